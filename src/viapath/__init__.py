@@ -1,0 +1,11 @@
+"""viapath: follow a designated path and avoid moving obstacles by choosing speed as well as direction.
+
+The core (``geometry``, ``path``, ``observation``, ``planning``) is pure numpy and is what goes on a
+robot; the simulator, scenarios, I/O and plotting sit around it.
+"""
+
+from viapath.observation import Command, Obstacles, Observation, RobotState
+from viapath.path import DesignatedPath
+
+__all__ = ["Command", "DesignatedPath", "Obstacles", "Observation", "RobotState"]
+__version__ = "0.1.0"

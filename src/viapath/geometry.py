@@ -1,0 +1,140 @@
+"""x-y-t geometry of the method: avoiding lines, reachable cones, via points, moving-disc checks.
+
+Source: Yamada, Sa, Ohya, "Moving Obstacle Avoidance for Mobile Robot Moving on Designated Path",
+§3 and Fig. 4, after Tsubouchi et al.'s "iterated forecast and planning"; made precise in DESIGN §2.
+
+* An obstacle with centre ``c + v t`` and combined radius ``R`` is an oblique cylinder in x-y-t.
+* The avoiding line of an obstacle is the cylinder generator through the 2-D tangent point from the
+  robot position ``p`` at t = 0: ``w = sqrt(D^2 - R^2) * Rot(±asin(R/D)) (c - p)/D``.
+* The via point is where that line meets the reachable cone ``|x - p| = v t``:
+  ``|w + v_obs t| = v t``. We solve it in the stable form ``s = |w|/t``:
+  ``s^2 + 2 s (ŵ·v_obs) + |v_obs|^2 - v^2 = 0``, so ``s = -ŵ·v_obs ± sqrt(v^2 - (ŵ × v_obs)^2)``.
+  The ``+`` root (largest s, earliest t) is "pass early"; the ``-`` root, positive only when the
+  obstacle is faster than the robot, is "let it overtake". Equal speeds need no special case.
+
+What the paper leaves open and we chose:
+* side ``+1`` (left) rotates the centre direction counter-clockwise: the robot passes the obstacle
+  with the obstacle on its right.
+* The contact test allows a radius that grows linearly with time (``R + g t``), which turns the
+  cylinder into a cone: this is how prediction uncertainty enters (DESIGN §2, pitfalls).
+
+Everything here is vectorised numpy with broadcasting over leading axes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+LEFT = 1
+RIGHT = -1
+
+
+def cross2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """z component of the 2-D cross product, over the last axis."""
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def rotate(vectors: np.ndarray, angle_rad: np.ndarray | float) -> np.ndarray:
+    """Rotate 2-D vectors counter-clockwise by ``angle_rad`` (broadcast)."""
+    c, s = np.cos(angle_rad), np.sin(angle_rad)
+    x, y = vectors[..., 0], vectors[..., 1]
+    return np.stack([c * x - s * y, s * x + c * y], axis=-1)
+
+
+def wrap_angle(angle_rad):
+    """Wrap to (-pi, pi]."""
+    return np.pi - np.mod(np.pi - np.asarray(angle_rad), 2.0 * np.pi)
+
+
+def tangent_vectors(origin: np.ndarray, centres: np.ndarray, radii: np.ndarray, side: np.ndarray | int):
+    """Vector from ``origin`` to the tangent point on disc (centre, radius) on ``side`` (+1 left, -1 right).
+
+    Returns ``(w, valid)``; ``valid`` is False where the origin lies inside the disc (no tangent).
+    """
+    offset = centres - origin
+    distance = np.hypot(offset[..., 0], offset[..., 1])
+    valid = distance > radii
+    safe_distance = np.where(valid, distance, 1.0)
+    alpha = np.arcsin(np.where(valid, radii / safe_distance, 0.0))
+    tangent_length = np.sqrt(np.maximum(safe_distance**2 - radii**2, 0.0))
+    direction = rotate(offset / safe_distance[..., None], side * alpha)
+    return direction * tangent_length[..., None], valid
+
+
+def via_times(w: np.ndarray, obstacle_velocity: np.ndarray, speed: np.ndarray | float):
+    """Times at which a robot leaving the cone apex at ``speed`` meets the avoiding line ``w + v_obs t``.
+
+    Returns ``(t_early, t_late)``; ``inf`` where that root does not exist. ``t_late`` is finite only
+    when the obstacle is faster than the robot (two crossings: pass early / let it overtake).
+    """
+    length = np.hypot(w[..., 0], w[..., 1])
+    safe_length = np.where(length > 0, length, 1.0)
+    unit = w / safe_length[..., None]
+    along = np.sum(unit * obstacle_velocity, axis=-1)
+    across = cross2(unit, obstacle_velocity)
+    discriminant = np.asarray(speed) ** 2 - across**2
+    root = np.sqrt(np.maximum(discriminant, 0.0))
+    s_early = -along + root
+    s_late = -along - root
+    ok = (discriminant >= 0) & (length > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_early = np.where(ok & (s_early > 1e-12), length / s_early, np.inf)
+        t_late = np.where(ok & (s_late > 1e-12) & (discriminant > 0), length / s_late, np.inf)
+    return t_early, t_late
+
+
+def first_contact_time(rel_position, rel_velocity, radius, duration, growth=0.0):
+    """First time in [0, duration] at which ``|rel_position + rel_velocity τ| <= radius + growth τ``.
+
+    ``rel_*`` are robot minus obstacle. Returns ``inf`` where there is no contact, 0 where the two
+    already touch. With ``growth = 0`` this is the classic moving-disc check; with ``growth > 0`` the
+    obstacle is a cone in x-y-t (prediction uncertainty growing with time).
+    """
+    radius = np.asarray(radius, dtype=float)
+    growth = np.asarray(growth, dtype=float)
+    a = np.sum(rel_velocity * rel_velocity, axis=-1) - growth**2
+    b = np.sum(rel_position * rel_velocity, axis=-1) - radius * growth
+    c = np.sum(rel_position * rel_position, axis=-1) - radius**2
+    discriminant = b * b - a * c
+    # c / (-b + sqrt(disc)) is the smaller positive root of a τ² + 2 b τ + c = 0 in every case
+    # (a > 0, a < 0, a = 0) where one exists, without cancellation.
+    denominator = -b + np.sqrt(np.maximum(discriminant, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tau = np.where((discriminant >= 0) & (denominator > 0), c / denominator, np.inf)
+    tau = np.where(tau <= duration, tau, np.inf)
+    return np.where(c <= 0, 0.0, tau)
+
+
+def closest_approach(rel_position, rel_velocity, duration):
+    """Minimum distance and its time over τ in [0, duration] for linear relative motion."""
+    speed_sq = np.sum(rel_velocity * rel_velocity, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tau = np.where(speed_sq > 0, -np.sum(rel_position * rel_velocity, axis=-1) / speed_sq, 0.0)
+    tau = np.clip(tau, 0.0, duration)
+    closest = rel_position + rel_velocity * np.asarray(tau)[..., None]
+    return np.hypot(closest[..., 0], closest[..., 1]), tau
+
+
+def legs_first_contact(
+    starts: np.ndarray,
+    start_times: np.ndarray,
+    velocities: np.ndarray,
+    durations: np.ndarray,
+    obstacle_positions: np.ndarray,
+    obstacle_velocities: np.ndarray,
+    radii: np.ndarray,
+    growth: np.ndarray | float = 0.0,
+) -> np.ndarray:
+    """First contact time, measured from each leg's start, for K legs against N moving discs: (K, N).
+
+    Obstacle j is at ``obstacle_positions[j] + obstacle_velocities[j] t`` with radius
+    ``radii[j] + growth[j] t`` (t from the planning instant). Leg k starts at ``starts[k]`` at time
+    ``start_times[k]`` and moves at ``velocities[k]`` for ``durations[k]``.
+    """
+    t0 = start_times[:, None]
+    obstacle_at_start = obstacle_positions[None, :, :] + obstacle_velocities[None, :, :] * t0[..., None]
+    rel_position = starts[:, None, :] - obstacle_at_start
+    rel_velocity = velocities[:, None, :] - obstacle_velocities[None, :, :]
+    growth = np.broadcast_to(np.asarray(growth, dtype=float), radii.shape)
+    radius_at_start = radii[None, :] + growth[None, :] * t0
+    return first_contact_time(rel_position, rel_velocity, radius_at_start, durations[:, None], growth[None, :])

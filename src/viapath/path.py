@@ -1,0 +1,169 @@
+"""The designated path (paper §2, Fig. 2-3): subgoals joined by straight segments inside a corridor.
+
+The corridor ("path boundary") bounds the robot *centre*: a point is inside when it lies within
+``half_width`` of some segment, i.e. the corridor is the union of one capsule per segment. This
+keeps corners filled on the outside of a turn and needs no special case at junctions.
+
+What the paper leaves open and we chose:
+* Subgoal switching: within ``reach_threshold_m`` of the subgoal, or once the robot's projection on
+  the segment that ends at the subgoal has passed it (so the robot never turns back for a subgoal
+  it has already passed, e.g. after an avoidance).
+* Bypass (Fig. 3): an intermediate subgoal is given up when an obstacle's disc, grown by the robot
+  radius, comes within ``blocked_clearance_m`` of it while the robot is within ``bypass_distance_m``.
+  The final goal is never given up.
+* Junctions: the robot heads for the corner subgoal itself and switches only when close, so it goes
+  straight to the end of a segment before turning, as the paper asks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from viapath.geometry import cross2
+
+
+class DesignatedPath:
+    """A polyline of subgoals (the last is the goal) with a corridor half-width per segment."""
+
+    def __init__(self, waypoints, half_width_m: float | None = None, half_widths_m=None):
+        waypoints = np.asarray(waypoints, dtype=float)
+        if waypoints.ndim != 2 or waypoints.shape[1] != 2 or len(waypoints) < 2:
+            raise ValueError("a designated path needs at least two (x, y) waypoints")
+        if not np.isfinite(waypoints).all():
+            raise ValueError("waypoints must be finite")
+        lengths = np.hypot(*np.diff(waypoints, axis=0).T)
+        if (lengths <= 1e-9).any():
+            raise ValueError("consecutive waypoints must differ")
+        n_segments = len(waypoints) - 1
+        if half_widths_m is None:
+            if half_width_m is None:
+                raise ValueError("give half_width_m or half_widths_m")
+            half_widths_m = np.full(n_segments, float(half_width_m))
+        half_widths_m = np.asarray(half_widths_m, dtype=float).reshape(-1)
+        if len(half_widths_m) != n_segments:
+            raise ValueError(f"half_widths_m needs one value per segment ({n_segments}), got {len(half_widths_m)}")
+        if not (np.isfinite(half_widths_m).all() and (half_widths_m > 0).all()):
+            raise ValueError("corridor half-widths must be positive and finite")
+        self.waypoints = waypoints
+        self.half_widths_m = half_widths_m
+        self.segment_starts = waypoints[:-1]
+        self.segment_vectors = np.diff(waypoints, axis=0)
+        self.segment_lengths_m = lengths
+        self.segment_directions = self.segment_vectors / lengths[:, None]
+        self.cumulative_length_m = np.concatenate([[0.0], np.cumsum(lengths)])
+
+    @property
+    def goal(self) -> np.ndarray:
+        return self.waypoints[-1]
+
+    @property
+    def length_m(self) -> float:
+        return float(self.cumulative_length_m[-1])
+
+    def _segment_geometry(self, points: np.ndarray):
+        """Per point and segment: clamped arc position along the segment and offset from it."""
+        rel = points[..., None, :] - self.segment_starts  # (..., S, 2)
+        along = np.sum(rel * self.segment_directions, axis=-1)
+        along_clamped = np.clip(along, 0.0, self.segment_lengths_m)
+        closest = self.segment_starts + along_clamped[..., None] * self.segment_directions
+        offset = points[..., None, :] - closest
+        distance = np.hypot(offset[..., 0], offset[..., 1])
+        return along, along_clamped, distance
+
+    def project(self, points):
+        """Nearest point on the path: ``(segment_index, arc_length_m, signed_lateral_m)``.
+
+        The lateral deviation is positive to the left of the direction of travel.
+        """
+        points = np.asarray(points, dtype=float)
+        along, along_clamped, distance = self._segment_geometry(points)
+        index = np.argmin(distance, axis=-1)
+        take = lambda a: np.take_along_axis(a, index[..., None], axis=-1)[..., 0]  # noqa: E731
+        rel = points - self.segment_starts[index]
+        side = np.sign(cross2(self.segment_directions[index], rel))
+        side = np.where(side == 0, 1.0, side)
+        arc = self.cumulative_length_m[index] + take(along_clamped)
+        return index, arc, side * take(distance)
+
+    def lateral_deviation(self, points) -> np.ndarray:
+        return self.project(points)[2]
+
+    def corridor_excess(self, points) -> np.ndarray:
+        """How far each point is outside the corridor (m); <= 0 inside."""
+        _, _, distance = self._segment_geometry(np.asarray(points, dtype=float))
+        return np.min(distance - self.half_widths_m, axis=-1)
+
+    def contains(self, points, tolerance_m: float = 1e-9) -> np.ndarray:
+        return self.corridor_excess(points) <= tolerance_m
+
+    def legs_inside(self, starts, ends, spacing_m: float = 0.05, tolerance_m: float = 1e-9) -> np.ndarray:
+        """Whether each straight leg stays in the corridor, checked at points ``spacing_m`` apart.
+
+        Each capsule is convex, so a leg whose samples all lie in one capsule is exactly inside;
+        across a junction the sampling step bounds the error.
+        """
+        starts = np.asarray(starts, dtype=float).reshape(-1, 2)
+        ends = np.asarray(ends, dtype=float).reshape(-1, 2)
+        if len(starts) == 0:
+            return np.zeros(0, dtype=bool)
+        longest = float(np.max(np.hypot(*(ends - starts).T), initial=0.0))
+        n_samples = max(2, int(np.ceil(longest / spacing_m)) + 1)
+        fractions = np.linspace(0.0, 1.0, n_samples)
+        samples = starts[:, None, :] + fractions[None, :, None] * (ends - starts)[:, None, :]
+        return np.all(self.corridor_excess(samples) <= tolerance_m, axis=1)
+
+    def point_at(self, arc_length_m: float) -> np.ndarray:
+        arc = float(np.clip(arc_length_m, 0.0, self.length_m))
+        index = int(np.clip(np.searchsorted(self.cumulative_length_m, arc, side="right") - 1, 0, len(self.segment_lengths_m) - 1))
+        return self.segment_starts[index] + (arc - self.cumulative_length_m[index]) * self.segment_directions[index]
+
+
+@dataclass
+class SubgoalPolicy:
+    reach_threshold_m: float = 0.2
+    goal_tolerance_m: float = 0.1
+    bypass_distance_m: float = 1.0
+    blocked_clearance_m: float = 0.1
+
+
+class SubgoalTracker:
+    """Which subgoal the robot heads for now (paper §2). Keeps state between cycles."""
+
+    def __init__(self, path: DesignatedPath, policy: SubgoalPolicy | None = None):
+        self.path = path
+        self.policy = policy or SubgoalPolicy()
+        self.index = 1
+        self.bypassed: list[int] = []
+
+    @property
+    def is_final(self) -> bool:
+        return self.index == len(self.path.waypoints) - 1
+
+    @property
+    def subgoal(self) -> np.ndarray:
+        return self.path.waypoints[self.index]
+
+    def goal_reached(self, position) -> bool:
+        return self.is_final and float(np.hypot(*(self.path.goal - position))) <= self.policy.goal_tolerance_m
+
+    def update(self, position, robot_radius_m: float = 0.0, obstacle_positions=None, obstacle_radii=None) -> int:
+        position = np.asarray(position, dtype=float)
+        while not self.is_final:
+            subgoal = self.subgoal
+            distance = float(np.hypot(*(subgoal - position)))
+            segment = self.index - 1
+            along = float(np.dot(position - self.path.segment_starts[segment], self.path.segment_directions[segment]))
+            passed = along >= self.path.segment_lengths_m[segment]
+            if distance <= self.policy.reach_threshold_m or passed:
+                self.index += 1
+                continue
+            if obstacle_positions is not None and len(obstacle_positions) and distance <= self.policy.bypass_distance_m:
+                gaps = np.hypot(*(np.asarray(obstacle_positions) - subgoal).T) - np.asarray(obstacle_radii) - robot_radius_m
+                if np.min(gaps) <= self.policy.blocked_clearance_m:
+                    self.bypassed.append(self.index)
+                    self.index += 1
+                    continue
+            break
+        return self.index

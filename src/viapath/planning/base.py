@@ -1,0 +1,120 @@
+"""The planner protocol (DESIGN §4) and the registry that lets the CLI and benchmark find planners.
+
+A planner is built once per episode with the designated path and the robot's limits, then called
+every cycle with an :class:`~viapath.observation.Observation`; it returns a :class:`Decision`:
+the command (v, ω) and its plan for display and analysis. Subclasses register by name:
+
+    class MyPlanner(Planner, name="mine"): ...
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+from viapath.observation import Command, MotionLimits, Observation
+from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
+
+_REGISTRY: dict[str, type["Planner"]] = {}
+
+
+@dataclass
+class Plan:
+    """What a planner intends, for display and analysis. Planners fill what applies to them."""
+
+    status: str  # e.g. "straight", "avoid", "stop", "escape", "goal"
+    speed_mps: float
+    target: np.ndarray  # the point the robot steers for now
+    via_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    waypoints: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # chosen polyline from the robot
+    subgoal_index: int = 1
+    candidate_count: int = 0
+    candidate_costs: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    candidate_polylines: list[np.ndarray] = field(default_factory=list)
+    chosen: int | None = None
+    extras: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class Decision:
+    command: Command
+    plan: Plan
+
+
+class Planner:
+    """Base class: subgoal tracking shared by every planner, and registration by name."""
+
+    name: ClassVar[str] = ""
+
+    def __init_subclass__(cls, name: str | None = None, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if name:
+            cls.name = name
+            _REGISTRY[name] = cls
+
+    def __init__(
+        self,
+        path: DesignatedPath,
+        *,
+        nominal_speed_mps: float = 0.2,
+        limits: MotionLimits | None = None,
+        robot_radius_m: float = 0.25,
+        subgoal_policy: SubgoalPolicy | None = None,
+    ):
+        self.path = path
+        self.nominal_speed_mps = float(nominal_speed_mps)
+        self.limits = limits or MotionLimits()
+        self.robot_radius_m = float(robot_radius_m)
+        self.subgoal_policy = subgoal_policy or SubgoalPolicy()
+        self.subgoals = SubgoalTracker(path, self.subgoal_policy)
+
+    def reset(self) -> None:
+        self.subgoals = SubgoalTracker(self.path, self.subgoal_policy)
+
+    def plan(self, observation: Observation) -> Decision:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def steer(self, observation: Observation, target: np.ndarray, speed_mps: float, heading_gain: float = 2.5) -> Command:
+        """Turn towards ``target`` and drive at ``speed_mps``, slowing for large heading errors."""
+        robot = observation.robot
+        offset = np.asarray(target) - robot.position
+        if np.hypot(*offset) < 1e-9 or speed_mps <= 0:
+            return Command(0.0, 0.0)
+        error = float(np.angle(np.exp(1j * (np.arctan2(offset[1], offset[0]) - robot.heading_rad))))
+        turn = float(np.clip(heading_gain * error, -self.limits.max_turn_rate_radps, self.limits.max_turn_rate_radps))
+        # Full speed up to 45 degrees off, none from 90: a sharp turn is made nearly on the spot.
+        scale = float(np.clip((np.pi / 2 - abs(error)) / (np.pi / 4), 0.0, 1.0))
+        return Command(min(speed_mps, self.limits.max_speed_mps) * scale, turn)
+
+
+def register(cls: type[Planner]) -> type[Planner]:
+    _REGISTRY[cls.name] = cls
+    return cls
+
+
+def available_planners() -> list[str]:
+    _load_builtin_planners()
+    return sorted(_REGISTRY)
+
+
+def planner_class(name: str) -> type[Planner]:
+    _load_builtin_planners()
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise KeyError(f"unknown planner {name!r}; available: {', '.join(sorted(_REGISTRY))}") from None
+
+
+def make_planner(name: str, path: DesignatedPath, **kwargs) -> Planner:
+    return planner_class(name)(path, **kwargs)
+
+
+def _load_builtin_planners() -> None:
+    # Importing the modules runs their class definitions, which register them.
+    import viapath.planning.viapath  # noqa: F401
+    try:
+        import viapath.planning.baselines  # noqa: F401
+    except ImportError:
+        pass
