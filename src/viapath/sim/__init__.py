@@ -1,0 +1,1 @@
+"""The simulator: robot kinematics, obstacle motion, perception, the closed loop and its metrics."""
