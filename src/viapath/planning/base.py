@@ -113,8 +113,10 @@ def make_planner(name: str, path: DesignatedPath, **kwargs) -> Planner:
 
 def _load_builtin_planners() -> None:
     # Importing the modules runs their class definitions, which register them.
+    import importlib
+    import importlib.util
+
     import viapath.planning.viapath  # noqa: F401
-    try:
-        import viapath.planning.baselines  # noqa: F401
-    except ImportError:
-        pass
+
+    if importlib.util.find_spec("viapath.planning.baselines") is not None:
+        importlib.import_module("viapath.planning.baselines")

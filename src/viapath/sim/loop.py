@@ -157,6 +157,7 @@ def run_episode(
         obstacle_radii_m=radii, plan_speeds_mps=np.array(rows["plan_speed"]), plan_targets=np.array(rows["target"]),
         plan_status=rows["status"], via_points=rows["via"], plan_times_ms=np.array(rows["plan_ms"]),
         reached_goal=reached, walls=walls, perceived=perceived, scan_points=scan_points,
+        extras={"nominal_speed_mps": spec.speed, "seed": scenario.seed if seed is None else seed},
     )
     metrics = compute_metrics(trace)
     extra_metrics = getattr(sensing, "episode_metrics", None)

@@ -1,0 +1,173 @@
+"""Command-line interface: ``viapath run SCENARIO``, ``viapath scenarios`` and friends (DESIGN §4)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Optional
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    help="Follow a designated path and avoid moving obstacles by choosing speed as well as direction.",
+)
+console = Console()
+errors = Console(stderr=True)
+
+_PLOT_SUFFIXES = {".png", ".pdf", ".svg"}
+_ANIMATION_SUFFIXES = {".gif", ".mp4"}
+
+
+def _fail(message: str, code: int = 2) -> None:
+    errors.print(f"[bold red]error:[/] {message}", highlight=False, soft_wrap=True)
+    raise typer.Exit(code)
+
+
+def _check_output(file: Optional[Path], suffixes: set[str], option: str) -> None:
+    if file is None:
+        return
+    if file.suffix.lower() not in suffixes:
+        _fail(f"{option} {file}: expected a file ending in {', '.join(sorted(suffixes))}")
+    if not file.parent.exists():
+        _fail(f"{option} {file}: folder {file.parent} does not exist")
+
+
+def _check_noise(value: Optional[float], option: str) -> None:
+    if value is not None and (not math.isfinite(value) or value < 0):
+        _fail(f"{option}: expected a finite number >= 0, found {value}")
+
+
+@app.command()
+def run(
+    scenario: str = typer.Argument(..., help="Built-in scenario name (see `viapath scenarios`) or a YAML file."),
+    planner: Optional[str] = typer.Option(None, "--planner", help="Planner name (default: the scenario's)."),
+    perception: Optional[str] = typer.Option(None, "--perception", help="oracle | laser (default: the scenario's)."),
+    seed: Optional[int] = typer.Option(None, "--seed", help="Random seed (default: the scenario's)."),
+    position_noise: Optional[float] = typer.Option(None, "--position-noise", help="Oracle position noise σ [m]."),
+    velocity_noise: Optional[float] = typer.Option(None, "--velocity-noise", help="Oracle velocity noise σ [m/s]."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object of metrics."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Write a figure (PNG/PDF/SVG) of the episode."),
+    trace: Optional[Path] = typer.Option(None, "--trace", help="Write the per-step trace as CSV."),
+    animate: Optional[Path] = typer.Option(None, "--animate", help="Write an animation (GIF, or MP4 with ffmpeg)."),
+) -> None:
+    """Run one scenario in the simulator and report its metrics."""
+    from viapath.planning import available_planners
+    from viapath.scenarios import ScenarioError, load_scenario
+    from viapath.sim.loop import run_episode
+
+    _check_output(plot, _PLOT_SUFFIXES, "--plot")
+    _check_output(animate, _ANIMATION_SUFFIXES, "--animate")
+    _check_output(trace, {".csv"}, "--trace")
+    _check_noise(position_noise, "--position-noise")
+    _check_noise(velocity_noise, "--velocity-noise")
+    if perception is not None and perception not in ("oracle", "laser"):
+        _fail(f"--perception: expected 'oracle' or 'laser', found {perception!r}")
+    try:
+        spec = load_scenario(scenario)
+    except ScenarioError as error:
+        _fail(str(error))
+    planner_name = planner or spec.planner.name
+    if planner_name not in available_planners():
+        _fail(f"--planner: unknown planner {planner_name!r}; available: {', '.join(available_planners())}")
+    try:
+        episode = run_episode(spec, planner=planner_name, perception=perception, seed=seed,
+                              position_noise_m=position_noise, velocity_noise_mps=velocity_noise)
+    except (ValueError, RuntimeError, FileNotFoundError) as error:
+        _fail(f"{scenario}: {error}")
+
+    if plot is not None:
+        from viapath.viz.plot import plot_episode
+
+        plot_episode(episode, plot)
+    if trace is not None:
+        from viapath.io.trace import write_trace_csv
+
+        write_trace_csv(episode.trace, trace)
+    if animate is not None:
+        from viapath.viz.animate import animate_episode
+
+        try:
+            animate_episode(episode, animate)
+        except (RuntimeError, ValueError) as error:
+            _fail(str(error))
+
+    if as_json:
+        print(json.dumps(episode.metrics, allow_nan=False))
+        return
+    _print_metrics(episode.metrics)
+    for label, file in (("plot", plot), ("trace", trace), ("animation", animate)):
+        if file is not None:
+            console.print(f"{label}: {file}")
+
+
+def _print_metrics(metrics: dict) -> None:
+    table = Table(title=f"{metrics['scenario']} — {metrics['planner']} ({metrics['perception']})", show_header=False)
+    table.add_column("metric", style="bold")
+    table.add_column("value", justify="right")
+    for key, value in metrics.items():
+        if key in ("scenario", "planner", "perception"):
+            continue
+        if isinstance(value, bool):
+            text = ("[red]yes[/]" if value else "[green]no[/]") if "collision" in key else ("yes" if value else "[red]no[/]")
+        elif isinstance(value, float):
+            text = f"{value:.3f}"
+        elif value is None:
+            text = "—"
+        else:
+            text = str(value)
+        table.add_row(key, text)
+    console.print(table)
+
+
+@app.command()
+def scenarios() -> None:
+    """List the built-in scenarios."""
+    from viapath.scenarios import builtin_names, load_scenario
+
+    table = Table(title="built-in scenarios (viapath run NAME)")
+    table.add_column("name", style="bold")
+    table.add_column("obstacles", justify="right")
+    table.add_column("description")
+    for name in builtin_names():
+        spec = load_scenario(name)
+        table.add_row(name, str(len(spec.obstacles)), " ".join(spec.description.split()))
+    console.print(table)
+
+
+@app.command()
+def planners() -> None:
+    """List the registered planners."""
+    from viapath.planning import available_planners, planner_class
+
+    for name in available_planners():
+        doc = (planner_class(name).__doc__ or "").strip().splitlines()
+        console.print(f"[bold]{name}[/]: {doc[0] if doc else ''}")
+
+
+def _register_plugins() -> None:
+    """Commands that live beside their subsystem (laser scans, benchmark)."""
+    import importlib
+
+    for module in ("viapath.perception.commands", "viapath.bench.commands"):
+        try:
+            spec = importlib.util.find_spec(module)
+        except ModuleNotFoundError:
+            spec = None
+        if spec is not None:
+            importlib.import_module(module).register(app)
+
+
+_register_plugins()
+
+
+def main() -> None:  # pragma: no cover
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -1,0 +1,1 @@
+"""Plots and animations of episodes (matplotlib is imported only when drawing)."""
