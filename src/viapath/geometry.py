@@ -50,15 +50,19 @@ def tangent_vectors(origin: np.ndarray, centres: np.ndarray, radii: np.ndarray, 
     """Vector from ``origin`` to the tangent point on disc (centre, radius) on ``side`` (+1 left, -1 right).
 
     Returns ``(w, valid)``; ``valid`` is False where the origin lies inside the disc (no tangent).
+    With ``d = c - origin``, ``D = |d|`` and ``L = sqrt(D² - R²)``, the tangent vector is ``d`` turned
+    by ``±asin(R/D)`` and scaled to ``L``: ``w = L (L d ∓ R d⊥) / D²`` (no trigonometry needed).
     """
-    offset = centres - origin
-    distance = np.hypot(offset[..., 0], offset[..., 1])
-    valid = distance > radii
-    safe_distance = np.where(valid, distance, 1.0)
-    alpha = np.arcsin(np.where(valid, radii / safe_distance, 0.0))
-    tangent_length = np.sqrt(np.maximum(safe_distance**2 - radii**2, 0.0))
-    direction = rotate(offset / safe_distance[..., None], side * alpha)
-    return direction * tangent_length[..., None], valid
+    dx = centres[..., 0] - origin[..., 0]
+    dy = centres[..., 1] - origin[..., 1]
+    distance_sq = dx * dx + dy * dy
+    radius_sq = radii * radii
+    valid = distance_sq > radius_sq
+    length = np.sqrt(np.maximum(distance_sq - radius_sq, 0.0))
+    scale = length / np.where(valid, distance_sq, 1.0)
+    side_radius = side * radii
+    w = np.stack([scale * (length * dx - side_radius * dy), scale * (side_radius * dx + length * dy)], axis=-1)
+    return w, valid
 
 
 def via_times(w: np.ndarray, obstacle_velocity: np.ndarray, speed: np.ndarray | float):
@@ -67,19 +71,21 @@ def via_times(w: np.ndarray, obstacle_velocity: np.ndarray, speed: np.ndarray | 
     Returns ``(t_early, t_late)``; ``inf`` where that root does not exist. ``t_late`` is finite only
     when the obstacle is faster than the robot (two crossings: pass early / let it overtake).
     """
-    length = np.hypot(w[..., 0], w[..., 1])
-    safe_length = np.where(length > 0, length, 1.0)
-    unit = w / safe_length[..., None]
-    along = np.sum(unit * obstacle_velocity, axis=-1)
-    across = cross2(unit, obstacle_velocity)
-    discriminant = np.asarray(speed) ** 2 - across**2
+    wx, wy = w[..., 0], w[..., 1]
+    vx, vy = obstacle_velocity[..., 0], obstacle_velocity[..., 1]
+    length = np.sqrt(wx * wx + wy * wy)
+    positive = length > 0
+    inverse = 1.0 / np.where(positive, length, 1.0)
+    along = (wx * vx + wy * vy) * inverse
+    across = (wx * vy - wy * vx) * inverse
+    discriminant = np.asarray(speed) ** 2 - across * across
     root = np.sqrt(np.maximum(discriminant, 0.0))
-    s_early = -along + root
+    s_early = root - along
     s_late = -along - root
-    ok = (discriminant >= 0) & (length > 0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t_early = np.where(ok & (s_early > 1e-12), length / s_early, np.inf)
-        t_late = np.where(ok & (s_late > 1e-12) & (discriminant > 0), length / s_late, np.inf)
+    ok = positive & (discriminant >= 0)
+    t_early = np.where(ok & (s_early > 1e-12), length / np.where(s_early > 1e-12, s_early, 1.0), np.inf)
+    ok &= (s_late > 1e-12) & (discriminant > 0)
+    t_late = np.where(ok, length / np.where(ok, s_late, 1.0), np.inf)
     return t_early, t_late
 
 
@@ -90,18 +96,26 @@ def first_contact_time(rel_position, rel_velocity, radius, duration, growth=0.0)
     already touch. With ``growth = 0`` this is the classic moving-disc check; with ``growth > 0`` the
     obstacle is a cone in x-y-t (prediction uncertainty growing with time).
     """
-    radius = np.asarray(radius, dtype=float)
-    growth = np.asarray(growth, dtype=float)
-    a = np.sum(rel_velocity * rel_velocity, axis=-1) - growth**2
-    b = np.sum(rel_position * rel_velocity, axis=-1) - radius * growth
-    c = np.sum(rel_position * rel_position, axis=-1) - radius**2
+    px, py = rel_position[..., 0], rel_position[..., 1]
+    vx, vy = rel_velocity[..., 0], rel_velocity[..., 1]
+    return _first_contact(px, py, vx, vy, np.asarray(radius, dtype=float), np.asarray(growth, dtype=float), duration)
+
+
+def _first_contact(px, py, vx, vy, radius, growth, duration):
+    if np.any(growth):
+        a = vx * vx + vy * vy - growth * growth
+        b = px * vx + py * vy - radius * growth
+    else:
+        a = vx * vx + vy * vy
+        b = px * vx + py * vy
+    c = px * px + py * py - radius * radius
     discriminant = b * b - a * c
     # c / (-b + sqrt(disc)) is the smaller positive root of a τ² + 2 b τ + c = 0 in every case
     # (a > 0, a < 0, a = 0) where one exists, without cancellation.
-    denominator = -b + np.sqrt(np.maximum(discriminant, 0.0))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tau = np.where((discriminant >= 0) & (denominator > 0), c / denominator, np.inf)
-    tau = np.where(tau <= duration, tau, np.inf)
+    denominator = np.sqrt(np.maximum(discriminant, 0.0)) - b
+    ok = (discriminant >= 0) & (denominator > 0)
+    tau = c / np.where(ok, denominator, 1.0)
+    tau = np.where(ok & (tau <= duration), tau, np.inf)
     return np.where(c <= 0, 0.0, tau)
 
 
@@ -132,9 +146,11 @@ def legs_first_contact(
     ``start_times[k]`` and moves at ``velocities[k]`` for ``durations[k]``.
     """
     t0 = start_times[:, None]
-    obstacle_at_start = obstacle_positions[None, :, :] + obstacle_velocities[None, :, :] * t0[..., None]
-    rel_position = starts[:, None, :] - obstacle_at_start
-    rel_velocity = velocities[:, None, :] - obstacle_velocities[None, :, :]
-    growth = np.broadcast_to(np.asarray(growth, dtype=float), radii.shape)
-    radius_at_start = radii[None, :] + growth[None, :] * t0
-    return first_contact_time(rel_position, rel_velocity, radius_at_start, durations[:, None], growth[None, :])
+    ox, oy = obstacle_positions[:, 0], obstacle_positions[:, 1]
+    ovx, ovy = obstacle_velocities[:, 0], obstacle_velocities[:, 1]
+    px = starts[:, 0:1] - (ox + ovx * t0)
+    py = starts[:, 1:2] - (oy + ovy * t0)
+    vx = velocities[:, 0:1] - ovx
+    vy = velocities[:, 1:2] - ovy
+    radius_at_start = radii + growth * t0
+    return _first_contact(px, py, vx, vy, radius_at_start, growth, durations[:, None])

@@ -99,20 +99,27 @@ class DesignatedPath:
         return self.corridor_excess(points) <= tolerance_m
 
     def legs_inside(self, starts, ends, spacing_m: float = 0.05, tolerance_m: float = 1e-9) -> np.ndarray:
-        """Whether each straight leg stays in the corridor, checked at points ``spacing_m`` apart.
+        """Whether each straight leg stays in the corridor.
 
-        Each capsule is convex, so a leg whose samples all lie in one capsule is exactly inside;
-        across a junction the sampling step bounds the error.
+        Each capsule is convex, so a leg whose two ends lie in the same capsule is inside, exactly.
+        Other legs (across a junction) are checked at points ``spacing_m`` apart.
         """
         starts = np.asarray(starts, dtype=float).reshape(-1, 2)
         ends = np.asarray(ends, dtype=float).reshape(-1, 2)
+        tolerance = np.broadcast_to(np.asarray(tolerance_m, dtype=float), (len(starts),))
         if len(starts) == 0:
             return np.zeros(0, dtype=bool)
-        longest = float(np.max(np.hypot(*(ends - starts).T), initial=0.0))
-        n_samples = max(2, int(np.ceil(longest / spacing_m)) + 1)
-        fractions = np.linspace(0.0, 1.0, n_samples)
-        samples = starts[:, None, :] + fractions[None, :, None] * (ends - starts)[:, None, :]
-        return np.all(self.corridor_excess(samples) <= tolerance_m, axis=1)
+        start_in = self._segment_geometry(starts)[2] - self.half_widths_m <= tolerance[:, None]
+        end_in = self._segment_geometry(ends)[2] - self.half_widths_m <= tolerance[:, None]
+        inside = np.any(start_in & end_in, axis=1)
+        unresolved = np.flatnonzero(~inside & start_in.any(axis=1) & end_in.any(axis=1))
+        if len(unresolved):
+            a, b = starts[unresolved], ends[unresolved]
+            longest = float(np.max(np.hypot(*(b - a).T)))
+            fractions = np.linspace(0.0, 1.0, max(2, int(np.ceil(longest / spacing_m)) + 1))
+            samples = a[:, None, :] + fractions[None, :, None] * (b - a)[:, None, :]
+            inside[unresolved] = np.all(self.corridor_excess(samples) <= tolerance[unresolved, None], axis=1)
+        return inside
 
     def point_at(self, arc_length_m: float) -> np.ndarray:
         arc = float(np.clip(arc_length_m, 0.0, self.length_m))
@@ -148,6 +155,13 @@ class SubgoalTracker:
     def goal_reached(self, position) -> bool:
         return self.is_final and float(np.hypot(*(self.path.goal - position))) <= self.policy.goal_tolerance_m
 
+    def is_blocked(self, obstacle_positions, obstacle_radii, robot_radius_m: float = 0.0) -> bool:
+        """Whether an obstacle sits on the current intermediate subgoal (the goal is never blocked)."""
+        if self.is_final or obstacle_positions is None or len(obstacle_positions) == 0:
+            return False
+        gaps = np.hypot(*(np.asarray(obstacle_positions) - self.subgoal).T) - np.asarray(obstacle_radii) - robot_radius_m
+        return bool(np.min(gaps) <= self.policy.blocked_clearance_m)
+
     def update(self, position, robot_radius_m: float = 0.0, obstacle_positions=None, obstacle_radii=None) -> int:
         position = np.asarray(position, dtype=float)
         while not self.is_final:
@@ -159,11 +173,9 @@ class SubgoalTracker:
             if distance <= self.policy.reach_threshold_m or passed:
                 self.index += 1
                 continue
-            if obstacle_positions is not None and len(obstacle_positions) and distance <= self.policy.bypass_distance_m:
-                gaps = np.hypot(*(np.asarray(obstacle_positions) - subgoal).T) - np.asarray(obstacle_radii) - robot_radius_m
-                if np.min(gaps) <= self.policy.blocked_clearance_m:
-                    self.bypassed.append(self.index)
-                    self.index += 1
-                    continue
+            if distance <= self.policy.bypass_distance_m and self.is_blocked(obstacle_positions, obstacle_radii, robot_radius_m):
+                self.bypassed.append(self.index)
+                self.index += 1
+                continue
             break
         return self.index

@@ -55,7 +55,7 @@ class ViaPathConfig:
     weights: Weights = field(default_factory=Weights)
     theta_unit: str = "rad"  # "rad" or "deg"
     planning_margin_m: float = 0.1
-    safety_margin_m: float = 0.0
+    safety_margin_m: float = 0.05
     horizon_s: float = 10.0
     max_depth: int = 3
     preferred_side: str = "left"
@@ -64,6 +64,7 @@ class ViaPathConfig:
     max_root_obstacles: int = 12
     heading_gain: float = 2.5
     corridor_check_spacing_m: float = 0.05
+    record_candidates: bool = False  # keep every candidate's polyline in the plan (for display)
 
     def __post_init__(self) -> None:
         if self.theta_unit not in ("rad", "deg"):
@@ -112,6 +113,24 @@ class ViaPathPlanner(Planner, name="viapath"):
         super().reset()
         self._previous_key = None
 
+    @classmethod
+    def options_from_spec(cls, spec) -> dict:
+        """Planner options from a scenario's ``planner:`` block (any object with those attributes)."""
+        config = ViaPathConfig(
+            speeds_mps=tuple(spec.speeds),
+            weights=Weights(**dict(spec.weights)),
+            theta_unit=spec.theta_unit,
+            planning_margin_m=spec.planning_margin_m,
+            safety_margin_m=spec.safety_margin_m,
+            horizon_s=spec.horizon_s,
+            max_depth=spec.max_depth,
+            preferred_side=spec.preferred_side,
+            hysteresis=spec.hysteresis,
+            uncertainty_sigmas=spec.uncertainty_sigmas,
+            **spec.params,
+        )
+        return {"config": config}
+
     # -- the cycle -------------------------------------------------------------------------------
 
     def plan(self, observation: Observation) -> Decision:
@@ -126,27 +145,24 @@ class ViaPathPlanner(Planner, name="viapath"):
             return Decision(Command.stop(), plan)
 
         search = _Search(self, position, robot.heading_rad, subgoal, obstacles, radii)
-        nominal = min(self.nominal_speed_mps, self.limits.max_speed_mps)
-        if search.straight_is_free(nominal):
-            self._previous_key = ("straight", round(nominal, 3))
-            plan = Plan("straight", nominal, subgoal.copy(), waypoints=np.array([position, subgoal]),
-                        subgoal_index=self.subgoals.index, candidate_count=1)
-            return Decision(self.steer(observation, subgoal, nominal, self.config.heading_gain), plan)
-
-        speeds = self._speed_set(robot.speed_mps)
-        result = search.run(speeds, self._previous_key)
+        speeds, nominal_index = self._speed_set(robot.speed_mps)
+        result = search.run(speeds, nominal_index, self._previous_key)
         if result is None:
             return self._fallback(observation, search)
         chosen, plan = result
         self._previous_key = chosen
         return Decision(self.steer(observation, plan.target, plan.speed_mps, self.config.heading_gain), plan)
 
-    def _speed_set(self, current_speed_mps: float) -> np.ndarray:
-        speeds = list(self.config.speeds_mps)
+    def _speed_set(self, current_speed_mps: float) -> tuple[np.ndarray, int]:
+        """The configured speeds, the current speed and the nominal speed (mm/s resolution, within
+        the limit), sorted; and where the nominal speed is in it."""
+        top = self.limits.max_speed_mps
+        nominal = round(min(self.nominal_speed_mps, top), 3)
+        speeds = {round(min(v, top), 3) for v in self.config.speeds_mps} | {nominal}
         if current_speed_mps > 0.02:
-            speeds.append(current_speed_mps)
-        speeds = np.unique(np.round(np.clip(speeds, 0.0, self.limits.max_speed_mps), 3))
-        return speeds[speeds > 0]
+            speeds.add(round(min(current_speed_mps, top), 3))
+        ordered = sorted(speeds)
+        return np.array(ordered), ordered.index(nominal)
 
     # -- no collision-free candidate -------------------------------------------------------------
 
@@ -156,7 +172,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         standing = search.contact_times(position[None], np.zeros(1), np.zeros((1, 2)), np.array([self.config.horizon_s]))
         base = dict(subgoal_index=self.subgoals.index)
         if np.isinf(standing).all():
-            self._previous_key = ("stop",)
+            self._previous_key = None
             return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), **base))
         self._previous_key = None
         obstacles, radii = search.obstacles, search.check_radii
@@ -205,12 +221,18 @@ class _Search:
         self.growth = k * obstacles.velocity_sigma_mps
         self.via_radii = self.check_radii + config.planning_margin_m
         self.horizon_s = config.horizon_s
+        tracker = planner.subgoals
+        # A blocked intermediate subgoal is given up once the robot is within the bypass distance
+        # (paper Fig. 3), so legs towards it need to be free only up to there.
+        blocked = tracker.is_blocked(obstacles.positions, obstacles.radii_m, planner.robot_radius_m)
+        self.stop_short_m = planner.subgoal_policy.bypass_distance_m if blocked else 0.0
         # Beyond an intermediate subgoal the robot carries on along the next segment.
-        index = planner.subgoals.index
-        self.continuation = None if planner.subgoals.is_final else (
+        index = tracker.index
+        self.continuation = None if (tracker.is_final or blocked) else (
             planner.path.segment_directions[index], planner.path.segment_lengths_m[index])
         # A robot already outside the corridor may not go further out, but may come back.
-        self.corridor_allowance = max(0.0, float(self.path.corridor_excess(position)))
+        self.corridor_tolerance = max(0.0, float(self.path.corridor_excess(position))) + 1e-9
+        self.subgoal_segments = [i for i in (index - 1, index) if i < len(planner.path.segment_lengths_m)]
 
     # -- checks ----------------------------------------------------------------------------------
 
@@ -223,58 +245,71 @@ class _Search:
                                   self.obstacles.velocities, self.check_radii, self.growth)
 
     def goal_legs(self, starts, start_times, speeds):
-        """Straight legs from nodes to the subgoal: (directions, lengths, contact (K, N), inside (K,))."""
+        """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N))."""
         offset = self.subgoal - starts
         lengths = np.hypot(offset[:, 0], offset[:, 1])
         directions = offset / np.maximum(lengths, 1e-12)[:, None]
-        durations = lengths / speeds
-        contact = self.contact_times(starts, start_times, directions * speeds[:, None], durations)
+        durations = np.maximum(lengths - self.stop_short_m, 0.0) / speeds
+        velocities = directions * speeds[:, None]
+        contact = self.contact_times(starts, start_times, velocities, durations)
         if self.continuation is not None and contact.shape[1]:
             direction, length = self.continuation
-            arrival = start_times + durations
-            more = self.contact_times(np.repeat(self.subgoal[None], len(starts), 0), arrival,
-                                      direction[None] * speeds[:, None], np.minimum(length / speeds, self.horizon_s))
+            more = self.contact_times(np.broadcast_to(self.subgoal, starts.shape), start_times + durations,
+                                      direction * speeds[:, None], length / speeds)
             contact = np.minimum(contact, more + durations[:, None])
-        inside = self.path.legs_inside(starts, np.repeat(self.subgoal[None], len(starts), 0),
-                                       self.config.corridor_check_spacing_m, self.corridor_allowance + 1e-9)
-        return directions, lengths, contact, inside
+        free = np.isinf(contact).all(axis=1) & self._goal_legs_inside(starts)
+        return directions, lengths, free, contact
 
-    def straight_is_free(self, speed: float) -> bool:
-        _, _, contact, inside = self.goal_legs(self.position[None], np.zeros(1), np.array([speed]))
-        return bool(inside[0] and np.isinf(contact).all())
+    def _goal_legs_inside(self, starts) -> np.ndarray:
+        # The subgoal ends both capsules next to it; a leg from a point inside one of them is inside
+        # that capsule (convex). Only other legs need the general check.
+        path = self.path
+        inside = np.zeros(len(starts), dtype=bool)
+        for i in self.subgoal_segments:
+            rel = starts - path.segment_starts[i]
+            along = np.clip(rel @ path.segment_directions[i], 0.0, path.segment_lengths_m[i])
+            gap = np.hypot(*(rel - along[:, None] * path.segment_directions[i]).T) - path.half_widths_m[i]
+            inside |= gap <= self.corridor_tolerance
+        if not inside.all():
+            rest = np.flatnonzero(~inside)
+            inside[rest] = path.legs_inside(starts[rest], np.broadcast_to(self.subgoal, (len(rest), 2)),
+                                            self.config.corridor_check_spacing_m, self.corridor_tolerance)
+        return inside
 
     # -- search ----------------------------------------------------------------------------------
 
-    def run(self, speeds: np.ndarray, previous_key):
+    def run(self, speeds: np.ndarray, nominal_index: int, previous_key):
+        """Best candidate as ``(key, plan)``, or None when no candidate is collision-free."""
         config = self.config
         nodes = _Nodes()
         n_speeds = len(speeds)
         frontier = nodes.extend(
-            position=np.repeat(self.position[None], n_speeds, 0), time_s=np.zeros(n_speeds), speed=speeds,
+            position=np.broadcast_to(self.position, (n_speeds, 2)), time_s=np.zeros(n_speeds), speed=speeds,
             parent=np.full(n_speeds, -1), length_m=np.zeros(n_speeds), first_direction=np.zeros((n_speeds, 2)),
             key=np.stack([np.arange(n_speeds), np.full(n_speeds, -1), np.zeros(n_speeds, int), np.zeros(n_speeds, int)], 1),
         )
         data = nodes.stacked()
-        complete, goal_length, goal_direction = [], [], []
+        complete, goal_length = [], []
         for depth in range(config.max_depth + 1):
-            if len(frontier) == 0:
-                break
             starts, times, node_speeds = data["position"][frontier], data["time_s"][frontier], data["speed"][frontier]
-            directions, lengths, contact, inside = self.goal_legs(starts, times, node_speeds)
-            free = inside & np.all(np.isinf(contact), axis=1)
-            complete.append(frontier[free])
-            goal_length.append(lengths[free])
-            goal_direction.append(directions[free])
+            directions, lengths, free, contact = self.goal_legs(starts, times, node_speeds)
             if depth == 0:
+                if free[nominal_index]:
+                    # Paper step 1: a free straight path at the normal speed is the plan.
+                    return self._straight_plan(speeds[nominal_index], nominal_index)
                 # A straight candidate's first leg is its goal leg.
                 data["first_direction"][frontier] = directions
                 nodes.first_direction[0] = directions
+            complete.append(frontier[free])
+            goal_length.append(lengths[free])
             if depth == config.max_depth or len(self.obstacles) == 0:
                 break
-            blocked = np.flatnonzero(~free & inside & np.isfinite(contact).any(axis=1))
+            blocked = np.flatnonzero(~free & np.isfinite(contact).any(axis=1))
+            if len(blocked) == 0:
+                break
             if depth == 0:
-                pairs = self._root_pairs(contact[blocked])
-                pair_nodes, pair_obstacles = frontier[blocked][pairs[0]], pairs[1]
+                rows, pair_obstacles = self._root_pairs(contact[blocked])
+                pair_nodes = frontier[blocked][rows]
             else:
                 pair_nodes = frontier[blocked]
                 pair_obstacles = np.argmin(contact[blocked], axis=1)
@@ -287,25 +322,23 @@ class _Search:
         complete = np.concatenate(complete)
         if len(complete) == 0:
             return None
-        goal_length = np.concatenate(goal_length)
-        total_length = data["length_m"][complete] + goal_length
+        total_length = data["length_m"][complete] + np.concatenate(goal_length)
         speeds_c = data["speed"][complete]
-        weights = config.weights
-        theta = np.abs(wrap_angle(np.arctan2(data["first_direction"][complete, 1], data["first_direction"][complete, 0])
-                                  - self.heading_rad))
+        first = data["first_direction"][complete]
+        theta = np.abs(wrap_angle(np.arctan2(first[:, 1], first[:, 0]) - self.heading_rad))
         if config.theta_unit == "deg":
             theta = np.degrees(theta)
+        weights = config.weights
         cost = (weights.k1 * total_length + weights.k2 * total_length / speeds_c
                 + weights.k3 * np.abs(speeds_c - self.planner.nominal_speed_mps) + weights.k4 * theta)
-        keys = data["key"][complete]
+        keys = np.column_stack([np.round(speeds_c * 1000).astype(int), data["key"][complete, 1:]])
         preferred = LEFT if config.preferred_side == "left" else RIGHT
-        cost = cost + 1e-3 * ((keys[:, 2] != 0) & (keys[:, 2] != preferred))
-        candidate_keys = [self._key(speeds_c[i], keys[i]) for i in range(len(complete))]
+        cost = cost + _TIE_BREAK * ((keys[:, 2] != 0) & (keys[:, 2] != preferred))
         if previous_key is not None:
-            cost = cost - config.hysteresis * np.array([k == previous_key for k in candidate_keys])
+            cost = cost - config.hysteresis * np.all(keys == previous_key, axis=1)
         best = int(np.argmin(cost))
-        polylines = [self._polyline(data, node) for node in complete]
-        chosen_line = polylines[best]
+        chosen_line = self._polyline(data, complete[best])
+        polylines = [self._polyline(data, node) for node in complete] if config.record_candidates else []
         plan = Plan(
             status="avoid" if len(chosen_line) > 2 else "straight",
             speed_mps=float(speeds_c[best]),
@@ -318,19 +351,19 @@ class _Search:
             candidate_polylines=polylines,
             chosen=best,
         )
-        return candidate_keys[best], plan
+        return keys[best], plan
 
-    @staticmethod
-    def _key(speed, key_row) -> tuple:
-        if key_row[1] < 0:
-            return ("straight", round(float(speed), 3))
-        return ("via", round(float(speed), 3), int(key_row[1]), int(key_row[2]), int(key_row[3]))
+    def _straight_plan(self, speed: float, speed_index: int):
+        key = np.array([int(round(speed * 1000)), -1, 0, 0])
+        plan = Plan("straight", float(speed), self.subgoal.copy(), waypoints=np.array([self.position, self.subgoal]),
+                    subgoal_index=self.planner.subgoals.index, candidate_count=1, chosen=0)
+        return key, plan
 
     def _root_pairs(self, contact: np.ndarray):
         """(row, obstacle) pairs to branch on at the root: each obstacle the leg hits, earliest first."""
         rows, cols = np.nonzero(np.isfinite(contact))
         limit = self.config.max_root_obstacles
-        if limit and len(rows):
+        if limit and len(rows) > limit:
             order = np.lexsort((contact[rows, cols], rows))
             rows, cols = rows[order], cols[order]
             rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
@@ -340,53 +373,47 @@ class _Search:
 
     def _expand(self, data, node_index, obstacle_index, is_root: bool):
         """Via-point children of each (node, obstacle) pair: both sides, both roots, legs checked."""
-        if len(node_index) == 0:
-            return None
         starts = data["position"][node_index]
         times = data["time_s"][node_index]
         speeds = data["speed"][node_index]
         obstacles = self.obstacles
-        centre_now = obstacles.positions[obstacle_index] + obstacles.velocities[obstacle_index] * times[:, None]
         velocity = obstacles.velocities[obstacle_index]
+        centre_now = obstacles.positions[obstacle_index] + velocity * times[:, None]
         # The radius grows with prediction uncertainty; evaluate it near the expected passing time.
         reach_time = np.hypot(*(centre_now - starts).T) / speeds
         radius = self.via_radii[obstacle_index] + self.growth[obstacle_index] * (times + reach_time)
 
-        sides = np.array([LEFT, RIGHT, LEFT, RIGHT])
-        roots = np.array([0, 0, 1, 1])
-        m = len(node_index)
-        rep = lambda a: np.repeat(a, 4, axis=0)  # noqa: E731
-        side_all, root_all = np.tile(sides, m), np.tile(roots, m)
-        w, valid = tangent_vectors(rep(starts), rep(centre_now), rep(radius), side_all)
-        t_early, t_late = via_times(w, rep(velocity), rep(speeds))
-        t_via = np.where(root_all == 0, t_early, t_late)
-        ok = valid & np.isfinite(t_via) & (t_via <= 3 * self.horizon_s)
-        if not ok.any():
+        # Axis 1 enumerates (side, root): (left, early), (right, early), (left, late), (right, late).
+        w, valid = tangent_vectors(starts[:, None, :], centre_now[:, None, :], radius[:, None], _SIDES[None, :2])
+        t_early, t_late = via_times(w, velocity[:, None, :], speeds[:, None])
+        t_via = np.concatenate([t_early, t_late], axis=1)
+        w = np.concatenate([w, w], axis=1)
+        ok = np.broadcast_to(valid, t_early.shape)
+        ok = np.concatenate([ok, ok], axis=1) & (t_via <= 3 * self.horizon_s)
+        pair, option = np.nonzero(ok)
+        if len(pair) == 0:
             return None
-        idx = np.flatnonzero(ok)
-        parent = rep(node_index)[idx]
-        starts_k, times_k, speeds_k = rep(starts)[idx], rep(times)[idx], rep(speeds)[idx]
-        t_k = t_via[idx]
-        via = starts_k + w[idx] + rep(velocity)[idx] * t_k[:, None]
-        leg_velocity = (via - starts_k) / t_k[:, None]
-        contact = self.contact_times(starts_k, times_k, leg_velocity, t_k)
-        inside = self.path.legs_inside(starts_k, via, self.config.corridor_check_spacing_m, self.corridor_allowance + 1e-9)
-        good = inside & np.all(np.isinf(contact), axis=1)
+        t_k = t_via[pair, option]
+        starts_k, times_k, speeds_k = starts[pair], times[pair], speeds[pair]
+        leg_velocity = (w[pair, option] + velocity[pair] * t_k[:, None]) / t_k[:, None]
+        via = starts_k + leg_velocity * t_k[:, None]
+        good = np.isinf(self.contact_times(starts_k, times_k, leg_velocity, t_k)).all(axis=1)
+        good[good] = self.path.legs_inside(starts_k[good], via[good], self.config.corridor_check_spacing_m,
+                                           self.corridor_tolerance)
         if not good.any():
             return None
-        g = np.flatnonzero(good)
-        direction = leg_velocity[g] / np.maximum(np.hypot(*leg_velocity[g].T), 1e-12)[:, None]
-        parent_g = parent[g]
+        pair, option, t_k = pair[good], option[good], t_k[good]
+        parent = node_index[pair]
         if is_root:
-            first_direction = direction
-            key = np.stack([data["key"][parent_g, 0], obstacles.ids[rep(obstacle_index)[idx][g]],
-                            side_all[idx][g], root_all[idx][g]], axis=1)
+            first_direction = leg_velocity[good] / speeds_k[good, None]
+            key = np.stack([data["key"][parent, 0], obstacles.ids[obstacle_index[pair]],
+                            _SIDES[option], _ROOTS[option]], axis=1)
         else:
-            first_direction = data["first_direction"][parent_g]
-            key = data["key"][parent_g]
+            first_direction = data["first_direction"][parent]
+            key = data["key"][parent]
         return dict(
-            position=via[g], time_s=times_k[g] + t_k[g], speed=speeds_k[g], parent=parent_g,
-            length_m=data["length_m"][parent_g] + speeds_k[g] * t_k[g],
+            position=via[good], time_s=times_k[good] + t_k, speed=speeds_k[good], parent=parent,
+            length_m=data["length_m"][parent] + speeds_k[good] * t_k,
             first_direction=first_direction, key=key,
         )
 
@@ -396,3 +423,9 @@ class _Search:
             points.append(data["position"][node])
             node = int(data["parent"][node])
         return np.array(points[::-1])
+
+
+_SIDES = np.array([LEFT, RIGHT, LEFT, RIGHT])
+_ROOTS = np.array([0, 0, 1, 1])
+# Cost added to the non-preferred side: breaks exact ties (head-on) and nothing else.
+_TIE_BREAK = 1e-3

@@ -1,0 +1,92 @@
+"""Load scenarios from built-in names or YAML files, turning every failure into one clear message."""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import ValidationError
+
+from viapath.scenarios.models import Scenario
+
+_BUILTIN_PACKAGE = "viapath.scenarios.builtin"
+_UNION_TAGS = {"moving", "replay"}
+
+
+class ScenarioError(ValueError):
+    """A scenario that cannot be used; the message names the file, the field and what was expected."""
+
+
+def builtin_names() -> list[str]:
+    files = resources.files(_BUILTIN_PACKAGE).iterdir()
+    return sorted(f.name[: -len(".yaml")] for f in files if f.name.endswith(".yaml"))
+
+
+def _builtin_text(name: str) -> str:
+    return resources.files(_BUILTIN_PACKAGE).joinpath(f"{name}.yaml").read_text()
+
+
+def load_scenario(source: str | Path) -> Scenario:
+    """A built-in name (see :func:`builtin_names`) or the path of a YAML file."""
+    source_str = str(source)
+    if source_str in builtin_names():
+        return _parse(_builtin_text(source_str), f"<built-in {source_str}>", base_dir=None)
+    path = Path(source_str)
+    if not path.exists():
+        raise ScenarioError(
+            f"{source_str}: no such file and no built-in scenario of that name "
+            f"(built-ins: {', '.join(builtin_names())})")
+    if path.is_dir():
+        raise ScenarioError(f"{source_str}: is a folder, expected a scenario YAML file")
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as error:
+        raise ScenarioError(f"{source_str}: cannot read: {error}") from None
+    return _parse(text, source_str, base_dir=path.parent)
+
+
+def scenario_from_dict(data: dict[str, Any], origin: str = "<dict>") -> Scenario:
+    try:
+        return Scenario.model_validate(data)
+    except ValidationError as error:
+        raise ScenarioError(format_validation_error(error, origin)) from None
+
+
+def _parse(text: str, origin: str, base_dir: Path | None) -> Scenario:
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        where = f" line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(error, "problem", None) or str(error)
+        raise ScenarioError(f"{origin}:{where}: not valid YAML: {problem}") from None
+    if not isinstance(data, dict):
+        raise ScenarioError(f"{origin}: expected a mapping of scenario fields (name, robot, path, ...), "
+                            f"found {type(data).__name__}")
+    scenario = scenario_from_dict(data, origin)
+    if base_dir is not None:
+        # Replay files are relative to the scenario file, so a suite folder can move as a whole.
+        for item in scenario.obstacles:
+            replay = getattr(item, "replay", None)
+            if replay is not None and not Path(replay.file).is_absolute():
+                candidate = base_dir / replay.file
+                if candidate.exists():
+                    replay.file = str(candidate)
+    return scenario
+
+
+def format_validation_error(error: ValidationError, origin: str) -> str:
+    lines = []
+    for item in error.errors(include_url=False):
+        location = ".".join(str(part) for part in item["loc"] if part not in _UNION_TAGS) or "(top level)"
+        message = item["msg"]
+        if item["type"] == "extra_forbidden":
+            message = "unknown field (check the spelling; extra fields are not allowed)"
+        elif item["type"] == "missing":
+            message = "required field is missing"
+        found = item.get("input")
+        found_text = "" if item["type"] in ("missing",) or isinstance(found, dict) else f"; found {found!r}"
+        lines.append(f"{origin}: {location}: {message}{found_text}")
+    return "\n".join(lines)

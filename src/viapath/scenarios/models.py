@@ -1,0 +1,177 @@
+"""Scenario files (DESIGN §4): pydantic models with ``extra="forbid"`` so a typo is an error naming the field.
+
+Every number must be finite and inside its physical range; the loader turns a validation failure
+into one message naming the file, the field path, what was expected and what was found.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    NonNegativeFloat,
+    PositiveFloat,
+    Tag,
+    field_validator,
+    model_validator,
+)
+
+Point = tuple[float, float]
+Segment = tuple[Point, Point]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
+
+
+class LimitsSpec(_Strict):
+    max_speed_mps: PositiveFloat = 0.6
+    max_accel_mps2: PositiveFloat = 0.8
+    max_turn_rate_radps: PositiveFloat = 2.0
+    max_turn_accel_radps2: PositiveFloat = 6.0
+
+
+class RobotSpec(_Strict):
+    start: Point
+    heading: float = 0.0
+    speed: PositiveFloat = Field(0.2, description="nominal speed, m/s")
+    radius: PositiveFloat = 0.25
+    limits: LimitsSpec = Field(default_factory=LimitsSpec)
+
+    @model_validator(mode="after")
+    def _speed_within_limits(self) -> "RobotSpec":
+        if self.speed > self.limits.max_speed_mps:
+            raise ValueError(f"speed {self.speed} m/s exceeds limits.max_speed_mps {self.limits.max_speed_mps}")
+        return self
+
+
+class PathSpec(_Strict):
+    waypoints: list[Point] = Field(min_length=2)
+    half_width: PositiveFloat | None = None
+    half_widths: list[PositiveFloat] | None = None
+
+    @model_validator(mode="after")
+    def _one_width_per_segment(self) -> "PathSpec":
+        if self.half_width is None and self.half_widths is None:
+            raise ValueError("give half_width (one for every segment) or half_widths (one per segment)")
+        if self.half_widths is not None and len(self.half_widths) != len(self.waypoints) - 1:
+            raise ValueError(
+                f"half_widths needs one value per segment ({len(self.waypoints) - 1}), found {len(self.half_widths)}")
+        for a, b in zip(self.waypoints, self.waypoints[1:]):
+            if a == b:
+                raise ValueError(f"consecutive waypoints must differ, found {list(a)} twice")
+        return self
+
+    def widths(self) -> list[float]:
+        return list(self.half_widths) if self.half_widths is not None else [self.half_width] * (len(self.waypoints) - 1)
+
+
+class ObstacleSpec(_Strict):
+    """A moving disc: constant ``velocity``, or along ``waypoints`` at ``speed`` (optionally looping)."""
+
+    start: Point
+    radius: PositiveFloat = 0.25
+    velocity: Point | None = None
+    waypoints: list[Point] | None = None
+    speed: PositiveFloat | None = None
+    loop: bool = False
+    start_time_s: NonNegativeFloat = 0.0  # stands still at ``start`` until then
+
+    @model_validator(mode="after")
+    def _one_motion(self) -> "ObstacleSpec":
+        if self.waypoints is not None:
+            if self.velocity is not None:
+                raise ValueError("give velocity or waypoints, not both")
+            if self.speed is None:
+                raise ValueError("an obstacle with waypoints needs a speed (m/s)")
+        elif self.speed is not None:
+            raise ValueError("speed applies only with waypoints; use velocity for constant motion")
+        return self
+
+
+class ReplaySpec(_Strict):
+    """Every pedestrian of a recorded trajectory file (ETH/UCY 4-column ``frame id x y``)."""
+
+    file: str
+    dt_s: PositiveFloat = 0.4
+    start_s: NonNegativeFloat = 0.0
+    offset: Point = (0.0, 0.0)
+    radius: PositiveFloat = 0.25
+
+
+class ReplayItem(_Strict):
+    replay: ReplaySpec
+
+
+def _obstacle_kind(value: Any) -> str:
+    if isinstance(value, dict):
+        return "replay" if "replay" in value else "moving"
+    return "replay" if isinstance(value, ReplayItem) else "moving"
+
+
+ObstacleItem = Annotated[
+    Union[Annotated[ObstacleSpec, Tag("moving")], Annotated[ReplayItem, Tag("replay")]],
+    Discriminator(_obstacle_kind),
+]
+
+
+class WeightsSpec(_Strict):
+    k1: NonNegativeFloat = 0.1
+    k2: NonNegativeFloat = 0.001
+    k3: NonNegativeFloat = 0.08
+    k4: NonNegativeFloat = 0.3
+
+
+class PlannerSpec(_Strict):
+    name: str = "viapath"
+    speeds: list[PositiveFloat] = Field(default_factory=lambda: [0.1, 0.2, 0.3, 0.4, 0.5], min_length=1)
+    weights: WeightsSpec = Field(default_factory=WeightsSpec)
+    theta_unit: Literal["rad", "deg"] = "rad"
+    planning_margin_m: NonNegativeFloat = 0.1
+    safety_margin_m: NonNegativeFloat = 0.05
+    horizon_s: PositiveFloat = 10.0
+    max_depth: int = Field(3, ge=1, le=6)
+    preferred_side: Literal["left", "right"] = "left"
+    hysteresis: NonNegativeFloat = 0.01
+    uncertainty_sigmas: NonNegativeFloat = 2.0
+    params: dict[str, Any] = Field(default_factory=dict, description="options for other planners")
+
+
+class PerceptionSpec(_Strict):
+    mode: Literal["oracle", "laser"] = "oracle"
+    position_noise_m: NonNegativeFloat = 0.0
+    velocity_noise_mps: NonNegativeFloat = 0.0
+    options: dict[str, Any] = Field(default_factory=dict, description="options for the laser chain")
+
+
+class SubgoalSpec(_Strict):
+    reach_threshold_m: PositiveFloat = 0.2
+    goal_tolerance_m: PositiveFloat = 0.1
+    bypass_distance_m: NonNegativeFloat = 1.0
+    blocked_clearance_m: float = 0.1
+
+
+class Scenario(_Strict):
+    name: str
+    description: str = ""
+    robot: RobotSpec
+    path: PathSpec
+    obstacles: list[ObstacleItem] = Field(default_factory=list)
+    walls: list[Segment] = Field(default_factory=list)
+    planner: PlannerSpec = Field(default_factory=PlannerSpec)
+    perception: PerceptionSpec = Field(default_factory=PerceptionSpec)
+    subgoals: SubgoalSpec = Field(default_factory=SubgoalSpec)
+    duration_s: PositiveFloat = 60.0
+    dt_s: PositiveFloat = 0.1
+    seed: int = 0
+
+    @field_validator("duration_s")
+    @classmethod
+    def _not_absurd(cls, value: float) -> float:
+        if value > 24 * 3600:
+            raise ValueError("duration_s above one day is surely a mistake")
+        return value

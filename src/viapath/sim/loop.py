@@ -1,0 +1,175 @@
+"""The closed loop: perceive, plan, drive, at the scan period (10 Hz by default).
+
+Deterministic for a given seed: the only randomness (perception noise) draws from one generator.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from viapath.observation import Command, MotionLimits, Observation, RobotState
+from viapath.path import DesignatedPath, SubgoalPolicy
+from viapath.planning import Decision, make_planner, planner_class
+from viapath.sim import robot as kinematics
+from viapath.sim.metrics import compute_metrics
+from viapath.sim.obstacles import scenario_obstacle_states
+from viapath.sim.perception import OraclePerception, Perception, WorldSnapshot
+
+
+@dataclass
+class Trace:
+    """Everything that happened, one row per step (robot rows include the final state)."""
+
+    scenario_name: str
+    planner_name: str
+    perception_mode: str
+    dt_s: float
+    path: DesignatedPath
+    robot_radius_m: float
+    times_s: np.ndarray  # (K,)
+    robot_poses: np.ndarray  # (K, 3) x, y, heading
+    robot_speeds_mps: np.ndarray  # (K,)
+    robot_turn_rates_radps: np.ndarray  # (K,)
+    commands: np.ndarray  # (K, 2) v, ω commanded at each step (last row: nothing commanded)
+    obstacle_positions: np.ndarray  # (K, N, 2), NaN where absent
+    obstacle_velocities: np.ndarray  # (K, N, 2)
+    obstacle_radii_m: np.ndarray  # (N,)
+    plan_speeds_mps: np.ndarray  # (K,)
+    plan_targets: np.ndarray  # (K, 2)
+    plan_status: list[str]
+    via_points: list[np.ndarray]  # per step, (k, 2)
+    plan_times_ms: np.ndarray  # (K,)
+    reached_goal: bool
+    walls: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 2)))
+    perceived: list[Any] = field(default_factory=list)  # per step Obstacles, when recorded
+    scan_points: list[np.ndarray] = field(default_factory=list)  # per step, world frame, laser only
+    extras: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class Episode:
+    trace: Trace
+    metrics: dict[str, Any]
+
+
+def make_perception(mode: str, scenario, position_noise_m: float, velocity_noise_mps: float) -> Perception:
+    if mode == "oracle":
+        return OraclePerception(position_noise_m, velocity_noise_mps)
+    if mode == "laser":
+        try:
+            from viapath.perception.laser import LaserPerception
+        except ImportError as error:  # pragma: no cover - depends on the laser chain being installed
+            raise RuntimeError(f"laser perception is not available: {error}") from None
+        return LaserPerception(**scenario.perception.options)
+    raise ValueError(f"unknown perception mode {mode!r}; use 'oracle' or 'laser'")
+
+
+def planner_options(scenario, planner_name: str) -> dict[str, Any]:
+    cls = planner_class(planner_name)
+    spec = scenario.planner
+    if hasattr(cls, "options_from_spec"):
+        return cls.options_from_spec(spec)
+    return dict(spec.params)
+
+
+def run_episode(
+    scenario,
+    planner: str | None = None,
+    perception: str | None = None,
+    seed: int | None = None,
+    position_noise_m: float | None = None,
+    velocity_noise_mps: float | None = None,
+    record_perceived: bool = False,
+    planner_overrides: dict[str, Any] | None = None,
+) -> Episode:
+    """Run one scenario to the goal or to ``duration_s``; returns the trace and its metrics."""
+    dt = scenario.dt_s
+    n_steps = int(round(scenario.duration_s / dt))
+    times = np.arange(n_steps + 1) * dt
+    positions, velocities, radii = scenario_obstacle_states(scenario, times)
+    walls = np.asarray(scenario.walls, dtype=float).reshape(-1, 2, 2)
+
+    path = DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths())
+    spec = scenario.robot
+    limits = MotionLimits(**spec.limits.model_dump())
+    subgoal_policy = SubgoalPolicy(**scenario.subgoals.model_dump())
+    planner_name = planner or scenario.planner.name
+    options = planner_options(scenario, planner_name)
+    options.update(planner_overrides or {})
+    the_planner = make_planner(planner_name, path, nominal_speed_mps=spec.speed, limits=limits,
+                               robot_radius_m=spec.radius, subgoal_policy=subgoal_policy, **options)
+    mode = perception or scenario.perception.mode
+    sensing = make_perception(
+        mode, scenario,
+        scenario.perception.position_noise_m if position_noise_m is None else position_noise_m,
+        scenario.perception.velocity_noise_mps if velocity_noise_mps is None else velocity_noise_mps,
+    )
+    rng = np.random.default_rng(scenario.seed if seed is None else seed)
+    sensing.reset(rng)
+
+    state = kinematics.UnicycleState(spec.start[0], spec.start[1], spec.heading, spec.speed, 0.0)
+    rows: dict[str, list] = {k: [] for k in ("pose", "speed", "turn", "command", "plan_speed", "target", "status", "via", "plan_ms")}
+    perceived, scan_points = [], []
+    reached = False
+    goal_tolerance = subgoal_policy.goal_tolerance_m
+    for k in range(n_steps + 1):
+        rows["pose"].append((state.x, state.y, state.heading_rad))
+        rows["speed"].append(state.speed_mps)
+        rows["turn"].append(state.turn_rate_radps)
+        if np.hypot(*(path.goal - state.position)) <= goal_tolerance:
+            reached = True
+        if reached or k == n_steps:
+            _append_idle(rows, state)
+            break
+        world = WorldSnapshot(float(times[k]), np.array([state.x, state.y, state.heading_rad]), spec.radius,
+                              positions[k], velocities[k], radii, walls)
+        observed = sensing.observe(world)
+        if record_perceived:
+            perceived.append(observed)
+        points = getattr(sensing, "last_points_world", None)
+        if points is not None:
+            scan_points.append(np.asarray(points))
+        observation = Observation(float(times[k]), RobotState(state.position, state.heading_rad, state.speed_mps,
+                                                              state.turn_rate_radps, spec.radius), observed)
+        started = time.perf_counter()
+        decision: Decision = the_planner.plan(observation)
+        rows["plan_ms"].append((time.perf_counter() - started) * 1e3)
+        command = decision.command
+        if not (np.isfinite(command.speed_mps) and np.isfinite(command.turn_rate_radps)):
+            command = Command.stop()
+        rows["command"].append((command.speed_mps, command.turn_rate_radps))
+        rows["plan_speed"].append(decision.plan.speed_mps)
+        rows["target"].append(np.asarray(decision.plan.target, dtype=float))
+        rows["status"].append(decision.plan.status)
+        rows["via"].append(np.asarray(decision.plan.via_points, dtype=float).reshape(-1, 2))
+        state = kinematics.step(state, command, limits, dt)
+
+    n = len(rows["pose"])
+    trace = Trace(
+        scenario_name=scenario.name, planner_name=planner_name, perception_mode=mode, dt_s=dt, path=path,
+        robot_radius_m=spec.radius, times_s=times[:n], robot_poses=np.array(rows["pose"]),
+        robot_speeds_mps=np.array(rows["speed"]), robot_turn_rates_radps=np.array(rows["turn"]),
+        commands=np.array(rows["command"]), obstacle_positions=positions[:n], obstacle_velocities=velocities[:n],
+        obstacle_radii_m=radii, plan_speeds_mps=np.array(rows["plan_speed"]), plan_targets=np.array(rows["target"]),
+        plan_status=rows["status"], via_points=rows["via"], plan_times_ms=np.array(rows["plan_ms"]),
+        reached_goal=reached, walls=walls, perceived=perceived, scan_points=scan_points,
+    )
+    metrics = compute_metrics(trace)
+    extra_metrics = getattr(sensing, "episode_metrics", None)
+    if callable(extra_metrics):
+        metrics.update(extra_metrics())
+    return Episode(trace, metrics)
+
+
+def _append_idle(rows: dict[str, list], state: kinematics.UnicycleState) -> None:
+    """The last row has no planning cycle: record 'nothing commanded' so every column has one row per step."""
+    rows["command"].append((0.0, 0.0))
+    rows["plan_speed"].append(0.0)
+    rows["target"].append(state.position)
+    rows["status"].append("end")
+    rows["via"].append(np.zeros((0, 2)))
+    rows["plan_ms"].append(np.nan)

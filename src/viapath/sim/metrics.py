@@ -1,0 +1,59 @@
+"""Episode metrics (DESIGN §4 names, SI units), computed from the trace alone."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from viapath.geometry import closest_approach
+
+
+def clearance_per_step(trace) -> np.ndarray:
+    """Smallest surface-to-surface distance to any obstacle during each step (K-1,), exact for
+    straight-line motion of both between samples; negative means overlap. inf with no obstacle."""
+    poses = trace.robot_poses[:, :2]
+    obstacles = trace.obstacle_positions
+    if obstacles.shape[1] == 0 or len(poses) < 2:
+        return np.full(max(len(poses) - 1, 0), np.inf)
+    rel_start = poses[:-1, None, :] - obstacles[:-1]
+    rel_end = poses[1:, None, :] - obstacles[1:]
+    # A person who enters or leaves the scene this step is checked only where present at both ends.
+    present = np.isfinite(rel_start).all(-1) & np.isfinite(rel_end).all(-1)
+    rel_start = np.where(present[..., None], rel_start, 1e9)
+    rel_end = np.where(present[..., None], rel_end, 1e9)
+    distance, _ = closest_approach(rel_start, (rel_end - rel_start), 1.0)
+    clearance = distance - trace.obstacle_radii_m[None, :] - trace.robot_radius_m
+    return clearance.min(axis=1)
+
+
+def compute_metrics(trace) -> dict[str, Any]:
+    poses = trace.robot_poses[:, :2]
+    dt = trace.dt_s
+    clearance = clearance_per_step(trace)
+    min_clearance = float(clearance.min()) if len(clearance) else float("inf")
+    lateral = np.abs(trace.path.lateral_deviation(poses))
+    outside = trace.path.corridor_excess(poses) > 1e-6
+    plan_ms = trace.plan_times_ms[np.isfinite(trace.plan_times_ms)]
+    speeds = trace.robot_speeds_mps
+    return {
+        "scenario": trace.scenario_name,
+        "planner": trace.planner_name,
+        "perception": trace.perception_mode,
+        "reached_goal": bool(trace.reached_goal),
+        "collision": bool(min_clearance < 0.0),
+        "min_clearance_m": _finite_or_none(min_clearance),
+        "time_to_goal_s": float(trace.times_s[-1]) if trace.reached_goal else None,
+        "path_length_m": float(np.sum(np.hypot(*np.diff(poses, axis=0).T))),
+        "mean_lateral_deviation_m": float(lateral.mean()),
+        "max_lateral_deviation_m": float(lateral.max()),
+        "time_outside_corridor_s": float(np.count_nonzero(outside[:-1]) * dt),
+        "min_speed_mps": float(speeds.min()),
+        "max_speed_mps": float(speeds.max()),
+        "plan_time_p50_ms": float(np.percentile(plan_ms, 50)) if len(plan_ms) else None,
+        "plan_time_p99_ms": float(np.percentile(plan_ms, 99)) if len(plan_ms) else None,
+    }
+
+
+def _finite_or_none(value: float):
+    return float(value) if np.isfinite(value) else None
