@@ -60,11 +60,19 @@ def test_ray_casting_matches_brute_force_marching(centres, radii, walls, angle):
         assert exact == 0.0
         return
     reference = march(origin, angle, centres, radii, segments)
-    if np.isinf(reference):
-        # no hit found by marching: the exact caster may only find a grazing hit the 1 mm march skips
-        assert np.isinf(exact) or exact > 0
-    else:
-        assert exact == pytest.approx(reference, abs=2e-3)
+    assert exact <= reference + 2e-3  # never misses what the march hits
+    if np.isinf(exact):
+        return
+    d = np.array([np.cos(angle), np.sin(angle)])
+    point = origin + exact * d
+    surface = [abs(np.hypot(*(point - c)) - r) for c, r in zip(centres, radii)]
+    surface += [point_segment_distance(point, a, b) for a, b in segments]
+    assert min(surface) < 1e-6  # the hit lies on a disc or a wall
+    if exact < reference - 2e-3:
+        # the 1 mm march stepped over a grazing contact: tangent to a disc or at a wall's end
+        tangent = [abs(abs(d[0] * (c - origin)[1] - d[1] * (c - origin)[0]) - r) < 1e-3 for c, r in zip(centres, radii)]
+        at_end = [min(np.hypot(*(point - a)), np.hypot(*(point - b))) < 2e-3 for a, b in segments]
+        assert any(tangent) or any(at_end)
 
 
 def test_disc_straight_ahead_and_wall_behind_it():

@@ -137,20 +137,27 @@ def gated_assignment(cost, gate: float) -> list[tuple[int, int]]:
 
 
 def _components(allowed: np.ndarray):
-    """Connected components of the bipartite graph given by the boolean matrix ``allowed``."""
-    n_rows, n_cols = allowed.shape
-    row_seen = np.zeros(n_rows, dtype=bool)
-    for start in np.flatnonzero(allowed.any(axis=1)):
-        if row_seen[start]:
-            continue
-        rows = np.zeros(n_rows, dtype=bool)
-        rows[start] = True
-        cols = np.zeros(n_cols, dtype=bool)
-        while True:
-            new_cols = allowed[rows].any(axis=0)
-            new_rows = allowed[:, new_cols].any(axis=1)
-            if (new_cols == cols).all() and (new_rows == rows).all():
-                break
-            rows, cols = new_rows | rows, new_cols
-        row_seen |= rows
-        yield [int(i) for i in np.flatnonzero(rows)], [int(j) for j in np.flatnonzero(cols)]
+    """Connected components (rows, cols) of the bipartite graph given by the boolean matrix ``allowed``.
+
+    Union–find over the allowed pairs in plain Python: the graphs are small and sparse.
+    """
+    n_rows = allowed.shape[0]
+    parent = list(range(n_rows + allowed.shape[1]))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    rows, cols = np.nonzero(allowed)
+    for i, j in zip(rows.tolist(), cols.tolist(), strict=True):
+        a, b = find(i), find(n_rows + j)
+        if a != b:
+            parent[b] = a
+    groups: dict[int, tuple[list[int], list[int]]] = {}
+    for i in sorted(set(rows.tolist())):
+        groups.setdefault(find(i), ([], []))[0].append(i)
+    for j in sorted(set(cols.tolist())):
+        groups.setdefault(find(n_rows + j), ([], []))[1].append(j)
+    return list(groups.values())

@@ -52,7 +52,7 @@ def fit_circles(
     radius_prior_sigma_m: float = 0.05,
     fixed_radius_m: float | None = None,
     range_sigma_m: float = 0.01,
-    iterations: int = 8,
+    iterations: int = 4,
 ) -> CircleFits:
     """Fit one circle to each cluster ``points[starts[k] : starts[k] + counts[k]]``.
 
@@ -88,34 +88,23 @@ def fit_circles(
         weight = np.zeros(k_count)
     target = radius.copy() if prior is not None else np.zeros(k_count)
 
-    jtj = np.zeros((k_count, 3, 3))
+    qz = q[..., 0] + 1j * q[..., 1]  # points as complex numbers: fewer numpy calls per iteration
+    cz = centre[:, 0] + 1j * centre[:, 1]
     for _ in range(iterations):
-        d = q - centre[:, None, :]
-        dist = np.maximum(np.hypot(d[..., 0], d[..., 1]), 1e-12)
-        u = d / dist[..., None]
-        res = (dist - radius[:, None]) * mask
-        jx, jy = -u[..., 0] * mask, -u[..., 1] * mask
-        jr = -mask
-        jtj[:, 0, 0] = (jx * jx).sum(1)
-        jtj[:, 0, 1] = jtj[:, 1, 0] = (jx * jy).sum(1)
-        jtj[:, 1, 1] = (jy * jy).sum(1)
-        jtj[:, 0, 2] = jtj[:, 2, 0] = (jx * jr).sum(1)
-        jtj[:, 1, 2] = jtj[:, 2, 1] = (jy * jr).sum(1)
-        jtj[:, 2, 2] = n + weight
-        jtr = np.stack([(jx * res).sum(1), (jy * res).sum(1), (jr * res).sum(1) + weight * (radius - target)], axis=-1)
-        damped = jtj + 1e-9 * np.eye(3)
-        step = -np.linalg.solve(damped, jtr[..., None])[..., 0]
-        centre = centre + step[:, :2]
-        radius = np.abs(radius + step[:, 2])
+        normal, _, jtr = _normal_equations(qz, mask, cz, radius, n, weight, target)
+        step, _, _ = solve_sym3(normal, jtr)
+        cz = cz - (step[0] + 1j * step[1])
+        radius = np.abs(radius - step[2])
 
-    d = q - centre[:, None, :]
-    dist = np.hypot(d[..., 0], d[..., 1])
-    res = (dist - radius[:, None]) * mask
-    rms = np.sqrt((res**2).sum(1) / n)
-    # Centre covariance: σ̂² (JᵀJ)⁻¹ at the solution (the last Jacobian is close enough).
+    normal, rms, jtr = _normal_equations(qz, mask, cz, radius, n, weight, target)
+    # Centre covariance: σ̂² (JᵀJ)⁻¹ at the solution; its 2x2 centre block from the cofactors.
+    _, cofactors, det = solve_sym3(normal, jtr)
     sigma2 = np.maximum(rms, range_sigma_m) ** 2
-    cov = np.linalg.inv(jtj + 1e-9 * np.eye(3))[:, :2, :2] * sigma2[:, None, None]
-    centre_sigma = np.sqrt(np.maximum(np.linalg.eigvalsh(cov)[:, -1], 0.0))
+    c00, c01, _, c11, _, _ = (c / det for c in cofactors)
+    half_trace, half_diff = 0.5 * (c00 + c11), 0.5 * (c00 - c11)
+    largest = half_trace + np.sqrt(half_diff**2 + c01**2)
+    centre_sigma = np.sqrt(np.maximum(largest * sigma2, 0.0))
+    centre = np.stack([cz.real, cz.imag], axis=-1)
     # The centre must lie behind the arc, away from the sensor; a fit that flips to the near side
     # (possible on a nearly straight, noisy arc) is mirrored through the arc's centroid.
     view = mean - origins
@@ -124,21 +113,59 @@ def fit_circles(
     return CircleFits(centre + mean, radius, rms, centre_sigma)
 
 
+def _normal_equations(qz, mask, cz, radius, n, weight, target):
+    """Gauss–Newton normal equations for (cx, cy, r): the six entries of ``JᵀJ``, the residual RMS and ``Jᵀr``.
+
+    Residual ``|p - c| - r``; Jacobian rows ``(-u_x, -u_y, -1)`` with ``u`` the unit vector from the
+    centre to the point (complex ``u``; ``Σu² = Σ(u_x² - u_y²) + 2iΣu_x u_y`` and ``u_x² + u_y² = 1``
+    give the 2x2 block in one sum); the prior adds ``weight (r - target)²``. The step is
+    ``δ = -(JᵀJ)⁻¹ Jᵀr``.
+    """
+    d = qz - cz[:, None]
+    dist = np.abs(d)
+    np.maximum(dist, 1e-12, out=dist)
+    u = d / dist * mask
+    res = (dist - radius[:, None]) * mask
+    u2 = (u * u).sum(1)
+    u1 = u.sum(1)
+    ur = (u * res).sum(1)
+    normal = (0.5 * (n + u2.real), 0.5 * u2.imag, u1.real, 0.5 * (n - u2.real), u1.imag, n + weight)
+    rms = np.sqrt((res * res).sum(1) / n)
+    jtr = (-ur.real, -ur.imag, -res.sum(1) + weight * (radius - target))
+    return normal, rms, jtr
+
+
+def solve_sym3(a, b):
+    """Solve K symmetric 3x3 systems given as entries ``a = (a00, a01, a02, a11, a12, a22)`` (each (K,)).
+
+    Cramer's rule on (K,) arrays: for a handful of clusters this is far faster than
+    ``np.linalg.solve``. Returns ``(x (3, K), cofactors (6 arrays), det)``; a singular system gives
+    a zero step.
+    """
+    a00, a01, a02, a11, a12, a22 = a
+    c00 = a11 * a22 - a12 * a12
+    c01 = a02 * a12 - a01 * a22
+    c02 = a01 * a12 - a02 * a11
+    c11 = a00 * a22 - a02 * a02
+    c12 = a01 * a02 - a00 * a12
+    c22 = a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    ok = np.abs(det) > 1e-300
+    det = np.where(ok, det, np.inf)
+    b0, b1, b2 = b
+    x = np.stack([(c00 * b0 + c01 * b1 + c02 * b2), (c01 * b0 + c11 * b1 + c12 * b2),
+                  (c02 * b0 + c12 * b1 + c22 * b2)]) / det
+    return x, (c00, c01, c02, c11, c12, c22), det
+
+
 def _kasa(q: np.ndarray, mask: np.ndarray, n: np.ndarray):
     """Algebraic fit ``x² + y² + a x + b y + c = 0`` (Kåsa), batched; ``q`` centred and masked."""
     x, y = q[..., 0], q[..., 1]
     z = x * x + y * y
-    a = np.zeros((len(n), 3, 3))
-    a[:, 0, 0] = (x * x).sum(1)
-    a[:, 0, 1] = a[:, 1, 0] = (x * y).sum(1)
-    a[:, 1, 1] = (y * y).sum(1)
-    a[:, 0, 2] = a[:, 2, 0] = x.sum(1)
-    a[:, 1, 2] = a[:, 2, 1] = y.sum(1)
-    a[:, 2, 2] = n
-    rhs = -np.stack([(x * z).sum(1), (y * z).sum(1), z.sum(1)], axis=-1)
-    sol = np.linalg.solve(a + 1e-12 * np.eye(3), rhs[..., None])[..., 0]
-    centre = -0.5 * sol[:, :2]
-    radius = np.sqrt(np.maximum((centre**2).sum(1) - sol[:, 2], 1e-12))
+    a = ((x * x).sum(1), (x * y).sum(1), x.sum(1), (y * y).sum(1), y.sum(1), n)
+    sol, _, _ = solve_sym3(a, (-(x * z).sum(1), -(y * z).sum(1), -z.sum(1)))
+    centre = -0.5 * sol[:2].T
+    radius = np.sqrt(np.maximum((centre**2).sum(1) - sol[2], 1e-12))
     return centre, radius
 
 

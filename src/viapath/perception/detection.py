@@ -34,12 +34,14 @@ What we chose where the sources leave it open:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 
-from viapath.perception.circle_fit import _padded, fit_circles
+from viapath.perception.circle_fit import _padded, fit_circles, solve_sym3
+from viapath.perception.fusion import FusedScan
 from viapath.perception.scanner import ScannerModel, sanitize_ranges
-from viapath.perception.segmentation import SegmentationParams, segment_scan
+from viapath.perception.segmentation import SegmentationParams, segment_beams
 
 
 @dataclass(frozen=True)
@@ -62,7 +64,7 @@ class DetectorParams:
     leg_pair_distance_m: float = 0.5
     leg_position_sigma_m: float = 0.1
     measurement_sigma_floor_m: float = 0.02
-    iterations: int = 8
+    iterations: int = 4
     keep_segments: bool = True  # per-segment points and fits, for plots and evaluation
 
     @classmethod
@@ -84,6 +86,7 @@ class Detections:
     leg_count: np.ndarray  # (K,) 0 for a round object, 1 or 2 for a person seen by the legs
     segments: list = field(default_factory=list)  # per-segment info for plots and evaluation
     legs: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # leg-sized centres before pairing
+    fused: FusedScan | None = None  # every valid point of the cycle, robot frame
 
     def __len__(self) -> int:
         return len(self.radii_m)
@@ -99,77 +102,92 @@ class Detections:
         rot = np.array([[c, -s], [s, c]])
         centres = self.centres @ rot.T + [x, y]
         legs = self.legs @ rot.T + [x, y] if len(self.legs) else self.legs
-        return Detections(centres, self.radii_m, self.position_sigma_m, self.leg_count, self.segments, legs)
+        return Detections(centres, self.radii_m, self.position_sigma_m, self.leg_count, self.segments, legs, self.fused)
 
 
 def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detections:
     """Detect round obstacles in the scans of ``scanners`` (readings may encode invalid as 0/NaN/inf)."""
-    all_points, all_starts, all_counts, origins, source, occluded = [], [], [], [], [], []
-    offset = 0
-    for index, (scanner, ranges) in enumerate(zip(scanners, scans, strict=True)):
-        scanner: ScannerModel
-        ranges = sanitize_ranges(ranges, scanner.range_min_m, scanner.range_max_m)
+    scanners = tuple(scanners)
+    layout = _beam_layout(scanners)
+    if len(scans) != len(scanners):
+        raise ValueError(f"{len(scanners)} scanners but {len(scans)} scans")
+    parts = []
+    for scanner, ranges in zip(scanners, scans, strict=True):
+        ranges = np.asarray(ranges, dtype=float).reshape(-1)
         if len(ranges) != scanner.beam_count:
             raise ValueError(f"scanner {scanner.name!r} has {scanner.beam_count} beams, scan has {len(ranges)}")
-        segments = segment_scan(ranges, scanner.beam_angles_rad(), params.segmentation)
-        if len(segments) == 0:
-            continue
-        c, s = np.cos(scanner.mount_yaw_rad), np.sin(scanner.mount_yaw_rad)
-        p = segments.points
-        all_points.append(np.stack([scanner.mount_x_m + c * p[:, 0] - s * p[:, 1], scanner.mount_y_m + s * p[:, 0] + c * p[:, 1]], -1))
-        all_starts.append(segments.starts + offset)
-        all_counts.append(segments.counts)
-        origins.append(np.repeat([[scanner.mount_x_m, scanner.mount_y_m]], len(segments), axis=0))
-        source.append(np.full(len(segments), index))
-        occluded.append(segments.occluded)
-        offset += len(p)
-    if not all_points:
-        return Detections.empty()
-    points = np.concatenate(all_points)
-    starts = np.concatenate(all_starts)
-    counts = np.concatenate(all_counts)
-    origins = np.concatenate(origins)
-    source = np.concatenate(source)
-    occluded = np.concatenate(occluded)
+        parts.append(ranges)
+    ranges = sanitize_ranges(np.concatenate(parts), 0.0)
+    ranges[(ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = np.nan
+    segments = segment_beams(ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index,
+                             params.segmentation)
+    fused = FusedScan(segments.all_points, layout.scan_index[segments.all_beam_index],
+                      segments.all_beam_index - layout.first_beam[layout.scan_index[segments.all_beam_index]])
+    if len(segments) == 0:
+        empty = Detections.empty()
+        empty.fused = fused
+        return empty
+    points, starts, counts = segments.points, segments.starts, segments.counts
+    source, occluded = segments.scan_index, segments.occluded
+    origins = np.stack([layout.mount_x_m[source], layout.mount_y_m[source]], -1)
 
-    fits = fit_circles(points, starts, counts, origins, radius_prior_m=params.radius_prior_m,
-                       radius_prior_sigma_m=params.radius_prior_sigma_m, fixed_radius_m=params.fixed_radius_m,
-                       range_sigma_m=params.segmentation.noise_sigma_near_m, iterations=params.iterations)
+    # Cheap tests first, on every segment; the circle fit only on what is left (walls are long and
+    # would widen the padded fitting arrays to hundreds of points).
     first = points[starts]
     last = points[starts + counts - 1]
     chord = last - first
     extent = np.hypot(chord[:, 0], chord[:, 1])
-    padded, mask = _padded(points, starts, counts)
-    normal = np.stack([-chord[:, 1], chord[:, 0]], -1) / np.maximum(extent, 1e-12)[:, None]
-    sagitta = (np.abs(((padded - first[:, None, :]) * normal[:, None, :]).sum(-1)) * mask).max(1)
-    straight = (extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * extent)
-    if params.flat_test_min_extent_m is not None:
-        t_convex = _convexity_t(padded, mask, first, chord, extent, origins, params.segmentation)
-        straight |= (extent >= params.flat_test_min_extent_m) & (t_convex < params.min_convexity_t)
-    # A flat piece with something nearer beside it: background seen between foreground objects.
-    straight |= occluded & (sagitta < params.occluded_max_sagitta_ratio * extent)
-    keep = ((extent <= params.max_extent_m) & ~straight & (fits.radii_m >= params.radius_min_m)
-            & (fits.radii_m <= params.radius_max_m) & (fits.rms_m <= params.max_rms_m)
-            & np.isfinite(fits.centres).all(1))
+    keep = extent <= params.max_extent_m
+    candidates = np.flatnonzero(keep)
+    centres_all = np.full((len(starts), 2), np.nan)
+    radii_all = np.full(len(starts), np.nan)
+    sigma_all = np.full(len(starts), np.nan)
+    if len(candidates):
+        c_starts, c_counts, c_first, c_chord = starts[candidates], counts[candidates], first[candidates], chord[candidates]
+        c_extent, c_origins = extent[candidates], origins[candidates]
+        padded, mask = _padded(points, c_starts, c_counts)
+        normal = np.stack([-c_chord[:, 1], c_chord[:, 0]], -1) / np.maximum(c_extent, 1e-12)[:, None]
+        sagitta = (np.abs(((padded - c_first[:, None, :]) * normal[:, None, :]).sum(-1)) * mask).max(1)
+        straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
+        if params.flat_test_min_extent_m is not None:
+            long_enough = c_extent >= params.flat_test_min_extent_m
+            if long_enough.any():
+                t_convex = _convexity_t(padded[long_enough], mask[long_enough], c_first[long_enough],
+                                        c_chord[long_enough], c_extent[long_enough], c_origins[long_enough], params.segmentation)
+                straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
+        # A flat piece with something nearer beside it: background seen between foreground objects.
+        straight |= occluded[candidates] & (sagitta < params.occluded_max_sagitta_ratio * c_extent)
+        keep[candidates[straight]] = False
+        candidates = candidates[~straight]
+    if len(candidates):
+        fits = fit_circles(points, starts[candidates], counts[candidates], origins[candidates],
+                           radius_prior_m=params.radius_prior_m, radius_prior_sigma_m=params.radius_prior_sigma_m,
+                           fixed_radius_m=params.fixed_radius_m, range_sigma_m=params.segmentation.noise_sigma_near_m,
+                           iterations=params.iterations)
+        good = ((fits.radii_m >= params.radius_min_m) & (fits.radii_m <= params.radius_max_m)
+                & (fits.rms_m <= params.max_rms_m) & np.isfinite(fits.centres).all(1))
+        centres_all[candidates], radii_all[candidates], sigma_all[candidates] = fits.centres, fits.radii_m, fits.centre_sigma_m
+        keep[candidates[~good]] = False
+    keep[:] = keep & np.isfinite(radii_all)
     segment_info = [
-        dict(scanner=int(source[k]), points=points[starts[k]:starts[k] + counts[k]], centre=fits.centres[k],
-             radius_m=float(fits.radii_m[k]), accepted=bool(keep[k]))
+        dict(scanner=int(source[k]), points=points[starts[k]:starts[k] + counts[k]], centre=centres_all[k],
+             radius_m=float(radii_all[k]), accepted=bool(keep[k]))
         for k in range(len(starts))
     ] if params.keep_segments else []
 
-    centres = fits.centres[keep]
-    radii = fits.radii_m[keep]
-    sigma = np.maximum(fits.centre_sigma_m[keep], params.measurement_sigma_floor_m)
+    centres = centres_all[keep]
+    radii = radii_all[keep]
+    sigma = np.maximum(sigma_all[keep], params.measurement_sigma_floor_m)
     source = source[keep]
     centres, radii, sigma, source = _merge_duplicates(centres, radii, sigma, source, params.duplicate_distance_m)
     legs_mask = radii <= params.leg_max_radius_m
     legs = centres[legs_mask]
     centres, radii, sigma, leg_count = _pair_legs(centres, radii, sigma, legs_mask, params)
-    return Detections(centres, radii, sigma, leg_count, segment_info, legs)
+    return Detections(centres, radii, sigma, leg_count, segment_info, legs, fused)
 
 
 def _merge_duplicates(centres, radii, sigma, source, distance_m):
-    if len(centres) < 2 or distance_m <= 0 or len(np.unique(source)) < 2:
+    if len(centres) < 2 or distance_m <= 0 or source.min() == source.max():
         return centres, radii, sigma, source
     d = np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1))
     d[source[:, None] == source[None, :]] = np.inf
@@ -228,16 +246,41 @@ def _convexity_t(padded, mask, first, chord, extent, origins, seg: SegmentationP
     y = (rel * n[:, None, :]).sum(-1) * mask
     count = mask.sum(1)
     x2 = x * x
-    a = np.empty((len(count), 3, 3))
-    a[:, 0, 0] = count
-    a[:, 0, 1] = a[:, 1, 0] = x.sum(1)
-    a[:, 0, 2] = a[:, 2, 0] = a[:, 1, 1] = x2.sum(1)
-    a[:, 1, 2] = a[:, 2, 1] = (x2 * x).sum(1)
-    a[:, 2, 2] = (x2 * x2).sum(1)
-    rhs = np.stack([y.sum(1), (x * y).sum(1), (x2 * y).sum(1)], -1)
-    a_reg = a + 1e-12 * np.eye(3)
-    coef = np.linalg.solve(a_reg, rhs[..., None])[..., 0]
-    inv22 = np.linalg.inv(a_reg)[:, 2, 2]
+    a = (count, x.sum(1), x2.sum(1), x2.sum(1), (x2 * x).sum(1), (x2 * x2).sum(1))
+    coef, cofactors, det = solve_sym3(a, (y.sum(1), (x * y).sum(1), (x2 * y).sum(1)))
+    inv22 = cofactors[5] / det
     distance = np.hypot(*(mid - origins).T)
     sigma = np.where(distance < seg.noise_switch_range_m, seg.noise_sigma_near_m, seg.noise_fraction_far * distance)
-    return -coef[:, 2] / (sigma * np.sqrt(np.maximum(inv22, 1e-30)))
+    return -coef[2] / (sigma * np.sqrt(np.maximum(inv22, 1e-30)))
+
+
+@dataclass(frozen=True)
+class _BeamLayout:
+    """Every beam of a set of scanners, concatenated, in the robot frame (cached per scanner set)."""
+
+    angles_rad: np.ndarray
+    origin_x_m: np.ndarray
+    origin_y_m: np.ndarray
+    scan_index: np.ndarray
+    first_beam: np.ndarray
+    range_min_m: np.ndarray
+    range_max_m: np.ndarray
+    mount_x_m: np.ndarray
+    mount_y_m: np.ndarray
+
+
+@lru_cache(maxsize=16)
+def _beam_layout(scanners: tuple[ScannerModel, ...]) -> _BeamLayout:
+    counts = [s.beam_count for s in scanners]
+    rep = lambda values: np.repeat(np.asarray(values, dtype=float), counts)  # noqa: E731
+    return _BeamLayout(
+        angles_rad=np.concatenate([s.beam_angles_rad() + s.mount_yaw_rad for s in scanners]),
+        origin_x_m=rep([s.mount_x_m for s in scanners]),
+        origin_y_m=rep([s.mount_y_m for s in scanners]),
+        scan_index=np.repeat(np.arange(len(scanners)), counts),
+        first_beam=np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(int),
+        range_min_m=rep([s.range_min_m for s in scanners]),
+        range_max_m=rep([s.range_max_m for s in scanners]),
+        mount_x_m=np.array([s.mount_x_m for s in scanners]),
+        mount_y_m=np.array([s.mount_y_m for s in scanners]),
+    )

@@ -20,11 +20,13 @@ from __future__ import annotations
 
 from dataclasses import fields, replace
 
+import time
+
 import numpy as np
 
 from viapath.observation import Obstacles
 from viapath.perception.detection import DetectorParams, Detections, detect
-from viapath.perception.fusion import BlindRegion, blind_region, fuse_scans
+from viapath.perception.fusion import BlindRegion, blind_region
 from viapath.perception.raycast import simulate_scan
 from viapath.perception.scanner import ScannerModel, paper_scanners
 from viapath.perception.segmentation import SegmentationParams
@@ -79,6 +81,8 @@ class LaserPerception(Perception):
             raise ValueError("at least one scanner is needed")
         if isinstance(detector, dict) and isinstance(detector.get("segmentation"), dict):
             detector = {**detector, "segmentation": _dataclass_from(SegmentationParams, detector["segmentation"], "segmentation")}
+        if detector is None:
+            detector = DetectorParams(keep_segments=False)  # per-segment details cost time; ask for them explicitly
         self.detector_params: DetectorParams = _dataclass_from(DetectorParams, detector, "detector")
         if fixed_radius_m is not None:
             self.detector_params = replace(self.detector_params, fixed_radius_m=float(fixed_radius_m))
@@ -100,6 +104,9 @@ class LaserPerception(Perception):
         self.last_points_scanner = np.zeros(0, dtype=int)
         self.last_detections_world = Detections.empty()
         self.last_robot_pose = np.zeros(3)
+        self._reported: list[Obstacles] = []
+        self._truth: list[WorldSnapshot] = []
+        self._process_times_s: list[float] = []
 
     def reset(self, rng: np.random.Generator) -> None:
         self.rng = rng
@@ -137,16 +144,30 @@ class LaserPerception(Perception):
         robot_pose = np.asarray(robot_pose, dtype=float)
         self.last_robot_pose = robot_pose
         self.last_scans = scans
-        fused = fuse_scans(self.scanners, scans)
-        self.last_points_world = fused.to_world(robot_pose)
-        self.last_points_scanner = fused.scanner_index
-        detections = detect(self.scanners, scans, self.detector_params).transformed(robot_pose)
+        detections = detect(self.scanners, scans, self.detector_params)
+        self.last_points_world = detections.fused.to_world(robot_pose)
+        self.last_points_scanner = detections.fused.scanner_index
+        detections = detections.transformed(robot_pose)
         self.last_detections_world = detections
         self._tracker.step(time_s, detections.centres, detections.position_sigma_m, detections.radii_m)
         return self._tracker.obstacles().finite()
 
     def observe(self, world: WorldSnapshot) -> Obstacles:
-        return self.process(world.time_s, world.robot_pose, self.scan(world))
+        scans = self.scan(world)
+        started = time.perf_counter()
+        obstacles = self.process(world.time_s, world.robot_pose, scans)
+        self._process_times_s.append(time.perf_counter() - started)
+        self._reported.append(obstacles)
+        self._truth.append(world)
+        return obstacles
+
+    def episode_metrics(self) -> dict:
+        """Tracking errors against the truth seen so far (the loop merges these into its metrics)."""
+        metrics = tracking_errors(self._reported, self._truth)
+        times_ms = np.asarray(self._process_times_s) * 1e3
+        metrics["perception_time_p50_ms"] = float(np.percentile(times_ms, 50)) if len(times_ms) else None
+        metrics["perception_time_p99_ms"] = float(np.percentile(times_ms, 99)) if len(times_ms) else None
+        return metrics
 
 
 def tracking_errors(reported, truth, match_distance_m: float = 1.0) -> dict:

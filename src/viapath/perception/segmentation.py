@@ -41,19 +41,27 @@ class SegmentationParams:
 
 @dataclass
 class Segments:
-    """Clusters of one scan. Points are listed cluster after cluster (beam order inside each)."""
+    """Clusters of one or more scans. Points are listed cluster after cluster (beam order inside each)."""
 
-    beam_index: np.ndarray  # (M,) beam of each point
-    points: np.ndarray  # (M, 2) in the scanner frame
+    beam_index: np.ndarray  # (M,) beam of each clustered point (index into the concatenated beams)
+    points: np.ndarray  # (M, 2) in the common frame (the scanner frame for a single scan)
     starts: np.ndarray  # (K,) first point of each cluster
     counts: np.ndarray  # (K,) points per cluster
-    occluded: np.ndarray | None = None  # (K,) bool: a neighbouring beam just outside it is nearer (something in front)
+    occluded: np.ndarray  # (K,) bool: a neighbouring beam just outside it is nearer (something in front)
+    scan_index: np.ndarray  # (K,) which scan each cluster comes from
+    all_points: np.ndarray  # (V, 2) every valid point, clustered or not (the fused scan)
+    all_beam_index: np.ndarray  # (V,)
 
     def __len__(self) -> int:
         return len(self.starts)
 
     def cluster_points(self, k: int) -> np.ndarray:
         return self.points[self.starts[k]:self.starts[k] + self.counts[k]]
+
+    @classmethod
+    def empty(cls) -> "Segments":
+        i, b = np.zeros(0, dtype=int), np.zeros(0, dtype=bool)
+        return cls(i, np.zeros((0, 2)), i, i, b, i, np.zeros((0, 2)), i)
 
 
 def breakpoint_threshold_m(range_m: np.ndarray, beam_gap_rad: np.ndarray, params: SegmentationParams) -> np.ndarray:
@@ -65,39 +73,55 @@ def breakpoint_threshold_m(range_m: np.ndarray, beam_gap_rad: np.ndarray, params
 
 
 def segment_scan(ranges_m: np.ndarray, angles_rad: np.ndarray, params: SegmentationParams = SegmentationParams()) -> Segments:
-    """Cluster a sanitised scan (NaN = invalid). Clusters with fewer than ``min_points`` points are dropped."""
+    """Cluster one sanitised scan (NaN = invalid) in its own frame."""
+    ranges_m = np.asarray(ranges_m, dtype=float)
+    return segment_beams(ranges_m, angles_rad, 0.0, 0.0, np.zeros(len(ranges_m), dtype=int), params)
+
+
+def segment_beams(ranges_m, angles_rad, origin_x_m, origin_y_m, scan_index, params: SegmentationParams = SegmentationParams()) -> Segments:
+    """Cluster the beams of several scans at once (concatenated, each in beam order).
+
+    ``angles_rad`` and the beam origins (``origin_x_m``, ``origin_y_m``: scalars or per beam) are in
+    a common frame (the robot frame); a cluster never spans two scans (``scan_index`` per beam).
+    Clusters with fewer than ``min_points`` points are dropped; ``all_points`` keeps every valid point.
+    """
     ranges_m = np.asarray(ranges_m, dtype=float)
     valid = np.flatnonzero(np.isfinite(ranges_m))
     if len(valid) == 0:
-        return Segments(np.zeros(0, dtype=int), np.zeros((0, 2)), np.zeros(0, dtype=int), np.zeros(0, dtype=int),
-                        np.zeros(0, dtype=bool))
+        return Segments.empty()
     r = ranges_m[valid]
     a = np.asarray(angles_rad, dtype=float)[valid]
-    points = np.stack([r * np.cos(a), r * np.sin(a)], axis=-1)
+    ox = origin_x_m[valid] if np.ndim(origin_x_m) else origin_x_m
+    oy = origin_y_m[valid] if np.ndim(origin_y_m) else origin_y_m
+    points = np.empty((len(valid), 2))
+    points[:, 0] = ox + r * np.cos(a)
+    points[:, 1] = oy + r * np.sin(a)
     step = np.diff(points, axis=0)
-    gap = np.hypot(step[:, 0], step[:, 1])
+    gap = np.sqrt(step[:, 0] ** 2 + step[:, 1] ** 2)
     threshold = breakpoint_threshold_m(np.minimum(r[:-1], r[1:]), np.abs(np.diff(a)), params)
-    split = (gap > threshold) | (np.diff(valid) > params.max_gap_beams + 1)
+    scans = np.asarray(scan_index)[valid]
+    adjacent = (np.diff(valid) <= params.max_gap_beams + 1) & (scans[1:] == scans[:-1])
+    split = (gap > threshold) | ~adjacent
     starts = np.concatenate([[0], np.flatnonzero(split) + 1])
-    counts = np.diff(np.concatenate([starts, [len(valid)]]))
+    counts = np.diff(np.append(starts, len(valid)))
     # Occlusion: the valid beam just before (after) a cluster, if adjacent, is nearer than its first (last) point.
     ends = starts + counts - 1
-    before = np.zeros(len(starts), dtype=bool)
-    after = np.zeros(len(starts), dtype=bool)
-    has_before = (starts > 0)
-    has_before[has_before] &= (valid[starts[has_before]] - valid[starts[has_before] - 1]) <= params.max_gap_beams + 1
-    before[has_before] = r[starts[has_before] - 1] < r[starts[has_before]]
-    has_after = ends < len(valid) - 1
-    has_after[has_after] &= (valid[ends[has_after] + 1] - valid[ends[has_after]]) <= params.max_gap_beams + 1
-    after[has_after] = r[ends[has_after] + 1] < r[ends[has_after]]
-    occluded = before | after
+    occluded = np.zeros(len(starts), dtype=bool)
+    inner = starts > 0
+    s_in = starts[inner]
+    occluded[inner] = adjacent[s_in - 1] & (r[s_in - 1] < r[s_in])
+    inner = ends < len(valid) - 1
+    e_in = ends[inner]
+    occluded[inner] |= adjacent[e_in] & (r[e_in + 1] < r[e_in])
+    all_points, all_beams = points, valid
+    cluster_scan = scans[starts]
     keep = counts >= params.min_points
     if not keep.all():
-        starts, counts, occluded = starts[keep], counts[keep], occluded[keep]
+        starts, counts, occluded, cluster_scan = starts[keep], counts[keep], occluded[keep], cluster_scan[keep]
         index = _ranges_index(starts, counts)
         valid, points = valid[index], points[index]
-        starts = (np.cumsum(counts) - counts).astype(int)
-    return Segments(valid, points, starts, counts, occluded)
+        starts = np.cumsum(counts) - counts
+    return Segments(valid, points, starts, counts, occluded, cluster_scan, all_points, all_beams)
 
 
 def _ranges_index(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
