@@ -147,3 +147,22 @@ def test_blind_region_of_the_paper_set_up_and_of_narrow_scanners():
     assert covered(paper_scanners(), np.array([[0.0, 3.0]]))[0]
     polygons = narrow.sector_polygons_world((1.0, 2.0, 0.3), far_m=2.0)
     assert len(polygons) == 2 and all(p.shape[1] == 2 for p in polygons)
+
+
+@pytest.mark.skipif(not __import__("viapath.perception.raycast", fromlist=["x"]).numba_available(),
+                    reason="numba not installed (pip install 'viapath[fast]')")
+@pytest.mark.parametrize("options", [dict(), dict(radius_prior_m=0.2, radius_prior_sigma_m=0.05), dict(fixed_radius_m=0.25)])
+def test_numba_circle_fit_equals_numpy(options):
+    rng = np.random.default_rng(11)
+    arcs = [arc((rng.uniform(0.5, 4), rng.uniform(-2, 2)), rng.uniform(0.04, 0.3), (0, 0), int(rng.integers(3, 60)), 0.01, rng,
+                half_angle=rng.uniform(0.3, 1.5)) for _ in range(25)]
+    points = np.concatenate(arcs)
+    counts = np.array([len(a) for a in arcs])
+    starts = np.cumsum(counts) - counts
+    origins = rng.uniform(-0.2, 0.2, (25, 2))
+    a = fit_circles(points, starts, counts, origins, backend="numpy", **options)
+    b = fit_circles(points, starts, counts, origins, backend="numba", **options)
+    np.testing.assert_allclose(b.centres, a.centres, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(b.radii_m, a.radii_m, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(b.rms_m, a.rms_m, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(b.centre_sigma_m, a.centre_sigma_m, rtol=1e-6, atol=1e-12)

@@ -53,19 +53,43 @@ def fit_circles(
     fixed_radius_m: float | None = None,
     range_sigma_m: float = 0.01,
     iterations: int = 4,
+    backend: str = "numpy",
 ) -> CircleFits:
     """Fit one circle to each cluster ``points[starts[k] : starts[k] + counts[k]]``.
 
     ``sensor_origins`` (K, 2) or (2,): where each cluster was seen from, in the points' frame
     (default: the origin); used for the start and so that the centre lands *behind* the arc.
+    ``backend``: ``"numpy"``, ``"numba"`` (the same algorithm compiled, one loop per cluster; equal
+    to round-off) or ``"auto"`` (numba when installed).
     """
-    starts = np.asarray(starts, dtype=int)
-    counts = np.asarray(counts, dtype=int)
+    starts = np.asarray(starts, dtype=np.int64)
+    counts = np.asarray(counts, dtype=np.int64)
     k_count = len(starts)
     if k_count == 0:
         return CircleFits(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
     if (counts < 2).any():
         raise ValueError("every cluster needs at least 2 points")
+    if backend == "auto":
+        backend = "numba" if _numba_fit() is not None else "numpy"
+    if backend == "numba":
+        kernel = _numba_fit()
+        if kernel is None:
+            raise RuntimeError("numba back end unavailable; pip install 'viapath[fast]'")
+        origins = np.zeros((k_count, 2)) if sensor_origins is None else np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
+        prior = fixed_radius_m if fixed_radius_m is not None else radius_prior_m
+        if fixed_radius_m is not None:
+            weight = 1e12
+        elif radius_prior_m is not None and np.isfinite(radius_prior_sigma_m) and radius_prior_sigma_m > 0:
+            weight = (range_sigma_m / radius_prior_sigma_m) ** 2
+        else:
+            weight = 0.0
+        out = np.empty((k_count, 5))
+        kernel(np.ascontiguousarray(points, dtype=float), starts, counts, np.ascontiguousarray(origins, dtype=float),
+               prior is not None, 0.0 if prior is None else float(prior), float(weight), float(range_sigma_m),
+               int(iterations), out)
+        return CircleFits(out[:, :2].copy(), out[:, 2].copy(), out[:, 3].copy(), out[:, 4].copy())
+    if backend != "numpy":
+        raise ValueError(f"backend must be 'numpy', 'numba' or 'auto', got {backend!r}")
     p, mask = _padded(np.asarray(points, dtype=float), starts, counts)
     n = counts.astype(float)
     mean = (p * mask[..., None]).sum(axis=1) / n[:, None]
@@ -174,3 +198,118 @@ def fit_circle(points: np.ndarray, sensor_origin=(0.0, 0.0), **options):
     points = np.asarray(points, dtype=float).reshape(-1, 2)
     fits = fit_circles(points, np.array([0]), np.array([len(points)]), np.asarray(sensor_origin, float)[None, :], **options)
     return fits.centres[0], float(fits.radii_m[0]), float(fits.rms_m[0])
+
+
+_NUMBA_FIT = None
+_NUMBA_FIT_FAILED = False
+
+
+def _numba_fit():
+    """The compiled fit (built on first use), or None without numba."""
+    global _NUMBA_FIT, _NUMBA_FIT_FAILED
+    if _NUMBA_FIT is None and not _NUMBA_FIT_FAILED:
+        try:
+            _NUMBA_FIT = _build_numba_fit()
+        except Exception:  # ImportError, or a numba that does not support this numpy
+            _NUMBA_FIT_FAILED = True
+    return _NUMBA_FIT
+
+
+def _build_numba_fit():
+    import numba
+
+    @numba.njit(cache=True, nogil=True)
+    def solve(a00, a01, a02, a11, a12, a22, b0, b1, b2):  # pragma: no cover - compiled
+        c00 = a11 * a22 - a12 * a12
+        c01 = a02 * a12 - a01 * a22
+        c02 = a01 * a12 - a02 * a11
+        c11 = a00 * a22 - a02 * a02
+        c12 = a01 * a02 - a00 * a12
+        c22 = a00 * a11 - a01 * a01
+        det = a00 * c00 + a01 * c01 + a02 * c02
+        if not abs(det) > 1e-300:
+            det = np.inf
+        return ((c00 * b0 + c01 * b1 + c02 * b2) / det, (c01 * b0 + c11 * b1 + c12 * b2) / det,
+                (c02 * b0 + c12 * b1 + c22 * b2) / det, c00 / det, c01 / det, c11 / det)
+
+    @numba.njit(cache=True, nogil=True)
+    def fit(points, starts, counts, origins, has_prior, prior, weight, range_sigma, iterations, out):  # pragma: no cover
+        for k in range(starts.shape[0]):
+            s, m = starts[k], counts[k]
+            mx = 0.0
+            my = 0.0
+            for i in range(s, s + m):
+                mx += points[i, 0]
+                my += points[i, 1]
+            mx /= m
+            my /= m
+            vx = mx - origins[k, 0]
+            vy = my - origins[k, 1]
+            if has_prior:
+                norm = max(np.sqrt(vx * vx + vy * vy), 1e-12)
+                cx = vx / norm * (2.0 / np.pi * prior)
+                cy = vy / norm * (2.0 / np.pi * prior)
+                r = prior
+                target = prior
+            else:  # Kåsa
+                sxx = sxy = sx = syy = sy = sxz = syz = sz = 0.0
+                for i in range(s, s + m):
+                    x = points[i, 0] - mx
+                    y = points[i, 1] - my
+                    z = x * x + y * y
+                    sxx += x * x
+                    sxy += x * y
+                    sx += x
+                    syy += y * y
+                    sy += y
+                    sxz += x * z
+                    syz += y * z
+                    sz += z
+                a, b, c, _, _, _ = solve(sxx, sxy, sx, syy, sy, float(m), -sxz, -syz, -sz)
+                cx = -0.5 * a
+                cy = -0.5 * b
+                r = np.sqrt(max(cx * cx + cy * cy - c, 1e-12))
+                target = 0.0
+            rms = 0.0
+            i00 = i01 = i11 = 0.0
+            for it in range(iterations + 1):
+                a00 = a01 = a02 = a11 = a12 = 0.0
+                g0 = g1 = g2 = 0.0
+                ss = 0.0
+                for i in range(s, s + m):
+                    dx = points[i, 0] - mx - cx
+                    dy = points[i, 1] - my - cy
+                    dist = max(np.sqrt(dx * dx + dy * dy), 1e-12)
+                    ux = dx / dist
+                    uy = dy / dist
+                    res = dist - r
+                    a00 += ux * ux
+                    a01 += ux * uy
+                    a02 += ux
+                    a11 += uy * uy
+                    a12 += uy
+                    g0 -= ux * res
+                    g1 -= uy * res
+                    g2 -= res
+                    ss += res * res
+                g2 += weight * (r - target)
+                d0, d1, d2, i00, i01, i11 = solve(a00, a01, a02, a11, a12, m + weight, g0, g1, g2)
+                rms = np.sqrt(ss / m)
+                if it < iterations:
+                    cx -= d0
+                    cy -= d1
+                    r = abs(r - d2)
+            sigma2 = max(rms, range_sigma) ** 2
+            half_trace = 0.5 * (i00 + i11)
+            half_diff = 0.5 * (i00 - i11)
+            largest = half_trace + np.sqrt(half_diff * half_diff + i01 * i01)
+            if cx * vx + cy * vy < 0:
+                cx = -cx
+                cy = -cy
+            out[k, 0] = cx + mx
+            out[k, 1] = cy + my
+            out[k, 2] = r
+            out[k, 3] = rms
+            out[k, 4] = np.sqrt(max(largest * sigma2, 0.0))
+
+    return fit

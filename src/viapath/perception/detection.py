@@ -65,6 +65,7 @@ class DetectorParams:
     leg_position_sigma_m: float = 0.1
     measurement_sigma_floor_m: float = 0.02
     iterations: int = 4
+    fit_backend: str = "auto"  # numba when installed (extra 'fast'), else numpy; equal to round-off
     keep_segments: bool = True  # per-segment points and fits, for plots and evaluation
 
     @classmethod
@@ -146,14 +147,14 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
         c_starts, c_counts, c_first, c_chord = starts[candidates], counts[candidates], first[candidates], chord[candidates]
         c_extent, c_origins = extent[candidates], origins[candidates]
         padded, mask = _padded(points, c_starts, c_counts)
-        normal = np.stack([-c_chord[:, 1], c_chord[:, 0]], -1) / np.maximum(c_extent, 1e-12)[:, None]
-        sagitta = (np.abs(((padded - c_first[:, None, :]) * normal[:, None, :]).sum(-1)) * mask).max(1)
+        x, y, mid = _chord_coordinates(padded, mask, c_first, c_chord, c_extent, c_origins)
+        sagitta = np.abs(y).max(1)
         straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
         if params.flat_test_min_extent_m is not None:
             long_enough = c_extent >= params.flat_test_min_extent_m
             if long_enough.any():
-                t_convex = _convexity_t(padded[long_enough], mask[long_enough], c_first[long_enough],
-                                        c_chord[long_enough], c_extent[long_enough], c_origins[long_enough], params.segmentation)
+                t_convex = _convexity_t(x[long_enough], y[long_enough], mask[long_enough], mid[long_enough],
+                                        c_origins[long_enough], params.segmentation)
                 straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
         # A flat piece with something nearer beside it: background seen between foreground objects.
         straight |= occluded[candidates] & (sagitta < params.occluded_max_sagitta_ratio * c_extent)
@@ -163,7 +164,7 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
         fits = fit_circles(points, starts[candidates], counts[candidates], origins[candidates],
                            radius_prior_m=params.radius_prior_m, radius_prior_sigma_m=params.radius_prior_sigma_m,
                            fixed_radius_m=params.fixed_radius_m, range_sigma_m=params.segmentation.noise_sigma_near_m,
-                           iterations=params.iterations)
+                           iterations=params.iterations, backend=params.fit_backend)
         good = ((fits.radii_m >= params.radius_min_m) & (fits.radii_m <= params.radius_max_m)
                 & (fits.rms_m <= params.max_rms_m) & np.isfinite(fits.centres).all(1))
         centres_all[candidates], radii_all[candidates], sigma_all[candidates] = fits.centres, fits.radii_m, fits.centre_sigma_m
@@ -234,16 +235,21 @@ def _pair_legs(centres, radii, sigma, legs_mask, params: DetectorParams):
     return centres[alive], radii[alive], sigma[alive], leg_count[alive]
 
 
-def _convexity_t(padded, mask, first, chord, extent, origins, seg: SegmentationParams) -> np.ndarray:
-    """t-statistic of the curvature towards the sensor of ``y = a + b x + c x²`` across each chord."""
+def _chord_coordinates(padded, mask, first, chord, extent, origins):
+    """Each point's coordinates along its segment's chord (``x``, from the chord's middle) and across it
+    (``y``, positive towards the sensor); padded entries are 0."""
     u = chord / np.maximum(extent, 1e-12)[:, None]
     mid = first + 0.5 * chord
     n = np.stack([-u[:, 1], u[:, 0]], -1)
-    towards = ((origins - mid) * n).sum(1) < 0
-    n[towards] *= -1.0  # n now points towards the sensor
+    n[((origins - mid) * n).sum(1) < 0] *= -1.0  # n points towards the sensor
     rel = padded - mid[:, None, :]
-    x = (rel * u[:, None, :]).sum(-1) * mask
-    y = (rel * n[:, None, :]).sum(-1) * mask
+    x = (rel[..., 0] * u[:, None, 0] + rel[..., 1] * u[:, None, 1]) * mask
+    y = (rel[..., 0] * n[:, None, 0] + rel[..., 1] * n[:, None, 1]) * mask
+    return x, y, mid
+
+
+def _convexity_t(x, y, mask, mid, origins, seg: SegmentationParams) -> np.ndarray:
+    """t-statistic of the curvature towards the sensor of ``y = a + b x + c x²`` fitted across each chord."""
     count = mask.sum(1)
     x2 = x * x
     a = (count, x.sum(1), x2.sum(1), x2.sum(1), (x2 * x).sum(1), (x2 * x2).sum(1))

@@ -182,14 +182,25 @@ class MultiTargetTracker:
         return pairs
 
     def _update(self, rows, z, sigma) -> None:
+        """Kalman update of tracks ``rows`` with position measurements ``z`` of isotropic noise ``sigma``.
+
+        ``H = [I 0]``: ``S = P_pp + σ² I`` (2x2, inverted in closed form), ``K = P[:, :2] S⁻¹``,
+        ``P' = P - K P[:2, :]`` (symmetrised).
+        """
         x = self.state[rows]
         cov = self.covariance[rows]
-        s = cov[:, :2, :2] + (sigma**2)[:, None, None] * np.eye(2)
-        gain = cov[:, :, :2] @ np.linalg.inv(s)  # (R, 4, 2)
+        var = sigma**2
+        s00 = cov[:, 0, 0] + var
+        s01 = cov[:, 0, 1]
+        s11 = cov[:, 1, 1] + var
+        det = s00 * s11 - s01 * s01
+        s_inv = np.empty((len(rows), 2, 2))
+        s_inv[:, 0, 0] = s11 / det
+        s_inv[:, 0, 1] = s_inv[:, 1, 0] = -s01 / det
+        s_inv[:, 1, 1] = s00 / det
+        gain = cov[:, :, :2] @ s_inv  # (R, 4, 2)
         x = x + (gain @ (z - x[:, :2])[..., None])[..., 0]
-        ikh = np.eye(4) - gain @ np.eye(2, 4)
-        r = (sigma**2)[:, None, None] * np.eye(2)
-        cov = ikh @ cov @ ikh.transpose(0, 2, 1) + gain @ r @ gain.transpose(0, 2, 1)  # Joseph form
+        cov = cov - gain @ cov[:, :2, :]
         self.state[rows] = x
         self.covariance[rows] = 0.5 * (cov + cov.transpose(0, 2, 1))
 
@@ -243,9 +254,8 @@ class MultiTargetTracker:
     def sigmas(self) -> tuple[np.ndarray, np.ndarray]:
         if len(self.ids) == 0:
             return np.zeros(0), np.zeros(0)
-        pos = np.linalg.eigvalsh(self.covariance[:, :2, :2])[:, -1]
-        vel = np.linalg.eigvalsh(self.covariance[:, 2:, 2:])[:, -1]
-        return np.sqrt(np.maximum(pos, 0)), np.sqrt(np.maximum(vel, 0))
+        c = self.covariance
+        return _largest_sigma(c[:, 0, 0], c[:, 0, 1], c[:, 1, 1]), _largest_sigma(c[:, 2, 2], c[:, 2, 3], c[:, 3, 3])
 
     def obstacles(self, confirmed_only: bool = True) -> Obstacles:
         """Tracks as the planner's :class:`~viapath.observation.Obstacles` (world frame, at the last step's time)."""
@@ -260,6 +270,13 @@ class MultiTargetTracker:
                   float(self.radii_m[i]), bool(self.confirmed[i]), int(self.hits[i]), float(self.last_seen_s[i]))
             for i in range(len(self.ids)) if self.confirmed[i] or not confirmed_only
         ]
+
+
+def _largest_sigma(a, b, c):
+    """Square root of the largest eigenvalue of the symmetric 2x2 matrices [[a, b], [b, c]]."""
+    half_trace = 0.5 * (a + c)
+    largest = half_trace + np.sqrt((0.5 * (a - c)) ** 2 + b * b)
+    return np.sqrt(np.maximum(largest, 0.0))
 
 
 def _popcount(values: np.ndarray) -> np.ndarray:
