@@ -13,7 +13,7 @@ What we chose where the sources leave it open:
   [``radius_min_m``, ``radius_max_m``], or when the fit residual RMS exceeds ``max_rms_m``. A
   segment partly hidden behind something nearer (a wall piece between two people) is rejected if
   it is flat: sagitta under ``occluded_max_sagitta_ratio`` (0.15) of its length, whatever its
-  length (a round object keeps ≥ 0.2 even when half hidden). Finally a segment longer than
+  length (a round object keeps ≥ 0.2 even when half hidden) — from ``occluded_min_extent_m`` on. Finally a segment longer than
   ``flat_test_min_extent_m`` must bulge towards the sensor: a parabola fitted across its chord
   must curve towards the sensor with a t-statistic ≥ ``min_convexity_t`` (2) given the range
   noise; short wall pieces (between shadows, at the edge of the field of view) fail it.
@@ -57,6 +57,7 @@ class DetectorParams:
     line_max_sagitta_ratio: float = 0.08
     max_rms_m: float = 0.06
     occluded_max_sagitta_ratio: float = 0.15
+    occluded_min_extent_m: float = 0.0
     flat_test_min_extent_m: float | None = 0.1
     min_convexity_t: float = 2.0
     duplicate_distance_m: float = 0.25
@@ -71,8 +72,10 @@ class DetectorParams:
     @classmethod
     def for_legs(cls, **overrides) -> "DetectorParams":
         """Real scans of walking people: legs (r ≈ 0.06 m) are the round things the laser sees."""
+        # A leg (≤ 0.15 m wide, often half hidden by the other leg, 5–10 points at 3–5 m) is too short
+        # a curve for the flatness tests; two legs in one segment (0.2–0.35 m) are not convex.
         values = dict(radius_prior_m=0.07, radius_prior_sigma_m=0.04, radius_max_m=0.3, max_extent_m=0.6,
-                      flat_test_min_extent_m=0.2)  # a leg is too short a curve for the convexity test
+                      flat_test_min_extent_m=0.35, occluded_min_extent_m=0.15)
         values.update(overrides)
         return cls(**values)
 
@@ -157,7 +160,8 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
                                         c_origins[long_enough], params.segmentation)
                 straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
         # A flat piece with something nearer beside it: background seen between foreground objects.
-        straight |= occluded[candidates] & (sagitta < params.occluded_max_sagitta_ratio * c_extent)
+        straight |= (occluded[candidates] & (c_extent >= params.occluded_min_extent_m)
+                     & (sagitta < params.occluded_max_sagitta_ratio * c_extent))
         keep[candidates[straight]] = False
         candidates = candidates[~straight]
     if len(candidates):
