@@ -47,7 +47,7 @@ def draw_laser(ax, perception, *, scan_color="tab:red", track_color="tab:blue", 
                     fontsize=7, color=track_color, ha="center")
 
 
-def plot_recording(result, path, title: str = "", min_travel_m: float = 1.0, point_scans: int = 40) -> Path:
+def plot_recording(result, path, title: str = "", min_travel_m: float = 1.0, point_scans: int = 40, dpi: int = 110) -> Path:
     """Three panels: tracks in the sensor frame over the scan points, speed over time, speed histogram."""
     plt = _pyplot()
     path = Path(path)
@@ -95,6 +95,6 @@ def plot_recording(result, path, title: str = "", min_travel_m: float = 1.0, poi
     ax.set_ylabel("track-scans")
     fig.suptitle(title or "laser tracks")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path
