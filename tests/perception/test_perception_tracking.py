@@ -195,3 +195,27 @@ def test_draw_laser_overlay_draws_points_unseen_region_and_tracks():
     assert len(ax.patches) == 1 + len(perception.tracks) + confirmed
     assert len(ax.collections[0].get_offsets()) == len(perception.last_points_world) > 0
     plt.close(fig)
+
+
+def test_scans_command_error_keeps_brackets_of_the_install_hint(monkeypatch):
+    """Rich markup must not eat "[ros]" in "pip install 'viapath[ros]'" (the error is one plain line)."""
+    import typer
+    from typer.testing import CliRunner
+
+    import viapath.io.rosbag as rosbag
+    from viapath.perception.commands import register
+
+    def missing():
+        raise rosbag.RosbagsMissingError("reading ROS bags needs the 'rosbags' package; install it with: pip install 'viapath[ros]'")
+
+    monkeypatch.setattr(rosbag, "_anyreader", missing)
+    app = typer.Typer()
+
+    @app.command()
+    def noop() -> None:
+        pass
+
+    register(app)
+    result = CliRunner().invoke(app, ["scans", __file__])
+    assert result.exit_code == 2
+    assert "viapath[ros]" in result.output and "Traceback" not in result.output
