@@ -1,0 +1,296 @@
+"""From the scans of one cycle to round obstacles (centre, radius, centre uncertainty) in the robot frame.
+
+Source: the usual 2-D laser people-detection chain (e.g. Arras, Martínez Mozos, Burgard, ICRA 2007;
+Leigh et al., ICRA 2015; DESIGN §3): segment each scan on range jumps
+(:mod:`~viapath.perception.segmentation`), fit a circle to each segment
+(:mod:`~viapath.perception.circle_fit`), keep the round, person- or leg-sized ones.
+
+What we chose where the sources leave it open:
+* **Walls and long segments** are rejected when a segment is longer than ``max_extent_m`` (a
+  person seen from any side spans < 0.6 m), when it is straight (longer than ``line_min_extent_m``
+  with a sagitta — largest distance from its chord — under ``line_max_sagitta_ratio`` of its
+  length; a half circle has 0.5, a 90° arc 0.21), when its fitted radius is outside
+  [``radius_min_m``, ``radius_max_m``], or when the fit residual RMS exceeds ``max_rms_m``. A
+  segment partly hidden behind something nearer (a wall piece between two people) is rejected if
+  it is flat: sagitta under ``occluded_max_sagitta_ratio`` (0.15) of its length, whatever its
+  length (a round object keeps ≥ 0.2 even when half hidden) — from ``occluded_min_extent_m`` on. Finally a segment longer than
+  ``flat_test_min_extent_m`` must bulge towards the sensor: a parabola fitted across its chord
+  must curve towards the sensor with a t-statistic ≥ ``min_convexity_t`` (2) given the range
+  noise; short wall pieces (between shadows, at the edge of the field of view) fail it.
+* **Two scanners, one object**: the forward and backward scans overlap beside the robot; a front
+  and a rear detection whose centres are closer than ``duplicate_distance_m`` are one object
+  (centre: inverse-variance average).
+* **Legs**: a walking person is often two leg segments (r ≈ 0.05–0.1 m) 0.1–0.45 m apart. Two
+  leg-sized detections (fitted radius ≤ ``leg_max_radius_m``) whose centres are closer than
+  ``leg_pair_distance_m`` (default 0.5 m) are one person, paired greedily, closest pair first, each
+  leg used once; the person's centre is the midpoint, its radius half the leg distance plus the leg
+  radius. A single leg is kept as a person too (the other leg is often hidden behind it). Leg-level
+  centres are a poor estimate of the body centre (the legs swing ±0.2 m around it), so leg-derived
+  detections get ``leg_position_sigma_m`` as measurement noise. Objects larger than a leg (the
+  simulator's 0.25 m discs, a person in a long coat) are never paired, so two people walking side
+  by side (≥ 0.5 m apart) stay two.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+import numpy as np
+
+from viapath.perception.circle_fit import _padded, fit_circles, solve_sym3
+from viapath.perception.fusion import FusedScan
+from viapath.perception.scanner import ScannerModel, sanitize_ranges
+from viapath.perception.segmentation import SegmentationParams, segment_beams
+
+
+@dataclass(frozen=True)
+class DetectorParams:
+    segmentation: SegmentationParams = field(default_factory=SegmentationParams)
+    radius_prior_m: float | None = 0.25
+    radius_prior_sigma_m: float = 0.1
+    fixed_radius_m: float | None = None
+    radius_min_m: float = 0.02
+    radius_max_m: float = 0.6
+    max_extent_m: float = 0.9
+    line_min_extent_m: float = 0.25
+    line_max_sagitta_ratio: float = 0.08
+    max_rms_m: float = 0.06
+    occluded_max_sagitta_ratio: float = 0.15
+    occluded_min_extent_m: float = 0.0
+    flat_test_min_extent_m: float | None = 0.1
+    min_convexity_t: float = 2.0
+    duplicate_distance_m: float = 0.25
+    leg_max_radius_m: float = 0.15
+    leg_pair_distance_m: float = 0.5
+    leg_position_sigma_m: float = 0.1
+    measurement_sigma_floor_m: float = 0.02
+    iterations: int = 4
+    fit_backend: str = "auto"  # numba when installed (extra 'fast'), else numpy; equal to round-off
+    keep_segments: bool = True  # per-segment points and fits, for plots and evaluation
+
+    @classmethod
+    def for_legs(cls, **overrides) -> "DetectorParams":
+        """Real scans of walking people: legs (r ≈ 0.06 m) are the round things the laser sees."""
+        # A leg (≤ 0.15 m wide, often half hidden by the other leg, 5–10 points at 3–5 m) is too short
+        # a curve for the flatness tests; two legs in one segment (0.2–0.35 m) are not convex.
+        values = dict(radius_prior_m=0.07, radius_prior_sigma_m=0.04, radius_max_m=0.3, max_extent_m=0.6,
+                      flat_test_min_extent_m=0.35, occluded_min_extent_m=0.15)
+        values.update(overrides)
+        return cls(**values)
+
+
+@dataclass
+class Detections:
+    """Obstacles found in one cycle, in the frame of the scanners' mounting poses (the robot frame)."""
+
+    centres: np.ndarray  # (K, 2)
+    radii_m: np.ndarray  # (K,)
+    position_sigma_m: np.ndarray  # (K,) measurement noise for the tracker
+    leg_count: np.ndarray  # (K,) 0 for a round object, 1 or 2 for a person seen by the legs
+    segments: list = field(default_factory=list)  # per-segment info for plots and evaluation
+    legs: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # leg-sized centres before pairing
+    fused: FusedScan | None = None  # every valid point of the cycle, robot frame
+
+    def __len__(self) -> int:
+        return len(self.radii_m)
+
+    @classmethod
+    def empty(cls) -> "Detections":
+        return cls(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0, dtype=int))
+
+    def transformed(self, pose) -> "Detections":
+        """The same detections in the frame where the robot (or sensor) has ``pose`` (x, y, heading)."""
+        x, y, heading = (float(v) for v in pose)
+        c, s = np.cos(heading), np.sin(heading)
+        rot = np.array([[c, -s], [s, c]])
+        centres = self.centres @ rot.T + [x, y]
+        legs = self.legs @ rot.T + [x, y] if len(self.legs) else self.legs
+        return Detections(centres, self.radii_m, self.position_sigma_m, self.leg_count, self.segments, legs, self.fused)
+
+
+def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detections:
+    """Detect round obstacles in the scans of ``scanners`` (readings may encode invalid as 0/NaN/inf)."""
+    scanners = tuple(scanners)
+    layout = _beam_layout(scanners)
+    if len(scans) != len(scanners):
+        raise ValueError(f"{len(scanners)} scanners but {len(scans)} scans")
+    parts = []
+    for scanner, ranges in zip(scanners, scans, strict=True):
+        ranges = np.asarray(ranges, dtype=float).reshape(-1)
+        if len(ranges) != scanner.beam_count:
+            raise ValueError(f"scanner {scanner.name!r} has {scanner.beam_count} beams, scan has {len(ranges)}")
+        parts.append(ranges)
+    ranges = sanitize_ranges(np.concatenate(parts), 0.0)
+    ranges[(ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = np.nan
+    segments = segment_beams(ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index,
+                             params.segmentation)
+    fused = FusedScan(segments.all_points, layout.scan_index[segments.all_beam_index],
+                      segments.all_beam_index - layout.first_beam[layout.scan_index[segments.all_beam_index]])
+    if len(segments) == 0:
+        empty = Detections.empty()
+        empty.fused = fused
+        return empty
+    points, starts, counts = segments.points, segments.starts, segments.counts
+    source, occluded = segments.scan_index, segments.occluded
+    origins = np.stack([layout.mount_x_m[source], layout.mount_y_m[source]], -1)
+
+    # Cheap tests first, on every segment; the circle fit only on what is left (walls are long and
+    # would widen the padded fitting arrays to hundreds of points).
+    first = points[starts]
+    last = points[starts + counts - 1]
+    chord = last - first
+    extent = np.hypot(chord[:, 0], chord[:, 1])
+    keep = extent <= params.max_extent_m
+    candidates = np.flatnonzero(keep)
+    centres_all = np.full((len(starts), 2), np.nan)
+    radii_all = np.full(len(starts), np.nan)
+    sigma_all = np.full(len(starts), np.nan)
+    if len(candidates):
+        c_starts, c_counts, c_first, c_chord = starts[candidates], counts[candidates], first[candidates], chord[candidates]
+        c_extent, c_origins = extent[candidates], origins[candidates]
+        padded, mask = _padded(points, c_starts, c_counts)
+        x, y, mid = _chord_coordinates(padded, mask, c_first, c_chord, c_extent, c_origins)
+        sagitta = np.abs(y).max(1)
+        straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
+        if params.flat_test_min_extent_m is not None:
+            long_enough = c_extent >= params.flat_test_min_extent_m
+            if long_enough.any():
+                t_convex = _convexity_t(x[long_enough], y[long_enough], mask[long_enough], mid[long_enough],
+                                        c_origins[long_enough], params.segmentation)
+                straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
+        # A flat piece with something nearer beside it: background seen between foreground objects.
+        straight |= (occluded[candidates] & (c_extent >= params.occluded_min_extent_m)
+                     & (sagitta < params.occluded_max_sagitta_ratio * c_extent))
+        keep[candidates[straight]] = False
+        candidates = candidates[~straight]
+    if len(candidates):
+        fits = fit_circles(points, starts[candidates], counts[candidates], origins[candidates],
+                           radius_prior_m=params.radius_prior_m, radius_prior_sigma_m=params.radius_prior_sigma_m,
+                           fixed_radius_m=params.fixed_radius_m, range_sigma_m=params.segmentation.noise_sigma_near_m,
+                           iterations=params.iterations, backend=params.fit_backend)
+        good = ((fits.radii_m >= params.radius_min_m) & (fits.radii_m <= params.radius_max_m)
+                & (fits.rms_m <= params.max_rms_m) & np.isfinite(fits.centres).all(1))
+        centres_all[candidates], radii_all[candidates], sigma_all[candidates] = fits.centres, fits.radii_m, fits.centre_sigma_m
+        keep[candidates[~good]] = False
+    keep[:] = keep & np.isfinite(radii_all)
+    segment_info = [
+        dict(scanner=int(source[k]), points=points[starts[k]:starts[k] + counts[k]], centre=centres_all[k],
+             radius_m=float(radii_all[k]), accepted=bool(keep[k]))
+        for k in range(len(starts))
+    ] if params.keep_segments else []
+
+    centres = centres_all[keep]
+    radii = radii_all[keep]
+    sigma = np.maximum(sigma_all[keep], params.measurement_sigma_floor_m)
+    source = source[keep]
+    centres, radii, sigma, source = _merge_duplicates(centres, radii, sigma, source, params.duplicate_distance_m)
+    legs_mask = radii <= params.leg_max_radius_m
+    legs = centres[legs_mask]
+    centres, radii, sigma, leg_count = _pair_legs(centres, radii, sigma, legs_mask, params)
+    return Detections(centres, radii, sigma, leg_count, segment_info, legs, fused)
+
+
+def _merge_duplicates(centres, radii, sigma, source, distance_m):
+    if len(centres) < 2 or distance_m <= 0 or source.min() == source.max():
+        return centres, radii, sigma, source
+    d = np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1))
+    d[source[:, None] == source[None, :]] = np.inf
+    alive = np.ones(len(centres), dtype=bool)
+    centres, radii, sigma = centres.copy(), radii.copy(), sigma.copy()
+    for flat in np.argsort(d, axis=None):
+        i, j = divmod(int(flat), len(centres))
+        if d[i, j] >= distance_m:
+            break
+        if i >= j or not (alive[i] and alive[j]):
+            continue
+        wi, wj = 1.0 / sigma[i] ** 2, 1.0 / sigma[j] ** 2
+        centres[i] = (wi * centres[i] + wj * centres[j]) / (wi + wj)
+        radii[i] = max(radii[i], radii[j])
+        sigma[i] = np.sqrt(1.0 / (wi + wj))
+        alive[j] = False
+    return centres[alive], radii[alive], sigma[alive], source[alive]
+
+
+def _pair_legs(centres, radii, sigma, legs_mask, params: DetectorParams):
+    leg_count = np.where(legs_mask, 1, 0)
+    sigma = np.where(legs_mask, np.maximum(sigma, params.leg_position_sigma_m), sigma)
+    legs = np.flatnonzero(legs_mask)
+    if len(legs) < 2 or params.leg_pair_distance_m <= 0:
+        return centres, radii, sigma, leg_count
+    sub = centres[legs]
+    d = np.hypot(*(sub[:, None, :] - sub[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    alive = np.ones(len(centres), dtype=bool)
+    used = np.zeros(len(legs), dtype=bool)
+    centres, radii = centres.copy(), radii.copy()
+    for flat in np.argsort(d, axis=None):
+        a, b = divmod(int(flat), len(legs))
+        if d[a, b] >= params.leg_pair_distance_m:
+            break
+        if a >= b or used[a] or used[b]:
+            continue
+        used[a] = used[b] = True
+        i, j = legs[a], legs[b]
+        centres[i] = 0.5 * (centres[i] + centres[j])
+        radii[i] = 0.5 * d[a, b] + max(radii[i], radii[j])
+        leg_count[i] = 2
+        alive[j] = False
+    return centres[alive], radii[alive], sigma[alive], leg_count[alive]
+
+
+def _chord_coordinates(padded, mask, first, chord, extent, origins):
+    """Each point's coordinates along its segment's chord (``x``, from the chord's middle) and across it
+    (``y``, positive towards the sensor); padded entries are 0."""
+    u = chord / np.maximum(extent, 1e-12)[:, None]
+    mid = first + 0.5 * chord
+    n = np.stack([-u[:, 1], u[:, 0]], -1)
+    n[((origins - mid) * n).sum(1) < 0] *= -1.0  # n points towards the sensor
+    rel = padded - mid[:, None, :]
+    x = (rel[..., 0] * u[:, None, 0] + rel[..., 1] * u[:, None, 1]) * mask
+    y = (rel[..., 0] * n[:, None, 0] + rel[..., 1] * n[:, None, 1]) * mask
+    return x, y, mid
+
+
+def _convexity_t(x, y, mask, mid, origins, seg: SegmentationParams) -> np.ndarray:
+    """t-statistic of the curvature towards the sensor of ``y = a + b x + c x²`` fitted across each chord."""
+    count = mask.sum(1)
+    x2 = x * x
+    a = (count, x.sum(1), x2.sum(1), x2.sum(1), (x2 * x).sum(1), (x2 * x2).sum(1))
+    coef, cofactors, det = solve_sym3(a, (y.sum(1), (x * y).sum(1), (x2 * y).sum(1)))
+    inv22 = cofactors[5] / det
+    distance = np.hypot(*(mid - origins).T)
+    sigma = np.where(distance < seg.noise_switch_range_m, seg.noise_sigma_near_m, seg.noise_fraction_far * distance)
+    return -coef[2] / (sigma * np.sqrt(np.maximum(inv22, 1e-30)))
+
+
+@dataclass(frozen=True)
+class _BeamLayout:
+    """Every beam of a set of scanners, concatenated, in the robot frame (cached per scanner set)."""
+
+    angles_rad: np.ndarray
+    origin_x_m: np.ndarray
+    origin_y_m: np.ndarray
+    scan_index: np.ndarray
+    first_beam: np.ndarray
+    range_min_m: np.ndarray
+    range_max_m: np.ndarray
+    mount_x_m: np.ndarray
+    mount_y_m: np.ndarray
+
+
+@lru_cache(maxsize=16)
+def _beam_layout(scanners: tuple[ScannerModel, ...]) -> _BeamLayout:
+    counts = [s.beam_count for s in scanners]
+    rep = lambda values: np.repeat(np.asarray(values, dtype=float), counts)  # noqa: E731
+    return _BeamLayout(
+        angles_rad=np.concatenate([s.beam_angles_rad() + s.mount_yaw_rad for s in scanners]),
+        origin_x_m=rep([s.mount_x_m for s in scanners]),
+        origin_y_m=rep([s.mount_y_m for s in scanners]),
+        scan_index=np.repeat(np.arange(len(scanners)), counts),
+        first_beam=np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(int),
+        range_min_m=rep([s.range_min_m for s in scanners]),
+        range_max_m=rep([s.range_max_m for s in scanners]),
+        mount_x_m=np.array([s.mount_x_m for s in scanners]),
+        mount_y_m=np.array([s.mount_y_m for s in scanners]),
+    )

@@ -1,0 +1,76 @@
+"""Closed loop with laser perception: the paper's three scenarios keep their behaviour (issue 3).
+
+Each episode simulates both URG-04LX scanners every 0.1 s, detects, tracks and plans on the tracks.
+Seeds change the range noise. Expected behaviours (paper §4, DESIGN §2): from behind the robot
+speeds up along the path; from the front it passes inside the corridor; from the side it slows
+down and lets the obstacle cross.
+"""
+
+from functools import lru_cache
+
+import numpy as np
+import pytest
+
+sim = pytest.importorskip("viapath.sim.loop", reason="simulator loop not available")
+from viapath.scenarios import load_scenario  # noqa: E402
+
+
+@lru_cache(maxsize=None)
+def episode(name: str, seed: int):
+    return sim.run_episode(load_scenario(name), perception="laser", seed=seed)
+
+
+def lateral(ep):
+    return ep.trace.path.lateral_deviation(ep.trace.robot_poses[:, :2])
+
+
+def assert_safe_arrival(ep):
+    m = ep.metrics
+    assert m["reached_goal"], m
+    assert not m["collision"] and m["min_clearance_m"] > 0.0, m
+    assert m["time_outside_corridor_s"] == 0.0, m
+    assert m["perception"] == "laser"
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_obstacle_from_behind_robot_speeds_up_along_the_path(seed):
+    ep = episode("paper-behind", seed)
+    assert_safe_arrival(ep)
+    assert ep.metrics["max_speed_mps"] >= 0.29
+    assert np.abs(lateral(ep)).max() < 0.1  # no sideways move
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_obstacle_from_the_front_is_passed_inside_the_corridor(seed):
+    ep = episode("paper-front", seed)
+    assert_safe_arrival(ep)
+    assert np.abs(lateral(ep)).max() > 0.2
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "planner, not perception: with tracker-level sigmas (position 0.015 m, velocity 0.09 m/s) the "
+    "via-point search finds no candidate head-on (the true state with velocity_sigma 0.05 m/s does the "
+    "same) and 'escape' plus a noise-broken left/right tie decides the side; see docs/perception.md"))
+def test_obstacle_from_the_front_is_passed_on_the_left_for_every_seed():
+    sides = [lateral(episode("paper-front", seed)) for seed in range(6)]
+    assert all(lat.max() > 0.2 and lat.min() > -0.2 for lat in sides)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_obstacle_from_the_side_robot_slows_down_before_the_crossing(seed):
+    ep = episode("paper-side", seed)
+    assert_safe_arrival(ep)
+    trace = ep.trace
+    crossing = int(np.argmax(trace.obstacle_positions[:, 0, 1] > 0.0))  # obstacle centre crosses the path
+    assert crossing > 0
+    assert trace.robot_speeds_mps[: crossing + 1].min() <= 0.11
+    assert trace.robot_speeds_mps[-20:].max() >= 0.19  # and resumes its speed afterwards
+
+
+@pytest.mark.parametrize("name", ["paper-behind", "paper-front", "paper-side"])
+def test_tracking_errors_are_reported_in_the_metrics(name):
+    m = episode(name, 0).metrics
+    assert m["track_samples"] > 50
+    assert m["false_track_samples"] == 0
+    assert m["track_position_rmse_m"] < 0.06
+    assert m["track_velocity_rmse_mps"] < 0.08
