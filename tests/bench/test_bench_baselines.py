@@ -83,8 +83,10 @@ def test_navground_corridor_borders_bound_the_centre_line():
     from viapath.planning.navground_peers import corridor_borders
 
     segments = corridor_borders(np.array([[0.0, 0.0], [3.0, 0.0], [3.0, 3.0]]), np.array([1.25, 1.25]))
-    assert len(segments) == 4
+    assert len(segments) == 6  # two borders of two segments each, and the two end caps
     points = np.array([p for segment in segments for p in segment])
+    # The cap behind the start lies 1.25 m behind it.
+    assert np.any(np.all(np.isclose(points, [-1.25, 1.25]), axis=1))
     # Mitred inner corner of an L turning left is at (3 - 1.25, 1.25); the outer at (3 + 1.25, -1.25).
     assert np.any(np.all(np.isclose(points, [1.75, 1.25]), axis=1))
     assert np.any(np.all(np.isclose(points, [4.25, -1.25]), axis=1))

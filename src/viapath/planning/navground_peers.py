@@ -14,7 +14,9 @@ What we chose to put them behind the planner protocol:
   :class:`~viapath.path.SubgoalTracker` as a point target at the nominal (optimal) speed.
 * The corridor is given as line obstacles: both borders of the designated path, offset by the
   half-width plus the robot radius (so touching a border = the robot centre on the corridor edge),
-  joined with mitred corners. navground has no other way to know about a corridor.
+  joined with mitred corners and closed by caps beyond both ends (without them a peer escaping a
+  group turned round and left through the open start). navground has no other way to know about
+  a corridor.
 * The command is the behaviour's twist in the robot frame: (forward speed, angular speed); a
   negative forward speed is clipped to 0 by the robot.
 """
@@ -28,19 +30,21 @@ from viapath.planning.base import Decision, Plan, Planner
 
 
 def corridor_borders(waypoints: np.ndarray, half_widths: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Segments of both corridor borders at the given offsets, with mitred joins between segments."""
+    """Segments of both corridor borders at the given offsets, with mitred joins between segments,
+    closed by a straight cap the same offset beyond each end (the corridor's capsules are round there)."""
     waypoints = np.asarray(waypoints, dtype=float)
     directions = np.diff(waypoints, axis=0)
     directions /= np.hypot(*directions.T)[:, None]
     normals = np.stack([-directions[:, 1], directions[:, 0]], axis=1)  # left of travel
-    segments = []
+    segments, ends = [], []
     for side in (1.0, -1.0):
         points = []
         n = len(directions)
         for i in range(n + 1):
             if i == 0 or i == n:
                 j = 0 if i == 0 else n - 1
-                points.append(waypoints[i] + side * half_widths[j] * normals[j])
+                beyond = -1.0 if i == 0 else 1.0
+                points.append(waypoints[i] + half_widths[j] * (side * normals[j] + beyond * directions[j]))
                 continue
             # Intersection of the two offset lines at the joint (mitre), bounded for sharp turns.
             a = waypoints[i] + side * half_widths[i - 1] * normals[i - 1]
@@ -52,6 +56,9 @@ def corridor_borders(waypoints: np.ndarray, half_widths: np.ndarray) -> list[tup
             t, _ = np.linalg.solve(matrix, b - a)
             points.append(a + np.clip(t, -3 * half_widths[i - 1], 3 * half_widths[i - 1]) * directions[i - 1])
         segments.extend(zip(points[:-1], points[1:]))
+        ends.append((points[0], points[-1]))
+    segments.append((ends[0][0], ends[1][0]))
+    segments.append((ends[0][1], ends[1][1]))
     return segments
 
 
