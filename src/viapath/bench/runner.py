@@ -263,7 +263,8 @@ def _parallel(backend: str, workers: int, scheduler: str | None):
         ray.init(num_cpus=workers, include_dashboard=False, ignore_reinit_error=True, log_to_driver=False)
     context = joblib.parallel_config(backend="ray")
     context.__enter__()
-    parallel = joblib.Parallel(n_jobs=workers if not scheduler else -1, return_as="generator_unordered")
+    # Ray's joblib backend returns lists only: the tasks go in chunks, each chunk's rows written when it ends.
+    parallel = joblib.Parallel(n_jobs=workers if not scheduler else -1, return_as="list")
 
     def close():
         context.__exit__(None, None, None)
@@ -316,7 +317,12 @@ def _run_and_write(parallel, tasks: list[Task], csv_path: Path, progress: bool) 
         if new_file:
             writer.writeheader()
             handle.flush()
-        results: Iterable[dict] = parallel(joblib.delayed(run_task)(task) for task in tasks)
+        if parallel.return_as == "list":
+            chunk = max(8, 4 * max(1, parallel.n_jobs))
+            results: Iterable[dict] = (row for start in range(0, len(tasks), chunk)
+                                       for row in parallel(joblib.delayed(run_task)(t) for t in tasks[start:start + chunk]))
+        else:
+            results = parallel(joblib.delayed(run_task)(task) for task in tasks)
         for row in _with_progress(results, len(tasks), progress):
             writer.writerow({c: _format(row.get(c)) for c in COLUMNS})
             handle.flush()
