@@ -166,26 +166,38 @@ def plot_rates(summary: list[dict[str, Any]], file: Path) -> None:
 
 
 def plot_deviation_vs_time(rows: list[dict[str, Any]], file: Path) -> None:
+    """One panel per planner (shared axes): each episode that reached the goal as a point; the other
+    planners' episodes in light grey behind, for comparison."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7, 4.5))
     planners = list(dict.fromkeys(r["planner"] for r in rows))
-    markers = "os^vD<>pPX*"
-    for i, planner in enumerate(planners):
-        group = [r for r in rows if r["planner"] == planner and r.get("time_ratio") is not None]
-        if not group:
-            continue
-        ratio = np.array([r["time_ratio"] for r in group])
-        deviation = np.array([r["max_lateral_deviation_m"] for r in group])
-        ax.scatter(ratio, deviation, s=10, alpha=0.5, marker=markers[i % len(markers)], label=planner)
-    ax.set_xlabel("time to goal / obstacle-free time (episodes that reached the goal)")
-    ax.set_ylabel("max lateral deviation [m]")
-    ax.set_title("Deviation from the path against delay, per episode")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, markerscale=2)
+    done = [r for r in rows if r.get("time_ratio") is not None and r.get("max_lateral_deviation_m") is not None]
+    columns = min(3, len(planners))
+    lines = int(np.ceil(len(planners) / columns))
+    fig, axes = plt.subplots(lines, columns, figsize=(3.6 * columns, 2.8 * lines), sharex=True, sharey=True,
+                             squeeze=False)
+    all_ratio = np.array([r["time_ratio"] for r in done])
+    all_deviation = np.array([r["max_lateral_deviation_m"] for r in done])
+    for ax, planner in zip(axes.flat, planners):
+        mine = [r for r in done if r["planner"] == planner]
+        ax.scatter(all_ratio, all_deviation, s=4, color="0.85", zorder=1)
+        if mine:
+            ratio = np.array([r["time_ratio"] for r in mine])
+            deviation = np.array([r["max_lateral_deviation_m"] for r in mine])
+            ax.scatter(ratio, deviation, s=8, alpha=0.6, color="tab:blue", zorder=2)
+            ax.scatter([np.median(ratio)], [np.median(deviation)], s=60, marker="x", color="tab:red", zorder=3)
+        ax.set_title(f"{planner} ({len(mine)} reached)", fontsize=9)
+        ax.grid(alpha=0.3)
+    for ax in axes.flat[len(planners):]:
+        ax.set_visible(False)
+    if len(all_ratio):
+        axes[0, 0].set_xlim(max(0.0, all_ratio.min() - 0.05), min(np.percentile(all_ratio, 99.5) + 0.1, 4.0))
+        axes[0, 0].set_ylim(-0.05, min(np.percentile(all_deviation, 99.5) + 0.1, 5.0))
+    fig.supxlabel("time to goal / obstacle-free time (episodes that reached the goal; x = median)", fontsize=9)
+    fig.supylabel("max lateral deviation [m]", fontsize=9)
     fig.tight_layout()
-    fig.savefig(file, dpi=120)
+    fig.savefig(file, dpi=110)
     plt.close(fig)
