@@ -71,7 +71,9 @@ class PathSpec(_Strict):
 
 
 class ObstacleSpec(_Strict):
-    """A moving disc: constant ``velocity``, or along ``waypoints`` at ``speed`` (optionally looping)."""
+    """A moving disc: constant ``velocity``, or along ``waypoints`` at ``speed`` (optionally looping),
+    or along ``waypoints`` reached at the given ``times_s`` (one time for ``start`` and one per
+    waypoint: e.g. a precomputed crowd whose speed varies)."""
 
     start: Point
     radius: PositiveFloat = 0.25
@@ -80,16 +82,25 @@ class ObstacleSpec(_Strict):
     speed: PositiveFloat | None = None
     loop: bool = False
     start_time_s: NonNegativeFloat = 0.0  # stands still at ``start`` until then
+    times_s: list[NonNegativeFloat] | None = None  # timed waypoints: when it is at start, then each waypoint
 
     @model_validator(mode="after")
     def _one_motion(self) -> "ObstacleSpec":
         if self.waypoints is not None:
             if self.velocity is not None:
                 raise ValueError("give velocity or waypoints, not both")
-            if self.speed is None:
-                raise ValueError("an obstacle with waypoints needs a speed (m/s)")
-        elif self.speed is not None:
-            raise ValueError("speed applies only with waypoints; use velocity for constant motion")
+            if self.times_s is not None:
+                if self.speed is not None or self.loop:
+                    raise ValueError("times_s sets the speeds: give no speed and no loop with it")
+                if len(self.times_s) != len(self.waypoints) + 1:
+                    raise ValueError(f"times_s needs one time for start and one per waypoint "
+                                     f"({len(self.waypoints) + 1}), found {len(self.times_s)}")
+                if any(b <= a for a, b in zip(self.times_s, self.times_s[1:])):
+                    raise ValueError("times_s must increase strictly")
+            elif self.speed is None:
+                raise ValueError("an obstacle with waypoints needs a speed (m/s) or times_s")
+        elif self.speed is not None or self.times_s is not None:
+            raise ValueError("speed and times_s apply only with waypoints; use velocity for constant motion")
         return self
 
 

@@ -27,6 +27,30 @@ def clearance_per_step(trace) -> np.ndarray:
     return clearance.min(axis=1)
 
 
+def at_fault_collision(trace, min_speed_mps: float = 0.05) -> bool:
+    """Contact while the robot was moving towards the person (replayed people do not react to the
+    robot, so only these contacts are the robot's fault): in the step where a contact with an
+    obstacle begins, the robot's speed exceeds ``min_speed_mps`` and its velocity has a positive
+    component towards that obstacle's centre (both taken at the start of the step). Only the onset
+    counts: simulated discs pass through each other afterwards, which says nothing about fault."""
+    poses = trace.robot_poses
+    obstacles = trace.obstacle_positions
+    if obstacles.shape[1] == 0 or len(poses) < 2:
+        return False
+    rel_start = poses[:-1, None, :2] - obstacles[:-1]
+    rel_end = poses[1:, None, :2] - obstacles[1:]
+    present = np.isfinite(rel_start).all(-1) & np.isfinite(rel_end).all(-1)
+    rel_start = np.where(present[..., None], rel_start, 1e9)
+    rel_end = np.where(present[..., None], rel_end, 1e9)
+    distance, _ = closest_approach(rel_start, rel_end - rel_start, 1.0)
+    contact = distance < trace.obstacle_radii_m[None, :] + trace.robot_radius_m  # (K-1, N)
+    speeds = trace.robot_speeds_mps[:-1]
+    velocity = speeds[:, None] * np.stack([np.cos(poses[:-1, 2]), np.sin(poses[:-1, 2])], axis=1)
+    towards = np.einsum("kj,knj->kn", velocity, -rel_start) > 0.0
+    onset = contact & ~np.vstack([np.zeros((1, contact.shape[1]), dtype=bool), contact[:-1]])
+    return bool(np.any(onset & towards & (speeds[:, None] > min_speed_mps)))
+
+
 def compute_metrics(trace) -> dict[str, Any]:
     poses = trace.robot_poses[:, :2]
     dt = trace.dt_s
@@ -42,6 +66,7 @@ def compute_metrics(trace) -> dict[str, Any]:
         "perception": trace.perception_mode,
         "reached_goal": bool(trace.reached_goal),
         "collision": bool(min_clearance < 0.0),
+        "at_fault_collision": at_fault_collision(trace),
         "min_clearance_m": _finite_or_none(min_clearance),
         "time_to_goal_s": float(trace.times_s[-1]) if trace.reached_goal else None,
         "path_length_m": float(np.sum(np.hypot(*np.diff(poses, axis=0).T))),

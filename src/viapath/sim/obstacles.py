@@ -40,6 +40,20 @@ def along_waypoints(start, waypoints, speed_mps: float, times, loop: bool = Fals
     return positions, velocities
 
 
+def timed_waypoints(start, waypoints, times_of_points, times):
+    """Pass through ``start, waypoints...`` at ``times_of_points``, linearly in between; before the
+    first time it stands at ``start``, after the last at the end. The velocity reported over a piece
+    is that piece's (constant) velocity, zero while standing."""
+    points = np.vstack([np.asarray(start, float), np.asarray(waypoints, float)])
+    knots = np.asarray(times_of_points, float)
+    positions = np.stack([np.interp(times, knots, points[:, axis]) for axis in (0, 1)], axis=1)
+    piece_velocities = np.diff(points, axis=0) / np.diff(knots)[:, None]
+    piece = np.clip(np.searchsorted(knots, times, side="right") - 1, 0, len(piece_velocities) - 1)
+    moving = (times >= knots[0]) & (times < knots[-1])
+    velocities = np.where(moving[:, None], piece_velocities[piece], 0.0)
+    return positions, velocities
+
+
 def scenario_obstacle_states(scenario, times: np.ndarray):
     """All obstacles of a scenario at the given times: positions (T, N, 2), velocities (T, N, 2), radii (N,)."""
     columns_p, columns_v, radii = [], [], []
@@ -52,7 +66,9 @@ def scenario_obstacle_states(scenario, times: np.ndarray):
             columns_v.append(v)
             radii.extend([replay.radius] * len(tracks))
             continue
-        if item.waypoints is not None:
+        if item.waypoints is not None and item.times_s is not None:
+            p, v = timed_waypoints(item.start, item.waypoints, item.times_s, times)
+        elif item.waypoints is not None:
             p, v = along_waypoints(item.start, item.waypoints, item.speed, times, item.loop, item.start_time_s)
         else:
             p, v = constant_velocity(item.start, item.velocity or (0.0, 0.0), times, item.start_time_s)

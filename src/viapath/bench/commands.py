@@ -1,0 +1,77 @@
+"""CLI commands of the benchmark: ``viapath suite`` and ``viapath bench`` (added by :func:`register`)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+
+def _fail(message: str) -> None:
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code=2)
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``suite`` and ``bench`` to the viapath CLI."""
+
+    @app.command("suite")
+    def suite_command(
+        name: str = typer.Argument(..., help="suite name: mixed, crossing, head-on, overtaken, overtaking, multi, "
+                                             "group, crowd, hallway, paper, eth-ucy"),
+        count: int = typer.Option(200, "--count", "-n", help="number of scenarios"),
+        seed: int = typer.Option(0, "--seed", help="same seed, same suite"),
+        out: Path = typer.Option(..., "--out", help="folder to write the scenario YAML files to"),
+    ) -> None:
+        """Generate a scenario suite from a seed and write it as scenario YAML files."""
+        from viapath.bench.suites import SuiteError, generate_suite, write_suite
+
+        try:
+            scenarios = generate_suite(name, count, seed)
+            files = write_suite(scenarios, out)
+        except (SuiteError, OSError) as error:
+            _fail(str(error))
+        typer.echo(f"wrote {len(files)} scenarios to {out}")
+
+    @app.command("bench")
+    def bench_command(
+        suite: str = typer.Argument(..., help="a folder of scenario YAML files, or a suite name (see 'viapath suite')"),
+        planners: str = typer.Option("viapath,follow,stop,dwa,vo", "--planners", "-p",
+                                     help="comma-separated planner names"),
+        workers: int = typer.Option(2, "--workers", "-w", help="parallel workers"),
+        backend: str = typer.Option("loky", "--backend", help="loky (local processes), dask or ray"),
+        scheduler: Optional[str] = typer.Option(None, "--scheduler",
+                                                help="address of an existing dask scheduler or ray cluster"),
+        out: Path = typer.Option(..., "--out", help="results folder (episodes.csv, summary.md/json, plots)"),
+        count: int = typer.Option(200, "--count", "-n", help="scenarios to generate when SUITE is a suite name"),
+        seed: int = typer.Option(0, "--seed", help="suite and episode seed"),
+        perception: str = typer.Option("oracle", "--perception", help="oracle or laser"),
+        plots: bool = typer.Option(True, "--plots/--no-plots", help="write rates.png and deviation_vs_time.png"),
+        as_json: bool = typer.Option(False, "--json", help="print the per-planner table as JSON"),
+    ) -> None:
+        """Run planners on a suite in parallel; write per-episode results, tables and plots."""
+        from viapath.bench.report import markdown_table, write_report
+        from viapath.bench.runner import BenchError, load_suite, run_bench
+        from viapath.bench.suites import SuiteError
+
+        names = [p.strip() for p in planners.split(",") if p.strip()]
+        if not names:
+            _fail("--planners is empty; give e.g. viapath,dwa,vo")
+        if scheduler and backend == "loky":
+            _fail("--scheduler needs --backend dask or ray")
+        try:
+            scenarios = load_suite(suite, out, count=count, seed=seed)
+            result = run_bench(scenarios, names, out, workers=workers, backend=backend, scheduler=scheduler,
+                               perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json)
+            summary = write_report(result["rows"], out, plots=plots, order=names)
+        except (BenchError, SuiteError, OSError) as error:
+            _fail(str(error))
+        if as_json:
+            typer.echo(json.dumps(summary, indent=2))
+            return
+        typer.echo(markdown_table(summary))
+        typer.echo(f"\n{result['ran']} episodes run, {result['skipped']} already done, {result['wall_s']:.1f} s; "
+                   f"results in {out}")

@@ -1,0 +1,354 @@
+"""Run many (scenario, planner) episodes in parallel with joblib, writing each result as it finishes.
+
+* Backends: ``loky`` (local processes, the default), ``dask`` (joins ``scheduler`` when given, else
+  starts a local cluster of ``workers`` processes; extra ``dask``) and ``ray`` (joins ``scheduler``
+  when given, else starts a local one; extra ``ray``). The same task function runs everywhere; a task
+  carries its scenario as a plain dict, so remote workers need only viapath and the data files.
+* Results: one CSV row per episode appended to ``episodes.csv`` as soon as the episode returns, so a
+  run that is stopped keeps what it finished; a rerun skips every (scenario, planner, perception,
+  seed) already in the file. ``episodes.parquet`` is rewritten from all rows at the end where
+  pyarrow is installed.
+* Determinism: the episode seed is derived from the bench seed and the scenario name, so the same
+  seed gives the same numbers (except the wall-clock plan times) on any backend and worker count.
+* Time to goal is reported relative to the obstacle-free time: the same scenario with its
+  obstacles removed, driven by ``follow`` (one common reference for every planner).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+import zlib
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, Iterable, Iterator
+
+from viapath.bench.suites import ETH_UCY_FOLDER, data_root, generate_suite, suite_names, write_suite
+
+COLUMNS = [
+    "scenario", "family", "planner", "perception", "seed",
+    "reached_goal", "collision", "at_fault_collision", "min_clearance_m", "time_to_goal_s",
+    "free_time_s", "time_ratio", "path_length_m", "mean_lateral_deviation_m", "max_lateral_deviation_m",
+    "time_outside_corridor_s", "min_speed_mps", "max_speed_mps", "plan_time_p50_ms", "plan_time_p99_ms",
+    "episode_wall_s", "error",
+]
+_BOOLS = {"reached_goal", "collision", "at_fault_collision"}
+_TEXT = {"scenario", "family", "planner", "perception", "error"}
+_INTS = {"seed"}
+BACKENDS = ("loky", "dask", "ray")
+
+
+class BenchError(ValueError):
+    """Bad benchmark input (unknown planner or backend, empty suite, missing extra)."""
+
+
+@dataclass(frozen=True)
+class Task:
+    scenario: dict
+    planner: str
+    perception: str
+    seed: int
+
+    @property
+    def key(self) -> tuple:
+        return (self.scenario["name"], self.planner, self.perception, str(self.seed))
+
+
+def episode_seed(bench_seed: int, scenario_name: str) -> int:
+    return zlib.crc32(f"{bench_seed}:{scenario_name}".encode()) & 0x7FFFFFFF
+
+
+def family_of(name: str) -> str:
+    head, _, tail = name.rpartition("-")
+    return head if tail.isdigit() and head else name
+
+
+# -- loading suites ---------------------------------------------------------------------------------
+
+def load_suite(suite: str, out_dir: Path | None = None, count: int = 200, seed: int = 0) -> list[dict]:
+    """Scenario dicts of SUITE: a folder of scenario YAML files, or a suite name (generated with
+    ``count`` and ``seed`` and written to ``out_dir/suite`` so it can be inspected and rerun)."""
+    from viapath.scenarios import ScenarioError, load_scenario
+
+    folder = Path(suite)
+    if folder.is_dir():
+        files = sorted(folder.glob("*.yaml")) + sorted(folder.glob("*.yml"))
+        if not files:
+            raise BenchError(f"{suite}: no scenario files (*.yaml) in this folder")
+    elif suite in suite_names():
+        scenarios = generate_suite(suite, count, seed)
+        if out_dir is None:
+            return [_resolve_replays(s) for s in scenarios]
+        files = write_suite(scenarios, Path(out_dir) / "suite")
+    else:
+        raise BenchError(f"{suite}: not a folder of scenario files nor a suite name ({', '.join(suite_names())})")
+    loaded = []
+    for file in files:
+        try:
+            scenario = load_scenario(file)
+        except ScenarioError as error:
+            raise BenchError(str(error).splitlines()[0]) from None
+        loaded.append(_resolve_replays(scenario.model_dump(mode="json")))
+    names = [s["name"] for s in loaded]
+    if len(set(names)) != len(names):
+        duplicate = next(n for n in names if names.count(n) > 1)
+        raise BenchError(f"{suite}: two scenarios are named {duplicate!r}; names key the results, make them unique")
+    return loaded
+
+
+def _resolve_replays(scenario: dict) -> dict:
+    """Replay files that do not exist where written are looked up under the data root by file name."""
+    for item in scenario.get("obstacles", []):
+        replay = item.get("replay") if isinstance(item, dict) else None
+        if replay is None:
+            continue
+        path = Path(replay["file"])
+        if not path.exists():
+            candidate = data_root() / ETH_UCY_FOLDER / path.name
+            if not candidate.exists():
+                raise BenchError(f"{scenario['name']}: replay file {replay['file']} not found (nor {candidate}); "
+                                 "set VIAPATH_DATA to the data folder")
+            replay["file"] = str(candidate)
+        else:
+            replay["file"] = str(path.resolve())
+    return scenario
+
+
+# -- one episode (runs in the workers) ---------------------------------------------------------------
+
+@lru_cache(maxsize=4096)
+def _free_time_s(scenario_json: str) -> float | None:
+    import json
+
+    from viapath.scenarios import scenario_from_dict
+    from viapath.sim.loop import run_episode
+
+    data = json.loads(scenario_json)
+    data["obstacles"] = []
+    episode = run_episode(scenario_from_dict(data), planner="follow", perception="oracle")
+    return episode.metrics["time_to_goal_s"]
+
+
+def run_task(task: Task) -> dict[str, Any]:
+    """Run one episode; never raises (an error is recorded in the row so the run goes on)."""
+    import json
+
+    from viapath.scenarios import scenario_from_dict
+    from viapath.sim.loop import run_episode
+
+    started = time.perf_counter()
+    row: dict[str, Any] = {column: None for column in COLUMNS}
+    name = task.scenario["name"]
+    row.update(scenario=name, family=family_of(name), planner=task.planner, perception=task.perception,
+               seed=task.seed, error="")
+    try:
+        scenario = scenario_from_dict(task.scenario, name)
+        episode = run_episode(scenario, planner=task.planner, perception=task.perception, seed=task.seed)
+        for column in COLUMNS:
+            if column in episode.metrics:
+                row[column] = episode.metrics[column]
+        free = _free_time_s(json.dumps(task.scenario, sort_keys=True))
+        row["free_time_s"] = free
+        if row["time_to_goal_s"] is not None and free:
+            row["time_ratio"] = row["time_to_goal_s"] / free
+    except Exception as error:  # noqa: BLE001 - one bad episode must not stop a long run
+        row["error"] = f"{type(error).__name__}: {error}".replace("\n", " ")[:300]
+    row["episode_wall_s"] = time.perf_counter() - started
+    return row
+
+
+# -- results file ----------------------------------------------------------------------------------
+
+def read_rows(csv_path: Path) -> list[dict[str, Any]]:
+    if not Path(csv_path).exists():
+        return []
+    with open(csv_path, newline="") as handle:
+        return [_parse(row) for row in csv.DictReader(handle)]
+
+
+def _parse(row: dict[str, str]) -> dict[str, Any]:
+    parsed: dict[str, Any] = {}
+    for column in COLUMNS:
+        value = row.get(column, "")
+        if column in _TEXT:
+            parsed[column] = value or ""
+        elif value == "" or value is None:
+            parsed[column] = None
+        elif column in _BOOLS:
+            parsed[column] = value == "True"
+        elif column in _INTS:
+            parsed[column] = int(value)
+        else:
+            parsed[column] = float(value)
+    return parsed
+
+
+def _format(value) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return repr(value) if math.isfinite(value) else ""
+    return str(value)
+
+
+def write_parquet(rows: list[dict], path: Path) -> bool:
+    """Write the rows as Parquet where pyarrow is installed; returns whether it did."""
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        return False
+    table = pa.Table.from_pylist([{c: row.get(c) for c in COLUMNS} for row in rows])
+    pq.write_table(table, path)
+    return True
+
+
+# -- the run ---------------------------------------------------------------------------------------
+
+def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "oracle", seed: int = 0) -> list[Task]:
+    from viapath.planning import available_planners
+
+    known = available_planners()
+    unknown = [p for p in planners if p not in known]
+    if unknown:
+        raise BenchError(f"unknown planner {unknown[0]!r}; available: {', '.join(known)}")
+    if perception not in ("oracle", "laser"):
+        raise BenchError(f"unknown perception {perception!r}; use oracle or laser")
+    return [Task(s, p, perception, episode_seed(seed, s["name"])) for s in scenarios for p in planners]
+
+
+def _parallel(backend: str, workers: int, scheduler: str | None):
+    """A joblib Parallel (and a cleanup callable) for the chosen backend."""
+    import joblib
+
+    if backend not in BACKENDS:
+        raise BenchError(f"unknown backend {backend!r}; use {', '.join(BACKENDS)}")
+    if workers < 1:
+        raise BenchError(f"workers must be at least 1, got {workers}")
+    if backend == "loky":
+        return joblib.Parallel(n_jobs=workers, backend="loky", return_as="generator_unordered"), lambda: None
+    if backend == "dask":
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise BenchError("backend dask needs the extra: pip install 'viapath[dask]'") from None
+        if scheduler:
+            client = Client(scheduler)
+            n_jobs = -1
+        else:
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+            client = Client(cluster)
+            n_jobs = workers
+        context = joblib.parallel_config(backend="dask")
+        context.__enter__()
+        parallel = joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered")
+
+        def close():
+            context.__exit__(None, None, None)
+            client.close()
+            if not scheduler:
+                cluster.close()
+        return parallel, close
+    try:
+        import ray
+        from ray.util.joblib import register_ray
+    except ImportError:
+        raise BenchError("backend ray needs the extra: pip install 'viapath[ray]'") from None
+    register_ray()
+    if scheduler:
+        ray.init(address=scheduler, ignore_reinit_error=True, log_to_driver=False)
+    else:
+        ray.init(num_cpus=workers, include_dashboard=False, ignore_reinit_error=True, log_to_driver=False)
+    context = joblib.parallel_config(backend="ray")
+    context.__enter__()
+    # Ray's joblib backend returns lists only: the tasks go in chunks, each chunk's rows written when it ends.
+    parallel = joblib.Parallel(n_jobs=workers if not scheduler else -1, return_as="list")
+
+    def close():
+        context.__exit__(None, None, None)
+        ray.shutdown()
+    return parallel, close
+
+
+def run_bench(
+    scenarios: list[dict],
+    planners: list[str],
+    out_dir: Path,
+    workers: int = 1,
+    backend: str = "loky",
+    scheduler: str | None = None,
+    perception: str = "oracle",
+    seed: int = 0,
+    progress: bool = True,
+) -> dict[str, Any]:
+    """Run every (scenario, planner) episode not already in ``out_dir/episodes.csv``.
+
+    Returns ``{"rows": all rows, "ran": episodes run now, "skipped": already done, "wall_s": ...}``.
+    """
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    csv_path = out_dir / "episodes.csv"
+    tasks = make_tasks(scenarios, planners, perception, seed)
+    done = {(r["scenario"], r["planner"], r["perception"], str(r["seed"])) for r in read_rows(csv_path)}
+    todo = [t for t in tasks if t.key not in done]
+    started = time.perf_counter()
+    if todo:
+        parallel, close = _parallel(backend, workers, scheduler)
+        try:
+            _run_and_write(parallel, todo, csv_path, progress)
+        finally:
+            close()
+    wall = time.perf_counter() - started
+    rows = read_rows(csv_path)
+    wanted = {t.key for t in tasks}
+    rows = [r for r in rows if (r["scenario"], r["planner"], r["perception"], str(r["seed"])) in wanted]
+    write_parquet(rows, out_dir / "episodes.parquet")
+    return {"rows": rows, "ran": len(todo), "skipped": len(tasks) - len(todo), "wall_s": wall}
+
+
+def _run_and_write(parallel, tasks: list[Task], csv_path: Path, progress: bool) -> None:
+    import joblib
+
+    new_file = not csv_path.exists() or csv_path.stat().st_size == 0
+    with open(csv_path, "a", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=COLUMNS)
+        if new_file:
+            writer.writeheader()
+            handle.flush()
+        if parallel.return_as == "list":
+            chunk = max(8, 4 * max(1, parallel.n_jobs))
+            results: Iterable[dict] = (row for start in range(0, len(tasks), chunk)
+                                       for row in parallel(joblib.delayed(run_task)(t) for t in tasks[start:start + chunk]))
+        else:
+            results = parallel(joblib.delayed(run_task)(task) for task in tasks)
+        for row in _with_progress(results, len(tasks), progress):
+            writer.writerow({c: _format(row.get(c)) for c in COLUMNS})
+            handle.flush()
+
+
+def _with_progress(results: Iterable[dict], total: int, enabled: bool) -> Iterator[dict]:
+    if not enabled:
+        yield from results
+        return
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    class _Rate(TextColumn):
+        def __init__(self):
+            super().__init__("")
+
+        def render(self, task):
+            elapsed = task.elapsed or 0.0
+            rate = task.completed / elapsed if elapsed > 0 else 0.0
+            return f"{rate:5.1f} ep/s"
+
+    columns = [TextColumn("episodes"), BarColumn(), MofNCompleteColumn(), _Rate(), TimeElapsedColumn(),
+               TextColumn("left"), TimeRemainingColumn()]
+    from rich.console import Console
+
+    with Progress(*columns, console=Console(stderr=True), transient=False) as bar:
+        job = bar.add_task("episodes", total=total)
+        for row in results:
+            bar.advance(job)
+            yield row

@@ -1,0 +1,129 @@
+"""The parallel runner: resume, determinism, and tables that match the per-episode rows."""
+
+import json
+
+import numpy as np
+import pytest
+import typer
+from typer.testing import CliRunner
+
+from viapath.bench.report import summarize, write_report
+from viapath.bench.runner import BenchError, load_suite, read_rows, run_bench
+from viapath.bench.suites import generate_suite
+
+TIMING = {"plan_time_p50_ms", "plan_time_p99_ms", "episode_wall_s"}
+
+
+@pytest.fixture(scope="module")
+def small_suite():
+    return generate_suite("paper", 3, seed=0) + generate_suite("crossing", 2, seed=0)
+
+
+def _key(row):
+    return (row["scenario"], row["planner"])
+
+
+def _numbers(rows):
+    return {_key(r): {k: v for k, v in r.items() if k not in TIMING} for r in rows}
+
+
+def test_rerun_skips_done_episodes_and_adds_only_new_ones(tmp_path, small_suite):
+    first = run_bench(small_suite[:3], ["follow"], tmp_path, workers=1, progress=False)
+    assert first["ran"] == 3 and first["skipped"] == 0
+    again = run_bench(small_suite[:3], ["follow"], tmp_path, workers=1, progress=False)
+    assert again["ran"] == 0 and again["skipped"] == 3
+    more = run_bench(small_suite, ["follow", "stop"], tmp_path, workers=1, progress=False)
+    assert more["ran"] == 2 * len(small_suite) - 3 and more["skipped"] == 3
+    rows = read_rows(tmp_path / "episodes.csv")
+    assert len(rows) == 2 * len(small_suite)  # each episode once in the file
+    assert len({_key(r) for r in rows}) == len(rows)
+
+
+def test_same_seed_same_numbers_across_worker_counts(tmp_path, small_suite):
+    one = run_bench(small_suite, ["viapath", "stop"], tmp_path / "a", workers=1, progress=False)
+    two = run_bench(small_suite, ["viapath", "stop"], tmp_path / "b", workers=2, progress=False)
+    assert _numbers(one["rows"]) == _numbers(two["rows"])
+    assert all(not r["error"] for r in one["rows"])
+
+
+def test_noise_seed_changes_numbers_only_with_the_bench_seed(tmp_path):
+    suite = generate_suite("paper", 3, seed=0)
+    for scenario in suite:
+        scenario["perception"] = {"mode": "oracle", "position_noise_m": 0.03, "velocity_noise_mps": 0.05}
+    a = run_bench(suite, ["viapath"], tmp_path / "a", seed=1, progress=False)["rows"]
+    b = run_bench(suite, ["viapath"], tmp_path / "b", seed=1, progress=False)["rows"]
+    c = run_bench(suite, ["viapath"], tmp_path / "c", seed=2, progress=False)["rows"]
+    assert _numbers(a) == _numbers(b)
+    assert [r["min_clearance_m"] for r in sorted(a, key=_key)] != [r["min_clearance_m"] for r in sorted(c, key=_key)]
+
+
+def test_table_aggregates_match_the_rows(tmp_path, small_suite):
+    rows = run_bench(small_suite, ["follow", "vo"], tmp_path, workers=1, progress=False)["rows"]
+    summary = {s["planner"]: s for s in write_report(rows, tmp_path, plots=False, order=["vo", "follow"])}
+    for planner, entry in summary.items():
+        mine = [r for r in rows if r["planner"] == planner]
+        assert entry["episodes"] == len(mine)
+        assert entry["collision_rate"] == pytest.approx(np.mean([r["collision"] for r in mine]))
+        assert entry["at_fault_collision_rate"] == pytest.approx(np.mean([r["at_fault_collision"] for r in mine]))
+        assert entry["success_rate"] == pytest.approx(np.mean([r["reached_goal"] and not r["collision"] for r in mine]))
+        ratios = [r["time_ratio"] for r in mine if r["time_ratio"] is not None]
+        assert entry["time_ratio_median"] == pytest.approx(np.median(ratios))
+        assert entry["max_lateral_deviation_m"] == pytest.approx(max(r["max_lateral_deviation_m"] for r in mine))
+        assert entry["min_clearance_m"] == pytest.approx(min(r["min_clearance_m"] for r in mine))
+    assert summary["follow"]["collision_rate"] == 1.0  # every generated person meets a non-reacting robot here
+    saved = json.loads((tmp_path / "summary.json").read_text())
+    assert [s["planner"] for s in saved] == ["vo", "follow"]
+    assert "| vo |" in (tmp_path / "summary.md").read_text()
+
+
+def test_time_ratio_is_relative_to_the_obstacle_free_run(tmp_path):
+    suite = generate_suite("paper", 1, seed=0)  # paper-behind: 5 m at 0.2 m/s
+    row = run_bench(suite, ["viapath"], tmp_path, progress=False)["rows"][0]
+    assert row["free_time_s"] == pytest.approx(24.6, abs=0.3)
+    assert row["time_ratio"] == pytest.approx(row["time_to_goal_s"] / row["free_time_s"])
+    assert row["time_ratio"] < 0.9  # the paper's robot speeds up ahead of the person behind
+
+
+def test_bad_input_is_one_clear_line(tmp_path, small_suite):
+    with pytest.raises(BenchError, match="unknown planner 'nope'"):
+        run_bench(small_suite, ["nope"], tmp_path, progress=False)
+    with pytest.raises(BenchError, match="unknown backend"):
+        run_bench(small_suite, ["follow"], tmp_path, backend="spark", progress=False)
+    with pytest.raises(BenchError, match="not a folder"):
+        load_suite(str(tmp_path / "missing"))
+
+    from viapath.bench.commands import register
+
+    app = typer.Typer()
+
+    @app.callback()
+    def main():
+        pass
+
+    register(app)
+    result = CliRunner().invoke(app, ["bench", "paper", "--planners", "follow,nope", "--out", str(tmp_path / "x")])
+    assert result.exit_code == 2
+    assert result.output.strip().count("\n") == 0 and "unknown planner 'nope'" in result.output
+    assert "Traceback" not in result.output
+
+
+def test_cli_suite_and_bench_json(tmp_path):
+    from viapath.bench.commands import register
+
+    app = typer.Typer()
+
+    @app.callback()
+    def main():
+        pass
+
+    register(app)
+    runner = CliRunner()
+    result = runner.invoke(app, ["suite", "head-on", "--count", "2", "--seed", "3", "--out", str(tmp_path / "s")])
+    assert result.exit_code == 0, result.output
+    assert len(list((tmp_path / "s").glob("*.yaml"))) == 2
+    result = runner.invoke(app, ["bench", str(tmp_path / "s"), "--planners", "follow,stop", "--workers", "1",
+                                 "--out", str(tmp_path / "r"), "--json", "--no-plots"])
+    assert result.exit_code == 0, result.output
+    table = json.loads(result.output)
+    assert [entry["planner"] for entry in table] == ["follow", "stop"]
+    assert all(entry["episodes"] == 2 for entry in table)
