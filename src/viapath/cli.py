@@ -9,6 +9,7 @@ from typing import Optional
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 app = typer.Typer(
@@ -24,7 +25,7 @@ _ANIMATION_SUFFIXES = {".gif", ".mp4"}
 
 
 def _fail(message: str, code: int = 2) -> None:
-    errors.print(f"[bold red]error:[/] {message}", highlight=False, soft_wrap=True)
+    errors.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
     raise typer.Exit(code)
 
 
@@ -48,8 +49,8 @@ def run(
     planner: Optional[str] = typer.Option(None, "--planner", help="Planner name (default: the scenario's)."),
     perception: Optional[str] = typer.Option(None, "--perception", help="oracle | laser (default: the scenario's)."),
     seed: Optional[int] = typer.Option(None, "--seed", help="Random seed (default: the scenario's)."),
-    position_noise: Optional[float] = typer.Option(None, "--position-noise", help="Oracle position noise σ [m]."),
-    velocity_noise: Optional[float] = typer.Option(None, "--velocity-noise", help="Oracle velocity noise σ [m/s]."),
+    position_noise: Optional[float] = typer.Option(None, "--position-noise", help="Oracle position noise σ in m."),
+    velocity_noise: Optional[float] = typer.Option(None, "--velocity-noise", help="Oracle velocity noise σ in m/s."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object of metrics."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Write a figure (PNG/PDF/SVG) of the episode."),
     trace: Optional[Path] = typer.Option(None, "--trace", help="Write the per-step trace as CSV."),
