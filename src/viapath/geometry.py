@@ -138,19 +138,34 @@ def legs_first_contact(
     obstacle_velocities: np.ndarray,
     radii: np.ndarray,
     growth: np.ndarray | float = 0.0,
+    growth_until_s: np.ndarray | float = np.inf,
 ) -> np.ndarray:
     """First contact time, measured from each leg's start, for K legs against N moving discs: (K, N).
 
     Obstacle j is at ``obstacle_positions[j] + obstacle_velocities[j] t`` with radius
-    ``radii[j] + growth[j] t`` (t from the planning instant). Leg k starts at ``starts[k]`` at time
+    ``radii[j] + growth[j] min(t, growth_until_s[j])`` (t from the planning instant): a cone in x-y-t
+    that turns into a cylinder at ``growth_until_s`` (a scalar or one time per obstacle). Leg k starts at ``starts[k]`` at time
     ``start_times[k]`` and moves at ``velocities[k]`` for ``durations[k]``.
     """
-    t0 = start_times[:, None]
+    t0 = np.asarray(start_times, dtype=float)[:, None]
+    duration = np.asarray(durations, dtype=float)[:, None]
+    growth = np.asarray(growth, dtype=float)
     ox, oy = obstacle_positions[:, 0], obstacle_positions[:, 1]
     ovx, ovy = obstacle_velocities[:, 0], obstacle_velocities[:, 1]
     px = starts[:, 0:1] - (ox + ovx * t0)
     py = starts[:, 1:2] - (oy + ovy * t0)
     vx = velocities[:, 0:1] - ovx
     vy = velocities[:, 1:2] - ovy
-    radius_at_start = radii + growth * t0
-    return _first_contact(px, py, vx, vy, radius_at_start, growth, durations[:, None])
+    until = np.asarray(growth_until_s, dtype=float)
+    if not np.any(growth) or not np.any(np.isfinite(until)):
+        return _first_contact(px, py, vx, vy, radii + growth * t0, growth, duration)
+    # Split each leg where the cone stops growing: the cone part, then the cylinder part.
+    cone_duration = np.clip(until - t0, 0.0, duration)
+    early = _first_contact(px, py, vx, vy, radii + growth * np.minimum(t0, until), np.where(until > t0, growth, 0.0),
+                           cone_duration)
+    full_growth = growth * np.where(np.isfinite(until), until, 0.0)
+    late = _first_contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy, radii + full_growth, 0.0,
+                          duration - cone_duration)
+    # The cylinder part exists only for legs that reach the end of the cone.
+    late = np.where(t0 + duration >= until, late + cone_duration, np.inf)
+    return np.where(np.isfinite(early), early, late)

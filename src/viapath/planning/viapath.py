@@ -61,6 +61,9 @@ class ViaPathConfig:
     preferred_side: str = "left"
     hysteresis: float = 0.01
     uncertainty_sigmas: float = 2.0
+    max_inflation_m: float = 0.15
+    side_tolerance: float = 0.01
+    slow_times_s: tuple[float, ...] = (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0)
     max_root_obstacles: int = 12
     heading_gain: float = 2.5
     corridor_check_spacing_m: float = 0.05
@@ -89,6 +92,8 @@ class _Nodes:
     length_m: list = field(default_factory=list)
     first_direction: list = field(default_factory=list)
     key: list = field(default_factory=list)  # (speed index, obstacle id, side, root) of the first branch
+    slow_s: list = field(default_factory=list)  # how long the candidate first drives slower (or stands)
+    slow_speed: list = field(default_factory=list)  # and at which speed
 
     def extend(self, **columns) -> np.ndarray:
         start = sum(len(p) for p in self.position)
@@ -127,6 +132,8 @@ class ViaPathPlanner(Planner, name="viapath"):
             preferred_side=spec.preferred_side,
             hysteresis=spec.hysteresis,
             uncertainty_sigmas=spec.uncertainty_sigmas,
+            max_inflation_m=spec.max_inflation_m,
+            side_tolerance=spec.side_tolerance,
             **spec.params,
         )
         return {"config": config}
@@ -169,39 +176,58 @@ class ViaPathPlanner(Planner, name="viapath"):
     def _fallback(self, observation: Observation, search: "_Search") -> Decision:
         robot = observation.robot
         position = np.asarray(robot.position, dtype=float)
-        standing = search.contact_times(position[None], np.zeros(1), np.zeros((1, 2)), np.array([self.config.horizon_s]))
         base = dict(subgoal_index=self.subgoals.index)
-        if np.isinf(standing).all():
-            self._previous_key = None
-            return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), **base))
         self._previous_key = None
-        obstacles, radii = search.obstacles, search.check_radii
-        gaps = np.hypot(*(obstacles.positions - position).T) - radii
-        if gaps.min() <= 0:
-            # Already touching: move straight away from the centre of the deepest overlap.
-            worst = int(np.argmin(gaps))
-            away = position - obstacles.positions[worst]
-            target = position + away / max(np.hypot(*away), 1e-9)
-            speed = self.limits.max_speed_mps
-            command = self.steer(observation, target, speed, self.config.heading_gain)
-            return Decision(command, Plan("escape", speed, target, **base))
-        # Even standing still is hit: take the straight motion with the longest time to contact,
-        # preferring to stay inside the corridor.
+        standing = search.contact_times(position[None], np.zeros(1), np.zeros((1, 2)), np.array([self.config.horizon_s]))
+        if np.isinf(standing).all():
+            return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), **base))
+        # Even standing still is hit: of a fan of straight motions (and standing), take the one that
+        # stays in the corridor, gets out of any overlap, and puts contact off the longest.
+        velocities, score = self._escape_scores(robot, search)
+        best = int(np.argmax(score))
+        speed = float(np.hypot(*velocities[best]))
+        if speed == 0.0:
+            return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), **base))
+        target = position + velocities[best] / speed
+        command = self.steer(observation, target, speed, self.config.heading_gain)
+        return Decision(command, Plan("escape", speed, target, **base))
+
+    def _escape_scores(self, robot, search: "_Search") -> tuple[np.ndarray, np.ndarray]:
+        """Velocities of the escape fan and the score of each (higher is better).
+
+        In order of importance: never further out of the corridor than now (checked where the robot
+        would be after 1 s and at contact, up to 2 s); out of any overlap within a second; the
+        longest time to contact; then slower, and towards the subgoal.
+        """
+        position = np.asarray(robot.position, dtype=float)
         headings = robot.heading_rad + np.linspace(-np.pi, np.pi, 24, endpoint=False)
         speeds = np.unique(np.concatenate([self.config.speeds_mps, [self.limits.max_speed_mps]]))
-        h, v = np.meshgrid(headings, speeds)
-        h, v = h.ravel(), v.ravel()
-        velocities = np.stack([np.cos(h), np.sin(h)], axis=1) * v[:, None]
-        horizon = np.full(len(h), self.config.horizon_s)
-        contact = search.contact_times(np.repeat(position[None], len(h), 0), np.zeros(len(h)), velocities, horizon)
-        time_to_contact = contact.min(axis=1)
-        ends = position + velocities * np.minimum(time_to_contact, 2.0)[:, None]
-        inside = self.path.contains(ends)
-        score = np.where(inside, 0.0, -1e3) + np.minimum(time_to_contact, 1e3)
-        best = int(np.argmax(score))
-        target = position + velocities[best] / v[best]
-        command = self.steer(observation, target, float(v[best]), self.config.heading_gain)
-        return Decision(command, Plan("escape", float(v[best]), target, **base))
+        h, v = (grid.ravel() for grid in np.meshgrid(headings, speeds))
+        velocities = np.concatenate([np.stack([np.cos(h), np.sin(h)], axis=1) * v[:, None], np.zeros((1, 2))])
+        count = len(velocities)
+        horizon = self.config.horizon_s
+        obstacles, radii = search.obstacles, search.check_radii
+        gaps = np.hypot(*(obstacles.positions - position).T) - radii
+        overlapping = gaps <= 0
+        contact = search.contact_times(np.repeat(position[None], count, 0), np.zeros(count), velocities,
+                                       np.full(count, horizon))
+        time_to_contact = np.min(np.where(overlapping, np.inf, contact), axis=1, initial=horizon)
+        time_to_contact = np.minimum(time_to_contact, horizon)
+        if overlapping.any():
+            # Clearance after one second from each overlapped obstacle (negative: still inside).
+            rel = (position + velocities)[:, None, :] - (obstacles.positions + obstacles.velocities)[overlapping]
+            separation = np.min(np.hypot(rel[..., 0], rel[..., 1]) - radii[overlapping], axis=1)
+        else:
+            separation = np.zeros(count)
+        allowed = search.corridor_tolerance
+        after_1s = self.path.corridor_excess(position + velocities) <= allowed
+        at_contact = self.path.corridor_excess(position + velocities * np.minimum(time_to_contact, 2.0)[:, None]) <= allowed
+        toward = search.subgoal - position
+        toward = toward / max(np.hypot(*toward), 1e-9)
+        speed = np.hypot(velocities[:, 0], velocities[:, 1])
+        score = (1e3 * (after_1s & at_contact) + 1e2 * np.minimum(separation, 0.0) + time_to_contact
+                 - 0.01 * speed + 0.001 * (velocities @ toward))
+        return velocities, score
 
 
 class _Search:
@@ -219,6 +245,10 @@ class _Search:
         k = config.uncertainty_sigmas
         self.check_radii = radii + config.safety_margin_m + k * obstacles.position_sigma_m
         self.growth = k * obstacles.velocity_sigma_mps
+        # Replanning every cycle corrects a velocity error before it matters far ahead, so the cone
+        # stops growing once it has added max_inflation_m (else head-on passes never fit a corridor).
+        with np.errstate(divide="ignore"):
+            self.growth_until_s = np.where(self.growth > 0, config.max_inflation_m / self.growth, np.inf)
         self.via_radii = self.check_radii + config.planning_margin_m
         self.horizon_s = config.horizon_s
         tracker = planner.subgoals
@@ -242,7 +272,8 @@ class _Search:
             return np.full((len(starts), 0), np.inf)
         checked = np.clip(self.horizon_s - start_times, 0.0, durations)
         return legs_first_contact(starts, start_times, velocities, checked, self.obstacles.positions,
-                                  self.obstacles.velocities, self.check_radii, self.growth)
+                                  self.obstacles.velocities, self.check_radii, self.growth,
+                                  self.growth_until_s)
 
     def goal_legs(self, starts, start_times, speeds):
         """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N))."""
@@ -287,6 +318,7 @@ class _Search:
             position=np.broadcast_to(self.position, (n_speeds, 2)), time_s=np.zeros(n_speeds), speed=speeds,
             parent=np.full(n_speeds, -1), length_m=np.zeros(n_speeds), first_direction=np.zeros((n_speeds, 2)),
             key=np.stack([np.arange(n_speeds), np.full(n_speeds, -1), np.zeros(n_speeds, int), np.zeros(n_speeds, int)], 1),
+            slow_s=np.zeros(n_speeds), slow_speed=np.zeros(n_speeds),
         )
         data = nodes.stacked()
         complete, goal_length = [], []
@@ -302,6 +334,12 @@ class _Search:
                 nodes.first_direction[0] = directions
             complete.append(frontier[free])
             goal_length.append(lengths[free])
+            if depth == 0 and config.slow_times_s and len(self.obstacles):
+                slowing = self._slow_candidates(nodes, speeds)
+                if slowing is not None:
+                    complete.append(slowing[0])
+                    goal_length.append(slowing[1])
+                data = nodes.stacked()
             if depth == config.max_depth or len(self.obstacles) == 0:
                 break
             blocked = np.flatnonzero(~free & np.isfinite(contact).any(axis=1))
@@ -324,19 +362,27 @@ class _Search:
             return None
         total_length = data["length_m"][complete] + np.concatenate(goal_length)
         speeds_c = data["speed"][complete]
+        slow_s, slow_speed = data["slow_s"][complete], data["slow_speed"][complete]
+        driven_s = (total_length - slow_speed * slow_s) / speeds_c
+        travel_time = slow_s + driven_s
+        # Eq. 1's speed term, time-weighted over a candidate that first slows down or waits.
+        nominal = self.planner.nominal_speed_mps
+        speed_error = (slow_s * np.abs(slow_speed - nominal) + driven_s * np.abs(speeds_c - nominal)) / travel_time
         first = data["first_direction"][complete]
         theta = np.abs(wrap_angle(np.arctan2(first[:, 1], first[:, 0]) - self.heading_rad))
         if config.theta_unit == "deg":
             theta = np.degrees(theta)
         weights = config.weights
-        cost = (weights.k1 * total_length + weights.k2 * total_length / speeds_c
-                + weights.k3 * np.abs(speeds_c - self.planner.nominal_speed_mps) + weights.k4 * theta)
+        cost = (weights.k1 * total_length + weights.k2 * travel_time
+                + weights.k3 * speed_error + weights.k4 * theta)
         keys = np.column_stack([np.round(speeds_c * 1000).astype(int), data["key"][complete, 1:]])
         preferred = LEFT if config.preferred_side == "left" else RIGHT
         cost = cost + _TIE_BREAK * ((keys[:, 2] != 0) & (keys[:, 2] != preferred))
         if previous_key is not None:
             cost = cost - config.hysteresis * np.all(keys == previous_key, axis=1)
         best = int(np.argmin(cost))
+        if slow_s[best] > 0:
+            return keys[best], self._slow_plan(data, complete, cost, best, polylines_wanted=config.record_candidates)
         chosen_line = self._polyline(data, complete[best])
         polylines = [self._polyline(data, node) for node in complete] if config.record_candidates else []
         plan = Plan(
@@ -352,6 +398,53 @@ class _Search:
             chosen=best,
         )
         return keys[best], plan
+
+    def _slow_candidates(self, nodes: _Nodes, speeds: np.ndarray):
+        """Stand still or drive slower than nominal towards the subgoal for each of
+        ``slow_times_s``, then on at each speed: the x-y-t way of letting an obstacle pass first.
+        Returns (complete node indices, goal leg lengths) or None."""
+        nominal = self.planner.nominal_speed_mps
+        slow_speeds = np.concatenate([[0.0], speeds[speeds < nominal - 1e-9]])
+        duration, slow_speed = (grid.ravel() for grid in np.meshgrid(np.asarray(self.config.slow_times_s, float),
+                                                                     slow_speeds))
+        offset = self.subgoal - self.position
+        direction = offset / max(float(np.hypot(*offset)), 1e-12)
+        # Never past the subgoal while slowing down.
+        ok = slow_speed * duration < np.hypot(*offset) - 1e-6
+        duration, slow_speed = duration[ok], slow_speed[ok]
+        starts = np.broadcast_to(self.position, (len(duration), 2))
+        first_leg = self.contact_times(starts, np.zeros(len(duration)), direction * slow_speed[:, None], duration)
+        free = np.isinf(first_leg).all(axis=1)
+        if not free.any():
+            return None
+        duration, slow_speed = duration[free], slow_speed[free]
+        d, v_slow = np.repeat(duration, len(speeds)), np.repeat(slow_speed, len(speeds))
+        v_after = np.tile(speeds, len(duration))
+        ends = self.position + direction * (v_slow * d)[:, None]
+        _, lengths, free, _ = self.goal_legs(ends, d, v_after)
+        if not free.any():
+            return None
+        count = int(free.sum())
+        speed_index = np.searchsorted(speeds, v_after[free])
+        index = nodes.extend(
+            position=ends[free], time_s=d[free], speed=v_after[free], parent=np.full(count, -1),
+            length_m=(v_slow * d)[free], first_direction=np.broadcast_to(direction, (count, 2)).copy(),
+            key=np.stack([speed_index, np.full(count, _SLOW), np.zeros(count, int), np.zeros(count, int)], 1),
+            slow_s=d[free], slow_speed=v_slow[free],
+        )
+        return index, lengths[free]
+
+    def _slow_plan(self, data, complete, cost, best, polylines_wanted: bool) -> Plan:
+        node = complete[best]
+        speed = float(data["slow_speed"][node])
+        line = np.array([self.position, self.subgoal])
+        polylines = [self._polyline(data, n) for n in complete] if polylines_wanted else []
+        return Plan(
+            status="wait" if speed == 0.0 else "slow", speed_mps=speed, target=self.subgoal.copy(), waypoints=line,
+            subgoal_index=self.planner.subgoals.index, candidate_count=len(complete), candidate_costs=cost,
+            candidate_polylines=polylines, chosen=best,
+            extras={"slow_s": float(data["slow_s"][node]), "speed_after_mps": float(data["speed"][node])},
+        )
 
     def _straight_plan(self, speed: float, speed_index: int):
         key = np.array([int(round(speed * 1000)), -1, 0, 0])
@@ -381,7 +474,11 @@ class _Search:
         centre_now = obstacles.positions[obstacle_index] + velocity * times[:, None]
         # The radius grows with prediction uncertainty; evaluate it near the expected passing time.
         reach_time = np.hypot(*(centre_now - starts).T) / speeds
-        radius = self.via_radii[obstacle_index] + self.growth[obstacle_index] * (times + reach_time)
+        passing_time = np.minimum(times + reach_time, self.growth_until_s[obstacle_index])
+        radius = self.via_radii[obstacle_index] + self.growth[obstacle_index] * passing_time
+        # A node already closer than that (after passing on a previous leg) goes round tangentially.
+        distance = np.hypot(*(centre_now - starts).T)
+        radius = np.maximum(np.minimum(radius, 0.98 * distance), 0.0)
 
         # Axis 1 enumerates (side, root): (left, early), (right, early), (left, late), (right, late).
         w, valid = tangent_vectors(starts[:, None, :], centre_now[:, None, :], radius[:, None], _SIDES[None, :2])
@@ -414,7 +511,8 @@ class _Search:
         return dict(
             position=via[good], time_s=times_k[good] + t_k, speed=speeds_k[good], parent=parent,
             length_m=data["length_m"][parent] + speeds_k[good] * t_k,
-            first_direction=first_direction, key=key,
+            first_direction=first_direction, key=key, slow_s=np.zeros(int(good.sum())),
+            slow_speed=np.zeros(int(good.sum())),
         )
 
     def _polyline(self, data, node: int) -> np.ndarray:
@@ -426,6 +524,7 @@ class _Search:
 
 
 _SIDES = np.array([LEFT, RIGHT, LEFT, RIGHT])
+_SLOW = -2  # the "obstacle id" in the key of a candidate that slows down or waits first
 _ROOTS = np.array([0, 0, 1, 1])
 # Cost added to the non-preferred side: breaks exact ties (head-on) and nothing else.
 _TIE_BREAK = 1e-3

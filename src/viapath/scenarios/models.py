@@ -149,6 +149,8 @@ class PlannerSpec(_Strict):
     preferred_side: Literal["left", "right"] = "left"
     hysteresis: NonNegativeFloat = 0.01
     uncertainty_sigmas: NonNegativeFloat = 2.0
+    max_inflation_m: NonNegativeFloat = 0.15
+    side_tolerance: NonNegativeFloat = 0.01
     params: dict[str, Any] = Field(default_factory=dict, description="options for other planners")
 
 
