@@ -47,10 +47,6 @@ def test_obstacle_from_the_front_is_passed_inside_the_corridor(seed):
     assert np.abs(lateral(ep)).max() > 0.2
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "planner, not perception: with tracker-level sigmas (position 0.015 m, velocity 0.09 m/s) the "
-    "via-point search finds no candidate head-on (the true state with velocity_sigma 0.05 m/s does the "
-    "same) and 'escape' plus a noise-broken left/right tie decides the side; see docs/perception.md"))
 def test_obstacle_from_the_front_is_passed_on_the_left_for_every_seed():
     sides = [lateral(episode("paper-front", seed)) for seed in range(6)]
     assert all(lat.max() > 0.2 and lat.min() > -0.2 for lat in sides)

@@ -21,8 +21,16 @@ What the paper leaves open and we chose (see DESIGN §2 pitfalls):
   combined radius (+ ``safety_margin_m``), or chaining never finds a path.
 * Legs are checked up to ``horizon_s``. Past an intermediate subgoal the robot is assumed to carry on
   along the next segment; past the final goal nothing is checked (the mission ends there).
-* Ties (the head-on case is exactly symmetric) go to ``preferred_side``; the previous cycle's
-  choice gets a bonus of ``hysteresis`` so that near-equal options do not alternate.
+* Near-ties (the head-on case is exactly symmetric, and noise breaks it at random) go to
+  ``preferred_side``: the other side pays ``side_tolerance``. The previous cycle's way round (same
+  obstacle, side, early/late) gets a bonus of ``hysteresis`` so that near-equal options do not
+  alternate.
+* Under velocity uncertainty an obstacle grows into a cone (``uncertainty_sigmas`` σ_v per second),
+  capped at ``max_inflation_m``: replanning every cycle corrects a velocity error long before it
+  matters ten seconds ahead, and an uncapped cone makes any head-on pass wider than a corridor.
+* Besides via points, candidates may first stand still or drive slower than nominal along the
+  straight leg for a while (``slow_times_s``), then go on: letting a crossing person pass is then a
+  straight candidate, not a sharp turn behind them. The speed term of Eq. 1 is time-weighted.
 * θ is in radians by default; degrees make the θ term swamp the others.
 * With no collision-free candidate: stop if standing still is safe over the horizon; otherwise take
   the motion with the longest time to contact (moving straight away when already touching).
@@ -62,7 +70,7 @@ class ViaPathConfig:
     hysteresis: float = 0.01
     uncertainty_sigmas: float = 2.0
     max_inflation_m: float = 0.15
-    side_tolerance: float = 0.01
+    side_tolerance: float = 0.03
     slow_times_s: tuple[float, ...] = (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0)
     max_root_obstacles: int = 12
     heading_gain: float = 2.5
@@ -377,9 +385,12 @@ class _Search:
                 + weights.k3 * speed_error + weights.k4 * theta)
         keys = np.column_stack([np.round(speeds_c * 1000).astype(int), data["key"][complete, 1:]])
         preferred = LEFT if config.preferred_side == "left" else RIGHT
-        cost = cost + _TIE_BREAK * ((keys[:, 2] != 0) & (keys[:, 2] != preferred))
+        cost = cost + config.side_tolerance * ((keys[:, 2] != 0) & (keys[:, 2] != preferred))
         if previous_key is not None:
-            cost = cost - config.hysteresis * np.all(keys == previous_key, axis=1)
+            # Keep last cycle's way round (same obstacle, side, early/late), and its speed if close.
+            same_way = np.all(keys[:, 1:] == previous_key[1:], axis=1)
+            same_speed = np.abs(keys[:, 0] - previous_key[0]) <= 50
+            cost = cost - config.hysteresis * (same_way + 0.5 * (same_way & same_speed))
         best = int(np.argmin(cost))
         if slow_s[best] > 0:
             return keys[best], self._slow_plan(data, complete, cost, best, polylines_wanted=config.record_candidates)
@@ -526,5 +537,3 @@ class _Search:
 _SIDES = np.array([LEFT, RIGHT, LEFT, RIGHT])
 _SLOW = -2  # the "obstacle id" in the key of a candidate that slows down or waits first
 _ROOTS = np.array([0, 0, 1, 1])
-# Cost added to the non-preferred side: breaks exact ties (head-on) and nothing else.
-_TIE_BREAK = 1e-3

@@ -150,7 +150,7 @@ class PlannerSpec(_Strict):
     hysteresis: NonNegativeFloat = 0.01
     uncertainty_sigmas: NonNegativeFloat = 2.0
     max_inflation_m: NonNegativeFloat = 0.15
-    side_tolerance: NonNegativeFloat = 0.01
+    side_tolerance: NonNegativeFloat = 0.03
     params: dict[str, Any] = Field(default_factory=dict, description="options for other planners")
 
 
