@@ -15,7 +15,7 @@ from viapath.observation import Command, MotionLimits, Observation, RobotState
 from viapath.path import DesignatedPath, SubgoalPolicy
 from viapath.planning import Decision, make_planner, planner_class
 from viapath.sim import robot as kinematics
-from viapath.sim.metrics import compute_metrics
+from viapath.sim.metrics import compute_metrics, plan_side
 from viapath.sim.obstacles import scenario_obstacle_states
 from viapath.sim.perception import OraclePerception, Perception, WorldSnapshot
 
@@ -48,6 +48,8 @@ class Trace:
     perceived: list[Any] = field(default_factory=list)  # per step Obstacles, when recorded
     scan_points: list[np.ndarray] = field(default_factory=list)  # per step, world frame, laser only
     extras: dict[str, Any] = field(default_factory=dict)
+    # Side of the chosen plan's first via point relative to robot -> subgoal: +1 left, -1 right, 0 none.
+    plan_sides: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))  # (K,)
 
 
 @dataclass
@@ -112,7 +114,7 @@ def run_episode(
     sensing.reset(rng)
 
     state = kinematics.UnicycleState(spec.start[0], spec.start[1], spec.heading, spec.speed, 0.0)
-    rows: dict[str, list] = {k: [] for k in ("pose", "speed", "turn", "command", "plan_speed", "target", "status", "via", "plan_ms")}
+    rows: dict[str, list] = {k: [] for k in ("pose", "speed", "turn", "command", "plan_speed", "target", "status", "via", "plan_ms", "side")}
     perceived, scan_points = [], []
     reached = False
     goal_tolerance = subgoal_policy.goal_tolerance_m
@@ -146,6 +148,7 @@ def run_episode(
         rows["target"].append(np.asarray(decision.plan.target, dtype=float))
         rows["status"].append(decision.plan.status)
         rows["via"].append(np.asarray(decision.plan.via_points, dtype=float).reshape(-1, 2))
+        rows["side"].append(plan_side(decision.plan.waypoints))
         state = kinematics.step(state, command, limits, dt)
 
     n = len(rows["pose"])
@@ -158,6 +161,7 @@ def run_episode(
         plan_status=rows["status"], via_points=rows["via"], plan_times_ms=np.array(rows["plan_ms"]),
         reached_goal=reached, walls=walls, perceived=perceived, scan_points=scan_points,
         extras={"nominal_speed_mps": spec.speed, "seed": scenario.seed if seed is None else seed},
+        plan_sides=np.array(rows["side"], dtype=int),
     )
     metrics = compute_metrics(trace)
     extra_metrics = getattr(sensing, "episode_metrics", None)
@@ -174,3 +178,4 @@ def _append_idle(rows: dict[str, list], state: kinematics.UnicycleState) -> None
     rows["status"].append("end")
     rows["via"].append(np.zeros((0, 2)))
     rows["plan_ms"].append(np.nan)
+    rows["side"].append(0)

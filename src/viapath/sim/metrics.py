@@ -77,6 +77,80 @@ def compute_metrics(trace) -> dict[str, Any]:
         "max_speed_mps": float(speeds.max()),
         "plan_time_p50_ms": float(np.percentile(plan_ms, 50)) if len(plan_ms) else None,
         "plan_time_p99_ms": float(np.percentile(plan_ms, 99)) if len(plan_ms) else None,
+        **smoothness_metrics(trace),
+    }
+
+
+# -- smoothness (issue 4) --------------------------------------------------------------------------
+# Taken from what the robot actually did (``robot_speeds_mps``, ``robot_turn_rates_radps``: one sample
+# per step, after the drive's limits), not from the raw commands, which may jump: a planner that
+# commands bang-bang speed changes shows up here as acceleration at the limit and large jerk.
+
+STEERING_REVERSAL_THRESHOLD_RADPS = 0.05
+
+
+def accel_jerk(speeds_mps, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Finite-difference acceleration (K-1,) and jerk (K-2,) of a speed profile sampled every ``dt_s``."""
+    speeds = np.asarray(speeds_mps, dtype=float)
+    accel = np.diff(speeds) / dt_s
+    return accel, np.diff(accel) / dt_s
+
+
+def steering_reversals(turn_rates_radps, threshold_radps: float = STEERING_REVERSAL_THRESHOLD_RADPS) -> int:
+    """Sign changes of the turn rate among the samples whose magnitude exceeds ``threshold_radps``;
+    small values in between (driving straight for a while) neither count nor reset the sign."""
+    turn = np.asarray(turn_rates_radps, dtype=float)
+    signs = np.sign(turn[np.abs(turn) > threshold_radps])
+    return int(np.count_nonzero(signs[1:] != signs[:-1]))
+
+
+def plan_side(waypoints) -> int:
+    """Which side of the straight line robot -> subgoal a chosen polyline passes on first:
+    +1 left, -1 right, 0 straight (no via point, or the via point on that line)."""
+    line = np.asarray(waypoints, dtype=float).reshape(-1, 2)
+    if len(line) < 3:
+        return 0
+    goal, via = line[-1] - line[0], line[1] - line[0]
+    cross = goal[0] * via[1] - goal[1] * via[0]
+    scale = max(float(np.hypot(*goal) * np.hypot(*via)), 1e-12)
+    return int(np.sign(cross)) if abs(cross) > 1e-6 * scale else 0
+
+
+def plan_switches(sides, speeds_mps, speed_tolerance_mps: float = 1e-3) -> int:
+    """Cycles whose chosen side (+1/0/-1) or chosen speed differs from the previous cycle's."""
+    sides = np.asarray(sides)
+    speeds = np.asarray(speeds_mps, dtype=float)
+    if len(sides) < 2:
+        return 0
+    changed = (sides[1:] != sides[:-1]) | (np.abs(np.diff(speeds)) > speed_tolerance_mps)
+    return int(np.count_nonzero(changed))
+
+
+def side_flips(sides) -> int:
+    """Left <-> right changes of the chosen side, ignoring straight (0) cycles in between."""
+    sides = np.asarray(sides)
+    sided = sides[sides != 0]
+    return int(np.count_nonzero(sided[1:] != sided[:-1]))
+
+
+def smoothness_metrics(trace) -> dict[str, Any]:
+    dt = trace.dt_s
+    accel, jerk = accel_jerk(trace.robot_speeds_mps, dt)
+    turn = np.asarray(trace.robot_turn_rates_radps, dtype=float)
+    # Planning cycles only: the last row ("end") has no plan.
+    status = list(getattr(trace, "plan_status", []))
+    cycles = len(status) - 1 if status and status[-1] == "end" else len(status)
+    sides = np.asarray(getattr(trace, "plan_sides", np.zeros(0)))[:cycles]
+    plan_speeds = np.asarray(getattr(trace, "plan_speeds_mps", np.zeros(0)), dtype=float)[:cycles]
+    if len(sides) != len(plan_speeds):  # a trace that does not record sides: speed changes only
+        sides = np.zeros(len(plan_speeds), dtype=int)
+    return {
+        "max_abs_accel_mps2": float(np.abs(accel).max()) if len(accel) else 0.0,
+        "max_abs_jerk_mps3": float(np.abs(jerk).max()) if len(jerk) else 0.0,
+        "max_abs_turn_rate_radps": float(np.abs(turn).max()) if len(turn) else 0.0,
+        "steering_reversals": steering_reversals(turn),
+        "plan_switches": plan_switches(sides, plan_speeds),
+        "plan_side_flips": side_flips(sides),
     }
 
 

@@ -1,0 +1,50 @@
+"""A small version of benchmarks/bench_noise.py: the paper's side-crossing and head-on cases with
+oracle perception noise (position σ 0.03 m, velocity σ 0.05 m/s), 4 seeds each."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+_BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_noise.py"
+
+
+def _bench_module():
+    spec = importlib.util.spec_from_file_location("bench_noise", _BENCH)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def noisy_runs():
+    bench = _bench_module()
+    grouped = bench.run_noise(("paper-side", "paper-front"), seeds=4, position_noise_m=0.03, velocity_noise_mps=0.05)
+    return bench, grouped
+
+
+@pytest.mark.parametrize("scenario", ["paper-side", "paper-front"])
+def test_noisy_runs_reach_goal_without_collision(noisy_runs, scenario):
+    bench, grouped = noisy_runs
+    summary = bench.summarise(grouped[scenario])
+    assert summary["runs"] == 4
+    assert summary["collisions"] == 0, f"collided seeds {summary['collided_seeds']}: {summary}"
+    assert summary["reached_goal"] == 4, f"seeds not reaching the goal {summary['failed_seeds']}: {summary}"
+
+
+def test_noise_changes_the_runs_and_seeds_are_reproducible():
+    bench = _bench_module()
+    a = bench.run_one("paper-side", 1, 0.03, 0.05)
+    b = bench.run_one("paper-side", 1, 0.03, 0.05)
+    clean = bench.run_one("paper-side", 1, 0.0, 0.0)
+    assert a["min_clearance_m"] == b["min_clearance_m"] and a["plan_switches"] == b["plan_switches"]
+    assert a["plan_switches"] > clean["plan_switches"]
+
+
+def test_bench_noise_command_prints_a_row_per_scenario(capsys):
+    bench = _bench_module()
+    bench.main(["--seeds", "1", "--scenarios", "paper-side"])
+    out = capsys.readouterr().out
+    assert "paper-side" in out and "clr min" in out
