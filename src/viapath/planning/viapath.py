@@ -274,27 +274,28 @@ class _Search:
 
     # -- checks ----------------------------------------------------------------------------------
 
-    def contact_times(self, starts, start_times, velocities, durations) -> np.ndarray:
+    def contact_times(self, starts, start_times, velocities, durations, horizon_s=None) -> np.ndarray:
         """(K, N) first contact of each leg with each obstacle, up to the horizon; inf = free."""
         if len(self.obstacles) == 0:
             return np.full((len(starts), 0), np.inf)
-        checked = np.clip(self.horizon_s - start_times, 0.0, durations)
+        horizon_s = self.horizon_s if horizon_s is None else horizon_s
+        checked = np.clip(horizon_s - start_times, 0.0, durations)
         return legs_first_contact(starts, start_times, velocities, checked, self.obstacles.positions,
                                   self.obstacles.velocities, self.check_radii, self.growth,
                                   self.growth_until_s)
 
-    def goal_legs(self, starts, start_times, speeds):
+    def goal_legs(self, starts, start_times, speeds, horizon_s=None):
         """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N))."""
         offset = self.subgoal - starts
         lengths = np.hypot(offset[:, 0], offset[:, 1])
         directions = offset / np.maximum(lengths, 1e-12)[:, None]
         durations = np.maximum(lengths - self.stop_short_m, 0.0) / speeds
         velocities = directions * speeds[:, None]
-        contact = self.contact_times(starts, start_times, velocities, durations)
+        contact = self.contact_times(starts, start_times, velocities, durations, horizon_s)
         if self.continuation is not None and contact.shape[1]:
             direction, length = self.continuation
             more = self.contact_times(np.broadcast_to(self.subgoal, starts.shape), start_times + durations,
-                                      direction * speeds[:, None], length / speeds)
+                                      direction * speeds[:, None], length / speeds, horizon_s)
             contact = np.minimum(contact, more + durations[:, None])
         free = np.isinf(contact).all(axis=1) & self._goal_legs_inside(starts)
         return directions, lengths, free, contact
@@ -387,9 +388,9 @@ class _Search:
         preferred = LEFT if config.preferred_side == "left" else RIGHT
         cost = cost + config.side_tolerance * ((keys[:, 2] != 0) & (keys[:, 2] != preferred))
         if previous_key is not None:
-            # Keep last cycle's way round (same obstacle, side, early/late), and its speed if close.
+            # Keep last cycle's way round (same obstacle, side, early/late), and its speed.
             same_way = np.all(keys[:, 1:] == previous_key[1:], axis=1)
-            same_speed = np.abs(keys[:, 0] - previous_key[0]) <= 50
+            same_speed = keys[:, 0] == previous_key[0]
             cost = cost - config.hysteresis * (same_way + 0.5 * (same_way & same_speed))
         best = int(np.argmin(cost))
         if slow_s[best] > 0:
@@ -412,7 +413,8 @@ class _Search:
 
     def _slow_candidates(self, nodes: _Nodes, speeds: np.ndarray):
         """Stand still or drive slower than nominal towards the subgoal for each of
-        ``slow_times_s``, then on at each speed: the x-y-t way of letting an obstacle pass first.
+        ``slow_times_s``, then on at nominal speed or faster: the x-y-t way of letting an obstacle
+        pass first.
         Returns (complete node indices, goal leg lengths) or None."""
         nominal = self.planner.nominal_speed_mps
         slow_speeds = np.concatenate([[0.0], speeds[speeds < nominal - 1e-9]])
@@ -429,10 +431,16 @@ class _Search:
         if not free.any():
             return None
         duration, slow_speed = duration[free], slow_speed[free]
-        d, v_slow = np.repeat(duration, len(speeds)), np.repeat(slow_speed, len(speeds))
-        v_after = np.tile(speeds, len(duration))
+        # Then at least the nominal speed: waiting only makes sense when the way is clear afterwards
+        # (slowing down for good is the straight candidates' job).
+        after = speeds[speeds >= nominal - 1e-9]
+        d, v_slow = np.repeat(duration, len(after)), np.repeat(slow_speed, len(after))
+        v_after = np.tile(after, len(duration))
         ends = self.position + direction * (v_slow * d)[:, None]
-        _, lengths, free, _ = self.goal_legs(ends, d, v_after)
+        # The leg after slowing down is checked to its end, not to the horizon: waiting is for
+        # letting someone pass, not for pushing a collision past the horizon cycle after cycle
+        # (behind a slow walker that would wait for ever).
+        _, lengths, free, _ = self.goal_legs(ends, d, v_after, np.inf)
         if not free.any():
             return None
         count = int(free.sum())

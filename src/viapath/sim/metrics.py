@@ -116,7 +116,7 @@ def plan_side(waypoints) -> int:
     return int(np.sign(cross)) if abs(cross) > 1e-6 * scale else 0
 
 
-def plan_switches(sides, speeds_mps, speed_tolerance_mps: float = 1e-3) -> int:
+def plan_switches(sides, speeds_mps, speed_tolerance_mps: float = 0.05) -> int:
     """Cycles whose chosen side (+1/0/-1) or chosen speed differs from the previous cycle's."""
     sides = np.asarray(sides)
     speeds = np.asarray(speeds_mps, dtype=float)
