@@ -58,6 +58,8 @@ BAD = {
                     "obstacles.1.replay.dt_z", "unknown field", "found 0.4", 1),
     "unknown_perception_mode": ("duration_s: 60", "perception: {mode: lidar}\nduration_s: 60",
                                 "perception.mode", "'oracle' or 'laser'", "found 'lidar'", 1),
+    "negative_seed": ("duration_s: 60", "duration_s: 60\nseed: -3",
+                      "seed", "greater than or equal to 0", "found -3", 1),
     "negative_weight": ("k1: 0.1", "k1: -0.1",
                         "planner.weights.k1", "greater than or equal to 0", "found -0.1", 1),
 }

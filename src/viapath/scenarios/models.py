@@ -178,7 +178,7 @@ class Scenario(_Strict):
     subgoals: SubgoalSpec = Field(default_factory=SubgoalSpec)
     duration_s: PositiveFloat = 60.0
     dt_s: PositiveFloat = 0.1
-    seed: int = 0
+    seed: int = Field(0, ge=0)  # numpy's generator takes no negative seed
 
     @field_validator("duration_s")
     @classmethod
