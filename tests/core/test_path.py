@@ -181,6 +181,22 @@ def test_legs_inside_across_a_corner():
     np.testing.assert_array_equal(path.legs_inside(starts, ends, spacing_m=0.01), expected)
 
 
+def test_legs_inside_finds_a_shallow_excursion_at_the_inner_corner():
+    """A leg across the junction that leaves the corridor by 1.4 cm, over 4 cm, just outside the
+    concave corner (3.5, 0.5); both ends are well inside (one in each capsule only)."""
+    path = DesignatedPath([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0]], half_width_m=0.5)
+    direction = np.array([1.0, 1.0]) / np.sqrt(2)
+    outward = np.array([-1.0, 1.0]) / np.sqrt(2)
+    closest = np.array([3.5, 0.5]) + 0.02 * outward
+    start, end = closest - 1.0 * direction, closest + 1.3 * direction
+    samples, _ = sample_polyline(path.waypoints, 4000)
+    leg = start + np.linspace(0, 1, 4601)[:, None] * (end - start)
+    excess = np.min(brute_segment_distances(leg, samples) - 0.5, axis=1)
+    assert 0.01 < excess.max() < 0.02 and excess[0] < 0 and excess[-1] < 0  # set-up sanity
+    assert not path.legs_inside(start[None], end[None], spacing_m=0.005)[0]
+    assert path.legs_inside(start[None], end[None], spacing_m=0.005, tolerance_m=0.02)[0]
+
+
 def test_legs_inside_empty_and_per_leg_tolerance():
     path = DesignatedPath([[0.0, 0.0], [4.0, 0.0]], half_width_m=0.5)
     assert path.legs_inside(np.zeros((0, 2)), np.zeros((0, 2))).shape == (0,)
