@@ -60,6 +60,8 @@ BAD = {
                                 "perception.mode", "'oracle' or 'laser'", "found 'lidar'", 1),
     "negative_seed": ("duration_s: 60", "duration_s: 60\nseed: -3",
                       "seed", "greater than or equal to 0", "found -3", 1),
+    "step_longer_than_episode": ("duration_s: 60", "duration_s: 5\ndt_s: 10",
+                                 "dt_s", "must not exceed duration_s", "found 10", 1),
     "negative_weight": ("k1: 0.1", "k1: -0.1",
                         "planner.weights.k1", "greater than or equal to 0", "found -0.1", 1),
 }

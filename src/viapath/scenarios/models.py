@@ -186,3 +186,11 @@ class Scenario(_Strict):
         if value > 24 * 3600:
             raise ValueError("duration_s above one day is surely a mistake")
         return value
+
+    @field_validator("dt_s")
+    @classmethod
+    def _step_within_duration(cls, value: float, info) -> float:
+        duration = info.data.get("duration_s")
+        if duration is not None and value > duration:
+            raise ValueError(f"dt_s must not exceed duration_s ({duration} s): the episode would have no step")
+        return value
