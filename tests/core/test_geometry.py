@@ -11,6 +11,7 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
+from _core_helpers import core_settings
 from viapath.geometry import (
     LEFT,
     RIGHT,
@@ -37,6 +38,7 @@ side = st.sampled_from([LEFT, RIGHT])
 # --------------------------------------------------------------------------- small helpers
 
 
+@core_settings
 @given(st.floats(-1e4, 1e4, allow_nan=False))
 def test_wrap_angle_range_and_equivalence(angle):
     wrapped = float(wrap_angle(angle))
@@ -56,6 +58,7 @@ def test_wrap_angle_boundaries_and_arrays():
     np.testing.assert_allclose(wrapped[4:], 0.0, atol=1e-12)
 
 
+@core_settings
 @given(point, point, st.floats(-10, 10))
 def test_rotate_preserves_length_and_turns_by_angle(a, b, angle):
     r = rotate(a, angle)
@@ -85,6 +88,7 @@ def _scan_tangent_directions(origin, centre, radius_m, n=100001):
     return base + phi[hit].max(), base + phi[hit].min(), phi[1] - phi[0]
 
 
+@core_settings
 @given(point, point, radius, side)
 def test_tangent_vectors_are_tangent_and_match_direction_scan(origin, centre, radius_m, which):
     distance = np.hypot(*(centre - origin))
@@ -104,6 +108,7 @@ def test_tangent_vectors_are_tangent_and_match_direction_scan(origin, centre, ra
     assert abs(float(wrap_angle(np.arctan2(w[1], w[0]) - expected))) <= 2 * step
 
 
+@core_settings
 @given(point, point, radius, st.floats(0.0, 0.3), st.lists(st.floats(0.0, 10.0), min_size=1, max_size=5))
 def test_tangent_vectors_to_growing_circle_broadcast(origin, centre, radius_m, growth, times):
     """The planner calls tangent_vectors with a radius R + g t per row and both sides at once."""
@@ -212,6 +217,7 @@ def test_via_point_standing_obstacle_is_the_tangent_point():
     assert np.isinf(t_late)
 
 
+@core_settings
 @given(point, point, velocity, st.floats(0.05, 1.0), radius, side)
 def test_via_points_random(origin, centre, obstacle_velocity, speed, radius_m, which):
     assume(np.hypot(*(centre - origin)) > radius_m * 1.01)
@@ -278,6 +284,7 @@ def _aim(rel_position, rel_velocity, aimed, miss):
 miss = st.tuples(st.floats(-1.5, 1.5), st.floats(-1.5, 1.5))
 
 
+@core_settings
 @given(point, velocity, radius, st.floats(0.1, 30.0), st.booleans(), miss)
 def test_first_contact_time_matches_sampling(rel_position, rel_velocity, radius_m, duration, aimed, miss_point):
     rel_velocity = _aim(rel_position, rel_velocity, aimed, miss_point)
@@ -285,6 +292,7 @@ def test_first_contact_time_matches_sampling(rel_position, rel_velocity, radius_
     _check_first_contact(tau_code, rel_position, rel_velocity, radius_m, 0.0, duration)
 
 
+@core_settings
 @given(point, velocity, radius, st.floats(0.0, 0.6), st.floats(0.1, 30.0), st.booleans(), miss)
 def test_first_contact_time_growing_radius_matches_sampling(rel_position, rel_velocity, radius_m, growth, duration,
                                                             aimed, miss_point):
@@ -321,6 +329,7 @@ def test_first_contact_named_cases(name):
         assert tau_code == 0.0
 
 
+@core_settings
 @given(
     st.integers(1, 4), st.integers(1, 4), st.floats(0.0, 0.4), st.booleans(),
     st.randoms(use_true_random=False),
@@ -371,6 +380,7 @@ def test_legs_first_contact_already_in_contact_and_separated():
 # --------------------------------------------------------------------------- closest approach
 
 
+@core_settings
 @given(point, velocity, st.floats(0.0, 30.0))
 def test_closest_approach_matches_sampling(rel_position, rel_velocity, duration):
     distance, tau = closest_approach(rel_position, rel_velocity, duration)

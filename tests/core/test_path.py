@@ -11,7 +11,7 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from conftest import brute_segment_distances, sample_polyline, sampling_error
+from _core_helpers import brute_segment_distances, core_settings, sample_polyline, sampling_error
 from viapath.geometry import cross2
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 
@@ -53,6 +53,7 @@ def test_brute_reference_matches_exact_point_segment_distance():
     np.testing.assert_allclose(d, [1.5, 5.0, 3.0, 0.0], atol=sampling_error([[0, 0], [4, 0]], PER_SEGMENT) + 1e-12)
 
 
+@core_settings
 @given(path_and_points())
 def test_project_matches_brute_force(case):
     path, points = case
@@ -94,6 +95,7 @@ def test_lateral_deviation_sign_convention():
     np.testing.assert_allclose(lateral, [0.5, -0.5, 0.5, -0.5])
 
 
+@core_settings
 @given(path_and_points())
 def test_corridor_excess_and_contains_match_brute_force(case):
     path, points = case
@@ -142,6 +144,7 @@ def path_and_legs(draw, count=4):
     return path, legs[:, 0], legs[:, 1], spacing
 
 
+@core_settings
 @given(path_and_legs())
 def test_legs_inside_matches_dense_sampling_of_leg(case):
     path, starts, ends, spacing = case
@@ -205,6 +208,7 @@ def test_legs_inside_empty_and_per_leg_tolerance():
     np.testing.assert_array_equal(path.legs_inside(starts, ends, tolerance_m=np.array([0.0, 0.1])), [False, True])
 
 
+@core_settings
 @given(paths(), st.lists(st.floats(-2.0, 20.0), min_size=1, max_size=20))
 def test_point_at_is_consistent_with_arc_length(path, arcs):
     samples, sample_arcs = sample_polyline(path.waypoints, 50)
@@ -342,6 +346,7 @@ def test_tracker_never_bypasses_the_goal():
     assert not tracker.goal_reached(np.array([4.0, 0.11]))
 
 
+@core_settings
 @given(paths(), st.lists(st.tuples(st.floats(-8, 8), st.floats(-8, 8)), min_size=1, max_size=30))
 def test_tracker_index_is_monotone_and_bounded(path, positions):
     tracker = SubgoalTracker(path)
