@@ -66,6 +66,8 @@ def run(
     _check_output(trace, {".csv"}, "--trace")
     _check_noise(position_noise, "--position-noise")
     _check_noise(velocity_noise, "--velocity-noise")
+    if seed is not None and seed < 0:
+        _fail(f"--seed: expected an integer >= 0, found {seed}")
     if perception is not None and perception not in ("oracle", "laser"):
         _fail(f"--perception: expected 'oracle' or 'laser', found {perception!r}")
     try:

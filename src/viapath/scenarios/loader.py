@@ -80,7 +80,7 @@ def _parse(text: str, origin: str, base_dir: Path | None) -> Scenario:
 def format_validation_error(error: ValidationError, origin: str) -> str:
     lines = []
     for item in error.errors(include_url=False):
-        location = ".".join(str(part) for part in item["loc"] if part not in _UNION_TAGS) or "(top level)"
+        location = ".".join(str(part) for part in _without_union_tags(item["loc"])) or "(top level)"
         message = item["msg"]
         if item["type"] == "extra_forbidden":
             message = "unknown field (check the spelling; extra fields are not allowed)"
@@ -90,3 +90,13 @@ def format_validation_error(error: ValidationError, origin: str) -> str:
         found_text = "" if item["type"] in ("missing",) or isinstance(found, dict) else f"; found {found!r}"
         lines.append(f"{origin}: {location}: {message}{found_text}")
     return "\n".join(lines)
+
+
+def _without_union_tags(loc: tuple) -> list:
+    """Drop the tag pydantic inserts after a list index for the tagged obstacle union.
+
+    Only a tag right after an index is dropped: ``replay`` is also a real field name
+    (``obstacles.1.replay.file``), which must stay in the path.
+    """
+    return [part for i, part in enumerate(loc)
+            if not (part in _UNION_TAGS and i > 0 and isinstance(loc[i - 1], int))]

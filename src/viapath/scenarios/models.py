@@ -180,11 +180,19 @@ class Scenario(_Strict):
     subgoals: SubgoalSpec = Field(default_factory=SubgoalSpec)
     duration_s: PositiveFloat = 60.0
     dt_s: PositiveFloat = 0.1
-    seed: int = 0
+    seed: int = Field(0, ge=0)  # numpy's generator takes no negative seed
 
     @field_validator("duration_s")
     @classmethod
     def _not_absurd(cls, value: float) -> float:
         if value > 24 * 3600:
             raise ValueError("duration_s above one day is surely a mistake")
+        return value
+
+    @field_validator("dt_s")
+    @classmethod
+    def _step_within_duration(cls, value: float, info) -> float:
+        duration = info.data.get("duration_s")
+        if duration is not None and value > duration:
+            raise ValueError(f"dt_s must not exceed duration_s ({duration} s): the episode would have no step")
         return value
