@@ -9,6 +9,7 @@ the command (v, ω) and its plan for display and analysis. Subclasses register b
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -79,14 +80,22 @@ class Planner:
     def steer(self, observation: Observation, target: np.ndarray, speed_mps: float, heading_gain: float = 2.5) -> Command:
         """Turn towards ``target`` and drive at ``speed_mps``, slowing for large heading errors."""
         robot = observation.robot
-        offset = np.asarray(target) - robot.position
-        if np.hypot(*offset) < 1e-9 or speed_mps <= 0:
-            return Command(0.0, 0.0)
-        error = float(np.angle(np.exp(1j * (np.arctan2(offset[1], offset[0]) - robot.heading_rad))))
-        turn = float(np.clip(heading_gain * error, -self.limits.max_turn_rate_radps, self.limits.max_turn_rate_radps))
-        # Full speed up to 45 degrees off, none from 90: a sharp turn is made nearly on the spot.
-        scale = float(np.clip((np.pi / 2 - abs(error)) / (np.pi / 4), 0.0, 1.0))
-        return Command(min(speed_mps, self.limits.max_speed_mps) * scale, turn)
+        return steer_command(robot.position[0], robot.position[1], robot.heading_rad, target, speed_mps,
+                             self.limits, heading_gain)
+
+
+def steer_command(x: float, y: float, heading_rad: float, target, speed_mps: float, limits: MotionLimits,
+                  heading_gain: float = 2.5) -> Command:
+    """Turn towards ``target`` and drive at ``speed_mps``, slowing for large heading errors."""
+    dx, dy = float(target[0]) - float(x), float(target[1]) - float(y)
+    if math.hypot(dx, dy) < 1e-9 or speed_mps <= 0:
+        return Command(0.0, 0.0)
+    error = math.atan2(dy, dx) - heading_rad
+    error = math.atan2(math.sin(error), math.cos(error))
+    turn = max(-limits.max_turn_rate_radps, min(limits.max_turn_rate_radps, heading_gain * error))
+    # Full speed up to 45 degrees off, none from 90: a sharp turn is made nearly on the spot.
+    scale = max(0.0, min(1.0, (math.pi / 2 - abs(error)) / (math.pi / 4)))
+    return Command(min(speed_mps, limits.max_speed_mps) * scale, turn)
 
 
 def register(cls: type[Planner]) -> type[Planner]:

@@ -43,8 +43,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from viapath.geometry import LEFT, RIGHT, legs_first_contact, tangent_vectors, via_times, wrap_angle
+from viapath.kinematics import UnicycleState, step
 from viapath.observation import Command, Observation, Obstacles
-from viapath.planning.base import Decision, Plan, Planner
+from viapath.planning.base import Decision, Plan, Planner, steer_command
 
 
 @dataclass(frozen=True)
@@ -72,6 +73,10 @@ class ViaPathConfig:
     max_inflation_m: float = 0.15
     side_tolerance: float = 0.03
     slow_times_s: tuple[float, ...] = (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0)
+    rollout_heading_rad: float = 0.35  # roll a plan out when its first leg turns more than this
+    rollout_s: float = 2.0
+    rollout_dt_s: float = 0.1
+    max_rollouts: int = 8  # candidates tried, cheapest first, before falling back
     max_root_obstacles: int = 12
     heading_gain: float = 2.5
     corridor_check_spacing_m: float = 0.05
@@ -159,7 +164,8 @@ class ViaPathPlanner(Planner, name="viapath"):
             plan = Plan("goal", 0.0, subgoal.copy(), subgoal_index=self.subgoals.index)
             return Decision(Command.stop(), plan)
 
-        search = _Search(self, position, robot.heading_rad, subgoal, obstacles, radii)
+        search = _Search(self, position, robot.heading_rad, subgoal, obstacles, radii,
+                         robot.speed_mps, robot.turn_rate_radps)
         speeds, nominal_index = self._speed_set(robot.speed_mps)
         result = search.run(speeds, nominal_index, self._previous_key)
         if result is None:
@@ -241,8 +247,11 @@ class ViaPathPlanner(Planner, name="viapath"):
 class _Search:
     """One cycle's x-y-t search, vectorised over nodes and obstacles."""
 
-    def __init__(self, planner: ViaPathPlanner, position, heading_rad, subgoal, obstacles: Obstacles, radii):
+    def __init__(self, planner: ViaPathPlanner, position, heading_rad, subgoal, obstacles: Obstacles, radii,
+                 speed_mps: float = 0.0, turn_rate_radps: float = 0.0):
         config = planner.config
+        self.speed_mps = float(speed_mps)
+        self.turn_rate_radps = float(turn_rate_radps)
         self.planner = planner
         self.config = config
         self.path = planner.path
@@ -336,8 +345,11 @@ class _Search:
             directions, lengths, free, contact = self.goal_legs(starts, times, node_speeds)
             if depth == 0:
                 if free[nominal_index]:
-                    # Paper step 1: a free straight path at the normal speed is the plan.
-                    return self._straight_plan(speeds[nominal_index], nominal_index)
+                    # Paper step 1: a free straight path at the normal speed is the plan, if the
+                    # robot can turn onto it in time.
+                    straight = self._straight_plan(speeds[nominal_index], nominal_index)
+                    if self.can_follow(straight[1]):
+                        return straight
                 # A straight candidate's first leg is its goal leg.
                 data["first_direction"][frontier] = directions
                 nodes.first_direction[0] = directions
@@ -392,14 +404,22 @@ class _Search:
             same_way = np.all(keys[:, 1:] == previous_key[1:], axis=1)
             same_speed = keys[:, 0] == previous_key[0]
             cost = cost - config.hysteresis * (same_way + 0.5 * (same_way & same_speed))
-        best = int(np.argmin(cost))
-        if slow_s[best] > 0:
-            return keys[best], self._slow_plan(data, complete, cost, best, polylines_wanted=config.record_candidates)
-        chosen_line = self._polyline(data, complete[best])
         polylines = [self._polyline(data, node) for node in complete] if config.record_candidates else []
-        plan = Plan(
+        # The cheapest candidate whose first leg the robot can actually follow (motion limits).
+        for best in np.argsort(cost, kind="stable")[:config.max_rollouts]:
+            if slow_s[best] > 0:
+                plan = self._slow_plan(data, complete, cost, best, polylines)
+            else:
+                plan = self._tree_plan(data, complete, cost, best, polylines, float(speeds_c[best]))
+            if self.can_follow(plan):
+                return keys[best], plan
+        return None
+
+    def _tree_plan(self, data, complete, cost, best, polylines, speed: float) -> Plan:
+        chosen_line = self._polyline(data, complete[best])
+        return Plan(
             status="avoid" if len(chosen_line) > 2 else "straight",
-            speed_mps=float(speeds_c[best]),
+            speed_mps=speed,
             target=chosen_line[1].copy(),
             via_points=chosen_line[1:-1].copy(),
             waypoints=chosen_line,
@@ -407,9 +427,46 @@ class _Search:
             candidate_count=len(complete),
             candidate_costs=cost,
             candidate_polylines=polylines,
-            chosen=best,
+            chosen=int(best),
         )
-        return keys[best], plan
+
+    # -- motion limits ---------------------------------------------------------------------------
+
+    def can_follow(self, plan: Plan) -> bool:
+        """Whether the robot, steering for the plan's target within its limits, keeps clear of every
+        obstacle and inside the corridor. The x-y-t legs assume instant turns and speed changes; a
+        plan that needs a sharp turn or a large speed change is rolled forward with the controller
+        (arcs and lines, as the drive executes them) and dropped if that roll-out fails."""
+        config, limits = self.config, self.planner.limits
+        offset = plan.target - self.position
+        heading_error = abs(float(wrap_angle(np.arctan2(offset[1], offset[0]) - self.heading_rad)))
+        speed_change = abs(plan.speed_mps - self.speed_mps)
+        if np.hypot(*offset) < 1e-6 or (heading_error <= config.rollout_heading_rad
+                                          and speed_change <= limits.max_accel_mps2 * config.rollout_dt_s * 2):
+            return True
+        dt = config.rollout_dt_s
+        steps = max(1, int(round(config.rollout_s / dt)))
+        state = UnicycleState(float(self.position[0]), float(self.position[1]), float(self.heading_rad),
+                              self.speed_mps, self.turn_rate_radps)
+        gain = config.heading_gain
+        path = np.empty((steps, 2))
+        for k in range(steps):
+            command = steer_command(state.x, state.y, state.heading_rad, plan.target, plan.speed_mps, limits, gain)
+            state = step(state, command, limits, dt)
+            path[k] = state.x, state.y
+        inside = self.path.corridor_excess(path) <= self.corridor_tolerance
+        if not inside.all():
+            return False
+        if len(self.obstacles) == 0:
+            return True
+        times = dt * np.arange(1, steps + 1)[:, None]
+        obstacles = self.obstacles
+        centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
+        reach = self.check_radii + self.growth * np.minimum(times, self.growth_until_s)
+        distance = np.hypot(*(path[:, None, :] - centres).transpose(2, 0, 1))
+        # Already inside an obstacle's margin (a close pass): only forbid getting closer still.
+        now = np.hypot(*(self.position - obstacles.positions).T)
+        return bool(np.all(distance >= np.minimum(reach, now - 1e-3)))
 
     def _slow_candidates(self, nodes: _Nodes, speeds: np.ndarray):
         """Stand still or drive slower than nominal towards the subgoal for each of
@@ -453,15 +510,14 @@ class _Search:
         )
         return index, lengths[free]
 
-    def _slow_plan(self, data, complete, cost, best, polylines_wanted: bool) -> Plan:
+    def _slow_plan(self, data, complete, cost, best, polylines) -> Plan:
         node = complete[best]
         speed = float(data["slow_speed"][node])
         line = np.array([self.position, self.subgoal])
-        polylines = [self._polyline(data, n) for n in complete] if polylines_wanted else []
         return Plan(
             status="wait" if speed == 0.0 else "slow", speed_mps=speed, target=self.subgoal.copy(), waypoints=line,
             subgoal_index=self.planner.subgoals.index, candidate_count=len(complete), candidate_costs=cost,
-            candidate_polylines=polylines, chosen=best,
+            candidate_polylines=polylines, chosen=int(best),
             extras={"slow_s": float(data["slow_s"][node]), "speed_after_mps": float(data["speed"][node])},
         )
 

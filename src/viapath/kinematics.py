@@ -1,0 +1,59 @@
+"""Differential-drive (unicycle) motion under speed, acceleration and turn-rate limits.
+
+Core, not simulator: the planner rolls its controller forward with the same model that the
+simulator drives the robot with, so a plan the robot cannot follow is caught before it is sent.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from viapath.observation import Command, MotionLimits
+
+
+@dataclass
+class UnicycleState:
+    x: float
+    y: float
+    heading_rad: float
+    speed_mps: float = 0.0
+    turn_rate_radps: float = 0.0
+
+    @property
+    def position(self) -> np.ndarray:
+        return np.array([self.x, self.y])
+
+
+def limit_command(command: Command, state: UnicycleState, limits: MotionLimits, dt_s: float) -> tuple[float, float]:
+    """The (v, ω) the drive actually achieves this step; a non-finite command is taken as stop."""
+    v_cmd, w_cmd = float(command.speed_mps), float(command.turn_rate_radps)
+    if not (math.isfinite(v_cmd) and math.isfinite(w_cmd)):
+        v_cmd, w_cmd = 0.0, 0.0
+    v_cmd = _clip(v_cmd, 0.0, limits.max_speed_mps)
+    w_cmd = _clip(w_cmd, -limits.max_turn_rate_radps, limits.max_turn_rate_radps)
+    dv = limits.max_accel_mps2 * dt_s
+    dw = limits.max_turn_accel_radps2 * dt_s
+    speed = state.speed_mps + _clip(v_cmd - state.speed_mps, -dv, dv)
+    turn = state.turn_rate_radps + _clip(w_cmd - state.turn_rate_radps, -dw, dw)
+    return speed, turn
+
+
+def step(state: UnicycleState, command: Command, limits: MotionLimits, dt_s: float) -> UnicycleState:
+    """Advance one step along the exact arc of the limited (v, ω)."""
+    speed, turn = limit_command(command, state, limits, dt_s)
+    heading = state.heading_rad
+    new_heading = heading + turn * dt_s
+    if abs(turn) < 1e-9:
+        x = state.x + speed * dt_s * math.cos(heading)
+        y = state.y + speed * dt_s * math.sin(heading)
+    else:
+        x = state.x + speed / turn * (math.sin(new_heading) - math.sin(heading))
+        y = state.y - speed / turn * (math.cos(new_heading) - math.cos(heading))
+    return UnicycleState(x, y, math.atan2(math.sin(new_heading), math.cos(new_heading)), speed, turn)
+
+
+def _clip(value: float, low: float, high: float) -> float:
+    return low if value < low else high if value > high else value
