@@ -34,8 +34,9 @@ def _finite(x: float, y: float) -> st.SearchStrategy:
 
 
 # Obstacles start at least this far from the robot (surface to surface): beyond the planner's own
-# inflation now (safety_margin_m 0.05 + 2 σ_p ≤ 0.1). Closer starts expose a known escape defect,
-# kept out of this suite (reproducer: /work/scratch/ptests_stop_unsafe.py).
+# inflation now (safety_margin_m 0.05 + 2 σ_p ≤ 0.1). Inside the margin the planner may rightly stand
+# still as its least-bad 'escape' (an obstacle leaving), which the status rules below do not allow;
+# the sweep that used to be mislabelled 'stop' there is test_planner_near_start.py.
 MIN_START_GAP = 0.16
 
 

@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from viapath.geometry import LEFT, RIGHT, legs_first_contact, tangent_vectors, via_times, wrap_angle
+from viapath.geometry import LEFT, RIGHT, closest_approach, legs_first_contact, tangent_vectors, via_times, wrap_angle
 from viapath.kinematics import UnicycleState, step
 from viapath.observation import Command, Observation, Obstacles
 from viapath.planning.base import Decision, Plan, Planner, steer_command
@@ -200,8 +200,8 @@ class ViaPathPlanner(Planner, name="viapath"):
         velocities, score = self._escape_scores(robot, search)
         best = int(np.argmax(score))
         speed = float(np.hypot(*velocities[best]))
-        if speed == 0.0:
-            return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), **base))
+        if speed == 0.0:  # standing is hit too, but least badly
+            return Decision(Command.stop(), Plan("escape", 0.0, position.copy(), **base))
         target = position + velocities[best] / speed
         command = self.steer(observation, target, speed, self.config.heading_gain)
         return Decision(command, Plan("escape", speed, target, **base))
@@ -211,7 +211,7 @@ class ViaPathPlanner(Planner, name="viapath"):
 
         In order of importance: never further out of the corridor than now (checked where the robot
         would be after 1 s and at contact, up to 2 s); out of any overlap within a second; the
-        longest time to contact; then slower, and towards the subgoal.
+        longest time to contact; then progress towards the subgoal, and slower rather than sideways.
         """
         position = np.asarray(robot.position, dtype=float)
         headings = robot.heading_rad + np.linspace(-np.pi, np.pi, 24, endpoint=False)
@@ -228,9 +228,15 @@ class ViaPathPlanner(Planner, name="viapath"):
         time_to_contact = np.min(np.where(overlapping, np.inf, contact), axis=1, initial=horizon)
         time_to_contact = np.minimum(time_to_contact, horizon)
         if overlapping.any():
-            # Clearance after one second from each overlapped obstacle (negative: still inside).
-            rel = (position + velocities)[:, None, :] - (obstacles.positions + obstacles.velocities)[overlapping]
-            separation = np.min(np.hypot(rel[..., 0], rel[..., 1]) - radii[overlapping], axis=1)
+            # From each overlapped obstacle: out of the margin after a second, and never deeper in
+            # than now on the way (an obstacle sweeping past a standing robot gets deeper).
+            rel = position - obstacles.positions[overlapping]
+            rel_velocity = velocities[:, None, :] - obstacles.velocities[overlapping]
+            closest, _ = closest_approach(np.broadcast_to(rel, rel_velocity.shape), rel_velocity, 1.0)
+            after = rel + rel_velocity
+            after_1s = np.hypot(after[..., 0], after[..., 1]) - radii[overlapping]
+            deeper = closest - (gaps[overlapping] + radii[overlapping])
+            separation = np.min(np.minimum(after_1s, 0.0) + np.minimum(deeper, 0.0), axis=1)
         else:
             separation = np.zeros(count)
         allowed = search.corridor_tolerance
@@ -240,7 +246,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         toward = toward / max(np.hypot(*toward), 1e-9)
         speed = np.hypot(velocities[:, 0], velocities[:, 1])
         score = (1e3 * (after_1s & at_contact) + 1e2 * np.minimum(separation, 0.0) + time_to_contact
-                 - 0.01 * speed + 0.001 * (velocities @ toward))
+                 + 0.01 * (velocities @ toward) - 0.005 * speed)
         return velocities, score
 
 
@@ -264,7 +270,7 @@ class _Search:
         self.growth = k * obstacles.velocity_sigma_mps
         # Replanning every cycle corrects a velocity error before it matters far ahead, so the cone
         # stops growing once it has added max_inflation_m (else head-on passes never fit a corridor).
-        with np.errstate(divide="ignore"):
+        with np.errstate(divide="ignore", over="ignore"):
             self.growth_until_s = np.where(self.growth > 0, config.max_inflation_m / self.growth, np.inf)
         self.via_radii = self.check_radii + config.planning_margin_m
         self.horizon_s = config.horizon_s
@@ -361,21 +367,23 @@ class _Search:
                     complete.append(slowing[0])
                     goal_length.append(slowing[1])
                 data = nodes.stacked()
-            if depth == config.max_depth or len(self.obstacles) == 0:
+            if depth == config.max_depth:
                 break
+            next_frontier = [self._corner_nodes(nodes, speeds)] if depth == 0 else []
             blocked = np.flatnonzero(~free & np.isfinite(contact).any(axis=1))
-            if len(blocked) == 0:
+            if len(blocked) and len(self.obstacles):
+                if depth == 0:
+                    rows, pair_obstacles = self._root_pairs(contact[blocked])
+                    pair_nodes = frontier[blocked][rows]
+                else:
+                    pair_nodes = frontier[blocked]
+                    pair_obstacles = np.argmin(contact[blocked], axis=1)
+                children = self._expand(data, pair_nodes, pair_obstacles, is_root=(depth == 0))
+                if children is not None:
+                    next_frontier.append(nodes.extend(**children))
+            frontier = np.concatenate([np.zeros(0, int)] + next_frontier)
+            if len(frontier) == 0:
                 break
-            if depth == 0:
-                rows, pair_obstacles = self._root_pairs(contact[blocked])
-                pair_nodes = frontier[blocked][rows]
-            else:
-                pair_nodes = frontier[blocked]
-                pair_obstacles = np.argmin(contact[blocked], axis=1)
-            children = self._expand(data, pair_nodes, pair_obstacles, is_root=(depth == 0))
-            if children is None:
-                break
-            frontier = nodes.extend(**children)
             data = nodes.stacked()
 
         complete = np.concatenate(complete)
@@ -468,11 +476,43 @@ class _Search:
         now = np.hypot(*(self.position - obstacles.positions).T)
         return bool(np.all(distance >= np.minimum(reach, now - 1e-3)))
 
+    def _corner_nodes(self, nodes: _Nodes, speeds: np.ndarray) -> np.ndarray:
+        """When the straight leg to the subgoal would cut a corner of the corridor (the robot was
+        pushed back, or a blocked subgoal was given up), the path's own corners between the robot
+        and the subgoal become via points: the way back along the designated path."""
+        path, tracker = self.path, self.planner.subgoals
+        segment = int(path.project(self.position)[0])
+        corners = np.arange(segment + 1, tracker.index)
+        if len(corners) == 0 or self._goal_legs_inside(self.position[None])[0]:
+            return np.zeros(0, int)
+        corner, speed = (grid.ravel() for grid in np.meshgrid(corners, speeds))
+        targets = path.waypoints[corner]
+        offset = targets - self.position
+        length = np.hypot(offset[:, 0], offset[:, 1])
+        direction = offset / np.maximum(length, 1e-12)[:, None]
+        starts = np.broadcast_to(self.position, targets.shape)
+        duration = length / speed
+        good = np.isinf(self.contact_times(starts, np.zeros(len(speed)), direction * speed[:, None], duration)).all(axis=1)
+        good &= path.legs_inside(starts, targets, self.config.corridor_check_spacing_m, self.corridor_tolerance)
+        count = int(good.sum())
+        if count == 0:
+            return np.zeros(0, int)
+        return nodes.extend(
+            position=targets[good], time_s=duration[good], speed=speed[good],
+            parent=np.searchsorted(speeds, speed[good]),  # the root node of that speed
+            length_m=length[good], first_direction=direction[good],
+            key=np.stack([np.searchsorted(speeds, speed[good]), np.full(count, _CORNER), np.zeros(count, int),
+                          corner[good]], 1),
+            slow_s=np.zeros(count), slow_speed=np.zeros(count),
+        )
+
     def _slow_candidates(self, nodes: _Nodes, speeds: np.ndarray):
         """Stand still or drive slower than nominal towards the subgoal for each of
         ``slow_times_s``, then on at nominal speed or faster: the x-y-t way of letting an obstacle
         pass first.
         Returns (complete node indices, goal leg lengths) or None."""
+        if not self._goal_legs_inside(self.position[None])[0]:
+            return None  # slowing down runs along the straight leg, which would leave the corridor
         nominal = self.planner.nominal_speed_mps
         slow_speeds = np.concatenate([[0.0], speeds[speeds < nominal - 1e-9]])
         duration, slow_speed = (grid.ravel() for grid in np.meshgrid(np.asarray(self.config.slow_times_s, float),
@@ -600,4 +640,5 @@ class _Search:
 
 _SIDES = np.array([LEFT, RIGHT, LEFT, RIGHT])
 _SLOW = -2  # the "obstacle id" in the key of a candidate that slows down or waits first
+_CORNER = -3  # ... and of one that goes back along the path through a corner (its index as 'root')
 _ROOTS = np.array([0, 0, 1, 1])
