@@ -57,3 +57,30 @@ def step(state: UnicycleState, command: Command, limits: MotionLimits, dt_s: flo
 
 def _clip(value: float, low: float, high: float) -> float:
     return low if value < low else high if value > high else value
+
+
+def rollout(state: UnicycleState, commands: np.ndarray, limits: MotionLimits, dt_s: float, steps: int) -> np.ndarray:
+    """Positions (K, steps, 2) after each step of holding each of K commands (v, ω) from ``state``:
+    the same limited arcs as :func:`step`, vectorised over the commands."""
+    commands = np.asarray(commands, dtype=float).reshape(-1, 2)
+    v_cmd = np.clip(commands[:, 0], 0.0, limits.max_speed_mps)
+    w_cmd = np.clip(commands[:, 1], -limits.max_turn_rate_radps, limits.max_turn_rate_radps)
+    dv, dw = limits.max_accel_mps2 * dt_s, limits.max_turn_accel_radps2 * dt_s
+    count = len(commands)
+    x, y = np.full(count, float(state.x)), np.full(count, float(state.y))
+    heading = np.full(count, float(state.heading_rad))
+    speed, turn = np.full(count, float(state.speed_mps)), np.full(count, float(state.turn_rate_radps))
+    positions = np.empty((count, steps, 2))
+    for k in range(steps):
+        speed = speed + np.clip(v_cmd - speed, -dv, dv)
+        turn = turn + np.clip(w_cmd - turn, -dw, dw)
+        new_heading = heading + turn * dt_s
+        straight = np.abs(turn) < 1e-9
+        safe_turn = np.where(straight, 1.0, turn)
+        x = np.where(straight, x + speed * dt_s * np.cos(heading),
+                     x + speed / safe_turn * (np.sin(new_heading) - np.sin(heading)))
+        y = np.where(straight, y + speed * dt_s * np.sin(heading),
+                     y - speed / safe_turn * (np.cos(new_heading) - np.cos(heading)))
+        heading = new_heading
+        positions[:, k, 0], positions[:, k, 1] = x, y
+    return positions

@@ -42,8 +42,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from viapath.geometry import LEFT, RIGHT, closest_approach, legs_first_contact, tangent_vectors, via_times, wrap_angle
-from viapath.kinematics import UnicycleState, step
+from viapath.geometry import LEFT, RIGHT, legs_first_contact, tangent_vectors, via_times, wrap_angle
+from viapath.kinematics import UnicycleState, rollout, step
 from viapath.observation import Command, Observation, Obstacles
 from viapath.planning.base import Decision, Plan, Planner, steer_command
 
@@ -77,6 +77,7 @@ class ViaPathConfig:
     rollout_s: float = 2.0
     rollout_dt_s: float = 0.1
     max_rollouts: int = 8  # candidates tried, cheapest first, before falling back
+    escape_s: float = 3.0  # how long each escape command is rolled out
     max_root_obstacles: int = 12
     heading_gain: float = 2.5
     corridor_check_spacing_m: float = 0.05
@@ -195,59 +196,59 @@ class ViaPathPlanner(Planner, name="viapath"):
         standing = search.contact_times(position[None], np.zeros(1), np.zeros((1, 2)), np.array([self.config.horizon_s]))
         if np.isinf(standing).all():
             return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), **base))
-        # Even standing still is hit: of a fan of straight motions (and standing), take the one that
-        # stays in the corridor, gets out of any overlap, and puts contact off the longest.
-        velocities, score = self._escape_scores(robot, search)
+        # Even standing still is hit: of a fan of drive commands (arcs within the limits, and
+        # standing), take the one that stays in the corridor, gets out of any overlap and puts
+        # contact off the longest.
+        commands, ends, score = self._escape_scores(robot, search)
         best = int(np.argmax(score))
-        speed = float(np.hypot(*velocities[best]))
-        if speed == 0.0:  # standing is hit too, but least badly
-            return Decision(Command.stop(), Plan("escape", 0.0, position.copy(), **base))
-        target = position + velocities[best] / speed
-        command = self.steer(observation, target, speed, self.config.heading_gain)
-        return Decision(command, Plan("escape", speed, target, **base))
+        speed, turn = (float(value) for value in commands[best])
+        return Decision(Command(speed, turn), Plan("escape", speed, ends[best], **base))
 
-    def _escape_scores(self, robot, search: "_Search") -> tuple[np.ndarray, np.ndarray]:
-        """Velocities of the escape fan and the score of each (higher is better).
+    def _escape_scores(self, robot, search: "_Search"):
+        """Commands (v, ω), where each leaves the robot, and the score of each (higher is better).
 
-        In order of importance: never further out of the corridor than now (checked where the robot
-        would be after 1 s and at contact, up to 2 s); out of any overlap within a second; the
-        longest time to contact; then progress towards the subgoal, and slower rather than sideways.
+        Each command is held for ``escape_s`` and rolled out with the drive's limits. In order of
+        importance: never further out of the corridor than now; out of any overlap by the end and
+        never deeper in on the way; the longest time to contact; then progress towards the subgoal,
+        and slower rather than sideways.
         """
+        config, limits = self.config, self.limits
         position = np.asarray(robot.position, dtype=float)
-        headings = robot.heading_rad + np.linspace(-np.pi, np.pi, 24, endpoint=False)
-        speeds = np.unique(np.concatenate([self.config.speeds_mps, [self.limits.max_speed_mps]]))
-        h, v = (grid.ravel() for grid in np.meshgrid(headings, speeds))
-        velocities = np.concatenate([np.stack([np.cos(h), np.sin(h)], axis=1) * v[:, None], np.zeros((1, 2))])
-        count = len(velocities)
-        horizon = self.config.horizon_s
-        obstacles, radii = search.obstacles, search.check_radii
-        gaps = np.hypot(*(obstacles.positions - position).T) - radii
-        overlapping = gaps <= 0
-        contact = search.contact_times(np.repeat(position[None], count, 0), np.zeros(count), velocities,
-                                       np.full(count, horizon))
-        time_to_contact = np.min(np.where(overlapping, np.inf, contact), axis=1, initial=horizon)
-        time_to_contact = np.minimum(time_to_contact, horizon)
-        if overlapping.any():
-            # From each overlapped obstacle: out of the margin after a second, and never deeper in
-            # than now on the way (an obstacle sweeping past a standing robot gets deeper).
-            rel = position - obstacles.positions[overlapping]
-            rel_velocity = velocities[:, None, :] - obstacles.velocities[overlapping]
-            closest, _ = closest_approach(np.broadcast_to(rel, rel_velocity.shape), rel_velocity, 1.0)
-            after = rel + rel_velocity
-            after_1s = np.hypot(after[..., 0], after[..., 1]) - radii[overlapping]
-            deeper = closest - (gaps[overlapping] + radii[overlapping])
-            separation = np.min(np.minimum(after_1s, 0.0) + np.minimum(deeper, 0.0), axis=1)
-        else:
-            separation = np.zeros(count)
+        speeds = np.unique(np.concatenate([[0.0], config.speeds_mps, [limits.max_speed_mps]]))
+        turns = np.linspace(-limits.max_turn_rate_radps, limits.max_turn_rate_radps, 9)
+        commands = np.stack([grid.ravel() for grid in np.meshgrid(speeds, turns)], axis=1)
+        dt = config.rollout_dt_s
+        steps = max(1, int(round(config.escape_s / dt)))
+        state = UnicycleState(float(position[0]), float(position[1]), float(robot.heading_rad),
+                              float(robot.speed_mps), float(robot.turn_rate_radps))
+        positions = rollout(state, commands, limits, dt, steps)  # (K, S, 2)
+        times = dt * np.arange(1, steps + 1)
+
         allowed = search.corridor_tolerance
-        after_1s = self.path.corridor_excess(position + velocities) <= allowed
-        at_contact = self.path.corridor_excess(position + velocities * np.minimum(time_to_contact, 2.0)[:, None]) <= allowed
+        excess = self.path.corridor_excess(positions.reshape(-1, 2)).reshape(len(commands), steps)
+        inside = np.all(excess <= allowed, axis=1)
+
+        obstacles = search.obstacles
+        centres = obstacles.positions[None] + obstacles.velocities[None] * times[:, None, None]  # (S, N, 2)
+        reach = search.check_radii + search.growth * np.minimum(times[:, None], search.growth_until_s)
+        offset = positions[:, :, None, :] - centres[None]
+        gap = np.hypot(offset[..., 0], offset[..., 1]) - reach[None]  # (K, S, N)
+        gap_now = np.hypot(*(position - obstacles.positions).T) - search.check_radii
+        overlapping = gap_now <= 0
+        touching = (gap < 0) & ~overlapping
+        first = np.where(touching.any(axis=1), np.argmax(touching, axis=1), steps)  # (K, N)
+        time_to_contact = np.min(first, axis=1, initial=steps) * dt
+        if overlapping.any():
+            deeper = np.min(gap[..., overlapping], axis=1) - gap_now[overlapping]
+            still_inside = gap[:, -1, overlapping]
+            separation = np.sum(np.minimum(deeper, 0.0) + np.minimum(still_inside, 0.0), axis=1)
+        else:
+            separation = np.zeros(len(commands))
         toward = search.subgoal - position
-        toward = toward / max(np.hypot(*toward), 1e-9)
-        speed = np.hypot(velocities[:, 0], velocities[:, 1])
-        score = (1e3 * (after_1s & at_contact) + 1e2 * np.minimum(separation, 0.0) + time_to_contact
-                 + 0.01 * (velocities @ toward) - 0.005 * speed)
-        return velocities, score
+        toward = toward / max(float(np.hypot(*toward)), 1e-9)
+        progress = (positions[:, -1] - position) @ toward / config.escape_s
+        score = (1e3 * inside + 1e2 * separation + time_to_contact + 0.01 * progress - 0.005 * commands[:, 0])
+        return commands, positions[:, -1], score
 
 
 class _Search:
