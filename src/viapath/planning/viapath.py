@@ -15,6 +15,9 @@ Procedure, per planning cycle (10 Hz):
    velocity uncertainty) up to the horizon; a leg that leaves the corridor drops its branch
    (paper step 4, extended from via points to whole legs).
 4. Complete candidates are ranked by E = k1·Dist + k2·Time + k3·|v - v_nominal| + k4·θ (Eq. 1).
+5. The cheapest candidate the robot can follow within its motion limits is the plan: one whose
+   first leg needs a sharp turn or a large speed change is rolled forward with the controller
+   (arcs and lines) and dropped if the roll-out touches an obstacle or leaves the corridor.
 
 What the paper leaves open and we chose (see DESIGN §2 pitfalls):
 * Via points are computed on a disc grown by ``planning_margin_m``; legs are checked with the true
@@ -31,9 +34,12 @@ What the paper leaves open and we chose (see DESIGN §2 pitfalls):
 * Besides via points, candidates may first stand still or drive slower than nominal along the
   straight leg for a while (``slow_times_s``), then go on: letting a crossing person pass is then a
   straight candidate, not a sharp turn behind them. The speed term of Eq. 1 is time-weighted.
+* A robot whose straight leg to the subgoal would cut a corner of the corridor (pushed back, or a
+  blocked subgoal given up) goes back along the path: the path's corners become via points.
 * θ is in radians by default; degrees make the θ term swamp the others.
 * With no collision-free candidate: stop if standing still is safe over the horizon; otherwise take
-  the motion with the longest time to contact (moving straight away when already touching).
+  the drive command (v, ω), rolled out for ``escape_s`` within the limits, that stays in the
+  corridor, gets out of any overlap and has the longest time to contact.
 """
 
 from __future__ import annotations
