@@ -84,3 +84,42 @@ def rollout(state: UnicycleState, commands: np.ndarray, limits: MotionLimits, dt
         heading = new_heading
         positions[:, k, 0], positions[:, k, 1] = x, y
     return positions
+
+
+def steer_towards(x: float, y: float, heading_rad: float, target_x: float, target_y: float, speed_mps: float,
+                  limits: MotionLimits, heading_gain: float = 2.5) -> tuple[float, float]:
+    """The controller: turn towards the target and drive at ``speed_mps``, slowing for large
+    heading errors (full speed up to 45° off, none from 90°: a sharp turn is made nearly on the spot)."""
+    dx, dy = target_x - x, target_y - y
+    if dx * dx + dy * dy < 1e-18 or speed_mps <= 0:
+        return 0.0, 0.0
+    error = math.atan2(dy, dx) - heading_rad
+    error = math.atan2(math.sin(error), math.cos(error))
+    turn = _clip(heading_gain * error, -limits.max_turn_rate_radps, limits.max_turn_rate_radps)
+    scale = _clip((math.pi / 2 - abs(error)) / (math.pi / 4), 0.0, 1.0)
+    return min(speed_mps, limits.max_speed_mps) * scale, turn
+
+
+def track(state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float, steps: int,
+          heading_gain: float = 2.5) -> np.ndarray:
+    """Positions (steps, 2) of the robot steering for ``target`` with :func:`steer_towards`, each
+    step as :func:`step` moves it (scalar arithmetic: this runs inside the planning cycle)."""
+    x, y, heading = float(state.x), float(state.y), float(state.heading_rad)
+    speed, turn = float(state.speed_mps), float(state.turn_rate_radps)
+    target_x, target_y = float(target[0]), float(target[1])
+    dv, dw = limits.max_accel_mps2 * dt_s, limits.max_turn_accel_radps2 * dt_s
+    positions = np.empty((steps, 2))
+    for k in range(steps):
+        v_cmd, w_cmd = steer_towards(x, y, heading, target_x, target_y, speed_mps, limits, heading_gain)
+        speed += _clip(v_cmd - speed, -dv, dv)
+        turn += _clip(w_cmd - turn, -dw, dw)
+        new_heading = heading + turn * dt_s
+        if abs(turn) < 1e-9:
+            x += speed * dt_s * math.cos(heading)
+            y += speed * dt_s * math.sin(heading)
+        else:
+            x += speed / turn * (math.sin(new_heading) - math.sin(heading))
+            y -= speed / turn * (math.cos(new_heading) - math.cos(heading))
+        heading = math.atan2(math.sin(new_heading), math.cos(new_heading))
+        positions[k] = x, y
+    return positions

@@ -9,12 +9,12 @@ the command (v, ω) and its plan for display and analysis. Subclasses register b
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
 
+from viapath.kinematics import steer_towards
 from viapath.observation import Command, MotionLimits, Observation
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 
@@ -87,15 +87,8 @@ class Planner:
 def steer_command(x: float, y: float, heading_rad: float, target, speed_mps: float, limits: MotionLimits,
                   heading_gain: float = 2.5) -> Command:
     """Turn towards ``target`` and drive at ``speed_mps``, slowing for large heading errors."""
-    dx, dy = float(target[0]) - float(x), float(target[1]) - float(y)
-    if math.hypot(dx, dy) < 1e-9 or speed_mps <= 0:
-        return Command(0.0, 0.0)
-    error = math.atan2(dy, dx) - heading_rad
-    error = math.atan2(math.sin(error), math.cos(error))
-    turn = max(-limits.max_turn_rate_radps, min(limits.max_turn_rate_radps, heading_gain * error))
-    # Full speed up to 45 degrees off, none from 90: a sharp turn is made nearly on the spot.
-    scale = max(0.0, min(1.0, (math.pi / 2 - abs(error)) / (math.pi / 4)))
-    return Command(min(speed_mps, limits.max_speed_mps) * scale, turn)
+    return Command(*steer_towards(float(x), float(y), float(heading_rad), float(target[0]), float(target[1]),
+                                  speed_mps, limits, heading_gain))
 
 
 def register(cls: type[Planner]) -> type[Planner]:

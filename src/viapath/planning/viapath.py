@@ -49,9 +49,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from viapath.geometry import LEFT, RIGHT, legs_first_contact, tangent_vectors, via_times, wrap_angle
-from viapath.kinematics import UnicycleState, rollout, step
+from viapath.kinematics import UnicycleState, rollout, track
 from viapath.observation import Command, Observation, Obstacles
-from viapath.planning.base import Decision, Plan, Planner, steer_command
+from viapath.planning.base import Decision, Plan, Planner
 
 
 @dataclass(frozen=True)
@@ -74,7 +74,7 @@ class ViaPathConfig:
     horizon_s: float = 10.0
     max_depth: int = 3
     preferred_side: str = "left"
-    hysteresis: float = 0.01
+    hysteresis: float = 0.05
     uncertainty_sigmas: float = 2.0
     max_inflation_m: float = 0.15
     side_tolerance: float = 0.03
@@ -84,6 +84,7 @@ class ViaPathConfig:
     rollout_dt_s: float = 0.1
     max_rollouts: int = 8  # candidates tried, cheapest first, before falling back
     escape_s: float = 3.0  # how long each escape command is rolled out
+    escape_dt_s: float = 0.2
     max_root_obstacles: int = 12
     heading_gain: float = 2.5
     corridor_check_spacing_m: float = 0.05
@@ -223,7 +224,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         speeds = np.unique(np.concatenate([[0.0], config.speeds_mps, [limits.max_speed_mps]]))
         turns = np.linspace(-limits.max_turn_rate_radps, limits.max_turn_rate_radps, 9)
         commands = np.stack([grid.ravel() for grid in np.meshgrid(speeds, turns)], axis=1)
-        dt = config.rollout_dt_s
+        dt = config.escape_dt_s
         steps = max(1, int(round(config.escape_s / dt)))
         state = UnicycleState(float(position[0]), float(position[1]), float(robot.heading_rad),
                               float(robot.speed_mps), float(robot.turn_rate_radps))
@@ -463,12 +464,7 @@ class _Search:
         steps = max(1, int(round(config.rollout_s / dt)))
         state = UnicycleState(float(self.position[0]), float(self.position[1]), float(self.heading_rad),
                               self.speed_mps, self.turn_rate_radps)
-        gain = config.heading_gain
-        path = np.empty((steps, 2))
-        for k in range(steps):
-            command = steer_command(state.x, state.y, state.heading_rad, plan.target, plan.speed_mps, limits, gain)
-            state = step(state, command, limits, dt)
-            path[k] = state.x, state.y
+        path = track(state, plan.target, plan.speed_mps, limits, dt, steps, config.heading_gain)
         inside = self.path.corridor_excess(path) <= self.corridor_tolerance
         if not inside.all():
             return False

@@ -147,7 +147,7 @@ class PlannerSpec(_Strict):
     horizon_s: PositiveFloat = 10.0
     max_depth: int = Field(3, ge=1, le=6)
     preferred_side: Literal["left", "right"] = "left"
-    hysteresis: NonNegativeFloat = 0.01
+    hysteresis: NonNegativeFloat = 0.05
     uncertainty_sigmas: NonNegativeFloat = 2.0
     max_inflation_m: NonNegativeFloat = 0.15
     side_tolerance: NonNegativeFloat = 0.03
