@@ -180,7 +180,18 @@ class ViaPathPlanner(Planner, name="viapath"):
             return self._fallback(observation, search)
         chosen, plan = result
         self._previous_key = chosen
-        return Decision(self.steer(observation, plan.target, plan.speed_mps, self.config.heading_gain), plan)
+        command = self.steer(observation, plan.target, plan.speed_mps, self.config.heading_gain)
+        if plan.extras.get("turn_in_place"):
+            command = Command(0.0, command.turn_rate_radps if command.turn_rate_radps else self._turn_towards(
+                observation, plan.target))
+        return Decision(command, plan)
+
+    def _turn_towards(self, observation: Observation, target) -> float:
+        robot = observation.robot
+        offset = np.asarray(target) - robot.position
+        error = float(wrap_angle(np.arctan2(offset[1], offset[0]) - robot.heading_rad))
+        return float(np.clip(self.config.heading_gain * error, -self.limits.max_turn_rate_radps,
+                             self.limits.max_turn_rate_radps))
 
     def _speed_set(self, current_speed_mps: float) -> tuple[np.ndarray, int]:
         """The configured speeds, the current speed and the nominal speed (mm/s resolution, within
@@ -215,9 +226,10 @@ class ViaPathPlanner(Planner, name="viapath"):
         """Commands (v, ω), where each leaves the robot, and the score of each (higher is better).
 
         Each command is held for ``escape_s`` and rolled out with the drive's limits. In order of
-        importance: never further out of the corridor than now; out of any overlap by the end and
-        never deeper in on the way; the longest time to contact; then progress towards the subgoal,
-        and slower rather than sideways.
+        importance: out of any overlap by the end and never deeper in on the way; no contact at all
+        during the roll-out; never further out of the corridor than now (worth up to 2 s of time to
+        contact: when stopping is not safe, not being hit comes first); the longest time to
+        contact; then progress towards the subgoal, and slower rather than sideways.
         """
         config, limits = self.config, self.limits
         position = np.asarray(robot.position, dtype=float)
@@ -254,7 +266,9 @@ class ViaPathPlanner(Planner, name="viapath"):
         toward = search.subgoal - position
         toward = toward / max(float(np.hypot(*toward)), 1e-9)
         progress = (positions[:, -1] - position) @ toward / config.escape_s
-        score = (1e3 * inside + 1e2 * separation + time_to_contact + 0.01 * progress - 0.005 * commands[:, 0])
+        free = time_to_contact >= steps * dt
+        score = (1e2 * separation + 20.0 * free + 2.0 * inside + time_to_contact
+                 + 0.01 * progress - 0.005 * commands[:, 0])
         return commands, positions[:, -1], score
 
 
@@ -465,12 +479,24 @@ class _Search:
         state = UnicycleState(float(self.position[0]), float(self.position[1]), float(self.heading_rad),
                               self.speed_mps, self.turn_rate_radps)
         path = track(state, plan.target, plan.speed_mps, limits, dt, steps, config.heading_gain)
-        inside = self.path.corridor_excess(path) <= self.corridor_tolerance
-        if not inside.all():
+        if not self._clear(path, dt):
             return False
+        if np.all(self.path.corridor_excess(path) <= self.corridor_tolerance):
+            return True
+        # Turning while moving would swing out of the corridor: turn on the spot first, if standing
+        # is safe meanwhile (the next cycles then find the robot facing its leg).
+        turn_s = heading_error / limits.max_turn_rate_radps + 1.0
+        standing = np.repeat(self.position[None], max(1, int(np.ceil(turn_s / dt))), axis=0)
+        if heading_error > config.rollout_heading_rad and self._clear(standing, dt):
+            plan.extras["turn_in_place"] = True
+            return True
+        return False
+
+    def _clear(self, path: np.ndarray, dt: float) -> bool:
+        """Whether robot positions ``path`` (one per ``dt`` from now) keep clear of every obstacle."""
         if len(self.obstacles) == 0:
             return True
-        times = dt * np.arange(1, steps + 1)[:, None]
+        times = dt * np.arange(1, len(path) + 1)[:, None]
         obstacles = self.obstacles
         centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
         reach = self.check_radii + self.growth * np.minimum(times, self.growth_until_s)
