@@ -79,7 +79,8 @@ def run(
         _fail(f"--planner: unknown planner {planner_name!r}; available: {', '.join(available_planners())}")
     try:
         episode = run_episode(spec, planner=planner_name, perception=perception, seed=seed,
-                              position_noise_m=position_noise, velocity_noise_mps=velocity_noise)
+                              position_noise_m=position_noise, velocity_noise_mps=velocity_noise,
+                              record_perceived=plot is not None or animate is not None)
     except (ValueError, RuntimeError, FileNotFoundError) as error:
         _fail(f"{scenario}: {error}")
 

@@ -129,16 +129,24 @@ class _NavgroundPeer(Planner):
 
 
 class NavgroundORCA(_NavgroundPeer, name="nav-orca"):
+    """navground's ORCA (optimal reciprocal collision avoidance), corridor as line obstacles (extra 'navground')."""
+
     behavior_type = "ORCA"
 
 
 class NavgroundHL(_NavgroundPeer, name="nav-hl"):
+    """navground's HL (human-like, Guzzi et al. 2013), corridor as line obstacles (extra 'navground')."""
+
     behavior_type = "HL"
 
 
 class NavgroundHRVO(_NavgroundPeer, name="nav-hrvo"):
+    """navground's HRVO (hybrid reciprocal velocity obstacles), corridor as line obstacles (extra 'navground')."""
+
     behavior_type = "HRVO"
 
 
 class NavgroundSocialForce(_NavgroundPeer, name="nav-sf"):
+    """navground's SocialForce (Helbing and Molnar 1995), corridor as line obstacles (extra 'navground')."""
+
     behavior_type = "SocialForce"

@@ -88,15 +88,11 @@ def plot_episode(episode, file: str | Path, title: str | None = None) -> Path:
     """Write the trajectory figure with a speed-over-time panel to ``file`` (PNG, PDF or SVG)."""
     plt = _matplotlib()
     trace, metrics = episode.trace, episode.metrics
-    fig = plt.figure(figsize=(9.0, 7.0), constrained_layout=True)
+    fig = plt.figure(figsize=(9.0, 6.0), constrained_layout=True)
     grid = fig.add_gridspec(2, 1, height_ratios=[3.2, 1.0])
     ax = fig.add_subplot(grid[0])
     draw_scene(ax, trace)
-    extra = getattr(trace, "scan_points", None)
-    if extra:
-        points = extra[-1]
-        if len(points):
-            ax.scatter(*np.asarray(points).T, s=2, color="0.2", zorder=2, label="last scan points")
+    _draw_perception(ax, trace)
     _fit_view(ax, trace)
     status = "reached goal" if metrics["reached_goal"] else "did not reach goal"
     collision = "COLLISION" if metrics["collision"] else "no collision"
@@ -120,6 +116,30 @@ def plot_episode(episode, file: str | Path, title: str | None = None) -> Path:
     fig.savefig(file, dpi=130)
     plt.close(fig)
     return file
+
+
+def _draw_perception(ax, trace) -> None:
+    """What the planner saw: the perceived obstacle centres every step, and (laser) the scan at the
+    robot's closest approach to an obstacle."""
+    perceived = [p for p in getattr(trace, "perceived", []) if p is not None and len(p)]
+    noisy = trace.perception_mode != "oracle" or any(np.any(p.position_sigma_m > 0) for p in perceived)
+    if perceived and noisy:
+        centres = np.vstack([p.positions for p in perceived])
+        ax.scatter(*centres.T, s=3, color="#2471a3", alpha=0.5, zorder=3, label="perceived obstacle centres")
+    scans = getattr(trace, "scan_points", None)
+    if scans:
+        from viapath.sim.metrics import clearance_per_step
+
+        clearance = clearance_per_step(trace)
+        k = int(np.argmin(clearance)) if len(clearance) and np.isfinite(clearance).any() else len(scans) - 1
+        k = min(k, len(scans) - 1)
+        points = np.asarray(scans[k])
+        if len(points):
+            ax.scatter(*points.T, s=3, color="0.15", zorder=2, label=f"scan at closest approach ({trace.times_s[k]:.1f} s)")
+            from matplotlib.patches import Circle
+
+            ax.add_patch(Circle(trace.robot_poses[k, :2], trace.robot_radius_m, fill=False, ec="0.15", ls="--",
+                                lw=0.8, zorder=7))
 
 
 def _fit_view(ax, trace, margin_m: float = 0.6) -> None:
