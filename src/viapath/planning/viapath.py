@@ -84,7 +84,7 @@ class ViaPathConfig:
     rollout_dt_s: float = 0.1
     max_rollouts: int = 8  # candidates tried, cheapest first, before falling back
     escape_s: float = 3.0  # how long each escape command is rolled out
-    escape_dt_s: float = 0.2
+    escape_dt_s: float = 0.1
     max_root_obstacles: int = 12
     heading_gain: float = 2.5
     corridor_check_spacing_m: float = 0.05
@@ -267,8 +267,11 @@ class ViaPathPlanner(Planner, name="viapath"):
         toward = toward / max(float(np.hypot(*toward)), 1e-9)
         progress = (positions[:, -1] - position) @ toward / config.escape_s
         free = time_to_contact >= steps * dt
+        # When contact cannot be avoided, fleeing fast mostly runs into someone else: a contact at
+        # speed counts 0.5 s of time to contact per m/s against the command (a tie-break, no more:
+        # the longest time to contact still decides, as the paper asks).
         score = (1e2 * separation + 20.0 * free + 2.0 * inside + time_to_contact
-                 + 0.01 * progress - 0.005 * commands[:, 0])
+                 - np.where(free, 0.005, 0.5) * commands[:, 0] + 0.01 * progress)
         return commands, positions[:, -1], score
 
 
