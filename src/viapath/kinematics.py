@@ -44,15 +44,20 @@ def limit_command(command: Command, state: UnicycleState, limits: MotionLimits, 
 def step(state: UnicycleState, command: Command, limits: MotionLimits, dt_s: float) -> UnicycleState:
     """Advance one step along the exact arc of the limited (v, ω)."""
     speed, turn = limit_command(command, state, limits, dt_s)
-    heading = state.heading_rad
+    x, y, heading = _arc(state.x, state.y, state.heading_rad, speed, turn, dt_s)
+    return UnicycleState(x, y, heading, speed, turn)
+
+
+def _arc(x: float, y: float, heading: float, speed: float, turn: float, dt_s: float) -> tuple[float, float, float]:
+    """Where constant (v, ω) for ``dt_s`` takes the robot: along the exact arc (a line for ω = 0)."""
     new_heading = heading + turn * dt_s
     if abs(turn) < 1e-9:
-        x = state.x + speed * dt_s * math.cos(heading)
-        y = state.y + speed * dt_s * math.sin(heading)
+        x += speed * dt_s * math.cos(heading)
+        y += speed * dt_s * math.sin(heading)
     else:
-        x = state.x + speed / turn * (math.sin(new_heading) - math.sin(heading))
-        y = state.y - speed / turn * (math.cos(new_heading) - math.cos(heading))
-    return UnicycleState(x, y, math.atan2(math.sin(new_heading), math.cos(new_heading)), speed, turn)
+        x += speed / turn * (math.sin(new_heading) - math.sin(heading))
+        y -= speed / turn * (math.cos(new_heading) - math.cos(heading))
+    return x, y, math.atan2(math.sin(new_heading), math.cos(new_heading))
 
 
 def _clip(value: float, low: float, high: float) -> float:
@@ -113,13 +118,6 @@ def track(state: UnicycleState, target, speed_mps: float, limits: MotionLimits, 
         v_cmd, w_cmd = steer_towards(x, y, heading, target_x, target_y, speed_mps, limits, heading_gain)
         speed += _clip(v_cmd - speed, -dv, dv)
         turn += _clip(w_cmd - turn, -dw, dw)
-        new_heading = heading + turn * dt_s
-        if abs(turn) < 1e-9:
-            x += speed * dt_s * math.cos(heading)
-            y += speed * dt_s * math.sin(heading)
-        else:
-            x += speed / turn * (math.sin(new_heading) - math.sin(heading))
-            y -= speed / turn * (math.cos(new_heading) - math.cos(heading))
-        heading = math.atan2(math.sin(new_heading), math.cos(new_heading))
+        x, y, heading = _arc(x, y, heading, speed, turn, dt_s)
         positions[k] = x, y
     return positions
