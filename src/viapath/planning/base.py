@@ -122,3 +122,14 @@ def _load_builtin_planners() -> None:
 
     if importlib.util.find_spec("viapath.planning.baselines") is not None:
         importlib.import_module("viapath.planning.baselines")
+    # Planners of other packages: an entry point in the group "viapath.planners" naming the module
+    # that defines them (pyproject: [project.entry-points."viapath.planners"] mine = "my_pkg.planner").
+    from importlib.metadata import entry_points
+
+    for entry in entry_points(group="viapath.planners"):
+        try:
+            entry.load()
+        except Exception as error:  # a broken plug-in must not take the built-in planners down
+            import warnings
+
+            warnings.warn(f"planner plug-in {entry.name!r} ({entry.value}) failed to load: {error}", stacklevel=2)
