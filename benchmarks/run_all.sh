@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The measurements of docs/benchmark.md. Two workers at most (the machine has two cores).
 set -euo pipefail
-PY=${PY:-.venv/bin/python}
+VIAPATH=${VIAPATH:-.venv/bin/viapath}
 OUT=${OUT:-out/bench}
-CLI="$PY benchmarks/bench_cli.py"
+CLI="$VIAPATH"
 ALL=viapath,follow,stop,dwa,vo,nav-orca,nav-hl,nav-hrvo,nav-sf
 mkdir -p "$OUT"
 

@@ -40,3 +40,19 @@ def test_readme_commands_are_one_line_and_use_a_fresh_venv():
     for marker in ("run-command", "test-command"):
         body = re.search(rf"<!-- {marker} -->\n```bash\n(.*?)```\n<!-- /{marker} -->", README, flags=re.S).group(1)
         assert body.count("\n") == 1 and "python3 -m venv .venv" in body
+
+
+def test_readme_plugin_planner_example_registers_and_drives(monkeypatch):
+    from viapath.planning import base
+    from viapath.scenarios import load_scenario
+    from viapath.sim.loop import run_episode
+
+    (block,) = [b for b in _blocks("python") if "name=\"mine\"" in b]
+    monkeypatch.setattr(base, "_REGISTRY", dict(base._REGISTRY))
+    exec(compile(block, "README.md plug-in example", "exec"), {})
+    assert "mine" in base.available_planners()
+    # It follows the path line at the nominal speed, avoiding no one.
+    metrics = run_episode(load_scenario("paper-side"), planner="mine").metrics
+    assert metrics["max_lateral_deviation_m"] < 0.05
+    assert metrics["max_speed_mps"] <= 0.2 + 1e-9
+    assert metrics["path_length_m"] > 4.5

@@ -76,7 +76,8 @@ def run(
         _fail(str(error))
     planner_name = planner or spec.planner.name
     if planner_name not in available_planners():
-        _fail(f"--planner: unknown planner {planner_name!r}; available: {', '.join(available_planners())}")
+        where = "--planner" if planner else f"{scenario}: planner.name"
+        _fail(f"{where}: unknown planner {planner_name!r}; available: {', '.join(available_planners())}")
     try:
         episode = run_episode(spec, planner=planner_name, perception=perception, seed=seed,
                               position_noise_m=position_noise, velocity_noise_mps=velocity_noise,

@@ -62,6 +62,10 @@ BAD = {
                       "seed", "greater than or equal to 0", "found -3", 1),
     "step_longer_than_episode": ("duration_s: 60", "duration_s: 5\ndt_s: 10",
                                  "dt_s", "must not exceed duration_s", "found 10", 1),
+    "one_number_velocity": ("velocity: [-0.3, 0.0]", "velocity: [-0.3]",
+                            "obstacles.0.velocity", "too few items", "found [-0.3]", 1),
+    "three_number_start": ("start: [2.0, 0.0]", "start: [2.0, 0.0, 1.0]",
+                           "obstacles.0.start", "list of 2 items", "found [2.0, 0.0, 1.0]", 1),
     "negative_weight": ("k1: 0.1", "k1: -0.1",
                         "planner.weights.k1", "greater than or equal to 0", "found -0.1", 1),
 }
@@ -134,7 +138,14 @@ def test_tab_indentation_is_a_yaml_error(tmp_path):
     assert message.startswith(f"{file}: line 2, column 1: not valid YAML")
 
 
-@pytest.mark.parametrize("text, found", [("", "NoneType"), ("- a\n- b\n", "list"), ("just words", "str")])
+def test_empty_file_says_so(tmp_path):
+    file = tmp_path / "empty.yaml"
+    file.write_text("# only a comment\n")
+    message = str(pytest.raises(ScenarioError, load_scenario, file).value)
+    assert message.startswith(f"{file}: the file is empty")
+
+
+@pytest.mark.parametrize("text, found", [("- a\n- b\n", "list"), ("just words", "str")])
 def test_not_a_mapping(tmp_path, text, found):
     file = tmp_path / "notmap.yaml"
     file.write_text(text)
@@ -221,3 +232,18 @@ def test_cli_bad_input_via_subprocess(tmp_path):
                           capture_output=True, text=True, env=env, timeout=120)
     _assert_clean_failure(done.returncode, done.stdout + done.stderr, str(file), f": {field}: ", expected, found)
     assert done.stdout == ""
+
+
+@pytest.mark.parametrize("old, new, needle", [
+    ("name: viapath,", "name: viapth,", ": planner.name: unknown planner 'viapth'"),
+    ("duration_s: 60", "duration_s: 60\nperception: {mode: laser, options: {bogus: 1}}",
+     ": perception.options: unknown option(s) bogus"),
+    ("duration_s: 60", "duration_s: 60\nperception: {mode: laser, options: {tracker: {gate: 3}}}",
+     ": perception.options: tracker: unknown option(s) gate"),
+])
+def test_cli_names_the_field_of_errors_found_after_loading(tmp_path, old, new, needle):
+    file = tmp_path / "late.yaml"
+    file.write_text(GOOD.replace(old, new, 1))
+    result = CliRunner().invoke(app, ["run", str(file), "--json"])
+    _assert_clean_failure(result.exit_code, result.output, f"{file}{needle}")
+    assert result.stdout == ""

@@ -66,3 +66,52 @@ def test_overtaking_robot_passes_the_slow_walker():
     lead = float(np.max(robot_x - walker_x))
     assert lead > 0.5, (f"the robot never got ahead of the walker (best lead {lead:.2f} m; "
                         f"time to goal {_episode('overtaking').metrics['time_to_goal_s']} s)")
+
+
+def test_robot_outside_the_corridor_facing_outwards_turns_back_instead_of_standing():
+    # After an escape (group-0194 of the mixed suite) the robot stood 0.13 m outside the corridor,
+    # facing 0.05 rad outwards, with everyone gone: every roll-out of the way back first swung
+    # further out, so the planner stopped for the rest of the episode.
+    from viapath import DesignatedPath, Obstacles, Observation, RobotState
+    from viapath.planning import make_planner
+
+    path = DesignatedPath([[0, 0], [7.8118, 0]], half_width_m=1.3622)
+    planner = make_planner("viapath", path, nominal_speed_mps=0.2572)
+    people_leaving = Obstacles(positions=[[-3.7, y] for y in (1.2, 0.5, -0.2, -0.9)],
+                               velocities=[[-0.43, 0.0]] * 4, radii_m=[0.25] * 4)
+    robot = RobotState(position=np.array([1.33, -1.49]), heading_rad=-0.05, speed_mps=0.0)
+    decision = planner.plan(Observation(time_s=0.0, robot=robot, obstacles=people_leaving))
+    assert decision.plan.status != "stop"
+    assert decision.command.turn_rate_radps > 0.0  # towards the corridor (left)
+
+
+def test_group_abreast_head_on_robot_returns_to_the_corridor_and_reaches_the_goal():
+    from viapath.scenarios.loader import scenario_from_dict
+
+    group = [{"start": [13.56, y], "velocity": [-0.4312, 0.0], "radius": 0.25}
+             for y in (1.1905, 0.4913, -0.2078, -0.9069)]
+    scenario = scenario_from_dict({
+        "name": "group-abreast", "duration_s": 76.0,
+        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2572, "radius": 0.25},
+        "path": {"waypoints": [[0.0, 0.0], [7.8118, 0.0]], "half_width": 1.3622},
+        "obstacles": group,
+    })
+    metrics = run_episode(scenario).metrics
+    assert metrics["reached_goal"], metrics
+    assert not metrics["collision"], metrics
+    assert metrics["time_outside_corridor_s"] < 10.0, metrics
+
+
+def test_l_corner_bypasses_the_occupied_corner_and_keeps_the_junction_rule_without_the_person():
+    from viapath.path import SubgoalPolicy
+
+    scenario = load_scenario("l-corner")
+    corner = np.asarray(scenario.path.waypoints[1])
+    with_person = run_episode(scenario)
+    alone = run_episode(scenario.model_copy(update={"obstacles": []}))
+    for episode in (with_person, alone):
+        assert episode.metrics["reached_goal"] and not episode.metrics["collision"], episode.metrics
+        assert episode.metrics["time_outside_corridor_s"] == 0.0, episode.metrics
+    closest = [np.hypot(*(e.trace.robot_poses[:, :2] - corner).T).min() for e in (with_person, alone)]
+    assert closest[1] <= SubgoalPolicy().reach_threshold_m + 0.05  # drives to the corner, then turns
+    assert closest[0] > 0.5  # gives the corner up to the person and cuts inside it

@@ -81,6 +81,7 @@ class ViaPathConfig:
     slow_times_s: tuple[float, ...] = (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0)
     rollout_heading_rad: float = 0.35  # roll a plan out when its first leg turns more than this
     rollout_s: float = 2.0
+    turn_in_place_min_rad: float = 0.02  # a plan whose roll-out leaves the corridor turns on the spot first
     rollout_dt_s: float = 0.1
     max_rollouts: int = 8  # candidates tried, cheapest first, before falling back
     escape_s: float = 3.0  # how long each escape command is rolled out
@@ -193,11 +194,14 @@ class ViaPathPlanner(Planner, name="viapath"):
         return float(np.clip(self.config.heading_gain * error, -self.limits.max_turn_rate_radps,
                              self.limits.max_turn_rate_radps))
 
+    def nominal_in_speed_set_mps(self) -> float:
+        return round(min(self.nominal_speed_mps, self.limits.max_speed_mps), 3)
+
     def _speed_set(self, current_speed_mps: float) -> tuple[np.ndarray, int]:
         """The configured speeds, the current speed and the nominal speed (mm/s resolution, within
         the limit), sorted; and where the nominal speed is in it."""
         top = self.limits.max_speed_mps
-        nominal = round(min(self.nominal_speed_mps, top), 3)
+        nominal = self.nominal_in_speed_set_mps()
         speeds = {round(min(v, top), 3) for v in self.config.speeds_mps} | {nominal}
         if current_speed_mps > 0.02:
             speeds.add(round(min(current_speed_mps, top), 3))
@@ -487,10 +491,12 @@ class _Search:
         if np.all(self.path.corridor_excess(path) <= self.corridor_tolerance):
             return True
         # Turning while moving would swing out of the corridor: turn on the spot first, if standing
-        # is safe meanwhile (the next cycles then find the robot facing its leg).
+        # is safe meanwhile (the next cycles then find the robot facing its leg). Even a small turn:
+        # at the corridor edge, or outside it after an escape, a robot facing a little outwards
+        # would otherwise never get going again.
         turn_s = heading_error / limits.max_turn_rate_radps + 1.0
         standing = np.repeat(self.position[None], max(1, int(np.ceil(turn_s / dt))), axis=0)
-        if heading_error > config.rollout_heading_rad and self._clear(standing, dt):
+        if heading_error > config.turn_in_place_min_rad and self._clear(standing, dt):
             plan.extras["turn_in_place"] = True
             return True
         return False
@@ -545,7 +551,7 @@ class _Search:
         Returns (complete node indices, goal leg lengths) or None."""
         if not self._goal_legs_inside(self.position[None])[0]:
             return None  # slowing down runs along the straight leg, which would leave the corridor
-        nominal = self.planner.nominal_speed_mps
+        nominal = self.planner.nominal_in_speed_set_mps()
         slow_speeds = np.concatenate([[0.0], speeds[speeds < nominal - 1e-9]])
         duration, slow_speed = (grid.ravel() for grid in np.meshgrid(np.asarray(self.config.slow_times_s, float),
                                                                      slow_speeds))

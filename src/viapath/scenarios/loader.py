@@ -62,6 +62,9 @@ def _parse(text: str, origin: str, base_dir: Path | None) -> Scenario:
         where = f" line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         problem = getattr(error, "problem", None) or str(error)
         raise ScenarioError(f"{origin}:{where}: not valid YAML: {problem}") from None
+    if data is None:
+        raise ScenarioError(f"{origin}: the file is empty; expected a mapping of scenario fields "
+                            "(name, robot, path, ...)")
     if not isinstance(data, dict):
         raise ScenarioError(f"{origin}: expected a mapping of scenario fields (name, robot, path, ...), "
                             f"found {type(data).__name__}")
@@ -82,12 +85,19 @@ def format_validation_error(error: ValidationError, origin: str) -> str:
     for item in error.errors(include_url=False):
         location = ".".join(str(part) for part in _without_union_tags(item["loc"])) or "(top level)"
         message = item["msg"]
-        if item["type"] == "extra_forbidden":
-            message = "unknown field (check the spelling; extra fields are not allowed)"
-        elif item["type"] == "missing":
-            message = "required field is missing"
         found = item.get("input")
         found_text = "" if item["type"] in ("missing",) or isinstance(found, dict) else f"; found {found!r}"
+        if item["type"] == "extra_forbidden":
+            message = "unknown field (check the spelling; extra fields are not allowed)"
+        elif item["type"] == "missing" and item["loc"] and isinstance(item["loc"][-1], int):
+            # A list too short for a fixed-size tuple such as a point [x, y]: name the whole list.
+            location = location.rsplit(".", 1)[0]
+            message = "too few items (a point is [x, y], a velocity [vx, vy], a wall [[x, y], [x, y]])"
+            found_text = f"; found {found!r}"
+        elif item["type"] == "missing":
+            message = "required field is missing"
+        elif item["type"] in ("too_long", "tuple_type"):
+            message = "expected a list of 2 items: a point [x, y], a velocity [vx, vy], a wall [[x, y], [x, y]]"
         lines.append(f"{origin}: {location}: {message}{found_text}")
     return "\n".join(lines)
 

@@ -5,6 +5,7 @@ Deterministic for a given seed: the only randomness (perception noise) draws fro
 
 from __future__ import annotations
 
+import inspect
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -66,8 +67,20 @@ def make_perception(mode: str, scenario, position_noise_m: float, velocity_noise
             from viapath.perception.laser import LaserPerception
         except ImportError as error:  # pragma: no cover - depends on the laser chain being installed
             raise RuntimeError(f"laser perception is not available: {error}") from None
-        return LaserPerception(**scenario.perception.options)
+        return _laser_perception(LaserPerception, scenario.perception.options)
     raise ValueError(f"unknown perception mode {mode!r}; use 'oracle' or 'laser'")
+
+
+def _laser_perception(cls, options: dict[str, Any]) -> Perception:
+    """The scenario's ``perception.options`` as keyword arguments, with errors naming that field."""
+    known = [name for name in inspect.signature(cls).parameters if name not in ("mode",)]
+    unknown = sorted(set(options) - set(known))
+    if unknown:
+        raise ValueError(f"perception.options: unknown option(s) {', '.join(unknown)}; known: {', '.join(known)}")
+    try:
+        return cls(**options)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"perception.options: {error}") from None
 
 
 def planner_options(scenario, planner_name: str) -> dict[str, Any]:
