@@ -193,10 +193,17 @@ def plot_deviation_vs_time(rows: list[dict[str, Any]], file: Path) -> None:
         ax.grid(alpha=0.3)
     for ax in axes.flat[len(planners):]:
         ax.set_visible(False)
+    beyond = ""
     if len(all_ratio):
-        axes[0, 0].set_xlim(max(0.0, all_ratio.min() - 0.05), min(np.percentile(all_ratio, 99.5) + 0.1, 4.0))
-        axes[0, 0].set_ylim(-0.05, min(np.percentile(all_deviation, 99.5) + 0.1, 5.0))
-    fig.supxlabel("time to goal / obstacle-free time (episodes that reached the goal; x = median)", fontsize=9)
+        # The axes end at the 99.5th percentiles so that a few outliers do not squash the rest.
+        ratio_top = min(np.percentile(all_ratio, 99.5) + 0.1, 4.0)
+        deviation_top = min(np.percentile(all_deviation, 99.5) + 0.1, 5.0)
+        axes[0, 0].set_xlim(max(0.0, all_ratio.min() - 0.05), ratio_top)
+        axes[0, 0].set_ylim(-0.05, deviation_top)
+        clipped = int(np.sum((all_ratio > ratio_top) | (all_deviation > deviation_top)))
+        beyond = f"; {clipped} of {len(all_ratio)} beyond the axes" if clipped else ""
+    fig.supxlabel(f"time to goal / obstacle-free time (episodes that reached the goal; x = median{beyond})",
+                  fontsize=9)
     fig.supylabel("max lateral deviation [m]", fontsize=9)
     fig.tight_layout()
     fig.savefig(file, dpi=110)

@@ -32,8 +32,12 @@ def corridor_polygons(path, resolution: int = 24):
     return outlines
 
 
-def draw_scene(ax, trace, upto: int | None = None, obstacle_every_s: float = 1.0, show_via: bool = True):
-    """Path, corridor, walls, robot and obstacle history on ``ax`` (up to step ``upto``)."""
+def draw_scene(ax, trace, upto: int | None = None, obstacle_every_s: float = 1.0, show_via: bool = True,
+               robot_every_s: float = 0.5):
+    """Path, corridor, walls, robot and obstacle history on ``ax`` (up to step ``upto``).
+
+    The robot is drawn every ``robot_every_s`` (its track as a line in between): at every 0.1 s step
+    the markers pile up into a band and hide the via points."""
     from matplotlib.patches import Circle, Polygon
 
     n = len(trace.times_s) if upto is None else upto + 1
@@ -62,11 +66,12 @@ def draw_scene(ax, trace, upto: int | None = None, obstacle_every_s: float = 1.0
     if len(trace.obstacle_radii_m):
         ax.plot([], [], "o", mfc="none", mec="#c0392b", ms=9, label="obstacle (every %.0f s)" % obstacle_every_s)
 
-    poses = trace.robot_poses[:n]
-    speeds = trace.robot_speeds_mps[:n]
+    ax.plot(*trace.robot_poses[:n, :2].T, color="0.35", lw=0.8, zorder=4)
+    shown = np.arange(0, n, max(1, int(round(robot_every_s / trace.dt_s))))
+    poses = trace.robot_poses[shown]
+    speeds = trace.robot_speeds_mps[shown]
     sizes = 6 + 140 * speeds / max(float(trace.robot_speeds_mps.max()), 1e-6)
-    heading_via = np.array([len(v) > 0 for v in trace.via_points[:n]])
-    ax.plot(*poses[:, :2].T, color="0.35", lw=0.8, zorder=4)
+    heading_via = np.array([len(trace.via_points[k]) > 0 for k in shown])
     ax.scatter(*poses[~heading_via, :2].T, s=sizes[~heading_via], marker="s", facecolor="#1f9e89", edgecolor="k",
                lw=0.3, zorder=6, label="robot → goal (size ∝ speed)")
     if heading_via.any():
@@ -76,8 +81,8 @@ def draw_scene(ax, trace, upto: int | None = None, obstacle_every_s: float = 1.0
         vias = [v for v in trace.via_points[:n] if len(v)]
         if vias:
             first_vias = np.array([v[0] for v in vias])
-            ax.scatter(*first_vias.T, marker="x", color="#8e44ad", s=18, lw=0.9, zorder=5, label="via points planned")
-    ax.add_patch(Circle(poses[-1, :2], trace.robot_radius_m, fill=False, ec="k", lw=1.2, zorder=7))
+            ax.scatter(*first_vias.T, marker="x", color="#8e44ad", s=24, lw=1.0, zorder=8, label="via points planned")
+    ax.add_patch(Circle(trace.robot_poses[n - 1, :2], trace.robot_radius_m, fill=False, ec="k", lw=1.2, zorder=7))
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
