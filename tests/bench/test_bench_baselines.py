@@ -113,3 +113,30 @@ def test_at_fault_is_decided_at_the_onset_of_contact():
     trace.robot_speeds_mps = np.full(4, 0.2)
     trace.obstacle_positions = np.array([[[-0.9, 0.0]], [[-0.6, 0.0]], [[-0.3, 0.0]], [[0.0, 0.0]]])
     assert not at_fault_collision(trace)
+
+
+def test_at_fault_seen_1s_ignores_people_who_appear_beside_the_robot():
+    from viapath.sim.metrics import at_fault_collision
+
+    class _Trace:
+        robot_radius_m = 0.25
+        obstacle_radii_m = np.array([0.25])
+        dt_s = 0.1
+
+    trace = _Trace()
+    steps = 30
+    times = np.arange(steps)
+    # The robot drives +x at 0.2 m/s; a standing person at x = 1.0 is touched at about step 19.
+    trace.robot_poses = np.column_stack([0.02 * times, np.zeros(steps), np.zeros(steps)])
+    trace.robot_speeds_mps = np.full(steps, 0.2)
+    trace.obstacle_positions = np.tile([[1.0, 0.0]], (steps, 1, 1)).astype(float)
+    first_touch = int(np.argmax(0.02 * times > 1.0 - 0.5))
+    assert at_fault_collision(trace) and at_fault_collision(trace, seen_for_s=1.0)
+    # The same person marked in the data only 0.5 s before the contact: at fault, but not seen 1 s.
+    trace.obstacle_positions[: first_touch - 5] = np.nan
+    assert at_fault_collision(trace)
+    assert not at_fault_collision(trace, seen_for_s=1.0)
+    # Present for 1.5 s before the contact: counts again.
+    trace.obstacle_positions = np.tile([[1.0, 0.0]], (steps, 1, 1)).astype(float)
+    trace.obstacle_positions[: first_touch - 15] = np.nan
+    assert at_fault_collision(trace, seen_for_s=1.0)

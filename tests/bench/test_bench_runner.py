@@ -127,3 +127,12 @@ def test_cli_suite_and_bench_json(tmp_path):
     table = json.loads(result.output)
     assert [entry["planner"] for entry in table] == ["follow", "stop"]
     assert all(entry["episodes"] == 2 for entry in table)
+
+
+def test_a_results_file_of_another_version_is_refused_not_mixed(tmp_path, small_suite):
+    run_bench(small_suite[:1], ["follow"], tmp_path, workers=1, progress=False)
+    csv_path = tmp_path / "episodes.csv"
+    header, *rest = csv_path.read_text().splitlines()
+    csv_path.write_text("\n".join([header.replace(",at_fault_collision_seen_1s", ""), *rest]) + "\n")
+    with pytest.raises(BenchError, match="another version"):
+        run_bench(small_suite[:2], ["follow"], tmp_path, workers=1, progress=False)

@@ -4,7 +4,8 @@ Aggregates, per planner, over its episodes (rows with an error are counted apart
 
 * ``success_rate``: reached the goal without any collision; ``reached_goal_rate``;
   ``collision_rate`` (any contact); ``at_fault_collision_rate`` (contact begun while the robot moved
-  towards the person, see :func:`viapath.sim.metrics.at_fault_collision`);
+  towards the person, see :func:`viapath.sim.metrics.at_fault_collision`); ``at_fault_seen_1s_rate``
+  (the same, counting only people present for at least 1 s before the contact);
 * ``time_ratio_median`` / ``time_ratio_mean``: time to goal over the obstacle-free time, episodes
   that reached the goal;
 * ``mean_lateral_deviation_m``: mean of the episodes' mean |lateral deviation|;
@@ -30,6 +31,7 @@ TABLE_COLUMNS = [
     ("success_rate", "success", "{:.1%}"),
     ("collision_rate", "collision", "{:.1%}"),
     ("at_fault_collision_rate", "at-fault", "{:.1%}"),
+    ("at_fault_seen_1s_rate", "at-fault, seen ≥ 1 s", "{:.1%}"),
     ("time_ratio_median", "time ratio (median)", "{:.2f}"),
     ("mean_lateral_deviation_m", "mean lat. dev. [m]", "{:.3f}"),
     ("max_lateral_deviation_m", "max lat. dev. [m]", "{:.2f}"),
@@ -71,6 +73,7 @@ def summarize(rows: list[dict[str, Any]], by: str = "planner", order: list[str] 
             "reached_goal_rate": rate("reached_goal"),
             "collision_rate": rate("collision"),
             "at_fault_collision_rate": rate("at_fault_collision"),
+            "at_fault_seen_1s_rate": rate("at_fault_collision_seen_1s"),
             "time_ratio_median": _stat(np.median, ratios),
             "time_ratio_mean": _stat(np.mean, ratios),
             "mean_lateral_deviation_m": _stat(np.mean, _values(ok, "mean_lateral_deviation_m")),

@@ -29,12 +29,13 @@ from viapath.bench.suites import ETH_UCY_FOLDER, data_root, generate_suite, suit
 
 COLUMNS = [
     "scenario", "family", "planner", "perception", "seed",
-    "reached_goal", "collision", "at_fault_collision", "min_clearance_m", "time_to_goal_s",
+    "reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s", "min_clearance_m",
+    "time_to_goal_s",
     "free_time_s", "time_ratio", "path_length_m", "mean_lateral_deviation_m", "max_lateral_deviation_m",
     "time_outside_corridor_s", "min_speed_mps", "max_speed_mps", "plan_time_p50_ms", "plan_time_p99_ms",
     "episode_wall_s", "error",
 ]
-_BOOLS = {"reached_goal", "collision", "at_fault_collision"}
+_BOOLS = {"reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s"}
 _TEXT = {"scenario", "family", "planner", "perception", "error"}
 _INTS = {"seed"}
 BACKENDS = ("loky", "dask", "ray")
@@ -165,7 +166,11 @@ def read_rows(csv_path: Path) -> list[dict[str, Any]]:
     if not Path(csv_path).exists():
         return []
     with open(csv_path, newline="") as handle:
-        return [_parse(row) for row in csv.DictReader(handle)]
+        reader = csv.DictReader(handle)
+        if reader.fieldnames is not None and list(reader.fieldnames) != COLUMNS:
+            raise BenchError(f"{csv_path}: written by another version of viapath (columns differ); "
+                             "use a new --out folder")
+        return [_parse(row) for row in reader]
 
 
 def _parse(row: dict[str, str]) -> dict[str, Any]:

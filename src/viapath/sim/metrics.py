@@ -27,12 +27,16 @@ def clearance_per_step(trace) -> np.ndarray:
     return clearance.min(axis=1)
 
 
-def at_fault_collision(trace, min_speed_mps: float = 0.05) -> bool:
+def at_fault_collision(trace, min_speed_mps: float = 0.05, seen_for_s: float = 0.0) -> bool:
     """Contact while the robot was moving towards the person (replayed people do not react to the
     robot, so only these contacts are the robot's fault): in the step where a contact with an
     obstacle begins, the robot's speed exceeds ``min_speed_mps`` and its velocity has a positive
     component towards that obstacle's centre (both taken at the start of the step). Only the onset
-    counts: simulated discs pass through each other afterwards, which says nothing about fault."""
+    counts: simulated discs pass through each other afterwards, which says nothing about fault.
+
+    With ``seen_for_s`` > 0, only contacts with a person present for at least that long before the
+    onset count: recorded tracks (ETH/UCY) begin wherever the annotators first marked someone, at
+    times right beside the robot, and no planner can avoid a person it has never seen."""
     poses = trace.robot_poses
     obstacles = trace.obstacle_positions
     if obstacles.shape[1] == 0 or len(poses) < 2:
@@ -48,7 +52,16 @@ def at_fault_collision(trace, min_speed_mps: float = 0.05) -> bool:
     velocity = speeds[:, None] * np.stack([np.cos(poses[:-1, 2]), np.sin(poses[:-1, 2])], axis=1)
     towards = np.einsum("kj,knj->kn", velocity, -rel_start) > 0.0
     onset = contact & ~np.vstack([np.zeros((1, contact.shape[1]), dtype=bool), contact[:-1]])
-    return bool(np.any(onset & towards & (speeds[:, None] > min_speed_mps)))
+    fault = onset & towards & (speeds[:, None] > min_speed_mps)
+    if seen_for_s > 0:
+        window = int(np.ceil(seen_for_s / trace.dt_s - 1e-9))
+        visible = np.isfinite(obstacles).all(-1)  # (K, N)
+        count = np.vstack([np.zeros((1, visible.shape[1]), int), np.cumsum(visible, axis=0)])
+        steps = np.arange(len(poses) - 1)
+        # present in each of the `window` steps before step k (and at k)
+        seen = (count[steps + 1] - count[np.maximum(steps + 1 - (window + 1), 0)]) == window + 1
+        fault &= seen
+    return bool(np.any(fault))
 
 
 def compute_metrics(trace) -> dict[str, Any]:
@@ -67,6 +80,7 @@ def compute_metrics(trace) -> dict[str, Any]:
         "reached_goal": bool(trace.reached_goal),
         "collision": bool(min_clearance < 0.0),
         "at_fault_collision": at_fault_collision(trace),
+        "at_fault_collision_seen_1s": at_fault_collision(trace, seen_for_s=1.0),
         "min_clearance_m": _finite_or_none(min_clearance),
         "time_to_goal_s": float(trace.times_s[-1]) if trace.reached_goal else None,
         "path_length_m": float(np.sum(np.hypot(*np.diff(poses, axis=0).T))),
