@@ -27,7 +27,9 @@ What the paper leaves open and we chose (see DESIGN §2 pitfalls):
 * Near-ties (the head-on case is exactly symmetric, and noise breaks it at random) go to
   ``preferred_side``: the other side pays ``side_tolerance``. The previous cycle's way round (same
   obstacle, side, early/late) gets a bonus of ``hysteresis`` so that near-equal options do not
-  alternate.
+  alternate. If that way has vanished, it is searched for once more with a fraction of the
+  uncertainty inflation and kept if still cheaper (``keep_previous_way``): under noise a way
+  often looks blocked for a single cycle, and the plan then flips and flips back.
 * Under velocity uncertainty an obstacle grows into a cone (``uncertainty_sigmas`` σ_v per second),
   capped at ``max_inflation_m``: replanning every cycle corrects a velocity error long before it
   matters ten seconds ahead, and an uncapped cone makes any head-on pass wider than a corridor.
@@ -44,7 +46,7 @@ What the paper leaves open and we chose (see DESIGN §2 pitfalls):
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -83,6 +85,8 @@ class ViaPathConfig:
     rollout_s: float = 2.0
     turn_in_place_min_rad: float = 0.02  # a plan whose roll-out leaves the corridor turns on the spot first
     rollout_dt_s: float = 0.1
+    keep_previous_way: bool = True  # constraint hysteresis, see ViaPathPlanner._keep_previous_way
+    keep_previous_inflation: float = 0.25  # ... re-checked with this fraction of the uncertainty inflation
     max_rollouts: int = 8  # candidates tried, cheapest first, before falling back
     escape_s: float = 3.0  # how long each escape command is rolled out
     escape_dt_s: float = 0.1
@@ -179,6 +183,9 @@ class ViaPathPlanner(Planner, name="viapath"):
         result = search.run(speeds, nominal_index, self._previous_key)
         if result is None:
             return self._fallback(observation, search)
+        if self.config.keep_previous_way and self._previous_key is not None:
+            result = self._keep_previous_way(result, position, robot, subgoal, obstacles, radii, speeds,
+                                             nominal_index)
         chosen, plan = result
         self._previous_key = chosen
         command = self.steer(observation, plan.target, plan.speed_mps, self.config.heading_gain)
@@ -186,6 +193,33 @@ class ViaPathPlanner(Planner, name="viapath"):
             command = Command(0.0, command.turn_rate_radps if command.turn_rate_radps else self._turn_towards(
                 observation, plan.target))
         return Decision(command, plan)
+
+    def _keep_previous_way(self, result, position, robot, subgoal, obstacles: Obstacles, radii, speeds,
+                           nominal_index):
+        """Hysteresis on the constraint as well as on the cost. Under velocity noise last cycle's way
+        round often looks blocked for one cycle only because its inflation grew with the estimate's
+        error; the plan then flips and flips back. If last cycle's way is gone, look for it again
+        with ``keep_previous_inflation`` of the uncertainty inflation (the safety margin stays) and
+        keep it if, with the usual hysteresis, it still costs less than the new choice."""
+        chosen, plan = result
+        previous = self._previous_key
+        if np.array_equal(chosen[1:], previous[1:]) or plan.chosen is None or not len(plan.candidate_costs):
+            return result  # same way, or a free straight leg at nominal speed (the paper's first choice)
+        if not (np.any(obstacles.position_sigma_m) or np.any(obstacles.velocity_sigma_mps)):
+            return result  # no inflation to relax: the search would be the same
+        fraction = self.config.keep_previous_inflation
+        less_inflated = replace(obstacles, position_sigma_m=fraction * obstacles.position_sigma_m,
+                                velocity_sigma_mps=fraction * obstacles.velocity_sigma_mps)
+        relaxed = _Search(self, position, robot.heading_rad, subgoal, less_inflated, radii, robot.speed_mps,
+                          robot.turn_rate_radps)
+        kept = relaxed.run(speeds, nominal_index, previous, only_way=previous)
+        if kept is None or kept[1].chosen is None:
+            return result
+        kept_cost = kept[1].candidate_costs[kept[1].chosen]
+        if kept_cost < plan.candidate_costs[plan.chosen]:
+            kept[1].extras["kept_previous_way"] = True
+            return kept
+        return result
 
     def _turn_towards(self, observation: Observation, target) -> float:
         robot = observation.robot
@@ -362,8 +396,9 @@ class _Search:
 
     # -- search ----------------------------------------------------------------------------------
 
-    def run(self, speeds: np.ndarray, nominal_index: int, previous_key):
-        """Best candidate as ``(key, plan)``, or None when no candidate is collision-free."""
+    def run(self, speeds: np.ndarray, nominal_index: int, previous_key, only_way=None):
+        """Best candidate as ``(key, plan)``, or None when no candidate is collision-free.
+        With ``only_way`` (a key), only candidates going that way round are considered."""
         config = self.config
         nodes = _Nodes()
         n_speeds = len(speeds)
@@ -379,7 +414,7 @@ class _Search:
             starts, times, node_speeds = data["position"][frontier], data["time_s"][frontier], data["speed"][frontier]
             directions, lengths, free, contact = self.goal_legs(starts, times, node_speeds)
             if depth == 0:
-                if free[nominal_index]:
+                if free[nominal_index] and only_way is None:
                     # Paper step 1: a free straight path at the normal speed is the plan, if the
                     # robot can turn onto it in time.
                     straight = self._straight_plan(speeds[nominal_index], nominal_index)
@@ -441,9 +476,15 @@ class _Search:
             same_way = np.all(keys[:, 1:] == previous_key[1:], axis=1)
             same_speed = keys[:, 0] == previous_key[0]
             cost = cost - config.hysteresis * (same_way + 0.5 * (same_way & same_speed))
+        if only_way is not None:
+            cost = np.where(np.all(keys[:, 1:] == only_way[1:], axis=1), cost, np.inf)
+            if not np.isfinite(cost).any():
+                return None
         polylines = [self._polyline(data, node) for node in complete] if config.record_candidates else []
         # The cheapest candidate whose first leg the robot can actually follow (motion limits).
         for best in np.argsort(cost, kind="stable")[:config.max_rollouts]:
+            if not np.isfinite(cost[best]):
+                break
             if slow_s[best] > 0:
                 plan = self._slow_plan(data, complete, cost, best, polylines)
             else:
