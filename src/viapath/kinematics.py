@@ -66,28 +66,27 @@ def _clip(value: float, low: float, high: float) -> float:
 
 def rollout(state: UnicycleState, commands: np.ndarray, limits: MotionLimits, dt_s: float, steps: int) -> np.ndarray:
     """Positions (K, steps, 2) after each step of holding each of K commands (v, ω) from ``state``:
-    the same limited arcs as :func:`step`, vectorised over the commands."""
+    the same limited arcs as :func:`step`, vectorised over the commands and the steps (a held
+    command makes speed and turn rate ramp to it at the acceleration limits, so both are known in
+    closed form; the positions are then running sums of the arcs)."""
     commands = np.asarray(commands, dtype=float).reshape(-1, 2)
     v_cmd = np.clip(commands[:, 0], 0.0, limits.max_speed_mps)
     w_cmd = np.clip(commands[:, 1], -limits.max_turn_rate_radps, limits.max_turn_rate_radps)
-    dv, dw = limits.max_accel_mps2 * dt_s, limits.max_turn_accel_radps2 * dt_s
-    count = len(commands)
-    x, y = np.full(count, float(state.x)), np.full(count, float(state.y))
-    heading = np.full(count, float(state.heading_rad))
-    speed, turn = np.full(count, float(state.speed_mps)), np.full(count, float(state.turn_rate_radps))
-    positions = np.empty((count, steps, 2))
-    for k in range(steps):
-        speed = speed + np.clip(v_cmd - speed, -dv, dv)
-        turn = turn + np.clip(w_cmd - turn, -dw, dw)
-        new_heading = heading + turn * dt_s
-        straight = np.abs(turn) < 1e-9
-        safe_turn = np.where(straight, 1.0, turn)
-        x = np.where(straight, x + speed * dt_s * np.cos(heading),
-                     x + speed / safe_turn * (np.sin(new_heading) - np.sin(heading)))
-        y = np.where(straight, y + speed * dt_s * np.sin(heading),
-                     y - speed / safe_turn * (np.cos(new_heading) - np.cos(heading)))
-        heading = new_heading
-        positions[:, k, 0], positions[:, k, 1] = x, y
+    ramp = np.arange(1, steps + 1)
+    speed0, turn0 = float(state.speed_mps), float(state.turn_rate_radps)
+    dv, dw = limits.max_accel_mps2 * dt_s * ramp, limits.max_turn_accel_radps2 * dt_s * ramp
+    speed = speed0 + np.clip((v_cmd - speed0)[:, None], -dv, dv)  # (K, steps), during each step
+    turn = turn0 + np.clip((w_cmd - turn0)[:, None], -dw, dw)
+    heading_after = float(state.heading_rad) + np.cumsum(turn * dt_s, axis=1)
+    heading_before = np.concatenate([np.full((len(commands), 1), float(state.heading_rad)), heading_after[:, :-1]],
+                                    axis=1)
+    straight = np.abs(turn) < 1e-9
+    radius = speed / np.where(straight, 1.0, turn)
+    dx = np.where(straight, speed * dt_s * np.cos(heading_before), radius * (np.sin(heading_after) - np.sin(heading_before)))
+    dy = np.where(straight, speed * dt_s * np.sin(heading_before), -radius * (np.cos(heading_after) - np.cos(heading_before)))
+    positions = np.empty((len(commands), steps, 2))
+    positions[..., 0] = float(state.x) + np.cumsum(dx, axis=1)
+    positions[..., 1] = float(state.y) + np.cumsum(dy, axis=1)
     return positions
 
 

@@ -285,12 +285,20 @@ class ViaPathPlanner(Planner, name="viapath"):
         excess = self.path.corridor_excess(positions.reshape(-1, 2)).reshape(len(commands), steps)
         inside = np.all(excess <= allowed, axis=1)
 
+        # Only people who could come within reach during the roll-out matter (triangle inequality:
+        # the robot travels at most `travel`, each person |v|·T, each cone grows at most so much).
+        horizon = steps * dt
+        travel = float(np.max(np.hypot(*(positions - position).reshape(-1, 2).T)))
         obstacles = search.obstacles
-        centres = obstacles.positions[None] + obstacles.velocities[None] * times[:, None, None]  # (S, N, 2)
-        reach = search.check_radii + search.growth * np.minimum(times[:, None], search.growth_until_s)
+        gap_all = np.hypot(*(position - obstacles.positions).T) - search.check_radii
+        growth_all = search.growth * np.minimum(horizon, search.growth_until_s)
+        near = gap_all - growth_all - np.hypot(*obstacles.velocities.T) * horizon - travel <= 0
+        positions_obs, velocities_obs = obstacles.positions[near], obstacles.velocities[near]
+        centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
+        reach = search.check_radii[near] + search.growth[near] * np.minimum(times[:, None], search.growth_until_s[near])
         offset = positions[:, :, None, :] - centres[None]
         gap = np.hypot(offset[..., 0], offset[..., 1]) - reach[None]  # (K, S, N)
-        gap_now = np.hypot(*(position - obstacles.positions).T) - search.check_radii
+        gap_now = gap_all[near]
         overlapping = gap_now <= 0
         touching = (gap < 0) & ~overlapping
         first = np.where(touching.any(axis=1), np.argmax(touching, axis=1), steps)  # (K, N)
