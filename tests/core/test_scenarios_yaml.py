@@ -64,6 +64,8 @@ BAD = {
                                  "dt_s", "must not exceed duration_s", "found 10", 1),
     "one_number_velocity": ("velocity: [-0.3, 0.0]", "velocity: [-0.3]",
                             "obstacles.0.velocity", "too few items", "found [-0.3]", 1),
+    "empty_velocity": ("velocity: [-0.3, 0.0]", "velocity: []",
+                       "obstacles.0.velocity", "too few items", "found []", 1),
     "three_number_start": ("start: [2.0, 0.0]", "start: [2.0, 0.0, 1.0]",
                            "obstacles.0.start", "list of 2 items", "found [2.0, 0.0, 1.0]", 1),
     "negative_weight": ("k1: 0.1", "k1: -0.1",
@@ -145,7 +147,7 @@ def test_empty_file_says_so(tmp_path):
     assert message.startswith(f"{file}: the file is empty")
 
 
-@pytest.mark.parametrize("text, found", [("- a\n- b\n", "list"), ("just words", "str")])
+@pytest.mark.parametrize("text, found", [("- a\n- b\n", "list"), ("just words", "str"), ("null\n", "null")])
 def test_not_a_mapping(tmp_path, text, found):
     file = tmp_path / "notmap.yaml"
     file.write_text(text)
@@ -247,3 +249,13 @@ def test_cli_names_the_field_of_errors_found_after_loading(tmp_path, old, new, n
     result = CliRunner().invoke(app, ["run", str(file), "--json"])
     _assert_clean_failure(result.exit_code, result.output, f"{file}{needle}")
     assert result.stdout == ""
+
+
+def test_laser_options_are_passed_through_including_the_mode():
+    from viapath.perception.laser import LaserPerception
+    from viapath.sim.loop import _laser_perception
+
+    perception = _laser_perception(LaserPerception, {"mode": "laser", "ray_backend": "numpy"})
+    assert isinstance(perception, LaserPerception)
+    with pytest.raises(ValueError, match=r"^perception.options: unknown option\(s\) bogus"):
+        _laser_perception(LaserPerception, {"bogus": 1})

@@ -70,3 +70,40 @@ def test_keeping_the_previous_way_cuts_side_flips_and_stays_safe():
             assert metrics["reached_goal"] and not metrics["collision"], (keep, metrics)
         flips[keep] = float(np.median([m["plan_side_flips"] for m in runs]))
     assert flips[True] <= 0.5 * flips[False], flips
+
+
+def test_a_previous_way_that_only_lost_on_cost_is_not_searched_again_with_less_inflation(monkeypatch):
+    # Relaxing the inflation is for a way that vanished; a way still there that simply costs more
+    # must not come back in a tighter, less inflated form.
+    import numpy as np
+
+    from viapath import DesignatedPath, Obstacles, Observation, RobotState
+    from viapath.planning import make_planner
+    from viapath.planning import viapath as vp
+
+    path = DesignatedPath([[0.0, 0.0], [8.0, 0.0]], half_width_m=1.5)
+    planner = make_planner("viapath", path, nominal_speed_mps=0.25)
+    head_on = Obstacles(positions=[[3.0, 0.05]], velocities=[[-0.3, 0.0]], radii_m=[0.25],
+                        position_sigma_m=[0.03], velocity_sigma_mps=[0.05])
+    observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.25), head_on)
+
+    ranked = []
+    original_run = vp._Search.run
+
+    def recording_run(self, *args, **kwargs):
+        result = original_run(self, *args, **kwargs)
+        ranked.append((kwargs.get("only_way") is not None, self.candidate_keys.copy(), result))
+        return result
+
+    monkeypatch.setattr(vp._Search, "run", recording_run)
+    first = planner.plan(observation)
+    assert first.plan.status == "avoid"
+    keys, costs = ranked[-1][1], first.plan.candidate_costs
+    worst = keys[int(np.argmax(np.where(np.isfinite(costs), costs, -np.inf)))]
+    assert not np.array_equal(worst[1:], planner._previous_key[1:])
+    planner._previous_key = worst  # last cycle went the dearest way, which is still available now
+    ranked.clear()
+    second = planner.plan(observation)
+    assert not np.array_equal(planner._previous_key[1:], worst[1:])  # it switched ...
+    assert [relaxed for relaxed, _, _ in ranked] == [False]  # ... after one search, no relaxed re-run
+    assert "kept_previous_way" not in second.plan.extras

@@ -184,7 +184,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         if result is None:
             return self._fallback(observation, search)
         if self.config.keep_previous_way and self._previous_key is not None:
-            result = self._keep_previous_way(result, position, robot, subgoal, obstacles, radii, speeds,
+            result = self._keep_previous_way(result, search, position, robot, subgoal, obstacles, radii, speeds,
                                              nominal_index)
         chosen, plan = result
         self._previous_key = chosen
@@ -194,8 +194,8 @@ class ViaPathPlanner(Planner, name="viapath"):
                 observation, plan.target))
         return Decision(command, plan)
 
-    def _keep_previous_way(self, result, position, robot, subgoal, obstacles: Obstacles, radii, speeds,
-                           nominal_index):
+    def _keep_previous_way(self, result, search: "_Search", position, robot, subgoal, obstacles: Obstacles, radii,
+                           speeds, nominal_index):
         """Hysteresis on the constraint as well as on the cost. Under velocity noise last cycle's way
         round often looks blocked for one cycle only because its inflation grew with the estimate's
         error; the plan then flips and flips back. If last cycle's way is gone, look for it again
@@ -205,6 +205,8 @@ class ViaPathPlanner(Planner, name="viapath"):
         previous = self._previous_key
         if np.array_equal(chosen[1:], previous[1:]) or plan.chosen is None or not len(plan.candidate_costs):
             return result  # same way, or a free straight leg at nominal speed (the paper's first choice)
+        if np.all(search.candidate_keys[:, 1:] == previous[1:], axis=1).any():
+            return result  # the previous way is still there and lost on cost: a fair switch
         if not (np.any(obstacles.position_sigma_m) or np.any(obstacles.velocity_sigma_mps)):
             return result  # no inflation to relax: the search would be the same
         fraction = self.config.keep_previous_inflation
@@ -357,6 +359,7 @@ class _Search:
         # A robot already outside the corridor may not go further out, but may come back.
         self.corridor_tolerance = max(0.0, float(self.path.corridor_excess(position))) + 1e-9
         self.subgoal_segments = [i for i in (index - 1, index) if i < len(planner.path.segment_lengths_m)]
+        self.candidate_keys = np.zeros((0, 4), dtype=int)  # of the complete candidates, once run() ranked them
 
     # -- checks ----------------------------------------------------------------------------------
 
@@ -477,6 +480,7 @@ class _Search:
         cost = (weights.k1 * total_length + weights.k2 * travel_time
                 + weights.k3 * speed_error + weights.k4 * theta)
         keys = np.column_stack([np.round(speeds_c * 1000).astype(int), data["key"][complete, 1:]])
+        self.candidate_keys = keys
         preferred = LEFT if config.preferred_side == "left" else RIGHT
         cost = cost + config.side_tolerance * ((keys[:, 2] != 0) & (keys[:, 2] != preferred))
         if previous_key is not None:

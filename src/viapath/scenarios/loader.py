@@ -62,12 +62,12 @@ def _parse(text: str, origin: str, base_dir: Path | None) -> Scenario:
         where = f" line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         problem = getattr(error, "problem", None) or str(error)
         raise ScenarioError(f"{origin}:{where}: not valid YAML: {problem}") from None
-    if data is None:
+    if data is None and not any(line.strip() and not line.lstrip().startswith("#") for line in text.splitlines()):
         raise ScenarioError(f"{origin}: the file is empty; expected a mapping of scenario fields "
                             "(name, robot, path, ...)")
     if not isinstance(data, dict):
         raise ScenarioError(f"{origin}: expected a mapping of scenario fields (name, robot, path, ...), "
-                            f"found {type(data).__name__}")
+                            f"found {'null' if data is None else type(data).__name__}")
     scenario = scenario_from_dict(data, origin)
     if base_dir is not None:
         # Replay files are relative to the scenario file, so a suite folder can move as a whole.
@@ -99,7 +99,7 @@ def format_validation_error(error: ValidationError, origin: str) -> str:
         elif item["type"] in ("too_long", "tuple_type"):
             message = "expected a list of 2 items: a point [x, y], a velocity [vx, vy], a wall [[x, y], [x, y]]"
         lines.append(f"{origin}: {location}: {message}{found_text}")
-    return "\n".join(lines)
+    return "\n".join(dict.fromkeys(lines))  # a list too short by two items gives the same line twice
 
 
 def _without_union_tags(loc: tuple) -> list:

@@ -73,7 +73,7 @@ def make_perception(mode: str, scenario, position_noise_m: float, velocity_noise
 
 def _laser_perception(cls, options: dict[str, Any]) -> Perception:
     """The scenario's ``perception.options`` as keyword arguments, with errors naming that field."""
-    known = [name for name in inspect.signature(cls).parameters if name not in ("mode",)]
+    known = list(inspect.signature(cls).parameters)
     unknown = sorted(set(options) - set(known))
     if unknown:
         raise ValueError(f"perception.options: unknown option(s) {', '.join(unknown)}; known: {', '.join(known)}")
