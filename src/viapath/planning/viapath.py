@@ -184,8 +184,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         if result is None:
             return self._fallback(observation, search)
         if self.config.keep_previous_way and self._previous_key is not None:
-            result = self._keep_previous_way(result, search, position, robot, subgoal, obstacles, radii, speeds,
-                                             nominal_index)
+            result = self._keep_previous_way(result, search, speeds, nominal_index)
         chosen, plan = result
         self._previous_key = chosen
         command = self.steer(observation, plan.target, plan.speed_mps, self.config.heading_gain)
@@ -194,8 +193,7 @@ class ViaPathPlanner(Planner, name="viapath"):
                 observation, plan.target))
         return Decision(command, plan)
 
-    def _keep_previous_way(self, result, search: "_Search", position, robot, subgoal, obstacles: Obstacles, radii,
-                           speeds, nominal_index):
+    def _keep_previous_way(self, result, search: "_Search", speeds, nominal_index):
         """Hysteresis on the constraint as well as on the cost. Under velocity noise last cycle's way
         round often looks blocked for one cycle only because its inflation grew with the estimate's
         error; the plan then flips and flips back. If last cycle's way is gone, look for it again
@@ -203,18 +201,15 @@ class ViaPathPlanner(Planner, name="viapath"):
         keep it if, with the usual hysteresis, it still costs less than the new choice."""
         chosen, plan = result
         previous = self._previous_key
-        if np.array_equal(chosen[1:], previous[1:]) or plan.chosen is None or not len(plan.candidate_costs):
-            return result  # same way, or a free straight leg at nominal speed (the paper's first choice)
-        if np.all(search.candidate_keys[:, 1:] == previous[1:], axis=1).any():
-            return result  # the previous way is still there and lost on cost: a fair switch
+        if plan.chosen is None or not len(plan.candidate_costs):
+            return result  # a free straight leg at nominal speed (the paper's first choice)
+        if _same_way(search.candidate_keys, previous).any():
+            return result  # the previous way is still there: chosen again, or a fair switch on cost
+        obstacles = search.obstacles
         if not (np.any(obstacles.position_sigma_m) or np.any(obstacles.velocity_sigma_mps)):
             return result  # no inflation to relax: the search would be the same
-        fraction = self.config.keep_previous_inflation
-        less_inflated = replace(obstacles, position_sigma_m=fraction * obstacles.position_sigma_m,
-                                velocity_sigma_mps=fraction * obstacles.velocity_sigma_mps)
-        relaxed = _Search(self, position, robot.heading_rad, subgoal, less_inflated, radii, robot.speed_mps,
-                          robot.turn_rate_radps)
-        kept = relaxed.run(speeds, nominal_index, previous, only_way=previous)
+        kept = search.with_less_inflation(self.config.keep_previous_inflation).run(
+            speeds, nominal_index, previous, only_way=previous)
         if kept is None or kept[1].chosen is None:
             return result
         kept_cost = kept[1].candidate_costs[kept[1].chosen]
@@ -359,7 +354,16 @@ class _Search:
         # A robot already outside the corridor may not go further out, but may come back.
         self.corridor_tolerance = max(0.0, float(self.path.corridor_excess(position))) + 1e-9
         self.subgoal_segments = [i for i in (index - 1, index) if i < len(planner.path.segment_lengths_m)]
+        self.combined_radii = radii
         self.candidate_keys = np.zeros((0, 4), dtype=int)  # of the complete candidates, once run() ranked them
+
+    def with_less_inflation(self, fraction: float) -> "_Search":
+        """The same cycle's search with ``fraction`` of the obstacles' uncertainty inflation."""
+        obstacles = self.obstacles
+        less_inflated = replace(obstacles, position_sigma_m=fraction * obstacles.position_sigma_m,
+                                velocity_sigma_mps=fraction * obstacles.velocity_sigma_mps)
+        return _Search(self.planner, self.position, self.heading_rad, self.subgoal, less_inflated,
+                       self.combined_radii, self.speed_mps, self.turn_rate_radps)
 
     # -- checks ----------------------------------------------------------------------------------
 
@@ -485,11 +489,11 @@ class _Search:
         cost = cost + config.side_tolerance * ((keys[:, 2] != 0) & (keys[:, 2] != preferred))
         if previous_key is not None:
             # Keep last cycle's way round (same obstacle, side, early/late), and its speed.
-            same_way = np.all(keys[:, 1:] == previous_key[1:], axis=1)
+            same_way = _same_way(keys, previous_key)
             same_speed = keys[:, 0] == previous_key[0]
             cost = cost - config.hysteresis * (same_way + 0.5 * (same_way & same_speed))
         if only_way is not None:
-            cost = np.where(np.all(keys[:, 1:] == only_way[1:], axis=1), cost, np.inf)
+            cost = np.where(_same_way(keys, only_way), cost, np.inf)
             if not np.isfinite(cost).any():
                 return None
         polylines = [self._polyline(data, node) for node in complete] if config.record_candidates else []
@@ -727,6 +731,11 @@ class _Search:
             points.append(data["position"][node])
             node = int(data["parent"][node])
         return np.array(points[::-1])
+
+
+def _same_way(keys: np.ndarray, key: np.ndarray) -> np.ndarray:
+    """Which candidate keys go the same way round as ``key`` (obstacle, side, early/late), any speed."""
+    return np.all(keys[:, 1:] == key[1:], axis=1)
 
 
 _SIDES = np.array([LEFT, RIGHT, LEFT, RIGHT])

@@ -37,10 +37,19 @@ def at_fault_collision(trace, min_speed_mps: float = 0.05, seen_for_s: float = 0
     With ``seen_for_s`` > 0, only contacts with a person present for at least that long before the
     onset count: recorded tracks (ETH/UCY) begin wherever the annotators first marked someone, at
     times right beside the robot, and no planner can avoid a person it has never seen."""
+    faults = at_fault_onsets(trace, min_speed_mps)
+    if seen_for_s > 0:
+        faults &= present_for(trace, seen_for_s)
+    return bool(np.any(faults))
+
+
+def at_fault_onsets(trace, min_speed_mps: float = 0.05) -> np.ndarray:
+    """(K-1, N): a contact with obstacle n begins in step k while the robot moves towards it (see
+    :func:`at_fault_collision`)."""
     poses = trace.robot_poses
     obstacles = trace.obstacle_positions
     if obstacles.shape[1] == 0 or len(poses) < 2:
-        return False
+        return np.zeros((max(len(poses) - 1, 0), obstacles.shape[1]), dtype=bool)
     rel_start = poses[:-1, None, :2] - obstacles[:-1]
     rel_end = poses[1:, None, :2] - obstacles[1:]
     present = np.isfinite(rel_start).all(-1) & np.isfinite(rel_end).all(-1)
@@ -52,22 +61,23 @@ def at_fault_collision(trace, min_speed_mps: float = 0.05, seen_for_s: float = 0
     velocity = speeds[:, None] * np.stack([np.cos(poses[:-1, 2]), np.sin(poses[:-1, 2])], axis=1)
     towards = np.einsum("kj,knj->kn", velocity, -rel_start) > 0.0
     onset = contact & ~np.vstack([np.zeros((1, contact.shape[1]), dtype=bool), contact[:-1]])
-    fault = onset & towards & (speeds[:, None] > min_speed_mps)
-    if seen_for_s > 0:
-        window = int(np.ceil(seen_for_s / trace.dt_s - 1e-9))
-        visible = np.isfinite(obstacles).all(-1)  # (K, N)
-        count = np.vstack([np.zeros((1, visible.shape[1]), int), np.cumsum(visible, axis=0)])
-        steps = np.arange(len(poses) - 1)
-        # present in each of the `window` steps before step k (and at k)
-        seen = (count[steps + 1] - count[np.maximum(steps + 1 - (window + 1), 0)]) == window + 1
-        fault &= seen
-    return bool(np.any(fault))
+    return onset & towards & (speeds[:, None] > min_speed_mps)
+
+
+def present_for(trace, seconds: float) -> np.ndarray:
+    """(K-1, N): obstacle n was present at step k and at each of the steps of the ``seconds`` before."""
+    window = int(np.ceil(seconds / trace.dt_s - 1e-9)) + 1  # samples spanning `seconds`
+    visible = np.isfinite(trace.obstacle_positions[:-1]).all(-1)  # (K-1, N)
+    count = np.vstack([np.zeros((1, visible.shape[1]), int), np.cumsum(visible, axis=0)])
+    ends = np.arange(1, len(visible) + 1)
+    return count[ends] - count[np.maximum(ends - window, 0)] == window
 
 
 def compute_metrics(trace) -> dict[str, Any]:
     poses = trace.robot_poses[:, :2]
     dt = trace.dt_s
     clearance = clearance_per_step(trace)
+    faults = at_fault_onsets(trace)
     min_clearance = float(clearance.min()) if len(clearance) else float("inf")
     lateral = np.abs(trace.path.lateral_deviation(poses))
     outside = trace.path.corridor_excess(poses) > 1e-6
@@ -79,8 +89,8 @@ def compute_metrics(trace) -> dict[str, Any]:
         "perception": trace.perception_mode,
         "reached_goal": bool(trace.reached_goal),
         "collision": bool(min_clearance < 0.0),
-        "at_fault_collision": at_fault_collision(trace),
-        "at_fault_collision_seen_1s": at_fault_collision(trace, seen_for_s=1.0),
+        "at_fault_collision": bool(np.any(faults)),
+        "at_fault_collision_seen_1s": bool(np.any(faults & present_for(trace, 1.0))),
         "min_clearance_m": _finite_or_none(min_clearance),
         "time_to_goal_s": float(trace.times_s[-1]) if trace.reached_goal else None,
         "path_length_m": float(np.sum(np.hypot(*np.diff(poses, axis=0).T))),
