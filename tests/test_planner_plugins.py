@@ -1,37 +1,51 @@
-"""Planners from other packages are found through the "viapath.planners" entry-point group."""
+"""Planners from other packages are found through the "viapath.planners" entry-point group; the
+registry refuses a second planner under a taken name."""
 
 from importlib.metadata import EntryPoint
 
 import pytest
 
-from viapath.planning import base
+import viapath.planning as planning
+from viapath.planning.base import PLANNERS
+from viapath.registry import DuplicateNameError
 
 
 def _fake_entry_points(*entries):
     return lambda group: [e for e in entries if e.group == group]
 
 
-def test_an_entry_point_module_registers_its_planner(monkeypatch):
+@pytest.fixture
+def fresh_registry(monkeypatch):
+    monkeypatch.setattr(PLANNERS, "_entries", dict(PLANNERS._entries))
+    monkeypatch.setattr(planning, "_plugins_loaded", False)
+
+
+def test_an_entry_point_module_registers_its_planner(monkeypatch, fresh_registry):
     source = (
         "from viapath.planning import Planner, Decision, Plan\n"
         "from viapath.observation import Command\n"
         "class Standstill(Planner, name='test-standstill'):\n"
-        "    def plan(self, observation):\n"
-        "        return Decision(Command.stop(), Plan('stop', 0.0, observation.robot.position))\n"
+        "    def decide(self, situation):\n"
+        "        return Decision(Command.stop(), Plan('stop', 0.0, situation.position))\n"
     )
-    base.available_planners()  # the built-ins register into the real registry first
     entry = EntryPoint("standstill", "viapath_test_plugin", "viapath.planners")
     monkeypatch.setattr("importlib.metadata.entry_points", _fake_entry_points(entry))
     # Loading the entry point imports the plug-in module, whose class definition registers it.
     monkeypatch.setattr(EntryPoint, "load", lambda self: exec(compile(source, self.value, "exec"), {}))
-    monkeypatch.setattr(base, "_REGISTRY", dict(base._REGISTRY))
-    assert "test-standstill" not in base._REGISTRY
-    assert "test-standstill" in base.available_planners()
+    assert "test-standstill" not in PLANNERS._entries
+    assert "test-standstill" in planning.available_planners()
 
 
-def test_a_broken_plugin_warns_and_leaves_the_built_ins(monkeypatch):
+def test_a_broken_plugin_warns_and_leaves_the_built_ins(monkeypatch, fresh_registry):
     entry = EntryPoint("broken", "no_such_module_for_viapath", "viapath.planners")
     monkeypatch.setattr("importlib.metadata.entry_points", _fake_entry_points(entry))
     with pytest.warns(UserWarning, match="broken"):
-        names = base.available_planners()
+        names = planning.available_planners()
     assert {"viapath", "dwa", "follow"} <= set(names)
+
+
+def test_a_second_planner_of_a_taken_name_is_refused(fresh_registry):
+    with pytest.raises(DuplicateNameError, match="'dwa' is already registered"):
+        class AnotherDWA(planning.Planner, name="dwa"):
+            pass
+    assert planning.planner_class("dwa").__name__ == "DWAPlanner"

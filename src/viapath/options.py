@@ -84,6 +84,37 @@ class Option:
         return (self._annotation(), Field(self.default, description=self.describe(), **limits))
 
 
+class Settings(Mapping):
+    """Every option's value, read-only, by key (``settings["k1"]``) or attribute (``settings.k1``)."""
+
+    def __init__(self, values: Mapping[str, Any]):
+        object.__setattr__(self, "_values", dict(values))
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            return self._values[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError("settings are read-only; build new ones with replace()")
+
+    def __getitem__(self, name: str) -> Any:
+        return self._values[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    def __repr__(self) -> str:
+        return f"Settings({self._values!r})"
+
+    def replace(self, **changes: Any) -> "Settings":
+        return Settings({**self._values, **changes})
+
+
 class OptionError(ValueError):
     """A value that no option accepts; ``errors`` holds (field path, message) pairs."""
 
@@ -152,7 +183,7 @@ class OptionSet:
                 nested[key] = value
         return nested
 
-    def validate(self, values: Mapping[str, Any] | None, where: str = "") -> dict[str, Any]:
+    def validate(self, values: Mapping[str, Any] | None, where: str = "") -> Settings:
         """Check ``values`` (nested as in YAML, flat, or dotted) against the set; return every option's
         value, flat. Raises :class:`OptionError` naming each bad field, prefixed by ``where``."""
         nested = self.nest(dict(values or {}))
@@ -164,7 +195,7 @@ class OptionSet:
         for option in self:
             value = getattr(getattr(model, option.group), option.name) if option.group else getattr(model, option.name)
             flat[option.name] = tuple(float(v) for v in value) if option.kind is tuple else value
-        return flat
+        return Settings(flat)
 
     def _explain(self, item: Mapping[str, Any], where: str) -> tuple[str, str]:
         location = ".".join(str(part) for part in item["loc"])

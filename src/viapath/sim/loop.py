@@ -14,7 +14,8 @@ import numpy as np
 
 from viapath.observation import Command, MotionLimits, Observation, RobotState
 from viapath.path import DesignatedPath, SubgoalPolicy
-from viapath.planning import Decision, make_planner, planner_class
+from viapath.planning import Decision, make_planner
+from viapath.scenarios.loader import planner_settings
 from viapath.sim import robot as kinematics
 from viapath.sim.metrics import compute_metrics, plan_side
 from viapath.sim.obstacles import scenario_obstacle_states
@@ -83,14 +84,6 @@ def _laser_perception(cls, options: dict[str, Any]) -> Perception:
         raise ValueError(f"perception.options: {error}") from None
 
 
-def planner_options(scenario, planner_name: str) -> dict[str, Any]:
-    cls = planner_class(planner_name)
-    spec = scenario.planner
-    if hasattr(cls, "options_from_spec"):
-        return cls.options_from_spec(spec)
-    return dict(spec.params)
-
-
 def run_episode(
     scenario,
     planner: str | None = None,
@@ -113,8 +106,7 @@ def run_episode(
     limits = MotionLimits(**spec.limits.model_dump())
     subgoal_policy = SubgoalPolicy(**scenario.subgoals.model_dump())
     planner_name = planner or scenario.planner.name
-    options = planner_options(scenario, planner_name)
-    options.update(planner_overrides or {})
+    options = {**planner_settings(scenario, planner_name), **(planner_overrides or {})}
     the_planner = make_planner(planner_name, path, nominal_speed_mps=spec.speed, limits=limits,
                                robot_radius_m=spec.radius, subgoal_policy=subgoal_policy, **options)
     mode = perception or scenario.perception.mode
