@@ -152,7 +152,7 @@ class OptionSet:
         return self._options[name]
 
     def __add__(self, other: "OptionSet") -> "OptionSet":
-        return OptionSet([*self, *other], owner=self.owner or other.owner)
+        return OptionSet([*self, *other], owner=other.owner or self.owner)
 
     @property
     def names(self) -> list[str]:
@@ -201,7 +201,7 @@ class OptionSet:
         location = ".".join(str(part) for part in item["loc"])
         field = f"{where}.{location}" if where else location
         if item["type"] == "extra_forbidden":
-            owner = f"{self.owner} has" if self.owner else "known"
+            owner = f"planner {self.owner!r} has" if self.owner else "known"
             return field, (f"unknown option {item['loc'][-1]!r}; {owner} options: "
                            f"{', '.join(option.path for option in self) or 'none'}")
         found = item.get("input")

@@ -51,6 +51,11 @@ class Registry(Generic[T]):
         self._load()
         return sorted(self._entries)
 
+    def ordered(self) -> list[str]:
+        """The names in the order they were registered."""
+        self._load()
+        return list(self._entries)
+
     def get(self, name: str) -> T:
         self._load()
         try:

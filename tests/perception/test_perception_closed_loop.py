@@ -11,8 +11,8 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
-sim = pytest.importorskip("viapath.sim.loop", reason="simulator loop not available")
-from viapath.scenarios import load_scenario  # noqa: E402
+from viapath.scenarios import load_scenario
+from viapath.sim import loop as sim
 
 
 @lru_cache(maxsize=None)

@@ -6,7 +6,7 @@ into one message naming the file, the field path, what was expected and what was
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Any, Union
 
 from pydantic import (
     BaseModel,
@@ -19,6 +19,8 @@ from pydantic import (
     field_validator,
     model_validator,
 )
+
+from viapath.perception.modes import PERCEPTION_MODES
 
 Point = tuple[float, float]
 Segment = tuple[Point, Point]
@@ -147,10 +149,17 @@ class PlannerSpec(BaseModel):
 
 
 class PerceptionSpec(_Strict):
-    mode: Literal["oracle", "laser"] = "oracle"
+    mode: str = "oracle"
     position_noise_m: NonNegativeFloat = 0.0
     velocity_noise_mps: NonNegativeFloat = 0.0
     options: dict[str, Any] = Field(default_factory=dict, description="options for the laser chain")
+
+    @field_validator("mode")
+    @classmethod
+    def _known_mode(cls, value: str) -> str:
+        if value not in PERCEPTION_MODES:
+            raise ValueError("expected " + " or ".join(repr(name) for name in PERCEPTION_MODES.ordered()))
+        return value
 
 
 class SubgoalSpec(_Strict):

@@ -57,4 +57,3 @@ _OWN = [
 ]
 
 VIAPATH_OPTIONS = COMMON_OPTIONS + OptionSet(_OWN, owner="viapath")
-VIAPATH_OPTIONS.owner = "viapath"
