@@ -19,6 +19,10 @@ Beyond the paper (DESIGN §2 and §5.2 future work):
   ``slow_times_s``, then on at the nominal speed or faster. Letting a crossing person pass is then a
   straight candidate, not a sharp turn behind them. The leg after waiting is checked to its end, not
   to the horizon: waiting is for letting someone pass, not for pushing a collision past the horizon.
+  The slow leg itself is checked with ``slow_leg_inflation`` of the uncertainty inflation: at a tenth
+  of a metre per second the robot stops within millimetres, the next cycles correct the forecast, and
+  the shield (DESIGN §7) keeps it passively safe; with the full cone a freshly tracked crossing person
+  made the robot wait where the paper slows down (laser paper-side).
 * **Corners**: when the straight leg to the subgoal would cut a corner of the corridor (the robot
   was pushed back, or a blocked subgoal was given up), the path's own corners between the robot and
   the subgoal become via points: the way back along the designated path.
@@ -157,8 +161,9 @@ class RootLegs:
         return bool(self.free[self.nominal_index])
 
 
-def grow(checks: LegChecks, roots: RootLegs, config) -> Candidates | None:
-    """Every complete candidate of the cycle (straight, slow/wait, corners, via-point chains)."""
+def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | None = None) -> Candidates | None:
+    """Every complete candidate of the cycle (straight, slow/wait, corners, via-point chains).
+    ``slow_checks`` (default ``checks``) checks the first, slow leg of the slow/wait candidates."""
     speeds = roots.speeds
     n_speeds = len(speeds)
     tree = _Tree()
@@ -169,7 +174,7 @@ def grow(checks: LegChecks, roots: RootLegs, config) -> Candidates | None:
     )
     leaves, goal_length = [frontier[roots.free]], [roots.lengths[roots.free]]
     if config.slow_times_s and len(checks.obstacles):
-        slowing = _slow_candidates(checks, tree, speeds, roots.nominal_index, config)
+        slowing = _slow_candidates(checks, slow_checks or checks, tree, speeds, roots.nominal_index, config)
         if slowing is not None:
             leaves.append(slowing[0])
             goal_length.append(slowing[1])
@@ -295,7 +300,8 @@ def _corner_nodes(checks: LegChecks, tree: _Tree, speeds: np.ndarray) -> np.ndar
     )
 
 
-def _slow_candidates(checks: LegChecks, tree: _Tree, speeds: np.ndarray, nominal_index: int, config):
+def _slow_candidates(checks: LegChecks, slow_checks: LegChecks, tree: _Tree, speeds: np.ndarray, nominal_index: int,
+                     config):
     """Stand still or drive slower than nominal towards the subgoal for each of ``slow_times_s``,
     then on at the nominal speed or faster. Returns (leaf node indices, goal leg lengths) or None."""
     if not checks.goal_legs_inside(checks.position[None])[0]:
@@ -310,7 +316,7 @@ def _slow_candidates(checks: LegChecks, tree: _Tree, speeds: np.ndarray, nominal
     ok = slow_speed * duration < np.hypot(*offset) - 1e-6
     duration, slow_speed = duration[ok], slow_speed[ok]
     starts = np.broadcast_to(checks.position, (len(duration), 2))
-    free = checks.legs_free(starts, np.zeros(len(duration)), direction * slow_speed[:, None], duration)
+    free = slow_checks.legs_free(starts, np.zeros(len(duration)), direction * slow_speed[:, None], duration)
     if not free.any():
         return None
     duration, slow_speed = duration[free], slow_speed[free]

@@ -71,11 +71,15 @@ class LegChecks:
             corridor_check_spacing_m=config.corridor_check_spacing_m,
         )
 
-    def with_less_inflation(self, fraction: float, robot_radius_m: float, settings) -> "LegChecks":
-        """The same checks with ``fraction`` of the obstacles' uncertainty inflation."""
+    def with_less_inflation(self, fraction: float, robot_radius_m: float, settings,
+                            cap_too: bool = False) -> "LegChecks":
+        """The same checks with ``fraction`` of the obstacles' uncertainty inflation (σ terms; with
+        ``cap_too`` the cap on the cone's growth as well)."""
         obstacles = self.obstacles
         less = replace(obstacles, position_sigma_m=fraction * obstacles.position_sigma_m,
                        velocity_sigma_mps=fraction * obstacles.velocity_sigma_mps)
+        if cap_too:
+            settings = {**settings, "max_inflation_m": fraction * settings["max_inflation_m"]}
         inflation = Inflation.of(less, robot_radius_m, settings)
         return replace(self, obstacles=less, check_radii=inflation.check_radii, growth=inflation.growth,
                        growth_until_s=inflation.growth_until_s,

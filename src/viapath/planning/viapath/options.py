@@ -37,6 +37,8 @@ _OWN = [
     Option("keep_previous_inflation", 0.25, "... with this fraction of the uncertainty inflation", minimum=0.0,
            maximum=1.0),
     # Slowing down and waiting.
+    Option("slow_leg_inflation", 0.25, "fraction of the uncertainty inflation the first, slow leg of a slow/wait "
+           "candidate is checked with", minimum=0.0, maximum=1.0),
     Option("slow_times_s", (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0), "how long a candidate may first stand or drive "
            "slower than nominal", "s", minimum=0.0, exclusive_minimum=True),
     # Motion limits: roll-outs of the first leg.
@@ -52,6 +54,12 @@ _OWN = [
     # No free candidate.
     Option("escape_s", 3.0, "how long each escape command is rolled out", "s", minimum=0.0, exclusive_minimum=True),
     Option("escape_dt_s", 0.1, "step of the escape roll-outs", "s", minimum=0.0, exclusive_minimum=True),
+    Option("calm_escape", True, "escape no faster than the top of the speed set, without flipping from one "
+           "cycle to the next"),
+    Option("escape_continuity_s", 0.5, "with calm_escape: time to contact an escape command pays for being "
+           "far from last cycle's", "s", minimum=0.0),
+    Option("escape_max_excess_m", 0.5, "an escape may take the robot at most this far outside the corridor "
+           "(standing is always allowed)", "m", minimum=0.0),
     # Display.
     Option("record_candidates", False, "keep every candidate's polyline in the plan (for display)"),
 ]

@@ -60,10 +60,12 @@ class ViaPathPlanner(Planner, name="viapath"):
         self.config = self.settings
         self.critics = critics_for(self.config)
         self._previous: Choice | None = None
+        self._previous_escape: Command | None = None  # last cycle's command, if it escaped
 
     def reset(self) -> None:
         super().reset()
         self._previous = None
+        self._previous_escape = None
 
     # -- the recipe ----------------------------------------------------------------------------------
 
@@ -73,7 +75,10 @@ class ViaPathPlanner(Planner, name="viapath"):
         chosen = self._choose(checks, speeds, nominal_index, self._previous)
         if chosen is None:
             self._previous = None
-            return stop_or_escape(checks, self.limits, self.config)
+            decision = stop_or_escape(checks, self.limits, self.config, self._previous_escape)
+            self._previous_escape = decision.command if decision.plan.status == "escape" else None
+            return decision
+        self._previous_escape = None
         if self.config.keep_previous_way and self._previous is not None:
             chosen = self._keep_previous_way(chosen, checks, speeds, nominal_index)
         self._previous = chosen.choice
@@ -106,7 +111,7 @@ class ViaPathPlanner(Planner, name="viapath"):
                         subgoal_index=checks.subgoal_index, candidate_count=1, chosen=0)
             if can_follow(plan, checks, self.limits, self.config):
                 return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
-        candidates = grow(checks, roots, self.config)
+        candidates = grow(checks, roots, self.config, self._slow_checks(checks))
         if candidates is None:
             return None
         costs = score(candidates, self.critics, Context(checks.heading_rad, self.nominal_speed_mps, previous))
@@ -140,6 +145,12 @@ class ViaPathPlanner(Planner, name="viapath"):
         line = candidates.polyline(k)
         return Plan("avoid" if len(line) > 2 else "straight", float(candidates.speed_mps[k]), line[1].copy(),
                     via_points=line[1:-1].copy(), waypoints=line, **common)
+
+    def _slow_checks(self, checks: LegChecks) -> LegChecks:
+        fraction = self.config.slow_leg_inflation
+        if fraction >= 1.0 or not (np.any(checks.obstacles.position_sigma_m) or np.any(checks.obstacles.velocity_sigma_mps)):
+            return checks
+        return checks.with_less_inflation(fraction, self.robot_radius_m, self.settings, cap_too=True)
 
     def _keep_previous_way(self, chosen: _Chosen, checks: LegChecks, speeds, nominal_index: int) -> _Chosen:
         previous = self._previous
