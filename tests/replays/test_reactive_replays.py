@@ -212,3 +212,19 @@ def test_real_people_give_way_to_a_robot_at_rest():
         hits[True] += run_episode(Scenario.model_validate(b), planner="stop").metrics["collision"]
     assert hits[False] >= 3
     assert hits[True] <= 1
+
+
+@needs_data
+def test_cli_writes_the_reactive_suite_and_the_report_keeps_the_modes_apart(tmp_path):
+    from typer.testing import CliRunner
+
+    from viapath.bench.runner import family_of
+    from viapath.cli import app
+    from viapath.scenarios import load_scenario
+
+    result = CliRunner().invoke(app, ["suite", "eth-ucy-react", "--count", "2", "--seed", "0", "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    files = sorted(tmp_path.glob("*.yaml"))
+    assert [f.stem for f in files] == ["eth-ucy-react-eth-0000", "eth-ucy-react-hotel-0001"]
+    assert load_scenario(files[0]).obstacles[0].replay.react is True
+    assert family_of(files[0].stem) == "eth-ucy-react-eth" != family_of("eth-ucy-eth-0000")
