@@ -114,6 +114,7 @@ class ReplaySpec(_Strict):
     start_s: NonNegativeFloat = 0.0
     offset: Point = (0.0, 0.0)
     radius: PositiveFloat = 0.25
+    react: bool = False  # people give way to the robot (viapath.sim.reactive)
 
 
 class ReplayItem(_Strict):

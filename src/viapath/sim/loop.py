@@ -20,6 +20,7 @@ from viapath.sim.metrics import compute_metrics, plan_side
 from viapath.sim.obstacles import scenario_obstacle_states
 from viapath.perception.base import WorldSnapshot
 from viapath.perception.modes import make_perception
+from viapath.sim.reactive import obstacle_motion
 
 
 @dataclass
@@ -74,7 +75,9 @@ def run_episode(
     dt = scenario.dt_s
     n_steps = int(round(scenario.duration_s / dt))
     times = np.arange(n_steps + 1) * dt
-    positions, velocities, radii = scenario_obstacle_states(scenario, times)
+    motion = obstacle_motion(scenario, times)  # None unless some replayed person reacts to the robot
+    positions, velocities, radii = (scenario_obstacle_states(scenario, times) if motion is None
+                                    else (motion.positions, motion.velocities, motion.radii))
     walls = np.asarray(scenario.walls, dtype=float).reshape(-1, 2, 2)
 
     path = DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths())
@@ -129,6 +132,8 @@ def run_episode(
         rows["status"].append(decision.plan.status)
         rows["via"].append(np.asarray(decision.plan.via_points, dtype=float).reshape(-1, 2))
         rows["side"].append(plan_side(decision.plan.waypoints))
+        if motion is not None:  # people move to step k + 1 seeing the robot at step k (rows filled in place)
+            motion.step(state.position, state.speed_mps * np.array([np.cos(state.heading_rad), np.sin(state.heading_rad)]))
         state = kinematics.step(state, command, limits, dt)
 
     n = len(rows["pose"])
