@@ -8,7 +8,7 @@ from __future__ import annotations
 import inspect
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -19,6 +19,7 @@ from viapath.sim import robot as kinematics
 from viapath.sim.metrics import compute_metrics, plan_side
 from viapath.sim.obstacles import scenario_obstacle_states
 from viapath.sim.perception import OraclePerception, Perception, WorldSnapshot
+from viapath.sim.step_record import StepRecord
 
 
 @dataclass
@@ -100,8 +101,11 @@ def run_episode(
     velocity_noise_mps: float | None = None,
     record_perceived: bool = False,
     planner_overrides: dict[str, Any] | None = None,
+    on_step: Callable[[StepRecord], None] | None = None,
 ) -> Episode:
-    """Run one scenario to the goal or to ``duration_s``; returns the trace and its metrics."""
+    """Run one scenario to the goal or to ``duration_s``; returns the trace and its metrics.
+
+    ``on_step`` (views, recorders) is called once per planning cycle with a :class:`StepRecord`."""
     dt = scenario.dt_s
     n_steps = int(round(scenario.duration_s / dt))
     times = np.arange(n_steps + 1) * dt
@@ -162,6 +166,9 @@ def run_episode(
         rows["status"].append(decision.plan.status)
         rows["via"].append(np.asarray(decision.plan.via_points, dtype=float).reshape(-1, 2))
         rows["side"].append(plan_side(decision.plan.waypoints))
+        if on_step is not None:
+            on_step(StepRecord(k, float(times[k]), state, observation, decision, rows["plan_ms"][-1], world,
+                               getattr(sensing, "last_scans", None) or None, sensing, the_planner))
         state = kinematics.step(state, command, limits, dt)
 
     n = len(rows["pose"])
