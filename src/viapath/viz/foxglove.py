@@ -156,6 +156,11 @@ class FoxglovePublisher:
 
     def __call__(self, record) -> CycleScene:
         """The ``on_step`` callback of :func:`viapath.sim.loop.run_episode`."""
+        scene = self.scene_of(record)
+        self.publish(scene)
+        return scene
+
+    def scene_of(self, record) -> CycleScene:
         if self.builder is None:
             settings = self.settings or ForecastSettings.from_planner(record.planner)
             self.builder = SceneBuilder(self.path, self.robot_radius_m, settings)
@@ -167,15 +172,16 @@ class FoxglovePublisher:
             present = np.isfinite(world.obstacle_positions).all(axis=1)
             truth = Obstacles(world.obstacle_positions[present], world.obstacle_velocities[present],
                               world.obstacle_radii_m[present], ids=np.flatnonzero(present))
-        scene = self.builder.build(record.step, record.time_s, (state.x, state.y, state.heading_rad), state.speed_mps,
-                                   state.turn_rate_radps, record.observation, record.decision, record.plan_time_ms,
-                                   record.perception if record.scans is not None else None, truth)
-        self.publish(scene)
-        return scene
+        return self.builder.build(record.step, record.time_s, (state.x, state.y, state.heading_rad), state.speed_mps,
+                                  state.turn_rate_radps, record.observation, record.decision, record.plan_time_ms,
+                                  record.perception if record.scans is not None else None, truth)
 
-    def publish(self, scene: CycleScene) -> None:
+    def open_channels(self, scene: CycleScene) -> None:
         if not self.channels:
             self._open_channels(scene)
+
+    def publish(self, scene: CycleScene) -> None:
+        self.open_channels(scene)
         ns = int(round(scene.time_s * 1e9))
         stamp = self.m.Timestamp(ns // 1_000_000_000, ns % 1_000_000_000)
         ch = self.channels
@@ -501,6 +507,8 @@ class Views:
         self._clock_start: float | None = None
         if self.mcap is not None or live:
             _foxglove()
+        if live and self.port != 0:
+            _check_port_free(host, self.port)
 
     @property
     def active(self) -> bool:
@@ -517,31 +525,40 @@ class Views:
         try:
             if self.mcap is not None:
                 self.writer = foxglove.open_mcap(self.mcap, allow_overwrite=self.force, context=context)
-            if self.live:
-                try:
-                    self.server = foxglove.start_server(name=f"viapath {self.scenario.name}", host=self.host,
-                                                        port=self.port, context=context)
-                except Exception as error:  # the SDK raises its own error type for a busy port
-                    raise ViewError(f"--live: cannot serve on {self.host}:{self.port} ({error})") from None
-                self.announce(f"live view: ws://{self.host}:{self.server.port} (Foxglove: open connection, "
-                              "Foxglove WebSocket)")
         except BaseException:
             self._close()
             raise
         path = DesignatedPath(self.scenario.path.waypoints, half_widths_m=self.scenario.path.widths())
+        self.context = context
         self.publisher = FoxglovePublisher(context, path, self.scenario.robot.radius, self.settings)
         self.planner_overrides = display_overrides(self.scenario, self.planner_name)
         self.on_step = self._paced if self.live else self.publisher
         return self
 
+    def _start_server(self) -> None:
+        import foxglove
+        from foxglove.websocket import Capability
+
+        try:
+            self.server = foxglove.start_server(name=f"viapath {self.scenario.name}", host=self.host, port=self.port,
+                                                context=self.context, capabilities=[Capability.Time])
+        except Exception as error:  # the SDK raises its own error type for a busy port
+            raise ViewError(f"--live: cannot serve on {self.host}:{self.port} ({error})") from None
+        self.announce(f"live view: ws://{self.host}:{self.server.port} (Foxglove: Open connection, Foxglove WebSocket)")
+
     def _paced(self, record) -> None:
-        """Publish, then hold the simulation so that it runs ``rate`` times as fast as the wall clock."""
+        """Publish, then hold the simulation so that it runs ``rate`` times as fast as the wall clock.
+        The server starts at the first cycle, once every channel exists, so a client that connects
+        is told of all of them at once."""
+        scene = self.publisher.scene_of(record)
+        if self.server is None:
+            self.publisher.open_channels(scene)
+            self._start_server()
         now = time.perf_counter()
         if self._clock_start is None:
             self._clock_start = now - record.time_s / self.rate
-        self.publisher(record)
-        if self.server is not None:
-            self.server.broadcast_time(int(round(record.time_s * 1e9)))
+        self.publisher.publish(scene)
+        self.server.broadcast_time(int(round(record.time_s * 1e9)))
         wait = self._clock_start + (record.time_s + self.scenario.dt_s) / self.rate - time.perf_counter()
         if wait > 0:
             time.sleep(wait)
@@ -556,6 +573,17 @@ class Views:
         if self.server is not None:
             self.server.stop()
             self.server = None
+
+
+def _check_port_free(host: str, port: int) -> None:
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        try:
+            probe.bind((host, port))
+        except OSError as error:
+            raise ViewError(f"--port {port}: {host}:{port} is in use ({error.strerror or error}); "
+                            "give another port, or 0 for any free one") from None
 
 
 def record_episode(scenario, file: Path | str, planner: str | None = None, force: bool = False, **run_kwargs):
@@ -653,3 +681,9 @@ def open_views(scenario, planner_name: str, mcap: Path | str | None = None, forc
     if mcap is None and not live:
         return _NoViews()
     return Views(scenario, planner_name, mcap=mcap, force=force, live=live, rate=rate, port=port, announce=announce)
+
+
+def check_failures_option(folder: Path | str) -> Path:
+    """``viapath bench --mcap-failures DIR``: the extra is installed and DIR can take files."""
+    _foxglove()
+    return check_output_folder(folder)
