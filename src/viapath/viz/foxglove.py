@@ -122,7 +122,7 @@ class FoxglovePublisher:
     """Logs one cycle's scene on a foxglove ``Context`` (whatever sinks it has: MCAP, WebSocket)."""
 
     def __init__(self, context, path, robot_radius_m: float, settings: ForecastSettings | None = None,
-                 xyt_segments: int = 20):
+                 xyt_segments: int = 16):
         self.fg = _foxglove()
         from foxglove import messages
 
@@ -135,6 +135,7 @@ class FoxglovePublisher:
         self.xyt_segments = int(xyt_segments)
         self.channels: dict[str, Any] = {}
         self.cycles = 0
+        self._setup_constants()
 
     # channels are made at the first cycle, when the scanners are known
     def _open_channels(self, scene: CycleScene) -> None:
@@ -186,56 +187,76 @@ class FoxglovePublisher:
         stamp = self.m.Timestamp(ns // 1_000_000_000, ns % 1_000_000_000)
         ch = self.channels
         ch[TF].log(self._transforms(scene, stamp), log_time=ns)
-        ch[FOOTPRINT].log(self._update(stamp, BASE, "robot", self._footprint(scene)), log_time=ns)
+        ch[FOOTPRINT].log(self._footprint(scene), log_time=ns)
         for scanner in scene.scanners:
             ch[scan_topic(scanner.name)].log(self._scan(scanner, stamp), log_time=ns)
         if scene.scanners:
-            ch[BLIND].log(self._update(stamp, BASE, "blind", self._blind(scene)), log_time=ns)
-            ch[DETECTIONS].log(self._update(stamp, WORLD, "detections", self._detections(scene)), log_time=ns)
+            ch[BLIND].log(self._blind(scene), log_time=ns)
+            ch[DETECTIONS].log(self._detections(scene, stamp), log_time=ns)
         ch[TRACKS].log(self._tracks(scene, stamp), log_time=ns)
-        ch[PATH].log(self._update(stamp, WORLD, "path", self._path(scene)), log_time=ns)
-        ch[CANDIDATES].log(self._update(stamp, WORLD, "candidates", self._candidates(scene)), log_time=ns)
-        ch[CHOSEN].log(self._update(stamp, WORLD, "chosen", self._chosen(scene)), log_time=ns)
-        ch[COSTS].log(json.dumps(costs_message(scene), allow_nan=False), log_time=ns)
+        ch[PATH].log(self._path(scene), log_time=ns)
+        ch[CANDIDATES].log(self._candidates(scene, stamp), log_time=ns)
+        ch[CHOSEN].log(self._chosen(scene, stamp), log_time=ns)
+        ch[COSTS].log(json.dumps(costs_message(scene), allow_nan=False).encode(), log_time=ns)
         ch[XYT].log(self._xyt(scene, stamp), log_time=ns)
-        ch[METRICS].log(json.dumps(metrics_message(scene), allow_nan=False), log_time=ns)
+        ch[METRICS].log(json.dumps(metrics_message(scene), allow_nan=False).encode(), log_time=ns)
         self.cycles += 1
 
     # -- pieces --------------------------------------------------------------------------------
+    # Built for speed (issue 14: writing must cost little beside the run): constant colours and
+    # poses are made once, content that does not change (footprint, blind region, path for a given
+    # subgoal) is one cached message, and meshes share their vertices through indices.
+    def _setup_constants(self) -> None:
+        m = self.m
+        C = lambda r, g, b, a=1.0: m.Color(r=r, g=g, b=b, a=a)  # noqa: E731
+        self.colours = {
+            "robot": C(0.1, 0.3, 0.9), "robot_fill": C(0.1, 0.3, 0.9, 0.35), "blind": C(0.3, 0.3, 0.3, 0.8),
+            "grey": C(0.4, 0.4, 0.4), "detection": C(1.0, 0.55, 0.0, 0.7), "track": C(0.85, 0.15, 0.15, 0.6),
+            "track_sigma": C(0.85, 0.15, 0.15, 0.2), "track_text": C(0.5, 0.0, 0.0), "arrow": C(0.6, 0.0, 0.0),
+            "path": C(0.2, 0.2, 0.2), "corridor": C(0.2, 0.6, 0.2, 0.7), "subgoal": C(0.9, 0.7, 0.0),
+            "subgoal_text": C(0.5, 0.4, 0.0), "chosen": C(0.0, 0.45, 1.0), "chosen_text": C(0.0, 0.2, 0.6),
+            "via": C(0.0, 0.0, 0.0), "mesh": C(0.9, 0.2, 0.2, 0.35), "ring": C(0.7, 0.1, 0.1, 0.9),
+            "axis": C(0.5, 0.0, 0.0), "time_axis": C(0.4, 0.4, 0.4, 0.6),
+        }
+        self.identity = self._pose()
+        self.delete_all = m.SceneEntityDeletion(type=m.SceneEntityDeletionType.All)
+        self.static: dict[Any, Any] = {}
+        self.candidate_colours: dict[int, Any] = {}
+
     def _p(self, x, y, z=0.0):
         return self.m.Point3(x=float(x), y=float(y), z=float(z))
 
-    def _points(self, xy: np.ndarray, z: float | np.ndarray = 0.0) -> list:
-        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
-        zs = np.broadcast_to(np.asarray(z, dtype=float), (len(xy),))
+    def _points(self, xy: np.ndarray, z: float = 0.0) -> list:
         P = self.m.Point3
-        return [P(x=a, y=b, z=c) for (a, b), c in zip(xy.tolist(), zs.tolist())]
+        return [P(x=a, y=b, z=z) for a, b in np.asarray(xy, dtype=float).reshape(-1, 2).tolist()]
 
     def _points3(self, xyz: np.ndarray) -> list:
         P = self.m.Point3
         return [P(x=a, y=b, z=c) for a, b, c in np.asarray(xyz, dtype=float).reshape(-1, 3).tolist()]
-
-    def _colour(self, r, g, b, a=1.0):
-        return self.m.Color(r=float(r), g=float(g), b=float(b), a=float(a))
 
     def _pose(self, x=0.0, y=0.0, z=0.0, yaw=0.0):
         m = self.m
         return m.Pose(position=m.Vector3(x=float(x), y=float(y), z=float(z)),
                       orientation=m.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)))
 
-    def _line(self, points: list, colour, thickness=0.03, loop=False, kind=None):
+    def _line(self, points: list, colour, thickness=0.03, loop=False):
         m = self.m
-        line_type = kind if kind is not None else (m.LinePrimitiveLineType.LineLoop if loop
-                                                   else m.LinePrimitiveLineType.LineStrip)
-        return m.LinePrimitive(type=line_type, pose=self._pose(), thickness=thickness, points=points, color=colour)
+        kind = m.LinePrimitiveLineType.LineLoop if loop else m.LinePrimitiveLineType.LineStrip
+        return m.LinePrimitive(type=kind, pose=self.identity, thickness=thickness, points=points, color=colour)
 
-    def _entity(self, stamp, frame, id_, **primitives):
-        return self.m.SceneEntity(timestamp=stamp, frame_id=frame, id=id_, **primitives)
-
-    def _update(self, stamp, frame, id_, primitives: dict):
+    def _disc(self, x, y, radius, colour, z=0.0, height=0.01):
         m = self.m
-        deletion = m.SceneEntityDeletion(timestamp=stamp, type=m.SceneEntityDeletionType.All)
-        return m.SceneUpdate(deletions=[deletion], entities=[self._entity(stamp, frame, id_, **primitives)])
+        return m.CylinderPrimitive(pose=self._pose(x, y, z + 0.5 * height),
+                                   size=m.Vector3(x=2 * radius, y=2 * radius, z=height), color=colour)
+
+    def _text(self, x, y, z, text, colour, size=12.0):
+        return self.m.TextPrimitive(pose=self._pose(x, y, z), billboard=True, font_size=size, scale_invariant=True,
+                                    color=colour, text=text)
+
+    def _update(self, stamp, frame, id_, primitives: dict, frame_locked: bool = False):
+        m = self.m
+        entity = m.SceneEntity(timestamp=stamp, frame_id=frame, id=id_, frame_locked=frame_locked, **primitives)
+        return m.SceneUpdate(deletions=[self.delete_all], entities=[entity])
 
     def _transforms(self, scene: CycleScene, stamp):
         m = self.m
@@ -249,141 +270,146 @@ class FoxglovePublisher:
         transforms += [tf(BASE, scanner_frame(s.name), *s.mount_pose) for s in scene.scanners]
         return m.FrameTransforms(transforms=transforms)
 
-    def _footprint(self, scene: CycleScene) -> dict:
-        m = self.m
-        r = scene.robot_radius_m
-        return {
-            "lines": [self._line(self._points(scene.footprint()), self._colour(0.1, 0.3, 0.9), 0.03)],
-            "cylinders": [m.CylinderPrimitive(pose=self._pose(z=0.005), size=m.Vector3(x=2 * r, y=2 * r, z=0.01),
-                                              color=self._colour(0.1, 0.3, 0.9, 0.35))],
-            "arrows": [m.ArrowPrimitive(pose=self._pose(z=0.02), shaft_length=0.8 * r, shaft_diameter=0.03,
-                                        head_length=0.12, head_diameter=0.08, color=self._colour(0.1, 0.3, 0.9))],
-        }
+    def _footprint(self, scene: CycleScene):
+        """The robot's disc and heading in the base frame: the same every cycle (frame-locked)."""
+        if "footprint" not in self.static:
+            m, c, r = self.m, self.colours, scene.robot_radius_m
+            self.static["footprint"] = self._update(None, BASE, "robot", {
+                "lines": [self._line(self._points(scene.footprint()), c["robot"], 0.03)],
+                "cylinders": [self._disc(0.0, 0.0, r, c["robot_fill"])],
+                "arrows": [m.ArrowPrimitive(pose=self._pose(z=0.02), shaft_length=0.8 * r, shaft_diameter=0.03,
+                                            head_length=0.12, head_diameter=0.08, color=c["robot"])],
+            }, frame_locked=True)
+        return self.static["footprint"]
 
     def _scan(self, scanner, stamp):
         ranges = np.asarray(scanner.ranges_m, dtype=float)
         valid = np.isfinite(ranges) & (ranges >= max(scanner.range_min_m, 1e-9)) & (ranges <= scanner.range_max_m)
         ranges = np.where(valid, ranges, np.nan)
-        return self.m.LaserScan(timestamp=stamp, frame_id=scanner_frame(scanner.name), pose=self._pose(),
+        return self.m.LaserScan(timestamp=stamp, frame_id=scanner_frame(scanner.name), pose=self.identity,
                                 start_angle=scanner.angle_min_rad, end_angle=scanner.angle_max_rad,
                                 ranges=ranges.tolist())
 
-    def _blind(self, scene: CycleScene) -> dict:
-        m = self.m
-        if not len(scene.blind_polygon_world):
-            return {}
-        # The polygon is drawn in the robot frame: undo the robot pose.
-        x, y, heading = scene.robot_pose
-        c, s = math.cos(-heading), math.sin(-heading)
-        rel = scene.blind_polygon_world - [x, y]
-        local = np.column_stack([c * rel[:, 0] - s * rel[:, 1], s * rel[:, 0] + c * rel[:, 1]])
-        texts = [m.TextPrimitive(pose=self._pose(*(0.3 * np.array([math.cos(0.5 * (a + b)), math.sin(0.5 * (a + b))])),
-                                                   0.05), billboard=True, font_size=12, scale_invariant=True,
-                                 color=self._colour(0.4, 0.4, 0.4), text="blind")
-                 for a, b in scene.blind_sectors_rad]
-        return {"lines": [self._line(self._points(local), self._colour(0.3, 0.3, 0.3, 0.8), 0.015, loop=True)],
-                "texts": texts}
+    def _blind(self, scene: CycleScene):
+        """What no scanner sees, in the base frame: fixed by the mounts, so one cached message."""
+        if "blind" not in self.static:
+            c = self.colours
+            primitives: dict[str, list] = {}
+            if len(scene.blind_polygon_world):
+                # The polygon is given in the world at the robot's pose: bring it into the robot frame.
+                x, y, heading = scene.robot_pose
+                cos, sin = math.cos(-heading), math.sin(-heading)
+                rel = scene.blind_polygon_world - [x, y]
+                local = np.column_stack([cos * rel[:, 0] - sin * rel[:, 1], sin * rel[:, 0] + cos * rel[:, 1]])
+                primitives["lines"] = [self._line(self._points(local, 0.01), c["blind"], 0.015, loop=True)]
+                primitives["texts"] = [self._text(0.35 * math.cos(0.5 * (a + b)), 0.35 * math.sin(0.5 * (a + b)), 0.05,
+                                                  "blind", c["grey"], 11.0) for a, b in scene.blind_sectors_rad]
+            self.static["blind"] = self._update(None, BASE, "blind", primitives, frame_locked=True)
+        return self.static["blind"]
 
-    def _detections(self, scene: CycleScene) -> dict:
-        lines = [self._line(self._points(circle_polygon(c, r, 16)), self._colour(1.0, 0.55, 0.0), 0.02)
-                 for c, r in zip(scene.detections_world, scene.detection_radii_m)]
-        return {"lines": lines}
+    def _detections(self, scene: CycleScene, stamp):
+        colour = self.colours["detection"]
+        discs = [self._disc(cx, cy, r, colour, height=0.02)
+                 for (cx, cy), r in zip(scene.detections_world.tolist(), scene.detection_radii_m.tolist())]
+        return self._update(stamp, WORLD, "detections", {"cylinders": discs})
 
     def _tracks(self, scene: CycleScene, stamp):
-        m = self.m
+        m, c = self.m, self.colours
         tracks = scene.tracks
         k = self.builder.settings.uncertainty_sigmas if self.builder else 2.0
         entities = []
-        for i in range(len(tracks)):
-            (px, py), (vx, vy) = tracks.positions[i], tracks.velocities[i]
-            r, speed = float(tracks.radii_m[i]), float(math.hypot(vx, vy))
-            sigma = float(tracks.position_sigma_m[i])
+        for (px, py), (vx, vy), r, sp, sv, track in zip(tracks.positions.tolist(), tracks.velocities.tolist(),
+                                                        tracks.radii_m.tolist(), tracks.position_sigma_m.tolist(),
+                                                        tracks.velocity_sigma_mps.tolist(), tracks.ids.tolist()):
+            speed = math.hypot(vx, vy)
             primitives: dict[str, list] = {
-                "cylinders": [m.CylinderPrimitive(pose=self._pose(px, py, 0.05), size=m.Vector3(x=2 * r, y=2 * r, z=0.1),
-                                                  color=self._colour(0.85, 0.15, 0.15, 0.6))],
-                "lines": [self._line(self._points(circle_polygon((px, py), r + k * sigma, 24)),
-                                     self._colour(0.85, 0.15, 0.15, 0.5), 0.01)],
-                "texts": [m.TextPrimitive(pose=self._pose(px, py, 0.3), billboard=True, font_size=12,
-                                          scale_invariant=True, color=self._colour(0.5, 0.0, 0.0),
-                                          text=f"{int(tracks.ids[i])}: {speed:.2f} m/s ±{float(tracks.velocity_sigma_mps[i]):.2f}")],
+                "cylinders": [self._disc(px, py, r, c["track"], height=0.1),
+                              self._disc(px, py, r + k * sp, c["track_sigma"], height=0.005)],
+                "texts": [self._text(px, py, 0.3, f"{track}: {speed:.2f} m/s ±{sv:.2f}", c["track_text"])],
             }
             if speed > 1e-6:
                 primitives["arrows"] = [m.ArrowPrimitive(pose=self._pose(px, py, 0.12, math.atan2(vy, vx)),
                                                          shaft_length=speed, shaft_diameter=0.03, head_length=0.1,
-                                                         head_diameter=0.08, color=self._colour(0.6, 0.0, 0.0))]
-            entities.append(self._entity(stamp, WORLD, f"track-{int(tracks.ids[i])}", **primitives))
-        deletion = m.SceneEntityDeletion(timestamp=stamp, type=m.SceneEntityDeletionType.All)
-        return m.SceneUpdate(deletions=[deletion], entities=entities)
+                                                         head_diameter=0.08, color=c["arrow"])]
+            entities.append(m.SceneEntity(timestamp=stamp, frame_id=WORLD, id=f"track-{track}", **primitives))
+        return m.SceneUpdate(deletions=[self.delete_all], entities=entities)
 
-    def _path(self, scene: CycleScene) -> dict:
-        m = self.m
-        view = self.builder.path_view
-        lines = [self._line(self._points(view.waypoints), self._colour(0.2, 0.2, 0.2), 0.02)]
-        lines += [self._line(self._points(outline), self._colour(0.2, 0.6, 0.2, 0.7), 0.015)
-                  for outline in view.corridor_outlines]
-        sub = scene.subgoal
-        return {"lines": lines,
-                "spheres": [m.SpherePrimitive(pose=self._pose(sub[0], sub[1], 0.05), size=m.Vector3(x=0.15, y=0.15, z=0.15),
-                                              color=self._colour(0.9, 0.7, 0.0))],
-                "texts": [m.TextPrimitive(pose=self._pose(sub[0], sub[1], 0.25), billboard=True, font_size=12,
-                                          scale_invariant=True, color=self._colour(0.5, 0.4, 0.0),
-                                          text=f"subgoal {scene.subgoal_index}")]}
+    def _path(self, scene: CycleScene):
+        """Path, corridor and the current subgoal: one cached message per subgoal."""
+        key = ("path", scene.subgoal_index, tuple(np.round(scene.subgoal, 9)))
+        if key not in self.static:
+            c, view = self.colours, self.builder.path_view
+            lines = [self._line(self._points(view.waypoints), c["path"], 0.02)]
+            lines += [self._line(self._points(outline), c["corridor"], 0.015) for outline in view.corridor_outlines]
+            sx, sy = scene.subgoal.tolist()
+            m = self.m
+            self.static[key] = self._update(None, WORLD, "path", {
+                "lines": lines,
+                "spheres": [m.SpherePrimitive(pose=self._pose(sx, sy, 0.05), size=m.Vector3(x=0.15, y=0.15, z=0.15),
+                                              color=c["subgoal"])],
+                "texts": [self._text(sx, sy, 0.25, f"subgoal {scene.subgoal_index}", c["subgoal_text"])],
+            })
+        return self.static[key]
 
-    def _candidates(self, scene: CycleScene) -> dict:
+    def _candidates(self, scene: CycleScene, stamp):
         plan = scene.plan
         costs = plan.candidate_costs
-        if not plan.candidate_polylines:
-            return {}
-        finite = costs[np.isfinite(costs)] if len(costs) else costs
-        low, high = (float(finite.min()), float(finite.max())) if len(finite) else (0.0, 0.0)
         lines = []
-        for i, line in enumerate(plan.candidate_polylines):
-            cost = float(costs[i]) if i < len(costs) else math.inf
-            lines.append(self._line(self._points(line, 0.01), self._colour(*candidate_colour(cost, low, high)), 0.01))
-        return {"lines": lines}
+        if plan.candidate_polylines:
+            finite = costs[np.isfinite(costs)] if len(costs) else costs
+            low, high = (float(finite.min()), float(finite.max())) if len(finite) else (0.0, 0.0)
+            m = self.m
+            for i, line in enumerate(plan.candidate_polylines):
+                cost = float(costs[i]) if i < len(costs) else math.inf
+                # Colours in 16 steps of E, made once each.
+                u = -1 if not math.isfinite(cost) else int(round(15 * (0 if high <= low else (cost - low) / (high - low))))
+                colour = self.candidate_colours.get(u)
+                if colour is None:
+                    rgba = candidate_colour(low + (u / 15) * (high - low) if u >= 0 else math.inf, low, high if u >= 0 else low)
+                    colour = self.candidate_colours[u] = m.Color(r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3])
+                lines.append(self._line(self._points(line, 0.01), colour, 0.01))
+        return self._update(stamp, WORLD, "candidates", {"lines": lines})
 
-    def _chosen(self, scene: CycleScene) -> dict:
-        m = self.m
+    def _chosen(self, scene: CycleScene, stamp):
+        m, c = self.m, self.colours
         plan = scene.plan
         line = plan.waypoints if len(plan.waypoints) else np.array([scene.robot_pose[:2], plan.target])
-        spheres = [m.SpherePrimitive(pose=self._pose(x, y, 0.03), size=m.Vector3(x=0.1, y=0.1, z=0.1),
-                                     color=self._colour(0.0, 0.0, 0.0)) for x, y in plan.via_points]
-        return {"lines": [self._line(self._points(line, 0.02), self._colour(0.0, 0.45, 1.0), 0.04)],
-                "spheres": spheres,
-                "texts": [m.TextPrimitive(pose=self._pose(*plan.target, 0.3), billboard=True, font_size=12,
-                                          scale_invariant=True, color=self._colour(0.0, 0.2, 0.6),
-                                          text=f"{plan.status} {plan.speed_mps:.2f} m/s")]}
+        size = m.Vector3(x=0.1, y=0.1, z=0.1)
+        spheres = [m.SpherePrimitive(pose=self._pose(x, y, 0.03), size=size, color=c["via"])
+                   for x, y in plan.via_points.tolist()]
+        tx, ty = plan.target.tolist()
+        return self._update(stamp, WORLD, "chosen", {
+            "lines": [self._line(self._points(line, 0.02), c["chosen"], 0.04)], "spheres": spheres,
+            "texts": [self._text(tx, ty, 0.3, f"{plan.status} {plan.speed_mps:.2f} m/s", c["chosen_text"])]})
 
     def _xyt(self, scene: CycleScene, stamp):
-        m = self.m
+        m, c = self.m, self.colours
         xyt = scene.xyt
         scale = xyt.settings.time_scale_m_per_s
-        to_z = np.array([1.0, 1.0, scale])
+        segments = self.xyt_segments
         entities = []
         for i, person in enumerate(xyt.persons):
-            triangles = xyt.mesh(i, self.xyt_segments).reshape(-1, 3) * to_z
-            rings = [self._line(self._points3(ring * to_z), self._colour(0.7, 0.1, 0.1, 0.9), 0.01, loop=True)
-                     for ring in xyt.rings(i, self.xyt_segments)]
-            axis = self._line(self._points3(xyt.axis_xyt(i) * to_z), self._colour(0.5, 0.0, 0.0), 0.01)
-            entities.append(self._entity(stamp, XYT_FRAME, f"person-{person.id}", triangles=[
-                m.TriangleListPrimitive(pose=self._pose(), points=self._points3(triangles),
-                                        color=self._colour(0.9, 0.2, 0.2, 0.35))], lines=rings + [axis]))
-        robot = xyt.plan_xyt * to_z
-        x, y = scene.robot_pose[:2]
-        horizon_z = xyt.settings.horizon_s * scale
-        ticks = [m.TextPrimitive(pose=self._pose(x - 0.3, y, t * scale), billboard=True, font_size=11,
-                                 scale_invariant=True, color=self._colour(0.3, 0.3, 0.3), text=f"{t:g} s")
-                 for t in np.arange(0.0, xyt.settings.horizon_s + 1e-9, 2.0)]
-        spheres = [m.SpherePrimitive(pose=self._pose(*p), size=m.Vector3(x=0.1, y=0.1, z=0.1),
-                                     color=self._colour(0.0, 0.0, 0.0)) for p in xyt.via_points_xyt * to_z]
-        entities.append(self._entity(stamp, XYT_FRAME, "robot-plan", lines=[
-            self._line(self._points3(robot), self._colour(0.0, 0.45, 1.0), 0.04),
-            self._line([self._p(x, y, 0.0), self._p(x, y, horizon_z)], self._colour(0.4, 0.4, 0.4, 0.6), 0.01),
-            self._line(self._points(circle_polygon((x, y), scene.robot_radius_m, 24), 0.0),
-                       self._colour(0.1, 0.3, 0.9), 0.02),
-        ], spheres=spheres, texts=ticks))
-        deletion = m.SceneEntityDeletion(timestamp=stamp, type=m.SceneEntityDeletionType.All)
-        return m.SceneUpdate(deletions=[deletion], entities=entities)
+            vertices, triangles = xyt.mesh_indexed(i, segments)
+            vertices = vertices * (1.0, 1.0, scale)
+            points = self._points3(vertices)
+            rings = [self._line(points[r * segments:(r + 1) * segments], c["ring"], 0.01, loop=True)
+                     for r in range((len(points) - 2) // segments)]
+            axis = self._line(self._points3(xyt.axis_xyt(i) * (1.0, 1.0, scale)), c["axis"], 0.01)
+            entities.append(m.SceneEntity(timestamp=stamp, frame_id=XYT_FRAME, id=f"person-{person.id}", triangles=[
+                m.TriangleListPrimitive(pose=self.identity, points=points, color=c["mesh"],
+                                        indices=triangles.ravel().tolist())], lines=rings + [axis]))
+        x, y = scene.robot_pose[:2].tolist()
+        horizon = xyt.settings.horizon_s
+        ticks = [self._text(x - 0.3, y, t * scale, f"{t:g} s", c["grey"], 11.0)
+                 for t in (0.0, 0.5 * horizon, horizon)]
+        size = m.Vector3(x=0.1, y=0.1, z=0.1)
+        spheres = [m.SpherePrimitive(pose=self._pose(px, py, pt * scale), size=size, color=c["via"])
+                   for px, py, pt in xyt.via_points_xyt.tolist()]
+        entities.append(m.SceneEntity(timestamp=stamp, frame_id=XYT_FRAME, id="robot-plan", lines=[
+            self._line(self._points3(xyt.plan_xyt * (1.0, 1.0, scale)), c["chosen"], 0.04),
+            self._line([self._p(x, y, 0.0), self._p(x, y, horizon * scale)], c["time_axis"], 0.01),
+        ], spheres=spheres, texts=ticks, cylinders=[self._disc(x, y, scene.robot_radius_m, c["robot_fill"])]))
+        return m.SceneUpdate(deletions=[self.delete_all], entities=entities)
 
 
 def _finite(value) -> float | None:
@@ -524,7 +550,11 @@ class Views:
         context = foxglove.Context()
         try:
             if self.mcap is not None:
-                self.writer = foxglove.open_mcap(self.mcap, allow_overwrite=self.force, context=context)
+                from foxglove.mcap import MCAPCompression, MCAPWriteOptions
+
+                options = MCAPWriteOptions(compression=MCAPCompression.Lz4)
+                self.writer = foxglove.open_mcap(self.mcap, allow_overwrite=self.force, context=context,
+                                                 writer_options=options)
         except BaseException:
             self._close()
             raise

@@ -33,7 +33,8 @@ What the sources leave open and we chose:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -133,23 +134,26 @@ class XYTScene:
         times = person.ring_times_s(self.settings, self.cone)
         centres = person.centre_at(times)
         radii = person.radius_at(times, self.settings, self.cone)
-        angles = np.linspace(0.0, 2.0 * np.pi, segments, endpoint=False)
-        circle = np.stack([np.cos(angles), np.sin(angles)], axis=-1)
+        circle = _unit_circle(segments)
         xy = centres[:, None, :] + radii[:, None, None] * circle[None]
-        return np.concatenate([xy, np.broadcast_to(times[:, None, None], (len(times), segments, 1))], axis=-1)
+        out = np.empty((len(times), segments, 3))
+        out[..., :2] = xy
+        out[..., 2] = times[:, None]
+        return out
+
+    def mesh_indexed(self, index: int, segments: int = 24) -> tuple[np.ndarray, np.ndarray]:
+        """Person ``index``'s oblique cylinder as shared vertices (V, 3) in x, y, t and triangles
+        (T, 3) of vertex indices: the side between consecutive rings and both caps. The vertices are
+        the rings' points, then the centres of the bottom and the top cap."""
+        rings = self.rings(index, segments)
+        count = len(rings)
+        vertices = np.concatenate([rings.reshape(-1, 3), rings[[0, -1]].mean(axis=1)])
+        return vertices, _mesh_triangles(count, segments)
 
     def mesh(self, index: int, segments: int = 24) -> np.ndarray:
         """Triangles (T, 3, 3) in x, y, t of person ``index``'s oblique cylinder: side and both caps."""
-        rings = self.rings(index, segments)
-        nxt = np.roll(np.arange(segments), -1)
-        triangles = []
-        for lower, upper in zip(rings[:-1], rings[1:]):
-            triangles.append(np.stack([lower, lower[nxt], upper], axis=1))
-            triangles.append(np.stack([lower[nxt], upper[nxt], upper], axis=1))
-        for ring in (rings[0], rings[-1]):
-            centre = np.broadcast_to(ring.mean(axis=0), ring.shape)
-            triangles.append(np.stack([centre, ring, ring[nxt]], axis=1))
-        return np.concatenate(triangles)
+        vertices, triangles = self.mesh_indexed(index, segments)
+        return vertices[triangles]
 
     def axis_xyt(self, index: int) -> np.ndarray:
         """The cylinder's axis (the forecast centre) from t = 0 to the horizon: (2, 3)."""
@@ -440,8 +444,7 @@ def clearance_m(position, robot_radius_m: float, people: Obstacles | None) -> fl
 
 def circle_polygon(centre, radius_m: float, segments: int = 32) -> np.ndarray:
     """A closed circle outline (segments + 1, 2)."""
-    angles = np.linspace(0.0, 2.0 * np.pi, segments + 1)
-    return np.asarray(centre, dtype=float) + radius_m * _unit(angles)
+    return np.asarray(centre, dtype=float) + radius_m * _closed_unit_circle(segments)
 
 
 def candidate_colour(cost: float, lowest: float, highest: float) -> tuple[float, float, float, float]:
@@ -451,6 +454,40 @@ def candidate_colour(cost: float, lowest: float, highest: float) -> tuple[float,
     span = highest - lowest
     u = 0.0 if span <= 1e-12 else float(np.clip((cost - lowest) / span, 0.0, 1.0))
     return (u, 1.0 - 0.6 * u, 0.1, 0.6)
+
+
+@lru_cache(maxsize=16)
+def _unit_circle(segments: int) -> np.ndarray:
+    """``segments`` points of the unit circle (read-only, shared)."""
+    circle = _unit(np.linspace(0.0, 2.0 * np.pi, segments, endpoint=False))
+    circle.setflags(write=False)
+    return circle
+
+
+@lru_cache(maxsize=16)
+def _closed_unit_circle(segments: int) -> np.ndarray:
+    circle = _unit(np.linspace(0.0, 2.0 * np.pi, segments + 1))
+    circle.setflags(write=False)
+    return circle
+
+
+@lru_cache(maxsize=16)
+def _mesh_triangles(rings: int, segments: int) -> np.ndarray:
+    """Vertex indices of the side between ``rings`` consecutive rings and of the two caps."""
+    k = np.arange(segments)
+    nxt = (k + 1) % segments
+    parts = []
+    for r in range(rings - 1):
+        lower, upper = r * segments, (r + 1) * segments
+        parts.append(np.stack([lower + k, lower + nxt, upper + k], axis=1))
+        parts.append(np.stack([lower + nxt, upper + nxt, upper + k], axis=1))
+    bottom, top = rings * segments, rings * segments + 1
+    last = (rings - 1) * segments
+    parts.append(np.stack([np.full(segments, bottom), k, nxt], axis=1))
+    parts.append(np.stack([np.full(segments, top), last + k, last + nxt], axis=1))
+    triangles = np.concatenate(parts)
+    triangles.setflags(write=False)
+    return triangles
 
 
 def _unit(angles) -> np.ndarray:
