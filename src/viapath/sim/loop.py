@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -21,6 +21,7 @@ from viapath.sim.obstacles import scenario_obstacle_states
 from viapath.perception.base import WorldSnapshot
 from viapath.perception.modes import make_perception
 from viapath.sim.reactive import obstacle_motion
+from viapath.sim.step_record import StepRecord
 
 
 @dataclass
@@ -70,8 +71,11 @@ def run_episode(
     velocity_noise_mps: float | None = None,
     record_perceived: bool = False,
     planner_overrides: dict[str, Any] | None = None,
+    on_step: Callable[[StepRecord], None] | None = None,
 ) -> Episode:
-    """Run one scenario to the goal or to ``duration_s``; returns the trace and its metrics."""
+    """Run one scenario to the goal or to ``duration_s``; returns the trace and its metrics.
+
+    ``on_step`` (views, recorders) is called once per planning cycle with a :class:`StepRecord`."""
     dt = scenario.dt_s
     n_steps = int(round(scenario.duration_s / dt))
     times = np.arange(n_steps + 1) * dt
@@ -132,6 +136,9 @@ def run_episode(
         rows["status"].append(decision.plan.status)
         rows["via"].append(np.asarray(decision.plan.via_points, dtype=float).reshape(-1, 2))
         rows["side"].append(plan_side(decision.plan.waypoints))
+        if on_step is not None:
+            on_step(StepRecord(k, float(times[k]), state, observation, decision, rows["plan_ms"][-1], world,
+                               sensing.last_scans or None, sensing, the_planner))
         if motion is not None:  # people move to step k + 1 seeing the robot at step k (rows filled in place)
             motion.step(state.position, state.speed_mps * np.array([np.cos(state.heading_rad), np.sin(state.heading_rad)]))
         state = kinematics.step(state, command, limits, dt)
