@@ -55,6 +55,9 @@ def run(
     plot: Optional[Path] = typer.Option(None, "--plot", help="Write a figure (PNG/PDF/SVG) of the episode."),
     trace: Optional[Path] = typer.Option(None, "--trace", help="Write the per-step trace as CSV."),
     animate: Optional[Path] = typer.Option(None, "--animate", help="Write an animation (GIF, or MP4 with ffmpeg)."),
+    shield: Optional[str] = typer.Option(None, "--shield", help="on | off: passive-safety shield on the planner's "
+                                         "commands (default: on for viapath, off for the others)."),
+    shield_mode: str = typer.Option("passive", "--shield-mode", help="passive | passive-friendly."),
 ) -> None:
     """Run one scenario in the simulator and report its metrics."""
     from viapath.planning import available_planners
@@ -70,6 +73,10 @@ def run(
         _fail(f"--seed: expected an integer >= 0, found {seed}")
     if perception is not None and perception not in ("oracle", "laser"):
         _fail(f"--perception: expected 'oracle' or 'laser', found {perception!r}")
+    if shield not in (None, "on", "off"):
+        _fail(f"--shield: expected 'on' or 'off', found {shield!r}")
+    if shield_mode not in ("passive", "passive-friendly"):
+        _fail(f"--shield-mode: expected 'passive' or 'passive-friendly', found {shield_mode!r}")
     try:
         spec = load_scenario(scenario)
     except ScenarioError as error:
@@ -81,7 +88,8 @@ def run(
     try:
         episode = run_episode(spec, planner=planner_name, perception=perception, seed=seed,
                               position_noise_m=position_noise, velocity_noise_mps=velocity_noise,
-                              record_perceived=plot is not None or animate is not None)
+                              record_perceived=plot is not None or animate is not None,
+                              shield=None if shield is None else shield == "on", shield_options={"mode": shield_mode})
     except (ValueError, RuntimeError, FileNotFoundError) as error:
         _fail(f"{scenario}: {error}")
 

@@ -51,6 +51,9 @@ def register(app: typer.Typer) -> None:
         perception: str = typer.Option("oracle", "--perception", help="oracle or laser"),
         plots: bool = typer.Option(True, "--plots/--no-plots", help="write rates.png and deviation_vs_time.png"),
         as_json: bool = typer.Option(False, "--json", help="print the per-planner table as JSON"),
+        shield: Optional[str] = typer.Option(None, "--shield", help="on | off | friendly: passive-safety shield "
+                                             "(friendly: passive-friendly mode) for every planner; default: on "
+                                             "for viapath, off for the others"),
     ) -> None:
         """Run planners on a suite in parallel; write per-episode results, tables and plots."""
         from viapath.bench.report import markdown_table, write_report
@@ -65,7 +68,8 @@ def register(app: typer.Typer) -> None:
         try:
             scenarios = load_suite(suite, out, count=count, seed=seed)
             result = run_bench(scenarios, names, out, workers=workers, backend=backend, scheduler=scheduler,
-                               perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json)
+                               perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json,
+                               shield=shield)
             summary = write_report(result["rows"], out, plots=plots, order=names)
         except (BenchError, SuiteError, OSError) as error:
             _fail(str(error))

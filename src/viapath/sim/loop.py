@@ -15,6 +15,7 @@ import numpy as np
 from viapath.observation import Command, MotionLimits, Observation, RobotState
 from viapath.path import DesignatedPath, SubgoalPolicy
 from viapath.planning import Decision, make_planner, planner_class
+from viapath.safety import shielded
 from viapath.sim import robot as kinematics
 from viapath.sim.metrics import compute_metrics, plan_side
 from viapath.sim.obstacles import scenario_obstacle_states
@@ -100,8 +101,12 @@ def run_episode(
     velocity_noise_mps: float | None = None,
     record_perceived: bool = False,
     planner_overrides: dict[str, Any] | None = None,
+    shield: bool | None = None,
+    shield_options: dict[str, Any] | None = None,
 ) -> Episode:
-    """Run one scenario to the goal or to ``duration_s``; returns the trace and its metrics."""
+    """Run one scenario to the goal or to ``duration_s``; returns the trace and its metrics.
+    ``shield``: filter the planner's commands through the passive-safety shield (None: on for the
+    planners in ``viapath.safety.SHIELDED_BY_DEFAULT``); ``shield_options``: its options."""
     dt = scenario.dt_s
     n_steps = int(round(scenario.duration_s / dt))
     times = np.arange(n_steps + 1) * dt
@@ -117,6 +122,7 @@ def run_episode(
     options.update(planner_overrides or {})
     the_planner = make_planner(planner_name, path, nominal_speed_mps=spec.speed, limits=limits,
                                robot_radius_m=spec.radius, subgoal_policy=subgoal_policy, **options)
+    the_planner = shielded(the_planner, shield, dt, shield_options, planner_name)
     mode = perception or scenario.perception.mode
     sensing = make_perception(
         mode, scenario,
@@ -180,6 +186,8 @@ def run_episode(
     extra_metrics = getattr(sensing, "episode_metrics", None)
     if callable(extra_metrics):
         metrics.update(extra_metrics())
+    shield_metrics = getattr(the_planner, "episode_metrics", None)
+    metrics.update(shield_metrics() if callable(shield_metrics) else {"shield": False, "shield_interventions": None})
     return Episode(trace, metrics)
 
 
