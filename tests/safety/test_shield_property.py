@@ -8,7 +8,7 @@ period, shield options, 0-6 people with random positions, velocities and uncerta
   admissible with ``ROBUST_M`` to spare, the shield's output is admissible (completeness). The
   spare covers the brute force's own time sampling; without it a grid point grazing a disc by
   0.1 mm would demand the shield find that very point.
-The same in passive-friendly mode on 2 000 cycles.
+The same in passive-friendly mode on 1 000 cycles (friendliness by its own brute force too).
 """
 
 from __future__ import annotations
@@ -120,7 +120,7 @@ def _batches(case: dict, size: int):
         yield order[start:start + size]
 
 
-@pytest.mark.parametrize("mode,count,seed", [("passive", 10_000, 0), ("passive-friendly", 2_000, 1)])
+@pytest.mark.parametrize("mode,count,seed", [("passive", 10_000, 0), ("passive-friendly", 1_000, 1)])
 def test_shield_against_brute_force(mode, count, seed):
     rng = np.random.default_rng(seed)
     # Friendly: people brake at >= 0.3 m/s² (near 0 their stopping room is unbounded: nothing is friendly).

@@ -42,7 +42,7 @@ SHIELD_OPTIONS: tuple[Option, ...] = (
            "forecast disc grows by k sigma_v t (and k sigma_p) with the tracker's uncertainty"),
     Option("samples", 11, "", 2, 101,
            "commands sampled per axis (speed, turn rate) of the dynamic window when replacing one"),
-    Option("substeps", 4, "", 1, 50,
+    Option("substeps", 2, "", 1, 50,
            "sub-intervals per control period in the swept-disc test (exact segment test on each)"),
 )
 

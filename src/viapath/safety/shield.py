@@ -56,6 +56,7 @@ from viapath.observation import Command, MotionLimits, Observation
 from viapath.safety.options import check_options
 
 _STRAIGHT = 1e-9
+_CHUNK = 24  # candidates tested at once when the planner's command fails
 
 
 @dataclass(frozen=True)
@@ -68,7 +69,7 @@ class ShieldConfig:
     person_accel_mps2: float = 1.0
     sigma_multiplier: float = 2.0
     samples: int = 11
-    substeps: int = 4
+    substeps: int = 2
 
     def __post_init__(self) -> None:
         check_options({name: getattr(self, name) for name in self.__dataclass_fields__})
@@ -255,7 +256,14 @@ class Shield:
         if friendly_mode:
             braking = speed_people ** 2 / (2.0 * max(accel, 1e-3))
             reach_people = reach_people + braking
-        near = distance - reach_people <= float(np.max(sweep.reach_m, initial=0.0)) + 1e-6
+        # Only people whose forecast path (centre over [0, horizon], grown to its largest radius) comes
+        # within the robot's longest sweep of its start can matter.
+        path = people.velocities * horizon
+        pp = np.sum(path * path, axis=1)
+        along = np.clip(np.sum(-offset * path, axis=1) / np.where(pp > 0, pp, 1.0), 0.0, 1.0)
+        closest = offset + path * along[:, None]
+        near = (np.hypot(closest[:, 0], closest[:, 1]) - (reach_people - speed_people * horizon)
+                <= float(np.max(sweep.reach_m, initial=0.0)) + 1e-6)
         if friendly_mode:
             self._friendly(out, sweep, people, base, growth, accel, np.ones(len(people), dtype=bool) & near)
         if sweep.moving.shape[1] == 0 or not np.any(near):
@@ -341,53 +349,59 @@ class Shield:
         if not (math.isfinite(command.speed_mps) and math.isfinite(command.turn_rate_radps)):
             command = Command.stop()
         limits = self.limits
+        friendly_mode = config.mode == "passive-friendly"
         # Within the limits (the drive would clip it the same way): the output never exceeds them.
         command = Command(min(max(float(command.speed_mps), 0.0), limits.max_speed_mps),
                           min(max(float(command.turn_rate_radps), -limits.max_turn_rate_radps),
                               limits.max_turn_rate_radps))
         # Most cycles the planner's command passes: test it alone first, the window only when it fails.
-        own = np.array([[command.speed_mps, command.turn_rate_radps]])
-        first_check = self.evaluate(observation, own)
-        passes = first_check["friendly"][0] if config.mode == "passive-friendly" else first_check["admissible"][0]
-        if passes and not first_check["contact"][0]:
-            return ShieldResult(command, original, False, "admissible", True,
-                                True if config.mode == "passive-friendly" else None, candidates=1,
-                                admissible_candidates=1)
-        commands = self.candidates(observation, command)
-        check = self.evaluate(observation, commands)
-        admissible, friendly = check["admissible"], check["friendly"]
+        own = self.evaluate(observation, np.array([[command.speed_mps, command.turn_rate_radps]]))
+        own_ok, own_friendly = bool(own["admissible"][0]), bool(own["friendly"][0])
+        if own_friendly if friendly_mode else own_ok:
+            return ShieldResult(command, original, False, "admissible", True, True if friendly_mode else None,
+                                candidates=1, admissible_candidates=1)
         ids = observation.obstacles.finite().ids
-        first = int(check["person"][0])
+        first = int(own["person"][0])
         person_id = int(ids[first]) if first >= 0 else None
-        meet = float(check["meet_time_s"][0]) if math.isfinite(check["meet_time_s"][0]) else None
-        count, n_ok = len(commands), int(admissible.sum())
-        friendly_mode = config.mode == "passive-friendly"
-        common = dict(person_id=person_id, meet_time_s=meet, candidates=count, admissible_candidates=n_ok)
-        if bool(check["contact"][0]):
-            stop = Command.stop()
+        meet = float(own["meet_time_s"][0]) if math.isfinite(own["meet_time_s"][0]) else None
+        stop = Command.stop()
+        if bool(own["contact"][0]):
             return ShieldResult(stop, original, not _same(original, stop),
                                 f"contact already happening with person {person_id}: at rest", False,
-                                False if friendly_mode else None, **common)
-        reached = check["achieved"]
-        scale = np.array([max(self.limits.max_speed_mps, 1e-9), max(self.limits.max_turn_rate_radps, 1e-9)])
-        distance = np.sum(((reached - reached[0]) / scale) ** 2, axis=1)
-        order = np.lexsort((reached[:, 0], distance))  # closest first, ties to the slower
+                                False if friendly_mode else None, person_id=person_id, meet_time_s=0.0, candidates=1)
         why = (f"would meet person {person_id} {meet:.2f} s ahead before at rest" if meet is not None
-               else "the person's stopping room")
-        if friendly_mode:
-            pick = next((i for i in order if friendly[i]), None)
-            if pick is not None:
-                return ShieldResult(self._as_command(commands, reached, pick), original, True,
-                                    f"not friendly ({why}): closest friendly command", True, True, **common)
-            if admissible[0]:
-                return ShieldResult(command, original, False, "admissible (no friendly command exists)", True,
-                                    False, **common)
-        pick = next((i for i in order if admissible[i]), None)
-        if pick is not None:
-            return ShieldResult(self._as_command(commands, reached, pick), original, True,
-                                f"{why}: closest admissible command", True,
-                                False if friendly_mode else None, **common)
-        stop = Command.stop()
+               else "the person would have no room to stop")
+        # Candidates closest first (each axis over its limit, ties to the slower), tested in chunks:
+        # the first chunk holding an admissible one holds the closest admissible one.
+        commands = self.candidates(observation, command)
+        reached = achieved_first_period(commands, float(observation.robot.speed_mps),
+                                        float(observation.robot.turn_rate_radps), limits, self.dt_s)
+        scale = np.array([max(limits.max_speed_mps, 1e-9), max(limits.max_turn_rate_radps, 1e-9)])
+        distance = np.sum(((reached - reached[0]) / scale) ** 2, axis=1)
+        order = np.lexsort((reached[:, 0], distance))
+        order = order[order != 0]  # the planner's own command is judged already
+        passive_pick, tested, passing = None, 0, 0
+        for chunk in np.array_split(order, max(1, math.ceil(len(order) / _CHUNK))):
+            check = self.evaluate(observation, commands[chunk])
+            tested += len(chunk)
+            passing += int(check["admissible"].sum())
+            wanted = check["friendly"] if friendly_mode else check["admissible"]
+            if np.any(wanted):
+                pick = int(chunk[np.argmax(wanted)])
+                text = f"not friendly ({why}): closest friendly command" if friendly_mode else \
+                    f"{why}: closest admissible command"
+                return ShieldResult(self._as_command(commands, reached, pick), original, True, text, True,
+                                    True if friendly_mode else None, person_id, meet, tested + 1, passing)
+            if passive_pick is None and np.any(check["admissible"]):
+                passive_pick = int(chunk[np.argmax(check["admissible"])])
+        common = dict(person_id=person_id, meet_time_s=meet, candidates=tested + 1,
+                      admissible_candidates=passing + int(own_ok))
+        if friendly_mode and own_ok:
+            return ShieldResult(command, original, False, "admissible (no friendly command exists)", True, False,
+                                **common)
+        if passive_pick is not None:
+            return ShieldResult(self._as_command(commands, reached, passive_pick), original, True,
+                                f"{why}: closest admissible command (no friendly one)", True, False, **common)
         return ShieldResult(stop, original, not _same(original, stop), f"{why}: none admissible, hardest braking",
                             False, False if friendly_mode else None, **common)
 
