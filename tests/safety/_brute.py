@@ -15,10 +15,13 @@ import numpy as np
 
 
 def brute_admissible(case: dict, commands: np.ndarray, extra_m: float = 0.0, fine: int = 8,
-                     friendly: bool = False) -> np.ndarray:
+                     friendly: bool = False, towards_only: bool = True,
+                     towards_slack: float = 0.0) -> np.ndarray:
     """(B, K) bool: command k of case b is admissible (and friendly, if asked) with radii grown by ``extra_m``.
 
-    ``case`` holds arrays: x, y, heading, speed, turn (B,), radius (B,), vmax, amax, wmax, alphamax,
+    ``towards_only``: a meeting counts only at instants when the robot's velocity has a positive
+    component towards the person's forecast centre (more than ``-towards_slack`` |v| |r|: a robust
+    check counts near-perpendicular motion too). ``case`` holds arrays: x, y, heading, speed, turn (B,), radius (B,), vmax, amax, wmax, alphamax,
     dt (B,), margin, accel_p, k_sigma (B,), people positions P (B,N,2), velocities V (B,N,2),
     radii r (B,N), sigma_v (B,N), sigma_p (B,N). ``commands`` (B, K, 2).
     """
@@ -64,7 +67,11 @@ def brute_admissible(case: dict, commands: np.ndarray, extra_m: float = 0.0, fin
             radius = b_l + g_l * tl + 0.5 * a_l * tl * tl  # (L, N)
             dx = xl[..., None] - (px + vx * tl)[:, None, :]
             dy = yl[..., None] - (py + vy * tl)[:, None, :]
-            okl &= ~(mv & np.any(dx * dx + dy * dy < (radius * radius)[:, None, :], axis=2))
+            inside = dx * dx + dy * dy < (radius * radius)[:, None, :]
+            if towards_only:  # robot velocity . (person centre - robot) > 0 (robust: > -slack |v| |r|)
+                along = -(sp * np.cos(hl))[..., None] * dx - (sp * np.sin(hl))[..., None] * dy
+                inside &= along > -towards_slack * np.abs(sp)[..., None] * np.sqrt(dx * dx + dy * dy)
+            okl &= ~(mv & np.any(inside, axis=2))
         x[live], y[live], heading[live], t[live], ok[live] = xl, yl, hl, tl, okl
         rest_x, rest_y = np.where(moving, x, rest_x), np.where(moving, y, rest_y)
         rest_t = np.where(moving, t, rest_t)

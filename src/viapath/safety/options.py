@@ -40,10 +40,14 @@ SHIELD_OPTIONS: tuple[Option, ...] = (
            "bound on how sharply people change velocity: the forecast disc grows by a_p t^2 / 2"),
     Option("sigma_multiplier", 2.0, "", 0.0, 10.0,
            "forecast disc grows by k sigma_v t (and k sigma_p) with the tracker's uncertainty"),
+    Option("towards_only", True, "", None, None,
+           "count a meeting only while the robot moves towards the person's forecast centre (the robot is "
+           "never the one moving into a person; a person catching up from behind meets it moving away); "
+           "false: any meeting before rest counts (DESIGN §7 to the letter: at rest at every contact)"),
     Option("samples", 11, "", 2, 101,
            "commands sampled per axis (speed, turn rate) of the dynamic window when replacing one"),
-    Option("substeps", 2, "", 1, 50,
-           "sub-intervals per control period in the swept-disc test (exact segment test on each)"),
+    Option("substep_s", 0.025, "s", 0.001, 1.0,
+           "longest sub-interval of the swept-disc test (a control period is split into equal ones)"),
 )
 
 

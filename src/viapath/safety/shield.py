@@ -15,6 +15,13 @@ forecast velocity once the robot is at rest, stops before reaching it: the robot
 miss the capsule swept by the person's forecast disc at the rest time T_s while it brakes,
 centre ``c_i + v_i T_s`` to ``c_i + v_i T_s + v_i |v_i| / (2 a_p)``.
 
+With ``towards_only`` (the default) a meeting counts only while the robot moves towards the person's
+forecast centre (u · (c_i − p) > 0): the robot is never the one moving into a person, which is what
+the at-fault metric counts, while a person catching up from behind may meet a robot that drives
+away from them (otherwise every faster person from behind stops the robot, and it is then hit at
+rest: the paper's "speed up to stay ahead" case). ``towards_only: false`` is DESIGN §7 to the
+letter: at rest at every contact.
+
 The motion model is the project's (``viapath.kinematics``): the drive reaches the commanded (v, ω)
 through the acceleration limits once per control period and holds it along an exact arc for the
 period, as the simulator and the planner's roll-outs do. The set of (v, ω) that one period can
@@ -22,7 +29,7 @@ reach is the **dynamic window**; a command outside it has the same effect as the
 is clipped to, so the shield samples the window (``samples`` per axis) and no command is missed.
 
 Choices where the sources are silent:
-* The swept-disc test is exact per sub-interval (``substeps`` per period): relative motion of robot
+* The swept-disc test is exact per sub-interval (a period split into pieces of at most ``substep_s``): relative motion of robot
   and forecast centre is a line there (robot arcs are replaced by chords, padded by
   ``4 τ · |v ω| h² / 8``, which bounds the arc's distance from its chord at fraction τ) and the forecast radius, convex in t, by its chord (above it by at most
   ``a_p h² / 8``); the disc test is then a quadratic inequality in time, solved exactly. The test
@@ -39,6 +46,8 @@ Choices where the sources are silent:
   output is the hardest braking, Command(0, 0). In passive-friendly mode the fallback order is:
   friendly commands, then (if none is friendly) the planner's command if passively admissible, else
   the closest passively admissible one, else the hardest braking.
+* "Towards" on a sub-interval is bounded, not sampled: u · (c − p) is at most its end values' mean
+  plus half the interval times a bound on its rate (|v||ω||c − p| + |v|(|v_i| + |v|)).
 * Position uncertainty k σ_p is added to the radius (constant in t) besides the velocity term.
 * A person is skipped when it cannot come within reach of the robot before the longest braking
   ends (a bound: its distance minus its forecast reach exceeds the robot's longest sweep).
@@ -69,7 +78,8 @@ class ShieldConfig:
     person_accel_mps2: float = 1.0
     sigma_multiplier: float = 2.0
     samples: int = 11
-    substeps: int = 2
+    substep_s: float = 0.025
+    towards_only: bool = True
 
     def __post_init__(self) -> None:
         check_options({name: getattr(self, name) for name in self.__dataclass_fields__})
@@ -121,6 +131,9 @@ class Sweep:
     rest_position: np.ndarray  # (K, 2)
     reach_m: np.ndarray  # (K,) path length until rest
     achieved: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (K, 2) (v, ω) of the first period
+    headings: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (K, T) at the sub-interval ends
+    speeds: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (K, T-1) during each sub-interval
+    turns: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (K, T-1)
 
 
 def achieved_first_period(commands: np.ndarray, speed_mps: float, turn_rate_radps: float, limits: MotionLimits,
@@ -184,6 +197,9 @@ def braking_sweep(position: np.ndarray, heading_rad: float, achieved: np.ndarray
         rest_position=positions[np.arange(k), rest_index],
         reach_m=np.sum(np.abs(speed), axis=1) * dt_s,
         achieved=achieved,
+        headings=np.concatenate([np.full((k, 1), float(heading_rad)), h1.reshape(k, -1)], axis=1),
+        speeds=np.repeat(speed, substeps, axis=1),
+        turns=np.repeat(turn, substeps, axis=1),
     )
 
 
@@ -237,7 +253,8 @@ class Shield:
             grow_bound = grow_bound + speed_people ** 2 / (2.0 * max(config.person_accel_mps2, 1e-3))
         if np.all(gap > 0.0) and np.all(distance - grow_bound > r_bound + 1e-6):
             return out
-        sweep = braking_sweep(position, float(robot.heading_rad), achieved, self.limits, self.dt_s, config.substeps)
+        substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
+        sweep = braking_sweep(position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps)
         if np.any(gap <= 0.0):
             out["admissible"][:] = False
             out["friendly"][:] = False
@@ -290,6 +307,20 @@ class Shield:
             inside = (qa > 0) & (vertex > 0.0) & (vertex < 1.0)
             low = np.where(inside, np.minimum(low, qc - qb * qb / np.where(qa > 0, 4.0 * qa, 1.0)), low)
             hit = (low < -1e-12) & sweep.moving[:, None, :]  # rounding at the edge is no meeting
+            if config.towards_only:
+                # Only while the robot moves towards the person's centre: T = u . (c - p) = -u . rel. Its
+                # largest value on the sub-interval is at most (T_a + T_b + L h) / 2, L bounding |dT/dt|.
+                heading = sweep.headings
+                ux, uy = np.cos(heading) * 1.0, np.sin(heading) * 1.0
+                s_int = sweep.speeds[:, None, :]
+                t_a = -s_int * (ux[:, None, :-1] * r_a[..., 0] + uy[:, None, :-1] * r_a[..., 1])
+                r_b = r_a + w
+                t_b = -s_int * (ux[:, None, 1:] * r_b[..., 0] + uy[:, None, 1:] * r_b[..., 1])
+                r_max = np.maximum(np.hypot(r_a[..., 0], r_a[..., 1]), np.hypot(r_b[..., 0], r_b[..., 1])) + 0.01
+                lipschitz = np.abs(s_int) * (np.abs(sweep.turns[:, None, :]) * r_max + speed_people[chunk][None, :, None]
+                                             + np.abs(s_int))
+                h_int = float(times[1] - times[0])
+                hit &= (t_a + t_b + lipschitz * h_int) > 0.0
             any_hit = hit.any(axis=2)  # (K, n)
             if not np.any(any_hit):
                 continue
