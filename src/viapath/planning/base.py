@@ -163,6 +163,10 @@ class Planner:
             corridor_excess_m=max(0.0, float(self.path.corridor_excess(position))),
         )
 
+    def episode_metrics(self) -> dict[str, Any]:
+        """Metrics of the planner over the episode (e.g. the shield's interventions)."""
+        return {}
+
     def decide(self, situation: Situation) -> Decision:  # pragma: no cover - interface
         raise NotImplementedError(f"{type(self).__name__} must implement decide(situation)")
 
