@@ -112,6 +112,9 @@ class Planner:
 
     name: ClassVar[str] = ""
     options: ClassVar[OptionSet] = COMMON_OPTIONS
+    #: The shield behind the planner, when there is one (set by ``viapath.safety.ShieldedPlanner``); a
+    #: planner that plans inside it (DESIGN §7) checks its candidates' commands with it.
+    shield = None
 
     def __init_subclass__(cls, name: str | None = None, **kwargs):
         super().__init_subclass__(**kwargs)

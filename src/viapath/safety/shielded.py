@@ -38,6 +38,7 @@ class ShieldedPlanner(Planner):
         self.subgoal_policy = inner.subgoal_policy
         self.settings = inner.settings
         self.shield = Shield(inner.limits, dt_s, config)
+        inner.shield = self.shield  # a planner that plans inside the shield reads it
         self.interventions = 0
         self.cycles = 0
 
