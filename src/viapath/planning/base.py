@@ -14,6 +14,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from viapath.guard import guard_plan
 from viapath.kinematics import steer_towards
 from viapath.observation import Command, MotionLimits, Observation
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
@@ -54,6 +55,8 @@ class Planner:
         if name:
             cls.name = name
             _REGISTRY[name] = cls
+        if "plan" in cls.__dict__:  # every planner's cycle goes through the guarded entry (viapath.guard)
+            cls.plan = guard_plan(cls.__dict__["plan"])
 
     def __init__(
         self,
