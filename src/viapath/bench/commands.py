@@ -67,6 +67,7 @@ def register(app: typer.Typer) -> None:
             _fail("--planners is empty; give e.g. viapath,dwa,vo")
         if scheduler and backend == "loky":
             _fail("--scheduler needs --backend dask or ray")
+        created = not out.exists()  # a run refused before any episode must leave no folder behind
         try:
             scenarios = load_suite(suite, out, count=count, seed=seed)
             result = run_bench(scenarios, names, out, workers=workers, backend=backend, scheduler=scheduler,
@@ -78,6 +79,10 @@ def register(app: typer.Typer) -> None:
                        err=True)
             raise typer.Exit(code=130) from None
         except (BenchError, SuiteError, OSError) as error:
+            if created and not (out / "episodes.csv").exists():
+                import shutil
+
+                shutil.rmtree(out, ignore_errors=True)
             _fail(str(error))
         from viapath.bench.identity import crash_lines
 
