@@ -10,8 +10,9 @@ subclass, plug-ins and navground peers included), so each cycle goes:
    is built with wrong shapes).
 2. **Values**, checked once, each problem named by field and index:
 
-   * the robot state (position, heading, speed, turn rate, radius) or the time is not finite, or a
-     coordinate is beyond ``max_coordinate_m``: the robot is told to **stop** (v = 0, ω = 0: with the
+   * the robot state (position, heading, speed, turn rate, radius) or the time is not finite, or
+     beyond its bound (``max_coordinate_m``, ``max_heading_rad``, ``max_state_speed_mps``,
+     ``max_state_turn_rate_radps``: values no odometry reports): the robot is told to **stop** (v = 0, ω = 0: with the
      drive's acceleration limits that is the hardest braking within the limits); the planner is not
      called, the decision's ``plan.status`` is ``"guard-stop"`` and ``plan.extras["guard"]`` lists why;
    * an obstacle's **position** is not finite: something is there and we do not know where, so the
@@ -36,7 +37,8 @@ subclass, plug-ins and navground peers included), so each cycle goes:
 Choices where the issue is silent: the largest σ and the default radius are configuration
 (:class:`GuardConfig`), not the largest value seen this cycle, so one bad track cannot make the
 others look safer or worse; a time that is not finite stops the robot too (planners use it for their
-period); a speed above the limits in the *state* (odometry) is not an error, only reported.
+period); a speed above the motion limits but below ``max_state_speed_mps`` in the *state* (odometry) is
+not an error: the command check brakes from it.
 """
 
 from __future__ import annotations
@@ -63,6 +65,9 @@ class GuardConfig:
     max_position_sigma_m: float = 0.5
     max_obstacle_speed_mps: float = 10.0
     max_coordinate_m: float = 1e6
+    max_heading_rad: float = 1e6  # beyond, float steps of the angle are too coarse to steer by
+    max_state_speed_mps: float = 50.0  # odometry beyond these is a sensor fault, not a robot state
+    max_state_turn_rate_radps: float = 100.0
     control_period_s: float = 0.1  # the scan period (DESIGN §2): how long a command is held
     brake_margin_m: float = 0.02
     tolerance: float = 1e-9
@@ -121,10 +126,12 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
     if not (np.isfinite(position).all() and np.all(np.abs(position) <= config.max_coordinate_m)):
         stop.append(f"robot.position: expected 2 finite numbers within ±{config.max_coordinate_m:g} m, "
                     f"found {_show(position)}")
-    for name in ("heading_rad", "speed_mps", "turn_rate_radps"):
+    for name, bound, unit in (("heading_rad", config.max_heading_rad, "rad"),
+                              ("speed_mps", config.max_state_speed_mps, "m/s"),
+                              ("turn_rate_radps", config.max_state_turn_rate_radps, "rad/s")):
         value = _scalar(f"robot.{name}", getattr(robot, name))
-        if not math.isfinite(value):
-            stop.append(f"robot.{name}: expected a finite number, found {value:g}")
+        if not (math.isfinite(value) and abs(value) <= bound):
+            stop.append(f"robot.{name}: expected a finite number within ±{bound:g} {unit}, found {value:g}")
     radius = _scalar("robot.radius_m", robot.radius_m)
     if not (math.isfinite(radius) and radius > 0):
         stop.append(f"robot.radius_m: expected a finite number > 0, found {radius:g}")

@@ -81,26 +81,28 @@ def moves_towards_close_obstacle(command: Command, observation: Observation, per
         return None
     start = np.hypot(centres[:, 0] - x, centres[:, 1] - y)
     dt = 1e-3
-    min_gap = np.full(len(centres), np.inf)
-    nearer = None
+    xs, ys = [], []
     t = 0.0
-    while True:
+    a, alpha = limits.max_accel_mps2 * dt, limits.max_turn_accel_radps2 * dt
+    goal_v = min(max(v_cmd, 0.0), limits.max_speed_mps)
+    while t < 60.0:
         holding = t < period_s - 1e-12
-        goal_v, goal_w = (v_cmd, w_cmd) if holding else (0.0, 0.0)
         if not holding and abs(speed) <= 1e-9:
             break
-        speed = _towards(speed, min(max(goal_v, 0.0), limits.max_speed_mps), limits.max_accel_mps2 * dt)
-        turn = _towards(turn, goal_w, limits.max_turn_accel_radps2 * dt)
+        target_v, target_w = (goal_v, w_cmd) if holding else (0.0, 0.0)
+        speed = _towards(speed, target_v, a)
+        turn = _towards(turn, target_w, alpha)
         x += speed * math.cos(heading) * dt
         y += speed * math.sin(heading) * dt
         heading += turn * dt
         t += dt
-        distance = np.hypot(centres[:, 0] - x, centres[:, 1] - y)
-        if nearer is None and t >= period_s / 5 - 1e-12:
-            nearer = distance < start - 1e-9
-        min_gap = np.minimum(min_gap, distance - robot_radius_m - radii)
-        if t > 60:
-            break
+        xs.append(x)
+        ys.append(y)
+    path = np.column_stack([xs, ys])  # (S, 2), one row per ms
+    distance = np.hypot(path[:, None, 0] - centres[None, :, 0], path[:, None, 1] - centres[None, :, 1])  # (S, N)
+    min_gap = distance.min(axis=0) - robot_radius_m - radii
+    first = min(len(path) - 1, int(round(period_s / 5 / dt)) - 1)
+    nearer = distance[first] < start - 1e-9
     hits = valid & nearer & (min_gap < 0) & (start - robot_radius_m - radii > 0)
     overlapping_deeper = valid & nearer & (start - robot_radius_m - radii <= 0)
     bad = np.flatnonzero(hits | overlapping_deeper)
