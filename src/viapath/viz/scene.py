@@ -281,9 +281,9 @@ class SceneBuilder:
         if _shield_intervened(extras):
             self.shield_interventions += 1
         scanners, detections, radii, points, sectors, blind = _perception_parts(perception)
-        xyt = XYTScene(self.settings, _persons(tracks, self.robot_radius_m),
-                       plan_xyt(pose[:2], plan, self.settings.horizon_s),
-                       _via_xyt(pose[:2], plan, self.settings.horizon_s), self.cone)
+        horizon = self.settings.horizon_s
+        xyt = XYTScene(self.settings, _persons(tracks, self.robot_radius_m), plan_xyt(pose[:2], plan, horizon),
+                       _via_xyt(pose[:2], plan, horizon), self.cone)
         people = true_people if true_people is not None else tracks
         series = {
             "speed_mps": float(robot_speed_mps),
@@ -356,12 +356,14 @@ def _clip_to_horizon(xyt: np.ndarray, horizon_s: float) -> np.ndarray:
     return np.vstack([xyt[: last + 1], a + fraction * (b - a)])
 
 
-def _via_xyt(robot_position, plan, horizon_s: float) -> np.ndarray:
-    """The via points at the times the plan passes them (those past the horizon left out)."""
+def _via_xyt(robot_position, plan, horizon_s: float, line: np.ndarray | None = None) -> np.ndarray:
+    """The via points at the times the plan passes them (those past the horizon left out);
+    ``line``: the plan's whole (x, y, t) polyline when already computed."""
     via = np.asarray(plan.via_points, dtype=float).reshape(-1, 2)
     if len(via) == 0:
         return np.zeros((0, 3))
-    line = plan_xyt(robot_position, plan, np.inf)
+    if line is None:
+        line = plan_xyt(robot_position, plan, np.inf)
     rows = []
     for point in via:
         distance = np.hypot(*(line[:, :2] - point).T)
