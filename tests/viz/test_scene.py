@@ -128,7 +128,6 @@ def test_runner_up_and_shield_count():
     from viapath.path import DesignatedPath
 
     builder = SceneBuilder(DesignatedPath([[0, 0], [5, 0]], half_width_m=1.0), 0.25, settings)
-    observation = type("O", (), {})()
     from viapath.observation import Observation, RobotState
 
     observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles.empty())

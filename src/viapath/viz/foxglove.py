@@ -31,7 +31,11 @@ What we chose:
   it alone (the layout's right-hand panel) while the main panel looks down on the world.
 * Each SceneUpdate first deletes everything its topic drew before, so a track that is gone
   disappears; static content (path, corridor) is still sent every cycle, so scrubbing to any time
-  shows it and every topic has one message per cycle.
+  shows it and every topic has one message per cycle. What never changes in its frame (footprint,
+  blind region: frame-locked to ``base``; the path for a given subgoal) is one message built once.
+* The vertex-heavy topics (``/xyt``, ``/plan/candidates``) are encoded with numpy
+  (:mod:`viapath.viz.protobuf_wire`) against the same ``foxglove.SceneUpdate`` schema; the rest
+  uses foxglove-sdk's message classes. MCAP chunks are LZ4-compressed (cheaper than zstd per cycle).
 * Readings a driver marks invalid (inf, NaN, 0, below the minimum range) are sent as NaN, which
   Foxglove leaves out.
 * JSON numbers that are not finite (no one in sight: clearance inf) are sent as ``null``.
