@@ -180,8 +180,13 @@ def test_plan_candidates_costs_and_chosen(front):
         for sphere in chosen_entity.spheres:
             via = np.array([sphere.pose.position.x, sphere.pose.position.y])
             assert np.min(np.hypot(*(line - via).T)) < 1e-9
-    # Cost terms are not in the plan yet: the message says so rather than inventing them.
-    assert all(not c["terms_available"] for c in costs)
+    # Each critic's share of E (Eq. 1 term by term, plus side and hysteresis) adds up to E.
+    for i in avoiding:
+        entry = costs[i]
+        assert entry["terms_available"]
+        terms = {k: v for k, v in entry["chosen"]["terms"].items() if k != "total"}
+        assert {"distance", "time", "speed", "heading"} <= set(terms)
+        assert abs(sum(terms.values()) - entry["chosen"]["E"]) < 1e-9
 
 
 def test_laser_scans_are_what_the_scanners_read(side_laser):

@@ -74,8 +74,10 @@ def test_via_points_lie_on_the_inflated_cylinder_at_their_time(front):
     obstacle's disc grown by its margins at the passing time. If the times were wrong, the via
     point would not lie on that cylinder at that height."""
     scenario, _, scenes = front
-    planner = scenario.planner
-    grown = planner.safety_margin_m + planner.planning_margin_m
+    from viapath.scenarios.loader import planner_settings
+
+    settings = planner_settings(scenario)
+    grown = settings.safety_margin_m + settings.planning_margin_m
     avoiding = [s for s in scenes if len(s.xyt.via_points_xyt)]
     assert avoiding, "paper-front should make the robot pass the person through via points"
     for scene in avoiding[:20]:

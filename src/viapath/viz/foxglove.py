@@ -49,7 +49,6 @@ import json
 import math
 import os
 import time
-from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable
 
@@ -466,21 +465,9 @@ def costs_message(scene: CycleScene) -> dict:
 def display_overrides(scenario, planner_name: str) -> dict[str, Any]:
     """Planner options that make it keep every candidate for display (the viapath planner's
     ``record_candidates``), or nothing for planners without such an option."""
-    import dataclasses
-    import inspect
+    from viapath.planning import planner_options
 
-    from viapath.planning import planner_class
-    from viapath.sim.loop import planner_options
-
-    options = planner_options(scenario, planner_name)
-    config = options.get("config")
-    if dataclasses.is_dataclass(config) and hasattr(config, "record_candidates"):
-        return {"config": replace(config, record_candidates=True)}
-    try:
-        parameters = inspect.signature(planner_class(planner_name)).parameters
-    except (TypeError, ValueError):
-        return {}
-    return {"record_candidates": True} if "record_candidates" in parameters else {}
+    return {"record_candidates": True} if "record_candidates" in planner_options(planner_name) else {}
 
 
 def check_mcap_path(file: Path | str, force: bool = False, option: str = "--mcap") -> Path:

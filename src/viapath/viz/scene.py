@@ -33,6 +33,8 @@ What the sources leave open and we chose:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
@@ -66,11 +68,10 @@ class ForecastSettings:
         """The planner's horizon and uncertainty cone where it has them (``planner.config`` or the
         planner itself), the defaults elsewhere."""
         values: dict[str, float] = {}
-        for source in (planner, getattr(planner, "config", None)):
-            if source is None:
-                continue
+        settings = getattr(planner, "settings", None) or {}
+        for source in (planner, settings):
             for name in ("horizon_s", "uncertainty_sigmas", "max_inflation_m"):
-                value = getattr(source, name, None)
+                value = source.get(name) if isinstance(source, Mapping) else getattr(source, name, None)
                 if isinstance(value, (int, float)) and np.isfinite(value):
                     values[name] = float(value)
         values.update(overrides)
