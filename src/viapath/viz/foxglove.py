@@ -55,6 +55,7 @@ from typing import Any, Callable
 import numpy as np
 
 from viapath.viz import protobuf_wire as wire
+from viapath.viz.scene import _mesh_triangles
 from viapath.viz.scene import CycleScene, ForecastSettings, SceneBuilder, candidate_colour
 
 TF = "/tf"
@@ -404,15 +405,40 @@ class FoxglovePublisher:
         segments = self.xyt_segments
         identity = w["identity"]
         entities = []
-        for i, person in enumerate(xyt.persons):
-            vertices, triangles = xyt.mesh_indexed(i, segments)
-            vertices = vertices * stretch
-            rings = [wire.line_primitive(vertices[r * segments:(r + 1) * segments], w["ring"], identity, 0.01,
-                                         wire.LINE_LOOP) for r in range((len(vertices) - 2) // segments)]
-            axis = wire.line_primitive(xyt.axis_xyt(i) * stretch, w["axis"], identity, 0.01)
-            mesh = wire.triangle_list_primitive(vertices, triangles, w["mesh"], identity)
-            entities.append(wire.scene_entity(ns, XYT_FRAME, f"person-{person.id}", lines=rings + [axis],
-                                              triangles=[mesh]))
+        if xyt.persons:
+            # All people at once: three rings each (0, cone cap or mid-horizon, horizon), the caps'
+            # centres, every point encoded in one numpy call and sliced per person and primitive.
+            rings = xyt.all_rings(segments) * stretch  # (P, 3, S, 3)
+            count = len(rings)
+            caps = rings[:, [0, 2]].mean(axis=2)  # (P, 2, 3)
+            vertices = np.concatenate([rings.reshape(count, 3 * segments, 3), caps], axis=1)  # (P, V, 3)
+            per_person = vertices.shape[1]
+            mesh_points = wire.points_field(2, vertices.reshape(-1, 3))
+            line_points = wire.points_field(5, rings.reshape(-1, 3))
+            axes = np.stack([rings[:, 0].mean(axis=1), rings[:, 2].mean(axis=1)], axis=1)  # (P, 2, 3)
+            axis_points = wire.points_field(5, axes.reshape(-1, 3))
+            key = ("xyt-parts", segments)
+            if key not in self.static:
+                self.static[key] = (
+                    wire.message_field(1, identity),  # mesh: pose
+                    wire.message_field(3, w["mesh"]) + wire.fixed32_packed_field(5, wire_triangles(segments)),
+                    wire.varint_field(1, wire.LINE_LOOP) + wire.message_field(2, identity) + wire.double_field(3, 0.01),
+                    wire.message_field(6, w["ring"]),
+                    wire.varint_field(1, wire.LINE_STRIP) + wire.message_field(2, identity) + wire.double_field(3, 0.01),
+                    wire.message_field(6, w["axis"]),
+                )
+            mesh_head, mesh_tail, ring_head, ring_tail, axis_head, axis_tail = self.static[key]
+            point_size, ring_size = 29, 29 * segments
+            for i, person in enumerate(xyt.persons):
+                start = i * per_person * point_size
+                mesh = mesh_head + mesh_points[start:start + per_person * point_size] + mesh_tail
+                lines = []
+                for r in range(3):
+                    begin = (i * 3 + r) * ring_size
+                    lines.append(ring_head + line_points[begin:begin + ring_size] + ring_tail)
+                lines.append(axis_head + axis_points[i * 2 * point_size:(i + 1) * 2 * point_size] + axis_tail)
+                entities.append(wire.scene_entity(ns, XYT_FRAME, f"person-{person.id}", lines=lines,
+                                                  triangles=[mesh]))
         x, y = scene.robot_pose[:2].tolist()
         horizon = xyt.settings.horizon_s
         ticks = [self._text(x - 0.3, y, t * scale, f"{t:g} s", c["grey"], 11.0) for t in (0.0, 0.5 * horizon, horizon)]
@@ -426,6 +452,11 @@ class FoxglovePublisher:
             wire.line_primitive(np.array([[x, y, 0.0], [x, y, horizon * scale]]), w["time_axis"], identity, 0.01),
         ], other=others))
         return wire.scene_update([w["delete_all"]], entities)
+
+
+def wire_triangles(segments: int) -> np.ndarray:
+    """Vertex indices of a three-ring cylinder with both caps (as :meth:`XYTScene.mesh_indexed`)."""
+    return _mesh_triangles(3, segments)
 
 
 def _finite(value) -> float | None:
