@@ -158,7 +158,7 @@ def _register_plugins() -> None:
     """Commands that live beside their subsystem (laser scans, benchmark)."""
     import importlib
 
-    for module in ("viapath.perception.commands", "viapath.bench.commands"):
+    for module in ("viapath.perception.commands", "viapath.bench.commands", "viapath.ros2.commands"):
         try:
             spec = importlib.util.find_spec(module)
         except ModuleNotFoundError:
