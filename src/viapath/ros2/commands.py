@@ -82,6 +82,7 @@ def sim(
     fault: List[str] = typer.Option([], "--fault", help="Inject a fault: silence:NAME@T, nan:NAME@T, short:NAME@T, odom@T, clock-back:D@T."),
     trace: Optional[Path] = typer.Option(None, "--trace", help="Write the per-step trace as CSV."),
     commands: Optional[Path] = typer.Option(None, "--commands", help="Write every step's received command as CSV."),
+    status_log: Optional[Path] = typer.Option(None, "--status-log", help="Write every planner status received (JSON lines)."),
     wait_s: float = typer.Option(60.0, "--wait-s", help="How long to wait for a planner node to appear."),
     duration: Optional[float] = typer.Option(None, "--duration", help="End the episode after this many seconds (default: the scenario's)."),
 ) -> None:
@@ -103,15 +104,15 @@ def sim(
         faults = [Fault.parse(f) for f in fault]
     except (ScenarioError, ValueError) as error:
         _fail(str(error))
-    for file, option in ((trace, "--trace"), (commands, "--commands")):
-        if file is not None and (file.suffix.lower() != ".csv" or not file.parent.exists()):
-            _fail(f"{option} {file}: expected a .csv file in an existing folder")
+    for file, option, suffix in ((trace, "--trace", ".csv"), (commands, "--commands", ".csv"), (status_log, "--status-log", ".jsonl")):
+        if file is not None and (file.suffix.lower() != suffix or not file.parent.exists()):
+            _fail(f"{option} {file}: expected a {suffix} file in an existing folder")
     _need_rclpy()
     try:
         code = run_sim(scenario, rate=rate, lockstep=lockstep, as_json=as_json, seed=seed, faults=faults,
                        trace_file=str(trace) if trace else None, wait_for_node_s=wait_s,
                        commands_file=str(commands) if commands else None, ros_args=ros_args,
-                       duration_s=duration)
+                       duration_s=duration, status_file=str(status_log) if status_log else None)
     except ValueError as error:
         _fail(str(error))
     raise typer.Exit(code)

@@ -7,7 +7,7 @@ arrays into messages, so a later shared scene description can feed it unchanged.
 
 What we chose:
 * Namespaces ``corridor``, ``path``, ``tracks`` (one CYLINDER per track, id = track id),
-  ``velocities`` (ARROW), ``forecasts`` (one LINE_LIST per track: its disc at t = 0, 1, 2, … s, drawn
+  ``velocities`` (ARROW), ``forecasts`` (one LINE_LIST per track: its disc at t = 0, 1, … 4 s, drawn
   at height ``time_scale_m_per_s`` · t, with the generator lines between), ``via_points`` (SPHERE_LIST),
   ``plan`` (LINE_STRIP of the chosen polyline), ``candidates`` (LINE_LIST, when the planner kept them).
 * Every marker is re-published each cycle with ``DELETEALL`` first, so vanished tracks disappear.
@@ -33,7 +33,7 @@ class Scene:
     track_positions: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     track_velocities: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     track_radii_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    forecast_times_s: np.ndarray = field(default_factory=lambda: np.arange(0.0, 5.01, 1.0))
+    forecast_times_s: np.ndarray = field(default_factory=lambda: np.arange(0.0, 4.01, 1.0))
     via_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     plan: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     candidates: list = field(default_factory=list)
@@ -67,10 +67,26 @@ def scene_from_cycle(path, result) -> Scene:
     return scene
 
 
-def _point(msg_cls, x, y, z=0.0):
-    p = msg_cls()
-    p.x, p.y, p.z = float(x), float(y), float(z)
-    return p
+def _points(msg_cls, xy, z=None) -> list:
+    """Points from an (N, 2) or (N, 3) array (one constructor call per point: the cost of a marker)."""
+    xy = np.asarray(xy, dtype=float)
+    if xy.shape[-1] == 2:
+        zs = np.zeros(len(xy)) if z is None else np.broadcast_to(z, (len(xy),))
+        xy = np.column_stack([xy, zs])
+    return [msg_cls(x=x, y=y, z=z) for x, y, z in xy.tolist()]
+
+
+_CIRCLE = np.linspace(0.0, 2 * np.pi, 13)
+
+
+def _forecast_segments(p, v, r, times, time_scale):
+    """Endpoints (2S, 3) of the line segments drawing a disc moving at ``v``: rings at ``times`` and 4 generators."""
+    rings = np.stack([np.column_stack([p[0] + v[0] * t + r * np.cos(_CIRCLE), p[1] + v[1] * t + r * np.sin(_CIRCLE),
+                                       np.full(len(_CIRCLE), t * time_scale)]) for t in times])  # (T, C, 3)
+    ring_segments = np.stack([rings[:, :-1], rings[:, 1:]], axis=2).reshape(-1, 3)
+    k = [0, 3, 6, 9]
+    generators = np.stack([rings[:-1, k], rings[1:, k]], axis=2).reshape(-1, 3)
+    return np.concatenate([ring_segments, generators])
 
 
 def marker_array(scene: Scene, frame_id: str, stamp, time_scale_m_per_s: float = 0.2):
@@ -96,37 +112,25 @@ def marker_array(scene: Scene, frame_id: str, stamp, time_scale_m_per_s: float =
 
     for k, edge in enumerate((scene.corridor_left, scene.corridor_right)):
         if len(edge):
-            m = marker("corridor", k, Marker.LINE_LIST, (0.2, 0.4, 1.0, 0.8))
-            m.points = [_point(Point, *p) for p in edge]
+            marker("corridor", k, Marker.LINE_LIST, (0.2, 0.4, 1.0, 0.8)).points = _points(Point, edge)
     if len(scene.path):
-        m = marker("path", 0, Marker.LINE_STRIP, (0.2, 0.4, 1.0, 0.4), (0.02, 0.02, 0.02))
-        m.points = [_point(Point, *p) for p in scene.path]
-    circle = np.linspace(0.0, 2 * np.pi, 17)
-    for tid, p, v, r in zip(scene.track_ids, scene.track_positions, scene.track_velocities, scene.track_radii_m, strict=True):
+        marker("path", 0, Marker.LINE_STRIP, (0.2, 0.4, 1.0, 0.4), (0.02, 0.02, 0.02)).points = _points(Point, scene.path)
+    for tid, p, v, r in zip(scene.track_ids.tolist(), scene.track_positions, scene.track_velocities,
+                            scene.track_radii_m.tolist(), strict=True):
         m = marker("tracks", tid, Marker.CYLINDER, (1.0, 0.5, 0.0, 0.8), (2 * r, 2 * r, 0.1))
-        m.pose.position = _point(Point, p[0], p[1], 0.05)
-        a = marker("velocities", tid, Marker.ARROW, (1.0, 0.2, 0.0, 1.0), (0.03, 0.06, 0.06))
-        a.points = [_point(Point, *p), _point(Point, *(p + v))]
+        m.pose.position = Point(x=float(p[0]), y=float(p[1]), z=0.05)
+        marker("velocities", tid, Marker.ARROW, (1.0, 0.2, 0.0, 1.0), (0.03, 0.06, 0.06)).points = _points(Point, [p, p + v])
         f = marker("forecasts", tid, Marker.LINE_LIST, (1.0, 0.5, 0.0, 0.4), (0.01, 0.01, 0.01))
-        points = []
-        rings = [np.stack([p[0] + v[0] * t + r * np.cos(circle), p[1] + v[1] * t + r * np.sin(circle),
-                           np.full(len(circle), t * time_scale_m_per_s)], axis=1) for t in scene.forecast_times_s]
-        for ring in rings:
-            for a0, a1 in zip(ring[:-1], ring[1:], strict=True):
-                points += [_point(Point, *a0), _point(Point, *a1)]
-        for r0, r1 in zip(rings[:-1], rings[1:], strict=True):
-            for j in (0, 4, 8, 12):
-                points += [_point(Point, *r0[j]), _point(Point, *r1[j])]
-        f.points = points
+        f.points = _points(Point, _forecast_segments(p, v, r, scene.forecast_times_s, time_scale_m_per_s))
     if len(scene.via_points):
-        m = marker("via_points", 0, Marker.SPHERE_LIST, (0.9, 0.0, 0.9, 1.0), (0.1, 0.1, 0.1))
-        m.points = [_point(Point, *p) for p in scene.via_points]
+        marker("via_points", 0, Marker.SPHERE_LIST, (0.9, 0.0, 0.9, 1.0), (0.1, 0.1, 0.1)).points = _points(Point, scene.via_points)
     if len(scene.plan) >= 2:
-        m = marker("plan", 0, Marker.LINE_STRIP, (0.0, 0.8, 0.2, 1.0), (0.04, 0.04, 0.04))
-        m.points = [_point(Point, *p) for p in scene.plan]
+        marker("plan", 0, Marker.LINE_STRIP, (0.0, 0.8, 0.2, 1.0), (0.04, 0.04, 0.04)).points = _points(Point, scene.plan)
     if scene.candidates:
-        m = marker("candidates", 0, Marker.LINE_LIST, (0.5, 0.5, 0.5, 0.3), (0.01, 0.01, 0.01))
-        m.points = [_point(Point, *q) for c in scene.candidates for a0, a1 in zip(c[:-1], c[1:], strict=True) for q in (a0, a1)]
+        segments = [np.stack([c[:-1], c[1:]], axis=1).reshape(-1, 2) for c in scene.candidates if len(c) >= 2]
+        if segments:
+            marker("candidates", 0, Marker.LINE_LIST, (0.5, 0.5, 0.5, 0.3), (0.01, 0.01, 0.01)).points = _points(
+                Point, np.concatenate(segments))
     return out
 
 

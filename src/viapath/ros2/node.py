@@ -203,7 +203,7 @@ def make_node_class():
 
         def _on_scan(self, index: int, msg) -> None:
             due = self.core.on_scan(index, self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id,
-                                    msg.angle_min, msg.angle_increment, msg.ranges)
+                                    msg.angle_min, msg.angle_increment, msg.ranges, msg.range_min, msg.range_max)
             if due:
                 self._publish(self.core.cycle(self._now_s()))
 
@@ -236,12 +236,20 @@ def make_node_class():
             assert math.isfinite(cmd.speed_mps) and math.isfinite(cmd.turn_rate_radps)
             self._pubs["cmd"].publish(self._command_msg(cmd.speed_mps, cmd.turn_rate_radps, result.stamp_s))
             stamp = self._stamp(result.stamp_s)
-            if markers:
+            if markers and self._pubs["markers"].get_subscription_count() > 0:  # built only for someone watching
                 scene = scene_from_cycle(self.core.path, result)
                 self._pubs["markers"].publish(marker_array(scene, self.core.settings.odom_frame or "odom", stamp))
             self._pubs["status"].publish(self._diagnostics(result, stamp))
 
+        def _inputs_matched(self) -> bool:
+            """Whether every input topic has a publisher (the simulator waits for this before its first step)."""
+            s = self.core.settings
+            topics = [sc.topic for sc in s.scanners] + [s.odom_topic]
+            return all(self.count_publishers(t) > 0 for t in topics)
+
         def _diagnostics(self, result: CycleResult, stamp) -> DiagnosticArray:
+            if result.cycle_time_ms is None:  # watchdog ticks only: cheap enough there
+                result.status["planner"]["inputs_matched"] = str(int(self._inputs_matched()))
             out = DiagnosticArray()
             out.header.stamp = stamp
             level_of = {0: DiagnosticStatus.OK, 1: DiagnosticStatus.WARN, 2: DiagnosticStatus.ERROR}

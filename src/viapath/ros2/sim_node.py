@@ -16,12 +16,13 @@ What we chose:
   before driving, so a slow machine changes the timing of nothing: the command of step k is applied
   in step k, as in ``viapath run``. Without it a late command is applied a step later, as on a robot.
 * The planner's side of the trace (plan speed, status, side, via points, cycle time, tracks) comes
-  from the node's DiagnosticArray and MarkerArray; ``plan_time_*`` are the node's whole cycle
+  from the node's DiagnosticArray (its planner status carries them as key/values); ``plan_time_*`` are the node's whole cycle
   (perception and planning), ``perception_time_*`` are not known here (null), and the tracking
-  errors compare the node's track markers with the true people at the same stamps.
-* Fault injection for tests (``--fault KIND@T``): ``silence:NAME`` (scanner NAME publishes nothing from
-  T), ``nan:NAME`` (all-NaN ranges), ``short:NAME`` (a scan 10 beams short), ``odom`` (no odometry from
-  T), ``clock-back:D`` (at T the clock and all stamps jump back by D seconds, then go on).
+  errors compare the node's reported tracks with the true people at the same stamps.
+* Fault injection for tests (``--fault KIND@T[-END]``, from T to END s or for good): ``silence:NAME``
+  (scanner NAME publishes nothing), ``nan:NAME`` (all-NaN ranges), ``short:NAME`` (scans 10 beams
+  short), ``odom`` (no odometry), ``clock-back:D`` (at T the clock and all stamps jump back by D
+  seconds, then go on).
 """
 
 from __future__ import annotations
@@ -42,24 +43,30 @@ class Fault:
     at_s: float
     scanner: str = ""
     amount_s: float = 0.0
+    until_s: float = math.inf
+
+    def active(self, t: float) -> bool:
+        return self.at_s <= t < self.until_s
 
     @classmethod
     def parse(cls, text: str) -> "Fault":
-        """``silence:front@2``, ``nan:rear@1.5``, ``short:front@2``, ``odom@3``, ``clock-back:2@3``."""
+        """``silence:front@2``, ``nan:rear@1.5-3``, ``short:front@2``, ``odom@3-4``, ``clock-back:2@3``."""
         try:
             what, at = text.rsplit("@", 1)
-            at_s = float(at)
+            start, _, end = at.partition("-")
+            at_s = float(start)
+            until_s = float(end) if end else math.inf
             kind, _, arg = what.partition(":")
         except ValueError:
-            raise ValueError(f"--fault {text!r}: expected KIND[:ARG]@TIME, e.g. silence:front@2") from None
-        if not math.isfinite(at_s) or at_s < 0:
-            raise ValueError(f"--fault {text!r}: time must be finite and >= 0")
+            raise ValueError(f"--fault {text!r}: expected KIND[:ARG]@TIME[-END], e.g. silence:front@2-4") from None
+        if not math.isfinite(at_s) or at_s < 0 or not until_s > at_s:
+            raise ValueError(f"--fault {text!r}: times must be finite, >= 0, and END after TIME")
         if kind in ("silence", "nan", "short"):
             if not arg:
                 raise ValueError(f"--fault {text!r}: name the scanner, e.g. {kind}:front@{at}")
-            return cls(kind, at_s, scanner=arg)
+            return cls(kind, at_s, scanner=arg, until_s=until_s)
         if kind == "odom":
-            return cls(kind, at_s)
+            return cls(kind, at_s, until_s=until_s)
         if kind == "clock-back":
             try:
                 amount = float(arg)
@@ -82,10 +89,10 @@ class StepRecord:
     late: bool = False
 
 
-def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max_wait_s: float = 2.0,
+def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max_wait_s: float = 10.0,
             as_json: bool = False, seed: int | None = None, faults: list[Fault] | None = None,
             trace_file: str | None = None, wait_for_node_s: float = 60.0, commands_file: str | None = None,
-            ros_args: list[str] | None = None, duration_s: float | None = None) -> int:
+            ros_args: list[str] | None = None, duration_s: float | None = None, status_file: str | None = None) -> int:
     """Run one episode against whatever node listens; prints metrics; returns the exit code."""
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
@@ -96,13 +103,12 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
     from rclpy.signals import SignalHandlerOptions
     from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import LaserScan
-    from visualization_msgs.msg import MarkerArray
 
     from viapath.observation import Command, MotionLimits
     from viapath.path import DesignatedPath, SubgoalPolicy
     from viapath.perception.laser import LaserPerception, tracking_errors
     from viapath.ros2 import convert
-    from viapath.ros2.markers import tracks_from_markers
+    from viapath.ros2.core import parse_points, parse_tracks
     from viapath.scenarios import load_scenario
     from viapath.sim import robot as kinematics
     from viapath.sim.loop import Trace
@@ -121,7 +127,7 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
     path = DesignatedPath(spec.path.waypoints, half_widths_m=spec.path.widths())
     limits = MotionLimits(**spec.robot.limits.model_dump())
     goal_tolerance = SubgoalPolicy(**spec.subgoals.model_dump()).goal_tolerance_m
-    laser = LaserPerception(robot_radius_m=spec.robot.radius)
+    laser = LaserPerception(robot_radius_m=spec.robot.radius, ray_backend="auto")  # numba when installed: same ranges
     rng = np.random.default_rng(spec.seed if seed is None else seed)
     laser.reset(rng)
     names = [s.name for s in laser.scanners]
@@ -140,7 +146,7 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
         odom_pub = node.create_publisher(Odometry, "odom", 10)
         path_pub = node.create_publisher(PathMsg, "designated_path", latched)
         scan_pubs = {n: node.create_publisher(LaserScan, f"scan_{n}", qos_profile_sensor_data) for n in names}
-        got = {"cmd": None, "cmd_count": 0, "status": [], "markers": {}, "by_stamp": {}, "watchdog": []}
+        got = {"cmd": None, "cmd_count": 0, "status": [], "by_stamp": {}, "watchdog": []}
 
         def on_twist(msg):
             got["cmd"] = (msg.linear.x, msg.angular.z)
@@ -160,16 +166,8 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
                     else:
                         got["watchdog"].append(stamp)
 
-        def on_markers(msg):
-            stamp = next((convert.stamp_seconds(m.header.stamp) for m in msg.markers if m.ns), None)
-            if stamp is not None:
-                ids, pos, vel = tracks_from_markers(msg)
-                via = [np.array([[p.x, p.y] for p in m.points]) for m in msg.markers if m.ns == "via_points"]
-                got["markers"][round(stamp, 6)] = (ids, pos, vel, via[0] if via else np.zeros((0, 2)))
-
         node.create_subscription(Twist, "cmd_vel", on_twist, 10)
         node.create_subscription(DiagnosticArray, "viapath/status", on_status, 50)
-        node.create_subscription(MarkerArray, "viapath/markers", on_markers, 20)
 
         def spin_until(deadline: float, done=lambda: False) -> None:
             while not stop["flag"]:
@@ -194,7 +192,8 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
         # ("no scan yet"): then clock, status and commands are matched both ways.
         tick = 0.0
         def node_ready():
-            return bool(got["status"]) and "no designated path" not in got["status"][-1].get("reasons", "")
+            last = got["status"][-1] if got["status"] else {}
+            return bool(last) and "no designated path" not in last.get("reasons", "") and last.get("inputs_matched") == "1"
 
         while not stop["flag"] and not node_ready() and time.monotonic() - started < wait_for_node_s:
             tick = min(tick + 0.01, 0.99)
@@ -236,14 +235,14 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
             stamp = convert.time_msg(stamp_s)
             clock.clock = stamp
             clock_pub.publish(clock)
-            if not any(f.kind == "odom" and t >= f.at_s for f in faults):
+            if not any(f.kind == "odom" and f.active(t) for f in faults):
                 odom_pub.publish(convert.odometry("odom", "base_link", stamp, state.x, state.y, state.heading_rad,
                                                   state.speed_mps, state.turn_rate_radps))
             pose = np.array([state.x, state.y, state.heading_rad])
             world = WorldSnapshot(t, pose, spec.robot.radius, positions[k], velocities[k], radii, walls)
             scans = laser.scan(world)
             for scanner, ranges in zip(laser.scanners, scans, strict=True):
-                active = [f for f in faults if f.scanner == scanner.name and t >= f.at_s]
+                active = [f for f in faults if f.scanner == scanner.name and f.active(t)]
                 if any(f.kind == "silence" for f in active):
                     continue
                 if any(f.kind == "nan" for f in active):
@@ -258,11 +257,11 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
 
             key = round(stamp_s, 6)
 
-            published = sum(1 for n in names if not any(f.scanner == n and f.kind == "silence" and t >= f.at_s for f in faults))
+            published = sum(1 for n in names if not any(f.scanner == n and f.kind == "silence" and f.active(t) for f in faults))
 
             def cycle_reported():
                 if key in got["by_stamp"]:
-                    return True
+                    return got["cmd_count"] > count_before  # its command too (another topic: may come second)
                 # no scan this step: the node's watchdog answers instead
                 return published == 0 and bool(got["watchdog"]) and got["watchdog"][-1] >= key - 1e-6
 
@@ -287,11 +286,10 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
             rec.status = status.get("plan_status", status.get("mode", "none"))
             rec.side = int(status.get("plan_side", 0))
             rec.cycle_ms = float(status.get("cycle_time_ms") or "nan")
-            marks = got["markers"].get(key)
-            if marks is not None:
-                ids, pos, vel, via = marks
-                rec.via = via
-                reported.append(Obstacles(pos, vel, np.full(len(pos), 0.25), ids=ids))
+            if status:
+                ids, pos, vel, rad = parse_tracks(status.get("tracks_xyv", ""))
+                rec.via = parse_points(status.get("via_xy", ""))
+                reported.append(Obstacles(pos, vel, rad, ids=ids))
                 truth.append(world)
         n = len(rows["pose"])
         trace = Trace(
@@ -315,6 +313,10 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
             from viapath.io.trace import write_trace_csv
 
             write_trace_csv(trace, trace_file)
+        if status_file:
+            with open(status_file, "w") as handle:
+                for values in got["status"]:
+                    handle.write(json.dumps(values) + "\n")
         if commands_file:
             np.savetxt(commands_file, np.array(received).reshape(-1, 4), delimiter=",", header="time_s,v_mps,w_radps,measured_speed_mps",
                        comments="")
