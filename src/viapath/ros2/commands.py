@@ -128,6 +128,8 @@ def play(
     rate: float = typer.Option(1.0, "--rate", help="Play R times faster, through /clock."),
     odom: bool = typer.Option(True, "--odom/--no-odom", help="Also publish a standing robot's odometry at the origin."),
     wait_s: float = typer.Option(30.0, "--wait-s", help="How long to wait for a subscriber before playing."),
+    lockstep: bool = typer.Option(False, "--lockstep", help="Wait for the node's cycle on each scan before the next."),
+    status_log: Optional[Path] = typer.Option(None, "--status-log", help="Write the node's planner statuses (JSON lines)."),
 ) -> None:
     """Publish a recording's scans with their timing (and /clock), so the node tracks real people."""
     import math
@@ -141,7 +143,8 @@ def play(
         _fail(f"{bag}: no such file or directory")
     _need_rclpy()
     try:
-        code = run_play(bag, topic, out_topic, frame_id, rate, odom, wait_s, ros_args)
+        code = run_play(bag, topic, out_topic, frame_id, rate, odom, wait_s, ros_args, lockstep=lockstep,
+                        status_file=str(status_log) if status_log else None)
     except (ValueError, ImportError, FileNotFoundError) as error:
         _fail(str(error))
     raise typer.Exit(code)

@@ -12,6 +12,9 @@ What we chose:
   at the origin is published with each scan, so the node has a pose (frame ``odom``).
 * Scans are published as recorded (clockwise ones too; invalid readings unchanged), with the
   sensor-data QoS but reliable, so a local subscriber misses none.
+* ``--lockstep`` waits after each scan (up to ``max_wait_s``) for the node's cycle on it (its
+  DiagnosticArray), then goes on with the recording's timing: on a slow machine the node then
+  still sees every scan. ``--status-log`` writes the node's planner statuses (JSON lines).
 """
 
 from __future__ import annotations
@@ -21,8 +24,12 @@ import sys
 import time
 
 
-def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait_s: float, ros_args=None) -> int:
+def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait_s: float, ros_args=None,
+             lockstep: bool = False, max_wait_s: float = 10.0, status_file=None, status_topic: str = "viapath/status") -> int:
+    import json
+
     import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
     from nav_msgs.msg import Odometry
     from rclpy.qos import QoSProfile, ReliabilityPolicy
     from rclpy.signals import SignalHandlerOptions
@@ -45,13 +52,31 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
         scan_pub = node.create_publisher(LaserScan, out_topic, qos)
         clock_pub = node.create_publisher(Clock, "/clock", 10)
         odom_pub = node.create_publisher(Odometry, "odom", 10) if odom else None
+        statuses: list[dict] = []
+        cycles: set[float] = set()
+
+        def on_status(msg):
+            for st in msg.status:
+                if st.name.endswith(": planner"):
+                    values = {kv.key: kv.value for kv in st.values}
+                    statuses.append(values)
+                    if values.get("source") == "cycle":
+                        try:
+                            cycles.add(round(float(values.get("stamp_s", "nan")), 6))
+                        except ValueError:
+                            pass
+
+        node.create_subscription(DiagnosticArray, status_topic, on_status, 100)
         started = time.monotonic()
-        while node.count_subscribers(out_topic) == 0 and not stop["flag"]:
+        while (node.count_subscribers(out_topic) == 0 or (lockstep and node.count_publishers(status_topic) == 0)) \
+                and not stop["flag"]:
             if time.monotonic() - started > wait_s:
                 print(f"error: nobody subscribed to {out_topic} within {wait_s:g} s", file=sys.stderr)
                 return 3
             rclpy.spin_once(node, timeout_sec=0.05)
-        time.sleep(0.5)
+        end = time.monotonic() + 1.0
+        while time.monotonic() < end:  # let both sides finish matching
+            rclpy.spin_once(node, timeout_sec=0.05)
         first = messages[0].stamp_s
         wall0 = time.monotonic()
         clock = Clock()
@@ -71,10 +96,20 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
                                                 m.angle_increment_rad, m.ranges_m, m.range_min_m, m.range_max_m,
                                                 m.scan_time_s or 0.1))
             sent += 1
+            if lockstep:  # wait for the node's cycle on this scan (a slow machine then changes nothing)
+                key = round(m.stamp_s, 6)
+                end = time.monotonic() + max_wait_s
+                while key not in cycles and time.monotonic() < end and not stop["flag"]:
+                    rclpy.spin_once(node, timeout_sec=0.01)
+                wall0 += max(time.monotonic() - due, 0.0)  # the recording's timing resumes from here
         end = time.monotonic() + 1.0
         while time.monotonic() < end:  # let the last messages go out
             rclpy.spin_once(node, timeout_sec=0.05)
-        print(f"viapath ros2 play: {sent} scans from {bag} on {out_topic}", file=sys.stderr)
+        if status_file:
+            with open(status_file, "w") as handle:
+                for values in statuses:
+                    handle.write(json.dumps(values) + "\n")
+        print(f"viapath ros2 play: {sent} scans from {bag} on {out_topic}, {len(cycles)} node cycles seen", file=sys.stderr)
         return 0
     finally:
         node.destroy_node()

@@ -77,6 +77,8 @@ NODE_OPTIONS: tuple[Option, ...] = (
     Option("cycle_period_s", 0.1, "s", 0.01, 1.0, "scan period; also the watchdog period"),
     Option("max_invalid_fraction", 0.5, "", 0.0, 1.0, "a scan with more NaN/zero readings than this counts as failed"),
     Option("detector", "people", "", help="detector preset", choices=("people", "legs")),
+    Option("fit_backend", "numpy", "", help="circle fit back end (numba: compiled at start, barely faster here)",
+           choices=("numpy", "auto", "numba")),
     Option("tracker_acceleration_sigma_mps2", 0.2, "m/s^2", 0.01, 10.0, "process noise of the tracker (real walkers: 0.5)"),
     Option("blind_person_speed_mps", 1.0, "m/s", 0.0, 5.0, "walking speed assumed for someone in a blind sector"),
     Option("blind_clearance_m", 0.3, "m", 0.0, 10.0, "distance from the body an unseen person is assumed to start from"),

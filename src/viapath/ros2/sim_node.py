@@ -127,7 +127,7 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
     path = DesignatedPath(spec.path.waypoints, half_widths_m=spec.path.widths())
     limits = MotionLimits(**spec.robot.limits.model_dump())
     goal_tolerance = SubgoalPolicy(**spec.subgoals.model_dump()).goal_tolerance_m
-    laser = LaserPerception(robot_radius_m=spec.robot.radius, ray_backend="auto")  # numba when installed: same ranges
+    laser = LaserPerception(robot_radius_m=spec.robot.radius)
     rng = np.random.default_rng(spec.seed if seed is None else seed)
     laser.reset(rng)
     names = [s.name for s in laser.scanners]
