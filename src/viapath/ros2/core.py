@@ -431,6 +431,8 @@ class PlannerCore:
         self.last_command, self.last_command_s = command, now_s
         elapsed = (time.perf_counter() - started) * 1e3
         self.cycle_times_ms.append(elapsed)
+        if len(self.cycle_times_ms) > 1000:
+            del self.cycle_times_ms[:-100]
         result = CycleResult(command, mode, reasons, stamp, decision, obstacles, pose, sectors, cap, elapsed)
         result.status = self._status(result, now_s)
         self.last_result = result
@@ -488,11 +490,11 @@ class PlannerCore:
             "state": "ok" if self.odometry_fresh(now_s) else "stale",
             "refused": ", ".join(f"{k}: {v}" for k, v in sorted(self.odom_refused.items())) or "none",
         }
-        times = np.asarray(self.cycle_times_ms[-200:])
+        times = sorted(self.cycle_times_ms[-100:])  # the last 100 cycles (np.percentile costs 0.7 ms a call)
         out["timing"] = {
             "cycle_time_ms": f"{result.cycle_time_ms:.3f}" if result.cycle_time_ms is not None else "",
-            "cycle_time_p50_ms": f"{np.percentile(times, 50):.3f}" if len(times) else "",
-            "cycle_time_p99_ms": f"{np.percentile(times, 99):.3f}" if len(times) else "",
+            "cycle_time_p50_ms": f"{times[len(times) // 2]:.3f}" if times else "",
+            "cycle_time_p99_ms": f"{times[min(len(times) - 1, int(0.99 * len(times)))]:.3f}" if times else "",
         }
         return out
 
