@@ -6,36 +6,35 @@ No rclpy needed: these check :mod:`viapath.ros2.settings` and :mod:`viapath.ros2
 from __future__ import annotations
 
 import math
-from dataclasses import fields
-
 import pytest
 
-from viapath.planning.viapath import ViaPathConfig, Weights
-from viapath.ros2.options import planner_kwargs, planner_options
+from viapath.planning import make_planner, planner_class
+from viapath.ros2.options import planner_kwargs
 from viapath.ros2.settings import (ParameterError, all_options, describe, read_params_file, validate,
                                    write_example_params)
 
 
 def test_every_planner_option_becomes_a_parameter_with_its_default():
-    options = {o.name: o for o in planner_options("viapath")}
-    expected = {f.name for f in fields(ViaPathConfig)} - {"weights", "record_candidates"}
-    expected |= {f"weights.{w.name}" for w in fields(Weights)}
-    assert set(options) == expected
-    config = ViaPathConfig()
-    assert options["horizon_s"].default == config.horizon_s and options["horizon_s"].unit == "s"
-    assert options["planning_margin_m"].unit == "m"
-    assert tuple(options["speeds_mps"].default) == config.speeds_mps
-    assert options["weights.k2"].default == Weights().k2
-    assert options["preferred_side"].choices == ("left", "right")
-    # the node's parameter names: planner.<option>
-    names = {o.name for o in all_options("viapath")}
-    assert {"planner.horizon_s", "planner.weights.k1", "planner_name", "scanners.front.mount_x_m"} <= names
+    schema = list(planner_class("viapath").options)
+    params = {o.name: o for o in all_options("viapath")}
+    for option in schema:
+        param = params[f"planner.{option.path}"]
+        assert param.default == option.default and param.unit == option.unit
+        assert (param.minimum, param.maximum, param.choices) == (option.minimum, option.maximum, option.choices)
+    assert {"planner.horizon_s", "planner.weights.k1", "planner.speeds", "planner_name", "scanners.front.mount_x_m"} <= set(params)
+    assert len([n for n in params if n.startswith("planner.")]) == len(schema)
 
 
-def test_defaults_rebuild_the_default_planner_config():
+def test_defaults_rebuild_the_default_planner():
+    from viapath.path import DesignatedPath
+
     settings = validate({})
-    config = planner_kwargs("viapath", settings.planner_values)["config"]
-    assert config == ViaPathConfig()
+    path = DesignatedPath([[0.0, 0.0], [5.0, 0.0]], half_width_m=1.0)
+    planner = make_planner("viapath", path, **planner_kwargs("viapath", settings.planner_values))
+    assert dict(planner.settings) == dict(planner_class("viapath").options.validate({}))
+    changed = validate({"planner.weights.k1": 0.3, "planner.speeds": [0.1, 0.3]})
+    planner = make_planner("viapath", path, **planner_kwargs("viapath", changed.planner_values))
+    assert planner.settings["k1"] == 0.3 and tuple(planner.settings["speeds"]) == (0.1, 0.3)
     assert settings.scanners[0].mount_x_m == pytest.approx(0.145) and settings.scanners[1].mount_x_m == pytest.approx(-0.145)
     assert settings.scanners[1].mount_yaw_rad == pytest.approx(math.pi)
 
@@ -52,7 +51,9 @@ def test_descriptions_carry_unit_and_bounds():
     ({"max_accel_mps2": "fast"}, "max_accel_mps2"),
     ({"planner.horizon_s": -1.0}, "planner.horizon_s"),
     ({"planner.preferred_side": "up"}, "planner.preferred_side"),
-    ({"planner.speeds_mps": [0.1, -0.2]}, "planner.speeds_mps"),
+    ({"planner.speeds": [0.1, -0.2]}, "planner.speeds"),
+    ({"planner.speeds": [0.0]}, "planner.speeds"),
+    ({"planner.weights.k1": -0.1}, "planner.weights.k1"),
     ({"planner.max_depth": 0}, "planner.max_depth"),
     ({"scan_geometry": "whatever"}, "scan_geometry"),
     ({"planner_name": "nope"}, "planner_name"),

@@ -6,8 +6,8 @@ node declares them with their unit and bounds in the description, and :func:`val
 bad value with one message naming the parameter (the node then does not drive).
 
 What we chose:
-* The planner's options live under ``planner.`` (``planner.horizon_s``, ``planner.weights.k1``);
-  which planner under ``planner_name``.
+* The planner's options (:mod:`viapath.options`) live under ``planner.`` with their dotted path
+  (``planner.horizon_s``, ``planner.weights.k1``); which planner under ``planner_name``.
 * Scanners are a list of names (``scanner_names``) with ``scanners.<name>.topic``, ``.frame_id``,
   ``.mount_x_m``, ``.mount_y_m``, ``.mount_yaw_rad``. The defaults are the paper's pair (URG-04LX
   0.145 m ahead facing forward, 0.145 m behind facing backward).
@@ -30,6 +30,11 @@ import numpy as np
 
 from viapath.ros2.options import Option, planner_options
 
+
+def _opt(name: str, default, unit: str = "", minimum=None, maximum=None, help: str = "", choices=None) -> Option:
+    """A node option (keywords: :class:`viapath.options.Option` takes ``help`` third)."""
+    return Option(name=name, default=default, help=help, unit=unit, minimum=minimum, maximum=maximum, choices=choices)
+
 NODE_NAME = "viapath"
 PLANNER_PREFIX = "planner."
 
@@ -41,49 +46,49 @@ class ParameterError(ValueError):
 def _scanner_options(name: str, topic: str, frame: str, x: float, yaw: float) -> tuple[Option, ...]:
     p = f"scanners.{name}."
     return (
-        Option(p + "topic", topic, "", help=f"sensor_msgs/LaserScan topic of the {name} scanner"),
-        Option(p + "frame_id", frame, "", help="frame_id its scans must carry ('' accepts any)"),
-        Option(p + "mount_x_m", x, "m", -10.0, 10.0, "scanner position ahead of the robot centre"),
-        Option(p + "mount_y_m", 0.0, "m", -10.0, 10.0, "scanner position left of the robot centre"),
-        Option(p + "mount_yaw_rad", yaw, "rad", -math.pi, math.pi, "scanner axis relative to the robot heading"),
+        _opt(p + "topic", topic, "", help=f"sensor_msgs/LaserScan topic of the {name} scanner"),
+        _opt(p + "frame_id", frame, "", help="frame_id its scans must carry ('' accepts any)"),
+        _opt(p + "mount_x_m", x, "m", -10.0, 10.0, "scanner position ahead of the robot centre"),
+        _opt(p + "mount_y_m", 0.0, "m", -10.0, 10.0, "scanner position left of the robot centre"),
+        _opt(p + "mount_yaw_rad", yaw, "rad", -math.pi, math.pi, "scanner axis relative to the robot heading"),
     )
 
 
 NODE_OPTIONS: tuple[Option, ...] = (
-    Option("scanner_names", ["front", "rear"], "", help="names of the scanners (each has scanners.<name>.*)"),
-    Option("scan_geometry", "urg04lx", "", help="beam layout the scans must have", choices=("urg04lx", "from_message")),
-    Option("odom_topic", "odom", "", help="nav_msgs/Odometry topic"),
-    Option("path_topic", "designated_path", "", help="nav_msgs/Path topic of the designated path (transient local)"),
-    Option("path_file", "", "", help="designated path from a file instead (scenario YAML, or YAML/CSV of x y waypoints)"),
-    Option("cmd_vel_topic", "cmd_vel", "", help="command topic"),
-    Option("cmd_vel_stamped", False, "", help="publish geometry_msgs/TwistStamped instead of Twist"),
-    Option("markers_topic", "viapath/markers", "", help="visualization_msgs/MarkerArray topic"),
-    Option("status_topic", "viapath/status", "", help="diagnostic_msgs/DiagnosticArray topic"),
-    Option("odom_frame", "odom", "", help="world frame of odometry and path ('' accepts any)"),
-    Option("base_frame", "base_link", "", help="robot frame (markers of the robot)"),
-    Option("half_width_m", 1.0, "m", 0.01, 100.0, "corridor half-width around the designated path"),
-    Option("half_widths_m", [0.0], "m", 0.0, 100.0, "one half-width per path segment (0 or empty: half_width_m)"),
-    Option("nominal_speed_mps", 0.2, "m/s", 0.01, 5.0, "speed the robot keeps when nothing is in the way"),
-    Option("robot_radius_m", 0.25, "m", 0.01, 5.0, "radius of the robot's footprint"),
-    Option("max_speed_mps", 0.6, "m/s", 0.01, 5.0, "speed limit of the base"),
-    Option("max_accel_mps2", 0.8, "m/s^2", 0.01, 20.0, "acceleration (and braking) limit of the base"),
-    Option("max_turn_rate_radps", 2.0, "rad/s", 0.01, 20.0, "turn-rate limit of the base"),
-    Option("max_turn_accel_radps2", 6.0, "rad/s^2", 0.01, 100.0, "turn acceleration limit of the base"),
-    Option("reach_threshold_m", 0.2, "m", 0.01, 10.0, "an intermediate subgoal is reached within this"),
-    Option("goal_tolerance_m", 0.1, "m", 0.01, 10.0, "the goal is reached within this"),
-    Option("bypass_distance_m", 1.0, "m", 0.0, 100.0, "a blocked subgoal is given up within this"),
-    Option("scan_timeout_s", 0.3, "s", 0.05, 10.0, "a scanner silent this long is blind; all silent: brake to a stop"),
-    Option("odom_timeout_s", 0.5, "s", 0.05, 10.0, "no odometry this long: brake to a stop"),
-    Option("cycle_period_s", 0.1, "s", 0.01, 1.0, "scan period; also the watchdog period"),
-    Option("max_invalid_fraction", 0.5, "", 0.0, 1.0, "a scan with more NaN/zero readings than this counts as failed"),
-    Option("detector", "people", "", help="detector preset", choices=("people", "legs")),
-    Option("fit_backend", "numpy", "", help="circle fit back end (numba: compiled at start, barely faster here)",
+    _opt("scanner_names", ["front", "rear"], "", help="names of the scanners (each has scanners.<name>.*)"),
+    _opt("scan_geometry", "urg04lx", "", help="beam layout the scans must have", choices=("urg04lx", "from_message")),
+    _opt("odom_topic", "odom", "", help="nav_msgs/Odometry topic"),
+    _opt("path_topic", "designated_path", "", help="nav_msgs/Path topic of the designated path (transient local)"),
+    _opt("path_file", "", "", help="designated path from a file instead (scenario YAML, or YAML/CSV of x y waypoints)"),
+    _opt("cmd_vel_topic", "cmd_vel", "", help="command topic"),
+    _opt("cmd_vel_stamped", False, "", help="publish geometry_msgs/TwistStamped instead of Twist"),
+    _opt("markers_topic", "viapath/markers", "", help="visualization_msgs/MarkerArray topic"),
+    _opt("status_topic", "viapath/status", "", help="diagnostic_msgs/DiagnosticArray topic"),
+    _opt("odom_frame", "odom", "", help="world frame of odometry and path ('' accepts any)"),
+    _opt("base_frame", "base_link", "", help="robot frame (markers of the robot)"),
+    _opt("half_width_m", 1.0, "m", 0.01, 100.0, "corridor half-width around the designated path"),
+    _opt("half_widths_m", [0.0], "m", 0.0, 100.0, "one half-width per path segment (0 or empty: half_width_m)"),
+    _opt("nominal_speed_mps", 0.2, "m/s", 0.01, 5.0, "speed the robot keeps when nothing is in the way"),
+    _opt("robot_radius_m", 0.25, "m", 0.01, 5.0, "radius of the robot's footprint"),
+    _opt("max_speed_mps", 0.6, "m/s", 0.01, 5.0, "speed limit of the base"),
+    _opt("max_accel_mps2", 0.8, "m/s^2", 0.01, 20.0, "acceleration (and braking) limit of the base"),
+    _opt("max_turn_rate_radps", 2.0, "rad/s", 0.01, 20.0, "turn-rate limit of the base"),
+    _opt("max_turn_accel_radps2", 6.0, "rad/s^2", 0.01, 100.0, "turn acceleration limit of the base"),
+    _opt("reach_threshold_m", 0.2, "m", 0.01, 10.0, "an intermediate subgoal is reached within this"),
+    _opt("goal_tolerance_m", 0.1, "m", 0.01, 10.0, "the goal is reached within this"),
+    _opt("bypass_distance_m", 1.0, "m", 0.0, 100.0, "a blocked subgoal is given up within this"),
+    _opt("scan_timeout_s", 0.3, "s", 0.05, 10.0, "a scanner silent this long is blind; all silent: brake to a stop"),
+    _opt("odom_timeout_s", 0.5, "s", 0.05, 10.0, "no odometry this long: brake to a stop"),
+    _opt("cycle_period_s", 0.1, "s", 0.01, 1.0, "scan period; also the watchdog period"),
+    _opt("max_invalid_fraction", 0.5, "", 0.0, 1.0, "a scan with more NaN/zero readings than this counts as failed"),
+    _opt("detector", "people", "", help="detector preset", choices=("people", "legs")),
+    _opt("fit_backend", "numpy", "", help="circle fit back end (numba: compiled at start, barely faster here)",
            choices=("numpy", "auto", "numba")),
-    Option("tracker_acceleration_sigma_mps2", 0.2, "m/s^2", 0.01, 10.0, "process noise of the tracker (real walkers: 0.5)"),
-    Option("blind_person_speed_mps", 1.0, "m/s", 0.0, 5.0, "walking speed assumed for someone in a blind sector"),
-    Option("blind_clearance_m", 0.3, "m", 0.0, 10.0, "distance from the body an unseen person is assumed to start from"),
-    Option("reset_hold_s", 0.5, "s", 0.0, 10.0, "after a time jump backwards the robot stands this long (tracks re-confirm)"),
-    Option("autostart", True, "", help="configure and activate the lifecycle node at start"),
+    _opt("tracker_acceleration_sigma_mps2", 0.2, "m/s^2", 0.01, 10.0, "process noise of the tracker (real walkers: 0.5)"),
+    _opt("blind_person_speed_mps", 1.0, "m/s", 0.0, 5.0, "walking speed assumed for someone in a blind sector"),
+    _opt("blind_clearance_m", 0.3, "m", 0.0, 10.0, "distance from the body an unseen person is assumed to start from"),
+    _opt("reset_hold_s", 0.5, "s", 0.0, 10.0, "after a time jump backwards the robot stands this long (tracks re-confirm)"),
+    _opt("autostart", True, "", help="configure and activate the lifecycle node at start"),
 ) + _scanner_options("front", "scan_front", "laser_front", 0.145, 0.0) + _scanner_options("rear", "scan_rear", "laser_rear", -0.145, math.pi)
 
 
@@ -95,9 +100,10 @@ def all_options(planner_name: str = "viapath", scanner_names=("front", "rear")) 
     for name in scanner_names:
         for o in _scanner_options(name, f"scan_{name}", f"laser_{name}", 0.0, 0.0):
             scanners.append(by_name.get(o.name, o))
-    planner = [Option(PLANNER_PREFIX + o.name, o.default, o.unit, o.minimum, o.maximum, o.help,
-                      getattr(o, "choices", None)) for o in planner_options(planner_name)]
-    return tuple(own + [Option("planner_name", planner_name, "", help="registered planner (viapath planners)")]
+    planner = [Option(name=PLANNER_PREFIX + o.path, default=o.default, help=o.help, unit=o.unit, minimum=o.minimum,
+                      maximum=o.maximum, exclusive_minimum=o.exclusive_minimum, choices=o.choices)
+               for o in planner_options(planner_name)]
+    return tuple(own + [_opt("planner_name", planner_name, help="registered planner (viapath planners)")]
                  + scanners + planner)
 
 
@@ -109,7 +115,7 @@ def describe(option: Option) -> str:
     if option.minimum is not None or option.maximum is not None:
         low = "-inf" if option.minimum is None else f"{option.minimum:g}"
         high = "inf" if option.maximum is None else f"{option.maximum:g}"
-        parts.append(f"range: [{low}, {high}]")
+        parts.append(f"range: {'(' if getattr(option, 'exclusive_minimum', False) else '['}{low}, {high}]")
     choices = getattr(option, "choices", None)
     if choices:
         parts.append("one of: " + ", ".join(choices))
@@ -121,6 +127,8 @@ def _check_number(option: Option, value, where: str):
         raise ParameterError(f"{where}: expected a number, found {value!r}")
     if not math.isfinite(float(value)):
         raise ParameterError(f"{where}: expected a finite number, found {value}")
+    if option.minimum is not None and getattr(option, "exclusive_minimum", False) and value <= option.minimum:
+        raise ParameterError(f"{where}: expected > {option.minimum:g} {option.unit}".rstrip() + f", found {value}")
     if option.minimum is not None and value < option.minimum:
         raise ParameterError(f"{where}: expected >= {option.minimum:g} {option.unit}".rstrip() + f", found {value}")
     if option.maximum is not None and value > option.maximum:
@@ -213,16 +221,14 @@ def validate(values: dict[str, Any]) -> NodeSettings:
         raise ParameterError(f"parameter nominal_speed_mps: expected <= max_speed_mps ({checked['max_speed_mps']:g} m/s), "
                              f"found {checked['nominal_speed_mps']}")
     planner_values = {k[len(PLANNER_PREFIX):]: v for k, v in checked.items() if k.startswith(PLANNER_PREFIX)}
-    if planner_name == "viapath":
-        from viapath.ros2.options import planner_kwargs
+    from viapath.options import OptionError
+    from viapath.planning import planner_class
 
-        if not planner_values.get("speeds_mps") or min(planner_values["speeds_mps"]) <= 0:
-            raise ParameterError(f"parameter planner.speeds_mps: expected a non-empty list of speeds > 0, found "
-                                 f"{planner_values.get('speeds_mps')}")
-        try:
-            planner_kwargs(planner_name, planner_values)
-        except (TypeError, ValueError) as error:
-            raise ParameterError(f"parameter planner.*: {error}") from None
+    try:  # the planner's own schema has the last word (e.g. checks across options)
+        planner_class(planner_name).options.validate(planner_values)
+    except OptionError as error:
+        where, message = error.errors[0] if error.errors else ("", str(error))
+        raise ParameterError(f"parameter {PLANNER_PREFIX}{where}: {message}") from None
     return NodeSettings(checked, scanners, planner_name, planner_values)
 
 
