@@ -62,6 +62,9 @@ def run(
     live: bool = typer.Option(False, "--live", help="Serve the run live to Foxglove on 127.0.0.1 (extra viz)."),
     rate: float = typer.Option(1.0, "--rate", help="With --live: simulated seconds per wall-clock second."),
     port: int = typer.Option(8765, "--port", help="With --live: the WebSocket port (0: any free one)."),
+    shield: Optional[str] = typer.Option(None, "--shield", help="on | off: passive-safety shield on the planner's "
+                                         "commands (default: on for viapath, off for the others)."),
+    shield_mode: str = typer.Option("passive", "--shield-mode", help="passive | passive-friendly."),
 ) -> None:
     """Run one scenario in the simulator and report its metrics."""
     from viapath.planning import available_planners
@@ -79,6 +82,10 @@ def run(
 
     if perception is not None and perception not in PERCEPTION_MODES:
         _fail(f"--perception: expected {' or '.join(repr(m) for m in PERCEPTION_MODES.ordered())}, found {perception!r}")
+    if shield not in (None, "on", "off"):
+        _fail(f"--shield: expected 'on' or 'off', found {shield!r}")
+    if shield_mode not in ("passive", "passive-friendly"):
+        _fail(f"--shield-mode: expected 'passive' or 'passive-friendly', found {shield_mode!r}")
     try:
         spec = load_scenario(scenario)
     except ScenarioError as error:
@@ -100,7 +107,8 @@ def run(
             episode = run_episode(spec, planner=planner_name, perception=perception, seed=seed,
                                   position_noise_m=position_noise, velocity_noise_mps=velocity_noise,
                                   record_perceived=plot is not None or animate is not None,
-                                  planner_overrides={**overrides, **(views.planner_overrides or {})}, on_step=views.on_step)
+                                  planner_overrides={**overrides, **(views.planner_overrides or {})}, on_step=views.on_step,
+                                  shield=None if shield is None else shield == "on", shield_options={"mode": shield_mode})
     except ViewError as error:
         _fail(str(error))
     except (ValueError, RuntimeError, FileNotFoundError) as error:

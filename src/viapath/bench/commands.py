@@ -54,6 +54,9 @@ def register(app: typer.Typer) -> None:
         mcap_failures: Optional[Path] = typer.Option(None, "--mcap-failures",
                                                      help="write an MCAP (Foxglove) of each failed episode here "
                                                           "(extra viz)"),
+        shield: Optional[str] = typer.Option(None, "--shield", help="on | off | friendly: passive-safety shield "
+                                             "(friendly: passive-friendly mode) for every planner; default: on "
+                                             "for viapath, off for the others"),
     ) -> None:
         """Run planners on a suite in parallel; write per-episode results, tables and plots."""
         from viapath.bench.report import markdown_table, write_report
@@ -75,7 +78,8 @@ def register(app: typer.Typer) -> None:
         try:
             scenarios = load_suite(suite, out, count=count, seed=seed)
             result = run_bench(scenarios, names, out, workers=workers, backend=backend, scheduler=scheduler,
-                               perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json)
+                               perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json,
+                               shield=shield)
             summary = write_report(result["rows"], out, plots=plots, order=names)
             if mcap_failures is not None:
                 from viapath.viz.foxglove import write_failure_mcaps

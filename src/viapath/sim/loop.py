@@ -14,6 +14,7 @@ import numpy as np
 from viapath.observation import Command, MotionLimits, Observation, RobotState
 from viapath.path import DesignatedPath, SubgoalPolicy
 from viapath.planning import Decision, make_planner
+from viapath.safety import shielded
 from viapath.scenarios.loader import planner_settings
 from viapath.sim import robot as kinematics
 from viapath.sim.metrics import compute_metrics, plan_side
@@ -72,10 +73,14 @@ def run_episode(
     record_perceived: bool = False,
     planner_overrides: dict[str, Any] | None = None,
     on_step: Callable[[StepRecord], None] | None = None,
+    shield: bool | None = None,
+    shield_options: dict[str, Any] | None = None,
 ) -> Episode:
     """Run one scenario to the goal or to ``duration_s``; returns the trace and its metrics.
 
-    ``on_step`` (views, recorders) is called once per planning cycle with a :class:`StepRecord`."""
+    ``on_step`` (views, recorders) is called once per planning cycle with a :class:`StepRecord`.
+    ``shield``: filter the planner's commands through the passive-safety shield (None: on for the
+    planners in ``viapath.safety.SHIELDED_BY_DEFAULT``); ``shield_options``: its options."""
     dt = scenario.dt_s
     n_steps = int(round(scenario.duration_s / dt))
     times = np.arange(n_steps + 1) * dt
@@ -92,6 +97,7 @@ def run_episode(
     options = {**planner_settings(scenario, planner_name), **(planner_overrides or {})}
     the_planner = make_planner(planner_name, path, nominal_speed_mps=spec.speed, limits=limits,
                                robot_radius_m=spec.radius, subgoal_policy=subgoal_policy, **options)
+    the_planner = shielded(the_planner, shield, dt, shield_options, planner_name)
     mode = perception or scenario.perception.mode
     sensing = make_perception(
         mode, scenario.perception.options,
@@ -157,6 +163,7 @@ def run_episode(
     )
     metrics = compute_metrics(trace)
     metrics.update(sensing.episode_metrics())
+    metrics.update({"shield": False, "shield_interventions": None, **the_planner.episode_metrics()})
     return Episode(trace, metrics)
 
 
