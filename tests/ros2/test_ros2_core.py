@@ -216,3 +216,19 @@ def test_any_scan_and_odometry_give_a_finite_command_inside_the_limits(garbage, 
         assert abs(c.turn_rate_radps) <= core.limits.max_turn_rate_radps
         v_meas = min(max(speed, 0.0), core.limits.max_speed_mps)
         assert abs(c.speed_mps - v_meas) <= core.limits.max_accel_mps2 * 0.1 + 1e-9
+
+
+@pytest.mark.parametrize("use_shield, expected", [("default", True), ("off", False)])
+def test_the_shield_wraps_the_planner_and_its_verdict_is_reported(use_shield, expected):
+    from viapath.safety import ShieldedPlanner
+
+    core = make_core(use_shield=use_shield, **{"shield.mode": "passive-friendly"})
+    assert isinstance(core.planner, ShieldedPlanner) == expected
+    for k in range(5):
+        feed(core, 1.0 + 0.1 * k)
+        result = core.cycle(1.0 + 0.1 * k)
+    assert ("shield" in result.status) == expected
+    if expected:
+        assert core.planner.shield.config.mode == "passive-friendly"
+        assert result.status["shield"]["intervened"] in ("True", "False")
+        assert result.status["planner"]["shield_mode"] == "passive-friendly"

@@ -144,6 +144,17 @@ class PlannerCore:
         self._first_scan_s: float | None = None
         self.odom_problem = ""
 
+    def _make_planner(self, path: DesignatedPath, subgoal_policy: SubgoalPolicy):
+        """The configured planner on ``path``, behind the shield when ``use_shield`` says so."""
+        from viapath.ros2.options import planner_kwargs
+        from viapath.safety import shielded
+
+        s = self.settings
+        planner = make_planner(s.planner_name, path, nominal_speed_mps=s.nominal_speed_mps, limits=self.limits,
+                               robot_radius_m=s.robot_radius_m, subgoal_policy=subgoal_policy,
+                               **planner_kwargs(s.planner_name, dict(s.planner_values)))
+        return shielded(planner, s.shield_flag, s.cycle_period_s, dict(s.shield_values), s.planner_name)
+
     def warm_up(self) -> None:
         """Run detection and one plan on made-up input, so the first real cycle is not slowed by imports."""
         from viapath.perception.raycast import simulate_scan
@@ -158,9 +169,7 @@ class PlannerCore:
         path = DesignatedPath([[0.0, 0.0], [5.0, 0.0]], half_width_m=1.0)
         from viapath.ros2.options import planner_kwargs
 
-        s = self.settings
-        planner = make_planner(s.planner_name, path, nominal_speed_mps=s.nominal_speed_mps, limits=self.limits,
-                               robot_radius_m=s.robot_radius_m, **planner_kwargs(s.planner_name, dict(s.planner_values)))
+        planner = self._make_planner(path, SubgoalPolicy())
         planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles([[2.0, 0.0]], [[-0.3, 0.0]], [0.25])))
 
     # -- inputs --------------------------------------------------------------------------------
@@ -182,9 +191,7 @@ class PlannerCore:
         from viapath.ros2.options import planner_kwargs
 
         self.path = path
-        self.planner = make_planner(s.planner_name, path, nominal_speed_mps=s.nominal_speed_mps, limits=self.limits,
-                                    robot_radius_m=s.robot_radius_m, subgoal_policy=self.subgoal_policy,
-                                    **planner_kwargs(s.planner_name, dict(s.planner_values)))
+        self.planner = self._make_planner(path, self.subgoal_policy)
         self.goal_reached = False
 
     def on_odometry(self, now_s: float, stamp_s: float, frame_id: str, x: float, y: float, heading_rad: float,
@@ -478,6 +485,10 @@ class PlannerCore:
         if plan is not None and "shield" in plan.extras:
             shield = plan.extras["shield"]
             out["shield"] = {k: str(v) for k, v in shield.items()} if isinstance(shield, dict) else {"shield": str(shield)}
+            intervened = bool(shield.get("intervened")) if isinstance(shield, dict) else False
+            planner["shield_intervened"] = str(int(intervened))
+            planner["shield_mode"] = str(getattr(getattr(self.planner, "shield", None), "config", None) and
+                                         self.planner.shield.config.mode)
         live = set(self.live_scanners(now_s))
         for i, (h, s) in enumerate(zip(self.health, self.settings.scanners, strict=True)):
             out[f"scanner {s.name}"] = {

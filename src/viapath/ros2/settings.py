@@ -8,6 +8,8 @@ bad value with one message naming the parameter (the node then does not drive).
 What we chose:
 * The planner's options (:mod:`viapath.options`) live under ``planner.`` with their dotted path
   (``planner.horizon_s``, ``planner.weights.k1``); which planner under ``planner_name``.
+* The shield (:mod:`viapath.safety`) is ``use_shield`` (default: as ``viapath run``, on for
+  ``viapath``) with its options under ``shield.`` (``shield.mode``, ``shield.margin_m``).
 * Scanners are a list of names (``scanner_names``) with ``scanners.<name>.topic``, ``.frame_id``,
   ``.mount_x_m``, ``.mount_y_m``, ``.mount_yaw_rad``. The defaults are the paper's pair (URG-04LX
   0.145 m ahead facing forward, 0.145 m behind facing backward).
@@ -37,6 +39,7 @@ def _opt(name: str, default, unit: str = "", minimum=None, maximum=None, help: s
 
 NODE_NAME = "viapath"
 PLANNER_PREFIX = "planner."
+SHIELD_PREFIX = "shield."
 
 
 class ParameterError(ValueError):
@@ -89,6 +92,8 @@ NODE_OPTIONS: tuple[Option, ...] = (
     _opt("blind_clearance_m", 0.3, "m", 0.0, 10.0, "distance from the body an unseen person is assumed to start from"),
     _opt("reset_hold_s", 0.5, "s", 0.0, 10.0, "after a time jump backwards the robot stands this long (tracks re-confirm)"),
     _opt("autostart", True, "", help="configure and activate the lifecycle node at start"),
+    _opt("use_shield", "default", "", help="passive-safety shield around the planner (DESIGN §7); default: as "
+         "viapath run (on for viapath)", choices=("default", "on", "off")),
 ) + _scanner_options("front", "scan_front", "laser_front", 0.145, 0.0) + _scanner_options("rear", "scan_rear", "laser_rear", -0.145, math.pi)
 
 
@@ -103,8 +108,13 @@ def all_options(planner_name: str = "viapath", scanner_names=("front", "rear")) 
     planner = [Option(name=PLANNER_PREFIX + o.path, default=o.default, help=o.help, unit=o.unit, minimum=o.minimum,
                       maximum=o.maximum, exclusive_minimum=o.exclusive_minimum, choices=o.choices)
                for o in planner_options(planner_name)]
+    from viapath.safety import SHIELD_OPTIONS
+
+    shield = [Option(name=SHIELD_PREFIX + o.path, default=o.default, help=o.help, unit=o.unit, minimum=o.minimum,
+                     maximum=o.maximum, exclusive_minimum=o.exclusive_minimum, choices=o.choices)
+              for o in SHIELD_OPTIONS if o.name != "enabled"]  # on / off is use_shield
     return tuple(own + [_opt("planner_name", planner_name, help="registered planner (viapath planners)")]
-                 + scanners + planner)
+                 + scanners + planner + shield)
 
 
 def describe(option: Option) -> str:
@@ -184,6 +194,12 @@ class NodeSettings:
     scanners: tuple[ScannerSetting, ...]
     planner_name: str
     planner_values: dict[str, Any] = field(default_factory=dict)
+    shield_values: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def shield_flag(self) -> bool | None:
+        """For :func:`viapath.safety.shielded`: None = the planner's default."""
+        return {"default": None, "on": True, "off": False}[self.values["use_shield"]]
 
     def __getattr__(self, name: str):
         try:
@@ -229,7 +245,8 @@ def validate(values: dict[str, Any]) -> NodeSettings:
     except OptionError as error:
         where, message = error.errors[0] if error.errors else ("", str(error))
         raise ParameterError(f"parameter {PLANNER_PREFIX}{where}: {message}") from None
-    return NodeSettings(checked, scanners, planner_name, planner_values)
+    shield_values = {k[len(SHIELD_PREFIX):]: v for k, v in checked.items() if k.startswith(SHIELD_PREFIX)}
+    return NodeSettings(checked, scanners, planner_name, planner_values, shield_values)
 
 
 def _flatten(data: dict, prefix: str = "") -> dict[str, Any]:

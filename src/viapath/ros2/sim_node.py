@@ -305,6 +305,11 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
             plan_sides=np.array([r.side for r in records], dtype=int),
         )
         metrics = compute_metrics(trace)
+        shielded_cycles = [v for v in got["by_stamp"].values() if "shield_intervened" in v]
+        metrics.update({"shield": bool(shielded_cycles), "shield_interventions": (
+            sum(int(v["shield_intervened"]) for v in shielded_cycles) if shielded_cycles else None)})
+        if shielded_cycles:
+            metrics["shield_mode"] = shielded_cycles[-1].get("shield_mode")
         metrics.update(tracking_errors(reported, truth))
         metrics["perception_time_p50_ms"] = None
         metrics["perception_time_p99_ms"] = None
