@@ -41,7 +41,6 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field, replace
-from typing import Any
 
 import numpy as np
 
@@ -167,7 +166,6 @@ class PlannerCore:
             for k in range(4):
                 tracker.step(0.1 * k, found.centres, found.position_sigma_m, found.radii_m)
         path = DesignatedPath([[0.0, 0.0], [5.0, 0.0]], half_width_m=1.0)
-        from viapath.ros2.options import planner_kwargs
 
         planner = self._make_planner(path, SubgoalPolicy())
         planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles([[2.0, 0.0]], [[-0.3, 0.0]], [0.25])))
@@ -188,7 +186,6 @@ class PlannerCore:
             path = DesignatedPath(waypoints, half_width_m=s.half_width_m)
         else:
             path = DesignatedPath(waypoints, half_widths_m=widths)
-        from viapath.ros2.options import planner_kwargs
 
         self.path = path
         self.planner = self._make_planner(path, self.subgoal_policy)
