@@ -79,7 +79,7 @@ def sim(
     lockstep: bool = typer.Option(False, "--lockstep", help="Wait for the node's command of each step before driving."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object of metrics (as viapath run --json)."),
     seed: Optional[int] = typer.Option(None, "--seed", help="Random seed of the range noise (default: the scenario's)."),
-    fault: List[str] = typer.Option([], "--fault", help="Inject a fault: silence:NAME@T, nan:NAME@T, short:NAME@T, odom@T, clock-back:D@T."),
+    fault: List[str] = typer.Option([], "--fault", help="Inject a fault from T (to END) s: silence:NAME@T[-END], nan:NAME@T[-END], short:NAME@T[-END], odom@T[-END], clock-back:D@T."),
     trace: Optional[Path] = typer.Option(None, "--trace", help="Write the per-step trace as CSV."),
     commands: Optional[Path] = typer.Option(None, "--commands", help="Write every step's received command as CSV."),
     status_log: Optional[Path] = typer.Option(None, "--status-log", help="Write every planner status received (JSON lines)."),
