@@ -51,7 +51,8 @@ from typing import Any, Callable
 import numpy as np
 
 from viapath.kinematics import UnicycleState, step
-from viapath.observation import Command, MotionLimits, Observation, ObservationError, Obstacles, RobotState
+from viapath.observation import (Command, Decision, MotionLimits, Observation, ObservationError, Obstacles, Plan,
+                                 RobotState)
 
 __all__ = ["GuardConfig", "Inspection", "ObservationError", "check_command", "guard_plan", "inspect_observation",
            "stopping_distance_m"]
@@ -258,8 +259,6 @@ def check_command(command: Any, observation: Observation, limits: MotionLimits, 
 
 
 def _stop_decision(planner, observation: Observation, status: str, reasons: list[str], extras: dict | None = None):
-    from viapath.planning.base import Decision, Plan
-
     try:
         target = np.asarray(observation.robot.position, dtype=float).reshape(2).copy()
     except Exception:  # noqa: BLE001 - the target is for display only

@@ -6,6 +6,7 @@ Obstacles are held as arrays, one row per obstacle, so that planners can vectori
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -173,3 +174,26 @@ class Command:
     @classmethod
     def stop(cls) -> "Command":
         return cls(0.0, 0.0)
+
+
+@dataclass
+class Plan:
+    """What a planner intends, for display and analysis. Planners fill what applies to them."""
+
+    status: str  # e.g. "straight", "avoid", "stop", "escape", "goal"
+    speed_mps: float
+    target: np.ndarray  # the point the robot steers for now
+    via_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    waypoints: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # chosen polyline from the robot
+    subgoal_index: int = 1
+    candidate_count: int = 0
+    candidate_costs: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    candidate_polylines: list[np.ndarray] = field(default_factory=list)
+    chosen: int | None = None
+    extras: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class Decision:
+    command: Command
+    plan: Plan

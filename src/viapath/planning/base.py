@@ -17,14 +17,14 @@ error. Options are declared once as an :class:`~viapath.options.OptionSet` in th
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
 
 from viapath.guard import guard_plan
 from viapath.kinematics import steer_towards
-from viapath.observation import Command, MotionLimits, Observation, Obstacles
+from viapath.observation import Command, Decision, MotionLimits, Observation, Obstacles, Plan
 from viapath.options import Option, OptionSet, Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.registry import Registry
@@ -37,29 +37,6 @@ COMMON_OPTIONS = OptionSet([
            minimum=0.0),
     Option("max_inflation_m", 0.15, "cap on the growth of the velocity-uncertainty cone", "m", minimum=0.0),
 ], owner="planner")
-
-
-@dataclass
-class Plan:
-    """What a planner intends, for display and analysis. Planners fill what applies to them."""
-
-    status: str  # e.g. "straight", "avoid", "stop", "escape", "goal"
-    speed_mps: float
-    target: np.ndarray  # the point the robot steers for now
-    via_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
-    waypoints: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # chosen polyline from the robot
-    subgoal_index: int = 1
-    candidate_count: int = 0
-    candidate_costs: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    candidate_polylines: list[np.ndarray] = field(default_factory=list)
-    chosen: int | None = None
-    extras: dict[str, Any] = field(default_factory=dict)
-
-
-@dataclass
-class Decision:
-    command: Command
-    plan: Plan
 
 
 @dataclass(frozen=True)
