@@ -1,6 +1,6 @@
 """Look at the contacts left with the shield on: per at-fault onset, what the robot and the shield did.
 
-Usage: python benchmarks/shield_faults.py OUT_DIR [--planner viapath] [--shield on] [--limit 10]
+Usage: python benchmarks/shield_faults.py OUT_DIR [--planner viapath] [--shield on] [--limit 10] [--suite DIR]
 
 Reads OUT_DIR/episodes.csv and the suite OUT_DIR/suite/*.yaml of a ``viapath bench`` run, re-runs
 each episode with an at-fault contact (same seed) and prints, for the step where that contact
@@ -46,6 +46,7 @@ def main() -> None:
     parser.add_argument("--planner", default="viapath")
     parser.add_argument("--shield", default="on")
     parser.add_argument("--limit", type=int, default=10)
+    parser.add_argument("--suite", type=Path, default=None, help="scenario folder (default OUT_DIR/suite)")
     args = parser.parse_args()
     with open(args.out / "episodes.csv") as handle:
         rows = [r for r in csv.DictReader(handle) if r["planner"] == args.planner and r["shield"] == args.shield
@@ -54,7 +55,7 @@ def main() -> None:
     loop.shielded = _recording_shielded
     mode = "passive-friendly" if args.shield == "friendly" else "passive"
     for row in rows[:args.limit]:
-        scenario = load_scenario(args.out / "suite" / f"{row['scenario']}.yaml")
+        scenario = load_scenario((args.suite or args.out / "suite") / f"{row['scenario']}.yaml")
         _Recording.log = []
         episode = loop.run_episode(scenario, planner=args.planner, seed=int(row["seed"]),
                                    shield=args.shield != "off", shield_options={"mode": mode})

@@ -1,6 +1,6 @@
 """Tables of docs/safety.md from ``viapath bench`` results: each planner with and without the shield.
 
-Usage: python benchmarks/shield_tables.py OUT_DIR [OUT_DIR ...] [--json]
+Usage: python benchmarks/shield_tables.py OUT_DIR [OUT_DIR ...] [--merge] [--json]
 
 Reads OUT_DIR/episodes.csv (rows of every shield setting side by side) and prints one Markdown table
 per folder: at-fault collision, collision, success, reached goal, median time ratio, shield
@@ -35,12 +35,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("folders", nargs="+", type=Path)
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--merge", action="store_true", help="one table of the rows of all folders")
     args = parser.parse_args()
     everything = {}
-    for folder in args.folders:
-        rows = read_rows(folder / "episodes.csv")
+    groups = ([(" + ".join(map(str, args.folders)), [r for f in args.folders for r in read_rows(f / "episodes.csv")])]
+              if args.merge else [(str(f), read_rows(f / "episodes.csv")) for f in args.folders])
+    for folder, rows in groups:
         summary = summarize(rows, order=ORDER)
-        everything[str(folder)] = summary
+        everything[folder] = summary
         if not args.json:
             print(f"\n### {folder}\n")
             print(markdown_table(summary, columns=COLUMNS))
