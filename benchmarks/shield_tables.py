@@ -20,6 +20,7 @@ COLUMNS = [
     ("planner", "planner", "{}"),
     ("episodes", "episodes", "{}"),
     ("at_fault_collision_rate", "at-fault", "{:.1%}"),
+    ("at_fault_seen_1s_rate", "at-fault, seen ≥ 1 s", "{:.1%}"),
     ("collision_rate", "collision", "{:.1%}"),
     ("success_rate", "success", "{:.1%}"),
     ("reached_goal_rate", "reached goal", "{:.1%}"),
