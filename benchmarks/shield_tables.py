@@ -39,8 +39,17 @@ def main() -> None:
     parser.add_argument("--merge", action="store_true", help="one table of the rows of all folders")
     args = parser.parse_args()
     everything = {}
-    groups = ([(" + ".join(map(str, args.folders)), [r for f in args.folders for r in read_rows(f / "episodes.csv")])]
-              if args.merge else [(str(f), read_rows(f / "episodes.csv")) for f in args.folders])
+    if args.merge:  # an episode (scenario, planner, perception, seed, shield) found in two folders counts once
+        seen, merged = set(), []
+        for folder in args.folders:
+            for row in read_rows(folder / "episodes.csv"):
+                key = (row["scenario"], row["planner"], row["perception"], row["seed"], row["shield"])
+                if key not in seen:
+                    seen.add(key)
+                    merged.append(row)
+        groups = [(" + ".join(map(str, args.folders)), merged)]
+    else:
+        groups = [(str(f), read_rows(f / "episodes.csv")) for f in args.folders]
     for folder, rows in groups:
         summary = summarize(rows, order=ORDER)
         everything[folder] = summary
