@@ -49,12 +49,16 @@ def brute_admissible(case: dict, commands: np.ndarray, extra_m: float = 0.0, fin
     ok &= ~np.any(gap0 <= 0.0, axis=1)[:, None]  # touching now: nothing is admissible
     t = np.zeros((b_count, 1))
     h = col("dt") / fine
-    moving = speed != 0.0
+    # At rest = speed 0 at the start of a period and during it: the first standing period still counts
+    # as moving, at the speed it began with (``previous``).
+    previous = np.broadcast_to(col("speed"), (b_count, k_count)).copy()
+    moving = (speed != 0.0) | (previous != 0.0)
     rest_x, rest_y, rest_t = x.copy(), y.copy(), np.zeros((b_count, k_count))
     steps = 0
     while np.any(moving):
         live = np.flatnonzero(moving.any(axis=1))  # cases still braking: only those are stepped
         mv, sp, tr = moving[live], speed[live], turn[live]
+        s_eff = np.maximum(np.abs(sp), np.abs(previous[live]))
         px, py, vx, vy = c["P"][live, :, 0], c["P"][live, :, 1], c["V"][live, :, 0], c["V"][live, :, 1]
         b_l, g_l, a_l, h_l = base[live], grow[live], c["accel_p"][live, None], h[live]
         xl, yl, hl, tl, okl = x[live], y[live], heading[live], t[live], ok[live]
@@ -69,16 +73,17 @@ def brute_admissible(case: dict, commands: np.ndarray, extra_m: float = 0.0, fin
             dy = yl[..., None] - (py + vy * tl)[:, None, :]
             inside = dx * dx + dy * dy < (radius * radius)[:, None, :]
             if towards_only:  # robot velocity . (person centre - robot) > 0 (robust: > -slack |v| |r|)
-                along = -(sp * np.cos(hl))[..., None] * dx - (sp * np.sin(hl))[..., None] * dy
-                inside &= along > -towards_slack * np.abs(sp)[..., None] * np.sqrt(dx * dx + dy * dy)
+                along = -(s_eff * np.cos(hl))[..., None] * dx - (s_eff * np.sin(hl))[..., None] * dy
+                inside &= along > -towards_slack * s_eff[..., None] * np.sqrt(dx * dx + dy * dy)
             okl &= ~(mv & np.any(inside, axis=2))
         x[live], y[live], heading[live], t[live], ok[live] = xl, yl, hl, tl, okl
         rest_x, rest_y = np.where(moving, x, rest_x), np.where(moving, y, rest_y)
         rest_t = np.where(moving, t, rest_t)
         # the next period: the stop command, through the same limits
+        previous = speed
         speed = speed + np.clip(-speed, -dv, dv)
         turn = turn + np.clip(-turn, -dw, dw)
-        moving = moving & (speed != 0.0)
+        moving = moving & ((speed != 0.0) | (previous != 0.0))
         steps += 1
         if steps > 10_000:
             raise RuntimeError("braking never ends")

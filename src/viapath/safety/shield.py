@@ -22,6 +22,11 @@ away from them (otherwise every faster person from behind stops the robot, and i
 rest: the paper's "speed up to stay ahead" case). ``towards_only: false`` is DESIGN §7 to the
 letter: at rest at every contact.
 
+**At rest** means speed 0 at the start of a control period and during it: the period in which the
+discrete model first stands still counts as moving, at the speed it began with. A real drive ramps
+its speed down within that period, and the at-fault metric reads the speed at the start of the
+step in which a contact begins.
+
 The motion model is the project's (``viapath.kinematics``): the drive reaches the commanded (v, ω)
 through the acceleration limits once per control period and holds it along an exact arc for the
 period, as the simulator and the planner's roll-outs do. The set of (v, ω) that one period can
@@ -151,8 +156,11 @@ def achieved_first_period(commands: np.ndarray, speed_mps: float, turn_rate_radp
 
 
 def braking_sweep(position: np.ndarray, heading_rad: float, achieved: np.ndarray, limits: MotionLimits,
-                  dt_s: float, substeps: int) -> Sweep:
-    """One period at each achieved (v, ω), then the hardest braking, until the robot is at rest."""
+                  dt_s: float, substeps: int, speed_now_mps: float = 0.0) -> Sweep:
+    """One period at each achieved (v, ω), then the hardest braking, until the robot is at rest: its
+    speed is 0 at the start of a period and during it (a drive ramps down within the period, and the
+    at-fault metric reads the speed at the start of the step), so the period in which the discrete
+    model first stands still still counts as moving (at the speed it had at its start)."""
     achieved = np.asarray(achieved, dtype=float).reshape(-1, 2)
     k = len(achieved)
     dv, dw = limits.max_accel_mps2 * dt_s, limits.max_turn_accel_radps2 * dt_s
@@ -163,8 +171,11 @@ def braking_sweep(position: np.ndarray, heading_rad: float, achieved: np.ndarray
         s, w = speeds[-1], turns[-1]
         speeds.append(s + np.clip(-s, -dv, dv))
         turns.append(w + np.clip(-w, -dw, dw))
-    speed = np.stack(speeds, axis=1)[:, :-1] if len(speeds) > 1 else np.zeros((k, 0))  # (K, J) moving steps
-    turn = np.stack(turns, axis=1)[:, :-1] if len(turns) > 1 else np.zeros((k, 0))
+    speed = np.stack(speeds, axis=1)  # (K, J): the last step has speed 0 for every command
+    turn = np.stack(turns, axis=1)
+    previous = np.concatenate([np.full((k, 1), float(speed_now_mps)), speed[:, :-1]], axis=1)
+    if not np.any(previous[:, -1] != 0.0) and speed.shape[1] > 1:
+        speed, turn, previous = speed[:, :-1], turn[:, :-1], previous[:, :-1]  # nobody needs the rest step
     j = speed.shape[1]
     h = dt_s / substeps
     tau = h * np.arange(1, substeps + 1)  # (M,) sub-times inside a step
@@ -183,8 +194,9 @@ def braking_sweep(position: np.ndarray, heading_rad: float, achieved: np.ndarray
     positions[:, 0] = position
     positions[:, 1:, 0] = (start_x[..., None] + dx).reshape(k, -1)
     positions[:, 1:, 1] = (start_y[..., None] + dy).reshape(k, -1)
-    moving_steps = speed != 0.0
+    moving_steps = (speed != 0.0) | (previous != 0.0)
     moving = np.repeat(moving_steps, substeps, axis=1)
+    effective = np.maximum(np.abs(speed), np.abs(previous))  # for "towards": the speed it may still have
     sagitta = np.repeat(np.abs(speed * turn) * h * h / 8.0, substeps, axis=1)
     steps_moving = moving_steps.sum(axis=1)
     rest_index = steps_moving * substeps
@@ -198,7 +210,7 @@ def braking_sweep(position: np.ndarray, heading_rad: float, achieved: np.ndarray
         reach_m=np.sum(np.abs(speed), axis=1) * dt_s,
         achieved=achieved,
         headings=np.concatenate([np.full((k, 1), float(heading_rad)), h1.reshape(k, -1)], axis=1),
-        speeds=np.repeat(speed, substeps, axis=1),
+        speeds=np.repeat(effective, substeps, axis=1),
         turns=np.repeat(turn, substeps, axis=1),
     )
 
@@ -254,7 +266,8 @@ class Shield:
         if np.all(gap > 0.0) and np.all(distance - grow_bound > r_bound + 1e-6):
             return out
         substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
-        sweep = braking_sweep(position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps)
+        sweep = braking_sweep(position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps,
+                              float(robot.speed_mps))
         if np.any(gap <= 0.0):
             out["admissible"][:] = False
             out["friendly"][:] = False
