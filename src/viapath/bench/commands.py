@@ -21,7 +21,7 @@ def register(app: typer.Typer) -> None:
     @app.command("suite")
     def suite_command(
         name: str = typer.Argument(..., help="suite name: mixed, crossing, head-on, overtaken, overtaking, multi, "
-                                             "group, crowd, hallway, paper, eth-ucy"),
+                                             "group, crowd, hallway, paper, eth-ucy, eth-ucy-react"),
         count: int = typer.Option(200, "--count", "-n", help="number of scenarios"),
         seed: int = typer.Option(0, "--seed", help="same seed, same suite"),
         out: Path = typer.Option(..., "--out", help="folder to write the scenario YAML files to"),
@@ -51,6 +51,12 @@ def register(app: typer.Typer) -> None:
         perception: str = typer.Option("oracle", "--perception", help="oracle or laser"),
         plots: bool = typer.Option(True, "--plots/--no-plots", help="write rates.png and deviation_vs_time.png"),
         as_json: bool = typer.Option(False, "--json", help="print the per-planner table as JSON"),
+        mcap_failures: Optional[Path] = typer.Option(None, "--mcap-failures",
+                                                     help="write an MCAP (Foxglove) of each failed episode here "
+                                                          "(extra viz)"),
+        shield: Optional[str] = typer.Option(None, "--shield", help="on | off | friendly: passive-safety shield "
+                                             "(friendly: passive-friendly mode) for every planner; default: on "
+                                             "for viapath, off for the others"),
         force: bool = typer.Option(False, "--force", help="use an --out folder written by another suite or "
                                                           "configuration (its rows are kept, never reused)"),
     ) -> None:
@@ -68,12 +74,24 @@ def register(app: typer.Typer) -> None:
         if scheduler and backend == "loky":
             _fail("--scheduler needs --backend dask or ray")
         created = not out.exists()  # a run refused before any episode must leave no folder behind
+        if mcap_failures is not None:
+            from viapath.viz.foxglove import ViewError, check_failures_option
+
+            try:
+                check_failures_option(mcap_failures)
+            except ViewError as error:
+                _fail(str(error))
         try:
             scenarios = load_suite(suite, out, count=count, seed=seed)
             result = run_bench(scenarios, names, out, workers=workers, backend=backend, scheduler=scheduler,
                                perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json,
-                               force=force)
+                               shield=shield, force=force)
             summary = write_report(result["rows"], out, plots=plots, order=names)
+            if mcap_failures is not None:
+                from viapath.viz.foxglove import write_failure_mcaps
+
+                write_failure_mcaps(result["rows"], scenarios, mcap_failures,
+                                    progress=lambda text: typer.echo(f"mcap: {text}", err=True))
         except BenchInterrupted as stopped:
             typer.echo(f"\n{stopped}; rerun the same command to resume ({stopped.total - stopped.finished} left)",
                        err=True)

@@ -33,10 +33,11 @@ COLUMNS = [
     "time_to_goal_s",
     "free_time_s", "time_ratio", "path_length_m", "mean_lateral_deviation_m", "max_lateral_deviation_m",
     "time_outside_corridor_s", "min_speed_mps", "max_speed_mps", "plan_time_p50_ms", "plan_time_p99_ms",
-    "episode_wall_s", "error",
+    "episode_wall_s", "error", "shield", "shield_interventions",
 ]
 _BOOLS = {"reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s"}
-_TEXT = {"scenario", "family", "planner", "perception", "error", "scenario_hash", "options_hash", "viapath_version"}
+_TEXT = {"scenario", "family", "planner", "perception", "error", "shield", "scenario_hash", "options_hash",
+         "viapath_version"}
 _INTS = {"seed"}
 BACKENDS = ("loky", "dask", "ray")
 
@@ -54,17 +55,18 @@ class Task:
     scenario_hash: str = ""
     options_hash: str = ""
     viapath_version: str = ""
+    shield: str = "off"  # off | on (passive) | friendly (passive-friendly), see viapath.safety
 
     @property
     def key(self) -> tuple:
         # What a row is (see viapath.bench.identity): never the scenario name alone.
         return (self.scenario_hash, self.planner, self.options_hash, self.perception, str(self.seed),
-                self.viapath_version)
+                self.viapath_version, self.shield)
 
 
 def row_key(row: dict) -> tuple:
     return (row["scenario_hash"], row["planner"], row["options_hash"], row["perception"], str(row["seed"]),
-            row["viapath_version"])
+            row["viapath_version"], row["shield"] or "off")
 
 
 def episode_seed(bench_seed: int, scenario_name: str) -> int:
@@ -154,13 +156,15 @@ def run_task(task: Task) -> dict[str, Any]:
     name = task.scenario["name"]
     row.update(scenario=name, family=family_of(name), planner=task.planner, perception=task.perception,
                seed=task.seed, scenario_hash=task.scenario_hash, options_hash=task.options_hash,
-               viapath_version=task.viapath_version, error="")
+               viapath_version=task.viapath_version, error="", shield=task.shield)
     _ignore_sigint_in_workers()
     try:
         scenario = scenario_from_dict(task.scenario, name)
-        episode = run_episode(scenario, planner=task.planner, perception=task.perception, seed=task.seed)
+        episode = run_episode(scenario, planner=task.planner, perception=task.perception, seed=task.seed,
+                              shield=task.shield != "off",
+                              shield_options={"mode": "passive-friendly" if task.shield == "friendly" else "passive"})
         for column in COLUMNS:
-            if column in episode.metrics:
+            if column in episode.metrics and column != "shield":
                 row[column] = episode.metrics[column]
         free = _free_time_s(json.dumps(task.scenario, sort_keys=True))
         row["free_time_s"] = free
@@ -235,8 +239,11 @@ def write_parquet(rows: list[dict], path: Path) -> bool:
 
 # -- the run ---------------------------------------------------------------------------------------
 
-def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "oracle", seed: int = 0) -> list[Task]:
+def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "oracle", seed: int = 0,
+               shield: str | None = None) -> list[Task]:
+    """``shield``: on | off | friendly for every planner, None for each planner's default (viapath.safety)."""
     from viapath.planning import available_planners
+    from viapath.safety import shield_default
 
     known = available_planners()
     unknown = [p for p in planners if p not in known]
@@ -244,11 +251,14 @@ def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "or
         raise BenchError(f"unknown planner {unknown[0]!r}; available: {', '.join(known)}")
     if perception not in ("oracle", "laser"):
         raise BenchError(f"unknown perception {perception!r}; use oracle or laser")
+    if shield not in (None, "on", "off", "friendly"):
+        raise BenchError(f"unknown shield setting {shield!r}; use on, off or friendly")
+    setting = {p: shield or ("on" if shield_default(p) else "off") for p in planners}
     from viapath.bench.identity import options_hash, scenario_hash, viapath_version
 
     version = viapath_version()
     hashes = [scenario_hash(s) for s in scenarios]
-    return [Task(s, p, perception, episode_seed(seed, s["name"]), h, options_hash(s, p), version)
+    return [Task(s, p, perception, episode_seed(seed, s["name"]), h, options_hash(s, p), version, setting[p])
             for s, h in zip(scenarios, hashes) for p in planners]
 
 
@@ -315,6 +325,7 @@ def run_bench(
     perception: str = "oracle",
     seed: int = 0,
     progress: bool = True,
+    shield: str | None = None,
     force: bool = False,
 ) -> dict[str, Any]:
     """Run every episode not already done in ``out_dir/episodes.csv`` (a row is identified by the
@@ -332,7 +343,7 @@ def run_bench(
 
     out_dir = Path(out_dir)
     csv_path = out_dir / "episodes.csv"
-    tasks = make_tasks(scenarios, planners, perception, seed)
+    tasks = make_tasks(scenarios, planners, perception, seed, shield)
     latest = _latest(read_rows(csv_path))
     ok_names = {row["scenario"] for row in latest.values() if not row.get("error")}
     crashed_only = {row["scenario"] for row in latest.values()} - ok_names

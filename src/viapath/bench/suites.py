@@ -22,6 +22,8 @@ Families (the scenario name is ``<family>-<index>``):
   rest with jittered speeds and offsets.
 * ``eth-ucy``: real pedestrians (ETH/UCY replays) with a designated path placed across each of the
   five standard scenes (eth, hotel, univ, zara1, zara2) at many start times; see :func:`eth_ucy`.
+* ``eth-ucy-react``: the same scenarios (same paths and start times for the same seed), with people who
+  give way to the robot (``replay: {react: true}``, :mod:`viapath.sim.reactive`).
 
 The suite ``mixed`` cycles through every synthetic family (index ``i`` → family ``i mod 9``).
 """
@@ -57,7 +59,7 @@ class SuiteError(ValueError):
 
 
 def suite_names() -> list[str]:
-    return ["mixed", *SYNTHETIC_FAMILIES, "eth-ucy"]
+    return ["mixed", *SYNTHETIC_FAMILIES, "eth-ucy", "eth-ucy-react"]
 
 
 def data_root() -> Path:
@@ -80,8 +82,8 @@ def generate_suite(name: str, count: int, seed: int = 0, data: Path | None = Non
         raise SuiteError(f"unknown suite {name!r}; available: {', '.join(suite_names())}")
     if count < 1:
         raise SuiteError(f"count must be at least 1, got {count}")
-    if name == "eth-ucy":
-        return eth_ucy(count, seed, data)
+    if name in ("eth-ucy", "eth-ucy-react"):
+        return eth_ucy(count, seed, data, react=name == "eth-ucy-react")
     scenarios = []
     for index in range(count):
         family = SYNTHETIC_FAMILIES[index % len(SYNTHETIC_FAMILIES)] if name == "mixed" else name
@@ -309,7 +311,7 @@ def _scene_samples(file: str, dt_s: float):
 
 
 def eth_ucy(count: int, seed: int = 0, data: Path | None = None, path_length_m: float = 6.0,
-            robot_speed_mps: float = 0.3, duration_s: float = 40.0) -> list[dict]:
+            robot_speed_mps: float = 0.3, duration_s: float = 40.0, react: bool = False) -> list[dict]:
     """Designated paths across the five ETH/UCY scenes at many start times (scene ``i mod 5``; univ
     alternates between students001 and students003).
 
@@ -317,7 +319,8 @@ def eth_ucy(count: int, seed: int = 0, data: Path | None = None, path_length_m: 
     during the episode (so the path goes where people walk), its direction is random; both ends lie
     inside the scene's central 90 % box, nobody is within 1 m of the robot's start at the start time,
     and at least one person comes within 2 m of the path during the episode. Every pedestrian of the
-    file is replayed (``replay`` item, DESIGN §4); they do not react to the robot.
+    file is replayed (``replay`` item, DESIGN §4); they do not react to the robot, unless ``react``
+    (then the names read ``eth-ucy-react-<scene>-<index>`` and the scenarios are otherwise the same).
     """
     root = Path(data) if data is not None else data_root()
     folder = root / ETH_UCY_FOLDER
@@ -340,16 +343,18 @@ def eth_ucy(count: int, seed: int = 0, data: Path | None = None, path_length_m: 
         if scenario is None:  # pragma: no cover - every standard scene has room
             raise SuiteError(f"could not place a path in {file} after many tries")
         start_s, waypoints = scenario
+        replay = {"file": str(file_path), "dt_s": dt, "start_s": start_s, "offset": [0.0, 0.0], "radius": 0.25}
+        if react:
+            replay["react"] = True
         scenarios.append(_rounded({
-            "name": f"eth-ucy-{scene}-{index:04d}",
+            "name": f"eth-ucy-{'react-' if react else ''}{scene}-{index:04d}",
             "description": f"ETH/UCY scene {scene} ({file}, {dt:.3f} s per row) replayed from {start_s:.1f} s; "
-                           "the people do not react to the robot.",
+                           + ("the people give way to the robot." if react else "the people do not react to the robot."),
             "robot": {"start": waypoints[0], "heading": float(np.arctan2(waypoints[1][1] - waypoints[0][1],
                                                                            waypoints[1][0] - waypoints[0][0])),
                       "speed": robot_speed_mps, "radius": 0.25},
             "path": {"waypoints": waypoints, "half_width": 1.0},
-            "obstacles": [{"replay": {"file": str(file_path), "dt_s": dt, "start_s": start_s,
-                                      "offset": [0.0, 0.0], "radius": 0.25}}],
+            "obstacles": [{"replay": replay}],
             "duration_s": duration_s,
             "seed": int(seed),
         }))

@@ -5,20 +5,24 @@ Deterministic for a given seed: the only randomness (perception noise) draws fro
 
 from __future__ import annotations
 
-import inspect
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from viapath.observation import Command, MotionLimits, Observation, RobotState
 from viapath.path import DesignatedPath, SubgoalPolicy
-from viapath.planning import Decision, make_planner, planner_class
+from viapath.planning import Decision, make_planner
+from viapath.safety import shielded
+from viapath.scenarios.loader import planner_settings
 from viapath.sim import robot as kinematics
 from viapath.sim.metrics import compute_metrics, plan_side
 from viapath.sim.obstacles import scenario_obstacle_states
-from viapath.sim.perception import OraclePerception, Perception, WorldSnapshot
+from viapath.perception.base import WorldSnapshot
+from viapath.perception.modes import make_perception
+from viapath.sim.reactive import obstacle_motion
+from viapath.sim.step_record import StepRecord
 
 
 @dataclass
@@ -59,38 +63,6 @@ class Episode:
     metrics: dict[str, Any]
 
 
-def make_perception(mode: str, scenario, position_noise_m: float, velocity_noise_mps: float) -> Perception:
-    if mode == "oracle":
-        return OraclePerception(position_noise_m, velocity_noise_mps)
-    if mode == "laser":
-        try:
-            from viapath.perception.laser import LaserPerception
-        except ImportError as error:  # pragma: no cover - depends on the laser chain being installed
-            raise RuntimeError(f"laser perception is not available: {error}") from None
-        return _laser_perception(LaserPerception, scenario.perception.options)
-    raise ValueError(f"unknown perception mode {mode!r}; use 'oracle' or 'laser'")
-
-
-def _laser_perception(cls, options: dict[str, Any]) -> Perception:
-    """The scenario's ``perception.options`` as keyword arguments, with errors naming that field."""
-    known = list(inspect.signature(cls).parameters)
-    unknown = sorted(set(options) - set(known))
-    if unknown:
-        raise ValueError(f"perception.options: unknown option(s) {', '.join(unknown)}; known: {', '.join(known)}")
-    try:
-        return cls(**options)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"perception.options: {error}") from None
-
-
-def planner_options(scenario, planner_name: str) -> dict[str, Any]:
-    cls = planner_class(planner_name)
-    spec = scenario.planner
-    if hasattr(cls, "options_from_spec"):
-        return cls.options_from_spec(spec)
-    return dict(spec.params)
-
-
 def run_episode(
     scenario,
     planner: str | None = None,
@@ -100,12 +72,21 @@ def run_episode(
     velocity_noise_mps: float | None = None,
     record_perceived: bool = False,
     planner_overrides: dict[str, Any] | None = None,
+    on_step: Callable[[StepRecord], None] | None = None,
+    shield: bool | None = None,
+    shield_options: dict[str, Any] | None = None,
 ) -> Episode:
-    """Run one scenario to the goal or to ``duration_s``; returns the trace and its metrics."""
+    """Run one scenario to the goal or to ``duration_s``; returns the trace and its metrics.
+
+    ``on_step`` (views, recorders) is called once per planning cycle with a :class:`StepRecord`.
+    ``shield``: filter the planner's commands through the passive-safety shield (None: on for the
+    planners in ``viapath.safety.SHIELDED_BY_DEFAULT``); ``shield_options``: its options."""
     dt = scenario.dt_s
     n_steps = int(round(scenario.duration_s / dt))
     times = np.arange(n_steps + 1) * dt
-    positions, velocities, radii = scenario_obstacle_states(scenario, times)
+    motion = obstacle_motion(scenario, times)  # None unless some replayed person reacts to the robot
+    positions, velocities, radii = (scenario_obstacle_states(scenario, times) if motion is None
+                                    else (motion.positions, motion.velocities, motion.radii))
     walls = np.asarray(scenario.walls, dtype=float).reshape(-1, 2, 2)
 
     path = DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths())
@@ -113,13 +94,13 @@ def run_episode(
     limits = MotionLimits(**spec.limits.model_dump())
     subgoal_policy = SubgoalPolicy(**scenario.subgoals.model_dump())
     planner_name = planner or scenario.planner.name
-    options = planner_options(scenario, planner_name)
-    options.update(planner_overrides or {})
+    options = {**planner_settings(scenario, planner_name), **(planner_overrides or {})}
     the_planner = make_planner(planner_name, path, nominal_speed_mps=spec.speed, limits=limits,
                                robot_radius_m=spec.radius, subgoal_policy=subgoal_policy, **options)
+    the_planner = shielded(the_planner, shield, dt, shield_options, planner_name)
     mode = perception or scenario.perception.mode
     sensing = make_perception(
-        mode, scenario,
+        mode, scenario.perception.options,
         scenario.perception.position_noise_m if position_noise_m is None else position_noise_m,
         scenario.perception.velocity_noise_mps if velocity_noise_mps is None else velocity_noise_mps,
     )
@@ -145,9 +126,8 @@ def run_episode(
         observed = sensing.observe(world)
         if record_perceived:
             perceived.append(observed)
-        points = getattr(sensing, "last_points_world", None)
-        if points is not None:
-            scan_points.append(np.asarray(points))
+        if mode == "laser":
+            scan_points.append(np.asarray(sensing.last_points_world))
         observation = Observation(float(times[k]), RobotState(state.position, state.heading_rad, state.speed_mps,
                                                               state.turn_rate_radps, spec.radius), observed)
         started = time.perf_counter()
@@ -162,6 +142,11 @@ def run_episode(
         rows["status"].append(decision.plan.status)
         rows["via"].append(np.asarray(decision.plan.via_points, dtype=float).reshape(-1, 2))
         rows["side"].append(plan_side(decision.plan.waypoints))
+        if on_step is not None:
+            on_step(StepRecord(k, float(times[k]), state, observation, decision, rows["plan_ms"][-1], world,
+                               sensing.last_scans or None, sensing, the_planner))
+        if motion is not None:  # people move to step k + 1 seeing the robot at step k (rows filled in place)
+            motion.step(state.position, state.speed_mps * np.array([np.cos(state.heading_rad), np.sin(state.heading_rad)]))
         state = kinematics.step(state, command, limits, dt)
 
     n = len(rows["pose"])
@@ -177,9 +162,8 @@ def run_episode(
         plan_sides=np.array(rows["side"], dtype=int),
     )
     metrics = compute_metrics(trace)
-    extra_metrics = getattr(sensing, "episode_metrics", None)
-    if callable(extra_metrics):
-        metrics.update(extra_metrics())
+    metrics.update(sensing.episode_metrics())
+    metrics.update({"shield": False, "shield_interventions": None, **the_planner.episode_metrics()})
     return Episode(trace, metrics)
 
 

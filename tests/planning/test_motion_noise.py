@@ -1,0 +1,112 @@
+"""A small version of benchmarks/bench_noise.py: the paper's side-crossing and head-on cases with
+oracle perception noise (position σ 0.03 m, velocity σ 0.05 m/s), 4 seeds each."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+_BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_noise.py"
+
+
+def _bench_module():
+    spec = importlib.util.spec_from_file_location("bench_noise", _BENCH)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def noisy_runs():
+    bench = _bench_module()
+    grouped = bench.run_noise(("paper-side", "paper-front"), seeds=4, position_noise_m=0.03, velocity_noise_mps=0.05)
+    return bench, grouped
+
+
+@pytest.mark.parametrize("scenario", ["paper-side", "paper-front"])
+def test_noisy_runs_reach_goal_without_collision(noisy_runs, scenario):
+    bench, grouped = noisy_runs
+    summary = bench.summarise(grouped[scenario])
+    assert summary["runs"] == 4
+    assert summary["collisions"] == 0, f"collided seeds {summary['collided_seeds']}: {summary}"
+    assert summary["reached_goal"] == 4, f"seeds not reaching the goal {summary['failed_seeds']}: {summary}"
+
+
+def test_noise_changes_the_runs_and_seeds_are_reproducible():
+    bench = _bench_module()
+    a = bench.run_one("paper-side", 1, 0.03, 0.05)
+    b = bench.run_one("paper-side", 1, 0.03, 0.05)
+    clean = bench.run_one("paper-side", 1, 0.0, 0.0)
+    assert a["min_clearance_m"] == b["min_clearance_m"] and a["plan_switches"] == b["plan_switches"]
+    assert a["plan_switches"] > clean["plan_switches"]
+
+
+def test_bench_noise_command_prints_a_row_per_scenario(capsys):
+    bench = _bench_module()
+    bench.main(["--seeds", "1", "--scenarios", "paper-side"])
+    out = capsys.readouterr().out
+    assert "paper-side" in out and "clr min" in out
+
+
+def test_keeping_the_previous_way_cuts_side_flips_and_stays_safe():
+    # Under white velocity noise last cycle's way round looks blocked now and then only because its
+    # cone grew with the error; re-checking it with less inflation keeps it (hysteresis on the
+    # constraint). Overtaking a slow walker flips most; same seeds with and without it.
+    import numpy as np
+
+    from viapath.scenarios.loader import load_scenario
+    from viapath.sim.loop import run_episode
+
+    flips = {}
+    for keep in (False, True):
+        scenario = load_scenario("overtaking")
+        params = {**scenario.planner.params, "keep_previous_way": keep}
+        scenario = scenario.model_copy(update={"planner": scenario.planner.model_copy(update={"params": params})})
+        runs = [run_episode(scenario, seed=seed, position_noise_m=0.03, velocity_noise_mps=0.05).metrics
+                for seed in range(4)]
+        for metrics in runs:
+            assert metrics["reached_goal"] and not metrics["collision"], (keep, metrics)
+        flips[keep] = float(np.median([m["plan_side_flips"] for m in runs]))
+    assert flips[True] <= 0.5 * flips[False], flips
+
+
+def test_a_previous_way_that_only_lost_on_cost_is_not_searched_again_with_less_inflation(monkeypatch):
+    # Relaxing the inflation is for a way that vanished; a way still there that simply costs more
+    # must not come back in a tighter, less inflated form.
+    import numpy as np
+
+    from viapath import DesignatedPath, Obstacles, Observation, RobotState
+    from viapath.planning import make_planner
+    from viapath.planning.viapath.candidates import Choice, Way
+    from viapath.planning.viapath.planner import ViaPathPlanner
+
+    path = DesignatedPath([[0.0, 0.0], [8.0, 0.0]], half_width_m=1.5)
+    planner = make_planner("viapath", path, nominal_speed_mps=0.25)
+    head_on = Obstacles(positions=[[3.0, 0.05]], velocities=[[-0.3, 0.0]], radii_m=[0.25],
+                        position_sigma_m=[0.03], velocity_sigma_mps=[0.05])
+    observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.25), head_on)
+
+    searches = []
+    original_choose = ViaPathPlanner._choose
+
+    def recording_choose(self, checks, speeds, nominal_index, previous, only_way=None):
+        result = original_choose(self, checks, speeds, nominal_index, previous, only_way)
+        searches.append((only_way is not None, result))
+        return result
+
+    monkeypatch.setattr(ViaPathPlanner, "_choose", recording_choose)
+    first = planner.plan(observation)
+    assert first.plan.status == "avoid"
+    candidates, costs = searches[-1][1].candidates, first.plan.candidate_costs
+    dearest = int(np.argmax(np.where(np.isfinite(costs), costs, -np.inf)))
+    worst = Way(*(int(v) for v in candidates.ways[dearest]))
+    assert worst != planner._previous.way
+    # Last cycle went the dearest way, which is still available now.
+    planner._previous = Choice(worst, int(candidates.speed_mmps[dearest]))
+    searches.clear()
+    second = planner.plan(observation)
+    assert planner._previous.way != worst  # it switched ...
+    assert [relaxed for relaxed, _ in searches] == [False]  # ... after one search, no relaxed re-run
+    assert "kept_previous_way" not in second.plan.extras
