@@ -67,8 +67,10 @@ def test_finding_4_crash_is_reported_rerun_and_exits_non_zero(tmp_path):
     folder = _suite(tmp_path / "suite", count=2)
     broken = sorted(folder.glob("*.yaml"))[0]
     data = yaml.safe_load(broken.read_text())
-    good_text = broken.read_text()
-    data["planner"] = {"name": "viapath", "params": {"no_such_option": 1}}  # fails when the planner is built
+    # A replay file that exists (so the suite loads) but cannot be read: the episode fails when it runs.
+    replay = folder / "people.txt"
+    replay.write_text("frame id x y\nnot numbers at all\n")
+    data["obstacles"].append({"replay": {"file": "people.txt", "dt_s": 0.4}})
     broken.write_text(yaml.safe_dump(data))
     out = tmp_path / "out"
     args = ["bench", str(folder), "--planners", "viapath", "--out", str(out), "--workers", "1", "--no-plots"]
@@ -78,12 +80,13 @@ def test_finding_4_crash_is_reported_rerun_and_exits_non_zero(tmp_path):
     table_line = next(line for line in result.output.splitlines() if line.startswith("| viapath"))
     assert table_line.rstrip(" |").endswith("1")  # the 'crashed' column of the console table
     summary_md = (out / "summary.md").read_text()
-    assert "1 episode(s) crashed" in summary_md and "no_such_option" in summary_md
+    assert "1 episode(s) crashed" in summary_md and "expected 4 numeric columns" in summary_md
     # Rerun without a fix: the crashed episode runs again (it is not "done").
     again = CliRunner().invoke(_app(), args)
     assert again.exit_code == 3 and "1 episodes run, 1 already done" in again.output
-    # Fixing the file changes its content; as every row of it crashed, that is no other suite: it runs.
-    broken.write_text(good_text)
+    # Fixing the data changes the scenario's content (its hash covers the replay file); as every row
+    # of it crashed, that is no other suite: it runs.
+    replay.write_text("0 1 30.0 30.0\n10 1 30.0 30.4\n")
     fixed = CliRunner().invoke(_app(), args)
     assert fixed.exit_code == 0, fixed.output
     assert "1 episodes run, 1 already done" in fixed.output

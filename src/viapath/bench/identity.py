@@ -63,10 +63,10 @@ def options_hash(scenario: dict, planner: str) -> str:
     """Hash of the options the planner is built with for this scenario (its ``planner:`` block as
     the planner reads it; the same for every scenario that shares the block)."""
     from viapath.scenarios import scenario_from_dict
-    from viapath.sim.loop import planner_options
+    from viapath.scenarios.loader import planner_settings
 
     try:
-        options = planner_options(scenario_from_dict(scenario, scenario.get("name", "?")), planner)
+        options = planner_settings(scenario_from_dict(scenario, scenario.get("name", "?")), planner)
         text = repr(sorted(options.items()))
     except Exception as error:  # noqa: BLE001 - the episode itself will report it
         text = f"error: {error}"
