@@ -122,3 +122,19 @@ def test_progress_bar_reads_elapsed_then_left(capsys):
     assert list(_with_progress(iter([{"a": 1}, {"a": 2}]), 2, True)) == [{"a": 1}, {"a": 2}]
     line = [x for x in capsys.readouterr().err.splitlines() if "episodes" in x][-1]
     assert re.search(r"elapsed \d+:\d\d:\d\d / \d+:\d\d:\d\d left", line), line
+
+
+def test_animation_progress_callback_shows_frames():
+    import io
+
+    from rich.console import Console
+
+    from viapath.cli_extras import animation_progress
+
+    buffer = io.StringIO()
+    update, close = animation_progress(Console(file=buffer, force_terminal=True, width=120))
+    for frame in range(3):
+        update(frame, 3)
+    close()
+    text = buffer.getvalue()
+    assert "writing frames" in text and "3/3" in text
