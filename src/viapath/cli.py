@@ -230,7 +230,7 @@ def _register_plugins() -> None:
     """Commands that live beside their subsystem (laser scans, benchmark)."""
     import importlib
 
-    for module in ("viapath.commands.scans", "viapath.bench.commands"):
+    for module in ("viapath.commands.scans", "viapath.bench.commands", "viapath.ros2.commands"):
         try:
             spec = importlib.util.find_spec(module)
         except ModuleNotFoundError:

@@ -67,10 +67,12 @@ def test_finding_4_crash_is_reported_rerun_and_exits_non_zero(tmp_path):
     folder = _suite(tmp_path / "suite", count=2)
     broken = sorted(folder.glob("*.yaml"))[0]
     data = yaml.safe_load(broken.read_text())
-    # A replay file that exists (so the suite loads) but cannot be read: the episode fails when it runs.
-    replay = folder / "people.txt"
-    replay.write_text("frame id x y\nnot numbers at all\n")
-    data["obstacles"].append({"replay": {"file": "people.txt", "dt_s": 0.4}})
+    good_text = broken.read_text()
+    # A replay file that exists but holds no trajectory: the episode fails when it reads it (a bad
+    # planner option no longer gets that far: the loader refuses it).
+    bad_replay = tmp_path / "not-a-trajectory.txt"
+    bad_replay.write_text("frame id x y\nthis is not a number\n")
+    data["obstacles"] = [*(data.get("obstacles") or []), {"replay": {"file": str(bad_replay)}}]
     broken.write_text(yaml.safe_dump(data))
     out = tmp_path / "out"
     args = ["bench", str(folder), "--planners", "viapath", "--out", str(out), "--workers", "1", "--no-plots"]
@@ -84,9 +86,8 @@ def test_finding_4_crash_is_reported_rerun_and_exits_non_zero(tmp_path):
     # Rerun without a fix: the crashed episode runs again (it is not "done").
     again = CliRunner().invoke(_app(), args)
     assert again.exit_code == 3 and "1 episodes run, 1 already done" in again.output
-    # Fixing the data changes the scenario's content (its hash covers the replay file); as every row
-    # of it crashed, that is no other suite: it runs.
-    replay.write_text("0 1 30.0 30.0\n10 1 30.0 30.4\n")
+    # Fixing the file changes its content; as every row of it crashed, that is no other suite: it runs.
+    broken.write_text(good_text)
     fixed = CliRunner().invoke(_app(), args)
     assert fixed.exit_code == 0, fixed.output
     assert "1 episodes run, 1 already done" in fixed.output

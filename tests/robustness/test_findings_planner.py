@@ -15,7 +15,7 @@ from viapath.observation import Observation, ObservationError, Obstacles
 from viapath.scenarios import scenario_from_dict
 from viapath.sim.loop import run_episode
 
-from _helpers import fresh, inside_limits, moves_towards_close_obstacle, one_obstacle, planners, robot
+from tests.robustness._helpers import fresh, inside_limits, moves_towards_close_obstacle, one_obstacle, planners, robot
 
 BAD_FIELDS = {
     "velocity-nan": dict(velocity=(math.nan, 0.0)),

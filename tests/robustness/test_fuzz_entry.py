@@ -18,8 +18,8 @@ from hypothesis import HealthCheck, given, settings
 from viapath.observation import ObservationError, Observation, RobotState
 from viapath.planning import available_planners
 
-from _fuzz import observation_batches, scan_sets
-from _helpers import fresh, inside_limits, moves_towards_close_obstacle
+from tests.robustness._fuzz import observation_batches, scan_sets
+from tests.robustness._helpers import fresh, inside_limits, moves_towards_close_obstacle
 
 BATCH = 5
 EXAMPLES_PER_PLANNER = 240  # x BATCH = 1 200 observations per planner

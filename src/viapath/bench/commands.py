@@ -73,7 +73,6 @@ def register(app: typer.Typer) -> None:
             _fail("--planners is empty; give e.g. viapath,dwa,vo")
         if scheduler and backend == "loky":
             _fail("--scheduler needs --backend dask or ray")
-        created = not out.exists()  # a run refused before any episode must leave no folder behind
         if mcap_failures is not None:
             from viapath.viz.foxglove import ViewError, check_failures_option
 
@@ -81,6 +80,7 @@ def register(app: typer.Typer) -> None:
                 check_failures_option(mcap_failures)
             except ViewError as error:
                 _fail(str(error))
+        created = not out.exists()  # a run refused before any episode must leave no folder behind
         try:
             scenarios = load_suite(suite, out, count=count, seed=seed)
             result = run_bench(scenarios, names, out, workers=workers, backend=backend, scheduler=scheduler,

@@ -34,12 +34,12 @@ COLUMNS = [
     "time_to_goal_s",
     "free_time_s", "time_ratio", "path_length_m", "mean_lateral_deviation_m", "max_lateral_deviation_m",
     "time_outside_corridor_s", "min_speed_mps", "max_speed_mps", "plan_time_p50_ms", "plan_time_p99_ms",
-    "episode_wall_s", "error", "shield", "shield_interventions",
+    "episode_wall_s", "error", "shield", "shield_interventions", "command_flips", "escape_cycles",
 ]
 _BOOLS = {"reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s"}
 _TEXT = {"scenario", "family", "planner", "perception", "error", "shield", "scenario_hash", "options_hash",
          "viapath_version"}
-_INTS = {"seed", "overlapping_at_appearance"}
+_INTS = {"seed", "command_flips", "escape_cycles", "overlapping_at_appearance"}
 BACKENDS = ("loky", "dask", "ray")
 
 
@@ -67,7 +67,7 @@ class Task:
 
 def row_key(row: dict) -> tuple:
     return (row["scenario_hash"], row["planner"], row["options_hash"], row["perception"], str(row["seed"]),
-            row["viapath_version"], row["shield"] or "off")
+            row["viapath_version"], row["shield"])
 
 
 def episode_seed(bench_seed: int, scenario_name: str) -> int:
@@ -252,11 +252,11 @@ def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "or
         raise BenchError(f"unknown planner {unknown[0]!r}; available: {', '.join(known)}")
     if perception not in ("oracle", "laser"):
         raise BenchError(f"unknown perception {perception!r}; use oracle or laser")
+    from viapath.bench.identity import options_hash, scenario_hash, viapath_version
+
     if shield not in (None, "on", "off", "friendly"):
         raise BenchError(f"unknown shield setting {shield!r}; use on, off or friendly")
     setting = {p: shield or ("on" if shield_default(p) else "off") for p in planners}
-    from viapath.bench.identity import options_hash, scenario_hash, viapath_version
-
     version = viapath_version()
     hashes = [scenario_hash(s) for s in scenarios]
     return [Task(s, p, perception, episode_seed(seed, s["name"]), h, options_hash(s, p), version, setting[p])

@@ -185,8 +185,7 @@ class Planner:
                              self.limits, heading_gain)
 
 
-# The template cycle is guarded too: planners that implement decide() inherit it (viapath.guard).
-Planner.plan = guard_plan(Planner.plan)
+Planner.plan = guard_plan(Planner.plan)  # the template is the entry of every planner: guarded too
 
 
 def steer_command(x: float, y: float, heading_rad: float, target, speed_mps: float, limits: MotionLimits,
