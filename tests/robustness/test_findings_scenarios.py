@@ -8,6 +8,7 @@ relative path; a refused bench left an empty folder behind; there was no --versi
 
 from __future__ import annotations
 
+import re
 import sys
 import time
 from pathlib import Path
@@ -113,3 +114,27 @@ def test_version_and_plain_flags_in_help():
     help_text = CliRunner().invoke(_app(), ["run", "--help"], env={"COLUMNS": "200"}).output
     json_line = next(line for line in help_text.splitlines() if "--json" in line)
     assert "<bool>" not in json_line and "bool" not in json_line.lower().replace("boolean", "")
+
+
+def test_progress_bar_reads_elapsed_then_left(capsys):
+    from viapath.bench.runner import _with_progress
+
+    assert list(_with_progress(iter([{"a": 1}, {"a": 2}]), 2, True)) == [{"a": 1}, {"a": 2}]
+    line = [x for x in capsys.readouterr().err.splitlines() if "episodes" in x][-1]
+    assert re.search(r"elapsed \d+:\d\d:\d\d / \d+:\d\d:\d\d left", line), line
+
+
+def test_animation_progress_callback_shows_frames():
+    import io
+
+    from rich.console import Console
+
+    from viapath.cli_extras import animation_progress
+
+    buffer = io.StringIO()
+    update, close = animation_progress(Console(file=buffer, force_terminal=True, width=120))
+    for frame in range(3):
+        update(frame, 3)
+    close()
+    text = buffer.getvalue()
+    assert "writing frames" in text and "3/3" in text
