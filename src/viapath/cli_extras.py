@@ -48,7 +48,7 @@ def install(app: typer.Typer) -> None:
 def print_warnings(scenario, console) -> None:
     from rich.markup import escape
 
-    from viapath.scenarios.checks import scenario_warnings
+    from viapath.sim.checks import scenario_warnings
 
     for warning in scenario_warnings(scenario):
         console.print(f"[bold yellow]warning:[/] {escape(warning)}", highlight=False, soft_wrap=True)

@@ -50,13 +50,13 @@ def step(state: UnicycleState, command: Command, limits: MotionLimits, dt_s: flo
 
 def _arc(x: float, y: float, heading: float, speed: float, turn: float, dt_s: float) -> tuple[float, float, float]:
     """Where constant (v, ω) for ``dt_s`` takes the robot: along the exact arc (a line for ω = 0)."""
+    # The chord of the arc: length v·dt·sin(h)/h with h = ω·dt/2, along the mean heading. Exact, and
+    # stable for tiny ω (v/ω·(sin a − sin b) loses ~1e-8 m at ω ~ 1e-9 rad/s).
     new_heading = heading + turn * dt_s
-    if abs(turn) < 1e-9:
-        x += speed * dt_s * math.cos(heading)
-        y += speed * dt_s * math.sin(heading)
-    else:
-        x += speed / turn * (math.sin(new_heading) - math.sin(heading))
-        y -= speed / turn * (math.cos(new_heading) - math.cos(heading))
+    half = 0.5 * turn * dt_s
+    chord = speed * dt_s * (1.0 - half * half / 6.0 if abs(half) < 1e-6 else math.sin(half) / half)
+    x += chord * math.cos(heading + half)
+    y += chord * math.sin(heading + half)
     return x, y, math.atan2(math.sin(new_heading), math.cos(new_heading))
 
 

@@ -52,7 +52,7 @@ def test_finding_6_too_many_steps_is_an_error_naming_dt(tmp_path):
 
 def test_finding_6_start_overlap_warns_and_is_not_at_fault():
     scenario = scenario_from_dict(_base(obstacles=[{"start": [0.3, 0.0], "velocity": [0.0, 0.0], "radius": 0.25}]))
-    from viapath.scenarios.checks import scenario_warnings
+    from viapath.sim.checks import scenario_warnings
 
     warnings = scenario_warnings(scenario)
     assert any("obstacle 0 starts overlapping the robot" in w for w in warnings), warnings
@@ -67,7 +67,7 @@ def test_finding_6_start_overlap_warns_and_is_not_at_fault():
 
 
 def test_finding_7_corridor_narrower_than_robot_warns(tmp_path):
-    from viapath.scenarios.checks import scenario_warnings
+    from viapath.sim.checks import scenario_warnings
 
     narrow = scenario_from_dict(_base(path={"waypoints": [[0.0, 0.0], [3.0, 0.0]], "half_width": 0.1}))
     assert any(w.startswith("path.half_width = 0.1 m is less than the robot radius 0.25 m") for w in

@@ -76,11 +76,16 @@ def test_via_points_lie_on_the_inflated_cylinder_at_their_time(front):
     scenario, _, scenes = front
     from viapath.scenarios.loader import planner_settings
 
+    from viapath.safety import ShieldConfig
+
     settings = planner_settings(scenario)
-    grown = settings.safety_margin_m + settings.planning_margin_m
     avoiding = [s for s in scenes if len(s.xyt.via_points_xyt)]
     assert avoiding, "paper-front should make the robot pass the person through via points"
     for scene in avoiding[:20]:
+        # With the shield behind it (on by default) the planner keeps its braking envelope as well.
+        stop_s = 0.1 + scene.plan.speed_mps / scenario.robot.limits.max_accel_mps2
+        envelope = 0.5 * ShieldConfig().person_accel_mps2 * stop_s ** 2
+        grown = settings.safety_margin_m + settings.planning_margin_m + envelope
         for x, y, t in scene.xyt.via_points_xyt:
             gaps = [abs(np.hypot(*(np.array([x, y]) - p.centre_at(t))) - (p.combined_radius_m + grown))
                     for p in scene.xyt.persons]
