@@ -59,13 +59,21 @@ def test_smoothness_metrics_are_reported_and_within_the_robot_limits(name):
 
 
 def test_overtaking_robot_passes_the_slow_walker():
-    """The robot (0.25 m/s nominal) must get ahead of the 0.1 m/s walker, not trail it to the goal."""
-    trace = _episode("overtaking").trace
-    robot_x = trace.robot_poses[:, 0]
-    walker_x = trace.obstacle_positions[:, 0, 0]
-    lead = float(np.max(robot_x - walker_x))
+    """The planner (0.25 m/s nominal) must get ahead of the 0.1 m/s walker, not trail it to the goal."""
+    episode = run_episode(load_scenario("overtaking"), shield=False)
+    trace = episode.trace
+    lead = float(np.max(trace.robot_poses[:, 0] - trace.obstacle_positions[:, 0, 0]))
     assert lead > 0.5, (f"the robot never got ahead of the walker (best lead {lead:.2f} m; "
-                        f"time to goal {_episode('overtaking').metrics['time_to_goal_s']} s)")
+                        f"time to goal {episode.metrics['time_to_goal_s']} s)")
+
+
+def test_overtaking_behind_the_shield_reaches_the_goal_without_being_the_one_moving_into_the_walker():
+    # Known cost of the shield's defaults (person_accel_mps2 = 1 m/s²): passing a walker at the
+    # corridor's width is not admissible, so the robot trails it (~70 s instead of ~29 s; with
+    # person_accel_mps2 = 0.5 it passes in ~30 s). Kept visible here rather than tuned away.
+    metrics = _episode("overtaking").metrics
+    assert metrics["reached_goal"] and not metrics["at_fault_collision"], metrics
+    assert metrics["shield"] is True and metrics["time_to_goal_s"] < load_scenario("overtaking").duration_s
 
 
 def test_robot_outside_the_corridor_facing_outwards_turns_back_instead_of_standing():
