@@ -10,7 +10,8 @@ step is a module of this package, named after it:
    path's corners (paper step 1: a free straight leg at the nominal speed is the plan at once);
 3. costs (:mod:`.critics`): Eq. 1 as critics, plus side preference and hysteresis;
 4. follow (:mod:`.follow`): the cheapest candidate whose first leg the robot can follow within its
-   motion limits;
+   motion limits and, with a shield behind the planner (DESIGN §7), whose command the shield admits
+   (via points then also keep the robot's braking envelope from people);
 5. command: steer for the plan's target at the plan's speed (turning on the spot first if needed);
 6. escape (:mod:`.escape`): stop if standing is safe, else the drive command that stays clear longest.
 
@@ -61,6 +62,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         self.critics = critics_for(self.config)
         self._previous: Choice | None = None
         self._previous_escape: Command | None = None  # last cycle's command, if it escaped
+        self._situation: Situation | None = None  # this cycle's, for the shield check of candidates
 
     def reset(self) -> None:
         super().reset()
