@@ -43,14 +43,15 @@ def test_readme_commands_are_one_line_and_use_a_fresh_venv():
 
 
 def test_readme_plugin_planner_example_registers_and_drives(monkeypatch):
-    from viapath.planning import base
+    from viapath.planning import available_planners
+    from viapath.planning.base import PLANNERS
     from viapath.scenarios import load_scenario
     from viapath.sim.loop import run_episode
 
     (block,) = [b for b in _blocks("python") if "name=\"mine\"" in b]
-    monkeypatch.setattr(base, "_REGISTRY", dict(base._REGISTRY))
+    monkeypatch.setattr(PLANNERS, "_entries", dict(PLANNERS._entries))
     exec(compile(block, "README.md plug-in example", "exec"), {})
-    assert "mine" in base.available_planners()
+    assert "mine" in available_planners()
     # It follows the path line at the nominal speed, avoiding no one.
     metrics = run_episode(load_scenario("paper-side"), planner="mine").metrics
     assert metrics["max_lateral_deviation_m"] < 0.05

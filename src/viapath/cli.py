@@ -55,6 +55,8 @@ def run(
     plot: Optional[Path] = typer.Option(None, "--plot", help="Write a figure (PNG/PDF/SVG) of the episode."),
     trace: Optional[Path] = typer.Option(None, "--trace", help="Write the per-step trace as CSV."),
     animate: Optional[Path] = typer.Option(None, "--animate", help="Write an animation (GIF, or MP4 with ffmpeg)."),
+    option: list[str] = typer.Option([], "--option", "-o", metavar="NAME=VALUE",
+                                     help="Set a planner option (repeatable); `viapath planners NAME` lists them."),
 ) -> None:
     """Run one scenario in the simulator and report its metrics."""
     from viapath.planning import available_planners
@@ -68,8 +70,10 @@ def run(
     _check_noise(velocity_noise, "--velocity-noise")
     if seed is not None and seed < 0:
         _fail(f"--seed: expected an integer >= 0, found {seed}")
-    if perception is not None and perception not in ("oracle", "laser"):
-        _fail(f"--perception: expected 'oracle' or 'laser', found {perception!r}")
+    from viapath.perception.modes import PERCEPTION_MODES
+
+    if perception is not None and perception not in PERCEPTION_MODES:
+        _fail(f"--perception: expected {' or '.join(repr(m) for m in PERCEPTION_MODES.ordered())}, found {perception!r}")
     try:
         spec = load_scenario(scenario)
     except ScenarioError as error:
@@ -78,10 +82,15 @@ def run(
     if planner_name not in available_planners():
         where = "--planner" if planner else f"{scenario}: planner.name"
         _fail(f"{where}: unknown planner {planner_name!r}; available: {', '.join(available_planners())}")
+    overrides = parse_options(option, planner_name)
+    if planner_name != spec.planner.name and spec.planner.given():
+        errors.print(f"note: {scenario}'s planner block configures {spec.planner.name!r}; {planner_name!r} runs with "
+                     "its own defaults (and any --option)", highlight=False)
     try:
         episode = run_episode(spec, planner=planner_name, perception=perception, seed=seed,
                               position_noise_m=position_noise, velocity_noise_mps=velocity_noise,
-                              record_perceived=plot is not None or animate is not None)
+                              record_perceived=plot is not None or animate is not None,
+                              planner_overrides=overrides)
     except (ValueError, RuntimeError, FileNotFoundError) as error:
         _fail(f"{scenario}: {error}")
 
@@ -144,21 +153,56 @@ def scenarios() -> None:
     console.print(table)
 
 
+def parse_options(assignments: list[str], planner_name: str) -> dict:
+    """``--option NAME=VALUE`` items, validated by the planner's option schema (exit 2 on a bad one)."""
+    from viapath.options import OptionError
+    from viapath.planning import planner_options
+
+    schema = planner_options(planner_name)
+    values = {}
+    try:
+        for text in assignments:
+            name, value = schema.parse_assignment(text)
+            values[name] = value
+        schema.validate(values, where="--option")
+    except OptionError as error:
+        _fail("\n".join(f"{field.replace('--option.', '--option ')}: {message}" for field, message in error.errors))
+    return schema.nest(values)
+
+
 @app.command()
-def planners() -> None:
-    """List the registered planners."""
+def planners(
+    name: Optional[str] = typer.Argument(None, help="A planner: list its options with defaults, units and bounds."),
+    as_json: bool = typer.Option(False, "--json", help="Print the options as JSON."),
+) -> None:
+    """List the registered planners, or one planner's options."""
     from viapath.planning import available_planners, planner_class
 
-    for name in available_planners():
-        doc = (planner_class(name).__doc__ or "").strip().splitlines()
-        console.print(f"[bold]{name}[/]: {doc[0] if doc else ''}")
+    if name is None:
+        for planner in available_planners():
+            doc = (planner_class(planner).__doc__ or "").strip().splitlines()
+            console.print(f"[bold]{planner}[/]: {doc[0] if doc else ''}")
+        return
+    if name not in available_planners():
+        _fail(f"unknown planner {name!r}; available: {', '.join(available_planners())}")
+    schema = planner_class(name).options
+    if as_json:
+        print(json.dumps([{"name": o.path, "default": o.default, "unit": o.unit, "minimum": o.minimum,
+                           "maximum": o.maximum, "choices": o.choices, "help": o.help} for o in schema]))
+        return
+    console.print(f"[bold]{name}[/] options (scenario: planner: {{name: {name}, OPTION: VALUE}}; "
+                  "command line: --option NAME=VALUE)")
+    for o in schema:
+        default = "[" + ", ".join(f"{v:g}" for v in o.default) + "]" if isinstance(o.default, tuple) else o.default
+        console.print(f"  [bold]{o.path}[/] = {default}" + (f" {o.unit}" if o.unit else ""), highlight=False)
+        console.print(f"      {escape(o.describe())}", highlight=False)
 
 
 def _register_plugins() -> None:
     """Commands that live beside their subsystem (laser scans, benchmark)."""
     import importlib
 
-    for module in ("viapath.perception.commands", "viapath.bench.commands"):
+    for module in ("viapath.commands.scans", "viapath.bench.commands"):
         try:
             spec = importlib.util.find_spec(module)
         except ModuleNotFoundError:

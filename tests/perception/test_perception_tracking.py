@@ -203,7 +203,7 @@ def test_scans_command_error_keeps_brackets_of_the_install_hint(monkeypatch):
     from typer.testing import CliRunner
 
     import viapath.io.rosbag as rosbag
-    from viapath.perception.commands import register
+    from viapath.commands.scans import register
 
     def missing():
         raise rosbag.RosbagsMissingError("reading ROS bags needs the 'rosbags' package; install it with: pip install 'viapath[ros]'")

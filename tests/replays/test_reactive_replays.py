@@ -138,14 +138,14 @@ def scenario_with(file: Path, react: bool, extra_obstacles=()):
 def standstill(monkeypatch):
     """A planner that always commands a stop (registered for this test only)."""
     from viapath.observation import Command
-    from viapath.planning import Decision, Plan, Planner, base
+    from viapath.planning import Decision, Plan, Planner
+    from viapath.planning.base import PLANNERS
 
-    base.available_planners()
-    monkeypatch.setattr(base, "_REGISTRY", dict(base._REGISTRY))
+    monkeypatch.setattr(PLANNERS, "_entries", dict(PLANNERS._entries))
 
     class Standstill(Planner, name="test-standstill"):
-        def plan(self, observation):
-            return Decision(Command.stop(), Plan("stop", 0.0, observation.robot.position))
+        def decide(self, situation):
+            return Decision(Command.stop(), Plan("stop", 0.0, situation.position))
 
     return "test-standstill"
 

@@ -31,7 +31,7 @@ from viapath.perception.raycast import simulate_scan
 from viapath.perception.scanner import ScannerModel, paper_scanners
 from viapath.perception.segmentation import SegmentationParams
 from viapath.perception.tracking import MultiTargetTracker, Track, TrackerParams
-from viapath.sim.perception import Perception, WorldSnapshot
+from viapath.perception.base import Perception, WorldSnapshot
 
 
 def _dataclass_from(cls, value, what: str):

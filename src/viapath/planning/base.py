@@ -1,24 +1,41 @@
-"""The planner protocol (DESIGN §4) and the registry that lets the CLI and benchmark find planners.
+"""The planner protocol (DESIGN §4): what every planner is handed and what it returns.
 
-A planner is built once per episode with the designated path and the robot's limits, then called
-every cycle with an :class:`~viapath.observation.Observation`; it returns a :class:`Decision`:
-the command (v, ω) and its plan for display and analysis. Subclasses register by name:
+A planner is built once per episode with the designated path, the robot's limits and its options,
+then called every cycle with an :class:`~viapath.observation.Observation`; it returns a
+:class:`Decision`: the command (v, ω) and its plan for display and analysis.
 
-    class MyPlanner(Planner, name="mine"): ...
+:meth:`Planner.plan` is a template method, the same for every planner: it keeps the obstacles whose
+estimates are usable, tracks the subgoal (paper §2), stops at the goal and works out the one safety
+inflation every planner gets (combined radius + margin + σ terms, the velocity cone capped at
+``max_inflation_m``) and how far outside the corridor the robot already is. It hands that
+:class:`Situation` to :meth:`Planner.decide`, the only method a planner must write. Subclasses
+register by name (``class Mine(Planner, name="mine")``); a second planner of the same name is an
+error. Options are declared once as an :class:`~viapath.options.OptionSet` in the class attribute
+``options`` (the common ones below come first).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
 
 from viapath.kinematics import steer_towards
-from viapath.observation import Command, MotionLimits, Observation
+from viapath.observation import Command, MotionLimits, Observation, Obstacles
+from viapath.options import Option, OptionSet, Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
+from viapath.registry import Registry
 
-_REGISTRY: dict[str, type["Planner"]] = {}
+PLANNERS: Registry[type["Planner"]] = Registry("planner")
+
+COMMON_OPTIONS = OptionSet([
+    Option("safety_margin_m", 0.05, "clearance added to every combined robot + obstacle radius", "m", minimum=0.0),
+    Option("uncertainty_sigmas", 2.0, "how many σ of position/velocity uncertainty inflate an obstacle", "",
+           minimum=0.0),
+    Option("max_inflation_m", 0.15, "cap on the growth of the velocity-uncertainty cone", "m", minimum=0.0),
+], owner="planner")
 
 
 @dataclass
@@ -44,16 +61,63 @@ class Decision:
     plan: Plan
 
 
+@dataclass(frozen=True)
+class Inflation:
+    """The one safety inflation: obstacle i must be kept ``check_radii[i] + growth[i]·min(t,
+    growth_until_s[i])`` from the robot centre at time t from now (DESIGN §2: the cylinder becomes a
+    capped cone). Replanning every cycle corrects a velocity error before it matters far ahead, so the
+    cone stops growing once it has added ``max_inflation_m`` (else head-on passes never fit a corridor)."""
+
+    obstacle_radii_m: np.ndarray  # obstacle radius + margin + k·σ_position (the robot's own radius apart)
+    check_radii: np.ndarray  # robot + obstacle radius + margin + k·σ_position
+    growth: np.ndarray  # k·σ_velocity, m/s
+    growth_until_s: np.ndarray  # when the cone stops growing
+
+    @classmethod
+    def of(cls, obstacles: Obstacles, robot_radius_m: float, settings: Mapping[str, Any]) -> "Inflation":
+        margin, k = settings["safety_margin_m"], settings["uncertainty_sigmas"]
+        position_term = k * obstacles.position_sigma_m
+        growth = k * obstacles.velocity_sigma_mps
+        with np.errstate(divide="ignore", over="ignore"):
+            until = np.where(growth > 0, settings["max_inflation_m"] / growth, np.inf)
+        return cls(obstacles.radii_m + margin + position_term,
+                   obstacles.radii_m + robot_radius_m + margin + position_term, growth, until)
+
+
+@dataclass
+class Situation:
+    """One cycle's facts, the same for every planner: where the robot is, what it heads for, the
+    obstacles it must keep clear of (usable estimates only) and how far outside the corridor it is."""
+
+    observation: Observation
+    position: np.ndarray
+    obstacles: Obstacles
+    inflation: Inflation
+    subgoal: np.ndarray
+    subgoal_index: int
+    corridor_excess_m: float  # how far outside the corridor the robot already is (0 inside)
+
+    @property
+    def robot(self):
+        return self.observation.robot
+
+    @property
+    def corridor_tolerance_m(self) -> float:
+        """A robot already outside may come back but not go further out."""
+        return self.corridor_excess_m + 1e-9
+
+
 class Planner:
-    """Base class: subgoal tracking shared by every planner, and registration by name."""
+    """Base class: the per-cycle template, the options, and registration by name."""
 
     name: ClassVar[str] = ""
+    options: ClassVar[OptionSet] = COMMON_OPTIONS
 
     def __init_subclass__(cls, name: str | None = None, **kwargs):
         super().__init_subclass__(**kwargs)
         if name:
             cls.name = name
-            _REGISTRY[name] = cls
+            PLANNERS.add(name, cls)
 
     def __init__(
         self,
@@ -63,6 +127,8 @@ class Planner:
         limits: MotionLimits | None = None,
         robot_radius_m: float = 0.25,
         subgoal_policy: SubgoalPolicy | None = None,
+        options: Mapping[str, Any] | None = None,
+        **option_values: Any,
     ):
         self.path = path
         self.nominal_speed_mps = float(nominal_speed_mps)
@@ -70,12 +136,37 @@ class Planner:
         self.robot_radius_m = float(robot_radius_m)
         self.subgoal_policy = subgoal_policy or SubgoalPolicy()
         self.subgoals = SubgoalTracker(path, self.subgoal_policy)
+        # Every option's value (defaults filled in), validated against the class's schema.
+        self.settings: Settings = type(self).options.validate({**dict(options or {}), **option_values},
+                                                                    where=f"planner {self.name or type(self).__name__}")
 
     def reset(self) -> None:
         self.subgoals = SubgoalTracker(self.path, self.subgoal_policy)
 
-    def plan(self, observation: Observation) -> Decision:  # pragma: no cover - interface
-        raise NotImplementedError
+    # -- the cycle (template) --------------------------------------------------------------------
+
+    def plan(self, observation: Observation) -> Decision:
+        situation = self.situation(observation)
+        if self.subgoals.goal_reached(situation.position):
+            subgoal = situation.subgoal
+            return Decision(Command.stop(), Plan("goal", 0.0, subgoal.copy(), subgoal_index=situation.subgoal_index))
+        return self.decide(situation)
+
+    def situation(self, observation: Observation) -> Situation:
+        position = np.asarray(observation.robot.position, dtype=float)
+        obstacles = observation.obstacles.finite()
+        self.subgoals.update(position, self.robot_radius_m, obstacles.positions, obstacles.radii_m)
+        return Situation(
+            observation=observation, position=position, obstacles=obstacles,
+            inflation=Inflation.of(obstacles, self.robot_radius_m, self.settings),
+            subgoal=self.subgoals.subgoal, subgoal_index=self.subgoals.index,
+            corridor_excess_m=max(0.0, float(self.path.corridor_excess(position))),
+        )
+
+    def decide(self, situation: Situation) -> Decision:  # pragma: no cover - interface
+        raise NotImplementedError(f"{type(self).__name__} must implement decide(situation)")
+
+    # -- helpers for planners ----------------------------------------------------------------------
 
     def steer(self, observation: Observation, target: np.ndarray, speed_mps: float, heading_gain: float = 2.5) -> Command:
         """Turn towards ``target`` and drive at ``speed_mps``, slowing for large heading errors."""
@@ -89,47 +180,3 @@ def steer_command(x: float, y: float, heading_rad: float, target, speed_mps: flo
     """Turn towards ``target`` and drive at ``speed_mps``, slowing for large heading errors."""
     return Command(*steer_towards(float(x), float(y), float(heading_rad), float(target[0]), float(target[1]),
                                   speed_mps, limits, heading_gain))
-
-
-def register(cls: type[Planner]) -> type[Planner]:
-    _REGISTRY[cls.name] = cls
-    return cls
-
-
-def available_planners() -> list[str]:
-    _load_builtin_planners()
-    return sorted(_REGISTRY)
-
-
-def planner_class(name: str) -> type[Planner]:
-    _load_builtin_planners()
-    try:
-        return _REGISTRY[name]
-    except KeyError:
-        raise KeyError(f"unknown planner {name!r}; available: {', '.join(sorted(_REGISTRY))}") from None
-
-
-def make_planner(name: str, path: DesignatedPath, **kwargs) -> Planner:
-    return planner_class(name)(path, **kwargs)
-
-
-def _load_builtin_planners() -> None:
-    # Importing the modules runs their class definitions, which register them.
-    import importlib
-    import importlib.util
-
-    import viapath.planning.viapath  # noqa: F401
-
-    if importlib.util.find_spec("viapath.planning.baselines") is not None:
-        importlib.import_module("viapath.planning.baselines")
-    # Planners of other packages: an entry point in the group "viapath.planners" naming the module
-    # that defines them (pyproject: [project.entry-points."viapath.planners"] mine = "my_pkg.planner").
-    from importlib.metadata import entry_points
-
-    for entry in entry_points(group="viapath.planners"):
-        try:
-            entry.load()
-        except Exception as error:  # a broken plug-in must not take the built-in planners down
-            import warnings
-
-            warnings.warn(f"planner plug-in {entry.name!r} ({entry.value}) failed to load: {error}", stacklevel=2)

@@ -39,112 +39,84 @@ What the sources leave open and we chose (and why):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from viapath.geometry import closest_approach, legs_first_contact, wrap_angle
-from viapath.observation import Command, Observation, Obstacles
-from viapath.planning.base import Decision, Plan, Planner
-
-
-def _inflation(obstacles: Obstacles, robot_radius_m: float, safety_margin_m: float, sigmas: float):
-    """Combined radius per obstacle and its growth rate (m/s) from the velocity uncertainty."""
-    radii = obstacles.radii_m + robot_radius_m + safety_margin_m + sigmas * obstacles.position_sigma_m
-    return radii, sigmas * obstacles.velocity_sigma_mps
+from viapath.observation import Command
+from viapath.options import Option, OptionSet
+from viapath.planning.base import COMMON_OPTIONS, Decision, Plan, Planner, Situation
 
 
 class _SubgoalFollower(Planner):
-    """Shared by the baselines: subgoal tracking (paper §2) and the obstacle list every cycle."""
+    """Shared by the baselines: the straight leg to the subgoal (paper §2) and the options as attributes."""
 
-    def _prepare(self, observation: Observation):
-        position = np.asarray(observation.robot.position, dtype=float)
-        obstacles = observation.obstacles.finite()
-        self.subgoals.update(position, self.robot_radius_m, obstacles.positions, obstacles.radii_m)
-        return position, obstacles, self.subgoals.subgoal
+    def __init__(self, path, **kwargs):
+        super().__init__(path, **kwargs)
+        self.config = self.settings
 
-    def _goal_decision(self, position) -> Decision | None:
-        if self.subgoals.goal_reached(position):
-            subgoal = self.subgoals.subgoal
-            return Decision(Command.stop(), Plan("goal", 0.0, subgoal.copy(), subgoal_index=self.subgoals.index))
-        return None
-
-    def _straight(self, observation, position, subgoal, status="straight") -> Decision:
-        speed = self.nominal_speed_mps
+    def _straight(self, situation: Situation, status="straight") -> Decision:
+        speed, position, subgoal = self.nominal_speed_mps, situation.position, situation.subgoal
         plan = Plan(status, speed, subgoal.copy(), waypoints=np.array([position, subgoal]),
-                    subgoal_index=self.subgoals.index)
-        return Decision(self.steer(observation, subgoal, speed), plan)
+                    subgoal_index=situation.subgoal_index)
+        return Decision(self.steer(situation.observation, subgoal, speed), plan)
 
 
 class FollowPlanner(_SubgoalFollower, name="follow"):
     """Follows the designated path at the nominal speed and ignores obstacles (the lower bound)."""
 
-    def plan(self, observation: Observation) -> Decision:
-        position, _, subgoal = self._prepare(observation)
-        return self._goal_decision(position) or self._straight(observation, position, subgoal)
+    def decide(self, situation: Situation) -> Decision:
+        return self._straight(situation)
 
 
 class StopPlanner(_SubgoalFollower, name="stop"):
     """Follows the path; stops while the straight leg ahead is predicted to touch an obstacle."""
 
-    def __init__(self, path, *, horizon_s: float = 4.0, safety_margin_m: float = 0.05,
-                 uncertainty_sigmas: float = 2.0, **kwargs):
-        super().__init__(path, **kwargs)
-        self.horizon_s = float(horizon_s)
-        self.safety_margin_m = float(safety_margin_m)
-        self.uncertainty_sigmas = float(uncertainty_sigmas)
+    options = COMMON_OPTIONS + OptionSet([
+        Option("horizon_s", 4.0, "stop while the straight leg touches an obstacle this far ahead", "s",
+               minimum=0.0, exclusive_minimum=True),
+    ], owner="stop")
 
-    def plan(self, observation: Observation) -> Decision:
-        position, obstacles, subgoal = self._prepare(observation)
-        done = self._goal_decision(position)
-        if done is not None:
-            return done
+    def decide(self, situation: Situation) -> Decision:
+        obstacles, position, subgoal = situation.obstacles, situation.position, situation.subgoal
         if len(obstacles):
             offset = subgoal - position
             distance = float(np.hypot(*offset))
             speed = self.nominal_speed_mps
             velocity = offset / max(distance, 1e-9) * speed
-            duration = min(self.horizon_s, distance / speed)
-            radii, growth = _inflation(obstacles, self.robot_radius_m, self.safety_margin_m, self.uncertainty_sigmas)
+            duration = min(self.config.horizon_s, distance / speed)
+            inflation = situation.inflation
             contact = legs_first_contact(position[None], np.zeros(1), velocity[None], np.array([duration]),
-                                         obstacles.positions, obstacles.velocities, radii, growth)
+                                         obstacles.positions, obstacles.velocities, inflation.check_radii,
+                                         inflation.growth, inflation.growth_until_s)
             if np.isfinite(contact).any():
-                return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), subgoal_index=self.subgoals.index))
-        return self._straight(observation, position, subgoal)
-
-
-@dataclass
-class DWAConfig:
-    horizon_s: float = 3.0  # an arc touching an obstacle this far ahead is inadmissible
-    sample_dt_s: float = 0.1
-    window_s: float = 0.1  # the control period: velocities reachable within it form the window
-    n_speeds: int = 7
-    n_turn_rates: int = 15
-    corridor_horizon_s: float = 1.5
-    heading_lookahead_s: float = 1.0
-    heading_weight: float = 1.0  # α
-    clearance_weight: float = 0.3  # β
-    velocity_weight: float = 0.3  # γ
-    path_weight: float = 0.5  # our addition: stay near the designated path
-    safety_margin_m: float = 0.05
-    uncertainty_sigmas: float = 2.0
+                return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), subgoal_index=situation.subgoal_index))
+        return self._straight(situation)
 
 
 class DWAPlanner(_SubgoalFollower, name="dwa"):
     """Dynamic window approach (Fox, Burgard, Thrun 1997) with predicted obstacle motion and the corridor."""
 
-    def __init__(self, path, *, config: DWAConfig | None = None, **kwargs):
-        options = {k: kwargs.pop(k) for k in list(kwargs) if k in DWAConfig.__dataclass_fields__}
-        super().__init__(path, **kwargs)
-        self.config = config or DWAConfig(**options)
+    options = COMMON_OPTIONS + OptionSet([
+        Option("horizon_s", 3.0, "an arc touching an obstacle this far ahead is inadmissible", "s",
+               minimum=0.0, exclusive_minimum=True),
+        Option("sample_dt_s", 0.1, "time step of the sampled arcs", "s", minimum=0.0, exclusive_minimum=True),
+        Option("window_s", 0.1, "the control period: velocities reachable within it form the window", "s",
+               minimum=0.0, exclusive_minimum=True),
+        Option("n_speeds", 7, "speeds sampled in the window", minimum=1),
+        Option("n_turn_rates", 15, "turn rates sampled in the window", minimum=1),
+        Option("corridor_horizon_s", 1.5, "an arc must stay in the corridor this long", "s", minimum=0.0),
+        Option("heading_lookahead_s", 1.0, "where along the arc heading and path terms are evaluated", "s",
+               minimum=0.0),
+        Option("heading_weight", 1.0, "α, weight of the heading to the subgoal", minimum=0.0),
+        Option("clearance_weight", 0.3, "β, weight of the time to the first contact", minimum=0.0),
+        Option("velocity_weight", 0.3, "γ, weight of closeness to the nominal speed", minimum=0.0),
+        Option("path_weight", 0.5, "weight of staying near the designated path (our addition)", minimum=0.0),
+    ], owner="dwa")
 
-    def plan(self, observation: Observation) -> Decision:
+    def decide(self, situation: Situation) -> Decision:
         config, limits = self.config, self.limits
-        position, obstacles, subgoal = self._prepare(observation)
-        done = self._goal_decision(position)
-        if done is not None:
-            return done
-        robot = observation.robot
+        obstacles, position, subgoal = situation.obstacles, situation.position, situation.subgoal
+        robot = situation.robot
         # The dynamic window: velocities reachable within one control period.
         dv, dw = limits.max_accel_mps2 * config.window_s, limits.max_turn_accel_radps2 * config.window_s
         speeds = np.linspace(max(0.0, robot.speed_mps - dv), min(limits.max_speed_mps, robot.speed_mps + dv), config.n_speeds)
@@ -159,7 +131,8 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
         xy = poses[..., :2]
         first_contact = np.full(len(v), np.inf)
         if len(obstacles):
-            radii, growth = _inflation(obstacles, self.robot_radius_m, config.safety_margin_m, config.uncertainty_sigmas)
+            radii, growth, until = (situation.inflation.check_radii, situation.inflation.growth,
+                                    situation.inflation.growth_until_s)
             reach = np.hypot(*(obstacles.positions - position).T) - radii
             reach_limit = (limits.max_speed_mps + np.hypot(*obstacles.velocities.T) + growth) * times[-1]
             near = reach <= reach_limit
@@ -168,7 +141,7 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
                 centres = obstacles.positions[near][None, :, :] + times[:, None, None] * obstacles.velocities[near][None]
                 rel = xy[:, :, None, :] - centres[None]  # (K, S, N, 2)
                 distance, _ = closest_approach(rel[:, :-1], rel[:, 1:] - rel[:, :-1], 1.0)
-                gaps = distance - (radii[near] + growth[near] * times[1:, None])[None]
+                gaps = distance - (radii[near] + growth[near] * np.minimum(times[1:, None], until[near]))[None]
                 touching = (gaps <= 0).any(axis=2)
                 first_contact = np.where(touching, times[:-1][None], np.inf).min(axis=1)
         admissible = first_contact > config.horizon_s
@@ -176,14 +149,14 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
 
         # The corridor as a constraint over its own, shorter horizon.
         corridor_samples = times <= config.corridor_horizon_s + 1e-9
-        tolerance = max(0.0, float(self.path.corridor_excess(position))) + 1e-6
+        tolerance = situation.corridor_excess_m + 1e-6
         inside = (self.path.corridor_excess(xy[:, corridor_samples]) <= tolerance).all(axis=1)
         admissible &= inside
 
         if not admissible.any():
             # Braking fallback: stop, turning along the arc whose contact (or exit) comes latest.
             best = int(np.argmax(np.where(inside, 1e3, 0.0) + np.minimum(first_contact, 1e3)))
-            plan = Plan("brake", 0.0, xy[best, -1].copy(), waypoints=xy[best].copy(), subgoal_index=self.subgoals.index,
+            plan = Plan("brake", 0.0, xy[best, -1].copy(), waypoints=xy[best].copy(), subgoal_index=situation.subgoal_index,
                         candidate_count=0)
             return Decision(Command(0.0, float(w[best])), plan)
 
@@ -195,14 +168,14 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
         heading_error = np.where(np.hypot(*to_goal.T) < 0.05, 0.0, heading_error)
         heading_term = 1.0 - heading_error / np.pi
         velocity_term = 1.0 - np.abs(v - self.nominal_speed_mps) / limits.max_speed_mps
-        half_width = self.path.half_widths_m[min(self.subgoals.index - 1, len(self.path.half_widths_m) - 1)]
+        half_width = self.path.half_widths_m[min(situation.subgoal_index - 1, len(self.path.half_widths_m) - 1)]
         path_term = 1.0 - np.clip(np.abs(self.path.lateral_deviation(ahead[:, :2])) / half_width, 0.0, 1.0)
         score = (config.heading_weight * heading_term + config.clearance_weight * clearance_term
                  + config.velocity_weight * velocity_term + config.path_weight * path_term)
         score = np.where(admissible, score, -np.inf)
         best = int(np.argmax(score))
         plan = Plan("dwa", float(v[best]), xy[best, look].copy(), waypoints=xy[best].copy(),
-                    subgoal_index=self.subgoals.index, candidate_count=int(admissible.sum()),
+                    subgoal_index=situation.subgoal_index, candidate_count=int(admissible.sum()),
                     candidate_costs=-score[admissible], extras={"turn_rate_radps": float(w[best])})
         return Decision(Command(float(v[best]), float(w[best])), plan)
 
@@ -219,35 +192,24 @@ def _arcs(position, heading_rad, speeds, turn_rates, times):
     return np.stack([position[0] + x, position[1] + y, heading], axis=-1)
 
 
-@dataclass
-class VOConfig:
-    horizon_s: float = 5.0  # truncation of the velocity obstacles
-    n_speeds: int = 7
-    n_headings: int = 37
-    heading_span_rad: float = np.pi / 2
-    corridor_horizon_s: float = 2.0
-    preferred_side: str = "left"
-    penalty_weight: float = 0.5
-    safety_margin_m: float = 0.05
-    uncertainty_sigmas: float = 2.0
-
-
 class VOPlanner(_SubgoalFollower, name="vo"):
     """Sampling-based velocity obstacles (Fiorini & Shiller 1998) with the corridor."""
 
-    def __init__(self, path, *, config: VOConfig | None = None, **kwargs):
-        options = {k: kwargs.pop(k) for k in list(kwargs) if k in VOConfig.__dataclass_fields__}
-        super().__init__(path, **kwargs)
-        self.config = config or VOConfig(**options)
-        if self.config.preferred_side not in ("left", "right"):
-            raise ValueError("preferred_side must be 'left' or 'right'")
+    options = COMMON_OPTIONS + OptionSet([
+        Option("horizon_s", 5.0, "truncation of the velocity obstacles", "s", minimum=0.0, exclusive_minimum=True),
+        Option("n_speeds", 7, "speeds sampled up to the top speed", minimum=1),
+        Option("n_headings", 37, "headings sampled around the direction to the subgoal", minimum=1),
+        Option("heading_span_rad", float(np.pi / 2), "headings within ± this of the direction to the subgoal",
+               "rad", minimum=0.0),
+        Option("corridor_horizon_s", 2.0, "a velocity must keep the robot in the corridor this long", "s",
+               minimum=0.0),
+        Option("preferred_side", "left", "exact ties (head-on) go round this side", choices=("left", "right")),
+        Option("penalty_weight", 0.5, "with no free velocity: weight of 1/time-to-contact", "s", minimum=0.0),
+    ], owner="vo")
 
-    def plan(self, observation: Observation) -> Decision:
+    def decide(self, situation: Situation) -> Decision:
         config = self.config
-        position, obstacles, subgoal = self._prepare(observation)
-        done = self._goal_decision(position)
-        if done is not None:
-            return done
+        obstacles, position, subgoal = situation.obstacles, situation.position, situation.subgoal
         offset = subgoal - position
         bearing = float(np.arctan2(offset[1], offset[0]))
         preferred = self.nominal_speed_mps * np.array([np.cos(bearing), np.sin(bearing)])
@@ -261,13 +223,13 @@ class VOPlanner(_SubgoalFollower, name="vo"):
         k = len(candidates)
 
         if len(obstacles):
-            radii, growth = _inflation(obstacles, self.robot_radius_m, config.safety_margin_m, config.uncertainty_sigmas)
+            inflation = situation.inflation
             contact = legs_first_contact(np.repeat(position[None], k, 0), np.zeros(k), candidates,
                                          np.full(k, config.horizon_s), obstacles.positions, obstacles.velocities,
-                                         radii, growth).min(axis=1)
+                                         inflation.check_radii, inflation.growth, inflation.growth_until_s).min(axis=1)
         else:
             contact = np.full(k, np.inf)
-        tolerance = max(0.0, float(self.path.corridor_excess(position))) + 1e-6
+        tolerance = situation.corridor_excess_m + 1e-6
         ends = position + candidates * config.corridor_horizon_s
         inside = self.path.legs_inside(np.repeat(position[None], k, 0), ends, tolerance_m=tolerance)
         free = np.isinf(contact) & inside
@@ -287,16 +249,7 @@ class VOPlanner(_SubgoalFollower, name="vo"):
         speed = float(s[best])
         target = position + velocity / max(speed, 1e-9) if speed > 0 else position.copy()
         plan = Plan(status, speed, target, waypoints=np.array([position, position + velocity * config.horizon_s]),
-                    subgoal_index=self.subgoals.index, candidate_count=int(free.sum()))
-        command = self.steer(observation, target, speed) if speed > 0 else Command.stop()
+                    subgoal_index=situation.subgoal_index, candidate_count=int(free.sum()))
+        command = self.steer(situation.observation, target, speed) if speed > 0 else Command.stop()
         return Decision(command, plan)
 
-
-# navground's behaviours (ORCA, HL, HRVO, SocialForce) register only when the package is installed.
-try:  # pragma: no cover - depends on the optional extra
-    import importlib.util as _util
-
-    if _util.find_spec("navground") is not None:
-        import viapath.planning.navground_peers  # noqa: F401
-except ImportError:
-    pass

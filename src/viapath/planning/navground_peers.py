@@ -25,8 +25,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from viapath.observation import Command, Observation
-from viapath.planning.base import Decision, Plan, Planner
+from viapath.observation import Command
+from viapath.options import Option, OptionSet
+from viapath.planning.base import COMMON_OPTIONS, Decision, Plan, Planner, Situation
 
 
 def corridor_borders(waypoints: np.ndarray, half_widths: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -64,15 +65,17 @@ def corridor_borders(waypoints: np.ndarray, half_widths: np.ndarray) -> list[tup
 
 class _NavgroundPeer(Planner):
     behavior_type = ""
+    options = COMMON_OPTIONS + OptionSet([
+        Option("horizon_s", 5.0, "navground behaviour's horizon", "s", minimum=0.0, exclusive_minimum=True),
+        Option("corridor_walls", True, "give navground the corridor borders as line obstacles"),
+    ], owner="navground")
 
-    def __init__(self, path, *, horizon_s: float = 5.0, safety_margin_m: float = 0.05,
-                 uncertainty_sigmas: float = 2.0, corridor_walls: bool = True, **kwargs):
+    def __init__(self, path, **kwargs):
         super().__init__(path, **kwargs)
         import navground.core as core  # imported here: the extra is optional
 
         self._core = core
-        self.safety_margin_m = float(safety_margin_m)
-        self.uncertainty_sigmas = float(uncertainty_sigmas)
+        horizon_s, corridor_walls = self.settings["horizon_s"], self.settings["corridor_walls"]
         behavior = core.Behavior.make_type(self.behavior_type)
         if behavior is None:  # pragma: no cover - depends on the navground build
             raise RuntimeError(f"navground has no behaviour {self.behavior_type!r}")
@@ -90,16 +93,10 @@ class _NavgroundPeer(Planner):
         self._dt_s = 0.1
         self._last_time_s: float | None = None
 
-    def plan(self, observation: Observation) -> Decision:
+    def decide(self, situation: Situation) -> Decision:
         core = self._core
-        robot = observation.robot
-        position = np.asarray(robot.position, dtype=float)
-        obstacles = observation.obstacles.finite()
-        self.subgoals.update(position, self.robot_radius_m, obstacles.positions, obstacles.radii_m)
-        subgoal = self.subgoals.subgoal
-        index = self.subgoals.index
-        if self.subgoals.goal_reached(position):
-            return Decision(Command.stop(), Plan("goal", 0.0, subgoal.copy(), subgoal_index=index))
+        observation, obstacles, position = situation.observation, situation.obstacles, situation.position
+        robot, subgoal, index = observation.robot, situation.subgoal, situation.subgoal_index
         if self._last_time_s is not None and observation.time_s > self._last_time_s:
             self._dt_s = observation.time_s - self._last_time_s
         self._last_time_s = observation.time_s
@@ -109,7 +106,7 @@ class _NavgroundPeer(Planner):
         behavior.orientation = float(robot.heading_rad)
         behavior.velocity = robot.velocity
         behavior.angular_speed = float(robot.turn_rate_radps)
-        radii = (obstacles.radii_m + self.safety_margin_m + self.uncertainty_sigmas * obstacles.position_sigma_m)
+        radii = situation.inflation.obstacle_radii_m
         state = behavior.environment_state
         state.neighbors = [core.Neighbor(p, float(r), v, int(i)) for p, r, v, i in
                            zip(obstacles.positions, radii, obstacles.velocities, obstacles.ids)]

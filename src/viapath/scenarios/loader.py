@@ -9,6 +9,7 @@ from typing import Any
 import yaml
 from pydantic import ValidationError
 
+from viapath.options import OptionError
 from viapath.scenarios.models import Scenario
 
 _BUILTIN_PACKAGE = "viapath.scenarios.builtin"
@@ -49,9 +50,33 @@ def load_scenario(source: str | Path) -> Scenario:
 
 def scenario_from_dict(data: dict[str, Any], origin: str = "<dict>") -> Scenario:
     try:
-        return Scenario.model_validate(data)
+        scenario = Scenario.model_validate(data)
     except ValidationError as error:
         raise ScenarioError(format_validation_error(error, origin)) from None
+    try:
+        planner_settings(scenario)
+    except (KeyError, OptionError) as error:
+        raise ScenarioError(_planner_error(error, origin)) from None
+    return scenario
+
+
+def planner_settings(scenario: Scenario, planner_name: str | None = None) -> dict[str, Any]:
+    """The options the scenario's ``planner:`` block sets, validated by the planner it names.
+
+    The block configures the planner it names; another planner (``--planner``) runs with its own
+    defaults. Raises ``KeyError`` for an unknown planner, :class:`OptionError` for a bad option."""
+    from viapath.planning import planner_class
+
+    spec = scenario.planner
+    cls = planner_class(spec.name)  # KeyError names the available planners
+    settings = cls.options.validate(spec.given(), where="planner")
+    return settings if planner_name in (None, spec.name) else {}
+
+
+def _planner_error(error: Exception, origin: str) -> str:
+    if isinstance(error, OptionError):
+        return "\n".join(f"{origin}: {field}: {message}" for field, message in error.errors)
+    return f"{origin}: planner.name: {error.args[0]}"
 
 
 def _parse(text: str, origin: str, base_dir: Path | None) -> Scenario:

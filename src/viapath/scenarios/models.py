@@ -6,7 +6,7 @@ into one message naming the file, the field path, what was expected and what was
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Any, Union
 
 from pydantic import (
     BaseModel,
@@ -19,6 +19,8 @@ from pydantic import (
     field_validator,
     model_validator,
 )
+
+from viapath.perception.modes import PERCEPTION_MODES
 
 Point = tuple[float, float]
 Segment = tuple[Point, Point]
@@ -131,35 +133,34 @@ ObstacleItem = Annotated[
 ]
 
 
-class WeightsSpec(_Strict):
-    k1: NonNegativeFloat = 0.1
-    k2: NonNegativeFloat = 0.001
-    k3: NonNegativeFloat = 0.08
-    k4: NonNegativeFloat = 0.3
+class PlannerSpec(BaseModel):
+    """``name`` and the options of that planner, as its option schema defines them (``viapath planners
+    NAME`` lists them): validated by the loader against the named planner, so a typo or an option of
+    another planner is an error naming the field and the options that planner has. ``params`` is the
+    older spelling (a mapping of options) and is merged in."""
 
+    model_config = ConfigDict(extra="allow", allow_inf_nan=False)
 
-class PlannerSpec(_Strict):
     name: str = "viapath"
-    speeds: list[PositiveFloat] = Field(default_factory=lambda: [0.1, 0.2, 0.3, 0.4, 0.5], min_length=1)
-    weights: WeightsSpec = Field(default_factory=WeightsSpec)
-    theta_unit: Literal["rad", "deg"] = "rad"
-    planning_margin_m: NonNegativeFloat = 0.1
-    safety_margin_m: NonNegativeFloat = 0.05
-    horizon_s: PositiveFloat = 10.0
-    max_depth: int = Field(3, ge=1, le=6)
-    preferred_side: Literal["left", "right"] = "left"
-    hysteresis: NonNegativeFloat = 0.05
-    uncertainty_sigmas: NonNegativeFloat = 2.0
-    max_inflation_m: NonNegativeFloat = 0.15
-    side_tolerance: NonNegativeFloat = 0.03
-    params: dict[str, Any] = Field(default_factory=dict, description="options for other planners")
+    params: dict[str, Any] = Field(default_factory=dict, description="options (older spelling)")
+
+    def given(self) -> dict[str, Any]:
+        """The options this block sets (nested as in YAML), without the defaults."""
+        return {**self.params, **(self.model_extra or {})}
 
 
 class PerceptionSpec(_Strict):
-    mode: Literal["oracle", "laser"] = "oracle"
+    mode: str = "oracle"
     position_noise_m: NonNegativeFloat = 0.0
     velocity_noise_mps: NonNegativeFloat = 0.0
     options: dict[str, Any] = Field(default_factory=dict, description="options for the laser chain")
+
+    @field_validator("mode")
+    @classmethod
+    def _known_mode(cls, value: str) -> str:
+        if value not in PERCEPTION_MODES:
+            raise ValueError("expected " + " or ".join(repr(name) for name in PERCEPTION_MODES.ordered()))
+        return value
 
 
 class SubgoalSpec(_Strict):

@@ -5,7 +5,6 @@ Deterministic for a given seed: the only randomness (perception noise) draws fro
 
 from __future__ import annotations
 
-import inspect
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -14,11 +13,13 @@ import numpy as np
 
 from viapath.observation import Command, MotionLimits, Observation, RobotState
 from viapath.path import DesignatedPath, SubgoalPolicy
-from viapath.planning import Decision, make_planner, planner_class
+from viapath.planning import Decision, make_planner
+from viapath.scenarios.loader import planner_settings
 from viapath.sim import robot as kinematics
 from viapath.sim.metrics import compute_metrics, plan_side
 from viapath.sim.obstacles import scenario_obstacle_states
-from viapath.sim.perception import OraclePerception, Perception, WorldSnapshot
+from viapath.perception.base import WorldSnapshot
+from viapath.perception.modes import make_perception
 from viapath.sim.reactive import obstacle_motion
 
 
@@ -60,38 +61,6 @@ class Episode:
     metrics: dict[str, Any]
 
 
-def make_perception(mode: str, scenario, position_noise_m: float, velocity_noise_mps: float) -> Perception:
-    if mode == "oracle":
-        return OraclePerception(position_noise_m, velocity_noise_mps)
-    if mode == "laser":
-        try:
-            from viapath.perception.laser import LaserPerception
-        except ImportError as error:  # pragma: no cover - depends on the laser chain being installed
-            raise RuntimeError(f"laser perception is not available: {error}") from None
-        return _laser_perception(LaserPerception, scenario.perception.options)
-    raise ValueError(f"unknown perception mode {mode!r}; use 'oracle' or 'laser'")
-
-
-def _laser_perception(cls, options: dict[str, Any]) -> Perception:
-    """The scenario's ``perception.options`` as keyword arguments, with errors naming that field."""
-    known = list(inspect.signature(cls).parameters)
-    unknown = sorted(set(options) - set(known))
-    if unknown:
-        raise ValueError(f"perception.options: unknown option(s) {', '.join(unknown)}; known: {', '.join(known)}")
-    try:
-        return cls(**options)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"perception.options: {error}") from None
-
-
-def planner_options(scenario, planner_name: str) -> dict[str, Any]:
-    cls = planner_class(planner_name)
-    spec = scenario.planner
-    if hasattr(cls, "options_from_spec"):
-        return cls.options_from_spec(spec)
-    return dict(spec.params)
-
-
 def run_episode(
     scenario,
     planner: str | None = None,
@@ -116,13 +85,12 @@ def run_episode(
     limits = MotionLimits(**spec.limits.model_dump())
     subgoal_policy = SubgoalPolicy(**scenario.subgoals.model_dump())
     planner_name = planner or scenario.planner.name
-    options = planner_options(scenario, planner_name)
-    options.update(planner_overrides or {})
+    options = {**planner_settings(scenario, planner_name), **(planner_overrides or {})}
     the_planner = make_planner(planner_name, path, nominal_speed_mps=spec.speed, limits=limits,
                                robot_radius_m=spec.radius, subgoal_policy=subgoal_policy, **options)
     mode = perception or scenario.perception.mode
     sensing = make_perception(
-        mode, scenario,
+        mode, scenario.perception.options,
         scenario.perception.position_noise_m if position_noise_m is None else position_noise_m,
         scenario.perception.velocity_noise_mps if velocity_noise_mps is None else velocity_noise_mps,
     )
@@ -148,9 +116,8 @@ def run_episode(
         observed = sensing.observe(world)
         if record_perceived:
             perceived.append(observed)
-        points = getattr(sensing, "last_points_world", None)
-        if points is not None:
-            scan_points.append(np.asarray(points))
+        if mode == "laser":
+            scan_points.append(np.asarray(sensing.last_points_world))
         observation = Observation(float(times[k]), RobotState(state.position, state.heading_rad, state.speed_mps,
                                                               state.turn_rate_radps, spec.radius), observed)
         started = time.perf_counter()
@@ -182,9 +149,7 @@ def run_episode(
         plan_sides=np.array(rows["side"], dtype=int),
     )
     metrics = compute_metrics(trace)
-    extra_metrics = getattr(sensing, "episode_metrics", None)
-    if callable(extra_metrics):
-        metrics.update(extra_metrics())
+    metrics.update(sensing.episode_metrics())
     return Episode(trace, metrics)
 
 

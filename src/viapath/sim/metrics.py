@@ -150,6 +150,20 @@ def plan_switches(sides, speeds_mps, speed_tolerance_mps: float = 0.05) -> int:
     return int(np.count_nonzero(changed))
 
 
+def command_flips(commands, speed_jump_mps: float = 0.25, turn_threshold_radps: float = 0.5) -> int:
+    """Cycles whose command flips against the previous cycle's: the speed command jumps by at least
+    ``speed_jump_mps``, or the turn command changes sign with both at least ``turn_threshold_radps``
+    (a bang-bang escape: 0.6 ↔ 0 m/s, +2 ↔ -2 rad/s)."""
+    commands = np.asarray(commands, dtype=float).reshape(-1, 2)
+    if len(commands) < 2:
+        return 0
+    speed, turn = commands[:, 0], commands[:, 1]
+    jump = np.abs(np.diff(speed)) >= speed_jump_mps
+    strong = np.abs(turn) >= turn_threshold_radps
+    reverse = (turn[1:] * turn[:-1] < 0) & strong[1:] & strong[:-1]
+    return int(np.count_nonzero(jump | reverse))
+
+
 def side_flips(sides) -> int:
     """Left <-> right changes of the chosen side, ignoring straight (0) cycles in between."""
     sides = np.asarray(sides)
@@ -175,6 +189,8 @@ def smoothness_metrics(trace) -> dict[str, Any]:
         "steering_reversals": steering_reversals(turn),
         "plan_switches": plan_switches(sides, plan_speeds),
         "plan_side_flips": side_flips(sides),
+        "command_flips": command_flips(np.asarray(getattr(trace, "commands", np.zeros((0, 2))))[:cycles]),
+        "escape_cycles": int(sum(1 for s in status[:cycles] if s == "escape")),
     }
 
 

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from _core_helpers import brute_segment_distances, core_settings, sample_polyline, sampling_error
+from tests._core_helpers import brute_segment_distances, core_settings, sample_polyline, sampling_error
 from viapath.geometry import cross2
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 

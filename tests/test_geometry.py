@@ -11,7 +11,7 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from _core_helpers import core_settings
+from tests._core_helpers import core_settings
 from viapath.geometry import (
     LEFT,
     RIGHT,

@@ -253,7 +253,7 @@ def test_cli_names_the_field_of_errors_found_after_loading(tmp_path, old, new, n
 
 def test_laser_options_are_passed_through_including_the_mode():
     from viapath.perception.laser import LaserPerception
-    from viapath.sim.loop import _laser_perception
+    from viapath.perception.modes import options_as_arguments as _laser_perception
 
     perception = _laser_perception(LaserPerception, {"mode": "laser", "ray_backend": "numpy"})
     assert isinstance(perception, LaserPerception)

@@ -134,7 +134,7 @@ def test_scans_command_end_to_end(tmp_path):
     import typer
     from typer.testing import CliRunner
 
-    from viapath.perception.commands import register
+    from viapath.commands.scans import register
 
     app = typer.Typer()
 

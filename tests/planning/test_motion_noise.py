@@ -79,7 +79,8 @@ def test_a_previous_way_that_only_lost_on_cost_is_not_searched_again_with_less_i
 
     from viapath import DesignatedPath, Obstacles, Observation, RobotState
     from viapath.planning import make_planner
-    from viapath.planning import viapath as vp
+    from viapath.planning.viapath.candidates import Choice, Way
+    from viapath.planning.viapath.planner import ViaPathPlanner
 
     path = DesignatedPath([[0.0, 0.0], [8.0, 0.0]], half_width_m=1.5)
     planner = make_planner("viapath", path, nominal_speed_mps=0.25)
@@ -87,23 +88,25 @@ def test_a_previous_way_that_only_lost_on_cost_is_not_searched_again_with_less_i
                         position_sigma_m=[0.03], velocity_sigma_mps=[0.05])
     observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.25), head_on)
 
-    ranked = []
-    original_run = vp._Search.run
+    searches = []
+    original_choose = ViaPathPlanner._choose
 
-    def recording_run(self, *args, **kwargs):
-        result = original_run(self, *args, **kwargs)
-        ranked.append((kwargs.get("only_way") is not None, self.candidate_keys.copy(), result))
+    def recording_choose(self, checks, speeds, nominal_index, previous, only_way=None):
+        result = original_choose(self, checks, speeds, nominal_index, previous, only_way)
+        searches.append((only_way is not None, result))
         return result
 
-    monkeypatch.setattr(vp._Search, "run", recording_run)
+    monkeypatch.setattr(ViaPathPlanner, "_choose", recording_choose)
     first = planner.plan(observation)
     assert first.plan.status == "avoid"
-    keys, costs = ranked[-1][1], first.plan.candidate_costs
-    worst = keys[int(np.argmax(np.where(np.isfinite(costs), costs, -np.inf)))]
-    assert not np.array_equal(worst[1:], planner._previous_key[1:])
-    planner._previous_key = worst  # last cycle went the dearest way, which is still available now
-    ranked.clear()
+    candidates, costs = searches[-1][1].candidates, first.plan.candidate_costs
+    dearest = int(np.argmax(np.where(np.isfinite(costs), costs, -np.inf)))
+    worst = Way(*(int(v) for v in candidates.ways[dearest]))
+    assert worst != planner._previous.way
+    # Last cycle went the dearest way, which is still available now.
+    planner._previous = Choice(worst, int(candidates.speed_mmps[dearest]))
+    searches.clear()
     second = planner.plan(observation)
-    assert not np.array_equal(planner._previous_key[1:], worst[1:])  # it switched ...
-    assert [relaxed for relaxed, _, _ in ranked] == [False]  # ... after one search, no relaxed re-run
+    assert planner._previous.way != worst  # it switched ...
+    assert [relaxed for relaxed, _ in searches] == [False]  # ... after one search, no relaxed re-run
     assert "kept_previous_way" not in second.plan.extras

@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 
 from viapath.cli import app
 
-SRC = Path(__file__).resolve().parents[2] / "src"
+SRC = Path(__file__).resolve().parents[1] / "src"
 BUILTIN_DIR = SRC / "viapath" / "scenarios" / "builtin"
 
 DESIGN_METRICS = [

@@ -16,7 +16,7 @@ import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
-from _planner_helpers import SAMPLE_DT_S, obstacle_gaps, piecewise_track, planner_settings, robot_track
+from tests.planning._planner_helpers import SAMPLE_DT_S, obstacle_gaps, piecewise_track, planner_settings, robot_track
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.path import DesignatedPath
 from viapath.planning import make_planner

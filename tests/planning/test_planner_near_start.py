@@ -7,7 +7,7 @@ overlapped obstacles only by where they would be after 1 s, so standing still wo
 
 import numpy as np
 
-import test_planner_safety as safety
+from tests.planning import test_planner_safety as safety
 from viapath.observation import MotionLimits, Observation, Obstacles, RobotState
 from viapath.path import DesignatedPath
 

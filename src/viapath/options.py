@@ -1,0 +1,222 @@
+"""One definition of each option: name, default, unit, bounds, one line of help.
+
+Source: navground's habit (every behaviour declares its properties once, with a description), and
+Nav2's parameters with descriptions and ranges. Everything that configures a planner or the shield
+is an :class:`Option` in an :class:`OptionSet`; scenario YAML, the CLI (``--option NAME=VALUE``), the
+ROS 2 node's parameters and ``viapath planners NAME`` are all generated from that set, so a
+default, a unit or a bound is written in one place.
+
+Choices made here:
+* The kind of an option is the kind of its default: ``bool``, ``int``, ``float``, ``str`` (then
+  ``choices`` lists the allowed words) or a tuple of floats (a list in YAML, e.g. the speed set).
+* ``group`` nests an option in YAML (``weights: {k1: 0.1}``) and in ROS 2 parameter names
+  (``weights.k1``); the option's own ``name`` is unique within its set without the group.
+* Validation goes through a pydantic model built from the set (``extra="forbid"``, no NaN or
+  infinity), so errors read like every other scenario error: the field path, what was expected
+  and what was found. A set refuses two options of the same name.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
+
+
+@dataclass(frozen=True)
+class Option:
+    """One tunable value: what it is called, its default, its unit and range, and what it does."""
+
+    name: str
+    default: Any
+    help: str
+    unit: str = ""  # SI unit ("m", "s", "m/s", "rad", "m/s²"), "" for a plain number
+    minimum: float | None = None
+    maximum: float | None = None
+    exclusive_minimum: bool = False  # the value must be > minimum rather than >= minimum
+    choices: tuple[str, ...] | None = None
+    group: str | None = None  # YAML/ROS nesting, e.g. "weights"
+
+    @property
+    def kind(self) -> type:
+        if isinstance(self.default, tuple):
+            return tuple
+        return type(self.default)
+
+    @property
+    def path(self) -> str:
+        """The dotted name used in YAML paths and ROS 2 parameters."""
+        return f"{self.group}.{self.name}" if self.group else self.name
+
+    def describe(self) -> str:
+        """One line for help texts and ROS parameter descriptions: help, unit and range."""
+        bounds = []
+        if self.minimum is not None:
+            bounds.append(f"{'>' if self.exclusive_minimum else '>='} {self.minimum:g}")
+        if self.maximum is not None:
+            bounds.append(f"<= {self.maximum:g}")
+        if self.choices:
+            bounds.append("one of " + ", ".join(self.choices))
+        unit = f" [{self.unit}]" if self.unit else ""
+        return f"{self.help}{unit}" + (f" ({'; '.join(bounds)})" if bounds else "")
+
+    def _annotation(self):
+        if self.choices:
+            return Literal[self.choices]  # type: ignore[valid-type]
+        if self.kind is tuple:
+            return tuple[float, ...]
+        return self.kind
+
+    def _field(self):
+        limits: dict[str, Any] = {}
+        if self.minimum is not None:
+            limits["gt" if self.exclusive_minimum else "ge"] = self.minimum
+        if self.maximum is not None:
+            limits["le"] = self.maximum
+        if self.kind is tuple:
+            # Bounds apply to every element of a list option; an empty list is never meaningful.
+            from typing import Annotated
+
+            element = Annotated[float, Field(**limits)] if limits else float
+            return (tuple[element, ...], Field(self.default, min_length=1, description=self.describe()))
+        return (self._annotation(), Field(self.default, description=self.describe(), **limits))
+
+
+class Settings(Mapping):
+    """Every option's value, read-only, by key (``settings["k1"]``) or attribute (``settings.k1``)."""
+
+    def __init__(self, values: Mapping[str, Any]):
+        object.__setattr__(self, "_values", dict(values))
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            return self._values[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError("settings are read-only; build new ones with replace()")
+
+    def __getitem__(self, name: str) -> Any:
+        return self._values[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    def __repr__(self) -> str:
+        return f"Settings({self._values!r})"
+
+    def replace(self, **changes: Any) -> "Settings":
+        return Settings({**self._values, **changes})
+
+
+class OptionError(ValueError):
+    """A value that no option accepts; ``errors`` holds (field path, message) pairs."""
+
+    def __init__(self, errors: list[tuple[str, str]]):
+        self.errors = errors
+        super().__init__("; ".join(f"{where}: {message}" if where else message for where, message in errors))
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, strict=False)
+
+
+class OptionSet:
+    """An ordered set of options with unique names; validates nested (YAML) or flat mappings."""
+
+    def __init__(self, options: Iterable[Option], owner: str = ""):
+        self.owner = owner  # e.g. the planner's name, for messages
+        self._options: dict[str, Option] = {}
+        for option in options:
+            if option.name in self._options:
+                raise ValueError(f"option {option.name!r} is defined twice{f' in {owner}' if owner else ''}")
+            self._options[option.name] = option
+        self._model = self._build_model()
+
+    def __iter__(self) -> Iterator[Option]:
+        return iter(self._options.values())
+
+    def __len__(self) -> int:
+        return len(self._options)
+
+    def __contains__(self, name: str) -> bool:
+        return name in self._options
+
+    def __getitem__(self, name: str) -> Option:
+        return self._options[name]
+
+    def __add__(self, other: "OptionSet") -> "OptionSet":
+        return OptionSet([*self, *other], owner=other.owner or self.owner)
+
+    @property
+    def names(self) -> list[str]:
+        return list(self._options)
+
+    def defaults(self) -> dict[str, Any]:
+        return {option.name: option.default for option in self}
+
+    def _build_model(self) -> type[BaseModel]:
+        groups: dict[str, dict[str, Any]] = {}
+        top: dict[str, Any] = {}
+        for option in self:
+            (groups.setdefault(option.group, {}) if option.group else top)[option.name] = option._field()
+        for group, fields in groups.items():
+            sub = create_model(f"{self.owner or 'Options'}_{group}", __base__=_Strict, **fields)
+            top[group] = (sub, Field(default_factory=sub))
+        return create_model(f"{self.owner or 'Options'}", __base__=_Strict, **top)
+
+    def nest(self, flat: Mapping[str, Any]) -> dict[str, Any]:
+        """Flat ``{name: value}`` (or dotted ``group.name``) → the nested YAML shape."""
+        nested: dict[str, Any] = {}
+        for key, value in flat.items():
+            name = key.split(".")[-1]
+            option = self._options.get(name)
+            if option is not None and option.group and (key == name or key == option.path):
+                nested.setdefault(option.group, {})[name] = value
+            else:
+                nested[key] = value
+        return nested
+
+    def validate(self, values: Mapping[str, Any] | None, where: str = "") -> Settings:
+        """Check ``values`` (nested as in YAML, flat, or dotted) against the set; return every option's
+        value, flat. Raises :class:`OptionError` naming each bad field, prefixed by ``where``."""
+        nested = self.nest(dict(values or {}))
+        try:
+            model = self._model.model_validate(nested)
+        except ValidationError as error:
+            raise OptionError([self._explain(item, where) for item in error.errors()]) from None
+        flat: dict[str, Any] = {}
+        for option in self:
+            value = getattr(getattr(model, option.group), option.name) if option.group else getattr(model, option.name)
+            flat[option.name] = tuple(float(v) for v in value) if option.kind is tuple else value
+        return Settings(flat)
+
+    def _explain(self, item: Mapping[str, Any], where: str) -> tuple[str, str]:
+        location = ".".join(str(part) for part in item["loc"])
+        field = f"{where}.{location}" if where else location
+        if item["type"] == "extra_forbidden":
+            owner = f"planner {self.owner!r} has" if self.owner else "known"
+            return field, (f"unknown option {item['loc'][-1]!r}; {owner} options: "
+                           f"{', '.join(option.path for option in self) or 'none'}")
+        found = item.get("input")
+        return field, f"{item['msg']}; found {found!r}"
+
+    def parse_assignment(self, text: str) -> tuple[str, Any]:
+        """``NAME=VALUE`` from the command line (VALUE parsed as YAML: numbers, true/false, lists)."""
+        import yaml
+
+        name, sep, raw = text.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise OptionError([("", f"expected NAME=VALUE, found {text!r}")])
+        try:
+            value = yaml.safe_load(raw)
+        except yaml.YAMLError:
+            value = raw
+        return name, value

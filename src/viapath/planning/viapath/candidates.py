@@ -1,0 +1,339 @@
+"""Step 2, the candidates: for every speed of the set, the ways to the subgoal in x-y-t.
+
+Source: paper §3 steps 1-3 (after Tsubouchi et al.'s iterated forecast and planning); DESIGN §2.
+
+Every candidate is a chain of legs at one constant speed, grown as a tree of (position, time)
+nodes. **The speed loop is the roots**: one root node per speed of the set (plus the current and the
+nominal speed), all at the robot, at t = 0. From each node the straight leg to the subgoal is tried:
+
+* a free straight leg completes a candidate ("speed up to stay ahead", "slow down and let it
+  pass" are straight candidates at other speeds);
+* a blocked one branches to the **via points** of the obstacle it hits (avoiding line ∩ reachable
+  cone, :func:`viapath.geometry.via_times`): both sides and, when the obstacle is faster, both roots
+  (pass early / let it overtake). At the root we branch on every obstacle the straight leg hits
+  (earliest first, at most ``max_root_obstacles``), deeper only on the first one hit. Depth is
+  bounded by ``max_depth``; a via leg that meets an obstacle or leaves the corridor drops its branch.
+
+Beyond the paper (DESIGN §2 and §5.2 future work):
+* **Slow / wait**: stand still or drive slower than nominal along the straight leg for each of
+  ``slow_times_s``, then on at the nominal speed or faster. Letting a crossing person pass is then a
+  straight candidate, not a sharp turn behind them. The leg after waiting is checked to its end, not
+  to the horizon: waiting is for letting someone pass, not for pushing a collision past the horizon.
+  The slow leg itself is checked with ``slow_leg_inflation`` of the uncertainty inflation: at a tenth
+  of a metre per second the robot stops within millimetres, the next cycles correct the forecast, and
+  the shield (DESIGN §7) keeps it passively safe; with the full cone a freshly tracked crossing person
+  made the robot wait where the paper slows down (laser paper-side).
+* **Corners**: when the straight leg to the subgoal would cut a corner of the corridor (the robot
+  was pushed back, or a blocked subgoal was given up), the path's own corners between the robot and
+  the subgoal become via points: the way back along the designated path.
+
+Each candidate records its **way round** — the first obstacle it avoids, the side and the root
+(:class:`Way`) — so that the next cycle can prefer the same way (hysteresis) without comparing
+positions.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from viapath.geometry import LEFT, RIGHT, tangent_vectors, via_times
+from viapath.planning.viapath.checks import LegChecks
+
+# The "obstacle" of a way that is not round an obstacle.
+STRAIGHT = -1  # the straight leg to the subgoal (or a chain grown from it)
+SLOW = -2  # first slows down or waits
+CORNER = -3  # back along the path through a corner (the corner's index as the way's 'root')
+
+_SIDES = np.array([LEFT, RIGHT, LEFT, RIGHT])  # of the via options: (left, early), (right, early), ...
+_ROOTS = np.array([0, 0, 1, 1])  # ... 0 = pass early (before the obstacle), 1 = late (behind it)
+
+
+@dataclass(frozen=True)
+class Way:
+    """Which way round a candidate goes: (first obstacle id or STRAIGHT/SLOW/CORNER, side, root)."""
+
+    obstacle: int
+    side: int
+    root: int
+
+    def same(self, ways: np.ndarray) -> np.ndarray:
+        """Which rows of a (K, 3) way array go this way round (at any speed)."""
+        return np.all(ways == (self.obstacle, self.side, self.root), axis=1)
+
+
+@dataclass
+class Choice:
+    """What the planner chose last cycle: the way round and the speed (mm/s)."""
+
+    way: Way
+    speed_mmps: int
+
+
+@dataclass
+class _Tree:
+    """Growable columns of search nodes: where and when the robot is, at which speed, how it got there."""
+
+    position: list = field(default_factory=list)
+    time_s: list = field(default_factory=list)
+    speed: list = field(default_factory=list)
+    parent: list = field(default_factory=list)
+    length_m: list = field(default_factory=list)
+    first_direction: list = field(default_factory=list)
+    way: list = field(default_factory=list)  # (obstacle, side, root) of the first branch
+    slow_s: list = field(default_factory=list)  # how long the candidate first drives slower (or stands)
+    slow_speed: list = field(default_factory=list)  # and at which speed
+    _size: int = 0
+
+    def extend(self, **columns) -> np.ndarray:
+        count = len(columns["position"])
+        defaults = {"slow_s": np.zeros(count), "slow_speed": np.zeros(count)}
+        for name in self.__dataclass_fields__:
+            if not name.startswith("_"):
+                getattr(self, name).append(columns.get(name, defaults.get(name)))
+        start, self._size = self._size, self._size + count
+        return np.arange(start, start + count)
+
+    def stacked(self) -> dict[str, np.ndarray]:
+        return {name: np.concatenate(getattr(self, name)) for name in self.__dataclass_fields__
+                if not name.startswith("_")}
+
+
+@dataclass
+class Candidates:
+    """The complete candidates of one cycle, as arrays (one row each)."""
+
+    nodes: dict[str, np.ndarray]  # the whole tree, stacked
+    leaves: np.ndarray  # the node each candidate ends in (before its last, straight leg)
+    total_length_m: np.ndarray
+    speed_mps: np.ndarray  # the speed of the candidate's driven legs
+    slow_s: np.ndarray  # how long it first slows down or waits (0: never)
+    slow_speed_mps: np.ndarray
+    first_direction: np.ndarray  # (K, 2) unit vector of the first leg
+    ways: np.ndarray  # (K, 3) obstacle, side, root
+    subgoal: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.leaves)
+
+    @property
+    def driven_s(self) -> np.ndarray:
+        return (self.total_length_m - self.slow_speed_mps * self.slow_s) / self.speed_mps
+
+    @property
+    def travel_time_s(self) -> np.ndarray:
+        return self.slow_s + self.driven_s
+
+    @property
+    def speed_mmps(self) -> np.ndarray:
+        return np.round(self.speed_mps * 1000).astype(int)
+
+    def polyline(self, k: int) -> np.ndarray:
+        """Candidate ``k`` from the robot through its via points to the subgoal."""
+        nodes, node = self.nodes, int(self.leaves[k])
+        points = [self.subgoal]
+        while node >= 0:
+            points.append(nodes["position"][node])
+            node = int(nodes["parent"][node])
+        return np.array(points[::-1])
+
+
+@dataclass
+class RootLegs:
+    """The straight legs from the robot at every speed: the roots of the tree (the speed loop)."""
+
+    speeds: np.ndarray
+    nominal_index: int
+    directions: np.ndarray
+    lengths: np.ndarray
+    free: np.ndarray
+    contact: np.ndarray
+
+    @classmethod
+    def of(cls, checks: LegChecks, speeds: np.ndarray, nominal_index: int) -> "RootLegs":
+        starts = np.broadcast_to(checks.position, (len(speeds), 2))
+        directions, lengths, free, contact = checks.goal_legs(starts, np.zeros(len(speeds)), speeds)
+        return cls(speeds, nominal_index, directions, lengths, free, contact)
+
+    @property
+    def nominal_is_free(self) -> bool:
+        return bool(self.free[self.nominal_index])
+
+
+def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | None = None) -> Candidates | None:
+    """Every complete candidate of the cycle (straight, slow/wait, corners, via-point chains).
+    ``slow_checks`` (default ``checks``) checks the first, slow leg of the slow/wait candidates."""
+    speeds = roots.speeds
+    n_speeds = len(speeds)
+    tree = _Tree()
+    frontier = tree.extend(
+        position=np.broadcast_to(checks.position, (n_speeds, 2)), time_s=np.zeros(n_speeds), speed=speeds,
+        parent=np.full(n_speeds, -1), length_m=np.zeros(n_speeds), first_direction=roots.directions,
+        way=np.stack([np.full(n_speeds, STRAIGHT), np.zeros(n_speeds, int), np.zeros(n_speeds, int)], 1),
+    )
+    leaves, goal_length = [frontier[roots.free]], [roots.lengths[roots.free]]
+    if config.slow_times_s and len(checks.obstacles):
+        slowing = _slow_candidates(checks, slow_checks or checks, tree, speeds, roots.nominal_index, config)
+        if slowing is not None:
+            leaves.append(slowing[0])
+            goal_length.append(slowing[1])
+    free, contact = roots.free, roots.contact
+    data = tree.stacked()
+    for depth in range(config.max_depth):
+        next_frontier = [_corner_nodes(checks, tree, speeds)] if depth == 0 else []
+        blocked = np.flatnonzero(~free & np.isfinite(contact).any(axis=1))
+        if len(blocked) and len(checks.obstacles):
+            if depth == 0:
+                rows, pair_obstacles = _root_pairs(contact[blocked], config.max_root_obstacles)
+                pair_nodes = frontier[blocked][rows]
+            else:
+                pair_nodes = frontier[blocked]
+                pair_obstacles = np.argmin(contact[blocked], axis=1)
+            children = _via_children(checks, data, pair_nodes, pair_obstacles, is_root=(depth == 0))
+            if children is not None:
+                next_frontier.append(tree.extend(**children))
+        frontier = np.concatenate([np.zeros(0, int)] + next_frontier)
+        if len(frontier) == 0:
+            break
+        data = tree.stacked()
+        starts, times, node_speeds = data["position"][frontier], data["time_s"][frontier], data["speed"][frontier]
+        _, lengths, free, contact = checks.goal_legs(starts, times, node_speeds)
+        leaves.append(frontier[free])
+        goal_length.append(lengths[free])
+
+    leaves = np.concatenate(leaves)
+    if len(leaves) == 0:
+        return None
+    return Candidates(
+        nodes=data, leaves=leaves, total_length_m=data["length_m"][leaves] + np.concatenate(goal_length),
+        speed_mps=data["speed"][leaves], slow_s=data["slow_s"][leaves], slow_speed_mps=data["slow_speed"][leaves],
+        first_direction=data["first_direction"][leaves], ways=data["way"][leaves], subgoal=checks.subgoal,
+    )
+
+
+def _root_pairs(contact: np.ndarray, limit: int):
+    """(row, obstacle) pairs to branch on at the root: each obstacle the leg hits, earliest first."""
+    rows, cols = np.nonzero(np.isfinite(contact))
+    if limit and len(rows) > limit:
+        order = np.lexsort((contact[rows, cols], rows))
+        rows, cols = rows[order], cols[order]
+        rank = np.arange(len(rows)) - np.searchsorted(rows, rows)
+        keep = rank < limit
+        rows, cols = rows[keep], cols[keep]
+    return rows, cols
+
+
+def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: bool):
+    """Via-point children of each (node, obstacle) pair: both sides, both roots, legs checked."""
+    starts = data["position"][node_index]
+    times = data["time_s"][node_index]
+    speeds = data["speed"][node_index]
+    obstacles = checks.obstacles
+    velocity = obstacles.velocities[obstacle_index]
+    centre_now = obstacles.positions[obstacle_index] + velocity * times[:, None]
+    # The radius grows with prediction uncertainty; evaluate it near the expected passing time.
+    reach_time = np.hypot(*(centre_now - starts).T) / speeds
+    passing_time = np.minimum(times + reach_time, checks.growth_until_s[obstacle_index])
+    radius = checks.via_radii[obstacle_index] + checks.growth[obstacle_index] * passing_time
+    # A node already closer than that (after passing on a previous leg) goes round tangentially.
+    distance = np.hypot(*(centre_now - starts).T)
+    radius = np.maximum(np.minimum(radius, 0.98 * distance), 0.0)
+
+    # Axis 1 enumerates (side, root): (left, early), (right, early), (left, late), (right, late).
+    w, valid = tangent_vectors(starts[:, None, :], centre_now[:, None, :], radius[:, None], _SIDES[None, :2])
+    t_early, t_late = via_times(w, velocity[:, None, :], speeds[:, None])
+    t_via = np.concatenate([t_early, t_late], axis=1)
+    w = np.concatenate([w, w], axis=1)
+    ok = np.broadcast_to(valid, t_early.shape)
+    ok = np.concatenate([ok, ok], axis=1) & (t_via <= 3 * checks.horizon_s)
+    pair, option = np.nonzero(ok)
+    if len(pair) == 0:
+        return None
+    t_k = t_via[pair, option]
+    starts_k, times_k, speeds_k = starts[pair], times[pair], speeds[pair]
+    leg_velocity = (w[pair, option] + velocity[pair] * t_k[:, None]) / t_k[:, None]
+    via = starts_k + leg_velocity * t_k[:, None]
+    good = checks.legs_free(starts_k, times_k, leg_velocity, t_k)
+    good[good] = checks.legs_inside(starts_k[good], via[good])
+    if not good.any():
+        return None
+    pair, option, t_k = pair[good], option[good], t_k[good]
+    parent = node_index[pair]
+    if is_root:
+        first_direction = leg_velocity[good] / speeds_k[good, None]
+        way = np.stack([obstacles.ids[obstacle_index[pair]], _SIDES[option], _ROOTS[option]], axis=1)
+    else:
+        first_direction = data["first_direction"][parent]
+        way = data["way"][parent]
+    return dict(
+        position=via[good], time_s=times_k[good] + t_k, speed=speeds_k[good], parent=parent,
+        length_m=data["length_m"][parent] + speeds_k[good] * t_k, first_direction=first_direction, way=way,
+    )
+
+
+def _corner_nodes(checks: LegChecks, tree: _Tree, speeds: np.ndarray) -> np.ndarray:
+    """The path's corners between the robot and the subgoal, as via points, when the straight leg
+    would cut the corridor."""
+    path = checks.path
+    segment = int(path.project(checks.position)[0])
+    corners = np.arange(segment + 1, checks.subgoal_index)
+    if len(corners) == 0 or checks.goal_legs_inside(checks.position[None])[0]:
+        return np.zeros(0, int)
+    corner, speed = (grid.ravel() for grid in np.meshgrid(corners, speeds))
+    targets = path.waypoints[corner]
+    offset = targets - checks.position
+    length = np.hypot(offset[:, 0], offset[:, 1])
+    direction = offset / np.maximum(length, 1e-12)[:, None]
+    starts = np.broadcast_to(checks.position, targets.shape)
+    duration = length / speed
+    good = checks.legs_free(starts, np.zeros(len(speed)), direction * speed[:, None], duration)
+    good &= checks.legs_inside(starts, targets)
+    count = int(good.sum())
+    if count == 0:
+        return np.zeros(0, int)
+    return tree.extend(
+        position=targets[good], time_s=duration[good], speed=speed[good],
+        parent=np.searchsorted(speeds, speed[good]),  # the root node of that speed
+        length_m=length[good], first_direction=direction[good],
+        way=np.stack([np.full(count, CORNER), np.zeros(count, int), corner[good]], 1),
+    )
+
+
+def _slow_candidates(checks: LegChecks, slow_checks: LegChecks, tree: _Tree, speeds: np.ndarray, nominal_index: int,
+                     config):
+    """Stand still or drive slower than nominal towards the subgoal for each of ``slow_times_s``,
+    then on at the nominal speed or faster. Returns (leaf node indices, goal leg lengths) or None."""
+    if not checks.goal_legs_inside(checks.position[None])[0]:
+        return None  # slowing down runs along the straight leg, which would leave the corridor
+    nominal = speeds[nominal_index]
+    slow_speeds = np.concatenate([[0.0], speeds[speeds < nominal - 1e-9]])
+    duration, slow_speed = (grid.ravel() for grid in np.meshgrid(np.asarray(config.slow_times_s, float),
+                                                                 slow_speeds))
+    offset = checks.subgoal - checks.position
+    direction = offset / max(float(np.hypot(*offset)), 1e-12)
+    # Never past the subgoal while slowing down.
+    ok = slow_speed * duration < np.hypot(*offset) - 1e-6
+    duration, slow_speed = duration[ok], slow_speed[ok]
+    starts = np.broadcast_to(checks.position, (len(duration), 2))
+    free = slow_checks.legs_free(starts, np.zeros(len(duration)), direction * slow_speed[:, None], duration)
+    if not free.any():
+        return None
+    duration, slow_speed = duration[free], slow_speed[free]
+    # Then at least the nominal speed: waiting only makes sense when the way is clear afterwards
+    # (slowing down for good is the straight candidates' job).
+    after = speeds[speeds >= nominal - 1e-9]
+    d, v_slow = np.repeat(duration, len(after)), np.repeat(slow_speed, len(after))
+    v_after = np.tile(after, len(duration))
+    ends = checks.position + direction * (v_slow * d)[:, None]
+    _, lengths, free, _ = checks.goal_legs(ends, d, v_after, np.inf)
+    if not free.any():
+        return None
+    count = int(free.sum())
+    index = tree.extend(
+        position=ends[free], time_s=d[free], speed=v_after[free], parent=np.full(count, -1),
+        length_m=(v_slow * d)[free], first_direction=np.broadcast_to(direction, (count, 2)).copy(),
+        way=np.stack([np.full(count, SLOW), np.zeros(count, int), np.zeros(count, int)], 1),
+        slow_s=d[free], slow_speed=v_slow[free],
+    )
+    return index, lengths[free]

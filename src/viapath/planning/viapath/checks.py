@@ -1,0 +1,153 @@
+"""Step 1, the situation: every check a candidate must pass, against the forecast and the corridor.
+
+Source: paper §3 step 3 (legs checked against the obstacles' x-y-t cylinders) and step 4 (the
+path boundary), DESIGN §2 (segment check, capped uncertainty cone, horizon past a near subgoal).
+
+What the paper leaves open and we chose:
+* Legs are checked with the true combined radius + safety margin (the shared
+  :class:`~viapath.planning.base.Inflation`); via points are placed ``planning_margin_m`` further
+  out, or chaining never finds a path.
+* Legs are checked up to ``horizon_s``. Past an intermediate subgoal the robot is assumed to carry
+  on along the next segment; past the final goal nothing is checked (the mission ends there). A
+  blocked intermediate subgoal is given up within the bypass distance (paper Fig. 3), so legs towards
+  it need to be free only up to there.
+* The corridor check covers whole legs, not only via points. A robot already outside the corridor
+  may not go further out, but may come back (``corridor_tolerance_m``). All corridor checks of the
+  planner go through :meth:`LegChecks.inside`, :meth:`LegChecks.legs_inside` and
+  :meth:`LegChecks.goal_legs_inside`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from viapath.geometry import legs_first_contact
+from viapath.observation import Obstacles
+from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
+from viapath.planning.base import Inflation, Situation
+
+
+@dataclass
+class LegChecks:
+    """One cycle's checks, vectorised over legs and obstacles."""
+
+    path: DesignatedPath
+    position: np.ndarray
+    heading_rad: float
+    speed_mps: float
+    turn_rate_radps: float
+    subgoal: np.ndarray
+    subgoal_index: int
+    is_final_subgoal: bool
+    obstacles: Obstacles
+    check_radii: np.ndarray  # robot + obstacle + margin + k·σ_position
+    growth: np.ndarray  # k·σ_velocity
+    growth_until_s: np.ndarray
+    via_radii: np.ndarray  # check_radii + planning margin
+    horizon_s: float
+    stop_short_m: float  # legs to a blocked subgoal need be free only up to the bypass distance
+    continuation: tuple[np.ndarray, float] | None  # direction and length of the segment after the subgoal
+    corridor_tolerance_m: float
+    corridor_check_spacing_m: float
+
+    @classmethod
+    def of(cls, situation: Situation, config, tracker: SubgoalTracker, policy: SubgoalPolicy,
+           robot_radius_m: float) -> "LegChecks":
+        robot, path, obstacles, inflation = situation.robot, tracker.path, situation.obstacles, situation.inflation
+        blocked = tracker.is_blocked(obstacles.positions, obstacles.radii_m, robot_radius_m)
+        index = situation.subgoal_index
+        continuation = None if (tracker.is_final or blocked) else (
+            path.segment_directions[index], path.segment_lengths_m[index])
+        return cls(
+            path=path, position=situation.position, heading_rad=robot.heading_rad,
+            speed_mps=float(robot.speed_mps), turn_rate_radps=float(robot.turn_rate_radps),
+            subgoal=situation.subgoal, subgoal_index=index, is_final_subgoal=tracker.is_final,
+            obstacles=obstacles, check_radii=inflation.check_radii, growth=inflation.growth,
+            growth_until_s=inflation.growth_until_s, via_radii=inflation.check_radii + config.planning_margin_m,
+            horizon_s=config.horizon_s, stop_short_m=policy.bypass_distance_m if blocked else 0.0,
+            continuation=continuation, corridor_tolerance_m=situation.corridor_tolerance_m,
+            corridor_check_spacing_m=config.corridor_check_spacing_m,
+        )
+
+    def with_less_inflation(self, fraction: float, robot_radius_m: float, settings,
+                            cap_too: bool = False) -> "LegChecks":
+        """The same checks with ``fraction`` of the obstacles' uncertainty inflation (σ terms; with
+        ``cap_too`` the cap on the cone's growth as well)."""
+        obstacles = self.obstacles
+        less = replace(obstacles, position_sigma_m=fraction * obstacles.position_sigma_m,
+                       velocity_sigma_mps=fraction * obstacles.velocity_sigma_mps)
+        if cap_too:
+            settings = {**settings, "max_inflation_m": fraction * settings["max_inflation_m"]}
+        inflation = Inflation.of(less, robot_radius_m, settings)
+        return replace(self, obstacles=less, check_radii=inflation.check_radii, growth=inflation.growth,
+                       growth_until_s=inflation.growth_until_s,
+                       via_radii=inflation.check_radii + settings["planning_margin_m"])
+
+    # -- against the forecast ----------------------------------------------------------------------
+
+    def contact_times(self, starts, start_times, velocities, durations, horizon_s=None) -> np.ndarray:
+        """(K, N) first contact of each leg with each obstacle, up to the horizon; inf = free."""
+        if len(self.obstacles) == 0:
+            return np.full((len(starts), 0), np.inf)
+        horizon_s = self.horizon_s if horizon_s is None else horizon_s
+        checked = np.clip(horizon_s - start_times, 0.0, durations)
+        return legs_first_contact(starts, start_times, velocities, checked, self.obstacles.positions,
+                                  self.obstacles.velocities, self.check_radii, self.growth, self.growth_until_s)
+
+    def legs_free(self, starts, start_times, velocities, durations) -> np.ndarray:
+        return np.isinf(self.contact_times(starts, start_times, velocities, durations)).all(axis=1)
+
+    def goal_legs(self, starts, start_times, speeds, horizon_s=None):
+        """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N))."""
+        offset = self.subgoal - starts
+        lengths = np.hypot(offset[:, 0], offset[:, 1])
+        directions = offset / np.maximum(lengths, 1e-12)[:, None]
+        durations = np.maximum(lengths - self.stop_short_m, 0.0) / speeds
+        velocities = directions * speeds[:, None]
+        contact = self.contact_times(starts, start_times, velocities, durations, horizon_s)
+        if self.continuation is not None and contact.shape[1]:
+            direction, length = self.continuation
+            more = self.contact_times(np.broadcast_to(self.subgoal, starts.shape), start_times + durations,
+                                      direction * speeds[:, None], length / speeds, horizon_s)
+            contact = np.minimum(contact, more + durations[:, None])
+        free = np.isinf(contact).all(axis=1) & self.goal_legs_inside(starts)
+        return directions, lengths, free, contact
+
+    def clear(self, positions: np.ndarray, dt: float) -> bool:
+        """Whether robot positions (one per ``dt`` from now) keep clear of every obstacle."""
+        if len(self.obstacles) == 0:
+            return True
+        times = dt * np.arange(1, len(positions) + 1)[:, None]
+        obstacles = self.obstacles
+        centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
+        reach = self.check_radii + self.growth * np.minimum(times, self.growth_until_s)
+        distance = np.hypot(*(positions[:, None, :] - centres).transpose(2, 0, 1))
+        # Already inside an obstacle's margin (a close pass): only forbid getting closer still.
+        now = np.hypot(*(self.position - obstacles.positions).T)
+        return bool(np.all(distance >= np.minimum(reach, now - 1e-3)))
+
+    # -- against the corridor (paper step 4) ---------------------------------------------------------
+
+    def inside(self, points: np.ndarray) -> np.ndarray:
+        """Which points are inside the corridor (or no further out than the robot is now)."""
+        return self.path.corridor_excess(points) <= self.corridor_tolerance_m
+
+    def legs_inside(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+        return self.path.legs_inside(starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m)
+
+    def goal_legs_inside(self, starts: np.ndarray) -> np.ndarray:
+        # The subgoal ends both capsules next to it; a leg from a point inside one of them is inside
+        # that capsule (convex). Only other legs need the general check.
+        path = self.path
+        inside = np.zeros(len(starts), dtype=bool)
+        for i in (i for i in (self.subgoal_index - 1, self.subgoal_index) if i < len(path.segment_lengths_m)):
+            rel = starts - path.segment_starts[i]
+            along = np.clip(rel @ path.segment_directions[i], 0.0, path.segment_lengths_m[i])
+            gap = np.hypot(*(rel - along[:, None] * path.segment_directions[i]).T) - path.half_widths_m[i]
+            inside |= gap <= self.corridor_tolerance_m
+        if not inside.all():
+            rest = np.flatnonzero(~inside)
+            inside[rest] = self.legs_inside(starts[rest], np.broadcast_to(self.subgoal, (len(rest), 2)))
+        return inside

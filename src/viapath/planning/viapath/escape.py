@@ -1,0 +1,100 @@
+"""Step 6, no free candidate: stand if standing is safe, else escape.
+
+Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 and §7.
+
+* If standing still is free over the horizon, the robot stops (status ``stop``).
+* Otherwise even standing is hit. Of a fan of drive commands (arcs within the limits, and standing),
+  each held for ``escape_s`` and rolled out with the drive's limits, take the best by, in order of
+  importance: out of any overlap by the end and never deeper in on the way; no contact at all during
+  the roll-out; never further out of the corridor than now (worth up to 2 s of time to contact: when
+  stopping is not safe, not being hit comes first); the longest time to contact; then progress towards
+  the subgoal, and slower rather than sideways (status ``escape``).
+* Only people who could come within reach during the roll-out are scored (triangle inequality: the
+  robot travels at most so far, each person |v|·T, each cone grows at most so much).
+* When contact cannot be avoided, fleeing fast mostly runs into someone else: a contact at speed
+  counts 0.5 s of time to contact per m/s against the command (a tie-break, no more: the longest time
+  to contact still decides).
+* A calm escape (``calm_escape``, issue 11): never faster than the top of the speed set (the limits'
+  top speed is for nothing the paper plans), and no flip from one cycle to the next: a command far
+  from last cycle's escape command (speed change per top speed, turn change per turn-rate limit) pays
+  up to ``escape_continuity_s`` seconds of time to contact. Before this, on ETH/UCY the speed command
+  flipped between 0.6 and 0 m/s and the turn between -2 and +2 rad/s from one cycle to the next.
+* An escape never takes the robot further than ``escape_max_excess_m`` outside the corridor (or
+  further out than it already is): standing is always among the commands, and at rest the robot is
+  passively safe (DESIGN §7); fleeing 10 m off the path is not.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from viapath.kinematics import UnicycleState, rollout
+from viapath.observation import Command, MotionLimits
+from viapath.planning.base import Decision, Plan
+from viapath.planning.viapath.checks import LegChecks
+
+
+def stop_or_escape(checks: LegChecks, limits: MotionLimits, config, previous: Command | None = None) -> Decision:
+    """``previous``: last cycle's command if last cycle escaped too (for a calm escape)."""
+    position = checks.position
+    base = dict(subgoal_index=checks.subgoal_index)
+    standing = checks.contact_times(position[None], np.zeros(1), np.zeros((1, 2)), np.array([config.horizon_s]))
+    if np.isinf(standing).all():
+        return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), **base))
+    commands, ends, score = escape_scores(checks, limits, config, previous)
+    best = int(np.argmax(score))
+    speed, turn = (float(value) for value in commands[best])
+    return Decision(Command(speed, turn), Plan("escape", speed, ends[best], **base))
+
+
+def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Command | None = None):
+    """Commands (v, ω), where each leaves the robot, and the score of each (higher is better)."""
+    position = checks.position
+    top = min(max(config.speeds), limits.max_speed_mps) if config.calm_escape else limits.max_speed_mps
+    speeds = np.unique(np.concatenate([[0.0], np.minimum(config.speeds, top), [top]]))
+    turns = np.linspace(-limits.max_turn_rate_radps, limits.max_turn_rate_radps, 9)
+    commands = np.stack([grid.ravel() for grid in np.meshgrid(speeds, turns)], axis=1)
+    dt = config.escape_dt_s
+    steps = max(1, int(round(config.escape_s / dt)))
+    state = UnicycleState(float(position[0]), float(position[1]), float(checks.heading_rad),
+                          float(checks.speed_mps), float(checks.turn_rate_radps))
+    positions = rollout(state, commands, limits, dt, steps)  # (K, S, 2)
+    times = dt * np.arange(1, steps + 1)
+    excess = checks.path.corridor_excess(positions.reshape(-1, 2)).reshape(len(commands), steps)
+    inside = np.all(excess <= checks.corridor_tolerance_m, axis=1)
+    within_bound = np.max(excess, axis=1) <= max(config.escape_max_excess_m, checks.corridor_tolerance_m)
+
+    horizon = steps * dt
+    travel = float(np.max(np.hypot(*(positions - position).reshape(-1, 2).T)))
+    obstacles = checks.obstacles
+    gap_all = np.hypot(*(position - obstacles.positions).T) - checks.check_radii
+    growth_all = checks.growth * np.minimum(horizon, checks.growth_until_s)
+    near = gap_all - growth_all - np.hypot(*obstacles.velocities.T) * horizon - travel <= 0
+    positions_obs, velocities_obs = obstacles.positions[near], obstacles.velocities[near]
+    centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
+    reach = checks.check_radii[near] + checks.growth[near] * np.minimum(times[:, None], checks.growth_until_s[near])
+    offset = positions[:, :, None, :] - centres[None]
+    gap = np.hypot(offset[..., 0], offset[..., 1]) - reach[None]  # (K, S, N)
+    gap_now = gap_all[near]
+    overlapping = gap_now <= 0
+    touching = (gap < 0) & ~overlapping
+    first = np.where(touching.any(axis=1), np.argmax(touching, axis=1), steps)  # (K, N)
+    time_to_contact = np.min(first, axis=1, initial=steps) * dt
+    if overlapping.any():
+        deeper = np.min(gap[..., overlapping], axis=1) - gap_now[overlapping]
+        still_inside = gap[:, -1, overlapping]
+        separation = np.sum(np.minimum(deeper, 0.0) + np.minimum(still_inside, 0.0), axis=1)
+    else:
+        separation = np.zeros(len(commands))
+    toward = checks.subgoal - position
+    toward = toward / max(float(np.hypot(*toward)), 1e-9)
+    progress = (positions[:, -1] - position) @ toward / config.escape_s
+    free = time_to_contact >= steps * dt
+    score = (1e2 * separation + 20.0 * free + 2.0 * inside + time_to_contact
+             - np.where(free, 0.005, 0.5) * commands[:, 0] + 0.01 * progress)
+    if config.calm_escape and previous is not None:
+        change = (np.abs(commands[:, 0] - previous.speed_mps) / max(top, 1e-9)
+                  + np.abs(commands[:, 1] - previous.turn_rate_radps) / limits.max_turn_rate_radps)
+        score = score - config.escape_continuity_s * np.minimum(change, 1.0)
+    score = np.where(within_bound | (commands[:, 0] == 0.0), score, -np.inf)
+    return commands, positions[:, -1], score

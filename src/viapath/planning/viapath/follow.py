@@ -1,0 +1,48 @@
+"""Step 4, the motion limits: the cheapest candidate the robot can actually follow.
+
+Source: beyond the paper (its §5.2 names the robot's dynamics as future work); DESIGN §2.
+
+The x-y-t legs assume instant turns and speed changes. A candidate whose first leg needs a sharp turn
+(more than ``rollout_heading_rad``) or a large speed change is rolled forward for ``rollout_s`` with
+the controller that will drive it (arcs and lines within the limits, :func:`viapath.kinematics.track`)
+and dropped if the roll-out touches an obstacle or leaves the corridor. Turning while moving can
+swing out of the corridor: then the robot turns on the spot first, if standing is safe meanwhile
+(the next cycles find it facing its leg). Even a small turn: at the corridor edge, or outside it
+after an escape, a robot facing a little outwards would otherwise never get going again.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from viapath.geometry import wrap_angle
+from viapath.kinematics import UnicycleState, track
+from viapath.observation import MotionLimits
+from viapath.planning.base import Plan
+from viapath.planning.viapath.checks import LegChecks
+
+
+def can_follow(plan: Plan, checks: LegChecks, limits: MotionLimits, config) -> bool:
+    """Whether the robot, steering for the plan's target within its limits, keeps clear of every
+    obstacle and inside the corridor. May mark the plan ``extras["turn_in_place"]``."""
+    offset = plan.target - checks.position
+    heading_error = abs(float(wrap_angle(np.arctan2(offset[1], offset[0]) - checks.heading_rad)))
+    speed_change = abs(plan.speed_mps - checks.speed_mps)
+    if np.hypot(*offset) < 1e-6 or (heading_error <= config.rollout_heading_rad
+                                      and speed_change <= limits.max_accel_mps2 * config.rollout_dt_s * 2):
+        return True
+    dt = config.rollout_dt_s
+    steps = max(1, int(round(config.rollout_s / dt)))
+    state = UnicycleState(float(checks.position[0]), float(checks.position[1]), float(checks.heading_rad),
+                          checks.speed_mps, checks.turn_rate_radps)
+    positions = track(state, plan.target, plan.speed_mps, limits, dt, steps, config.heading_gain)
+    if not checks.clear(positions, dt):
+        return False
+    if np.all(checks.inside(positions)):
+        return True
+    turn_s = heading_error / limits.max_turn_rate_radps + 1.0
+    standing = np.repeat(checks.position[None], max(1, int(np.ceil(turn_s / dt))), axis=0)
+    if heading_error > config.turn_in_place_min_rad and checks.clear(standing, dt):
+        plan.extras["turn_in_place"] = True
+        return True
+    return False

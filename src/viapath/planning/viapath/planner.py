@@ -1,0 +1,199 @@
+"""The paper's planner, as its procedure: situation → candidates → costs → the first candidate the
+robot can follow → command; with no free candidate, stop or escape.
+
+Source: Yamada, Sa, Ohya, §3 (procedure steps 1-5, Eq. 1), after Tsubouchi et al.; DESIGN §2. Each
+step is a module of this package, named after it:
+
+1. situation (:mod:`.checks`): the subgoal, the people with their capped uncertainty cones, the corridor;
+2. candidates (:mod:`.candidates`): for every speed of the set (:meth:`ViaPathPlanner.speed_set`), the
+   straight leg, via points chained through further obstacles, slow/wait, the way back through the
+   path's corners (paper step 1: a free straight leg at the nominal speed is the plan at once);
+3. costs (:mod:`.critics`): Eq. 1 as critics, plus side preference and hysteresis;
+4. follow (:mod:`.follow`): the cheapest candidate whose first leg the robot can follow within its
+   motion limits;
+5. command: steer for the plan's target at the plan's speed (turning on the spot first if needed);
+6. escape (:mod:`.escape`): stop if standing is safe, else the drive command that stays clear longest.
+
+What the paper leaves open and we chose, beyond what those modules say:
+* The speed set is the configured speeds, the current speed and the nominal speed (mm/s resolution,
+  within the speed limit).
+* Constraint hysteresis (``keep_previous_way``): under velocity noise last cycle's way round often
+  looks blocked for one cycle only because its inflation grew with the estimate's error; the plan
+  then flips and flips back. If last cycle's way is gone, it is searched for once more with
+  ``keep_previous_inflation`` of the uncertainty inflation (the safety margin stays) and kept if,
+  with the usual hysteresis, it still costs less than the new choice.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import numpy as np
+
+from viapath.geometry import wrap_angle
+from viapath.observation import Command
+from viapath.options import Settings
+from viapath.planning.base import Decision, Plan, Planner, Situation
+from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, grow
+from viapath.planning.viapath.checks import LegChecks
+from viapath.planning.viapath.critics import Context, Costs, critics_for, score
+from viapath.planning.viapath.escape import stop_or_escape
+from viapath.planning.viapath.follow import can_follow
+from viapath.planning.viapath.options import VIAPATH_OPTIONS
+
+
+@dataclass
+class _Chosen:
+    choice: Choice
+    plan: Plan
+    candidates: Candidates | None  # None for the paper's step 1 (a free straight leg at nominal speed)
+
+
+class ViaPathPlanner(Planner, name="viapath"):
+    """Yamada-Sa-Ohya planner: follows the designated path, avoids by changing speed and direction."""
+
+    options = VIAPATH_OPTIONS
+
+    def __init__(self, path, *, config=None, **kwargs):
+        if config is not None:  # a mapping of options (e.g. ViaPathConfig(...)), before any keyword
+            kwargs["options"] = {**dict(config), **dict(kwargs.get("options") or {})}
+        super().__init__(path, **kwargs)
+        self.config = self.settings
+        self.critics = critics_for(self.config)
+        self._previous: Choice | None = None
+        self._previous_escape: Command | None = None  # last cycle's command, if it escaped
+
+    def reset(self) -> None:
+        super().reset()
+        self._previous = None
+        self._previous_escape = None
+
+    # -- the recipe ----------------------------------------------------------------------------------
+
+    def decide(self, situation: Situation) -> Decision:
+        checks = LegChecks.of(situation, self.config, self.subgoals, self.subgoal_policy, self.robot_radius_m)
+        speeds, nominal_index = self.speed_set(situation.robot.speed_mps)
+        chosen = self._choose(checks, speeds, nominal_index, self._previous)
+        if chosen is None:
+            self._previous = None
+            decision = stop_or_escape(checks, self.limits, self.config, self._previous_escape)
+            self._previous_escape = decision.command if decision.plan.status == "escape" else None
+            return decision
+        self._previous_escape = None
+        if self.config.keep_previous_way and self._previous is not None:
+            chosen = self._keep_previous_way(chosen, checks, speeds, nominal_index)
+        self._previous = chosen.choice
+        return Decision(self._command(situation, chosen.plan), chosen.plan)
+
+    def speed_set(self, current_speed_mps: float) -> tuple[np.ndarray, int]:
+        """The configured speeds, the current speed and the nominal speed (mm/s resolution, within
+        the limit), sorted; and where the nominal speed is in it."""
+        top = self.limits.max_speed_mps
+        nominal = self.nominal_in_speed_set_mps()
+        speeds = {round(min(v, top), 3) for v in self.config.speeds} | {nominal}
+        if current_speed_mps > 0.02:
+            speeds.add(round(min(current_speed_mps, top), 3))
+        ordered = sorted(speeds)
+        return np.array(ordered), ordered.index(nominal)
+
+    def nominal_in_speed_set_mps(self) -> float:
+        return round(min(self.nominal_speed_mps, self.limits.max_speed_mps), 3)
+
+    def _choose(self, checks: LegChecks, speeds, nominal_index: int, previous: Choice | None,
+                only_way: Way | None = None) -> _Chosen | None:
+        """Candidates → costs → the cheapest the robot can follow; None when none is free.
+        With ``only_way``, only candidates going that way round are considered."""
+        roots = RootLegs.of(checks, speeds, nominal_index)
+        if roots.nominal_is_free and only_way is None:
+            # Paper step 1: a free straight path at the normal speed is the plan, if the robot can
+            # turn onto it in time.
+            speed = float(speeds[nominal_index])
+            plan = Plan("straight", speed, checks.subgoal.copy(), waypoints=np.array([checks.position, checks.subgoal]),
+                        subgoal_index=checks.subgoal_index, candidate_count=1, chosen=0)
+            if can_follow(plan, checks, self.limits, self.config):
+                return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
+        candidates = grow(checks, roots, self.config, self._slow_checks(checks))
+        if candidates is None:
+            return None
+        costs = score(candidates, self.critics, Context(checks.heading_rad, self.nominal_speed_mps, previous))
+        total = costs.total
+        if only_way is not None:
+            total = np.where(only_way.same(candidates.ways), total, np.inf)
+            if not np.isfinite(total).any():
+                return None
+        polylines = [candidates.polyline(k) for k in range(len(candidates))] if self.config.record_candidates else []
+        order = np.argsort(total, kind="stable")
+        for rank, best in enumerate(order[:self.config.max_rollouts]):
+            if not np.isfinite(total[best]):
+                break
+            plan = self._plan_of(candidates, int(best), total, checks, polylines)
+            if can_follow(plan, checks, self.limits, self.config):
+                plan.extras["cost_terms"] = _cost_terms(costs, order, rank, total)
+                ways = candidates.ways[best]
+                choice = Choice(Way(int(ways[0]), int(ways[1]), int(ways[2])), int(candidates.speed_mmps[best]))
+                return _Chosen(choice, plan, candidates)
+        return None
+
+    def _plan_of(self, candidates: Candidates, k: int, total, checks: LegChecks, polylines) -> Plan:
+        common = dict(subgoal_index=checks.subgoal_index, candidate_count=len(candidates), candidate_costs=total,
+                      candidate_polylines=polylines, chosen=k)
+        if candidates.slow_s[k] > 0:
+            speed = float(candidates.slow_speed_mps[k])
+            return Plan("wait" if speed == 0.0 else "slow", speed, checks.subgoal.copy(),
+                        waypoints=np.array([checks.position, checks.subgoal]),
+                        extras={"slow_s": float(candidates.slow_s[k]),
+                                "speed_after_mps": float(candidates.speed_mps[k])}, **common)
+        line = candidates.polyline(k)
+        return Plan("avoid" if len(line) > 2 else "straight", float(candidates.speed_mps[k]), line[1].copy(),
+                    via_points=line[1:-1].copy(), waypoints=line, **common)
+
+    def _slow_checks(self, checks: LegChecks) -> LegChecks:
+        fraction = self.config.slow_leg_inflation
+        if fraction >= 1.0 or not (np.any(checks.obstacles.position_sigma_m) or np.any(checks.obstacles.velocity_sigma_mps)):
+            return checks
+        return checks.with_less_inflation(fraction, self.robot_radius_m, self.settings, cap_too=True)
+
+    def _keep_previous_way(self, chosen: _Chosen, checks: LegChecks, speeds, nominal_index: int) -> _Chosen:
+        previous = self._previous
+        if chosen.candidates is None:
+            return chosen  # a free straight leg at nominal speed (the paper's first choice)
+        if previous.way.same(chosen.candidates.ways).any():
+            return chosen  # the previous way is still there: chosen again, or a fair switch on cost
+        obstacles = checks.obstacles
+        if not (np.any(obstacles.position_sigma_m) or np.any(obstacles.velocity_sigma_mps)):
+            return chosen  # no inflation to relax: the search would be the same
+        relaxed = checks.with_less_inflation(self.config.keep_previous_inflation, self.robot_radius_m, self.settings)
+        kept = self._choose(relaxed, speeds, nominal_index, previous, only_way=previous.way)
+        if kept is None:
+            return chosen
+        if kept.plan.candidate_costs[kept.plan.chosen] < chosen.plan.candidate_costs[chosen.plan.chosen]:
+            kept.plan.extras["kept_previous_way"] = True
+            return kept
+        return chosen
+
+    # -- step 5: the command -------------------------------------------------------------------------
+
+    def _command(self, situation: Situation, plan: Plan) -> Command:
+        command = self.steer(situation.observation, plan.target, plan.speed_mps, self.config.heading_gain)
+        if plan.extras.get("turn_in_place"):
+            turn = command.turn_rate_radps if command.turn_rate_radps else self._turn_towards(situation, plan.target)
+            command = Command(0.0, turn)
+        return command
+
+    def _turn_towards(self, situation: Situation, target) -> float:
+        offset = np.asarray(target) - situation.position
+        error = float(wrap_angle(np.arctan2(offset[1], offset[0]) - situation.robot.heading_rad))
+        return float(np.clip(self.config.heading_gain * error, -self.limits.max_turn_rate_radps,
+                             self.limits.max_turn_rate_radps))
+
+
+def _cost_terms(costs: Costs, order: np.ndarray, rank: int, total: np.ndarray) -> dict:
+    """Each critic's share of E for the chosen candidate and the cheapest other one (for tuning and views)."""
+    best = int(order[rank])
+    other = int(order[1] if rank == 0 else order[0]) if len(order) > 1 else None
+    runner_up = costs.breakdown(other) if other is not None and np.isfinite(total[other]) else None
+    return {"chosen": costs.breakdown(best), "runner_up": runner_up}
+
+
+def ViaPathConfig(**values) -> Settings:
+    """The viapath planner's options, validated, defaults filled in (``make_planner(..., config=...)``)."""
+    return VIAPATH_OPTIONS.validate(values, where="viapath")

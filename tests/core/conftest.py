@@ -1,8 +1,0 @@
-"""Make sure tests/core exercises this worktree's ``src`` (not another editable install)."""
-
-import sys
-from pathlib import Path
-
-SRC = Path(__file__).resolve().parents[2] / "src"
-if str(SRC) not in sys.path:
-    sys.path.insert(0, str(SRC))
