@@ -57,6 +57,14 @@ def run(
     animate: Optional[Path] = typer.Option(None, "--animate", help="Write an animation (GIF, or MP4 with ffmpeg)."),
     option: list[str] = typer.Option([], "--option", "-o", metavar="NAME=VALUE",
                                      help="Set a planner option (repeatable); `viapath planners NAME` lists them."),
+    mcap: Optional[Path] = typer.Option(None, "--mcap", help="Write the run as MCAP for Foxglove (extra viz)."),
+    force: bool = typer.Option(False, "--force", help="Overwrite an existing --mcap file."),
+    live: bool = typer.Option(False, "--live", help="Serve the run live to Foxglove on 127.0.0.1 (extra viz)."),
+    rate: float = typer.Option(1.0, "--rate", help="With --live: simulated seconds per wall-clock second."),
+    port: int = typer.Option(8765, "--port", help="With --live: the WebSocket port (0: any free one)."),
+    shield: Optional[str] = typer.Option(None, "--shield", help="on | off: passive-safety shield on the planner's "
+                                         "commands (default: on for viapath, off for the others)."),
+    shield_mode: str = typer.Option("passive", "--shield-mode", help="passive | passive-friendly."),
 ) -> None:
     """Run one scenario in the simulator and report its metrics."""
     from viapath.planning import available_planners
@@ -74,6 +82,10 @@ def run(
 
     if perception is not None and perception not in PERCEPTION_MODES:
         _fail(f"--perception: expected {' or '.join(repr(m) for m in PERCEPTION_MODES.ordered())}, found {perception!r}")
+    if shield not in (None, "on", "off"):
+        _fail(f"--shield: expected 'on' or 'off', found {shield!r}")
+    if shield_mode not in ("passive", "passive-friendly"):
+        _fail(f"--shield-mode: expected 'passive' or 'passive-friendly', found {shield_mode!r}")
     try:
         spec = load_scenario(scenario)
     except ScenarioError as error:
@@ -86,13 +98,23 @@ def run(
     if planner_name != spec.planner.name and spec.planner.given():
         errors.print(f"note: {scenario}'s planner block configures {spec.planner.name!r}; {planner_name!r} runs with "
                      "its own defaults (and any --option)", highlight=False)
+    from viapath.viz.foxglove import ViewError, open_views
+
     try:
-        episode = run_episode(spec, planner=planner_name, perception=perception, seed=seed,
-                              position_noise_m=position_noise, velocity_noise_mps=velocity_noise,
-                              record_perceived=plot is not None or animate is not None,
-                              planner_overrides=overrides)
+        views = open_views(spec, planner_name, mcap=mcap, force=force, live=live, rate=rate, port=port,
+                           announce=lambda text: errors.print(text, highlight=False))
+        with views:
+            episode = run_episode(spec, planner=planner_name, perception=perception, seed=seed,
+                                  position_noise_m=position_noise, velocity_noise_mps=velocity_noise,
+                                  record_perceived=plot is not None or animate is not None,
+                                  planner_overrides={**overrides, **(views.planner_overrides or {})}, on_step=views.on_step,
+                                  shield=None if shield is None else shield == "on", shield_options={"mode": shield_mode})
+    except ViewError as error:
+        _fail(str(error))
     except (ValueError, RuntimeError, FileNotFoundError) as error:
         _fail(f"{scenario}: {error}")
+    except KeyboardInterrupt:
+        _fail("interrupted", code=130)
 
     if plot is not None:
         from viapath.viz.plot import plot_episode
@@ -114,7 +136,7 @@ def run(
         print(json.dumps(episode.metrics, allow_nan=False))
         return
     _print_metrics(episode.metrics)
-    for label, file in (("plot", plot), ("trace", trace), ("animation", animate)):
+    for label, file in (("plot", plot), ("trace", trace), ("animation", animate), ("mcap", mcap)):
         if file is not None:
             console.print(f"{label}: {file}")
 

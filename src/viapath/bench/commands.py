@@ -51,6 +51,12 @@ def register(app: typer.Typer) -> None:
         perception: str = typer.Option("oracle", "--perception", help="oracle or laser"),
         plots: bool = typer.Option(True, "--plots/--no-plots", help="write rates.png and deviation_vs_time.png"),
         as_json: bool = typer.Option(False, "--json", help="print the per-planner table as JSON"),
+        mcap_failures: Optional[Path] = typer.Option(None, "--mcap-failures",
+                                                     help="write an MCAP (Foxglove) of each failed episode here "
+                                                          "(extra viz)"),
+        shield: Optional[str] = typer.Option(None, "--shield", help="on | off | friendly: passive-safety shield "
+                                             "(friendly: passive-friendly mode) for every planner; default: on "
+                                             "for viapath, off for the others"),
     ) -> None:
         """Run planners on a suite in parallel; write per-episode results, tables and plots."""
         from viapath.bench.report import markdown_table, write_report
@@ -62,11 +68,24 @@ def register(app: typer.Typer) -> None:
             _fail("--planners is empty; give e.g. viapath,dwa,vo")
         if scheduler and backend == "loky":
             _fail("--scheduler needs --backend dask or ray")
+        if mcap_failures is not None:
+            from viapath.viz.foxglove import ViewError, check_failures_option
+
+            try:
+                check_failures_option(mcap_failures)
+            except ViewError as error:
+                _fail(str(error))
         try:
             scenarios = load_suite(suite, out, count=count, seed=seed)
             result = run_bench(scenarios, names, out, workers=workers, backend=backend, scheduler=scheduler,
-                               perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json)
+                               perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json,
+                               shield=shield)
             summary = write_report(result["rows"], out, plots=plots, order=names)
+            if mcap_failures is not None:
+                from viapath.viz.foxglove import write_failure_mcaps
+
+                write_failure_mcaps(result["rows"], scenarios, mcap_failures,
+                                    progress=lambda text: typer.echo(f"mcap: {text}", err=True))
         except (BenchError, SuiteError, OSError) as error:
             _fail(str(error))
         if as_json:

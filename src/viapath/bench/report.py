@@ -39,7 +39,14 @@ TABLE_COLUMNS = [
     ("min_clearance_m", "min clearance [m]", "{:.2f}"),
     ("plan_time_p50_ms", "plan p50 [ms]", "{:.2f}"),
     ("plan_time_p99_ms", "plan p99 [ms]", "{:.1f}"),
+    ("shield_interventions_per_episode", "shield interventions/ep", "{:.1f}"),
 ]
+
+
+def label(row: dict[str, Any]) -> str:
+    """The planner's name, marked when the shield was on (rows of both settings can share a table)."""
+    setting = row.get("shield") or "off"
+    return row["planner"] if setting == "off" else f"{row['planner']} +{'shield' if setting == 'on' else setting}"
 
 
 def _values(rows, column) -> np.ndarray:
@@ -52,9 +59,10 @@ def _stat(function, values):
 
 def summarize(rows: list[dict[str, Any]], by: str = "planner", order: list[str] | None = None) -> list[dict[str, Any]]:
     """One dict of aggregates per value of ``by`` (planner by default), in ``order`` then first-seen order."""
-    groups: dict[str, list[dict]] = {key: [] for key in order or []}
+    keyed = label if by == "planner" else (lambda row: row[by])
+    groups: dict[str, list[dict]] = {f"{key}{mark}": [] for key in order or [] for mark in ("", " +shield", " +friendly")}
     for row in rows:
-        groups.setdefault(row[by], []).append(row)
+        groups.setdefault(keyed(row), []).append(row)
     summary = []
     for key, group in groups.items():
         if not group:
@@ -85,6 +93,8 @@ def summarize(rows: list[dict[str, Any]], by: str = "planner", order: list[str] 
             "median_min_clearance_m": _stat(np.median, _values(ok, "min_clearance_m")),
             "plan_time_p50_ms": _stat(np.median, _values(ok, "plan_time_p50_ms")),
             "plan_time_p99_ms": _stat(lambda v: np.percentile(v, 99), _values(ok, "plan_time_p99_ms")),
+            "shield": group[0].get("shield") or "off",
+            "shield_interventions_per_episode": _stat(np.mean, _values(ok, "shield_interventions")),
         })
     return summary
 
@@ -105,13 +115,13 @@ def markdown_table(summary: list[dict[str, Any]], columns=TABLE_COLUMNS, key: st
 
 def family_table(rows: list[dict[str, Any]]) -> str:
     """Success / collision / at-fault per family (rows) and planner (columns), as Markdown."""
-    planners = list(dict.fromkeys(r["planner"] for r in rows))
+    planners = list(dict.fromkeys(label(r) for r in rows))
     families = sorted(set(r["family"] for r in rows))
     lines = ["| family | " + " | ".join(planners) + " |", "|---|" + "|".join("---" for _ in planners) + "|"]
     for family in families:
         cells = []
         for planner in planners:
-            group = [r for r in rows if r["family"] == family and r["planner"] == planner and not r.get("error")]
+            group = [r for r in rows if r["family"] == family and label(r) == planner and not r.get("error")]
             if not group:
                 cells.append("–")
                 continue
@@ -176,7 +186,7 @@ def plot_deviation_vs_time(rows: list[dict[str, Any]], file: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    planners = list(dict.fromkeys(r["planner"] for r in rows))
+    planners = list(dict.fromkeys(label(r) for r in rows))
     done = [r for r in rows if r.get("time_ratio") is not None and r.get("max_lateral_deviation_m") is not None]
     columns = min(3, len(planners))
     lines = int(np.ceil(len(planners) / columns))
@@ -185,7 +195,7 @@ def plot_deviation_vs_time(rows: list[dict[str, Any]], file: Path) -> None:
     all_ratio = np.array([r["time_ratio"] for r in done])
     all_deviation = np.array([r["max_lateral_deviation_m"] for r in done])
     for ax, planner in zip(axes.flat, planners):
-        mine = [r for r in done if r["planner"] == planner]
+        mine = [r for r in done if label(r) == planner]
         ax.scatter(all_ratio, all_deviation, s=4, color="0.85", zorder=1)
         if mine:
             ratio = np.array([r["time_ratio"] for r in mine])

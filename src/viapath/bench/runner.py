@@ -33,10 +33,10 @@ COLUMNS = [
     "time_to_goal_s",
     "free_time_s", "time_ratio", "path_length_m", "mean_lateral_deviation_m", "max_lateral_deviation_m",
     "time_outside_corridor_s", "min_speed_mps", "max_speed_mps", "plan_time_p50_ms", "plan_time_p99_ms",
-    "episode_wall_s", "error",
+    "episode_wall_s", "error", "shield", "shield_interventions",
 ]
 _BOOLS = {"reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s"}
-_TEXT = {"scenario", "family", "planner", "perception", "error"}
+_TEXT = {"scenario", "family", "planner", "perception", "error", "shield"}
 _INTS = {"seed"}
 BACKENDS = ("loky", "dask", "ray")
 
@@ -51,10 +51,11 @@ class Task:
     planner: str
     perception: str
     seed: int
+    shield: str = "off"  # off | on (passive) | friendly (passive-friendly), see viapath.safety
 
     @property
     def key(self) -> tuple:
-        return (self.scenario["name"], self.planner, self.perception, str(self.seed))
+        return (self.scenario["name"], self.planner, self.perception, str(self.seed), self.shield)
 
 
 def episode_seed(bench_seed: int, scenario_name: str) -> int:
@@ -143,12 +144,14 @@ def run_task(task: Task) -> dict[str, Any]:
     row: dict[str, Any] = {column: None for column in COLUMNS}
     name = task.scenario["name"]
     row.update(scenario=name, family=family_of(name), planner=task.planner, perception=task.perception,
-               seed=task.seed, error="")
+               seed=task.seed, error="", shield=task.shield)
     try:
         scenario = scenario_from_dict(task.scenario, name)
-        episode = run_episode(scenario, planner=task.planner, perception=task.perception, seed=task.seed)
+        episode = run_episode(scenario, planner=task.planner, perception=task.perception, seed=task.seed,
+                              shield=task.shield != "off",
+                              shield_options={"mode": "passive-friendly" if task.shield == "friendly" else "passive"})
         for column in COLUMNS:
-            if column in episode.metrics:
+            if column in episode.metrics and column != "shield":
                 row[column] = episode.metrics[column]
         free = _free_time_s(json.dumps(task.scenario, sort_keys=True))
         row["free_time_s"] = free
@@ -212,8 +215,11 @@ def write_parquet(rows: list[dict], path: Path) -> bool:
 
 # -- the run ---------------------------------------------------------------------------------------
 
-def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "oracle", seed: int = 0) -> list[Task]:
+def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "oracle", seed: int = 0,
+               shield: str | None = None) -> list[Task]:
+    """``shield``: on | off | friendly for every planner, None for each planner's default (viapath.safety)."""
     from viapath.planning import available_planners
+    from viapath.safety import shield_default
 
     known = available_planners()
     unknown = [p for p in planners if p not in known]
@@ -221,7 +227,10 @@ def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "or
         raise BenchError(f"unknown planner {unknown[0]!r}; available: {', '.join(known)}")
     if perception not in ("oracle", "laser"):
         raise BenchError(f"unknown perception {perception!r}; use oracle or laser")
-    return [Task(s, p, perception, episode_seed(seed, s["name"])) for s in scenarios for p in planners]
+    if shield not in (None, "on", "off", "friendly"):
+        raise BenchError(f"unknown shield setting {shield!r}; use on, off or friendly")
+    setting = {p: shield or ("on" if shield_default(p) else "off") for p in planners}
+    return [Task(s, p, perception, episode_seed(seed, s["name"]), setting[p]) for s in scenarios for p in planners]
 
 
 def _parallel(backend: str, workers: int, scheduler: str | None):
@@ -287,6 +296,7 @@ def run_bench(
     perception: str = "oracle",
     seed: int = 0,
     progress: bool = True,
+    shield: str | None = None,
 ) -> dict[str, Any]:
     """Run every (scenario, planner) episode not already in ``out_dir/episodes.csv``.
 
@@ -295,8 +305,8 @@ def run_bench(
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     csv_path = out_dir / "episodes.csv"
-    tasks = make_tasks(scenarios, planners, perception, seed)
-    done = {(r["scenario"], r["planner"], r["perception"], str(r["seed"])) for r in read_rows(csv_path)}
+    tasks = make_tasks(scenarios, planners, perception, seed, shield)
+    done = {(r["scenario"], r["planner"], r["perception"], str(r["seed"]), r["shield"]) for r in read_rows(csv_path)}
     todo = [t for t in tasks if t.key not in done]
     started = time.perf_counter()
     if todo:
@@ -308,7 +318,7 @@ def run_bench(
     wall = time.perf_counter() - started
     rows = read_rows(csv_path)
     wanted = {t.key for t in tasks}
-    rows = [r for r in rows if (r["scenario"], r["planner"], r["perception"], str(r["seed"])) in wanted]
+    rows = [r for r in rows if (r["scenario"], r["planner"], r["perception"], str(r["seed"]), r["shield"]) in wanted]
     write_parquet(rows, out_dir / "episodes.parquet")
     return {"rows": rows, "ran": len(todo), "skipped": len(tasks) - len(todo), "wall_s": wall}
 

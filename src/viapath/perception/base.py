@@ -37,6 +37,8 @@ class Perception:
     name = "base"
     #: Scan points of the last cycle in the world frame (laser models; empty for the others).
     last_points_world: np.ndarray = np.zeros((0, 2))
+    #: The last cycle's scans, one per scanner, in their own frames (laser models; empty for the others).
+    last_scans: list = []
 
     def reset(self, rng: np.random.Generator) -> None:
         self.rng = rng

@@ -112,6 +112,9 @@ class Planner:
 
     name: ClassVar[str] = ""
     options: ClassVar[OptionSet] = COMMON_OPTIONS
+    #: The shield behind the planner, when there is one (set by ``viapath.safety.ShieldedPlanner``); a
+    #: planner that plans inside it (DESIGN §7) checks its candidates' commands with it.
+    shield = None
 
     def __init_subclass__(cls, name: str | None = None, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -162,6 +165,10 @@ class Planner:
             subgoal=self.subgoals.subgoal, subgoal_index=self.subgoals.index,
             corridor_excess_m=max(0.0, float(self.path.corridor_excess(position))),
         )
+
+    def episode_metrics(self) -> dict[str, Any]:
+        """Metrics of the planner over the episode (e.g. the shield's interventions)."""
+        return {}
 
     def decide(self, situation: Situation) -> Decision:  # pragma: no cover - interface
         raise NotImplementedError(f"{type(self).__name__} must implement decide(situation)")

@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from viapath.observation import Command, MotionLimits, Observation, RobotState
 from viapath.path import DesignatedPath, SubgoalPolicy
 from viapath.planning import Decision, make_planner
+from viapath.safety import shielded
 from viapath.scenarios.loader import planner_settings
 from viapath.sim import robot as kinematics
 from viapath.sim.metrics import compute_metrics, plan_side
@@ -21,6 +22,7 @@ from viapath.sim.obstacles import scenario_obstacle_states
 from viapath.perception.base import WorldSnapshot
 from viapath.perception.modes import make_perception
 from viapath.sim.reactive import obstacle_motion
+from viapath.sim.step_record import StepRecord
 
 
 @dataclass
@@ -70,8 +72,15 @@ def run_episode(
     velocity_noise_mps: float | None = None,
     record_perceived: bool = False,
     planner_overrides: dict[str, Any] | None = None,
+    on_step: Callable[[StepRecord], None] | None = None,
+    shield: bool | None = None,
+    shield_options: dict[str, Any] | None = None,
 ) -> Episode:
-    """Run one scenario to the goal or to ``duration_s``; returns the trace and its metrics."""
+    """Run one scenario to the goal or to ``duration_s``; returns the trace and its metrics.
+
+    ``on_step`` (views, recorders) is called once per planning cycle with a :class:`StepRecord`.
+    ``shield``: filter the planner's commands through the passive-safety shield (None: on for the
+    planners in ``viapath.safety.SHIELDED_BY_DEFAULT``); ``shield_options``: its options."""
     dt = scenario.dt_s
     n_steps = int(round(scenario.duration_s / dt))
     times = np.arange(n_steps + 1) * dt
@@ -88,6 +97,7 @@ def run_episode(
     options = {**planner_settings(scenario, planner_name), **(planner_overrides or {})}
     the_planner = make_planner(planner_name, path, nominal_speed_mps=spec.speed, limits=limits,
                                robot_radius_m=spec.radius, subgoal_policy=subgoal_policy, **options)
+    the_planner = shielded(the_planner, shield, dt, shield_options, planner_name)
     mode = perception or scenario.perception.mode
     sensing = make_perception(
         mode, scenario.perception.options,
@@ -132,6 +142,9 @@ def run_episode(
         rows["status"].append(decision.plan.status)
         rows["via"].append(np.asarray(decision.plan.via_points, dtype=float).reshape(-1, 2))
         rows["side"].append(plan_side(decision.plan.waypoints))
+        if on_step is not None:
+            on_step(StepRecord(k, float(times[k]), state, observation, decision, rows["plan_ms"][-1], world,
+                               sensing.last_scans or None, sensing, the_planner))
         if motion is not None:  # people move to step k + 1 seeing the robot at step k (rows filled in place)
             motion.step(state.position, state.speed_mps * np.array([np.cos(state.heading_rad), np.sin(state.heading_rad)]))
         state = kinematics.step(state, command, limits, dt)
@@ -150,6 +163,7 @@ def run_episode(
     )
     metrics = compute_metrics(trace)
     metrics.update(sensing.episode_metrics())
+    metrics.update({"shield": False, "shield_interventions": None, **the_planner.episode_metrics()})
     return Episode(trace, metrics)
 
 

@@ -70,6 +70,7 @@ class ViaPathPlanner(Planner, name="viapath"):
     # -- the recipe ----------------------------------------------------------------------------------
 
     def decide(self, situation: Situation) -> Decision:
+        self._situation = situation
         checks = LegChecks.of(situation, self.config, self.subgoals, self.subgoal_policy, self.robot_radius_m)
         speeds, nominal_index = self.speed_set(situation.robot.speed_mps)
         chosen = self._choose(checks, speeds, nominal_index, self._previous)
@@ -109,7 +110,7 @@ class ViaPathPlanner(Planner, name="viapath"):
             speed = float(speeds[nominal_index])
             plan = Plan("straight", speed, checks.subgoal.copy(), waypoints=np.array([checks.position, checks.subgoal]),
                         subgoal_index=checks.subgoal_index, candidate_count=1, chosen=0)
-            if can_follow(plan, checks, self.limits, self.config):
+            if can_follow(plan, checks, self.limits, self.config) and self._inside_shield(plan):
                 return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
         candidates = grow(checks, roots, self.config, self._slow_checks(checks))
         if candidates is None:
@@ -126,12 +127,25 @@ class ViaPathPlanner(Planner, name="viapath"):
             if not np.isfinite(total[best]):
                 break
             plan = self._plan_of(candidates, int(best), total, checks, polylines)
-            if can_follow(plan, checks, self.limits, self.config):
+            if can_follow(plan, checks, self.limits, self.config) and self._inside_shield(plan):
                 plan.extras["cost_terms"] = _cost_terms(costs, order, rank, total)
                 ways = candidates.ways[best]
                 choice = Choice(Way(int(ways[0]), int(ways[1]), int(ways[2])), int(candidates.speed_mmps[best]))
                 return _Chosen(choice, plan, candidates)
         return None
+
+    def _inside_shield(self, plan: Plan) -> bool:
+        """With a shield (DESIGN §7) behind the planner, a candidate whose command the shield would refuse
+        is passed over for the next one: speeds near a person only where the robot can stop in time."""
+        if self.shield is None:
+            return True
+        situation = self._situation
+        command = self._command(situation, plan)
+        verdict = self.shield.evaluate(situation.observation, np.array([[command.speed_mps, command.turn_rate_radps]]))
+        ok = verdict["friendly"] if self.shield.config.mode == "passive-friendly" else verdict["admissible"]
+        if not ok[0]:
+            plan.extras["outside_shield"] = True
+        return bool(ok[0])
 
     def _plan_of(self, candidates: Candidates, k: int, total, checks: LegChecks, polylines) -> Plan:
         common = dict(subgoal_index=checks.subgoal_index, candidate_count=len(candidates), candidate_costs=total,

@@ -1,0 +1,8 @@
+"""Passive safety (DESIGN §7): a shield between any planner and the base, and a planner wrapper."""
+
+from viapath.safety.options import SHIELD_MODES, SHIELD_OPTIONS
+from viapath.safety.shield import Shield, ShieldConfig, ShieldResult
+from viapath.safety.shielded import SHIELDED_BY_DEFAULT, ShieldedPlanner, shield_default, shielded
+
+__all__ = ["SHIELD_MODES", "SHIELD_OPTIONS", "SHIELDED_BY_DEFAULT", "Shield", "ShieldConfig",
+           "ShieldResult", "ShieldedPlanner", "shield_default", "shielded"]

@@ -1,0 +1,45 @@
+"""One definition of each shield option (name, default, unit, bounds, help): DESIGN §7, §8.
+
+The same :class:`~viapath.options.OptionSet` as the planners' options, so the CLI, the ROS 2
+parameters and the listings are generated from it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from viapath.options import Option, OptionError, OptionSet
+
+SHIELD_MODES = ("passive", "passive-friendly")
+
+SHIELD_OPTIONS = OptionSet([
+    Option("enabled", True, "filter the planner's command through the passive-safety shield (DESIGN §7)"),
+    Option("mode", "passive", "passive: the robot is at rest before any person's forecast disc can reach it; "
+           "passive-friendly (Mitsch & Platzer 2017): also early enough that the person, braking at "
+           "person_accel_mps2 from its forecast velocity, stops before contact", choices=SHIELD_MODES),
+    Option("margin_m", 0.05, "clearance added to robot radius + person radius (at most the person's present gap)",
+           "m", minimum=0.0, maximum=2.0),
+    Option("person_accel_mps2", 1.0, "bound on how sharply people change velocity: the forecast disc grows by "
+           "a_p t^2 / 2", "m/s²", minimum=0.0, maximum=20.0),
+    Option("sigma_multiplier", 2.0, "forecast disc grows by k sigma_v t (and k sigma_p) with the tracker's "
+           "uncertainty", minimum=0.0, maximum=10.0),
+    Option("towards_only", True, "count a meeting only while the robot moves towards the person's forecast "
+           "centre (the robot is never the one moving into a person; a person catching up from behind meets it "
+           "moving away); false: any meeting before rest counts (DESIGN §7 to the letter)"),
+    Option("samples", 11, "commands sampled per axis (speed, turn rate) of the dynamic window when replacing one",
+           minimum=2, maximum=101),
+    Option("substep_s", 0.025, "longest sub-interval of the swept-disc test (a control period is split into "
+           "equal ones)", "s", minimum=0.001, maximum=1.0),
+], owner="shield")
+
+
+def option_defaults() -> dict[str, Any]:
+    return SHIELD_OPTIONS.defaults()
+
+
+def check_options(values: dict[str, Any], where: str = "shield") -> dict[str, Any]:
+    """Defaults overlaid with ``values``; one clear ValueError naming the option for bad input."""
+    try:
+        return dict(SHIELD_OPTIONS.validate(values, where=where))
+    except OptionError as error:
+        raise ValueError(str(error)) from None

@@ -1,0 +1,706 @@
+"""Runs as Foxglove sees them: one MCAP per run, or a live WebSocket view, built from the scene.
+
+Source: DESIGN §9 (foxglove-sdk writes MCAP and serves a live WebSocket view with Foxglove's
+schemas; the paper's Fig. 4 as a 3-D scene, time as the height) and issue 14. Every message is
+built from a :class:`viapath.viz.scene.CycleScene`, the neutral description the ROS 2 node's
+MarkerArray shares. Needs the ``viz`` extra (``foxglove-sdk``); imported only when asked for.
+
+Topics (one message per planning cycle on each, log time = simulated time, from 0):
+
+================================  ===========================  ========================================
+topic                             schema                       content
+================================  ===========================  ========================================
+``/tf``                           foxglove.FrameTransforms     world → base → each scanner; world → xyt
+``/robot/footprint``              foxglove.SceneUpdate         the robot's disc and heading (frame base)
+``/scan/<scanner>``               foxglove.LaserScan           each scan in its scanner's frame (laser)
+``/perception/blind_sectors``     foxglove.SceneUpdate         what no scanner sees (frame base; laser)
+``/perception/detections``        foxglove.SceneUpdate         this cycle's detections (laser)
+``/perception/tracks``            foxglove.SceneUpdate         tracks: disc, velocity arrow, k·σ ring
+``/path``                         foxglove.SceneUpdate         designated path, corridor, current subgoal
+``/plan/candidates``              foxglove.SceneUpdate         every candidate, coloured by E
+``/plan/chosen``                  foxglove.SceneUpdate         the chosen polyline and its via points
+``/plan/costs``                   viapath.PlanCosts (JSON)     E of chosen and runner-up, per term if known
+``/xyt``                          foxglove.SceneUpdate         Fig. 4: cylinders and the plan in x-y-t
+``/metrics``                      viapath.Metrics (JSON)       speed, turn rate, clearance, deviation, …
+================================  ===========================  ========================================
+
+What we chose:
+* Frames: ``world`` (the scenario's), ``base`` (robot centre, x forward), ``laser_<name>`` per
+  scanner (its mounting pose), ``xyt`` (identity under world; heights in it are time ×
+  ``time_scale_m_per_s``). The x-y-t view is its own topic in its own frame so a 3-D panel shows
+  it alone (the layout's right-hand panel) while the main panel looks down on the world.
+* Each SceneUpdate first deletes everything its topic drew before, so a track that is gone
+  disappears; static content (path, corridor) is still sent every cycle, so scrubbing to any time
+  shows it and every topic has one message per cycle.
+* Readings a driver marks invalid (inf, NaN, 0, below the minimum range) are sent as NaN, which
+  Foxglove leaves out.
+* JSON numbers that are not finite (no one in sight: clearance inf) are sent as ``null``.
+* Live: the simulation is paced so that simulated time runs ``rate`` times as fast as the wall
+  clock; a SIGINT ends the run, and the server is stopped in every case.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from viapath.viz.scene import CycleScene, ForecastSettings, SceneBuilder, candidate_colour, circle_polygon
+
+TF = "/tf"
+FOOTPRINT = "/robot/footprint"
+BLIND = "/perception/blind_sectors"
+DETECTIONS = "/perception/detections"
+TRACKS = "/perception/tracks"
+PATH = "/path"
+CANDIDATES = "/plan/candidates"
+CHOSEN = "/plan/chosen"
+COSTS = "/plan/costs"
+XYT = "/xyt"
+METRICS = "/metrics"
+WORLD, BASE, XYT_FRAME = "world", "base", "xyt"
+
+COSTS_SCHEMA = {
+    "title": "viapath.PlanCosts",
+    "type": "object",
+    "properties": {
+        "time_s": {"type": "number"}, "status": {"type": "string"}, "speed_mps": {"type": "number"},
+        "candidate_count": {"type": "integer"}, "terms_available": {"type": "boolean"},
+        "chosen": {"type": ["object", "null"]}, "runner_up": {"type": ["object", "null"]},
+        "margin": {"type": ["number", "null"], "description": "E(runner-up) - E(chosen)"},
+    },
+}
+METRICS_SCHEMA = {
+    "title": "viapath.Metrics",
+    "type": "object",
+    "properties": {name: {"type": ["number", "null"]} for name in (
+        "time_s", "speed_mps", "turn_rate_radps", "command_speed_mps", "command_turn_rate_radps", "clearance_m",
+        "lateral_deviation_m", "plan_time_ms", "shield_interventions", "tracks", "candidates")},
+}
+
+
+class ViewError(ValueError):
+    """A view cannot be set up (bad output path, missing extra, busy port)."""
+
+
+def scan_topic(name: str) -> str:
+    return f"/scan/{name}"
+
+
+def scanner_frame(name: str) -> str:
+    return f"laser_{name}"
+
+
+def expected_topics(scanner_names: list[str] | tuple[str, ...] = ()) -> dict[str, str]:
+    """Topic → schema name of a run (laser topics only when there are scanners)."""
+    topics = {TF: "foxglove.FrameTransforms", FOOTPRINT: "foxglove.SceneUpdate", TRACKS: "foxglove.SceneUpdate",
+              PATH: "foxglove.SceneUpdate", CANDIDATES: "foxglove.SceneUpdate", CHOSEN: "foxglove.SceneUpdate",
+              COSTS: "viapath.PlanCosts", XYT: "foxglove.SceneUpdate", METRICS: "viapath.Metrics"}
+    if scanner_names:
+        topics.update({BLIND: "foxglove.SceneUpdate", DETECTIONS: "foxglove.SceneUpdate"})
+        topics.update({scan_topic(name): "foxglove.LaserScan" for name in scanner_names})
+    return topics
+
+
+def _foxglove():
+    try:
+        import foxglove  # noqa: F401
+    except ImportError:
+        raise ViewError("--mcap/--live need foxglove-sdk: pip install 'viapath[viz]'") from None
+    return foxglove
+
+
+# -- messages ------------------------------------------------------------------------------------
+
+class FoxglovePublisher:
+    """Logs one cycle's scene on a foxglove ``Context`` (whatever sinks it has: MCAP, WebSocket)."""
+
+    def __init__(self, context, path, robot_radius_m: float, settings: ForecastSettings | None = None,
+                 xyt_segments: int = 16):
+        self.fg = _foxglove()
+        from foxglove import messages
+
+        self.m = messages
+        self.context = context
+        self.settings = settings
+        self.builder: SceneBuilder | None = None
+        self.path = path
+        self.robot_radius_m = robot_radius_m
+        self.xyt_segments = int(xyt_segments)
+        self.channels: dict[str, Any] = {}
+        self.cycles = 0
+        self._setup_constants()
+
+    # channels are made at the first cycle, when the scanners are known
+    def _open_channels(self, scene: CycleScene) -> None:
+        from foxglove import Channel, Schema
+        from foxglove.channels import FrameTransformsChannel, LaserScanChannel, SceneUpdateChannel
+
+        ctx = self.context
+        self.channels[TF] = FrameTransformsChannel(TF, context=ctx)
+        topics = [FOOTPRINT, TRACKS, PATH, CANDIDATES, CHOSEN, XYT]
+        if scene.scanners:
+            topics[1:1] = [BLIND, DETECTIONS]
+        for topic in topics:
+            self.channels[topic] = SceneUpdateChannel(topic, context=ctx)
+        for scanner in scene.scanners:
+            self.channels[scan_topic(scanner.name)] = LaserScanChannel(scan_topic(scanner.name), context=ctx)
+        for topic, schema in ((COSTS, COSTS_SCHEMA), (METRICS, METRICS_SCHEMA)):
+            self.channels[topic] = Channel(topic, message_encoding="json", context=ctx, schema=Schema(
+                name=schema["title"], encoding="jsonschema", data=json.dumps(schema).encode()))
+
+    def __call__(self, record) -> CycleScene:
+        """The ``on_step`` callback of :func:`viapath.sim.loop.run_episode`."""
+        scene = self.scene_of(record)
+        self.publish(scene)
+        return scene
+
+    def scene_of(self, record) -> CycleScene:
+        if self.builder is None:
+            settings = self.settings or ForecastSettings.from_planner(record.planner)
+            self.builder = SceneBuilder(self.path, self.robot_radius_m, settings)
+        state, world = record.state, record.world
+        from viapath.observation import Obstacles
+
+        truth = None
+        if world is not None:
+            present = np.isfinite(world.obstacle_positions).all(axis=1)
+            truth = Obstacles(world.obstacle_positions[present], world.obstacle_velocities[present],
+                              world.obstacle_radii_m[present], ids=np.flatnonzero(present))
+        return self.builder.build(record.step, record.time_s, (state.x, state.y, state.heading_rad), state.speed_mps,
+                                  state.turn_rate_radps, record.observation, record.decision, record.plan_time_ms,
+                                  record.perception if record.scans is not None else None, truth)
+
+    def open_channels(self, scene: CycleScene) -> None:
+        if not self.channels:
+            self._open_channels(scene)
+
+    def publish(self, scene: CycleScene) -> None:
+        self.open_channels(scene)
+        ns = int(round(scene.time_s * 1e9))
+        stamp = self.m.Timestamp(ns // 1_000_000_000, ns % 1_000_000_000)
+        ch = self.channels
+        ch[TF].log(self._transforms(scene, stamp), log_time=ns)
+        ch[FOOTPRINT].log(self._footprint(scene), log_time=ns)
+        for scanner in scene.scanners:
+            ch[scan_topic(scanner.name)].log(self._scan(scanner, stamp), log_time=ns)
+        if scene.scanners:
+            ch[BLIND].log(self._blind(scene), log_time=ns)
+            ch[DETECTIONS].log(self._detections(scene, stamp), log_time=ns)
+        ch[TRACKS].log(self._tracks(scene, stamp), log_time=ns)
+        ch[PATH].log(self._path(scene), log_time=ns)
+        ch[CANDIDATES].log(self._candidates(scene, stamp), log_time=ns)
+        ch[CHOSEN].log(self._chosen(scene, stamp), log_time=ns)
+        ch[COSTS].log(json.dumps(costs_message(scene), allow_nan=False).encode(), log_time=ns)
+        ch[XYT].log(self._xyt(scene, stamp), log_time=ns)
+        ch[METRICS].log(json.dumps(metrics_message(scene), allow_nan=False).encode(), log_time=ns)
+        self.cycles += 1
+
+    # -- pieces --------------------------------------------------------------------------------
+    # Built for speed (issue 14: writing must cost little beside the run): constant colours and
+    # poses are made once, content that does not change (footprint, blind region, path for a given
+    # subgoal) is one cached message, and meshes share their vertices through indices.
+    def _setup_constants(self) -> None:
+        m = self.m
+        C = lambda r, g, b, a=1.0: m.Color(r=r, g=g, b=b, a=a)  # noqa: E731
+        self.colours = {
+            "robot": C(0.1, 0.3, 0.9), "robot_fill": C(0.1, 0.3, 0.9, 0.35), "blind": C(0.3, 0.3, 0.3, 0.8),
+            "grey": C(0.4, 0.4, 0.4), "detection": C(1.0, 0.55, 0.0, 0.7), "track": C(0.85, 0.15, 0.15, 0.6),
+            "track_sigma": C(0.85, 0.15, 0.15, 0.2), "track_text": C(0.5, 0.0, 0.0), "arrow": C(0.6, 0.0, 0.0),
+            "path": C(0.2, 0.2, 0.2), "corridor": C(0.2, 0.6, 0.2, 0.7), "subgoal": C(0.9, 0.7, 0.0),
+            "subgoal_text": C(0.5, 0.4, 0.0), "chosen": C(0.0, 0.45, 1.0), "chosen_text": C(0.0, 0.2, 0.6),
+            "via": C(0.0, 0.0, 0.0), "mesh": C(0.9, 0.2, 0.2, 0.35), "ring": C(0.7, 0.1, 0.1, 0.9),
+            "axis": C(0.5, 0.0, 0.0), "time_axis": C(0.4, 0.4, 0.4, 0.6),
+        }
+        self.identity = self._pose()
+        self.delete_all = m.SceneEntityDeletion(type=m.SceneEntityDeletionType.All)
+        self.static: dict[Any, Any] = {}
+        self.candidate_colours: dict[int, Any] = {}
+
+    def _p(self, x, y, z=0.0):
+        return self.m.Point3(x=float(x), y=float(y), z=float(z))
+
+    def _points(self, xy: np.ndarray, z: float = 0.0) -> list:
+        P = self.m.Point3
+        return [P(x=a, y=b, z=z) for a, b in np.asarray(xy, dtype=float).reshape(-1, 2).tolist()]
+
+    def _points3(self, xyz: np.ndarray) -> list:
+        P = self.m.Point3
+        return [P(x=a, y=b, z=c) for a, b, c in np.asarray(xyz, dtype=float).reshape(-1, 3).tolist()]
+
+    def _pose(self, x=0.0, y=0.0, z=0.0, yaw=0.0):
+        m = self.m
+        return m.Pose(position=m.Vector3(x=float(x), y=float(y), z=float(z)),
+                      orientation=m.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)))
+
+    def _line(self, points: list, colour, thickness=0.03, loop=False):
+        m = self.m
+        kind = m.LinePrimitiveLineType.LineLoop if loop else m.LinePrimitiveLineType.LineStrip
+        return m.LinePrimitive(type=kind, pose=self.identity, thickness=thickness, points=points, color=colour)
+
+    def _disc(self, x, y, radius, colour, z=0.0, height=0.01):
+        m = self.m
+        return m.CylinderPrimitive(pose=self._pose(x, y, z + 0.5 * height),
+                                   size=m.Vector3(x=2 * radius, y=2 * radius, z=height), color=colour)
+
+    def _text(self, x, y, z, text, colour, size=12.0):
+        return self.m.TextPrimitive(pose=self._pose(x, y, z), billboard=True, font_size=size, scale_invariant=True,
+                                    color=colour, text=text)
+
+    def _update(self, stamp, frame, id_, primitives: dict, frame_locked: bool = False):
+        m = self.m
+        entity = m.SceneEntity(timestamp=stamp, frame_id=frame, id=id_, frame_locked=frame_locked, **primitives)
+        return m.SceneUpdate(deletions=[self.delete_all], entities=[entity])
+
+    def _transforms(self, scene: CycleScene, stamp):
+        m = self.m
+        x, y, heading = scene.robot_pose
+
+        def tf(parent, child, px, py, yaw):
+            return m.FrameTransform(timestamp=stamp, parent_frame_id=parent, child_frame_id=child,
+                                    translation=m.Vector3(x=float(px), y=float(py), z=0.0),
+                                    rotation=m.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)))
+        transforms = [tf(WORLD, BASE, x, y, heading), tf(WORLD, XYT_FRAME, 0.0, 0.0, 0.0)]
+        transforms += [tf(BASE, scanner_frame(s.name), *s.mount_pose) for s in scene.scanners]
+        return m.FrameTransforms(transforms=transforms)
+
+    def _footprint(self, scene: CycleScene):
+        """The robot's disc and heading in the base frame: the same every cycle (frame-locked)."""
+        if "footprint" not in self.static:
+            m, c, r = self.m, self.colours, scene.robot_radius_m
+            self.static["footprint"] = self._update(None, BASE, "robot", {
+                "lines": [self._line(self._points(scene.footprint()), c["robot"], 0.03)],
+                "cylinders": [self._disc(0.0, 0.0, r, c["robot_fill"])],
+                "arrows": [m.ArrowPrimitive(pose=self._pose(z=0.02), shaft_length=0.8 * r, shaft_diameter=0.03,
+                                            head_length=0.12, head_diameter=0.08, color=c["robot"])],
+            }, frame_locked=True)
+        return self.static["footprint"]
+
+    def _scan(self, scanner, stamp):
+        ranges = np.asarray(scanner.ranges_m, dtype=float)
+        valid = np.isfinite(ranges) & (ranges >= max(scanner.range_min_m, 1e-9)) & (ranges <= scanner.range_max_m)
+        ranges = np.where(valid, ranges, np.nan)
+        return self.m.LaserScan(timestamp=stamp, frame_id=scanner_frame(scanner.name), pose=self.identity,
+                                start_angle=scanner.angle_min_rad, end_angle=scanner.angle_max_rad,
+                                ranges=ranges.tolist())
+
+    def _blind(self, scene: CycleScene):
+        """What no scanner sees, in the base frame: fixed by the mounts, so one cached message."""
+        if "blind" not in self.static:
+            c = self.colours
+            primitives: dict[str, list] = {}
+            if len(scene.blind_polygon_world):
+                # The polygon is given in the world at the robot's pose: bring it into the robot frame.
+                x, y, heading = scene.robot_pose
+                cos, sin = math.cos(-heading), math.sin(-heading)
+                rel = scene.blind_polygon_world - [x, y]
+                local = np.column_stack([cos * rel[:, 0] - sin * rel[:, 1], sin * rel[:, 0] + cos * rel[:, 1]])
+                primitives["lines"] = [self._line(self._points(local, 0.01), c["blind"], 0.015, loop=True)]
+                primitives["texts"] = [self._text(0.35 * math.cos(0.5 * (a + b)), 0.35 * math.sin(0.5 * (a + b)), 0.05,
+                                                  "blind", c["grey"], 11.0) for a, b in scene.blind_sectors_rad]
+            self.static["blind"] = self._update(None, BASE, "blind", primitives, frame_locked=True)
+        return self.static["blind"]
+
+    def _detections(self, scene: CycleScene, stamp):
+        colour = self.colours["detection"]
+        discs = [self._disc(cx, cy, r, colour, height=0.02)
+                 for (cx, cy), r in zip(scene.detections_world.tolist(), scene.detection_radii_m.tolist())]
+        return self._update(stamp, WORLD, "detections", {"cylinders": discs})
+
+    def _tracks(self, scene: CycleScene, stamp):
+        m, c = self.m, self.colours
+        tracks = scene.tracks
+        k = self.builder.settings.uncertainty_sigmas if self.builder else 2.0
+        entities = []
+        for (px, py), (vx, vy), r, sp, sv, track in zip(tracks.positions.tolist(), tracks.velocities.tolist(),
+                                                        tracks.radii_m.tolist(), tracks.position_sigma_m.tolist(),
+                                                        tracks.velocity_sigma_mps.tolist(), tracks.ids.tolist()):
+            speed = math.hypot(vx, vy)
+            primitives: dict[str, list] = {
+                "cylinders": [self._disc(px, py, r, c["track"], height=0.1),
+                              self._disc(px, py, r + k * sp, c["track_sigma"], height=0.005)],
+                "texts": [self._text(px, py, 0.3, f"{track}: {speed:.2f} m/s ±{sv:.2f}", c["track_text"])],
+            }
+            if speed > 1e-6:
+                primitives["arrows"] = [m.ArrowPrimitive(pose=self._pose(px, py, 0.12, math.atan2(vy, vx)),
+                                                         shaft_length=speed, shaft_diameter=0.03, head_length=0.1,
+                                                         head_diameter=0.08, color=c["arrow"])]
+            entities.append(m.SceneEntity(timestamp=stamp, frame_id=WORLD, id=f"track-{track}", **primitives))
+        return m.SceneUpdate(deletions=[self.delete_all], entities=entities)
+
+    def _path(self, scene: CycleScene):
+        """Path, corridor and the current subgoal: one cached message per subgoal."""
+        key = ("path", scene.subgoal_index, tuple(np.round(scene.subgoal, 9)))
+        if key not in self.static:
+            c, view = self.colours, self.builder.path_view
+            lines = [self._line(self._points(view.waypoints), c["path"], 0.02)]
+            lines += [self._line(self._points(outline), c["corridor"], 0.015) for outline in view.corridor_outlines]
+            sx, sy = scene.subgoal.tolist()
+            m = self.m
+            self.static[key] = self._update(None, WORLD, "path", {
+                "lines": lines,
+                "spheres": [m.SpherePrimitive(pose=self._pose(sx, sy, 0.05), size=m.Vector3(x=0.15, y=0.15, z=0.15),
+                                              color=c["subgoal"])],
+                "texts": [self._text(sx, sy, 0.25, f"subgoal {scene.subgoal_index}", c["subgoal_text"])],
+            })
+        return self.static[key]
+
+    def _candidates(self, scene: CycleScene, stamp):
+        plan = scene.plan
+        costs = plan.candidate_costs
+        lines = []
+        if plan.candidate_polylines:
+            finite = costs[np.isfinite(costs)] if len(costs) else costs
+            low, high = (float(finite.min()), float(finite.max())) if len(finite) else (0.0, 0.0)
+            m = self.m
+            for i, line in enumerate(plan.candidate_polylines):
+                cost = float(costs[i]) if i < len(costs) else math.inf
+                # Colours in 16 steps of E, made once each.
+                u = -1 if not math.isfinite(cost) else int(round(15 * (0 if high <= low else (cost - low) / (high - low))))
+                colour = self.candidate_colours.get(u)
+                if colour is None:
+                    rgba = candidate_colour(low + (u / 15) * (high - low) if u >= 0 else math.inf, low, high if u >= 0 else low)
+                    colour = self.candidate_colours[u] = m.Color(r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3])
+                lines.append(self._line(self._points(line, 0.01), colour, 0.01))
+        return self._update(stamp, WORLD, "candidates", {"lines": lines})
+
+    def _chosen(self, scene: CycleScene, stamp):
+        m, c = self.m, self.colours
+        plan = scene.plan
+        line = plan.waypoints if len(plan.waypoints) else np.array([scene.robot_pose[:2], plan.target])
+        size = m.Vector3(x=0.1, y=0.1, z=0.1)
+        spheres = [m.SpherePrimitive(pose=self._pose(x, y, 0.03), size=size, color=c["via"])
+                   for x, y in plan.via_points.tolist()]
+        tx, ty = plan.target.tolist()
+        return self._update(stamp, WORLD, "chosen", {
+            "lines": [self._line(self._points(line, 0.02), c["chosen"], 0.04)], "spheres": spheres,
+            "texts": [self._text(tx, ty, 0.3, f"{plan.status} {plan.speed_mps:.2f} m/s", c["chosen_text"])]})
+
+    def _xyt(self, scene: CycleScene, stamp):
+        m, c = self.m, self.colours
+        xyt = scene.xyt
+        scale = xyt.settings.time_scale_m_per_s
+        segments = self.xyt_segments
+        entities = []
+        for i, person in enumerate(xyt.persons):
+            vertices, triangles = xyt.mesh_indexed(i, segments)
+            vertices = vertices * (1.0, 1.0, scale)
+            points = self._points3(vertices)
+            rings = [self._line(points[r * segments:(r + 1) * segments], c["ring"], 0.01, loop=True)
+                     for r in range((len(points) - 2) // segments)]
+            axis = self._line(self._points3(xyt.axis_xyt(i) * (1.0, 1.0, scale)), c["axis"], 0.01)
+            entities.append(m.SceneEntity(timestamp=stamp, frame_id=XYT_FRAME, id=f"person-{person.id}", triangles=[
+                m.TriangleListPrimitive(pose=self.identity, points=points, color=c["mesh"],
+                                        indices=triangles.ravel().tolist())], lines=rings + [axis]))
+        x, y = scene.robot_pose[:2].tolist()
+        horizon = xyt.settings.horizon_s
+        ticks = [self._text(x - 0.3, y, t * scale, f"{t:g} s", c["grey"], 11.0)
+                 for t in (0.0, 0.5 * horizon, horizon)]
+        size = m.Vector3(x=0.1, y=0.1, z=0.1)
+        spheres = [m.SpherePrimitive(pose=self._pose(px, py, pt * scale), size=size, color=c["via"])
+                   for px, py, pt in xyt.via_points_xyt.tolist()]
+        entities.append(m.SceneEntity(timestamp=stamp, frame_id=XYT_FRAME, id="robot-plan", lines=[
+            self._line(self._points3(xyt.plan_xyt * (1.0, 1.0, scale)), c["chosen"], 0.04),
+            self._line([self._p(x, y, 0.0), self._p(x, y, horizon * scale)], c["time_axis"], 0.01),
+        ], spheres=spheres, texts=ticks, cylinders=[self._disc(x, y, scene.robot_radius_m, c["robot_fill"])]))
+        return m.SceneUpdate(deletions=[self.delete_all], entities=entities)
+
+
+def _finite(value) -> float | None:
+    if value is None:
+        return None
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def metrics_message(scene: CycleScene) -> dict:
+    return {"time_s": scene.time_s, **{name: _finite(value) for name, value in scene.series.items()}}
+
+
+def costs_message(scene: CycleScene) -> dict:
+    """E of the chosen and the runner-up candidate, with the per-term breakdown when the planner gives one."""
+    plan = scene.plan
+    terms = plan.cost_terms or {}
+
+    def one(index, cost, key):
+        if index is None:
+            return None
+        entry: dict[str, Any] = {"index": int(index), "E": _finite(cost)}
+        if isinstance(terms.get(key), dict):
+            entry["terms"] = {str(k): _finite(v) for k, v in terms[key].items()}
+        return entry
+    chosen, runner = plan.chosen_cost, plan.runner_up_cost
+    return {
+        "time_s": scene.time_s, "status": plan.status, "speed_mps": _finite(plan.speed_mps),
+        "candidate_count": int(len(plan.candidate_costs)), "terms_available": plan.cost_terms is not None,
+        "chosen": one(plan.chosen, chosen, "chosen"), "runner_up": one(plan.runner_up, runner, "runner_up"),
+        "margin": None if chosen is None or runner is None else runner - chosen,
+    }
+
+
+# -- running with a view ---------------------------------------------------------------------------
+
+def display_overrides(scenario, planner_name: str) -> dict[str, Any]:
+    """Planner options that make it keep every candidate for display (the viapath planner's
+    ``record_candidates``), or nothing for planners without such an option."""
+    from viapath.planning import planner_options
+
+    return {"record_candidates": True} if "record_candidates" in planner_options(planner_name) else {}
+
+
+def check_mcap_path(file: Path | str, force: bool = False, option: str = "--mcap") -> Path:
+    """A file we may write: ends in .mcap, its folder exists and is writable, not there unless ``force``.
+    Checked by creating the file, so the answer is true for the user running it (root included)."""
+    file = Path(file)
+    if file.suffix.lower() != ".mcap":
+        raise ViewError(f"{option} {file}: expected a file ending in .mcap")
+    if file.is_dir():
+        raise ViewError(f"{option} {file}: is a folder; give a file name ending in .mcap")
+    if not file.parent.is_dir():
+        raise ViewError(f"{option} {file}: folder {file.parent} does not exist")
+    if file.exists() and not force:
+        raise ViewError(f"{option} {file}: file exists; add --force to overwrite it")
+    existed = file.exists()
+    try:
+        with open(file, "ab"):
+            pass
+    except OSError as error:
+        raise ViewError(f"{option} {file}: cannot write there ({error.strerror or error})") from None
+    if not existed:
+        file.unlink()
+    return file
+
+
+def check_output_folder(folder: Path | str, option: str = "--mcap-failures") -> Path:
+    """A folder we may write files into (made if missing, its parent must exist)."""
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise ViewError(f"{option} {folder}: is a file, expected a folder")
+    if not folder.exists():
+        if not folder.parent.is_dir():
+            raise ViewError(f"{option} {folder}: folder {folder.parent} does not exist")
+        try:
+            folder.mkdir()
+        except OSError as error:
+            raise ViewError(f"{option} {folder}: cannot create it ({error.strerror or error})") from None
+    probe = folder / f".viapath-write-test-{os.getpid()}"
+    try:
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as error:
+        raise ViewError(f"{option} {folder}: cannot write there ({error.strerror or error})") from None
+    return folder
+
+
+class Views:
+    """The views of one run: an MCAP file, a live server, or both. Use as a context manager around
+    ``run_episode(..., planner_overrides=views.planner_overrides, on_step=views.on_step)``."""
+
+    def __init__(self, scenario, planner_name: str, mcap: Path | str | None = None, force: bool = False,
+                 live: bool = False, rate: float = 1.0, host: str = "127.0.0.1", port: int = 8765,
+                 settings: ForecastSettings | None = None, announce: Callable[[str], None] | None = None):
+        if not (math.isfinite(rate) and rate > 0):
+            raise ViewError(f"--rate: expected a number > 0, found {rate}")
+        self.mcap = check_mcap_path(mcap, force) if mcap is not None else None
+        self.force = force
+        self.live, self.rate, self.host, self.port = live, float(rate), host, int(port)
+        self.scenario, self.planner_name = scenario, planner_name
+        self.settings = settings
+        self.announce = announce or (lambda message: None)
+        self.on_step: Callable | None = None
+        self.planner_overrides: dict[str, Any] | None = None
+        self.server = None
+        self.writer = None
+        self.publisher: FoxglovePublisher | None = None
+        self._clock_start: float | None = None
+        if self.mcap is not None or live:
+            _foxglove()
+        if live and self.port != 0:
+            _check_port_free(host, self.port)
+
+    @property
+    def active(self) -> bool:
+        return self.mcap is not None or self.live
+
+    def __enter__(self) -> "Views":
+        if not self.active:
+            return self
+        import foxglove
+
+        from viapath.path import DesignatedPath
+
+        context = foxglove.Context()
+        try:
+            if self.mcap is not None:
+                from foxglove.mcap import MCAPCompression, MCAPWriteOptions
+
+                options = MCAPWriteOptions(compression=MCAPCompression.Lz4)
+                self.writer = foxglove.open_mcap(self.mcap, allow_overwrite=self.force, context=context,
+                                                 writer_options=options)
+        except BaseException:
+            self._close()
+            raise
+        path = DesignatedPath(self.scenario.path.waypoints, half_widths_m=self.scenario.path.widths())
+        self.context = context
+        self.publisher = FoxglovePublisher(context, path, self.scenario.robot.radius, self.settings)
+        self.planner_overrides = display_overrides(self.scenario, self.planner_name)
+        self.on_step = self._paced if self.live else self.publisher
+        return self
+
+    def _start_server(self) -> None:
+        import foxglove
+        from foxglove.websocket import Capability
+
+        try:
+            self.server = foxglove.start_server(name=f"viapath {self.scenario.name}", host=self.host, port=self.port,
+                                                context=self.context, capabilities=[Capability.Time])
+        except Exception as error:  # the SDK raises its own error type for a busy port
+            raise ViewError(f"--live: cannot serve on {self.host}:{self.port} ({error})") from None
+        self.announce(f"live view: ws://{self.host}:{self.server.port} (Foxglove: Open connection, Foxglove WebSocket)")
+
+    def _paced(self, record) -> None:
+        """Publish, then hold the simulation so that it runs ``rate`` times as fast as the wall clock.
+        The server starts at the first cycle, once every channel exists, so a client that connects
+        is told of all of them at once."""
+        scene = self.publisher.scene_of(record)
+        if self.server is None:
+            self.publisher.open_channels(scene)
+            self._start_server()
+        now = time.perf_counter()
+        if self._clock_start is None:
+            self._clock_start = now - record.time_s / self.rate
+        self.publisher.publish(scene)
+        self.server.broadcast_time(int(round(record.time_s * 1e9)))
+        wait = self._clock_start + (record.time_s + self.scenario.dt_s) / self.rate - time.perf_counter()
+        if wait > 0:
+            time.sleep(wait)
+
+    def __exit__(self, *exc) -> None:
+        self._close()
+
+    def _close(self) -> None:
+        if self.writer is not None:
+            self.writer.close()
+            self.writer = None
+        if self.server is not None:
+            self.server.stop()
+            self.server = None
+
+
+def _check_port_free(host: str, port: int) -> None:
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        try:
+            probe.bind((host, port))
+        except OSError as error:
+            raise ViewError(f"--port {port}: {host}:{port} is in use ({error.strerror or error}); "
+                            "give another port, or 0 for any free one") from None
+
+
+def record_episode(scenario, file: Path | str, planner: str | None = None, force: bool = False, **run_kwargs):
+    """Run one episode and write its MCAP; returns the episode."""
+    from viapath.sim.loop import run_episode
+
+    name = planner or scenario.planner.name
+    with Views(scenario, name, mcap=file, force=force) as views:
+        return run_episode(scenario, planner=name, planner_overrides=views.planner_overrides,
+                           on_step=views.on_step, **run_kwargs)
+
+
+# -- benchmark failures ----------------------------------------------------------------------------
+
+FAILURE_REASONS = ("collision", "at_fault_collision", "outside_corridor", "missed_goal")
+
+
+def failure_reasons(row: dict) -> list[str]:
+    """Why a benchmark row is a failure (empty: it is not). Rows with an error are not episodes."""
+    if row.get("error"):
+        return []
+    reasons = []
+    if row.get("collision"):
+        reasons.append("collision")
+    if row.get("at_fault_collision"):
+        reasons.append("at_fault_collision")
+    if (row.get("time_outside_corridor_s") or 0.0) > 0.0:
+        reasons.append("outside_corridor")
+    if row.get("reached_goal") is False:
+        reasons.append("missed_goal")
+    return reasons
+
+
+def failure_file_name(scenario_name: str, planner: str, perception: str = "oracle", seed: int | None = None) -> str:
+    safe = lambda text: "".join(c if c.isalnum() or c in "-_." else "_" for c in str(text))  # noqa: E731
+    return f"{safe(scenario_name)}__{safe(planner)}__{safe(perception)}.mcap"
+
+
+def write_failure_mcaps(rows: list[dict], scenarios: list[dict], folder: Path | str, force: bool = True,
+                        progress: Callable[[str], None] | None = None) -> list[dict]:
+    """Re-run each failed episode of a benchmark (same scenario, planner, perception and seed: the
+    runs are deterministic) and write its MCAP into ``folder``. Returns one entry per file with the
+    reasons and whether the re-run failed the same way (it should; a mismatch is reported)."""
+    from viapath.scenarios import scenario_from_dict
+
+    folder = Path(folder)
+    by_name = {s["name"]: s for s in scenarios}
+    written = []
+    for row in rows:
+        reasons = failure_reasons(row)
+        if not reasons or row["scenario"] not in by_name:
+            continue
+        file = folder / failure_file_name(row["scenario"], row["planner"], row["perception"])
+        scenario = scenario_from_dict(by_name[row["scenario"]], row["scenario"])
+        episode = record_episode(scenario, file, planner=row["planner"], force=force,
+                                 perception=row["perception"], seed=int(row["seed"]))
+        again = failure_reasons({**row, **{k: episode.metrics.get(k) for k in
+                                           ("collision", "at_fault_collision", "time_outside_corridor_s",
+                                            "reached_goal")}})
+        entry = {"file": str(file), "scenario": row["scenario"], "planner": row["planner"], "reasons": reasons,
+                 "reproduced": again == reasons}
+        written.append(entry)
+        if progress is not None:
+            progress(f"{file.name}: {', '.join(reasons)}" + ("" if entry["reproduced"] else
+                                                             f" (re-run gave: {', '.join(again) or 'no failure'})"))
+    return written
+
+
+class _NoViews:
+    """What :func:`open_views` returns when no view is asked for: changes nothing in the run."""
+
+    planner_overrides = None
+    on_step = None
+    active = False
+
+    def __enter__(self) -> "_NoViews":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        return None
+
+
+def open_views(scenario, planner_name: str, mcap: Path | str | None = None, force: bool = False, live: bool = False,
+               rate: float = 1.0, port: int = 8765, announce: Callable[[str], None] | None = None):
+    """The CLI's entry: checks every option (paths, rate, port, the extra) before the run starts."""
+    if not live:
+        if rate != 1.0:
+            raise ViewError("--rate applies to --live only")
+        if port != 8765:
+            raise ViewError("--port applies to --live only")
+    elif not 0 <= port <= 65535:
+        raise ViewError(f"--port: expected 0..65535, found {port}")
+    if force and mcap is None:
+        raise ViewError("--force applies to --mcap only")
+    if mcap is None and not live:
+        return _NoViews()
+    return Views(scenario, planner_name, mcap=mcap, force=force, live=live, rate=rate, port=port, announce=announce)
+
+
+def check_failures_option(folder: Path | str) -> Path:
+    """``viapath bench --mcap-failures DIR``: the extra is installed and DIR can take files."""
+    _foxglove()
+    return check_output_folder(folder)
