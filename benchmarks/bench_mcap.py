@@ -10,13 +10,16 @@ Each scenario runs once to warm up (imports, numba), then ``repeats`` times each
 planner's.
 A scenario ``NAME:laser`` runs with laser perception; ``zara01`` is 20 s among replayed ETH/UCY
 people (crowds_zara01.txt; skipped when the data folder is absent). Printed: median wall time of
-each, the overhead in per cent, the file size and the messages per second of simulated time.
+each; the MCAP run's overhead over the plain one in wall time and in CPU time of the process (all
+threads; steadier than wall time on a shared machine), the part of it that is the planner keeping its
+candidates, the extra milliseconds per cycle, the file size and the 1-minute load average.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import statistics
 import tempfile
@@ -53,26 +56,33 @@ def measure(name: str, repeats: int, folder: Path) -> dict | None:
         return None
     perception = mode or "oracle"
     run_episode(scenario, perception=perception)  # warm-up
-    plain, candidates, mcap, cycles, size = [], [], [], 0, 0
+    wall = {"plain": [], "candidates": [], "mcap": []}
+    cpu = {"plain": [], "candidates": [], "mcap": []}
     overrides = display_overrides(scenario, scenario.planner.name)
+    cycles, size = 0, 0
+
+    def timed(kind, run):
+        wall_start, cpu_start = time.perf_counter(), time.process_time()
+        result = run()
+        wall[kind].append(time.perf_counter() - wall_start)
+        cpu[kind].append(time.process_time() - cpu_start)  # all threads of the process (the writer's too)
+        return result
     for k in range(repeats):
-        started = time.perf_counter()
-        episode = run_episode(scenario, perception=perception)
-        plain.append(time.perf_counter() - started)
-        started = time.perf_counter()
-        run_episode(scenario, perception=perception, planner_overrides=overrides)
-        candidates.append(time.perf_counter() - started)
+        episode = timed("plain", lambda: run_episode(scenario, perception=perception))
+        timed("candidates", lambda: run_episode(scenario, perception=perception, planner_overrides=overrides))
         file = folder / f"{base}-{k}.mcap"
-        started = time.perf_counter()
-        recorded = record_episode(scenario, file, perception=perception, force=True)
-        mcap.append(time.perf_counter() - started)
+        recorded = timed("mcap", lambda: record_episode(scenario, file, perception=perception, force=True))
         cycles, size = len(recorded.trace.times_s) - 1, file.stat().st_size
         assert len(episode.trace.times_s) == len(recorded.trace.times_s)
-    p, m, c = statistics.median(plain), statistics.median(mcap), statistics.median(candidates)
-    return {"scenario": name, "perception": perception, "cycles": cycles, "plain_s": plain, "mcap_s": mcap,
-            "candidates_s": candidates, "plain_median_s": p, "mcap_median_s": m, "candidates_median_s": c,
+    med = {kind: statistics.median(values) for kind, values in wall.items()}
+    med_cpu = {kind: statistics.median(values) for kind, values in cpu.items()}
+    p, m, c = med["plain"], med["mcap"], med["candidates"]
+    return {"scenario": name, "perception": perception, "cycles": cycles, "wall_s": wall, "cpu_s": cpu,
+            "plain_median_s": p, "mcap_median_s": m, "candidates_median_s": c,
             "overhead_percent": 100.0 * (m - p) / p, "candidates_overhead_percent": 100.0 * (c - p) / p,
-            "mcap_ms_per_cycle": 1e3 * (m - p) / max(cycles, 1), "file_bytes": size}
+            "cpu_overhead_percent": 100.0 * (med_cpu["mcap"] - med_cpu["plain"]) / med_cpu["plain"],
+            "mcap_ms_per_cycle": 1e3 * (m - p) / max(cycles, 1), "file_bytes": size,
+            "load_average_1min": os.getloadavg()[0]}
 
 
 def main() -> None:
@@ -93,12 +103,13 @@ def main() -> None:
         print(json.dumps({"python": platform.python_version(), "repeats": args.repeats, "results": results}))
         return
     print(f"python {platform.python_version()}, {platform.machine()}, {args.repeats} repeats each (medians)")
-    print(f"{'scenario':20s} {'cycles':>6s} {'plain s':>8s} {'cand. s':>8s} {'mcap s':>8s} {'overhead':>9s} "
-          f"{'of which cand.':>15s} {'ms/cycle':>9s} {'file':>9s}")
+    print(f"{'scenario':18s} {'cycles':>6s} {'plain s':>8s} {'cand. s':>8s} {'mcap s':>8s} {'wall +':>8s} "
+          f"{'cand. +':>8s} {'CPU +':>7s} {'ms/cycle':>9s} {'file':>8s} {'load':>5s}")
     for r in results:
-        print(f"{r['scenario']:20s} {r['cycles']:6d} {r['plain_median_s']:8.2f} {r['candidates_median_s']:8.2f} "
-              f"{r['mcap_median_s']:8.2f} {r['overhead_percent']:8.1f}% {r['candidates_overhead_percent']:14.1f}% "
-              f"{r['mcap_ms_per_cycle']:9.2f} {r['file_bytes'] / 1e6:7.2f} MB")
+        print(f"{r['scenario']:18s} {r['cycles']:6d} {r['plain_median_s']:8.2f} {r['candidates_median_s']:8.2f} "
+              f"{r['mcap_median_s']:8.2f} {r['overhead_percent']:7.1f}% {r['candidates_overhead_percent']:7.1f}% "
+              f"{r['cpu_overhead_percent']:6.1f}% {r['mcap_ms_per_cycle']:9.2f} {r['file_bytes'] / 1e6:6.2f}MB "
+              f"{r['load_average_1min']:5.1f}")
 
 
 if __name__ == "__main__":

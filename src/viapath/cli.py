@@ -90,6 +90,9 @@ def run(
         spec = load_scenario(scenario)
     except ScenarioError as error:
         _fail(str(error))
+    from viapath.cli_extras import animation_progress, print_warnings
+
+    print_warnings(spec, errors)
     planner_name = planner or spec.planner.name
     if planner_name not in available_planners():
         where = "--planner" if planner else f"{scenario}: planner.name"
@@ -127,10 +130,13 @@ def run(
     if animate is not None:
         from viapath.viz.animate import animate_episode
 
+        progress, done = animation_progress(errors)
         try:
-            animate_episode(episode, animate)
+            animate_episode(episode, animate, progress=progress)
         except (RuntimeError, ValueError) as error:
             _fail(str(error))
+        finally:
+            done()
 
     if as_json:
         print(json.dumps(episode.metrics, allow_nan=False))
@@ -224,7 +230,7 @@ def _register_plugins() -> None:
     """Commands that live beside their subsystem (laser scans, benchmark)."""
     import importlib
 
-    for module in ("viapath.commands.scans", "viapath.bench.commands"):
+    for module in ("viapath.commands.scans", "viapath.bench.commands", "viapath.ros2.commands"):
         try:
             spec = importlib.util.find_spec(module)
         except ModuleNotFoundError:
@@ -234,6 +240,7 @@ def _register_plugins() -> None:
 
 
 _register_plugins()
+__import__("viapath.cli_extras").cli_extras.install(app)  # --version, plain flags (issue 12)
 
 
 def main() -> None:  # pragma: no cover

@@ -70,7 +70,10 @@ def test_table_aggregates_match_the_rows(tmp_path, small_suite):
         assert entry["time_ratio_median"] == pytest.approx(np.median(ratios))
         assert entry["max_lateral_deviation_m"] == pytest.approx(max(r["max_lateral_deviation_m"] for r in mine))
         assert entry["min_clearance_m"] == pytest.approx(min(r["min_clearance_m"] for r in mine))
-    assert summary["follow"]["collision_rate"] == 1.0  # every generated person meets a non-reacting robot here
+    # Every generated person meets a robot that does not avoid; since the guarded entry (issue 12) even
+    # follow stops short of someone inside its stopping distance, but people still walk into it.
+    assert summary["follow"]["collision_rate"] >= 0.6
+    assert summary["follow"]["collision_rate"] > summary["vo"]["collision_rate"]
     saved = json.loads((tmp_path / "summary.json").read_text())
     assert [s["planner"] for s in saved] == ["vo", "follow"]
     assert "| vo |" in (tmp_path / "summary.md").read_text()

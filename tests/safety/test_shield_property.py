@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from _brute import brute_admissible, window_grid
+from tests.safety._brute import brute_admissible, window_grid
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.safety import Shield, ShieldConfig
 

@@ -44,7 +44,20 @@ def _trace(speeds, turns, plan_speeds=None, sides=None):
 def test_constant_speed_has_no_acceleration_jerk_or_turning():
     m = smoothness_metrics(_trace(np.full(50, 0.2), np.zeros(50)))
     assert m == {"max_abs_accel_mps2": 0.0, "max_abs_jerk_mps3": 0.0, "max_abs_turn_rate_radps": 0.0,
-                 "steering_reversals": 0, "plan_switches": 0, "plan_side_flips": 0}
+                 "steering_reversals": 0, "plan_switches": 0, "plan_side_flips": 0, "command_flips": 0,
+                 "escape_cycles": 0}
+
+
+def test_command_flips_count_speed_jumps_and_turn_reversals_against_brute_force():
+    from viapath.sim.metrics import command_flips
+
+    rng = np.random.default_rng(3)
+    commands = np.column_stack([rng.choice([0.0, 0.1, 0.5, 0.6], 200), rng.choice([-2.0, -0.3, 0.0, 0.4, 2.0], 200)])
+    expected = 0
+    for (v0, w0), (v1, w1) in zip(commands[:-1], commands[1:]):
+        expected += abs(v1 - v0) >= 0.25 or (w0 * w1 < 0 and abs(w0) >= 0.5 and abs(w1) >= 0.5)
+    assert command_flips(commands) == expected > 0
+    assert command_flips(np.tile([[0.3, 1.0]], (20, 1))) == 0
 
 
 def test_linear_ramp_has_constant_accel_and_jerk_only_at_its_ends():

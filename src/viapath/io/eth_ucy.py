@@ -31,7 +31,8 @@ def load_tracks(file: str | Path, dt_s: float) -> list[PedestrianTrack]:
     try:
         table = np.loadtxt(path, ndmin=2)
     except OSError as error:
-        raise FileNotFoundError(f"{path}: cannot read trajectory file: {error}") from None
+        where = path if path.is_absolute() else f"{path} (resolved: {path.resolve()})"
+        raise FileNotFoundError(f"{where}: cannot read trajectory file: {error.strerror or error}") from None
     except ValueError as error:
         raise ValueError(f"{path}: expected 4 numeric columns 'frame ped_id x y': {error}") from None
     if table.shape[1] != 4:

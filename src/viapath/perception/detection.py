@@ -109,18 +109,43 @@ class Detections:
         return Detections(centres, self.radii_m, self.position_sigma_m, self.leg_count, self.segments, legs, self.fused)
 
 
+def checked_scans(scanners, scans) -> list[np.ndarray]:
+    """One float array per scanner, checked: one scan per scanner, in order (``None`` for a scanner
+    with no reading this cycle, e.g. a dropped message: all its beams count as invalid), each with
+    the scanner's beam count. Anything else raises :class:`~viapath.observation.ObservationError`
+    naming the scan and the scanner (issue 12: bad input never becomes motion)."""
+    from viapath.observation import ObservationError
+
+    names = ", ".join(repr(s.name) for s in scanners)
+    try:
+        scans = list(scans)
+    except TypeError:
+        raise ObservationError(f"scans: expected a list of {len(scanners)} scans ({names}), "
+                               f"found {type(scans).__name__}") from None
+    if len(scans) != len(scanners):
+        raise ObservationError(f"scans: expected {len(scanners)} scans, one per scanner ({names}) in that order, "
+                               f"found {len(scans)}; pass None for a scanner without a reading this cycle")
+    parts = []
+    for i, (scanner, ranges) in enumerate(zip(scanners, scans, strict=True)):
+        if ranges is None:
+            parts.append(np.full(scanner.beam_count, np.nan))
+            continue
+        try:
+            ranges = np.asarray(ranges, dtype=float)
+        except (TypeError, ValueError):
+            raise ObservationError(f"scans[{i}] (scanner {scanner.name!r}): expected {scanner.beam_count} numbers") from None
+        if ranges.ndim != 1 or len(ranges) != scanner.beam_count:
+            raise ObservationError(f"scans[{i}] (scanner {scanner.name!r}): expected {scanner.beam_count} ranges "
+                                   f"(its beam count), found shape {ranges.shape}")
+        parts.append(ranges)
+    return parts
+
+
 def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detections:
     """Detect round obstacles in the scans of ``scanners`` (readings may encode invalid as 0/NaN/inf)."""
     scanners = tuple(scanners)
     layout = _beam_layout(scanners)
-    if len(scans) != len(scanners):
-        raise ValueError(f"{len(scanners)} scanners but {len(scans)} scans")
-    parts = []
-    for scanner, ranges in zip(scanners, scans, strict=True):
-        ranges = np.asarray(ranges, dtype=float).reshape(-1)
-        if len(ranges) != scanner.beam_count:
-            raise ValueError(f"scanner {scanner.name!r} has {scanner.beam_count} beams, scan has {len(ranges)}")
-        parts.append(ranges)
+    parts = checked_scans(scanners, scans)
     ranges = sanitize_ranges(np.concatenate(parts), 0.0)
     ranges[(ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = np.nan
     segments = segment_beams(ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index,

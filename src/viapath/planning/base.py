@@ -22,6 +22,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from viapath.guard import guard_plan
 from viapath.kinematics import steer_towards
 from viapath.observation import Command, MotionLimits, Observation, Obstacles
 from viapath.options import Option, OptionSet, Settings
@@ -121,6 +122,8 @@ class Planner:
         if name:
             cls.name = name
             PLANNERS.add(name, cls)
+        if "plan" in cls.__dict__:  # every planner's cycle goes through the guarded entry (viapath.guard)
+            cls.plan = guard_plan(cls.__dict__["plan"])
 
     def __init__(
         self,
@@ -180,6 +183,9 @@ class Planner:
         robot = observation.robot
         return steer_command(robot.position[0], robot.position[1], robot.heading_rad, target, speed_mps,
                              self.limits, heading_gain)
+
+
+Planner.plan = guard_plan(Planner.plan)  # the template is the entry of every planner: guarded too
 
 
 def steer_command(x: float, y: float, heading_rad: float, target, speed_mps: float, limits: MotionLimits,

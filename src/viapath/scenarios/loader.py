@@ -16,6 +16,29 @@ _BUILTIN_PACKAGE = "viapath.scenarios.builtin"
 _UNION_TAGS = {"moving", "replay"}
 
 
+class _DuplicateKey(yaml.YAMLError):
+    def __init__(self, key, line: int, first_line: int):
+        super().__init__(f"duplicate key {key!r}")
+        self.key, self.line, self.first_line = key, line, first_line
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, refusing a mapping that gives a key twice (PyYAML keeps the last silently)."""
+
+    def construct_mapping(self, node, deep=False):
+        seen: dict = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            try:
+                hash(key)
+            except TypeError:
+                continue  # the base class reports unhashable keys
+            if key in seen:
+                raise _DuplicateKey(key, key_node.start_mark.line + 1, seen[key])
+            seen[key] = key_node.start_mark.line + 1
+        return super().construct_mapping(node, deep=deep)
+
+
 class ScenarioError(ValueError):
     """A scenario that cannot be used; the message names the file, the field and what was expected."""
 
@@ -81,7 +104,10 @@ def _planner_error(error: Exception, origin: str) -> str:
 
 def _parse(text: str, origin: str, base_dir: Path | None) -> Scenario:
     try:
-        data = yaml.safe_load(text)
+        data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+    except _DuplicateKey as error:
+        raise ScenarioError(f"{origin}: line {error.line}: duplicate key {error.key!r} (first given on line "
+                            f"{error.first_line}); each field may appear once") from None
     except yaml.YAMLError as error:
         mark = getattr(error, "problem_mark", None)
         where = f" line {mark.line + 1}, column {mark.column + 1}" if mark else ""
@@ -100,8 +126,9 @@ def _parse(text: str, origin: str, base_dir: Path | None) -> Scenario:
             replay = getattr(item, "replay", None)
             if replay is not None and not Path(replay.file).is_absolute():
                 candidate = base_dir / replay.file
-                if candidate.exists():
-                    replay.file = str(candidate)
+                if candidate.exists() or not Path(replay.file).exists():
+                    # Missing either way: name the resolved path, relative to the scenario file.
+                    replay.file = str(candidate.resolve())
     return scenario
 
 

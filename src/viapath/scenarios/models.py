@@ -23,6 +23,7 @@ from pydantic import (
 from viapath.perception.modes import PERCEPTION_MODES
 
 Point = tuple[float, float]
+MAX_STEPS = 1_000_000  # a day at 10 Hz is 864 000; more is a typo in dt_s that would hang a run (issue 12)
 Segment = tuple[Point, Point]
 
 
@@ -197,4 +198,7 @@ class Scenario(_Strict):
         duration = info.data.get("duration_s")
         if duration is not None and value > duration:
             raise ValueError(f"dt_s must not exceed duration_s ({duration} s): the episode would have no step")
+        if duration is not None and duration / value > MAX_STEPS:
+            raise ValueError(f"duration_s / dt_s = {duration / value:,.0f} steps; at most {MAX_STEPS:,} "
+                             f"(raise dt_s or shorten duration_s; the scan period is 0.1 s)")
         return value

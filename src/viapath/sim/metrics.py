@@ -61,7 +61,23 @@ def at_fault_onsets(trace, min_speed_mps: float = 0.05) -> np.ndarray:
     velocity = speeds[:, None] * np.stack([np.cos(poses[:-1, 2]), np.sin(poses[:-1, 2])], axis=1)
     towards = np.einsum("kj,knj->kn", velocity, -rel_start) > 0.0
     onset = contact & ~np.vstack([np.zeros((1, contact.shape[1]), dtype=bool), contact[:-1]])
-    return onset & towards & (speeds[:, None] > min_speed_mps)
+    # Someone who is already overlapping the robot when they appear (at t = 0, or a replayed person's
+    # first sample) did not meet a moving robot: not at fault (counted by overlapping_at_appearance).
+    return onset & towards & (speeds[:, None] > min_speed_mps) & ~overlap_on_appearance(trace)
+
+
+def overlap_on_appearance(trace) -> np.ndarray:
+    """(K-1, N): obstacle n appears in step k (k = 0, or absent the step before) already overlapping the robot."""
+    poses = trace.robot_poses
+    obstacles = trace.obstacle_positions
+    if obstacles.shape[1] == 0 or len(poses) < 2:
+        return np.zeros((max(len(poses) - 1, 0), obstacles.shape[1]), dtype=bool)
+    rel_start = poses[:-1, None, :2] - obstacles[:-1]
+    present = np.isfinite(rel_start).all(-1) & np.isfinite(obstacles[1:]).all(-1)
+    appeared = present & ~np.vstack([np.zeros((1, present.shape[1]), dtype=bool), present[:-1]])
+    with np.errstate(invalid="ignore"):
+        overlapping = np.hypot(rel_start[..., 0], rel_start[..., 1]) < trace.obstacle_radii_m[None] + trace.robot_radius_m
+    return appeared & overlapping
 
 
 def present_for(trace, seconds: float) -> np.ndarray:
@@ -91,6 +107,7 @@ def compute_metrics(trace) -> dict[str, Any]:
         "collision": bool(min_clearance < 0.0),
         "at_fault_collision": bool(np.any(faults)),
         "at_fault_collision_seen_1s": bool(np.any(faults & present_for(trace, 1.0))),
+        "overlapping_at_appearance": int(np.count_nonzero(overlap_on_appearance(trace))),
         "min_clearance_m": _finite_or_none(min_clearance),
         "time_to_goal_s": float(trace.times_s[-1]) if trace.reached_goal else None,
         "path_length_m": float(np.sum(np.hypot(*np.diff(poses, axis=0).T))),

@@ -9,7 +9,8 @@ import numpy as np
 from viapath.viz.plot import _fit_view, _matplotlib, corridor_polygons
 
 
-def animate_episode(episode, file: str | Path, fps: int = 10, max_frames: int = 400) -> Path:
+def animate_episode(episode, file: str | Path, fps: int = 10, max_frames: int = 400, progress=None) -> Path:
+    """Write the animation; ``progress(frame, total)`` is called as each frame is written."""
     plt = _matplotlib()
     from matplotlib import animation
     from matplotlib.patches import Circle, Polygon
@@ -61,12 +62,12 @@ def animate_episode(episode, file: str | Path, fps: int = 10, max_frames: int = 
 
     movie = animation.FuncAnimation(fig, update, frames=frames, blit=False)
     if file.suffix.lower() == ".gif":
-        movie.save(file, writer=animation.PillowWriter(fps=fps))
+        movie.save(file, writer=animation.PillowWriter(fps=fps), progress_callback=progress)
     elif file.suffix.lower() == ".mp4":
         if not animation.writers.is_available("ffmpeg"):
             plt.close(fig)
             raise RuntimeError("writing .mp4 needs ffmpeg on the PATH (e.g. apt-get install ffmpeg); use .gif otherwise")
-        movie.save(file, writer=animation.FFMpegWriter(fps=fps))
+        movie.save(file, writer=animation.FFMpegWriter(fps=fps), progress_callback=progress)
     else:
         plt.close(fig)
         raise ValueError(f"{file}: animation must end in .gif or .mp4")

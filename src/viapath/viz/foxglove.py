@@ -31,7 +31,11 @@ What we chose:
   it alone (the layout's right-hand panel) while the main panel looks down on the world.
 * Each SceneUpdate first deletes everything its topic drew before, so a track that is gone
   disappears; static content (path, corridor) is still sent every cycle, so scrubbing to any time
-  shows it and every topic has one message per cycle.
+  shows it and every topic has one message per cycle. What never changes in its frame (footprint,
+  blind region: frame-locked to ``base``; the path for a given subgoal) is one message built once.
+* The vertex-heavy topics (``/xyt``, ``/plan/candidates``) are encoded with numpy
+  (:mod:`viapath.viz.protobuf_wire`) against the same ``foxglove.SceneUpdate`` schema; the rest
+  uses foxglove-sdk's message classes. MCAP chunks are LZ4-compressed (cheaper than zstd per cycle).
 * Readings a driver marks invalid (inf, NaN, 0, below the minimum range) are sent as NaN, which
   Foxglove leaves out.
 * JSON numbers that are not finite (no one in sight: clearance inf) are sent as ``null``.
@@ -50,7 +54,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from viapath.viz.scene import CycleScene, ForecastSettings, SceneBuilder, candidate_colour, circle_polygon
+from viapath.viz import protobuf_wire as wire
+from viapath.viz.scene import _mesh_triangles
+from viapath.viz.scene import CycleScene, ForecastSettings, SceneBuilder, candidate_colour
 
 TF = "/tf"
 FOOTPRINT = "/robot/footprint"
@@ -143,11 +149,15 @@ class FoxglovePublisher:
 
         ctx = self.context
         self.channels[TF] = FrameTransformsChannel(TF, context=ctx)
-        topics = [FOOTPRINT, TRACKS, PATH, CANDIDATES, CHOSEN, XYT]
+        topics = [FOOTPRINT, TRACKS, PATH, CHOSEN]
         if scene.scanners:
             topics[1:1] = [BLIND, DETECTIONS]
         for topic in topics:
             self.channels[topic] = SceneUpdateChannel(topic, context=ctx)
+        # Vertex-heavy topics are encoded here (viapath.viz.protobuf_wire), with Foxglove's schema.
+        scene_schema = self.m.SceneUpdate.get_schema()
+        for topic in (CANDIDATES, XYT):
+            self.channels[topic] = Channel(topic, message_encoding="protobuf", schema=scene_schema, context=ctx)
         for scanner in scene.scanners:
             self.channels[scan_topic(scanner.name)] = LaserScanChannel(scan_topic(scanner.name), context=ctx)
         for topic, schema in ((COSTS, COSTS_SCHEMA), (METRICS, METRICS_SCHEMA)):
@@ -194,10 +204,10 @@ class FoxglovePublisher:
             ch[DETECTIONS].log(self._detections(scene, stamp), log_time=ns)
         ch[TRACKS].log(self._tracks(scene, stamp), log_time=ns)
         ch[PATH].log(self._path(scene), log_time=ns)
-        ch[CANDIDATES].log(self._candidates(scene, stamp), log_time=ns)
+        ch[CANDIDATES].log(self._candidates(scene, ns), log_time=ns)
         ch[CHOSEN].log(self._chosen(scene, stamp), log_time=ns)
         ch[COSTS].log(json.dumps(costs_message(scene), allow_nan=False).encode(), log_time=ns)
-        ch[XYT].log(self._xyt(scene, stamp), log_time=ns)
+        ch[XYT].log(self._xyt(scene, stamp, ns), log_time=ns)
         ch[METRICS].log(json.dumps(metrics_message(scene), allow_nan=False).encode(), log_time=ns)
         self.cycles += 1
 
@@ -219,6 +229,8 @@ class FoxglovePublisher:
         }
         self.identity = self._pose()
         self.delete_all = m.SceneEntityDeletion(type=m.SceneEntityDeletionType.All)
+        self.wire = {"identity": self.identity.encode(), "delete_all": self.delete_all.encode(),
+                     **{name: colour.encode() for name, colour in self.colours.items()}}
         self.static: dict[Any, Any] = {}
         self.candidate_colours: dict[int, Any] = {}
 
@@ -350,24 +362,28 @@ class FoxglovePublisher:
             })
         return self.static[key]
 
-    def _candidates(self, scene: CycleScene, stamp):
+    def _candidates(self, scene: CycleScene, ns: int) -> bytes:
         plan = scene.plan
         costs = plan.candidate_costs
         lines = []
         if plan.candidate_polylines:
             finite = costs[np.isfinite(costs)] if len(costs) else costs
             low, high = (float(finite.min()), float(finite.max())) if len(finite) else (0.0, 0.0)
-            m = self.m
+            identity = self.wire["identity"]
             for i, line in enumerate(plan.candidate_polylines):
                 cost = float(costs[i]) if i < len(costs) else math.inf
-                # Colours in 16 steps of E, made once each.
+                # Colours in 16 steps of E, encoded once each.
                 u = -1 if not math.isfinite(cost) else int(round(15 * (0 if high <= low else (cost - low) / (high - low))))
                 colour = self.candidate_colours.get(u)
                 if colour is None:
-                    rgba = candidate_colour(low + (u / 15) * (high - low) if u >= 0 else math.inf, low, high if u >= 0 else low)
-                    colour = self.candidate_colours[u] = m.Color(r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3])
-                lines.append(self._line(self._points(line, 0.01), colour, 0.01))
-        return self._update(stamp, WORLD, "candidates", {"lines": lines})
+                    rgba = candidate_colour(low + (u / 15) * (high - low) if u >= 0 else math.inf, low,
+                                            high if u >= 0 else low)
+                    colour = self.candidate_colours[u] = self.m.Color(r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3]).encode()
+                xyz = np.empty((len(line), 3))
+                xyz[:, :2], xyz[:, 2] = line, 0.01
+                lines.append(wire.line_primitive(xyz, colour, identity, 0.01))
+        entity = wire.scene_entity(ns, WORLD, "candidates", lines=lines)
+        return wire.scene_update([self.wire["delete_all"]], [entity])
 
     def _chosen(self, scene: CycleScene, stamp):
         m, c = self.m, self.colours
@@ -381,34 +397,66 @@ class FoxglovePublisher:
             "lines": [self._line(self._points(line, 0.02), c["chosen"], 0.04)], "spheres": spheres,
             "texts": [self._text(tx, ty, 0.3, f"{plan.status} {plan.speed_mps:.2f} m/s", c["chosen_text"])]})
 
-    def _xyt(self, scene: CycleScene, stamp):
-        m, c = self.m, self.colours
+    def _xyt(self, scene: CycleScene, stamp, ns: int) -> bytes:
+        m, c, w = self.m, self.colours, self.wire
         xyt = scene.xyt
         scale = xyt.settings.time_scale_m_per_s
+        stretch = np.array([1.0, 1.0, scale])
         segments = self.xyt_segments
+        identity = w["identity"]
         entities = []
-        for i, person in enumerate(xyt.persons):
-            vertices, triangles = xyt.mesh_indexed(i, segments)
-            vertices = vertices * (1.0, 1.0, scale)
-            points = self._points3(vertices)
-            rings = [self._line(points[r * segments:(r + 1) * segments], c["ring"], 0.01, loop=True)
-                     for r in range((len(points) - 2) // segments)]
-            axis = self._line(self._points3(xyt.axis_xyt(i) * (1.0, 1.0, scale)), c["axis"], 0.01)
-            entities.append(m.SceneEntity(timestamp=stamp, frame_id=XYT_FRAME, id=f"person-{person.id}", triangles=[
-                m.TriangleListPrimitive(pose=self.identity, points=points, color=c["mesh"],
-                                        indices=triangles.ravel().tolist())], lines=rings + [axis]))
+        if xyt.persons:
+            # All people at once: three rings each (0, cone cap or mid-horizon, horizon), the caps'
+            # centres, every point encoded in one numpy call and sliced per person and primitive.
+            rings = xyt.all_rings(segments) * stretch  # (P, 3, S, 3)
+            count = len(rings)
+            caps = rings[:, [0, 2]].mean(axis=2)  # (P, 2, 3)
+            vertices = np.concatenate([rings.reshape(count, 3 * segments, 3), caps], axis=1)  # (P, V, 3)
+            per_person = vertices.shape[1]
+            mesh_points = wire.points_field(2, vertices.reshape(-1, 3))
+            line_points = wire.points_field(5, rings.reshape(-1, 3))
+            axes = np.stack([rings[:, 0].mean(axis=1), rings[:, 2].mean(axis=1)], axis=1)  # (P, 2, 3)
+            axis_points = wire.points_field(5, axes.reshape(-1, 3))
+            key = ("xyt-parts", segments)
+            if key not in self.static:
+                self.static[key] = (
+                    wire.message_field(1, identity),  # mesh: pose
+                    wire.message_field(3, w["mesh"]) + wire.fixed32_packed_field(5, wire_triangles(segments)),
+                    wire.varint_field(1, wire.LINE_LOOP) + wire.message_field(2, identity) + wire.double_field(3, 0.01),
+                    wire.message_field(6, w["ring"]),
+                    wire.varint_field(1, wire.LINE_STRIP) + wire.message_field(2, identity) + wire.double_field(3, 0.01),
+                    wire.message_field(6, w["axis"]),
+                )
+            mesh_head, mesh_tail, ring_head, ring_tail, axis_head, axis_tail = self.static[key]
+            point_size, ring_size = 29, 29 * segments
+            for i, person in enumerate(xyt.persons):
+                start = i * per_person * point_size
+                mesh = mesh_head + mesh_points[start:start + per_person * point_size] + mesh_tail
+                lines = []
+                for r in range(3):
+                    begin = (i * 3 + r) * ring_size
+                    lines.append(ring_head + line_points[begin:begin + ring_size] + ring_tail)
+                lines.append(axis_head + axis_points[i * 2 * point_size:(i + 1) * 2 * point_size] + axis_tail)
+                entities.append(wire.scene_entity(ns, XYT_FRAME, f"person-{person.id}", lines=lines,
+                                                  triangles=[mesh]))
         x, y = scene.robot_pose[:2].tolist()
         horizon = xyt.settings.horizon_s
-        ticks = [self._text(x - 0.3, y, t * scale, f"{t:g} s", c["grey"], 11.0)
-                 for t in (0.0, 0.5 * horizon, horizon)]
+        ticks = [self._text(x - 0.3, y, t * scale, f"{t:g} s", c["grey"], 11.0) for t in (0.0, 0.5 * horizon, horizon)]
         size = m.Vector3(x=0.1, y=0.1, z=0.1)
         spheres = [m.SpherePrimitive(pose=self._pose(px, py, pt * scale), size=size, color=c["via"])
                    for px, py, pt in xyt.via_points_xyt.tolist()]
-        entities.append(m.SceneEntity(timestamp=stamp, frame_id=XYT_FRAME, id="robot-plan", lines=[
-            self._line(self._points3(xyt.plan_xyt * (1.0, 1.0, scale)), c["chosen"], 0.04),
-            self._line([self._p(x, y, 0.0), self._p(x, y, horizon * scale)], c["time_axis"], 0.01),
-        ], spheres=spheres, texts=ticks, cylinders=[self._disc(x, y, scene.robot_radius_m, c["robot_fill"])]))
-        return m.SceneUpdate(deletions=[self.delete_all], entities=entities)
+        others = m.SceneEntity(spheres=spheres, texts=ticks,
+                               cylinders=[self._disc(x, y, scene.robot_radius_m, c["robot_fill"])]).encode()
+        entities.append(wire.scene_entity(ns, XYT_FRAME, "robot-plan", lines=[
+            wire.line_primitive(xyt.plan_xyt * stretch, w["chosen"], identity, 0.04),
+            wire.line_primitive(np.array([[x, y, 0.0], [x, y, horizon * scale]]), w["time_axis"], identity, 0.01),
+        ], other=others))
+        return wire.scene_update([w["delete_all"]], entities)
+
+
+def wire_triangles(segments: int) -> np.ndarray:
+    """Vertex indices of a three-ring cylinder with both caps (as :meth:`XYTScene.mesh_indexed`)."""
+    return _mesh_triangles(3, segments)
 
 
 def _finite(value) -> float | None:

@@ -151,6 +151,31 @@ class XYTScene:
         vertices = np.concatenate([rings.reshape(-1, 3), rings[[0, -1]].mean(axis=1)])
         return vertices, _mesh_triangles(count, segments)
 
+    def all_rings(self, segments: int = 24) -> np.ndarray:
+        """Every person's cylinder as three rings each, (P, 3, segments, 3) in x, y, t, in one go:
+        at 0, where the cone stops growing (or half the horizon when it does not within it), and at
+        the horizon. Between them the surface is ruled, so these rings describe it exactly."""
+        count = len(self.persons)
+        if count == 0:
+            return np.zeros((0, 3, segments, 3))
+        settings = self.settings
+        horizon = settings.horizon_s
+        position = np.array([p.position for p in self.persons])
+        velocity = np.array([p.velocity for p in self.persons])
+        combined = np.array([p.combined_radius_m for p in self.persons])
+        growth = settings.uncertainty_sigmas * np.array([p.velocity_sigma_mps for p in self.persons]) if self.cone \
+            else np.zeros(count)
+        with np.errstate(divide="ignore"):
+            cap = np.where(growth > 0, settings.max_inflation_m / np.where(growth > 0, growth, 1.0), np.inf)
+        middle = np.where((cap > 0) & (cap < horizon), cap, 0.5 * horizon)
+        times = np.column_stack([np.zeros(count), middle, np.full(count, horizon)])  # (P, 3)
+        radii = combined[:, None] + np.minimum(growth[:, None] * times, settings.max_inflation_m)
+        centres = position[:, None, :] + times[..., None] * velocity[:, None, :]  # (P, 3, 2)
+        out = np.empty((count, 3, segments, 3))
+        out[..., :2] = centres[:, :, None, :] + radii[:, :, None, None] * _unit_circle(segments)
+        out[..., 2] = times[:, :, None]
+        return out
+
     def mesh(self, index: int, segments: int = 24) -> np.ndarray:
         """Triangles (T, 3, 3) in x, y, t of person ``index``'s oblique cylinder: side and both caps."""
         vertices, triangles = self.mesh_indexed(index, segments)
@@ -282,9 +307,9 @@ class SceneBuilder:
         if _shield_intervened(extras):
             self.shield_interventions += 1
         scanners, detections, radii, points, sectors, blind = _perception_parts(perception)
-        xyt = XYTScene(self.settings, _persons(tracks, self.robot_radius_m),
-                       plan_xyt(pose[:2], plan, self.settings.horizon_s),
-                       _via_xyt(pose[:2], plan, self.settings.horizon_s), self.cone)
+        horizon = self.settings.horizon_s
+        xyt = XYTScene(self.settings, _persons(tracks, self.robot_radius_m), plan_xyt(pose[:2], plan, horizon),
+                       _via_xyt(pose[:2], plan, horizon), self.cone)
         people = true_people if true_people is not None else tracks
         series = {
             "speed_mps": float(robot_speed_mps),
@@ -357,12 +382,14 @@ def _clip_to_horizon(xyt: np.ndarray, horizon_s: float) -> np.ndarray:
     return np.vstack([xyt[: last + 1], a + fraction * (b - a)])
 
 
-def _via_xyt(robot_position, plan, horizon_s: float) -> np.ndarray:
-    """The via points at the times the plan passes them (those past the horizon left out)."""
+def _via_xyt(robot_position, plan, horizon_s: float, line: np.ndarray | None = None) -> np.ndarray:
+    """The via points at the times the plan passes them (those past the horizon left out);
+    ``line``: the plan's whole (x, y, t) polyline when already computed."""
     via = np.asarray(plan.via_points, dtype=float).reshape(-1, 2)
     if len(via) == 0:
         return np.zeros((0, 3))
-    line = plan_xyt(robot_position, plan, np.inf)
+    if line is None:
+        line = plan_xyt(robot_position, plan, np.inf)
     rows = []
     for point in via:
         distance = np.hypot(*(line[:, :2] - point).T)

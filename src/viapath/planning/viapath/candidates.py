@@ -235,7 +235,8 @@ def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: 
     # The radius grows with prediction uncertainty; evaluate it near the expected passing time.
     reach_time = np.hypot(*(centre_now - starts).T) / speeds
     passing_time = np.minimum(times + reach_time, checks.growth_until_s[obstacle_index])
-    radius = checks.via_radii[obstacle_index] + checks.growth[obstacle_index] * passing_time
+    radius = (checks.via_radii[obstacle_index] + checks.growth[obstacle_index] * passing_time
+              + checks.envelope_m(speeds))
     # A node already closer than that (after passing on a previous leg) goes round tangentially.
     distance = np.hypot(*(centre_now - starts).T)
     radius = np.maximum(np.minimum(radius, 0.98 * distance), 0.0)

@@ -51,6 +51,18 @@ class LegChecks:
     continuation: tuple[np.ndarray, float] | None  # direction and length of the segment after the subgoal
     corridor_tolerance_m: float
     corridor_check_spacing_m: float
+    # With a shield behind the planner: via points keep the robot's braking envelope from a person
+    # too, (person_accel / 2)·(period + v / max_accel)², so the pass they offer is one the shield admits.
+    envelope_accel_mps2: float = 0.0
+    envelope_period_s: float = 0.0
+    max_accel_mps2: float = 1.0
+
+    def envelope_m(self, speeds: np.ndarray) -> np.ndarray:
+        """How much further out a via point at ``speeds`` must lie for the robot to stop in time."""
+        if self.envelope_accel_mps2 <= 0:
+            return np.zeros(np.shape(speeds))
+        stop_s = self.envelope_period_s + np.asarray(speeds) / self.max_accel_mps2
+        return 0.5 * self.envelope_accel_mps2 * stop_s ** 2
 
     @classmethod
     def of(cls, situation: Situation, config, tracker: SubgoalTracker, policy: SubgoalPolicy,

@@ -26,7 +26,7 @@ What the paper leaves open and we chose, beyond what those modules say:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import numpy as np
 
 from viapath.geometry import wrap_angle
@@ -72,6 +72,9 @@ class ViaPathPlanner(Planner, name="viapath"):
     def decide(self, situation: Situation) -> Decision:
         self._situation = situation
         checks = LegChecks.of(situation, self.config, self.subgoals, self.subgoal_policy, self.robot_radius_m)
+        if self.shield is not None and self.shield.config.enabled:
+            checks = replace(checks, envelope_accel_mps2=self.shield.config.person_accel_mps2,
+                             envelope_period_s=self.shield.dt_s, max_accel_mps2=self.limits.max_accel_mps2)
         speeds, nominal_index = self.speed_set(situation.robot.speed_mps)
         chosen = self._choose(checks, speeds, nominal_index, self._previous)
         if chosen is None:

@@ -1,0 +1,314 @@
+"""The guarded entry of every planner: bad input never becomes motion (issue 12; DESIGN §4, §7).
+
+Every planner's ``plan`` is wrapped by :func:`guard_plan` (the planner base does it for each
+subclass, plug-ins and navground peers included), so each cycle goes:
+
+1. **Structure** (:func:`inspect_observation`): an observation whose fields have the wrong shape or
+   type cannot be read at all and raises :class:`ObservationError`, naming the field, e.g.
+   ``obstacles.positions: expected an (N, 2) array of [x, y] rows, found shape (2, 5)``. This is the
+   only exception bad input makes (the same class is raised when :class:`~viapath.observation.Obstacles`
+   is built with wrong shapes).
+2. **Values**, checked once, each problem named by field and index:
+
+   * the robot state (position, heading, speed, turn rate, radius) or the time is not finite, or
+     beyond its bound (``max_coordinate_m``, ``max_heading_rad``, ``max_state_speed_mps``,
+     ``max_state_turn_rate_radps``: values no odometry reports): the robot is told to **stop** (v = 0, ω = 0: with the
+     drive's acceleration limits that is the hardest braking within the limits); the planner is not
+     called, the decision's ``plan.status`` is ``"guard-stop"`` and ``plan.extras["guard"]`` lists why;
+   * an obstacle's **position** is not finite: something is there and we do not know where, so the
+     robot stops too (the same status). Dropping it would be the one thing never to do;
+   * an obstacle with a known position and a bad **velocity** (NaN, inf, faster than
+     ``max_obstacle_speed_mps``) is **kept** standing still with the largest velocity uncertainty
+     ``max_velocity_sigma_mps`` (a planner under uncertainty grows it into a cone in every
+     direction); a bad **radius** (NaN, inf, negative) becomes ``default_radius_m`` (a person), one
+     above ``max_radius_m`` is cut to it; a bad **σ** (NaN, inf, negative, above the largest) becomes
+     the largest σ. The planner sees the repaired obstacles; ``plan.extras["guard"]`` lists each repair.
+3. **The command** (:func:`check_command`): it must be finite and inside the limits
+   (0 ≤ v ≤ ``max_speed_mps``, |ω| ≤ ``max_turn_rate_radps``), else it becomes a stop
+   (``"guard-stop"``). A command that moves the robot towards an obstacle within its stopping
+   distance keeps its turn rate but its speed becomes 0 (``"guard-brake"``): turning on the spot
+   moves no part of a round robot towards anyone. "Within stopping distance": holding the command
+   for one control period and then braking at the limits (:func:`braking_path`, stepped with the
+   drive model of :mod:`viapath.kinematics`) the robot would touch the obstacle *as it stands now*
+   (radius + ``brake_margin_m``), and the first step brings it nearer. A robot passing beside a
+   person is not braked (braking in front of someone walking at you is worse than passing). This is a last line, not the shield of DESIGN §7: it knows nothing of
+   where people go, only that the robot must not be the one closing in.
+
+Choices where the issue is silent: the largest σ and the default radius are configuration
+(:class:`GuardConfig`), not the largest value seen this cycle, so one bad track cannot make the
+others look safer or worse; a time that is not finite stops the robot too (planners use it for their
+period); a speed above the motion limits but below ``max_state_speed_mps`` in the *state* (odometry) is
+not an error: the command check brakes from it.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from viapath.kinematics import UnicycleState, step
+from viapath.observation import Command, MotionLimits, Observation, ObservationError, Obstacles, RobotState
+
+__all__ = ["GuardConfig", "Inspection", "ObservationError", "check_command", "guard_plan", "inspect_observation",
+           "stopping_distance_m"]
+
+
+@dataclass(frozen=True)
+class GuardConfig:
+    default_radius_m: float = 0.3  # a person, for an obstacle whose radius is unknown
+    max_radius_m: float = 10.0
+    max_velocity_sigma_mps: float = 1.0  # unknown velocity / bad velocity σ: a person may walk any way at ~1 m/s
+    max_position_sigma_m: float = 0.5
+    max_obstacle_speed_mps: float = 10.0
+    max_coordinate_m: float = 1e6
+    max_heading_rad: float = 1e6  # beyond, float steps of the angle are too coarse to steer by
+    max_state_speed_mps: float = 50.0  # odometry beyond these is a sensor fault, not a robot state
+    max_state_turn_rate_radps: float = 100.0
+    control_period_s: float = 0.1  # the scan period (DESIGN §2): how long a command is held
+    brake_margin_m: float = 0.02
+    tolerance: float = 1e-9
+
+
+DEFAULT_CONFIG = GuardConfig()
+
+
+@dataclass
+class Inspection:
+    """What :func:`inspect_observation` found: the observation to plan with (repaired), or why not."""
+
+    observation: Observation | None  # None: the robot must stop
+    stop_reasons: list[str] = field(default_factory=list)
+    repairs: list[str] = field(default_factory=list)
+
+
+def _show(values) -> str:
+    return "[" + ", ".join(f"{v:g}" for v in np.atleast_1d(np.asarray(values, dtype=float))) + "]"
+
+
+def _array(name: str, value, shape: tuple) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ObservationError(f"{name}: expected numbers of shape {shape}, found {value!r}"[:300]) from None
+    if array.shape != shape:
+        raise ObservationError(f"{name}: expected shape {shape}, found shape {array.shape}")
+    return array
+
+
+def _scalar(name: str, value) -> float:
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise ObservationError(f"{name}: expected a number, found {value!r}"[:300]) from None
+
+
+def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_CONFIG) -> Inspection:
+    """Check an observation once; raise :class:`ObservationError` on wrong structure, else return
+    the repaired observation or the reasons to stop (see the module docstring)."""
+    if not isinstance(observation, Observation):
+        raise ObservationError(f"observation: expected a viapath.observation.Observation, found {type(observation).__name__}")
+    robot, obstacles = observation.robot, observation.obstacles
+    if not isinstance(robot, RobotState):
+        raise ObservationError(f"robot: expected a RobotState, found {type(robot).__name__}")
+    if not isinstance(obstacles, Obstacles):
+        raise ObservationError(f"obstacles: expected an Obstacles, found {type(obstacles).__name__}")
+    stop: list[str] = []
+    repairs: list[str] = []
+
+    time_s = _scalar("time_s", observation.time_s)
+    if not math.isfinite(time_s):
+        stop.append(f"time_s: expected a finite number, found {time_s:g}")
+    position = _array("robot.position", robot.position, (2,))
+    if not (np.isfinite(position).all() and np.all(np.abs(position) <= config.max_coordinate_m)):
+        stop.append(f"robot.position: expected 2 finite numbers within ±{config.max_coordinate_m:g} m, "
+                    f"found {_show(position)}")
+    for name, bound, unit in (("heading_rad", config.max_heading_rad, "rad"),
+                              ("speed_mps", config.max_state_speed_mps, "m/s"),
+                              ("turn_rate_radps", config.max_state_turn_rate_radps, "rad/s")):
+        value = _scalar(f"robot.{name}", getattr(robot, name))
+        if not (math.isfinite(value) and abs(value) <= bound):
+            stop.append(f"robot.{name}: expected a finite number within ±{bound:g} {unit}, found {value:g}")
+    radius = _scalar("robot.radius_m", robot.radius_m)
+    if not (math.isfinite(radius) and radius > 0):
+        stop.append(f"robot.radius_m: expected a finite number > 0, found {radius:g}")
+
+    try:
+        positions = np.asarray(obstacles.positions, dtype=float)
+    except (TypeError, ValueError):
+        raise ObservationError("obstacles.positions: expected an (N, 2) array of numbers") from None
+    if positions.ndim != 2 or positions.shape[1] != 2:
+        raise ObservationError(f"obstacles.positions: expected an (N, 2) array of [x, y] rows, found shape {positions.shape}")
+    n = len(positions)
+    velocities = _array("obstacles.velocities", obstacles.velocities, (n, 2)).copy()
+    radii = _array("obstacles.radii_m", obstacles.radii_m, (n,)).copy()
+    position_sigma = _array("obstacles.position_sigma_m", obstacles.position_sigma_m, (n,)).copy()
+    velocity_sigma = _array("obstacles.velocity_sigma_mps", obstacles.velocity_sigma_mps, (n,)).copy()
+    ids = np.asarray(obstacles.ids)
+    if ids.shape != (n,):
+        raise ObservationError(f"obstacles.ids: expected shape ({n},), found shape {ids.shape}")
+
+    bad_position = ~(np.isfinite(positions).all(axis=1) & (np.abs(positions) <= config.max_coordinate_m).all(axis=1))
+    for i in np.flatnonzero(bad_position):
+        stop.append(f"obstacles.positions[{i}]: expected 2 finite numbers within ±{config.max_coordinate_m:g} m, "
+                    f"found {_show(positions[i])}; where it is is unknown: stopping")
+    speed = np.hypot(velocities[:, 0], velocities[:, 1]) if n else np.zeros(0)
+    bad_velocity = ~(np.isfinite(velocities).all(axis=1) & (speed <= config.max_obstacle_speed_mps))
+    for i in np.flatnonzero(bad_velocity & ~bad_position):
+        repairs.append(f"obstacles.velocities[{i}]: expected 2 finite numbers (speed ≤ {config.max_obstacle_speed_mps:g} "
+                       f"m/s), found {_show(velocities[i])}; kept standing with velocity σ "
+                       f"{config.max_velocity_sigma_mps:g} m/s")
+    velocities[bad_velocity] = 0.0
+    velocity_sigma[bad_velocity] = config.max_velocity_sigma_mps
+    bad_radius = ~(np.isfinite(radii) & (radii >= 0))
+    for i in np.flatnonzero(bad_radius & ~bad_position):
+        repairs.append(f"obstacles.radii_m[{i}]: expected a finite number ≥ 0, found {radii[i]:g}; "
+                       f"kept with radius {config.default_radius_m:g} m")
+    radii[bad_radius] = config.default_radius_m
+    too_big = radii > config.max_radius_m
+    for i in np.flatnonzero(too_big & ~bad_position):
+        repairs.append(f"obstacles.radii_m[{i}]: expected at most {config.max_radius_m:g} m, found {radii[i]:g}; "
+                       f"kept with radius {config.max_radius_m:g} m")
+    radii[too_big] = config.max_radius_m
+    for name, values, largest, unit in (("velocity_sigma_mps", velocity_sigma, config.max_velocity_sigma_mps, "m/s"),
+                                        ("position_sigma_m", position_sigma, config.max_position_sigma_m, "m")):
+        bad = ~(np.isfinite(values) & (values >= 0) & (values <= largest))
+        for i in np.flatnonzero(bad & ~bad_position):
+            repairs.append(f"obstacles.{name}[{i}]: expected a finite number in [0, {largest:g}] {unit}, "
+                           f"found {values[i]:g}; kept with the largest σ {largest:g} {unit}")
+        values[bad] = largest
+    if stop:
+        return Inspection(None, stop, repairs)
+    if not repairs:
+        return Inspection(observation, [], [])
+    repaired = Obstacles(positions, velocities, radii, position_sigma, velocity_sigma, ids)
+    return Inspection(Observation(time_s, robot, repaired), [], repairs)
+
+
+def stopping_distance_m(speed_mps: float, limits: MotionLimits, config: GuardConfig = DEFAULT_CONFIG) -> float:
+    """How far the robot goes holding ``speed_mps`` for one control period and then braking at the
+    limit, plus the margin."""
+    v = max(0.0, float(speed_mps))
+    return v * config.control_period_s + v * v / (2.0 * max(limits.max_accel_mps2, 1e-9)) + config.brake_margin_m
+
+
+def braking_path(robot: RobotState, command: Command, limits: MotionLimits, period_s: float,
+                 samples_per_period: int = 5) -> np.ndarray:
+    """Positions (S, 2) of the robot holding ``command`` for ``period_s`` and then commanded to stop
+    until at rest, stepped by :func:`viapath.kinematics.step` (the drive's acceleration limits), from
+    the first sample on (the current position excluded)."""
+    dt = period_s / samples_per_period
+    state = UnicycleState(float(robot.position[0]), float(robot.position[1]), float(robot.heading_rad),
+                          float(robot.speed_mps), float(robot.turn_rate_radps))
+    points = []
+    for _ in range(samples_per_period):
+        state = step(state, command, limits, dt)
+        points.append((state.x, state.y))
+    stop = Command.stop()
+    top = max(limits.max_speed_mps, abs(state.speed_mps))
+    for _ in range(min(1000, int(math.ceil(top / max(limits.max_accel_mps2 * dt, 1e-9))) + 2)):
+        if state.speed_mps <= 1e-12:
+            break
+        state = step(state, stop, limits, dt)
+        points.append((state.x, state.y))
+    return np.array(points)
+
+
+def check_command(command: Any, observation: Observation, limits: MotionLimits, robot_radius_m: float,
+                  config: GuardConfig = DEFAULT_CONFIG) -> tuple[Command, str | None, str | None]:
+    """The command to send, the status if it was replaced (``guard-stop`` / ``guard-brake``) and why."""
+    try:
+        v, w = float(command.speed_mps), float(command.turn_rate_radps)
+    except (AttributeError, TypeError, ValueError):
+        return Command.stop(), "guard-stop", f"command: expected a Command (v, ω), found {command!r}"[:300]
+    tol = config.tolerance
+    if not (math.isfinite(v) and math.isfinite(w)):
+        return Command.stop(), "guard-stop", f"command ({v:g}, {w:g}): not finite"
+    if not (-tol <= v <= limits.max_speed_mps + tol and abs(w) <= limits.max_turn_rate_radps + tol):
+        return Command.stop(), "guard-stop", (
+            f"command ({v:g} m/s, {w:g} rad/s): outside the limits 0 ≤ v ≤ {limits.max_speed_mps:g} m/s, "
+            f"|ω| ≤ {limits.max_turn_rate_radps:g} rad/s")
+    v = min(max(v, 0.0), limits.max_speed_mps)
+    w = min(max(w, -limits.max_turn_rate_radps), limits.max_turn_rate_radps)
+    obstacles = observation.obstacles
+    if v > 0 and len(obstacles):
+        robot = observation.robot
+        position = np.asarray(robot.position, dtype=float)
+        offsets = obstacles.positions - position
+        distance = np.hypot(offsets[:, 0], offsets[:, 1])
+        reach = robot_radius_m + obstacles.radii_m + config.brake_margin_m
+        # Only obstacles the robot could reach before it is at rest, at its fastest, need the roll-out.
+        near = distance - reach <= stopping_distance_m(max(limits.max_speed_mps, float(robot.speed_mps)), limits, config)
+        if near.any():
+            swept = braking_path(robot, Command(v, w), limits, config.control_period_s)
+            centres = obstacles.positions[near]
+            gaps = np.hypot(*(swept[:, None, :] - centres[None]).transpose(2, 0, 1)) - reach[near][None]
+            closer = np.hypot(*(swept[0] - centres).T) < distance[near] - 1e-12  # the first sample moves towards it
+            touches = (gaps.min(axis=0) <= 0) & closer
+            if touches.any():
+                i = int(np.flatnonzero(near)[np.argmax(touches)])
+                return Command(0.0, w), "guard-brake", (
+                    f"command ({v:g} m/s, {w:g} rad/s) closes on obstacle {i} (id {int(obstacles.ids[i])}), "
+                    f"{distance[i] - reach[i] + config.brake_margin_m:.3f} m away: braking from here would still "
+                    "reach it; speed set to 0")
+    return Command(v, w), None, None
+
+
+def _stop_decision(planner, observation: Observation, status: str, reasons: list[str], extras: dict | None = None):
+    from viapath.planning.base import Decision, Plan
+
+    try:
+        target = np.asarray(observation.robot.position, dtype=float).reshape(2).copy()
+    except Exception:  # noqa: BLE001 - the target is for display only
+        target = np.zeros(2)
+    subgoal_index = getattr(getattr(planner, "subgoals", None), "index", 1)
+    plan = Plan(status, 0.0, target, subgoal_index=subgoal_index, extras={"guard": list(reasons), **(extras or {})})
+    return Decision(Command.stop(), plan)
+
+
+def guard_plan(plan: Callable) -> Callable:
+    """Wrap a planner's ``plan(self, observation)`` with the checks of this module (idempotent; a
+    ``plan`` that calls ``super().plan`` is guarded once, at the outside)."""
+    if getattr(plan, "__viapath_guarded__", False):
+        return plan
+
+    @functools.wraps(plan)
+    def guarded(self, observation, *args, **kwargs):
+        if getattr(self, "_guard_active", False):
+            return plan(self, observation, *args, **kwargs)
+        config = getattr(self, "guard_config", DEFAULT_CONFIG)
+        inspection = inspect_observation(observation, config)
+        if inspection.observation is None:
+            return _stop_decision(self, observation, "guard-stop", inspection.stop_reasons + inspection.repairs)
+        self._guard_active = True
+        try:
+            decision = plan(self, inspection.observation, *args, **kwargs)
+        finally:
+            self._guard_active = False
+        limits = getattr(self, "limits", None) or MotionLimits()
+        radius = max(float(getattr(self, "robot_radius_m", 0.0) or 0.0), float(observation.robot.radius_m))
+        command, status, reason = check_command(getattr(decision, "command", None), inspection.observation, limits,
+                                                radius, config)
+        if status is not None:
+            plan_ = getattr(decision, "plan", None)
+            if status == "guard-stop" or plan_ is None:
+                original = getattr(plan_, "status", None)
+                return _stop_decision(self, observation, "guard-stop", inspection.repairs + [reason],
+                                      {"guard_planner_status": original})
+            plan_.extras["guard"] = inspection.repairs + [reason]
+            plan_.extras["guard_planner_status"] = plan_.status
+            plan_.status = status
+            plan_.speed_mps = 0.0
+            decision.command = command
+            return decision
+        if inspection.repairs:
+            decision.plan.extras["guard"] = list(inspection.repairs)
+        if command != decision.command:
+            decision.command = command
+        return decision
+
+    guarded.__viapath_guarded__ = True
+    return guarded

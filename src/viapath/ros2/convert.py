@@ -1,0 +1,154 @@
+"""Message conversion between ROS 2 types and viapath's arrays, and the designated path from a file.
+
+Source: REP 103 (x forward, y left, yaw counter-clockwise), REP 117 (LaserScan: NaN = erroneous,
++inf = no return), ``nav_msgs/Path``. Imports of ROS message modules are inside the functions so
+that the pure helpers (yaw, path files) work without rclpy.
+
+What we chose:
+* Yaw from a quaternion is the rotation about z (roll and pitch are ignored: a planar robot).
+* A path file is a built-in scenario name, a scenario YAML (its ``path:`` block, widths included),
+  a YAML map ``{waypoints: [[x, y], ...], half_width: w}`` / a plain YAML list of [x, y], or a CSV
+  / whitespace text of x y rows.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+
+class PathFileError(ValueError):
+    """A path file that cannot be used; the message names the file."""
+
+
+def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def quaternion_from_yaw(yaw: float) -> tuple[float, float, float, float]:
+    return 0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)
+
+
+def stamp_seconds(stamp) -> float:
+    return float(stamp.sec) + 1e-9 * float(stamp.nanosec)
+
+
+def time_msg(seconds: float):
+    from builtin_interfaces.msg import Time
+
+    t = Time()
+    seconds = max(float(seconds), 0.0)
+    t.sec = int(math.floor(seconds))
+    t.nanosec = min(int(round((seconds - t.sec) * 1e9)), 999_999_999)
+    return t
+
+
+def load_path_file(source: str) -> tuple[np.ndarray, list[float] | None]:
+    """(waypoints (N, 2), half-widths per segment or None) from ``source`` (see module notes)."""
+    from viapath.scenarios import ScenarioError, builtin_names, load_scenario
+
+    if source in builtin_names():
+        spec = load_scenario(source)
+        return np.asarray(spec.path.waypoints, dtype=float), list(spec.path.widths())
+    path = Path(source)
+    if not path.is_file():
+        raise PathFileError(f"{source}: no such path file (or built-in scenario)")
+    text = path.read_text()
+    if path.suffix.lower() in (".yaml", ".yml"):
+        import yaml
+
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as error:
+            raise PathFileError(f"{source}: not valid YAML ({error})") from None
+        if isinstance(data, dict) and "robot" in data:
+            try:
+                spec = load_scenario(path)
+            except ScenarioError as error:
+                raise PathFileError(str(error)) from None
+            return np.asarray(spec.path.waypoints, dtype=float), list(spec.path.widths())
+        widths = None
+        if isinstance(data, dict):
+            if "waypoints" not in data:
+                raise PathFileError(f"{source}: expected a 'waypoints' list of [x, y]")
+            if "half_widths" in data:
+                widths = [float(w) for w in data["half_widths"]]
+            elif "half_width" in data:
+                widths = [float(data["half_width"])] * (len(data["waypoints"]) - 1)
+            data = data["waypoints"]
+        try:
+            points = np.asarray(data, dtype=float)
+        except (TypeError, ValueError):
+            raise PathFileError(f"{source}: waypoints: expected a list of [x, y] numbers") from None
+    else:
+        try:
+            points = np.loadtxt(path, delimiter="," if "," in text else None, ndmin=2)
+        except ValueError as error:
+            raise PathFileError(f"{source}: expected rows of x y numbers ({error})") from None
+    if points.ndim != 2 or points.shape[1] != 2 or len(points) < 2 or not np.isfinite(points).all():
+        raise PathFileError(f"{source}: waypoints: expected at least two finite [x, y] points, found shape {points.shape}")
+    if widths is not None and (len(widths) != len(points) - 1 or not all(math.isfinite(w) and w > 0 for w in widths)):
+        raise PathFileError(f"{source}: half_widths: expected {len(points) - 1} positive numbers")
+    return points, widths
+
+
+def path_message(waypoints, frame_id: str, stamp):
+    from geometry_msgs.msg import PoseStamped
+    from nav_msgs.msg import Path as PathMsg
+
+    msg = PathMsg()
+    msg.header.frame_id = frame_id
+    msg.header.stamp = stamp
+    points = np.asarray(waypoints, dtype=float)
+    for k, p in enumerate(points):
+        pose = PoseStamped()
+        pose.header = msg.header
+        pose.pose.position.x, pose.pose.position.y = float(p[0]), float(p[1])
+        nxt = points[min(k + 1, len(points) - 1)] - points[max(k + 1, 1) - 1]
+        _, _, pose.pose.orientation.z, pose.pose.orientation.w = quaternion_from_yaw(math.atan2(nxt[1], nxt[0]))
+        msg.poses.append(pose)
+    return msg
+
+
+def waypoints_from_path(msg) -> np.ndarray:
+    return np.array([[p.pose.position.x, p.pose.position.y] for p in msg.poses], dtype=float).reshape(-1, 2)
+
+
+def laser_scan(frame_id: str, stamp, angle_min: float, angle_increment: float, ranges, range_min: float,
+               range_max: float, scan_time: float = 0.1):
+    from sensor_msgs.msg import LaserScan
+
+    msg = LaserScan()
+    msg.header.frame_id = frame_id
+    msg.header.stamp = stamp
+    ranges = np.asarray(ranges, dtype=np.float32)
+    msg.angle_min = float(angle_min)
+    msg.angle_increment = float(angle_increment)
+    msg.angle_max = float(angle_min + (len(ranges) - 1) * angle_increment)
+    msg.time_increment = 0.0
+    msg.scan_time = float(scan_time)
+    msg.range_min, msg.range_max = float(range_min), float(range_max)
+    msg.ranges = ranges  # numpy float32 is accepted as array('f') without a per-element copy
+    return msg
+
+
+def odometry(frame_id: str, child_frame_id: str, stamp, x: float, y: float, yaw: float, speed: float, turn_rate: float):
+    from nav_msgs.msg import Odometry
+
+    msg = Odometry()
+    msg.header.frame_id = frame_id
+    msg.header.stamp = stamp
+    msg.child_frame_id = child_frame_id
+    msg.pose.pose.position.x, msg.pose.pose.position.y = float(x), float(y)
+    _, _, msg.pose.pose.orientation.z, msg.pose.pose.orientation.w = quaternion_from_yaw(yaw)
+    msg.twist.twist.linear.x = float(speed)
+    msg.twist.twist.angular.z = float(turn_rate)
+    return msg
+
+
+def odometry_values(msg) -> tuple[float, float, float, float, float]:
+    """(x, y, yaw, forward speed, turn rate) of a ``nav_msgs/Odometry`` (twist in the child frame)."""
+    p, q, t = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist
+    return float(p.x), float(p.y), yaw_from_quaternion(q.x, q.y, q.z, q.w), float(t.linear.x), float(t.angular.z)

@@ -1,0 +1,527 @@
+"""What the ROS 2 node does each scan cycle, without ROS: inputs checked, perception, planning, safe stops.
+
+Source: DESIGN §3 (two URG-04LX, invalid readings 0 / NaN / inf), §8 (topics); the perception chain
+of :mod:`viapath.perception` (fusion, detection, tracking: the same code ``viapath run --perception
+laser`` runs) and any registered planner. The rclpy node (:mod:`viapath.ros2.node`) only converts
+messages and calls this; tests drive it directly too.
+
+What we chose where the sources are silent:
+* **A cycle** runs when every scanner that is alive has delivered a scan since the last cycle, or
+  when one scanner delivers its second scan meanwhile (the others are late: do not wait for them).
+  Scans of one cycle lie within half a cycle period of each other: an older waiting scan missed its
+  cycle and is dropped. All scans of a cycle are placed with the pose at the newest stamp
+  (unsynchronised scanners, up to 50 ms apart, put a point at most 2.5 cm off at 0.5 m/s). At
+  start the first cycle waits (up to ``scan_timeout_s``) for every scanner's first scan. The robot pose for the scans is the latest
+  odometry moved to the scan stamp along its own twist (odometry and scans are never stamped alike).
+* **Bad scans** are refused and counted per reason: wrong frame_id, a beam count or angle range
+  other than the scanner's, a stamp older than the scanner's previous one, more than
+  ``max_invalid_fraction`` of NaN / zero readings (a failing scanner; +inf is "no return" and fine).
+  A scanner with no good scan for ``scan_timeout_s`` is *silent*.
+* **All scanners silent**, or no odometry for ``odom_timeout_s``, or no path: the robot brakes to a
+  stop within its limits (the command ramps down by ``max_accel_mps2`` per cycle from the measured
+  speed) and the status says why. The watchdog runs every ``cycle_period_s``.
+* **Some scanners silent**: the cycle goes on with the others; their field of view is the one the
+  planner has, and the rest is *blind* (:func:`viapath.perception.fusion.blind_region` of the live
+  scanners). The robot never drives into a blind sector: if the directions within 30° of its heading
+  are blind beyond its body, it does not drive forward (it may turn on the spot). Otherwise the speed
+  is capped so that it comes to rest before an unseen person could reach it: someone unseen is taken
+  to be at least ``blind_clearance_m`` from the body and to walk at ``blind_person_speed_mps``, so
+  they need ``T = blind_clearance_m / blind_person_speed_mps``; the robot stops within one cycle plus
+  ``v / max_accel``, hence ``v ≤ max_accel · (T − cycle_period_s)`` (0.16 m/s with the defaults).
+  Tracks of people seen before the scanner fell silent coast for the tracker's ``max_unseen_s``.
+* **A time jump backwards** (a scan or odometry stamp earlier than the last cycle's): the tracker and
+  odometry are reset, and the robot is held stopped for ``reset_hold_s`` of the new time so that
+  tracks confirm again before it moves.
+* **Every command** is finite and inside the limits: speed in [0, max_speed_mps], turn rate in
+  ±max_turn_rate_radps, and within one cycle's acceleration of the measured speed and turn rate.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
+from viapath.path import DesignatedPath, SubgoalPolicy
+from viapath.perception.detection import DetectorParams, detect
+from viapath.perception.fusion import blind_region
+from viapath.perception.scanner import ScannerModel
+from viapath.perception.tracking import MultiTargetTracker, TrackerParams
+from viapath.planning import Decision, make_planner
+from viapath.ros2.settings import NodeSettings
+
+FORWARD_CONE_RAD = math.radians(30.0)
+
+
+@dataclass
+class ScannerHealth:
+    model: ScannerModel | None
+    expected_frame: str
+    last_good_s: float | None = None  # node clock time of the last good scan
+    last_stamp_s: float | None = None
+    pending: tuple[float, np.ndarray] | None = None  # (stamp, ranges) not yet used by a cycle
+    good: int = 0
+    refused: dict[str, int] = field(default_factory=dict)
+    last_problem: str = ""
+    invalid_fraction: float = 0.0
+
+    def refuse(self, reason: str, detail: str) -> None:
+        self.refused[reason] = self.refused.get(reason, 0) + 1
+        self.last_problem = detail
+
+
+@dataclass
+class Odometry:
+    stamp_s: float
+    received_s: float
+    x: float
+    y: float
+    heading_rad: float
+    speed_mps: float
+    turn_rate_radps: float
+
+
+@dataclass
+class CycleResult:
+    """What one cycle (or one watchdog tick) sends out."""
+
+    command: Command
+    mode: str  # driving | degraded | braking | stopped | goal | waiting
+    reasons: list[str]
+    stamp_s: float
+    decision: Decision | None = None
+    obstacles: Obstacles = field(default_factory=Obstacles.empty)
+    robot_pose: np.ndarray | None = None
+    blind_sectors_rad: list[tuple[float, float]] = field(default_factory=list)
+    speed_cap_mps: float | None = None
+    cycle_time_ms: float | None = None
+    status: dict[str, dict[str, str]] = field(default_factory=dict)  # name -> key/values, for diagnostics
+
+
+def urg04lx_models(settings: NodeSettings) -> list[ScannerModel]:
+    return [ScannerModel(name=s.name, mount_x_m=s.mount_x_m, mount_y_m=s.mount_y_m, mount_yaw_rad=s.mount_yaw_rad)
+            for s in settings.scanners]
+
+
+def _wrap(angle: float) -> float:
+    return math.atan2(math.sin(angle), math.cos(angle))
+
+
+class PlannerCore:
+    """The node's logic; times are seconds of the node's clock (sim time with ``use_sim_time``)."""
+
+    def __init__(self, settings: NodeSettings):
+        self.settings = settings
+        s = settings
+        self.limits = MotionLimits(s.max_speed_mps, s.max_accel_mps2, s.max_turn_rate_radps, s.max_turn_accel_radps2)
+        self.subgoal_policy = SubgoalPolicy(s.reach_threshold_m, s.goal_tolerance_m, s.bypass_distance_m)
+        fixed = s.scan_geometry == "urg04lx"
+        models = urg04lx_models(s) if fixed else [None] * len(s.scanners)
+        self.health = [ScannerHealth(m, sc.frame_id) for m, sc in zip(models, s.scanners, strict=True)]
+        if s.detector == "legs":
+            self.detector_params = replace(DetectorParams.for_legs(), fit_backend=s.fit_backend)
+        else:
+            self.detector_params = DetectorParams(keep_segments=False, fit_backend=s.fit_backend)
+        self.tracker = MultiTargetTracker(TrackerParams(acceleration_sigma_mps2=s.tracker_acceleration_sigma_mps2))
+        self.path: DesignatedPath | None = None
+        self.planner = None
+        self.odometry: Odometry | None = None
+        self.odom_refused: dict[str, int] = {}
+        self.last_cycle_stamp_s: float | None = None
+        self.hold_until_stamp_s: float | None = None
+        self.last_command = Command.stop()
+        self.last_command_s: float | None = None
+        self.last_result: CycleResult | None = None
+        self.cycle_times_ms: list[float] = []
+        self.events: list[str] = []  # things reported once (time jumps, refused path)
+        self.active = True
+        self.goal_reached = False
+        self._now_s = 0.0
+        self._first_scan_s: float | None = None
+        self.odom_problem = ""
+
+    def _make_planner(self, path: DesignatedPath, subgoal_policy: SubgoalPolicy):
+        """The configured planner on ``path``, behind the shield when ``use_shield`` says so."""
+        from viapath.ros2.options import planner_kwargs
+        from viapath.safety import shielded
+
+        s = self.settings
+        planner = make_planner(s.planner_name, path, nominal_speed_mps=s.nominal_speed_mps, limits=self.limits,
+                               robot_radius_m=s.robot_radius_m, subgoal_policy=subgoal_policy,
+                               **planner_kwargs(s.planner_name, dict(s.planner_values)))
+        return shielded(planner, s.shield_flag, s.cycle_period_s, dict(s.shield_values), s.planner_name)
+
+    def warm_up(self) -> None:
+        """Run detection and one plan on made-up input, so the first real cycle is not slowed by imports."""
+        from viapath.perception.raycast import simulate_scan
+
+        models = [h.model for h in self.health if h.model is not None]
+        if models:  # a person beside the robot, so that every step of detection runs (and compiles) once
+            scans = [simulate_scan(m, np.zeros(3), np.array([[1.0, 0.4], [-1.0, -0.4]]), np.array([0.25, 0.25])) for m in models]
+            found = detect(models, scans, self.detector_params)
+            tracker = MultiTargetTracker(self.tracker.params)
+            for k in range(4):
+                tracker.step(0.1 * k, found.centres, found.position_sigma_m, found.radii_m)
+        path = DesignatedPath([[0.0, 0.0], [5.0, 0.0]], half_width_m=1.0)
+
+        planner = self._make_planner(path, SubgoalPolicy())
+        planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles([[2.0, 0.0]], [[-0.3, 0.0]], [0.25])))
+
+    # -- inputs --------------------------------------------------------------------------------
+    def set_path(self, waypoints, half_widths_m=None) -> None:
+        """A new designated path (world frame = odometry frame); the planner starts again on it."""
+        waypoints = np.asarray(waypoints, dtype=float).reshape(-1, 2)
+        s = self.settings
+        if half_widths_m is None:
+            widths = [w if w > 0 else s.half_width_m for w in s.half_widths_m] if any(w > 0 for w in s.half_widths_m) else None
+        else:
+            widths = list(half_widths_m)
+        if widths is not None and len(widths) != len(waypoints) - 1:
+            widths = None  # one width per segment or the single half_width_m
+            self.events.append(f"half_widths_m has {len(s.half_widths_m)} values for {len(waypoints) - 1} segments: using half_width_m")
+        if widths is None:
+            path = DesignatedPath(waypoints, half_width_m=s.half_width_m)
+        else:
+            path = DesignatedPath(waypoints, half_widths_m=widths)
+
+        self.path = path
+        self.planner = self._make_planner(path, self.subgoal_policy)
+        self.goal_reached = False
+
+    def on_odometry(self, now_s: float, stamp_s: float, frame_id: str, x: float, y: float, heading_rad: float,
+                    speed_mps: float, turn_rate_radps: float) -> bool:
+        """Store one odometry message; False (and counted) when refused."""
+        expected = self.settings.odom_frame
+        if expected and frame_id and frame_id != expected:
+            self.odom_refused["frame"] = self.odom_refused.get("frame", 0) + 1
+            self.odom_problem = f"frame_id {frame_id!r}, expected {expected!r}"
+            return False
+        values = (stamp_s, x, y, heading_rad, speed_mps, turn_rate_radps)
+        if not all(math.isfinite(v) for v in values):
+            self.odom_refused["not_finite"] = self.odom_refused.get("not_finite", 0) + 1
+            self.odom_problem = "a NaN or infinite value"
+            return False
+        if self.odometry is not None and stamp_s < self.odometry.stamp_s - 1e-9:
+            self._time_jump(f"odometry stamp went back {self.odometry.stamp_s - stamp_s:.3f} s")
+        self.odometry = Odometry(stamp_s, now_s, x, y, heading_rad, speed_mps, turn_rate_radps)
+        return True
+
+    def on_scan(self, index: int, now_s: float, stamp_s: float, frame_id: str, angle_min_rad: float,
+                angle_increment_rad: float, ranges, range_min_m: float = 0.02, range_max_m: float = 5.6) -> bool:
+        """Store one scan of scanner ``index``; returns whether a cycle is due now."""
+        h = self.health[index]
+        setting = self.settings.scanners[index]
+        ranges = np.asarray(ranges, dtype=float).reshape(-1)
+        if h.expected_frame and frame_id != h.expected_frame:
+            h.refuse("frame", f"frame_id {frame_id!r}, expected {h.expected_frame!r}")
+            return False
+        if not (math.isfinite(stamp_s) and math.isfinite(angle_min_rad) and math.isfinite(angle_increment_rad)):
+            h.refuse("header", "a NaN or infinite stamp or angle")
+            return False
+        if angle_increment_rad < 0:  # clockwise scanner: store it counter-clockwise
+            ranges = ranges[::-1]
+            angle_min_rad, angle_increment_rad = angle_min_rad + (len(ranges) - 1) * angle_increment_rad, -angle_increment_rad
+        if h.model is None:
+            if len(ranges) < 2 or angle_increment_rad <= 0:
+                h.refuse("layout", f"{len(ranges)} beams, increment {angle_increment_rad}")
+                return False
+            n = len(ranges)
+            h.model = ScannerModel(name=setting.name, mount_x_m=setting.mount_x_m, mount_y_m=setting.mount_y_m,
+                                   mount_yaw_rad=_wrap(setting.mount_yaw_rad + angle_min_rad + 0.5 * (n - 1) * angle_increment_rad),
+                                   beam_count=n, angle_increment_rad=angle_increment_rad,
+                                   range_min_m=max(float(range_min_m), 0.0) if math.isfinite(range_min_m) else 0.0,
+                                   range_max_m=float(range_max_m) if math.isfinite(range_max_m) and range_max_m > range_min_m else 5.6)
+            h.angle_min_rad = angle_min_rad
+        model = h.model
+        expected_min = getattr(h, "angle_min_rad", model.angle_min_rad)
+        if len(ranges) != model.beam_count:
+            h.refuse("length", f"{len(ranges)} beams, expected {model.beam_count}")
+            return False
+        if abs(angle_increment_rad - model.angle_increment_rad) > 1e-4 or abs(_wrap(angle_min_rad - expected_min)) > 1e-3:
+            h.refuse("angles", f"angle_min {angle_min_rad:.4f} / increment {angle_increment_rad:.6f} rad, expected "
+                               f"{expected_min:.4f} / {model.angle_increment_rad:.6f}")
+            return False
+        with np.errstate(invalid="ignore"):
+            erroneous = np.isnan(ranges) | (ranges <= 0.0)
+        h.invalid_fraction = float(erroneous.mean()) if len(ranges) else 1.0
+        if h.invalid_fraction > self.settings.max_invalid_fraction:
+            h.refuse("invalid", f"{100 * h.invalid_fraction:.0f} % of the readings are NaN or zero")
+            return False
+        if self.last_cycle_stamp_s is not None and stamp_s < self.last_cycle_stamp_s - 1e-9:
+            self._time_jump(f"scan stamp went back {self.last_cycle_stamp_s - stamp_s:.3f} s")
+        h.last_stamp_s = stamp_s
+        h.last_good_s = now_s
+        h.good += 1
+        waited_a_period = h.pending is not None  # this scanner delivered twice: the others are late, go on
+        h.pending = (stamp_s, ranges)
+        # Scans of one cycle lie within half a period of each other; an older one missed its cycle.
+        window_s = 0.5 * self.settings.cycle_period_s
+        for other in self.health:
+            if other.pending is not None and other.pending[0] < stamp_s - window_s:
+                other.pending = None
+        if self._first_scan_s is None:
+            self._first_scan_s = now_s
+        live = set(self.live_scanners(now_s))
+        if now_s - self._first_scan_s <= self.settings.scan_timeout_s + 1e-9:  # at start, wait for every scanner
+            live |= {i for i, other in enumerate(self.health) if other.good == 0}
+        return waited_a_period or all(self.health[i].pending is not None for i in live)
+
+    def _time_jump(self, why: str) -> None:
+        self.tracker.reset()
+        for h in self.health:
+            h.pending = None
+        self.odometry = None
+        self.last_cycle_stamp_s = None
+        self.last_command_s = None
+        self.hold_until_stamp_s = -math.inf  # set from the next cycle's stamp
+        self.events.append(f"time jump backwards ({why}): tracks and odometry reset, robot held for "
+                           f"{self.settings.reset_hold_s:g} s")
+
+    def clock_jumped_back(self, why: str) -> None:
+        """The node's own clock went back (e.g. /clock restarted): forget receipt times too."""
+        for h in self.health:
+            h.last_good_s = None
+        self._time_jump(why)
+
+    # -- state ---------------------------------------------------------------------------------
+    def live_scanners(self, now_s: float) -> list[int]:
+        timeout = self.settings.scan_timeout_s
+        return [i for i, h in enumerate(self.health) if h.last_good_s is not None and now_s - h.last_good_s <= timeout + 1e-9]
+
+    def odometry_fresh(self, now_s: float) -> bool:
+        return self.odometry is not None and now_s - self.odometry.received_s <= self.settings.odom_timeout_s + 1e-9
+
+    def _stop_reasons(self, now_s: float) -> list[str]:
+        reasons = []
+        if not self.active:
+            reasons.append("inactive")
+        if self.path is None:
+            reasons.append("no designated path")
+        if not self.odometry_fresh(now_s):
+            reasons.append("no odometry for %.2f s" % self.settings.odom_timeout_s if self.odometry is not None or any(
+                h.good for h in self.health) else "no odometry yet")
+        if not self.live_scanners(now_s):
+            reasons.append(f"no scan for {self.settings.scan_timeout_s:g} s" if any(h.good for h in self.health)
+                           else "no scan yet")
+        return reasons
+
+    def _measured(self) -> tuple[float, float, float]:
+        """Speed, turn rate and the time over which they may change now: the odometry's while fresh
+        (one cycle), else what was last commanded (the time since that command, at most one cycle)."""
+        dt = self.settings.cycle_period_s
+        if self.odometry is not None and self.odometry_fresh(self._now_s):
+            return self.odometry.speed_mps, self.odometry.turn_rate_radps, dt
+        since = dt if self.last_command_s is None else min(max(self._now_s - self.last_command_s, 0.0), dt)
+        return self.last_command.speed_mps, self.last_command.turn_rate_radps, since
+
+    def brake_command(self) -> Command:
+        """One cycle's hardest braking within the limits, from the measured (or last commanded) motion."""
+        v, w, dt = self._measured()
+        v_new = max(0.0, min(v, self.limits.max_speed_mps) - self.limits.max_accel_mps2 * dt)
+        dw = self.limits.max_turn_accel_radps2 * dt
+        w_new = 0.0 if abs(w) <= dw else w - math.copysign(dw, w)
+        return self._limit(Command(v_new, w_new))
+
+    def _limit(self, command: Command, speed_cap_mps: float | None = None) -> Command:
+        v, w = float(command.speed_mps), float(command.turn_rate_radps)
+        if not (math.isfinite(v) and math.isfinite(w)):
+            v, w = 0.0, 0.0
+        lim = self.limits
+        v_meas, w_meas, dt = self._measured()
+        v_meas = min(max(v_meas, 0.0), lim.max_speed_mps)
+        v = min(max(v, 0.0), lim.max_speed_mps)
+        if speed_cap_mps is not None:
+            v = min(v, speed_cap_mps)
+        v = min(max(v, v_meas - lim.max_accel_mps2 * dt), v_meas + lim.max_accel_mps2 * dt)
+        v = min(max(v, 0.0), lim.max_speed_mps)
+        w = min(max(w, w_meas - lim.max_turn_accel_radps2 * dt), w_meas + lim.max_turn_accel_radps2 * dt)
+        w = min(max(w, -lim.max_turn_rate_radps), lim.max_turn_rate_radps)
+        return Command(float(v), float(w))
+
+    def watchdog(self, now_s: float) -> CycleResult | None:
+        """Called every cycle period: brakes when inputs are stale; None when the scan cycles run."""
+        self._now_s = now_s
+        reasons = self._stop_reasons(now_s)
+        if not reasons:
+            return None
+        command = self.brake_command()
+        self.last_command, self.last_command_s = command, now_s
+        mode = "stopped" if command.speed_mps == 0.0 and command.turn_rate_radps == 0.0 else "braking"
+        result = CycleResult(command, mode, reasons, now_s, robot_pose=self._pose_at(now_s))
+        result.status = self._status(result, now_s)
+        self.last_result = result
+        return result
+
+    def _pose_at(self, stamp_s: float) -> np.ndarray | None:
+        o = self.odometry
+        if o is None:
+            return None
+        dt = min(max(stamp_s - o.stamp_s, -0.5), 0.5)  # extrapolate at most half a second
+        heading = o.heading_rad + o.turn_rate_radps * dt
+        mid = o.heading_rad + 0.5 * o.turn_rate_radps * dt
+        return np.array([o.x + o.speed_mps * dt * math.cos(mid), o.y + o.speed_mps * dt * math.sin(mid), _wrap(heading)])
+
+    def blind_speed_cap(self, live: list[int]) -> tuple[float | None, list[tuple[float, float]]]:
+        """Speed cap and blind sectors (robot frame) with only the ``live`` scanners (module notes)."""
+        if len(live) == len(self.health):
+            return None, []
+        models = tuple(self.health[i].model for i in live if self.health[i].model is not None)
+        if not models:
+            return 0.0, [(-math.pi, math.pi)]
+        region = blind_region(models, self.settings.robot_radius_m)
+        ahead = np.abs(region.angles_rad) <= FORWARD_CONE_RAD
+        if np.any(region.blind_depth_m[ahead] > self.settings.robot_radius_m + 0.01):
+            return 0.0, region.sectors_rad
+        s = self.settings
+        reach_s = s.blind_clearance_m / s.blind_person_speed_mps if s.blind_person_speed_mps > 0 else math.inf
+        cap = max(0.0, self.limits.max_accel_mps2 * (reach_s - s.cycle_period_s))
+        return cap, region.sectors_rad
+
+    # -- the cycle -----------------------------------------------------------------------------
+    def cycle(self, now_s: float) -> CycleResult:
+        """Perceive and plan on the pending scans; the command is always finite and within the limits."""
+        started = time.perf_counter()
+        self._now_s = now_s
+        live = self.live_scanners(now_s)
+        used = [i for i in live if self.health[i].pending is not None]
+        stamp = max(self.health[i].pending[0] for i in used) if used else now_s
+        reasons = self._stop_reasons(now_s)
+        scans = [(self.health[i].model, self.health[i].pending[1]) for i in used]
+        for h in self.health:
+            h.pending = None
+        if self.hold_until_stamp_s == -math.inf:
+            self.hold_until_stamp_s = stamp + self.settings.reset_hold_s
+        if not used:
+            reasons.append("no scan in this cycle")
+        pose = self._pose_at(stamp)
+        obstacles = Obstacles.empty()
+        if used and pose is not None:
+            detections = detect([m for m, _ in scans], [r for _, r in scans], self.detector_params).transformed(pose)
+            if self.tracker.time_s is not None and stamp < self.tracker.time_s:
+                self._time_jump("scan stamp before the tracker's time")
+                self.hold_until_stamp_s = stamp + self.settings.reset_hold_s
+            self.tracker.step(stamp, detections.centres, detections.position_sigma_m, detections.radii_m)
+            obstacles = self.tracker.obstacles().finite()
+            self.last_cycle_stamp_s = stamp
+        cap, sectors = self.blind_speed_cap(live)
+        decision = None
+        if reasons:
+            command = self.brake_command()
+            mode = "braking"
+        else:
+            o = self.odometry
+            robot = RobotState(pose[:2].copy(), float(pose[2]), max(o.speed_mps, 0.0), o.turn_rate_radps,
+                               self.settings.robot_radius_m)
+            decision = self.planner.plan(Observation(stamp, robot, obstacles))
+            command = self._limit(decision.command, cap)
+            mode = "driving" if cap is None else "degraded"
+            if cap is not None:
+                reasons.append("scanner(s) silent: " + ", ".join(self.settings.scanners[i].name for i in range(len(self.health))
+                                                                if i not in live) + f"; speed capped at {cap:.2f} m/s")
+            if decision.plan.status == "goal":
+                self.goal_reached = True
+                mode = "goal"
+            if self.hold_until_stamp_s is not None and stamp < self.hold_until_stamp_s:
+                command = self.brake_command()
+                mode = "braking"
+                reasons.append("holding after a time jump backwards")
+            elif self.hold_until_stamp_s is not None:
+                self.hold_until_stamp_s = None
+        if command.speed_mps == 0.0 and command.turn_rate_radps == 0.0 and mode == "braking":
+            mode = "stopped"
+        self.last_command, self.last_command_s = command, now_s
+        elapsed = (time.perf_counter() - started) * 1e3
+        self.cycle_times_ms.append(elapsed)
+        if len(self.cycle_times_ms) > 1000:
+            del self.cycle_times_ms[:-100]
+        result = CycleResult(command, mode, reasons, stamp, decision, obstacles, pose, sectors, cap, elapsed)
+        result.status = self._status(result, now_s)
+        self.last_result = result
+        return result
+
+    def stop_command(self) -> Command:
+        self.last_command = Command.stop()
+        return self.last_command
+
+    # -- reporting -----------------------------------------------------------------------------
+    def _status(self, result: CycleResult, now_s: float) -> dict[str, dict[str, str]]:
+        out: dict[str, dict[str, str]] = {}
+        plan = result.decision.plan if result.decision is not None else None
+        planner = {
+            "mode": result.mode,
+            "reasons": "; ".join(result.reasons),
+            "planner": self.settings.planner_name,
+            "command_speed_mps": f"{result.command.speed_mps:.4f}",
+            "command_turn_rate_radps": f"{result.command.turn_rate_radps:.4f}",
+            "tracks": str(len(result.obstacles)),
+            "stamp_s": f"{result.stamp_s:.6f}",
+            "source": "cycle" if result.cycle_time_ms is not None else "watchdog",
+            "cycle_time_ms": f"{result.cycle_time_ms:.3f}" if result.cycle_time_ms is not None else "",
+        }
+        if plan is not None:
+            from viapath.sim.metrics import plan_side
+
+            planner.update(plan_status=plan.status, plan_speed_mps=f"{plan.speed_mps:.4f}",
+                           plan_side=str(plan_side(plan.waypoints)), via_points=str(len(plan.via_points)),
+                           subgoal_index=str(plan.subgoal_index))
+        if plan is not None and len(plan.via_points):
+            planner["via_xy"] = ";".join(f"{x:.4f},{y:.4f}" for x, y in np.asarray(plan.via_points).reshape(-1, 2))
+        o = result.obstacles
+        if len(o):  # id,x,y,vx,vy,radius per confirmed track (tests and the simulator read them back)
+            planner["tracks_xyv"] = ";".join(
+                f"{i},{p[0]:.4f},{p[1]:.4f},{v[0]:.4f},{v[1]:.4f},{r:.3f}"
+                for i, p, v, r in zip(o.ids.tolist(), o.positions, o.velocities, o.radii_m.tolist(), strict=True))
+        if result.speed_cap_mps is not None:
+            planner["speed_cap_mps"] = f"{result.speed_cap_mps:.4f}"
+        if self.events:
+            planner["events"] = " | ".join(self.events[-3:])
+        out["planner"] = planner
+        if plan is not None and "shield" in plan.extras:
+            shield = plan.extras["shield"]
+            out["shield"] = {k: str(v) for k, v in shield.items()} if isinstance(shield, dict) else {"shield": str(shield)}
+            intervened = bool(shield.get("intervened")) if isinstance(shield, dict) else False
+            planner["shield_intervened"] = str(int(intervened))
+            planner["shield_mode"] = str(getattr(getattr(self.planner, "shield", None), "config", None) and
+                                         self.planner.shield.config.mode)
+        live = set(self.live_scanners(now_s))
+        for i, (h, s) in enumerate(zip(self.health, self.settings.scanners, strict=True)):
+            out[f"scanner {s.name}"] = {
+                "state": "ok" if i in live else ("silent" if h.good else "no scan yet"),
+                "topic": s.topic, "good_scans": str(h.good),
+                "refused": ", ".join(f"{k}: {v}" for k, v in sorted(h.refused.items())) or "none",
+                "last_problem": h.last_problem, "invalid_fraction": f"{h.invalid_fraction:.3f}",
+            }
+        out["odometry"] = {
+            "state": "ok" if self.odometry_fresh(now_s) else "stale",
+            "refused": ", ".join(f"{k}: {v}" for k, v in sorted(self.odom_refused.items())) or "none",
+        }
+        times = sorted(self.cycle_times_ms[-100:])  # the last 100 cycles (np.percentile costs 0.7 ms a call)
+        out["timing"] = {
+            "cycle_time_ms": f"{result.cycle_time_ms:.3f}" if result.cycle_time_ms is not None else "",
+            "cycle_time_p50_ms": f"{times[len(times) // 2]:.3f}" if times else "",
+            "cycle_time_p99_ms": f"{times[min(len(times) - 1, int(0.99 * len(times)))]:.3f}" if times else "",
+        }
+        return out
+
+
+def parse_tracks(text: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(ids, positions, velocities, radii) from a status' ``tracks_xyv`` value."""
+    rows = [tuple(float(v) for v in item.split(",")) for item in text.split(";") if item]
+    a = np.array(rows, dtype=float).reshape(-1, 6)
+    return a[:, 0].astype(int), a[:, 1:3], a[:, 3:5], a[:, 5]
+
+
+def parse_points(text: str) -> np.ndarray:
+    return np.array([[float(v) for v in item.split(",")] for item in text.split(";") if item], dtype=float).reshape(-1, 2)
+
+
+def severity(result: CycleResult) -> int:
+    """Diagnostic level: 0 OK (driving, goal), 1 WARN (degraded, waiting), 2 ERROR (braking or stopped for a fault)."""
+    if result.mode in ("driving", "goal"):
+        return 0
+    if result.mode == "degraded" or result.reasons in (["no designated path"], ["inactive"]):
+        return 1
+    return 2

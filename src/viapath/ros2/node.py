@@ -1,0 +1,326 @@
+"""``viapath ros2 node``: the planner as a ROS 2 (lifecycle) node.
+
+Source: DESIGN §8 (topics, QoS, parameters from the option schema, ``use_sim_time``); the ROS 2
+managed-node design (configure / activate / deactivate / cleanup, ``rclpy.lifecycle``). All the
+decisions of a cycle are in :class:`viapath.ros2.core.PlannerCore`; this module converts messages
+and owns the timers.
+
+What we chose:
+* Lifecycle: parameters are declared at construction; ``configure`` validates them (a bad value is
+  refused with a message naming the parameter: the transition fails and the node never drives),
+  builds the core and the publishers and subscriptions; ``activate`` starts commanding;
+  ``deactivate`` publishes a zero command first. With ``autostart`` (default) the node configures
+  and activates itself; ``viapath ros2 node`` exits with code 2 when configuring fails.
+* Scans arrive with the sensor-data QoS (best effort, depth 5); odometry reliable depth 10; the
+  path is subscribed transient-local (a latched path published before the node started is received).
+* ``cmd_vel`` is published once per scan cycle and by the watchdog (every ``cycle_period_s``) when
+  inputs are stale; markers and the DiagnosticArray once per cycle.
+* Signals: SIGINT / SIGTERM end the spin loop; a zero command is published before the node is
+  destroyed (rclpy's own handlers would shut the context down before we could publish).
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import sys
+from typing import Any
+
+from viapath.ros2.core import CycleResult, PlannerCore, severity
+from viapath.ros2.settings import NODE_NAME, ParameterError, all_options, describe, validate
+
+
+def _parameter_descriptor(option, read_only: bool = True):
+    """Description with unit and bounds. Typing is dynamic: ``validate`` converts and checks every
+    value with a message naming the parameter (rclpy's own checks would refuse ``1`` for a double)."""
+    from rcl_interfaces.msg import ParameterDescriptor
+
+    d = ParameterDescriptor()
+    d.description = describe(option)
+    d.read_only = read_only
+    d.dynamic_typing = True
+    return d
+
+
+def _declare_all(node, planner_name: str, scanner_names) -> dict[str, Any]:
+    """Declare every parameter (defaults from the schema) and return the values the node was given."""
+    from rclpy.exceptions import ParameterAlreadyDeclaredException
+
+    values: dict[str, Any] = {}
+    for option in all_options(planner_name, scanner_names):
+        default = option.default
+        if isinstance(default, tuple):
+            default = list(default)
+        if isinstance(default, list) and default and isinstance(default[0], (int, float)) and not isinstance(default[0], bool):
+            default = [float(v) for v in default]
+        try:
+            node.declare_parameter(option.name, default, _parameter_descriptor(option), ignore_override=False)
+        except ParameterAlreadyDeclaredException:
+            pass
+        except Exception as error:  # a given value of the wrong type: name the parameter
+            raise ParameterError(f"parameter {option.name}: {error}") from None
+        value = node.get_parameter(option.name).value
+        if isinstance(value, (tuple,)) or type(value).__name__ == "array":
+            value = list(value)
+        values[option.name] = value
+    return values
+
+
+def make_node_class():
+    """The node class (built lazily: importing this module must not need rclpy)."""
+    import rclpy
+    from builtin_interfaces.msg import Time
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from geometry_msgs.msg import Twist, TwistStamped
+    from nav_msgs.msg import Odometry
+    from nav_msgs.msg import Path as PathMsg
+    from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+    from sensor_msgs.msg import LaserScan
+    from visualization_msgs.msg import MarkerArray
+
+    from viapath.ros2 import convert
+    from viapath.ros2.markers import marker_array, scene_from_cycle
+
+    class ViaPathNode(LifecycleNode):
+        """Scans + odometry + designated path in; cmd_vel, markers and diagnostics out."""
+
+        def __init__(self, node_name: str = NODE_NAME, **kwargs):
+            super().__init__(node_name, **kwargs)
+            self.error: str | None = None
+            self.core: PlannerCore | None = None
+            self._subs: list = []
+            self._pubs: dict[str, Any] = {}
+            self._timer = None
+            self._last_now_s: float | None = None
+            try:
+                self.declare_parameter("planner_name", "viapath")
+                self.declare_parameter("scanner_names", ["front", "rear"])
+                planner_name = self.get_parameter("planner_name").value
+                scanner_names = list(self.get_parameter("scanner_names").value)
+                from viapath.planning import available_planners
+
+                if planner_name not in available_planners():
+                    raise ParameterError(f"parameter planner_name: unknown planner {planner_name!r}; available: "
+                                         f"{', '.join(available_planners())}")
+                self.given = _declare_all(self, planner_name, scanner_names)
+            except ParameterError as error:
+                self.error = str(error)
+                self.given = {}
+
+        # -- lifecycle -----------------------------------------------------------------------
+        def on_configure(self, state) -> TransitionCallbackReturn:
+            if self.error is None:
+                try:
+                    settings = validate(self.given)
+                    self.core = PlannerCore(settings)
+                    self.core.warm_up()
+                    if settings.path_file:
+                        waypoints, widths = convert.load_path_file(settings.path_file)
+                        self.core.set_path(waypoints, widths)
+                except (ParameterError, ValueError) as error:
+                    self.error = str(error) if isinstance(error, ParameterError) else f"parameter path_file: {error}"
+            if self.error is not None:
+                self.get_logger().error(f"refusing to start: {self.error}")
+                return TransitionCallbackReturn.FAILURE
+            s = self.core.settings
+            cmd_type = TwistStamped if s.cmd_vel_stamped else Twist
+            self._pubs["cmd"] = self.create_lifecycle_publisher(cmd_type, s.cmd_vel_topic, 10)
+            self._pubs["markers"] = self.create_lifecycle_publisher(MarkerArray, s.markers_topic, 5)
+            self._pubs["status"] = self.create_lifecycle_publisher(DiagnosticArray, s.status_topic, 10)
+            # Odometry first: when odometry and scans are both waiting, the executor takes odometry first.
+            self._subs.append(self.create_subscription(Odometry, s.odom_topic, self._on_odom, 10))
+            for index, scanner in enumerate(s.scanners):
+                self._subs.append(self.create_subscription(
+                    LaserScan, scanner.topic, lambda msg, i=index: self._on_scan(i, msg), qos_profile_sensor_data))
+            if not s.path_file:
+                latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+                self._subs.append(self.create_subscription(PathMsg, s.path_topic, self._on_path, latched))
+            self.core.active = False
+            self._timer = self.create_timer(s.cycle_period_s, self._on_watchdog)
+            self.get_logger().info(f"configured: planner {s.planner_name}, scanners "
+                                   f"{', '.join(sc.topic for sc in s.scanners)}, odometry {s.odom_topic}")
+            return TransitionCallbackReturn.SUCCESS
+
+        def on_activate(self, state) -> TransitionCallbackReturn:
+            result = super().on_activate(state)
+            self.core.active = True
+            self.get_logger().info("active: commanding " + self.core.settings.cmd_vel_topic)
+            return result
+
+        def on_deactivate(self, state) -> TransitionCallbackReturn:
+            self.publish_stop()
+            self.core.active = False
+            return super().on_deactivate(state)
+
+        def on_cleanup(self, state) -> TransitionCallbackReturn:
+            self._teardown()
+            return TransitionCallbackReturn.SUCCESS
+
+        def on_shutdown(self, state) -> TransitionCallbackReturn:
+            self.publish_stop()
+            self._teardown()
+            return TransitionCallbackReturn.SUCCESS
+
+        def _teardown(self) -> None:
+            if self._timer is not None:
+                self.destroy_timer(self._timer)
+                self._timer = None
+            for sub in self._subs:
+                self.destroy_subscription(sub)
+            self._subs = []
+            for pub in self._pubs.values():
+                self.destroy_lifecycle_publisher(pub)
+            self._pubs = {}
+
+        # -- time ----------------------------------------------------------------------------
+        def _now_s(self) -> float:
+            now = self.get_clock().now().nanoseconds * 1e-9
+            if self._last_now_s is not None and now < self._last_now_s - 1e-9 and self.core is not None:
+                self.core.clock_jumped_back(f"the node's clock went back {self._last_now_s - now:.3f} s")
+            self._last_now_s = now
+            return now
+
+        # -- inputs --------------------------------------------------------------------------
+        def _on_odom(self, msg) -> None:
+            x, y, yaw, v, w = convert.odometry_values(msg)
+            self.core.on_odometry(self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id, x, y, yaw, v, w)
+
+        def _on_path(self, msg) -> None:
+            expected = self.core.settings.odom_frame
+            waypoints = convert.waypoints_from_path(msg)
+            if expected and msg.header.frame_id and msg.header.frame_id != expected:
+                self.core.events.append(f"path refused: frame_id {msg.header.frame_id!r}, expected {expected!r}")
+                self.get_logger().error(self.core.events[-1])
+                return
+            try:
+                self.core.set_path(waypoints)
+            except ValueError as error:
+                self.core.events.append(f"path refused: {error}")
+                self.get_logger().error(self.core.events[-1])
+                return
+            self.get_logger().info(f"designated path: {len(waypoints)} waypoints, goal ({waypoints[-1][0]:.2f}, {waypoints[-1][1]:.2f})")
+
+        def _on_scan(self, index: int, msg) -> None:
+            due = self.core.on_scan(index, self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id,
+                                    msg.angle_min, msg.angle_increment, msg.ranges, msg.range_min, msg.range_max)
+            if due:
+                self._publish(self.core.cycle(self._now_s()))
+
+        def _on_watchdog(self) -> None:
+            if self.core is None:
+                return
+            result = self.core.watchdog(self._now_s())
+            if result is not None:
+                self._publish(result, markers=False)
+
+        # -- outputs -------------------------------------------------------------------------
+        def _stamp(self, seconds: float) -> Time:
+            return convert.time_msg(seconds)
+
+        def _command_msg(self, v: float, w: float, stamp_s: float):
+            twist = Twist()
+            twist.linear.x, twist.angular.z = float(v), float(w)
+            if not self.core.settings.cmd_vel_stamped:
+                return twist
+            msg = TwistStamped()
+            msg.header.stamp = self._stamp(stamp_s)
+            msg.header.frame_id = self.core.settings.base_frame
+            msg.twist = twist
+            return msg
+
+        def _publish(self, result: CycleResult, markers: bool = True) -> None:
+            if not self.core.active:
+                return
+            cmd = result.command
+            assert math.isfinite(cmd.speed_mps) and math.isfinite(cmd.turn_rate_radps)
+            self._pubs["cmd"].publish(self._command_msg(cmd.speed_mps, cmd.turn_rate_radps, result.stamp_s))
+            stamp = self._stamp(result.stamp_s)
+            if markers and self._pubs["markers"].get_subscription_count() > 0:  # built only for someone watching
+                scene = scene_from_cycle(self.core.path, result)
+                self._pubs["markers"].publish(marker_array(scene, self.core.settings.odom_frame or "odom", stamp))
+            self._pubs["status"].publish(self._diagnostics(result, stamp))
+
+        def _inputs_matched(self) -> bool:
+            """Whether every input topic has a publisher (the simulator waits for this before its first step)."""
+            s = self.core.settings
+            topics = [sc.topic for sc in s.scanners] + [s.odom_topic]
+            return all(self.count_publishers(t) > 0 for t in topics)
+
+        def _diagnostics(self, result: CycleResult, stamp) -> DiagnosticArray:
+            if result.cycle_time_ms is None:  # watchdog ticks only: cheap enough there
+                result.status["planner"]["inputs_matched"] = str(int(self._inputs_matched()))
+            out = DiagnosticArray()
+            out.header.stamp = stamp
+            level_of = {0: DiagnosticStatus.OK, 1: DiagnosticStatus.WARN, 2: DiagnosticStatus.ERROR}
+            for name, values in result.status.items():
+                status = DiagnosticStatus()
+                status.name = f"{self.get_name()}: {name}"
+                status.hardware_id = self.get_name()
+                if name == "planner":
+                    status.level = level_of[severity(result)]
+                    status.message = result.mode + (f" ({'; '.join(result.reasons)})" if result.reasons else "")
+                else:
+                    ok = values.get("state", "ok") == "ok"
+                    status.level = DiagnosticStatus.OK if ok else DiagnosticStatus.WARN
+                    status.message = values.get("state", "")
+                status.values = [KeyValue(key=str(k), value=str(v)) for k, v in values.items()]
+                out.status.append(status)
+            return out
+
+        def publish_stop(self) -> None:
+            if self.core is None or "cmd" not in self._pubs:
+                return
+            self.core.stop_command()
+            now = self._now_s()
+            for _ in range(3):  # best effort against a lossy link; the subscriber's depth keeps them
+                try:
+                    self._pubs["cmd"].publish(self._command_msg(0.0, 0.0, now))
+                except Exception:  # the context may already be going down
+                    break
+
+    _ = rclpy
+    return ViaPathNode
+
+
+def run_node(ros_args: list[str] | None = None) -> int:
+    """Start the node (``ros_args``: arguments after ``--ros-args``); returns the exit code."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.signals import SignalHandlerOptions
+
+    args = [sys.argv[0]] + (["--ros-args", *ros_args] if ros_args else [])
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop = {"flag": False}
+
+    def _handler(signum, frame):
+        stop["flag"] = True
+
+    previous = {s: signal.signal(s, _handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    node = None
+    try:
+        node = make_node_class()()
+        if node.error is not None:
+            print(f"error: {node.error}", file=sys.stderr)
+            return 2
+        autostart = bool(node.get_parameter("autostart").value)
+        if autostart:
+            from rclpy.lifecycle import TransitionCallbackReturn
+
+            if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
+                print(f"error: {node.error}", file=sys.stderr)
+                return 2
+            node.trigger_activate()
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        while not stop["flag"] and rclpy.ok():
+            executor.spin_once(timeout_sec=0.05)
+        return 0
+    finally:
+        if node is not None:
+            node.publish_stop()
+            node.destroy_node()
+        for s, h in previous.items():
+            signal.signal(s, h)
+        if rclpy.ok():
+            rclpy.shutdown()

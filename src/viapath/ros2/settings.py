@@ -1,0 +1,302 @@
+"""The ROS 2 node's parameters: one schema for the node's own values and the planner's options.
+
+Source: DESIGN §8 (topics, mounts, ``use_sim_time``) and the planner's option schema
+(:mod:`viapath.ros2.options`). Every parameter is an :class:`~viapath.ros2.options.Option`; the
+node declares them with their unit and bounds in the description, and :func:`validate` refuses a
+bad value with one message naming the parameter (the node then does not drive).
+
+What we chose:
+* The planner's options (:mod:`viapath.options`) live under ``planner.`` with their dotted path
+  (``planner.horizon_s``, ``planner.weights.k1``); which planner under ``planner_name``.
+* The shield (:mod:`viapath.safety`) is ``use_shield`` (default: as ``viapath run``, on for
+  ``viapath``) with its options under ``shield.`` (``shield.mode``, ``shield.margin_m``).
+* Scanners are a list of names (``scanner_names``) with ``scanners.<name>.topic``, ``.frame_id``,
+  ``.mount_x_m``, ``.mount_y_m``, ``.mount_yaw_rad``. The defaults are the paper's pair (URG-04LX
+  0.145 m ahead facing forward, 0.145 m behind facing backward).
+* ``scan_geometry``: ``urg04lx`` checks every scan against the URG-04LX beam layout (683 beams,
+  0.352°) and refuses one that differs; ``from_message`` takes the beam layout of the first scan
+  of each scanner (a bag from another scanner, ``viapath ros2 play``) and refuses later scans that
+  differ from it.
+* A ROS parameters file (``node: {ros__parameters: {...}}``, nested maps or dotted keys) is read
+  here too, so that an unknown name is an error (rclpy would ignore it silently).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from viapath.ros2.options import Option, planner_options
+
+
+def _opt(name: str, default, unit: str = "", minimum=None, maximum=None, help: str = "", choices=None) -> Option:
+    """A node option (keywords: :class:`viapath.options.Option` takes ``help`` third)."""
+    return Option(name=name, default=default, help=help, unit=unit, minimum=minimum, maximum=maximum, choices=choices)
+
+NODE_NAME = "viapath"
+PLANNER_PREFIX = "planner."
+SHIELD_PREFIX = "shield."
+
+
+class ParameterError(ValueError):
+    """A parameter value the node refuses; the message names the parameter."""
+
+
+def _scanner_options(name: str, topic: str, frame: str, x: float, yaw: float) -> tuple[Option, ...]:
+    p = f"scanners.{name}."
+    return (
+        _opt(p + "topic", topic, "", help=f"sensor_msgs/LaserScan topic of the {name} scanner"),
+        _opt(p + "frame_id", frame, "", help="frame_id its scans must carry ('' accepts any)"),
+        _opt(p + "mount_x_m", x, "m", -10.0, 10.0, "scanner position ahead of the robot centre"),
+        _opt(p + "mount_y_m", 0.0, "m", -10.0, 10.0, "scanner position left of the robot centre"),
+        _opt(p + "mount_yaw_rad", yaw, "rad", -math.pi, math.pi, "scanner axis relative to the robot heading"),
+    )
+
+
+NODE_OPTIONS: tuple[Option, ...] = (
+    _opt("scanner_names", ["front", "rear"], "", help="names of the scanners (each has scanners.<name>.*)"),
+    _opt("scan_geometry", "urg04lx", "", help="beam layout the scans must have", choices=("urg04lx", "from_message")),
+    _opt("odom_topic", "odom", "", help="nav_msgs/Odometry topic"),
+    _opt("path_topic", "designated_path", "", help="nav_msgs/Path topic of the designated path (transient local)"),
+    _opt("path_file", "", "", help="designated path from a file instead (scenario YAML, or YAML/CSV of x y waypoints)"),
+    _opt("cmd_vel_topic", "cmd_vel", "", help="command topic"),
+    _opt("cmd_vel_stamped", False, "", help="publish geometry_msgs/TwistStamped instead of Twist"),
+    _opt("markers_topic", "viapath/markers", "", help="visualization_msgs/MarkerArray topic"),
+    _opt("status_topic", "viapath/status", "", help="diagnostic_msgs/DiagnosticArray topic"),
+    _opt("odom_frame", "odom", "", help="world frame of odometry and path ('' accepts any)"),
+    _opt("base_frame", "base_link", "", help="robot frame (markers of the robot)"),
+    _opt("half_width_m", 1.0, "m", 0.01, 100.0, "corridor half-width around the designated path"),
+    _opt("half_widths_m", [0.0], "m", 0.0, 100.0, "one half-width per path segment (0 or empty: half_width_m)"),
+    _opt("nominal_speed_mps", 0.2, "m/s", 0.01, 5.0, "speed the robot keeps when nothing is in the way"),
+    _opt("robot_radius_m", 0.25, "m", 0.01, 5.0, "radius of the robot's footprint"),
+    _opt("max_speed_mps", 0.6, "m/s", 0.01, 5.0, "speed limit of the base"),
+    _opt("max_accel_mps2", 0.8, "m/s^2", 0.01, 20.0, "acceleration (and braking) limit of the base"),
+    _opt("max_turn_rate_radps", 2.0, "rad/s", 0.01, 20.0, "turn-rate limit of the base"),
+    _opt("max_turn_accel_radps2", 6.0, "rad/s^2", 0.01, 100.0, "turn acceleration limit of the base"),
+    _opt("reach_threshold_m", 0.2, "m", 0.01, 10.0, "an intermediate subgoal is reached within this"),
+    _opt("goal_tolerance_m", 0.1, "m", 0.01, 10.0, "the goal is reached within this"),
+    _opt("bypass_distance_m", 1.0, "m", 0.0, 100.0, "a blocked subgoal is given up within this"),
+    _opt("scan_timeout_s", 0.3, "s", 0.05, 10.0, "a scanner silent this long is blind; all silent: brake to a stop"),
+    _opt("odom_timeout_s", 0.5, "s", 0.05, 10.0, "no odometry this long: brake to a stop"),
+    _opt("cycle_period_s", 0.1, "s", 0.01, 1.0, "scan period; also the watchdog period"),
+    _opt("max_invalid_fraction", 0.5, "", 0.0, 1.0, "a scan with more NaN/zero readings than this counts as failed"),
+    _opt("detector", "people", "", help="detector preset", choices=("people", "legs")),
+    _opt("fit_backend", "numpy", "", help="circle fit back end (numba: compiled at start, barely faster here)",
+           choices=("numpy", "auto", "numba")),
+    _opt("tracker_acceleration_sigma_mps2", 0.2, "m/s^2", 0.01, 10.0, "process noise of the tracker (real walkers: 0.5)"),
+    _opt("blind_person_speed_mps", 1.0, "m/s", 0.0, 5.0, "walking speed assumed for someone in a blind sector"),
+    _opt("blind_clearance_m", 0.3, "m", 0.0, 10.0, "distance from the body an unseen person is assumed to start from"),
+    _opt("reset_hold_s", 0.5, "s", 0.0, 10.0, "after a time jump backwards the robot stands this long (tracks re-confirm)"),
+    _opt("autostart", True, "", help="configure and activate the lifecycle node at start"),
+    _opt("use_shield", "default", "", help="passive-safety shield around the planner (DESIGN §7); default: as "
+         "viapath run (on for viapath)", choices=("default", "on", "off")),
+) + _scanner_options("front", "scan_front", "laser_front", 0.145, 0.0) + _scanner_options("rear", "scan_rear", "laser_rear", -0.145, math.pi)
+
+
+def all_options(planner_name: str = "viapath", scanner_names=("front", "rear")) -> tuple[Option, ...]:
+    """Every parameter of the node: its own, one block per scanner, and ``planner.*`` from the schema."""
+    own = [o for o in NODE_OPTIONS if not o.name.startswith("scanners.")]
+    by_name = {o.name: o for o in NODE_OPTIONS}
+    scanners = []
+    for name in scanner_names:
+        for o in _scanner_options(name, f"scan_{name}", f"laser_{name}", 0.0, 0.0):
+            scanners.append(by_name.get(o.name, o))
+    planner = [Option(name=PLANNER_PREFIX + o.path, default=o.default, help=o.help, unit=o.unit, minimum=o.minimum,
+                      maximum=o.maximum, exclusive_minimum=o.exclusive_minimum, choices=o.choices)
+               for o in planner_options(planner_name)]
+    from viapath.safety import SHIELD_OPTIONS
+
+    shield = [Option(name=SHIELD_PREFIX + o.path, default=o.default, help=o.help, unit=o.unit, minimum=o.minimum,
+                     maximum=o.maximum, exclusive_minimum=o.exclusive_minimum, choices=o.choices)
+              for o in SHIELD_OPTIONS if o.name != "enabled"]  # on / off is use_shield
+    return tuple(own + [_opt("planner_name", planner_name, help="registered planner (viapath planners)")]
+                 + scanners + planner + shield)
+
+
+def describe(option: Option) -> str:
+    """A parameter description with its unit and bounds, as ``ros2 param describe`` shows it."""
+    parts = [option.help] if option.help else []
+    if option.unit:
+        parts.append(f"unit: {option.unit}")
+    if option.minimum is not None or option.maximum is not None:
+        low = "-inf" if option.minimum is None else f"{option.minimum:g}"
+        high = "inf" if option.maximum is None else f"{option.maximum:g}"
+        parts.append(f"range: {'(' if getattr(option, 'exclusive_minimum', False) else '['}{low}, {high}]")
+    choices = getattr(option, "choices", None)
+    if choices:
+        parts.append("one of: " + ", ".join(choices))
+    return "; ".join(parts)
+
+
+def _check_number(option: Option, value, where: str):
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{where}: expected a number, found {value!r}")
+    if not math.isfinite(float(value)):
+        raise ParameterError(f"{where}: expected a finite number, found {value}")
+    if option.minimum is not None and getattr(option, "exclusive_minimum", False) and value <= option.minimum:
+        raise ParameterError(f"{where}: expected > {option.minimum:g} {option.unit}".rstrip() + f", found {value}")
+    if option.minimum is not None and value < option.minimum:
+        raise ParameterError(f"{where}: expected >= {option.minimum:g} {option.unit}".rstrip() + f", found {value}")
+    if option.maximum is not None and value > option.maximum:
+        raise ParameterError(f"{where}: expected <= {option.maximum:g} {option.unit}".rstrip() + f", found {value}")
+    return type(option.default)(value) if isinstance(option.default, (int, float)) else value
+
+
+def check_value(option: Option, value):
+    """The value converted to the option's type, or :class:`ParameterError` naming the parameter."""
+    where = f"parameter {option.name}"
+    default = option.default
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise ParameterError(f"{where}: expected true or false, found {value!r}")
+        return value
+    if isinstance(default, str):
+        if not isinstance(value, str):
+            raise ParameterError(f"{where}: expected a string, found {value!r}")
+        choices = getattr(option, "choices", None)
+        if choices and value not in choices:
+            raise ParameterError(f"{where}: expected one of {', '.join(choices)}, found {value!r}")
+        return value
+    if isinstance(default, (list, tuple)):
+        if not isinstance(value, (list, tuple, np.ndarray)):
+            raise ParameterError(f"{where}: expected a list, found {value!r}")
+        if default and isinstance(default[0], str):
+            if not all(isinstance(v, str) and v for v in value) or not len(value):
+                raise ParameterError(f"{where}: expected a non-empty list of names, found {list(value)!r}")
+            return list(value)
+        out = [float(_check_number(option, v, f"{where}[{i}]")) for i, v in enumerate(value)]
+        return out
+    if isinstance(default, int) and isinstance(value, float) and not value.is_integer():
+        raise ParameterError(f"{where}: expected an integer, found {value}")
+    value = _check_number(option, value, where)
+    return int(value) if isinstance(default, int) else float(value)
+
+
+@dataclass(frozen=True)
+class ScannerSetting:
+    name: str
+    topic: str
+    frame_id: str
+    mount_x_m: float
+    mount_y_m: float
+    mount_yaw_rad: float
+
+
+@dataclass(frozen=True)
+class NodeSettings:
+    """Validated parameter values (``values``), with the scanners and planner options pulled out."""
+
+    values: dict[str, Any]
+    scanners: tuple[ScannerSetting, ...]
+    planner_name: str
+    planner_values: dict[str, Any] = field(default_factory=dict)
+    shield_values: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def shield_flag(self) -> bool | None:
+        """For :func:`viapath.safety.shielded`: None = the planner's default."""
+        return {"default": None, "on": True, "off": False}[self.values["use_shield"]]
+
+    def __getattr__(self, name: str):
+        try:
+            return self.__dict__["values"][name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+
+def validate(values: dict[str, Any]) -> NodeSettings:
+    """Check every value against its option; unknown names and bad values raise :class:`ParameterError`."""
+    planner_name = values.get("planner_name", "viapath")
+    if not isinstance(planner_name, str):
+        raise ParameterError(f"parameter planner_name: expected a string, found {planner_name!r}")
+    from viapath.planning import available_planners
+
+    if planner_name not in available_planners():
+        raise ParameterError(f"parameter planner_name: unknown planner {planner_name!r}; available: "
+                             f"{', '.join(available_planners())}")
+    names_option = next(o for o in NODE_OPTIONS if o.name == "scanner_names")
+    scanner_names = check_value(names_option, values.get("scanner_names", names_option.default))
+    if len(set(scanner_names)) != len(scanner_names):
+        raise ParameterError(f"parameter scanner_names: names repeat: {scanner_names}")
+    options = {o.name: o for o in all_options(planner_name, scanner_names)}
+    unknown = sorted(set(values) - set(options) - {"use_sim_time"})
+    if unknown:
+        raise ParameterError(f"parameter {unknown[0]}: unknown parameter" + (f" (and {len(unknown) - 1} more)" if len(unknown) > 1 else ""))
+    checked = {name: check_value(o, values.get(name, o.default)) for name, o in options.items()}
+    scanners = tuple(ScannerSetting(n, checked[f"scanners.{n}.topic"], checked[f"scanners.{n}.frame_id"],
+                                    checked[f"scanners.{n}.mount_x_m"], checked[f"scanners.{n}.mount_y_m"],
+                                    checked[f"scanners.{n}.mount_yaw_rad"]) for n in scanner_names)
+    for s in scanners:
+        if not s.topic:
+            raise ParameterError(f"parameter scanners.{s.name}.topic: expected a topic name, found ''")
+    if checked["nominal_speed_mps"] > checked["max_speed_mps"]:
+        raise ParameterError(f"parameter nominal_speed_mps: expected <= max_speed_mps ({checked['max_speed_mps']:g} m/s), "
+                             f"found {checked['nominal_speed_mps']}")
+    planner_values = {k[len(PLANNER_PREFIX):]: v for k, v in checked.items() if k.startswith(PLANNER_PREFIX)}
+    from viapath.options import OptionError
+    from viapath.planning import planner_class
+
+    try:  # the planner's own schema has the last word (e.g. checks across options)
+        planner_class(planner_name).options.validate(planner_values)
+    except OptionError as error:
+        where, message = error.errors[0] if error.errors else ("", str(error))
+        raise ParameterError(f"parameter {PLANNER_PREFIX}{where}: {message}") from None
+    shield_values = {k[len(SHIELD_PREFIX):]: v for k, v in checked.items() if k.startswith(SHIELD_PREFIX)}
+    return NodeSettings(checked, scanners, planner_name, planner_values, shield_values)
+
+
+def _flatten(data: dict, prefix: str = "") -> dict[str, Any]:
+    out = {}
+    for key, value in data.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            out.update(_flatten(value, name + "."))
+        else:
+            out[name] = value
+    return out
+
+
+def read_params_file(path, node_name: str = NODE_NAME) -> dict[str, Any]:
+    """The node's values from a ROS 2 parameters file (``/**`` and ``node_name`` sections merged)."""
+    import yaml
+
+    path = Path(path)
+    if not path.is_file():
+        raise ParameterError(f"{path}: no such parameters file")
+    try:
+        data = yaml.safe_load(path.read_text()) or {}
+    except yaml.YAMLError as error:
+        raise ParameterError(f"{path}: not valid YAML ({error})") from None
+    if not isinstance(data, dict):
+        raise ParameterError(f"{path}: expected a map of node names to {{ros__parameters: ...}}")
+    values: dict[str, Any] = {}
+    found = False
+    for key in ("/**", node_name, "/" + node_name):
+        section = data.get(key)
+        if section is None:
+            continue
+        if not isinstance(section, dict) or not isinstance(section.get("ros__parameters"), dict):
+            raise ParameterError(f"{path}: {key}: expected a map with 'ros__parameters'")
+        values.update(_flatten(section["ros__parameters"]))
+        found = True
+    if not found:
+        raise ParameterError(f"{path}: no section for node {node_name!r} (or '/**') with ros__parameters")
+    return values
+
+
+def write_example_params(path, planner_name: str = "viapath") -> None:
+    """A parameters file holding every parameter at its default, with units and bounds as comments."""
+    lines = [f"# viapath ROS 2 node parameters (defaults). Run: viapath ros2 node --params-file {Path(path).name}",
+             f"{NODE_NAME}:", "  ros__parameters:"]
+    for o in all_options(planner_name):
+        value = o.default
+        text = ("true" if value else "false") if isinstance(value, bool) else repr(value) if isinstance(value, str) else (
+            "[" + ", ".join(repr(v) if isinstance(v, str) else repr(float(v)) for v in value) + "]" if isinstance(value, (list, tuple))
+            else repr(float(value)) if isinstance(value, float) else str(value))
+        text = text.replace("'", '"')
+        lines.append(f"    {o.name}: {text}  # {describe(o)}")
+    Path(path).write_text("\n".join(lines) + "\n")

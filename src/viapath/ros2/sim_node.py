@@ -1,0 +1,342 @@
+"""``viapath ros2 sim SCENARIO``: the simulator as a ROS 2 node, so the planner node can be tried without a robot.
+
+Source: DESIGN §8 (topics) and the simulator of :mod:`viapath.sim` (kinematics, obstacle motion,
+metrics), with the two URG-04LX scans of :mod:`viapath.perception` (ray casting, range noise,
+invalid readings as +inf). The episode's metrics are :func:`viapath.sim.metrics.compute_metrics` of
+the same :class:`~viapath.sim.loop.Trace` that ``viapath run`` builds, so ``--json`` prints the same
+object as ``viapath run SCENARIO --perception laser --json``.
+
+What we chose:
+* Time is the simulator's: step k is at ``k · dt_s`` and published on ``/clock`` (the node runs with
+  ``use_sim_time``). Each step publishes the clock, then odometry (true pose and motion), then both
+  scans, all stamped with the step's time; it then waits until ``dt_s / rate`` of wall time has passed
+  and drives the robot one step with the latest ``cmd_vel`` through the same drive limits as
+  ``viapath run``.
+* ``--lockstep`` also waits (up to ``--max-wait-s`` of wall time) for the node's status of this step
+  before driving, so a slow machine changes the timing of nothing: the command of step k is applied
+  in step k, as in ``viapath run``. Without it a late command is applied a step later, as on a robot.
+* The planner's side of the trace (plan speed, status, side, via points, cycle time, tracks) comes
+  from the node's DiagnosticArray (its planner status carries them as key/values); ``plan_time_*`` are the node's whole cycle
+  (perception and planning), ``perception_time_*`` are not known here (null), and the tracking
+  errors compare the node's reported tracks with the true people at the same stamps.
+* Fault injection for tests (``--fault KIND@T[-END]``, from T to END s or for good): ``silence:NAME``
+  (scanner NAME publishes nothing), ``nan:NAME`` (all-NaN ranges), ``short:NAME`` (scans 10 beams
+  short), ``odom`` (no odometry), ``clock-back:D`` (at T the clock and all stamps jump back by D
+  seconds, then go on).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import signal
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass
+class Fault:
+    kind: str  # silence | nan | short | odom | clock-back
+    at_s: float
+    scanner: str = ""
+    amount_s: float = 0.0
+    until_s: float = math.inf
+
+    def active(self, t: float) -> bool:
+        return self.at_s <= t < self.until_s
+
+    @classmethod
+    def parse(cls, text: str) -> "Fault":
+        """``silence:front@2``, ``nan:rear@1.5-3``, ``short:front@2``, ``odom@3-4``, ``clock-back:2@3``."""
+        try:
+            what, at = text.rsplit("@", 1)
+            start, _, end = at.partition("-")
+            at_s = float(start)
+            until_s = float(end) if end else math.inf
+            kind, _, arg = what.partition(":")
+        except ValueError:
+            raise ValueError(f"--fault {text!r}: expected KIND[:ARG]@TIME[-END], e.g. silence:front@2-4") from None
+        if not math.isfinite(at_s) or at_s < 0 or not until_s > at_s:
+            raise ValueError(f"--fault {text!r}: times must be finite, >= 0, and END after TIME")
+        if kind in ("silence", "nan", "short"):
+            if not arg:
+                raise ValueError(f"--fault {text!r}: name the scanner, e.g. {kind}:front@{at}")
+            return cls(kind, at_s, scanner=arg, until_s=until_s)
+        if kind == "odom":
+            return cls(kind, at_s, until_s=until_s)
+        if kind == "clock-back":
+            try:
+                amount = float(arg)
+            except ValueError:
+                raise ValueError(f"--fault {text!r}: expected clock-back:SECONDS@TIME") from None
+            if not (math.isfinite(amount) and amount > 0):
+                raise ValueError(f"--fault {text!r}: the jump must be > 0 s")
+            return cls(kind, at_s, amount_s=amount)
+        raise ValueError(f"--fault {text!r}: unknown kind {kind!r}; one of silence, nan, short, odom, clock-back")
+
+
+@dataclass
+class StepRecord:
+    command: tuple[float, float] = (0.0, 0.0)
+    plan_speed: float = 0.0
+    status: str = "none"
+    side: int = 0
+    via: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    cycle_ms: float = float("nan")
+    late: bool = False
+
+
+def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max_wait_s: float = 10.0,
+            as_json: bool = False, seed: int | None = None, faults: list[Fault] | None = None,
+            trace_file: str | None = None, wait_for_node_s: float = 60.0, commands_file: str | None = None,
+            ros_args: list[str] | None = None, duration_s: float | None = None, status_file: str | None = None) -> int:
+    """Run one episode against whatever node listens; prints metrics; returns the exit code."""
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import Twist
+    from nav_msgs.msg import Odometry
+    from nav_msgs.msg import Path as PathMsg
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+    from rclpy.signals import SignalHandlerOptions
+    from rosgraph_msgs.msg import Clock
+    from sensor_msgs.msg import LaserScan
+
+    from viapath.observation import Command, MotionLimits
+    from viapath.path import DesignatedPath, SubgoalPolicy
+    from viapath.perception.laser import LaserPerception, tracking_errors
+    from viapath.ros2 import convert
+    from viapath.ros2.core import parse_points, parse_tracks
+    from viapath.scenarios import load_scenario
+    from viapath.sim import robot as kinematics
+    from viapath.sim.loop import Trace
+    from viapath.sim.metrics import compute_metrics
+    from viapath.sim.obstacles import scenario_obstacle_states
+    from viapath.sim.perception import WorldSnapshot
+    from viapath.observation import Obstacles
+
+    faults = list(faults or [])
+    spec = load_scenario(scenario_source)
+    dt = spec.dt_s
+    n_steps = int(round((spec.duration_s if duration_s is None else min(duration_s, spec.duration_s)) / dt))
+    times = np.arange(n_steps + 1) * dt
+    positions, velocities, radii = scenario_obstacle_states(spec, times)
+    walls = np.asarray(spec.walls, dtype=float).reshape(-1, 2, 2)
+    path = DesignatedPath(spec.path.waypoints, half_widths_m=spec.path.widths())
+    limits = MotionLimits(**spec.robot.limits.model_dump())
+    goal_tolerance = SubgoalPolicy(**spec.subgoals.model_dump()).goal_tolerance_m
+    laser = LaserPerception(robot_radius_m=spec.robot.radius)
+    rng = np.random.default_rng(spec.seed if seed is None else seed)
+    laser.reset(rng)
+    names = [s.name for s in laser.scanners]
+    for f in faults:
+        if f.scanner and f.scanner not in names:
+            raise ValueError(f"--fault: unknown scanner {f.scanner!r}; scanners: {', '.join(names)}")
+
+    rclpy.init(args=[sys.argv[0]] + (["--ros-args", *ros_args] if ros_args else []),
+               signal_handler_options=SignalHandlerOptions.NO)
+    stop = {"flag": False}
+    previous = {s: signal.signal(s, lambda *_: stop.__setitem__("flag", True)) for s in (signal.SIGINT, signal.SIGTERM)}
+    node = rclpy.create_node("viapath_sim")
+    try:
+        latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        clock_pub = node.create_publisher(Clock, "/clock", 10)
+        odom_pub = node.create_publisher(Odometry, "odom", 10)
+        path_pub = node.create_publisher(PathMsg, "designated_path", latched)
+        scan_pubs = {n: node.create_publisher(LaserScan, f"scan_{n}", qos_profile_sensor_data) for n in names}
+        got = {"cmd": None, "cmd_count": 0, "status": [], "by_stamp": {}, "watchdog": []}
+
+        def on_twist(msg):
+            got["cmd"] = (msg.linear.x, msg.angular.z)
+            got["cmd_count"] += 1
+
+        def on_status(msg):
+            for s in msg.status:
+                if s.name.endswith(": planner"):
+                    values = {kv.key: kv.value for kv in s.values}
+                    got["status"].append(values)
+                    try:
+                        stamp = round(float(values.get("stamp_s", "nan")), 6)
+                    except ValueError:
+                        continue
+                    if values.get("source") == "cycle":
+                        got["by_stamp"][stamp] = values
+                    else:
+                        got["watchdog"].append(stamp)
+
+        node.create_subscription(Twist, "cmd_vel", on_twist, 10)
+        node.create_subscription(DiagnosticArray, "viapath/status", on_status, 50)
+
+        def spin_until(deadline: float, done=lambda: False) -> None:
+            while not stop["flag"]:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0 or done():
+                    return
+                rclpy.spin_once(node, timeout_sec=min(remaining, 0.01))
+
+        clock = Clock()
+        clock.clock = convert.time_msg(0.0)
+        clock_pub.publish(clock)
+        path_pub.publish(convert.path_message(spec.path.waypoints, "odom", convert.time_msg(0.0)))
+        # Wait for a planner node: someone listening to the scans and publishing commands.
+        started = time.monotonic()
+        while not stop["flag"] and (node.count_subscribers(f"scan_{names[0]}") == 0 or node.count_publishers("cmd_vel") == 0):
+            if time.monotonic() - started > wait_for_node_s:
+                print(f"error: no planner node (subscriber of scan_{names[0]}, publisher of cmd_vel) within "
+                      f"{wait_for_node_s:g} s", file=sys.stderr)
+                return 3
+            rclpy.spin_once(node, timeout_sec=0.05)
+        # Warm-up: tick the clock below the episode's start (1 s) until the node's watchdog reports
+        # ("no scan yet"): then clock, status and commands are matched both ways.
+        tick = 0.0
+        def node_ready():
+            last = got["status"][-1] if got["status"] else {}
+            return bool(last) and "no designated path" not in last.get("reasons", "") and last.get("inputs_matched") == "1"
+
+        while not stop["flag"] and not node_ready() and time.monotonic() - started < wait_for_node_s:
+            tick = min(tick + 0.01, 0.99)
+            clock.clock = convert.time_msg(tick)
+            clock_pub.publish(clock)
+            spin_until(time.monotonic() + 0.02)
+        if not node_ready():
+            print("warning: the planner node did not report a designated path during warm-up", file=sys.stderr)
+        spin_until(time.monotonic() + 0.2)
+
+        state = kinematics.UnicycleState(spec.robot.start[0], spec.robot.start[1], spec.robot.heading, spec.robot.speed, 0.0)
+        rows = {k: [] for k in ("pose", "speed", "turn")}
+        records: list[StepRecord] = []
+        reported, truth, stamps = [], [], []
+        offset_s = 0.0
+        jumped = set()
+        reached = False
+        late = 0
+        late_steps: list[int] = []
+        period = dt / rate
+        wall_start = time.monotonic()
+        received: list[tuple[float, float, float, float]] = []  # sim time, v, w, measured speed
+        worlds = []  # (stamp key, true world) per step
+        for k in range(n_steps + 1):
+            rows["pose"].append((state.x, state.y, state.heading_rad))
+            rows["speed"].append(state.speed_mps)
+            rows["turn"].append(state.turn_rate_radps)
+            if np.hypot(*(path.goal - state.position)) <= goal_tolerance:
+                reached = True
+            if reached or k == n_steps or stop["flag"]:
+                records.append(StepRecord(status="end"))
+                break
+            t = float(times[k])
+            for f in faults:
+                if f.kind == "clock-back" and t >= f.at_s and id(f) not in jumped:
+                    jumped.add(id(f))
+                    offset_s -= f.amount_s
+            stamp_s = max(t + offset_s, 0.0) + 1.0  # +1 s: /clock never shows 0 (rclpy's "time not set")
+            stamp = convert.time_msg(stamp_s)
+            clock.clock = stamp
+            clock_pub.publish(clock)
+            if not any(f.kind == "odom" and f.active(t) for f in faults):
+                odom_pub.publish(convert.odometry("odom", "base_link", stamp, state.x, state.y, state.heading_rad,
+                                                  state.speed_mps, state.turn_rate_radps))
+            pose = np.array([state.x, state.y, state.heading_rad])
+            world = WorldSnapshot(t, pose, spec.robot.radius, positions[k], velocities[k], radii, walls)
+            scans = laser.scan(world)
+            for scanner, ranges in zip(laser.scanners, scans, strict=True):
+                active = [f for f in faults if f.scanner == scanner.name and f.active(t)]
+                if any(f.kind == "silence" for f in active):
+                    continue
+                if any(f.kind == "nan" for f in active):
+                    ranges = np.full_like(ranges, np.nan)
+                if any(f.kind == "short" for f in active):
+                    ranges = ranges[:-10]
+                scan_pubs[scanner.name].publish(convert.laser_scan(
+                    f"laser_{scanner.name}", stamp, scanner.angle_min_rad, scanner.angle_increment_rad, ranges,
+                    scanner.range_min_m, scanner.range_max_m, scanner.scan_period_s))
+            stamps.append(stamp_s)
+            count_before = got["cmd_count"]
+
+            key = round(stamp_s, 6)
+
+            published = sum(1 for n in names if not any(f.scanner == n and f.kind == "silence" and f.active(t) for f in faults))
+
+            def cycle_reported():
+                if key in got["by_stamp"]:
+                    return got["cmd_count"] > count_before  # its command too (another topic: may come second)
+                # no scan this step: the node's watchdog answers instead
+                return published == 0 and bool(got["watchdog"]) and got["watchdog"][-1] >= key - 1e-6
+
+            deadline = wall_start + (k + 1) * period
+            if lockstep:
+                spin_until(time.monotonic() + max_wait_s, cycle_reported)
+            spin_until(deadline)  # hold the rate
+            on_time = cycle_reported() and got["cmd_count"] > count_before
+            late += not on_time
+            if not on_time:
+                late_steps.append(k)
+            v, w = got["cmd"] if got["cmd"] is not None else (0.0, 0.0)
+            received.append((t, v, w, state.speed_mps))
+            records.append(StepRecord((v, w), v, late=not on_time))
+            worlds.append((key, world))
+            state = kinematics.step(state, Command(v, w), limits, dt)
+
+        spin_until(time.monotonic() + 0.5)  # the last reports
+        for rec, (key, world) in zip(records, worlds):
+            status = got["by_stamp"].get(key, {})
+            rec.plan_speed = float(status.get("plan_speed_mps", rec.command[0]))
+            rec.status = status.get("plan_status", status.get("mode", "none"))
+            rec.side = int(status.get("plan_side", 0))
+            rec.cycle_ms = float(status.get("cycle_time_ms") or "nan")
+            if status:
+                ids, pos, vel, rad = parse_tracks(status.get("tracks_xyv", ""))
+                rec.via = parse_points(status.get("via_xy", ""))
+                reported.append(Obstacles(pos, vel, rad, ids=ids))
+                truth.append(world)
+        n = len(rows["pose"])
+        trace = Trace(
+            scenario_name=spec.name, planner_name=(got["status"][-1].get("planner", "viapath") if got["status"] else "viapath"),
+            perception_mode="laser", dt_s=dt, path=path, robot_radius_m=spec.robot.radius, times_s=times[:n],
+            robot_poses=np.array(rows["pose"]), robot_speeds_mps=np.array(rows["speed"]),
+            robot_turn_rates_radps=np.array(rows["turn"]), commands=np.array([r.command for r in records]),
+            obstacle_positions=positions[:n], obstacle_velocities=velocities[:n], obstacle_radii_m=radii,
+            plan_speeds_mps=np.array([r.plan_speed for r in records]),
+            plan_targets=np.tile(path.goal, (len(records), 1)), plan_status=[r.status for r in records],
+            via_points=[r.via for r in records], plan_times_ms=np.array([r.cycle_ms for r in records[:-1]] + [np.nan]),
+            reached_goal=reached, walls=walls, extras={"nominal_speed_mps": spec.robot.speed, "seed": spec.seed if seed is None else seed},
+            plan_sides=np.array([r.side for r in records], dtype=int),
+        )
+        metrics = compute_metrics(trace)
+        shielded_cycles = [v for v in got["by_stamp"].values() if "shield_intervened" in v]
+        metrics.update({"shield": bool(shielded_cycles), "shield_interventions": (
+            sum(int(v["shield_intervened"]) for v in shielded_cycles) if shielded_cycles else None)})
+        if shielded_cycles:
+            metrics["shield_mode"] = shielded_cycles[-1].get("shield_mode")
+        metrics.update(tracking_errors(reported, truth))
+        metrics["perception_time_p50_ms"] = None
+        metrics["perception_time_p99_ms"] = None
+        metrics = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in metrics.items()}
+        if trace_file:
+            from viapath.io.trace import write_trace_csv
+
+            write_trace_csv(trace, trace_file)
+        if status_file:
+            with open(status_file, "w") as handle:
+                for values in got["status"]:
+                    handle.write(json.dumps(values) + "\n")
+        if commands_file:
+            np.savetxt(commands_file, np.array(received).reshape(-1, 4), delimiter=",", header="time_s,v_mps,w_radps,measured_speed_mps",
+                       comments="")
+        print(f"viapath ros2 sim: {len(records) - 1} steps, {late} without the node's command in time, "
+              f"rate {rate:g}{' lockstep' if lockstep else ''}, {time.monotonic() - wall_start:.1f} s"
+              + (f" (late steps: {late_steps[:10]})" if late_steps else ""), file=sys.stderr)
+        if as_json:
+            print(json.dumps(metrics, allow_nan=False))
+        else:
+            for key, value in metrics.items():
+                print(f"{key}: {value}")
+        return 0
+    finally:
+        node.destroy_node()
+        for s, h in previous.items():
+            signal.signal(s, h)
+        if rclpy.ok():
+            rclpy.shutdown()

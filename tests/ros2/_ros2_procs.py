@@ -1,0 +1,113 @@
+"""Start and end the processes of a ROS 2 test: each keeps DDS on this machine, in a domain of its own.
+
+Every process gets ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and a ``ROS_DOMAIN_ID`` that no
+other test (nor another pytest run started at the same time) uses; :class:`Processes` ends each by
+its pid (SIGTERM, then SIGKILL after a timeout), also when the test fails.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+_counter = itertools.count()
+
+
+def domain_id() -> int:
+    """A ROS_DOMAIN_ID in 1..100 unique within this run (offset by the pid against parallel runs)."""
+    return 1 + (os.getpid() * 17 + next(_counter)) % 100
+
+
+def ros_env(domain: int) -> dict[str, str]:
+    env = dict(os.environ)
+    env.update(ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(domain), PYTHONUNBUFFERED="1")
+    env.pop("ROS_STATIC_PEERS", None)
+    return env
+
+
+def viapath(*args: str) -> list[str]:
+    return [sys.executable, "-m", "viapath.cli", *args]
+
+
+class Processes:
+    """Processes started by one test or fixture; :meth:`stop_all` ends every one of them by pid."""
+
+    def __init__(self, folder: Path):
+        self.folder = Path(folder)
+        self.started: list[tuple[subprocess.Popen, Path, Path]] = []
+
+    def start(self, name: str, args: list[str], domain: int) -> subprocess.Popen:
+        out, err = self.folder / f"{name}.out", self.folder / f"{name}.err"
+        proc = subprocess.Popen(args, env=ros_env(domain), stdout=out.open("w"), stderr=err.open("w"),
+                                stdin=subprocess.DEVNULL)
+        self.started.append((proc, out, err))
+        return proc
+
+    def output(self, proc) -> tuple[str, str]:
+        for p, out, err in self.started:
+            if p is proc:
+                return out.read_text(), err.read_text()
+        raise KeyError(proc)
+
+    def wait(self, proc, timeout_s: float) -> int:
+        try:
+            return proc.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            out, err = self.output(proc)
+            raise AssertionError(f"process {proc.args} still running after {timeout_s} s; stderr: {err[-2000:]}") from None
+
+    @staticmethod
+    def stop(proc, timeout_s: float = 10.0) -> None:
+        if proc.poll() is not None:
+            return
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=timeout_s)
+
+    def stop_all(self) -> None:
+        for proc, _, _ in reversed(self.started):
+            self.stop(proc)
+
+
+class Pair:
+    """A planner node and a simulator node in one domain."""
+
+    def __init__(self, procs: Processes, name: str, scenario: str, sim_args=(), node_args=(), rate: float = 20.0):
+        self.procs, self.name = procs, name
+        self.domain = domain_id()
+        self.trace = procs.folder / f"{name}_trace.csv"
+        self.commands = procs.folder / f"{name}_commands.csv"
+        self.status = procs.folder / f"{name}_status.jsonl"
+        self.node = procs.start(f"{name}_node", viapath("ros2", "node", "--use-sim-time", *node_args), self.domain)
+        self.sim = procs.start(f"{name}_sim", viapath("ros2", "sim", scenario, "--rate", str(rate), "--lockstep", "--json",
+                                                      "--trace", str(self.trace), "--commands", str(self.commands),
+                                                      "--status-log", str(self.status),
+                                                      *sim_args), self.domain)
+
+    def finish(self, timeout_s: float = 150.0) -> dict:
+        code = self.procs.wait(self.sim, timeout_s)
+        out, err = self.procs.output(self.sim)
+        node_out, node_err = self.procs.output(self.node)
+        self.procs.stop(self.node)
+        assert code == 0, f"{self.name}: sim exited {code}: {err[-3000:]}\nnode: {node_err[-2000:]}"
+        self.sim_stderr = err
+        self.statuses = [json.loads(line) for line in self.status.read_text().splitlines() if line.strip()]
+        return json.loads(out.strip().splitlines()[-1])
+
+
+def wait_until(predicate, timeout_s: float, period_s: float = 0.05) -> bool:
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        if predicate():
+            return True
+        time.sleep(period_s)
+    return predicate()

@@ -1,0 +1,159 @@
+"""One launcher for every ROS 2 end-to-end test: all process groups start at once (each pair in a
+ROS domain of its own), so their start-up and lock-step waiting overlap; each test module then
+collects its group. Every process is ended by pid when the session ends, also on failure."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+from _ros2_procs import Pair, Processes, domain_id, viapath  # noqa: F401
+
+DATA = Path(os.environ.get("VIAPATH_DATA", Path(__file__).resolve().parents[3] / "shared" / "data"))
+BAG = DATA / "leg_tracker_laser" / "positive_2.bag"
+PAPER = ("paper-behind", "paper-front", "paper-side")
+EMPTY = """name: empty-corridor
+robot: {start: [0.0, 0.0], heading: 0.0, speed: 0.3, radius: 0.25}
+path: {waypoints: [[0.0, 0.0], [12.0, 0.0]], half_width: 1.0}
+obstacles: []
+duration_s: 60
+"""
+FRONT_FAULTS = ["silence:front@1.0-2.2", "nan:front@3.0-4.2", "odom@5.0-6.4", "clock-back:3@7.5"]
+REAR_FAULTS = ["silence:rear@1.0-2.5", "short:rear@3.5-5.0"]
+FRONT_DURATION_S, REAR_DURATION_S = 9.5, 6.0
+
+
+def reference_metrics(name: str) -> dict:
+    """``viapath run NAME --perception laser --json``, in this process (the circle fit in numpy: equal to
+    round-off, and no numba compile, which its cache does not keep here, in every process)."""
+    from viapath.scenarios import load_scenario
+    from viapath.sim.loop import run_episode
+
+    spec = load_scenario(name)
+    spec = spec.model_copy(update={"perception": spec.perception.model_copy(
+        update={"options": {"detector": {"keep_segments": False, "fit_backend": "numpy"}}})})
+    return run_episode(spec, perception="laser").metrics
+PLAY_PARAMS = """viapath:
+  ros__parameters:
+    scanner_names: ["laser"]
+    scanners:
+      laser: {topic: scan_front, frame_id: "", mount_x_m: 0.0, mount_y_m: 0.0, mount_yaw_rad: 0.0}
+    scan_geometry: from_message
+    detector: legs
+    tracker_acceleration_sigma_mps2: 0.5
+"""
+
+
+class Launcher:
+    def __init__(self, folder: Path):
+        self.folder = folder
+        self.procs = Processes(folder)
+        self.groups: dict[str, dict] = {}
+        self.results: dict[str, object] = {}
+
+    def start_all(self) -> None:
+        if self.groups:
+            return
+        procs, folder = self.procs, self.folder
+        self.groups["paper"] = {
+            "pairs": {name: Pair(procs, name, name) for name in PAPER},
+        }
+        import threading
+
+        references: dict[str, dict] = {}
+        thread = threading.Thread(target=lambda: references.update({n: reference_metrics(n) for n in PAPER}), daemon=True)
+        thread.start()
+        self.groups["paper"]["references"] = (thread, references)
+        scenario = folder / "empty.yaml"
+        scenario.write_text(EMPTY)
+        node_args = ["--ros-args", "-p", "nominal_speed_mps:=0.3"]
+        faults = lambda items: sum((["--fault", f] for f in items), [])  # noqa: E731
+        self.groups["faults"] = {
+            "front": Pair(procs, "front", str(scenario), ["--duration", str(FRONT_DURATION_S), *faults(FRONT_FAULTS)], node_args),
+            "rear": Pair(procs, "rear", str(scenario), ["--duration", str(REAR_DURATION_S), *faults(REAR_FAULTS)], node_args),
+        }
+        if BAG.is_file():
+            params = folder / "play.yaml"
+            params.write_text(PLAY_PARAMS)
+            domain = domain_id()
+            record = folder / "play_status.jsonl"
+            self.groups["play"] = {
+                "node": procs.start("play_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(params)), domain),
+                "play": procs.start("play_play", viapath("ros2", "play", str(BAG), "--topic", "right_scan", "--rate", "4",
+                                                         "--lockstep", "--status-log", str(record)), domain),
+                "record": record,
+            }
+
+    def paper(self):
+        if "paper" not in self.results:
+            from test_ros2_e2e import read_trace
+
+            group = self.groups["paper"]
+            runs, reference = {}, {}
+            for name, pair in group["pairs"].items():
+                runs[name] = (pair.finish(), read_trace(pair.trace), pair.sim_stderr)
+            thread, computed = group["references"]
+            thread.join(timeout=300)
+            reference = dict(computed)
+            self.results["paper"] = (runs, reference)
+        return self.results["paper"]
+
+    def faults(self):
+        if "faults" not in self.results:
+            from test_ros2_e2e import read_trace
+
+            out = {}
+            for name, pair in self.groups["faults"].items():
+                metrics = pair.finish()
+                out[name] = (metrics, read_trace(pair.trace), pair.statuses)
+            self.results["faults"] = out
+        return self.results["faults"]
+
+    def play(self):
+        if "play" not in self.groups:
+            pytest.skip(f"{BAG} not found (../shared/data absent)")
+        if "play" not in self.results:
+            group = self.groups["play"]
+            code = self.procs.wait(group["play"], 150)
+            _, err = self.procs.output(group["play"])
+            assert code == 0, err
+            self.procs.stop(group["node"])
+            lines = group["record"].read_text().splitlines()
+            self.results["play"] = [json.loads(line) for line in lines if line.strip()]
+        return self.results["play"]
+
+
+@pytest.fixture(scope="session")
+def ros2_launcher(tmp_path_factory):
+    from viapath.ros2 import rclpy_available
+
+    ok, why = rclpy_available()
+    if not ok:
+        pytest.skip(why)
+    launcher = Launcher(tmp_path_factory.mktemp("ros2_e2e"))
+    try:
+        launcher.start_all()
+        yield launcher
+    finally:
+        launcher.procs.stop_all()
+
+
+def pytest_collection_modifyitems(session, config, items):
+    """Tests that read the launched processes go last, so the fast ones run while those processes work."""
+    items.sort(key=lambda item: "ros2_launcher" in getattr(item, "fixturenames", ()) or
+               any(name in getattr(item, "fixturenames", ()) for name in ("paper_runs", "fault_runs", "play_tracks")))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _start_ros2_processes_early(request):
+    """Start the launcher with the first test when any collected test needs it."""
+    wanted = ("ros2_launcher", "paper_runs", "fault_runs", "play_tracks", "in_process")
+    if any(any(n in getattr(item, "fixturenames", ()) for n in wanted) for item in request.session.items):
+        from viapath.ros2 import rclpy_available
+
+        if rclpy_available()[0]:
+            request.getfixturevalue("ros2_launcher")
+    yield

@@ -1,0 +1,234 @@
+"""The node's cycle logic without ROS: bad input refused and reported, safe stops, limits always kept.
+
+Checks :class:`viapath.ros2.core.PlannerCore` directly (no rclpy, no DDS). Blind-sector claims are
+checked against an independent sampling of the scanners' fields of view, not against the code
+that makes them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from viapath.perception.raycast import simulate_scan
+from viapath.perception.scanner import ScannerModel
+from viapath.ros2.core import PlannerCore
+from viapath.ros2.settings import validate
+
+SCANNERS = (ScannerModel.urg04lx("front", "forward"), ScannerModel.urg04lx("rear", "backward"))
+FRAMES = ("laser_front", "laser_rear")
+
+
+def make_core(**values) -> PlannerCore:
+    core = PlannerCore(validate(values))
+    core.set_path([[0.0, 0.0], [5.0, 0.0]])
+    return core
+
+
+def scans_at(pose, people=np.array([[2.0, 0.0]])):
+    radii = np.full(len(people), 0.25)
+    return [simulate_scan(s, np.asarray(pose, float), people, radii) for s in SCANNERS]
+
+
+def feed(core, t, pose=(0.0, 0.0, 0.0), speed=0.2, scans=None, which=(0, 1), odom=True):
+    if odom:
+        core.on_odometry(t, t, "odom", pose[0], pose[1], pose[2], speed, 0.0)
+    scans = scans_at(pose) if scans is None else scans
+    due = False
+    for i in which:
+        s = SCANNERS[i]
+        due = core.on_scan(i, t, t, FRAMES[i], s.angle_min_rad, s.angle_increment_rad, scans[i])
+    return due
+
+
+def check_command(core, command, measured_speed):
+    lim = core.limits
+    dt = core.settings.cycle_period_s
+    assert math.isfinite(command.speed_mps) and math.isfinite(command.turn_rate_radps)
+    assert 0.0 <= command.speed_mps <= lim.max_speed_mps + 1e-12
+    assert abs(command.turn_rate_radps) <= lim.max_turn_rate_radps + 1e-12
+    assert abs(command.speed_mps - min(max(measured_speed, 0.0), lim.max_speed_mps)) <= lim.max_accel_mps2 * dt + 1e-9
+
+
+def test_a_normal_cycle_drives_and_tracks_the_person():
+    core = make_core()
+    for k in range(6):
+        assert feed(core, 1.0 + 0.1 * k)
+        result = core.cycle(1.0 + 0.1 * k)
+    assert result.mode == "driving" and result.reasons == []
+    assert len(result.obstacles) == 1 and np.allclose(result.obstacles.positions[0], [2.0, 0.0], atol=0.1)
+    assert result.command.speed_mps > 0.0
+
+
+@pytest.mark.parametrize("fault, reason", [
+    ("nan", "invalid"), ("zeros", "invalid"), ("short", "length"), ("frame", "frame"), ("angles", "angles"),
+])
+def test_bad_scans_are_refused_and_counted(fault, reason):
+    core = make_core()
+    s = SCANNERS[0]
+    ranges = scans_at((0.0, 0.0, 0.0))[0]
+    frame, angle_min = FRAMES[0], s.angle_min_rad
+    if fault == "nan":
+        ranges = np.full_like(ranges, np.nan)
+    elif fault == "zeros":
+        ranges = np.zeros_like(ranges)
+    elif fault == "short":
+        ranges = ranges[:-10]
+    elif fault == "frame":
+        frame = "somewhere_else"
+    elif fault == "angles":
+        angle_min += 0.2
+    assert not core.on_scan(0, 1.0, 1.0, frame, angle_min, s.angle_increment_rad, ranges)
+    assert core.health[0].refused == {reason: 1} and core.health[0].good == 0
+    result = core.cycle(1.0)
+    assert result.status["scanner front"]["state"] != "ok" and reason in result.status["scanner front"]["refused"]
+
+
+def test_inf_readings_are_no_return_not_a_failure():
+    core = make_core()
+    s = SCANNERS[0]
+    core.on_scan(0, 1.0, 1.0, FRAMES[0], s.angle_min_rad, s.angle_increment_rad, np.full(s.beam_count, np.inf))
+    assert core.health[0].good == 1 and core.health[0].refused == {}
+
+
+def test_no_scan_brakes_to_a_stop_within_the_limits():
+    core = make_core()
+    for k in range(3):
+        feed(core, 1.0 + 0.1 * k, speed=0.5)
+        core.cycle(1.0 + 0.1 * k)
+    speed = 0.5
+    speeds = []
+    for k in range(12):  # scans stop; odometry goes on, the robot slows as commanded
+        t = 1.3 + 0.1 * k
+        core.on_odometry(t, t, "odom", 0.0, 0.0, 0.0, speed, 0.0)
+        result = core.watchdog(t)
+        if t - 1.2 <= 0.3 + 1e-9:
+            assert result is None  # within the timeout the scan cycles are still expected
+            continue
+        check_command(core, result.command, speed)
+        assert "no scan for 0.3 s" in result.reasons
+        speed = result.command.speed_mps
+        speeds.append(speed)
+    assert speeds[-1] == 0.0 and result.mode == "stopped"
+    # hardest braking: 0.5 m/s at 0.8 m/s² is 0.625 s, so the seventh tick is at rest
+    assert speeds.index(0.0) == math.ceil(0.5 / (0.8 * 0.1) - 1e-9) - 1
+
+
+def test_no_odometry_brakes_from_the_last_command_to_zero():
+    core = make_core()
+    for k in range(3):
+        feed(core, 1.0 + 0.1 * k, speed=0.3)
+        core.cycle(1.0 + 0.1 * k)
+    core.last_command = type(core.last_command)(0.3, 0.5)
+    commands = []
+    for k in range(1, 15):  # scans go on, odometry stopped at 1.2 s
+        t = 1.2 + 0.1 * k
+        feed(core, t, odom=False)
+        commands.append(core.cycle(t).command)
+    late = [c for c, k in zip(commands, range(1, 15)) if 0.1 * k > 0.5 + 1e-9]
+    assert all(abs(a.speed_mps - b.speed_mps) <= 0.08 + 1e-9 for a, b in zip(late[:-1], late[1:]))
+    assert late[-1].speed_mps == 0.0 and late[-1].turn_rate_radps == 0.0
+
+
+def _blind_ahead_brute_force(scanners, robot_radius_m: float, cone_rad: float) -> bool:
+    """Independent check: sample points ahead beyond the body; is any of them outside every field of view?"""
+    for angle in np.linspace(-cone_rad, cone_rad, 61):
+        for r in np.linspace(robot_radius_m + 0.02, 3.0, 60):
+            p = np.array([r * math.cos(angle), r * math.sin(angle)])
+            seen = False
+            for s in scanners:
+                d = p - np.array([s.mount_x_m, s.mount_y_m])
+                bearing = math.atan2(math.sin(math.atan2(d[1], d[0]) - s.mount_yaw_rad), math.cos(math.atan2(d[1], d[0]) - s.mount_yaw_rad))
+                seen |= abs(bearing) <= s.field_of_view_rad / 2 and s.range_min_m <= np.hypot(*d) <= s.range_max_m
+            if not seen:
+                return True
+    return False
+
+
+@pytest.mark.parametrize("silent", [0, 1])
+def test_one_scanner_silent_marks_its_sector_blind_and_limits_the_speed(silent):
+    core = make_core()
+    live = 1 - silent
+    for k in range(3):
+        feed(core, 1.0 + 0.1 * k)
+        core.cycle(1.0 + 0.1 * k)
+    speed = 0.2
+    for k in range(3, 12):  # the base follows the command exactly
+        t = 1.0 + 0.1 * k
+        due = feed(core, t, speed=speed, which=(live,))
+        if due:  # the first lone scan waits one period for the other scanner
+            result = core.cycle(t)
+            speed = result.command.speed_mps
+    assert result.mode == "degraded"
+    blind_ahead = _blind_ahead_brute_force([SCANNERS[live]], 0.25, math.radians(30))
+    assert blind_ahead == (silent == 0)  # the front scanner silent leaves the way ahead unseen
+    expected_cap = 0.0 if blind_ahead else 0.8 * (0.3 / 1.0 - 0.1)
+    assert result.speed_cap_mps == pytest.approx(expected_cap)
+    assert result.command.speed_mps <= max(expected_cap, 0.2 - 9 * 0.08) + 1e-9
+    assert result.blind_sectors_rad and "silent: " + ("front" if silent == 0 else "rear") in result.reasons[-1]
+
+
+def test_time_jump_backwards_resets_and_holds_the_robot():
+    core = make_core()
+    for k in range(5):
+        feed(core, 5.0 + 0.1 * k)
+        core.cycle(5.0 + 0.1 * k)
+    assert len(core.tracker) > 0
+    speeds = []
+    speed = 0.2
+    for k in range(10):
+        t = 3.0 + 0.1 * k  # the clock went back 2.5 s
+        feed(core, t, speed=speed)
+        result = core.cycle(t)
+        check_command(core, result.command, speed)
+        speed = result.command.speed_mps
+        speeds.append((t, speed, result.mode))
+    assert any("time jump backwards" in e for e in core.events)
+    held = [v for t, v, _ in speeds if t < 3.0 + 0.5 - 1e-9]
+    assert all(a >= b for a, b in zip(held[:-1], held[1:]))  # braking while held
+    assert speeds[-1][2] == "driving" and speeds[-1][1] > 0.0
+
+
+@settings(max_examples=15, deadline=None, derandomize=True)
+@given(
+    garbage=st.lists(st.sampled_from([0.0, -1.0, float("nan"), float("inf"), float("-inf"), 1e9, 0.3, 1.5, 4.0]),
+                     min_size=683, max_size=683),
+    speed=st.floats(-1.0, 2.0),
+    turn=st.floats(-5.0, 5.0),
+    heading=st.floats(-10.0, 10.0),
+)
+def test_any_scan_and_odometry_give_a_finite_command_inside_the_limits(garbage, speed, turn, heading):
+    core = make_core()
+    s = SCANNERS[0]
+    ranges = np.array(garbage, dtype=float)
+    for k in range(3):
+        t = 1.0 + 0.1 * k
+        core.on_odometry(t, t, "odom", 0.5, 0.1, heading, speed, turn)
+        core.on_scan(0, t, t, FRAMES[0], s.angle_min_rad, s.angle_increment_rad, ranges)
+        core.on_scan(1, t, t, FRAMES[1], s.angle_min_rad, s.angle_increment_rad, np.roll(ranges, 7))
+        result = core.cycle(t)
+        c = result.command
+        assert math.isfinite(c.speed_mps) and math.isfinite(c.turn_rate_radps)
+        assert 0.0 <= c.speed_mps <= core.limits.max_speed_mps
+        assert abs(c.turn_rate_radps) <= core.limits.max_turn_rate_radps
+        v_meas = min(max(speed, 0.0), core.limits.max_speed_mps)
+        assert abs(c.speed_mps - v_meas) <= core.limits.max_accel_mps2 * 0.1 + 1e-9
+
+
+@pytest.mark.parametrize("use_shield, expected", [("default", True), ("off", False)])
+def test_the_shield_wraps_the_planner_and_its_verdict_is_reported(use_shield, expected):
+    from viapath.safety import ShieldedPlanner
+
+    core = make_core(use_shield=use_shield, **{"shield.mode": "passive-friendly"})
+    assert isinstance(core.planner, ShieldedPlanner) == expected
+    for k in range(5):
+        feed(core, 1.0 + 0.1 * k)
+        result = core.cycle(1.0 + 0.1 * k)
+    assert ("shield" in result.status) == expected
+    if expected:
+        assert core.planner.shield.config.mode == "passive-friendly"
+        assert result.status["shield"]["intervened"] in ("True", "False")
+        assert result.status["planner"]["shield_mode"] == "passive-friendly"
