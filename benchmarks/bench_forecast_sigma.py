@@ -25,7 +25,7 @@ from viapath.bench.suites import generate_suite
 from viapath.forecast import velocity_sigma_mps
 from viapath.observation import Obstacles
 from viapath.scenarios.models import Scenario
-from viapath.sim.perception import OraclePerception
+from viapath.perception.oracle import OraclePerception
 
 
 class HeadingSigmaOracle(OraclePerception):

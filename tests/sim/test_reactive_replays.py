@@ -228,3 +228,21 @@ def test_cli_writes_the_reactive_suite_and_the_report_keeps_the_modes_apart(tmp_
     assert [f.stem for f in files] == ["eth-ucy-react-eth-0000", "eth-ucy-react-hotel-0001"]
     assert load_scenario(files[0]).obstacles[0].replay.react is True
     assert family_of(files[0].stem) == "eth-ucy-react-eth" != family_of("eth-ucy-eth-0000")
+
+
+def test_nobody_enters_inside_the_robot(tmp_path):
+    # A recording that begins (at 2 s) right where the robot stands, walking away along +x.
+    tracks = load_tracks(write_track(tmp_path, start=(0.1, 0.05), rows=20, first_row=5), ROW_S)
+    times = episode_times(10.0)
+    recorded, _ = replay_states(tracks, times, ROW_S)
+    robot = np.zeros((len(times), 2))
+    entry = np.flatnonzero(np.isfinite(recorded[:, 0, 0]))[0]
+    assert surface_gap(recorded[entry, 0][None], robot[entry][None])[0] < -0.3  # plain: appears inside it
+    reactive = ReactiveReplay(tracks, times, 0.0, ROW_S)
+    drive(reactive, lambda k: (0.0, 0.0))
+    gap = surface_gap(reactive.positions[:, 0], robot)
+    assert np.nanmin(gap) >= 0.3 - 1e-9  # enters 0.3 m from it, and no closer afterwards
+    np.testing.assert_allclose(reactive.positions[entry, 0] / np.hypot(*reactive.positions[entry, 0]),
+                               np.array([0.1, 0.05]) / np.hypot(0.1, 0.05), atol=0.05)  # straight away from the centre
+    last = np.flatnonzero(np.isfinite(recorded[:, 0, 0]))[-1]
+    assert np.hypot(*(reactive.positions[last, 0] - recorded[last, 0])) < 0.05  # then back on the track

@@ -39,7 +39,14 @@ What the sources leave open and we chose:
   avoidance, and a deviation is short and local. Reactive people do not see walls.
 * Integration: semi-implicit Euler at ``step_s = 0.05 s`` (two sub-steps per 0.1 s cycle); during
   one cycle the robot is taken where it was at the start of the cycle (what people saw last).
-* A person enters the scene on their track (e = w = 0) and leaves it when their recording ends.
+* A person enters the scene on their track (e = w = 0) and leaves it when their recording ends —
+  except that nobody enters *inside or against* the robot: a person whose recording begins less
+  than ``spawn_gap_m = 0.3 m`` (surface to surface) from the robot enters that far from it, pushed
+  straight away from the robot's centre (and is then pulled back to the track like any deviation).
+  A real person would have walked round the robot before entering the recorded area; without this
+  rule 3 of viapath's 4 contacts on the first ``eth-ucy-react`` run were people appearing
+  overlapping the robot (present for 0 s), which no planner can avoid. People present at the
+  episode's first step are not moved (the suites keep everyone 1 m from the start).
 * The velocity given to the planner is, as for plain replays (:func:`viapath.io.eth_ucy.replay_states`),
   a backward difference over one row step of the person's *actual* positions: the recording's
   estimate plus the backward difference of the deviation.
@@ -72,6 +79,7 @@ class ReactiveParams:
     max_speed_factor: float = 1.3
     min_speed_cap_mps: float = 1.0
     standing_speed_mps: float = 0.1
+    spawn_gap_m: float = 0.3
     step_s: float = 0.05
 
 
@@ -152,6 +160,7 @@ class ReactiveReplay:
                 pieces = np.diff(track.positions, axis=0) / np.diff(track.times_s)[:, None]
                 self.recorded_velocity[:, c] = pieces[piece]
         self.recorded_velocity[~self.present] = 0.0
+        self.was_present = self.present[0].copy()
 
     def _fill_row(self, row: int) -> None:
         """Row ``row`` of positions and past-only velocity estimates: recording + deviation."""
@@ -181,6 +190,14 @@ class ReactiveReplay:
             deviation_rate = np.where(span[:, None] > 1e-9, (e_now - e_before) / span[:, None], 0.0)
         self.velocities[row, idx] = self.velocities[row, idx] + deviation_rate
 
+    def _entry_deviation(self, recorded: np.ndarray, robot_position: np.ndarray) -> np.ndarray:
+        """Deviation (M, 2) that puts people entering at ``recorded`` at least ``spawn_gap_m`` from the robot."""
+        away = recorded - robot_position
+        centre = np.hypot(away[:, 0], away[:, 1])
+        wanted = self.surface_m + self.params.spawn_gap_m
+        direction = np.where(centre[:, None] > 1e-9, away / np.maximum(centre, 1e-9)[:, None], np.array([1.0, 0.0]))
+        return np.where((centre < wanted)[:, None], robot_position + direction * wanted - recorded, 0.0)
+
     # -- one cycle --------------------------------------------------------------------------------
     def step(self, robot_position, robot_velocity) -> None:
         """Advance people from step ``k`` to ``k + 1``, seeing the robot where it is at step ``k``."""
@@ -198,6 +215,10 @@ class ReactiveReplay:
             present = self.present[g]
             e[~present] = 0.0
             w[~present] = 0.0
+            entering = present & ~self.was_present
+            self.was_present = present
+            if entering.any():
+                e[entering] = self._entry_deviation(self.recorded[g, entering], robot_position)
             if not present.any():
                 continue
             recorded_velocity = self.recorded_velocity[g, present]
@@ -214,6 +235,10 @@ class ReactiveReplay:
         present_end = self.present[(self.k + 1) * self.substeps]
         e[~present_end] = 0.0
         w[~present_end] = 0.0
+        entering = present_end & ~self.was_present
+        self.was_present = present_end
+        if entering.any():
+            e[entering] = self._entry_deviation(self.recorded[(self.k + 1) * self.substeps, entering], robot_position)
         self.k += 1
         self.deviations[self.k, active] = e
         self.deviation_velocity[active] = w
