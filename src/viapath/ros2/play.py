@@ -19,7 +19,6 @@ What we chose:
 
 from __future__ import annotations
 
-import signal
 import sys
 import time
 
@@ -32,7 +31,7 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
     from diagnostic_msgs.msg import DiagnosticArray
     from nav_msgs.msg import Odometry
     from rclpy.qos import QoSProfile, ReliabilityPolicy
-    from rclpy.signals import SignalHandlerOptions
+    from viapath.ros2.process import finish_ros_process, start_ros_process
     from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import LaserScan
 
@@ -42,11 +41,7 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
     messages = list(read_laser_scans(bag, topic))
     if not messages:
         raise ValueError(f"{bag}: the topic holds no scans")
-    rclpy.init(args=[sys.argv[0]] + (["--ros-args", *ros_args] if ros_args else []),
-               signal_handler_options=SignalHandlerOptions.NO)
-    stop = {"flag": False}
-    previous = {s: signal.signal(s, lambda *_: stop.__setitem__("flag", True)) for s in (signal.SIGINT, signal.SIGTERM)}
-    node = rclpy.create_node("viapath_play")
+    node, stop, previous = start_ros_process("viapath_play", ros_args)
     try:
         qos = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
         scan_pub = node.create_publisher(LaserScan, out_topic, qos)
@@ -112,8 +107,4 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
         print(f"viapath ros2 play: {sent} scans from {bag} on {out_topic}, {len(cycles)} node cycles seen", file=sys.stderr)
         return 0
     finally:
-        node.destroy_node()
-        for s, h in previous.items():
-            signal.signal(s, h)
-        if rclpy.ok():
-            rclpy.shutdown()
+        finish_ros_process(node, previous)

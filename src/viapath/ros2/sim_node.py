@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import json
 import math
-import signal
 import sys
 import time
 from dataclasses import dataclass, field
@@ -100,7 +99,7 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
     from nav_msgs.msg import Odometry
     from nav_msgs.msg import Path as PathMsg
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
-    from rclpy.signals import SignalHandlerOptions
+    from viapath.ros2.process import finish_ros_process, start_ros_process
     from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import LaserScan
 
@@ -135,11 +134,7 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
         if f.scanner and f.scanner not in names:
             raise ValueError(f"--fault: unknown scanner {f.scanner!r}; scanners: {', '.join(names)}")
 
-    rclpy.init(args=[sys.argv[0]] + (["--ros-args", *ros_args] if ros_args else []),
-               signal_handler_options=SignalHandlerOptions.NO)
-    stop = {"flag": False}
-    previous = {s: signal.signal(s, lambda *_: stop.__setitem__("flag", True)) for s in (signal.SIGINT, signal.SIGTERM)}
-    node = rclpy.create_node("viapath_sim")
+    node, stop, previous = start_ros_process("viapath_sim", ros_args)
     try:
         latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
         clock_pub = node.create_publisher(Clock, "/clock", 10)
@@ -335,8 +330,4 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
                 print(f"{key}: {value}")
         return 0
     finally:
-        node.destroy_node()
-        for s, h in previous.items():
-            signal.signal(s, h)
-        if rclpy.ok():
-            rclpy.shutdown()
+        finish_ros_process(node, previous)
