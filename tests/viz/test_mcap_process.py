@@ -15,7 +15,7 @@ mcap_reader = pytest.importorskip("mcap.reader", reason="needs the viz extra (mc
 
 from viapath.scenarios import load_scenario  # noqa: E402
 from viapath.sim.loop import run_episode  # noqa: E402
-from viapath.viz.foxglove import Views, ViewError  # noqa: E402
+from viapath.viz.foxglove import FoxglovePublisher, Views, ViewError  # noqa: E402
 from viapath.viz.mcap_process import MCAPWriterProcess  # noqa: E402
 
 
@@ -90,5 +90,5 @@ def test_the_writer_refuses_a_file_it_cannot_open(tmp_path):
 
     path = DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths())
     with pytest.raises(ViewError, match="could not start"):
-        MCAPWriterProcess(existing, False, path, scenario.robot.radius)
+        MCAPWriterProcess(existing, False, path, scenario.robot.radius, FoxglovePublisher, ViewError)
     assert existing.read_bytes() == b"keep me"

@@ -593,7 +593,7 @@ class Views:
             from viapath.viz.mcap_process import MCAPWriterProcess
 
             self.writer_process = MCAPWriterProcess(self.mcap, self.force, path, self.scenario.robot.radius,
-                                                    self.settings)
+                                                    FoxglovePublisher, ViewError, self.settings)
             self.on_step = self.writer_process
             return self
         context = foxglove.Context()

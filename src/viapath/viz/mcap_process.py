@@ -14,7 +14,7 @@ the run's own process an MCAP doubles the run. A recorder beside the robot is ho
 * It is started by ``fork`` where the platform has it (it then inherits the imports: starts in a few
   ms) and ``spawn`` elsewhere. It opens the file and reports ready (or its error) before the run
   starts; at the end the run's process sends "done" and waits for the count of cycles written.
-  If the writer fails mid-run, the next send or the end raises :class:`ViewError` with its reason.
+  If the writer fails mid-run, the next send or the end raises the given error (the views pass :class:`~viapath.viz.foxglove.ViewError`) with its reason.
 
 Choices: a pipe rather than a ``multiprocessing.Queue`` (no feeder thread competing for the GIL);
 when the writer falls behind, the run waits on the pipe (its buffer holds tens of cycles), so memory
@@ -55,8 +55,8 @@ def cycle_input(record) -> tuple:
             state.turn_rate_radps, record.observation, record.decision, record.plan_time_ms, parts, truth)
 
 
-def _writer_main(connection, file: str, force: bool, waypoints, half_widths_m, robot_radius_m: float,
-                 settings) -> None:
+def _writer_main(connection, publisher_class, file: str, force: bool, waypoints, half_widths_m,
+                 robot_radius_m: float, settings) -> None:
     """The writer process: open the file, then build and log each cycle until told it is done."""
     writer = None
     try:
@@ -64,14 +64,13 @@ def _writer_main(connection, file: str, force: bool, waypoints, half_widths_m, r
         from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
         from viapath.path import DesignatedPath
-        from viapath.viz.foxglove import FoxglovePublisher
         from viapath.viz.scene import SceneBuilder
 
         context = foxglove.Context()
         writer = foxglove.open_mcap(file, allow_overwrite=force, context=context,
                                     writer_options=MCAPWriteOptions(compression=MCAPCompression.Lz4))
         path = DesignatedPath(waypoints, half_widths_m=half_widths_m)
-        publisher = FoxglovePublisher(context, path, robot_radius_m, settings)
+        publisher = publisher_class(context, path, robot_radius_m, settings)
         connection.send((_READY, None))
         while True:
             message = connection.recv_bytes()
@@ -103,12 +102,14 @@ def _writer_main(connection, file: str, force: bool, waypoints, half_widths_m, r
 
 
 class MCAPWriterProcess:
-    """The ``on_step`` callback that hands each cycle to a writer process (see module notes)."""
+    """The ``on_step`` callback that hands each cycle to a writer process (see module notes).
+    ``publisher_class`` logs a scene on a foxglove context (:class:`viapath.viz.foxglove.FoxglovePublisher`,
+    passed in so that this module does not import the one that uses it); ``error`` is the
+    exception raised when the writer fails."""
 
-    def __init__(self, file: Path | str, force: bool, path, robot_radius_m: float, settings=None):
-        from viapath.viz.foxglove import ViewError
-
-        self._error = ViewError
+    def __init__(self, file: Path | str, force: bool, path, robot_radius_m: float, publisher_class,
+                 error: type[Exception] = RuntimeError, settings=None):
+        self._error = error
         self.file = Path(file)
         self.cycles = 0
         self._first = True
@@ -116,14 +117,14 @@ class MCAPWriterProcess:
         self._connection, child = ctx.Pipe(duplex=True)
         self.process = ctx.Process(
             target=_writer_main, name="viapath-mcap-writer", daemon=True,
-            args=(child, str(self.file), force, np.asarray(path.waypoints, dtype=float),
+            args=(child, publisher_class, str(self.file), force, np.asarray(path.waypoints, dtype=float),
                   np.asarray(path.half_widths_m, dtype=float), float(robot_radius_m), settings))
         self.process.start()
         child.close()
         kind, detail = self._receive()
         if kind != _READY:
             self._stop()
-            raise ViewError(f"--mcap {self.file}: the writer could not start ({detail})")
+            raise error(f"--mcap {self.file}: the writer could not start ({detail})")
 
     def _receive(self) -> tuple[str, Any]:
         try:
