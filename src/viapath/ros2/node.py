@@ -80,7 +80,7 @@ def make_node_class():
     from visualization_msgs.msg import MarkerArray
 
     from viapath.ros2 import convert
-    from viapath.ros2.markers import marker_array, scene_from_cycle
+    from viapath.ros2.markers import MarkerScenes, marker_array
 
     class ViaPathNode(LifecycleNode):
         """Scans + odometry + designated path in; cmd_vel, markers and diagnostics out."""
@@ -124,6 +124,7 @@ def make_node_class():
                 self.get_logger().error(f"refusing to start: {self.error}")
                 return TransitionCallbackReturn.FAILURE
             s = self.core.settings
+            self._scenes = MarkerScenes(s.robot_radius_m)
             cmd_type = TwistStamped if s.cmd_vel_stamped else Twist
             self._pubs["cmd"] = self.create_lifecycle_publisher(cmd_type, s.cmd_vel_topic, 10)
             self._pubs["markers"] = self.create_lifecycle_publisher(MarkerArray, s.markers_topic, 5)
@@ -236,9 +237,12 @@ def make_node_class():
             assert math.isfinite(cmd.speed_mps) and math.isfinite(cmd.turn_rate_radps)
             self._pubs["cmd"].publish(self._command_msg(cmd.speed_mps, cmd.turn_rate_radps, result.stamp_s))
             stamp = self._stamp(result.stamp_s)
-            if markers and self._pubs["markers"].get_subscription_count() > 0:  # built only for someone watching
-                scene = scene_from_cycle(self.core.path, result)
-                self._pubs["markers"].publish(marker_array(scene, self.core.settings.odom_frame or "odom", stamp))
+            path = self.core.path
+            if markers and path is not None and self._pubs["markers"].get_subscription_count() > 0:
+                # built only for someone watching, after cmd_vel is out
+                scene = self._scenes.scene(path, self.core.planner, result)
+                corridor = self._scenes.builder(path, self.core.planner).path_view
+                self._pubs["markers"].publish(marker_array(scene, corridor, self.core.settings.odom_frame or "odom", stamp))
             self._pubs["status"].publish(self._diagnostics(result, stamp))
 
         def _inputs_matched(self) -> bool:
