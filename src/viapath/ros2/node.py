@@ -287,10 +287,24 @@ def make_node_class():
     return ViaPathNode
 
 
+def _executor(kind: str):
+    """rclpy's EventsExecutor where it exists (Kilted: ``rclpy.experimental``), which takes a callback
+    from DDS to Python without rebuilding a wait set per wake-up (the pure-Python executor's cost,
+    about a millisecond per scan on this machine); else, or when asked, the SingleThreadedExecutor."""
+    from rclpy.executors import SingleThreadedExecutor
+
+    if kind == "events":
+        try:
+            from rclpy.experimental import EventsExecutor
+        except ImportError:
+            return SingleThreadedExecutor()
+        return EventsExecutor()
+    return SingleThreadedExecutor()
+
+
 def run_node(ros_args: list[str] | None = None) -> int:
     """Start the node (``ros_args``: arguments after ``--ros-args``); returns the exit code."""
     import rclpy
-    from rclpy.executors import SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
     args = [sys.argv[0]] + (["--ros-args", *ros_args] if ros_args else [])
@@ -315,7 +329,7 @@ def run_node(ros_args: list[str] | None = None) -> int:
                 print(f"error: {node.error}", file=sys.stderr)
                 return 2
             node.trigger_activate()
-        executor = SingleThreadedExecutor()
+        executor = _executor(str(node.get_parameter("executor").value))
         executor.add_node(node)
         while not stop["flag"] and rclpy.ok():
             executor.spin_once(timeout_sec=0.05)

@@ -14,7 +14,8 @@ the run's own process an MCAP doubles the run. A recorder beside the robot is ho
 * It is started by ``fork`` where the platform has it (it then inherits the imports: starts in a few
   ms) and ``spawn`` elsewhere. It opens the file and reports ready (or its error) before the run
   starts; at the end the run's process sends "done" and waits for the count of cycles written.
-  If the writer fails mid-run, the next send or the end raises the given error (the views pass :class:`~viapath.viz.foxglove.ViewError`) with its reason.
+  If the writer fails mid-run, the next send or the end raises the given error (the views pass
+  :class:`~viapath.viz.foxglove.ViewError`) with its reason.
 
 Choices: a pipe rather than a ``multiprocessing.Queue`` (no feeder thread competing for the GIL);
 when the writer falls behind, the run waits on the pipe (its buffer holds tens of cycles), so memory
