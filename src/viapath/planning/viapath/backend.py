@@ -1,0 +1,98 @@
+"""Which arithmetic the viapath planner runs: the numpy reference or the compiled kernels (extra ``fast``).
+
+Source: issue 16 (a compiled hot path, the numpy path stays the reference); docs/speed.md.
+
+* Option ``backend`` (:mod:`.options`): ``auto`` (default) uses numba when it is importable, ``numpy``
+  and ``numba`` force one (``numba`` without numba installed is an error naming the extra). The
+  environment variable ``VIAPATH_PLANNER_BACKEND`` (same choices) overrides ``auto`` only, so a
+  whole benchmark can be run on the reference path without touching its scenario files.
+* A :class:`Backend` holds the two hot functions, :meth:`legs_first_contact` (leg-against-people
+  checks) and :meth:`track` (motion-limit roll-outs), with the numpy signatures; the compiled ones get
+  C-contiguous float64 arrays. The planner says in ``plan.extras["backend"]`` which one ran.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from viapath.geometry import legs_first_contact as numpy_legs_first_contact
+from viapath.kinematics import UnicycleState
+from viapath.kinematics import track as numpy_track
+from viapath.observation import MotionLimits
+
+BACKENDS = ("auto", "numpy", "numba")
+ENVIRONMENT_VARIABLE = "VIAPATH_PLANNER_BACKEND"
+
+
+def numba_available() -> bool:
+    return importlib.util.find_spec("numba") is not None
+
+
+def resolve(choice: str) -> str:
+    """``numpy`` or ``numba`` for an option value (``auto`` looks at the environment, then at numba)."""
+    if choice == "auto":
+        override = os.environ.get(ENVIRONMENT_VARIABLE, "").strip().lower()
+        if override and override != "auto":
+            if override not in BACKENDS:
+                raise ValueError(f"environment variable {ENVIRONMENT_VARIABLE}={override!r}: expected one of "
+                                 f"{', '.join(BACKENDS)}")
+            choice = override
+        else:
+            return "numba" if numba_available() else "numpy"
+    if choice == "numba" and not numba_available():
+        raise ValueError("viapath option backend='numba' needs numba: install the extra 'fast' "
+                         "(pip install 'viapath[fast]')")
+    if choice not in ("numpy", "numba"):
+        raise ValueError(f"viapath option backend={choice!r}: expected one of {', '.join(BACKENDS)}")
+    return choice
+
+
+@dataclass(frozen=True)
+class Backend:
+    name: str  # numpy | numba
+
+    def legs_first_contact(self, starts, start_times, velocities, durations, positions, velocities_obs, radii,
+                           growth, growth_until_s) -> np.ndarray:
+        if self.name == "numpy":
+            return numpy_legs_first_contact(starts, start_times, velocities, durations, positions, velocities_obs,
+                                            radii, growth, growth_until_s)
+        from viapath.planning.viapath import kernels
+
+        n = len(positions)
+        return kernels.legs_first_contact(
+            _c(starts), _c(start_times), _c(velocities), _c(durations), _c(positions), _c(velocities_obs),
+            _per_obstacle(radii, n), _per_obstacle(growth, n), _per_obstacle(growth_until_s, n))
+
+    def track(self, state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float, steps: int,
+              heading_gain: float) -> np.ndarray:
+        if self.name == "numpy":
+            return numpy_track(state, target, speed_mps, limits, dt_s, steps, heading_gain)
+        from viapath.planning.viapath import kernels
+
+        return kernels.track(float(state.x), float(state.y), float(state.heading_rad), float(state.speed_mps),
+                             float(state.turn_rate_radps), float(target[0]), float(target[1]), float(speed_mps),
+                             float(limits.max_speed_mps), float(limits.max_turn_rate_radps),
+                             float(limits.max_accel_mps2), float(limits.max_turn_accel_radps2), float(dt_s),
+                             int(steps), float(heading_gain))
+
+
+def _c(array) -> np.ndarray:
+    return np.ascontiguousarray(array, dtype=np.float64)
+
+
+def _per_obstacle(values, n: int) -> np.ndarray:
+    """One float64 per obstacle (a scalar is repeated)."""
+    if isinstance(values, np.ndarray) and values.shape == (n,):
+        return _c(values)
+    return np.full(n, values, dtype=np.float64) if np.ndim(values) == 0 else _c(np.broadcast_to(values, (n,)))
+
+
+NUMPY = Backend("numpy")
+
+
+def backend_for(choice: str) -> Backend:
+    return Backend(resolve(choice))
