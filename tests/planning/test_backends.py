@@ -164,3 +164,57 @@ def test_planners_command_says_which_path_runs(monkeypatch):
         assert backend and backend[0]["resolved"] == expected and backend[0]["default"] == "auto"
         text = CliRunner().invoke(app, ["planners", "viapath"]).output
         assert f"(here: {expected})" in text
+
+
+def test_via_options_kernel_matches_reference():
+    """Via points of random (node, obstacle) pairs: nodes inside the disc, obstacles faster and slower
+    than the robot (two roots or one), the cone capped before and after the passing time."""
+    from viapath.geometry import via_options
+    from viapath.planning.viapath import kernels
+
+    rng = np.random.default_rng(11)
+    p = 500
+    starts = rng.uniform(-3, 3, (p, 2))
+    times = rng.uniform(0, 5, p)
+    speeds = rng.uniform(0.05, 0.6, p)
+    positions = rng.uniform(-3, 3, (p, 2))
+    positions[:20] = starts[:20]  # the node sits on the obstacle: no tangent
+    velocities = rng.uniform(-1.5, 1.5, (p, 2))
+    radii = rng.uniform(0.4, 0.9, p)
+    growth = np.where(rng.random(p) < 0.5, 0.0, rng.uniform(0, 0.2, p))
+    with np.errstate(divide="ignore"):
+        until = np.where(growth > 0, 0.15 / np.where(growth > 0, growth, 1.0), np.inf)
+    envelope = np.where(rng.random(p) < 0.5, 0.0, rng.uniform(0, 0.3, p))
+    expected = via_options(starts, times, speeds, positions, velocities, radii, growth, until, envelope, 30.0)
+    got = kernels.via_options(starts, times, speeds, positions, velocities, radii, growth, until, envelope, 30.0)
+    assert np.array_equal(expected[0], got[0]) and np.array_equal(expected[1], got[1])
+    for a, b in zip(expected[2:], got[2:]):
+        assert np.allclose(a, b, rtol=0.0, atol=1e-12)
+    late = np.isin(expected[1], (2, 3))
+    assert late.any() and (~late).any() and len(np.unique(expected[0])) < p  # both roots; some pairs have none
+
+
+@pytest.mark.parametrize("path", PATHS, ids=["straight", "corner", "zigzag"])
+def test_corridor_kernels_match_reference(path):
+    """Corridor checks of random legs (inside, across a junction, leaving) against the numpy reference."""
+    from viapath.planning.viapath.backend import Backend
+    from viapath.planning.viapath.checks import LegChecks
+
+    rng = np.random.default_rng(13)
+    low, high = path.waypoints.min(axis=0) - 1.5, path.waypoints.max(axis=0) + 1.5
+    starts, ends = rng.uniform(low, high, (600, 2)), rng.uniform(low, high, (600, 2))
+    compiled = Backend("numba")
+    for tolerance in (1e-9, 0.3):
+        expected = path.legs_inside(starts, ends, 0.05, tolerance)
+        assert np.array_equal(compiled.legs_inside(path, starts, ends, 0.05, tolerance), expected)
+        assert expected.any() and not expected.all()
+    for subgoal_index in range(len(path.waypoints)):
+        checks = LegChecks(path=path, position=np.zeros(2), heading_rad=0.0, speed_mps=0.0, turn_rate_radps=0.0,
+                           subgoal=path.waypoints[subgoal_index], subgoal_index=subgoal_index,
+                           is_final_subgoal=False, obstacles=None, check_radii=None, growth=None, growth_until_s=None,
+                           via_radii=None, horizon_s=10.0, stop_short_m=0.0, continuation=None,
+                           corridor_tolerance_m=1e-9, corridor_check_spacing_m=0.05)
+        expected = checks.goal_legs_inside(starts)
+        got = compiled.goal_legs_inside(path, starts, checks.subgoal, subgoal_index, 0.05, 1e-9)
+        assert np.array_equal(got, expected)
+        assert expected.any() and not expected.all()

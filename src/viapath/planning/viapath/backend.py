@@ -6,8 +6,10 @@ Source: issue 16 (a compiled hot path, the numpy path stays the reference); docs
   and ``numba`` force one (``numba`` without numba installed is an error naming the extra). The
   environment variable ``VIAPATH_PLANNER_BACKEND`` (same choices) overrides ``auto`` only, so a
   whole benchmark can be run on the reference path without touching its scenario files.
-* A :class:`Backend` holds the two hot functions, :meth:`legs_first_contact` (leg-against-people
-  checks) and :meth:`track` (motion-limit roll-outs), with the numpy signatures; the compiled ones get
+* A :class:`Backend` holds the hot functions, :meth:`legs_first_contact` (leg-against-people
+  checks), :meth:`via_options` (via points of (node, obstacle) pairs), :meth:`legs_inside` and
+  :meth:`goal_legs_inside` (corridor checks) and :meth:`track` (motion-limit roll-outs), with the
+  numpy signatures; the compiled ones get
   C-contiguous float64 arrays. The planner says in ``plan.extras["backend"]`` which one ran.
 """
 
@@ -20,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from viapath.geometry import legs_first_contact as numpy_legs_first_contact
+from viapath.geometry import via_options as numpy_via_options
 from viapath.kinematics import UnicycleState
 from viapath.kinematics import track as numpy_track
 from viapath.observation import MotionLimits
@@ -67,6 +70,41 @@ class Backend:
             _c(starts), _c(start_times), _c(velocities), _c(durations), _c(positions), _c(velocities_obs),
             _per_obstacle(radii, n), _per_obstacle(growth, n), _per_obstacle(growth_until_s, n))
 
+    def via_options(self, starts, start_times, speeds, positions, velocities, via_radii, growth, growth_until_s,
+                    envelope_m, max_time_s):
+        if self.name == "numpy":
+            return numpy_via_options(starts, start_times, speeds, positions, velocities, via_radii, growth,
+                                     growth_until_s, envelope_m, max_time_s)
+        from viapath.planning.viapath import kernels
+
+        n = len(starts)
+        return kernels.via_options(_c(starts), _c(start_times), _c(speeds), _c(positions), _c(velocities),
+                                   _per_obstacle(via_radii, n), _per_obstacle(growth, n),
+                                   _per_obstacle(growth_until_s, n), _per_obstacle(envelope_m, n), float(max_time_s))
+
+    def legs_inside(self, path, starts, ends, spacing_m: float, tolerance_m: float) -> np.ndarray:
+        if self.name == "numpy":
+            return path.legs_inside(starts, ends, spacing_m, tolerance_m)
+        from viapath.planning.viapath import kernels
+
+        return kernels.legs_inside(*_corridor(path), _c(np.reshape(starts, (-1, 2))), _c(np.reshape(ends, (-1, 2))),
+                                   float(spacing_m), float(tolerance_m))
+
+    def goal_legs_inside(self, path, starts, subgoal, subgoal_index: int, spacing_m: float,
+                         tolerance_m: float) -> np.ndarray | None:
+        """None on the numpy path (the caller's own code is the reference)."""
+        if self.name == "numpy":
+            return None
+        from viapath.planning.viapath import kernels
+
+        inside = kernels.goal_legs_inside(*_corridor(path), _c(starts), int(subgoal_index), float(tolerance_m))
+        if not inside.all():
+            rest = np.flatnonzero(~inside)
+            inside[rest] = kernels.legs_inside(*_corridor(path), _c(starts[rest]),
+                                               _c(np.broadcast_to(subgoal, (len(rest), 2))), float(spacing_m),
+                                               float(tolerance_m))
+        return inside
+
     def track(self, state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float, steps: int,
               heading_gain: float) -> np.ndarray:
         if self.name == "numpy":
@@ -82,6 +120,16 @@ class Backend:
 
 def _c(array) -> np.ndarray:
     return np.ascontiguousarray(array, dtype=np.float64)
+
+
+def _corridor(path):
+    """The path's segment arrays, C-contiguous float64 (cached on the path object)."""
+    arrays = getattr(path, "_kernel_arrays", None)
+    if arrays is None:
+        arrays = (_c(path.segment_starts), _c(path.segment_directions), _c(path.segment_lengths_m),
+                  _c(path.half_widths_m))
+        path._kernel_arrays = arrays
+    return arrays
 
 
 def _per_obstacle(values, n: int) -> np.ndarray:

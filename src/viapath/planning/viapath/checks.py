@@ -155,9 +155,14 @@ class LegChecks:
         return self.path.corridor_excess(points) <= self.corridor_tolerance_m
 
     def legs_inside(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-        return self.path.legs_inside(starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m)
+        return self.backend.legs_inside(self.path, starts, ends, self.corridor_check_spacing_m,
+                                        self.corridor_tolerance_m)
 
     def goal_legs_inside(self, starts: np.ndarray) -> np.ndarray:
+        compiled = self.backend.goal_legs_inside(self.path, starts, self.subgoal, self.subgoal_index,
+                                                 self.corridor_check_spacing_m, self.corridor_tolerance_m)
+        if compiled is not None:
+            return compiled
         # The subgoal ends both capsules next to it; a leg from a point inside one of them is inside
         # that capsule (convex). Only other legs need the general check.
         path = self.path
