@@ -218,3 +218,36 @@ def test_corridor_kernels_match_reference(path):
         got = compiled.goal_legs_inside(path, starts, checks.subgoal, subgoal_index, 0.05, 1e-9)
         assert np.array_equal(got, expected)
         assert expected.any() and not expected.all()
+
+
+def test_escape_scores_match_reference():
+    """The escape's scores of every command on both paths, in crowds that overlap the robot (the
+    separation term) or only threaten it (the time to contact)."""
+    from dataclasses import replace
+
+    from viapath.planning.viapath.backend import Backend
+    from viapath.planning.viapath.checks import LegChecks
+    from viapath.planning.viapath.escape import escape_scores
+
+    rng = np.random.default_rng(17)
+    path = PATHS[1]
+    planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend="numpy")
+    overlapped = 0
+    for _ in range(60):
+        n = int(rng.integers(1, 15))
+        positions = rng.uniform(-1.5, 1.5, (n, 2)) + [1.0, 0.0]
+        velocities = rng.uniform(-1, 1, (n, 2))
+        sigma = rng.uniform(0, 0.1, n)
+        observation = Observation(0.0, RobotState(np.array([1.0, 0.2]), rng.uniform(-3, 3), rng.uniform(0, 0.5)),
+                                  Obstacles(positions, velocities, np.full(n, 0.3), position_sigma_m=sigma,
+                                            velocity_sigma_mps=sigma))
+        planner.reset()
+        situation = planner.situation(observation)
+        checks = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
+        commands, ends, expected = escape_scores(checks, planner.limits, planner.config)
+        _, _, got = escape_scores(replace(checks, backend=Backend("numba")), planner.limits, planner.config)
+        assert np.array_equal(np.isfinite(expected), np.isfinite(got))
+        assert np.allclose(expected[np.isfinite(expected)], got[np.isfinite(got)], rtol=0.0, atol=1e-12)
+        assert np.argmax(expected) == np.argmax(got)
+        overlapped += bool(np.any(np.hypot(*(positions - [1.0, 0.2]).T) < checks.check_radii))
+    assert 5 < overlapped < 60  # both kinds of crowd came up

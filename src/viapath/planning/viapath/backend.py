@@ -8,8 +8,8 @@ Source: issue 16 (a compiled hot path, the numpy path stays the reference); docs
   whole benchmark can be run on the reference path without touching its scenario files.
 * A :class:`Backend` holds the hot functions, :meth:`legs_first_contact` (leg-against-people
   checks), :meth:`via_options` (via points of (node, obstacle) pairs), :meth:`legs_inside` and
-  :meth:`goal_legs_inside` (corridor checks) and :meth:`track` (motion-limit roll-outs), with the
-  numpy signatures; the compiled ones get
+  :meth:`goal_legs_inside` (corridor checks), :meth:`track` (motion-limit roll-outs) and, for the
+  escape, :meth:`corridor_excess` and :meth:`escape_contacts`, with the numpy signatures; the compiled ones get
   C-contiguous float64 arrays. The planner says in ``plan.extras["backend"]`` which one ran.
 """
 
@@ -104,6 +104,25 @@ class Backend:
                                                _c(np.broadcast_to(subgoal, (len(rest), 2))), float(spacing_m),
                                                float(tolerance_m))
         return inside
+
+    def corridor_excess(self, path, points) -> np.ndarray:
+        if self.name == "numpy":
+            return path.corridor_excess(points)
+        from viapath.planning.viapath import kernels
+
+        return kernels.corridor_excess(*_corridor(path), _c(points))
+
+    def escape_contacts(self, positions, times, positions_obs, velocities_obs, check_radii, growth, growth_until_s,
+                        overlapping, steps: int):
+        """First contact step (K,) and the gaps to the people overlapped now (smallest, last: (K, M)) of
+        K roll-outs; None on the numpy path (:func:`.escape.escape_scores` is the reference)."""
+        if self.name == "numpy":
+            return None
+        from viapath.planning.viapath import kernels
+
+        return kernels.escape_contacts(_c(positions), _c(times), _c(positions_obs), _c(velocities_obs),
+                                       _c(check_radii), _c(growth), _c(growth_until_s),
+                                       np.ascontiguousarray(overlapping, dtype=np.bool_), int(steps))
 
     def track(self, state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float, steps: int,
               heading_gain: float) -> np.ndarray:

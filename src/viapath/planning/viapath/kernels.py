@@ -335,3 +335,55 @@ def goal_legs_inside(segment_starts, segment_directions, segment_lengths, half_w
             if math.hypot(rx - along * dx, ry - along * dy) - half_widths[j] <= tolerance_m:
                 inside[k] = True
     return inside
+
+
+@njit(cache=True, nogil=True)
+def corridor_excess(segment_starts, segment_directions, segment_lengths, half_widths, points):
+    """The numba twin of :meth:`viapath.path.DesignatedPath.corridor_excess` for (M, 2) points."""
+    out = np.empty(points.shape[0])
+    for m in range(points.shape[0]):
+        out[m] = _excess(points[m, 0], points[m, 1], segment_starts, segment_directions, segment_lengths, half_widths)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def escape_contacts(positions, times, obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s,
+                    overlapping, steps):
+    """For K rolled-out commands (K, S, 2) against N people (centre ``p + v t``, radius ``r + g min(t, cap)``):
+    the first step at which each command touches someone it does not overlap now (``steps`` if never),
+    and, for the people it overlaps now (``overlapping``), the smallest gap over the roll-out and the gap
+    at its end, (K, N_overlapping) each: the arrays :func:`viapath.planning.viapath.escape.escape_scores`
+    scores with."""
+    k_count = positions.shape[0]
+    s_count = positions.shape[1]
+    n_count = obstacle_positions.shape[0]
+    n_overlapping = 0
+    for j in range(n_count):
+        if overlapping[j]:
+            n_overlapping += 1
+    first = np.full(k_count, steps, np.int64)
+    gap_min = np.full((k_count, n_overlapping), np.inf)
+    gap_last = np.empty((k_count, n_overlapping))
+    for k in range(k_count):
+        column = 0
+        for j in range(n_count):
+            px = obstacle_positions[j, 0]
+            py = obstacle_positions[j, 1]
+            vx = obstacle_velocities[j, 0]
+            vy = obstacle_velocities[j, 1]
+            for s in range(s_count):
+                t = times[s]
+                reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
+                gap = math.hypot(positions[k, s, 0] - (px + vx * t), positions[k, s, 1] - (py + vy * t)) - reach
+                if overlapping[j]:
+                    if gap < gap_min[k, column]:
+                        gap_min[k, column] = gap
+                    if s == s_count - 1:
+                        gap_last[k, column] = gap
+                elif gap < 0:
+                    if s < first[k]:
+                        first[k] = s
+                    break
+            if overlapping[j]:
+                column += 1
+    return first, gap_min, gap_last
