@@ -214,15 +214,19 @@ def planners(
     if name not in available_planners():
         _fail(f"unknown planner {name!r}; available: {', '.join(available_planners())}")
     schema = planner_class(name).options
+    # What an option's default resolves to on this machine (viapath's backend: numpy or numba).
+    resolved = getattr(planner_class(name), "resolved_defaults", dict)()
     if as_json:
         print(json.dumps([{"name": o.path, "default": o.default, "unit": o.unit, "minimum": o.minimum,
-                           "maximum": o.maximum, "choices": o.choices, "help": o.help} for o in schema]))
+                           "maximum": o.maximum, "choices": o.choices, "help": o.help}
+                          | ({"resolved": resolved[o.path]} if o.path in resolved else {}) for o in schema]))
         return
     console.print(f"[bold]{name}[/] options (scenario: planner: {{name: {name}, OPTION: VALUE}}; "
                   "command line: --option NAME=VALUE)")
     for o in schema:
         default = "[" + ", ".join(f"{v:g}" for v in o.default) + "]" if isinstance(o.default, tuple) else o.default
-        console.print(f"  [bold]{o.path}[/] = {default}" + (f" {o.unit}" if o.unit else ""), highlight=False)
+        console.print(f"  [bold]{o.path}[/] = {default}" + (f" {o.unit}" if o.unit else "")
+                      + (f" (here: {resolved[o.path]})" if o.path in resolved else ""), highlight=False)
         console.print(f"      {escape(o.describe())}", highlight=False)
 
 

@@ -169,3 +169,37 @@ def legs_first_contact(
     # The cylinder part exists only for legs that reach the end of the cone.
     late = np.where(t0 + duration >= until, late + cone_duration, np.inf)
     return np.where(np.isfinite(early), early, late)
+
+
+VIA_SIDES = np.array([LEFT, RIGHT, LEFT, RIGHT])  # of the via options: (left, early), (right, early), ...
+VIA_ROOTS = np.array([0, 0, 1, 1])  # ... 0 = pass early (before the obstacle), 1 = late (behind it)
+
+
+def via_options(starts, start_times, speeds, obstacle_positions, obstacle_velocities, via_radii, growth,
+                growth_until_s, envelope_m, max_time_s):
+    """Via points of P (node, obstacle) pairs (one row per pair: the node's position, time and speed,
+    that obstacle's position, velocity, via radius, cone growth and cap, the braking envelope), on both
+    sides and both roots: ``(pair, option, t, leg_velocity, via)`` for every option whose via time is
+    at most ``max_time_s``, in row-major (pair, option) order; option indexes :data:`VIA_SIDES` and
+    :data:`VIA_ROOTS`. The radius is the capped cone evaluated near the expected passing time, and
+    kept below 98 % of the node's distance from the obstacle (a node already that close goes round
+    tangentially)."""
+    velocity = obstacle_velocities
+    centre_now = obstacle_positions + velocity * start_times[:, None]
+    reach_time = np.hypot(*(centre_now - starts).T) / speeds
+    passing_time = np.minimum(start_times + reach_time, growth_until_s)
+    radius = via_radii + growth * passing_time + envelope_m
+    distance = np.hypot(*(centre_now - starts).T)
+    radius = np.maximum(np.minimum(radius, 0.98 * distance), 0.0)
+    # Axis 1 enumerates (side, root): (left, early), (right, early), (left, late), (right, late).
+    w, valid = tangent_vectors(starts[:, None, :], centre_now[:, None, :], radius[:, None], VIA_SIDES[None, :2])
+    t_early, t_late = via_times(w, velocity[:, None, :], speeds[:, None])
+    t_via = np.concatenate([t_early, t_late], axis=1)
+    w = np.concatenate([w, w], axis=1)
+    ok = np.broadcast_to(valid, t_early.shape)
+    ok = np.concatenate([ok, ok], axis=1) & (t_via <= max_time_s)
+    pair, option = np.nonzero(ok)
+    t_k = t_via[pair, option]
+    leg_velocity = (w[pair, option] + velocity[pair] * t_k[:, None]) / t_k[:, None]
+    via = starts[pair] + leg_velocity * t_k[:, None]
+    return pair, option, t_k, leg_velocity, via

@@ -67,6 +67,8 @@ def options_hash(scenario: dict, planner: str) -> str:
 
     try:
         options = planner_settings(scenario_from_dict(scenario, scenario.get("name", "?")), planner)
+        # viapath's backend chooses the arithmetic, not the decisions (docs/speed.md): same rows.
+        options = {key: value for key, value in options.items() if key != "backend"}
         text = repr(sorted(options.items()))
     except Exception as error:  # noqa: BLE001 - the episode itself will report it
         text = f"error: {error}"

@@ -38,16 +38,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from viapath.geometry import LEFT, RIGHT, tangent_vectors, via_times
+from viapath.geometry import VIA_ROOTS as _ROOTS
+from viapath.geometry import VIA_SIDES as _SIDES
 from viapath.planning.viapath.checks import LegChecks
 
 # The "obstacle" of a way that is not round an obstacle.
 STRAIGHT = -1  # the straight leg to the subgoal (or a chain grown from it)
 SLOW = -2  # first slows down or waits
 CORNER = -3  # back along the path through a corner (the corner's index as the way's 'root')
-
-_SIDES = np.array([LEFT, RIGHT, LEFT, RIGHT])  # of the via options: (left, early), (right, early), ...
-_ROOTS = np.array([0, 0, 1, 1])  # ... 0 = pass early (before the obstacle), 1 = late (behind it)
 
 
 @dataclass(frozen=True)
@@ -230,31 +228,14 @@ def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: 
     times = data["time_s"][node_index]
     speeds = data["speed"][node_index]
     obstacles = checks.obstacles
-    velocity = obstacles.velocities[obstacle_index]
-    centre_now = obstacles.positions[obstacle_index] + velocity * times[:, None]
-    # The radius grows with prediction uncertainty; evaluate it near the expected passing time.
-    reach_time = np.hypot(*(centre_now - starts).T) / speeds
-    passing_time = np.minimum(times + reach_time, checks.growth_until_s[obstacle_index])
-    radius = (checks.via_radii[obstacle_index] + checks.growth[obstacle_index] * passing_time
-              + checks.envelope_m(speeds))
-    # A node already closer than that (after passing on a previous leg) goes round tangentially.
-    distance = np.hypot(*(centre_now - starts).T)
-    radius = np.maximum(np.minimum(radius, 0.98 * distance), 0.0)
-
-    # Axis 1 enumerates (side, root): (left, early), (right, early), (left, late), (right, late).
-    w, valid = tangent_vectors(starts[:, None, :], centre_now[:, None, :], radius[:, None], _SIDES[None, :2])
-    t_early, t_late = via_times(w, velocity[:, None, :], speeds[:, None])
-    t_via = np.concatenate([t_early, t_late], axis=1)
-    w = np.concatenate([w, w], axis=1)
-    ok = np.broadcast_to(valid, t_early.shape)
-    ok = np.concatenate([ok, ok], axis=1) & (t_via <= 3 * checks.horizon_s)
-    pair, option = np.nonzero(ok)
+    # The radius grows with prediction uncertainty; it is evaluated near the expected passing time.
+    pair, option, t_k, leg_velocity, via = checks.backend.via_options(
+        starts, times, speeds, obstacles.positions[obstacle_index], obstacles.velocities[obstacle_index],
+        checks.via_radii[obstacle_index], checks.growth[obstacle_index], checks.growth_until_s[obstacle_index],
+        checks.envelope_m(speeds), 3 * checks.horizon_s)
     if len(pair) == 0:
         return None
-    t_k = t_via[pair, option]
     starts_k, times_k, speeds_k = starts[pair], times[pair], speeds[pair]
-    leg_velocity = (w[pair, option] + velocity[pair] * t_k[:, None]) / t_k[:, None]
-    via = starts_k + leg_velocity * t_k[:, None]
     good = checks.legs_free(starts_k, times_k, leg_velocity, t_k)
     good[good] = checks.legs_inside(starts_k[good], via[good])
     if not good.any():

@@ -23,10 +23,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from viapath.geometry import legs_first_contact
 from viapath.observation import Obstacles
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.planning.base import Inflation, Situation
+from viapath.planning.viapath.backend import NUMPY, Backend
 
 
 @dataclass
@@ -56,6 +56,7 @@ class LegChecks:
     envelope_accel_mps2: float = 0.0
     envelope_period_s: float = 0.0
     max_accel_mps2: float = 1.0
+    backend: Backend = NUMPY  # numpy reference or compiled kernels (.backend)
 
     def envelope_m(self, speeds: np.ndarray) -> np.ndarray:
         """How much further out a via point at ``speeds`` must lie for the robot to stop in time."""
@@ -66,7 +67,7 @@ class LegChecks:
 
     @classmethod
     def of(cls, situation: Situation, config, tracker: SubgoalTracker, policy: SubgoalPolicy,
-           robot_radius_m: float) -> "LegChecks":
+           robot_radius_m: float, backend: Backend = NUMPY) -> "LegChecks":
         robot, path, obstacles, inflation = situation.robot, tracker.path, situation.obstacles, situation.inflation
         blocked = tracker.is_blocked(obstacles.positions, obstacles.radii_m, robot_radius_m)
         index = situation.subgoal_index
@@ -80,7 +81,7 @@ class LegChecks:
             growth_until_s=inflation.growth_until_s, via_radii=inflation.check_radii + config.planning_margin_m,
             horizon_s=config.horizon_s, stop_short_m=policy.bypass_distance_m if blocked else 0.0,
             continuation=continuation, corridor_tolerance_m=situation.corridor_tolerance_m,
-            corridor_check_spacing_m=config.corridor_check_spacing_m,
+            corridor_check_spacing_m=config.corridor_check_spacing_m, backend=backend,
         )
 
     def with_less_inflation(self, fraction: float, robot_radius_m: float, settings,
@@ -105,8 +106,9 @@ class LegChecks:
             return np.full((len(starts), 0), np.inf)
         horizon_s = self.horizon_s if horizon_s is None else horizon_s
         checked = np.clip(horizon_s - start_times, 0.0, durations)
-        return legs_first_contact(starts, start_times, velocities, checked, self.obstacles.positions,
-                                  self.obstacles.velocities, self.check_radii, self.growth, self.growth_until_s)
+        return self.backend.legs_first_contact(starts, start_times, velocities, checked, self.obstacles.positions,
+                                               self.obstacles.velocities, self.check_radii, self.growth,
+                                               self.growth_until_s)
 
     def legs_free(self, starts, start_times, velocities, durations) -> np.ndarray:
         return np.isinf(self.contact_times(starts, start_times, velocities, durations)).all(axis=1)
@@ -118,12 +120,18 @@ class LegChecks:
         directions = offset / np.maximum(lengths, 1e-12)[:, None]
         durations = np.maximum(lengths - self.stop_short_m, 0.0) / speeds
         velocities = directions * speeds[:, None]
-        contact = self.contact_times(starts, start_times, velocities, durations, horizon_s)
-        if self.continuation is not None and contact.shape[1]:
+        if self.continuation is not None and len(self.obstacles):
+            # The leg and its continuation past the subgoal, checked in one call (2K legs).
             direction, length = self.continuation
-            more = self.contact_times(np.broadcast_to(self.subgoal, starts.shape), start_times + durations,
-                                      direction * speeds[:, None], length / speeds, horizon_s)
-            contact = np.minimum(contact, more + durations[:, None])
+            count = len(starts)
+            both = self.contact_times(
+                np.concatenate([starts, np.broadcast_to(self.subgoal, starts.shape)]),
+                np.concatenate([start_times, start_times + durations]),
+                np.concatenate([velocities, direction * speeds[:, None]]),
+                np.concatenate([durations, length / speeds]), horizon_s)
+            contact = np.minimum(both[:count], both[count:] + durations[:, None])
+        else:
+            contact = self.contact_times(starts, start_times, velocities, durations, horizon_s)
         free = np.isinf(contact).all(axis=1) & self.goal_legs_inside(starts)
         return directions, lengths, free, contact
 
@@ -147,9 +155,14 @@ class LegChecks:
         return self.path.corridor_excess(points) <= self.corridor_tolerance_m
 
     def legs_inside(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-        return self.path.legs_inside(starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m)
+        return self.backend.legs_inside(self.path, starts, ends, self.corridor_check_spacing_m,
+                                        self.corridor_tolerance_m)
 
     def goal_legs_inside(self, starts: np.ndarray) -> np.ndarray:
+        compiled = self.backend.goal_legs_inside(self.path, starts, self.subgoal, self.subgoal_index,
+                                                 self.corridor_check_spacing_m, self.corridor_tolerance_m)
+        if compiled is not None:
+            return compiled
         # The subgoal ends both capsules next to it; a leg from a point inside one of them is inside
         # that capsule (convex). Only other legs need the general check.
         path = self.path

@@ -60,7 +60,7 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
                           float(checks.speed_mps), float(checks.turn_rate_radps))
     positions = rollout(state, commands, limits, dt, steps)  # (K, S, 2)
     times = dt * np.arange(1, steps + 1)
-    excess = checks.path.corridor_excess(positions.reshape(-1, 2)).reshape(len(commands), steps)
+    excess = checks.backend.corridor_excess(checks.path, positions.reshape(-1, 2)).reshape(len(commands), steps)
     inside = np.all(excess <= checks.corridor_tolerance_m, axis=1)
     within_bound = np.max(excess, axis=1) <= max(config.escape_max_excess_m, checks.corridor_tolerance_m)
 
@@ -71,18 +71,26 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     growth_all = checks.growth * np.minimum(horizon, checks.growth_until_s)
     near = gap_all - growth_all - np.hypot(*obstacles.velocities.T) * horizon - travel <= 0
     positions_obs, velocities_obs = obstacles.positions[near], obstacles.velocities[near]
-    centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
-    reach = checks.check_radii[near] + checks.growth[near] * np.minimum(times[:, None], checks.growth_until_s[near])
-    offset = positions[:, :, None, :] - centres[None]
-    gap = np.hypot(offset[..., 0], offset[..., 1]) - reach[None]  # (K, S, N)
     gap_now = gap_all[near]
     overlapping = gap_now <= 0
-    touching = (gap < 0) & ~overlapping
-    first = np.where(touching.any(axis=1), np.argmax(touching, axis=1), steps)  # (K, N)
-    time_to_contact = np.min(first, axis=1, initial=steps) * dt
+    compiled = checks.backend.escape_contacts(positions, times, positions_obs, velocities_obs, checks.check_radii[near],
+                                              checks.growth[near], checks.growth_until_s[near], overlapping, steps)
+    if compiled is not None:  # the same figures, without the (K, S, N) arrays
+        first_step, gap_min, gap_last = compiled
+        time_to_contact = first_step * dt
+    else:
+        centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
+        reach = checks.check_radii[near] + checks.growth[near] * np.minimum(times[:, None], checks.growth_until_s[near])
+        offset = positions[:, :, None, :] - centres[None]
+        gap = np.hypot(offset[..., 0], offset[..., 1]) - reach[None]  # (K, S, N)
+        touching = (gap < 0) & ~overlapping
+        first = np.where(touching.any(axis=1), np.argmax(touching, axis=1), steps)  # (K, N)
+        time_to_contact = np.min(first, axis=1, initial=steps) * dt
+        if overlapping.any():
+            gap_min, gap_last = np.min(gap[..., overlapping], axis=1), gap[:, -1, overlapping]
     if overlapping.any():
-        deeper = np.min(gap[..., overlapping], axis=1) - gap_now[overlapping]
-        still_inside = gap[:, -1, overlapping]
+        deeper = gap_min - gap_now[overlapping]
+        still_inside = gap_last
         separation = np.sum(np.minimum(deeper, 0.0) + np.minimum(still_inside, 0.0), axis=1)
     else:
         separation = np.zeros(len(commands))

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from viapath.geometry import wrap_angle
-from viapath.kinematics import UnicycleState, track
+from viapath.kinematics import UnicycleState
 from viapath.observation import MotionLimits
 from viapath.planning.base import Plan
 from viapath.planning.viapath.checks import LegChecks
@@ -35,7 +35,7 @@ def can_follow(plan: Plan, checks: LegChecks, limits: MotionLimits, config) -> b
     steps = max(1, int(round(config.rollout_s / dt)))
     state = UnicycleState(float(checks.position[0]), float(checks.position[1]), float(checks.heading_rad),
                           checks.speed_mps, checks.turn_rate_radps)
-    positions = track(state, plan.target, plan.speed_mps, limits, dt, steps, config.heading_gain)
+    positions = checks.backend.track(state, plan.target, plan.speed_mps, limits, dt, steps, config.heading_gain)
     if not checks.clear(positions, dt):
         return False
     if np.all(checks.inside(positions)):

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from viapath.options import Option, OptionSet
 from viapath.planning.base import COMMON_OPTIONS
+from viapath.planning.viapath.backend import BACKENDS
 
 _OWN = [
     # The paper (§3, §4.2).
@@ -60,6 +61,9 @@ _OWN = [
            "far from last cycle's", "s", minimum=0.0),
     Option("escape_max_excess_m", 0.5, "an escape may take the robot at most this far outside the corridor "
            "(standing is always allowed)", "m", minimum=0.0),
+    # Speed (docs/speed.md).
+    Option("backend", "auto", "arithmetic of the hot path: auto = compiled (numba, extra 'fast') when numba is "
+           "importable, else numpy; the decisions are the same", choices=BACKENDS),
     # Display.
     Option("record_candidates", False, "keep every candidate's polyline in the plan (for display)"),
 ]

@@ -34,6 +34,8 @@ from viapath.geometry import wrap_angle
 from viapath.observation import Command
 from viapath.options import Settings
 from viapath.planning.base import Decision, Plan, Planner, Situation
+from viapath.planning.viapath.backend import backend_for
+from viapath.planning.viapath.backend import resolve as resolve_backend
 from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, grow
 from viapath.planning.viapath.checks import LegChecks
 from viapath.planning.viapath.critics import Context, Costs, critics_for, score
@@ -60,9 +62,15 @@ class ViaPathPlanner(Planner, name="viapath"):
         super().__init__(path, **kwargs)
         self.config = self.settings
         self.critics = critics_for(self.config)
+        self.backend = backend_for(self.config.backend)  # numpy reference or compiled kernels (docs/speed.md)
         self._previous: Choice | None = None
         self._previous_escape: Command | None = None  # last cycle's command, if it escaped
         self._situation: Situation | None = None  # this cycle's, for the shield check of candidates
+
+    @classmethod
+    def resolved_defaults(cls) -> dict[str, str]:
+        """What the default of an option resolves to here (``viapath planners viapath`` shows it)."""
+        return {"backend": resolve_backend(cls.options.defaults()["backend"])}
 
     def reset(self) -> None:
         super().reset()
@@ -72,8 +80,14 @@ class ViaPathPlanner(Planner, name="viapath"):
     # -- the recipe ----------------------------------------------------------------------------------
 
     def decide(self, situation: Situation) -> Decision:
+        decision = self._decide(situation)
+        decision.plan.extras["backend"] = self.backend.name
+        return decision
+
+    def _decide(self, situation: Situation) -> Decision:
         self._situation = situation
-        checks = LegChecks.of(situation, self.config, self.subgoals, self.subgoal_policy, self.robot_radius_m)
+        checks = LegChecks.of(situation, self.config, self.subgoals, self.subgoal_policy, self.robot_radius_m,
+                              self.backend)
         if self.shield is not None and self.shield.config.enabled:
             checks = replace(checks, envelope_accel_mps2=self.shield.config.person_accel_mps2,
                              envelope_period_s=self.shield.dt_s, max_accel_mps2=self.limits.max_accel_mps2)

@@ -1,0 +1,165 @@
+"""Which arithmetic the viapath planner runs: the numpy reference or the compiled kernels (extra ``fast``).
+
+Source: issue 16 (a compiled hot path, the numpy path stays the reference); docs/speed.md.
+
+* Option ``backend`` (:mod:`.options`): ``auto`` (default) uses numba when it is importable, ``numpy``
+  and ``numba`` force one (``numba`` without numba installed is an error naming the extra). The
+  environment variable ``VIAPATH_PLANNER_BACKEND`` (same choices) overrides ``auto`` only, so a
+  whole benchmark can be run on the reference path without touching its scenario files.
+* A :class:`Backend` holds the hot functions, :meth:`legs_first_contact` (leg-against-people
+  checks), :meth:`via_options` (via points of (node, obstacle) pairs), :meth:`legs_inside` and
+  :meth:`goal_legs_inside` (corridor checks), :meth:`track` (motion-limit roll-outs) and, for the
+  escape, :meth:`corridor_excess` and :meth:`escape_contacts`, with the numpy signatures; the compiled ones get
+  C-contiguous float64 arrays. The planner says in ``plan.extras["backend"]`` which one ran.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from viapath.geometry import legs_first_contact as numpy_legs_first_contact
+from viapath.geometry import via_options as numpy_via_options
+from viapath.kinematics import UnicycleState
+from viapath.kinematics import track as numpy_track
+from viapath.observation import MotionLimits
+
+BACKENDS = ("auto", "numpy", "numba")
+ENVIRONMENT_VARIABLE = "VIAPATH_PLANNER_BACKEND"
+
+
+def numba_available() -> bool:
+    return importlib.util.find_spec("numba") is not None
+
+
+def resolve(choice: str) -> str:
+    """``numpy`` or ``numba`` for an option value (``auto`` looks at the environment, then at numba)."""
+    if choice == "auto":
+        override = os.environ.get(ENVIRONMENT_VARIABLE, "").strip().lower()
+        if override and override != "auto":
+            if override not in BACKENDS:
+                raise ValueError(f"environment variable {ENVIRONMENT_VARIABLE}={override!r}: expected one of "
+                                 f"{', '.join(BACKENDS)}")
+            choice = override
+        else:
+            return "numba" if numba_available() else "numpy"
+    if choice == "numba" and not numba_available():
+        raise ValueError("viapath option backend='numba' needs numba: install the extra 'fast' "
+                         "(pip install 'viapath[fast]')")
+    if choice not in ("numpy", "numba"):
+        raise ValueError(f"viapath option backend={choice!r}: expected one of {', '.join(BACKENDS)}")
+    return choice
+
+
+@dataclass(frozen=True)
+class Backend:
+    name: str  # numpy | numba
+
+    def legs_first_contact(self, starts, start_times, velocities, durations, positions, velocities_obs, radii,
+                           growth, growth_until_s) -> np.ndarray:
+        if self.name == "numpy":
+            return numpy_legs_first_contact(starts, start_times, velocities, durations, positions, velocities_obs,
+                                            radii, growth, growth_until_s)
+        from viapath.planning.viapath import kernels
+
+        n = len(positions)
+        return kernels.legs_first_contact(
+            _c(starts), _c(start_times), _c(velocities), _c(durations), _c(positions), _c(velocities_obs),
+            _per_obstacle(radii, n), _per_obstacle(growth, n), _per_obstacle(growth_until_s, n))
+
+    def via_options(self, starts, start_times, speeds, positions, velocities, via_radii, growth, growth_until_s,
+                    envelope_m, max_time_s):
+        if self.name == "numpy":
+            return numpy_via_options(starts, start_times, speeds, positions, velocities, via_radii, growth,
+                                     growth_until_s, envelope_m, max_time_s)
+        from viapath.planning.viapath import kernels
+
+        n = len(starts)
+        return kernels.via_options(_c(starts), _c(start_times), _c(speeds), _c(positions), _c(velocities),
+                                   _per_obstacle(via_radii, n), _per_obstacle(growth, n),
+                                   _per_obstacle(growth_until_s, n), _per_obstacle(envelope_m, n), float(max_time_s))
+
+    def legs_inside(self, path, starts, ends, spacing_m: float, tolerance_m: float) -> np.ndarray:
+        if self.name == "numpy":
+            return path.legs_inside(starts, ends, spacing_m, tolerance_m)
+        from viapath.planning.viapath import kernels
+
+        return kernels.legs_inside(*_corridor(path), _c(np.reshape(starts, (-1, 2))), _c(np.reshape(ends, (-1, 2))),
+                                   float(spacing_m), float(tolerance_m))
+
+    def goal_legs_inside(self, path, starts, subgoal, subgoal_index: int, spacing_m: float,
+                         tolerance_m: float) -> np.ndarray | None:
+        """None on the numpy path (the caller's own code is the reference)."""
+        if self.name == "numpy":
+            return None
+        from viapath.planning.viapath import kernels
+
+        inside = kernels.goal_legs_inside(*_corridor(path), _c(starts), int(subgoal_index), float(tolerance_m))
+        if not inside.all():
+            rest = np.flatnonzero(~inside)
+            inside[rest] = kernels.legs_inside(*_corridor(path), _c(starts[rest]),
+                                               _c(np.broadcast_to(subgoal, (len(rest), 2))), float(spacing_m),
+                                               float(tolerance_m))
+        return inside
+
+    def corridor_excess(self, path, points) -> np.ndarray:
+        if self.name == "numpy":
+            return path.corridor_excess(points)
+        from viapath.planning.viapath import kernels
+
+        return kernels.corridor_excess(*_corridor(path), _c(points))
+
+    def escape_contacts(self, positions, times, positions_obs, velocities_obs, check_radii, growth, growth_until_s,
+                        overlapping, steps: int):
+        """First contact step (K,) and the gaps to the people overlapped now (smallest, last: (K, M)) of
+        K roll-outs; None on the numpy path (:func:`.escape.escape_scores` is the reference)."""
+        if self.name == "numpy":
+            return None
+        from viapath.planning.viapath import kernels
+
+        return kernels.escape_contacts(_c(positions), _c(times), _c(positions_obs), _c(velocities_obs),
+                                       _c(check_radii), _c(growth), _c(growth_until_s),
+                                       np.ascontiguousarray(overlapping, dtype=np.bool_), int(steps))
+
+    def track(self, state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float, steps: int,
+              heading_gain: float) -> np.ndarray:
+        if self.name == "numpy":
+            return numpy_track(state, target, speed_mps, limits, dt_s, steps, heading_gain)
+        from viapath.planning.viapath import kernels
+
+        return kernels.track(float(state.x), float(state.y), float(state.heading_rad), float(state.speed_mps),
+                             float(state.turn_rate_radps), float(target[0]), float(target[1]), float(speed_mps),
+                             float(limits.max_speed_mps), float(limits.max_turn_rate_radps),
+                             float(limits.max_accel_mps2), float(limits.max_turn_accel_radps2), float(dt_s),
+                             int(steps), float(heading_gain))
+
+
+def _c(array) -> np.ndarray:
+    return np.ascontiguousarray(array, dtype=np.float64)
+
+
+def _corridor(path):
+    """The path's segment arrays, C-contiguous float64 (cached on the path object)."""
+    arrays = getattr(path, "_kernel_arrays", None)
+    if arrays is None:
+        arrays = (_c(path.segment_starts), _c(path.segment_directions), _c(path.segment_lengths_m),
+                  _c(path.half_widths_m))
+        path._kernel_arrays = arrays
+    return arrays
+
+
+def _per_obstacle(values, n: int) -> np.ndarray:
+    """One float64 per obstacle (a scalar is repeated)."""
+    if isinstance(values, np.ndarray) and values.shape == (n,):
+        return _c(values)
+    return np.full(n, values, dtype=np.float64) if np.ndim(values) == 0 else _c(np.broadcast_to(values, (n,)))
+
+
+NUMPY = Backend("numpy")
+
+
+def backend_for(choice: str) -> Backend:
+    return Backend(resolve(choice))

@@ -1,0 +1,389 @@
+"""The compiled hot path of the viapath planner (extra ``fast``: numba): the same arithmetic as the
+numpy reference, one scalar loop instead of a few dozen array operations.
+
+Source: the profile of ``benchmarks/bench_planner.py`` (docs/speed.md): per cycle the planner spends
+most of its time in (1) the leg-against-people checks, :func:`viapath.geometry.legs_first_contact`,
+called a handful of times per cycle on K legs × N people, and (2) the roll-outs of
+:func:`viapath.kinematics.track` (a Python loop of 20 steps, up to ``max_rollouts`` times a cycle).
+Both are pure functions of arrays, so they are compiled here, operation for operation as the numpy
+code does them (same order of additions, same roots), so that the decisions are the same
+(``tests/planning/test_backends.py`` checks it on random observations).
+
+Choices:
+* Only imported when numba is importable (:mod:`viapath.planning.viapath.backend` decides);
+  every kernel is a plain module-level ``@njit(cache=True)`` function, so numba's on-disk cache
+  works and a process after the first pays no compilation (docs/speed.md gives the first run's cost).
+* Inputs are C-contiguous float64 arrays (the caller makes them so): one compiled signature each.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, nogil=True)
+def _contact(px, py, vx, vy, radius, growth, duration):
+    """Scalar :func:`viapath.geometry._first_contact`: first τ in [0, duration] with
+    |p + v τ| <= radius + growth τ; inf if none, 0 if already touching. (The reference drops the
+    growth terms when there is no growth; with growth +0.0 and a finite radius they are exact zeros,
+    so one form serves both, and one compiled signature.)"""
+    a = vx * vx + vy * vy - growth * growth
+    b = px * vx + py * vy - radius * growth
+    c = px * px + py * py - radius * radius
+    if c <= 0:
+        return 0.0
+    discriminant = b * b - a * c
+    denominator = math.sqrt(discriminant if discriminant > 0.0 else 0.0) - b
+    if discriminant >= 0 and denominator > 0:
+        tau = c / denominator
+        if tau <= duration:
+            return tau
+    return math.inf
+
+
+@njit(cache=True, nogil=True)
+def legs_first_contact(starts, start_times, velocities, durations, obstacle_positions, obstacle_velocities,
+                       radii, growth, growth_until_s):
+    """(K, N) first contact of K legs with N moving discs whose radius grows as a capped cone: the
+    numba twin of :func:`viapath.geometry.legs_first_contact` (all arguments arrays, one value per
+    obstacle for ``radii``, ``growth`` and ``growth_until_s``)."""
+    k_count = starts.shape[0]
+    n_count = obstacle_positions.shape[0]
+    out = np.empty((k_count, n_count))
+    any_growth = False
+    any_finite_until = False
+    for j in range(n_count):
+        if growth[j] != 0.0:
+            any_growth = True
+        if math.isfinite(growth_until_s[j]):
+            any_finite_until = True
+    cylinder_only = (not any_growth) or (not any_finite_until)
+    for k in range(k_count):
+        t0 = start_times[k]
+        duration = durations[k]
+        for j in range(n_count):
+            ovx = obstacle_velocities[j, 0]
+            ovy = obstacle_velocities[j, 1]
+            px = starts[k, 0] - (obstacle_positions[j, 0] + ovx * t0)
+            py = starts[k, 1] - (obstacle_positions[j, 1] + ovy * t0)
+            vx = velocities[k, 0] - ovx
+            vy = velocities[k, 1] - ovy
+            g = growth[j]
+            if cylinder_only:
+                out[k, j] = _contact(px, py, vx, vy, radii[j] + g * t0, g, duration)
+                continue
+            until = growth_until_s[j]
+            cone_duration = until - t0
+            if cone_duration < 0.0:
+                cone_duration = 0.0
+            if cone_duration > duration:
+                cone_duration = duration
+            early = _contact(px, py, vx, vy, radii[j] + g * (t0 if t0 < until else until),
+                             g if until > t0 else 0.0, cone_duration)
+            if math.isfinite(early):
+                out[k, j] = early
+                continue
+            if t0 + duration >= until:
+                full_growth = g * (until if math.isfinite(until) else 0.0)
+                late = _contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy, radii[j] + full_growth,
+                                0.0, duration - cone_duration)
+                out[k, j] = late + cone_duration
+            else:
+                out[k, j] = math.inf
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _clip(value, low, high):
+    return low if value < low else high if value > high else value
+
+
+@njit(cache=True, nogil=True)
+def track(x, y, heading, speed, turn, target_x, target_y, speed_mps, max_speed_mps, max_turn_rate_radps,
+          max_accel_mps2, max_turn_accel_radps2, dt_s, steps, heading_gain):
+    """(steps, 2) positions of the robot steering for the target: the numba twin of
+    :func:`viapath.kinematics.track` (with :func:`~viapath.kinematics.steer_towards` and the exact arcs)."""
+    dv = max_accel_mps2 * dt_s
+    dw = max_turn_accel_radps2 * dt_s
+    positions = np.empty((steps, 2))
+    for k in range(steps):
+        # steer_towards
+        dx = target_x - x
+        dy = target_y - y
+        if dx * dx + dy * dy < 1e-18 or speed_mps <= 0:
+            v_cmd = 0.0
+            w_cmd = 0.0
+        else:
+            error = math.atan2(dy, dx) - heading
+            error = math.atan2(math.sin(error), math.cos(error))
+            w_cmd = _clip(heading_gain * error, -max_turn_rate_radps, max_turn_rate_radps)
+            scale = _clip((math.pi / 2 - abs(error)) / (math.pi / 4), 0.0, 1.0)
+            v_cmd = min(speed_mps, max_speed_mps) * scale
+        speed += _clip(v_cmd - speed, -dv, dv)
+        turn += _clip(w_cmd - turn, -dw, dw)
+        # _arc
+        new_heading = heading + turn * dt_s
+        half = 0.5 * turn * dt_s
+        chord = speed * dt_s * (1.0 - half * half / 6.0 if abs(half) < 1e-6 else math.sin(half) / half)
+        x += chord * math.cos(heading + half)
+        y += chord * math.sin(heading + half)
+        heading = math.atan2(math.sin(new_heading), math.cos(new_heading))
+        positions[k, 0] = x
+        positions[k, 1] = y
+    return positions
+
+
+@njit(cache=True, nogil=True)
+def via_options(starts, start_times, speeds, obstacle_positions, obstacle_velocities, via_radii, growth,
+                growth_until_s, envelope_m, max_time_s):
+    """The numba twin of :func:`viapath.geometry.via_options` (tangent points, via times on both
+    sides and both roots, the legs to the via points), same options in the same order."""
+    count = starts.shape[0]
+    pair = np.empty(4 * count, np.int64)
+    option = np.empty(4 * count, np.int64)
+    t_out = np.empty(4 * count)
+    w_out = np.empty((4 * count, 2))
+    m = 0
+    t_via = np.empty(4)
+    w_via = np.empty((2, 2))
+    for p in range(count):
+        sx = starts[p, 0]
+        sy = starts[p, 1]
+        t0 = start_times[p]
+        speed = speeds[p]
+        vx = obstacle_velocities[p, 0]
+        vy = obstacle_velocities[p, 1]
+        cx = obstacle_positions[p, 0] + vx * t0
+        cy = obstacle_positions[p, 1] + vy * t0
+        distance = math.hypot(cx - sx, cy - sy)
+        passing_time = t0 + distance / speed
+        until = growth_until_s[p]
+        if until < passing_time:
+            passing_time = until
+        radius = via_radii[p] + growth[p] * passing_time + envelope_m[p]
+        limit = 0.98 * distance
+        if limit < radius:
+            radius = limit
+        if radius < 0.0:
+            radius = 0.0
+        # tangent_vectors, both sides
+        dx = cx - sx
+        dy = cy - sy
+        distance_sq = dx * dx + dy * dy
+        radius_sq = radius * radius
+        valid = distance_sq > radius_sq
+        gap = distance_sq - radius_sq
+        length = math.sqrt(gap if gap > 0.0 else 0.0)
+        scale = length / (distance_sq if valid else 1.0)
+        for s in range(2):
+            side_radius = (1.0 if s == 0 else -1.0) * radius
+            wx = scale * (length * dx - side_radius * dy)
+            wy = scale * (side_radius * dx + length * dy)
+            w_via[s, 0] = wx
+            w_via[s, 1] = wy
+            # via_times
+            w_length = math.sqrt(wx * wx + wy * wy)
+            positive = w_length > 0
+            inverse = 1.0 / (w_length if positive else 1.0)
+            along = (wx * vx + wy * vy) * inverse
+            across = (wx * vy - wy * vx) * inverse
+            discriminant = speed * speed - across * across
+            root = math.sqrt(discriminant if discriminant > 0.0 else 0.0)
+            s_early = root - along
+            s_late = -along - root
+            ok = positive and discriminant >= 0
+            t_via[s] = w_length / s_early if (ok and s_early > 1e-12) else math.inf
+            t_via[2 + s] = w_length / s_late if (ok and s_late > 1e-12 and discriminant > 0) else math.inf
+        if not valid:
+            continue
+        for o in range(4):
+            if t_via[o] <= max_time_s:
+                pair[m] = p
+                option[m] = o
+                t_out[m] = t_via[o]
+                w_out[m, 0] = w_via[o % 2, 0]
+                w_out[m, 1] = w_via[o % 2, 1]
+                m += 1
+    leg_velocity = np.empty((m, 2))
+    via = np.empty((m, 2))
+    for i in range(m):
+        p = pair[i]
+        t = t_out[i]
+        leg_velocity[i, 0] = (w_out[i, 0] + obstacle_velocities[p, 0] * t) / t
+        leg_velocity[i, 1] = (w_out[i, 1] + obstacle_velocities[p, 1] * t) / t
+        via[i, 0] = starts[p, 0] + leg_velocity[i, 0] * t
+        via[i, 1] = starts[p, 1] + leg_velocity[i, 1] * t
+    return pair[:m].copy(), option[:m].copy(), t_out[:m].copy(), leg_velocity, via
+
+
+@njit(cache=True, nogil=True)
+def _excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths):
+    """Scalar :meth:`viapath.path.DesignatedPath.corridor_excess` of one point."""
+    best = math.inf
+    for i in range(segment_starts.shape[0]):
+        dx = segment_directions[i, 0]
+        dy = segment_directions[i, 1]
+        rx = px - segment_starts[i, 0]
+        ry = py - segment_starts[i, 1]
+        along = rx * dx + ry * dy
+        if along < 0.0:
+            along = 0.0
+        if along > segment_lengths[i]:
+            along = segment_lengths[i]
+        ox = px - (segment_starts[i, 0] + along * dx)
+        oy = py - (segment_starts[i, 1] + along * dy)
+        value = math.hypot(ox, oy) - half_widths[i]
+        if value < best:
+            best = value
+    return best
+
+
+@njit(cache=True, nogil=True)
+def _capsule_excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths, i):
+    dx = segment_directions[i, 0]
+    dy = segment_directions[i, 1]
+    rx = px - segment_starts[i, 0]
+    ry = py - segment_starts[i, 1]
+    along = rx * dx + ry * dy
+    if along < 0.0:
+        along = 0.0
+    if along > segment_lengths[i]:
+        along = segment_lengths[i]
+    ox = px - (segment_starts[i, 0] + along * dx)
+    oy = py - (segment_starts[i, 1] + along * dy)
+    return math.hypot(ox, oy) - half_widths[i]
+
+
+@njit(cache=True, nogil=True)
+def legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, starts, ends, spacing_m,
+                tolerance_m):
+    """The numba twin of :meth:`viapath.path.DesignatedPath.legs_inside`: both ends in one capsule, else
+    sampled every ``spacing_m`` (the sample count set by the longest unresolved leg, as there)."""
+    count = starts.shape[0]
+    segments = segment_starts.shape[0]
+    inside = np.zeros(count, np.bool_)
+    unresolved = np.zeros(count, np.bool_)
+    longest = 0.0
+    any_unresolved = False
+    for k in range(count):
+        start_any = False
+        end_any = False
+        both = False
+        for i in range(segments):
+            a = _capsule_excess(starts[k, 0], starts[k, 1], segment_starts, segment_directions, segment_lengths,
+                                half_widths, i) <= tolerance_m
+            b = _capsule_excess(ends[k, 0], ends[k, 1], segment_starts, segment_directions, segment_lengths,
+                                half_widths, i) <= tolerance_m
+            start_any = start_any or a
+            end_any = end_any or b
+            both = both or (a and b)
+        inside[k] = both
+        if not both and start_any and end_any:
+            unresolved[k] = True
+            any_unresolved = True
+            length = math.hypot(ends[k, 0] - starts[k, 0], ends[k, 1] - starts[k, 1])
+            if length > longest:
+                longest = length
+    if not any_unresolved:
+        return inside
+    num = max(2, int(math.ceil(longest / spacing_m)) + 1)
+    step = 1.0 / (num - 1)
+    for k in range(count):
+        if not unresolved[k]:
+            continue
+        ax = starts[k, 0]
+        ay = starts[k, 1]
+        bx = ends[k, 0] - ax
+        by = ends[k, 1] - ay
+        ok = True
+        for f_index in range(num):
+            fraction = 1.0 if f_index == num - 1 else f_index * step
+            if _excess(ax + fraction * bx, ay + fraction * by, segment_starts, segment_directions, segment_lengths,
+                       half_widths) > tolerance_m:
+                ok = False
+                break
+        inside[k] = ok
+    return inside
+
+
+@njit(cache=True, nogil=True)
+def goal_legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, starts, subgoal_index,
+                     tolerance_m):
+    """The first part of :meth:`viapath.planning.viapath.checks.LegChecks.goal_legs_inside`: a leg from a
+    point inside a capsule next to the subgoal is inside (the caller checks the others with
+    :func:`legs_inside`)."""
+    count = starts.shape[0]
+    segments = segment_starts.shape[0]
+    inside = np.zeros(count, np.bool_)
+    for k in range(count):
+        for i in (subgoal_index - 1, subgoal_index):
+            if i >= segments:
+                continue
+            j = i if i >= 0 else i + segments  # a Python index: -1 is the last segment
+            dx = segment_directions[j, 0]
+            dy = segment_directions[j, 1]
+            rx = starts[k, 0] - segment_starts[j, 0]
+            ry = starts[k, 1] - segment_starts[j, 1]
+            along = rx * dx + ry * dy
+            if along < 0.0:
+                along = 0.0
+            if along > segment_lengths[j]:
+                along = segment_lengths[j]
+            if math.hypot(rx - along * dx, ry - along * dy) - half_widths[j] <= tolerance_m:
+                inside[k] = True
+    return inside
+
+
+@njit(cache=True, nogil=True)
+def corridor_excess(segment_starts, segment_directions, segment_lengths, half_widths, points):
+    """The numba twin of :meth:`viapath.path.DesignatedPath.corridor_excess` for (M, 2) points."""
+    out = np.empty(points.shape[0])
+    for m in range(points.shape[0]):
+        out[m] = _excess(points[m, 0], points[m, 1], segment_starts, segment_directions, segment_lengths, half_widths)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def escape_contacts(positions, times, obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s,
+                    overlapping, steps):
+    """For K rolled-out commands (K, S, 2) against N people (centre ``p + v t``, radius ``r + g min(t, cap)``):
+    the first step at which each command touches someone it does not overlap now (``steps`` if never),
+    and, for the people it overlaps now (``overlapping``), the smallest gap over the roll-out and the gap
+    at its end, (K, N_overlapping) each: the arrays :func:`viapath.planning.viapath.escape.escape_scores`
+    scores with."""
+    k_count = positions.shape[0]
+    s_count = positions.shape[1]
+    n_count = obstacle_positions.shape[0]
+    n_overlapping = 0
+    for j in range(n_count):
+        if overlapping[j]:
+            n_overlapping += 1
+    first = np.full(k_count, steps, np.int64)
+    gap_min = np.full((k_count, n_overlapping), np.inf)
+    gap_last = np.empty((k_count, n_overlapping))
+    for k in range(k_count):
+        column = 0
+        for j in range(n_count):
+            px = obstacle_positions[j, 0]
+            py = obstacle_positions[j, 1]
+            vx = obstacle_velocities[j, 0]
+            vy = obstacle_velocities[j, 1]
+            for s in range(s_count):
+                t = times[s]
+                reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
+                gap = math.hypot(positions[k, s, 0] - (px + vx * t), positions[k, s, 1] - (py + vy * t)) - reach
+                if overlapping[j]:
+                    if gap < gap_min[k, column]:
+                        gap_min[k, column] = gap
+                    if s == s_count - 1:
+                        gap_last[k, column] = gap
+                elif gap < 0:
+                    if s < first[k]:
+                        first[k] = s
+                    break
+            if overlapping[j]:
+                column += 1
+    return first, gap_min, gap_last

@@ -1,0 +1,253 @@
+"""The compiled hot path (numba, extra ``fast``) decides as the numpy reference does (issue 16).
+
+Both planners get the same random observations (paths with corners, people with and without
+uncertainty, the robot anywhere near the corridor, with and without the shield behind it) and must
+take the same decision every cycle: same status, same way round (obstacle, side, early/late) and speed,
+commands equal to 1e-9. Two cycles per case, so last cycle's choice (hysteresis, keep_previous_way,
+calm escape) is exercised too.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from viapath import DesignatedPath, Obstacles, Observation, RobotState
+from viapath.planning import make_planner
+from viapath.planning.viapath.backend import ENVIRONMENT_VARIABLE, numba_available, resolve
+from viapath.safety.shielded import ShieldedPlanner
+
+pytestmark = pytest.mark.skipif(not numba_available(), reason="numba (extra 'fast') is not installed")
+
+PATHS = [
+    DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
+    DesignatedPath([[0.0, 0.0], [3.0, 0.0], [3.0, 4.0]], half_width_m=1.2),
+    DesignatedPath([[0.0, 0.0], [2.5, 0.5], [5.0, -0.5], [8.0, 0.0]], half_width_m=1.5),
+]
+
+
+@st.composite
+def cases(draw):
+    path_index = draw(st.integers(0, len(PATHS) - 1))
+    n = draw(st.integers(0, 12))
+    floats = lambda lo, hi: st.floats(lo, hi, allow_nan=False, allow_infinity=False)  # noqa: E731
+    seed = draw(st.integers(0, 2**31 - 1))
+    rng = np.random.default_rng(seed)
+    # The robot near the path, mostly heading along it; people mostly ahead of it (some behind, some
+    # touching it: escapes), so that every kind of plan comes up.
+    robot = (draw(floats(-0.5, 3.0)), draw(floats(-1.3, 1.3)), draw(floats(-0.8, 0.8)) * draw(st.sampled_from([1, 4])),
+             draw(floats(0.0, 0.5)), draw(floats(-1.0, 1.0)))
+    distance = rng.uniform(draw(st.sampled_from([0.3, 0.8])), 6.0, n)
+    bearing = rng.normal(0.0, draw(st.sampled_from([0.5, 3.0])), n)
+    positions = np.array(robot[:2]) + np.stack([distance * np.cos(bearing), distance * np.sin(bearing)], 1)
+    speed, direction = rng.uniform(0.0, 1.5, n), rng.uniform(-np.pi, np.pi, n)
+    velocities = np.stack([speed * np.cos(direction), speed * np.sin(direction)], 1)
+    uncertain = draw(st.booleans())
+    sigma_p = rng.uniform(0.0, 0.05, n) if uncertain else None
+    sigma_v = rng.uniform(0.0, 0.1, n) if uncertain else None
+    shield = draw(st.booleans())
+    step = rng.uniform(-0.05, 0.05, (n, 2))  # the second cycle: people moved a little, the robot too
+    return path_index, robot, positions, velocities, rng.uniform(0.2, 0.35, n), sigma_p, sigma_v, shield, step
+
+
+def _planner(path, backend: str, shield: bool):
+    planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend)
+    return ShieldedPlanner(planner) if shield else planner
+
+
+def _observations(case):
+    _, robot, positions, velocities, radii, sigma_p, sigma_v, _, step = case
+    x, y, heading, speed, turn = robot
+    for cycle in range(2):
+        obstacles = Obstacles(positions + cycle * (step + 0.1 * velocities), velocities, radii,
+                              position_sigma_m=sigma_p, velocity_sigma_mps=sigma_v)
+        state = RobotState(np.array([x + 0.02 * cycle * np.cos(heading), y + 0.02 * cycle * np.sin(heading)]),
+                           heading, speed, turn)
+        yield Observation(0.1 * cycle, state, obstacles)
+
+
+@settings(max_examples=1000, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(cases())
+def test_numba_decides_as_numpy(case):
+    path = PATHS[case[0]]
+    reference, compiled = _planner(path, "numpy", case[7]), _planner(path, "numba", case[7])
+    for observation in _observations(case):
+        a, b = reference.plan(observation), compiled.plan(observation)
+        assert a.plan.status == b.plan.status
+        inner_a = getattr(reference, "inner", reference)
+        inner_b = getattr(compiled, "inner", compiled)
+        assert inner_a._previous == inner_b._previous  # same way round and speed (or both none)
+        assert abs(a.command.speed_mps - b.command.speed_mps) <= 1e-9
+        assert abs(a.command.turn_rate_radps - b.command.turn_rate_radps) <= 1e-9
+        assert np.allclose(a.plan.target, b.plan.target, rtol=0.0, atol=1e-9)
+        assert (a.plan.extras["backend"], b.plan.extras["backend"]) == ("numpy", "numba")
+
+
+def test_kernels_match_reference_on_edge_cases():
+    """The contact kernel against numpy where the cone is capped mid-leg, legs start inside a disc, the
+    relative speed is zero and the cone outgrows the relative speed (a < 0)."""
+    from viapath.geometry import legs_first_contact
+    from viapath.planning.viapath import kernels
+
+    rng = np.random.default_rng(3)
+    k, n = 400, 7
+    starts = rng.uniform(-3, 3, (k, 2))
+    starts[:5] = 0.0  # inside obstacle 0 at the start
+    times = rng.uniform(0, 4, k)
+    velocities = rng.uniform(-0.5, 0.5, (k, 2))
+    velocities[5:10] = 0.0
+    durations = rng.uniform(0, 8, k)
+    positions = rng.uniform(-3, 3, (n, 2))
+    positions[0] = 0.0
+    obstacle_velocities = rng.uniform(-1, 1, (n, 2))
+    obstacle_velocities[1] = 0.0  # with the resting legs: zero relative speed
+    radii = rng.uniform(0.3, 0.8, n)
+    growth = np.array([0.0, 0.1, 2.0, 0.05, 0.0, 0.3, 1.0])
+    with np.errstate(divide="ignore"):
+        until = np.where(growth > 0, 0.15 / growth, np.inf)
+    for g, u in ((growth, until), (np.zeros(n), np.full(n, np.inf)), (growth, np.full(n, np.inf))):
+        expected = legs_first_contact(starts, times, velocities, durations, positions, obstacle_velocities, radii, g, u)
+        got = kernels.legs_first_contact(starts, times, velocities, durations, positions, obstacle_velocities,
+                                         radii, g, u)
+        assert np.array_equal(np.isinf(expected), np.isinf(got))
+        assert np.allclose(expected, got, rtol=0.0, atol=1e-12)
+        assert np.isfinite(expected).any() and np.isinf(expected).any()  # both kinds of legs are there
+
+
+def test_backend_choice(monkeypatch):
+    monkeypatch.delenv(ENVIRONMENT_VARIABLE, raising=False)
+    assert resolve("auto") == "numba"
+    assert resolve("numpy") == "numpy"
+    monkeypatch.setenv(ENVIRONMENT_VARIABLE, "numpy")
+    assert resolve("auto") == "numpy"
+    assert resolve("numba") == "numba"  # an explicit option wins over the environment
+    monkeypatch.setenv(ENVIRONMENT_VARIABLE, "fortran")
+    with pytest.raises(ValueError, match=ENVIRONMENT_VARIABLE):
+        resolve("auto")
+
+
+def test_track_kernel_matches_reference():
+    """The compiled roll-out against :func:`viapath.kinematics.track`, from random states towards random
+    targets (sharp turns, targets behind, at rest and at speed)."""
+    from viapath.kinematics import UnicycleState, track
+    from viapath.observation import MotionLimits
+    from viapath.planning.viapath.backend import Backend
+
+    rng = np.random.default_rng(5)
+    limits = MotionLimits()
+    compiled = Backend("numba")
+    worst = 0.0
+    for _ in range(200):
+        state = UnicycleState(*rng.uniform(-2, 2, 2), rng.uniform(-np.pi, np.pi), rng.uniform(0, 0.6),
+                              rng.uniform(-2, 2))
+        target, speed = rng.uniform(-3, 3, 2), rng.uniform(0, 0.6)
+        expected = track(state, target, speed, limits, 0.1, 20, 2.5)
+        got = compiled.track(state, target, speed, limits, 0.1, 20, 2.5)
+        worst = max(worst, float(np.max(np.abs(expected - got))))
+    assert worst <= 1e-12
+
+
+def test_planners_command_says_which_path_runs(monkeypatch):
+    import json
+
+    from typer.testing import CliRunner
+
+    from viapath.cli import app
+
+    for environment, expected in (("", "numba"), ("numpy", "numpy")):
+        monkeypatch.setenv(ENVIRONMENT_VARIABLE, environment)
+        result = CliRunner().invoke(app, ["planners", "viapath", "--json"])
+        assert result.exit_code == 0, result.output
+        backend = [option for option in json.loads(result.output) if option["name"] == "backend"]
+        assert backend and backend[0]["resolved"] == expected and backend[0]["default"] == "auto"
+        text = CliRunner().invoke(app, ["planners", "viapath"]).output
+        assert f"(here: {expected})" in text
+
+
+def test_via_options_kernel_matches_reference():
+    """Via points of random (node, obstacle) pairs: nodes inside the disc, obstacles faster and slower
+    than the robot (two roots or one), the cone capped before and after the passing time."""
+    from viapath.geometry import via_options
+    from viapath.planning.viapath import kernels
+
+    rng = np.random.default_rng(11)
+    p = 500
+    starts = rng.uniform(-3, 3, (p, 2))
+    times = rng.uniform(0, 5, p)
+    speeds = rng.uniform(0.05, 0.6, p)
+    positions = rng.uniform(-3, 3, (p, 2))
+    positions[:20] = starts[:20]  # the node sits on the obstacle: no tangent
+    velocities = rng.uniform(-1.5, 1.5, (p, 2))
+    radii = rng.uniform(0.4, 0.9, p)
+    growth = np.where(rng.random(p) < 0.5, 0.0, rng.uniform(0, 0.2, p))
+    with np.errstate(divide="ignore"):
+        until = np.where(growth > 0, 0.15 / np.where(growth > 0, growth, 1.0), np.inf)
+    envelope = np.where(rng.random(p) < 0.5, 0.0, rng.uniform(0, 0.3, p))
+    expected = via_options(starts, times, speeds, positions, velocities, radii, growth, until, envelope, 30.0)
+    got = kernels.via_options(starts, times, speeds, positions, velocities, radii, growth, until, envelope, 30.0)
+    assert np.array_equal(expected[0], got[0]) and np.array_equal(expected[1], got[1])
+    for a, b in zip(expected[2:], got[2:]):
+        assert np.allclose(a, b, rtol=0.0, atol=1e-12)
+    late = np.isin(expected[1], (2, 3))
+    assert late.any() and (~late).any() and len(np.unique(expected[0])) < p  # both roots; some pairs have none
+
+
+@pytest.mark.parametrize("path", PATHS, ids=["straight", "corner", "zigzag"])
+def test_corridor_kernels_match_reference(path):
+    """Corridor checks of random legs (inside, across a junction, leaving) against the numpy reference."""
+    from viapath.planning.viapath.backend import Backend
+    from viapath.planning.viapath.checks import LegChecks
+
+    rng = np.random.default_rng(13)
+    low, high = path.waypoints.min(axis=0) - 1.5, path.waypoints.max(axis=0) + 1.5
+    starts, ends = rng.uniform(low, high, (600, 2)), rng.uniform(low, high, (600, 2))
+    compiled = Backend("numba")
+    for tolerance in (1e-9, 0.3):
+        expected = path.legs_inside(starts, ends, 0.05, tolerance)
+        assert np.array_equal(compiled.legs_inside(path, starts, ends, 0.05, tolerance), expected)
+        assert expected.any() and not expected.all()
+    for subgoal_index in range(len(path.waypoints)):
+        checks = LegChecks(path=path, position=np.zeros(2), heading_rad=0.0, speed_mps=0.0, turn_rate_radps=0.0,
+                           subgoal=path.waypoints[subgoal_index], subgoal_index=subgoal_index,
+                           is_final_subgoal=False, obstacles=None, check_radii=None, growth=None, growth_until_s=None,
+                           via_radii=None, horizon_s=10.0, stop_short_m=0.0, continuation=None,
+                           corridor_tolerance_m=1e-9, corridor_check_spacing_m=0.05)
+        expected = checks.goal_legs_inside(starts)
+        got = compiled.goal_legs_inside(path, starts, checks.subgoal, subgoal_index, 0.05, 1e-9)
+        assert np.array_equal(got, expected)
+        assert expected.any() and not expected.all()
+
+
+def test_escape_scores_match_reference():
+    """The escape's scores of every command on both paths, in crowds that overlap the robot (the
+    separation term) or only threaten it (the time to contact)."""
+    from dataclasses import replace
+
+    from viapath.planning.viapath.backend import Backend
+    from viapath.planning.viapath.checks import LegChecks
+    from viapath.planning.viapath.escape import escape_scores
+
+    rng = np.random.default_rng(17)
+    path = PATHS[1]
+    planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend="numpy")
+    overlapped = 0
+    for _ in range(60):
+        n = int(rng.integers(1, 15))
+        positions = rng.uniform(-1.5, 1.5, (n, 2)) + [1.0, 0.0]
+        velocities = rng.uniform(-1, 1, (n, 2))
+        sigma = rng.uniform(0, 0.1, n)
+        observation = Observation(0.0, RobotState(np.array([1.0, 0.2]), rng.uniform(-3, 3), rng.uniform(0, 0.5)),
+                                  Obstacles(positions, velocities, np.full(n, 0.3), position_sigma_m=sigma,
+                                            velocity_sigma_mps=sigma))
+        planner.reset()
+        situation = planner.situation(observation)
+        checks = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
+        commands, ends, expected = escape_scores(checks, planner.limits, planner.config)
+        _, _, got = escape_scores(replace(checks, backend=Backend("numba")), planner.limits, planner.config)
+        assert np.array_equal(np.isfinite(expected), np.isfinite(got))
+        assert np.allclose(expected[np.isfinite(expected)], got[np.isfinite(got)], rtol=0.0, atol=1e-12)
+        assert np.argmax(expected) == np.argmax(got)
+        overlapped += bool(np.any(np.hypot(*(positions - [1.0, 0.2]).T) < checks.check_radii))
+    assert 5 < overlapped < 60  # both kinds of crowd came up
