@@ -14,7 +14,8 @@ What we chose:
 * Two back ends: vectorised numpy (``(B, N)`` broadcasting) and an optional numba loop
   (``pip install 'viapath[fast]'``). They evaluate the same expressions in the same order, without
   fast-math, so they agree bit for bit (tested). ``backend="auto"`` takes numba when it is
-  installed; its first call compiles the kernel (cached on disk), later calls are fast.
+  installed; the first call on a machine compiles the kernel (~seconds, cached on disk:
+  :mod:`~viapath.perception._numba_kernels`), later processes load it.
 """
 
 from __future__ import annotations
@@ -75,45 +76,10 @@ def cast_rays_numpy(origin, directions, centres, radii, segments) -> np.ndarray:
     return best
 
 
-def _build_numba_kernel():
-    import numba
+def _load_numba_kernel():
+    from viapath.perception._numba_kernels import cast_rays_kernel  # module-level: cached on disk once per machine
 
-    @numba.njit(cache=True, fastmath=False, nogil=True)
-    def kernel(ox, oy, directions, centres, radii, segments, out):  # pragma: no cover - compiled
-        n_beams = directions.shape[0]
-        for i in range(n_beams):
-            dx = directions[i, 0]
-            dy = directions[i, 1]
-            best = np.inf
-            for j in range(centres.shape[0]):
-                fx = ox - centres[j, 0]
-                fy = oy - centres[j, 1]
-                k = fx * fx + fy * fy - radii[j] * radii[j]
-                if k <= 0.0:
-                    best = min(best, 0.0)
-                    continue
-                b = fx * dx + fy * dy
-                disc = b * b - k
-                if disc >= 0.0:
-                    t = -b - np.sqrt(disc)
-                    if t >= 0.0 and t < best:
-                        best = t
-            for j in range(segments.shape[0]):
-                px = segments[j, 0, 0]
-                py = segments[j, 0, 1]
-                ex = segments[j, 1, 0] - px
-                ey = segments[j, 1, 1] - py
-                wx = px - ox
-                wy = py - oy
-                denom = dx * ey - dy * ex
-                if denom != 0.0:
-                    t = (wx * ey - wy * ex) / denom
-                    s = (wx * dy - wy * dx) / denom
-                    if t >= 0.0 and s >= 0.0 and s <= 1.0 and t < best:
-                        best = t
-            out[i] = best
-
-    return kernel
+    return cast_rays_kernel
 
 
 def numba_available() -> bool:
@@ -123,7 +89,7 @@ def numba_available() -> bool:
     if _NUMBA_FAILED is not None:
         return False
     try:
-        _NUMBA_KERNEL = _build_numba_kernel()
+        _NUMBA_KERNEL = _load_numba_kernel()
     except Exception as error:  # ImportError, or a numba that does not support this numpy
         _NUMBA_FAILED = f"{type(error).__name__}: {error}"
         return False
