@@ -11,7 +11,8 @@ Two figures, each for the numpy and (when installed) the numba back end, ``--run
 * ``closed_loop_steps_per_s``: ``viapath.sim.loop.run_episode`` with laser perception on the
   closed-loop scene of ``bench_perception.py`` (10 people, viapath planner + shield): laser chain
   plus planning plus simulation; the planner's share is the planner's (the ``fast`` branch).
-The load average is printed with each run: the machine is shared; compare runs of one session.
+The load average is printed with each run, and each figure is given per wall-clock second and per
+second of this process's CPU time (steadier on a shared machine; equal on an idle one).
 Not a test: numbers depend on the machine.
 """
 
@@ -41,10 +42,10 @@ def laser_chain(backend: str, steps: int) -> float:
     for world in worlds[:20]:  # warm-up (and numba's cache load)
         perception.observe(world)
     perception.reset(np.random.default_rng(1))
-    started = time.perf_counter()
+    started, cpu = time.perf_counter(), time.process_time()
     for world in worlds:
         perception.observe(world)
-    return steps / (time.perf_counter() - started)
+    return steps / (time.perf_counter() - started), steps / (time.process_time() - cpu)
 
 
 def closed_loop_scenario(backend: str, steps: int):
@@ -74,9 +75,10 @@ def closed_loop(backend: str, steps: int) -> float:
 
     scenario = closed_loop_scenario(backend, steps)
     run_episode(scenario, seed=0)
-    started = time.perf_counter()
+    started, cpu = time.perf_counter(), time.process_time()
     episode = run_episode(scenario, seed=0)
-    return len(episode.trace.times_s) / (time.perf_counter() - started)
+    n = len(episode.trace.times_s)
+    return n / (time.perf_counter() - started), n / (time.process_time() - cpu)
 
 
 def main(argv=None) -> int:
@@ -91,14 +93,15 @@ def main(argv=None) -> int:
     for run in range(args.runs):
         row = {"run": run + 1, "load_average": os.getloadavg()}
         for backend in backends:
-            row[f"laser_steps_per_s_{backend}"] = laser_chain(backend, args.steps)
+            row[f"laser_steps_per_s_{backend}"], row[f"laser_steps_per_cpu_s_{backend}"] = laser_chain(backend, args.steps)
             if args.loop_steps > 0:
-                row[f"closed_loop_steps_per_s_{backend}"] = closed_loop(backend, args.loop_steps)
+                (row[f"closed_loop_steps_per_s_{backend}"],
+                 row[f"closed_loop_steps_per_cpu_s_{backend}"]) = closed_loop(backend, args.loop_steps)
         results["runs"].append(row)
         if not args.json:
             load = " ".join(f"{v:.2f}" for v in row["load_average"])
-            figures = "  ".join(f"{k.replace('_steps_per_s', '')} {v:6.0f}" for k, v in row.items() if k.endswith(tuple(backends)))
-            print(f"run {run + 1} (load {load}): steps/s  {figures}")
+            figures = "  ".join(f"{k.replace('_steps_per', '')} {v:6.0f}" for k, v in row.items() if k.endswith(tuple(backends)))
+            print(f"run {run + 1} (load {load}): steps per wall s / per CPU s:  {figures}")
     if args.json:
         print(json.dumps(results, indent=2))
     else:
