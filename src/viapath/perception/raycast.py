@@ -227,21 +227,20 @@ def _candidate_pairs(origins_x, origins_y, centres, radii, groups, best):
         lo = np.ceil((bearing - half) / increment)
         hi = np.floor((bearing + half) / increment)
         everything = half >= 0.5 * np.pi
-        for j in range(len(centres)):
-            if everything[j]:
-                index = np.arange(count)
-            else:
-                parts = []
-                for shift in (-two_pi / increment, 0.0, two_pi / increment):
-                    a = max(int(lo[j] + np.floor(shift)) - 1, 0)
-                    b = min(int(hi[j] + np.ceil(shift)) + 1, count - 1)
-                    if a <= b:
-                        parts.append(np.arange(a, b + 1))
-                if not parts:
-                    continue
-                index = np.unique(np.concatenate(parts)) if len(parts) > 1 else parts[0]
-            beams.append(first + index)
-            discs.append(np.full(len(index), j))
+        # The beam range of each disc, and its copies one turn before and after (a disc across the
+        # ends of a 360° scan); they cannot overlap (half < π/2), and a repeated pair would do no harm.
+        shifts = np.array([-two_pi / increment, 0.0, two_pi / increment])
+        start = np.maximum((lo[:, None] + np.floor(shifts)).astype(int) - 1, 0)
+        stop = np.minimum((hi[:, None] + np.ceil(shifts)).astype(int) + 1, count - 1)
+        start[everything] = (0, 1, 1)
+        stop[everything] = (count - 1, 0, 0)
+        length = np.maximum(stop - start + 1, 0).ravel()
+        if not length.any():
+            continue
+        start = start.ravel()
+        offsets = np.repeat(start - (np.cumsum(length) - length), length)
+        beams.append(first + np.arange(int(length.sum())) + offsets)
+        discs.append(np.repeat(np.repeat(np.arange(len(centres)), 3), length))
     if not beams:
         return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
     return np.concatenate(beams), np.concatenate(discs)
