@@ -82,7 +82,7 @@ def register(app: typer.Typer) -> None:
                 _fail(str(error))
         created = not out.exists()  # a run refused before any episode must leave no folder behind
         try:
-            scenarios = load_suite(suite, out, count=count, seed=seed)
+            scenarios = load_suite(suite, out, count=count, seed=seed, workers=workers if backend == "loky" else 1)
             result = run_bench(scenarios, names, out, workers=workers, backend=backend, scheduler=scheduler,
                                perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json,
                                shield=shield, force=force)

@@ -81,7 +81,7 @@ def family_of(name: str) -> str:
 
 # -- loading suites ---------------------------------------------------------------------------------
 
-def load_suite(suite: str, out_dir: Path | None = None, count: int = 200, seed: int = 0) -> list[dict]:
+def load_suite(suite: str, out_dir: Path | None = None, count: int = 200, seed: int = 0, workers: int = 1) -> list[dict]:
     """Scenario dicts of SUITE: a folder of scenario YAML files, or a suite name (generated with
     ``count`` and ``seed`` and written to ``out_dir/suite`` so it can be inspected and rerun)."""
     from viapath.scenarios import ScenarioError, load_scenario
@@ -92,7 +92,7 @@ def load_suite(suite: str, out_dir: Path | None = None, count: int = 200, seed: 
         if not files:
             raise BenchError(f"{suite}: no scenario files (*.yaml) in this folder")
     elif suite in suite_names():
-        scenarios = generate_suite(suite, count, seed)
+        scenarios = generate_suite(suite, count, seed, workers=workers)
         if out_dir is None:
             return [_resolve_replays(s) for s in scenarios]
         files = write_suite(scenarios, Path(out_dir) / "suite")

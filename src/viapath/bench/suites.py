@@ -46,6 +46,8 @@ import yaml
 from viapath.registry import Registry
 from viapath.sim.social_force import simulate_crowd
 
+_SAFE_DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)  # libyaml's emitter where present (issue 16)
+
 FAMILIES: Registry[Callable[[np.random.Generator, int], dict]] = Registry("scenario family")
 
 # The five standard leave-one-out scenes (data README §1): (scene, file, seconds per row step).
@@ -82,16 +84,34 @@ def data_root() -> Path:
     return (Path.cwd() / ".." / "shared" / "data").resolve()
 
 
-def generate_suite(name: str, count: int, seed: int = 0, data: Path | None = None) -> list[dict]:
-    """``count`` scenario dicts of suite ``name`` (see :func:`suite_names`), deterministic per seed."""
+def generate_suite(name: str, count: int, seed: int = 0, data: Path | None = None, workers: int = 1) -> list[dict]:
+    """``count`` scenario dicts of suite ``name`` (see :func:`suite_names`), deterministic per seed.
+
+    ``workers`` > 1 generates the synthetic scenarios in that many processes (joblib/loky, whose
+    workers the benchmark then reuses): each scenario has its own generator ``[seed, index]``, so
+    the suite is the same (issue 16: the social-force families made generation the longest part
+    of a 1000-scenario benchmark)."""
     if name not in suite_names():
         raise SuiteError(f"unknown suite {name!r}; available: {', '.join(suite_names())}")
     if count < 1:
         raise SuiteError(f"count must be at least 1, got {count}")
     if name in ("eth-ucy", "eth-ucy-react"):
         return eth_ucy(count, seed, data, react=name == "eth-ucy-react")
+    families = SYNTHETIC_FAMILIES if name == "mixed" else (name,)
+    # Worker processes know only the families this module registers (not ones registered from outside).
+    if workers > 1 and count > 1 and all(FAMILIES.get(f).__module__ == __name__ for f in families):
+        import joblib
+
+        chunks = [range(start, min(count, start + 25)) for start in range(0, count, 25)]
+        parts = joblib.Parallel(n_jobs=workers, backend="loky")(
+            joblib.delayed(_synthetic_scenarios)(name, seed, chunk) for chunk in chunks)
+        return [scenario for part in parts for scenario in part]
+    return _synthetic_scenarios(name, seed, range(count))
+
+
+def _synthetic_scenarios(name: str, seed: int, indices) -> list[dict]:
     scenarios = []
-    for index in range(count):
+    for index in indices:
         family = SYNTHETIC_FAMILIES[index % len(SYNTHETIC_FAMILIES)] if name == "mixed" else name
         family_index = index // len(SYNTHETIC_FAMILIES) if name == "mixed" else index
         rng = np.random.default_rng([seed, index])
@@ -119,7 +139,7 @@ def write_suite(scenarios: list[dict], out_dir: Path) -> list[Path]:
             obstacles.append(item)
         scenario["obstacles"] = obstacles
         path = out_dir / f"{scenario['name']}.yaml"
-        path.write_text(yaml.safe_dump(scenario, sort_keys=False, default_flow_style=None, width=120))
+        path.write_text(yaml.dump(scenario, Dumper=_SAFE_DUMPER, sort_keys=False, default_flow_style=None, width=120))
         written.append(path)
     return written
 

@@ -27,7 +27,7 @@ import numpy as np
 from viapath.observation import Obstacles
 from viapath.perception.detection import DetectorParams, Detections, detect
 from viapath.perception.fusion import BlindRegion, blind_region
-from viapath.perception.raycast import simulate_scan
+from viapath.perception.raycast import simulate_scans
 from viapath.perception.scanner import ScannerModel, paper_scanners
 from viapath.perception.segmentation import SegmentationParams
 from viapath.perception.tracking import MultiTargetTracker, Track, TrackerParams
@@ -136,8 +136,8 @@ class LaserPerception(Perception):
         """The readings of every scanner at the snapshot, as the drivers would report them."""
         pose = np.asarray(world.robot_pose, dtype=float)
         rng = self.rng if self.range_noise else None
-        return [simulate_scan(s, pose, world.obstacle_positions, world.obstacle_radii_m, world.walls, rng, self.ray_backend)
-                for s in self.scanners]
+        return simulate_scans(self.scanners, pose, world.obstacle_positions, world.obstacle_radii_m, world.walls, rng,
+                              self.ray_backend)
 
     def process(self, time_s: float, robot_pose, scans) -> Obstacles:
         """Detection and tracking on given scans (no ray casting): the part a real robot runs."""

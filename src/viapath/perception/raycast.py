@@ -14,10 +14,14 @@ What we chose:
 * Two back ends: vectorised numpy (``(B, N)`` broadcasting) and an optional numba loop
   (``pip install 'viapath[fast]'``). They evaluate the same expressions in the same order, without
   fast-math, so they agree bit for bit (tested). ``backend="auto"`` takes numba when it is
-  installed; its first call compiles the kernel (cached on disk), later calls are fast.
+  installed; the first call on a machine compiles the kernel (~seconds, cached on disk:
+  :mod:`~viapath.perception._numba_kernels`), later processes load it.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -75,45 +79,10 @@ def cast_rays_numpy(origin, directions, centres, radii, segments) -> np.ndarray:
     return best
 
 
-def _build_numba_kernel():
-    import numba
+def _load_numba_kernel():
+    from viapath.perception._numba_kernels import cast_rays_kernel  # module-level: cached on disk once per machine
 
-    @numba.njit(cache=True, fastmath=False, nogil=True)
-    def kernel(ox, oy, directions, centres, radii, segments, out):  # pragma: no cover - compiled
-        n_beams = directions.shape[0]
-        for i in range(n_beams):
-            dx = directions[i, 0]
-            dy = directions[i, 1]
-            best = np.inf
-            for j in range(centres.shape[0]):
-                fx = ox - centres[j, 0]
-                fy = oy - centres[j, 1]
-                k = fx * fx + fy * fy - radii[j] * radii[j]
-                if k <= 0.0:
-                    best = min(best, 0.0)
-                    continue
-                b = fx * dx + fy * dy
-                disc = b * b - k
-                if disc >= 0.0:
-                    t = -b - np.sqrt(disc)
-                    if t >= 0.0 and t < best:
-                        best = t
-            for j in range(segments.shape[0]):
-                px = segments[j, 0, 0]
-                py = segments[j, 0, 1]
-                ex = segments[j, 1, 0] - px
-                ey = segments[j, 1, 1] - py
-                wx = px - ox
-                wy = py - oy
-                denom = dx * ey - dy * ex
-                if denom != 0.0:
-                    t = (wx * ey - wy * ex) / denom
-                    s = (wx * dy - wy * dx) / denom
-                    if t >= 0.0 and s >= 0.0 and s <= 1.0 and t < best:
-                        best = t
-            out[i] = best
-
-    return kernel
+    return cast_rays_kernel
 
 
 def numba_available() -> bool:
@@ -123,7 +92,7 @@ def numba_available() -> bool:
     if _NUMBA_FAILED is not None:
         return False
     try:
-        _NUMBA_KERNEL = _build_numba_kernel()
+        _NUMBA_KERNEL = _load_numba_kernel()
     except Exception as error:  # ImportError, or a numba that does not support this numpy
         _NUMBA_FAILED = f"{type(error).__name__}: {error}"
         return False
@@ -161,3 +130,168 @@ def simulate_scan(scanner, robot_pose, centres, radii, segments=None, rng=None, 
     x, y, yaw = scanner.world_pose(robot_pose)
     true_range = cast_rays((x, y), scanner.beam_angles_rad() + yaw, centres, radii, segments, backend=backend)
     return scanner.measure(true_range, rng)
+
+
+# -- all scanners of a robot in one call (issue 16: the laser loop) ---------------------------------
+
+
+@dataclass(frozen=True)
+class _ScanLayout:
+    """Per-beam constants of a set of scanners, concatenated (cached per scanner tuple)."""
+
+    beam_angles_rad: tuple  # per scanner, scanner frame (ScannerModel.beam_angles_rad())
+    bounds: np.ndarray  # (S + 1,) first beam of each scanner, then the total
+    range_min_m: np.ndarray  # (B,)
+    range_max_m: np.ndarray  # (B,)
+    noise_sigma_near_m: np.ndarray  # (B,)
+    noise_fraction_far: np.ndarray  # (B,)
+    noise_switch_range_m: np.ndarray  # (B,)
+    invalid_values: tuple  # per scanner: the value its driver reports for an invalid beam
+
+
+@lru_cache(maxsize=16)
+def _scan_layout(scanners) -> _ScanLayout:
+    counts = [s.beam_count for s in scanners]
+    rep = lambda name: np.repeat(np.array([getattr(s, name) for s in scanners], dtype=float), counts)  # noqa: E731
+    return _ScanLayout(tuple(s.beam_angles_rad() for s in scanners), np.concatenate([[0], np.cumsum(counts)]),
+                       rep("range_min_m"), rep("range_max_m"), rep("noise_sigma_near_m"), rep("noise_fraction_far"),
+                       rep("noise_switch_range_m"),
+                       tuple({"inf": np.inf, "nan": np.nan, "zero": 0.0}[s.invalid_encoding] for s in scanners))
+
+
+def cast_rays_from_numpy(origins_x, origins_y, directions, centres, radii, segments, groups=None) -> np.ndarray:
+    """:func:`cast_rays_numpy` for beams with their own origins (``origins_x``/``origins_y`` (B,)); same bits.
+
+    ``groups``: optional list of ``(first, count, angle0_rad, increment_rad)`` — runs of beams from
+    one origin at uniformly spaced world angles ``angle0 + i * increment`` (a scanner). With it, a
+    disc is only tested against the beams within its angular extent plus two beams of margin (the
+    others miss it by far more than round-off: ``b² - k <= -(d² sin²(α + 2Δφ) - r²)``), and a
+    scanner inside a disc reads 0 on every beam, as in :func:`cast_rays_numpy`.
+    """
+    n_beams = len(directions)
+    best = np.full(n_beams, np.inf)
+    dx = directions[:, 0]
+    dy = directions[:, 1]
+    if len(centres):
+        if groups is None:
+            beam = np.repeat(np.arange(n_beams), len(centres))
+            disc_of = np.tile(np.arange(len(centres)), n_beams)
+        else:
+            beam, disc_of = _candidate_pairs(origins_x, origins_y, centres, radii, groups, best)
+        if len(beam):
+            fx = origins_x[beam] - centres[disc_of, 0]
+            fy = origins_y[beam] - centres[disc_of, 1]
+            r = radii[disc_of]
+            k = fx * fx + fy * fy - r * r
+            b = fx * dx[beam] + fy * dy[beam]
+            disc = b * b - k
+            with np.errstate(invalid="ignore"):
+                t = -b - np.sqrt(disc)
+            t = np.where((disc >= 0.0) & (t >= 0.0), t, np.inf)
+            t = np.where(k <= 0.0, 0.0, t)
+            np.minimum.at(best, beam, t)
+    if len(segments):
+        px = segments[:, 0, 0]
+        py = segments[:, 0, 1]
+        ex = segments[:, 1, 0] - px
+        ey = segments[:, 1, 1] - py
+        wx = px - origins_x[:, None]
+        wy = py - origins_y[:, None]
+        dxc, dyc = dx[:, None], dy[:, None]
+        denom = dxc * ey - dyc * ex
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (wx * ey - wy * ex) / denom
+            s = (wx * dyc - wy * dxc) / denom
+            ok = (denom != 0.0) & (t >= 0.0) & (s >= 0.0) & (s <= 1.0)
+        t = np.where(ok, t, np.inf)
+        best = np.minimum(best, t.min(axis=1))
+    return best
+
+
+def _candidate_pairs(origins_x, origins_y, centres, radii, groups, best):
+    """(beam, disc) pairs that may hit, per uniform beam group; beams of a scanner inside a disc set to 0."""
+    beams, discs = [], []
+    two_pi = 2.0 * np.pi
+    for first, count, angle0, increment in groups:
+        ox, oy = origins_x[first], origins_y[first]
+        fx = ox - centres[:, 0]
+        fy = oy - centres[:, 1]
+        k = fx * fx + fy * fy - radii * radii  # the expression of the per-pair test: same sign
+        inside = k <= 0.0
+        if inside.any():
+            best[first:first + count] = 0.0  # t = 0 on every beam, whatever else it meets
+            continue
+        distance = np.sqrt(fx * fx + fy * fy)
+        half = np.arcsin(np.minimum(radii / distance, 1.0)) + 2.0 * increment
+        bearing = np.mod(np.arctan2(-fy, -fx) - angle0, two_pi)
+        lo = np.ceil((bearing - half) / increment)
+        hi = np.floor((bearing + half) / increment)
+        everything = half >= 0.5 * np.pi
+        # The beam range of each disc, and its copies one turn before and after (a disc across the
+        # ends of a 360° scan); they cannot overlap (half < π/2), and a repeated pair would do no harm.
+        shifts = np.array([-two_pi / increment, 0.0, two_pi / increment])
+        start = np.maximum((lo[:, None] + np.floor(shifts)).astype(int) - 1, 0)
+        stop = np.minimum((hi[:, None] + np.ceil(shifts)).astype(int) + 1, count - 1)
+        start[everything] = (0, 1, 1)
+        stop[everything] = (count - 1, 0, 0)
+        length = np.maximum(stop - start + 1, 0).ravel()
+        if not length.any():
+            continue
+        start = start.ravel()
+        offsets = np.repeat(start - (np.cumsum(length) - length), length)
+        beams.append(first + np.arange(int(length.sum())) + offsets)
+        discs.append(np.repeat(np.repeat(np.arange(len(centres)), 3), length))
+    if not beams:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    return np.concatenate(beams), np.concatenate(discs)
+
+
+def simulate_scans(scanners, robot_pose, centres, radii, segments=None, rng=None, backend: str = "numpy") -> list[np.ndarray]:
+    """``[simulate_scan(s, ...) for s in scanners]`` in one pass: the same readings, bit for bit, and the
+    same draws from ``rng`` (one normal per hit beam, scanner after scanner)."""
+    scanners = tuple(scanners)
+    layout = _scan_layout(scanners)
+    centres, radii, segments = _as_inputs(centres, radii, np.zeros((0, 2, 2)) if segments is None else segments)
+    n_beams = int(layout.bounds[-1])
+    origins_x = np.empty(n_beams)
+    origins_y = np.empty(n_beams)
+    directions = np.empty((n_beams, 2))
+    groups = []
+    for index, scanner in enumerate(scanners):
+        x, y, yaw = scanner.world_pose(robot_pose)
+        first, last = int(layout.bounds[index]), int(layout.bounds[index + 1])
+        angles = layout.beam_angles_rad[index] + yaw
+        origins_x[first:last] = x
+        origins_y[first:last] = y
+        directions[first:last, 0] = np.cos(angles)
+        directions[first:last, 1] = np.sin(angles)
+        groups.append((first, last - first, float(angles[0]), scanner.angle_increment_rad))
+    if backend == "auto":
+        backend = "numba" if numba_available() else "numpy"
+    if backend == "numpy":
+        true_range = cast_rays_from_numpy(origins_x, origins_y, directions, centres, radii, segments, groups)
+    elif backend == "numba":
+        if not numba_available():
+            raise RuntimeError(f"numba back end unavailable ({_NUMBA_FAILED}); pip install 'viapath[fast]'")
+        from viapath.perception._numba_kernels import cast_rays_from_kernel
+
+        true_range = np.empty(n_beams)
+        cast_rays_from_kernel(origins_x, origins_y, directions, centres, radii, segments, true_range)
+    else:
+        raise ValueError(f"backend must be 'numpy', 'numba' or 'auto', got {backend!r}")
+    # ScannerModel.measure on every scanner at once: same expressions, per-beam parameters.
+    reading = true_range.copy()
+    if rng is not None:
+        hit = np.isfinite(true_range)
+        r = true_range[hit]
+        sigma = np.where(r < layout.noise_switch_range_m[hit], layout.noise_sigma_near_m[hit],
+                         layout.noise_fraction_far[hit] * r)
+        reading[hit] += rng.standard_normal(int(hit.sum())) * sigma
+    invalid = ~np.isfinite(reading) | (reading < layout.range_min_m) | (reading > layout.range_max_m)
+    out = []
+    for index, value in enumerate(layout.invalid_values):
+        first, last = int(layout.bounds[index]), int(layout.bounds[index + 1])
+        part = reading[first:last]
+        part[invalid[first:last]] = value
+        out.append(part)
+    return out

@@ -1,0 +1,113 @@
+"""Laser loop speed (issue 16): two simulated URG-04LX scans (683 beams each), 10 people, tracking.
+
+    python benchmarks/bench_laser_loop.py [--steps 600] [--runs 3] [--json]
+
+Two figures, each for the numpy and (when installed) the numba back end, ``--runs`` times:
+* ``laser_steps_per_s``: the laser chain alone, one step = ray casting of both scanners (with
+  range noise), fusion, segmentation, circle fits, association and tracking
+  (``LaserPerception.observe``) on the scene of ``bench_perception.py`` (10 people circling a robot
+  driving between two walls; all stay in view). This is the part issue 16's laser targets are about
+  (>= 300 steps/s numpy, >= 1000 numba; IR-SIM runs its lidar world at ~86 steps/s).
+* ``closed_loop_steps_per_s``: ``viapath.sim.loop.run_episode`` with laser perception on the
+  closed-loop scene of ``bench_perception.py`` (10 people, viapath planner + shield): laser chain
+  plus planning plus simulation; the planner's share is the planner's (the ``fast`` branch).
+The load average is printed with each run, and each figure is given per wall-clock second and per
+second of this process's CPU time (steadier on a shared machine; equal on an idle one).
+Not a test: numbers depend on the machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_perception import scene  # noqa: E402
+
+from viapath.perception.laser import LaserPerception  # noqa: E402
+from viapath.perception.raycast import numba_available  # noqa: E402
+
+
+def laser_chain(backend: str, steps: int) -> float:
+    worlds = [scene(10, k) for k in range(steps)]
+    perception = LaserPerception(ray_backend=backend, detector={"keep_segments": False, "fit_backend": backend})
+    perception.reset(np.random.default_rng(1))
+    for world in worlds[:20]:  # warm-up (and numba's cache load)
+        perception.observe(world)
+    perception.reset(np.random.default_rng(1))
+    started, cpu = time.perf_counter(), time.process_time()
+    for world in worlds:
+        perception.observe(world)
+    return steps / (time.perf_counter() - started), steps / (time.process_time() - cpu)
+
+
+def closed_loop_scenario(backend: str, steps: int):
+    from viapath.scenarios import scenario_from_dict
+
+    rng = np.random.default_rng(3)
+    obstacles = []
+    for _ in range(10):
+        y = rng.uniform(-3.0, 3.0)
+        x = rng.uniform(2.0, 14.0)
+        obstacles.append({"start": [float(x), float(y)], "velocity": [float(rng.uniform(-0.4, 0.4)), float(-np.sign(y) * 0.1)],
+                          "radius": 0.25})
+    return scenario_from_dict({
+        "name": "bench-10",
+        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2, "radius": 0.25},
+        "path": {"waypoints": [[0.0, 0.0], [15.0, 0.0]], "half_width": 1.5},
+        "obstacles": obstacles,
+        "walls": [[[-2.0, -4.0], [20.0, -4.0]], [[-2.0, 4.0], [20.0, 4.0]]],
+        "duration_s": steps * 0.1,
+        "perception": {"mode": "laser", "options": {"ray_backend": backend,
+                                                     "detector": {"fit_backend": backend, "keep_segments": False}}},
+    })
+
+
+def closed_loop(backend: str, steps: int) -> float:
+    from viapath.sim.loop import run_episode
+
+    scenario = closed_loop_scenario(backend, steps)
+    run_episode(scenario, seed=0)
+    started, cpu = time.perf_counter(), time.process_time()
+    episode = run_episode(scenario, seed=0)
+    n = len(episode.trace.times_s)
+    return n / (time.perf_counter() - started), n / (time.process_time() - cpu)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=600, help="laser-chain steps per run")
+    parser.add_argument("--loop-steps", type=int, default=300, help="closed-loop steps per run (0: skip)")
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args(argv)
+    backends = ["numpy"] + (["numba"] if numba_available() else [])
+    results = {"python": platform.python_version(), "numpy": np.__version__, "numba": numba_available(), "runs": []}
+    for run in range(args.runs):
+        row = {"run": run + 1, "load_average": os.getloadavg()}
+        for backend in backends:
+            row[f"laser_steps_per_s_{backend}"], row[f"laser_steps_per_cpu_s_{backend}"] = laser_chain(backend, args.steps)
+            if args.loop_steps > 0:
+                (row[f"closed_loop_steps_per_s_{backend}"],
+                 row[f"closed_loop_steps_per_cpu_s_{backend}"]) = closed_loop(backend, args.loop_steps)
+        results["runs"].append(row)
+        if not args.json:
+            load = " ".join(f"{v:.2f}" for v in row["load_average"])
+            figures = "  ".join(f"{k.replace('_steps_per', '')} {v:6.0f}" for k, v in row.items() if k.endswith(tuple(backends)))
+            print(f"run {run + 1} (load {load}): steps per wall s / per CPU s:  {figures}")
+    if args.json:
+        print(json.dumps(results, indent=2))
+    else:
+        print("targets: laser >= 300 steps/s (numpy), >= 1000 (numba); IR-SIM lidar world ~86 steps/s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

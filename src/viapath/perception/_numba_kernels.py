@@ -1,0 +1,203 @@
+"""Compiled (numba) kernels of the laser chain: ray casting and the batched circle fit.
+
+Source: the same closed forms as :mod:`~viapath.perception.raycast` and
+:mod:`~viapath.perception.circle_fit` (their docstrings), written as loops.
+
+Why a module of its own, with plain module-level functions (issue 16):
+* numba's on-disk cache (``cache=True``) only works for functions it can find again by module and
+  qualified name, with no closure variables. The kernels used to be built inside functions
+  (``_build_numba_fit.<locals>.fit``); the fit kernel closed over the ``solve`` dispatcher, whose
+  pickled bytes differ in every process, so numba's cache index never matched: every process start
+  compiled again (~10 s) and added another ``.nbc`` file next to the source.
+* Imported only when numba is present (``raycast.numba_available()`` / ``circle_fit._numba_fit()``
+  import it inside a ``try``): the numpy path never needs numba.
+* Where the cache goes: numba writes next to the source (``__pycache__``) when that folder is
+  writable, else (an installed, read-only site-packages) in the user-wide cache
+  (``~/.cache/numba`` or ``$NUMBA_CACHE_DIR``). Either way the first process on a machine compiles
+  and every later one loads (tested: ``tests/perception/test_numba_cache.py``).
+* No fast-math: the kernels evaluate the numpy path's expressions in the same order, so ray
+  casting agrees bit for bit and the fit to round-off (tested).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True, fastmath=False, nogil=True)
+def cast_rays_kernel(ox, oy, directions, centres, radii, segments, out):  # pragma: no cover - compiled
+    """Range along each unit direction from (ox, oy) to the nearest disc or wall; ``inf`` = no hit."""
+    n_beams = directions.shape[0]
+    for i in range(n_beams):
+        dx = directions[i, 0]
+        dy = directions[i, 1]
+        best = np.inf
+        for j in range(centres.shape[0]):
+            fx = ox - centres[j, 0]
+            fy = oy - centres[j, 1]
+            k = fx * fx + fy * fy - radii[j] * radii[j]
+            if k <= 0.0:
+                best = min(best, 0.0)
+                continue
+            b = fx * dx + fy * dy
+            disc = b * b - k
+            if disc >= 0.0:
+                t = -b - np.sqrt(disc)
+                if t >= 0.0 and t < best:
+                    best = t
+        for j in range(segments.shape[0]):
+            px = segments[j, 0, 0]
+            py = segments[j, 0, 1]
+            ex = segments[j, 1, 0] - px
+            ey = segments[j, 1, 1] - py
+            wx = px - ox
+            wy = py - oy
+            denom = dx * ey - dy * ex
+            if denom != 0.0:
+                t = (wx * ey - wy * ex) / denom
+                s = (wx * dy - wy * dx) / denom
+                if t >= 0.0 and s >= 0.0 and s <= 1.0 and t < best:
+                    best = t
+        out[i] = best
+
+
+@numba.njit(cache=True, fastmath=False, nogil=True)
+def cast_rays_from_kernel(origins_x, origins_y, directions, centres, radii, segments, out):  # pragma: no cover
+    """:func:`cast_rays_kernel` with one origin per beam (all scanners of a robot in one call)."""
+    n_beams = directions.shape[0]
+    for i in range(n_beams):
+        ox = origins_x[i]
+        oy = origins_y[i]
+        dx = directions[i, 0]
+        dy = directions[i, 1]
+        best = np.inf
+        for j in range(centres.shape[0]):
+            fx = ox - centres[j, 0]
+            fy = oy - centres[j, 1]
+            k = fx * fx + fy * fy - radii[j] * radii[j]
+            if k <= 0.0:
+                best = min(best, 0.0)
+                continue
+            b = fx * dx + fy * dy
+            disc = b * b - k
+            if disc >= 0.0:
+                t = -b - np.sqrt(disc)
+                if t >= 0.0 and t < best:
+                    best = t
+        for j in range(segments.shape[0]):
+            px = segments[j, 0, 0]
+            py = segments[j, 0, 1]
+            ex = segments[j, 1, 0] - px
+            ey = segments[j, 1, 1] - py
+            wx = px - ox
+            wy = py - oy
+            denom = dx * ey - dy * ex
+            if denom != 0.0:
+                t = (wx * ey - wy * ex) / denom
+                s = (wx * dy - wy * dx) / denom
+                if t >= 0.0 and s >= 0.0 and s <= 1.0 and t < best:
+                    best = t
+        out[i] = best
+
+
+@numba.njit(cache=True, nogil=True)
+def solve_sym3_scalar(a00, a01, a02, a11, a12, a22, b0, b1, b2):  # pragma: no cover - compiled
+    """One symmetric 3x3 system by Cramer's rule: the solution and the centre block of the inverse."""
+    c00 = a11 * a22 - a12 * a12
+    c01 = a02 * a12 - a01 * a22
+    c02 = a01 * a12 - a02 * a11
+    c11 = a00 * a22 - a02 * a02
+    c12 = a01 * a02 - a00 * a12
+    c22 = a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    if not abs(det) > 1e-300:
+        det = np.inf
+    return ((c00 * b0 + c01 * b1 + c02 * b2) / det, (c01 * b0 + c11 * b1 + c12 * b2) / det,
+            (c02 * b0 + c12 * b1 + c22 * b2) / det, c00 / det, c01 / det, c11 / det)
+
+
+@numba.njit(cache=True, nogil=True)
+def fit_circles_kernel(points, starts, counts, origins, has_prior, prior, weight, range_sigma, iterations,
+                       out):  # pragma: no cover - compiled
+    """The batched geometric circle fit of :func:`~viapath.perception.circle_fit.fit_circles`, one loop per cluster.
+
+    ``out[k]`` = (centre x, centre y, radius, rms, centre sigma).
+    """
+    for k in range(starts.shape[0]):
+        s, m = starts[k], counts[k]
+        mx = 0.0
+        my = 0.0
+        for i in range(s, s + m):
+            mx += points[i, 0]
+            my += points[i, 1]
+        mx /= m
+        my /= m
+        vx = mx - origins[k, 0]
+        vy = my - origins[k, 1]
+        if has_prior:
+            norm = max(np.sqrt(vx * vx + vy * vy), 1e-12)
+            cx = vx / norm * (2.0 / np.pi * prior)
+            cy = vy / norm * (2.0 / np.pi * prior)
+            r = prior
+            target = prior
+        else:  # Kåsa
+            sxx = sxy = sx = syy = sy = sxz = syz = sz = 0.0
+            for i in range(s, s + m):
+                x = points[i, 0] - mx
+                y = points[i, 1] - my
+                z = x * x + y * y
+                sxx += x * x
+                sxy += x * y
+                sx += x
+                syy += y * y
+                sy += y
+                sxz += x * z
+                syz += y * z
+                sz += z
+            a, b, c, _, _, _ = solve_sym3_scalar(sxx, sxy, sx, syy, sy, float(m), -sxz, -syz, -sz)
+            cx = -0.5 * a
+            cy = -0.5 * b
+            r = np.sqrt(max(cx * cx + cy * cy - c, 1e-12))
+            target = 0.0
+        rms = 0.0
+        i00 = i01 = i11 = 0.0
+        for it in range(iterations + 1):
+            a00 = a01 = a02 = a11 = a12 = 0.0
+            g0 = g1 = g2 = 0.0
+            ss = 0.0
+            for i in range(s, s + m):
+                dx = points[i, 0] - mx - cx
+                dy = points[i, 1] - my - cy
+                dist = max(np.sqrt(dx * dx + dy * dy), 1e-12)
+                ux = dx / dist
+                uy = dy / dist
+                res = dist - r
+                a00 += ux * ux
+                a01 += ux * uy
+                a02 += ux
+                a11 += uy * uy
+                a12 += uy
+                g0 -= ux * res
+                g1 -= uy * res
+                g2 -= res
+                ss += res * res
+            g2 += weight * (r - target)
+            d0, d1, d2, i00, i01, i11 = solve_sym3_scalar(a00, a01, a02, a11, a12, m + weight, g0, g1, g2)
+            rms = np.sqrt(ss / m)
+            if it < iterations:
+                cx -= d0
+                cy -= d1
+                r = abs(r - d2)
+        sigma2 = max(rms, range_sigma) ** 2
+        half_trace = 0.5 * (i00 + i11)
+        half_diff = 0.5 * (i00 - i11)
+        largest = half_trace + np.sqrt(half_diff * half_diff + i01 * i01)
+        if cx * vx + cy * vy < 0:
+            cx = -cx
+            cy = -cy
+        out[k, 0] = cx + mx
+        out[k, 1] = cy + my
+        out[k, 2] = r
+        out[k, 3] = rms
+        out[k, 4] = np.sqrt(max(largest * sigma2, 0.0))
