@@ -85,7 +85,8 @@ NODE_OPTIONS: tuple[Option, ...] = (
     _opt("cycle_period_s", 0.1, "s", 0.01, 1.0, "scan period; also the watchdog period"),
     _opt("max_invalid_fraction", 0.5, "", 0.0, 1.0, "a scan with more NaN/zero readings than this counts as failed"),
     _opt("detector", "people", "", help="detector preset", choices=("people", "legs")),
-    _opt("fit_backend", "numpy", "", help="circle fit back end (numba: compiled at start, barely faster here)",
+    _opt("fit_backend", "numpy", "", help="circle fit back end (numba: compiled once per machine, then loaded from "
+         "its cache; equal to round-off, barely faster here)",
            choices=("numpy", "auto", "numba")),
     _opt("tracker_acceleration_sigma_mps2", 0.2, "m/s^2", 0.01, 10.0, "process noise of the tracker (real walkers: 0.5)"),
     _opt("blind_person_speed_mps", 1.0, "m/s", 0.0, 5.0, "walking speed assumed for someone in a blind sector"),
