@@ -1,0 +1,26 @@
+"""Tiny scenarios for the tuning tests: short paths, one person, a few seconds of simulated time each."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import yaml
+
+TINY = {
+    "tiny-crossing-0": {"start": [1.4, -1.2], "velocity": [0.0, 0.4]},
+    "tiny-head-on-1": {"start": [2.6, 0.05], "velocity": [-0.3, 0.0]},
+}
+
+
+def tiny_scenario(name: str, obstacle: dict, length_m: float = 2.4) -> dict:
+    return {"name": name, "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.25, "radius": 0.25},
+            "path": {"waypoints": [[0.0, 0.0], [length_m, 0.0]], "half_width": 1.0},
+            "obstacles": [{**obstacle, "radius": 0.25}], "duration_s": 25.0}
+
+
+def write_tiny_suite(folder: Path, names=None) -> Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, obstacle in TINY.items():
+        if names is None or name in names:
+            (folder / f"{name}.yaml").write_text(yaml.safe_dump(tiny_scenario(name, obstacle)))
+    return folder
