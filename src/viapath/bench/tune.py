@@ -25,7 +25,7 @@ Choices where the issue is silent:
 * Sampler: multi-objective TPE with constraints, seeded (``sampler="nsga2"`` for NSGA-II). With a few
   hundred trials TPE converges faster than NSGA-II's generations of 50.
 * The first trial of a new study is the paper's weights (enqueued), the reference point of the plot
-  and of the test-suite ranking.
+  and of the test-suite ranking. ``--start-from PRESET`` enqueues more known points (once per study).
 * ``trials`` is the **total** wanted: a rerun with the same storage and study name runs only what is
   missing (a trial that crashed or was killed does not count and is rerun by the sampler). The study
   records its suite (scenario content hashes), seeds, space and constraints; a rerun with other ones
@@ -215,15 +215,20 @@ def open_study(url: str, name: str, seed: int, sampler: str, constraints: Constr
 
     # Optuna 5 takes constraints from ``trial.set_constraint`` (see run_study); 3.6-4.x from constraints_func.
     given = {} if _has_set_constraint() else {"constraints_func": constraints_func}
-    if sampler == "tpe":
-        chosen = optuna.samplers.TPESampler(seed=seed, multivariate=True, n_startup_trials=10, **given)
-    else:
-        chosen = optuna.samplers.NSGAIISampler(seed=seed, **given)
+
+    def make_sampler(sampler_seed: int):
+        if sampler == "tpe":
+            return optuna.samplers.TPESampler(seed=sampler_seed, multivariate=True, n_startup_trials=10, **given)
+        return optuna.samplers.NSGAIISampler(seed=sampler_seed, **given)
+
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     try:
         storage = optuna.storages.RDBStorage(url, heartbeat_interval=60, grace_period=180)
-        study = optuna.create_study(study_name=name, storage=storage, sampler=chosen, load_if_exists=True,
+        study = optuna.create_study(study_name=name, storage=storage, sampler=make_sampler(seed), load_if_exists=True,
                                     directions=["minimize", "minimize"])
+        # A resumed study must not replay the first run's random draws: the seed moves on with the trials
+        # already stored (still deterministic for the same history).
+        study.sampler = make_sampler(seed + len(study.trials))
     except Exception as error:  # noqa: BLE001 - SQLAlchemy/Optuna errors: one message
         if sqlite_file is not None and not existed and sqlite_file.exists():
             sqlite_file.unlink()
@@ -266,9 +271,11 @@ def paper_trial(study):
 
 def run_study(study, scenarios: list[dict], space: list[Param], trials: int, workers: int, seed: int,
               constraints: Constraints, timeout_s: float | None = None, backend: str = "loky",
-              on_trial: Callable[[Any, Any], None] | None = None) -> tuple[int, float]:
+              on_trial: Callable[[Any, Any], None] | None = None,
+              start_from: list[tuple[str, dict[str, Any]]] = ()) -> tuple[int, float]:
     """Run trials until the study has ``trials`` complete ones (or ``timeout_s`` passes); returns
-    (trials run now, wall seconds)."""
+    (trials run now, wall seconds). ``start_from``: (label, option values) tried first (once per study),
+    e.g. presets a user already trusts; values outside the searched ranges are left to the sampler."""
     optuna_module()
     from optuna.storages import fail_stale_trials
 
@@ -285,6 +292,12 @@ def run_study(study, scenarios: list[dict], space: list[Param], trials: int, wor
             if p.name not in reference and p.low <= default <= p.high:
                 reference[p.name] = default
         study.enqueue_trial(reference, user_attrs={"reference": "paper"})
+    tried = {t.user_attrs.get("start_from") for t in study.get_trials(deepcopy=False)}
+    for label, values in start_from:
+        if label in tried:
+            continue
+        fixed = {p.name: values[p.name] for p in space if p.name in values and p.low <= values[p.name] <= p.high}
+        study.enqueue_trial(fixed, user_attrs={"start_from": label})
 
     def objective(trial):
         values = {}

@@ -101,6 +101,10 @@ def _register_tune(app: typer.Typer) -> None:
                                        "allowed"),
         sampler: str = typer.Option("tpe", "--sampler", help="tpe (multi-objective TPE) or nsga2"),
         timeout: Optional[float] = typer.Option(None, "--timeout", help="start no new trial after this many seconds"),
+        start_from: list[str] = typer.Option([], "--start-from", metavar="PRESET", help="try this preset (name or "
+                                             "file) early in the study (repeatable; once per study)"),
+        test_top: Optional[int] = typer.Option(None, "--test-top", help="with --test: test only the K front trials "
+                                               "nearest the knee (smallest objectives relative to the paper's)"),
     ) -> None:
         """Search the viapath planner's weights k1..k4: minimise mean lateral deviation and median time
         ratio on SUITE, with at-fault contacts, time outside the corridor and goal misses as constraints.
@@ -130,6 +134,12 @@ def _register_tune(app: typer.Typer) -> None:
             if pick is not None and export is None:
                 raise tuning.TuneError("--pick needs --export")
             tuning.check_storage(storage)
+            from viapath.presets import PresetError, preset_values
+
+            try:
+                starts = [(text, preset_values(text)) for text in start_from]
+            except PresetError as error:
+                raise tuning.TuneError(f"--start-from: {error}") from None
             constraints = tuning.Constraints(max_at_fault, max_outside_s, max_misses)
             scenarios = load_suite(suite, None, count=count, seed=seed)
             test_scenarios = None
@@ -157,7 +167,7 @@ def _register_tune(app: typer.Typer) -> None:
 
         show = _errors.is_terminal and not as_json
         ran, wall = _run_with_progress(tuning, study, scenarios, space, trials, workers, seed, constraints, timeout,
-                                       show)
+                                       show, log=not _errors.is_terminal, start_from=starts)
         front = tuning.pareto_front(study)
         paper = tuning.paper_trial(study)
         test_results: dict[int, dict] = {}
@@ -165,7 +175,10 @@ def _register_tune(app: typer.Typer) -> None:
         if test_scenarios is not None:
             test_key = suite_key(test_scenarios)
             info["test_suite"] = f"{test} ({len(test_scenarios)} scenarios, {test_key})"
-            chosen = list(front) + ([paper] if paper is not None and paper not in front else [])
+            nearest = sorted(front, key=lambda t: _relative(t, paper))
+            if test_top is not None:
+                nearest = [t for t in nearest if paper is None or t.number != paper.number][:max(0, test_top)]
+            chosen = nearest + ([paper] if paper is not None and paper not in nearest else [])
             if show:
                 _errors.print(f"testing {len(chosen)} trials on {len(test_scenarios)} scenarios ...")
             test_results = tuning.evaluate_on_test(study, chosen, test_scenarios, test_key, workers, seed)
@@ -204,9 +217,26 @@ def _json_default(value):
     return str(value)
 
 
-def _run_with_progress(tuning, study, scenarios, space, trials, workers, seed, constraints, timeout, show):
+def _relative(trial, paper) -> float:
+    d0, t0 = paper.values if paper is not None else (1.0, 1.0)
+    return trial.values[0] / (d0 or 1.0) + trial.values[1] / (t0 or 1.0)
+
+
+def _run_with_progress(tuning, study, scenarios, space, trials, workers, seed, constraints, timeout, show, log=False,
+                       start_from=()):
     if not show:
-        return tuning.run_study(study, scenarios, space, trials, workers, seed, constraints, timeout)
+        def line(study_, trial):  # one line per trial on stderr (a log file), never on stdout
+            m = trial.user_attrs.get("metrics") or {}
+            state = "feasible" if tuning.is_feasible(trial) else "infeasible"
+            params = " ".join(f"{k}={v:.4g}" for k, v in trial.params.items())
+            _errors.print(f"trial {trial.number} ({state}): {params}: dev {m.get('mean_lateral_deviation_m', float('nan')):.4f} m, "
+                          f"time ratio {m.get('median_time_ratio', float('nan')):.4f}, at-fault {m.get('at_fault')}, "
+                          f"contacts {m.get('contacts')}, misses {m.get('misses')} {m.get('misses_by_family')}, "
+                          f"outside {m.get('outside_s_per_episode', float('nan')):.2f} s/ep, "
+                          f"{trial.duration.total_seconds() if trial.duration else float('nan'):.1f} s",
+                          highlight=False, soft_wrap=True)
+        return tuning.run_study(study, scenarios, space, trials, workers, seed, constraints, timeout,
+                                on_trial=line if log else None, start_from=start_from)
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     done = len(tuning.complete_trials(study))
@@ -218,7 +248,7 @@ def _run_with_progress(tuning, study, scenarios, space, trials, workers, seed, c
             bar.update(job, completed=min(len(tuning.complete_trials(study_)), trials),
                        description=_best_text(tuning, study_))
         return tuning.run_study(study, scenarios, space, trials, workers, seed, constraints, timeout,
-                                on_trial=on_trial)
+                                on_trial=on_trial, start_from=start_from)
 
 
 def _best_text(tuning, study) -> str:
