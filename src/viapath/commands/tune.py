@@ -97,8 +97,8 @@ def _register_tune(app: typer.Typer) -> None:
         max_at_fault: int = typer.Option(0, "--max-at-fault", help="constraint: at-fault contacts allowed"),
         max_outside_s: float = typer.Option(0.25, "--max-outside-s", help="constraint: mean time outside the "
                                             "corridor per episode [s]"),
-        max_misses: int = typer.Option(0, "--max-misses", help="constraint: goal misses (and crashed episodes) "
-                                       "allowed"),
+        max_misses: int = typer.Option(0, "--max-misses", help="constraint: goal misses without a contact (and "
+                                       "crashed episodes) allowed"),
         sampler: str = typer.Option("tpe", "--sampler", help="tpe (multi-objective TPE) or nsga2"),
         timeout: Optional[float] = typer.Option(None, "--timeout", help="start no new trial after this many seconds"),
         start_from: list[str] = typer.Option([], "--start-from", metavar="PRESET", help="try this preset (name or "
@@ -158,7 +158,8 @@ def _register_tune(app: typer.Typer) -> None:
         train_key = suite_key(scenarios)
         identity = {"planner": tuning.PLANNER, "suite_hash": train_key, "seed": seed,
                     "space": [[p.name, p.low, p.high, p.log, p.integer] for p in space],
-                    "constraints": [constraints.max_at_fault, constraints.max_outside_s, constraints.max_misses]}
+                    "constraints": dict(zip(tuning.CONSTRAINT_NAMES, [constraints.max_at_fault, constraints.max_outside_s,
+                                                                      constraints.max_misses]))}
         try:
             study = tuning.open_study(storage, study_name, seed, sampler, constraints, identity)
         except tuning.TuneError as error:
