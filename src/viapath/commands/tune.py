@@ -103,6 +103,8 @@ def _register_tune(app: typer.Typer) -> None:
         timeout: Optional[float] = typer.Option(None, "--timeout", help="start no new trial after this many seconds"),
         start_from: list[str] = typer.Option([], "--start-from", metavar="PRESET", help="try this preset (name or "
                                              "file) early in the study (repeatable; once per study)"),
+        test_trials: Optional[str] = typer.Option(None, "--test-trials", metavar="N,N", help="with --test: test "
+                                                  "these trials (numbers) instead of the front"),
         test_top: Optional[int] = typer.Option(None, "--test-top", help="with --test: test only the K front trials "
                                                "nearest the knee (smallest objectives relative to the paper's)"),
     ) -> None:
@@ -177,7 +179,17 @@ def _register_tune(app: typer.Typer) -> None:
             test_key = suite_key(test_scenarios)
             info["test_suite"] = f"{test} ({len(test_scenarios)} scenarios, {test_key})"
             nearest = sorted(front, key=lambda t: _relative(t, paper))
-            if test_top is not None:
+            if test_trials:
+                by_number = {t.number: t for t in tuning.complete_trials(study)}
+                try:
+                    wanted = [int(n) for n in test_trials.split(",") if n.strip()]
+                except ValueError:
+                    _fail(f"--test-trials {test_trials}: expected trial numbers, e.g. 3,8")
+                missing = [n for n in wanted if n not in by_number]
+                if missing:
+                    _fail(f"--test-trials: no complete trial {missing[0]} in study {study_name!r}")
+                nearest = [by_number[n] for n in wanted]
+            elif test_top is not None:
                 nearest = [t for t in nearest if paper is None or t.number != paper.number][:max(0, test_top)]
             chosen = nearest + ([paper] if paper is not None and paper not in nearest else [])
             if show:
@@ -277,9 +289,12 @@ def _summary(tuning, study, front, paper, test_results, ranking, ran, wall) -> d
         return item
 
     front_sorted = sorted(front, key=lambda t: t.values[1])
+    on_front = {t.number for t in front} | ({paper.number} if paper is not None else set())
+    others = [t for t in tuning.complete_trials(study) if t.number in test_results and t.number not in on_front]
     return {"study": study.study_name, "trials": len(tuning.complete_trials(study)), "ran": ran,
             "wall_s": round(wall, 1), "front": [entry(t) for t in front_sorted],
-            "paper": entry(paper) if paper is not None else None, "test_ranking": ranking}
+            "paper": entry(paper) if paper is not None else None, "tested_off_front": [entry(t) for t in others],
+            "test_ranking": ranking}
 
 
 def _print_summary(summary: dict) -> None:
@@ -292,6 +307,7 @@ def _print_summary(summary: dict) -> None:
     rows = list(summary["front"])
     if paper and all(item["trial"] != paper["trial"] for item in rows):
         rows.append(paper)
+    rows += summary.get("tested_off_front", [])
 
     def counts(m):
         return f"{m['at_fault']}/{m['contacts']}/{m['misses']}" if m else "-"
