@@ -5,14 +5,18 @@ Usage: python benchmarks/bench_mcap.py [--repeats 3] [--scenarios paper-front pa
 
 Each scenario runs once to warm up (imports, numba), then ``repeats`` times each way, interleaved:
 ``plain`` is ``run_episode`` as ``viapath run`` does it; ``mcap`` is the same run with the MCAP view
-(the viapath planner then also keeps every candidate's polyline for display, part of the cost);
-``cand.`` is the plain run with that planner option alone, to show which part of the cost is the
-planner's.
+as ``viapath run --mcap`` writes it (the messages built and written by a process of its own,
+:mod:`viapath.viz.mcap_process`; the viapath planner also keeps every candidate's polyline for
+display, part of the cost); ``here`` writes the same file from the run's own process (how the live
+view works, and the cost before the writer process); ``cand.`` is the plain run with the
+candidates option alone, to show which part of the cost is the planner's.
 A scenario ``NAME:laser`` runs with laser perception; ``zara01`` is 20 s among replayed ETH/UCY
 people (crowds_zara01.txt; skipped when the data folder is absent). Printed: median wall time of
-each; the MCAP run's overhead over the plain one in wall time and in CPU time of the process (all
-threads; steadier than wall time on a shared machine), the part of it that is the planner keeping its
-candidates, the extra milliseconds per cycle, the file size and the 1-minute load average.
+each; the MCAP run's wall-time overhead over the plain one (the target), the same for ``here``;
+CPU overhead of the run's process alone and of run + writer together (``resource`` children
+time, taken after the writer is reaped), the extra wall milliseconds per cycle, the file size and
+the 1-minute load average. The writer process only pays off when a core is free: on a loaded
+machine the two processes share one core and the wall overhead approaches ``here``'s.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ import argparse
 import json
 import os
 import platform
+import resource
 import statistics
 import tempfile
 import time
@@ -56,16 +61,23 @@ def measure(name: str, repeats: int, folder: Path) -> dict | None:
         return None
     perception = mode or "oracle"
     run_episode(scenario, perception=perception)  # warm-up
-    wall = {"plain": [], "candidates": [], "mcap": []}
-    cpu = {"plain": [], "candidates": [], "mcap": []}
+    kinds = ("plain", "candidates", "mcap", "here")
+    wall = {kind: [] for kind in kinds}
+    cpu = {kind: [] for kind in kinds}  # the run's process
+    cpu_all = {kind: [] for kind in kinds}  # the run's process and its (reaped) writer process
     overrides = display_overrides(scenario, scenario.planner.name)
     cycles, size = 0, 0
 
+    def children_cpu() -> float:
+        usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return usage.ru_utime + usage.ru_stime
+
     def timed(kind, run):
-        wall_start, cpu_start = time.perf_counter(), time.process_time()
+        wall_start, cpu_start, child_start = time.perf_counter(), time.process_time(), children_cpu()
         result = run()
         wall[kind].append(time.perf_counter() - wall_start)
-        cpu[kind].append(time.process_time() - cpu_start)  # all threads of the process (the writer's too)
+        cpu[kind].append(time.process_time() - cpu_start)
+        cpu_all[kind].append(cpu[kind][-1] + children_cpu() - child_start)
         return result
     for k in range(repeats):
         episode = timed("plain", lambda: run_episode(scenario, perception=perception))
@@ -73,14 +85,21 @@ def measure(name: str, repeats: int, folder: Path) -> dict | None:
         file = folder / f"{base}-{k}.mcap"
         recorded = timed("mcap", lambda: record_episode(scenario, file, perception=perception, force=True))
         cycles, size = len(recorded.trace.times_s) - 1, file.stat().st_size
+        timed("here", lambda: record_episode(scenario, folder / "here.mcap", perception=perception, force=True,
+                                             in_process=True))
         assert len(episode.trace.times_s) == len(recorded.trace.times_s)
     med = {kind: statistics.median(values) for kind, values in wall.items()}
     med_cpu = {kind: statistics.median(values) for kind, values in cpu.items()}
-    p, m, c = med["plain"], med["mcap"], med["candidates"]
+    med_cpu_all = {kind: statistics.median(values) for kind, values in cpu_all.items()}
+    p, m, c, h = med["plain"], med["mcap"], med["candidates"], med["here"]
+    percent = lambda a, b: 100.0 * (a - b) / b  # noqa: E731
     return {"scenario": name, "perception": perception, "cycles": cycles, "wall_s": wall, "cpu_s": cpu,
-            "plain_median_s": p, "mcap_median_s": m, "candidates_median_s": c,
-            "overhead_percent": 100.0 * (m - p) / p, "candidates_overhead_percent": 100.0 * (c - p) / p,
-            "cpu_overhead_percent": 100.0 * (med_cpu["mcap"] - med_cpu["plain"]) / med_cpu["plain"],
+            "cpu_with_writer_s": cpu_all,
+            "plain_median_s": p, "mcap_median_s": m, "candidates_median_s": c, "here_median_s": h,
+            "overhead_percent": percent(m, p), "here_overhead_percent": percent(h, p),
+            "candidates_overhead_percent": percent(c, p),
+            "cpu_overhead_percent": percent(med_cpu["mcap"], med_cpu["plain"]),
+            "cpu_with_writer_overhead_percent": percent(med_cpu_all["mcap"], med_cpu_all["plain"]),
             "mcap_ms_per_cycle": 1e3 * (m - p) / max(cycles, 1), "file_bytes": size,
             "load_average_1min": os.getloadavg()[0]}
 
@@ -103,14 +122,14 @@ def main() -> None:
         print(json.dumps({"python": platform.python_version(), "repeats": args.repeats, "results": results}))
         return
     print(f"python {platform.python_version()}, {platform.machine()}, {args.repeats} repeats each (medians)")
-    print(f"{'scenario':18s} {'cycles':>6s} {'plain s':>8s} {'cand. s':>8s} {'mcap s':>8s} {'wall +':>8s} "
-          f"{'cand. +':>8s} {'CPU +':>7s} {'ms/cycle':>9s} {'file':>8s} {'load':>5s}")
+    print(f"{'scenario':18s} {'cycles':>6s} {'plain s':>8s} {'mcap s':>8s} {'wall +':>8s} {'here +':>8s} "
+          f"{'cand. +':>8s} {'CPU run +':>10s} {'CPU all +':>10s} {'ms/cycle':>9s} {'file':>8s} {'load':>5s}")
     for r in results:
-        print(f"{r['scenario']:18s} {r['cycles']:6d} {r['plain_median_s']:8.2f} {r['candidates_median_s']:8.2f} "
-              f"{r['mcap_median_s']:8.2f} {r['overhead_percent']:7.1f}% {r['candidates_overhead_percent']:7.1f}% "
-              f"{r['cpu_overhead_percent']:6.1f}% {r['mcap_ms_per_cycle']:9.2f} {r['file_bytes'] / 1e6:6.2f}MB "
-              f"{r['load_average_1min']:5.1f}")
-
+        print(f"{r['scenario']:18s} {r['cycles']:6d} {r['plain_median_s']:8.2f} {r['mcap_median_s']:8.2f} "
+              f"{r['overhead_percent']:7.1f}% {r['here_overhead_percent']:7.1f}% "
+              f"{r['candidates_overhead_percent']:7.1f}% {r['cpu_overhead_percent']:9.1f}% "
+              f"{r['cpu_with_writer_overhead_percent']:9.1f}% {r['mcap_ms_per_cycle']:9.2f} "
+              f"{r['file_bytes'] / 1e6:6.2f}MB {r['load_average_1min']:5.1f}")
 
 if __name__ == "__main__":
     main()

@@ -1,6 +1,7 @@
 """ROS 2 node latency: scan in -> cmd_vel out over DDS, with 10 and 50 simulated people; CPU per cycle.
 
-Usage: python benchmarks/bench_ros2.py [--people 10 50] [--cycles 150] [--json]
+Usage: python benchmarks/bench_ros2.py [--people 10 50] [--cycles 150] [--executor events|single-threaded]
+                                      [--profile node.prof] [--json]
 
 Needs the ``ros2`` extra. Starts ``viapath ros2 node`` as a separate process (its own ROS domain,
 DDS kept on this machine) and drives it from this process at the scan rate (10 Hz, real time):
@@ -35,7 +36,8 @@ def _cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def run(people_counts, cycles: int, seed: int = 0) -> list[dict]:
+def run(people_counts, cycles: int, seed: int = 0, profile: str | None = None,
+        node_args: tuple[str, ...] = ()) -> list[dict]:
     domain = 150 + os.getpid() % 50
     os.environ.update(ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(domain))
     import rclpy
@@ -50,8 +52,9 @@ def run(people_counts, cycles: int, seed: int = 0) -> list[dict]:
     from viapath.ros2 import convert
 
     node_proc = subprocess.Popen(
-        [sys.executable, "-m", "viapath.cli", "ros2", "node", "--ros-args", "-p", "path_file:=paper-front",
-         "-p", "scan_timeout_s:=5.0", "-p", "odom_timeout_s:=5.0"],
+        [sys.executable, *(["-m", "cProfile", "-o", profile] if profile else []), "-m", "viapath.cli", "ros2", "node",
+         "--ros-args", "-p", "path_file:=paper-front", "-p", "scan_timeout_s:=5.0", "-p", "odom_timeout_s:=5.0",
+         *node_args],
         env=dict(os.environ), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     rclpy.init()
     node = rclpy.create_node("viapath_bench")
@@ -150,9 +153,13 @@ def main() -> None:
     parser.add_argument("--cycles", type=int, default=150)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--executor", choices=("events", "single-threaded"), default=None,
+                        help="the node's executor parameter (default: the node's default)")
+    parser.add_argument("--profile", metavar="FILE", help="run the node under cProfile, stats written to FILE")
     args = parser.parse_args()
     started = time.time()
-    results = run(args.people, args.cycles, args.seed)
+    node_args = ("-p", f"executor:={args.executor}") if args.executor else ()
+    results = run(args.people, args.cycles, args.seed, args.profile, node_args)
     load = os.getloadavg()[0]
     if args.json:
         print(json.dumps({"benchmark": "ros2", "load_avg_1min": load, "wall_s": time.time() - started, "results": results}))

@@ -109,3 +109,28 @@ def test_eth_ucy_replay_velocities_use_only_past_positions():
     _, velocity = replay_states([track], np.array([track.times_s[5]]), 0.4)
     expected = (track.positions[5] - track.positions[4]) / 0.4  # backward difference over one row step
     np.testing.assert_allclose(velocity[0, 0], expected)
+
+
+def test_families_are_a_registry_and_mixed_keeps_its_nine(monkeypatch):
+    from viapath.bench.suites import FAMILIES, suite_names
+    from viapath.registry import DuplicateNameError
+
+    # mixed's order is its definition (scenario i is family i mod 9): changing it would change every suite.
+    assert SYNTHETIC_FAMILIES == ["crossing", "head-on", "overtaken", "overtaking", "multi", "group", "crowd",
+                                  "hallway", "paper"]
+    before = generate_suite("mixed", 18, seed=3)
+    monkeypatch.setattr(FAMILIES, "_entries", dict(FAMILIES._entries))  # undone after the test
+    with pytest.raises(DuplicateNameError, match="crossing"):
+        FAMILIES.add("crossing", lambda rng, index: {})
+    crossing = FAMILIES.get("crossing")
+
+    @FAMILIES.register("two-crossings")
+    def two_crossings(rng, index):
+        scenario = crossing(rng, index)
+        scenario["obstacles"] = scenario["obstacles"] * 2
+        return scenario
+    assert "two-crossings" in suite_names()
+    made = generate_suite("two-crossings", 2, seed=0)
+    assert [s["name"] for s in made] == ["two-crossings-0000", "two-crossings-0001"]
+    assert all(len(s["obstacles"]) == 2 for s in made)
+    assert generate_suite("mixed", 18, seed=3) == before

@@ -62,6 +62,7 @@ def test_descriptions_carry_unit_and_bounds():
     ({"not_a_parameter": 1.0}, "not_a_parameter"),
     ({"scanners.front.mount_yaw_rad": 7.0}, "scanners.front.mount_yaw_rad"),
     ({"autostart": "yes"}, "autostart"),
+    ({"executor": "multi-threaded"}, "executor"),
 ])
 def test_a_bad_value_is_refused_with_its_name(values, named):
     with pytest.raises(ParameterError) as error:

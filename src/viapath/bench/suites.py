@@ -26,6 +26,11 @@ Families (the scenario name is ``<family>-<index>``):
   give way to the robot (``replay: {react: true}``, :mod:`viapath.sim.reactive`).
 
 The suite ``mixed`` cycles through every synthetic family (index ``i`` → family ``i mod 9``).
+
+Families are kept in a :class:`viapath.registry.Registry` (``FAMILIES``): each generator registers
+itself by name where it is defined, a second one under a taken name is refused, and ``viapath
+suite``/``bench`` take their list from it. A family registered from outside (``@FAMILIES.register``)
+is a suite of its own; ``mixed`` stays the nine built-in ones, so its scenarios never change.
 """
 
 from __future__ import annotations
@@ -38,9 +43,10 @@ from typing import Callable
 import numpy as np
 import yaml
 
+from viapath.registry import Registry
 from viapath.sim.social_force import simulate_crowd
 
-SYNTHETIC_FAMILIES = ["crossing", "head-on", "overtaken", "overtaking", "multi", "group", "crowd", "hallway", "paper"]
+FAMILIES: Registry[Callable[[np.random.Generator, int], dict]] = Registry("scenario family")
 
 # The five standard leave-one-out scenes (data README §1): (scene, file, seconds per row step).
 ETH_UCY_SCENES = [
@@ -59,7 +65,7 @@ class SuiteError(ValueError):
 
 
 def suite_names() -> list[str]:
-    return ["mixed", *SYNTHETIC_FAMILIES, "eth-ucy", "eth-ucy-react"]
+    return ["mixed", *FAMILIES.ordered(), "eth-ucy", "eth-ucy-react"]
 
 
 def data_root() -> Path:
@@ -89,7 +95,7 @@ def generate_suite(name: str, count: int, seed: int = 0, data: Path | None = Non
         family = SYNTHETIC_FAMILIES[index % len(SYNTHETIC_FAMILIES)] if name == "mixed" else name
         family_index = index // len(SYNTHETIC_FAMILIES) if name == "mixed" else index
         rng = np.random.default_rng([seed, index])
-        scenario = _FAMILIES[family](rng, family_index)
+        scenario = FAMILIES.get(family)(rng, family_index)
         scenario["name"] = f"{family}-{index:04d}"
         scenario["seed"] = int(seed)
         scenarios.append(_rounded(scenario))
@@ -167,24 +173,28 @@ def _overtaking_person(rng, scenario) -> dict:
             "velocity": [speed + rng.uniform(0.15, 0.35), 0.0], "radius": 0.25}
 
 
+@FAMILIES.register("crossing")
 def crossing(rng, index) -> dict:
     scenario = _base(rng, "crossing", "One person crosses the path at a random angle and speed.")
     scenario["obstacles"].append(_crossing_person(rng, scenario))
     return scenario
 
 
+@FAMILIES.register("head-on")
 def head_on(rng, index) -> dict:
     scenario = _base(rng, "head-on", "One person walks down the path towards the robot.")
     scenario["obstacles"].append(_head_on_person(rng, scenario))
     return scenario
 
 
+@FAMILIES.register("overtaken")
 def overtaken(rng, index) -> dict:
     scenario = _base(rng, "overtaken", "A faster person comes from behind along the path.")
     scenario["obstacles"].append(_overtaking_person(rng, scenario))
     return scenario
 
 
+@FAMILIES.register("overtaking")
 def overtaking(rng, index) -> dict:
     scenario = _base(rng, "overtaking", "A slower walker ahead on the path: the robot must pass it.")
     speed = _robot_speed(scenario)
@@ -193,6 +203,7 @@ def overtaking(rng, index) -> dict:
     return scenario
 
 
+@FAMILIES.register("multi")
 def multi(rng, index) -> dict:
     scenario = _base(rng, "multi", "Two or three people at once: crossing, head-on or from behind.")
     makers = [_crossing_person, _head_on_person, _overtaking_person]
@@ -201,6 +212,7 @@ def multi(rng, index) -> dict:
     return scenario
 
 
+@FAMILIES.register("group")
 def group(rng, index) -> dict:
     scenario = _base(rng, "group", "A group of 2-4 people walking abreast, crossing or head-on.")
     leader = _crossing_person(rng, scenario) if rng.random() < 0.5 else _head_on_person(rng, scenario)
@@ -231,6 +243,7 @@ def _timed_people(trajectory, keep_every: int, starts_at, radius=0.25) -> list[d
     return people
 
 
+@FAMILIES.register("crowd")
 def crowd(rng, index) -> dict:
     scenario = _base(rng, "crowd", "A crowd moved by the social-force model (Helbing & Molnar 1995), "
                                    "crossing and walking along the corridor; precomputed, does not react to the robot.")
@@ -254,6 +267,7 @@ def crowd(rng, index) -> dict:
     return scenario
 
 
+@FAMILIES.register("hallway")
 def hallway(rng, index) -> dict:
     scenario = _base(rng, "hallway", "A walled hallway with oncoming people, moved by the social-force model.")
     length, half_width = _length(scenario), scenario["path"]["half_width"]
@@ -270,6 +284,7 @@ def hallway(rng, index) -> dict:
     return scenario
 
 
+@FAMILIES.register("paper")
 def paper(rng, index) -> dict:
     """The paper's three experiments (§4, Fig. 8): robot 0.2 m/s, goal 5 m ahead, corridor ±1 m."""
     variant = index % 3
@@ -295,10 +310,8 @@ def paper(rng, index) -> dict:
     return scenario
 
 
-_FAMILIES: dict[str, Callable] = {
-    "crossing": crossing, "head-on": head_on, "overtaken": overtaken, "overtaking": overtaking, "multi": multi,
-    "group": group, "crowd": crowd, "hallway": hallway, "paper": paper,
-}
+# The nine of ``mixed``, in its order (registered above in this order; checked in the tests).
+SYNTHETIC_FAMILIES = FAMILIES.ordered()
 
 
 # -- ETH/UCY ---------------------------------------------------------------------------------------

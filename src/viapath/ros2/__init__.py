@@ -3,7 +3,7 @@
 Install with ``pip install -e '.[ros2]'`` (the PyPI wheels of ROS 2 Kilted: rclpy over Fast DDS; no
 system ROS and no environment variables are needed), or run from a sourced ROS 2 installation.
 Modules that need rclpy import it inside their functions: ``settings``, ``core``, ``options``,
-``markers.scene_from_cycle`` and ``convert.load_path_file`` work without it.
+``markers.MarkerScenes`` and ``convert.load_path_file`` work without it.
 """
 
 

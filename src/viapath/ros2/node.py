@@ -80,7 +80,7 @@ def make_node_class():
     from visualization_msgs.msg import MarkerArray
 
     from viapath.ros2 import convert
-    from viapath.ros2.markers import marker_array, scene_from_cycle
+    from viapath.ros2.markers import MarkerScenes, marker_array
 
     class ViaPathNode(LifecycleNode):
         """Scans + odometry + designated path in; cmd_vel, markers and diagnostics out."""
@@ -124,6 +124,7 @@ def make_node_class():
                 self.get_logger().error(f"refusing to start: {self.error}")
                 return TransitionCallbackReturn.FAILURE
             s = self.core.settings
+            self._scenes = MarkerScenes(s.robot_radius_m)
             cmd_type = TwistStamped if s.cmd_vel_stamped else Twist
             self._pubs["cmd"] = self.create_lifecycle_publisher(cmd_type, s.cmd_vel_topic, 10)
             self._pubs["markers"] = self.create_lifecycle_publisher(MarkerArray, s.markers_topic, 5)
@@ -236,9 +237,12 @@ def make_node_class():
             assert math.isfinite(cmd.speed_mps) and math.isfinite(cmd.turn_rate_radps)
             self._pubs["cmd"].publish(self._command_msg(cmd.speed_mps, cmd.turn_rate_radps, result.stamp_s))
             stamp = self._stamp(result.stamp_s)
-            if markers and self._pubs["markers"].get_subscription_count() > 0:  # built only for someone watching
-                scene = scene_from_cycle(self.core.path, result)
-                self._pubs["markers"].publish(marker_array(scene, self.core.settings.odom_frame or "odom", stamp))
+            path = self.core.path
+            if markers and path is not None and self._pubs["markers"].get_subscription_count() > 0:
+                # built only for someone watching, after cmd_vel is out
+                scene = self._scenes.scene(path, self.core.planner, result)
+                corridor = self._scenes.builder(path, self.core.planner).path_view
+                self._pubs["markers"].publish(marker_array(scene, corridor, self.core.settings.odom_frame or "odom", stamp))
             self._pubs["status"].publish(self._diagnostics(result, stamp))
 
         def _inputs_matched(self) -> bool:
@@ -283,10 +287,24 @@ def make_node_class():
     return ViaPathNode
 
 
+def _executor(kind: str):
+    """rclpy's EventsExecutor where it exists (Kilted: ``rclpy.experimental``), which takes a callback
+    from DDS to Python without rebuilding a wait set per wake-up (the pure-Python executor's cost,
+    about a millisecond per scan on this machine); else, or when asked, the SingleThreadedExecutor."""
+    from rclpy.executors import SingleThreadedExecutor
+
+    if kind == "events":
+        try:
+            from rclpy.experimental import EventsExecutor
+        except ImportError:
+            return SingleThreadedExecutor()
+        return EventsExecutor()
+    return SingleThreadedExecutor()
+
+
 def run_node(ros_args: list[str] | None = None) -> int:
     """Start the node (``ros_args``: arguments after ``--ros-args``); returns the exit code."""
     import rclpy
-    from rclpy.executors import SingleThreadedExecutor
     from rclpy.signals import SignalHandlerOptions
 
     args = [sys.argv[0]] + (["--ros-args", *ros_args] if ros_args else [])
@@ -311,7 +329,7 @@ def run_node(ros_args: list[str] | None = None) -> int:
                 print(f"error: {node.error}", file=sys.stderr)
                 return 2
             node.trigger_activate()
-        executor = SingleThreadedExecutor()
+        executor = _executor(str(node.get_parameter("executor").value))
         executor.add_node(node)
         while not stop["flag"] and rclpy.ok():
             executor.spin_once(timeout_sec=0.05)

@@ -93,6 +93,9 @@ NODE_OPTIONS: tuple[Option, ...] = (
     _opt("blind_clearance_m", 0.3, "m", 0.0, 10.0, "distance from the body an unseen person is assumed to start from"),
     _opt("reset_hold_s", 0.5, "s", 0.0, 10.0, "after a time jump backwards the robot stands this long (tracks re-confirm)"),
     _opt("autostart", True, "", help="configure and activate the lifecycle node at start"),
+    _opt("executor", "events", "", help="rclpy executor: events (rclpy's EventsExecutor, callbacks dispatched "
+         "from C++: lower latency) or single-threaded (rclpy's pure-Python SingleThreadedExecutor)",
+         choices=("events", "single-threaded")),
     _opt("use_shield", "default", "", help="passive-safety shield around the planner (DESIGN §7); default: as "
          "viapath run (on for viapath)", choices=("default", "on", "off")),
 ) + _scanner_options("front", "scan_front", "laser_front", 0.145, 0.0) + _scanner_options("rear", "scan_rear", "laser_rear", -0.145, math.pi)

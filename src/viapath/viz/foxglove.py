@@ -547,11 +547,14 @@ def check_output_folder(folder: Path | str, option: str = "--mcap-failures") -> 
 
 class Views:
     """The views of one run: an MCAP file, a live server, or both. Use as a context manager around
-    ``run_episode(..., planner_overrides=views.planner_overrides, on_step=views.on_step)``."""
+    ``run_episode(..., planner_overrides=views.planner_overrides, on_step=views.on_step)``.
+    An MCAP alone is written by a process of its own (:mod:`viapath.viz.mcap_process`) unless
+    ``in_process``; with ``live`` everything is logged in the run's process, which the view paces."""
 
     def __init__(self, scenario, planner_name: str, mcap: Path | str | None = None, force: bool = False,
                  live: bool = False, rate: float = 1.0, host: str = "127.0.0.1", port: int = 8765,
-                 settings: ForecastSettings | None = None, announce: Callable[[str], None] | None = None):
+                 settings: ForecastSettings | None = None, announce: Callable[[str], None] | None = None,
+                 in_process: bool = False):
         if not (math.isfinite(rate) and rate > 0):
             raise ViewError(f"--rate: expected a number > 0, found {rate}")
         self.mcap = check_mcap_path(mcap, force) if mcap is not None else None
@@ -564,6 +567,8 @@ class Views:
         self.planner_overrides: dict[str, Any] | None = None
         self.server = None
         self.writer = None
+        self.writer_process = None  # viapath.viz.mcap_process.MCAPWriterProcess (an MCAP without --live)
+        self.in_process = in_process
         self.publisher: FoxglovePublisher | None = None
         self._clock_start: float | None = None
         if self.mcap is not None or live:
@@ -582,6 +587,15 @@ class Views:
 
         from viapath.path import DesignatedPath
 
+        path = DesignatedPath(self.scenario.path.waypoints, half_widths_m=self.scenario.path.widths())
+        self.planner_overrides = display_overrides(self.scenario, self.planner_name)
+        if not self.live and self.in_process is False:
+            from viapath.viz.mcap_process import MCAPWriterProcess
+
+            self.writer_process = MCAPWriterProcess(self.mcap, self.force, path, self.scenario.robot.radius,
+                                                    FoxglovePublisher, ViewError, self.settings)
+            self.on_step = self.writer_process
+            return self
         context = foxglove.Context()
         try:
             if self.mcap is not None:
@@ -593,10 +607,8 @@ class Views:
         except BaseException:
             self._close()
             raise
-        path = DesignatedPath(self.scenario.path.waypoints, half_widths_m=self.scenario.path.widths())
         self.context = context
         self.publisher = FoxglovePublisher(context, path, self.scenario.robot.radius, self.settings)
-        self.planner_overrides = display_overrides(self.scenario, self.planner_name)
         self.on_step = self._paced if self.live else self.publisher
         return self
 
@@ -632,6 +644,9 @@ class Views:
         self._close()
 
     def _close(self) -> None:
+        if self.writer_process is not None:
+            writer, self.writer_process = self.writer_process, None
+            writer.close()
         if self.writer is not None:
             self.writer.close()
             self.writer = None
@@ -651,12 +666,13 @@ def _check_port_free(host: str, port: int) -> None:
                             "give another port, or 0 for any free one") from None
 
 
-def record_episode(scenario, file: Path | str, planner: str | None = None, force: bool = False, **run_kwargs):
-    """Run one episode and write its MCAP; returns the episode."""
+def record_episode(scenario, file: Path | str, planner: str | None = None, force: bool = False,
+                   in_process: bool = False, **run_kwargs):
+    """Run one episode and write its MCAP (by a writer process unless ``in_process``); returns the episode."""
     from viapath.sim.loop import run_episode
 
     name = planner or scenario.planner.name
-    with Views(scenario, name, mcap=file, force=force) as views:
+    with Views(scenario, name, mcap=file, force=force, in_process=in_process) as views:
         return run_episode(scenario, planner=name, planner_overrides=views.planner_overrides,
                            on_step=views.on_step, **run_kwargs)
 

@@ -296,9 +296,10 @@ class SceneBuilder:
 
     def build(self, step: int, time_s: float, robot_pose, robot_speed_mps: float, robot_turn_rate_radps: float,
               observation, decision, plan_time_ms: float = float("nan"), perception: Any = None,
-              true_people: Obstacles | None = None) -> CycleScene:
+              true_people: Obstacles | None = None, perception_parts: tuple | None = None) -> CycleScene:
         """The scene of one cycle. ``perception``: the perception object (its last scans, detections
-        and blind region are drawn when it has them, as the laser chain does)."""
+        and blind region are drawn when it has them, as the laser chain does); or, instead of it,
+        ``perception_parts`` already taken from it (what a writer in another process receives)."""
         pose = np.asarray(robot_pose, dtype=float).reshape(3)
         tracks = observation.obstacles.finite()
         plan = decision.plan
@@ -306,7 +307,8 @@ class SceneBuilder:
         plan_view = _plan_view(plan, extras)
         if _shield_intervened(extras):
             self.shield_interventions += 1
-        scanners, detections, radii, points, sectors, blind = _perception_parts(perception)
+        parts = perception_parts if perception_parts is not None else perception_parts_of(perception)
+        scanners, detections, radii, points, sectors, blind = parts
         horizon = self.settings.horizon_s
         xyt = XYTScene(self.settings, _persons(tracks, self.robot_radius_m), plan_xyt(pose[:2], plan, horizon),
                        _via_xyt(pose[:2], plan, horizon), self.cone)
@@ -425,7 +427,7 @@ def _plan_view(plan, extras: dict) -> PlanView:
     )
 
 
-def _perception_parts(perception):
+def perception_parts_of(perception):
     """Scans in scanner frames, detections, scan points and blind region of a perception object
     that has them (the laser chain); empty for the oracle."""
     scanners: list[ScannerView] = []

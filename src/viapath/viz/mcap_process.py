@@ -1,0 +1,175 @@
+"""Write a run's MCAP in a process of its own, so the run is not slowed by building its messages.
+
+Source: issue 14 (writing the MCAP may cost at most 20 % of the run's wall time) and DESIGN §9.
+Building Foxglove messages in Python costs about as much per cycle as planning (1.5-3 ms), so in
+the run's own process an MCAP doubles the run. A recorder beside the robot is how ROS does it
+(``ros2 bag record`` is its own process); we do the same:
+
+* The run's process keeps, per cycle, only what the scene is built from (step, time, robot state,
+  observation, decision, plan time, the perception's scans/detections/blind region as plain arrays,
+  the simulator's truth), pickles it and sends it down a pipe: 0.1-0.4 ms a cycle.
+* The writer process builds the :class:`~viapath.viz.scene.CycleScene` with the same
+  :class:`~viapath.viz.scene.SceneBuilder` and logs it with the same
+  :class:`~viapath.viz.foxglove.FoxglovePublisher` as an in-process view, so the file is the same.
+* It is started by ``fork`` where the platform has it (it then inherits the imports: starts in a few
+  ms) and ``spawn`` elsewhere. It opens the file and reports ready (or its error) before the run
+  starts; at the end the run's process sends "done" and waits for the count of cycles written.
+  If the writer fails mid-run, the next send or the end raises the given error (the views pass
+  :class:`~viapath.viz.foxglove.ViewError`) with its reason.
+
+Choices: a pipe rather than a ``multiprocessing.Queue`` (no feeder thread competing for the GIL);
+when the writer falls behind, the run waits on the pipe (its buffer holds tens of cycles), so memory
+stays bounded and the file is complete. The live view stays in the run's process: it paces the run.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import pickle
+import traceback
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+_READY, _DONE, _FAILED = "ready", "done", "failed"
+_PICKLE = pickle.HIGHEST_PROTOCOL
+
+
+def _start_method() -> str:
+    return "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+
+
+def cycle_input(record) -> tuple:
+    """What one cycle's scene is built from, as plain picklable data (see module notes)."""
+    from viapath.observation import Obstacles
+    from viapath.viz.scene import perception_parts_of
+
+    state, world = record.state, record.world
+    truth = None
+    if world is not None:
+        present = np.isfinite(world.obstacle_positions).all(axis=1)
+        truth = Obstacles(world.obstacle_positions[present], world.obstacle_velocities[present],
+                          world.obstacle_radii_m[present], ids=np.flatnonzero(present))
+    parts = perception_parts_of(record.perception if record.scans is not None else None)
+    return (record.step, record.time_s, (state.x, state.y, state.heading_rad), state.speed_mps,
+            state.turn_rate_radps, record.observation, record.decision, record.plan_time_ms, parts, truth)
+
+
+def _writer_main(connection, publisher_class, file: str, force: bool, waypoints, half_widths_m,
+                 robot_radius_m: float, settings) -> None:
+    """The writer process: open the file, then build and log each cycle until told it is done."""
+    writer = None
+    try:
+        import foxglove
+        from foxglove.mcap import MCAPCompression, MCAPWriteOptions
+
+        from viapath.path import DesignatedPath
+        from viapath.viz.scene import SceneBuilder
+
+        context = foxglove.Context()
+        writer = foxglove.open_mcap(file, allow_overwrite=force, context=context,
+                                    writer_options=MCAPWriteOptions(compression=MCAPCompression.Lz4))
+        path = DesignatedPath(waypoints, half_widths_m=half_widths_m)
+        publisher = publisher_class(context, path, robot_radius_m, settings)
+        connection.send((_READY, None))
+        while True:
+            message = connection.recv_bytes()
+            if message == b"":
+                break
+            payload = pickle.loads(message)
+            if publisher.builder is None:
+                first_settings, payload = payload
+                publisher.builder = SceneBuilder(path, robot_radius_m, settings or first_settings)
+            step, time_s, pose, speed, turn_rate, observation, decision, plan_time_ms, parts, truth = payload
+            scene = publisher.builder.build(step, time_s, pose, speed, turn_rate, observation, decision, plan_time_ms,
+                                            true_people=truth, perception_parts=parts)
+            publisher.publish(scene)
+        writer.close()
+        writer = None
+        connection.send((_DONE, publisher.cycles))
+    except BaseException as error:  # every failure goes back to the run's process as text
+        if writer is not None:
+            try:
+                writer.close()
+            except Exception:
+                pass
+        try:
+            connection.send((_FAILED, f"{type(error).__name__}: {error}\n{traceback.format_exc(limit=4)}"))
+        except Exception:
+            pass
+    finally:
+        connection.close()
+
+
+class MCAPWriterProcess:
+    """The ``on_step`` callback that hands each cycle to a writer process (see module notes).
+    ``publisher_class`` logs a scene on a foxglove context (:class:`viapath.viz.foxglove.FoxglovePublisher`,
+    passed in so that this module does not import the one that uses it); ``error`` is the
+    exception raised when the writer fails."""
+
+    def __init__(self, file: Path | str, force: bool, path, robot_radius_m: float, publisher_class,
+                 error: type[Exception] = RuntimeError, settings=None):
+        self._error = error
+        self.file = Path(file)
+        self.cycles = 0
+        self._first = True
+        ctx = multiprocessing.get_context(_start_method())
+        self._connection, child = ctx.Pipe(duplex=True)
+        self.process = ctx.Process(
+            target=_writer_main, name="viapath-mcap-writer", daemon=True,
+            args=(child, publisher_class, str(self.file), force, np.asarray(path.waypoints, dtype=float),
+                  np.asarray(path.half_widths_m, dtype=float), float(robot_radius_m), settings))
+        self.process.start()
+        child.close()
+        kind, detail = self._receive()
+        if kind != _READY:
+            self._stop()
+            raise error(f"--mcap {self.file}: the writer could not start ({detail})")
+
+    def _receive(self) -> tuple[str, Any]:
+        try:
+            return self._connection.recv()
+        except (EOFError, OSError):
+            return _FAILED, f"the writer process ended with exit code {self.process.exitcode}"
+
+    def __call__(self, record) -> None:
+        payload = cycle_input(record)
+        if self._first:
+            from viapath.viz.scene import ForecastSettings
+
+            payload = (ForecastSettings.from_planner(record.planner), payload)
+            self._first = False
+        try:
+            self._connection.send_bytes(pickle.dumps(payload, protocol=_PICKLE))
+        except (BrokenPipeError, OSError):
+            kind, detail = self._receive()
+            self._stop()
+            raise self._error(f"--mcap {self.file}: the writer failed ({detail})") from None
+        self.cycles += 1
+
+    def close(self) -> int:
+        """Tell the writer the run is over, wait for it to finish the file; the cycles it wrote."""
+        if self.process is None:
+            return self.cycles
+        try:
+            self._connection.send_bytes(b"")
+        except (BrokenPipeError, OSError):
+            pass
+        kind, detail = self._receive()
+        self._stop()
+        if kind != _DONE:
+            raise self._error(f"--mcap {self.file}: the writer failed ({detail})")
+        if detail != self.cycles:
+            raise self._error(f"--mcap {self.file}: the writer wrote {detail} of {self.cycles} cycles")
+        return detail
+
+    def _stop(self) -> None:
+        process, self.process = self.process, None
+        if process is None:
+            return
+        process.join(timeout=30)
+        if process.is_alive():
+            process.kill()
+            process.join()
+        self._connection.close()

@@ -1,0 +1,94 @@
+"""The MCAP written by its own process (viapath.viz.mcap_process) is the file an in-process view
+writes, message for message; a run that stops part-way keeps the cycles it ran; a writer that
+dies is reported, not hidden."""
+
+from __future__ import annotations
+
+import os
+import signal
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("foxglove", reason="needs the viz extra (foxglove-sdk)")
+mcap_reader = pytest.importorskip("mcap.reader", reason="needs the viz extra (mcap)")
+
+from viapath.scenarios import load_scenario  # noqa: E402
+from viapath.sim.loop import run_episode  # noqa: E402
+from viapath.viz.foxglove import FoxglovePublisher, Views, ViewError  # noqa: E402
+from viapath.viz.mcap_process import MCAPWriterProcess  # noqa: E402
+
+
+def _messages(file: Path) -> list[tuple[str, int, bytes]]:
+    with open(file, "rb") as handle:
+        reader = mcap_reader.make_reader(handle)
+        return [(channel.topic, message.log_time, message.data) for _, channel, message in reader.iter_messages()]
+
+
+def _record(scenario, file: Path, in_process: bool, perception: str = "oracle", stop_after: int | None = None):
+    with Views(scenario, scenario.planner.name, mcap=file, in_process=in_process) as views:
+        if not in_process:
+            assert isinstance(views.on_step, MCAPWriterProcess)
+            pid = views.on_step.process.pid
+            assert pid != os.getpid()
+
+        def on_step(record):
+            if stop_after is not None and record.step >= stop_after:
+                raise KeyboardInterrupt
+            views.on_step(record)
+        try:
+            return run_episode(scenario, perception=perception, planner_overrides=views.planner_overrides,
+                               on_step=on_step, seed=0)
+        except KeyboardInterrupt:
+            return None
+
+
+@pytest.mark.parametrize("name, perception", [("paper-front", "oracle"), ("paper-side", "laser")])
+def test_writer_process_writes_the_same_messages_as_in_process(tmp_path, name, perception):
+    scenario = load_scenario(name)
+    episode = _record(scenario, tmp_path / "child.mcap", in_process=False, perception=perception)
+    _record(scenario, tmp_path / "here.mcap", in_process=True, perception=perception)
+    child, here = _messages(tmp_path / "child.mcap"), _messages(tmp_path / "here.mcap")
+    assert len(child) == len(here) > 0
+    cycles = len(episode.trace.times_s) - 1
+    assert sum(topic == "/tf" for topic, _, _ in child) == cycles
+    # Same order of topics and times; same bytes except where the content is the wall clock.
+    assert [(t, s) for t, s, _ in child] == [(t, s) for t, s, _ in here]
+    differing = {topic for (topic, _, a), (_, _, b) in zip(child, here) if a != b}
+    assert differing <= {"/metrics", "/plan/costs"}  # plan_time_ms is measured, so it differs run to run
+
+
+def test_a_run_stopped_part_way_keeps_its_cycles(tmp_path):
+    file = tmp_path / "stopped.mcap"
+    assert _record(load_scenario("paper-front"), file, in_process=False, stop_after=40) is None
+    messages = _messages(file)  # a complete, readable file
+    assert sum(topic == "/tf" for topic, _, _ in messages) == 40
+    assert max(time for _, time, _ in messages) == pytest.approx(39 * 0.1e9, abs=1e3)
+
+
+def test_a_writer_that_dies_is_reported(tmp_path):
+    scenario = load_scenario("paper-front")
+    file = tmp_path / "killed.mcap"
+    with pytest.raises(ViewError, match="writer"):
+        with Views(scenario, scenario.planner.name, mcap=file) as views:
+            writer = views.on_step
+
+            def on_step(record):
+                if record.step == 5:
+                    os.kill(writer.process.pid, signal.SIGKILL)
+                    writer.process.join()
+                views.on_step(record)
+            run_episode(scenario, planner_overrides=views.planner_overrides, on_step=on_step)
+    assert writer.process is None  # ended and reaped
+
+
+def test_the_writer_refuses_a_file_it_cannot_open(tmp_path):
+    scenario = load_scenario("paper-front")
+    existing = tmp_path / "there.mcap"
+    existing.write_bytes(b"keep me")
+    from viapath.path import DesignatedPath
+
+    path = DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths())
+    with pytest.raises(ViewError, match="could not start"):
+        MCAPWriterProcess(existing, False, path, scenario.robot.radius, FoxglovePublisher, ViewError)
+    assert existing.read_bytes() == b"keep me"
