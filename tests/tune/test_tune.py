@@ -15,9 +15,10 @@ import csv
 import json
 import sys
 
-import optuna
 import pytest
 from typer.testing import CliRunner
+
+optuna = pytest.importorskip("optuna", reason="viapath tune needs the extra 'tune' (Optuna)")
 
 from tests.tune._tiny import write_tiny_suite
 from viapath.cli import app
