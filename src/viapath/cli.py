@@ -57,6 +57,8 @@ def run(
     animate: Optional[Path] = typer.Option(None, "--animate", help="Write an animation (GIF, or MP4 with ffmpeg)."),
     option: list[str] = typer.Option([], "--option", "-o", metavar="NAME=VALUE",
                                      help="Set a planner option (repeatable); `viapath planners NAME` lists them."),
+    weights: Optional[str] = typer.Option(None, "--weights", help="A weights preset (`viapath presets`) or preset "
+                                          "YAML file for the viapath planner; --option values win over it."),
     mcap: Optional[Path] = typer.Option(None, "--mcap", help="Write the run as MCAP for Foxglove (extra viz)."),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing --mcap file."),
     live: bool = typer.Option(False, "--live", help="Serve the run live to Foxglove on 127.0.0.1 (extra viz)."),
@@ -98,6 +100,13 @@ def run(
         where = "--planner" if planner else f"{scenario}: planner.name"
         _fail(f"{where}: unknown planner {planner_name!r}; available: {', '.join(available_planners())}")
     overrides = parse_options(option, planner_name)
+    if weights is not None:
+        from viapath.presets import PresetError, preset_values
+
+        try:
+            overrides = {**preset_values(weights, planner_name), **overrides}
+        except PresetError as error:
+            _fail(f"--weights: {error}")
     if planner_name != spec.planner.name and spec.planner.given():
         errors.print(f"note: {scenario}'s planner block configures {spec.planner.name!r}; {planner_name!r} runs with "
                      "its own defaults (and any --option)", highlight=False)
@@ -234,7 +243,8 @@ def _register_plugins() -> None:
     """Commands that live beside their subsystem (laser scans, benchmark)."""
     import importlib
 
-    for module in ("viapath.commands.scans", "viapath.bench.commands", "viapath.ros2.commands"):
+    for module in ("viapath.commands.scans", "viapath.bench.commands", "viapath.ros2.commands",
+                   "viapath.commands.tune"):
         try:
             spec = importlib.util.find_spec(module)
         except ModuleNotFoundError:

@@ -59,6 +59,8 @@ def register(app: typer.Typer) -> None:
                                              "for viapath, off for the others"),
         force: bool = typer.Option(False, "--force", help="use an --out folder written by another suite or "
                                                           "configuration (its rows are kept, never reused)"),
+        weights: Optional[str] = typer.Option(None, "--weights", help="a weights preset (viapath presets) or preset "
+                                              "YAML file for the viapath planner (enters the rows' options hash)"),
     ) -> None:
         """Run planners on a suite in parallel; write per-episode results, tables and plots.
 
@@ -80,12 +82,22 @@ def register(app: typer.Typer) -> None:
                 check_failures_option(mcap_failures)
             except ViewError as error:
                 _fail(str(error))
+        planner_options = None
+        if weights is not None:
+            from viapath.presets import PresetError, preset_values
+
+            if "viapath" not in names:
+                _fail("--weights applies to the viapath planner, which is not in --planners")
+            try:
+                planner_options = {"viapath": preset_values(weights)}
+            except PresetError as error:
+                _fail(f"--weights: {error}")
         created = not out.exists()  # a run refused before any episode must leave no folder behind
         try:
             scenarios = load_suite(suite, out, count=count, seed=seed, workers=workers if backend == "loky" else 1)
             result = run_bench(scenarios, names, out, workers=workers, backend=backend, scheduler=scheduler,
                                perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json,
-                               shield=shield, force=force)
+                               shield=shield, force=force, planner_options=planner_options)
             summary = write_report(result["rows"], out, plots=plots, order=names)
             if mcap_failures is not None:
                 from viapath.viz.foxglove import write_failure_mcaps

@@ -59,14 +59,16 @@ def scenario_hash(scenario: dict) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def options_hash(scenario: dict, planner: str) -> str:
+def options_hash(scenario: dict, planner: str, overrides: dict | None = None) -> str:
     """Hash of the options the planner is built with for this scenario (its ``planner:`` block as
-    the planner reads it; the same for every scenario that shares the block)."""
+    the planner reads it, then ``overrides`` such as ``--weights``; the same for every scenario that
+    shares the block)."""
     from viapath.scenarios import scenario_from_dict
     from viapath.scenarios.loader import planner_settings
 
     try:
-        options = planner_settings(scenario_from_dict(scenario, scenario.get("name", "?")), planner)
+        options = {**planner_settings(scenario_from_dict(scenario, scenario.get("name", "?")), planner),
+                   **(overrides or {})}
         # viapath's backend chooses the arithmetic, not the decisions (docs/speed.md): same rows.
         options = {key: value for key, value in options.items() if key != "backend"}
         text = repr(sorted(options.items()))

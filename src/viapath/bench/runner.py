@@ -57,6 +57,7 @@ class Task:
     options_hash: str = ""
     viapath_version: str = ""
     shield: str = "off"  # off | on (passive) | friendly (passive-friendly), see viapath.safety
+    options: tuple = ()  # (name, value) planner options over the scenario's block (--weights); in options_hash
 
     @property
     def key(self) -> tuple:
@@ -162,7 +163,7 @@ def run_task(task: Task) -> dict[str, Any]:
     try:
         scenario = scenario_from_dict(task.scenario, name)
         episode = run_episode(scenario, planner=task.planner, perception=task.perception, seed=task.seed,
-                              shield=task.shield != "off",
+                              shield=task.shield != "off", planner_overrides=dict(task.options),
                               shield_options={"mode": "passive-friendly" if task.shield == "friendly" else "passive"})
         for column in COLUMNS:
             if column in episode.metrics and column != "shield":
@@ -241,8 +242,9 @@ def write_parquet(rows: list[dict], path: Path) -> bool:
 # -- the run ---------------------------------------------------------------------------------------
 
 def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "oracle", seed: int = 0,
-               shield: str | None = None) -> list[Task]:
-    """``shield``: on | off | friendly for every planner, None for each planner's default (viapath.safety)."""
+               shield: str | None = None, planner_options: dict[str, dict] | None = None) -> list[Task]:
+    """``shield``: on | off | friendly for every planner, None for each planner's default (viapath.safety).
+    ``planner_options``: planner name → option values set over every scenario's block (``--weights``)."""
     from viapath.planning import available_planners
     from viapath.safety import shield_default
 
@@ -259,7 +261,9 @@ def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "or
     setting = {p: shield or ("on" if shield_default(p) else "off") for p in planners}
     version = viapath_version()
     hashes = [scenario_hash(s) for s in scenarios]
-    return [Task(s, p, perception, episode_seed(seed, s["name"]), h, options_hash(s, p), version, setting[p])
+    extra = {p: tuple(sorted((planner_options or {}).get(p, {}).items())) for p in planners}
+    return [Task(s, p, perception, episode_seed(seed, s["name"]), h, options_hash(s, p, dict(extra[p])), version,
+                 setting[p], extra[p])
             for s, h in zip(scenarios, hashes) for p in planners]
 
 
@@ -328,6 +332,7 @@ def run_bench(
     progress: bool = True,
     shield: str | None = None,
     force: bool = False,
+    planner_options: dict[str, dict] | None = None,
 ) -> dict[str, Any]:
     """Run every episode not already done in ``out_dir/episodes.csv`` (a row is identified by the
     scenario's content hash, planner, options, perception, seed and viapath version; an episode that
@@ -344,7 +349,7 @@ def run_bench(
 
     out_dir = Path(out_dir)
     csv_path = out_dir / "episodes.csv"
-    tasks = make_tasks(scenarios, planners, perception, seed, shield)
+    tasks = make_tasks(scenarios, planners, perception, seed, shield, planner_options)
     latest = _latest(read_rows(csv_path))
     ok_names = {row["scenario"] for row in latest.values() if not row.get("error")}
     crashed_only = {row["scenario"] for row in latest.values()} - ok_names

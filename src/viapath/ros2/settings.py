@@ -40,6 +40,7 @@ def _opt(name: str, default, unit: str = "", minimum=None, maximum=None, help: s
 NODE_NAME = "viapath"
 PLANNER_PREFIX = "planner."
 SHIELD_PREFIX = "shield."
+WEIGHTS_PRESET = "weights_preset"  # issue 15: one parameter selects a preset (viapath.presets); planner.* stays the schema
 
 
 class ParameterError(ValueError):
@@ -117,8 +118,10 @@ def all_options(planner_name: str = "viapath", scanner_names=("front", "rear")) 
     shield = [Option(name=SHIELD_PREFIX + o.path, default=o.default, help=o.help, unit=o.unit, minimum=o.minimum,
                      maximum=o.maximum, exclusive_minimum=o.exclusive_minimum, choices=o.choices)
               for o in SHIELD_OPTIONS if o.name != "enabled"]  # on / off is use_shield
+    preset = [_opt(WEIGHTS_PRESET, "", help="weights preset name or preset YAML file (viapath presets); "
+                   "a planner.weights.* parameter set to other than its default wins over it")] if planner_name == "viapath" else []
     return tuple(own + [_opt("planner_name", planner_name, help="registered planner (viapath planners)")]
-                 + scanners + planner + shield)
+                 + scanners + preset + planner + shield)
 
 
 def describe(option: Option) -> str:
@@ -241,6 +244,23 @@ def validate(values: dict[str, Any]) -> NodeSettings:
         raise ParameterError(f"parameter nominal_speed_mps: expected <= max_speed_mps ({checked['max_speed_mps']:g} m/s), "
                              f"found {checked['nominal_speed_mps']}")
     planner_values = {k[len(PLANNER_PREFIX):]: v for k, v in checked.items() if k.startswith(PLANNER_PREFIX)}
+    if checked.get(WEIGHTS_PRESET):
+        from viapath.presets import PresetError, load_preset
+
+        try:
+            preset = load_preset(checked[WEIGHTS_PRESET])
+        except PresetError as error:
+            raise ParameterError(f"parameter {WEIGHTS_PRESET}: {error}") from None
+        if preset.planner != planner_name:
+            raise ParameterError(f"parameter {WEIGHTS_PRESET}: preset {preset.name!r} is for planner "
+                                 f"{preset.planner!r}, not {planner_name!r}")
+        # A parameter set to other than its default wins over the preset. (The node declares every
+        # parameter and hands all values over, so "given" can only be told apart from "default" by value.)
+        for path, value in preset.dotted().items():
+            name = PLANNER_PREFIX + path
+            if checked[name] == options[name].default:
+                planner_values[path] = value
+                checked[name] = value
     from viapath.options import OptionError
     from viapath.planning import planner_class
 

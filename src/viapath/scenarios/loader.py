@@ -95,8 +95,29 @@ def planner_settings(scenario: Scenario, planner_name: str | None = None) -> dic
 
     spec = scenario.planner
     cls = planner_class(spec.name)  # KeyError names the available planners
-    settings = cls.options.validate(spec.given(), where="planner")
+    settings = cls.options.validate(_with_preset(spec.given(), spec.name), where="planner")
     return settings if planner_name in (None, spec.name) else {}
+
+
+def _with_preset(given: dict[str, Any], planner_name: str) -> dict[str, Any]:
+    """``weights: PRESET`` (a preset name or file, :mod:`viapath.presets`) → the preset's values; any
+    other option the block gives beside it wins over the preset's."""
+    if not isinstance(given.get("weights"), str):
+        return given
+    from viapath.presets import PresetError, load_preset
+
+    try:
+        preset = load_preset(given["weights"])
+    except PresetError as error:
+        raise OptionError([("planner.weights", str(error).replace("\n", "; "))]) from None
+    if preset.planner != planner_name:
+        raise OptionError([("planner.weights", f"preset {preset.name!r} is for planner {preset.planner!r}, "
+                                               f"not {planner_name!r}")])
+    rest = {key: value for key, value in given.items() if key != "weights"}
+    merged = preset.nested()
+    for key, value in rest.items():
+        merged[key] = {**merged[key], **value} if isinstance(value, dict) and isinstance(merged.get(key), dict) else value
+    return merged
 
 
 def _planner_error(error: Exception, origin: str) -> str:

@@ -1,0 +1,38 @@
+"""The paper's three behaviours (Fig. 8; tests/planning/test_paper_behaviours.py) hold with EVERY shipped
+weight preset: the same assertions, run on episodes driven with each preset's values."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.planning import test_paper_behaviours as paper
+from viapath.presets import preset_names, preset_values
+from viapath.scenarios import load_scenario
+from viapath.sim.loop import run_episode
+
+CASES = ("paper-behind", "paper-front", "paper-side")
+
+
+@pytest.fixture(scope="module", params=preset_names())
+def episodes(request):
+    values = preset_values(request.param)
+    return {name: run_episode(load_scenario(name), perception="oracle", seed=0, position_noise_m=0.0,
+                              velocity_noise_mps=0.0, planner_overrides=values) for name in CASES}
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_reaches_goal_without_contact(episodes, name):
+    paper.test_reaches_goal_without_contact(episodes, name)
+
+
+def test_behind_speeds_up_along_the_path(episodes):
+    paper.test_behind_speeds_up_along_the_path(episodes)
+
+
+def test_front_passes_on_the_left_inside_the_corridor(episodes):
+    paper.test_front_passes_on_the_left_inside_the_corridor(episodes)
+    paper.test_front_left_pass_is_beside_the_obstacle(episodes)
+
+
+def test_side_slows_down_lets_it_cross_then_resumes(episodes):
+    paper.test_side_slows_down_lets_it_cross_then_resumes(episodes)
