@@ -92,3 +92,41 @@ def test_the_writer_refuses_a_file_it_cannot_open(tmp_path):
     with pytest.raises(ViewError, match="could not start"):
         MCAPWriterProcess(existing, False, path, scenario.robot.radius, FoxglovePublisher, ViewError)
     assert existing.read_bytes() == b"keep me"
+
+
+def test_ctrl_c_ends_the_run_and_keeps_a_readable_file(tmp_path):
+    """SIGINT to the whole process group (as a terminal's Ctrl-C): the writer ignores it, the run
+    ends with 'interrupted' (exit 130) and the file holds the cycles run so far."""
+    import subprocess
+    import sys
+    import time
+
+    import yaml
+
+    long_run = {
+        "name": "long-corridor", "dt_s": 0.1, "duration_s": 300.0,
+        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.3, "radius": 0.25},
+        "path": {"waypoints": [[0.0, 0.0], [80.0, 0.0]], "half_width": 1.5},
+        "obstacles": [{"start": [6.0 + 3.0 * k, (-1) ** k * 0.4], "velocity": [-0.3, 0.0], "radius": 0.25}
+                      for k in range(20)],
+    }
+    scenario = tmp_path / "long.yaml"
+    scenario.write_text(yaml.safe_dump(long_run))
+    file = tmp_path / "long.mcap"
+    process = subprocess.Popen([sys.executable, "-m", "viapath.cli", "run", str(scenario), "--mcap", str(file)],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 60
+        while not (file.exists() and file.stat().st_size > 20_000) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert process.poll() is None, process.communicate()[1]
+        os.killpg(process.pid, signal.SIGINT)
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+    assert process.returncode == 130
+    assert "interrupted" in stderr and "Traceback" not in stderr
+    cycles = sum(topic == "/tf" for topic, _, _ in _messages(file))
+    assert 0 < cycles < 3000

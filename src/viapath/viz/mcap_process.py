@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import multiprocessing
 import pickle
+import signal
 import traceback
 from pathlib import Path
 from typing import Any
@@ -59,6 +60,9 @@ def cycle_input(record) -> tuple:
 def _writer_main(connection, publisher_class, file: str, force: bool, waypoints, half_widths_m,
                  robot_radius_m: float, settings) -> None:
     """The writer process: open the file, then build and log each cycle until told it is done."""
+    # Ctrl-C reaches the whole process group: the run's process decides when the file ends (it sends
+    # "done" from its clean-up), so the writer does not stop half-way on its own.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     writer = None
     try:
         import foxglove
