@@ -41,6 +41,8 @@ What we chose:
 * JSON numbers that are not finite (no one in sight: clearance inf) are sent as ``null``.
 * Live: the simulation is paced so that simulated time runs ``rate`` times as fast as the wall
   clock; a SIGINT ends the run, and the server is stopped in every case.
+* An MCAP without the live view is built and written by a process of its own
+  (:mod:`viapath.viz.mcap_process`), so the run is not slowed by the messages: same file.
 """
 
 from __future__ import annotations
@@ -589,7 +591,7 @@ class Views:
 
         path = DesignatedPath(self.scenario.path.waypoints, half_widths_m=self.scenario.path.widths())
         self.planner_overrides = display_overrides(self.scenario, self.planner_name)
-        if not self.live and self.in_process is False:
+        if not self.live and not self.in_process:
             from viapath.viz.mcap_process import MCAPWriterProcess
 
             self.writer_process = MCAPWriterProcess(self.mcap, self.force, path, self.scenario.robot.radius,
