@@ -57,6 +57,7 @@ from typing import Any, Callable
 import numpy as np
 
 from viapath.viz import protobuf_wire as wire
+from viapath.viz.mcap_process import cycle_input
 from viapath.viz.scene import _mesh_triangles
 from viapath.viz.scene import CycleScene, ForecastSettings, SceneBuilder, candidate_colour
 
@@ -176,17 +177,14 @@ class FoxglovePublisher:
         if self.builder is None:
             settings = self.settings or ForecastSettings.from_planner(record.planner)
             self.builder = SceneBuilder(self.path, self.robot_radius_m, settings)
-        state, world = record.state, record.world
-        from viapath.observation import Obstacles
+        return self.build(cycle_input(record))
 
-        truth = None
-        if world is not None:
-            present = np.isfinite(world.obstacle_positions).all(axis=1)
-            truth = Obstacles(world.obstacle_positions[present], world.obstacle_velocities[present],
-                              world.obstacle_radii_m[present], ids=np.flatnonzero(present))
-        return self.builder.build(record.step, record.time_s, (state.x, state.y, state.heading_rad), state.speed_mps,
-                                  state.turn_rate_radps, record.observation, record.decision, record.plan_time_ms,
-                                  record.perception if record.scans is not None else None, truth)
+    def build(self, inputs: tuple) -> CycleScene:
+        """The scene of one cycle from :func:`viapath.viz.mcap_process.cycle_input` (the writer process
+        receives the same tuple)."""
+        step, time_s, pose, speed, turn_rate, observation, decision, plan_time_ms, parts, truth = inputs
+        return self.builder.build(step, time_s, pose, speed, turn_rate, observation, decision, plan_time_ms,
+                                  true_people=truth, perception_parts=parts)
 
     def open_channels(self, scene: CycleScene) -> None:
         if not self.channels:

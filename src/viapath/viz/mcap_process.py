@@ -85,10 +85,7 @@ def _writer_main(connection, publisher_class, file: str, force: bool, waypoints,
             if publisher.builder is None:
                 first_settings, payload = payload
                 publisher.builder = SceneBuilder(path, robot_radius_m, settings or first_settings)
-            step, time_s, pose, speed, turn_rate, observation, decision, plan_time_ms, parts, truth = payload
-            scene = publisher.builder.build(step, time_s, pose, speed, turn_rate, observation, decision, plan_time_ms,
-                                            true_people=truth, perception_parts=parts)
-            publisher.publish(scene)
+            publisher.publish(publisher.build(payload))
         writer.close()
         writer = None
         connection.send((_DONE, publisher.cycles))
