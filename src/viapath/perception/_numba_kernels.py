@@ -26,79 +26,50 @@ import numpy as np
 
 
 @numba.njit(cache=True, fastmath=False, nogil=True)
+def beam_range(ox, oy, dx, dy, centres, radii, segments):  # pragma: no cover - compiled
+    """Range along the unit direction (dx, dy) from (ox, oy) to the nearest disc or wall; ``inf`` = no hit."""
+    best = np.inf
+    for j in range(centres.shape[0]):
+        fx = ox - centres[j, 0]
+        fy = oy - centres[j, 1]
+        k = fx * fx + fy * fy - radii[j] * radii[j]
+        if k <= 0.0:
+            best = min(best, 0.0)
+            continue
+        b = fx * dx + fy * dy
+        disc = b * b - k
+        if disc >= 0.0:
+            t = -b - np.sqrt(disc)
+            if t >= 0.0 and t < best:
+                best = t
+    for j in range(segments.shape[0]):
+        px = segments[j, 0, 0]
+        py = segments[j, 0, 1]
+        ex = segments[j, 1, 0] - px
+        ey = segments[j, 1, 1] - py
+        wx = px - ox
+        wy = py - oy
+        denom = dx * ey - dy * ex
+        if denom != 0.0:
+            t = (wx * ey - wy * ex) / denom
+            s = (wx * dy - wy * dx) / denom
+            if t >= 0.0 and s >= 0.0 and s <= 1.0 and t < best:
+                best = t
+    return best
+
+
+@numba.njit(cache=True, fastmath=False, nogil=True)
 def cast_rays_kernel(ox, oy, directions, centres, radii, segments, out):  # pragma: no cover - compiled
-    """Range along each unit direction from (ox, oy) to the nearest disc or wall; ``inf`` = no hit."""
-    n_beams = directions.shape[0]
-    for i in range(n_beams):
-        dx = directions[i, 0]
-        dy = directions[i, 1]
-        best = np.inf
-        for j in range(centres.shape[0]):
-            fx = ox - centres[j, 0]
-            fy = oy - centres[j, 1]
-            k = fx * fx + fy * fy - radii[j] * radii[j]
-            if k <= 0.0:
-                best = min(best, 0.0)
-                continue
-            b = fx * dx + fy * dy
-            disc = b * b - k
-            if disc >= 0.0:
-                t = -b - np.sqrt(disc)
-                if t >= 0.0 and t < best:
-                    best = t
-        for j in range(segments.shape[0]):
-            px = segments[j, 0, 0]
-            py = segments[j, 0, 1]
-            ex = segments[j, 1, 0] - px
-            ey = segments[j, 1, 1] - py
-            wx = px - ox
-            wy = py - oy
-            denom = dx * ey - dy * ex
-            if denom != 0.0:
-                t = (wx * ey - wy * ex) / denom
-                s = (wx * dy - wy * dx) / denom
-                if t >= 0.0 and s >= 0.0 and s <= 1.0 and t < best:
-                    best = t
-        out[i] = best
+    """:func:`beam_range` of every unit direction from one origin (one scanner)."""
+    for i in range(directions.shape[0]):
+        out[i] = beam_range(ox, oy, directions[i, 0], directions[i, 1], centres, radii, segments)
 
 
 @numba.njit(cache=True, fastmath=False, nogil=True)
 def cast_rays_from_kernel(origins_x, origins_y, directions, centres, radii, segments, out):  # pragma: no cover
-    """:func:`cast_rays_kernel` with one origin per beam (all scanners of a robot in one call)."""
-    n_beams = directions.shape[0]
-    for i in range(n_beams):
-        ox = origins_x[i]
-        oy = origins_y[i]
-        dx = directions[i, 0]
-        dy = directions[i, 1]
-        best = np.inf
-        for j in range(centres.shape[0]):
-            fx = ox - centres[j, 0]
-            fy = oy - centres[j, 1]
-            k = fx * fx + fy * fy - radii[j] * radii[j]
-            if k <= 0.0:
-                best = min(best, 0.0)
-                continue
-            b = fx * dx + fy * dy
-            disc = b * b - k
-            if disc >= 0.0:
-                t = -b - np.sqrt(disc)
-                if t >= 0.0 and t < best:
-                    best = t
-        for j in range(segments.shape[0]):
-            px = segments[j, 0, 0]
-            py = segments[j, 0, 1]
-            ex = segments[j, 1, 0] - px
-            ey = segments[j, 1, 1] - py
-            wx = px - ox
-            wy = py - oy
-            denom = dx * ey - dy * ex
-            if denom != 0.0:
-                t = (wx * ey - wy * ex) / denom
-                s = (wx * dy - wy * dx) / denom
-                if t >= 0.0 and s >= 0.0 and s <= 1.0 and t < best:
-                    best = t
-        out[i] = best
+    """:func:`beam_range` with one origin per beam (all scanners of a robot in one call)."""
+    for i in range(directions.shape[0]):
+        out[i] = beam_range(origins_x[i], origins_y[i], directions[i, 0], directions[i, 1], centres, radii, segments)
 
 
 @numba.njit(cache=True, nogil=True)

@@ -224,18 +224,7 @@ def _excess(px, py, segment_starts, segment_directions, segment_lengths, half_wi
     """Scalar :meth:`viapath.path.DesignatedPath.corridor_excess` of one point."""
     best = math.inf
     for i in range(segment_starts.shape[0]):
-        dx = segment_directions[i, 0]
-        dy = segment_directions[i, 1]
-        rx = px - segment_starts[i, 0]
-        ry = py - segment_starts[i, 1]
-        along = rx * dx + ry * dy
-        if along < 0.0:
-            along = 0.0
-        if along > segment_lengths[i]:
-            along = segment_lengths[i]
-        ox = px - (segment_starts[i, 0] + along * dx)
-        oy = py - (segment_starts[i, 1] + along * dy)
-        value = math.hypot(ox, oy) - half_widths[i]
+        value = _capsule_excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths, i)
         if value < best:
             best = value
     return best
