@@ -57,7 +57,7 @@ from typing import Any, Callable
 import numpy as np
 
 from viapath.viz import protobuf_wire as wire
-from viapath.viz.mcap_process import cycle_input
+from viapath.viz.mcap_process import cycle_input, scene_inputs
 from viapath.viz.scene import _mesh_triangles
 from viapath.viz.scene import CycleScene, ForecastSettings, SceneBuilder, candidate_colour
 
@@ -182,9 +182,8 @@ class FoxglovePublisher:
     def build(self, inputs: tuple) -> CycleScene:
         """The scene of one cycle from :func:`viapath.viz.mcap_process.cycle_input` (the writer process
         receives the same tuple)."""
-        step, time_s, pose, speed, turn_rate, observation, decision, plan_time_ms, parts, truth = inputs
-        return self.builder.build(step, time_s, pose, speed, turn_rate, observation, decision, plan_time_ms,
-                                  true_people=truth, perception_parts=parts)
+        *cycle, truth, parts = scene_inputs(inputs)
+        return self.builder.build(*cycle, true_people=truth, perception_parts=parts)
 
     def open_channels(self, scene: CycleScene) -> None:
         if not self.channels:

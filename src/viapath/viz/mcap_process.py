@@ -42,19 +42,106 @@ def _start_method() -> str:
 
 
 def cycle_input(record) -> tuple:
-    """What one cycle's scene is built from, as plain picklable data (see module notes)."""
-    from viapath.observation import Obstacles
+    """What one cycle's scene is built from, packed into a few flat arrays and numbers (see module
+    notes); :func:`scene_inputs` unpacks it into the arguments of :meth:`SceneBuilder.build`."""
     from viapath.viz.scene import perception_parts_of
 
-    state, world = record.state, record.world
+    state, world, decision = record.state, record.world, record.decision
     truth = None
     if world is not None:
         present = np.isfinite(world.obstacle_positions).all(axis=1)
-        truth = Obstacles(world.obstacle_positions[present], world.obstacle_velocities[present],
-                          world.obstacle_radii_m[present], ids=np.flatnonzero(present))
+        truth = np.column_stack([world.obstacle_positions[present], world.obstacle_velocities[present],
+                                 world.obstacle_radii_m[present], np.flatnonzero(present)])
     parts = perception_parts_of(record.perception if record.scans is not None else None)
+    command = decision.command
     return (record.step, record.time_s, (state.x, state.y, state.heading_rad), state.speed_mps,
-            state.turn_rate_radps, record.observation, record.decision, record.plan_time_ms, parts, truth)
+            state.turn_rate_radps, _pack_obstacles(record.observation.obstacles.finite()),
+            (command.speed_mps, command.turn_rate_radps), _pack_plan(decision.plan), record.plan_time_ms,
+            _pack_parts(parts), truth)
+
+
+def scene_inputs(payload: tuple) -> tuple:
+    """The arguments of :meth:`viapath.viz.scene.SceneBuilder.build` (step, time, pose, speed, turn
+    rate, observation, decision, plan time; then ``true_people`` and ``perception_parts``) from a
+    :func:`cycle_input` payload. The observation carries only the finite tracks, all a scene reads."""
+    from viapath.observation import Command, Decision
+
+    step, time_s, pose, speed, turn_rate, tracks, command, plan, plan_time_ms, parts, truth = payload
+    if truth is not None:
+        zeros = np.zeros(len(truth))
+        truth = _obstacles(truth[:, 0:2], truth[:, 2:4], truth[:, 4], zeros, zeros, truth[:, 5].astype(int))
+    decision = Decision(Command(*command), _unpack_plan(plan))
+    return (step, time_s, pose, speed, turn_rate, _Tracks(_unpack_obstacles(tracks)), decision, plan_time_ms,
+            truth, _unpack_parts(parts))
+
+
+class _Tracks:
+    """An observation as far as a scene reads one: its tracks."""
+
+    __slots__ = ("obstacles",)
+
+    def __init__(self, obstacles) -> None:
+        self.obstacles = obstacles
+
+
+def _pack_obstacles(obstacles) -> np.ndarray:
+    return np.column_stack([obstacles.positions, obstacles.velocities, obstacles.radii_m, obstacles.position_sigma_m,
+                            obstacles.velocity_sigma_mps, obstacles.ids])
+
+
+def _unpack_obstacles(rows: np.ndarray):
+    return _obstacles(rows[:, 0:2], rows[:, 2:4], rows[:, 4], rows[:, 5], rows[:, 6], rows[:, 7].astype(int))
+
+
+def _obstacles(positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids):
+    """An :class:`~viapath.observation.Obstacles` from fields taken from one (they were checked when it
+    was made): its shape checks are the writer's largest cost per cycle otherwise."""
+    from viapath.observation import Obstacles
+
+    obstacles = object.__new__(Obstacles)
+    for name, value in (("positions", positions), ("velocities", velocities), ("radii_m", radii_m),
+                        ("position_sigma_m", position_sigma_m), ("velocity_sigma_mps", velocity_sigma_mps),
+                        ("ids", ids)):
+        object.__setattr__(obstacles, name, value)
+    return obstacles
+
+
+def _pack_plan(plan) -> tuple:
+    """A plan's points (target, via points, waypoints, every candidate polyline) as one (R, 2) array
+    and the row counts; the rest as plain values."""
+    lines = [np.asarray(line, dtype=float).reshape(-1, 2) for line in plan.candidate_polylines]
+    via = np.asarray(plan.via_points, dtype=float).reshape(-1, 2)
+    waypoints = np.asarray(plan.waypoints, dtype=float).reshape(-1, 2)
+    points = np.concatenate([np.asarray(plan.target, dtype=float).reshape(1, 2), via, waypoints, *lines])
+    counts = [len(via), len(waypoints)] + [len(line) for line in lines]
+    return (plan.status, plan.speed_mps, points, counts, plan.subgoal_index, plan.candidate_count,
+            np.asarray(plan.candidate_costs, dtype=float).reshape(-1).tolist(), plan.chosen, plan.extras)
+
+
+def _unpack_plan(packed: tuple):
+    from viapath.observation import Plan
+
+    status, speed, points, counts, subgoal_index, candidate_count, costs, chosen, extras = packed
+    pieces, start = [], 1
+    for count in counts:
+        pieces.append(points[start:start + count])
+        start += count
+    return Plan(status, speed, points[0], pieces[0], pieces[1], subgoal_index, candidate_count,
+                np.array(costs, dtype=float), pieces[2:], chosen, extras)
+
+
+def _pack_parts(parts: tuple) -> tuple:
+    scanners, detections, radii, points, sectors, blind = parts
+    flat = [(s.name, s.mount_pose, s.angle_min_rad, s.angle_increment_rad, s.ranges_m, s.range_min_m, s.range_max_m)
+            for s in scanners]
+    return flat, detections, radii, points, sectors, blind
+
+
+def _unpack_parts(packed: tuple) -> tuple:
+    from viapath.viz.scene import ScannerView
+
+    flat, detections, radii, points, sectors, blind = packed
+    return ([ScannerView(*fields) for fields in flat], detections, radii, points, sectors, blind)
 
 
 def _writer_main(connection, publisher_class, file: str, force: bool, waypoints, half_widths_m,
