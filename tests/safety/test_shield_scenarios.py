@@ -112,3 +112,23 @@ def test_disabled_shield_passes_everything():
     shield = Shield(LIMITS, 0.1, ShieldConfig(enabled=False))
     result = shield.filter(_observation(0.5, 0.6), Command(0.5, 0.0))
     assert result.command == Command(0.5, 0.0) and not result.intervened
+
+
+def test_passing_a_slow_walker_keeps_the_braking_envelope_and_gets_past():
+    """Mixed overtaking-0066 (seed 0): a walker at 0.036 m/s, 0.16 m left of the path. A leg back to
+    the path that passes the walker with only the plain margin left the robot 7 cm alongside and a
+    little behind, where every forward command moves towards the walker closer than it can stop:
+    the shield admitted only creeping at the walker's pace, and the goal was missed after 54 s. Legs to
+    the subgoal now keep the braking envelope at their speed, so the pass leaves room to drive on."""
+    scenario = scenario_from_dict({
+        "name": "overtaking-0066", "duration_s": 54.0,
+        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2798, "radius": 0.25},
+        "path": {"waypoints": [[0.0, 0.0], [6.0251, 0.0]], "half_width": 1.2107},
+        "obstacles": [{"start": [1.836, 0.1565], "velocity": [0.0364, 0.0], "radius": 0.25}],
+    })
+    episode = run_episode(scenario)
+    metrics = episode.metrics
+    assert metrics["reached_goal"] and not metrics["collision"], metrics
+    assert metrics["time_to_goal_s"] < 45.0, metrics
+    # Closest approach: the plain margin (0.05 m) plus most of the envelope at the passing speed.
+    assert metrics["min_clearance_m"] > 0.1, metrics
