@@ -160,17 +160,18 @@ class XYTScene:
             return np.zeros((0, 3, segments, 3))
         settings = self.settings
         horizon = settings.horizon_s
-        position = np.array([p.position for p in self.persons])
-        velocity = np.array([p.velocity for p in self.persons])
-        combined = np.array([p.combined_radius_m for p in self.persons])
-        growth = settings.uncertainty_sigmas * np.array([p.velocity_sigma_mps for p in self.persons]) if self.cone \
-            else np.zeros(count)
-        with np.errstate(divide="ignore"):
-            cap = np.where(growth > 0, settings.max_inflation_m / np.where(growth > 0, growth, 1.0), np.inf)
-        middle = np.where((cap > 0) & (cap < horizon), cap, 0.5 * horizon)
-        times = np.column_stack([np.zeros(count), middle, np.full(count, horizon)])  # (P, 3)
-        radii = combined[:, None] + np.minimum(growth[:, None] * times, settings.max_inflation_m)
-        centres = position[:, None, :] + times[..., None] * velocity[:, None, :]  # (P, 3, 2)
+        # One (P, 6) array of what the rings depend on: fewer, larger numpy calls (this runs every cycle).
+        fields = np.array([(*p.position, *p.velocity, p.combined_radius_m, p.velocity_sigma_mps) for p in self.persons])
+        growth = settings.uncertainty_sigmas * fields[:, 5] if self.cone else np.zeros(count)
+        growing = growth > 0
+        cap = np.full(count, np.inf)
+        cap[growing] = settings.max_inflation_m / growth[growing]
+        times = np.empty((count, 3))
+        times[:, 0] = 0.0
+        times[:, 1] = np.where((cap > 0) & (cap < horizon), cap, 0.5 * horizon)
+        times[:, 2] = horizon
+        radii = fields[:, 4:5] + np.minimum(growth[:, None] * times, settings.max_inflation_m)
+        centres = fields[:, None, 0:2] + times[..., None] * fields[:, None, 2:4]  # (P, 3, 2)
         out = np.empty((count, 3, segments, 3))
         out[..., :2] = centres[:, :, None, :] + radii[:, :, None, None] * _unit_circle(segments)
         out[..., 2] = times[:, :, None]
