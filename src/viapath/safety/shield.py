@@ -61,12 +61,13 @@ Choices where the sources are silent:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from viapath.observation import Command, MotionLimits, Observation
+from viapath.planning.viapath.backend import resolve as resolve_backend
 from viapath.safety.options import check_options
 
 _STRAIGHT = 1e-9
@@ -85,6 +86,7 @@ class ShieldConfig:
     samples: int = 11
     substep_s: float = 0.025
     towards_only: bool = True
+    backend: str = "auto"
 
     def __post_init__(self) -> None:
         check_options({name: getattr(self, name) for name in self.__dataclass_fields__})
@@ -108,6 +110,7 @@ class ShieldResult:
     meet_time_s: float | None = None  # when, from now
     candidates: int = 0
     admissible_candidates: int = 0
+    backend: str = "numpy"  # which arithmetic ran the test (numpy reference or the compiled kernels)
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -121,6 +124,7 @@ class ShieldResult:
             "meet_time_s": self.meet_time_s,
             "candidates": self.candidates,
             "admissible_candidates": self.admissible_candidates,
+            "backend": self.backend,
         }
 
 
@@ -224,6 +228,8 @@ class Shield:
         self.limits = limits or MotionLimits()
         self.dt_s = float(dt_s)
         self.config = config or ShieldConfig()
+        # numpy (the reference below) or numba (viapath.safety.kernels, the same arithmetic compiled).
+        self.backend = resolve_backend(self.config.backend)
 
     # -- the test --------------------------------------------------------------------------------
 
@@ -247,6 +253,8 @@ class Shield:
         }
         if len(people) == 0:
             return out
+        if self.backend == "numba":
+            return self._evaluate_compiled(out, observation.robot, people, achieved)
         offset = people.positions - position
         distance = np.hypot(offset[:, 0], offset[:, 1])
         touching = float(robot.radius_m) + people.radii_m
@@ -348,6 +356,23 @@ class Shield:
         out["friendly"] &= out["admissible"]
         return out
 
+    def _evaluate_compiled(self, out: dict[str, np.ndarray], robot, people, achieved: np.ndarray) -> dict[str, np.ndarray]:
+        """The test above, compiled (:func:`viapath.safety.kernels.evaluate`: same arithmetic, same verdicts)."""
+        from viapath.safety import kernels
+
+        config, limits = self.config, self.limits
+        substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
+        admissible, friendly, meet, person, contact = kernels.evaluate(
+            float(robot.position[0]), float(robot.position[1]), float(robot.heading_rad), float(robot.speed_mps),
+            float(robot.radius_m), _c(achieved), float(limits.max_accel_mps2), limits.max_accel_mps2 * self.dt_s,
+            limits.max_turn_accel_radps2 * self.dt_s, self.dt_s, int(substeps), _c(people.positions),
+            _c(people.velocities), _c(people.radii_m), _c(people.position_sigma_m), _c(people.velocity_sigma_mps),
+            float(config.margin_m), float(config.sigma_multiplier), float(config.person_accel_mps2),
+            config.mode == "passive-friendly", bool(config.towards_only))
+        out.update(admissible=admissible, friendly=friendly, meet_time_s=meet, person=person)
+        out["contact"][:] = contact
+        return out
+
     def _friendly(self, out, sweep: Sweep, people, base, growth, accel, near) -> None:
         """Passive friendly: the person, braking from its forecast at the robot's rest time, stops short."""
         idx = np.flatnonzero(near)
@@ -386,6 +411,10 @@ class Shield:
         return np.concatenate([planner, [[0.0, 0.0]], slower, turned, grid])
 
     def filter(self, observation: Observation, command: Command) -> ShieldResult:
+        """What goes to the base instead of ``command`` (the planner's), and why; says which backend ran."""
+        return replace(self._filter(observation, command), backend=self.backend)
+
+    def _filter(self, observation: Observation, command: Command) -> ShieldResult:
         config = self.config
         original = command
         if not config.enabled:
@@ -454,6 +483,10 @@ class Shield:
         if index == 1:  # the hardest braking itself
             return Command.stop()
         return Command(float(reached[index, 0]), float(reached[index, 1]))
+
+
+def _c(array) -> np.ndarray:
+    return np.ascontiguousarray(array, dtype=np.float64)
 
 
 def _same(a: Command, b: Command) -> bool:

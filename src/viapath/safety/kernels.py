@@ -1,0 +1,401 @@
+"""The compiled shield (extra ``fast``: numba): :meth:`viapath.safety.shield.Shield.evaluate` as one
+scalar loop, the same arithmetic as the numpy reference in :mod:`viapath.safety.shield` (DESIGN §7).
+
+Source: issue 16 and the profile of ``benchmarks/bench_shield.py`` (docs/speed.md): per cycle the
+shield spends nearly all its time in ``evaluate`` (the (command, person, sub-interval) swept-disc and
+"towards" tests, a few dozen array operations on (K, N, T) arrays) and in ``braking_sweep`` (the
+braking roll-outs of the K commands). Both are compiled here, operation for operation as the numpy
+code does them (same order of additions, same quadratic, same bounds), so that the verdicts are the
+same (``tests/safety/test_shield_backends.py`` checks it on random cases).
+
+Choices:
+* Only imported when numba is importable (:mod:`viapath.safety.shield` asks
+  :mod:`viapath.planning.viapath.backend`, which decides for the planner too); module-level
+  ``@njit(cache=True, nogil=True)`` functions with C-contiguous float64 inputs, one signature each.
+* What a scalar loop can do and the array code cannot: per (command, person) the sub-intervals are
+  scanned from the start and the scan stops at the first hit, or as soon as no later hit could come
+  before the meeting already found for that command (the reference keeps the earliest meeting, ties
+  to the lower person row, which the loop order gives too).
+* ``reach_m`` (path length until rest) is summed as numpy sums a row (pairwise, 8 accumulators):
+  it feeds the "near" bound, and the same bits keep the same people near.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+_STRAIGHT = 1e-9
+_LIMIT = 10_000  # braking steps at most, as braking_sweep
+
+
+@njit(cache=True, nogil=True)
+def _clip(x, low, high):
+    """np.clip for scalars: minimum(maximum(x, low), high)."""
+    if x < low:
+        x = low
+    if x > high:
+        x = high
+    return x
+
+
+@njit(cache=True, nogil=True)
+def _pairwise_block(a, start, n):
+    """numpy's pairwise sum of a[start:start + n] for n <= 128 (numpy/_core/src/umath/loops_utils.h.src)."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += a[start + i]
+        return res
+    r0 = a[start]
+    r1 = a[start + 1]
+    r2 = a[start + 2]
+    r3 = a[start + 3]
+    r4 = a[start + 4]
+    r5 = a[start + 5]
+    r6 = a[start + 6]
+    r7 = a[start + 7]
+    i = 8
+    while i < n - (n % 8):
+        r0 += a[start + i]
+        r1 += a[start + i + 1]
+        r2 += a[start + i + 2]
+        r3 += a[start + i + 3]
+        r4 += a[start + i + 4]
+        r5 += a[start + i + 5]
+        r6 += a[start + i + 6]
+        r7 += a[start + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[start + i]
+        i += 1
+    return res
+
+
+@njit(cache=True, nogil=True)
+def _pairwise(a, start, n):
+    """numpy's pairwise sum: blocks of at most 128, halves (rounded to 8) added recursively; the
+    recursion is unrolled on an explicit stack (post-order: left half, right half, then their sum)."""
+    if n <= 128:
+        return _pairwise_block(a, start, n)
+    kinds = np.empty(256, dtype=np.int64)  # 0: a segment to sum, 1: add the two last values
+    starts = np.empty(256, dtype=np.int64)
+    counts = np.empty(256, dtype=np.int64)
+    values = np.empty(256)
+    top = 0
+    kinds[0] = 0
+    starts[0] = start
+    counts[0] = n
+    depth = 1
+    while depth > 0:
+        depth -= 1
+        kind = kinds[depth]
+        if kind == 1:
+            top -= 1
+            values[top - 1] = values[top - 1] + values[top]
+            continue
+        s = starts[depth]
+        c = counts[depth]
+        if c <= 128:
+            values[top] = _pairwise_block(a, s, c)
+            top += 1
+            continue
+        half = c // 2
+        half -= half % 8
+        kinds[depth] = 1
+        kinds[depth + 1] = 0
+        starts[depth + 1] = s + half
+        counts[depth + 1] = c - half
+        kinds[depth + 2] = 0
+        starts[depth + 2] = s
+        counts[depth + 2] = half
+        depth += 3
+    return values[0]
+
+
+@njit(cache=True, nogil=True)
+def row_sum(a):
+    """np.sum(a) of a 1-D float64 array, bit for bit (0.0 + the pairwise sum)."""
+    return 0.0 + _pairwise(a, 0, a.shape[0])
+
+
+@njit(cache=True, nogil=True)
+def braking_sweep(px, py, heading, speed_now, achieved, dv, dw, dt, substeps):
+    """:func:`viapath.safety.shield.braking_sweep`: positions (K, T, 2) and headings (K, T) at the
+    sub-interval ends, per braking step (K, J) the speed to count for "towards" (``effective``), the
+    turn rate, moving flag and sagitta, and per command the rest time, rest index and reach."""
+    k_count = achieved.shape[0]
+    # Steps: the drive's recurrence until every command is at rest (numpy's while loop), at most _LIMIT.
+    j_count = 1
+    for k in range(k_count):
+        s = achieved[k, 0]
+        n = 1
+        while s != 0.0 and n < _LIMIT:
+            s = s + _clip(-s, -dv, dv)
+            n += 1
+        if n > j_count:
+            j_count = n
+    speed = np.empty((k_count, j_count))
+    turn = np.empty((k_count, j_count))
+    previous = np.empty((k_count, j_count))
+    for k in range(k_count):
+        s = achieved[k, 0]
+        w = achieved[k, 1]
+        speed[k, 0] = s
+        turn[k, 0] = w
+        for j in range(1, j_count):
+            s = s + _clip(-s, -dv, dv)
+            w = w + _clip(-w, -dw, dw)
+            speed[k, j] = s
+            turn[k, j] = w
+        previous[k, 0] = speed_now
+        for j in range(1, j_count):
+            previous[k, j] = speed[k, j - 1]
+    if j_count > 1:
+        drop = True
+        for k in range(k_count):
+            if previous[k, j_count - 1] != 0.0:
+                drop = False
+        if drop:
+            j_count -= 1
+    m = substeps
+    h = dt / m
+    t_count = j_count * m + 1
+    positions = np.empty((k_count, t_count, 2))
+    headings = np.empty((k_count, t_count))
+    effective = np.empty((k_count, j_count))
+    sagitta = np.empty((k_count, j_count))
+    moving = np.zeros((k_count, j_count), dtype=np.bool_)
+    rest_time = np.empty(k_count)
+    rest_index = np.empty(k_count, dtype=np.int64)
+    reach = np.empty(k_count)
+    absolute = np.empty(j_count)
+    for k in range(k_count):
+        positions[k, 0, 0] = px
+        positions[k, 0, 1] = py
+        headings[k, 0] = heading
+        cum_turn = 0.0
+        cum_x = 0.0
+        cum_y = 0.0
+        steps_moving = 0
+        for j in range(j_count):
+            s = speed[k, j]
+            w = turn[k, j]
+            h0 = heading + (cum_turn if j > 0 else 0.0)
+            start_x = px + (cum_x if j > 0 else 0.0)
+            start_y = py + (cum_y if j > 0 else 0.0)
+            straight = abs(w) < _STRAIGHT
+            safe_w = 1.0 if straight else w
+            dx = 0.0
+            dy = 0.0
+            for i in range(m):
+                tau = h * (i + 1)
+                h1 = h0 + w * tau
+                if straight:
+                    dx = s * tau * math.cos(h0)
+                    dy = s * tau * math.sin(h0)
+                else:
+                    dx = s / safe_w * (math.sin(h1) - math.sin(h0))
+                    dy = -s / safe_w * (math.cos(h1) - math.cos(h0))
+                index = 1 + j * m + i
+                positions[k, index, 0] = start_x + dx
+                positions[k, index, 1] = start_y + dy
+                headings[k, index] = h1
+            cum_turn = cum_turn + w * dt if j > 0 else w * dt
+            cum_x = cum_x + dx if j > 0 else dx
+            cum_y = cum_y + dy if j > 0 else dy
+            p = previous[k, j]
+            moving[k, j] = (s != 0.0) or (p != 0.0)
+            effective[k, j] = max(abs(s), abs(p))
+            sagitta[k, j] = abs(s * w) * h * h / 8.0
+            if moving[k, j]:
+                steps_moving += 1
+            absolute[j] = abs(s)
+        rest_time[k] = steps_moving * dt
+        rest_index[k] = steps_moving * m
+        reach[k] = row_sum(absolute) * dt
+    return positions, headings, effective, turn[:, :j_count].copy(), moving, sagitta, rest_time, rest_index, reach
+
+
+@njit(cache=True, nogil=True)
+def evaluate(px, py, heading, speed_now, robot_radius, achieved, max_accel, dv, dw, dt, substeps,
+             positions_obs, velocities_obs, radii, position_sigma, velocity_sigma, margin, k_sigma, accel,
+             friendly_mode, towards_only):
+    """The verdicts of :meth:`viapath.safety.shield.Shield.evaluate` for K achieved (v, ω) (K, 2) and
+    N >= 1 finite people: admissible (K,), friendly (K,), meet time (K,) (inf: never), person row (K,)
+    (-1: none) and whether a person touches the robot now."""
+    k_count = achieved.shape[0]
+    n_count = positions_obs.shape[0]
+    admissible = np.ones(k_count, dtype=np.bool_)
+    friendly = np.ones(k_count, dtype=np.bool_)
+    meet = np.full(k_count, np.inf)
+    person = np.full(k_count, -1, dtype=np.int64)
+    contact = False
+    offset_x = np.empty(n_count)
+    offset_y = np.empty(n_count)
+    distance = np.empty(n_count)
+    touching = np.empty(n_count)
+    gap = np.empty(n_count)
+    speed_people = np.empty(n_count)
+    for n in range(n_count):
+        offset_x[n] = positions_obs[n, 0] - px
+        offset_y[n] = positions_obs[n, 1] - py
+        distance[n] = math.hypot(offset_x[n], offset_y[n])
+        touching[n] = robot_radius + radii[n]
+        gap[n] = distance[n] - touching[n]
+        speed_people[n] = math.hypot(velocities_obs[n, 0], velocities_obs[n, 1])
+    # The cheap bound: nobody within reach of the longest braking.
+    fastest = 0.0
+    for k in range(k_count):
+        fastest = max(fastest, abs(achieved[k, 0]))
+    a_robot = max(max_accel, 1e-9)
+    t_bound = fastest / a_robot + 2.0 * dt
+    r_bound = fastest * t_bound
+    braking_den = 2.0 * max(accel, 1e-3)
+    everyone_far = True
+    for n in range(n_count):
+        grow = (touching[n] + margin + k_sigma * (position_sigma[n] + velocity_sigma[n] * t_bound)
+                + 0.5 * accel * t_bound ** 2.0 + speed_people[n] * t_bound)
+        if friendly_mode:
+            grow = grow + speed_people[n] * speed_people[n] / braking_den
+        if not (gap[n] > 0.0 and distance[n] - grow > r_bound + 1e-6):
+            everyone_far = False
+            break
+    if everyone_far:
+        return admissible, friendly, meet, person, contact
+    if not gap.min() > 0.0:  # a person touches the robot now: nothing is admissible
+        first = 0
+        for n in range(n_count):  # argmin: the first smallest gap
+            if gap[n] < gap[first]:
+                first = n
+        for k in range(k_count):
+            admissible[k] = False
+            friendly[k] = False
+            person[k] = first
+            meet[k] = 0.0
+        return admissible, friendly, meet, person, True
+    sweep = braking_sweep(px, py, heading, speed_now, achieved, dv, dw, dt, substeps)
+    positions, headings, effective, turn, moving, sagitta, rest_time, rest_index, reach = sweep
+    t_count = positions.shape[1]
+    m = substeps
+    h = dt / m
+    horizon = h * (t_count - 1)
+    base = np.empty(n_count)
+    growth = np.empty(n_count)
+    near = np.zeros(n_count, dtype=np.bool_)
+    max_reach = 0.0
+    for k in range(k_count):
+        max_reach = max(max_reach, reach[k])
+    any_near = False
+    for n in range(n_count):
+        base[n] = touching[n] + min(margin + k_sigma * position_sigma[n], gap[n])
+        growth[n] = k_sigma * velocity_sigma[n]
+        reach_person = base[n] + growth[n] * horizon + 0.5 * accel * horizon ** 2.0 + speed_people[n] * horizon
+        if friendly_mode:
+            reach_person = reach_person + speed_people[n] * speed_people[n] / braking_den
+        path_x = velocities_obs[n, 0] * horizon
+        path_y = velocities_obs[n, 1] * horizon
+        pp = path_x * path_x + path_y * path_y
+        along = _clip((-offset_x[n] * path_x + -offset_y[n] * path_y) / (pp if pp > 0 else 1.0), 0.0, 1.0)
+        closest_x = offset_x[n] + path_x * along
+        closest_y = offset_y[n] + path_y * along
+        near[n] = math.hypot(closest_x, closest_y) - (reach_person - speed_people[n] * horizon) <= max_reach + 1e-6
+        any_near = any_near or near[n]
+    if friendly_mode:
+        for k in range(k_count):
+            t_rest = rest_time[k]
+            rest_x = positions[k, rest_index[k], 0]
+            rest_y = positions[k, rest_index[k], 1]
+            for n in range(n_count):
+                if not near[n]:
+                    continue
+                vx = velocities_obs[n, 0]
+                vy = velocities_obs[n, 1]
+                speed = math.hypot(vx, vy)
+                start_x = positions_obs[n, 0] + vx * t_rest
+                start_y = positions_obs[n, 1] + vy * t_rest
+                stretch = speed / braking_den
+                travel_x = vx * stretch
+                travel_y = vy * stretch
+                radius = base[n] + growth[n] * t_rest + 0.5 * accel * (t_rest * t_rest)
+                rel_x = rest_x - start_x
+                rel_y = rest_y - start_y
+                tt = travel_x * travel_x + travel_y * travel_y
+                f = _clip((rel_x * travel_x + rel_y * travel_y) / (tt if tt > 0 else 1.0), 0.0, 1.0)
+                if math.hypot(rel_x - travel_x * f, rel_y - travel_y * f) < radius:
+                    friendly[k] = False
+                    break
+    if not any_near:
+        return admissible, friendly, meet, person, contact
+    times = np.empty(t_count)
+    for t in range(t_count):
+        times[t] = h * t
+    h_int = times[1] - times[0]
+    # Per person: forecast centres and radii at the sub-interval ends (as the reference's (n, T) arrays).
+    centre_x = np.empty(t_count)
+    centre_y = np.empty(t_count)
+    radii_t = np.empty(t_count)
+    ux = np.empty((k_count, t_count))
+    uy = np.empty((k_count, t_count))
+    if towards_only:
+        for k in range(k_count):
+            for t in range(t_count):
+                ux[k, t] = math.cos(headings[k, t]) * 1.0
+                uy[k, t] = math.sin(headings[k, t]) * 1.0
+    for n in range(n_count):
+        if not near[n]:
+            continue
+        cx = positions_obs[n, 0]
+        cy = positions_obs[n, 1]
+        vx = velocities_obs[n, 0]
+        vy = velocities_obs[n, 1]
+        for t in range(t_count):
+            tt = times[t]
+            centre_x[t] = cx + vx * tt
+            centre_y[t] = cy + vy * tt
+            radii_t[t] = base[n] + growth[n] * tt + 0.5 * accel * (tt * tt)
+        sp = speed_people[n]
+        for k in range(k_count):
+            best = meet[k]
+            for t in range(t_count - 1):
+                when = times[t + 1]  # the meeting time a hit here gives (the reference: times[first + 1])
+                if not when < best:
+                    break  # no later hit can come before the meeting already found
+                j = t // m
+                if not moving[k, j]:
+                    continue
+                r_ax = positions[k, t, 0] - centre_x[t]
+                r_ay = positions[k, t, 1] - centre_y[t]
+                w_x = (positions[k, t + 1, 0] - centre_x[t + 1]) - r_ax
+                w_y = (positions[k, t + 1, 1] - centre_y[t + 1]) - r_ay
+                r_start = radii_t[t]
+                d_r = (radii_t[t + 1] - radii_t[t]) + 4.0 * sagitta[k, j]
+                qa = (w_x * w_x + w_y * w_y) - d_r * d_r
+                qb = 2.0 * ((r_ax * w_x + r_ay * w_y) - r_start * d_r)
+                qc = (r_ax * r_ax + r_ay * r_ay) - r_start * r_start
+                low = min(qc, qa + qb + qc)
+                vertex = -qb / (2.0 * qa if qa > 0 else 1.0)
+                if qa > 0 and vertex > 0.0 and vertex < 1.0:
+                    low = min(low, qc - qb * qb / (4.0 * qa if qa > 0 else 1.0))
+                if not low < -1e-12:
+                    continue
+                if towards_only:
+                    s_int = effective[k, j]
+                    t_a = -s_int * (ux[k, t] * r_ax + uy[k, t] * r_ay)
+                    r_bx = r_ax + w_x
+                    r_by = r_ay + w_y
+                    t_b = -s_int * (ux[k, t + 1] * r_bx + uy[k, t + 1] * r_by)
+                    r_max = max(math.hypot(r_ax, r_ay), math.hypot(r_bx, r_by)) + 0.01
+                    lipschitz = abs(s_int) * (abs(turn[k, j]) * r_max + sp + abs(s_int))
+                    if not (t_a + t_b + lipschitz * h_int) > 0.0:
+                        continue
+                meet[k] = when
+                person[k] = n
+                break
+    for k in range(k_count):
+        admissible[k] = not math.isfinite(meet[k])
+        friendly[k] = friendly[k] and admissible[k]
+    return admissible, friendly, meet, person, contact
