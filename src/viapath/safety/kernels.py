@@ -338,13 +338,9 @@ def evaluate(px, py, heading, speed_now, robot_radius, achieved, max_accel, dv, 
     centre_x = np.empty(t_count)
     centre_y = np.empty(t_count)
     radii_t = np.empty(t_count)
-    ux = np.empty((k_count, t_count))
+    ux = np.empty((k_count, t_count))  # heading unit vectors, filled per command when first needed
     uy = np.empty((k_count, t_count))
-    if towards_only:
-        for k in range(k_count):
-            for t in range(t_count):
-                ux[k, t] = math.cos(headings[k, t]) * 1.0
-                uy[k, t] = math.sin(headings[k, t]) * 1.0
+    have_u = np.zeros(k_count, dtype=np.bool_)
     for n in range(n_count):
         if not near[n]:
             continue
@@ -383,6 +379,11 @@ def evaluate(px, py, heading, speed_now, robot_radius, achieved, max_accel, dv, 
                 if not low < -1e-12:
                     continue
                 if towards_only:
+                    if not have_u[k]:
+                        for u in range(t_count):
+                            ux[k, u] = math.cos(headings[k, u]) * 1.0
+                            uy[k, u] = math.sin(headings[k, u]) * 1.0
+                        have_u[k] = True
                     s_int = effective[k, j]
                     t_a = -s_int * (ux[k, t] * r_ax + uy[k, t] * r_ay)
                     r_bx = r_ax + w_x
@@ -399,3 +400,71 @@ def evaluate(px, py, heading, speed_now, robot_radius, achieved, max_accel, dv, 
         admissible[k] = not math.isfinite(meet[k])
         friendly[k] = friendly[k] and admissible[k]
     return admissible, friendly, meet, person, contact
+
+
+@njit(cache=True, nogil=True)
+def achieved_first_period(commands, speed, turn_rate, max_speed, max_turn_rate, dv, dw):
+    """:func:`viapath.safety.shield.achieved_first_period` (dv, dw: the speed and turn-rate steps of one period)."""
+    k_count = commands.shape[0]
+    out = np.empty((k_count, 2))
+    for k in range(k_count):
+        v = commands[k, 0]
+        w = commands[k, 1]
+        v_cmd = _clip(v if math.isfinite(v) else 0.0, 0.0, max_speed)
+        w_cmd = _clip(w if math.isfinite(w) else 0.0, -max_turn_rate, max_turn_rate)
+        if not (math.isfinite(v) and math.isfinite(w)):
+            v_cmd = 0.0
+            w_cmd = 0.0
+        out[k, 0] = speed + _clip(v_cmd - speed, -dv, dv)
+        out[k, 1] = turn_rate + _clip(w_cmd - turn_rate, -dw, dw)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def evaluate_commands(robot, limits, commands, positions_obs, velocities_obs, radii, position_sigma, velocity_sigma,
+                      settings, friendly_mode, towards_only):
+    """:meth:`viapath.safety.shield.Shield.evaluate` whole, in one call: the achieved (v, ω) of K raw
+    commands, the people's rows with a non-finite field (or a negative radius) dropped as
+    :meth:`viapath.observation.Obstacles.finite` does (``person`` counts the rows kept), then
+    :func:`evaluate`. ``robot``: x, y, heading, speed, turn rate, radius; ``limits``: max speed, max
+    accel, max turn rate, max turn accel; ``settings``: dt, substeps, margin, k sigma, person accel."""
+    dt = settings[0]
+    dv = limits[1] * dt
+    dw = limits[3] * dt
+    achieved = achieved_first_period(commands, robot[3], robot[4], limits[0], limits[2], dv, dw)
+    n_all = positions_obs.shape[0]
+    keep = np.empty(n_all, dtype=np.bool_)
+    kept = 0
+    for n in range(n_all):
+        keep[n] = (math.isfinite(positions_obs[n, 0]) and math.isfinite(positions_obs[n, 1])
+                   and math.isfinite(velocities_obs[n, 0]) and math.isfinite(velocities_obs[n, 1])
+                   and math.isfinite(radii[n]) and radii[n] >= 0 and math.isfinite(position_sigma[n])
+                   and math.isfinite(velocity_sigma[n]))
+        kept += keep[n]
+    if kept < n_all:
+        p = np.empty((kept, 2))
+        v = np.empty((kept, 2))
+        r = np.empty(kept)
+        sp = np.empty(kept)
+        sv = np.empty(kept)
+        i = 0
+        for n in range(n_all):
+            if keep[n]:
+                p[i, 0] = positions_obs[n, 0]
+                p[i, 1] = positions_obs[n, 1]
+                v[i, 0] = velocities_obs[n, 0]
+                v[i, 1] = velocities_obs[n, 1]
+                r[i] = radii[n]
+                sp[i] = position_sigma[n]
+                sv[i] = velocity_sigma[n]
+                i += 1
+        positions_obs, velocities_obs, radii, position_sigma, velocity_sigma = p, v, r, sp, sv
+    k_count = achieved.shape[0]
+    if kept == 0:
+        return (achieved, np.ones(k_count, dtype=np.bool_), np.ones(k_count, dtype=np.bool_), np.full(k_count, np.inf),
+                np.full(k_count, -1, dtype=np.int64), False)
+    admissible, friendly, meet, person, contact = evaluate(
+        robot[0], robot[1], robot[2], robot[3], robot[5], achieved, limits[1], dv, dw, dt, int(settings[1]),
+        positions_obs, velocities_obs, radii, position_sigma, velocity_sigma, settings[2], settings[3], settings[4],
+        friendly_mode, towards_only)
+    return achieved, admissible, friendly, meet, person, contact

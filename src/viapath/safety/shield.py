@@ -230,6 +230,7 @@ class Shield:
         self.config = config or ShieldConfig()
         # numpy (the reference below) or numba (viapath.safety.kernels, the same arithmetic compiled).
         self.backend = resolve_backend(self.config.backend)
+        self._kernel_settings: tuple | None = None  # the compiled test's constants (and what they were made of)
 
     # -- the test --------------------------------------------------------------------------------
 
@@ -237,6 +238,8 @@ class Shield:
         """For each command (K, 2): ``admissible``, ``friendly``, ``meet_time_s`` (inf: never),
         ``person`` (row of the first person met, -1 none) and ``achieved`` (v, ω) of the first period.
         A person already touching the robot makes every command inadmissible (``contact`` is True)."""
+        if self.backend == "numba":
+            return self._evaluate_compiled(observation, commands)
         config, robot = self.config, observation.robot
         people = observation.obstacles.finite()
         achieved = achieved_first_period(commands, float(robot.speed_mps), float(robot.turn_rate_radps),
@@ -253,8 +256,6 @@ class Shield:
         }
         if len(people) == 0:
             return out
-        if self.backend == "numba":
-            return self._evaluate_compiled(out, observation.robot, people, achieved)
         offset = people.positions - position
         distance = np.hypot(offset[:, 0], offset[:, 1])
         touching = float(robot.radius_m) + people.radii_m
@@ -356,22 +357,31 @@ class Shield:
         out["friendly"] &= out["admissible"]
         return out
 
-    def _evaluate_compiled(self, out: dict[str, np.ndarray], robot, people, achieved: np.ndarray) -> dict[str, np.ndarray]:
-        """The test above, compiled (:func:`viapath.safety.kernels.evaluate`: same arithmetic, same verdicts)."""
+    def _evaluate_compiled(self, observation: Observation, commands: np.ndarray) -> dict[str, np.ndarray]:
+        """The test above, compiled (:func:`viapath.safety.kernels.evaluate_commands`: same arithmetic,
+        same verdicts), with the achieved (v, ω) and the dropping of non-finite people in the same call."""
         from viapath.safety import kernels
 
-        config, limits = self.config, self.limits
-        substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
-        admissible, friendly, meet, person, contact = kernels.evaluate(
-            float(robot.position[0]), float(robot.position[1]), float(robot.heading_rad), float(robot.speed_mps),
-            float(robot.radius_m), _c(achieved), float(limits.max_accel_mps2), limits.max_accel_mps2 * self.dt_s,
-            limits.max_turn_accel_radps2 * self.dt_s, self.dt_s, int(substeps), _c(people.positions),
-            _c(people.velocities), _c(people.radii_m), _c(people.position_sigma_m), _c(people.velocity_sigma_mps),
-            float(config.margin_m), float(config.sigma_multiplier), float(config.person_accel_mps2),
+        config, robot, people = self.config, observation.robot, observation.obstacles
+        key = (self.limits, self.dt_s, config)
+        settings = self._kernel_settings
+        if settings is None or settings[2] != key:
+            limits = self.limits
+            substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
+            settings = self._kernel_settings = (
+                np.array([limits.max_speed_mps, limits.max_accel_mps2, limits.max_turn_rate_radps,
+                          limits.max_turn_accel_radps2], dtype=np.float64),
+                np.array([self.dt_s, substeps, config.margin_m, config.sigma_multiplier, config.person_accel_mps2],
+                         dtype=np.float64), key)
+        position = robot.position
+        state = np.array([position[0], position[1], robot.heading_rad, robot.speed_mps, robot.turn_rate_radps,
+                          robot.radius_m], dtype=np.float64)
+        achieved, admissible, friendly, meet, person, contact = kernels.evaluate_commands(
+            state, settings[0], _c(np.reshape(commands, (-1, 2))), _c(people.positions), _c(people.velocities),
+            _c(people.radii_m), _c(people.position_sigma_m), _c(people.velocity_sigma_mps), settings[1],
             config.mode == "passive-friendly", bool(config.towards_only))
-        out.update(admissible=admissible, friendly=friendly, meet_time_s=meet, person=person)
-        out["contact"][:] = contact
-        return out
+        return {"achieved": achieved, "admissible": admissible, "friendly": friendly, "meet_time_s": meet,
+                "person": person, "contact": np.full(1, contact)}
 
     def _friendly(self, out, sweep: Sweep, people, base, growth, accel, near) -> None:
         """Passive friendly: the person, braking from its forecast at the robot's rest time, stops short."""
