@@ -421,6 +421,39 @@ def achieved_first_period(commands, speed, turn_rate, max_speed, max_turn_rate, 
 
 
 @njit(cache=True, nogil=True)
+def _finite_people(positions_obs, velocities_obs, radii, position_sigma, velocity_sigma):
+    """The rows :meth:`viapath.observation.Obstacles.finite` keeps (no NaN or infinite field, radius >= 0)."""
+    n_all = positions_obs.shape[0]
+    keep = np.empty(n_all, dtype=np.bool_)
+    kept = 0
+    for n in range(n_all):
+        keep[n] = (math.isfinite(positions_obs[n, 0]) and math.isfinite(positions_obs[n, 1])
+                   and math.isfinite(velocities_obs[n, 0]) and math.isfinite(velocities_obs[n, 1])
+                   and math.isfinite(radii[n]) and radii[n] >= 0 and math.isfinite(position_sigma[n])
+                   and math.isfinite(velocity_sigma[n]))
+        kept += keep[n]
+    if kept == n_all:
+        return positions_obs, velocities_obs, radii, position_sigma, velocity_sigma
+    p = np.empty((kept, 2))
+    v = np.empty((kept, 2))
+    r = np.empty(kept)
+    sp = np.empty(kept)
+    sv = np.empty(kept)
+    i = 0
+    for n in range(n_all):
+        if keep[n]:
+            p[i, 0] = positions_obs[n, 0]
+            p[i, 1] = positions_obs[n, 1]
+            v[i, 0] = velocities_obs[n, 0]
+            v[i, 1] = velocities_obs[n, 1]
+            r[i] = radii[n]
+            sp[i] = position_sigma[n]
+            sv[i] = velocity_sigma[n]
+            i += 1
+    return p, v, r, sp, sv
+
+
+@njit(cache=True, nogil=True)
 def evaluate_commands(robot, limits, commands, positions_obs, velocities_obs, radii, position_sigma, velocity_sigma,
                       settings, friendly_mode, towards_only):
     """:meth:`viapath.safety.shield.Shield.evaluate` whole, in one call: the achieved (v, ω) of K raw
@@ -432,33 +465,9 @@ def evaluate_commands(robot, limits, commands, positions_obs, velocities_obs, ra
     dv = limits[1] * dt
     dw = limits[3] * dt
     achieved = achieved_first_period(commands, robot[3], robot[4], limits[0], limits[2], dv, dw)
-    n_all = positions_obs.shape[0]
-    keep = np.empty(n_all, dtype=np.bool_)
-    kept = 0
-    for n in range(n_all):
-        keep[n] = (math.isfinite(positions_obs[n, 0]) and math.isfinite(positions_obs[n, 1])
-                   and math.isfinite(velocities_obs[n, 0]) and math.isfinite(velocities_obs[n, 1])
-                   and math.isfinite(radii[n]) and radii[n] >= 0 and math.isfinite(position_sigma[n])
-                   and math.isfinite(velocity_sigma[n]))
-        kept += keep[n]
-    if kept < n_all:
-        p = np.empty((kept, 2))
-        v = np.empty((kept, 2))
-        r = np.empty(kept)
-        sp = np.empty(kept)
-        sv = np.empty(kept)
-        i = 0
-        for n in range(n_all):
-            if keep[n]:
-                p[i, 0] = positions_obs[n, 0]
-                p[i, 1] = positions_obs[n, 1]
-                v[i, 0] = velocities_obs[n, 0]
-                v[i, 1] = velocities_obs[n, 1]
-                r[i] = radii[n]
-                sp[i] = position_sigma[n]
-                sv[i] = velocity_sigma[n]
-                i += 1
-        positions_obs, velocities_obs, radii, position_sigma, velocity_sigma = p, v, r, sp, sv
+    positions_obs, velocities_obs, radii, position_sigma, velocity_sigma = _finite_people(
+        positions_obs, velocities_obs, radii, position_sigma, velocity_sigma)
+    kept = positions_obs.shape[0]
     k_count = achieved.shape[0]
     if kept == 0:
         return (achieved, np.ones(k_count, dtype=np.bool_), np.ones(k_count, dtype=np.bool_), np.full(k_count, np.inf),
@@ -468,3 +477,128 @@ def evaluate_commands(robot, limits, commands, positions_obs, velocities_obs, ra
         positions_obs, velocities_obs, radii, position_sigma, velocity_sigma, settings[2], settings[3], settings[4],
         friendly_mode, towards_only)
     return achieved, admissible, friendly, meet, person, contact
+
+
+@njit(cache=True, nogil=True)
+def _linspace(start, stop, num):
+    """np.linspace(start, stop, num) for num >= 2, bit for bit (i * step + start, the last one stop)."""
+    out = np.empty(num)
+    div = num - 1
+    delta = stop - start
+    step = delta / div
+    for i in range(num):
+        if step == 0:
+            out[i] = i / div * delta + start
+        else:
+            out[i] = i * step + start
+    out[num - 1] = stop
+    return out
+
+
+@njit(cache=True, nogil=True)
+def candidates(robot, limits, command, samples, dt):
+    """:meth:`viapath.safety.shield.Shield.candidates` (K, 2) and their achieved (v, ω) (K, 2)."""
+    dv = limits[1] * dt
+    dw = limits[3] * dt
+    corners_in = np.empty((2, 2))
+    corners_in[0, 0] = 0.0
+    corners_in[0, 1] = -limits[2]
+    corners_in[1, 0] = limits[0]
+    corners_in[1, 1] = limits[2]
+    corners = achieved_first_period(corners_in, robot[3], robot[4], limits[0], limits[2], dv, dw)
+    n = samples
+    v = _linspace(corners[0, 0], corners[1, 0], n)
+    w = _linspace(corners[0, 1], corners[1, 1], n)
+    planner = np.empty((1, 2))
+    planner[0, 0] = command[0]
+    planner[0, 1] = command[1]
+    planner_reached = achieved_first_period(planner, robot[3], robot[4], limits[0], limits[2], dv, dw)
+    out = np.empty((2 + 2 * n + n * n, 2))
+    out[0, 0] = command[0]
+    out[0, 1] = command[1]
+    out[1, 0] = 0.0
+    out[1, 1] = 0.0
+    for i in range(n):
+        out[2 + i, 0] = v[i]
+        out[2 + i, 1] = planner_reached[0, 1]
+        out[2 + n + i, 0] = planner_reached[0, 0]
+        out[2 + n + i, 1] = w[i]
+        for j in range(n):
+            out[2 + 2 * n + i * n + j, 0] = v[i]
+            out[2 + 2 * n + i * n + j, 1] = w[j]
+    reached = achieved_first_period(out, robot[3], robot[4], limits[0], limits[2], dv, dw)
+    return out, reached
+
+
+@njit(cache=True, nogil=True)
+def search(robot, limits, command, samples, chunk, positions_obs, velocities_obs, radii, position_sigma,
+           velocity_sigma, settings, friendly_mode, towards_only):
+    """The window search of :meth:`viapath.safety.shield.Shield.filter` when the planner's command
+    fails: candidates closest first (each axis over its limit, ties to the slower, then to the lower
+    row, as np.lexsort), tested in the same chunks as the reference (np.array_split into
+    ceil(L / chunk) pieces), stopping after the first chunk holding a wanted (friendly, or admissible)
+    one. Returns the wanted pick's row (-1: none), the first admissible row of the first chunk holding
+    one (-1: none), candidates tested, admissible among them, and the candidates' achieved (v, ω)."""
+    dt = settings[0]
+    dv = limits[1] * dt
+    dw = limits[3] * dt
+    commands, reached = candidates(robot, limits, command, samples, dt)
+    k_count = commands.shape[0]
+    scale_v = max(limits[0], 1e-9)
+    scale_w = max(limits[2], 1e-9)
+    distance = np.empty(k_count)
+    for k in range(k_count):
+        a = (reached[k, 0] - reached[0, 0]) / scale_v
+        b = (reached[k, 1] - reached[0, 1]) / scale_w
+        distance[k] = a * a + b * b
+    # Stable insertion sort on (distance, achieved speed), the planner's own row left out.
+    order = np.empty(k_count - 1, dtype=np.int64)
+    count = 0
+    for k in range(1, k_count):
+        i = count
+        while i > 0:
+            o = order[i - 1]
+            if distance[o] > distance[k] or (distance[o] == distance[k] and reached[o, 0] > reached[k, 0]):
+                order[i] = o
+                i -= 1
+            else:
+                break
+        order[i] = k
+        count += 1
+    people = _finite_people(positions_obs, velocities_obs, radii, position_sigma, velocity_sigma)
+    positions_obs, velocities_obs, radii, position_sigma, velocity_sigma = people
+    total = k_count - 1
+    sections = max(1, (total + chunk - 1) // chunk)
+    size, extra = total // sections, total % sections
+    start = 0
+    tested = 0
+    passing = 0
+    passive_pick = -1
+    for section in range(sections):
+        length = size + 1 if section < extra else size
+        rows = order[start:start + length]
+        start += length
+        achieved = np.empty((length, 2))
+        for i in range(length):
+            achieved[i, 0] = reached[rows[i], 0]
+            achieved[i, 1] = reached[rows[i], 1]
+        if positions_obs.shape[0] == 0:
+            admissible = np.ones(length, dtype=np.bool_)
+            friendly = np.ones(length, dtype=np.bool_)
+        else:
+            admissible, friendly, meet, person, contact = evaluate(
+                robot[0], robot[1], robot[2], robot[3], robot[5], achieved, limits[1], dv, dw, dt, int(settings[1]),
+                positions_obs, velocities_obs, radii, position_sigma, velocity_sigma, settings[2], settings[3],
+                settings[4], friendly_mode, towards_only)
+        tested += length
+        for i in range(length):
+            passing += admissible[i]
+        for i in range(length):
+            if friendly[i] if friendly_mode else admissible[i]:
+                return rows[i], passive_pick, tested, passing, reached
+        if passive_pick < 0:
+            for i in range(length):
+                if admissible[i]:
+                    passive_pick = rows[i]
+                    break
+    return -1, passive_pick, tested, passing, reached

@@ -363,25 +363,30 @@ class Shield:
         from viapath.safety import kernels
 
         config, robot, people = self.config, observation.robot, observation.obstacles
+        limits_array, settings = self._settings_arrays()
+        state = _robot_array(robot)
+        achieved, admissible, friendly, meet, person, contact = kernels.evaluate_commands(
+            state, limits_array, _c(np.reshape(commands, (-1, 2))), _c(people.positions), _c(people.velocities),
+            _c(people.radii_m), _c(people.position_sigma_m), _c(people.velocity_sigma_mps), settings,
+            config.mode == "passive-friendly", bool(config.towards_only))
+        return {"achieved": achieved, "admissible": admissible, "friendly": friendly, "meet_time_s": meet,
+                "person": person, "contact": np.full(1, contact)}
+
+    def _settings_arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """The compiled test's constants: limits (max speed, accel, turn rate, turn accel) and settings
+        (dt, substeps, margin, k sigma, person accel), made again only when what they come from changes."""
+        config = self.config
         key = (self.limits, self.dt_s, config)
-        settings = self._kernel_settings
-        if settings is None or settings[2] != key:
+        cached = self._kernel_settings
+        if cached is None or cached[2] != key:
             limits = self.limits
             substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
-            settings = self._kernel_settings = (
+            cached = self._kernel_settings = (
                 np.array([limits.max_speed_mps, limits.max_accel_mps2, limits.max_turn_rate_radps,
                           limits.max_turn_accel_radps2], dtype=np.float64),
                 np.array([self.dt_s, substeps, config.margin_m, config.sigma_multiplier, config.person_accel_mps2],
                          dtype=np.float64), key)
-        position = robot.position
-        state = np.array([position[0], position[1], robot.heading_rad, robot.speed_mps, robot.turn_rate_radps,
-                          robot.radius_m], dtype=np.float64)
-        achieved, admissible, friendly, meet, person, contact = kernels.evaluate_commands(
-            state, settings[0], _c(np.reshape(commands, (-1, 2))), _c(people.positions), _c(people.velocities),
-            _c(people.radii_m), _c(people.position_sigma_m), _c(people.velocity_sigma_mps), settings[1],
-            config.mode == "passive-friendly", bool(config.towards_only))
-        return {"achieved": achieved, "admissible": admissible, "friendly": friendly, "meet_time_s": meet,
-                "person": person, "contact": np.full(1, contact)}
+        return cached[0], cached[1]
 
     def _friendly(self, out, sweep: Sweep, people, base, growth, accel, near) -> None:
         """Passive friendly: the person, braking from its forecast at the robot's rest time, stops short."""
@@ -454,6 +459,31 @@ class Shield:
                                 False if friendly_mode else None, person_id=person_id, meet_time_s=0.0, candidates=1)
         why = (f"would meet person {person_id} {meet:.2f} s ahead before at rest" if meet is not None
                else "the person would have no room to stop")
+        pick, passive_pick, tested, passing, reached = self._search(observation, command)
+        if pick is not None:
+            text = f"not friendly ({why}): closest friendly command" if friendly_mode else \
+                f"{why}: closest admissible command"
+            return ShieldResult(self._as_command(reached, pick), original, True, text, True,
+                                True if friendly_mode else None, person_id, meet, tested + 1, passing)
+        common = dict(person_id=person_id, meet_time_s=meet, candidates=tested + 1,
+                      admissible_candidates=passing + int(own_ok))
+        if friendly_mode and own_ok:
+            return ShieldResult(command, original, False, "admissible (no friendly command exists)", True, False,
+                                **common)
+        if passive_pick is not None:
+            return ShieldResult(self._as_command(reached, passive_pick), original, True,
+                                f"{why}: closest admissible command (no friendly one)", True, False, **common)
+        return ShieldResult(stop, original, not _same(original, stop), f"{why}: none admissible, hardest braking",
+                            False, False if friendly_mode else None, **common)
+
+    def _search(self, observation: Observation, command: Command) -> tuple[int | None, int | None, int, int, np.ndarray]:
+        """The window search when the planner's command fails: the wanted (friendly in passive-friendly
+        mode, else admissible) candidate closest to it, the closest admissible one, how many were tested
+        and passed, and the candidates' achieved (v, ω)."""
+        if self.backend == "numba":
+            return self._search_compiled(observation, command)
+        friendly_mode = self.config.mode == "passive-friendly"
+        limits = self.limits
         # Candidates closest first (each axis over its limit, ties to the slower), tested in chunks:
         # the first chunk holding an admissible one holds the closest admissible one.
         commands = self.candidates(observation, command)
@@ -470,29 +500,38 @@ class Shield:
             passing += int(check["admissible"].sum())
             wanted = check["friendly"] if friendly_mode else check["admissible"]
             if np.any(wanted):
-                pick = int(chunk[np.argmax(wanted)])
-                text = f"not friendly ({why}): closest friendly command" if friendly_mode else \
-                    f"{why}: closest admissible command"
-                return ShieldResult(self._as_command(commands, reached, pick), original, True, text, True,
-                                    True if friendly_mode else None, person_id, meet, tested + 1, passing)
+                return int(chunk[np.argmax(wanted)]), passive_pick, tested, passing, reached
             if passive_pick is None and np.any(check["admissible"]):
                 passive_pick = int(chunk[np.argmax(check["admissible"])])
-        common = dict(person_id=person_id, meet_time_s=meet, candidates=tested + 1,
-                      admissible_candidates=passing + int(own_ok))
-        if friendly_mode and own_ok:
-            return ShieldResult(command, original, False, "admissible (no friendly command exists)", True, False,
-                                **common)
-        if passive_pick is not None:
-            return ShieldResult(self._as_command(commands, reached, passive_pick), original, True,
-                                f"{why}: closest admissible command (no friendly one)", True, False, **common)
-        return ShieldResult(stop, original, not _same(original, stop), f"{why}: none admissible, hardest braking",
-                            False, False if friendly_mode else None, **common)
+        return None, passive_pick, tested, passing, reached
+
+    def _search_compiled(self, observation: Observation, command: Command):
+        """:meth:`_search` compiled (:func:`viapath.safety.kernels.search`: same candidates, order and chunks)."""
+        from viapath.safety import kernels
+
+        config, robot, people = self.config, observation.robot, observation.obstacles
+        limits_array, settings = self._settings_arrays()
+        state = _robot_array(robot)
+        pick, passive_pick, tested, passing, reached = kernels.search(
+            state, limits_array, np.array([command.speed_mps, command.turn_rate_radps], dtype=np.float64),
+            int(config.samples), _CHUNK, _c(people.positions), _c(people.velocities), _c(people.radii_m),
+            _c(people.position_sigma_m), _c(people.velocity_sigma_mps), settings, config.mode == "passive-friendly",
+            bool(config.towards_only))
+        return (int(pick) if pick >= 0 else None, int(passive_pick) if passive_pick >= 0 else None, int(tested),
+                int(passing), reached)
 
     @staticmethod
-    def _as_command(commands: np.ndarray, reached: np.ndarray, index: int) -> Command:
+    def _as_command(reached: np.ndarray, index: int) -> Command:
         if index == 1:  # the hardest braking itself
             return Command.stop()
         return Command(float(reached[index, 0]), float(reached[index, 1]))
+
+
+def _robot_array(robot) -> np.ndarray:
+    """x, y, heading, speed, turn rate, radius: the compiled kernels' robot state."""
+    position = robot.position
+    return np.array([position[0], position[1], robot.heading_rad, robot.speed_mps, robot.turn_rate_radps,
+                     robot.radius_m], dtype=np.float64)
 
 
 def _c(array) -> np.ndarray:
