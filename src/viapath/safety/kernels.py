@@ -16,8 +16,11 @@ Choices:
   scanned from the start and the scan stops at the first hit, or as soon as no later hit could come
   before the meeting already found for that command (the reference keeps the earliest meeting, ties
   to the lower person row, which the loop order gives too).
-* ``reach_m`` (path length until rest) is summed as numpy sums a row (pairwise, 8 accumulators):
-  it feeds the "near" bound, and the same bits keep the same people near.
+* ``reach_m`` (path length until rest) is summed in order, where numpy sums a row pairwise (8
+  accumulators past 8 steps): the two differ in the last bits at most, and the sum only feeds the
+  "near" bound, which has 1e-6 m to spare (a person that close to it cannot be met). Copying numpy's
+  pairwise sum cost two seconds of compilation.
+* No np.zeros / np.ones / np.full / .copy(): each costs a compilation of its own (np.empty and loops).
 """
 
 from __future__ import annotations
@@ -39,87 +42,6 @@ def _clip(x, low, high):
     if x > high:
         x = high
     return x
-
-
-@njit(cache=True, nogil=True)
-def _pairwise_block(a, start, n):
-    """numpy's pairwise sum of a[start:start + n] for n <= 128 (numpy/_core/src/umath/loops_utils.h.src)."""
-    if n < 8:
-        res = 0.0
-        for i in range(n):
-            res += a[start + i]
-        return res
-    r0 = a[start]
-    r1 = a[start + 1]
-    r2 = a[start + 2]
-    r3 = a[start + 3]
-    r4 = a[start + 4]
-    r5 = a[start + 5]
-    r6 = a[start + 6]
-    r7 = a[start + 7]
-    i = 8
-    while i < n - (n % 8):
-        r0 += a[start + i]
-        r1 += a[start + i + 1]
-        r2 += a[start + i + 2]
-        r3 += a[start + i + 3]
-        r4 += a[start + i + 4]
-        r5 += a[start + i + 5]
-        r6 += a[start + i + 6]
-        r7 += a[start + i + 7]
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += a[start + i]
-        i += 1
-    return res
-
-
-@njit(cache=True, nogil=True)
-def _pairwise(a, start, n):
-    """numpy's pairwise sum: blocks of at most 128, halves (rounded to 8) added recursively; the
-    recursion is unrolled on an explicit stack (post-order: left half, right half, then their sum)."""
-    if n <= 128:
-        return _pairwise_block(a, start, n)
-    kinds = np.empty(256, dtype=np.int64)  # 0: a segment to sum, 1: add the two last values
-    starts = np.empty(256, dtype=np.int64)
-    counts = np.empty(256, dtype=np.int64)
-    values = np.empty(256)
-    top = 0
-    kinds[0] = 0
-    starts[0] = start
-    counts[0] = n
-    depth = 1
-    while depth > 0:
-        depth -= 1
-        kind = kinds[depth]
-        if kind == 1:
-            top -= 1
-            values[top - 1] = values[top - 1] + values[top]
-            continue
-        s = starts[depth]
-        c = counts[depth]
-        if c <= 128:
-            values[top] = _pairwise_block(a, s, c)
-            top += 1
-            continue
-        half = c // 2
-        half -= half % 8
-        kinds[depth] = 1
-        kinds[depth + 1] = 0
-        starts[depth + 1] = s + half
-        counts[depth + 1] = c - half
-        kinds[depth + 2] = 0
-        starts[depth + 2] = s
-        counts[depth + 2] = half
-        depth += 3
-    return values[0]
-
-
-@njit(cache=True, nogil=True)
-def row_sum(a):
-    """np.sum(a) of a 1-D float64 array, bit for bit (0.0 + the pairwise sum)."""
-    return 0.0 + _pairwise(a, 0, a.shape[0])
 
 
 @njit(cache=True, nogil=True)
@@ -168,11 +90,10 @@ def braking_sweep(px, py, heading, speed_now, achieved, dv, dw, dt, substeps):
     headings = np.empty((k_count, t_count))
     effective = np.empty((k_count, j_count))
     sagitta = np.empty((k_count, j_count))
-    moving = np.zeros((k_count, j_count), dtype=np.bool_)
+    moving = np.empty((k_count, j_count), dtype=np.bool_)
     rest_time = np.empty(k_count)
     rest_index = np.empty(k_count, dtype=np.int64)
     reach = np.empty(k_count)
-    absolute = np.empty(j_count)
     for k in range(k_count):
         positions[k, 0, 0] = px
         positions[k, 0, 1] = py
@@ -181,6 +102,7 @@ def braking_sweep(px, py, heading, speed_now, achieved, dv, dw, dt, substeps):
         cum_x = 0.0
         cum_y = 0.0
         steps_moving = 0
+        path_length = 0.0
         for j in range(j_count):
             s = speed[k, j]
             w = turn[k, j]
@@ -213,11 +135,27 @@ def braking_sweep(px, py, heading, speed_now, achieved, dv, dw, dt, substeps):
             sagitta[k, j] = abs(s * w) * h * h / 8.0
             if moving[k, j]:
                 steps_moving += 1
-            absolute[j] = abs(s)
+            path_length += abs(s)
         rest_time[k] = steps_moving * dt
         rest_index[k] = steps_moving * m
-        reach[k] = row_sum(absolute) * dt
-    return positions, headings, effective, turn[:, :j_count].copy(), moving, sagitta, rest_time, rest_index, reach
+        reach[k] = path_length * dt
+    return positions, headings, effective, turn, moving, sagitta, rest_time, rest_index, reach
+
+
+@njit(cache=True, nogil=True)
+def _all_clear(k_count):
+    """Verdicts of K commands nobody can meet: admissible, friendly, meet time inf, person -1.
+    (np.empty and loops: np.ones / np.full would each cost a compilation of their own.)"""
+    admissible = np.empty(k_count, dtype=np.bool_)
+    friendly = np.empty(k_count, dtype=np.bool_)
+    meet = np.empty(k_count)
+    person = np.empty(k_count, dtype=np.int64)
+    for k in range(k_count):
+        admissible[k] = True
+        friendly[k] = True
+        meet[k] = math.inf
+        person[k] = -1
+    return admissible, friendly, meet, person
 
 
 @njit(cache=True, nogil=True)
@@ -229,10 +167,7 @@ def evaluate(px, py, heading, speed_now, robot_radius, achieved, max_accel, dv, 
     (-1: none) and whether a person touches the robot now."""
     k_count = achieved.shape[0]
     n_count = positions_obs.shape[0]
-    admissible = np.ones(k_count, dtype=np.bool_)
-    friendly = np.ones(k_count, dtype=np.bool_)
-    meet = np.full(k_count, np.inf)
-    person = np.full(k_count, -1, dtype=np.int64)
+    admissible, friendly, meet, person = _all_clear(k_count)
     contact = False
     offset_x = np.empty(n_count)
     offset_y = np.empty(n_count)
@@ -266,7 +201,11 @@ def evaluate(px, py, heading, speed_now, robot_radius, achieved, max_accel, dv, 
             break
     if everyone_far:
         return admissible, friendly, meet, person, contact
-    if not gap.min() > 0.0:  # a person touches the robot now: nothing is admissible
+    touched = False
+    for n in range(n_count):
+        if not gap[n] > 0.0:
+            touched = True
+    if touched:  # a person touches the robot now: nothing is admissible
         first = 0
         for n in range(n_count):  # argmin: the first smallest gap
             if gap[n] < gap[first]:
@@ -285,7 +224,7 @@ def evaluate(px, py, heading, speed_now, robot_radius, achieved, max_accel, dv, 
     horizon = h * (t_count - 1)
     base = np.empty(n_count)
     growth = np.empty(n_count)
-    near = np.zeros(n_count, dtype=np.bool_)
+    near = np.empty(n_count, dtype=np.bool_)
     max_reach = 0.0
     for k in range(k_count):
         max_reach = max(max_reach, reach[k])
@@ -340,7 +279,9 @@ def evaluate(px, py, heading, speed_now, robot_radius, achieved, max_accel, dv, 
     radii_t = np.empty(t_count)
     ux = np.empty((k_count, t_count))  # heading unit vectors, filled per command when first needed
     uy = np.empty((k_count, t_count))
-    have_u = np.zeros(k_count, dtype=np.bool_)
+    have_u = np.empty(k_count, dtype=np.bool_)
+    for k in range(k_count):
+        have_u[k] = False
     for n in range(n_count):
         if not near[n]:
             continue
@@ -454,32 +395,6 @@ def _finite_people(positions_obs, velocities_obs, radii, position_sigma, velocit
 
 
 @njit(cache=True, nogil=True)
-def evaluate_commands(robot, limits, commands, positions_obs, velocities_obs, radii, position_sigma, velocity_sigma,
-                      settings, friendly_mode, towards_only):
-    """:meth:`viapath.safety.shield.Shield.evaluate` whole, in one call: the achieved (v, ω) of K raw
-    commands, the people's rows with a non-finite field (or a negative radius) dropped as
-    :meth:`viapath.observation.Obstacles.finite` does (``person`` counts the rows kept), then
-    :func:`evaluate`. ``robot``: x, y, heading, speed, turn rate, radius; ``limits``: max speed, max
-    accel, max turn rate, max turn accel; ``settings``: dt, substeps, margin, k sigma, person accel."""
-    dt = settings[0]
-    dv = limits[1] * dt
-    dw = limits[3] * dt
-    achieved = achieved_first_period(commands, robot[3], robot[4], limits[0], limits[2], dv, dw)
-    positions_obs, velocities_obs, radii, position_sigma, velocity_sigma = _finite_people(
-        positions_obs, velocities_obs, radii, position_sigma, velocity_sigma)
-    kept = positions_obs.shape[0]
-    k_count = achieved.shape[0]
-    if kept == 0:
-        return (achieved, np.ones(k_count, dtype=np.bool_), np.ones(k_count, dtype=np.bool_), np.full(k_count, np.inf),
-                np.full(k_count, -1, dtype=np.int64), False)
-    admissible, friendly, meet, person, contact = evaluate(
-        robot[0], robot[1], robot[2], robot[3], robot[5], achieved, limits[1], dv, dw, dt, int(settings[1]),
-        positions_obs, velocities_obs, radii, position_sigma, velocity_sigma, settings[2], settings[3], settings[4],
-        friendly_mode, towards_only)
-    return achieved, admissible, friendly, meet, person, contact
-
-
-@njit(cache=True, nogil=True)
 def _linspace(start, stop, num):
     """np.linspace(start, stop, num) for num >= 2, bit for bit (i * step + start, the last one stop)."""
     out = np.empty(num)
@@ -531,49 +446,73 @@ def candidates(robot, limits, command, samples, dt):
 
 
 @njit(cache=True, nogil=True)
-def search(robot, limits, command, samples, chunk, positions_obs, velocities_obs, radii, position_sigma,
-           velocity_sigma, settings, friendly_mode, towards_only):
-    """The window search of :meth:`viapath.safety.shield.Shield.filter` when the planner's command
-    fails: candidates closest first (each axis over its limit, ties to the slower, then to the lower
-    row, as np.lexsort), tested in the same chunks as the reference (np.array_split into
-    ceil(L / chunk) pieces), stopping after the first chunk holding a wanted (friendly, or admissible)
-    one. Returns the wanted pick's row (-1: none), the first admissible row of the first chunk holding
-    one (-1: none), candidates tested, admissible among them, and the candidates' achieved (v, ω)."""
+def shield(robot, limits, commands, search_window, samples, chunk, positions_obs, velocities_obs, radii,
+           position_sigma, velocity_sigma, settings, friendly_mode, towards_only):
+    """The one compiled entry of the shield (one entry links :func:`evaluate` once: two entries cost
+    seconds more of compilation). ``robot``: x, y, heading, speed, turn rate, radius; ``limits``:
+    max speed, max accel, max turn rate, max turn accel; ``settings``: dt, substeps, margin, k sigma,
+    person accel. The people's rows with a non-finite field (or a negative radius) are dropped as
+    :meth:`viapath.observation.Obstacles.finite` does (``person`` counts the rows kept).
+
+    ``search_window`` False: :meth:`viapath.safety.shield.Shield.evaluate` of the K raw
+    ``commands``: returns their achieved (v, ω), admissible, friendly, meet time, person, contact
+    (then -1, -1, 0, 0).
+
+    ``search_window`` True: the window search of :meth:`viapath.safety.shield.Shield.filter` when the
+    planner's command ``commands[0]`` fails: candidates closest first (each axis over its limit,
+    ties to the slower, then to the lower row, as np.lexsort), tested in the reference's chunks
+    (np.array_split into ceil(L / chunk) pieces), stopping after the first chunk holding a wanted
+    (friendly, or admissible) one. Returns the candidates' achieved (v, ω), the last chunk's
+    verdicts, then the wanted pick's row (-1: none), the first admissible row of the first chunk
+    holding one (-1: none), the candidates tested and the admissible among them."""
     dt = settings[0]
     dv = limits[1] * dt
     dw = limits[3] * dt
-    commands, reached = candidates(robot, limits, command, samples, dt)
-    k_count = commands.shape[0]
-    scale_v = max(limits[0], 1e-9)
-    scale_w = max(limits[2], 1e-9)
-    distance = np.empty(k_count)
-    for k in range(k_count):
-        a = (reached[k, 0] - reached[0, 0]) / scale_v
-        b = (reached[k, 1] - reached[0, 1]) / scale_w
-        distance[k] = a * a + b * b
-    # Stable insertion sort on (distance, achieved speed), the planner's own row left out.
-    order = np.empty(k_count - 1, dtype=np.int64)
-    count = 0
-    for k in range(1, k_count):
-        i = count
-        while i > 0:
-            o = order[i - 1]
-            if distance[o] > distance[k] or (distance[o] == distance[k] and reached[o, 0] > reached[k, 0]):
-                order[i] = o
-                i -= 1
-            else:
-                break
-        order[i] = k
-        count += 1
-    people = _finite_people(positions_obs, velocities_obs, radii, position_sigma, velocity_sigma)
-    positions_obs, velocities_obs, radii, position_sigma, velocity_sigma = people
-    total = k_count - 1
-    sections = max(1, (total + chunk - 1) // chunk)
+    positions_obs, velocities_obs, radii, position_sigma, velocity_sigma = _finite_people(
+        positions_obs, velocities_obs, radii, position_sigma, velocity_sigma)
+    if search_window:
+        command = np.empty(2)
+        command[0] = commands[0, 0]
+        command[1] = commands[0, 1]
+        candidate_commands, reached = candidates(robot, limits, command, samples, dt)
+        k_count = candidate_commands.shape[0]
+        scale_v = max(limits[0], 1e-9)
+        scale_w = max(limits[2], 1e-9)
+        distance = np.empty(k_count)
+        for k in range(k_count):
+            a = (reached[k, 0] - reached[0, 0]) / scale_v
+            b = (reached[k, 1] - reached[0, 1]) / scale_w
+            distance[k] = a * a + b * b
+        # Stable insertion sort on (distance, achieved speed), the planner's own row left out.
+        order = np.empty(k_count - 1, dtype=np.int64)
+        count = 0
+        for k in range(1, k_count):
+            i = count
+            while i > 0:
+                o = order[i - 1]
+                if distance[o] > distance[k] or (distance[o] == distance[k] and reached[o, 0] > reached[k, 0]):
+                    order[i] = o
+                    i -= 1
+                else:
+                    break
+            order[i] = k
+            count += 1
+        total = k_count - 1
+        sections = max(1, (total + chunk - 1) // chunk)
+    else:
+        reached = achieved_first_period(commands, robot[3], robot[4], limits[0], limits[2], dv, dw)
+        total = reached.shape[0]
+        order = np.empty(total, dtype=np.int64)
+        for k in range(total):
+            order[k] = k
+        sections = 1
     size, extra = total // sections, total % sections
     start = 0
     tested = 0
     passing = 0
     passive_pick = -1
+    admissible, friendly, meet, person = _all_clear(0)
+    contact = False
     for section in range(sections):
         length = size + 1 if section < extra else size
         rows = order[start:start + length]
@@ -583,22 +522,24 @@ def search(robot, limits, command, samples, chunk, positions_obs, velocities_obs
             achieved[i, 0] = reached[rows[i], 0]
             achieved[i, 1] = reached[rows[i], 1]
         if positions_obs.shape[0] == 0:
-            admissible = np.ones(length, dtype=np.bool_)
-            friendly = np.ones(length, dtype=np.bool_)
+            admissible, friendly, meet, person = _all_clear(length)
+            contact = False
         else:
             admissible, friendly, meet, person, contact = evaluate(
                 robot[0], robot[1], robot[2], robot[3], robot[5], achieved, limits[1], dv, dw, dt, int(settings[1]),
                 positions_obs, velocities_obs, radii, position_sigma, velocity_sigma, settings[2], settings[3],
                 settings[4], friendly_mode, towards_only)
+        if not search_window:
+            return reached, admissible, friendly, meet, person, contact, -1, -1, 0, 0
         tested += length
         for i in range(length):
             passing += admissible[i]
         for i in range(length):
             if friendly[i] if friendly_mode else admissible[i]:
-                return rows[i], passive_pick, tested, passing, reached
+                return reached, admissible, friendly, meet, person, contact, rows[i], passive_pick, tested, passing
         if passive_pick < 0:
             for i in range(length):
                 if admissible[i]:
                     passive_pick = rows[i]
                     break
-    return -1, passive_pick, tested, passing, reached
+    return reached, admissible, friendly, meet, person, contact, -1, passive_pick, tested, passing

@@ -358,17 +358,17 @@ class Shield:
         return out
 
     def _evaluate_compiled(self, observation: Observation, commands: np.ndarray) -> dict[str, np.ndarray]:
-        """The test above, compiled (:func:`viapath.safety.kernels.evaluate_commands`: same arithmetic,
+        """The test above, compiled (:func:`viapath.safety.kernels.shield`: same arithmetic,
         same verdicts), with the achieved (v, ω) and the dropping of non-finite people in the same call."""
         from viapath.safety import kernels
 
         config, robot, people = self.config, observation.robot, observation.obstacles
         limits_array, settings = self._settings_arrays()
         state = _robot_array(robot)
-        achieved, admissible, friendly, meet, person, contact = kernels.evaluate_commands(
-            state, limits_array, _c(np.reshape(commands, (-1, 2))), _c(people.positions), _c(people.velocities),
-            _c(people.radii_m), _c(people.position_sigma_m), _c(people.velocity_sigma_mps), settings,
-            config.mode == "passive-friendly", bool(config.towards_only))
+        achieved, admissible, friendly, meet, person, contact = kernels.shield(
+            state, limits_array, _c(np.reshape(commands, (-1, 2))), False, 0, 0, _c(people.positions),
+            _c(people.velocities), _c(people.radii_m), _c(people.position_sigma_m), _c(people.velocity_sigma_mps),
+            settings, config.mode == "passive-friendly", bool(config.towards_only))[:6]
         return {"achieved": achieved, "admissible": admissible, "friendly": friendly, "meet_time_s": meet,
                 "person": person, "contact": np.full(1, contact)}
 
@@ -506,14 +506,14 @@ class Shield:
         return None, passive_pick, tested, passing, reached
 
     def _search_compiled(self, observation: Observation, command: Command):
-        """:meth:`_search` compiled (:func:`viapath.safety.kernels.search`: same candidates, order and chunks)."""
+        """:meth:`_search` compiled (:func:`viapath.safety.kernels.shield`: same candidates, order and chunks)."""
         from viapath.safety import kernels
 
         config, robot, people = self.config, observation.robot, observation.obstacles
         limits_array, settings = self._settings_arrays()
         state = _robot_array(robot)
-        pick, passive_pick, tested, passing, reached = kernels.search(
-            state, limits_array, np.array([command.speed_mps, command.turn_rate_radps], dtype=np.float64),
+        reached, _, _, _, _, _, pick, passive_pick, tested, passing = kernels.shield(
+            state, limits_array, np.array([[command.speed_mps, command.turn_rate_radps]], dtype=np.float64), True,
             int(config.samples), _CHUNK, _c(people.positions), _c(people.velocities), _c(people.radii_m),
             _c(people.position_sigma_m), _c(people.velocity_sigma_mps), settings, config.mode == "passive-friendly",
             bool(config.towards_only))
