@@ -1,6 +1,6 @@
 """Plan time with the passive-safety shield: p50/p99 for 1, 10, 50 and 100 people (DESIGN §7).
 
-Usage: python benchmarks/bench_shield.py [--cycles 300] [--seed 0] [--runs 3] [--json]
+Usage: python benchmarks/bench_shield.py [--cycles 300] [--seed 0] [--runs 3] [--backend numpy|numba|both] [--json]
 
 Scenes as in bench_planner.py (robot at the start of a 10 m path, people within 8 m walking at
 0.3-1.5 m/s in random directions, none overlapping the robot), but the robot moves at 0.4 m/s and
@@ -9,6 +9,8 @@ a third of the people are placed within 2 m, so the shield has work to do. Rows:
 * ``shield``: the filter alone on viapath's command (mostly the one-command fast path);
 * ``shield-search``: the filter on a command it must replace (full speed straight at the nearest
   person), i.e. the whole dynamic-window search: the worst case per cycle.
+``--backend`` picks the shield's arithmetic (the numpy reference or the compiled kernels of
+``viapath.safety.kernels``; ``both``: every row twice); the planner runs its default backend.
 Single thread; each run redraws nothing (same seed), so the runs differ by machine load only.
 """
 
@@ -24,7 +26,7 @@ import numpy as np
 from viapath import DesignatedPath, Obstacles, Observation, RobotState
 from viapath.observation import Command, MotionLimits
 from viapath.planning import make_planner
-from viapath.safety import ShieldedPlanner
+from viapath.safety import ShieldConfig, ShieldedPlanner
 
 
 def random_scene(rng, n_people: int) -> Observation:
@@ -51,12 +53,13 @@ def _time(function, scenes, cycles) -> list[float]:
     return samples
 
 
-def one_run(cycles: int, seed: int) -> list[dict]:
+def one_run(cycles: int, seed: int, backend: str = "auto") -> list[dict]:
     rng = np.random.default_rng(seed)
     path = DesignatedPath([[0.0, 0.0], [10.0, 0.0]], half_width_m=1.5)
     limits = MotionLimits()
     bare = make_planner("viapath", path, nominal_speed_mps=0.2, limits=limits)
-    guarded = ShieldedPlanner(make_planner("viapath", path, nominal_speed_mps=0.2, limits=limits), dt_s=0.1)
+    guarded = ShieldedPlanner(make_planner("viapath", path, nominal_speed_mps=0.2, limits=limits), dt_s=0.1,
+                              config=ShieldConfig(backend=backend))
     shield = guarded.shield
     rows = []
     for n_people in (1, 10, 50, 100):
@@ -88,7 +91,7 @@ def one_run(cycles: int, seed: int) -> list[dict]:
         for name, function in cases.items():
             samples = _time(function, scenes, cycles)
             p50, p99 = np.percentile(samples, [50, 99])
-            rows.append({"people": n_people, "case": name, "p50_ms": float(p50), "p99_ms": float(p99),
+            rows.append({"people": n_people, "case": name, "backend": shield.backend, "p50_ms": float(p50), "p99_ms": float(p99),
                          "max_ms": float(max(samples)),
                          "intervened_fraction": float(intervened if name in ("shield", "viapath+shield") else
                                                       searched if name == "shield-search" else 0.0)})
@@ -100,17 +103,20 @@ def main() -> None:
     parser.add_argument("--cycles", type=int, default=300)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--backend", choices=("auto", "numpy", "numba", "both"), default="auto",
+                        help="the shield's arithmetic (both: each row on numpy, then on numba)")
     parser.add_argument("--json", action="store_true", help="print one JSON object (all runs)")
     args = parser.parse_args()
-    runs = [one_run(args.cycles, args.seed) for _ in range(args.runs)]
+    backends = ("numpy", "numba") if args.backend == "both" else (args.backend,)
+    runs = [[row for backend in backends for row in one_run(args.cycles, args.seed, backend)] for _ in range(args.runs)]
     if args.json:
-        print(json.dumps({"cycles": args.cycles, "seed": args.seed, "pid": os.getpid(), "runs": runs}, indent=1))
+        print(json.dumps({"cycles": args.cycles, "seed": args.seed, "backend": args.backend, "pid": os.getpid(), "runs": runs}, indent=1))
         return
     for number, rows in enumerate(runs, 1):
         print(f"run {number}: {args.cycles} cycles per row, pid {os.getpid()}, single thread")
-        print(f"{'people':>6} {'case':>15} {'p50 ms':>8} {'p99 ms':>8} {'max ms':>8} {'replaced':>8}")
+        print(f"{'people':>6} {'case':>15} {'shield':>7} {'p50 ms':>8} {'p99 ms':>8} {'max ms':>8} {'replaced':>8}")
         for row in rows:
-            print(f"{row['people']:>6} {row['case']:>15} {row['p50_ms']:>8.3f} {row['p99_ms']:>8.3f} "
+            print(f"{row['people']:>6} {row['case']:>15} {row['backend']:>7} {row['p50_ms']:>8.3f} {row['p99_ms']:>8.3f} "
                   f"{row['max_ms']:>8.3f} {row['intervened_fraction']:>8.0%}")
 
 

@@ -11,6 +11,8 @@ period, shield options, 0-6 people with random positions, velocities and uncerta
   meeting counts only while the robot moves towards the person; the robust check also counts motion
   up to ~11 degrees past perpendicular (``TOWARDS_SLACK``).
 The same in passive-friendly mode on 1 000 cycles (friendliness by its own brute force too).
+The shield runs on the numpy reference; with numba installed the compiled backend must give the same
+outputs on every cycle, so the checks hold for both.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import pytest
 
 from tests.safety._brute import brute_admissible, window_grid
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
+from viapath.planning.viapath.backend import numba_available
 from viapath.safety import Shield, ShieldConfig
 
 ROBUST_M = 0.01
@@ -67,13 +70,14 @@ def planner_commands(rng: np.random.Generator, case: dict) -> np.ndarray:
     return np.stack([rng.uniform(-0.2, 1.3, count) * case["vmax"], rng.uniform(-1.3, 1.3, count) * case["wmax"]], 1)
 
 
-def run_shield(case: dict, commands: np.ndarray, mode: str, towards_only: bool = True):
+def run_shield(case: dict, commands: np.ndarray, mode: str, towards_only: bool = True, backend: str = "numpy"):
     outputs, claimed = np.zeros((len(commands), 2)), np.zeros(len(commands), dtype=bool)
     for b in range(len(commands)):
         n = int(case["n_people"][b])
         limits = MotionLimits(case["vmax"][b], case["amax"][b], case["wmax"][b], case["alphamax"][b])
         config = ShieldConfig(margin_m=case["margin"][b], person_accel_mps2=case["accel_p"][b],
-                              sigma_multiplier=case["k_sigma"][b], mode=mode, towards_only=towards_only)
+                              sigma_multiplier=case["k_sigma"][b], mode=mode, towards_only=towards_only,
+                              backend=backend)
         shield = Shield(limits, float(case["dt"][b]), config)
         people = Obstacles(case["P"][b, :n], case["V"][b, :n], case["r"][b, :n], case["sigma_p"][b, :n],
                            case["sigma_v"][b, :n])
@@ -92,6 +96,10 @@ def _subset(case: dict, index: np.ndarray) -> dict:
 def check_batch(case: dict, commands: np.ndarray, mode: str, towards_only: bool = True) -> dict:
     friendly = mode == "passive-friendly"
     outputs, claimed = run_shield(case, commands, mode, towards_only)
+    if numba_available():  # the compiled shield (extra 'fast') gives the same outputs: the checks below hold for it
+        compiled, compiled_claimed = run_shield(case, commands, mode, towards_only, backend="numba")
+        np.testing.assert_allclose(compiled, outputs, rtol=0, atol=1e-9)
+        np.testing.assert_array_equal(compiled_claimed, claimed)
     robust = dict(extra_m=ROBUST_M, towards_only=towards_only, towards_slack=TOWARDS_SLACK)
     # limits, finiteness
     assert np.all(np.isfinite(outputs))

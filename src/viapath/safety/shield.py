@@ -56,17 +56,24 @@ Choices where the sources are silent:
 * Position uncertainty k σ_p is added to the radius (constant in t) besides the velocity term.
 * A person is skipped when it cannot come within reach of the robot before the longest braking
   ends (a bound: its distance minus its forecast reach exceeds the robot's longest sweep).
+
+Speed (issue 16, docs/speed.md): the numpy code here is the reference; option ``backend`` (``auto``
+| ``numpy`` | ``numba``, as the planner's, env ``VIAPATH_PLANNER_BACKEND`` overriding ``auto``) may
+run :meth:`Shield.evaluate` and the window search of :meth:`Shield.filter` on
+:mod:`viapath.safety.kernels` instead, the same arithmetic compiled (extra ``fast``), with the same
+verdicts (tests/safety/test_shield_backends.py); ``ShieldResult.backend`` says which ran.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
 from viapath.observation import Command, MotionLimits, Observation
+from viapath.planning.viapath.backend import resolve as resolve_backend
 from viapath.safety.options import check_options
 
 _STRAIGHT = 1e-9
@@ -85,6 +92,7 @@ class ShieldConfig:
     samples: int = 11
     substep_s: float = 0.025
     towards_only: bool = True
+    backend: str = "auto"
 
     def __post_init__(self) -> None:
         check_options({name: getattr(self, name) for name in self.__dataclass_fields__})
@@ -108,6 +116,7 @@ class ShieldResult:
     meet_time_s: float | None = None  # when, from now
     candidates: int = 0
     admissible_candidates: int = 0
+    backend: str = "numpy"  # which arithmetic ran the test (numpy reference or the compiled kernels)
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -121,6 +130,7 @@ class ShieldResult:
             "meet_time_s": self.meet_time_s,
             "candidates": self.candidates,
             "admissible_candidates": self.admissible_candidates,
+            "backend": self.backend,
         }
 
 
@@ -224,6 +234,9 @@ class Shield:
         self.limits = limits or MotionLimits()
         self.dt_s = float(dt_s)
         self.config = config or ShieldConfig()
+        # numpy (the reference below) or numba (viapath.safety.kernels, the same arithmetic compiled).
+        self.backend = resolve_backend(self.config.backend)
+        self._kernel_settings: tuple | None = None  # the compiled test's constants (and what they were made of)
 
     # -- the test --------------------------------------------------------------------------------
 
@@ -231,6 +244,8 @@ class Shield:
         """For each command (K, 2): ``admissible``, ``friendly``, ``meet_time_s`` (inf: never),
         ``person`` (row of the first person met, -1 none) and ``achieved`` (v, ω) of the first period.
         A person already touching the robot makes every command inadmissible (``contact`` is True)."""
+        if self.backend == "numba":
+            return self._evaluate_compiled(observation, commands)
         config, robot = self.config, observation.robot
         people = observation.obstacles.finite()
         achieved = achieved_first_period(commands, float(robot.speed_mps), float(robot.turn_rate_radps),
@@ -348,6 +363,37 @@ class Shield:
         out["friendly"] &= out["admissible"]
         return out
 
+    def _evaluate_compiled(self, observation: Observation, commands: np.ndarray) -> dict[str, np.ndarray]:
+        """The test above, compiled (:func:`viapath.safety.kernels.shield`: same arithmetic,
+        same verdicts), with the achieved (v, ω) and the dropping of non-finite people in the same call."""
+        from viapath.safety import kernels
+
+        config, robot, people = self.config, observation.robot, observation.obstacles
+        limits_array, settings = self._settings_arrays()
+        state = _robot_array(robot)
+        achieved, admissible, friendly, meet, person, contact = kernels.shield(
+            state, limits_array, _c(np.reshape(commands, (-1, 2))), False, 0, 0, _c(people.positions),
+            _c(people.velocities), _c(people.radii_m), _c(people.position_sigma_m), _c(people.velocity_sigma_mps),
+            settings, config.mode == "passive-friendly", bool(config.towards_only))[:6]
+        return {"achieved": achieved, "admissible": admissible, "friendly": friendly, "meet_time_s": meet,
+                "person": person, "contact": np.full(1, contact)}
+
+    def _settings_arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """The compiled test's constants: limits (max speed, accel, turn rate, turn accel) and settings
+        (dt, substeps, margin, k sigma, person accel), made again only when what they come from changes."""
+        config = self.config
+        key = (self.limits, self.dt_s, config)
+        cached = self._kernel_settings
+        if cached is None or cached[2] != key:
+            limits = self.limits
+            substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
+            cached = self._kernel_settings = (
+                np.array([limits.max_speed_mps, limits.max_accel_mps2, limits.max_turn_rate_radps,
+                          limits.max_turn_accel_radps2], dtype=np.float64),
+                np.array([self.dt_s, substeps, config.margin_m, config.sigma_multiplier, config.person_accel_mps2],
+                         dtype=np.float64), key)
+        return cached[0], cached[1]
+
     def _friendly(self, out, sweep: Sweep, people, base, growth, accel, near) -> None:
         """Passive friendly: the person, braking from its forecast at the robot's rest time, stops short."""
         idx = np.flatnonzero(near)
@@ -386,6 +432,10 @@ class Shield:
         return np.concatenate([planner, [[0.0, 0.0]], slower, turned, grid])
 
     def filter(self, observation: Observation, command: Command) -> ShieldResult:
+        """What goes to the base instead of ``command`` (the planner's), and why; says which backend ran."""
+        return replace(self._filter(observation, command), backend=self.backend)
+
+    def _filter(self, observation: Observation, command: Command) -> ShieldResult:
         config = self.config
         original = command
         if not config.enabled:
@@ -415,6 +465,31 @@ class Shield:
                                 False if friendly_mode else None, person_id=person_id, meet_time_s=0.0, candidates=1)
         why = (f"would meet person {person_id} {meet:.2f} s ahead before at rest" if meet is not None
                else "the person would have no room to stop")
+        pick, passive_pick, tested, passing, reached = self._search(observation, command)
+        if pick is not None:
+            text = f"not friendly ({why}): closest friendly command" if friendly_mode else \
+                f"{why}: closest admissible command"
+            return ShieldResult(self._as_command(reached, pick), original, True, text, True,
+                                True if friendly_mode else None, person_id, meet, tested + 1, passing)
+        common = dict(person_id=person_id, meet_time_s=meet, candidates=tested + 1,
+                      admissible_candidates=passing + int(own_ok))
+        if friendly_mode and own_ok:
+            return ShieldResult(command, original, False, "admissible (no friendly command exists)", True, False,
+                                **common)
+        if passive_pick is not None:
+            return ShieldResult(self._as_command(reached, passive_pick), original, True,
+                                f"{why}: closest admissible command (no friendly one)", True, False, **common)
+        return ShieldResult(stop, original, not _same(original, stop), f"{why}: none admissible, hardest braking",
+                            False, False if friendly_mode else None, **common)
+
+    def _search(self, observation: Observation, command: Command) -> tuple[int | None, int | None, int, int, np.ndarray]:
+        """The window search when the planner's command fails: the wanted (friendly in passive-friendly
+        mode, else admissible) candidate closest to it, the closest admissible one, how many were tested
+        and passed, and the candidates' achieved (v, ω)."""
+        if self.backend == "numba":
+            return self._search_compiled(observation, command)
+        friendly_mode = self.config.mode == "passive-friendly"
+        limits = self.limits
         # Candidates closest first (each axis over its limit, ties to the slower), tested in chunks:
         # the first chunk holding an admissible one holds the closest admissible one.
         commands = self.candidates(observation, command)
@@ -431,29 +506,42 @@ class Shield:
             passing += int(check["admissible"].sum())
             wanted = check["friendly"] if friendly_mode else check["admissible"]
             if np.any(wanted):
-                pick = int(chunk[np.argmax(wanted)])
-                text = f"not friendly ({why}): closest friendly command" if friendly_mode else \
-                    f"{why}: closest admissible command"
-                return ShieldResult(self._as_command(commands, reached, pick), original, True, text, True,
-                                    True if friendly_mode else None, person_id, meet, tested + 1, passing)
+                return int(chunk[np.argmax(wanted)]), passive_pick, tested, passing, reached
             if passive_pick is None and np.any(check["admissible"]):
                 passive_pick = int(chunk[np.argmax(check["admissible"])])
-        common = dict(person_id=person_id, meet_time_s=meet, candidates=tested + 1,
-                      admissible_candidates=passing + int(own_ok))
-        if friendly_mode and own_ok:
-            return ShieldResult(command, original, False, "admissible (no friendly command exists)", True, False,
-                                **common)
-        if passive_pick is not None:
-            return ShieldResult(self._as_command(commands, reached, passive_pick), original, True,
-                                f"{why}: closest admissible command (no friendly one)", True, False, **common)
-        return ShieldResult(stop, original, not _same(original, stop), f"{why}: none admissible, hardest braking",
-                            False, False if friendly_mode else None, **common)
+        return None, passive_pick, tested, passing, reached
+
+    def _search_compiled(self, observation: Observation, command: Command):
+        """:meth:`_search` compiled (:func:`viapath.safety.kernels.shield`: same candidates, order and chunks)."""
+        from viapath.safety import kernels
+
+        config, robot, people = self.config, observation.robot, observation.obstacles
+        limits_array, settings = self._settings_arrays()
+        state = _robot_array(robot)
+        reached, _, _, _, _, _, pick, passive_pick, tested, passing = kernels.shield(
+            state, limits_array, np.array([[command.speed_mps, command.turn_rate_radps]], dtype=np.float64), True,
+            int(config.samples), _CHUNK, _c(people.positions), _c(people.velocities), _c(people.radii_m),
+            _c(people.position_sigma_m), _c(people.velocity_sigma_mps), settings, config.mode == "passive-friendly",
+            bool(config.towards_only))
+        return (int(pick) if pick >= 0 else None, int(passive_pick) if passive_pick >= 0 else None, int(tested),
+                int(passing), reached)
 
     @staticmethod
-    def _as_command(commands: np.ndarray, reached: np.ndarray, index: int) -> Command:
+    def _as_command(reached: np.ndarray, index: int) -> Command:
         if index == 1:  # the hardest braking itself
             return Command.stop()
         return Command(float(reached[index, 0]), float(reached[index, 1]))
+
+
+def _robot_array(robot) -> np.ndarray:
+    """x, y, heading, speed, turn rate, radius: the compiled kernels' robot state."""
+    position = robot.position
+    return np.array([position[0], position[1], robot.heading_rad, robot.speed_mps, robot.turn_rate_radps,
+                     robot.radius_m], dtype=np.float64)
+
+
+def _c(array) -> np.ndarray:
+    return np.ascontiguousarray(array, dtype=np.float64)
 
 
 def _same(a: Command, b: Command) -> bool:
