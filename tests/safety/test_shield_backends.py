@@ -129,3 +129,23 @@ def test_backend_option_and_environment(monkeypatch):
     assert Shield(config=ShieldConfig()).backend == "numba"
     with pytest.raises(ValueError, match="backend"):
         ShieldConfig(backend="fortran")
+
+
+def test_auto_waits_for_the_compiled_shield_and_compile_kernels_builds_it(monkeypatch):
+    """A plain ``auto`` does not make a short run wait ~12 s for numba: before the kernels are compiled
+    (in this process or numba's disk cache) it runs the numpy reference; ``compile_kernels`` (what
+    ``viapath bench`` and the ROS 2 node call first) builds them, and an explicit choice compiles too."""
+    from viapath.safety import kernels
+    from viapath.safety.shield import compile_kernels
+
+    monkeypatch.delenv(ENVIRONMENT_VARIABLE, raising=False)
+    monkeypatch.setattr(kernels, "compiled", lambda: False)
+    assert Shield().backend == "numpy"
+    assert Shield(config=ShieldConfig(backend="numba")).backend == "numba"
+    monkeypatch.setenv(ENVIRONMENT_VARIABLE, "numba")
+    assert Shield().backend == "numba"
+    monkeypatch.undo()
+    monkeypatch.delenv(ENVIRONMENT_VARIABLE, raising=False)
+    assert compile_kernels() is True
+    assert kernels.compiled()  # in this process or in numba's disk cache
+    assert Shield().backend == "numba"

@@ -361,6 +361,9 @@ def run_bench(
     todo = [t for t in tasks if t.key not in done]
     started = time.perf_counter()
     if todo:
+        from viapath.safety.shield import compile_kernels
+
+        compile_kernels()  # once per machine (numba caches it), so that the workers' shields are compiled ones
         os.environ["VIAPATH_BENCH_PARENT_PID"] = str(os.getpid())
         parallel, close = _parallel(backend, workers, scheduler)
         try:

@@ -29,6 +29,7 @@ Choices:
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 from numba import njit
@@ -546,3 +547,13 @@ def shield(robot, limits, commands, search_window, samples, chunk, positions_obs
                     passive_pick = rows[i]
                     break
     return reached, admissible, friendly, meet, person, contact, -1, passive_pick, tested, passing
+
+
+def compiled() -> bool:
+    """Whether :func:`shield` is compiled in this process or in numba's on-disk cache, i.e. whether
+    using it now costs no compilation (about 12 s the first time on this machine)."""
+    if shield.signatures:
+        return True
+    cache_file = getattr(getattr(shield, "_cache", None), "_cache_file", None)
+    index = getattr(cache_file, "_index_path", None)
+    return index is not None and os.path.exists(index)

@@ -61,18 +61,24 @@ Speed (issue 16, docs/speed.md): the numpy code here is the reference; option ``
 | ``numpy`` | ``numba``, as the planner's, env ``VIAPATH_PLANNER_BACKEND`` overriding ``auto``) may
 run :meth:`Shield.evaluate` and the window search of :meth:`Shield.filter` on
 :mod:`viapath.safety.kernels` instead, the same arithmetic compiled (extra ``fast``), with the same
-verdicts (tests/safety/test_shield_backends.py); ``ShieldResult.backend`` says which ran.
+verdicts (tests/safety/test_shield_backends.py); ``ShieldResult.backend`` says which ran. The
+compiled shield takes about 12 s to compile, once per machine; ``auto`` uses it only once it is
+compiled (:func:`compile_kernels`, which ``viapath bench`` and the ROS 2 node call before they start),
+so that a first short ``viapath run`` does not wait for it (docs/speed.md). ``numba``, or the
+environment variable set to ``numba``, compiles it on first use.
 """
 
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
-from viapath.observation import Command, MotionLimits, Observation
+from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
+from viapath.planning.viapath.backend import ENVIRONMENT_VARIABLE, numba_available
 from viapath.planning.viapath.backend import resolve as resolve_backend
 from viapath.safety.options import check_options
 
@@ -235,7 +241,7 @@ class Shield:
         self.dt_s = float(dt_s)
         self.config = config or ShieldConfig()
         # numpy (the reference below) or numba (viapath.safety.kernels, the same arithmetic compiled).
-        self.backend = resolve_backend(self.config.backend)
+        self.backend = shield_backend(self.config.backend)
         self._kernel_settings: tuple | None = None  # the compiled test's constants (and what they were made of)
 
     # -- the test --------------------------------------------------------------------------------
@@ -542,6 +548,34 @@ def _robot_array(robot) -> np.ndarray:
 
 def _c(array) -> np.ndarray:
     return np.ascontiguousarray(array, dtype=np.float64)
+
+
+def shield_backend(choice: str) -> str:
+    """``numpy`` or ``numba`` for the option value: as the planner's (:func:`resolve_backend`), except
+    that a plain ``auto`` takes numba only once the compiled shield needs no compilation."""
+    backend = resolve_backend(choice)
+    explicit = choice != "auto" or os.environ.get(ENVIRONMENT_VARIABLE, "").strip().lower() not in ("", "auto")
+    if backend == "numba" and not explicit:
+        from viapath.safety import kernels
+
+        if not kernels.compiled():
+            return "numpy"
+    return backend
+
+
+def compile_kernels() -> bool:
+    """Compile the shield's kernels now if numba is there and they are not compiled yet (about 12 s,
+    once per machine: numba caches them on disk); True when the compiled shield is ready."""
+    if not numba_available():
+        return False
+    from viapath.safety import kernels
+
+    if not kernels.compiled():
+        shield = Shield(config=ShieldConfig(backend="numba"))
+        people = Obstacles(np.array([[1.0, 0.0]]), np.array([[-0.5, 0.0]]), np.array([0.25]))
+        observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.3, 0.0, 0.25), people)
+        shield.filter(observation, Command(0.5, 0.0))  # the planner's command fails: the search compiles too
+    return True
 
 
 def _same(a: Command, b: Command) -> bool:
