@@ -31,9 +31,9 @@ SHIELD_OPTIONS = OptionSet([
            minimum=2, maximum=101),
     Option("substep_s", 0.025, "longest sub-interval of the swept-disc test (a control period is split into "
            "equal ones)", "s", minimum=0.001, maximum=1.0),
-    Option("backend", "auto", "arithmetic of the shield's test: auto = compiled (numba, extra 'fast') when numba is "
-           "importable, else numpy (env VIAPATH_PLANNER_BACKEND overrides auto, as for the planner); the verdicts "
-           "are the same", choices=BACKENDS),
+    Option("backend", "auto", "arithmetic of the shield's test: auto = compiled (numba, extra 'fast') once it is "
+           "compiled (viapath bench and the ROS 2 node compile it, ~12 s once per machine), else numpy (env "
+           "VIAPATH_PLANNER_BACKEND overrides auto, as for the planner); the verdicts are the same", choices=BACKENDS),
 ], owner="shield")
 
 
