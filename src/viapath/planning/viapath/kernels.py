@@ -89,8 +89,8 @@ def legs_first_contact(starts, start_times, velocities, durations, obstacle_posi
                 continue
             if t0 + duration >= until:
                 full_growth = g * (until if math.isfinite(until) else 0.0)
-                late = _contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy, (radii[j] + extra_radii[k, j]) + full_growth,
-                                0.0, duration - cone_duration)
+                late = _contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy,
+                                (radii[j] + extra_radii[k, j]) + full_growth, 0.0, duration - cone_duration)
                 out[k, j] = late + cone_duration
             else:
                 out[k, j] = math.inf
