@@ -59,9 +59,9 @@ def test_per_obstacle_cap_equals_one_obstacle_at_a_time():
     assert np.isfinite(together).any() and np.isinf(together).any()
 
 
-def test_extra_radii_widen_each_leg_and_disc_pair_by_its_own_amount():
-    """``extra_radii_m`` (a braking envelope per leg and person) is the same as checking each pair alone
-    against a disc that much larger."""
+def test_leg_radii_widen_each_leg_by_its_own_amount():
+    """``leg_radii_m`` (a braking envelope per leg) is the same as checking each leg alone against
+    discs that much larger."""
     rng = np.random.default_rng(7)
     k, n = 60, 5
     starts = rng.uniform(-3, 3, (k, 2))
@@ -73,15 +73,13 @@ def test_extra_radii_widen_each_leg_and_disc_pair_by_its_own_amount():
     radii = rng.uniform(0.3, 0.7, n)
     growth = rng.uniform(0, 0.3, n)
     until = rng.uniform(0.5, 3.0, n)
-    extra = rng.uniform(0, 0.4, (k, n)) * (rng.uniform(size=(k, n)) < 0.5)
+    extra = rng.uniform(0, 0.4, k) * (rng.uniform(size=k) < 0.5)
     together = legs_first_contact(starts, start_times, velocities, durations, centres, obstacle_velocities, radii,
                                   growth, until, extra)
     for i in range(k):
-        for j in range(n):
-            alone = legs_first_contact(starts[i:i + 1], start_times[i:i + 1], velocities[i:i + 1], durations[i:i + 1],
-                                       centres[j:j + 1], obstacle_velocities[j:j + 1], radii[j:j + 1] + extra[i, j],
-                                       growth[j:j + 1], until[j:j + 1])
-            assert together[i, j] == alone[0, 0]
+        alone = legs_first_contact(starts[i:i + 1], start_times[i:i + 1], velocities[i:i + 1], durations[i:i + 1],
+                                   centres, obstacle_velocities, radii + extra[i], growth, until)
+        assert np.array_equal(together[i], alone[0])
     plain = legs_first_contact(starts, start_times, velocities, durations, centres, obstacle_velocities, radii,
                                growth, until)
     assert np.all(together <= plain) and np.any(together < plain)  # larger discs are met no later, some sooner

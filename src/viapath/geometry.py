@@ -139,18 +139,18 @@ def legs_first_contact(
     radii: np.ndarray,
     growth: np.ndarray | float = 0.0,
     growth_until_s: np.ndarray | float = np.inf,
-    extra_radii_m: np.ndarray | None = None,
+    leg_radii_m: np.ndarray | None = None,
 ) -> np.ndarray:
     """First contact time, measured from each leg's start, for K legs against N moving discs: (K, N).
 
     Obstacle j is at ``obstacle_positions[j] + obstacle_velocities[j] t`` with radius
     ``radii[j] + growth[j] min(t, growth_until_s[j])`` (t from the planning instant): a cone in x-y-t
     that turns into a cylinder at ``growth_until_s`` (a scalar or one time per obstacle). Leg k starts at ``starts[k]`` at time
-    ``start_times[k]`` and moves at ``velocities[k]`` for ``durations[k]``. ``extra_radii_m`` (K, N),
-    when given, is added to disc j's radius for leg k (what that leg must keep from it besides).
+    ``start_times[k]`` and moves at ``velocities[k]`` for ``durations[k]``. ``leg_radii_m`` (K,), when
+    given, is added to every disc's radius for leg k (what a leg at its speed must keep besides).
     """
-    if extra_radii_m is not None:
-        radii = np.asarray(radii, dtype=float)[None, :] + np.asarray(extra_radii_m, dtype=float)
+    if leg_radii_m is not None:
+        radii = np.asarray(radii, dtype=float)[None, :] + np.asarray(leg_radii_m, dtype=float)[:, None]
     t0 = np.asarray(start_times, dtype=float)[:, None]
     duration = np.asarray(durations, dtype=float)[:, None]
     growth = np.asarray(growth, dtype=float)

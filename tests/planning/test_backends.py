@@ -107,13 +107,13 @@ def test_kernels_match_reference_on_edge_cases():
     growth = np.array([0.0, 0.1, 2.0, 0.05, 0.0, 0.3, 1.0])
     with np.errstate(divide="ignore"):
         until = np.where(growth > 0, 0.15 / growth, np.inf)
-    envelope = rng.uniform(0.0, 0.3, (k, n)) * (rng.uniform(size=(k, n)) < 0.5)  # a braking envelope, some pairs
+    envelope = rng.uniform(0.0, 0.3, k) * (rng.uniform(size=k) < 0.5)  # a braking envelope, some legs
     for g, u, legs in ((growth, until, None), (np.zeros(n), np.full(n, np.inf), None),
                        (growth, np.full(n, np.inf), None), (growth, until, envelope)):
         expected = legs_first_contact(starts, times, velocities, durations, positions, obstacle_velocities, radii, g, u,
                                       legs)
         got = kernels.legs_first_contact(starts, times, velocities, durations, positions, obstacle_velocities,
-                                         radii, g, u, np.zeros((k, n)) if legs is None else legs)
+                                         radii, g, u, np.zeros(k) if legs is None else legs)
         assert np.array_equal(np.isinf(expected), np.isinf(got))
         assert np.allclose(expected, got, rtol=0.0, atol=1e-12)
         assert np.isfinite(expected).any() and np.isinf(expected).any()  # both kinds of legs are there

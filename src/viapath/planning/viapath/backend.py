@@ -59,17 +59,17 @@ class Backend:
     name: str  # numpy | numba
 
     def legs_first_contact(self, starts, start_times, velocities, durations, positions, velocities_obs, radii,
-                           growth, growth_until_s, extra_radii_m=None) -> np.ndarray:
+                           growth, growth_until_s, leg_radii_m=None) -> np.ndarray:
         if self.name == "numpy":
             return numpy_legs_first_contact(starts, start_times, velocities, durations, positions, velocities_obs,
-                                            radii, growth, growth_until_s, extra_radii_m)
+                                            radii, growth, growth_until_s, leg_radii_m)
         from viapath.planning.viapath import kernels
 
         n = len(positions)
-        extra = np.zeros((len(starts), n)) if extra_radii_m is None else _c(extra_radii_m)
+        legs = np.zeros(len(starts)) if leg_radii_m is None else _c(leg_radii_m)
         return kernels.legs_first_contact(
             _c(starts), _c(start_times), _c(velocities), _c(durations), _c(positions), _c(velocities_obs),
-            _per_obstacle(radii, n), _per_obstacle(growth, n), _per_obstacle(growth_until_s, n), extra)
+            _per_obstacle(radii, n), _per_obstacle(growth, n), _per_obstacle(growth_until_s, n), legs)
 
     def via_options(self, starts, start_times, speeds, positions, velocities, via_radii, growth, growth_until_s,
                     envelope_m, max_time_s):

@@ -115,13 +115,12 @@ class LegChecks:
             return np.full((len(starts), 0), np.inf)
         horizon_s = self.horizon_s if horizon_s is None else horizon_s
         checked = np.clip(horizon_s - start_times, 0.0, durations)
-        extra = None
+        envelope = None
         if keep_envelope and self.envelope_accel_mps2 > 0:
             envelope = self.envelope_m(np.hypot(velocities[:, 0], velocities[:, 1]))
-            extra = np.repeat(envelope[:, None], len(self.obstacles), axis=1)
         return self.backend.legs_first_contact(starts, start_times, velocities, checked, self.obstacles.positions,
                                                self.obstacles.velocities, self.check_radii, self.growth,
-                                               self.growth_until_s, extra)
+                                               self.growth_until_s, envelope)
 
     def legs_free(self, starts, start_times, velocities, durations) -> np.ndarray:
         return np.isinf(self.contact_times(starts, start_times, velocities, durations)).all(axis=1)

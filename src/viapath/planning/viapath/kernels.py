@@ -46,11 +46,11 @@ def _contact(px, py, vx, vy, radius, growth, duration):
 
 @njit(cache=True, nogil=True)
 def legs_first_contact(starts, start_times, velocities, durations, obstacle_positions, obstacle_velocities,
-                       radii, growth, growth_until_s, extra_radii):
+                       radii, growth, growth_until_s, leg_radii):
     """(K, N) first contact of K legs with N moving discs whose radius grows as a capped cone: the
     numba twin of :func:`viapath.geometry.legs_first_contact` (all arguments arrays, one value per
-    obstacle for ``radii``, ``growth`` and ``growth_until_s``; ``extra_radii`` (K, N) is added per leg
-    and obstacle: zeros leave the radii as they are, x + 0.0 being x)."""
+    obstacle for ``radii``, ``growth`` and ``growth_until_s``; ``leg_radii`` (K,) is added per leg:
+    zeros leave the radii as they are, x + 0.0 being x)."""
     k_count = starts.shape[0]
     n_count = obstacle_positions.shape[0]
     out = np.empty((k_count, n_count))
@@ -74,7 +74,7 @@ def legs_first_contact(starts, start_times, velocities, durations, obstacle_posi
             vy = velocities[k, 1] - ovy
             g = growth[j]
             if cylinder_only:
-                out[k, j] = _contact(px, py, vx, vy, (radii[j] + extra_radii[k, j]) + g * t0, g, duration)
+                out[k, j] = _contact(px, py, vx, vy, (radii[j] + leg_radii[k]) + g * t0, g, duration)
                 continue
             until = growth_until_s[j]
             cone_duration = until - t0
@@ -82,7 +82,7 @@ def legs_first_contact(starts, start_times, velocities, durations, obstacle_posi
                 cone_duration = 0.0
             if cone_duration > duration:
                 cone_duration = duration
-            early = _contact(px, py, vx, vy, (radii[j] + extra_radii[k, j]) + g * (t0 if t0 < until else until),
+            early = _contact(px, py, vx, vy, (radii[j] + leg_radii[k]) + g * (t0 if t0 < until else until),
                              g if until > t0 else 0.0, cone_duration)
             if math.isfinite(early):
                 out[k, j] = early
@@ -90,7 +90,7 @@ def legs_first_contact(starts, start_times, velocities, durations, obstacle_posi
             if t0 + duration >= until:
                 full_growth = g * (until if math.isfinite(until) else 0.0)
                 late = _contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy,
-                                (radii[j] + extra_radii[k, j]) + full_growth, 0.0, duration - cone_duration)
+                                (radii[j] + leg_radii[k]) + full_growth, 0.0, duration - cone_duration)
                 out[k, j] = late + cone_duration
             else:
                 out[k, j] = math.inf
