@@ -144,13 +144,17 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
     if positions.ndim != 2 or positions.shape[1] != 2:
         raise ObservationError(f"obstacles.positions: expected an (N, 2) array of [x, y] rows, found shape {positions.shape}")
     n = len(positions)
-    velocities = _array("obstacles.velocities", obstacles.velocities, (n, 2)).copy()
-    radii = _array("obstacles.radii_m", obstacles.radii_m, (n,)).copy()
-    position_sigma = _array("obstacles.position_sigma_m", obstacles.position_sigma_m, (n,)).copy()
-    velocity_sigma = _array("obstacles.velocity_sigma_mps", obstacles.velocity_sigma_mps, (n,)).copy()
+    velocities = _array("obstacles.velocities", obstacles.velocities, (n, 2))
+    radii = _array("obstacles.radii_m", obstacles.radii_m, (n,))
+    position_sigma = _array("obstacles.position_sigma_m", obstacles.position_sigma_m, (n,))
+    velocity_sigma = _array("obstacles.velocity_sigma_mps", obstacles.velocity_sigma_mps, (n,))
     ids = np.asarray(obstacles.ids)
     if ids.shape != (n,):
         raise ObservationError(f"obstacles.ids: expected shape ({n},), found shape {ids.shape}")
+    if not stop and _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config):
+        return Inspection(observation, [], [])  # the common case: nothing to stop for, nothing to repair
+    velocities, radii = velocities.copy(), radii.copy()
+    position_sigma, velocity_sigma = position_sigma.copy(), velocity_sigma.copy()
 
     bad_position = ~(np.isfinite(positions).all(axis=1) & (np.abs(positions) <= config.max_coordinate_m).all(axis=1))
     for i in np.flatnonzero(bad_position):
@@ -187,6 +191,22 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
         return Inspection(observation, [], [])
     repaired = Obstacles(positions, velocities, radii, position_sigma, velocity_sigma, ids)
     return Inspection(Observation(time_s, robot, repaired), [], repairs)
+
+
+def _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config: GuardConfig) -> bool:
+    """Whether no obstacle field needs a stop or a repair: the per-field checks below, as a few whole-array
+    reductions (an episode's every cycle comes here; the per-index loops run only when this is False).
+    A NaN fails every comparison (and ``max``/``min`` propagate it) and an infinity every bound, so
+    ``max ≤ bound`` and ``min ≥ 0`` also say "finite"; a speed is inf or NaN whenever a velocity part is."""
+    if len(positions) == 0:
+        return True
+    return bool(
+        np.abs(positions).max() <= config.max_coordinate_m
+        and np.hypot(velocities[:, 0], velocities[:, 1]).max() <= config.max_obstacle_speed_mps
+        and radii.min() >= 0 and radii.max() <= config.max_radius_m
+        and velocity_sigma.min() >= 0 and velocity_sigma.max() <= config.max_velocity_sigma_mps
+        and position_sigma.min() >= 0 and position_sigma.max() <= config.max_position_sigma_m
+    )
 
 
 def stopping_distance_m(speed_mps: float, limits: MotionLimits, config: GuardConfig = DEFAULT_CONFIG) -> float:

@@ -1,0 +1,58 @@
+"""The guard's whole-array check of the obstacles (``guard._obstacles_sound``, the common case of every
+cycle) decides exactly as its per-field checks: on observations with NaN, infinities, negative and
+too large values sprinkled in, the inspection with the shortcut equals the one without it."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings, strategies as st
+
+from viapath import guard
+from viapath.observation import Observation, Obstacles, RobotState
+
+_ODD = [np.nan, np.inf, -np.inf, -0.1, 0.0, 0.3, 0.6, 0.9, 1.2, 11.0, 2e6, -2e6]
+
+
+@st.composite
+def _observations(draw):
+    n = draw(st.integers(0, 4))
+    fields = {}
+    for name, shape, base in (("positions", (n, 2), 3.0), ("velocities", (n, 2), 1.0), ("radii", (n,), 0.3),
+                              ("position_sigma", (n,), 0.1), ("velocity_sigma", (n,), 0.1)):
+        values = np.full(shape, base) * np.array(draw(st.lists(st.floats(0.0, 1.0), min_size=int(np.prod(shape)),
+                                                              max_size=int(np.prod(shape))))).reshape(shape)
+        flat = values.reshape(-1)
+        for index in draw(st.lists(st.integers(0, max(0, flat.size - 1)), max_size=2)) if flat.size else []:
+            flat[index] = draw(st.sampled_from(_ODD))
+        fields[name] = values
+    obstacles = Obstacles(fields["positions"], fields["velocities"], fields["radii"], fields["position_sigma"],
+                          fields["velocity_sigma"])
+    speed = draw(st.sampled_from([0.2, 0.2, np.nan, 60.0]))
+    return Observation(0.0, RobotState(np.zeros(2), 0.0, speed, 0.0, 0.25), obstacles)
+
+
+@settings(max_examples=400, deadline=None, derandomize=True)
+@given(_observations())
+def test_shortcut_decides_as_the_per_field_checks(monkeypatch_observation):
+    fast = guard.inspect_observation(monkeypatch_observation)
+    original = guard._obstacles_sound
+    guard._obstacles_sound = lambda *args: False  # every observation through the per-field checks
+    try:
+        slow = guard.inspect_observation(monkeypatch_observation)
+    finally:
+        guard._obstacles_sound = original
+    assert fast.stop_reasons == slow.stop_reasons
+    assert fast.repairs == slow.repairs
+    assert (fast.observation is None) == (slow.observation is None)
+    if fast.observation is not None and not fast.repairs:
+        assert fast.observation is slow.observation  # nothing repaired: the observation itself, unchanged
+
+
+def test_sound_obstacles_take_the_shortcut():
+    obstacles = Obstacles(np.array([[1.0, 2.0]]), np.array([[0.3, 0.0]]), np.array([0.3]))
+    assert guard._obstacles_sound(obstacles.positions, obstacles.velocities, obstacles.radii_m,
+                                  obstacles.position_sigma_m, obstacles.velocity_sigma_mps, guard.DEFAULT_CONFIG)
+    for bad in (np.nan, np.inf, -1.0, 20.0):
+        assert not guard._obstacles_sound(obstacles.positions, obstacles.velocities, np.array([bad]),
+                                          obstacles.position_sigma_m, obstacles.velocity_sigma_mps,
+                                          guard.DEFAULT_CONFIG)
