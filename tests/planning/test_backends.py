@@ -254,3 +254,52 @@ def test_escape_scores_match_reference():
         assert np.argmax(expected) == np.argmax(got)
         overlapped += bool(np.any(np.hypot(*(positions - [1.0, 0.2]).T) < checks.check_radii))
     assert 5 < overlapped < 60  # both kinds of crowd came up
+
+
+@pytest.mark.parametrize("path", PATHS, ids=["straight", "corner", "zigzag"])
+def test_goal_legs_kernel_matches_reference(path):
+    """kernels.goal_legs (the whole LegChecks.goal_legs in one call) equals the numpy code bit for bit:
+    with and without the continuation past the subgoal, the braking envelope, a blocked subgoal's stop
+    short, a finite and an infinite horizon, people with and without uncertainty, and none."""
+    from dataclasses import replace
+
+    from viapath.planning.viapath.backend import NUMPY, Backend
+    from viapath.planning.viapath.checks import LegChecks
+
+    rng = np.random.default_rng(7)
+    compared = 0
+    for trial in range(60):
+        n = int(rng.integers(0, 9))
+        robot = RobotState(np.array([rng.uniform(-0.5, 3.0), rng.uniform(-1.3, 1.3)]), rng.uniform(-0.8, 0.8),
+                           rng.uniform(0.0, 0.5), 0.0)
+        positions = robot.position + rng.uniform(-4.0, 6.0, (n, 2))
+        velocities = rng.uniform(-1.2, 1.2, (n, 2))
+        uncertain = trial % 2 == 0
+        obstacles = Obstacles(positions, velocities, rng.uniform(0.2, 0.35, n),
+                              position_sigma_m=rng.uniform(0.0, 0.05, n) if uncertain else None,
+                              velocity_sigma_mps=rng.uniform(0.0, 0.1, n) if uncertain else None)
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend="numpy")
+        situation = planner.situation(Observation(0.0, robot, obstacles))
+        base = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25, NUMPY)
+        k = int(rng.integers(1, 12))
+        starts = robot.position + rng.uniform(-2.0, 3.0, (k, 2))
+        starts[0] = robot.position
+        times = rng.uniform(0.0, 6.0, k) * (rng.random(k) < 0.7)
+        speeds = rng.choice([0.1, 0.2, 0.3, 0.4, 0.5, 0.6], k)
+        continuations = [base.continuation, None]
+        if base.continuation is None and path.segment_lengths_m.size > 1:
+            continuations[0] = (path.segment_directions[1], path.segment_lengths_m[1])
+        for continuation in continuations:
+            for envelope in (0.0, 2.0):
+                for stop_short in (0.0, 0.6):
+                    checks = replace(base, continuation=continuation, envelope_accel_mps2=envelope,
+                                     envelope_period_s=0.1, max_accel_mps2=0.8, stop_short_m=stop_short)
+                    compiled = replace(checks, backend=Backend("numba"))
+                    for horizon in (None, np.inf, 3.0):
+                        expected = checks.goal_legs(starts, times, speeds, horizon)
+                        found = compiled.goal_legs(starts, times, speeds, horizon)
+                        for a, b in zip(expected, found):
+                            assert a.shape == b.shape and a.dtype == b.dtype
+                            np.testing.assert_array_equal(a, b)
+                        compared += 1
+    assert compared == 60 * 2 * 2 * 2 * 3

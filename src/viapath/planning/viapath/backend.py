@@ -8,7 +8,8 @@ Source: issue 16 (a compiled hot path, the numpy path stays the reference); docs
   whole benchmark can be run on the reference path without touching its scenario files.
 * A :class:`Backend` holds the hot functions, :meth:`legs_first_contact` (leg-against-people
   checks), :meth:`via_options` (via points of (node, obstacle) pairs), :meth:`legs_inside` and
-  :meth:`goal_legs_inside` (corridor checks), :meth:`track` (motion-limit roll-outs) and, for the
+  :meth:`goal_legs_inside` (corridor checks), :meth:`goal_legs` (all of a batch of legs to the subgoal:
+  contacts and corridor in one call), :meth:`track` (motion-limit roll-outs) and, for the
   escape, :meth:`corridor_excess` and :meth:`escape_contacts`, with the numpy signatures; the compiled ones get
   C-contiguous float64 arrays. The planner says in ``plan.extras["backend"]`` which one ran.
 """
@@ -105,6 +106,20 @@ class Backend:
                                                _c(np.broadcast_to(subgoal, (len(rest), 2))), float(spacing_m),
                                                float(tolerance_m))
         return inside
+
+    def goal_legs(self, checks, starts, start_times, speeds, horizon_s: float):
+        """:meth:`.checks.LegChecks.goal_legs` in one compiled call; None on the numpy path (the caller's own
+        code is the reference)."""
+        if self.name == "numpy":
+            return None
+        from viapath.planning.viapath import kernels
+
+        obstacles = checks.kernel_obstacles()
+        return kernels.goal_legs(_c(starts), _c(start_times), _c(speeds), _c(checks.subgoal),
+                                 float(checks.stop_short_m), float(horizon_s), checks.kernel_continuation(),
+                                 *obstacles, checks.kernel_envelope(), *_corridor(checks.path),
+                                 int(checks.subgoal_index), float(checks.corridor_check_spacing_m),
+                                 float(checks.corridor_tolerance_m))
 
     def corridor_excess(self, path, points) -> np.ndarray:
         if self.name == "numpy":

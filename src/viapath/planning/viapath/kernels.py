@@ -377,3 +377,112 @@ def escape_contacts(positions, times, obstacle_positions, obstacle_velocities, c
             if overlapping[j]:
                 column += 1
     return first, gap_min, gap_last
+
+
+@njit(cache=True, nogil=True)
+def goal_legs(starts, start_times, speeds, subgoal, stop_short_m, horizon_s, continuation, obstacle_positions,
+              obstacle_velocities, radii, growth, growth_until_s, envelope, segment_starts, segment_directions,
+              segment_lengths, half_widths, subgoal_index, spacing_m, tolerance_m):
+    """The numba twin of :meth:`viapath.planning.viapath.checks.LegChecks.goal_legs`, whole: the straight
+    legs from K nodes to the subgoal (with the continuation past an intermediate subgoal as K more legs),
+    their first contacts with the braking envelope kept, and the corridor check (:func:`goal_legs_inside`,
+    then :func:`legs_inside` for the legs it leaves open, as the backend does). One call instead of
+    three kernels and some thirty small array operations; called a few times every cycle.
+
+    ``continuation`` is (dx, dy, length) or empty (none); ``envelope`` is (person accel, period, robot
+    accel), accel 0 for none. Returns (directions (K, 2), lengths (K,), free (K,), contact (K, N))."""
+    k_count = starts.shape[0]
+    n_count = obstacle_positions.shape[0]
+    two = continuation.shape[0] == 3 and n_count > 0
+    legs = 2 * k_count if two else k_count
+    directions = np.empty((k_count, 2))
+    lengths = np.empty(k_count)
+    durations = np.empty(k_count)
+    leg_starts = np.empty((legs, 2))
+    leg_times = np.empty(legs)
+    leg_velocities = np.empty((legs, 2))
+    leg_durations = np.empty(legs)
+    for k in range(k_count):
+        ox = subgoal[0] - starts[k, 0]
+        oy = subgoal[1] - starts[k, 1]
+        length = math.hypot(ox, oy)
+        lengths[k] = length
+        divisor = length if length > 1e-12 else 1e-12
+        dx = ox / divisor
+        dy = oy / divisor
+        directions[k, 0] = dx
+        directions[k, 1] = dy
+        short = length - stop_short_m
+        duration = (short if short > 0.0 else 0.0) / speeds[k]
+        durations[k] = duration
+        leg_starts[k, 0] = starts[k, 0]
+        leg_starts[k, 1] = starts[k, 1]
+        leg_times[k] = start_times[k]
+        leg_velocities[k, 0] = dx * speeds[k]
+        leg_velocities[k, 1] = dy * speeds[k]
+        leg_durations[k] = duration
+        if two:
+            m = k_count + k
+            leg_starts[m, 0] = subgoal[0]
+            leg_starts[m, 1] = subgoal[1]
+            leg_times[m] = start_times[k] + duration
+            leg_velocities[m, 0] = continuation[0] * speeds[k]
+            leg_velocities[m, 1] = continuation[1] * speeds[k]
+            leg_durations[m] = continuation[2] / speeds[k]
+    contact = np.empty((k_count, n_count))
+    if n_count > 0:
+        checked = np.empty(legs)
+        leg_radii = np.empty(legs)
+        half_accel = 0.5 * envelope[0]
+        for m in range(legs):
+            checked[m] = _clip(horizon_s - leg_times[m], 0.0, leg_durations[m])
+            if envelope[0] > 0:
+                stop_s = envelope[1] + math.hypot(leg_velocities[m, 0], leg_velocities[m, 1]) / envelope[2]
+                leg_radii[m] = half_accel * (stop_s * stop_s)
+            else:
+                leg_radii[m] = 0.0
+        both = legs_first_contact(leg_starts, leg_times, leg_velocities, checked, obstacle_positions,
+                                  obstacle_velocities, radii, growth, growth_until_s, leg_radii)
+        for k in range(k_count):
+            for j in range(n_count):
+                value = both[k, j]
+                if two:
+                    later = both[k_count + k, j] + durations[k]
+                    if value != value or later != later:
+                        value = math.nan
+                    elif later < value:
+                        value = later
+                contact[k, j] = value
+    inside = goal_legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, starts,
+                              subgoal_index, tolerance_m)
+    rest = 0
+    for k in range(k_count):
+        if not inside[k]:
+            rest += 1
+    if rest:
+        rest_starts = np.empty((rest, 2))
+        rest_ends = np.empty((rest, 2))
+        index = np.empty(rest, np.int64)
+        r = 0
+        for k in range(k_count):
+            if not inside[k]:
+                rest_starts[r, 0] = starts[k, 0]
+                rest_starts[r, 1] = starts[k, 1]
+                rest_ends[r, 0] = subgoal[0]
+                rest_ends[r, 1] = subgoal[1]
+                index[r] = k
+                r += 1
+        rest_inside = legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, rest_starts,
+                                  rest_ends, spacing_m, tolerance_m)
+        for r in range(rest):
+            inside[index[r]] = rest_inside[r]
+    free = np.empty(k_count, np.bool_)
+    for k in range(k_count):
+        ok = inside[k]
+        if ok:
+            for j in range(n_count):
+                if not math.isinf(contact[k, j]):
+                    ok = False
+                    break
+        free[k] = ok
+    return directions, lengths, free, contact
