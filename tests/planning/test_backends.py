@@ -303,3 +303,92 @@ def test_goal_legs_kernel_matches_reference(path):
                             np.testing.assert_array_equal(a, b)
                         compared += 1
     assert compared == 60 * 2 * 2 * 2 * 3
+
+
+def _tree_inputs(case, backend, path=None):
+    """The arguments the planner hands candidates.grow in the first cycle of ``case``."""
+    from dataclasses import replace
+
+    from viapath.planning.viapath.backend import Backend
+    from viapath.planning.viapath.candidates import RootLegs
+    from viapath.planning.viapath.checks import LegChecks
+
+    path_index, _, _, _, _, _, _, shield, _ = case
+    planner = _planner(PATHS[path_index] if path is None else path, "numpy", shield)
+    inner = getattr(planner, "inner", planner)
+    observation = next(_observations(case))
+    situation = inner.situation(observation)
+    checks = LegChecks.of(situation, inner.config, inner.subgoals, inner.subgoal_policy, inner.robot_radius_m,
+                          Backend(backend))
+    if shield:
+        checks = replace(checks, envelope_accel_mps2=inner.shield.config.person_accel_mps2,
+                         envelope_period_s=inner.shield.dt_s, max_accel_mps2=inner.limits.max_accel_mps2)
+    speeds, nominal_index = inner.speed_set(observation.robot.speed_mps)
+    return checks, RootLegs.of(checks, speeds, nominal_index), inner._slow_checks(checks), inner.config
+
+
+@settings(max_examples=600, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(cases(), st.sampled_from([(3, 12), (3, 2), (1, 0), (5, 1)]))
+def test_tree_kernel_builds_the_same_candidates(case, limits):
+    """kernels.grow (the whole candidate tree in one call) builds the numpy grow's candidates exactly:
+    the same nodes in the same order (so the same ties), the same leaves and arrays, bit for bit; with
+    the default depth and root limit and with others (a root limit of 1-2 takes the sorted branch)."""
+    from viapath.planning.viapath.candidates import grow
+
+    depth, root_limit = limits
+    found = []
+    for backend in ("numpy", "numba"):
+        checks, roots, slow, config = _tree_inputs(case, backend)
+        config = config.replace(max_depth=depth, max_root_obstacles=root_limit)
+        found.append(grow(checks, roots, config, slow))
+    reference, compiled = found
+    assert (reference is None) == (compiled is None)
+    if reference is None:
+        return
+    for name in reference.nodes:
+        np.testing.assert_array_equal(reference.nodes[name], compiled.nodes[name], err_msg=name)
+    for name in ("leaves", "total_length_m", "speed_mps", "slow_s", "slow_speed_mps", "first_direction", "ways"):
+        np.testing.assert_array_equal(getattr(reference, name), getattr(compiled, name), err_msg=name)
+
+
+U_TURN = DesignatedPath([[0.0, 0.0], [3.0, 0.0], [3.0, 3.0], [0.0, 3.0]], half_width_m=0.8)
+
+
+@pytest.mark.parametrize("path_index", [1, 3], ids=["corner", "u-turn"])
+def test_tree_kernel_builds_the_same_corner_candidates(path_index):
+    """The same with the subgoal past a corner of the path (a blocked subgoal given up, or the robot pushed
+    back): the straight leg cuts the corridor and the path's corners become via points (_corner_nodes),
+    at every speed, each chained on from the root of its speed."""
+    from dataclasses import replace
+
+    from viapath.planning.viapath.backend import Backend
+    from viapath.planning.viapath.candidates import CORNER, RootLegs, grow
+
+    path = PATHS[path_index] if path_index < len(PATHS) else U_TURN
+    last = 2  # the subgoal past the first corner (on the U-turn, another segment follows)
+    rng = np.random.default_rng(11)
+    corner_nodes = 0
+    for trial in range(150):
+        n = int(rng.integers(0, 6))
+        # Where the straight leg to the last waypoint cuts the corridor: near the start of either path.
+        robot = np.array([rng.uniform(-0.3, 1.0), rng.uniform(-0.7, 0.7)])
+        case = (path_index, (robot[0], robot[1], rng.uniform(-0.5, 0.5), rng.uniform(0.0, 0.4), 0.0),
+                robot + rng.uniform(-3.0, 5.0, (n, 2)), rng.uniform(-1.0, 1.0, (n, 2)), rng.uniform(0.2, 0.35, n),
+                None, None, bool(trial % 2), np.zeros((n, 2)))
+        found = []
+        for backend in ("numpy", "numba"):
+            checks, _, slow, config = _tree_inputs(case, backend, path)
+            checks = replace(checks, subgoal=path.waypoints[last].copy(), subgoal_index=last, continuation=None)
+            slow = replace(slow, subgoal=checks.subgoal, subgoal_index=last, continuation=None, backend=Backend(backend))
+            roots = RootLegs.of(checks, np.array([0.1, 0.2, 0.3, 0.5]), 1)
+            found.append(grow(checks, roots, config, slow))
+        reference, compiled = found
+        assert (reference is None) == (compiled is None)
+        if reference is None:
+            continue
+        for name in reference.nodes:
+            np.testing.assert_array_equal(reference.nodes[name], compiled.nodes[name], err_msg=name)
+        np.testing.assert_array_equal(reference.leaves, compiled.leaves)
+        np.testing.assert_array_equal(reference.total_length_m, compiled.total_length_m)
+        corner_nodes += int(np.sum(reference.nodes["way"][:, 0] == CORNER))
+    assert corner_nodes > 50  # the corners were there to compare

@@ -9,7 +9,7 @@ Source: issue 16 (a compiled hot path, the numpy path stays the reference); docs
 * A :class:`Backend` holds the hot functions, :meth:`legs_first_contact` (leg-against-people
   checks), :meth:`via_options` (via points of (node, obstacle) pairs), :meth:`legs_inside` and
   :meth:`goal_legs_inside` (corridor checks), :meth:`goal_legs` (all of a batch of legs to the subgoal:
-  contacts and corridor in one call), :meth:`track` (motion-limit roll-outs) and, for the
+  contacts and corridor in one call), :meth:`grow` (the whole candidate tree), :meth:`track` (motion-limit roll-outs) and, for the
   escape, :meth:`corridor_excess` and :meth:`escape_contacts`, with the numpy signatures; the compiled ones get
   C-contiguous float64 arrays. The planner says in ``plan.extras["backend"]`` which one ran.
 """
@@ -120,6 +120,30 @@ class Backend:
                                  *obstacles, checks.kernel_envelope(), *_corridor(checks.path),
                                  int(checks.subgoal_index), float(checks.corridor_check_spacing_m),
                                  float(checks.corridor_tolerance_m))
+
+    def grow(self, checks, slow_checks, roots, config):
+        """:func:`.candidates.grow`'s whole candidate tree in one compiled call: the node store (floats
+        (M, 10), integers (M, 5), columns as in :mod:`.kernels`); None on the numpy path (the reference)."""
+        if self.name == "numpy":
+            return None
+        from viapath.planning.viapath import kernels
+
+        positions, velocities, radii, growth, until = checks.kernel_obstacles()
+        _, _, slow_radii, slow_growth, slow_until = slow_checks.kernel_obstacles()
+        path = checks.path
+        index = int(checks.subgoal_index)
+        # The robot's segment matters only when a corner can lie between it and the subgoal.
+        segment = int(path.project(checks.position)[0]) if index >= 2 else 0
+        slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
+        return kernels.grow(
+            _c(checks.position), _c(checks.subgoal), _c(roots.speeds), int(roots.nominal_index), _c(roots.directions),
+            _c(roots.lengths), np.ascontiguousarray(roots.free, dtype=np.bool_), _c(roots.contact), positions,
+            velocities, radii, growth, until, _per_obstacle(checks.via_radii, len(positions)),
+            np.ascontiguousarray(checks.obstacles.ids, dtype=np.int64), slow_radii, slow_growth, slow_until,
+            slow_times, bool(len(slow_times)), float(checks.stop_short_m), float(checks.horizon_s),
+            checks.kernel_continuation(), checks.kernel_envelope(), *_corridor(path), _c(path.waypoints), segment,
+            index, float(checks.corridor_check_spacing_m), float(checks.corridor_tolerance_m), int(config.max_depth),
+            int(config.max_root_obstacles))
 
     def corridor_excess(self, path, points) -> np.ndarray:
         if self.name == "numpy":
