@@ -43,6 +43,7 @@ not an error: the command check brakes from it.
 
 from __future__ import annotations
 
+import contextvars
 import functools
 import math
 from dataclasses import dataclass, field
@@ -288,6 +289,11 @@ def _stop_decision(planner, observation: Observation, status: str, reasons: list
     return Decision(Command.stop(), plan)
 
 
+#: The observation the innermost running guarded ``plan`` was handed after its inspection, and the
+#: configuration it was inspected with (per thread and task).
+_INSPECTED: contextvars.ContextVar = contextvars.ContextVar("viapath_guard_inspected", default=None)
+
+
 def guard_plan(plan: Callable) -> Callable:
     """Wrap a planner's ``plan(self, observation)`` with the checks of this module (idempotent; a
     ``plan`` that calls ``super().plan`` is guarded once, at the outside)."""
@@ -299,13 +305,22 @@ def guard_plan(plan: Callable) -> Callable:
         if getattr(self, "_guard_active", False):
             return plan(self, observation, *args, **kwargs)
         config = getattr(self, "guard_config", DEFAULT_CONFIG)
-        inspection = inspect_observation(observation, config)
+        checked = _INSPECTED.get()
+        if checked is not None and checked[0] is observation and checked[1] == config:
+            # A planner inside another guarded one (the shield's): this very observation came out of the
+            # outer guard's inspection with the same configuration, and an inspected (or repaired)
+            # observation passes again with nothing to stop for or repair.
+            inspection = Inspection(observation, [], [])
+        else:
+            inspection = inspect_observation(observation, config)
         if inspection.observation is None:
             return _stop_decision(self, observation, "guard-stop", inspection.stop_reasons + inspection.repairs)
         self._guard_active = True
+        token = _INSPECTED.set((inspection.observation, config))
         try:
             decision = plan(self, inspection.observation, *args, **kwargs)
         finally:
+            _INSPECTED.reset(token)
             self._guard_active = False
         limits = getattr(self, "limits", None) or MotionLimits()
         radius = max(float(getattr(self, "robot_radius_m", 0.0) or 0.0), float(observation.robot.radius_m))

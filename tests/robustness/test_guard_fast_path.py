@@ -56,3 +56,47 @@ def test_sound_obstacles_take_the_shortcut():
         assert not guard._obstacles_sound(obstacles.positions, obstacles.velocities, np.array([bad]),
                                           obstacles.position_sigma_m, obstacles.velocity_sigma_mps,
                                           guard.DEFAULT_CONFIG)
+
+
+def test_a_planner_inside_a_guarded_one_is_not_inspected_again(monkeypatch):
+    """The shield's planner gets the observation the shield's guard already inspected: it is not
+    inspected a second time (same configuration), and the decisions (repairs reported included) are
+    those of two inspections."""
+    from viapath import DesignatedPath
+    from viapath.planning import make_planner
+    from viapath.safety.shielded import ShieldedPlanner
+
+    path = DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0)
+    observations = [Observation(0.1 * k, RobotState(np.array([0.1 * k, 0.0]), 0.0, 0.2, 0.0, 0.25),
+                                Obstacles(np.array([[3.0, 0.1 * k], [2.0, 1.0]]),
+                                          np.array([[-0.3, 0.0], [np.nan if k == 2 else 0.0, -0.2]]),
+                                          np.array([0.3, 0.3]))) for k in range(4)]  # cycle 2: a repair
+    calls = []
+    original = guard.inspect_observation
+    monkeypatch.setattr(guard, "inspect_observation", lambda *a, **k: calls.append(1) or original(*a, **k))
+
+    def decisions():
+        planner = ShieldedPlanner(make_planner("viapath", path, nominal_speed_mps=0.2))
+        return [planner.plan(o) for o in observations]
+
+    once = decisions()
+    assert len(calls) == len(observations)
+
+    class NeverInspected:  # the marker switched off: every guarded plan inspects
+        def get(self):
+            return None
+
+        def set(self, value):
+            return None
+
+        def reset(self, token):
+            return None
+
+    monkeypatch.setattr(guard, "_INSPECTED", NeverInspected())
+    calls.clear()
+    twice = decisions()
+    assert len(calls) == 2 * len(observations)
+    for a, b in zip(once, twice):
+        assert a.command == b.command and a.plan.status == b.plan.status
+        assert a.plan.extras.get("guard") == b.plan.extras.get("guard")
+    assert any(d.plan.extras.get("guard") for d in once)  # the repair was there to compare

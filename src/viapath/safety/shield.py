@@ -72,7 +72,7 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -439,7 +439,11 @@ class Shield:
 
     def filter(self, observation: Observation, command: Command) -> ShieldResult:
         """What goes to the base instead of ``command`` (the planner's), and why; says which backend ran."""
-        return replace(self._filter(observation, command), backend=self.backend)
+        result = self._filter(observation, command)
+        # The result was made just now and is seen by no one yet: set its backend in place rather than copy
+        # all its fields with dataclasses.replace (every cycle).
+        object.__setattr__(result, "backend", self.backend)
+        return result
 
     def _filter(self, observation: Observation, command: Command) -> ShieldResult:
         config = self.config

@@ -159,10 +159,9 @@ class LegChecks:
         cached = self.__dict__.get("_kernel_obstacles")
         if cached is None:
             n = len(self.obstacles)
-            cached = tuple(np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=np.float64), shape))
-                           for a, shape in ((self.obstacles.positions, (n, 2)), (self.obstacles.velocities, (n, 2)),
-                                            (self.check_radii, (n,)), (self.growth, (n,)),
-                                            (self.growth_until_s, (n,))))
+            cached = tuple(_contiguous(a, shape) for a, shape in (
+                (self.obstacles.positions, (n, 2)), (self.obstacles.velocities, (n, 2)), (self.check_radii, (n,)),
+                (self.growth, (n,)), (self.growth_until_s, (n,))))
             self.__dict__["_kernel_obstacles"] = cached
         return cached
 
@@ -228,3 +227,11 @@ class LegChecks:
             rest = np.flatnonzero(~inside)
             inside[rest] = self.legs_inside(starts[rest], np.broadcast_to(self.subgoal, (len(rest), 2)))
         return inside
+
+
+def _contiguous(values, shape: tuple) -> np.ndarray:
+    """``values`` as a C-contiguous float64 array of ``shape`` (a scalar or a row is repeated)."""
+    array = np.asarray(values, dtype=np.float64)
+    if array.shape != shape:
+        array = np.broadcast_to(array, shape)
+    return np.ascontiguousarray(array)
