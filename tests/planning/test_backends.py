@@ -392,3 +392,40 @@ def test_tree_kernel_builds_the_same_corner_candidates(path_index):
         np.testing.assert_array_equal(reference.total_length_m, compiled.total_length_m)
         corner_nodes += int(np.sum(reference.nodes["way"][:, 0] == CORNER))
     assert corner_nodes > 50  # the corners were there to compare
+
+
+def test_whole_step_kernels_wait_for_their_compilation(monkeypatch):
+    """``auto`` takes the whole-step kernels (goal_legs, grow: seconds to compile the first time) only once
+    they are compiled; an explicit numba takes them at once. Either way the decisions are the same."""
+    from viapath.planning.viapath import backend
+
+    monkeypatch.delenv(ENVIRONMENT_VARIABLE, raising=False)
+    monkeypatch.setattr(backend, "whole_steps_compiled", lambda: False)
+    assert backend.backend_for("auto") == backend.Backend("numba", whole_steps=False)
+    assert backend.backend_for("numba").whole_steps
+    monkeypatch.setenv(ENVIRONMENT_VARIABLE, "numba")
+    assert backend.backend_for("auto").whole_steps
+    monkeypatch.setenv(ENVIRONMENT_VARIABLE, "numpy")
+    assert not backend.backend_for("auto").whole_steps
+    monkeypatch.delenv(ENVIRONMENT_VARIABLE)
+    monkeypatch.setattr(backend, "whole_steps_compiled", lambda: True)
+    assert backend.backend_for("auto").whole_steps
+    assert backend.compile_kernels()
+
+
+@settings(max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(cases())
+def test_numba_without_whole_steps_decides_as_numpy(case):
+    """The compiled path before its whole-step kernels are compiled (small kernels only) decides as well."""
+    from viapath.planning.viapath.backend import Backend
+
+    path = PATHS[case[0]]
+    reference, compiled = _planner(path, "numpy", case[7]), _planner(path, "numba", case[7])
+    inner = getattr(compiled, "inner", compiled)
+    inner.backend = Backend("numba", whole_steps=False)
+    for observation in _observations(case):
+        a, b = reference.plan(observation), compiled.plan(observation)
+        assert a.plan.status == b.plan.status
+        assert getattr(reference, "inner", reference)._previous == inner._previous
+        assert abs(a.command.speed_mps - b.command.speed_mps) <= 1e-9
+        assert abs(a.command.turn_rate_radps - b.command.turn_rate_radps) <= 1e-9

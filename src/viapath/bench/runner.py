@@ -386,9 +386,11 @@ def run_bench(
     todo = [t for t in tasks if t.key not in done]
     started = time.perf_counter()
     if todo:
+        from viapath.planning.viapath.backend import compile_kernels as compile_planner_kernels
         from viapath.safety.shield import compile_kernels
 
         compile_kernels()  # once per machine (numba caches it), so that the workers' shields are compiled ones
+        compile_planner_kernels()  # and the planner's whole-step kernels (candidate tree, goal legs)
         os.environ["VIAPATH_BENCH_PARENT_PID"] = str(os.getpid())
         parallel, close = _parallel(backend, workers, scheduler)
         try:

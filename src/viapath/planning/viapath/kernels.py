@@ -507,6 +507,10 @@ _PARENT, _WAY0, _WAY1, _WAY2, _LEAF = 0, 1, 2, 3, 4
 _STRAIGHT, _SLOW, _CORNER = -1, -2, -3  # candidates.STRAIGHT, SLOW, CORNER
 _SIDES = (1, -1, 1, -1)  # geometry.VIA_SIDES
 _ROOTS = (0, 0, 1, 1)  # geometry.VIA_ROOTS
+# The same as int64 values, not literals: every call of _add then has one signature (literal arguments
+# would each compile a variant of it, seconds of the first run).
+_NONE, _ZERO = np.int64(-1), np.int64(0)
+_I_STRAIGHT, _I_SLOW, _I_CORNER = np.int64(_STRAIGHT), np.int64(_SLOW), np.int64(_CORNER)
 
 
 @njit(cache=True, nogil=True)
@@ -578,10 +582,10 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
     n_count = obstacle_positions.shape[0]
     nf = np.empty((4 * s_count + 32, 10))
     ni = np.empty((4 * s_count + 32, 5), np.int64)
-    m = 0
+    m = _ZERO
     for i in range(s_count):  # the roots: one per speed, at the robot, now
-        nf, ni, m = _add(nf, ni, m, position[0], position[1], 0.0, speeds[i], -1, 0.0, root_directions[i, 0],
-                         root_directions[i, 1], _STRAIGHT, 0, 0, 0.0, 0.0)
+        nf, ni, m = _add(nf, ni, m, position[0], position[1], 0.0, speeds[i], _NONE, 0.0, root_directions[i, 0],
+                         root_directions[i, 1], _I_STRAIGHT, _ZERO, _ZERO, 0.0, 0.0)
         if root_free[i]:
             ni[m - 1, _LEAF] = 1
             nf[m - 1, _GOAL] = root_lengths[i]
@@ -662,8 +666,8 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                 segment_lengths, half_widths, subgoal_index, spacing_m, tolerance_m)
             for q in range(legs):
                 if goal_free[q]:
-                    nf, ni, m = _add(nf, ni, m, ends[q, 0], ends[q, 1], times[q], after[q], -1, slow_v[q] * times[q],
-                                     dx, dy, _SLOW, 0, 0, times[q], slow_v[q])
+                    nf, ni, m = _add(nf, ni, m, ends[q, 0], ends[q, 1], times[q], after[q], _NONE, slow_v[q] * times[q],
+                                     dx, dy, _I_SLOW, _ZERO, _ZERO, times[q], slow_v[q])
                     ni[m - 1, _LEAF] = 1
                     nf[m - 1, _GOAL] = lengths[q]
 
@@ -712,12 +716,12 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                                  spacing_m, tolerance_m)
             for q in range(legs):
                 if good[q] and inside[q]:
-                    root = 0  # np.searchsorted(speeds, speed): the root node of that speed
+                    root = _ZERO  # np.searchsorted(speeds, speed): the root node of that speed
                     while root < s_count and speeds[root] < speed_of[q]:
                         root += 1
                     nf, ni, m = _add(nf, ni, m, targets[q, 0], targets[q, 1], durations[q], speed_of[q], root,
-                                     lengths[q], directions[q, 0], directions[q, 1], _CORNER, 0, corner_of[q], 0.0,
-                                     0.0)
+                                     lengths[q], directions[q, 0], directions[q, 1], _I_CORNER, _ZERO, corner_of[q],
+                                     0.0, 0.0)
 
         # The (node, obstacle) pairs to branch on: at the root every obstacle the leg hits, earliest first
         # (at most max_root_obstacles, when there are more pairs than that; _root_pairs), deeper the first hit.
