@@ -63,3 +63,45 @@ def test_shortcut_keeps_the_shape_errors():
         Obstacles(np.zeros((3, 2)), np.zeros((3, 2)), np.zeros(2))
     with pytest.raises(ObservationError, match="ids"):
         Obstacles(np.zeros((3, 2)), np.zeros((3, 2)), np.zeros(3), ids=np.zeros(2, dtype=int))
+
+
+@settings(max_examples=200, deadline=None, derandomize=True)
+@given(_fields())
+def test_fresh_arrays_make_the_obstacles_the_constructor_makes(fields):
+    """A perception's fresh arrays are kept as they are (no copy) when well formed: the same values,
+    dtypes and shapes as the constructor's; anything else goes through the constructor."""
+    positions, velocities, radii, sigma, ids = fields
+    n = len(positions)
+    sigma = np.full(n, 0.05) if sigma is None else sigma
+    candidates = [(positions, velocities, radii, sigma, sigma, ids),
+                  (np.ascontiguousarray(positions), velocities, np.broadcast_to(np.asarray(radii, float), (n,)).copy(),
+                   np.broadcast_to(np.asarray(sigma, float), (n,)).copy(), np.zeros(n), np.arange(n))]
+    for args in candidates:
+        fresh, built = Obstacles.of_fresh_arrays(*args), Obstacles(*args)
+        for name in ("positions", "velocities", "radii_m", "position_sigma_m", "velocity_sigma_mps", "ids"):
+            a, b = getattr(fresh, name), getattr(built, name)
+            assert a.dtype == b.dtype and a.shape == b.shape, name
+            np.testing.assert_array_equal(a, b, err_msg=name)
+    kept = Obstacles.of_fresh_arrays(*candidates[1])
+    assert kept.positions is candidates[1][0]  # well formed: handed over, not copied
+
+
+def test_oracle_observes_as_before():
+    from viapath.perception.base import WorldSnapshot
+    from viapath.perception.oracle import OraclePerception
+
+    world = WorldSnapshot(0.0, np.zeros(3), 0.25, np.array([[1.0, 2.0], [np.nan, np.nan], [3.0, -1.0]]),
+                          np.array([[0.1, 0.0], [0.0, 0.0], [-0.3, 0.2]]), np.array([0.3, 0.25, 0.35]))
+    for noise in (0.0, 0.05):
+        oracle = OraclePerception(noise, noise)
+        oracle.rng = np.random.default_rng(1)
+        seen = oracle.observe(world)
+        rng = np.random.default_rng(1)
+        positions = world.obstacle_positions[[0, 2]] + (rng.normal(0.0, noise, (2, 2)) if noise else 0.0)
+        velocities = world.obstacle_velocities[[0, 2]] + (rng.normal(0.0, noise, (2, 2)) if noise else 0.0)
+        expected = Obstacles(positions, velocities, np.array([0.3, 0.35]), np.full(2, noise), np.full(2, noise),
+                             np.array([0, 2]))
+        for name in ("positions", "velocities", "radii_m", "position_sigma_m", "velocity_sigma_mps", "ids"):
+            a, b = getattr(seen, name), getattr(expected, name)
+            assert a.dtype == b.dtype
+            np.testing.assert_array_equal(a, b, err_msg=name)

@@ -125,7 +125,9 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
     if not math.isfinite(time_s):
         stop.append(f"time_s: expected a finite number, found {time_s:g}")
     position = _array("robot.position", robot.position, (2,))
-    if not (np.isfinite(position).all() and np.all(np.abs(position) <= config.max_coordinate_m)):
+    x, y = float(position[0]), float(position[1])  # a NaN fails the bound too; an inf is not finite
+    if not (math.isfinite(x) and math.isfinite(y) and abs(x) <= config.max_coordinate_m
+            and abs(y) <= config.max_coordinate_m):
         stop.append(f"robot.position: expected 2 finite numbers within ±{config.max_coordinate_m:g} m, "
                     f"found {_show(position)}")
     for name, bound, unit in (("heading_rad", config.max_heading_rad, "rad"),

@@ -115,6 +115,26 @@ class Obstacles:
             ids = ids.astype(int)
         object.__setattr__(self, "ids", ids)
 
+    @classmethod
+    def of_fresh_arrays(cls, positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids) -> "Obstacles":
+        """Obstacles from arrays made for them and used by no one else (a perception's estimates): when
+        they are well formed (float64 (N, 2), (N, 2), (N,), (N,), (N,) and (N,) integer ids) they are
+        kept as they are instead of copied; anything else goes through the checks of the constructor."""
+        n = len(positions) if type(positions) is np.ndarray and positions.ndim == 2 else -1
+        if (n >= 0 and positions.dtype == np.float64 and positions.shape == (n, 2)
+                and isinstance(ids, np.ndarray) and ids.shape == (n,) and ids.dtype == np.int64
+                and all(type(a) is np.ndarray and a.dtype == np.float64 and a.shape == shape
+                        for a, shape in ((velocities, (n, 2)), (radii_m, (n,)), (position_sigma_m, (n,)),
+                                         (velocity_sigma_mps, (n,))))):
+            obstacles = object.__new__(cls)
+            ids = ids.astype(float).astype(int)  # as the constructor: through float (ids past 2**53 round)
+            for name, value in (("positions", positions), ("velocities", velocities), ("radii_m", radii_m),
+                                ("position_sigma_m", position_sigma_m), ("velocity_sigma_mps", velocity_sigma_mps),
+                                ("ids", ids)):
+                object.__setattr__(obstacles, name, value)
+            return obstacles
+        return cls(positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids)
+
     def _set_well_formed(self) -> bool:
         """The common case (perception hands float64 arrays of the right shapes, integer ids): the same
         copies as the general path below, without its conversions and checks; False for anything else."""
