@@ -429,3 +429,24 @@ def test_numba_without_whole_steps_decides_as_numpy(case):
         assert getattr(reference, "inner", reference)._previous == inner._previous
         assert abs(a.command.speed_mps - b.command.speed_mps) <= 1e-9
         assert abs(a.command.turn_rate_radps - b.command.turn_rate_radps) <= 1e-9
+
+
+@settings(max_examples=300, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(cases())
+def test_numba_decides_as_numpy_with_the_way_back(case):
+    """The same with the way back to the path on (return_lookahead_m, the close-to-path preset's 0.5 m):
+    its leg to a path point goes through the compiled goal_legs too."""
+    path = PATHS[case[0]]
+    planners = []
+    for backend in ("numpy", "numba"):
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend, return_lookahead_m=0.5,
+                               k2=0.01)
+        planners.append(ShieldedPlanner(planner) if case[7] else planner)
+    reference, compiled = planners
+    for observation in _observations(case):
+        a, b = reference.plan(observation), compiled.plan(observation)
+        assert a.plan.status == b.plan.status
+        assert a.plan.extras.get("way_back") == b.plan.extras.get("way_back")
+        assert getattr(reference, "inner", reference)._previous == getattr(compiled, "inner", compiled)._previous
+        assert abs(a.command.speed_mps - b.command.speed_mps) <= 1e-9
+        assert abs(a.command.turn_rate_radps - b.command.turn_rate_radps) <= 1e-9
