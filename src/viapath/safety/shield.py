@@ -255,7 +255,7 @@ class Shield:
         ``person`` (row of the first person met, -1 none) and ``achieved`` (v, ω) of the first period.
         A person already touching the robot makes every command inadmissible (``contact`` is True)."""
         verdicts = self._verdicts
-        if verdicts is not None and commands.shape == (1, 2):
+        if verdicts is not None and np.shape(commands) == (1, 2):
             key = (id(observation), np.asarray(commands, dtype=np.float64).tobytes())  # bit for bit (-0.0 too)
             known = verdicts.get(key)
             if known is not None and known[0] is observation:
