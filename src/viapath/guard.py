@@ -51,7 +51,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from viapath.kinematics import UnicycleState, step
+from viapath.kinematics import _arc, _clip
 from viapath.observation import (Command, Decision, MotionLimits, Observation, ObservationError, Obstacles, Plan,
                                  RobotState)
 
@@ -224,20 +224,34 @@ def braking_path(robot: RobotState, command: Command, limits: MotionLimits, peri
     """Positions (S, 2) of the robot holding ``command`` for ``period_s`` and then commanded to stop
     until at rest, stepped by :func:`viapath.kinematics.step` (the drive's acceleration limits), from
     the first sample on (the current position excluded)."""
+    # kinematics.step's arithmetic on plain floats (no state objects per step): limit_command's clipped
+    # command and ramps, then the exact arc; the same numbers (tests/robustness/test_guard_fast_path.py).
     dt = period_s / samples_per_period
-    state = UnicycleState(float(robot.position[0]), float(robot.position[1]), float(robot.heading_rad),
-                          float(robot.speed_mps), float(robot.turn_rate_radps))
+    x, y = float(robot.position[0]), float(robot.position[1])
+    heading, speed, turn = float(robot.heading_rad), float(robot.speed_mps), float(robot.turn_rate_radps)
+    dv = limits.max_accel_mps2 * dt
+    dw = limits.max_turn_accel_radps2 * dt
+    v_cmd, w_cmd = float(command.speed_mps), float(command.turn_rate_radps)
+    if not (math.isfinite(v_cmd) and math.isfinite(w_cmd)):
+        v_cmd, w_cmd = 0.0, 0.0
+    v_cmd = _clip(v_cmd, 0.0, limits.max_speed_mps)
+    w_cmd = _clip(w_cmd, -limits.max_turn_rate_radps, limits.max_turn_rate_radps)
     points = []
     for _ in range(samples_per_period):
-        state = step(state, command, limits, dt)
-        points.append((state.x, state.y))
-    stop = Command.stop()
-    top = max(limits.max_speed_mps, abs(state.speed_mps))
+        speed = speed + _clip(v_cmd - speed, -dv, dv)
+        turn = turn + _clip(w_cmd - turn, -dw, dw)
+        x, y, heading = _arc(x, y, heading, speed, turn, dt)
+        points.append((x, y))
+    v_stop = _clip(0.0, 0.0, limits.max_speed_mps)  # the stop command, limited as step limits it
+    w_stop = _clip(0.0, -limits.max_turn_rate_radps, limits.max_turn_rate_radps)
+    top = max(limits.max_speed_mps, abs(speed))
     for _ in range(min(1000, int(math.ceil(top / max(limits.max_accel_mps2 * dt, 1e-9))) + 2)):
-        if state.speed_mps <= 1e-12:
+        if speed <= 1e-12:
             break
-        state = step(state, stop, limits, dt)
-        points.append((state.x, state.y))
+        speed = speed + _clip(v_stop - speed, -dv, dv)
+        turn = turn + _clip(w_stop - turn, -dw, dw)
+        x, y, heading = _arc(x, y, heading, speed, turn, dt)
+        points.append((x, y))
     return np.array(points)
 
 

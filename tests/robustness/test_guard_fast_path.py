@@ -100,3 +100,37 @@ def test_a_planner_inside_a_guarded_one_is_not_inspected_again(monkeypatch):
         assert a.command == b.command and a.plan.status == b.plan.status
         assert a.plan.extras.get("guard") == b.plan.extras.get("guard")
     assert any(d.plan.extras.get("guard") for d in once)  # the repair was there to compare
+
+
+def test_braking_path_steps_as_the_drive_model():
+    """The guard's braking roll-out on plain floats gives kinematics.step's positions exactly: the held
+    command (within the limits or not, not finite) for one period, then the stop until at rest."""
+    from viapath.kinematics import UnicycleState, step
+    from viapath.observation import Command, MotionLimits
+
+    def reference(robot, command, limits, period_s, samples=5):
+        dt = period_s / samples
+        state = UnicycleState(float(robot.position[0]), float(robot.position[1]), float(robot.heading_rad),
+                              float(robot.speed_mps), float(robot.turn_rate_radps))
+        points = []
+        for _ in range(samples):
+            state = step(state, command, limits, dt)
+            points.append((state.x, state.y))
+        top = max(limits.max_speed_mps, abs(state.speed_mps))
+        for _ in range(min(1000, int(np.ceil(top / max(limits.max_accel_mps2 * dt, 1e-9))) + 2)):
+            if state.speed_mps <= 1e-12:
+                break
+            state = step(state, Command.stop(), limits, dt)
+            points.append((state.x, state.y))
+        return np.array(points)
+
+    rng = np.random.default_rng(5)
+    for trial in range(500):
+        limits = MotionLimits(rng.uniform(0.3, 1.2), rng.uniform(0.3, 2.0), rng.uniform(0.5, 3.0), rng.uniform(1, 8))
+        robot = RobotState(rng.uniform(-5, 5, 2), rng.uniform(-4, 4), rng.uniform(0.0, 1.5), rng.uniform(-3, 3), 0.25)
+        v, w = rng.uniform(-0.2, 1.5), rng.uniform(-4, 4)
+        if trial % 50 == 0:
+            v = np.nan
+        command = Command(v, w)
+        np.testing.assert_array_equal(guard.braking_path(robot, command, limits, 0.1),
+                                      reference(robot, command, limits, 0.1))
