@@ -192,6 +192,19 @@ def _writer_main(connection, publisher_class, file: str, force: bool, waypoints,
         connection.close()
 
 
+def _hold_interrupts():
+    """Block SIGINT for this thread where the platform can (POSIX); what was blocked before, or None."""
+    if not hasattr(signal, "pthread_sigmask"):
+        return None
+    return signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+
+
+def _release_interrupts(held) -> None:
+    """Restore the mask: a SIGINT that came meanwhile is delivered now (KeyboardInterrupt here)."""
+    if held is not None:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
+
+
 class MCAPWriterProcess:
     """The ``on_step`` callback that hands each cycle to a writer process (see module notes).
     ``publisher_class`` logs a scene on a foxglove context (:class:`viapath.viz.foxglove.FoxglovePublisher`,
@@ -230,13 +243,21 @@ class MCAPWriterProcess:
 
             payload = (ForecastSettings.from_planner(record.planner), payload)
             self._first = False
+        data = pickle.dumps(payload, protocol=_PICKLE)
+        # A cycle is counted if and only if the writer gets all of it: Ctrl-C is held back while it is
+        # sent (the run often waits here on a full pipe now that planning is fast, and an interrupt
+        # there could leave a cycle sent but not counted; close() compares the counts).
+        held = _hold_interrupts()
         try:
-            self._connection.send_bytes(pickle.dumps(payload, protocol=_PICKLE))
-        except (BrokenPipeError, OSError):
-            kind, detail = self._receive()
-            self._stop()
-            raise self._error(f"--mcap {self.file}: the writer failed ({detail})") from None
-        self.cycles += 1
+            try:
+                self._connection.send_bytes(data)
+            except (BrokenPipeError, OSError):
+                kind, detail = self._receive()
+                self._stop()
+                raise self._error(f"--mcap {self.file}: the writer failed ({detail})") from None
+            self.cycles += 1
+        finally:
+            _release_interrupts(held)
 
     def close(self) -> int:
         """Tell the writer the run is over, wait for it to finish the file; the cycles it wrote."""
