@@ -57,7 +57,7 @@ from typing import Any, Callable
 import numpy as np
 
 from viapath.viz import protobuf_wire as wire
-from viapath.viz.mcap_process import cycle_input, scene_inputs
+from viapath.viz.mcap_process import cycle_input, scene_inputs, static_input
 from viapath.viz.scene import _mesh_triangles
 from viapath.viz.scene import CycleScene, ForecastSettings, SceneBuilder, candidate_colour
 
@@ -175,14 +175,19 @@ class FoxglovePublisher:
 
     def scene_of(self, record) -> CycleScene:
         if self.builder is None:
-            settings = self.settings or ForecastSettings.from_planner(record.planner)
-            self.builder = SceneBuilder(self.path, self.robot_radius_m, settings)
+            self.start(static_input(record))
         return self.build(cycle_input(record))
+
+    def start(self, static: tuple) -> None:
+        """Take what stays the same for the run (:func:`viapath.viz.mcap_process.static_input`: the
+        planner's forecast settings unless given, the scanners) before the first cycle."""
+        self.run_static = static
+        self.builder = SceneBuilder(self.path, self.robot_radius_m, self.settings or static[0])
 
     def build(self, inputs: tuple) -> CycleScene:
         """The scene of one cycle from :func:`viapath.viz.mcap_process.cycle_input` (the writer process
         receives the same tuple)."""
-        *cycle, truth, parts = scene_inputs(inputs)
+        *cycle, truth, parts = scene_inputs(inputs, self.run_static)
         return self.builder.build(*cycle, true_people=truth, perception_parts=parts)
 
     def open_channels(self, scene: CycleScene) -> None:

@@ -7,15 +7,19 @@ the run's own process an MCAP doubles the run. A recorder beside the robot is ho
 
 * The run's process keeps, per cycle, only what the scene is built from (step, time, robot state,
   the tracks, the command and plan, plan time, the perception's scans/detections/blind region, the
-  simulator's truth), packed into a few flat arrays (tracks as one (N, 8) array, every point of the
-  plan as one (R, 2) array with row counts), pickles it and sends it down a pipe. Pickled as the
-  dataclasses they come in, the same content cost three times as much (about 5 µs per small array).
+  simulator's truth): the numbers and strings as they are, every array of the cycle in one float
+  array with the row counts (:func:`cycle_input`), pickled and sent down a pipe. What stays the
+  same for the run (forecast settings, the scanners' names, mounts and beam geometry) goes once,
+  with the first cycle (:func:`static_input`). Pickling costs about 2-3 µs per array, so one array
+  instead of a dozen is most of the run's share; the rows the scene drops (tracks with a NaN
+  field, people not in the scene) are dropped by the writer, and of the plan's extras only those
+  a scene reads are sent.
 * The writer process builds the :class:`~viapath.viz.scene.CycleScene` with the same
   :class:`~viapath.viz.scene.SceneBuilder` and logs it with the same
   :class:`~viapath.viz.foxglove.FoxglovePublisher` as an in-process view, so the file is the same.
 * It is started by ``fork`` where the platform has it (it then inherits the imports: starts in a few
   ms) and ``spawn`` elsewhere. It opens the file and reports ready (or its error) before the run
-  starts; at the end the run's process sends "done" and waits for the count of cycles written.
+  starts, then sets up its publisher while the run begins; at the end the run's process sends "done" and waits for the count of cycles written.
   If the writer fails mid-run, the next send or the end raises the given error (the views pass
   :class:`~viapath.viz.foxglove.ViewError`) with its reason.
 
@@ -43,38 +47,113 @@ def _start_method() -> str:
     return "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
 
 
+# The plan's extras a scene reads (viapath.viz.scene: the plan's times, the cost breakdown, the
+# shield's verdict); the rest (backend names, the shield's diagnostics) stays in the run's process.
+_SCENE_EXTRAS = ("waypoint_times_s", "slow_s", "speed_after_mps", "cost_terms", "shield_intervened")
+
+
+def static_input(record) -> tuple:
+    """What stays the same for a whole run, sent once with the first cycle: the x-y-t view's forecast
+    settings and each scanner's name, mount and beam geometry (see module notes)."""
+    from viapath.viz.scene import ForecastSettings
+
+    perception = record.perception if record.scans is not None else None
+    scanners = tuple((str(m.name), np.asarray(m.mount_pose(), dtype=float), float(m.angle_min_rad),
+                      float(m.angle_increment_rad), float(m.range_min_m), float(m.range_max_m))
+                     for m in (getattr(perception, "scanners", ()) or ()))
+    return ForecastSettings.from_planner(record.planner), scanners
+
+
 def cycle_input(record) -> tuple:
-    """What one cycle's scene is built from, packed into a few flat arrays and numbers (see module
-    notes); :func:`scene_inputs` unpacks it into the arguments of :meth:`SceneBuilder.build`."""
-    from viapath.viz.scene import perception_parts_of
+    """What one cycle's scene is built from: a few numbers and strings, and every array of the cycle
+    (tracks, the true people, the plan's points and costs, scans, detections, blind region) in one
+    float array with the row counts (see module notes); :func:`scene_inputs` unpacks it."""
+    from viapath.viz.scene import perception_arrays_of
 
     state, world, decision = record.state, record.world, record.decision
-    truth = None
+    plan, command = decision.plan, decision.command
+    tracks = record.observation.obstacles  # all rows: the scene keeps the finite ones, as it does in-process
+    detections, radii, points, sectors, blind = perception_arrays_of(
+        record.perception if record.scans is not None else None)
+    lines = [np.asarray(line, dtype=float).reshape(-1) for line in plan.candidate_polylines]
+    via = np.asarray(plan.via_points, dtype=float).reshape(-1)
+    waypoints = np.asarray(plan.waypoints, dtype=float).reshape(-1)
+    costs = np.asarray(plan.candidate_costs, dtype=float).reshape(-1)
+    scans = [np.asarray(ranges, dtype=float).reshape(-1) for ranges in (record.scans or ())]
+    pieces = [tracks.positions.reshape(-1), tracks.velocities.reshape(-1), tracks.radii_m, tracks.position_sigma_m,
+              tracks.velocity_sigma_mps, tracks.ids, via, waypoints, costs, *lines, *scans, detections.reshape(-1),
+              radii, points.reshape(-1), blind.reshape(-1)]
+    truth = 0
     if world is not None:
-        present = np.isfinite(world.obstacle_positions).all(axis=1)
-        truth = np.column_stack([world.obstacle_positions[present], world.obstacle_velocities[present],
-                                 world.obstacle_radii_m[present], np.flatnonzero(present)])
-    parts = perception_parts_of(record.perception if record.scans is not None else None)
-    command = decision.command
-    return (record.step, record.time_s, (state.x, state.y, state.heading_rad), state.speed_mps,
-            state.turn_rate_radps, _pack_obstacles(record.observation.obstacles.finite()),
-            (command.speed_mps, command.turn_rate_radps), _pack_plan(decision.plan), record.plan_time_ms,
-            _pack_parts(parts), truth)
+        truth = len(world.obstacle_radii_m)
+        pieces += [world.obstacle_positions.reshape(-1), world.obstacle_velocities.reshape(-1),
+                   world.obstacle_radii_m]
+    counts = (len(tracks), truth if world is not None else -1, len(via) // 2, len(waypoints) // 2, len(costs),
+              tuple(len(line) // 2 for line in lines), tuple(len(ranges) for ranges in scans), len(radii),
+              len(points), len(blind))
+    extras = plan.extras or {}
+    kept = {name: extras[name] for name in _SCENE_EXTRAS if name in extras}
+    shield = extras.get("shield")
+    if isinstance(shield, dict):
+        kept["shield"] = {"intervened": bool(shield.get("intervened"))}
+    target = np.asarray(plan.target, dtype=float).reshape(2)
+    return (record.step, record.time_s, state.x, state.y, state.heading_rad, state.speed_mps, state.turn_rate_radps,
+            command.speed_mps, command.turn_rate_radps, record.plan_time_ms, plan.status, plan.speed_mps,
+            float(target[0]), float(target[1]), plan.subgoal_index, plan.candidate_count, plan.chosen, kept,
+            sectors, counts, np.concatenate(pieces))
 
 
-def scene_inputs(payload: tuple) -> tuple:
+def scene_inputs(payload: tuple, static: tuple) -> tuple:
     """The arguments of :meth:`viapath.viz.scene.SceneBuilder.build` (step, time, pose, speed, turn
     rate, observation, decision, plan time; then ``true_people`` and ``perception_parts``) from a
-    :func:`cycle_input` payload. The observation carries only the finite tracks, all a scene reads."""
-    from viapath.observation import Command, Decision
+    :func:`cycle_input` payload and the run's :func:`static_input`."""
+    from viapath.observation import Command, Decision, Plan
+    from viapath.viz.scene import ScannerView
 
-    step, time_s, pose, speed, turn_rate, tracks, command, plan, plan_time_ms, parts, truth = payload
-    if truth is not None:
-        zeros = np.zeros(len(truth))
-        truth = _obstacles(truth[:, 0:2], truth[:, 2:4], truth[:, 4], zeros, zeros, truth[:, 5].astype(int))
-    decision = Decision(Command(*command), _unpack_plan(plan))
-    return (step, time_s, pose, speed, turn_rate, _Tracks(_unpack_obstacles(tracks)), decision, plan_time_ms,
-            truth, _unpack_parts(parts))
+    (step, time_s, x, y, heading, speed, turn_rate, command_speed, command_turn_rate, plan_time_ms, status,
+     plan_speed, target_x, target_y, subgoal_index, candidate_count, chosen, extras, sectors, counts,
+     numbers) = payload
+    n, truth_count, via_count, waypoint_count, cost_count, line_counts, scan_counts, detection_count, point_count, \
+        blind_count = counts
+    cursor = _Cursor(numbers)
+    tracks = _obstacles(cursor.rows(n, 2), cursor.rows(n, 2), cursor.rows(n), cursor.rows(n), cursor.rows(n),
+                        cursor.rows(n).astype(int))
+    via, waypoints, costs = cursor.rows(via_count, 2), cursor.rows(waypoint_count, 2), cursor.rows(cost_count)
+    lines = [cursor.rows(count, 2) for count in line_counts]
+    scans = [cursor.rows(count) for count in scan_counts]
+    detections, radii = cursor.rows(detection_count, 2), cursor.rows(detection_count)
+    points, blind = cursor.rows(point_count, 2), cursor.rows(blind_count, 2)
+    truth = None
+    if truth_count >= 0:
+        positions, velocities, truth_radii = (cursor.rows(truth_count, 2), cursor.rows(truth_count, 2),
+                                              cursor.rows(truth_count))
+        present = np.isfinite(positions).all(axis=1)
+        zeros = np.zeros(int(present.sum()))
+        truth = _obstacles(positions[present], velocities[present], truth_radii[present], zeros, zeros,
+                           np.flatnonzero(present))
+    plan = Plan(status, plan_speed, np.array([target_x, target_y]), via, waypoints, subgoal_index, candidate_count,
+                costs, lines, chosen, extras)
+    _, scanner_statics = static
+    scanners = [ScannerView(name, mount, angle_min, increment, ranges, range_min, range_max)
+                for (name, mount, angle_min, increment, range_min, range_max), ranges in zip(scanner_statics, scans)]
+    decision = Decision(Command(command_speed, command_turn_rate), plan)
+    return (step, time_s, (x, y, heading), speed, turn_rate, _Tracks(tracks), decision, plan_time_ms, truth,
+            (scanners, detections, radii, points, sectors, blind))
+
+
+class _Cursor:
+    """Reads consecutive blocks of rows from the cycle's float array (views, no copies)."""
+
+    __slots__ = ("numbers", "start")
+
+    def __init__(self, numbers: np.ndarray) -> None:
+        self.numbers, self.start = numbers, 0
+
+    def rows(self, count: int, width: int = 0) -> np.ndarray:
+        size = count * (width or 1)
+        block = self.numbers[self.start:self.start + size]
+        self.start += size
+        return block.reshape(count, width) if width else block
 
 
 class _Tracks:
@@ -84,15 +163,6 @@ class _Tracks:
 
     def __init__(self, obstacles) -> None:
         self.obstacles = obstacles
-
-
-def _pack_obstacles(obstacles) -> np.ndarray:
-    return np.column_stack([obstacles.positions, obstacles.velocities, obstacles.radii_m, obstacles.position_sigma_m,
-                            obstacles.velocity_sigma_mps, obstacles.ids])
-
-
-def _unpack_obstacles(rows: np.ndarray):
-    return _obstacles(rows[:, 0:2], rows[:, 2:4], rows[:, 4], rows[:, 5], rows[:, 6], rows[:, 7].astype(int))
 
 
 def _obstacles(positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids):
@@ -108,44 +178,6 @@ def _obstacles(positions, velocities, radii_m, position_sigma_m, velocity_sigma_
     return obstacles
 
 
-def _pack_plan(plan) -> tuple:
-    """A plan's points (target, via points, waypoints, every candidate polyline) as one (R, 2) array
-    and the row counts; the rest as plain values."""
-    lines = [np.asarray(line, dtype=float).reshape(-1, 2) for line in plan.candidate_polylines]
-    via = np.asarray(plan.via_points, dtype=float).reshape(-1, 2)
-    waypoints = np.asarray(plan.waypoints, dtype=float).reshape(-1, 2)
-    points = np.concatenate([np.asarray(plan.target, dtype=float).reshape(1, 2), via, waypoints, *lines])
-    counts = [len(via), len(waypoints)] + [len(line) for line in lines]
-    return (plan.status, plan.speed_mps, points, counts, plan.subgoal_index, plan.candidate_count,
-            np.asarray(plan.candidate_costs, dtype=float).reshape(-1).tolist(), plan.chosen, plan.extras)
-
-
-def _unpack_plan(packed: tuple):
-    from viapath.observation import Plan
-
-    status, speed, points, counts, subgoal_index, candidate_count, costs, chosen, extras = packed
-    pieces, start = [], 1
-    for count in counts:
-        pieces.append(points[start:start + count])
-        start += count
-    return Plan(status, speed, points[0], pieces[0], pieces[1], subgoal_index, candidate_count,
-                np.array(costs, dtype=float), pieces[2:], chosen, extras)
-
-
-def _pack_parts(parts: tuple) -> tuple:
-    scanners, detections, radii, points, sectors, blind = parts
-    flat = [(s.name, s.mount_pose, s.angle_min_rad, s.angle_increment_rad, s.ranges_m, s.range_min_m, s.range_max_m)
-            for s in scanners]
-    return flat, detections, radii, points, sectors, blind
-
-
-def _unpack_parts(packed: tuple) -> tuple:
-    from viapath.viz.scene import ScannerView
-
-    flat, detections, radii, points, sectors, blind = packed
-    return ([ScannerView(*fields) for fields in flat], detections, radii, points, sectors, blind)
-
-
 def _writer_main(connection, publisher_class, file: str, force: bool, waypoints, half_widths_m,
                  robot_radius_m: float, settings) -> None:
     """The writer process: open the file, then build and log each cycle until told it is done."""
@@ -158,22 +190,23 @@ def _writer_main(connection, publisher_class, file: str, force: bool, waypoints,
         from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
         from viapath.path import DesignatedPath
-        from viapath.viz.scene import SceneBuilder
 
         context = foxglove.Context()
         writer = foxglove.open_mcap(file, allow_overwrite=force, context=context,
                                     writer_options=MCAPWriteOptions(compression=MCAPCompression.Lz4))
+        # Ready once the file is open (what can fail for a reason of the user's); the run starts while
+        # the rest is set up, and a failure from here on is reported at the next send or the end.
+        connection.send((_READY, None))
         path = DesignatedPath(waypoints, half_widths_m=half_widths_m)
         publisher = publisher_class(context, path, robot_radius_m, settings)
-        connection.send((_READY, None))
         while True:
             message = connection.recv_bytes()
             if message == b"":
                 break
             payload = pickle.loads(message)
             if publisher.builder is None:
-                first_settings, payload = payload
-                publisher.builder = SceneBuilder(path, robot_radius_m, settings or first_settings)
+                static, payload = payload
+                publisher.start(static)
             publisher.publish(publisher.build(payload))
         writer.close()
         writer = None
@@ -226,9 +259,7 @@ class MCAPWriterProcess:
     def __call__(self, record) -> None:
         payload = cycle_input(record)
         if self._first:
-            from viapath.viz.scene import ForecastSettings
-
-            payload = (ForecastSettings.from_planner(record.planner), payload)
+            payload = (static_input(record), payload)
             self._first = False
         try:
             self._connection.send_bytes(pickle.dumps(payload, protocol=_PICKLE))

@@ -432,9 +432,8 @@ def perception_parts_of(perception):
     """Scans in scanner frames, detections, scan points and blind region of a perception object
     that has them (the laser chain); empty for the oracle."""
     scanners: list[ScannerView] = []
-    empty2 = np.zeros((0, 2))
     if perception is None:
-        return scanners, empty2, np.zeros(0), empty2, [], empty2
+        return (scanners, *perception_arrays_of(None))
     models = getattr(perception, "scanners", ()) or ()
     scans = getattr(perception, "last_scans", None) or []
     for model, ranges in zip(models, scans):
@@ -442,6 +441,15 @@ def perception_parts_of(perception):
                                     float(model.angle_min_rad), float(model.angle_increment_rad),
                                     np.asarray(ranges, dtype=float).reshape(-1), float(model.range_min_m),
                                     float(model.range_max_m)))
+    return (scanners, *perception_arrays_of(perception))
+
+
+def perception_arrays_of(perception):
+    """The part of :func:`perception_parts_of` that changes every cycle: detections (D, 2) and their
+    radii, scan points (M, 2), blind sectors and the blind region's polygon (B, 2)."""
+    empty2 = np.zeros((0, 2))
+    if perception is None:
+        return empty2, np.zeros(0), empty2, [], empty2
     detections = getattr(perception, "last_detections_world", None)
     centres = np.asarray(getattr(detections, "centres", empty2), dtype=float).reshape(-1, 2)
     radii = np.asarray(getattr(detections, "radii_m", np.zeros(len(centres))), dtype=float).reshape(-1)
@@ -452,7 +460,7 @@ def perception_parts_of(perception):
     polygon = getattr(perception, "blind_polygon_world", None)
     if callable(polygon) and sectors:
         blind = np.asarray(polygon(), dtype=float).reshape(-1, 2)
-    return scanners, centres, radii, points, sectors, blind
+    return centres, radii, points, sectors, blind
 
 
 def _shield_intervened(extras: dict) -> bool:
