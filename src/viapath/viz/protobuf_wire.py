@@ -9,8 +9,12 @@ point list is one structured numpy array turned into bytes.
 
 What we chose:
 * Only what the views need: ``SceneUpdate`` with deletions and entities; entities with
-  ``LinePrimitive`` and ``TriangleListPrimitive`` written here and every other primitive taken
-  from foxglove-sdk's own ``encode()`` (protobuf concatenates repeated fields, so the parts join).
+  ``LinePrimitive``, ``TriangleListPrimitive``, ``CylinderPrimitive``, ``SpherePrimitive``,
+  ``ArrowPrimitive`` and ``TextPrimitive``; ``LaserScan``. Anything else (and any part that is the
+  same all run: colours, the identity pose, static entities) is taken from foxglove-sdk's own
+  ``encode()`` (protobuf concatenates fields, so the parts join).
+* Poses and vectors are one ``struct.pack`` each (tags and values together): the per-cycle cost of
+  a person's track is a handful of calls, not one Python object per field.
 * Every double is written, zeros included (proto3 allows it; decoders read the same values).
 * Tests decode what this writes with the schema from the file (``tests/viz``) and compare with the
   SDK's own encoding of the same message.
@@ -18,12 +22,14 @@ What we chose:
 
 from __future__ import annotations
 
+import math
 import struct
 
 import numpy as np
 
 _POINT = np.dtype([("tag", "u1"), ("length", "u1"), ("tx", "u1"), ("x", "<f8"), ("ty", "u1"), ("y", "<f8"),
                    ("tz", "u1"), ("z", "<f8")])  # packed: 29 bytes, one length-delimited Point3
+POINT_DTYPE = _POINT
 
 
 _SMALL = [bytes((i,)) for i in range(128)]
@@ -112,7 +118,7 @@ def triangle_list_primitive(vertices_xyz: np.ndarray, triangles: np.ndarray, col
 
 # foxglove.SceneEntity: timestamp 1, frame_id 2, id 3, lifetime 4, frame_locked 5, metadata 6, arrows 7,
 # cubes 8, spheres 9, cylinders 10, lines 11, triangles 12, texts 13, models 14
-ENTITY_LINES, ENTITY_TRIANGLES = 11, 12
+ENTITY_LINES, ENTITY_TRIANGLES = 11, 12  # with ENTITY_ARROWS ... below
 
 
 def scene_entity(stamp_ns: int, frame_id: str, entity_id: str, lines: list[bytes] = (), triangles: list[bytes] = (),
@@ -127,3 +133,76 @@ def scene_entity(stamp_ns: int, frame_id: str, entity_id: str, lines: list[bytes
 # foxglove.SceneUpdate: deletions 1, entities 2
 def scene_update(deletions: list[bytes], entities: list[bytes]) -> bytes:
     return b"".join(message_field(1, d) for d in deletions) + b"".join(message_field(2, e) for e in entities)
+
+
+# -- small messages as one struct.pack each (every tag and length is a single byte here) -----------
+# foxglove.Vector3 / Point3: x 1, y 2, z 3; Quaternion: x 1, y 2, z 3, w 4; Pose: position 1, orientation 2
+_VECTOR3 = struct.Struct("<BdBdBd")  # 27 bytes
+_POSE = struct.Struct("<BBBdBdBdBBBdBdBdBd")  # 67 bytes: position (2 + 27) and orientation (2 + 36)
+
+
+def vector3(x: float, y: float, z: float) -> bytes:
+    """An encoded ``foxglove.Vector3`` (27 bytes)."""
+    return _VECTOR3.pack(0x09, x, 0x11, y, 0x19, z)
+
+
+def pose(x: float, y: float, z: float = 0.0, yaw_rad: float = 0.0) -> bytes:
+    """An encoded ``foxglove.Pose`` at (x, y, z) turned by ``yaw_rad`` about z (67 bytes)."""
+    half = 0.5 * yaw_rad
+    return _POSE.pack(0x0A, 27, 0x09, x, 0x11, y, 0x19, z, 0x12, 36, 0x09, 0.0, 0x11, 0.0, 0x19, math.sin(half),
+                      0x21, math.cos(half))
+
+
+_POSE_1, _SIZE_2 = b"\x0a\x43", b"\x12\x1b"  # field 1 of 67 bytes (pose), field 2 of 27 bytes (size)
+
+
+# foxglove.CylinderPrimitive: pose 1, size 2, bottom_scale 3, top_scale 4, color 5
+def cylinder(pose_bytes: bytes, size_x: float, size_y: float, size_z: float, color: bytes) -> bytes:
+    """An encoded ``CylinderPrimitive`` (``pose_bytes``: :func:`pose`; ``color``: an encoded Color)."""
+    return _POSE_1 + pose_bytes + _SIZE_2 + vector3(size_x, size_y, size_z) + message_field(5, color)
+
+
+# foxglove.SpherePrimitive: pose 1, size 2, color 3
+def sphere(pose_bytes: bytes, size: bytes, color: bytes) -> bytes:
+    """An encoded ``SpherePrimitive`` (``size``: :func:`vector3`)."""
+    return _POSE_1 + pose_bytes + _SIZE_2 + size + message_field(3, color)
+
+
+# foxglove.ArrowPrimitive: pose 1, shaft_length 2, shaft_diameter 3, head_length 4, head_diameter 5, color 6
+_ARROW = struct.Struct("<BdBdBdBd")
+
+
+def arrow(pose_bytes: bytes, shaft_length: float, shaft_diameter: float, head_length: float, head_diameter: float,
+          color: bytes) -> bytes:
+    return (_POSE_1 + pose_bytes + _ARROW.pack(0x11, shaft_length, 0x19, shaft_diameter, 0x21, head_length, 0x29,
+                                               head_diameter) + message_field(6, color))
+
+
+# foxglove.TextPrimitive: pose 1, billboard 2, font_size 3, scale_invariant 4, color 5, text 6
+def text(pose_bytes: bytes, content: str, font_size: float, color: bytes, billboard: bool = True,
+         scale_invariant: bool = True) -> bytes:
+    return (_POSE_1 + pose_bytes + varint_field(2, int(billboard)) + double_field(3, font_size)
+            + varint_field(4, int(scale_invariant)) + message_field(5, color) + string_field(6, content))
+
+
+ENTITY_ARROWS, ENTITY_SPHERES, ENTITY_CYLINDERS, ENTITY_TEXTS = 7, 9, 10, 13
+
+
+def entity_head(stamp_ns: int | None, frame_id: str, entity_id: str, frame_locked: bool = False) -> bytes:
+    """The fields of a ``SceneEntity`` before its primitives (no timestamp when ``stamp_ns`` is None)."""
+    head = (b"" if stamp_ns is None else message_field(1, timestamp(stamp_ns))) + string_field(2, frame_id)
+    return head + string_field(3, entity_id) + (varint_field(5, 1) if frame_locked else b"")
+
+
+def primitives(field: int, encoded: list[bytes]) -> bytes:
+    """Repeated primitives of one kind in an entity (``field``: ``ENTITY_*``)."""
+    return b"".join(message_field(field, one) for one in encoded)
+
+
+# foxglove.LaserScan: timestamp 1, frame_id 2, pose 3, start_angle 4, end_angle 5, ranges 6, intensities 7
+def laser_scan(stamp_ns: int, frame_id: str, pose_bytes: bytes, start_angle: float, end_angle: float,
+               ranges: np.ndarray) -> bytes:
+    """An encoded ``foxglove.LaserScan`` (``pose_bytes``: an encoded Pose; ranges packed as doubles)."""
+    data = np.asarray(ranges, dtype="<f8").tobytes()
+    return (message_field(1, timestamp(stamp_ns)) + string_field(2, frame_id) + message_field(3, pose_bytes)
+            + double_field(4, start_angle) + double_field(5, end_angle) + (message_field(6, data) if data else b""))
