@@ -135,8 +135,9 @@ def reference(topic: str, scene, ns: int, colours: dict, k_sigma: float, segment
         if len(rings) == 2:  # the publisher always draws three rings: add the mid-horizon one (same surface)
             rings = xyt.all_rings(segments)[i]
         rings = rings * stretch
-        vertices = np.concatenate([rings.reshape(-1, 3), rings[[0, 2]].mean(axis=1)])
-        axis = np.stack([rings[0].mean(axis=0), rings[2].mean(axis=0)])
+        ends = np.array([0.0, xyt.settings.horizon_s])
+        axis = np.column_stack([person.centre_at(ends), ends]) * stretch  # the caps' centres too
+        vertices = np.concatenate([rings.reshape(-1, 3), axis])
         entities.append(m.SceneEntity(
             timestamp=stamp, frame_id="xyt", id=f"person-{person.id}",
             lines=[_line(ring, c["ring"], 0.01, loop=True) for ring in rings] + [_line(axis, c["axis"], 0.01)],

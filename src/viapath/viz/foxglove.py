@@ -489,11 +489,11 @@ class FoxglovePublisher:
         entities = []
         if xyt.persons:
             # All people at once: three rings each (0, cone cap or mid-horizon, horizon), the caps'
-            # centres; each person's entity a numpy record of the same layout (see _xyt_layout).
-            rings = xyt.all_rings(segments) * stretch  # (P, 3, S, 3)
+            # centres on the axis; each person's entity a numpy record of the same layout (see _xyt_layout).
+            rings, centres = xyt.all_rings_and_centres(segments)
+            rings = rings * stretch  # (P, 3, S, 3)
             count = len(rings)
-            caps = rings[:, [0, 2]].mean(axis=2)  # (P, 2, 3)
-            axes = np.stack([rings[:, 0].mean(axis=1), rings[:, 2].mean(axis=1)], axis=1)  # (P, 2, 3)
+            caps = axes = centres[:, ::2] * stretch  # (P, 2, 3): the axis from t = 0 to the horizon
             dtype, template = self._xyt_layout(segments)
             records = np.empty(count, dtype=dtype)
             records.view(np.uint8).reshape(count, dtype.itemsize)[:] = template

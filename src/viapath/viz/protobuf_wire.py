@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import struct
+from functools import lru_cache
 
 import numpy as np
 
@@ -38,6 +39,8 @@ _SMALL = [bytes((i,)) for i in range(128)]
 def varint(value: int) -> bytes:
     if 0 <= value < 128:
         return _SMALL[value]
+    if 0 <= value < 16384:  # two bytes: the length of most sub-messages here
+        return bytes((value & 0x7F | 0x80, value >> 7))
     value = int(value)
     if value < 0:
         value += 1 << 64
@@ -56,9 +59,15 @@ def tag(field: int, wire_type: int) -> bytes:
     return _SMALL[field << 3 | wire_type] if field < 16 else varint(field << 3 | wire_type)
 
 
+_LENGTH_DELIMITED = [tag(field, 2) for field in range(16)]
+
+
 def message_field(field: int, payload: bytes) -> bytes:
     """A length-delimited field (sub-message, string, bytes, packed scalars)."""
-    return tag(field, 2) + varint(len(payload)) + payload
+    size = len(payload)
+    if size < 128:  # the common case in one step: a one-byte tag and a one-byte length
+        return _LENGTH_DELIMITED[field] + _SMALL[size] + payload
+    return tag(field, 2) + varint(size) + payload
 
 
 def double_field(field: int, value: float) -> bytes:
@@ -181,8 +190,14 @@ def arrow(pose_bytes: bytes, shaft_length: float, shaft_diameter: float, head_le
 # foxglove.TextPrimitive: pose 1, billboard 2, font_size 3, scale_invariant 4, color 5, text 6
 def text(pose_bytes: bytes, content: str, font_size: float, color: bytes, billboard: bool = True,
          scale_invariant: bool = True) -> bytes:
-    return (_POSE_1 + pose_bytes + varint_field(2, int(billboard)) + double_field(3, font_size)
-            + varint_field(4, int(scale_invariant)) + message_field(5, color) + string_field(6, content))
+    return _POSE_1 + pose_bytes + _text_tail(content, font_size, color, billboard, scale_invariant)
+
+
+@lru_cache(maxsize=1024)
+def _text_tail(content: str, font_size: float, color: bytes, billboard: bool, scale_invariant: bool) -> bytes:
+    """Everything of a TextPrimitive after its pose: the same for a label drawn again elsewhere."""
+    return (varint_field(2, int(billboard)) + double_field(3, font_size) + varint_field(4, int(scale_invariant))
+            + message_field(5, color) + string_field(6, content))
 
 
 ENTITY_ARROWS, ENTITY_SPHERES, ENTITY_CYLINDERS, ENTITY_TEXTS = 7, 9, 10, 13

@@ -155,9 +155,14 @@ class XYTScene:
         """Every person's cylinder as three rings each, (P, 3, segments, 3) in x, y, t, in one go:
         at 0, where the cone stops growing (or half the horizon when it does not within it), and at
         the horizon. Between them the surface is ruled, so these rings describe it exactly."""
+        return self.all_rings_and_centres(segments)[0]
+
+    def all_rings_and_centres(self, segments: int = 24) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`all_rings` and the rings' centres (P, 3, 3) in x, y, t: the forecast position at
+        each ring's time (the cylinder's axis; the caps' centres)."""
         count = len(self.persons)
         if count == 0:
-            return np.zeros((0, 3, segments, 3))
+            return np.zeros((0, 3, segments, 3)), np.zeros((0, 3, 3))
         settings = self.settings
         horizon = settings.horizon_s
         # One (P, 6) array of what the rings depend on: fewer, larger numpy calls (this runs every cycle).
@@ -171,11 +176,13 @@ class XYTScene:
         times[:, 1] = np.where((cap > 0) & (cap < horizon), cap, 0.5 * horizon)
         times[:, 2] = horizon
         radii = fields[:, 4:5] + np.minimum(growth[:, None] * times, settings.max_inflation_m)
-        centres = fields[:, None, 0:2] + times[..., None] * fields[:, None, 2:4]  # (P, 3, 2)
+        centres = np.empty((count, 3, 3))
+        centres[..., :2] = fields[:, None, 0:2] + times[..., None] * fields[:, None, 2:4]
+        centres[..., 2] = times
         out = np.empty((count, 3, segments, 3))
-        out[..., :2] = centres[:, :, None, :] + radii[:, :, None, None] * _unit_circle(segments)
+        out[..., :2] = centres[:, :, None, :2] + radii[:, :, None, None] * _unit_circle(segments)
         out[..., 2] = times[:, :, None]
-        return out
+        return out, centres
 
     def mesh(self, index: int, segments: int = 24) -> np.ndarray:
         """Triangles (T, 3, 3) in x, y, t of person ``index``'s oblique cylinder: side and both caps."""
