@@ -347,7 +347,7 @@ class FoxglovePublisher:
         w = self.wire
         tracks = scene.tracks
         k = self.builder.settings.uncertainty_sigmas if self.builder else 2.0
-        stamp = wire.message_field(1, wire.timestamp(ns))
+        stamp = wire.stamp_field(ns)
         cache, self.track_cache = self.track_cache, {}
         entities = []
         for key in zip(tracks.positions[:, 0].tolist(), tracks.positions[:, 1].tolist(),
@@ -485,7 +485,7 @@ class FoxglovePublisher:
         stretch = np.array([1.0, 1.0, scale])
         segments = self.xyt_segments
         identity = w["identity"]
-        head = wire.message_field(1, wire.timestamp(ns)) + wire.string_field(2, XYT_FRAME)
+        head = wire.stamp_field(ns) + wire.string_field(2, XYT_FRAME)
         entities = []
         if xyt.persons:
             # All people at once: three rings each (0, cone cap or mid-horizon, horizon), the caps'
@@ -509,7 +509,7 @@ class FoxglovePublisher:
         ticks = [self._wire_text(x - 0.3, y, t * scale, f"{t:g} s", w["grey"], 11.0) for t in (0.0, 0.5 * horizon, horizon)]
         spheres = [wire.sphere(wire.pose(px, py, pt * scale), w["via_size"], w["via"])
                    for px, py, pt in xyt.via_points_xyt.tolist()]
-        entities.append(head + wire.string_field(3, "robot-plan") + wire.primitives(wire.ENTITY_LINES, [
+        entities.append(wire.entity_head(ns, XYT_FRAME, "robot-plan") + wire.primitives(wire.ENTITY_LINES, [
             wire.line_primitive(xyt.plan_xyt * stretch, w["chosen"], identity, 0.04),
             wire.line_primitive(np.array([[x, y, 0.0], [x, y, horizon * scale]]), w["time_axis"], identity, 0.01),
         ]) + wire.primitives(wire.ENTITY_SPHERES, spheres) + wire.primitives(wire.ENTITY_TEXTS, ticks)

@@ -107,6 +107,12 @@ def timestamp(ns: int) -> bytes:
     return (varint_field(1, seconds) if seconds else b"") + (varint_field(2, nanos) if nanos else b"")
 
 
+@lru_cache(maxsize=4)
+def stamp_field(ns: int) -> bytes:
+    """Field 1 holding the timestamp ``ns``: every message of a cycle has the same one."""
+    return message_field(1, timestamp(ns))
+
+
 # foxglove.LinePrimitive: type 1, pose 2, thickness 3, scale_invariant 4, points 5, color 6, colors 7, indices 8
 LINE_STRIP, LINE_LOOP, LINE_LIST = 0, 1, 2
 
@@ -134,7 +140,7 @@ def scene_entity(stamp_ns: int, frame_id: str, entity_id: str, lines: list[bytes
                  other: bytes = b"") -> bytes:
     """An encoded ``foxglove.SceneEntity``; ``other``: the SDK's encoding of an entity holding the
     remaining primitives (spheres, texts, ...), which protobuf merges into this one."""
-    head = message_field(1, timestamp(stamp_ns)) + string_field(2, frame_id) + string_field(3, entity_id)
+    head = stamp_field(stamp_ns) + _names(frame_id, entity_id, False)
     return (head + b"".join(message_field(ENTITY_LINES, line) for line in lines)
             + b"".join(message_field(ENTITY_TRIANGLES, tri) for tri in triangles) + other)
 
@@ -205,8 +211,13 @@ ENTITY_ARROWS, ENTITY_SPHERES, ENTITY_CYLINDERS, ENTITY_TEXTS = 7, 9, 10, 13
 
 def entity_head(stamp_ns: int | None, frame_id: str, entity_id: str, frame_locked: bool = False) -> bytes:
     """The fields of a ``SceneEntity`` before its primitives (no timestamp when ``stamp_ns`` is None)."""
-    head = (b"" if stamp_ns is None else message_field(1, timestamp(stamp_ns))) + string_field(2, frame_id)
-    return head + string_field(3, entity_id) + (varint_field(5, 1) if frame_locked else b"")
+    return (b"" if stamp_ns is None else stamp_field(stamp_ns)) + _names(frame_id, entity_id, frame_locked)
+
+
+@lru_cache(maxsize=1024)
+def _names(frame_id: str, entity_id: str, frame_locked: bool) -> bytes:
+    """A SceneEntity's frame, id and frame_locked: the same for a given entity every cycle."""
+    return string_field(2, frame_id) + string_field(3, entity_id) + (varint_field(5, 1) if frame_locked else b"")
 
 
 def primitives(field: int, encoded: list[bytes]) -> bytes:
@@ -219,5 +230,5 @@ def laser_scan(stamp_ns: int, frame_id: str, pose_bytes: bytes, start_angle: flo
                ranges: np.ndarray) -> bytes:
     """An encoded ``foxglove.LaserScan`` (``pose_bytes``: an encoded Pose; ranges packed as doubles)."""
     data = np.asarray(ranges, dtype="<f8").tobytes()
-    return (message_field(1, timestamp(stamp_ns)) + string_field(2, frame_id) + message_field(3, pose_bytes)
+    return (stamp_field(stamp_ns) + string_field(2, frame_id) + message_field(3, pose_bytes)
             + double_field(4, start_angle) + double_field(5, end_angle) + (message_field(6, data) if data else b""))

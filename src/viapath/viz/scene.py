@@ -33,6 +33,7 @@ What the sources leave open and we chose:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 from dataclasses import dataclass
@@ -297,6 +298,10 @@ class SceneBuilder:
     def __init__(self, path, robot_radius_m: float, settings: ForecastSettings | None = None, cone: bool = True):
         self.path = path
         self.path_view = path_view(path)
+        # The path's segments as plain numbers, for the lateral deviation of one point per cycle.
+        self._segments = list(zip(np.asarray(path.segment_starts, dtype=float).tolist(),
+                                  np.asarray(path.segment_directions, dtype=float).tolist(),
+                                  np.asarray(path.segment_lengths_m, dtype=float).tolist()))
         self.robot_radius_m = float(robot_radius_m)
         self.settings = settings or ForecastSettings()
         self.cone = cone
@@ -327,7 +332,7 @@ class SceneBuilder:
             "command_speed_mps": float(decision.command.speed_mps),
             "command_turn_rate_radps": float(decision.command.turn_rate_radps),
             "clearance_m": clearance_m(pose[:2], self.robot_radius_m, people),
-            "lateral_deviation_m": float(self.path.lateral_deviation(pose[:2])),
+            "lateral_deviation_m": lateral_deviation_m(self._segments, float(pose[0]), float(pose[1])),
             "plan_time_ms": float(plan_time_ms),
             "shield_interventions": int(self.shield_interventions),
             "tracks": int(len(tracks)),
@@ -344,7 +349,7 @@ class SceneBuilder:
         )
 
     def _subgoal(self, plan) -> np.ndarray:
-        index = int(np.clip(plan.subgoal_index, 0, len(self.path.waypoints) - 1))
+        index = min(max(int(plan.subgoal_index), 0), len(self.path.waypoints) - 1)
         return self.path.waypoints[index]
 
 
@@ -380,6 +385,21 @@ def plan_xyt(robot_position, plan, horizon_s: float) -> np.ndarray:
     if speed <= 1e-9:
         return np.array([[start[0], start[1], 0.0], [start[0], start[1], horizon_s]])
     return _clip_to_horizon(np.column_stack([line, lengths / speed]), horizon_s)
+
+
+def lateral_deviation_m(segments: list, x: float, y: float) -> float:
+    """:meth:`viapath.path.DesignatedPath.lateral_deviation` of one point, the same steps in scalar
+    arithmetic (a path has a few segments: numpy's per-call cost was most of it). ``segments``:
+    ``((start_x, start_y), (direction_x, direction_y), length_m)`` per segment."""
+    best, side = math.inf, 1.0
+    for (sx, sy), (dx, dy), length in segments:
+        rx, ry = x - sx, y - sy
+        along = min(max(rx * dx + ry * dy, 0.0), length)
+        distance = math.hypot(x - (sx + along * dx), y - (sy + along * dy))
+        if distance < best:  # the first nearest segment, as argmin
+            cross = dx * ry - dy * rx
+            best, side = distance, (-1.0 if cross < 0 else 1.0)
+    return side * best
 
 
 def _clip_to_horizon(xyt: np.ndarray, horizon_s: float) -> np.ndarray:
