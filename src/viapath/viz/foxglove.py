@@ -93,6 +93,10 @@ METRICS_SCHEMA = {
 }
 
 
+# json.dumps(..., allow_nan=False) makes an encoder per call; one, made once, writes the same text.
+_JSON = json.JSONEncoder(allow_nan=False)
+
+
 class ViewError(ValueError):
     """A view cannot be set up (bad output path, missing extra, busy port)."""
 
@@ -211,9 +215,9 @@ class FoxglovePublisher:
         ch[PATH].log(self._path(scene), log_time=ns)
         ch[CANDIDATES].log(self._candidates(scene, ns), log_time=ns)
         ch[CHOSEN].log(self._chosen(scene, ns), log_time=ns)
-        ch[COSTS].log(json.dumps(costs_message(scene), allow_nan=False).encode(), log_time=ns)
+        ch[COSTS].log(_JSON.encode(costs_message(scene)).encode(), log_time=ns)
         ch[XYT].log(self._xyt(scene, ns), log_time=ns)
-        ch[METRICS].log(json.dumps(metrics_message(scene), allow_nan=False).encode(), log_time=ns)
+        ch[METRICS].log(_JSON.encode(metrics_message(scene)).encode(), log_time=ns)
         self.cycles += 1
 
     # -- pieces --------------------------------------------------------------------------------
@@ -372,7 +376,7 @@ class FoxglovePublisher:
 
     def _path(self, scene: CycleScene) -> bytes:
         """Path, corridor and the current subgoal: one cached message per subgoal."""
-        key = ("path", scene.subgoal_index, tuple(np.round(scene.subgoal, 9)))
+        key = ("path", scene.subgoal_index, *(round(value, 9) for value in scene.subgoal.tolist()))
         if key not in self.static:
             c, view = self.colours, self.builder.path_view
             lines = [self._line(self._points(view.waypoints), c["path"], 0.02)]
