@@ -8,8 +8,9 @@ the run's own process an MCAP doubles the run. A recorder beside the robot is ho
 * The run's process keeps, per cycle, only what the scene is built from (step, time, robot state,
   the tracks, the command and plan, plan time, the perception's scans/detections/blind region, the
   simulator's truth): the numbers and strings as they are, every array of the cycle in one float
-  array with the row counts (:func:`cycle_input`), pickled and sent down a pipe. What stays the
-  same for the run (forecast settings, the scanners' names, mounts and beam geometry) goes once,
+  array with the row counts (:func:`cycle_input`), pickled and sent down a pipe in batches of up
+  to 8 cycles (a send, and the writer's wake-up, cost more than a cycle's pickling). What stays
+  the same for the run (forecast settings, the scanners' names, mounts and beam geometry) goes once,
   with the first cycle (:func:`static_input`). Pickling costs about 2-3 µs per array, so one array
   instead of a dozen is most of the run's share; the rows the scene drops (tracks with a NaN
   field, people not in the scene) are dropped by the writer, and of the plan's extras only those
@@ -19,8 +20,10 @@ the run's own process an MCAP doubles the run. A recorder beside the robot is ho
   :class:`~viapath.viz.foxglove.FoxglovePublisher` as an in-process view, so the file is the same.
 * It is started by ``fork`` where the platform has it (it then inherits the imports: starts in a few
   ms) and ``spawn`` elsewhere. It opens the file and reports ready (or its error) before the run
-  starts, then sets up its publisher while the run begins; at the end the run's process sends "done" and waits for the count of cycles written.
-  If the writer fails mid-run, the next send or the end raises the given error (the views pass
+  starts, then sets up its publisher while the run begins; at the end the run's process sends
+  "done" and waits for the count of cycles written. A run that stops (Ctrl-C, an error) first
+  sends the cycles still kept, so the file holds every cycle that ran. If the writer fails
+  mid-run, the next send or the end raises the given error (the views pass
   :class:`~viapath.viz.foxglove.ViewError`) with its reason.
 
 Choices: a pipe rather than a ``multiprocessing.Queue`` (no feeder thread competing for the GIL);
@@ -33,6 +36,7 @@ from __future__ import annotations
 import multiprocessing
 import pickle
 import signal
+import time
 import traceback
 from pathlib import Path
 from typing import Any
@@ -40,6 +44,10 @@ from typing import Any
 import numpy as np
 
 _READY, _DONE, _FAILED = "ready", "done", "failed"
+# Cycles go to the writer in batches: one send (a system call and a wake-up of the writer) per
+# batch instead of per cycle. Bounded by count and by size (a laser cycle is ~13 kB).
+BATCH_CYCLES, BATCH_BYTES = 8, 64_000
+POLL_S = 0.001  # how long the writer sleeps when nothing has come (s)
 _PICKLE = pickle.HIGHEST_PROTOCOL
 
 
@@ -200,14 +208,19 @@ def _writer_main(connection, publisher_class, file: str, force: bool, waypoints,
         path = DesignatedPath(waypoints, half_widths_m=half_widths_m)
         publisher = publisher_class(context, path, robot_radius_m, settings)
         while True:
+            # Sleep rather than wait on the pipe: a process waiting on it must be woken by each send,
+            # which costs the run's process a wake-up (an interrupt to the other core, often a
+            # switch to this one) per batch. Polling every millisecond costs the writer, not the run.
+            while not connection.poll(0):
+                time.sleep(POLL_S)
             message = connection.recv_bytes()
             if message == b"":
                 break
-            payload = pickle.loads(message)
-            if publisher.builder is None:
-                static, payload = payload
+            static, payloads = pickle.loads(message)
+            if static is not None:
                 publisher.start(static)
-            publisher.publish(publisher.build(payload))
+            for payload in payloads:
+                publisher.publish(publisher.build(payload))
         writer.close()
         writer = None
         connection.send((_DONE, publisher.cycles))
@@ -235,8 +248,10 @@ class MCAPWriterProcess:
                  error: type[Exception] = RuntimeError, settings=None):
         self._error = error
         self.file = Path(file)
-        self.cycles = 0
-        self._first = True
+        self.cycles = 0  # handed to the writer (sent or pending)
+        self._static, self._static_sent = None, False
+        self._pending: list[tuple] = []
+        self._pending_bytes = 0
         ctx = multiprocessing.get_context(_start_method())
         self._connection, child = ctx.Pipe(duplex=True)
         self.process = ctx.Process(
@@ -257,22 +272,33 @@ class MCAPWriterProcess:
             return _FAILED, f"the writer process ended with exit code {self.process.exitcode}"
 
     def __call__(self, record) -> None:
+        if self._static is None:
+            self._static = static_input(record)
         payload = cycle_input(record)
-        if self._first:
-            payload = (static_input(record), payload)
-            self._first = False
+        self._pending.append(payload)
+        self._pending_bytes += payload[-1].nbytes
+        self.cycles += 1
+        if len(self._pending) >= BATCH_CYCLES or self._pending_bytes >= BATCH_BYTES:
+            self._send_pending()
+
+    def _send_pending(self) -> None:
+        """Send the cycles kept so far (with the run's static part before the first)."""
+        static = self._static if not self._static_sent else None
+        message = pickle.dumps((static, self._pending), protocol=_PICKLE)
+        self._pending, self._pending_bytes, self._static_sent = [], 0, True
         try:
-            self._connection.send_bytes(pickle.dumps(payload, protocol=_PICKLE))
+            self._connection.send_bytes(message)
         except (BrokenPipeError, OSError):
             kind, detail = self._receive()
             self._stop()
             raise self._error(f"--mcap {self.file}: the writer failed ({detail})") from None
-        self.cycles += 1
 
     def close(self) -> int:
         """Tell the writer the run is over, wait for it to finish the file; the cycles it wrote."""
         if self.process is None:
             return self.cycles
+        if self._pending:
+            self._send_pending()
         try:
             self._connection.send_bytes(b"")
         except (BrokenPipeError, OSError):
