@@ -245,9 +245,12 @@ class FoxglovePublisher:
                      **{name: colour.encode() for name, colour in self.colours.items()}}
         self.wire["deletions"] = wire.message_field(1, self.wire["delete_all"])  # a SceneUpdate's "delete all"
         self.wire["via_size"] = wire.vector3(0.1, 0.1, 0.1)
+        for name in ("track", "track_sigma"):  # a CylinderPrimitive's colour is its field 5
+            self.wire[f"{name}_field"] = wire.message_field(5, self.wire[name])
         self.static: dict[Any, Any] = {}
         self.candidate_colours: dict[int, bytes] = {}
         self.track_cache: dict[tuple, bytes] = {}  # the last cycle's tracks: key -> entity without timestamp
+        self.person_names: dict[int, bytes] = {}  # track id -> the encoded id of its x-y-t entity
 
     def _points(self, xy: np.ndarray, z: float = 0.0) -> list:
         P = self.m.Point3
@@ -352,6 +355,9 @@ class FoxglovePublisher:
         tracks = scene.tracks
         k = self.builder.settings.uncertainty_sigmas if self.builder else 2.0
         stamp = wire.stamp_field(ns)
+        track_colour, sigma_colour = w["track_field"], w["track_sigma_field"]
+        cylinders, texts, arrows = (wire.tag(field, 2) for field in (
+            wire.ENTITY_CYLINDERS, wire.ENTITY_TEXTS, wire.ENTITY_ARROWS))
         cache, self.track_cache = self.track_cache, {}
         entities = []
         for key in zip(tracks.positions[:, 0].tolist(), tracks.positions[:, 1].tolist(),
@@ -361,15 +367,17 @@ class FoxglovePublisher:
             if body is None:
                 px, py, vx, vy, r, sp, sv, track = key
                 speed = math.hypot(vx, vy)
+                # The disc and the k·σ ring as _disc draws them (centre at half the height).
+                disc = wire.upright_cylinder(px, py, 0.0 + 0.5 * 0.1, 2 * r, 2 * r, 0.1, track_colour)
+                ring = wire.upright_cylinder(px, py, 0.0 + 0.5 * 0.005, 2 * (r + k * sp), 2 * (r + k * sp), 0.005,
+                                             sigma_colour)
+                label = self._wire_text(px, py, 0.3, f"{track}: {speed:.2f} m/s ±{sv:.2f}", w["track_text"])
                 body = (wire.string_field(2, WORLD) + wire.string_field(3, f"track-{track}")
-                        + wire.primitives(wire.ENTITY_CYLINDERS, [
-                            self._wire_disc(px, py, r, w["track"], height=0.1),
-                            self._wire_disc(px, py, r + k * sp, w["track_sigma"], height=0.005)])
-                        + wire.message_field(wire.ENTITY_TEXTS, self._wire_text(
-                            px, py, 0.3, f"{track}: {speed:.2f} m/s ±{sv:.2f}", w["track_text"])))
+                        + cylinders + wire.varint(len(disc)) + disc + cylinders + wire.varint(len(ring)) + ring
+                        + texts + wire.varint(len(label)) + label)
                 if speed > 1e-6:
-                    body += wire.message_field(wire.ENTITY_ARROWS, wire.arrow(
-                        wire.pose(px, py, 0.12, math.atan2(vy, vx)), speed, 0.03, 0.1, 0.08, w["arrow"]))
+                    arrow = wire.arrow(wire.pose(px, py, 0.12, math.atan2(vy, vx)), speed, 0.03, 0.1, 0.08, w["arrow"])
+                    body += arrows + wire.varint(len(arrow)) + arrow
             self.track_cache[key] = body
             entities.append(stamp + body)
         return self._scene_update(entities)
@@ -505,9 +513,12 @@ class FoxglovePublisher:
                               ("mesh", np.concatenate([rings.reshape(count, 3 * segments, 3), caps], axis=1))):
                 points = records[name]
                 points["x"], points["y"], points["z"] = xyz[..., 0], xyz[..., 1], xyz[..., 2]
-            data, size = records.tobytes(), dtype.itemsize
+            data, size, names = records.tobytes(), dtype.itemsize, self.person_names
             for i, person in enumerate(xyt.persons):
-                entities.append(head + wire.string_field(3, f"person-{person.id}") + data[i * size:(i + 1) * size])
+                name = names.get(person.id)
+                if name is None:
+                    name = names[person.id] = wire.string_field(3, f"person-{person.id}")
+                entities.append(head + name + data[i * size:(i + 1) * size])
         x, y = scene.robot_pose[:2].tolist()
         horizon = xyt.settings.horizon_s
         ticks = [self._wire_text(x - 0.3, y, t * scale, f"{t:g} s", w["grey"], 11.0) for t in (0.0, 0.5 * horizon, horizon)]

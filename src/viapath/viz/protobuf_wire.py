@@ -177,6 +177,17 @@ def cylinder(pose_bytes: bytes, size_x: float, size_y: float, size_z: float, col
     return _POSE_1 + pose_bytes + _SIZE_2 + vector3(size_x, size_y, size_z) + message_field(5, color)
 
 
+# A CylinderPrimitive standing upright (yaw 0): its pose and size in one struct.pack.
+_UPRIGHT = struct.Struct("<BB" + "BBBdBdBdBBBdBdBdBd" + "BBBdBdBd")
+
+
+def upright_cylinder(x: float, y: float, z: float, size_x: float, size_y: float, size_z: float,
+                     color_field: bytes) -> bytes:
+    """:func:`cylinder` with the pose ``pose(x, y, z)``; ``color_field``: ``message_field(5, color)``."""
+    return _UPRIGHT.pack(0x0A, 67, 0x0A, 27, 0x09, x, 0x11, y, 0x19, z, 0x12, 36, 0x09, 0.0, 0x11, 0.0, 0x19, 0.0,
+                         0x21, 1.0, 0x12, 27, 0x09, size_x, 0x11, size_y, 0x19, size_z) + color_field
+
+
 # foxglove.SpherePrimitive: pose 1, size 2, color 3
 def sphere(pose_bytes: bytes, size: bytes, color: bytes) -> bytes:
     """An encoded ``SpherePrimitive`` (``size``: :func:`vector3`)."""

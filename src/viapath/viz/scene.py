@@ -126,6 +126,9 @@ class XYTScene:
     plan_xyt: np.ndarray  # (K, 3) x, y, t of the robot's plan from the robot (t = 0) on
     via_points_xyt: np.ndarray  # (V, 3)
     cone: bool = True
+    # (P, 6) x, y, vx, vy, combined radius, σ_v of the persons, in their order (None: read from them);
+    # the builder gives it from the tracks' arrays so that the rings need no loop over persons.
+    person_fields: np.ndarray | None = None
 
     def height_m(self, t_s) -> np.ndarray:
         return np.asarray(t_s, dtype=float) * self.settings.time_scale_m_per_s
@@ -167,7 +170,10 @@ class XYTScene:
         settings = self.settings
         horizon = settings.horizon_s
         # One (P, 6) array of what the rings depend on: fewer, larger numpy calls (this runs every cycle).
-        fields = np.array([(*p.position, *p.velocity, p.combined_radius_m, p.velocity_sigma_mps) for p in self.persons])
+        fields = self.person_fields
+        if fields is None:
+            fields = np.array([(*p.position, *p.velocity, p.combined_radius_m, p.velocity_sigma_mps)
+                               for p in self.persons])
         growth = settings.uncertainty_sigmas * fields[:, 5] if self.cone else np.zeros(count)
         growing = growth > 0
         cap = np.full(count, np.inf)
@@ -323,8 +329,10 @@ class SceneBuilder:
         parts = perception_parts if perception_parts is not None else perception_parts_of(perception)
         scanners, detections, radii, points, sectors, blind = parts
         horizon = self.settings.horizon_s
+        fields = np.column_stack([tracks.positions, tracks.velocities, tracks.radii_m + self.robot_radius_m,
+                                  tracks.velocity_sigma_mps]) if len(tracks) else None
         xyt = XYTScene(self.settings, _persons(tracks, self.robot_radius_m), plan_xyt(pose[:2], plan, horizon),
-                       _via_xyt(pose[:2], plan, horizon), self.cone)
+                       _via_xyt(pose[:2], plan, horizon), self.cone, fields)
         people = true_people if true_people is not None else tracks
         series = {
             "speed_mps": float(robot_speed_mps),
