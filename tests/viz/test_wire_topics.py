@@ -1,5 +1,6 @@
-"""Every topic the publisher encodes itself (viapath.viz.protobuf_wire) decodes, with Foxglove's own
-schema, to the message foxglove-sdk's classes build from the same scene, field by field.
+"""Every topic the publisher encodes itself (viapath.viz.protobuf_wire: transforms, scans and every
+SceneUpdate built per cycle) decodes, with Foxglove's own schema, to the message foxglove-sdk's
+classes build from the same scene, field by field.
 
 The reference below is the publisher as it was written with the SDK's classes only (one
 ``foxglove.messages`` object per point, primitive and entity). Scenes come from real runs: the
@@ -40,6 +41,7 @@ def _message_class(sdk_class, name: str):
 
 SCENE_UPDATE = _message_class(m.SceneUpdate, "foxglove.SceneUpdate")
 LASER_SCAN = _message_class(m.LaserScan, "foxglove.LaserScan")
+FRAME_TRANSFORMS = _message_class(m.FrameTransforms, "foxglove.FrameTransforms")
 
 
 # -- the reference: foxglove-sdk's classes only ------------------------------------------------------
@@ -79,6 +81,14 @@ def _update(entities):
 
 def reference(topic: str, scene, ns: int, colours: dict, k_sigma: float, segments: int, scanner=None):
     c, stamp = colours, _stamp(ns)
+    if topic == fx.TF:
+        def tf(parent, child, px, py, yaw):
+            return m.FrameTransform(timestamp=stamp, parent_frame_id=parent, child_frame_id=child,
+                                    translation=m.Vector3(x=float(px), y=float(py), z=0.0),
+                                    rotation=m.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)))
+        x, y, heading = scene.robot_pose
+        return m.FrameTransforms(transforms=[tf("world", "base", x, y, heading), tf("world", "xyt", 0.0, 0.0, 0.0)] + [
+            tf("base", fx.scanner_frame(s.name), *s.mount_pose) for s in scene.scanners]).encode()
     if topic == "scan":
         ranges = np.asarray(scanner.ranges_m, dtype=float)
         valid = np.isfinite(ranges) & (ranges >= max(scanner.range_min_m, 1e-9)) & (ranges <= scanner.range_max_m)
@@ -184,6 +194,9 @@ def _compare_run(scenario, perception: str, every: int = 1) -> dict[str, int]:
             for entity in ours.entities:
                 for kind in ("arrows", "cylinders", "spheres", "lines", "triangles", "texts"):
                     seen[kind] = seen.get(kind, 0) + len(getattr(entity, kind))
+        ours = FRAME_TRANSFORMS.FromString(publisher._transforms(scene, ns))
+        assert ours == FRAME_TRANSFORMS.FromString(reference(fx.TF, scene, ns, publisher.colours, k, 0)), record.step
+        seen["transforms"] = seen.get("transforms", 0) + len(ours.transforms)
         for scanner in scene.scanners if record.step % every == 0 else ():
             ours = LASER_SCAN.FromString(publisher._scan(scanner, ns))
             theirs = LASER_SCAN.FromString(reference("scan", scene, ns, publisher.colours, k, 0, scanner))
@@ -199,6 +212,7 @@ def _compare_run(scenario, perception: str, every: int = 1) -> dict[str, int]:
 def test_laser_run_topics_decode_to_the_sdk_messages():
     seen = _compare_run(load_scenario("paper-side"), "laser", every=3)
     assert seen["scans"] > 0 and seen["arrows"] > 0 and seen["triangles"] > 0 and seen["texts"] > 0
+    assert seen["transforms"] > 0
 
 
 def test_front_run_candidates_and_via_points_decode_to_the_sdk_messages():

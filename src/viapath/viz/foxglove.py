@@ -33,9 +33,13 @@ What we chose:
   disappears; static content (path, corridor) is still sent every cycle, so scrubbing to any time
   shows it and every topic has one message per cycle. What never changes in its frame (footprint,
   blind region: frame-locked to ``base``; the path for a given subgoal) is one message built once.
-* The vertex-heavy topics (``/xyt``, ``/plan/candidates``) are encoded with numpy
-  (:mod:`viapath.viz.protobuf_wire`) against the same ``foxglove.SceneUpdate`` schema; the rest
-  uses foxglove-sdk's message classes. MCAP chunks are LZ4-compressed (cheaper than zstd per cycle).
+* Every protobuf message that changes per cycle (``/tf``, scans, every ``SceneUpdate``) is
+  encoded by :mod:`viapath.viz.protobuf_wire` (a pose is one ``struct.pack``, a point list one
+  numpy array) against Foxglove's own schemas, on channels that take bytes; what never changes
+  (colours, the footprint, the blind region, the path for a subgoal) is built once with
+  foxglove-sdk's message classes. ``tests/viz/test_wire_topics.py`` decodes every hand-encoded
+  topic and compares it, field by field, with the message the SDK's classes build. MCAP chunks
+  are LZ4-compressed (cheaper than zstd per cycle).
 * Readings a driver marks invalid (inf, NaN, 0, below the minimum range) are sent as NaN, which
   Foxglove leaves out.
 * JSON numbers that are not finite (no one in sight: clearance inf) are sent as ``null``.
@@ -152,12 +156,12 @@ class FoxglovePublisher:
     # channels are made at the first cycle, when the scanners are known
     def _open_channels(self, scene: CycleScene) -> None:
         from foxglove import Channel, Schema
-        from foxglove.channels import FrameTransformsChannel
 
         ctx = self.context
-        self.channels[TF] = FrameTransformsChannel(TF, context=ctx)
-        # Every SceneUpdate and LaserScan is encoded here (viapath.viz.protobuf_wire) against
-        # Foxglove's own schema, so these channels take bytes.
+        # Every FrameTransforms, SceneUpdate and LaserScan is encoded here (viapath.viz.protobuf_wire)
+        # against Foxglove's own schema, so these channels take bytes.
+        self.channels[TF] = Channel(TF, message_encoding="protobuf", schema=self.m.FrameTransforms.get_schema(),
+                                    context=ctx)
         topics = [FOOTPRINT, TRACKS, PATH, CANDIDATES, CHOSEN, XYT]
         if scene.scanners:
             topics[1:1] = [BLIND, DETECTIONS]
@@ -202,9 +206,8 @@ class FoxglovePublisher:
     def publish(self, scene: CycleScene) -> None:
         self.open_channels(scene)
         ns = int(round(scene.time_s * 1e9))
-        stamp = self.m.Timestamp(ns // 1_000_000_000, ns % 1_000_000_000)
         ch = self.channels
-        ch[TF].log(self._transforms(scene, stamp), log_time=ns)
+        ch[TF].log(self._transforms(scene, ns), log_time=ns)
         ch[FOOTPRINT].log(self._footprint(scene), log_time=ns)
         for scanner in scene.scanners:
             ch[scan_topic(scanner.name)].log(self._scan(scanner, ns), log_time=ns)
@@ -295,17 +298,16 @@ class FoxglovePublisher:
         """A SceneUpdate that first deletes what its topic drew before."""
         return self.wire["deletions"] + b"".join(wire.message_field(2, entity) for entity in entities)
 
-    def _transforms(self, scene: CycleScene, stamp):
-        m = self.m
-        x, y, heading = scene.robot_pose
-
-        def tf(parent, child, px, py, yaw):
-            return m.FrameTransform(timestamp=stamp, parent_frame_id=parent, child_frame_id=child,
-                                    translation=m.Vector3(x=float(px), y=float(py), z=0.0),
-                                    rotation=m.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)))
-        transforms = [tf(WORLD, BASE, x, y, heading), tf(WORLD, XYT_FRAME, 0.0, 0.0, 0.0)]
-        transforms += [tf(BASE, scanner_frame(s.name), *s.mount_pose) for s in scene.scanners]
-        return m.FrameTransforms(transforms=transforms)
+    def _transforms(self, scene: CycleScene, ns: int) -> bytes:
+        """world → base at the robot's pose, world → xyt, base → each scanner at its mount."""
+        stamp = wire.stamp_field(ns)
+        fixed = self.static.get("tf")
+        if fixed is None:  # what follows the timestamp of the transforms that never move
+            fixed = self.static["tf"] = [wire.frame_transform_tail(WORLD, XYT_FRAME, 0.0, 0.0, 0.0)] + [
+                wire.frame_transform_tail(BASE, scanner_frame(s.name), *s.mount_pose.tolist()) for s in scene.scanners]
+        x, y, heading = scene.robot_pose.tolist()
+        return wire.frame_transforms([stamp + wire.frame_transform_tail(WORLD, BASE, x, y, heading)]
+                                     + [stamp + tail for tail in fixed])
 
     def _footprint(self, scene: CycleScene) -> bytes:
         """The robot's disc and heading in the base frame: the same every cycle (frame-locked)."""

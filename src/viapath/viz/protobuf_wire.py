@@ -243,3 +243,20 @@ def laser_scan(stamp_ns: int, frame_id: str, pose_bytes: bytes, start_angle: flo
     data = np.asarray(ranges, dtype="<f8").tobytes()
     return (stamp_field(stamp_ns) + string_field(2, frame_id) + message_field(3, pose_bytes)
             + double_field(4, start_angle) + double_field(5, end_angle) + (message_field(6, data) if data else b""))
+
+
+# foxglove.FrameTransform: timestamp 1, parent_frame_id 2, child_frame_id 3, translation 4, rotation 5
+_QUATERNION = struct.Struct("<BdBdBdBd")  # 36 bytes
+
+
+def frame_transform_tail(parent: str, child: str, x: float, y: float, yaw_rad: float) -> bytes:
+    """An encoded ``foxglove.FrameTransform`` after its timestamp: ``child`` at (x, y, 0) in
+    ``parent``, turned by ``yaw_rad`` about z (prepend :func:`stamp_field`)."""
+    half = yaw_rad / 2
+    return (string_field(2, parent) + string_field(3, child) + b"\x22\x1b" + vector3(x, y, 0.0) + b"\x2a\x24"
+            + _QUATERNION.pack(0x09, 0.0, 0x11, 0.0, 0x19, math.sin(half), 0x21, math.cos(half)))
+
+
+# foxglove.FrameTransforms: transforms 1
+def frame_transforms(transforms: list[bytes]) -> bytes:
+    return b"".join(message_field(1, transform) for transform in transforms)

@@ -369,14 +369,17 @@ def plan_xyt(robot_position, plan, horizon_s: float) -> np.ndarray:
     line = np.asarray(plan.waypoints, dtype=float).reshape(-1, 2)
     if len(line) == 0:
         line = np.array([start, np.asarray(plan.target, dtype=float).reshape(2)])
-    if np.hypot(*(line[0] - start)) > 1e-9:
+    if math.hypot(line[0, 0] - start[0], line[0, 1] - start[1]) > 1e-9:
         line = np.vstack([start, line])
     extras = plan.extras or {}
     times = extras.get("waypoint_times_s")
     if times is not None and len(times) == len(plan.waypoints) and len(line) == len(plan.waypoints):
         xyt = np.column_stack([line, np.asarray(times, dtype=float)])
         return _clip_to_horizon(xyt, horizon_s)
-    lengths = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(line, axis=0).T))])
+    # Arc length at each point (this runs every cycle on a few points: plain slicing, no np.diff).
+    steps = line[1:] - line[:-1]
+    lengths = np.zeros(len(line))
+    np.cumsum(np.hypot(steps[:, 0], steps[:, 1]), out=lengths[1:])
     speed = float(plan.speed_mps)
     slow_s = float(extras.get("slow_s", 0.0) or 0.0)
     after = extras.get("speed_after_mps")
@@ -392,7 +395,9 @@ def plan_xyt(robot_position, plan, horizon_s: float) -> np.ndarray:
         return _clip_to_horizon(np.column_stack([points, t]), horizon_s)
     if speed <= 1e-9:
         return np.array([[start[0], start[1], 0.0], [start[0], start[1], horizon_s]])
-    return _clip_to_horizon(np.column_stack([line, lengths / speed]), horizon_s)
+    xyt = np.empty((len(line), 3))
+    xyt[:, :2], xyt[:, 2] = line, lengths / speed
+    return _clip_to_horizon(xyt, horizon_s)
 
 
 def lateral_deviation_m(segments: list, x: float, y: float) -> float:
