@@ -130,3 +130,17 @@ def test_ctrl_c_ends_the_run_and_keeps_a_readable_file(tmp_path):
     assert "interrupted" in stderr and "Traceback" not in stderr
     cycles = sum(topic == "/tf" for topic, _, _ in _messages(file))
     assert 0 < cycles < 3000
+
+
+def test_a_writer_that_cannot_open_its_file_says_so_without_holding_up_the_run(tmp_path):
+    """The run does not wait for the writer to open the file: a failure to open it (here a folder
+    that does not exist, which the views check first) is raised at the first batch or the end."""
+    from viapath.path import DesignatedPath
+
+    scenario = load_scenario("paper-front")
+    path = DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths())
+    writer = MCAPWriterProcess(tmp_path / "missing" / "x.mcap", False, path, scenario.robot.radius,
+                               FoxglovePublisher, ViewError)
+    with pytest.raises(ViewError, match="could not start"):
+        writer.close()
+    assert writer.process is None

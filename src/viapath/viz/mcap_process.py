@@ -19,8 +19,10 @@ the run's own process an MCAP doubles the run. A recorder beside the robot is ho
   :class:`~viapath.viz.scene.SceneBuilder` and logs it with the same
   :class:`~viapath.viz.foxglove.FoxglovePublisher` as an in-process view, so the file is the same.
 * It is started by ``fork`` where the platform has it (it then inherits the imports: starts in a few
-  ms) and ``spawn`` elsewhere. It opens the file and reports ready (or its error) before the run
-  starts, then sets up its publisher while the run begins; at the end the run's process sends
+  ms) and ``spawn`` elsewhere. The run does not wait for it: a file that exists without ``force``
+  is refused before the process starts (the views check the folder and the rights before that),
+  and the writer's report of opening the file is read when the first batch goes (a failure is
+  then raised as "could not start"); at the end the run's process sends
   "done" and waits for the count of cycles written. A run that stops (Ctrl-C, an error) first
   sends the cycles still kept, so the file holds every cycle that ran. If the writer fails
   mid-run, the next send or the end raises the given error (the views pass
@@ -258,12 +260,21 @@ class MCAPWriterProcess:
             target=_writer_main, name="viapath-mcap-writer", daemon=True,
             args=(child, publisher_class, str(self.file), force, np.asarray(path.waypoints, dtype=float),
                   np.asarray(path.half_widths_m, dtype=float), float(robot_radius_m), settings))
+        if self.file.exists() and not force:  # the one refusal foreseen: said before the process starts
+            raise error(f"--mcap {self.file}: the writer could not start (file exists; add --force to overwrite it)")
         self.process.start()
         child.close()
+        self._ready = False  # the writer's "ready" is read when the first batch goes, not waited for
+
+    def _check_ready(self, wait: bool) -> None:
+        """Read the writer's report of opening the file once it has come (``wait``: until it comes)."""
+        if self._ready or not (wait or self._connection.poll(0)):
+            return
         kind, detail = self._receive()
         if kind != _READY:
             self._stop()
-            raise error(f"--mcap {self.file}: the writer could not start ({detail})")
+            raise self._error(f"--mcap {self.file}: the writer could not start ({detail})")
+        self._ready = True
 
     def _receive(self) -> tuple[str, Any]:
         try:
@@ -283,12 +294,14 @@ class MCAPWriterProcess:
 
     def _send_pending(self) -> None:
         """Send the cycles kept so far (with the run's static part before the first)."""
+        self._check_ready(wait=False)
         static = self._static if not self._static_sent else None
         message = pickle.dumps((static, self._pending), protocol=_PICKLE)
         self._pending, self._pending_bytes, self._static_sent = [], 0, True
         try:
             self._connection.send_bytes(message)
         except (BrokenPipeError, OSError):
+            self._check_ready(wait=True)  # a writer that could not open the file says so
             kind, detail = self._receive()
             self._stop()
             raise self._error(f"--mcap {self.file}: the writer failed ({detail})") from None
@@ -303,6 +316,7 @@ class MCAPWriterProcess:
             self._connection.send_bytes(b"")
         except (BrokenPipeError, OSError):
             pass
+        self._check_ready(wait=True)
         kind, detail = self._receive()
         self._stop()
         if kind != _DONE:

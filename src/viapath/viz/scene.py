@@ -422,7 +422,10 @@ def _clip_to_horizon(xyt: np.ndarray, horizon_s: float) -> np.ndarray:
     last = int(np.flatnonzero(inside)[-1])
     a, b = xyt[last], xyt[last + 1]
     fraction = (horizon_s - a[2]) / max(b[2] - a[2], 1e-12)
-    return np.vstack([xyt[: last + 1], a + fraction * (b - a)])
+    out = np.empty((last + 2, 3))  # the points inside, then the one at the horizon
+    out[:last + 1] = xyt[:last + 1]
+    out[last + 1] = a + fraction * (b - a)
+    return out
 
 
 def _via_xyt(robot_position, plan, horizon_s: float, line: np.ndarray | None = None) -> np.ndarray:
