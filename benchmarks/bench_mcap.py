@@ -37,6 +37,12 @@ from viapath.scenarios import load_scenario, scenario_from_dict
 from viapath.sim.loop import run_episode
 from viapath.viz.foxglove import display_overrides, record_episode
 
+try:
+    from viapath.viz.mcap_process import wait_for_writers
+except ImportError:  # an older viapath (measured for comparison) waits for its writer itself
+    def wait_for_writers() -> None:
+        return None
+
 DEFAULT = ("paper-front", "paper-side:laser", "zara01")
 
 
@@ -77,6 +83,7 @@ def measure(name: str, repeats: int, folder: Path) -> dict | None:
         wall_start, cpu_start, child_start = time.perf_counter(), time.process_time(), children_cpu()
         result = run()
         wall[kind].append(time.perf_counter() - wall_start)
+        wait_for_writers()  # the writer's exit is not waited for by the run; its CPU counts once reaped
         cpu[kind].append(time.process_time() - cpu_start)
         cpu_all[kind].append(cpu[kind][-1] + children_cpu() - child_start)
         return result

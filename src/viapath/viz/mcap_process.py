@@ -23,7 +23,8 @@ the run's own process an MCAP doubles the run. A recorder beside the robot is ho
   is refused before the process starts (the views check the folder and the rights before that),
   and the writer's report of opening the file is read when the first batch goes (a failure is
   then raised as "could not start"); at the end the run's process sends
-  "done" and waits for the count of cycles written. A run that stops (Ctrl-C, an error) first
+  "done" and waits for the count of cycles written (the file is then complete; the writer's exit
+  is waited for by a thread, not by the run). A run that stops (Ctrl-C, an error) first
   sends the cycles still kept, so the file holds every cycle that ran. If the writer fails
   mid-run, the next send or the end raises the given error (the views pass
   :class:`~viapath.viz.foxglove.ViewError`) with its reason.
@@ -38,6 +39,7 @@ from __future__ import annotations
 import multiprocessing
 import pickle
 import signal
+import threading
 import time
 import traceback
 from pathlib import Path
@@ -318,19 +320,40 @@ class MCAPWriterProcess:
             pass
         self._check_ready(wait=True)
         kind, detail = self._receive()
-        self._stop()
+        self._stop(reap_later=kind == _DONE)
         if kind != _DONE:
             raise self._error(f"--mcap {self.file}: the writer failed ({detail})")
         if detail != self.cycles:
             raise self._error(f"--mcap {self.file}: the writer wrote {detail} of {self.cycles} cycles")
         return detail
 
-    def _stop(self) -> None:
+    def _stop(self, reap_later: bool = False) -> None:
+        """End the writer process. ``reap_later``: it has closed the file and is exiting (which takes
+        a few ms: its copy of the run's memory is released); a thread waits for it instead of the run."""
         process, self.process = self.process, None
         if process is None:
             return
-        process.join(timeout=30)
-        if process.is_alive():
-            process.kill()
-            process.join()
         self._connection.close()
+        if reap_later and process.is_alive():
+            reaper = threading.Thread(target=_reap, args=(process,), name="viapath-mcap-reaper", daemon=True)
+            reaper.start()
+            _REAPERS.append(reaper)
+            return
+        _reap(process)
+
+
+_REAPERS: list[threading.Thread] = []
+
+
+def _reap(process) -> None:
+    process.join(timeout=30)
+    if process.is_alive():
+        process.kill()
+        process.join()
+
+
+def wait_for_writers() -> None:
+    """Wait until every writer process that finished its file has exited (benchmarks read the
+    writers' CPU time, which counts once they are reaped)."""
+    while _REAPERS:
+        _REAPERS.pop().join()
