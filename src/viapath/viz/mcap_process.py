@@ -37,11 +37,13 @@ stays bounded and the file is complete. The live view stays in the run's process
 from __future__ import annotations
 
 import multiprocessing
+import os
 import pickle
 import signal
 import threading
 import time
 import traceback
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -183,10 +185,8 @@ def _obstacles(positions, velocities, radii_m, position_sigma_m, velocity_sigma_
     from viapath.observation import Obstacles
 
     obstacles = object.__new__(Obstacles)
-    for name, value in (("positions", positions), ("velocities", velocities), ("radii_m", radii_m),
-                        ("position_sigma_m", position_sigma_m), ("velocity_sigma_mps", velocity_sigma_mps),
-                        ("ids", ids)):
-        object.__setattr__(obstacles, name, value)
+    vars(obstacles).update(positions=positions, velocities=velocities, radii_m=radii_m,
+                           position_sigma_m=position_sigma_m, velocity_sigma_mps=velocity_sigma_mps, ids=ids)
     return obstacles
 
 
@@ -301,7 +301,8 @@ class MCAPWriterProcess:
         message = pickle.dumps((static, self._pending), protocol=_PICKLE)
         self._pending, self._pending_bytes, self._static_sent = [], 0, True
         try:
-            self._connection.send_bytes(message)
+            with _whole_message():
+                self._connection.send_bytes(message)
         except (BrokenPipeError, OSError):
             self._check_ready(wait=True)  # a writer that could not open the file says so
             kind, detail = self._receive()
@@ -315,7 +316,8 @@ class MCAPWriterProcess:
         if self._pending:
             self._send_pending()
         try:
-            self._connection.send_bytes(b"")
+            with _whole_message():
+                self._connection.send_bytes(b"")
         except (BrokenPipeError, OSError):
             pass
         self._check_ready(wait=True)
@@ -343,6 +345,26 @@ class MCAPWriterProcess:
 
 
 _REAPERS: list[threading.Thread] = []
+
+
+@contextmanager
+def _whole_message():
+    """Hold a Ctrl-C until the message is sent: a batch above 16 kB goes in several writes, and an
+    interrupt between two would leave the writer waiting for the rest of it (and the run waiting
+    for the writer). The signal is raised again, as it came, once the message is out. Main thread
+    only (where Python runs signal handlers); elsewhere the send is as it is."""
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or not callable(previous):
+        yield  # not the main thread, or Ctrl-C ignored or handled outside Python
+        return
+    caught: list[int] = []
+    signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if caught:
+            os.kill(os.getpid(), signal.SIGINT)
 
 
 def _reap(process) -> None:
