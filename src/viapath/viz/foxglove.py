@@ -513,13 +513,14 @@ class FoxglovePublisher:
             records = np.empty((count, size), dtype=np.uint8)
             records[:] = template
 
-            def put(field: str, first: int, xyz: np.ndarray) -> None:
+            def put(field: str, first: int, xyz: np.ndarray, strides: tuple = ()) -> None:
                 # The x, y, z of each point record (tag, length, then a tag before each double: 29
                 # bytes) as one strided view of unaligned doubles, written in one assignment.
                 offset = dtype.fields[field][1] + 29 * first + 3
-                np.ndarray(xyz.shape, dtype="<f8", buffer=records, offset=offset, strides=(size, 29, 9))[...] = xyz
-            for r in range(3):
-                put(f"ring{r}", 0, rings[:, r])
+                np.ndarray(xyz.shape, dtype="<f8", buffer=records, offset=offset,
+                           strides=(size, *strides, 29, 9))[...] = xyz
+            # The three rings' lines have the same layout one after the other: one view for all.
+            put("ring0", 0, rings, (dtype.fields["ring1"][1] - dtype.fields["ring0"][1],))
             put("axis", 0, axes)
             put("mesh", 0, rings.reshape(count, 3 * segments, 3))
             put("mesh", 3 * segments, caps)
