@@ -517,11 +517,14 @@ def clearance_m(position, robot_radius_m: float, people: Obstacles | None) -> fl
     """Surface-to-surface distance from the robot to the nearest person (inf with nobody)."""
     if people is None or len(people) == 0:
         return float("inf")
-    present = np.isfinite(people.positions).all(axis=1)
-    if not present.any():
-        return float("inf")
-    gap = np.hypot(*(people.positions[present] - np.asarray(position, dtype=float)).T)
-    return float(np.min(gap - people.radii_m[present] - robot_radius_m))
+    positions, radii = people.positions, people.radii_m
+    present = np.isfinite(positions).all(axis=1)
+    if not present.all():  # (the writer's true people are all present: no copies then)
+        if not present.any():
+            return float("inf")
+        positions, radii = positions[present], radii[present]
+    offsets = positions - np.asarray(position, dtype=float)
+    return float((np.hypot(offsets[:, 0], offsets[:, 1]) - radii - robot_radius_m).min())
 
 
 def circle_polygon(centre, radius_m: float, segments: int = 32) -> np.ndarray:
