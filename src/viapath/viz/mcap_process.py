@@ -1,20 +1,23 @@
 """Write a run's MCAP in a process of its own, so the run is not slowed by building its messages.
 
 Source: issue 14 (writing the MCAP may cost at most 20 % of the run's wall time) and DESIGN §9.
-Building Foxglove messages in Python costs about as much per cycle as planning (1.5-3 ms), so in
-the run's own process an MCAP doubles the run. A recorder beside the robot is how ROS does it
-(``ros2 bag record`` is its own process); we do the same:
+Building and encoding one cycle's Foxglove messages takes 0.2-0.5 ms of CPU in Python, about as
+much as a whole cycle of the paper's scenarios (0.3 ms for paper-front), so in the run's own
+process an MCAP doubles a run. A recorder beside the robot is how ROS does it (``ros2 bag
+record`` is its own process); we do the same:
 
 * The run's process keeps, per cycle, only what the scene is built from (step, time, robot state,
   the tracks, the command and plan, plan time, the perception's scans/detections/blind region, the
   simulator's truth): the numbers and strings as they are, every array of the cycle in one float
-  array with the row counts (:func:`cycle_input`), pickled and sent down a pipe in batches of up
-  to 8 cycles (a send, and the writer's wake-up, cost more than a cycle's pickling). What stays
-  the same for the run (forecast settings, the scanners' names, mounts and beam geometry) goes once,
-  with the first cycle (:func:`static_input`). Pickling costs about 2-3 µs per array, so one array
-  instead of a dozen is most of the run's share; the rows the scene drops (tracks with a NaN
-  field, people not in the scene) are dropped by the writer, and of the plan's extras only those
-  a scene reads are sent.
+  array with the row counts (:func:`cycle_input`). What stays the same for the run (forecast
+  settings, the scanners' names, mounts and beam geometry) goes once, with the first cycle
+  (:func:`static_input`). Pickling costs about 2-3 µs per array, so one array instead of a dozen
+  is most of the run's share; the rows the scene drops (tracks with a NaN field, people not in
+  the scene) are dropped by the writer, and of the plan's extras only those a scene reads go.
+* Cycles are pickled and sent down a pipe in batches of up to 8 (or 64 kB): a send and the
+  writer's wake-up cost the run ~70 µs of CPU, more than a cycle's packing, and the writer waits
+  on the pipe (polling it every millisecond cost the run more). A send is never cut by Ctrl-C
+  (:func:`_whole_message`): a batch above 16 kB goes in several writes.
 * The writer process builds the :class:`~viapath.viz.scene.CycleScene` with the same
   :class:`~viapath.viz.scene.SceneBuilder` and logs it with the same
   :class:`~viapath.viz.foxglove.FoxglovePublisher` as an in-process view, so the file is the same.
@@ -22,16 +25,21 @@ the run's own process an MCAP doubles the run. A recorder beside the robot is ho
   ms) and ``spawn`` elsewhere. The run does not wait for it: a file that exists without ``force``
   is refused before the process starts (the views check the folder and the rights before that),
   and the writer's report of opening the file is read when the first batch goes (a failure is
-  then raised as "could not start"); at the end the run's process sends
-  "done" and waits for the count of cycles written (the file is then complete; the writer's exit
-  is waited for by a thread, not by the run). A run that stops (Ctrl-C, an error) first
-  sends the cycles still kept, so the file holds every cycle that ran. If the writer fails
-  mid-run, the next send or the end raises the given error (the views pass
-  :class:`~viapath.viz.foxglove.ViewError`) with its reason.
+  then raised as "could not start"). At the end the run's process sends what it kept and "done",
+  and waits for the count of cycles written (the file is then complete; the writer's exit is
+  waited for by a thread, not by the run). A run that stops (Ctrl-C, an error) ends the same way,
+  so the file holds every cycle that ran. If the writer fails mid-run, the next send or the end
+  raises the given error (the views pass :class:`~viapath.viz.foxglove.ViewError`) with its reason.
+
+What the run still pays (paper-front, 239 cycles, ~75 ms of CPU alone; ``benchmarks/bench_mcap.py``):
+the fork and the copy-on-write faults of memory it now shares with the writer (~1500 faults,
+~5-8 ms), packing (~15 µs a cycle), the sends (~30 of them, ~3 ms), and the last batch written
+after the run; on a machine whose two cores are both busy, the writer's CPU too.
 
 Choices: a pipe rather than a ``multiprocessing.Queue`` (no feeder thread competing for the GIL);
-when the writer falls behind, the run waits on the pipe (its buffer holds tens of cycles), so memory
-stays bounded and the file is complete. The live view stays in the run's process: it paces the run.
+when the writer falls behind, the run waits on the pipe (its buffer holds tens of batches), so
+memory stays bounded and the file is complete. The live view stays in the run's process: it paces
+the run.
 """
 
 from __future__ import annotations

@@ -1,23 +1,26 @@
-"""Protobuf wire format for the vertex-heavy Foxglove messages, vectorised with numpy.
+"""Protobuf wire format for the Foxglove messages written every cycle, with struct and numpy.
 
 Source: the protobuf encoding specification (varints, tags ``field << 3 | wire type``, length-
 delimited sub-messages, packed repeated scalars) and the field numbers of Foxglove's schemas
-(``foxglove/SceneUpdate.proto`` and the primitives it holds, as stored in the MCAP schema record).
-Why: building one Python object per vertex (``foxglove.messages.Point3``) cost about a microsecond
-each; a person's x-y-t cylinder has ~50 vertices, a cycle's candidates hundreds. Here a whole
-point list is one structured numpy array turned into bytes.
+(``foxglove/SceneUpdate.proto``, ``LaserScan.proto``, ``FrameTransforms.proto`` and what they
+hold, as stored in the MCAP schema record). Why: building one Python object per vertex or field
+(``foxglove.messages.Point3``, ``Pose``, ...) cost about a microsecond each; a person's x-y-t
+cylinder has ~50 vertices, a cycle's candidates hundreds, and the writer's CPU per cycle is what
+an MCAP costs a run (issue 14). Here a point list is one structured numpy array turned into bytes
+(up to 8 points, one ``struct.pack`` each), a pose one ``struct.pack``.
 
 What we chose:
 * Only what the views need: ``SceneUpdate`` with deletions and entities; entities with
   ``LinePrimitive``, ``TriangleListPrimitive``, ``CylinderPrimitive``, ``SpherePrimitive``,
-  ``ArrowPrimitive`` and ``TextPrimitive``; ``LaserScan``. Anything else (and any part that is the
-  same all run: colours, the identity pose, static entities) is taken from foxglove-sdk's own
-  ``encode()`` (protobuf concatenates fields, so the parts join).
-* Poses and vectors are one ``struct.pack`` each (tags and values together): the per-cycle cost of
-  a person's track is a handful of calls, not one Python object per field.
+  ``ArrowPrimitive`` and ``TextPrimitive``; ``LaserScan``; ``FrameTransforms``. Anything else (and
+  any part that is the same all run: colours, the identity pose, static entities) is taken from
+  foxglove-sdk's own ``encode()`` (protobuf concatenates fields, so the parts join).
+* What repeats is encoded once: a cycle's timestamp field, an entity's frame and id, a label's
+  text after its pose (``lru_cache``).
 * Every double is written, zeros included (proto3 allows it; decoders read the same values).
-* Tests decode what this writes with the schema from the file (``tests/viz``) and compare with the
-  SDK's own encoding of the same message.
+* Tests decode what this writes with the schema (``tests/viz/test_protobuf_wire.py``,
+  ``tests/viz/test_wire_topics.py``) and compare it, field by field, with the message
+  foxglove-sdk's classes build.
 """
 
 from __future__ import annotations
