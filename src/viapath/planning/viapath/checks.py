@@ -24,10 +24,15 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from viapath.geometry import cross2
 from viapath.observation import Obstacles
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.planning.base import Inflation, Situation
 from viapath.planning.viapath.backend import NUMPY, Backend
+
+
+# Closer to the path line than this the robot is on the path: the way back is the leg to the subgoal.
+ON_PATH_M = 0.01
 
 
 @dataclass
@@ -104,6 +109,24 @@ class LegChecks:
         return replace(self, obstacles=less, check_radii=inflation.check_radii, growth=inflation.growth,
                        growth_until_s=inflation.growth_until_s,
                        via_radii=inflation.check_radii + settings["planning_margin_m"])
+
+    def back_to_path(self, lookahead_m: float) -> "LegChecks | None":
+        """The same checks towards the path point ``lookahead_m`` ahead of the robot on the segment that
+        ends at the subgoal, continued along the path to the subgoal (option ``return_lookahead_m``).
+        None when the robot is on the path line or that point would lie at or past the subgoal: then
+        the leg to the subgoal is the way back already."""
+        segment = self.subgoal_index - 1
+        path = self.path
+        start, direction = path.segment_starts[segment], path.segment_directions[segment]
+        length = float(path.segment_lengths_m[segment])
+        relative = self.position - start
+        ahead_m = max(float(relative @ direction), 0.0) + lookahead_m
+        if abs(float(cross2(direction, relative))) <= ON_PATH_M or ahead_m >= length:
+            return None
+        # The continuation to the subgoal is checked with the full radii, so a person standing on a
+        # blocked subgoal blocks the way back too and the planner plans as the paper does.
+        return replace(self, subgoal=start + ahead_m * direction, continuation=(direction, length - ahead_m),
+                       stop_short_m=0.0)
 
     # -- against the forecast ----------------------------------------------------------------------
 

@@ -29,6 +29,10 @@ _OWN = [
     Option("max_root_obstacles", 12, "obstacles branched on at the root, earliest contact first (0: all)", minimum=0),
     Option("corridor_check_spacing_m", 0.05, "spacing of the points that check a leg against the corridor", "m",
            minimum=0.0, exclusive_minimum=True),
+    # Beyond the paper: the way back to the path after an avoidance (docs/weights.md §6).
+    Option("return_lookahead_m", 0.0, "off the path line, first try the straight leg at the nominal speed to the "
+           "path point this far ahead of the robot (before the subgoal), so it returns within about this distance "
+           "rather than on the shallow line to a far subgoal (0: off, the paper's way)", "m", minimum=0.0),
     # Ties and churn.
     Option("preferred_side", "left", "near-ties (head-on) go round this side", choices=("left", "right")),
     Option("side_tolerance", 0.03, "cost added to passing on the other side", minimum=0.0),

@@ -23,6 +23,10 @@ What the paper leaves open and we chose, beyond what those modules say:
   then flips and flips back. If last cycle's way is gone, it is searched for once more with
   ``keep_previous_inflation`` of the uncertainty inflation (the safety margin stays) and kept if,
   with the usual hysteresis, it still costs less than the new choice.
+* The way back (``return_lookahead_m``, off by default): off the path line, the paper's step 1 is
+  tried first towards the path point that far ahead instead of the subgoal. The paper heads for the
+  subgoal; when that is metres away the robot drifts back to the path on a shallow line after a pass,
+  and that drift was most of the extra deviation of a passing robot (docs/weights.md §6).
 """
 
 from __future__ import annotations
@@ -122,6 +126,10 @@ class ViaPathPlanner(Planner, name="viapath"):
                 only_way: Way | None = None) -> _Chosen | None:
         """Candidates → costs → the cheapest the robot can follow; None when none is free.
         With ``only_way``, only candidates going that way round are considered."""
+        if only_way is None and self.config.return_lookahead_m > 0:
+            back = self._way_back(checks, float(speeds[nominal_index]))
+            if back is not None:
+                return back
         roots = RootLegs.of(checks, speeds, nominal_index)
         if roots.nominal_is_free and only_way is None:
             # Paper step 1: a free straight path at the normal speed is the plan, if the robot can
@@ -152,6 +160,26 @@ class ViaPathPlanner(Planner, name="viapath"):
                 choice = Choice(Way(int(ways[0]), int(ways[1]), int(ways[2])), int(candidates.speed_mmps[best]))
                 return _Chosen(choice, plan, candidates)
         return None
+
+    def _way_back(self, checks: LegChecks, speed: float) -> _Chosen | None:
+        """Beyond the paper (``return_lookahead_m``): off the path line, the paper's step 1 towards the
+        path point ``return_lookahead_m`` ahead instead of the subgoal, i.e. the free straight leg at the
+        nominal speed, checked on along the path to the subgoal. None if there is none; then the paper's
+        candidates decide. Eq. 1 never picks such a leg itself: it turns more (k4·θ) than the leg to a
+        far subgoal and nothing in E rewards being on the path, so after a pass the robot would drift
+        back on the shallow line to a subgoal metres away (docs/weights.md §6)."""
+        back = checks.back_to_path(self.config.return_lookahead_m)
+        if back is None:
+            return None
+        _, _, free, _ = back.goal_legs(back.position[None], np.zeros(1), np.array([speed]))
+        if not free[0]:
+            return None
+        plan = Plan("straight", speed, back.subgoal.copy(), waypoints=np.array([back.position, back.subgoal,
+                                                                                 checks.subgoal]),
+                    subgoal_index=checks.subgoal_index, candidate_count=1, chosen=0, extras={"way_back": True})
+        if not (can_follow(plan, back, self.limits, self.config) and self._inside_shield(plan)):
+            return None
+        return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
 
     def _inside_shield(self, plan: Plan) -> bool:
         """With a shield (DESIGN §7) behind the planner, a candidate whose command the shield would refuse
