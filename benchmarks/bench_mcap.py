@@ -16,8 +16,9 @@ each; the MCAP run's wall-time overhead over the plain one (the target), the sam
 CPU overhead of the run's process alone and of run + writer together (``resource`` children
 time, taken after the writer is reaped), the writer process's CPU per cycle (its whole life, start
 and end included: less sensitive to the machine's load than wall time), the extra wall milliseconds
-per cycle, the file size and the 1-minute load average. The writer process only pays off when a core is free: on a loaded
-machine the two processes share one core and the wall overhead approaches ``here``'s.
+per cycle, the file size and the 1-minute load average. The writer process only pays off when a
+core is free: on a loaded machine the two processes share one core and the wall overhead
+approaches ``here``'s.
 """
 
 from __future__ import annotations

@@ -109,9 +109,9 @@ def reference(topic: str, scene, ns: int, colours: dict, k_sigma: float, segment
                                         _disc(px, py, r + k_sigma * sp, c["track_sigma"], height=0.005)],
                           "texts": [_text(px, py, 0.3, f"{track}: {speed:.2f} m/s ±{sv:.2f}", c["track_text"])]}
             if speed > 1e-6:
-                primitives["arrows"] = [m.ArrowPrimitive(pose=_pose(px, py, 0.12, math.atan2(vy, vx)), shaft_length=speed,
-                                                         shaft_diameter=0.03, head_length=0.1, head_diameter=0.08,
-                                                         color=c["arrow"])]
+                primitives["arrows"] = [m.ArrowPrimitive(
+                    pose=_pose(px, py, 0.12, math.atan2(vy, vx)), shaft_length=speed, shaft_diameter=0.03,
+                    head_length=0.1, head_diameter=0.08, color=c["arrow"])]
             entities.append(m.SceneEntity(timestamp=stamp, frame_id="world", id=f"track-{track}", **primitives))
         return _update(entities)
     plan = scene.plan

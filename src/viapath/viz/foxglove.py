@@ -450,8 +450,8 @@ class FoxglovePublisher:
             wire.entity_head(ns, WORLD, "chosen")
             + wire.message_field(wire.ENTITY_LINES, wire.line_primitive(xyz, w["chosen"], w["identity"], 0.04))
             + wire.primitives(wire.ENTITY_SPHERES, spheres)
-            + wire.message_field(wire.ENTITY_TEXTS, self._wire_text(tx, ty, 0.3, f"{plan.status} {plan.speed_mps:.2f} m/s",
-                                                                    w["chosen_text"]))])
+            + wire.message_field(wire.ENTITY_TEXTS, self._wire_text(
+                tx, ty, 0.3, f"{plan.status} {plan.speed_mps:.2f} m/s", w["chosen_text"]))])
 
     def _xyt_layout(self, segments: int) -> tuple[np.dtype, np.ndarray]:
         """One person's x-y-t entity after its id, as a numpy record: constant bytes (tags, lengths,
@@ -532,7 +532,8 @@ class FoxglovePublisher:
                 entities.append(head + name + data[i * size:(i + 1) * size])
         x, y = scene.robot_pose[:2].tolist()
         horizon = xyt.settings.horizon_s
-        ticks = [self._wire_text(x - 0.3, y, t * scale, f"{t:g} s", w["grey"], 11.0) for t in (0.0, 0.5 * horizon, horizon)]
+        ticks = [self._wire_text(x - 0.3, y, t * scale, f"{t:g} s", w["grey"], 11.0)
+                 for t in (0.0, 0.5 * horizon, horizon)]
         spheres = [wire.sphere(wire.pose(px, py, pt * scale), w["via_size"], w["via"])
                    for px, py, pt in xyt.via_points_xyt.tolist()]
         entities.append(wire.entity_head(ns, XYT_FRAME, "robot-plan") + wire.primitives(wire.ENTITY_LINES, [
