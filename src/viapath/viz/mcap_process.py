@@ -149,9 +149,13 @@ def scene_inputs(payload: tuple, static: tuple) -> tuple:
         positions, velocities, truth_radii = (cursor.rows(truth_count, 2), cursor.rows(truth_count, 2),
                                               cursor.rows(truth_count))
         present = np.isfinite(positions).all(axis=1)
-        zeros = np.zeros(int(present.sum()))
-        truth = _obstacles(positions[present], velocities[present], truth_radii[present], zeros, zeros,
-                           np.flatnonzero(present))
+        if present.all():  # everyone in the scene: no copies
+            zeros = np.zeros(truth_count)
+            truth = _obstacles(positions, velocities, truth_radii, zeros, zeros, np.arange(truth_count))
+        else:
+            zeros = np.zeros(int(present.sum()))
+            truth = _obstacles(positions[present], velocities[present], truth_radii[present], zeros, zeros,
+                               np.flatnonzero(present))
     plan = Plan(status, plan_speed, np.array([target_x, target_y]), via, waypoints, subgoal_index, candidate_count,
                 costs, lines, chosen, extras)
     _, scanner_statics = static

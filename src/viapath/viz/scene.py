@@ -446,10 +446,13 @@ def _via_xyt(robot_position, plan, horizon_s: float, line: np.ndarray | None = N
 
 
 def _persons(tracks: Obstacles, robot_radius_m: float) -> list[PersonForecast]:
-    return [PersonForecast(int(tracks.ids[i]), tracks.positions[i].copy(), tracks.velocities[i].copy(),
-                           float(tracks.radii_m[i]), float(tracks.radii_m[i] + robot_radius_m),
-                           float(tracks.position_sigma_m[i]), float(tracks.velocity_sigma_mps[i]))
-            for i in range(len(tracks))]
+    # Each person's position and velocity are rows of private copies; the scalars read in one go
+    # (a crowd's cycle: one numpy call per field, not per person and field).
+    positions, velocities = tracks.positions.copy(), tracks.velocities.copy()
+    return [PersonForecast(int(track), positions[i], velocities[i], radius, combined, position_sigma, velocity_sigma)
+            for i, (track, radius, combined, position_sigma, velocity_sigma) in enumerate(zip(
+                tracks.ids.tolist(), tracks.radii_m.tolist(), (tracks.radii_m + robot_radius_m).tolist(),
+                tracks.position_sigma_m.tolist(), tracks.velocity_sigma_mps.tolist()))]
 
 
 def _plan_view(plan, extras: dict) -> PlanView:
