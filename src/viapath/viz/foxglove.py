@@ -301,9 +301,10 @@ class FoxglovePublisher:
     def _transforms(self, scene: CycleScene, ns: int) -> bytes:
         """world → base at the robot's pose, world → xyt, base → each scanner at its mount."""
         stamp = wire.stamp_field(ns)
-        fixed = self.static.get("tf")
+        key = ("tf", *(s.name for s in scene.scanners))
+        fixed = self.static.get(key)
         if fixed is None:  # what follows the timestamp of the transforms that never move
-            fixed = self.static["tf"] = [wire.frame_transform_tail(WORLD, XYT_FRAME, 0.0, 0.0, 0.0)] + [
+            fixed = self.static[key] = [wire.frame_transform_tail(WORLD, XYT_FRAME, 0.0, 0.0, 0.0)] + [
                 wire.frame_transform_tail(BASE, scanner_frame(s.name), *s.mount_pose.tolist()) for s in scene.scanners]
         x, y, heading = scene.robot_pose.tolist()
         return wire.frame_transforms([stamp + wire.frame_transform_tail(WORLD, BASE, x, y, heading)]
