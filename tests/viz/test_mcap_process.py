@@ -130,3 +130,48 @@ def test_ctrl_c_ends_the_run_and_keeps_a_readable_file(tmp_path):
     assert "interrupted" in stderr and "Traceback" not in stderr
     cycles = sum(topic == "/tf" for topic, _, _ in _messages(file))
     assert 0 < cycles < 3000
+
+
+def test_a_writer_that_cannot_open_its_file_says_so_without_holding_up_the_run(tmp_path):
+    """The run does not wait for the writer to open the file: a failure to open it (here a folder
+    that does not exist, which the views check first) is raised at the first batch or the end."""
+    from viapath.path import DesignatedPath
+
+    scenario = load_scenario("paper-front")
+    path = DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths())
+    writer = MCAPWriterProcess(tmp_path / "missing" / "x.mcap", False, path, scenario.robot.radius,
+                               FoxglovePublisher, ViewError)
+    with pytest.raises(ViewError, match="could not start"):
+        writer.close()
+    assert writer.process is None
+
+
+def test_a_ctrl_c_during_a_send_waits_for_the_whole_message(tmp_path):
+    """A batch above 16 kB is written in parts: Ctrl-C in between is held until it is out (then
+    raised as it came), so the writer never waits for the rest of a message and the file ends with
+    every cycle handed over."""
+    scenario = load_scenario("paper-front")
+    file = tmp_path / "interrupted.mcap"
+    sends = []
+
+    class Interrupting:
+        def __init__(self, connection):
+            self.connection = connection
+
+        def send_bytes(self, message):
+            sends.append(len(message))
+            if len(sends) == 3:
+                os.kill(os.getpid(), signal.SIGINT)  # arrives while the batch is being sent
+            self.connection.send_bytes(message)
+
+        def __getattr__(self, name):
+            return getattr(self.connection, name)
+
+    with pytest.raises(KeyboardInterrupt):
+        with Views(scenario, scenario.planner.name, mcap=file) as views:
+            writer = views.on_step
+            writer._connection = Interrupting(writer._connection)
+            run_episode(scenario, planner_overrides=views.planner_overrides, on_step=writer, seed=0)
+    assert len(sends) >= 4  # three batches, then what was kept and "done" from the clean-up
+    cycles = sum(topic == "/tf" for topic, _, _ in _messages(file))
+    assert cycles == writer.cycles > 0

@@ -188,3 +188,19 @@ def test_a_plan_that_stops_stands_for_the_whole_horizon():
     plan = Plan("stop", 0.0, start, waypoints=np.array([start, start + [2.0, 0.0]]))
     line = plan_xyt(start, plan, horizon_s=7.0)
     np.testing.assert_allclose(line, [[1.0, 2.0, 0.0], [1.0, 2.0, 7.0]])
+
+
+def test_lateral_deviation_of_one_point_is_the_paths():
+    """The scene's scalar lateral deviation (one point per cycle) is DesignatedPath's, to rounding."""
+    from viapath.path import DesignatedPath
+    from viapath.viz.scene import lateral_deviation_m
+
+    rng = np.random.default_rng(0)
+    for _ in range(100):
+        waypoints = np.cumsum(rng.normal(size=(rng.integers(2, 6), 2)) * 3, axis=0)
+        path = DesignatedPath(waypoints, half_width_m=1.0)
+        segments = list(zip(path.segment_starts.tolist(), path.segment_directions.tolist(),
+                            path.segment_lengths_m.tolist()))
+        for point in rng.normal(size=(20, 2)) * 5:
+            assert lateral_deviation_m(segments, *point.tolist()) == pytest.approx(
+                float(path.lateral_deviation(point)), abs=1e-12)

@@ -33,9 +33,13 @@ What we chose:
   disappears; static content (path, corridor) is still sent every cycle, so scrubbing to any time
   shows it and every topic has one message per cycle. What never changes in its frame (footprint,
   blind region: frame-locked to ``base``; the path for a given subgoal) is one message built once.
-* The vertex-heavy topics (``/xyt``, ``/plan/candidates``) are encoded with numpy
-  (:mod:`viapath.viz.protobuf_wire`) against the same ``foxglove.SceneUpdate`` schema; the rest
-  uses foxglove-sdk's message classes. MCAP chunks are LZ4-compressed (cheaper than zstd per cycle).
+* Every protobuf message that changes per cycle (``/tf``, scans, every ``SceneUpdate``) is
+  encoded by :mod:`viapath.viz.protobuf_wire` (a pose is one ``struct.pack``, a point list one
+  numpy array) against Foxglove's own schemas, on channels that take bytes; what never changes
+  (colours, the footprint, the blind region, the path for a subgoal) is built once with
+  foxglove-sdk's message classes. ``tests/viz/test_wire_topics.py`` decodes every hand-encoded
+  topic and compares it, field by field, with the message the SDK's classes build. MCAP chunks
+  are LZ4-compressed (cheaper than zstd per cycle).
 * Readings a driver marks invalid (inf, NaN, 0, below the minimum range) are sent as NaN, which
   Foxglove leaves out.
 * JSON numbers that are not finite (no one in sight: clearance inf) are sent as ``null``.
@@ -57,7 +61,7 @@ from typing import Any, Callable
 import numpy as np
 
 from viapath.viz import protobuf_wire as wire
-from viapath.viz.mcap_process import cycle_input, scene_inputs
+from viapath.viz.mcap_process import cycle_input, scene_inputs, static_input
 from viapath.viz.scene import _mesh_triangles
 from viapath.viz.scene import CycleScene, ForecastSettings, SceneBuilder, candidate_colour
 
@@ -91,6 +95,10 @@ METRICS_SCHEMA = {
         "time_s", "speed_mps", "turn_rate_radps", "command_speed_mps", "command_turn_rate_radps", "clearance_m",
         "lateral_deviation_m", "plan_time_ms", "shield_interventions", "tracks", "candidates")},
 }
+
+
+# json.dumps(..., allow_nan=False) makes an encoder per call; one, made once, writes the same text.
+_JSON = json.JSONEncoder(allow_nan=False)
 
 
 class ViewError(ValueError):
@@ -148,21 +156,22 @@ class FoxglovePublisher:
     # channels are made at the first cycle, when the scanners are known
     def _open_channels(self, scene: CycleScene) -> None:
         from foxglove import Channel, Schema
-        from foxglove.channels import FrameTransformsChannel, LaserScanChannel, SceneUpdateChannel
 
         ctx = self.context
-        self.channels[TF] = FrameTransformsChannel(TF, context=ctx)
-        topics = [FOOTPRINT, TRACKS, PATH, CHOSEN]
+        # Every FrameTransforms, SceneUpdate and LaserScan is encoded here (viapath.viz.protobuf_wire)
+        # against Foxglove's own schema, so these channels take bytes.
+        self.channels[TF] = Channel(TF, message_encoding="protobuf", schema=self.m.FrameTransforms.get_schema(),
+                                    context=ctx)
+        topics = [FOOTPRINT, TRACKS, PATH, CANDIDATES, CHOSEN, XYT]
         if scene.scanners:
             topics[1:1] = [BLIND, DETECTIONS]
-        for topic in topics:
-            self.channels[topic] = SceneUpdateChannel(topic, context=ctx)
-        # Vertex-heavy topics are encoded here (viapath.viz.protobuf_wire), with Foxglove's schema.
         scene_schema = self.m.SceneUpdate.get_schema()
-        for topic in (CANDIDATES, XYT):
+        for topic in topics:
             self.channels[topic] = Channel(topic, message_encoding="protobuf", schema=scene_schema, context=ctx)
+        scan_schema = self.m.LaserScan.get_schema()
         for scanner in scene.scanners:
-            self.channels[scan_topic(scanner.name)] = LaserScanChannel(scan_topic(scanner.name), context=ctx)
+            topic = scan_topic(scanner.name)
+            self.channels[topic] = Channel(topic, message_encoding="protobuf", schema=scan_schema, context=ctx)
         for topic, schema in ((COSTS, COSTS_SCHEMA), (METRICS, METRICS_SCHEMA)):
             self.channels[topic] = Channel(topic, message_encoding="json", context=ctx, schema=Schema(
                 name=schema["title"], encoding="jsonschema", data=json.dumps(schema).encode()))
@@ -175,14 +184,19 @@ class FoxglovePublisher:
 
     def scene_of(self, record) -> CycleScene:
         if self.builder is None:
-            settings = self.settings or ForecastSettings.from_planner(record.planner)
-            self.builder = SceneBuilder(self.path, self.robot_radius_m, settings)
+            self.start(static_input(record))
         return self.build(cycle_input(record))
+
+    def start(self, static: tuple) -> None:
+        """Take what stays the same for the run (:func:`viapath.viz.mcap_process.static_input`: the
+        planner's forecast settings unless given, the scanners) before the first cycle."""
+        self.run_static = static
+        self.builder = SceneBuilder(self.path, self.robot_radius_m, self.settings or static[0])
 
     def build(self, inputs: tuple) -> CycleScene:
         """The scene of one cycle from :func:`viapath.viz.mcap_process.cycle_input` (the writer process
         receives the same tuple)."""
-        *cycle, truth, parts = scene_inputs(inputs)
+        *cycle, truth, parts = scene_inputs(inputs, self.run_static)
         return self.builder.build(*cycle, true_people=truth, perception_parts=parts)
 
     def open_channels(self, scene: CycleScene) -> None:
@@ -192,28 +206,30 @@ class FoxglovePublisher:
     def publish(self, scene: CycleScene) -> None:
         self.open_channels(scene)
         ns = int(round(scene.time_s * 1e9))
-        stamp = self.m.Timestamp(ns // 1_000_000_000, ns % 1_000_000_000)
         ch = self.channels
-        ch[TF].log(self._transforms(scene, stamp), log_time=ns)
+        ch[TF].log(self._transforms(scene, ns), log_time=ns)
         ch[FOOTPRINT].log(self._footprint(scene), log_time=ns)
         for scanner in scene.scanners:
-            ch[scan_topic(scanner.name)].log(self._scan(scanner, stamp), log_time=ns)
+            ch[scan_topic(scanner.name)].log(self._scan(scanner, ns), log_time=ns)
         if scene.scanners:
             ch[BLIND].log(self._blind(scene), log_time=ns)
-            ch[DETECTIONS].log(self._detections(scene, stamp), log_time=ns)
-        ch[TRACKS].log(self._tracks(scene, stamp), log_time=ns)
+            ch[DETECTIONS].log(self._detections(scene, ns), log_time=ns)
+        ch[TRACKS].log(self._tracks(scene, ns), log_time=ns)
         ch[PATH].log(self._path(scene), log_time=ns)
         ch[CANDIDATES].log(self._candidates(scene, ns), log_time=ns)
-        ch[CHOSEN].log(self._chosen(scene, stamp), log_time=ns)
-        ch[COSTS].log(json.dumps(costs_message(scene), allow_nan=False).encode(), log_time=ns)
-        ch[XYT].log(self._xyt(scene, stamp, ns), log_time=ns)
-        ch[METRICS].log(json.dumps(metrics_message(scene), allow_nan=False).encode(), log_time=ns)
+        ch[CHOSEN].log(self._chosen(scene, ns), log_time=ns)
+        ch[COSTS].log(_JSON.encode(costs_message(scene)).encode(), log_time=ns)
+        ch[XYT].log(self._xyt(scene, ns), log_time=ns)
+        ch[METRICS].log(_JSON.encode(metrics_message(scene)).encode(), log_time=ns)
         self.cycles += 1
 
     # -- pieces --------------------------------------------------------------------------------
-    # Built for speed (issue 14: writing must cost little beside the run): constant colours and
-    # poses are made once, content that does not change (footprint, blind region, path for a given
-    # subgoal) is one cached message, and meshes share their vertices through indices.
+    # Built for speed (issue 14: writing must cost little beside the run). What is the same all run
+    # (colours, poses, the footprint, the blind region, the path for a given subgoal) is encoded
+    # once, with foxglove-sdk's classes; what changes every cycle is encoded by
+    # viapath.viz.protobuf_wire (one struct.pack per pose, numpy for point lists); a track that did
+    # not change since the last cycle reuses its encoding; the x-y-t people are one numpy record
+    # each (every person's entity has the same layout but for its id).
     def _setup_constants(self) -> None:
         m = self.m
         C = lambda r, g, b, a=1.0: m.Color(r=r, g=g, b=b, a=a)  # noqa: E731
@@ -230,19 +246,18 @@ class FoxglovePublisher:
         self.delete_all = m.SceneEntityDeletion(type=m.SceneEntityDeletionType.All)
         self.wire = {"identity": self.identity.encode(), "delete_all": self.delete_all.encode(),
                      **{name: colour.encode() for name, colour in self.colours.items()}}
+        self.wire["deletions"] = wire.message_field(1, self.wire["delete_all"])  # a SceneUpdate's "delete all"
+        self.wire["via_size"] = wire.vector3(0.1, 0.1, 0.1)
+        for name in ("track", "track_sigma"):  # a CylinderPrimitive's colour is its field 5
+            self.wire[f"{name}_field"] = wire.message_field(5, self.wire[name])
         self.static: dict[Any, Any] = {}
-        self.candidate_colours: dict[int, Any] = {}
-
-    def _p(self, x, y, z=0.0):
-        return self.m.Point3(x=float(x), y=float(y), z=float(z))
+        self.candidate_colours: dict[int, bytes] = {}
+        self.track_cache: dict[tuple, bytes] = {}  # the last cycle's tracks: key -> entity without timestamp
+        self.person_names: dict[int, bytes] = {}  # track id -> the encoded id of its x-y-t entity
 
     def _points(self, xy: np.ndarray, z: float = 0.0) -> list:
         P = self.m.Point3
         return [P(x=a, y=b, z=z) for a, b in np.asarray(xy, dtype=float).reshape(-1, 2).tolist()]
-
-    def _points3(self, xyz: np.ndarray) -> list:
-        P = self.m.Point3
-        return [P(x=a, y=b, z=c) for a, b, c in np.asarray(xyz, dtype=float).reshape(-1, 3).tolist()]
 
     def _pose(self, x=0.0, y=0.0, z=0.0, yaw=0.0):
         m = self.m
@@ -263,24 +278,39 @@ class FoxglovePublisher:
         return self.m.TextPrimitive(pose=self._pose(x, y, z), billboard=True, font_size=size, scale_invariant=True,
                                     color=colour, text=text)
 
-    def _update(self, stamp, frame, id_, primitives: dict, frame_locked: bool = False):
+    def _update(self, stamp, frame, id_, primitives: dict, frame_locked: bool = False) -> bytes:
+        """An encoded SceneUpdate built with the SDK's classes (for what is encoded once)."""
         m = self.m
         entity = m.SceneEntity(timestamp=stamp, frame_id=frame, id=id_, frame_locked=frame_locked, **primitives)
-        return m.SceneUpdate(deletions=[self.delete_all], entities=[entity])
+        return m.SceneUpdate(deletions=[self.delete_all], entities=[entity]).encode()
 
-    def _transforms(self, scene: CycleScene, stamp):
-        m = self.m
-        x, y, heading = scene.robot_pose
+    @staticmethod
+    def _wire_disc(x, y, radius, colour: bytes, z=0.0, height=0.01) -> bytes:
+        """:meth:`_disc`, encoded."""
+        return wire.cylinder(wire.pose(x, y, z + 0.5 * height), 2 * radius, 2 * radius, height, colour)
 
-        def tf(parent, child, px, py, yaw):
-            return m.FrameTransform(timestamp=stamp, parent_frame_id=parent, child_frame_id=child,
-                                    translation=m.Vector3(x=float(px), y=float(py), z=0.0),
-                                    rotation=m.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)))
-        transforms = [tf(WORLD, BASE, x, y, heading), tf(WORLD, XYT_FRAME, 0.0, 0.0, 0.0)]
-        transforms += [tf(BASE, scanner_frame(s.name), *s.mount_pose) for s in scene.scanners]
-        return m.FrameTransforms(transforms=transforms)
+    @staticmethod
+    def _wire_text(x, y, z, text, colour: bytes, size=12.0) -> bytes:
+        """:meth:`_text`, encoded."""
+        return wire.text(wire.pose(x, y, z), text, size, colour)
 
-    def _footprint(self, scene: CycleScene):
+    def _scene_update(self, entities: list[bytes]) -> bytes:
+        """A SceneUpdate that first deletes what its topic drew before."""
+        return self.wire["deletions"] + b"".join(wire.message_field(2, entity) for entity in entities)
+
+    def _transforms(self, scene: CycleScene, ns: int) -> bytes:
+        """world → base at the robot's pose, world → xyt, base → each scanner at its mount."""
+        stamp = wire.stamp_field(ns)
+        key = ("tf", *(s.name for s in scene.scanners))
+        fixed = self.static.get(key)
+        if fixed is None:  # what follows the timestamp of the transforms that never move
+            fixed = self.static[key] = [wire.frame_transform_tail(WORLD, XYT_FRAME, 0.0, 0.0, 0.0)] + [
+                wire.frame_transform_tail(BASE, scanner_frame(s.name), *s.mount_pose.tolist()) for s in scene.scanners]
+        x, y, heading = scene.robot_pose.tolist()
+        return wire.frame_transforms([stamp + wire.frame_transform_tail(WORLD, BASE, x, y, heading)]
+                                     + [stamp + tail for tail in fixed])
+
+    def _footprint(self, scene: CycleScene) -> bytes:
         """The robot's disc and heading in the base frame: the same every cycle (frame-locked)."""
         if "footprint" not in self.static:
             m, c, r = self.m, self.colours, scene.robot_radius_m
@@ -292,15 +322,14 @@ class FoxglovePublisher:
             }, frame_locked=True)
         return self.static["footprint"]
 
-    def _scan(self, scanner, stamp):
+    def _scan(self, scanner, ns: int) -> bytes:
         ranges = np.asarray(scanner.ranges_m, dtype=float)
         valid = np.isfinite(ranges) & (ranges >= max(scanner.range_min_m, 1e-9)) & (ranges <= scanner.range_max_m)
         ranges = np.where(valid, ranges, np.nan)
-        return self.m.LaserScan(timestamp=stamp, frame_id=scanner_frame(scanner.name), pose=self.identity,
-                                start_angle=scanner.angle_min_rad, end_angle=scanner.angle_max_rad,
-                                ranges=ranges.tolist())
+        return wire.laser_scan(ns, scanner_frame(scanner.name), self.wire["identity"], scanner.angle_min_rad,
+                               scanner.angle_max_rad, ranges)
 
-    def _blind(self, scene: CycleScene):
+    def _blind(self, scene: CycleScene) -> bytes:
         """What no scanner sees, in the base frame: fixed by the mounts, so one cached message."""
         if "blind" not in self.static:
             c = self.colours
@@ -317,36 +346,48 @@ class FoxglovePublisher:
             self.static["blind"] = self._update(None, BASE, "blind", primitives, frame_locked=True)
         return self.static["blind"]
 
-    def _detections(self, scene: CycleScene, stamp):
-        colour = self.colours["detection"]
-        discs = [self._disc(cx, cy, r, colour, height=0.02)
+    def _detections(self, scene: CycleScene, ns: int) -> bytes:
+        colour = self.wire["detection"]
+        discs = [self._wire_disc(cx, cy, r, colour, height=0.02)
                  for (cx, cy), r in zip(scene.detections_world.tolist(), scene.detection_radii_m.tolist())]
-        return self._update(stamp, WORLD, "detections", {"cylinders": discs})
+        return self._scene_update([wire.entity_head(ns, WORLD, "detections")
+                                   + wire.primitives(wire.ENTITY_CYLINDERS, discs)])
 
-    def _tracks(self, scene: CycleScene, stamp):
-        m, c = self.m, self.colours
+    def _tracks(self, scene: CycleScene, ns: int) -> bytes:
+        w = self.wire
         tracks = scene.tracks
         k = self.builder.settings.uncertainty_sigmas if self.builder else 2.0
+        stamp = wire.stamp_field(ns)
+        track_colour, sigma_colour = w["track_field"], w["track_sigma_field"]
+        cylinders, texts, arrows = (wire.tag(field, 2) for field in (
+            wire.ENTITY_CYLINDERS, wire.ENTITY_TEXTS, wire.ENTITY_ARROWS))
+        cache, self.track_cache = self.track_cache, {}
         entities = []
-        for (px, py), (vx, vy), r, sp, sv, track in zip(tracks.positions.tolist(), tracks.velocities.tolist(),
-                                                        tracks.radii_m.tolist(), tracks.position_sigma_m.tolist(),
-                                                        tracks.velocity_sigma_mps.tolist(), tracks.ids.tolist()):
-            speed = math.hypot(vx, vy)
-            primitives: dict[str, list] = {
-                "cylinders": [self._disc(px, py, r, c["track"], height=0.1),
-                              self._disc(px, py, r + k * sp, c["track_sigma"], height=0.005)],
-                "texts": [self._text(px, py, 0.3, f"{track}: {speed:.2f} m/s ±{sv:.2f}", c["track_text"])],
-            }
-            if speed > 1e-6:
-                primitives["arrows"] = [m.ArrowPrimitive(pose=self._pose(px, py, 0.12, math.atan2(vy, vx)),
-                                                         shaft_length=speed, shaft_diameter=0.03, head_length=0.1,
-                                                         head_diameter=0.08, color=c["arrow"])]
-            entities.append(m.SceneEntity(timestamp=stamp, frame_id=WORLD, id=f"track-{track}", **primitives))
-        return m.SceneUpdate(deletions=[self.delete_all], entities=entities)
+        for key in zip(tracks.positions[:, 0].tolist(), tracks.positions[:, 1].tolist(),
+                       tracks.velocities[:, 0].tolist(), tracks.velocities[:, 1].tolist(), tracks.radii_m.tolist(),
+                       tracks.position_sigma_m.tolist(), tracks.velocity_sigma_mps.tolist(), tracks.ids.tolist()):
+            body = cache.get(key)
+            if body is None:
+                px, py, vx, vy, r, sp, sv, track = key
+                speed = math.hypot(vx, vy)
+                # The disc and the k·σ ring as _disc draws them (centre at half the height).
+                disc = wire.upright_cylinder(px, py, 0.0 + 0.5 * 0.1, 2 * r, 2 * r, 0.1, track_colour)
+                ring = wire.upright_cylinder(px, py, 0.0 + 0.5 * 0.005, 2 * (r + k * sp), 2 * (r + k * sp), 0.005,
+                                             sigma_colour)
+                label = self._wire_text(px, py, 0.3, f"{track}: {speed:.2f} m/s ±{sv:.2f}", w["track_text"])
+                body = (wire.string_field(2, WORLD) + wire.string_field(3, f"track-{track}")
+                        + cylinders + wire.varint(len(disc)) + disc + cylinders + wire.varint(len(ring)) + ring
+                        + texts + wire.varint(len(label)) + label)
+                if speed > 1e-6:
+                    arrow = wire.arrow(wire.pose(px, py, 0.12, math.atan2(vy, vx)), speed, 0.03, 0.1, 0.08, w["arrow"])
+                    body += arrows + wire.varint(len(arrow)) + arrow
+            self.track_cache[key] = body
+            entities.append(stamp + body)
+        return self._scene_update(entities)
 
-    def _path(self, scene: CycleScene):
+    def _path(self, scene: CycleScene) -> bytes:
         """Path, corridor and the current subgoal: one cached message per subgoal."""
-        key = ("path", scene.subgoal_index, tuple(np.round(scene.subgoal, 9)))
+        key = ("path", scene.subgoal_index, *(round(value, 9) for value in scene.subgoal.tolist()))
         if key not in self.static:
             c, view = self.colours, self.builder.path_view
             lines = [self._line(self._points(view.waypoints), c["path"], 0.02)]
@@ -365,92 +406,143 @@ class FoxglovePublisher:
         plan = scene.plan
         costs = plan.candidate_costs
         lines = []
-        if plan.candidate_polylines:
+        polylines = plan.candidate_polylines
+        if polylines:
             finite = costs[np.isfinite(costs)] if len(costs) else costs
             low, high = (float(finite.min()), float(finite.max())) if len(finite) else (0.0, 0.0)
-            identity = self.wire["identity"]
-            for i, line in enumerate(plan.candidate_polylines):
-                cost = float(costs[i]) if i < len(costs) else math.inf
-                # Colours in 16 steps of E, encoded once each.
-                u = -1 if not math.isfinite(cost) else int(round(15 * (0 if high <= low else (cost - low) / (high - low))))
+            # Colours in 16 steps of E (-1: no finite cost), each encoded once.
+            padded = np.full(len(polylines), np.inf)
+            padded[:min(len(costs), len(polylines))] = costs[:len(polylines)]
+            with np.errstate(invalid="ignore"):
+                steps = np.rint(15 * ((padded - low) / (high - low))) if high > low else np.zeros(len(padded))
+            steps = np.where(np.isfinite(padded), steps, -1).astype(int).tolist()
+            counts = [len(line) for line in polylines]
+            xyz = np.empty((sum(counts), 3))
+            xyz[:, :2], xyz[:, 2] = np.concatenate(polylines), 0.01
+            points = wire.points_field(5, xyz)
+            head = self.static.get("candidate_head")
+            if head is None:
+                head = self.static["candidate_head"] = (wire.varint_field(1, wire.LINE_STRIP)
+                                                        + wire.message_field(2, self.wire["identity"])
+                                                        + wire.double_field(3, 0.01))
+            start = 0
+            for u, count in zip(steps, counts):
                 colour = self.candidate_colours.get(u)
                 if colour is None:
-                    rgba = candidate_colour(low + (u / 15) * (high - low) if u >= 0 else math.inf, low,
-                                            high if u >= 0 else low)
-                    colour = self.candidate_colours[u] = self.m.Color(r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3]).encode()
-                xyz = np.empty((len(line), 3))
-                xyz[:, :2], xyz[:, 2] = line, 0.01
-                lines.append(wire.line_primitive(xyz, colour, identity, 0.01))
+                    # Step u of 16 is the colour of E at u/15 of the way from the lowest to the highest.
+                    rgba = candidate_colour(u / 15 if u >= 0 else math.inf, 0.0, 1.0)
+                    colour = self.candidate_colours[u] = wire.message_field(6, self.m.Color(
+                        r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3]).encode())
+                end = start + 29 * count
+                lines.append(head + points[start:end] + colour)
+                start = end
         entity = wire.scene_entity(ns, WORLD, "candidates", lines=lines)
-        return wire.scene_update([self.wire["delete_all"]], [entity])
+        return self._scene_update([entity])
 
-    def _chosen(self, scene: CycleScene, stamp):
-        m, c = self.m, self.colours
+    def _chosen(self, scene: CycleScene, ns: int) -> bytes:
+        w = self.wire
         plan = scene.plan
         line = plan.waypoints if len(plan.waypoints) else np.array([scene.robot_pose[:2], plan.target])
-        size = m.Vector3(x=0.1, y=0.1, z=0.1)
-        spheres = [m.SpherePrimitive(pose=self._pose(x, y, 0.03), size=size, color=c["via"])
-                   for x, y in plan.via_points.tolist()]
+        xyz = np.empty((len(line), 3))
+        xyz[:, :2], xyz[:, 2] = line, 0.02
+        spheres = [wire.sphere(wire.pose(x, y, 0.03), w["via_size"], w["via"]) for x, y in plan.via_points.tolist()]
         tx, ty = plan.target.tolist()
-        return self._update(stamp, WORLD, "chosen", {
-            "lines": [self._line(self._points(line, 0.02), c["chosen"], 0.04)], "spheres": spheres,
-            "texts": [self._text(tx, ty, 0.3, f"{plan.status} {plan.speed_mps:.2f} m/s", c["chosen_text"])]})
+        return self._scene_update([
+            wire.entity_head(ns, WORLD, "chosen")
+            + wire.message_field(wire.ENTITY_LINES, wire.line_primitive(xyz, w["chosen"], w["identity"], 0.04))
+            + wire.primitives(wire.ENTITY_SPHERES, spheres)
+            + wire.message_field(wire.ENTITY_TEXTS, self._wire_text(
+                tx, ty, 0.3, f"{plan.status} {plan.speed_mps:.2f} m/s", w["chosen_text"]))])
 
-    def _xyt(self, scene: CycleScene, stamp, ns: int) -> bytes:
-        m, c, w = self.m, self.colours, self.wire
+    def _xyt_layout(self, segments: int) -> tuple[np.dtype, np.ndarray]:
+        """One person's x-y-t entity after its id, as a numpy record: constant bytes (tags, lengths,
+        pose, colours, the mesh's triangles) and the points of its three rings, its axis and its
+        mesh; with the template filling the constant bytes."""
+        key = ("xyt-layout", segments)
+        if key in self.static:
+            return self.static[key]
+        w = self.wire
+        fields, template = [], []
+
+        def const(data: bytes) -> None:
+            fields.append((f"c{len(fields)}", f"V{len(data)}"))
+            template.append(data)
+
+        def points(name: str, field: int, count: int) -> None:
+            fields.append((name, wire.POINT_DTYPE, (count,)))
+            template.append(wire.points_field(field, np.zeros((count, 3))))
+
+        def line(name: str, kind: int, count: int, colour: bytes) -> None:
+            head = wire.varint_field(1, kind) + wire.message_field(2, w["identity"]) + wire.double_field(3, 0.01)
+            tail = wire.message_field(6, colour)
+            const(wire.tag(wire.ENTITY_LINES, 2) + wire.varint(len(head) + 29 * count + len(tail)) + head)
+            points(name, 5, count)
+            const(tail)
+        for r in range(3):
+            line(f"ring{r}", wire.LINE_LOOP, segments, w["ring"])
+        line("axis", wire.LINE_STRIP, 2, w["axis"])
+        vertices = 3 * segments + 2
+        head = wire.message_field(1, w["identity"])
+        tail = wire.message_field(3, w["mesh"]) + wire.fixed32_packed_field(5, wire_triangles(segments))
+        const(wire.tag(wire.ENTITY_TRIANGLES, 2) + wire.varint(len(head) + 29 * vertices + len(tail)) + head)
+        points("mesh", 2, vertices)
+        const(tail)
+        dtype = np.dtype(fields)
+        row = np.frombuffer(b"".join(template), dtype=np.uint8)
+        assert len(row) == dtype.itemsize
+        self.static[key] = (dtype, row)
+        return self.static[key]
+
+    def _xyt(self, scene: CycleScene, ns: int) -> bytes:
+        w = self.wire
         xyt = scene.xyt
         scale = xyt.settings.time_scale_m_per_s
         stretch = np.array([1.0, 1.0, scale])
         segments = self.xyt_segments
         identity = w["identity"]
+        head = wire.stamp_field(ns) + wire.string_field(2, XYT_FRAME)
         entities = []
         if xyt.persons:
             # All people at once: three rings each (0, cone cap or mid-horizon, horizon), the caps'
-            # centres, every point encoded in one numpy call and sliced per person and primitive.
-            rings = xyt.all_rings(segments) * stretch  # (P, 3, S, 3)
+            # centres on the axis; each person's entity a numpy record of the same layout (see _xyt_layout).
+            rings, centres = xyt.all_rings_and_centres(segments)
+            rings = rings * stretch  # (P, 3, S, 3)
             count = len(rings)
-            caps = rings[:, [0, 2]].mean(axis=2)  # (P, 2, 3)
-            vertices = np.concatenate([rings.reshape(count, 3 * segments, 3), caps], axis=1)  # (P, V, 3)
-            per_person = vertices.shape[1]
-            mesh_points = wire.points_field(2, vertices.reshape(-1, 3))
-            line_points = wire.points_field(5, rings.reshape(-1, 3))
-            axes = np.stack([rings[:, 0].mean(axis=1), rings[:, 2].mean(axis=1)], axis=1)  # (P, 2, 3)
-            axis_points = wire.points_field(5, axes.reshape(-1, 3))
-            key = ("xyt-parts", segments)
-            if key not in self.static:
-                self.static[key] = (
-                    wire.message_field(1, identity),  # mesh: pose
-                    wire.message_field(3, w["mesh"]) + wire.fixed32_packed_field(5, wire_triangles(segments)),
-                    wire.varint_field(1, wire.LINE_LOOP) + wire.message_field(2, identity) + wire.double_field(3, 0.01),
-                    wire.message_field(6, w["ring"]),
-                    wire.varint_field(1, wire.LINE_STRIP) + wire.message_field(2, identity) + wire.double_field(3, 0.01),
-                    wire.message_field(6, w["axis"]),
-                )
-            mesh_head, mesh_tail, ring_head, ring_tail, axis_head, axis_tail = self.static[key]
-            point_size, ring_size = 29, 29 * segments
+            caps = axes = centres[:, ::2] * stretch  # (P, 2, 3): the axis from t = 0 to the horizon
+            dtype, template = self._xyt_layout(segments)
+            size = dtype.itemsize
+            records = np.empty((count, size), dtype=np.uint8)
+            records[:] = template
+
+            def put(field: str, first: int, xyz: np.ndarray, strides: tuple = ()) -> None:
+                # The x, y, z of each point record (tag, length, then a tag before each double: 29
+                # bytes) as one strided view of unaligned doubles, written in one assignment.
+                offset = dtype.fields[field][1] + 29 * first + 3
+                np.ndarray(xyz.shape, dtype="<f8", buffer=records, offset=offset,
+                           strides=(size, *strides, 29, 9))[...] = xyz
+            # The three rings' lines have the same layout one after the other: one view for all.
+            put("ring0", 0, rings, (dtype.fields["ring1"][1] - dtype.fields["ring0"][1],))
+            put("axis", 0, axes)
+            put("mesh", 0, rings.reshape(count, 3 * segments, 3))
+            put("mesh", 3 * segments, caps)
+            data, names = records.tobytes(), self.person_names
             for i, person in enumerate(xyt.persons):
-                start = i * per_person * point_size
-                mesh = mesh_head + mesh_points[start:start + per_person * point_size] + mesh_tail
-                lines = []
-                for r in range(3):
-                    begin = (i * 3 + r) * ring_size
-                    lines.append(ring_head + line_points[begin:begin + ring_size] + ring_tail)
-                lines.append(axis_head + axis_points[i * 2 * point_size:(i + 1) * 2 * point_size] + axis_tail)
-                entities.append(wire.scene_entity(ns, XYT_FRAME, f"person-{person.id}", lines=lines,
-                                                  triangles=[mesh]))
+                name = names.get(person.id)
+                if name is None:
+                    name = names[person.id] = wire.string_field(3, f"person-{person.id}")
+                entities.append(head + name + data[i * size:(i + 1) * size])
         x, y = scene.robot_pose[:2].tolist()
         horizon = xyt.settings.horizon_s
-        ticks = [self._text(x - 0.3, y, t * scale, f"{t:g} s", c["grey"], 11.0) for t in (0.0, 0.5 * horizon, horizon)]
-        size = m.Vector3(x=0.1, y=0.1, z=0.1)
-        spheres = [m.SpherePrimitive(pose=self._pose(px, py, pt * scale), size=size, color=c["via"])
+        ticks = [self._wire_text(x - 0.3, y, t * scale, f"{t:g} s", w["grey"], 11.0)
+                 for t in (0.0, 0.5 * horizon, horizon)]
+        spheres = [wire.sphere(wire.pose(px, py, pt * scale), w["via_size"], w["via"])
                    for px, py, pt in xyt.via_points_xyt.tolist()]
-        others = m.SceneEntity(spheres=spheres, texts=ticks,
-                               cylinders=[self._disc(x, y, scene.robot_radius_m, c["robot_fill"])]).encode()
-        entities.append(wire.scene_entity(ns, XYT_FRAME, "robot-plan", lines=[
+        entities.append(wire.entity_head(ns, XYT_FRAME, "robot-plan") + wire.primitives(wire.ENTITY_LINES, [
             wire.line_primitive(xyt.plan_xyt * stretch, w["chosen"], identity, 0.04),
             wire.line_primitive(np.array([[x, y, 0.0], [x, y, horizon * scale]]), w["time_axis"], identity, 0.01),
-        ], other=others))
-        return wire.scene_update([w["delete_all"]], entities)
+        ]) + wire.primitives(wire.ENTITY_SPHERES, spheres) + wire.primitives(wire.ENTITY_TEXTS, ticks)
+            + wire.message_field(wire.ENTITY_CYLINDERS, self._wire_disc(x, y, scene.robot_radius_m, w["robot_fill"])))
+        return self._scene_update(entities)
 
 
 def wire_triangles(segments: int) -> np.ndarray:

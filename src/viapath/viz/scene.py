@@ -33,6 +33,7 @@ What the sources leave open and we chose:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 from dataclasses import dataclass
@@ -125,6 +126,9 @@ class XYTScene:
     plan_xyt: np.ndarray  # (K, 3) x, y, t of the robot's plan from the robot (t = 0) on
     via_points_xyt: np.ndarray  # (V, 3)
     cone: bool = True
+    # (P, 6) x, y, vx, vy, combined radius, σ_v of the persons, in their order (None: read from them);
+    # the builder gives it from the tracks' arrays so that the rings need no loop over persons.
+    person_fields: np.ndarray | None = None
 
     def height_m(self, t_s) -> np.ndarray:
         return np.asarray(t_s, dtype=float) * self.settings.time_scale_m_per_s
@@ -155,13 +159,21 @@ class XYTScene:
         """Every person's cylinder as three rings each, (P, 3, segments, 3) in x, y, t, in one go:
         at 0, where the cone stops growing (or half the horizon when it does not within it), and at
         the horizon. Between them the surface is ruled, so these rings describe it exactly."""
+        return self.all_rings_and_centres(segments)[0]
+
+    def all_rings_and_centres(self, segments: int = 24) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`all_rings` and the rings' centres (P, 3, 3) in x, y, t: the forecast position at
+        each ring's time (the cylinder's axis; the caps' centres)."""
         count = len(self.persons)
         if count == 0:
-            return np.zeros((0, 3, segments, 3))
+            return np.zeros((0, 3, segments, 3)), np.zeros((0, 3, 3))
         settings = self.settings
         horizon = settings.horizon_s
         # One (P, 6) array of what the rings depend on: fewer, larger numpy calls (this runs every cycle).
-        fields = np.array([(*p.position, *p.velocity, p.combined_radius_m, p.velocity_sigma_mps) for p in self.persons])
+        fields = self.person_fields
+        if fields is None:
+            fields = np.array([(*p.position, *p.velocity, p.combined_radius_m, p.velocity_sigma_mps)
+                               for p in self.persons])
         growth = settings.uncertainty_sigmas * fields[:, 5] if self.cone else np.zeros(count)
         growing = growth > 0
         cap = np.full(count, np.inf)
@@ -171,11 +183,13 @@ class XYTScene:
         times[:, 1] = np.where((cap > 0) & (cap < horizon), cap, 0.5 * horizon)
         times[:, 2] = horizon
         radii = fields[:, 4:5] + np.minimum(growth[:, None] * times, settings.max_inflation_m)
-        centres = fields[:, None, 0:2] + times[..., None] * fields[:, None, 2:4]  # (P, 3, 2)
+        centres = np.empty((count, 3, 3))
+        centres[..., :2] = fields[:, None, 0:2] + times[..., None] * fields[:, None, 2:4]
+        centres[..., 2] = times
         out = np.empty((count, 3, segments, 3))
-        out[..., :2] = centres[:, :, None, :] + radii[:, :, None, None] * _unit_circle(segments)
+        out[..., :2] = centres[:, :, None, :2] + radii[:, :, None, None] * _unit_circle(segments)
         out[..., 2] = times[:, :, None]
-        return out
+        return out, centres
 
     def mesh(self, index: int, segments: int = 24) -> np.ndarray:
         """Triangles (T, 3, 3) in x, y, t of person ``index``'s oblique cylinder: side and both caps."""
@@ -290,6 +304,10 @@ class SceneBuilder:
     def __init__(self, path, robot_radius_m: float, settings: ForecastSettings | None = None, cone: bool = True):
         self.path = path
         self.path_view = path_view(path)
+        # The path's segments as plain numbers, for the lateral deviation of one point per cycle.
+        self._segments = list(zip(np.asarray(path.segment_starts, dtype=float).tolist(),
+                                  np.asarray(path.segment_directions, dtype=float).tolist(),
+                                  np.asarray(path.segment_lengths_m, dtype=float).tolist()))
         self.robot_radius_m = float(robot_radius_m)
         self.settings = settings or ForecastSettings()
         self.cone = cone
@@ -311,8 +329,10 @@ class SceneBuilder:
         parts = perception_parts if perception_parts is not None else perception_parts_of(perception)
         scanners, detections, radii, points, sectors, blind = parts
         horizon = self.settings.horizon_s
+        fields = np.column_stack([tracks.positions, tracks.velocities, tracks.radii_m + self.robot_radius_m,
+                                  tracks.velocity_sigma_mps]) if len(tracks) else None
         xyt = XYTScene(self.settings, _persons(tracks, self.robot_radius_m), plan_xyt(pose[:2], plan, horizon),
-                       _via_xyt(pose[:2], plan, horizon), self.cone)
+                       _via_xyt(pose[:2], plan, horizon), self.cone, fields)
         people = true_people if true_people is not None else tracks
         series = {
             "speed_mps": float(robot_speed_mps),
@@ -320,7 +340,7 @@ class SceneBuilder:
             "command_speed_mps": float(decision.command.speed_mps),
             "command_turn_rate_radps": float(decision.command.turn_rate_radps),
             "clearance_m": clearance_m(pose[:2], self.robot_radius_m, people),
-            "lateral_deviation_m": float(self.path.lateral_deviation(pose[:2])),
+            "lateral_deviation_m": lateral_deviation_m(self._segments, float(pose[0]), float(pose[1])),
             "plan_time_ms": float(plan_time_ms),
             "shield_interventions": int(self.shield_interventions),
             "tracks": int(len(tracks)),
@@ -337,7 +357,7 @@ class SceneBuilder:
         )
 
     def _subgoal(self, plan) -> np.ndarray:
-        index = int(np.clip(plan.subgoal_index, 0, len(self.path.waypoints) - 1))
+        index = min(max(int(plan.subgoal_index), 0), len(self.path.waypoints) - 1)
         return self.path.waypoints[index]
 
 
@@ -349,14 +369,17 @@ def plan_xyt(robot_position, plan, horizon_s: float) -> np.ndarray:
     line = np.asarray(plan.waypoints, dtype=float).reshape(-1, 2)
     if len(line) == 0:
         line = np.array([start, np.asarray(plan.target, dtype=float).reshape(2)])
-    if np.hypot(*(line[0] - start)) > 1e-9:
+    if math.hypot(line[0, 0] - start[0], line[0, 1] - start[1]) > 1e-9:
         line = np.vstack([start, line])
     extras = plan.extras or {}
     times = extras.get("waypoint_times_s")
     if times is not None and len(times) == len(plan.waypoints) and len(line) == len(plan.waypoints):
         xyt = np.column_stack([line, np.asarray(times, dtype=float)])
         return _clip_to_horizon(xyt, horizon_s)
-    lengths = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(line, axis=0).T))])
+    # Arc length at each point (this runs every cycle on a few points: plain slicing, no np.diff).
+    steps = line[1:] - line[:-1]
+    lengths = np.zeros(len(line))
+    np.cumsum(np.hypot(steps[:, 0], steps[:, 1]), out=lengths[1:])
     speed = float(plan.speed_mps)
     slow_s = float(extras.get("slow_s", 0.0) or 0.0)
     after = extras.get("speed_after_mps")
@@ -372,7 +395,24 @@ def plan_xyt(robot_position, plan, horizon_s: float) -> np.ndarray:
         return _clip_to_horizon(np.column_stack([points, t]), horizon_s)
     if speed <= 1e-9:
         return np.array([[start[0], start[1], 0.0], [start[0], start[1], horizon_s]])
-    return _clip_to_horizon(np.column_stack([line, lengths / speed]), horizon_s)
+    xyt = np.empty((len(line), 3))
+    xyt[:, :2], xyt[:, 2] = line, lengths / speed
+    return _clip_to_horizon(xyt, horizon_s)
+
+
+def lateral_deviation_m(segments: list, x: float, y: float) -> float:
+    """:meth:`viapath.path.DesignatedPath.lateral_deviation` of one point, the same steps in scalar
+    arithmetic (a path has a few segments: numpy's per-call cost was most of it). ``segments``:
+    ``((start_x, start_y), (direction_x, direction_y), length_m)`` per segment."""
+    best, side = math.inf, 1.0
+    for (sx, sy), (dx, dy), length in segments:
+        rx, ry = x - sx, y - sy
+        along = min(max(rx * dx + ry * dy, 0.0), length)
+        distance = math.hypot(x - (sx + along * dx), y - (sy + along * dy))
+        if distance < best:  # the first nearest segment, as argmin
+            cross = dx * ry - dy * rx
+            best, side = distance, (-1.0 if cross < 0 else 1.0)
+    return side * best
 
 
 def _clip_to_horizon(xyt: np.ndarray, horizon_s: float) -> np.ndarray:
@@ -382,7 +422,10 @@ def _clip_to_horizon(xyt: np.ndarray, horizon_s: float) -> np.ndarray:
     last = int(np.flatnonzero(inside)[-1])
     a, b = xyt[last], xyt[last + 1]
     fraction = (horizon_s - a[2]) / max(b[2] - a[2], 1e-12)
-    return np.vstack([xyt[: last + 1], a + fraction * (b - a)])
+    out = np.empty((last + 2, 3))  # the points inside, then the one at the horizon
+    out[:last + 1] = xyt[:last + 1]
+    out[last + 1] = a + fraction * (b - a)
+    return out
 
 
 def _via_xyt(robot_position, plan, horizon_s: float, line: np.ndarray | None = None) -> np.ndarray:
@@ -403,10 +446,13 @@ def _via_xyt(robot_position, plan, horizon_s: float, line: np.ndarray | None = N
 
 
 def _persons(tracks: Obstacles, robot_radius_m: float) -> list[PersonForecast]:
-    return [PersonForecast(int(tracks.ids[i]), tracks.positions[i].copy(), tracks.velocities[i].copy(),
-                           float(tracks.radii_m[i]), float(tracks.radii_m[i] + robot_radius_m),
-                           float(tracks.position_sigma_m[i]), float(tracks.velocity_sigma_mps[i]))
-            for i in range(len(tracks))]
+    # Each person's position and velocity are rows of private copies; the scalars read in one go
+    # (a crowd's cycle: one numpy call per field, not per person and field).
+    positions, velocities = tracks.positions.copy(), tracks.velocities.copy()
+    return [PersonForecast(int(track), positions[i], velocities[i], radius, combined, position_sigma, velocity_sigma)
+            for i, (track, radius, combined, position_sigma, velocity_sigma) in enumerate(zip(
+                tracks.ids.tolist(), tracks.radii_m.tolist(), (tracks.radii_m + robot_radius_m).tolist(),
+                tracks.position_sigma_m.tolist(), tracks.velocity_sigma_mps.tolist()))]
 
 
 def _plan_view(plan, extras: dict) -> PlanView:
@@ -432,9 +478,8 @@ def perception_parts_of(perception):
     """Scans in scanner frames, detections, scan points and blind region of a perception object
     that has them (the laser chain); empty for the oracle."""
     scanners: list[ScannerView] = []
-    empty2 = np.zeros((0, 2))
     if perception is None:
-        return scanners, empty2, np.zeros(0), empty2, [], empty2
+        return (scanners, *perception_arrays_of(None))
     models = getattr(perception, "scanners", ()) or ()
     scans = getattr(perception, "last_scans", None) or []
     for model, ranges in zip(models, scans):
@@ -442,6 +487,15 @@ def perception_parts_of(perception):
                                     float(model.angle_min_rad), float(model.angle_increment_rad),
                                     np.asarray(ranges, dtype=float).reshape(-1), float(model.range_min_m),
                                     float(model.range_max_m)))
+    return (scanners, *perception_arrays_of(perception))
+
+
+def perception_arrays_of(perception):
+    """The part of :func:`perception_parts_of` that changes every cycle: detections (D, 2) and their
+    radii, scan points (M, 2), blind sectors and the blind region's polygon (B, 2)."""
+    empty2 = np.zeros((0, 2))
+    if perception is None:
+        return empty2, np.zeros(0), empty2, [], empty2
     detections = getattr(perception, "last_detections_world", None)
     centres = np.asarray(getattr(detections, "centres", empty2), dtype=float).reshape(-1, 2)
     radii = np.asarray(getattr(detections, "radii_m", np.zeros(len(centres))), dtype=float).reshape(-1)
@@ -452,7 +506,7 @@ def perception_parts_of(perception):
     polygon = getattr(perception, "blind_polygon_world", None)
     if callable(polygon) and sectors:
         blind = np.asarray(polygon(), dtype=float).reshape(-1, 2)
-    return scanners, centres, radii, points, sectors, blind
+    return centres, radii, points, sectors, blind
 
 
 def _shield_intervened(extras: dict) -> bool:
@@ -466,11 +520,14 @@ def clearance_m(position, robot_radius_m: float, people: Obstacles | None) -> fl
     """Surface-to-surface distance from the robot to the nearest person (inf with nobody)."""
     if people is None or len(people) == 0:
         return float("inf")
-    present = np.isfinite(people.positions).all(axis=1)
-    if not present.any():
-        return float("inf")
-    gap = np.hypot(*(people.positions[present] - np.asarray(position, dtype=float)).T)
-    return float(np.min(gap - people.radii_m[present] - robot_radius_m))
+    positions, radii = people.positions, people.radii_m
+    present = np.isfinite(positions).all(axis=1)
+    if not present.all():  # (the writer's true people are all present: no copies then)
+        if not present.any():
+            return float("inf")
+        positions, radii = positions[present], radii[present]
+    offsets = positions - np.asarray(position, dtype=float)
+    return float((np.hypot(offsets[:, 0], offsets[:, 1]) - radii - robot_radius_m).min())
 
 
 def circle_polygon(centre, radius_m: float, segments: int = 32) -> np.ndarray:
