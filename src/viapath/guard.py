@@ -43,6 +43,7 @@ not an error: the command check brakes from it.
 
 from __future__ import annotations
 
+import contextvars
 import functools
 import math
 from dataclasses import dataclass, field
@@ -50,7 +51,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from viapath.kinematics import UnicycleState, step
+from viapath.kinematics import _arc, _clip
 from viapath.observation import (Command, Decision, MotionLimits, Observation, ObservationError, Obstacles, Plan,
                                  RobotState)
 
@@ -124,7 +125,9 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
     if not math.isfinite(time_s):
         stop.append(f"time_s: expected a finite number, found {time_s:g}")
     position = _array("robot.position", robot.position, (2,))
-    if not (np.isfinite(position).all() and np.all(np.abs(position) <= config.max_coordinate_m)):
+    x, y = float(position[0]), float(position[1])  # a NaN fails the bound too; an inf is not finite
+    if not (math.isfinite(x) and math.isfinite(y) and abs(x) <= config.max_coordinate_m
+            and abs(y) <= config.max_coordinate_m):
         stop.append(f"robot.position: expected 2 finite numbers within ±{config.max_coordinate_m:g} m, "
                     f"found {_show(position)}")
     for name, bound, unit in (("heading_rad", config.max_heading_rad, "rad"),
@@ -144,13 +147,17 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
     if positions.ndim != 2 or positions.shape[1] != 2:
         raise ObservationError(f"obstacles.positions: expected an (N, 2) array of [x, y] rows, found shape {positions.shape}")
     n = len(positions)
-    velocities = _array("obstacles.velocities", obstacles.velocities, (n, 2)).copy()
-    radii = _array("obstacles.radii_m", obstacles.radii_m, (n,)).copy()
-    position_sigma = _array("obstacles.position_sigma_m", obstacles.position_sigma_m, (n,)).copy()
-    velocity_sigma = _array("obstacles.velocity_sigma_mps", obstacles.velocity_sigma_mps, (n,)).copy()
+    velocities = _array("obstacles.velocities", obstacles.velocities, (n, 2))
+    radii = _array("obstacles.radii_m", obstacles.radii_m, (n,))
+    position_sigma = _array("obstacles.position_sigma_m", obstacles.position_sigma_m, (n,))
+    velocity_sigma = _array("obstacles.velocity_sigma_mps", obstacles.velocity_sigma_mps, (n,))
     ids = np.asarray(obstacles.ids)
     if ids.shape != (n,):
         raise ObservationError(f"obstacles.ids: expected shape ({n},), found shape {ids.shape}")
+    if not stop and _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config):
+        return Inspection(observation, [], [])  # the common case: nothing to stop for, nothing to repair
+    velocities, radii = velocities.copy(), radii.copy()
+    position_sigma, velocity_sigma = position_sigma.copy(), velocity_sigma.copy()
 
     bad_position = ~(np.isfinite(positions).all(axis=1) & (np.abs(positions) <= config.max_coordinate_m).all(axis=1))
     for i in np.flatnonzero(bad_position):
@@ -189,6 +196,22 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
     return Inspection(Observation(time_s, robot, repaired), [], repairs)
 
 
+def _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config: GuardConfig) -> bool:
+    """Whether no obstacle field needs a stop or a repair: the per-field checks below, as a few whole-array
+    reductions (an episode's every cycle comes here; the per-index loops run only when this is False).
+    A NaN fails every comparison (and ``max``/``min`` propagate it) and an infinity every bound, so
+    ``max ≤ bound`` and ``min ≥ 0`` also say "finite"; a speed is inf or NaN whenever a velocity part is."""
+    if len(positions) == 0:
+        return True
+    return bool(
+        np.abs(positions).max() <= config.max_coordinate_m
+        and np.hypot(velocities[:, 0], velocities[:, 1]).max() <= config.max_obstacle_speed_mps
+        and radii.min() >= 0 and radii.max() <= config.max_radius_m
+        and velocity_sigma.min() >= 0 and velocity_sigma.max() <= config.max_velocity_sigma_mps
+        and position_sigma.min() >= 0 and position_sigma.max() <= config.max_position_sigma_m
+    )
+
+
 def stopping_distance_m(speed_mps: float, limits: MotionLimits, config: GuardConfig = DEFAULT_CONFIG) -> float:
     """How far the robot goes holding ``speed_mps`` for one control period and then braking at the
     limit, plus the margin."""
@@ -201,20 +224,34 @@ def braking_path(robot: RobotState, command: Command, limits: MotionLimits, peri
     """Positions (S, 2) of the robot holding ``command`` for ``period_s`` and then commanded to stop
     until at rest, stepped by :func:`viapath.kinematics.step` (the drive's acceleration limits), from
     the first sample on (the current position excluded)."""
+    # kinematics.step's arithmetic on plain floats (no state objects per step): limit_command's clipped
+    # command and ramps, then the exact arc; the same numbers (tests/robustness/test_guard_fast_path.py).
     dt = period_s / samples_per_period
-    state = UnicycleState(float(robot.position[0]), float(robot.position[1]), float(robot.heading_rad),
-                          float(robot.speed_mps), float(robot.turn_rate_radps))
+    x, y = float(robot.position[0]), float(robot.position[1])
+    heading, speed, turn = float(robot.heading_rad), float(robot.speed_mps), float(robot.turn_rate_radps)
+    dv = limits.max_accel_mps2 * dt
+    dw = limits.max_turn_accel_radps2 * dt
+    v_cmd, w_cmd = float(command.speed_mps), float(command.turn_rate_radps)
+    if not (math.isfinite(v_cmd) and math.isfinite(w_cmd)):
+        v_cmd, w_cmd = 0.0, 0.0
+    v_cmd = _clip(v_cmd, 0.0, limits.max_speed_mps)
+    w_cmd = _clip(w_cmd, -limits.max_turn_rate_radps, limits.max_turn_rate_radps)
     points = []
     for _ in range(samples_per_period):
-        state = step(state, command, limits, dt)
-        points.append((state.x, state.y))
-    stop = Command.stop()
-    top = max(limits.max_speed_mps, abs(state.speed_mps))
+        speed = speed + _clip(v_cmd - speed, -dv, dv)
+        turn = turn + _clip(w_cmd - turn, -dw, dw)
+        x, y, heading = _arc(x, y, heading, speed, turn, dt)
+        points.append((x, y))
+    v_stop = _clip(0.0, 0.0, limits.max_speed_mps)  # the stop command, limited as step limits it
+    w_stop = _clip(0.0, -limits.max_turn_rate_radps, limits.max_turn_rate_radps)
+    top = max(limits.max_speed_mps, abs(speed))
     for _ in range(min(1000, int(math.ceil(top / max(limits.max_accel_mps2 * dt, 1e-9))) + 2)):
-        if state.speed_mps <= 1e-12:
+        if speed <= 1e-12:
             break
-        state = step(state, stop, limits, dt)
-        points.append((state.x, state.y))
+        speed = speed + _clip(v_stop - speed, -dv, dv)
+        turn = turn + _clip(w_stop - turn, -dw, dw)
+        x, y, heading = _arc(x, y, heading, speed, turn, dt)
+        points.append((x, y))
     return np.array(points)
 
 
@@ -268,6 +305,11 @@ def _stop_decision(planner, observation: Observation, status: str, reasons: list
     return Decision(Command.stop(), plan)
 
 
+#: The observation the innermost running guarded ``plan`` was handed after its inspection, and the
+#: configuration it was inspected with (per thread and task).
+_INSPECTED: contextvars.ContextVar = contextvars.ContextVar("viapath_guard_inspected", default=None)
+
+
 def guard_plan(plan: Callable) -> Callable:
     """Wrap a planner's ``plan(self, observation)`` with the checks of this module (idempotent; a
     ``plan`` that calls ``super().plan`` is guarded once, at the outside)."""
@@ -279,13 +321,22 @@ def guard_plan(plan: Callable) -> Callable:
         if getattr(self, "_guard_active", False):
             return plan(self, observation, *args, **kwargs)
         config = getattr(self, "guard_config", DEFAULT_CONFIG)
-        inspection = inspect_observation(observation, config)
+        checked = _INSPECTED.get()
+        if checked is not None and checked[0] is observation and checked[1] == config:
+            # A planner inside another guarded one (the shield's): this very observation came out of the
+            # outer guard's inspection with the same configuration, and an inspected (or repaired)
+            # observation passes again with nothing to stop for or repair.
+            inspection = Inspection(observation, [], [])
+        else:
+            inspection = inspect_observation(observation, config)
         if inspection.observation is None:
             return _stop_decision(self, observation, "guard-stop", inspection.stop_reasons + inspection.repairs)
         self._guard_active = True
+        token = _INSPECTED.set((inspection.observation, config))
         try:
             decision = plan(self, inspection.observation, *args, **kwargs)
         finally:
+            _INSPECTED.reset(token)
             self._guard_active = False
         limits = getattr(self, "limits", None) or MotionLimits()
         radius = max(float(getattr(self, "robot_radius_m", 0.0) or 0.0), float(observation.robot.radius_m))

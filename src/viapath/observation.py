@@ -85,6 +85,8 @@ class Obstacles:
         # Shapes are checked here, once, with the field named (a transposed (2, N) array or lists of
         # different lengths must never be reshaped into phantom obstacles). Values (NaN, a negative
         # radius) are the guard's business: see viapath.guard.
+        if self._set_well_formed():
+            return
         positions = _points("positions", self.positions)
         n = len(positions)
         velocities = _points("velocities", self.velocities)
@@ -113,6 +115,56 @@ class Obstacles:
             ids = ids.astype(int)
         object.__setattr__(self, "ids", ids)
 
+    @classmethod
+    def of_fresh_arrays(cls, positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids) -> "Obstacles":
+        """Obstacles from arrays made for them and used by no one else (a perception's estimates): when
+        they are well formed (float64 (N, 2), (N, 2), (N,), (N,), (N,) and (N,) integer ids) they are
+        kept as they are instead of copied; anything else goes through the checks of the constructor."""
+        n = len(positions) if type(positions) is np.ndarray and positions.ndim == 2 else -1
+        if (n >= 0 and positions.dtype == np.float64 and positions.shape == (n, 2)
+                and isinstance(ids, np.ndarray) and ids.shape == (n,) and ids.dtype == np.int64
+                and all(type(a) is np.ndarray and a.dtype == np.float64 and a.shape == shape
+                        for a, shape in ((velocities, (n, 2)), (radii_m, (n,)), (position_sigma_m, (n,)),
+                                         (velocity_sigma_mps, (n,))))):
+            obstacles = object.__new__(cls)
+            ids = ids.astype(float).astype(int)  # as the constructor: through float (ids past 2**53 round)
+            for name, value in (("positions", positions), ("velocities", velocities), ("radii_m", radii_m),
+                                ("position_sigma_m", position_sigma_m), ("velocity_sigma_mps", velocity_sigma_mps),
+                                ("ids", ids)):
+                object.__setattr__(obstacles, name, value)
+            return obstacles
+        return cls(positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids)
+
+    def _set_well_formed(self) -> bool:
+        """The common case (perception hands float64 arrays of the right shapes, integer ids): the same
+        copies as the general path below, without its conversions and checks; False for anything else."""
+        positions, velocities, radii = self.positions, self.velocities, self.radii_m
+        if not (type(positions) is np.ndarray and positions.dtype == np.float64 and positions.ndim == 2
+                and positions.shape[1] == 2):
+            return False
+        n = positions.shape[0]
+        arrays = [velocities, radii, self.position_sigma_m, self.velocity_sigma_mps]
+        shapes = [(n, 2), (n,), (n,), (n,)]
+        for k, (array, shape) in enumerate(zip(arrays, shapes)):
+            if array is None and k >= 2:
+                arrays[k] = np.zeros(n)
+            elif type(array) is np.ndarray and array.dtype == np.float64 and array.shape == shape:
+                arrays[k] = array.copy()
+            else:
+                return False
+        ids = self.ids
+        if ids is None:
+            ids = np.arange(n)
+        elif type(ids) is np.ndarray and ids.shape == (n,) and ids.dtype.kind in "iu":
+            ids = ids.astype(float).astype(int)  # as the general path: through float (always whole, finite)
+        else:
+            return False
+        object.__setattr__(self, "positions", positions.copy())
+        for name, array in zip(("velocities", "radii_m", "position_sigma_m", "velocity_sigma_mps"), arrays):
+            object.__setattr__(self, name, array)
+        object.__setattr__(self, "ids", ids)
+        return True
+
     def __len__(self) -> int:
         return len(self.positions)
 
@@ -122,6 +174,8 @@ class Obstacles:
 
     def finite(self) -> "Obstacles":
         """Drop rows with a NaN or infinite field: a bad estimate must never reach a command."""
+        if len(self.positions) == 0:
+            return self
         ok = (
             np.isfinite(self.positions).all(axis=1)
             & np.isfinite(self.velocities).all(axis=1)

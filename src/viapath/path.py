@@ -17,6 +17,7 @@ What the paper leaves open and we chose:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,8 +93,34 @@ class DesignatedPath:
 
     def corridor_excess(self, points) -> np.ndarray:
         """How far each point is outside the corridor (m); <= 0 inside."""
-        _, _, distance = self._segment_geometry(np.asarray(points, dtype=float))
+        points = np.asarray(points, dtype=float)
+        if points.shape == (2,):
+            x, y = float(points[0]), float(points[1])
+            if math.isfinite(x) and math.isfinite(y):
+                return self._point_excess(x, y)
+        _, _, distance = self._segment_geometry(points)
         return np.min(distance - self.half_widths_m, axis=-1)
+
+    def _point_excess(self, x: float, y: float) -> np.float64:
+        """:meth:`corridor_excess` of one finite point (the robot's, every cycle) in scalar arithmetic: the
+        same operations as :meth:`_segment_geometry` (the clamp as ``np.clip``'s max-then-min, the
+        distance by ``np.hypot``; ``math.hypot`` rounds differently), without its array temporaries."""
+        segments = self.__dict__.get("_segments")
+        if segments is None:
+            segments = self._segments = [
+                (float(sx), float(sy), float(dx), float(dy), float(length), float(half))
+                for (sx, sy), (dx, dy), length, half in zip(self.segment_starts, self.segment_directions,
+                                                            self.segment_lengths_m, self.half_widths_m)]
+        best = math.inf
+        hypot = np.hypot
+        for sx, sy, dx, dy, length, half in segments:
+            along = (x - sx) * dx + (y - sy) * dy
+            along = along if along > 0.0 else 0.0
+            along = along if along < length else length
+            excess = float(hypot(x - (sx + along * dx), y - (sy + along * dy))) - half
+            if excess < best:
+                best = excess
+        return np.float64(best)
 
     def contains(self, points, tolerance_m: float = 1e-9) -> np.ndarray:
         return self.corridor_excess(points) <= tolerance_m

@@ -29,3 +29,15 @@ def test_suite_files_round_trip_as_with_the_pure_python_yaml(tmp_path):
         assert text == yaml.safe_dump(scenario, sort_keys=False, default_flow_style=None, width=120)
         assert yaml.load(text, Loader=yaml.SafeLoader) == yaml.safe_load(yaml.safe_dump(scenario))
         assert data["name"] == scenario["name"] and len(data["obstacles"]) == len(scenario["obstacles"])
+
+
+def test_suite_written_and_read_in_workers_equals_serial(tmp_path):
+    """A generated suite is written and read back in the workers, chunk by chunk (more than one chunk of
+    50 here): the same files and the same scenario dicts, in the same order, as in one process."""
+    serial = load_suite("mixed", tmp_path / "serial", count=60, seed=4, workers=1)
+    parallel = load_suite("mixed", tmp_path / "parallel", count=60, seed=4, workers=2)
+    assert serial == parallel
+    files = sorted(p.name for p in (tmp_path / "serial" / "suite").iterdir())
+    assert files == sorted(p.name for p in (tmp_path / "parallel" / "suite").iterdir()) and len(files) == 60
+    for name in files:
+        assert (tmp_path / "serial" / "suite" / name).read_text() == (tmp_path / "parallel" / "suite" / name).read_text()

@@ -254,3 +254,199 @@ def test_escape_scores_match_reference():
         assert np.argmax(expected) == np.argmax(got)
         overlapped += bool(np.any(np.hypot(*(positions - [1.0, 0.2]).T) < checks.check_radii))
     assert 5 < overlapped < 60  # both kinds of crowd came up
+
+
+@pytest.mark.parametrize("path", PATHS, ids=["straight", "corner", "zigzag"])
+def test_goal_legs_kernel_matches_reference(path):
+    """kernels.goal_legs (the whole LegChecks.goal_legs in one call) equals the numpy code bit for bit:
+    with and without the continuation past the subgoal, the braking envelope, a blocked subgoal's stop
+    short, a finite and an infinite horizon, people with and without uncertainty, and none."""
+    from dataclasses import replace
+
+    from viapath.planning.viapath.backend import NUMPY, Backend
+    from viapath.planning.viapath.checks import LegChecks
+
+    rng = np.random.default_rng(7)
+    compared = 0
+    for trial in range(60):
+        n = int(rng.integers(0, 9))
+        robot = RobotState(np.array([rng.uniform(-0.5, 3.0), rng.uniform(-1.3, 1.3)]), rng.uniform(-0.8, 0.8),
+                           rng.uniform(0.0, 0.5), 0.0)
+        positions = robot.position + rng.uniform(-4.0, 6.0, (n, 2))
+        velocities = rng.uniform(-1.2, 1.2, (n, 2))
+        uncertain = trial % 2 == 0
+        obstacles = Obstacles(positions, velocities, rng.uniform(0.2, 0.35, n),
+                              position_sigma_m=rng.uniform(0.0, 0.05, n) if uncertain else None,
+                              velocity_sigma_mps=rng.uniform(0.0, 0.1, n) if uncertain else None)
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend="numpy")
+        situation = planner.situation(Observation(0.0, robot, obstacles))
+        base = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25, NUMPY)
+        k = int(rng.integers(1, 12))
+        starts = robot.position + rng.uniform(-2.0, 3.0, (k, 2))
+        starts[0] = robot.position
+        times = rng.uniform(0.0, 6.0, k) * (rng.random(k) < 0.7)
+        speeds = rng.choice([0.1, 0.2, 0.3, 0.4, 0.5, 0.6], k)
+        continuations = [base.continuation, None]
+        if base.continuation is None and path.segment_lengths_m.size > 1:
+            continuations[0] = (path.segment_directions[1], path.segment_lengths_m[1])
+        for continuation in continuations:
+            for envelope in (0.0, 2.0):
+                for stop_short in (0.0, 0.6):
+                    checks = replace(base, continuation=continuation, envelope_accel_mps2=envelope,
+                                     envelope_period_s=0.1, max_accel_mps2=0.8, stop_short_m=stop_short)
+                    compiled = replace(checks, backend=Backend("numba"))
+                    for horizon in (None, np.inf, 3.0):
+                        expected = checks.goal_legs(starts, times, speeds, horizon)
+                        found = compiled.goal_legs(starts, times, speeds, horizon)
+                        for a, b in zip(expected, found):
+                            assert a.shape == b.shape and a.dtype == b.dtype
+                            np.testing.assert_array_equal(a, b)
+                        compared += 1
+    assert compared == 60 * 2 * 2 * 2 * 3
+
+
+def _tree_inputs(case, backend, path=None):
+    """The arguments the planner hands candidates.grow in the first cycle of ``case``."""
+    from dataclasses import replace
+
+    from viapath.planning.viapath.backend import Backend
+    from viapath.planning.viapath.candidates import RootLegs
+    from viapath.planning.viapath.checks import LegChecks
+
+    path_index, _, _, _, _, _, _, shield, _ = case
+    planner = _planner(PATHS[path_index] if path is None else path, "numpy", shield)
+    inner = getattr(planner, "inner", planner)
+    observation = next(_observations(case))
+    situation = inner.situation(observation)
+    checks = LegChecks.of(situation, inner.config, inner.subgoals, inner.subgoal_policy, inner.robot_radius_m,
+                          Backend(backend))
+    if shield:
+        checks = replace(checks, envelope_accel_mps2=inner.shield.config.person_accel_mps2,
+                         envelope_period_s=inner.shield.dt_s, max_accel_mps2=inner.limits.max_accel_mps2)
+    speeds, nominal_index = inner.speed_set(observation.robot.speed_mps)
+    return checks, RootLegs.of(checks, speeds, nominal_index), inner._slow_checks(checks), inner.config
+
+
+@settings(max_examples=600, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(cases(), st.sampled_from([(3, 12), (3, 2), (1, 0), (5, 1)]))
+def test_tree_kernel_builds_the_same_candidates(case, limits):
+    """kernels.grow (the whole candidate tree in one call) builds the numpy grow's candidates exactly:
+    the same nodes in the same order (so the same ties), the same leaves and arrays, bit for bit; with
+    the default depth and root limit and with others (a root limit of 1-2 takes the sorted branch)."""
+    from viapath.planning.viapath.candidates import grow
+
+    depth, root_limit = limits
+    found = []
+    for backend in ("numpy", "numba"):
+        checks, roots, slow, config = _tree_inputs(case, backend)
+        config = config.replace(max_depth=depth, max_root_obstacles=root_limit)
+        found.append(grow(checks, roots, config, slow))
+    reference, compiled = found
+    assert (reference is None) == (compiled is None)
+    if reference is None:
+        return
+    for name in reference.nodes:
+        np.testing.assert_array_equal(reference.nodes[name], compiled.nodes[name], err_msg=name)
+    for name in ("leaves", "total_length_m", "speed_mps", "slow_s", "slow_speed_mps", "first_direction", "ways"):
+        np.testing.assert_array_equal(getattr(reference, name), getattr(compiled, name), err_msg=name)
+
+
+U_TURN = DesignatedPath([[0.0, 0.0], [3.0, 0.0], [3.0, 3.0], [0.0, 3.0]], half_width_m=0.8)
+
+
+@pytest.mark.parametrize("path_index", [1, 3], ids=["corner", "u-turn"])
+def test_tree_kernel_builds_the_same_corner_candidates(path_index):
+    """The same with the subgoal past a corner of the path (a blocked subgoal given up, or the robot pushed
+    back): the straight leg cuts the corridor and the path's corners become via points (_corner_nodes),
+    at every speed, each chained on from the root of its speed."""
+    from dataclasses import replace
+
+    from viapath.planning.viapath.backend import Backend
+    from viapath.planning.viapath.candidates import CORNER, RootLegs, grow
+
+    path = PATHS[path_index] if path_index < len(PATHS) else U_TURN
+    last = 2  # the subgoal past the first corner (on the U-turn, another segment follows)
+    rng = np.random.default_rng(11)
+    corner_nodes = 0
+    for trial in range(150):
+        n = int(rng.integers(0, 6))
+        # Where the straight leg to the last waypoint cuts the corridor: near the start of either path.
+        robot = np.array([rng.uniform(-0.3, 1.0), rng.uniform(-0.7, 0.7)])
+        case = (path_index, (robot[0], robot[1], rng.uniform(-0.5, 0.5), rng.uniform(0.0, 0.4), 0.0),
+                robot + rng.uniform(-3.0, 5.0, (n, 2)), rng.uniform(-1.0, 1.0, (n, 2)), rng.uniform(0.2, 0.35, n),
+                None, None, bool(trial % 2), np.zeros((n, 2)))
+        found = []
+        for backend in ("numpy", "numba"):
+            checks, _, slow, config = _tree_inputs(case, backend, path)
+            checks = replace(checks, subgoal=path.waypoints[last].copy(), subgoal_index=last, continuation=None)
+            slow = replace(slow, subgoal=checks.subgoal, subgoal_index=last, continuation=None, backend=Backend(backend))
+            roots = RootLegs.of(checks, np.array([0.1, 0.2, 0.3, 0.5]), 1)
+            found.append(grow(checks, roots, config, slow))
+        reference, compiled = found
+        assert (reference is None) == (compiled is None)
+        if reference is None:
+            continue
+        for name in reference.nodes:
+            np.testing.assert_array_equal(reference.nodes[name], compiled.nodes[name], err_msg=name)
+        np.testing.assert_array_equal(reference.leaves, compiled.leaves)
+        np.testing.assert_array_equal(reference.total_length_m, compiled.total_length_m)
+        corner_nodes += int(np.sum(reference.nodes["way"][:, 0] == CORNER))
+    assert corner_nodes > 50  # the corners were there to compare
+
+
+def test_whole_step_kernels_wait_for_their_compilation(monkeypatch):
+    """``auto`` takes the whole-step kernels (goal_legs, grow: seconds to compile the first time) only once
+    they are compiled; an explicit numba takes them at once. Either way the decisions are the same."""
+    from viapath.planning.viapath import backend
+
+    monkeypatch.delenv(ENVIRONMENT_VARIABLE, raising=False)
+    monkeypatch.setattr(backend, "whole_steps_compiled", lambda: False)
+    assert backend.backend_for("auto") == backend.Backend("numba", whole_steps=False)
+    assert backend.backend_for("numba").whole_steps
+    monkeypatch.setenv(ENVIRONMENT_VARIABLE, "numba")
+    assert backend.backend_for("auto").whole_steps
+    monkeypatch.setenv(ENVIRONMENT_VARIABLE, "numpy")
+    assert not backend.backend_for("auto").whole_steps
+    monkeypatch.delenv(ENVIRONMENT_VARIABLE)
+    monkeypatch.setattr(backend, "whole_steps_compiled", lambda: True)
+    assert backend.backend_for("auto").whole_steps
+    assert backend.compile_kernels()
+
+
+@settings(max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(cases())
+def test_numba_without_whole_steps_decides_as_numpy(case):
+    """The compiled path before its whole-step kernels are compiled (small kernels only) decides as well."""
+    from viapath.planning.viapath.backend import Backend
+
+    path = PATHS[case[0]]
+    reference, compiled = _planner(path, "numpy", case[7]), _planner(path, "numba", case[7])
+    inner = getattr(compiled, "inner", compiled)
+    inner.backend = Backend("numba", whole_steps=False)
+    for observation in _observations(case):
+        a, b = reference.plan(observation), compiled.plan(observation)
+        assert a.plan.status == b.plan.status
+        assert getattr(reference, "inner", reference)._previous == inner._previous
+        assert abs(a.command.speed_mps - b.command.speed_mps) <= 1e-9
+        assert abs(a.command.turn_rate_radps - b.command.turn_rate_radps) <= 1e-9
+
+
+@settings(max_examples=300, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(cases())
+def test_numba_decides_as_numpy_with_the_way_back(case):
+    """The same with the way back to the path on (return_lookahead_m, the close-to-path preset's 0.5 m):
+    its leg to a path point goes through the compiled goal_legs too."""
+    path = PATHS[case[0]]
+    planners = []
+    for backend in ("numpy", "numba"):
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend, return_lookahead_m=0.5,
+                               k2=0.01)
+        planners.append(ShieldedPlanner(planner) if case[7] else planner)
+    reference, compiled = planners
+    for observation in _observations(case):
+        a, b = reference.plan(observation), compiled.plan(observation)
+        assert a.plan.status == b.plan.status
+        assert a.plan.extras.get("way_back") == b.plan.extras.get("way_back")
+        assert getattr(reference, "inner", reference)._previous == getattr(compiled, "inner", compiled)._previous
+        assert abs(a.command.speed_mps - b.command.speed_mps) <= 1e-9
+        assert abs(a.command.turn_rate_radps - b.command.turn_rate_radps) <= 1e-9

@@ -85,8 +85,6 @@ def family_of(name: str) -> str:
 def load_suite(suite: str, out_dir: Path | None = None, count: int = 200, seed: int = 0, workers: int = 1) -> list[dict]:
     """Scenario dicts of SUITE: a folder of scenario YAML files, or a suite name (generated with
     ``count`` and ``seed`` and written to ``out_dir/suite`` so it can be inspected and rerun)."""
-    from viapath.scenarios import ScenarioError, load_scenario
-
     folder = Path(suite)
     if folder.is_dir():
         files = sorted(folder.glob("*.yaml")) + sorted(folder.glob("*.yml"))
@@ -96,9 +94,32 @@ def load_suite(suite: str, out_dir: Path | None = None, count: int = 200, seed: 
         scenarios = generate_suite(suite, count, seed, workers=workers)
         if out_dir is None:
             return [_resolve_replays(s) for s in scenarios]
-        files = write_suite(scenarios, Path(out_dir) / "suite")
+        folder = Path(out_dir) / "suite"
+        if workers > 1 and len(scenarios) > 1:
+            # Writing the YAML files and reading them back is PyYAML's Python representer and constructor,
+            # a few seconds per thousand scenarios: done in the workers, chunk by chunk, in order.
+            import joblib
+
+            chunks = [scenarios[start:start + 50] for start in range(0, len(scenarios), 50)]
+            parts = joblib.Parallel(n_jobs=workers, backend="loky")(
+                joblib.delayed(_write_and_read)(chunk, folder) for chunk in chunks)
+            loaded = [scenario for part in parts for scenario in part]
+        else:
+            loaded = _write_and_read(scenarios, folder)
+        return _unique_names(loaded, suite)
     else:
         raise BenchError(f"{suite}: not a folder of scenario files nor a suite name ({', '.join(suite_names())})")
+    return _unique_names(_read(files), suite)
+
+
+def _write_and_read(scenarios: list[dict], folder: Path) -> list[dict]:
+    """Write scenario files into ``folder`` and read them back as a rerun from the folder would."""
+    return _read(write_suite(scenarios, folder))
+
+
+def _read(files: list[Path]) -> list[dict]:
+    from viapath.scenarios import ScenarioError, load_scenario
+
     loaded = []
     for file in files:
         try:
@@ -106,6 +127,10 @@ def load_suite(suite: str, out_dir: Path | None = None, count: int = 200, seed: 
         except ScenarioError as error:
             raise BenchError(str(error).splitlines()[0]) from None
         loaded.append(_resolve_replays(scenario.model_dump(mode="json")))
+    return loaded
+
+
+def _unique_names(loaded: list[dict], suite: str) -> list[dict]:
     names = [s["name"] for s in loaded]
     if len(set(names)) != len(names):
         duplicate = next(n for n in names if names.count(n) > 1)
@@ -361,9 +386,11 @@ def run_bench(
     todo = [t for t in tasks if t.key not in done]
     started = time.perf_counter()
     if todo:
+        from viapath.planning.viapath.backend import compile_kernels as compile_planner_kernels
         from viapath.safety.shield import compile_kernels
 
         compile_kernels()  # once per machine (numba caches it), so that the workers' shields are compiled ones
+        compile_planner_kernels()  # and the planner's whole-step kernels (candidate tree, goal legs)
         os.environ["VIAPATH_BENCH_PARENT_PID"] = str(os.getpid())
         parallel, close = _parallel(backend, workers, scheduler)
         try:

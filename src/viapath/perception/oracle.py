@@ -32,11 +32,12 @@ class OraclePerception(Perception):
         if self.velocity_noise_mps > 0:
             velocities = velocities + self.rng.normal(0.0, self.velocity_noise_mps, velocities.shape)
         n = len(positions)
-        return Obstacles(
+        # Every array here is new (indexing with a mask copies), so the estimates are handed over as they are.
+        return Obstacles.of_fresh_arrays(
             positions,
             velocities,
             world.obstacle_radii_m[present],
-            position_sigma_m=np.full(n, self.position_noise_m),
-            velocity_sigma_mps=np.full(n, self.velocity_noise_mps),
-            ids=np.flatnonzero(present),
+            np.full(n, self.position_noise_m),
+            np.full(n, self.velocity_noise_mps),
+            np.flatnonzero(present),
         )

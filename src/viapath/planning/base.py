@@ -56,8 +56,12 @@ class Inflation:
         margin, k = settings["safety_margin_m"], settings["uncertainty_sigmas"]
         position_term = k * obstacles.position_sigma_m
         growth = k * obstacles.velocity_sigma_mps
-        with np.errstate(divide="ignore", over="ignore"):
-            until = np.where(growth > 0, settings["max_inflation_m"] / growth, np.inf)
+        growing = growth > 0
+        if not growing.any():  # no velocity uncertainty (e.g. oracle perception): cylinders, no division
+            until = np.full(len(growth), np.inf)
+        else:
+            with np.errstate(divide="ignore", over="ignore"):
+                until = np.where(growing, settings["max_inflation_m"] / growth, np.inf)
         return cls(obstacles.radii_m + margin + position_term,
                    obstacles.radii_m + robot_radius_m + margin + position_term, growth, until)
 

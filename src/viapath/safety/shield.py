@@ -70,9 +70,10 @@ environment variable set to ``numba``, compiles it on first use.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -243,6 +244,9 @@ class Shield:
         # numpy (the reference below) or numba (viapath.safety.kernels, the same arithmetic compiled).
         self.backend = shield_backend(self.config.backend)
         self._kernel_settings: tuple | None = None  # the compiled test's constants (and what they were made of)
+        # Within one cycle of a shielded planner (:meth:`remembering`), the verdicts on single commands: the
+        # planner tests its chosen command against this observation and the filter then tests the same one.
+        self._verdicts: dict | None = None
 
     # -- the test --------------------------------------------------------------------------------
 
@@ -250,6 +254,29 @@ class Shield:
         """For each command (K, 2): ``admissible``, ``friendly``, ``meet_time_s`` (inf: never),
         ``person`` (row of the first person met, -1 none) and ``achieved`` (v, ω) of the first period.
         A person already touching the robot makes every command inadmissible (``contact`` is True)."""
+        verdicts = self._verdicts
+        if verdicts is not None and np.shape(commands) == (1, 2):
+            key = (id(observation), np.asarray(commands, dtype=np.float64).tobytes())  # bit for bit (-0.0 too)
+            known = verdicts.get(key)
+            if known is not None and known[0] is observation:
+                return known[1]
+            out = self._evaluate(observation, commands)
+            verdicts[key] = (observation, out)
+            return out
+        return self._evaluate(observation, commands)
+
+    @contextlib.contextmanager
+    def remembering(self):
+        """Within this block (one planning cycle: the observation does not change) a single command is
+        tested once against one observation, and its verdict reused (evaluate is a pure function of them).
+        The verdicts are read, never changed, by their users."""
+        self._verdicts = {}
+        try:
+            yield
+        finally:
+            self._verdicts = None
+
+    def _evaluate(self, observation: Observation, commands: np.ndarray) -> dict[str, np.ndarray]:
         if self.backend == "numba":
             return self._evaluate_compiled(observation, commands)
         config, robot = self.config, observation.robot
@@ -439,7 +466,11 @@ class Shield:
 
     def filter(self, observation: Observation, command: Command) -> ShieldResult:
         """What goes to the base instead of ``command`` (the planner's), and why; says which backend ran."""
-        return replace(self._filter(observation, command), backend=self.backend)
+        result = self._filter(observation, command)
+        # The result was made just now and is seen by no one yet: set its backend in place rather than copy
+        # all its fields with dataclasses.replace (every cycle).
+        object.__setattr__(result, "backend", self.backend)
+        return result
 
     def _filter(self, observation: Observation, command: Command) -> ShieldResult:
         config = self.config

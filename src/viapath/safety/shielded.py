@@ -56,8 +56,9 @@ class ShieldedPlanner(Planner):
         self.cycles = 0
 
     def plan(self, observation: Observation) -> Decision:
-        decision = self.inner.plan(observation)
-        result = self.shield.filter(observation, decision.command)
+        with self.shield.remembering():  # the planner's own test of its command is the filter's first
+            decision = self.inner.plan(observation)
+            result = self.shield.filter(observation, decision.command)
         self.cycles += 1
         self.interventions += int(result.intervened)
         plan: Plan = decision.plan

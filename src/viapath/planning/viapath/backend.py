@@ -8,7 +8,8 @@ Source: issue 16 (a compiled hot path, the numpy path stays the reference); docs
   whole benchmark can be run on the reference path without touching its scenario files.
 * A :class:`Backend` holds the hot functions, :meth:`legs_first_contact` (leg-against-people
   checks), :meth:`via_options` (via points of (node, obstacle) pairs), :meth:`legs_inside` and
-  :meth:`goal_legs_inside` (corridor checks), :meth:`track` (motion-limit roll-outs) and, for the
+  :meth:`goal_legs_inside` (corridor checks), :meth:`goal_legs` (all of a batch of legs to the subgoal:
+  contacts and corridor in one call), :meth:`grow` (the whole candidate tree), :meth:`track` (motion-limit roll-outs) and, for the
   escape, :meth:`corridor_excess` and :meth:`escape_contacts`, with the numpy signatures; the compiled ones get
   C-contiguous float64 arrays. The planner says in ``plan.extras["backend"]`` which one ran.
 """
@@ -57,6 +58,11 @@ def resolve(choice: str) -> str:
 @dataclass(frozen=True)
 class Backend:
     name: str  # numpy | numba
+    # numba: also the two kernels that take over whole steps of the cycle (goal_legs, the candidate tree grow).
+    # They take seconds to compile the first time, so ``auto`` uses them only once they are in numba's cache
+    # (:func:`compile_kernels`, which ``viapath bench`` and the ROS 2 node call before they start); until then
+    # the smaller kernels do those steps, with the same decisions.
+    whole_steps: bool = True
 
     def legs_first_contact(self, starts, start_times, velocities, durations, positions, velocities_obs, radii,
                            growth, growth_until_s, leg_radii_m=None) -> np.ndarray:
@@ -105,6 +111,44 @@ class Backend:
                                                _c(np.broadcast_to(subgoal, (len(rest), 2))), float(spacing_m),
                                                float(tolerance_m))
         return inside
+
+    def goal_legs(self, checks, starts, start_times, speeds, horizon_s: float):
+        """:meth:`.checks.LegChecks.goal_legs` in one compiled call; None on the numpy path (the caller's own
+        code is the reference)."""
+        if self.name == "numpy" or not self.whole_steps:
+            return None
+        from viapath.planning.viapath import kernels
+
+        obstacles = checks.kernel_obstacles()
+        return kernels.goal_legs(_c(starts), _c(start_times), _c(speeds), _c(checks.subgoal),
+                                 float(checks.stop_short_m), float(horizon_s), checks.kernel_continuation(),
+                                 *obstacles, checks.kernel_envelope(), *_corridor(checks.path),
+                                 int(checks.subgoal_index), float(checks.corridor_check_spacing_m),
+                                 float(checks.corridor_tolerance_m))
+
+    def grow(self, checks, slow_checks, roots, config):
+        """:func:`.candidates.grow`'s whole candidate tree in one compiled call: the node store (floats
+        (M, 10), integers (M, 5), columns as in :mod:`.kernels`); None on the numpy path (the reference)."""
+        if self.name == "numpy" or not self.whole_steps:
+            return None
+        from viapath.planning.viapath import kernels
+
+        positions, velocities, radii, growth, until = checks.kernel_obstacles()
+        _, _, slow_radii, slow_growth, slow_until = slow_checks.kernel_obstacles()
+        path = checks.path
+        index = int(checks.subgoal_index)
+        # The robot's segment matters only when a corner can lie between it and the subgoal.
+        segment = int(path.project(checks.position)[0]) if index >= 2 else 0
+        slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
+        return kernels.grow(
+            _c(checks.position), _c(checks.subgoal), _c(roots.speeds), int(roots.nominal_index), _c(roots.directions),
+            _c(roots.lengths), np.ascontiguousarray(roots.free, dtype=np.bool_), _c(roots.contact), positions,
+            velocities, radii, growth, until, _per_obstacle(checks.via_radii, len(positions)),
+            np.ascontiguousarray(checks.obstacles.ids, dtype=np.int64), slow_radii, slow_growth, slow_until,
+            slow_times, bool(len(slow_times)), float(checks.stop_short_m), float(checks.horizon_s),
+            checks.kernel_continuation(), checks.kernel_envelope(), *_corridor(path), _c(path.waypoints), segment,
+            index, float(checks.corridor_check_spacing_m), float(checks.corridor_tolerance_m), int(config.max_depth),
+            int(config.max_root_obstacles))
 
     def corridor_excess(self, path, points) -> np.ndarray:
         if self.name == "numpy":
@@ -163,4 +207,39 @@ NUMPY = Backend("numpy")
 
 
 def backend_for(choice: str) -> Backend:
-    return Backend(resolve(choice))
+    name = resolve(choice)
+    explicit = choice != "auto" or os.environ.get(ENVIRONMENT_VARIABLE, "").strip().lower() not in ("", "auto")
+    return Backend(name, whole_steps=name == "numba" and (explicit or whole_steps_compiled()))
+
+
+def whole_steps_compiled() -> bool:
+    """Whether the kernels of whole steps (goal_legs, grow) cost no compilation now: compiled in this
+    process or in numba's on-disk cache."""
+    from viapath.planning.viapath import kernels
+
+    for kernel in (kernels.goal_legs, kernels.grow):
+        if kernel.signatures:
+            continue
+        cache_file = getattr(getattr(kernel, "_cache", None), "_cache_file", None)
+        index = getattr(cache_file, "_index_path", None)
+        if index is None or not os.path.exists(index):
+            return False
+    return True
+
+
+def compile_kernels() -> bool:
+    """Compile every planner kernel now if numba is there and the whole-step ones are not compiled yet
+    (about 10 s once per machine: numba caches them on disk); True when they are ready. One planning
+    cycle whose straight leg is blocked runs all of them with the planner's own argument types."""
+    if not numba_available():
+        return False
+    if not whole_steps_compiled():
+        from viapath.observation import Observation, Obstacles, RobotState
+        from viapath.path import DesignatedPath
+        from viapath.planning import make_planner
+
+        planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
+                               nominal_speed_mps=0.2, backend="numba")
+        person = Obstacles(np.array([[2.0, 0.0]]), np.array([[-0.2, 0.0]]), np.array([0.3]))
+        planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), person))
+    return True

@@ -162,6 +162,9 @@ class RootLegs:
 def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | None = None) -> Candidates | None:
     """Every complete candidate of the cycle (straight, slow/wait, corners, via-point chains).
     ``slow_checks`` (default ``checks``) checks the first, slow leg of the slow/wait candidates."""
+    compiled = checks.backend.grow(checks, slow_checks or checks, roots, config)
+    if compiled is not None:
+        return _candidates_of(compiled, checks.subgoal)
     speeds = roots.speeds
     n_speeds = len(speeds)
     tree = _Tree()
@@ -207,6 +210,23 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
         nodes=data, leaves=leaves, total_length_m=data["length_m"][leaves] + np.concatenate(goal_length),
         speed_mps=data["speed"][leaves], slow_s=data["slow_s"][leaves], slow_speed_mps=data["slow_speed"][leaves],
         first_direction=data["first_direction"][leaves], ways=data["way"][leaves], subgoal=checks.subgoal,
+    )
+
+
+def _candidates_of(store, subgoal: np.ndarray) -> Candidates | None:
+    """Candidates from the compiled tree's node store (:meth:`.backend.Backend.grow`): the same arrays as
+    the numpy :func:`grow` builds, leaves in node order as there."""
+    floats, integers = store
+    data = {"position": floats[:, 0:2], "time_s": floats[:, 2], "speed": floats[:, 3], "parent": integers[:, 0],
+            "length_m": floats[:, 4], "first_direction": floats[:, 5:7], "way": integers[:, 1:4],
+            "slow_s": floats[:, 7], "slow_speed": floats[:, 8]}
+    leaves = np.flatnonzero(integers[:, 4])
+    if len(leaves) == 0:
+        return None
+    return Candidates(
+        nodes=data, leaves=leaves, total_length_m=data["length_m"][leaves] + floats[leaves, 9],
+        speed_mps=data["speed"][leaves], slow_s=data["slow_s"][leaves], slow_speed_mps=data["slow_speed"][leaves],
+        first_direction=data["first_direction"][leaves], ways=data["way"][leaves], subgoal=subgoal,
     )
 
 

@@ -150,6 +150,10 @@ class LegChecks:
 
     def goal_legs(self, starts, start_times, speeds, horizon_s=None):
         """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N))."""
+        compiled = self.backend.goal_legs(self, starts, start_times, speeds,
+                                          self.horizon_s if horizon_s is None else horizon_s)
+        if compiled is not None:
+            return compiled
         offset = self.subgoal - starts
         lengths = np.hypot(offset[:, 0], offset[:, 1])
         directions = offset / np.maximum(lengths, 1e-12)[:, None]
@@ -169,6 +173,41 @@ class LegChecks:
             contact = self.contact_times(starts, start_times, velocities, durations, horizon_s, keep_envelope=True)
         free = np.isinf(contact).all(axis=1) & self.goal_legs_inside(starts)
         return directions, lengths, free, contact
+
+    # -- the same facts as the compiled kernels take them (C-contiguous float64, made once per LegChecks: a
+    # LegChecks is not changed after it is built; dataclasses.replace makes a new one, without these) --
+
+    def kernel_obstacles(self) -> tuple:
+        """positions, velocities, check radii, growth, growth_until_s of the obstacles, for the kernels."""
+        cached = self.__dict__.get("_kernel_obstacles")
+        if cached is None:
+            n = len(self.obstacles)
+            cached = tuple(_contiguous(a, shape) for a, shape in (
+                (self.obstacles.positions, (n, 2)), (self.obstacles.velocities, (n, 2)), (self.check_radii, (n,)),
+                (self.growth, (n,)), (self.growth_until_s, (n,))))
+            self.__dict__["_kernel_obstacles"] = cached
+        return cached
+
+    def kernel_continuation(self) -> np.ndarray:
+        """(dx, dy, length) of the segment after the subgoal, or an empty array (none)."""
+        cached = self.__dict__.get("_kernel_continuation")
+        if cached is None:
+            if self.continuation is None:
+                cached = np.zeros(0)
+            else:
+                direction, length = self.continuation
+                cached = np.array([direction[0], direction[1], length], dtype=np.float64)
+            self.__dict__["_kernel_continuation"] = cached
+        return cached
+
+    def kernel_envelope(self) -> np.ndarray:
+        """(person accel, period, robot accel) of the braking envelope; accel 0: none (:meth:`envelope_m`)."""
+        cached = self.__dict__.get("_kernel_envelope")
+        if cached is None:
+            cached = np.array([self.envelope_accel_mps2, self.envelope_period_s, self.max_accel_mps2],
+                              dtype=np.float64)
+            self.__dict__["_kernel_envelope"] = cached
+        return cached
 
     def clear(self, positions: np.ndarray, dt: float) -> bool:
         """Whether robot positions (one per ``dt`` from now) keep clear of every obstacle."""
@@ -211,3 +250,11 @@ class LegChecks:
             rest = np.flatnonzero(~inside)
             inside[rest] = self.legs_inside(starts[rest], np.broadcast_to(self.subgoal, (len(rest), 2)))
         return inside
+
+
+def _contiguous(values, shape: tuple) -> np.ndarray:
+    """``values`` as a C-contiguous float64 array of ``shape`` (a scalar or a row is repeated)."""
+    array = np.asarray(values, dtype=np.float64)
+    if array.shape != shape:
+        array = np.broadcast_to(array, shape)
+    return np.ascontiguousarray(array)

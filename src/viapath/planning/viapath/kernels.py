@@ -377,3 +377,502 @@ def escape_contacts(positions, times, obstacle_positions, obstacle_velocities, c
             if overlapping[j]:
                 column += 1
     return first, gap_min, gap_last
+
+
+@njit(cache=True, nogil=True)
+def goal_legs(starts, start_times, speeds, subgoal, stop_short_m, horizon_s, continuation, obstacle_positions,
+              obstacle_velocities, radii, growth, growth_until_s, envelope, segment_starts, segment_directions,
+              segment_lengths, half_widths, subgoal_index, spacing_m, tolerance_m):
+    """The numba twin of :meth:`viapath.planning.viapath.checks.LegChecks.goal_legs`, whole: the straight
+    legs from K nodes to the subgoal (with the continuation past an intermediate subgoal as K more legs),
+    their first contacts with the braking envelope kept, and the corridor check (:func:`goal_legs_inside`,
+    then :func:`legs_inside` for the legs it leaves open, as the backend does). One call instead of
+    three kernels and some thirty small array operations; called a few times every cycle.
+
+    ``continuation`` is (dx, dy, length) or empty (none); ``envelope`` is (person accel, period, robot
+    accel), accel 0 for none. Returns (directions (K, 2), lengths (K,), free (K,), contact (K, N))."""
+    k_count = starts.shape[0]
+    n_count = obstacle_positions.shape[0]
+    two = continuation.shape[0] == 3 and n_count > 0
+    legs = 2 * k_count if two else k_count
+    directions = np.empty((k_count, 2))
+    lengths = np.empty(k_count)
+    durations = np.empty(k_count)
+    leg_starts = np.empty((legs, 2))
+    leg_times = np.empty(legs)
+    leg_velocities = np.empty((legs, 2))
+    leg_durations = np.empty(legs)
+    for k in range(k_count):
+        ox = subgoal[0] - starts[k, 0]
+        oy = subgoal[1] - starts[k, 1]
+        length = math.hypot(ox, oy)
+        lengths[k] = length
+        divisor = length if length > 1e-12 else 1e-12
+        dx = ox / divisor
+        dy = oy / divisor
+        directions[k, 0] = dx
+        directions[k, 1] = dy
+        short = length - stop_short_m
+        duration = (short if short > 0.0 else 0.0) / speeds[k]
+        durations[k] = duration
+        leg_starts[k, 0] = starts[k, 0]
+        leg_starts[k, 1] = starts[k, 1]
+        leg_times[k] = start_times[k]
+        leg_velocities[k, 0] = dx * speeds[k]
+        leg_velocities[k, 1] = dy * speeds[k]
+        leg_durations[k] = duration
+        if two:
+            m = k_count + k
+            leg_starts[m, 0] = subgoal[0]
+            leg_starts[m, 1] = subgoal[1]
+            leg_times[m] = start_times[k] + duration
+            leg_velocities[m, 0] = continuation[0] * speeds[k]
+            leg_velocities[m, 1] = continuation[1] * speeds[k]
+            leg_durations[m] = continuation[2] / speeds[k]
+    contact = np.empty((k_count, n_count))
+    if n_count > 0:
+        checked = np.empty(legs)
+        leg_radii = np.empty(legs)
+        half_accel = 0.5 * envelope[0]
+        for m in range(legs):
+            checked[m] = _clip(horizon_s - leg_times[m], 0.0, leg_durations[m])
+            if envelope[0] > 0:
+                stop_s = envelope[1] + math.hypot(leg_velocities[m, 0], leg_velocities[m, 1]) / envelope[2]
+                leg_radii[m] = half_accel * (stop_s * stop_s)
+            else:
+                leg_radii[m] = 0.0
+        both = legs_first_contact(leg_starts, leg_times, leg_velocities, checked, obstacle_positions,
+                                  obstacle_velocities, radii, growth, growth_until_s, leg_radii)
+        for k in range(k_count):
+            for j in range(n_count):
+                value = both[k, j]
+                if two:
+                    later = both[k_count + k, j] + durations[k]
+                    if value != value or later != later:
+                        value = math.nan
+                    elif later < value:
+                        value = later
+                contact[k, j] = value
+    inside = _goal_legs_inside_all(segment_starts, segment_directions, segment_lengths, half_widths, starts, subgoal,
+                                   subgoal_index, spacing_m, tolerance_m)
+    free = np.empty(k_count, np.bool_)
+    for k in range(k_count):
+        ok = inside[k]
+        if ok:
+            for j in range(n_count):
+                if not math.isinf(contact[k, j]):
+                    ok = False
+                    break
+        free[k] = ok
+    return directions, lengths, free, contact
+
+
+@njit(cache=True, nogil=True)
+def _goal_legs_inside_all(segment_starts, segment_directions, segment_lengths, half_widths, starts, subgoal,
+                          subgoal_index, spacing_m, tolerance_m):
+    """What the backend's ``goal_legs_inside`` returns: :func:`goal_legs_inside`, then :func:`legs_inside`
+    on the legs it leaves open (all of them in one call: the sample spacing depends on the longest)."""
+    k_count = starts.shape[0]
+    inside = goal_legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, starts,
+                              subgoal_index, tolerance_m)
+    rest = 0
+    for k in range(k_count):
+        if not inside[k]:
+            rest += 1
+    if rest:
+        rest_starts = np.empty((rest, 2))
+        rest_ends = np.empty((rest, 2))
+        index = np.empty(rest, np.int64)
+        r = 0
+        for k in range(k_count):
+            if not inside[k]:
+                rest_starts[r, 0] = starts[k, 0]
+                rest_starts[r, 1] = starts[k, 1]
+                rest_ends[r, 0] = subgoal[0]
+                rest_ends[r, 1] = subgoal[1]
+                index[r] = k
+                r += 1
+        rest_inside = legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, rest_starts,
+                                  rest_ends, spacing_m, tolerance_m)
+        for r in range(rest):
+            inside[index[r]] = rest_inside[r]
+    return inside
+
+
+# -- the candidate tree (candidates.grow) in one call --------------------------------------------------------
+
+# Columns of the node store: floats, then integers.
+_X, _Y, _T, _V, _LENGTH, _FX, _FY, _SLOW_S, _SLOW_V, _GOAL = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9
+_PARENT, _WAY0, _WAY1, _WAY2, _LEAF = 0, 1, 2, 3, 4
+_STRAIGHT, _SLOW, _CORNER = -1, -2, -3  # candidates.STRAIGHT, SLOW, CORNER
+_SIDES = (1, -1, 1, -1)  # geometry.VIA_SIDES
+_ROOTS = (0, 0, 1, 1)  # geometry.VIA_ROOTS
+# The same as int64 values, not literals: every call of _add then has one signature (literal arguments
+# would each compile a variant of it, seconds of the first run).
+_NONE, _ZERO = np.int64(-1), np.int64(0)
+_I_STRAIGHT, _I_SLOW, _I_CORNER = np.int64(_STRAIGHT), np.int64(_SLOW), np.int64(_CORNER)
+
+
+@njit(cache=True, nogil=True)
+def _reserve(nf, ni, m, count):
+    """Room for ``count`` more nodes after the first ``m`` (the store doubles when full)."""
+    if m + count <= nf.shape[0]:
+        return nf, ni
+    capacity = max(2 * nf.shape[0], m + count)
+    bigger_f = np.empty((capacity, nf.shape[1]))
+    bigger_i = np.empty((capacity, ni.shape[1]), np.int64)
+    bigger_f[:m] = nf[:m]
+    bigger_i[:m] = ni[:m]
+    return bigger_f, bigger_i
+
+
+@njit(cache=True, nogil=True)
+def _add(nf, ni, m, x, y, t, v, parent, length, fx, fy, way0, way1, way2, slow_s, slow_v):
+    nf, ni = _reserve(nf, ni, m, 1)
+    nf[m, _X] = x
+    nf[m, _Y] = y
+    nf[m, _T] = t
+    nf[m, _V] = v
+    nf[m, _LENGTH] = length
+    nf[m, _FX] = fx
+    nf[m, _FY] = fy
+    nf[m, _SLOW_S] = slow_s
+    nf[m, _SLOW_V] = slow_v
+    nf[m, _GOAL] = 0.0
+    ni[m, _PARENT] = parent
+    ni[m, _WAY0] = way0
+    ni[m, _WAY1] = way1
+    ni[m, _WAY2] = way2
+    ni[m, _LEAF] = 0
+    return nf, ni, m + 1
+
+
+@njit(cache=True, nogil=True)
+def _legs_free(starts, start_times, velocities, durations, horizon_s, obstacle_positions, obstacle_velocities, radii,
+               growth, growth_until_s):
+    """LegChecks.legs_free: no contact up to the horizon, plain radii (no braking envelope)."""
+    k_count = starts.shape[0]
+    checked = np.empty(k_count)
+    for k in range(k_count):
+        checked[k] = _clip(horizon_s - start_times[k], 0.0, durations[k])
+    contact = legs_first_contact(starts, start_times, velocities, checked, obstacle_positions, obstacle_velocities,
+                                 radii, growth, growth_until_s, np.zeros(k_count))
+    free = np.empty(k_count, np.bool_)
+    for k in range(k_count):
+        ok = True
+        for j in range(contact.shape[1]):
+            if not math.isinf(contact[k, j]):
+                ok = False
+                break
+        free[k] = ok
+    return free
+
+
+@njit(cache=True, nogil=True)
+def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths, root_free, root_contact,
+         obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, via_radii, ids, slow_radii, slow_growth,
+         slow_growth_until_s, slow_times, slow_enabled, stop_short_m, horizon_s, continuation, envelope,
+         segment_starts, segment_directions, segment_lengths, half_widths, waypoints, robot_segment, subgoal_index,
+         spacing_m, tolerance_m, max_depth, max_root_obstacles):
+    """The numba twin of :func:`viapath.planning.viapath.candidates.grow`: the same nodes in the same order
+    (roots, slow/wait, corners, then the via-point children depth by depth), so the candidates, their
+    order and so every tie are the same. Returns the node store, floats (M, 10) and integers (M, 5), in
+    the columns named above; a node is a leaf (a complete candidate) when its goal leg is free."""
+    s_count = speeds.shape[0]
+    n_count = obstacle_positions.shape[0]
+    nf = np.empty((4 * s_count + 32, 10))
+    ni = np.empty((4 * s_count + 32, 5), np.int64)
+    m = _ZERO
+    for i in range(s_count):  # the roots: one per speed, at the robot, now
+        nf, ni, m = _add(nf, ni, m, position[0], position[1], 0.0, speeds[i], _NONE, 0.0, root_directions[i, 0],
+                         root_directions[i, 1], _I_STRAIGHT, _ZERO, _ZERO, 0.0, 0.0)
+        if root_free[i]:
+            ni[m - 1, _LEAF] = 1
+            nf[m - 1, _GOAL] = root_lengths[i]
+    here = np.empty((1, 2))
+    here[0, 0] = position[0]
+    here[0, 1] = position[1]
+    straight_inside = _goal_legs_inside_all(segment_starts, segment_directions, segment_lengths, half_widths, here,
+                                            subgoal, subgoal_index, spacing_m, tolerance_m)[0]
+
+    # Slow down or wait along the straight leg, then on at the nominal speed or faster (_slow_candidates).
+    if slow_enabled and n_count > 0 and straight_inside:
+        nominal = speeds[nominal_index]
+        slow_count = 1
+        for i in range(s_count):
+            if speeds[i] < nominal - 1e-9:
+                slow_count += 1
+        slow_speeds = np.empty(slow_count)
+        slow_speeds[0] = 0.0
+        c = 1
+        for i in range(s_count):
+            if speeds[i] < nominal - 1e-9:
+                slow_speeds[c] = speeds[i]
+                c += 1
+        ox = subgoal[0] - position[0]
+        oy = subgoal[1] - position[1]
+        distance = math.hypot(ox, oy)
+        divisor = distance if distance > 1e-12 else 1e-12
+        dx = ox / divisor
+        dy = oy / divisor
+        t_count = slow_times.shape[0]
+        durations = np.empty(slow_count * t_count)
+        slows = np.empty(slow_count * t_count)
+        c = 0
+        for i in range(slow_count):
+            for j in range(t_count):
+                if slow_speeds[i] * slow_times[j] < distance - 1e-6:  # never past the subgoal while slow
+                    durations[c] = slow_times[j]
+                    slows[c] = slow_speeds[i]
+                    c += 1
+        starts = np.empty((c, 2))
+        velocities = np.empty((c, 2))
+        for k in range(c):
+            starts[k, 0] = position[0]
+            starts[k, 1] = position[1]
+            velocities[k, 0] = dx * slows[k]
+            velocities[k, 1] = dy * slows[k]
+        free = _legs_free(starts, np.zeros(c), velocities, durations[:c], horizon_s, obstacle_positions,
+                          obstacle_velocities, slow_radii, slow_growth, slow_growth_until_s)
+        after_count = 0
+        for i in range(s_count):
+            if speeds[i] >= nominal - 1e-9:
+                after_count += 1
+        kept = 0
+        for k in range(c):
+            if free[k]:
+                kept += 1
+        if kept:
+            legs = kept * after_count
+            ends = np.empty((legs, 2))
+            times = np.empty(legs)
+            after = np.empty(legs)
+            slow_v = np.empty(legs)
+            q = 0
+            for k in range(c):
+                if not free[k]:
+                    continue
+                for i in range(s_count):
+                    if speeds[i] >= nominal - 1e-9:
+                        ends[q, 0] = position[0] + dx * (slows[k] * durations[k])
+                        ends[q, 1] = position[1] + dy * (slows[k] * durations[k])
+                        times[q] = durations[k]
+                        after[q] = speeds[i]
+                        slow_v[q] = slows[k]
+                        q += 1
+            _, lengths, goal_free, _ = goal_legs(
+                ends, times, after, subgoal, stop_short_m, math.inf, continuation, obstacle_positions,
+                obstacle_velocities, radii, growth, growth_until_s, envelope, segment_starts, segment_directions,
+                segment_lengths, half_widths, subgoal_index, spacing_m, tolerance_m)
+            for q in range(legs):
+                if goal_free[q]:
+                    nf, ni, m = _add(nf, ni, m, ends[q, 0], ends[q, 1], times[q], after[q], _NONE, slow_v[q] * times[q],
+                                     dx, dy, _I_SLOW, _ZERO, _ZERO, times[q], slow_v[q])
+                    ni[m - 1, _LEAF] = 1
+                    nf[m - 1, _GOAL] = lengths[q]
+
+    half_accel = 0.5 * envelope[0]
+    frontier_start = 0
+    frontier_end = s_count
+    free_now = root_free.copy()
+    contact_now = root_contact
+    for depth in range(max_depth):
+        batch = m
+        if depth == 0 and robot_segment + 1 < subgoal_index and not straight_inside:
+            # The path's corners between the robot and the subgoal as via points (_corner_nodes).
+            corners = subgoal_index - robot_segment - 1
+            legs = corners * s_count
+            targets = np.empty((legs, 2))
+            starts = np.empty((legs, 2))
+            velocities = np.empty((legs, 2))
+            directions = np.empty((legs, 2))
+            lengths = np.empty(legs)
+            durations = np.empty(legs)
+            corner_of = np.empty(legs, np.int64)
+            speed_of = np.empty(legs)
+            q = 0
+            for i in range(s_count):
+                for corner in range(robot_segment + 1, subgoal_index):
+                    targets[q, 0] = waypoints[corner, 0]
+                    targets[q, 1] = waypoints[corner, 1]
+                    ox = targets[q, 0] - position[0]
+                    oy = targets[q, 1] - position[1]
+                    length = math.hypot(ox, oy)
+                    divisor = length if length > 1e-12 else 1e-12
+                    directions[q, 0] = ox / divisor
+                    directions[q, 1] = oy / divisor
+                    starts[q, 0] = position[0]
+                    starts[q, 1] = position[1]
+                    velocities[q, 0] = directions[q, 0] * speeds[i]
+                    velocities[q, 1] = directions[q, 1] * speeds[i]
+                    lengths[q] = length
+                    durations[q] = length / speeds[i]
+                    corner_of[q] = corner
+                    speed_of[q] = speeds[i]
+                    q += 1
+            good = _legs_free(starts, np.zeros(legs), velocities, durations, horizon_s, obstacle_positions,
+                              obstacle_velocities, radii, growth, growth_until_s)
+            inside = legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, starts, targets,
+                                 spacing_m, tolerance_m)
+            for q in range(legs):
+                if good[q] and inside[q]:
+                    root = _ZERO  # np.searchsorted(speeds, speed): the root node of that speed
+                    while root < s_count and speeds[root] < speed_of[q]:
+                        root += 1
+                    nf, ni, m = _add(nf, ni, m, targets[q, 0], targets[q, 1], durations[q], speed_of[q], root,
+                                     lengths[q], directions[q, 0], directions[q, 1], _I_CORNER, _ZERO, corner_of[q],
+                                     0.0, 0.0)
+
+        # The (node, obstacle) pairs to branch on: at the root every obstacle the leg hits, earliest first
+        # (at most max_root_obstacles, when there are more pairs than that; _root_pairs), deeper the first hit.
+        if n_count > 0:
+            pair_nodes = np.empty((frontier_end - frontier_start) * n_count, np.int64)
+            pair_obstacles = np.empty((frontier_end - frontier_start) * n_count, np.int64)
+            pairs = 0
+            total = 0
+            for r in range(frontier_end - frontier_start):
+                if free_now[r]:
+                    continue
+                for j in range(n_count):
+                    if math.isfinite(contact_now[r, j]):
+                        total += 1
+            if depth == 0 and max_root_obstacles > 0 and total > max_root_obstacles:
+                order = np.empty(n_count, np.int64)
+                for r in range(frontier_end - frontier_start):
+                    if free_now[r]:
+                        continue
+                    count = 0
+                    for j in range(n_count):  # a stable insertion sort by contact time
+                        value = contact_now[r, j]
+                        if not math.isfinite(value):
+                            continue
+                        place = count
+                        while place > 0 and contact_now[r, order[place - 1]] > value:
+                            order[place] = order[place - 1]
+                            place -= 1
+                        order[place] = j
+                        count += 1
+                    for q in range(min(count, max_root_obstacles)):
+                        pair_nodes[pairs] = frontier_start + r
+                        pair_obstacles[pairs] = order[q]
+                        pairs += 1
+            else:
+                for r in range(frontier_end - frontier_start):
+                    if free_now[r]:
+                        continue
+                    best = -1
+                    for j in range(n_count):
+                        value = contact_now[r, j]
+                        if not math.isfinite(value):
+                            continue
+                        if depth == 0:
+                            pair_nodes[pairs] = frontier_start + r
+                            pair_obstacles[pairs] = j
+                            pairs += 1
+                        elif best < 0 or value < contact_now[r, best]:
+                            best = j
+                    if depth > 0 and best >= 0:
+                        pair_nodes[pairs] = frontier_start + r
+                        pair_obstacles[pairs] = best
+                        pairs += 1
+            if pairs:
+                # The via points of each pair (_via_children): both sides, both roots, legs checked.
+                starts = np.empty((pairs, 2))
+                times = np.empty(pairs)
+                pair_speeds = np.empty(pairs)
+                centres = np.empty((pairs, 2))
+                moving = np.empty((pairs, 2))
+                pair_via_radii = np.empty(pairs)
+                pair_growth = np.empty(pairs)
+                pair_until = np.empty(pairs)
+                pair_envelope = np.empty(pairs)
+                for p in range(pairs):
+                    node = pair_nodes[p]
+                    j = pair_obstacles[p]
+                    starts[p, 0] = nf[node, _X]
+                    starts[p, 1] = nf[node, _Y]
+                    times[p] = nf[node, _T]
+                    pair_speeds[p] = nf[node, _V]
+                    centres[p, 0] = obstacle_positions[j, 0]
+                    centres[p, 1] = obstacle_positions[j, 1]
+                    moving[p, 0] = obstacle_velocities[j, 0]
+                    moving[p, 1] = obstacle_velocities[j, 1]
+                    pair_via_radii[p] = via_radii[j]
+                    pair_growth[p] = growth[j]
+                    pair_until[p] = growth_until_s[j]
+                    if envelope[0] > 0:
+                        stop_s = envelope[1] + pair_speeds[p] / envelope[2]
+                        pair_envelope[p] = half_accel * (stop_s * stop_s)
+                    else:
+                        pair_envelope[p] = 0.0
+                pair, option, t_k, leg_velocity, via = via_options(starts, times, pair_speeds, centres, moving,
+                                                                   pair_via_radii, pair_growth, pair_until,
+                                                                   pair_envelope, 3 * horizon_s)
+                count = pair.shape[0]
+                if count:
+                    starts_k = np.empty((count, 2))
+                    times_k = np.empty(count)
+                    for q in range(count):
+                        starts_k[q, 0] = starts[pair[q], 0]
+                        starts_k[q, 1] = starts[pair[q], 1]
+                        times_k[q] = times[pair[q]]
+                    good = _legs_free(starts_k, times_k, leg_velocity, t_k, horizon_s, obstacle_positions,
+                                      obstacle_velocities, radii, growth, growth_until_s)
+                    kept = 0
+                    for q in range(count):
+                        if good[q]:
+                            kept += 1
+                    if kept:
+                        good_starts = np.empty((kept, 2))
+                        good_vias = np.empty((kept, 2))
+                        g = 0
+                        for q in range(count):
+                            if good[q]:
+                                good_starts[g, 0] = starts_k[q, 0]
+                                good_starts[g, 1] = starts_k[q, 1]
+                                good_vias[g, 0] = via[q, 0]
+                                good_vias[g, 1] = via[q, 1]
+                                g += 1
+                        inside = legs_inside(segment_starts, segment_directions, segment_lengths, half_widths,
+                                             good_starts, good_vias, spacing_m, tolerance_m)
+                        g = 0
+                        for q in range(count):
+                            if not good[q]:
+                                continue
+                            ok = inside[g]
+                            g += 1
+                            if not ok:
+                                continue
+                            p = pair[q]
+                            parent = pair_nodes[p]
+                            speed = pair_speeds[p]
+                            if depth == 0:
+                                fx = leg_velocity[q, 0] / speed
+                                fy = leg_velocity[q, 1] / speed
+                                way0 = ids[pair_obstacles[p]]
+                                way1 = _SIDES[option[q]]
+                                way2 = _ROOTS[option[q]]
+                            else:
+                                fx = nf[parent, _FX]
+                                fy = nf[parent, _FY]
+                                way0 = ni[parent, _WAY0]
+                                way1 = ni[parent, _WAY1]
+                                way2 = ni[parent, _WAY2]
+                            nf, ni, m = _add(nf, ni, m, via[q, 0], via[q, 1], times_k[q] + t_k[q], speed, parent,
+                                             nf[parent, _LENGTH] + speed * t_k[q], fx, fy, way0, way1, way2, 0.0,
+                                             0.0)
+        if m == batch:
+            break
+        # The goal legs of the new frontier: the free ones complete candidates.
+        frontier_start = batch
+        frontier_end = m
+        starts = np.ascontiguousarray(nf[batch:m, _X:_Y + 1])
+        _, lengths, free_now, contact_now = goal_legs(
+            starts, nf[batch:m, _T].copy(), nf[batch:m, _V].copy(), subgoal, stop_short_m, horizon_s, continuation,
+            obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, envelope, segment_starts,
+            segment_directions, segment_lengths, half_widths, subgoal_index, spacing_m, tolerance_m)
+        for r in range(m - batch):
+            if free_now[r]:
+                ni[batch + r, _LEAF] = 1
+                nf[batch + r, _GOAL] = lengths[r]
+    return nf[:m].copy(), ni[:m].copy()

@@ -31,7 +31,7 @@ What the paper leaves open and we chose, beyond what those modules say:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 import numpy as np
 
 from viapath.geometry import wrap_angle
@@ -93,8 +93,10 @@ class ViaPathPlanner(Planner, name="viapath"):
         checks = LegChecks.of(situation, self.config, self.subgoals, self.subgoal_policy, self.robot_radius_m,
                               self.backend)
         if self.shield is not None and self.shield.config.enabled:
-            checks = replace(checks, envelope_accel_mps2=self.shield.config.person_accel_mps2,
-                             envelope_period_s=self.shield.dt_s, max_accel_mps2=self.limits.max_accel_mps2)
+            # Set on the checks just built (dataclasses.replace would copy every field again, every cycle).
+            checks.envelope_accel_mps2 = self.shield.config.person_accel_mps2
+            checks.envelope_period_s = self.shield.dt_s
+            checks.max_accel_mps2 = self.limits.max_accel_mps2
         speeds, nominal_index = self.speed_set(situation.robot.speed_mps)
         chosen = self._choose(checks, speeds, nominal_index, self._previous)
         if chosen is None:
