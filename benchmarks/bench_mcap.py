@@ -1,6 +1,6 @@
 """What writing the MCAP costs: a run's wall time with and without ``--mcap`` (target: at most +20 %).
 
-Usage: python benchmarks/bench_mcap.py [--repeats 3] [--scenarios paper-front paper-side:laser zara01]
+Usage: python benchmarks/bench_mcap.py [--repeats 3] [--scenarios paper-front paper-side:laser zara01] [--command]
                                        [--json]
 
 Each scenario runs once to warm up (imports, numba), then ``repeats`` times each way, interleaved:
@@ -19,6 +19,12 @@ and end included: less sensitive to the machine's load than wall time), the extr
 per cycle, the file size and the 1-minute load average. The writer process only pays off when a
 core is free: on a loaded machine the two processes share one core and the wall overhead
 approaches ``here``'s.
+
+``--command`` also times the whole ``viapath run SCENARIO --json`` command in a fresh process, as a
+user types it (imports, the run, the file closed), without and with ``--mcap``: what writing the
+view costs the user's run. The episode loop alone (above) is the stricter figure: a short run such as
+paper-front's loop (about 40 ms here) still pays the writer process's fixed cost (fork, first batch,
+end of file: about 20 ms).
 """
 
 from __future__ import annotations
@@ -29,9 +35,13 @@ import os
 import platform
 import resource
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
+
+import yaml
 
 from viapath.bench.suites import data_root
 from viapath.scenarios import load_scenario, scenario_from_dict
@@ -47,18 +57,23 @@ except ImportError:  # an older viapath (measured for comparison) waits for its 
 DEFAULT = ("paper-front", "paper-side:laser", "zara01")
 
 
+def _zara01() -> dict | None:
+    file = data_root() / "eth_ucy_trajectron" / "crowds_zara01.txt"
+    if not file.exists():
+        return None
+    return {
+        "name": "zara01-bench", "dt_s": 0.1, "duration_s": 20.0,
+        "robot": {"start": [3.0, 5.0], "heading": 0.0, "speed": 0.3, "radius": 0.25},
+        "path": {"waypoints": [[3.0, 5.0], [12.0, 5.0]], "half_width": 1.5},
+        "obstacles": [{"replay": {"file": str(file), "dt_s": 0.4, "start_s": 120, "offset": [0, 0],
+                                  "radius": 0.25}}],
+    }
+
+
 def _scenario(name: str):
     if name == "zara01":
-        file = data_root() / "eth_ucy_trajectron" / "crowds_zara01.txt"
-        if not file.exists():
-            return None
-        return scenario_from_dict({
-            "name": "zara01-bench", "dt_s": 0.1, "duration_s": 20.0,
-            "robot": {"start": [3.0, 5.0], "heading": 0.0, "speed": 0.3, "radius": 0.25},
-            "path": {"waypoints": [[3.0, 5.0], [12.0, 5.0]], "half_width": 1.5},
-            "obstacles": [{"replay": {"file": str(file), "dt_s": 0.4, "start_s": 120, "offset": [0, 0],
-                                      "radius": 0.25}}],
-        })
+        data = _zara01()
+        return None if data is None else scenario_from_dict(data)
     return load_scenario(name)
 
 
@@ -115,11 +130,38 @@ def measure(name: str, repeats: int, folder: Path) -> dict | None:
             "load_average_1min": os.getloadavg()[0]}
 
 
+def measure_command(name: str, repeats: int, folder: Path) -> dict | None:
+    """The whole ``viapath run`` command as a user types it (a fresh process: imports, the run, the
+    file closed), without and with ``--mcap``, interleaved; medians of the wall times."""
+    base, _, mode = name.partition(":")
+    target = base
+    if base == "zara01":
+        data = _zara01()
+        if data is None:
+            return None
+        target = str(folder / "zara01.yaml")
+        Path(target).write_text(yaml.safe_dump(data))
+    command = [sys.executable, "-m", "viapath.cli", "run", target, "--json"] + (["--perception", mode] if mode else [])
+    mcap = ["--mcap", str(folder / f"{base}-command.mcap"), "--force"]
+    subprocess.run(command + mcap, check=True, capture_output=True)  # warm-up (numba's cache, page cache)
+    wall = {"plain": [], "mcap": []}
+    for _ in range(repeats):
+        for kind, extra in (("plain", []), ("mcap", mcap)):
+            started = time.perf_counter()
+            subprocess.run(command + extra, check=True, capture_output=True)
+            wall[kind].append(time.perf_counter() - started)
+    p, m = statistics.median(wall["plain"]), statistics.median(wall["mcap"])
+    return {"scenario": name, "command_wall_s": wall, "command_plain_median_s": p, "command_mcap_median_s": m,
+            "command_overhead_percent": 100.0 * (m - p) / p, "load_average_1min": os.getloadavg()[0]}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--scenarios", nargs="+", default=list(DEFAULT))
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--command", action="store_true",
+                        help="also time the whole `viapath run` command (a fresh process) without and with --mcap")
     args = parser.parse_args()
     results = []
     with tempfile.TemporaryDirectory() as folder:
@@ -129,8 +171,11 @@ def main() -> None:
                 print(f"{name}: skipped (data not found under {data_root()})") if not args.json else None
                 continue
             results.append(result)
+        commands = [c for c in (measure_command(name, args.repeats, Path(folder)) for name in args.scenarios)
+                    if c is not None] if args.command else []
     if args.json:
-        print(json.dumps({"python": platform.python_version(), "repeats": args.repeats, "results": results}))
+        print(json.dumps({"python": platform.python_version(), "repeats": args.repeats, "results": results,
+                          "commands": commands}))
         return
     print(f"python {platform.python_version()}, {platform.machine()}, {args.repeats} repeats each (medians)")
     print(f"{'scenario':18s} {'cycles':>6s} {'plain s':>8s} {'mcap s':>8s} {'wall +':>8s} {'here +':>8s} "
@@ -143,6 +188,10 @@ def main() -> None:
               f"{r['cpu_with_writer_overhead_percent']:9.1f}% {r['writer_cpu_ms_per_cycle']:7.2f} "
               f"{r['mcap_ms_per_cycle']:9.2f} "
               f"{r['file_bytes'] / 1e6:6.2f}MB {r['load_average_1min']:5.1f}")
+    for c in commands:
+        print(f"{c['scenario']:18s} whole command: {c['command_plain_median_s']:.2f} s -> "
+              f"{c['command_mcap_median_s']:.2f} s with --mcap ({c['command_overhead_percent']:+.1f} %), "
+              f"load {c['load_average_1min']:.1f}")
 
 if __name__ == "__main__":
     main()
