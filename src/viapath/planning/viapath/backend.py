@@ -150,6 +150,32 @@ class Backend:
             index, float(checks.corridor_check_spacing_m), float(checks.corridor_tolerance_m), int(config.max_depth),
             int(config.max_root_obstacles))
 
+    def choose_tree(self, checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.ndarray,
+                    integers: np.ndarray):
+        """The first half of the planner's choice in one compiled call (roots, step 1, the candidate tree):
+        :func:`.kernels.choose_tree`; None on the numpy path. ``slow_times`` (float64), ``settings`` and
+        ``integers`` are the kernel's, filled in by the planner."""
+        if self.name == "numpy" or not self.whole_steps:
+            return None
+        from viapath.planning.viapath import kernels
+
+        positions, velocities, radii, growth, until = checks.kernel_obstacles()
+        _, _, slow_radii, slow_growth, slow_until = slow_checks.kernel_obstacles()
+        return kernels.choose_tree(
+            checks.kernel_robot(), _c(speeds), _c(checks.subgoal), positions, velocities, radii, growth, until,
+            checks.kernel_via_radii(), checks.kernel_ids(), slow_radii, slow_growth, slow_until, slow_times,
+            checks.kernel_continuation(), checks.kernel_envelope(), *_corridor(checks.path), _waypoints(checks.path),
+            settings, integers)
+
+    def choose_candidate(self, checks, floats, nodes, leaves, targets, angles, settings: np.ndarray,
+                         integers: np.ndarray):
+        """The second half (critics, order, roll-outs up to the first that follows): :func:`.kernels.choose_candidate`."""
+        from viapath.planning.viapath import kernels
+
+        positions, velocities, radii, growth, until = checks.kernel_obstacles()
+        return kernels.choose_candidate(checks.kernel_robot(), floats, nodes, leaves, targets, angles, positions,
+                                        velocities, radii, growth, until, *_corridor(checks.path), settings, integers)
+
     def corridor_excess(self, path, points) -> np.ndarray:
         if self.name == "numpy":
             return path.corridor_excess(points)
@@ -196,6 +222,13 @@ def _corridor(path):
     return arrays
 
 
+def _waypoints(path) -> np.ndarray:
+    arrays = getattr(path, "_kernel_waypoints", None)
+    if arrays is None:
+        arrays = path._kernel_waypoints = _c(path.waypoints)
+    return arrays
+
+
 def _per_obstacle(values, n: int) -> np.ndarray:
     """One float64 per obstacle (a scalar is repeated)."""
     if isinstance(values, np.ndarray) and values.shape == (n,):
@@ -217,7 +250,7 @@ def whole_steps_compiled() -> bool:
     process or in numba's on-disk cache."""
     from viapath.planning.viapath import kernels
 
-    for kernel in (kernels.goal_legs, kernels.grow):
+    for kernel in (kernels.goal_legs, kernels.grow, kernels.choose_tree, kernels.choose_candidate):
         if kernel.signatures:
             continue
         cache_file = getattr(getattr(kernel, "_cache", None), "_cache_file", None)

@@ -188,6 +188,27 @@ class LegChecks:
             self.__dict__["_kernel_obstacles"] = cached
         return cached
 
+    def kernel_robot(self) -> np.ndarray:
+        """(x, y, heading, speed, turn rate) of the robot."""
+        cached = self.__dict__.get("_kernel_robot")
+        if cached is None:
+            cached = self.__dict__["_kernel_robot"] = np.array(
+                [self.position[0], self.position[1], self.heading_rad, self.speed_mps, self.turn_rate_radps],
+                dtype=np.float64)
+        return cached
+
+    def kernel_via_radii(self) -> np.ndarray:
+        cached = self.__dict__.get("_kernel_via_radii")
+        if cached is None:
+            cached = self.__dict__["_kernel_via_radii"] = _contiguous(self.via_radii, (len(self.obstacles),))
+        return cached
+
+    def kernel_ids(self) -> np.ndarray:
+        cached = self.__dict__.get("_kernel_ids")
+        if cached is None:
+            cached = self.__dict__["_kernel_ids"] = np.ascontiguousarray(self.obstacles.ids, dtype=np.int64)
+        return cached
+
     def kernel_continuation(self) -> np.ndarray:
         """(dx, dy, length) of the segment after the subgoal, or an empty array (none)."""
         cached = self.__dict__.get("_kernel_continuation")

@@ -40,19 +40,47 @@ from viapath.options import Settings
 from viapath.planning.base import Decision, Plan, Planner, Situation
 from viapath.planning.viapath.backend import backend_for
 from viapath.planning.viapath.backend import resolve as resolve_backend
-from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, grow
+from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, _candidates_of, grow
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.critics import Context, Costs, critics_for, score
+from viapath.planning.viapath.critics import (Context, Costs, Distance, Heading, Hysteresis, SidePreference,
+                                              SpeedError, Time, critics_for, score)
 from viapath.planning.viapath.escape import stop_or_escape
 from viapath.planning.viapath.follow import can_follow
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
+
+# What kernels.choose_tree found (its STEP_ONE, CANDIDATES: that module imports numba, not imported here).
+_FOUND_STEP_ONE, _FOUND_CANDIDATES = 1, 2
+# The critics kernels.choose_candidate sums, in this order (critics_for's): others take the numpy choice.
+_PAPER_CRITICS = (Distance, Time, SpeedError, Heading, SidePreference, Hysteresis)
+
+
+class _CompiledCandidates:
+    """The compiled choice's candidates: their ways round at once (what :meth:`ViaPathPlanner._keep_previous_way`
+    reads), everything else of :class:`Candidates` built from the node store when first asked for."""
+
+    def __init__(self, floats: np.ndarray, nodes: np.ndarray, leaves: np.ndarray, subgoal: np.ndarray):
+        self._store, self._leaves, self._subgoal, self._built = (floats, nodes), leaves, subgoal, None
+
+    @property
+    def ways(self) -> np.ndarray:
+        return self._store[1][self._leaves, 1:4]
+
+    def __getattr__(self, name: str):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        if self._built is None:
+            self._built = _candidates_of(self._store, self._subgoal)
+        return getattr(self._built, name)
+
+    def __len__(self) -> int:
+        return len(self._leaves)
 
 
 @dataclass
 class _Chosen:
     choice: Choice
     plan: Plan
-    candidates: Candidates | None  # None for the paper's step 1 (a free straight leg at nominal speed)
+    candidates: Candidates | _CompiledCandidates | None  # None for the paper's step 1 (a free straight leg at nominal speed)
 
 
 class ViaPathPlanner(Planner, name="viapath"):
@@ -132,6 +160,8 @@ class ViaPathPlanner(Planner, name="viapath"):
             back = self._way_back(checks, float(speeds[nominal_index]))
             if back is not None:
                 return back
+        if self._compiled_choice():
+            return self._choose_compiled(checks, speeds, nominal_index, previous, only_way)
         roots = RootLegs.of(checks, speeds, nominal_index)
         if roots.nominal_is_free and only_way is None:
             # Paper step 1: a free straight path at the normal speed is the plan, if the robot can
@@ -162,6 +192,120 @@ class ViaPathPlanner(Planner, name="viapath"):
                 choice = Choice(Way(int(ways[0]), int(ways[1]), int(ways[2])), int(candidates.speed_mmps[best]))
                 return _Chosen(choice, plan, candidates)
         return None
+
+    # -- the same choice in one compiled call (docs/speed.md, "The compiled cycle") ---------------------------
+
+    def _compiled_choice(self) -> bool:
+        """Whether :meth:`_choose` runs as :meth:`_choose_compiled`: the compiled whole-step kernels, the
+        paper's critics (the kernel sums exactly those) and no candidate polylines to record."""
+        backend = self.backend
+        return (backend.name == "numba" and backend.whole_steps and not self.config.record_candidates
+                and tuple(map(type, self.critics)) == _PAPER_CRITICS)
+
+    def _kernel_constants(self) -> tuple:
+        """The kernels' settings that do not change within an episode (rebuilt when the options, limits or
+        critics object is replaced)."""
+        key = (id(self.config), id(self.limits), id(self.critics), self.nominal_speed_mps)
+        cached = self.__dict__.get("_kernel_cache")
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        config, limits = self.config, self.limits
+        distance, time, speed, heading, side, hysteresis = self.critics
+        settings = np.array([
+            distance.weight, time.weight, speed.weight, heading.weight, side.weight, hysteresis.weight,
+            self.nominal_speed_mps, config.rollout_heading_rad, limits.max_accel_mps2, config.rollout_dt_s,
+            limits.max_turn_rate_radps, limits.max_turn_accel_radps2, limits.max_speed_mps, config.heading_gain,
+            config.turn_in_place_min_rad, 0.0, config.horizon_s, config.corridor_check_spacing_m, 0.0, 0.0],
+            dtype=np.float64)
+        integers = np.zeros(20, dtype=np.int64)
+        integers[3:10] = (config.max_depth, config.max_root_obstacles, config.max_rollouts,
+                          max(1, int(round(config.rollout_s / config.rollout_dt_s))), heading.degrees, side.preferred,
+                          bool(config.slow_times_s))
+        slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
+        constants = (settings, integers, slow_times)
+        self.__dict__["_kernel_cache"] = (key, constants)
+        return constants
+
+    def _choose_compiled(self, checks: LegChecks, speeds, nominal_index: int, previous: Choice | None,
+                         only_way: Way | None) -> _Chosen | None:
+        """:meth:`_choose` with two kernels doing everything up to the shield check (:func:`.kernels.choose_tree`,
+        :func:`.kernels.choose_candidate`; numpy's np.arctan2 between them). The second rolls out candidates
+        cheapest first until one follows; a candidate the shield refuses sends the search on to the next
+        ones here, as the reference does."""
+        constants, integers_0, slow_times = self._kernel_constants()
+        settings = constants.copy()
+        settings[15] = checks.stop_short_m
+        settings[16] = checks.horizon_s
+        settings[18] = checks.corridor_tolerance_m
+        offset = checks.subgoal - checks.position
+        settings[19] = np.arctan2(offset[1], offset[0])  # can_follow's angle of the straight leg
+        integers = integers_0.copy()
+        index = checks.subgoal_index
+        # The robot's segment matters only when a corner can lie between it and the subgoal.
+        integers[0:3] = (nominal_index, int(checks.path.project(checks.position)[0]) if index >= 2 else 0, index)
+        integers[10] = 1  # try the paper's step 1
+        if previous is not None:
+            way = previous.way
+            integers[11:16] = (1, way.obstacle, way.side, way.root, previous.speed_mmps)
+        if only_way is not None:
+            integers[16:20] = (1, only_way.obstacle, only_way.side, only_way.root)
+        slow_checks = self._slow_checks(checks)
+        backend = self.backend
+        found = backend.choose_tree(checks, slow_checks, speeds, slow_times, settings, integers)
+        if found[0][0] == _FOUND_STEP_ONE:
+            speed = float(speeds[nominal_index])
+            plan = Plan("straight", speed, checks.subgoal.copy(), waypoints=np.array([checks.position, checks.subgoal]),
+                        subgoal_index=checks.subgoal_index, candidate_count=1, chosen=0)
+            if found[0][1]:
+                plan.extras["turn_in_place"] = True
+            if self._inside_shield(plan):
+                return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
+            integers[10] = 0  # the shield refused it: the candidates decide
+            found = backend.choose_tree(checks, slow_checks, speeds, slow_times, settings, integers)
+        result, floats, nodes, leaves, targets, angles = found
+        if result[0] != _FOUND_CANDIDATES:
+            return None
+        # Eq. 1's θ and can_follow's heading error from numpy's arctan2, as the reference takes them.
+        angles = np.arctan2(angles[0::2], angles[1::2])
+        result, terms, raw_total, total, order, follow = backend.choose_candidate(
+            checks, floats, nodes, leaves, targets, angles, settings, integers)
+        costs = Costs(raw_total, {critic.name: terms[:, i] for i, critic in enumerate(self.critics)})
+        for rank in range(min(int(result[1]), self.config.max_rollouts)):
+            best = int(order[rank])
+            if not np.isfinite(total[best]):
+                break
+            verdict = int(follow[rank])
+            if verdict == 0:
+                continue
+            plan = self._plan_of_nodes(floats, nodes, leaves, best, total, checks)
+            if verdict < 0:  # past the first that follows: only after the shield refused that one
+                verdict = can_follow(plan, checks, self.limits, self.config)
+            elif verdict == 2:
+                plan.extras["turn_in_place"] = True
+            if verdict and self._inside_shield(plan):
+                plan.extras["cost_terms"] = _cost_terms(costs, order, rank, total)
+                node = int(leaves[best])
+                way = Way(int(nodes[node, 1]), int(nodes[node, 2]), int(nodes[node, 3]))
+                return _Chosen(Choice(way, int(np.round(floats[node, 3] * 1000))), plan, _CompiledCandidates(floats, nodes, leaves, checks.subgoal))
+        return None
+
+    def _plan_of_nodes(self, floats, nodes, leaves, k: int, total, checks: LegChecks) -> Plan:
+        """:meth:`_plan_of` from the compiled tree's node store (columns as in :mod:`.kernels`)."""
+        node = int(leaves[k])
+        common = dict(subgoal_index=checks.subgoal_index, candidate_count=len(leaves), candidate_costs=total,
+                      candidate_polylines=[], chosen=k)
+        if floats[node, 7] > 0:
+            speed = float(floats[node, 8])
+            return Plan("wait" if speed == 0.0 else "slow", speed, checks.subgoal.copy(),
+                        waypoints=np.array([checks.position, checks.subgoal]),
+                        extras={"slow_s": float(floats[node, 7]), "speed_after_mps": float(floats[node, 3])}, **common)
+        points = [checks.subgoal]
+        while node >= 0:
+            points.append(floats[node, 0:2])
+            node = int(nodes[node, 0])
+        line = np.array(points[::-1])
+        return Plan("avoid" if len(line) > 2 else "straight", float(floats[int(leaves[k]), 3]), line[1].copy(),
+                    via_points=line[1:-1].copy(), waypoints=line, **common)
 
     def _way_back(self, checks: LegChecks, speed: float) -> _Chosen | None:
         """Beyond the paper (``return_lookahead_m``): off the path line, the paper's step 1 towards the
