@@ -167,13 +167,13 @@ class Backend:
             checks.kernel_continuation(), checks.kernel_envelope(), *_corridor(checks.path), _waypoints(checks.path),
             settings, integers)
 
-    def choose_candidate(self, checks, floats, nodes, leaves, targets, angles, settings: np.ndarray,
+    def choose_candidate(self, checks, floats, nodes, found, facts, angles, settings: np.ndarray,
                          integers: np.ndarray):
         """The second half (critics, order, roll-outs up to the first that follows): :func:`.kernels.choose_candidate`."""
         from viapath.planning.viapath import kernels
 
         positions, velocities, radii, growth, until = checks.kernel_obstacles()
-        return kernels.choose_candidate(checks.kernel_robot(), floats, nodes, leaves, targets, angles, positions,
+        return kernels.choose_candidate(checks.kernel_robot(), floats, nodes, found, facts, angles, positions,
                                         velocities, radii, growth, until, *_corridor(checks.path), settings, integers)
 
     def corridor_excess(self, path, points) -> np.ndarray:

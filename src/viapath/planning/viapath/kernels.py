@@ -970,10 +970,11 @@ def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities,
     else the candidate tree (:func:`grow`). ``robot`` is (x, y, heading, speed, turn rate); ``settings`` and
     ``integers`` hold the scalars (the ``_F_*`` and ``_C_*`` entries above).
 
-    Returns (result, floats, integers: grow's node store, leaves (K,), targets (K, 2): the point each
-    candidate steers for first, angles (4, K): each candidate's first direction (y, x) and its target's
-    offset from the robot (y, x), for np.arctan2). ``result`` is (what was found, step 1 turns on the spot
-    first)."""
+    Returns (found, floats, integers: grow's node store, facts). ``found`` is (NO_CANDIDATE / STEP_ONE /
+    CANDIDATES, step 1 turns on the spot first, then the K leaves: the candidates' nodes); ``facts`` (6, K)
+    is each candidate's first direction (y, x) and its target's offset from the robot (y, x), for np.arctan2,
+    and the target (x, y): the point it steers for first. (Few arrays: each one returned costs about a
+    microsecond.)"""
     result = np.zeros(2, np.int64)
     s_count = speeds.shape[0]
     nominal_index = integers[_C_NOMINAL]
@@ -997,8 +998,7 @@ def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities,
         if follows:
             result[0] = STEP_ONE
             result[1] = follows == 2
-            return (result, np.empty((0, 10)), np.empty((0, 5), np.int64), np.empty(0, np.int64), np.empty((0, 2)),
-                    np.empty((4, 0)))
+            return result, np.empty((0, 10)), np.empty((0, 5), np.int64), np.empty((6, 0))
     nf, ni = grow(robot[:2].copy(), subgoal, speeds, nominal_index, directions, lengths, free, contact,
                   obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, via_radii, ids, slow_radii,
                   slow_growth, slow_growth_until_s, slow_times, integers[_C_SLOW] != 0, stop_short_m, horizon_s,
@@ -1009,14 +1009,13 @@ def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities,
     for m in range(ni.shape[0]):
         if ni[m, _LEAF]:
             k_count += 1
-    leaves = np.empty(k_count, np.int64)
-    targets = np.empty((k_count, 2))
-    angles = np.empty((4, k_count))
+    found = np.empty(2 + k_count, np.int64)
+    facts = np.empty((6, k_count))
     k = 0
     for m in range(ni.shape[0]):
         if not ni[m, _LEAF]:
             continue
-        leaves[k] = m
+        found[2 + k] = m
         # _plan_of's target: the subgoal for slow/wait and straight candidates, else the second point of
         # the polyline (the node below the root).
         target_x = subgoal[0]
@@ -1027,16 +1026,16 @@ def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities,
                 target_x = nf[node, _X]
                 target_y = nf[node, _Y]
                 node = ni[node, _PARENT]
-        targets[k, 0] = target_x
-        targets[k, 1] = target_y
-        angles[0, k] = nf[m, _FY]
-        angles[1, k] = nf[m, _FX]
-        angles[2, k] = target_y - robot[1]
-        angles[3, k] = target_x - robot[0]
+        facts[0, k] = nf[m, _FY]
+        facts[1, k] = nf[m, _FX]
+        facts[2, k] = target_y - robot[1]
+        facts[3, k] = target_x - robot[0]
+        facts[4, k] = target_x
+        facts[5, k] = target_y
         k += 1
-    if k_count:
-        result[0] = CANDIDATES
-    return result, nf, ni, leaves, targets, angles
+    found[0] = CANDIDATES if k_count else NO_CANDIDATE
+    found[1] = 0
+    return found, nf, ni, facts
 
 
 @njit(cache=True, nogil=True)
@@ -1048,24 +1047,24 @@ def _before(a, b):
 
 
 @njit(cache=True, nogil=True)
-def choose_candidate(robot, nf, ni, leaves, targets, angles, obstacle_positions, obstacle_velocities, radii, growth,
+def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, obstacle_velocities, radii, growth,
                      growth_until_s, segment_starts, segment_directions, segment_lengths, half_widths, settings,
                      integers):
     """The second half of ``_choose`` up to its shield check: Eq. 1's critics (:mod:`.critics`, each term as
     there, summed in :func:`.critics.critics_for`'s order), with ``only_way`` the other ways priced out, the
     cheapest-first order (np.argsort's, stable) of the first ``max_rollouts`` candidates (and at least two,
-    for the runner-up), and follow.can_follow of each in that order until one passes. ``angles`` (2, K):
-    np.arctan2 of :func:`choose_tree`'s.
+    for the runner-up), and follow.can_follow of each in that order until one passes. ``found`` and ``facts``
+    are :func:`choose_tree`'s, ``angles`` (2, K) np.arctan2 of its facts.
 
-    Returns (result, costs (K, 6): the critics' terms, their sum (K,), the sum with only_way applied (K,),
-    order (R,), follow (R,): can_follow of the ranks tried, 0/1/2, -1 not tried). ``result`` is (the rank
-    that follows or -1, ranks in order; 0 ranks: with only_way, no candidate goes that way)."""
-    result = np.zeros(2, np.int64)
-    result[0] = -1
-    k_count = leaves.shape[0]
-    terms = np.empty((k_count, 6))
-    raw_total = np.empty(k_count)
-    total = np.empty(k_count)
+    Returns (ranking, costs). ``ranking`` is (the rank that follows or -1, R: the ranks in order (0: with
+    only_way, no candidate goes that way), the order (R), can_follow of each rank tried (R): 0/1/2, -1 not
+    tried); ``costs`` (8, K) the critics' terms, their sum and the sum with only_way applied."""
+    k_count = found.shape[0] - 2
+    leaves = found[2:]
+    costs = np.empty((8, k_count))
+    terms = costs[:6]
+    raw_total = costs[6]
+    total = costs[7]
     nominal = settings[_F_NOMINAL]
     only = integers[_C_ONLY] != 0
     any_finite = False
@@ -1077,25 +1076,25 @@ def choose_candidate(robot, nf, ni, leaves, targets, angles, obstacle_positions,
         slow_v = nf[m, _SLOW_V]
         driven_s = (length - slow_v * slow_s) / speed
         travel_s = slow_s + driven_s
-        terms[k, 0] = settings[_F_K1] * length
-        terms[k, 1] = settings[_F_K2] * travel_s
+        terms[0, k] = settings[_F_K1] * length
+        terms[1, k] = settings[_F_K2] * travel_s
         error = (slow_s * abs(slow_v - nominal) + driven_s * abs(speed - nominal)) / travel_s
-        terms[k, 2] = settings[_F_K3] * error
+        terms[2, k] = settings[_F_K3] * error
         theta = abs(_wrap(angles[0, k] - robot[2]))
-        terms[k, 3] = settings[_F_K4] * (theta * (180.0 / math.pi) if integers[_C_DEGREES] else theta)
+        terms[3, k] = settings[_F_K4] * (theta * (180.0 / math.pi) if integers[_C_DEGREES] else theta)
         side = ni[m, _WAY1]
-        terms[k, 4] = settings[_F_SIDE] * (1.0 if (side != 0 and side != integers[_C_PREFERRED]) else 0.0)
+        terms[4, k] = settings[_F_SIDE] * (1.0 if (side != 0 and side != integers[_C_PREFERRED]) else 0.0)
         if integers[_C_PREVIOUS]:
             same_way = (ni[m, _WAY0] == integers[_C_PREV_WAY] and ni[m, _WAY1] == integers[_C_PREV_WAY + 1]
                         and ni[m, _WAY2] == integers[_C_PREV_WAY + 2])
             same_speed = np.rint(speed * 1000) == integers[_C_PREV_MMPS]
             bonus = (1.0 if same_way else 0.0) + 0.5 * (1.0 if (same_way and same_speed) else 0.0)
-            terms[k, 5] = -(settings[_F_HYSTERESIS] * bonus)
+            terms[5, k] = -(settings[_F_HYSTERESIS] * bonus)
         else:
-            terms[k, 5] = 0.0
-        value = terms[k, 0] + terms[k, 1]
+            terms[5, k] = 0.0
+        value = terms[0, k] + terms[1, k]
         for c in range(2, 6):
-            value = value + terms[k, c]
+            value = value + terms[c, k]
         raw_total[k] = value
         if only and not (ni[m, _WAY0] == integers[_C_ONLY_WAY] and ni[m, _WAY1] == integers[_C_ONLY_WAY + 1]
                          and ni[m, _WAY2] == integers[_C_ONLY_WAY + 2]):
@@ -1104,10 +1103,16 @@ def choose_candidate(robot, nf, ni, leaves, targets, angles, obstacle_positions,
         if math.isfinite(value):
             any_finite = True
     if only and not any_finite:
-        return result, terms, raw_total, total, np.empty(0, np.int64), np.empty(0, np.int64)
+        ranking = np.zeros(2, np.int64)
+        ranking[0] = -1
+        return ranking, costs
 
     ranks = min(k_count, max(integers[_C_ROLLOUTS], 2))
-    order = np.empty(ranks, np.int64)
+    ranking = np.empty(2 + 2 * ranks, np.int64)
+    ranking[0] = -1
+    ranking[1] = ranks
+    order = ranking[2:2 + ranks]
+    follow = ranking[2 + ranks:]
     taken = np.zeros(k_count, np.bool_)
     for r in range(ranks):
         best = -1
@@ -1116,18 +1121,17 @@ def choose_candidate(robot, nf, ni, leaves, targets, angles, obstacle_positions,
                 best = k
         taken[best] = True
         order[r] = best
-    result[1] = ranks
-    follow = np.full(ranks, -1, np.int64)
+    follow[:] = -1
     for r in range(min(ranks, integers[_C_ROLLOUTS])):
         k = order[r]
         if not math.isfinite(total[k]):
             break
         m = leaves[k]
         speed = nf[m, _SLOW_V] if nf[m, _SLOW_S] > 0 else nf[m, _V]
-        follow[r] = _follows(robot, targets[k, 0], targets[k, 1], angles[1, k], speed, settings, integers[_C_STEPS],
+        follow[r] = _follows(robot, facts[4, k], facts[5, k], angles[1, k], speed, settings, integers[_C_STEPS],
                              obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, segment_starts,
                              segment_directions, segment_lengths, half_widths)
         if follow[r]:
-            result[0] = r
+            ranking[0] = r
             break
-    return result, terms, raw_total, total, order, follow
+    return ranking, costs

@@ -31,7 +31,9 @@ What the paper leaves open and we chose, beyond what those modules say:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+
 import numpy as np
 
 from viapath.geometry import wrap_angle
@@ -142,12 +144,25 @@ class ViaPathPlanner(Planner, name="viapath"):
         """The configured speeds, the current speed and the nominal speed (mm/s resolution, within
         the limit), sorted; and where the nominal speed is in it."""
         top = self.limits.max_speed_mps
-        nominal = self.nominal_in_speed_set_mps()
-        speeds = {round(min(v, top), 3) for v in self.config.speeds} | {nominal}
-        if current_speed_mps > 0.02:
-            speeds.add(round(min(current_speed_mps, top), 3))
-        ordered = sorted(speeds)
-        return np.array(ordered), ordered.index(nominal)
+        current = round(min(current_speed_mps, top), 3) if current_speed_mps > 0.02 else None
+        # The same few sets come back cycle after cycle (one per current speed in mm/s): kept while the
+        # options, limits and nominal speed are the same objects.
+        setup = (self.config, self.limits, self.nominal_speed_mps)
+        cached = self.__dict__.get("_speed_sets")
+        if cached is None or not all(a is b for a, b in zip(cached[0], setup)):
+            cached = self.__dict__["_speed_sets"] = (setup, {})
+        known = cached[1]
+        found = known.get(current)
+        if found is None:
+            nominal = self.nominal_in_speed_set_mps()
+            speeds = {round(min(v, top), 3) for v in self.config.speeds} | {nominal}
+            if current is not None:
+                speeds.add(current)
+            ordered = sorted(speeds)
+            found = known[current] = (ordered, ordered.index(nominal))
+            if len(known) > 4096:  # a long run through many current speeds: start again
+                known.clear()
+        return np.array(found[0]), found[1]
 
     def nominal_in_speed_set_mps(self) -> float:
         return round(min(self.nominal_speed_mps, self.limits.max_speed_mps), 3)
@@ -205,9 +220,9 @@ class ViaPathPlanner(Planner, name="viapath"):
     def _kernel_constants(self) -> tuple:
         """The kernels' settings that do not change within an episode (rebuilt when the options, limits or
         critics object is replaced)."""
-        key = (id(self.config), id(self.limits), id(self.critics), self.nominal_speed_mps)
+        setup = (self.config, self.limits, self.critics, self.nominal_speed_mps)
         cached = self.__dict__.get("_kernel_cache")
-        if cached is not None and cached[0] == key:
+        if cached is not None and all(a is b for a, b in zip(cached[0], setup)):
             return cached[1]
         config, limits = self.config, self.limits
         distance, time, speed, heading, side, hysteresis = self.critics
@@ -223,7 +238,7 @@ class ViaPathPlanner(Planner, name="viapath"):
                           bool(config.slow_times_s))
         slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
         constants = (settings, integers, slow_times)
-        self.__dict__["_kernel_cache"] = (key, constants)
+        self.__dict__["_kernel_cache"] = (setup, constants)
         return constants
 
     def _choose_compiled(self, checks: LegChecks, speeds, nominal_index: int, previous: Choice | None,
@@ -262,17 +277,17 @@ class ViaPathPlanner(Planner, name="viapath"):
                 return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
             integers[10] = 0  # the shield refused it: the candidates decide
             found = backend.choose_tree(checks, slow_checks, speeds, slow_times, settings, integers)
-        result, floats, nodes, leaves, targets, angles = found
-        if result[0] != _FOUND_CANDIDATES:
+        found, floats, nodes, facts = found
+        if found[0] != _FOUND_CANDIDATES:
             return None
         # Eq. 1's θ and can_follow's heading error from numpy's arctan2, as the reference takes them.
-        angles = np.arctan2(angles[0::2], angles[1::2])
-        result, terms, raw_total, total, order, follow = backend.choose_candidate(
-            checks, floats, nodes, leaves, targets, angles, settings, integers)
-        costs = Costs(raw_total, {critic.name: terms[:, i] for i, critic in enumerate(self.critics)})
-        for rank in range(min(int(result[1]), self.config.max_rollouts)):
+        angles = np.arctan2(facts[0:4:2], facts[1:4:2])
+        ranking, costs = backend.choose_candidate(checks, floats, nodes, found, facts, angles, settings, integers)
+        leaves, total, ranks = found[2:], costs[7], int(ranking[1])
+        order, follow = ranking[2:2 + ranks], ranking[2 + ranks:]
+        for rank in range(min(ranks, self.config.max_rollouts)):
             best = int(order[rank])
-            if not np.isfinite(total[best]):
+            if not math.isfinite(total[best]):
                 break
             verdict = int(follow[rank])
             if verdict == 0:
@@ -283,10 +298,12 @@ class ViaPathPlanner(Planner, name="viapath"):
             elif verdict == 2:
                 plan.extras["turn_in_place"] = True
             if verdict and self._inside_shield(plan):
-                plan.extras["cost_terms"] = _cost_terms(costs, order, rank, total)
+                terms = Costs(costs[6], {critic.name: costs[i] for i, critic in enumerate(self.critics)})
+                plan.extras["cost_terms"] = _cost_terms(terms, order, rank, total)
                 node = int(leaves[best])
                 way = Way(int(nodes[node, 1]), int(nodes[node, 2]), int(nodes[node, 3]))
-                return _Chosen(Choice(way, int(np.round(floats[node, 3] * 1000))), plan, _CompiledCandidates(floats, nodes, leaves, checks.subgoal))
+                return _Chosen(Choice(way, int(np.round(floats[node, 3] * 1000))), plan,
+                               _CompiledCandidates(floats, nodes, leaves, checks.subgoal))
         return None
 
     def _plan_of_nodes(self, floats, nodes, leaves, k: int, total, checks: LegChecks) -> Plan:
@@ -355,7 +372,7 @@ class ViaPathPlanner(Planner, name="viapath"):
 
     def _slow_checks(self, checks: LegChecks) -> LegChecks:
         fraction = self.config.slow_leg_inflation
-        if fraction >= 1.0 or not (np.any(checks.obstacles.position_sigma_m) or np.any(checks.obstacles.velocity_sigma_mps)):
+        if fraction >= 1.0 or not (checks.obstacles.position_sigma_m.any() or checks.obstacles.velocity_sigma_mps.any()):
             return checks
         return checks.with_less_inflation(fraction, self.robot_radius_m, self.settings, cap_too=True)
 
