@@ -157,11 +157,9 @@ class Backend:
         ``integers`` are the kernel's, filled in by the planner."""
         if self.name == "numpy" or not self.whole_steps:
             return None
-        from viapath.planning.viapath import kernels
-
         positions, velocities, radii, growth, until = checks.kernel_obstacles()
         _, _, slow_radii, slow_growth, slow_until = slow_checks.kernel_obstacles()
-        return kernels.choose_tree(
+        return _kernels().choose_tree(
             checks.kernel_robot(), _c(speeds), _c(checks.subgoal), positions, velocities, radii, growth, until,
             checks.kernel_via_radii(), checks.kernel_ids(), slow_radii, slow_growth, slow_until, slow_times,
             checks.kernel_continuation(), checks.kernel_envelope(), *_corridor(checks.path), _waypoints(checks.path),
@@ -170,10 +168,8 @@ class Backend:
     def choose_candidate(self, checks, floats, nodes, found, facts, angles, settings: np.ndarray,
                          integers: np.ndarray):
         """The second half (critics, order, roll-outs up to the first that follows): :func:`.kernels.choose_candidate`."""
-        from viapath.planning.viapath import kernels
-
         positions, velocities, radii, growth, until = checks.kernel_obstacles()
-        return kernels.choose_candidate(checks.kernel_robot(), floats, nodes, found, facts, angles, positions,
+        return _kernels().choose_candidate(checks.kernel_robot(), floats, nodes, found, facts, angles, positions,
                                         velocities, radii, growth, until, *_corridor(checks.path), settings, integers)
 
     def corridor_excess(self, path, points) -> np.ndarray:
@@ -206,6 +202,20 @@ class Backend:
                              float(limits.max_speed_mps), float(limits.max_turn_rate_radps),
                              float(limits.max_accel_mps2), float(limits.max_turn_accel_radps2), float(dt_s),
                              int(steps), float(heading_gain))
+
+
+def _kernels():
+    """The kernels module (imports numba: only on the compiled path; kept after the first import, as the
+    per-call import statement costs a microsecond)."""
+    global _KERNELS
+    if _KERNELS is None:
+        from viapath.planning.viapath import kernels
+
+        _KERNELS = kernels
+    return _KERNELS
+
+
+_KERNELS = None
 
 
 def _c(array) -> np.ndarray:

@@ -275,6 +275,8 @@ class LegChecks:
 
 def _contiguous(values, shape: tuple) -> np.ndarray:
     """``values`` as a C-contiguous float64 array of ``shape`` (a scalar or a row is repeated)."""
+    if type(values) is np.ndarray and values.dtype == np.float64 and values.shape == shape and values.flags.c_contiguous:
+        return values  # what the conversions below return for it, without them (every cycle, every array)
     array = np.asarray(values, dtype=np.float64)
     if array.shape != shape:
         array = np.broadcast_to(array, shape)

@@ -147,11 +147,11 @@ class ViaPathPlanner(Planner, name="viapath"):
         current = round(min(current_speed_mps, top), 3) if current_speed_mps > 0.02 else None
         # The same few sets come back cycle after cycle (one per current speed in mm/s): kept while the
         # options, limits and nominal speed are the same objects.
-        setup = (self.config, self.limits, self.nominal_speed_mps)
+        config, limits, nominal_speed = self.config, self.limits, self.nominal_speed_mps
         cached = self.__dict__.get("_speed_sets")
-        if cached is None or not all(a is b for a, b in zip(cached[0], setup)):
-            cached = self.__dict__["_speed_sets"] = (setup, {})
-        known = cached[1]
+        if cached is None or cached[0] is not config or cached[1] is not limits or cached[2] is not nominal_speed:
+            cached = self.__dict__["_speed_sets"] = (config, limits, nominal_speed, {})
+        known = cached[3]
         found = known.get(current)
         if found is None:
             nominal = self.nominal_in_speed_set_mps()
@@ -220,11 +220,11 @@ class ViaPathPlanner(Planner, name="viapath"):
     def _kernel_constants(self) -> tuple:
         """The kernels' settings that do not change within an episode (rebuilt when the options, limits or
         critics object is replaced)."""
-        setup = (self.config, self.limits, self.critics, self.nominal_speed_mps)
+        config, limits, critics, nominal_speed = self.config, self.limits, self.critics, self.nominal_speed_mps
         cached = self.__dict__.get("_kernel_cache")
-        if cached is not None and all(a is b for a, b in zip(cached[0], setup)):
-            return cached[1]
-        config, limits = self.config, self.limits
+        if (cached is not None and cached[0] is config and cached[1] is limits and cached[2] is critics
+                and cached[3] is nominal_speed):
+            return cached[4]
         distance, time, speed, heading, side, hysteresis = self.critics
         settings = np.array([
             distance.weight, time.weight, speed.weight, heading.weight, side.weight, hysteresis.weight,
@@ -238,7 +238,7 @@ class ViaPathPlanner(Planner, name="viapath"):
                           bool(config.slow_times_s))
         slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
         constants = (settings, integers, slow_times)
-        self.__dict__["_kernel_cache"] = (setup, constants)
+        self.__dict__["_kernel_cache"] = (config, limits, critics, nominal_speed, constants)
         return constants
 
     def _choose_compiled(self, checks: LegChecks, speeds, nominal_index: int, previous: Choice | None,
@@ -254,16 +254,25 @@ class ViaPathPlanner(Planner, name="viapath"):
         settings[18] = checks.corridor_tolerance_m
         offset = checks.subgoal - checks.position
         settings[19] = np.arctan2(offset[1], offset[0])  # can_follow's angle of the straight leg
-        integers = integers_0.copy()
+        integers = integers_0.copy()  # (one item at a time: a slice from a tuple converts it first, slower)
         index = checks.subgoal_index
-        # The robot's segment matters only when a corner can lie between it and the subgoal.
-        integers[0:3] = (nominal_index, int(checks.path.project(checks.position)[0]) if index >= 2 else 0, index)
+        integers[0] = nominal_index
+        if index >= 2:  # the robot's segment matters only when a corner can lie between it and the subgoal
+            integers[1] = int(checks.path.project(checks.position)[0])
+        integers[2] = index
         integers[10] = 1  # try the paper's step 1
         if previous is not None:
             way = previous.way
-            integers[11:16] = (1, way.obstacle, way.side, way.root, previous.speed_mmps)
+            integers[11] = 1
+            integers[12] = way.obstacle
+            integers[13] = way.side
+            integers[14] = way.root
+            integers[15] = previous.speed_mmps
         if only_way is not None:
-            integers[16:20] = (1, only_way.obstacle, only_way.side, only_way.root)
+            integers[16] = 1
+            integers[17] = only_way.obstacle
+            integers[18] = only_way.side
+            integers[19] = only_way.root
         slow_checks = self._slow_checks(checks)
         backend = self.backend
         found = backend.choose_tree(checks, slow_checks, speeds, slow_times, settings, integers)
