@@ -256,7 +256,7 @@ def backend_for(choice: str) -> Backend:
 
 
 def whole_steps_compiled() -> bool:
-    """Whether the kernels of whole steps (goal_legs, grow) cost no compilation now: compiled in this
+    """Whether the kernels of whole steps (goal_legs, grow, the choice) cost no compilation now: compiled in this
     process or in numba's on-disk cache."""
     from viapath.planning.viapath import kernels
 
@@ -272,8 +272,9 @@ def whole_steps_compiled() -> bool:
 
 def compile_kernels() -> bool:
     """Compile every planner kernel now if numba is there and the whole-step ones are not compiled yet
-    (about 10 s once per machine: numba caches them on disk); True when they are ready. One planning
-    cycle whose straight leg is blocked runs all of them with the planner's own argument types."""
+    (about 25 s of CPU once per machine, the choice kernels most of it: numba caches them on disk); True
+    when they are ready. One planning cycle whose straight leg is blocked runs all of them with the
+    planner's own argument types (goal_legs and grow inside the choice kernels)."""
     if not numba_available():
         return False
     if not whole_steps_compiled():
