@@ -307,13 +307,22 @@ class ViaPathPlanner(Planner, name="viapath"):
             elif verdict == 2:
                 plan.extras["turn_in_place"] = True
             if verdict and self._inside_shield(plan):
-                terms = Costs(costs[6], {critic.name: costs[i] for i, critic in enumerate(self.critics)})
-                plan.extras["cost_terms"] = _cost_terms(terms, order, rank, total)
+                plan.extras["cost_terms"] = self._cost_terms_of(costs, order, rank, total)
                 node = int(leaves[best])
                 way = Way(int(nodes[node, 1]), int(nodes[node, 2]), int(nodes[node, 3]))
                 return _Chosen(Choice(way, int(np.round(floats[node, 3] * 1000))), plan,
                                _CompiledCandidates(floats, nodes, leaves, checks.subgoal))
         return None
+
+    def _cost_terms_of(self, costs: np.ndarray, order: np.ndarray, rank: int, total: np.ndarray) -> dict:
+        """:func:`_cost_terms` from :func:`.kernels.choose_candidate`'s costs (rows: the critics' terms, E): one
+        column each as Python floats, the same values as :meth:`.critics.Costs.breakdown` takes one by one."""
+        names = [critic.name for critic in self.critics] + ["total"]
+        best = int(order[rank])
+        other = int(order[1] if rank == 0 else order[0]) if len(order) > 1 else None
+        runner_up = (dict(zip(names, costs[:7, other].tolist()))
+                     if other is not None and math.isfinite(total[other]) else None)
+        return {"chosen": dict(zip(names, costs[:7, best].tolist())), "runner_up": runner_up}
 
     def _plan_of_nodes(self, floats, nodes, leaves, k: int, total, checks: LegChecks) -> Plan:
         """:meth:`_plan_of` from the compiled tree's node store (columns as in :mod:`.kernels`)."""
