@@ -82,7 +82,8 @@ class _CompiledCandidates:
 class _Chosen:
     choice: Choice
     plan: Plan
-    candidates: Candidates | _CompiledCandidates | None  # None for the paper's step 1 (a free straight leg at nominal speed)
+    # None for the paper's step 1 (a free straight leg at nominal speed)
+    candidates: Candidates | _CompiledCandidates | None
 
 
 class ViaPathPlanner(Planner, name="viapath"):
@@ -208,7 +209,7 @@ class ViaPathPlanner(Planner, name="viapath"):
                 return _Chosen(choice, plan, candidates)
         return None
 
-    # -- the same choice in one compiled call (docs/speed.md, "The compiled cycle") ---------------------------
+    # -- the same choice in two compiled calls (docs/speed.md, "The compiled cycle") -------------------------
 
     def _compiled_choice(self) -> bool:
         """Whether :meth:`_choose` runs as :meth:`_choose_compiled`: the compiled whole-step kernels, the
@@ -248,6 +249,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         cheapest first until one follows; a candidate the shield refuses sends the search on to the next
         ones here, as the reference does."""
         constants, integers_0, slow_times = self._kernel_constants()
+        # This cycle's entries of the kernels' settings (indices: kernels' _F_* and _C_* constants).
         settings = constants.copy()
         settings[15] = checks.stop_short_m
         settings[16] = checks.horizon_s
