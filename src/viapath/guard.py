@@ -56,7 +56,7 @@ from viapath.observation import (Command, Decision, MotionLimits, Observation, O
                                  RobotState)
 
 __all__ = ["GuardConfig", "Inspection", "ObservationError", "check_command", "guard_plan", "inspect_observation",
-           "stopping_distance_m"]
+           "inspected", "stopping_distance_m"]
 
 
 @dataclass(frozen=True)
@@ -308,6 +308,25 @@ def _stop_decision(planner, observation: Observation, status: str, reasons: list
 #: The observation the innermost running guarded ``plan`` was handed after its inspection, and the
 #: configuration it was inspected with (per thread and task).
 _INSPECTED: contextvars.ContextVar = contextvars.ContextVar("viapath_guard_inspected", default=None)
+_FINITE_BOUNDS: dict[int, tuple[GuardConfig, bool]] = {}  # id → (configuration, all its numbers finite)
+
+
+def inspected(observation: Observation) -> bool:
+    """Whether the innermost running guarded ``plan`` was handed this very ``observation`` out of its
+    inspection, with a configuration of finite numbers: then every obstacle field is finite (sound within
+    finite bounds, or repaired to finite values), and :meth:`~viapath.observation.Obstacles.finite` would
+    keep every obstacle."""
+    checked = _INSPECTED.get()
+    if checked is None or checked[0] is not observation:
+        return False
+    config = checked[1]
+    known = _FINITE_BOUNDS.get(id(config))
+    if known is None or known[0] is not config:
+        finite = all(math.isfinite(float(getattr(config, name))) for name in config.__dataclass_fields__)
+        known = _FINITE_BOUNDS[id(config)] = (config, finite)
+        if len(_FINITE_BOUNDS) > 64:
+            _FINITE_BOUNDS.clear()
+    return known[1]
 
 
 def guard_plan(plan: Callable) -> Callable:

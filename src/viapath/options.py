@@ -89,6 +89,12 @@ class Settings(Mapping):
 
     def __init__(self, values: Mapping[str, Any]):
         object.__setattr__(self, "_values", dict(values))
+        # Planners read their options as attributes every cycle: kept in the instance's own dict too, so a
+        # read is one lookup, not a failed one and then __getattr__. Names the class has (keys, get, ...) stay
+        # the class's, as with __getattr__ alone.
+        cls = type(self)
+        self.__dict__.update((name, value) for name, value in self._values.items()
+                             if isinstance(name, str) and not name.startswith("_") and not hasattr(cls, name))
 
     def __getattr__(self, name: str) -> Any:
         try:

@@ -450,3 +450,83 @@ def test_numba_decides_as_numpy_with_the_way_back(case):
         assert getattr(reference, "inner", reference)._previous == getattr(compiled, "inner", compiled)._previous
         assert abs(a.command.speed_mps - b.command.speed_mps) <= 1e-9
         assert abs(a.command.turn_rate_radps - b.command.turn_rate_radps) <= 1e-9
+
+
+def _plans_equal(a, b):
+    """Two plans the same, bit for bit (the backend's name apart)."""
+    assert a.status == b.status and a.speed_mps == b.speed_mps
+    for name in ("target", "via_points", "waypoints", "candidate_costs"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    assert (a.subgoal_index, a.candidate_count, a.chosen) == (b.subgoal_index, b.candidate_count, b.chosen)
+    assert a.extras == b.extras
+
+
+@settings(max_examples=600, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(cases(), st.sampled_from([{}, {"theta_unit": "deg", "preferred_side": "right"}, {"max_rollouts": 1},
+                                 {"keep_previous_way": False, "hysteresis": 0.2, "slow_times_s": (1.0,)}]))
+def test_compiled_choice_is_the_numpy_choice(case, options):
+    """kernels.choose (roots, step 1, tree, critics, order and roll-outs in one call) against the numpy
+    planner: the same plan bit for bit — status, target, via points, every candidate's cost, each critic's
+    share of the chosen and the runner-up, turn on the spot, the shield's refusals — and the same command,
+    with the paper's options and others (degrees, the other side, a single roll-out, one slow time)."""
+    path = PATHS[case[0]]
+    planners = []
+    for backend in ("numpy", "numba"):
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend, **options)
+        planners.append(ShieldedPlanner(planner) if case[7] else planner)
+    reference, compiled = planners
+    assert getattr(compiled, "inner", compiled)._compiled_choice()
+    for observation in _observations(case):
+        a, b = reference.plan(observation), compiled.plan(observation)
+        b.plan.extras["backend"] = a.plan.extras["backend"]
+        _plans_equal(a.plan, b.plan)
+        assert a.command == b.command
+        assert getattr(reference, "inner", reference)._previous == getattr(compiled, "inner", compiled)._previous
+
+
+def test_compiled_choice_scalars_match_reference():
+    """The scalar pieces of kernels.choose against the numpy operations they stand in for: wrap_angle
+    (np.mod's sign convention), np.degrees, np.round to mm/s."""
+    from numba import njit
+
+    from viapath.geometry import wrap_angle
+    from viapath.planning.viapath import kernels
+
+    rng = np.random.default_rng(5)
+    angles = np.concatenate([rng.uniform(-20, 20, 4000), [0.0, -0.0, np.pi, -np.pi, 2 * np.pi, -2 * np.pi, 3 * np.pi,
+                                                           np.nextafter(np.pi, 4), np.nextafter(-np.pi, -4), 1e-300]])
+    wrap = njit(lambda values: np.array([kernels._wrap(v) for v in values]))
+    np.testing.assert_array_equal(wrap(angles), wrap_angle(angles))
+    degrees = njit(lambda values: np.array([v * (180.0 / np.pi) for v in values]))
+    np.testing.assert_array_equal(degrees(np.abs(angles)), np.degrees(np.abs(angles)))
+    speeds = np.concatenate([rng.uniform(0, 2, 4000), np.arange(0, 2000) / 1000 + 0.0005])
+    rint = njit(lambda values: np.array([np.rint(v * 1000) for v in values]))
+    np.testing.assert_array_equal(rint(speeds), np.round(speeds * 1000))
+
+
+@settings(max_examples=300, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(cases(), st.integers(0, 3), st.sampled_from([100, 200, 300]))
+def test_compiled_choice_after_refusals_and_a_vanished_way(case, way, speed_mmps):
+    """The compiled choice's rarer branches against numpy: a shield that refuses the paper's step 1 and every
+    other candidate it is offered (so the search goes on past the kernel's first candidate that follows,
+    in Python), and last cycle's way round set to one round an obstacle that may have vanished (the
+    relaxed search with only that way, only_way)."""
+    from viapath.planning.viapath.candidates import Choice, Way
+
+    path_index, _, positions, _, _, sigma_p, _, _, _ = case
+    planners = [make_planner("viapath", PATHS[path_index], nominal_speed_mps=0.2, backend=backend)
+                for backend in ("numpy", "numba")]
+    offered = [[], []]
+    for planner, seen in zip(planners, offered):
+        def inside_shield(plan, seen=seen):
+            seen.append((plan.status, plan.chosen, plan.target.tolist()))
+            return len(seen) % 2 == 0  # refuse every other one: step 1 is always refused
+        planner._inside_shield = inside_shield
+        if len(positions) and sigma_p is not None:
+            planner._previous = Choice(Way(0, (1, -1)[way % 2], way // 2), speed_mmps)
+    observation = next(_observations(case))
+    a, b = (planner.plan(observation) for planner in planners)
+    b.plan.extras["backend"] = a.plan.extras["backend"]
+    _plans_equal(a.plan, b.plan)
+    assert a.command == b.command and offered[0] == offered[1]
+    assert planners[0]._previous == planners[1]._previous

@@ -134,3 +134,32 @@ def test_braking_path_steps_as_the_drive_model():
         command = Command(v, w)
         np.testing.assert_array_equal(guard.braking_path(robot, command, limits, 0.1),
                                       reference(robot, command, limits, 0.1))
+
+
+@settings(max_examples=400, deadline=None, derandomize=True)
+@given(_observations(), st.sampled_from([guard.DEFAULT_CONFIG, guard.GuardConfig(max_velocity_sigma_mps=np.inf),
+                                         guard.GuardConfig(max_coordinate_m=np.inf)]))
+def test_an_inspected_observation_has_only_finite_obstacles(observation, config):
+    """The planners' situation keeps every obstacle of an observation the guard has just inspected (or
+    repaired) without looking again (``guard.inspected``): with finite bounds that is what
+    ``Obstacles.finite`` would keep; with a bound at infinity it looks again."""
+    from viapath import DesignatedPath
+    from viapath.planning import make_planner
+
+    seen = []
+    planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), backend="numpy")
+    planner.guard_config = config
+    original = planner.situation
+
+    def situation(handed):
+        found = original(handed)
+        seen.append((guard.inspected(handed), handed.obstacles, found.obstacles))
+        return found
+
+    planner.situation = situation
+    planner.plan(observation)
+    for skipped, handed, kept in seen:
+        finite = handed.finite()
+        assert skipped == all(np.isfinite(float(getattr(config, name))) for name in config.__dataclass_fields__)
+        for name in ("positions", "velocities", "radii_m", "position_sigma_m", "velocity_sigma_mps", "ids"):
+            np.testing.assert_array_equal(getattr(kept, name), getattr(finite, name))

@@ -22,7 +22,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from viapath.guard import guard_plan
+from viapath.guard import guard_plan, inspected
 from viapath.kinematics import steer_towards
 from viapath.observation import Command, Decision, MotionLimits, Observation, Obstacles, Plan
 from viapath.options import Option, OptionSet, Settings
@@ -141,7 +141,8 @@ class Planner:
 
     def situation(self, observation: Observation) -> Situation:
         position = np.asarray(observation.robot.position, dtype=float)
-        obstacles = observation.obstacles.finite()
+        # Out of the guard's inspection every obstacle is finite already: finite() would keep them all.
+        obstacles = observation.obstacles if inspected(observation) else observation.obstacles.finite()
         self.subgoals.update(position, self.robot_radius_m, obstacles.positions, obstacles.radii_m)
         return Situation(
             observation=observation, position=position, obstacles=obstacles,

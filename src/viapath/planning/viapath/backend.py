@@ -150,6 +150,28 @@ class Backend:
             index, float(checks.corridor_check_spacing_m), float(checks.corridor_tolerance_m), int(config.max_depth),
             int(config.max_root_obstacles))
 
+    def choose_tree(self, checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.ndarray,
+                    integers: np.ndarray):
+        """The first half of the planner's choice in one compiled call (roots, step 1, the candidate tree):
+        :func:`.kernels.choose_tree`; None on the numpy path. ``slow_times`` (float64), ``settings`` and
+        ``integers`` are the kernel's, filled in by the planner."""
+        if self.name == "numpy" or not self.whole_steps:
+            return None
+        positions, velocities, radii, growth, until = checks.kernel_obstacles()
+        _, _, slow_radii, slow_growth, slow_until = slow_checks.kernel_obstacles()
+        return _kernels().choose_tree(
+            checks.kernel_robot(), _c(speeds), _c(checks.subgoal), positions, velocities, radii, growth, until,
+            checks.kernel_via_radii(), checks.kernel_ids(), slow_radii, slow_growth, slow_until, slow_times,
+            checks.kernel_continuation(), checks.kernel_envelope(), *_corridor(checks.path), _waypoints(checks.path),
+            settings, integers)
+
+    def choose_candidate(self, checks, floats, nodes, found, facts, angles, settings: np.ndarray,
+                         integers: np.ndarray):
+        """The second half (critics, order, roll-outs up to the first that follows): :func:`.kernels.choose_candidate`."""
+        positions, velocities, radii, growth, until = checks.kernel_obstacles()
+        return _kernels().choose_candidate(checks.kernel_robot(), floats, nodes, found, facts, angles, positions,
+                                        velocities, radii, growth, until, *_corridor(checks.path), settings, integers)
+
     def corridor_excess(self, path, points) -> np.ndarray:
         if self.name == "numpy":
             return path.corridor_excess(points)
@@ -182,6 +204,20 @@ class Backend:
                              int(steps), float(heading_gain))
 
 
+def _kernels():
+    """The kernels module (imports numba: only on the compiled path; kept after the first import, as the
+    per-call import statement costs a microsecond)."""
+    global _KERNELS
+    if _KERNELS is None:
+        from viapath.planning.viapath import kernels
+
+        _KERNELS = kernels
+    return _KERNELS
+
+
+_KERNELS = None
+
+
 def _c(array) -> np.ndarray:
     return np.ascontiguousarray(array, dtype=np.float64)
 
@@ -193,6 +229,13 @@ def _corridor(path):
         arrays = (_c(path.segment_starts), _c(path.segment_directions), _c(path.segment_lengths_m),
                   _c(path.half_widths_m))
         path._kernel_arrays = arrays
+    return arrays
+
+
+def _waypoints(path) -> np.ndarray:
+    arrays = getattr(path, "_kernel_waypoints", None)
+    if arrays is None:
+        arrays = path._kernel_waypoints = _c(path.waypoints)
     return arrays
 
 
@@ -213,11 +256,11 @@ def backend_for(choice: str) -> Backend:
 
 
 def whole_steps_compiled() -> bool:
-    """Whether the kernels of whole steps (goal_legs, grow) cost no compilation now: compiled in this
+    """Whether the kernels of whole steps (goal_legs, grow, the choice) cost no compilation now: compiled in this
     process or in numba's on-disk cache."""
     from viapath.planning.viapath import kernels
 
-    for kernel in (kernels.goal_legs, kernels.grow):
+    for kernel in (kernels.goal_legs, kernels.grow, kernels.choose_tree, kernels.choose_candidate):
         if kernel.signatures:
             continue
         cache_file = getattr(getattr(kernel, "_cache", None), "_cache_file", None)
@@ -229,8 +272,9 @@ def whole_steps_compiled() -> bool:
 
 def compile_kernels() -> bool:
     """Compile every planner kernel now if numba is there and the whole-step ones are not compiled yet
-    (about 10 s once per machine: numba caches them on disk); True when they are ready. One planning
-    cycle whose straight leg is blocked runs all of them with the planner's own argument types."""
+    (about 25 s of CPU once per machine, the choice kernels most of it: numba caches them on disk); True
+    when they are ready. One planning cycle whose straight leg is blocked runs all of them with the
+    planner's own argument types (goal_legs and grow inside the choice kernels)."""
     if not numba_available():
         return False
     if not whole_steps_compiled():

@@ -188,6 +188,27 @@ class LegChecks:
             self.__dict__["_kernel_obstacles"] = cached
         return cached
 
+    def kernel_robot(self) -> np.ndarray:
+        """(x, y, heading, speed, turn rate) of the robot."""
+        cached = self.__dict__.get("_kernel_robot")
+        if cached is None:
+            cached = self.__dict__["_kernel_robot"] = np.array(
+                [self.position[0], self.position[1], self.heading_rad, self.speed_mps, self.turn_rate_radps],
+                dtype=np.float64)
+        return cached
+
+    def kernel_via_radii(self) -> np.ndarray:
+        cached = self.__dict__.get("_kernel_via_radii")
+        if cached is None:
+            cached = self.__dict__["_kernel_via_radii"] = _contiguous(self.via_radii, (len(self.obstacles),))
+        return cached
+
+    def kernel_ids(self) -> np.ndarray:
+        cached = self.__dict__.get("_kernel_ids")
+        if cached is None:
+            cached = self.__dict__["_kernel_ids"] = np.ascontiguousarray(self.obstacles.ids, dtype=np.int64)
+        return cached
+
     def kernel_continuation(self) -> np.ndarray:
         """(dx, dy, length) of the segment after the subgoal, or an empty array (none)."""
         cached = self.__dict__.get("_kernel_continuation")
@@ -254,6 +275,8 @@ class LegChecks:
 
 def _contiguous(values, shape: tuple) -> np.ndarray:
     """``values`` as a C-contiguous float64 array of ``shape`` (a scalar or a row is repeated)."""
+    if type(values) is np.ndarray and values.dtype == np.float64 and values.shape == shape and values.flags.c_contiguous:
+        return values  # what the conversions below return for it, without them (every cycle, every array)
     array = np.asarray(values, dtype=np.float64)
     if array.shape != shape:
         array = np.broadcast_to(array, shape)

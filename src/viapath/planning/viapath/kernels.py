@@ -876,3 +876,262 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                 ni[batch + r, _LEAF] = 1
                 nf[batch + r, _GOAL] = lengths[r]
     return nf[:m].copy(), ni[:m].copy()
+
+
+# -- the choice (planner._choose) in two calls: roots, step 1 and the tree; then Eq. 1's critics, the order and the
+# motion-limit checks. Between them numpy takes the angles (np.arctan2 rounds differently from the libm atan2
+# numba calls, in about one case in twelve here: the angles are the reference's own, so the decisions are).
+
+# Entries of the integer settings.
+_C_NOMINAL, _C_SEGMENT, _C_SUBGOAL, _C_DEPTH, _C_ROOT_LIMIT, _C_ROLLOUTS, _C_STEPS, _C_DEGREES, _C_PREFERRED = range(9)
+_C_SLOW, _C_TRY_STRAIGHT, _C_PREVIOUS, _C_PREV_WAY, _C_PREV_MMPS, _C_ONLY, _C_ONLY_WAY = 9, 10, 11, 12, 15, 16, 17
+# Float settings.
+_F_K1, _F_K2, _F_K3, _F_K4, _F_SIDE, _F_HYSTERESIS, _F_NOMINAL, _F_ROLLOUT_HEADING, _F_ACCEL, _F_DT = range(10)
+_F_TURN_RATE, _F_TURN_ACCEL, _F_SPEED, _F_GAIN, _F_TURN_IN_PLACE, _F_STOP_SHORT, _F_HORIZON = range(10, 17)
+_F_SPACING, _F_TOLERANCE, _F_STRAIGHT_ANGLE = 17, 18, 19
+# What choose_tree found (result[0]).
+NO_CANDIDATE, STEP_ONE, CANDIDATES = 0, 1, 2
+
+
+@njit(cache=True, nogil=True)
+def _wrap(angle):
+    """:func:`viapath.geometry.wrap_angle` of a scalar (np.mod's sign convention is Python's %)."""
+    return math.pi - ((math.pi - angle) % (2.0 * math.pi))
+
+
+@njit(cache=True, nogil=True)
+def _clear(positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth,
+           growth_until_s):
+    """LegChecks.clear of the first ``count`` positions (one per ``dt`` from now)."""
+    for j in range(obstacle_positions.shape[0]):
+        now = math.hypot(robot_x - obstacle_positions[j, 0], robot_y - obstacle_positions[j, 1]) - 1e-3
+        for s in range(count):
+            t = dt * (s + 1)
+            cx = obstacle_positions[j, 0] + obstacle_velocities[j, 0] * t
+            cy = obstacle_positions[j, 1] + obstacle_velocities[j, 1] * t
+            until = growth_until_s[j]
+            capped = until if until != until else (t if t < until else until)  # np.minimum keeps a NaN
+            reach = radii[j] + growth[j] * capped
+            limit = reach if (reach != reach or reach < now) else now  # np.minimum, NaN first
+            if now != now:
+                limit = now
+            distance = math.hypot(positions[s, 0] - cx, positions[s, 1] - cy)
+            if not distance >= limit:
+                return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _follows(robot, target_x, target_y, angle, speed, settings, steps, obstacle_positions, obstacle_velocities, radii,
+             growth, growth_until_s, segment_starts, segment_directions, segment_lengths, half_widths):
+    """follow.can_follow: 0 cannot, 1 can, 2 can after turning on the spot first. ``angle``: np.arctan2 of
+    the offset from the robot to the target."""
+    ox = target_x - robot[0]
+    oy = target_y - robot[1]
+    heading_error = abs(_wrap(angle - robot[2]))
+    speed_change = abs(speed - robot[3])
+    dt = settings[_F_DT]
+    if math.hypot(ox, oy) < 1e-6 or (heading_error <= settings[_F_ROLLOUT_HEADING]
+                                     and speed_change <= settings[_F_ACCEL] * dt * 2):
+        return 1
+    positions = track(robot[0], robot[1], robot[2], robot[3], robot[4], target_x, target_y, speed, settings[_F_SPEED],
+                      settings[_F_TURN_RATE], settings[_F_ACCEL], settings[_F_TURN_ACCEL], dt, steps,
+                      settings[_F_GAIN])
+    if not _clear(positions, steps, dt, robot[0], robot[1], obstacle_positions, obstacle_velocities, radii, growth,
+                  growth_until_s):
+        return 0
+    inside = True
+    for s in range(steps):
+        if not _excess(positions[s, 0], positions[s, 1], segment_starts, segment_directions, segment_lengths,
+                       half_widths) <= settings[_F_TOLERANCE]:
+            inside = False
+            break
+    if inside:
+        return 1
+    turn_s = heading_error / settings[_F_TURN_RATE] + 1.0
+    count = max(1, int(math.ceil(turn_s / dt)))
+    if heading_error > settings[_F_TURN_IN_PLACE]:
+        standing = np.empty((count, 2))
+        for s in range(count):
+            standing[s, 0] = robot[0]
+            standing[s, 1] = robot[1]
+        if _clear(standing, count, dt, robot[0], robot[1], obstacle_positions, obstacle_velocities, radii, growth,
+                  growth_until_s):
+            return 2
+    return 0
+
+
+@njit(cache=True, nogil=True)
+def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s,
+                via_radii, ids, slow_radii, slow_growth, slow_growth_until_s, slow_times, continuation, envelope,
+                segment_starts, segment_directions, segment_lengths, half_widths, waypoints, settings, integers):
+    """The first half of the viapath planner's ``_choose`` in one call: the root legs (:func:`goal_legs`), the
+    paper's step 1 (the free straight leg at the nominal speed, if the robot can follow it: follow.can_follow),
+    else the candidate tree (:func:`grow`). ``robot`` is (x, y, heading, speed, turn rate); ``settings`` and
+    ``integers`` hold the scalars (the ``_F_*`` and ``_C_*`` entries above).
+
+    Returns (found, floats, integers: grow's node store, facts). ``found`` is (NO_CANDIDATE / STEP_ONE /
+    CANDIDATES, step 1 turns on the spot first, then the K leaves: the candidates' nodes); ``facts`` (6, K)
+    is each candidate's first direction (y, x) and its target's offset from the robot (y, x), for np.arctan2,
+    and the target (x, y): the point it steers for first. (Few arrays: each one returned costs about a
+    microsecond.)"""
+    result = np.zeros(2, np.int64)
+    s_count = speeds.shape[0]
+    nominal_index = integers[_C_NOMINAL]
+    subgoal_index = integers[_C_SUBGOAL]
+    stop_short_m = settings[_F_STOP_SHORT]
+    horizon_s = settings[_F_HORIZON]
+    spacing_m = settings[_F_SPACING]
+    tolerance_m = settings[_F_TOLERANCE]
+    starts = np.empty((s_count, 2))
+    for i in range(s_count):
+        starts[i, 0] = robot[0]
+        starts[i, 1] = robot[1]
+    directions, lengths, free, contact = goal_legs(
+        starts, np.zeros(s_count), speeds, subgoal, stop_short_m, horizon_s, continuation, obstacle_positions,
+        obstacle_velocities, radii, growth, growth_until_s, envelope, segment_starts, segment_directions,
+        segment_lengths, half_widths, subgoal_index, spacing_m, tolerance_m)
+    if free[nominal_index] and integers[_C_TRY_STRAIGHT] and not integers[_C_ONLY]:
+        follows = _follows(robot, subgoal[0], subgoal[1], settings[_F_STRAIGHT_ANGLE], speeds[nominal_index], settings,
+                           integers[_C_STEPS], obstacle_positions, obstacle_velocities, radii, growth, growth_until_s,
+                           segment_starts, segment_directions, segment_lengths, half_widths)
+        if follows:
+            result[0] = STEP_ONE
+            result[1] = follows == 2
+            return result, np.empty((0, 10)), np.empty((0, 5), np.int64), np.empty((6, 0))
+    nf, ni = grow(robot[:2].copy(), subgoal, speeds, nominal_index, directions, lengths, free, contact,
+                  obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, via_radii, ids, slow_radii,
+                  slow_growth, slow_growth_until_s, slow_times, integers[_C_SLOW] != 0, stop_short_m, horizon_s,
+                  continuation, envelope, segment_starts, segment_directions, segment_lengths, half_widths, waypoints,
+                  integers[_C_SEGMENT], subgoal_index, spacing_m, tolerance_m, integers[_C_DEPTH],
+                  integers[_C_ROOT_LIMIT])
+    k_count = 0
+    for m in range(ni.shape[0]):
+        if ni[m, _LEAF]:
+            k_count += 1
+    found = np.empty(2 + k_count, np.int64)
+    facts = np.empty((6, k_count))
+    k = 0
+    for m in range(ni.shape[0]):
+        if not ni[m, _LEAF]:
+            continue
+        found[2 + k] = m
+        # _plan_of's target: the subgoal for slow/wait and straight candidates, else the second point of
+        # the polyline (the node below the root).
+        target_x = subgoal[0]
+        target_y = subgoal[1]
+        if nf[m, _SLOW_S] <= 0 and ni[m, _PARENT] >= 0:
+            node = m
+            while ni[node, _PARENT] >= 0:
+                target_x = nf[node, _X]
+                target_y = nf[node, _Y]
+                node = ni[node, _PARENT]
+        facts[0, k] = nf[m, _FY]
+        facts[1, k] = nf[m, _FX]
+        facts[2, k] = target_y - robot[1]
+        facts[3, k] = target_x - robot[0]
+        facts[4, k] = target_x
+        facts[5, k] = target_y
+        k += 1
+    found[0] = CANDIDATES if k_count else NO_CANDIDATE
+    found[1] = 0
+    return found, nf, ni, facts
+
+
+@njit(cache=True, nogil=True)
+def _before(a, b):
+    """np.argsort's order of two costs: NaN after everything (ties are kept in index order by the caller)."""
+    if b != b:
+        return a == a
+    return a < b
+
+
+@njit(cache=True, nogil=True)
+def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, obstacle_velocities, radii, growth,
+                     growth_until_s, segment_starts, segment_directions, segment_lengths, half_widths, settings,
+                     integers):
+    """The second half of ``_choose`` up to its shield check: Eq. 1's critics (:mod:`.critics`, each term as
+    there, summed in :func:`.critics.critics_for`'s order), with ``only_way`` the other ways priced out, the
+    cheapest-first order (np.argsort's, stable) of the first ``max_rollouts`` candidates (and at least two,
+    for the runner-up), and follow.can_follow of each in that order until one passes. ``found`` and ``facts``
+    are :func:`choose_tree`'s, ``angles`` (2, K) np.arctan2 of its facts.
+
+    Returns (ranking, costs). ``ranking`` is (the rank that follows or -1, R: the ranks in order (0: with
+    only_way, no candidate goes that way), the order (R), can_follow of each rank tried (R): 0/1/2, -1 not
+    tried); ``costs`` (8, K) the critics' terms, their sum and the sum with only_way applied."""
+    k_count = found.shape[0] - 2
+    leaves = found[2:]
+    costs = np.empty((8, k_count))
+    terms = costs[:6]
+    raw_total = costs[6]
+    total = costs[7]
+    nominal = settings[_F_NOMINAL]
+    only = integers[_C_ONLY] != 0
+    any_finite = False
+    for k in range(k_count):
+        m = leaves[k]
+        length = nf[m, _LENGTH] + nf[m, _GOAL]
+        speed = nf[m, _V]
+        slow_s = nf[m, _SLOW_S]
+        slow_v = nf[m, _SLOW_V]
+        driven_s = (length - slow_v * slow_s) / speed
+        travel_s = slow_s + driven_s
+        terms[0, k] = settings[_F_K1] * length
+        terms[1, k] = settings[_F_K2] * travel_s
+        error = (slow_s * abs(slow_v - nominal) + driven_s * abs(speed - nominal)) / travel_s
+        terms[2, k] = settings[_F_K3] * error
+        theta = abs(_wrap(angles[0, k] - robot[2]))
+        terms[3, k] = settings[_F_K4] * (theta * (180.0 / math.pi) if integers[_C_DEGREES] else theta)
+        side = ni[m, _WAY1]
+        terms[4, k] = settings[_F_SIDE] * (1.0 if (side != 0 and side != integers[_C_PREFERRED]) else 0.0)
+        if integers[_C_PREVIOUS]:
+            same_way = (ni[m, _WAY0] == integers[_C_PREV_WAY] and ni[m, _WAY1] == integers[_C_PREV_WAY + 1]
+                        and ni[m, _WAY2] == integers[_C_PREV_WAY + 2])
+            same_speed = np.rint(speed * 1000) == integers[_C_PREV_MMPS]
+            bonus = (1.0 if same_way else 0.0) + 0.5 * (1.0 if (same_way and same_speed) else 0.0)
+            terms[5, k] = -(settings[_F_HYSTERESIS] * bonus)
+        else:
+            terms[5, k] = 0.0
+        value = terms[0, k] + terms[1, k]
+        for c in range(2, 6):
+            value = value + terms[c, k]
+        raw_total[k] = value
+        if only and not (ni[m, _WAY0] == integers[_C_ONLY_WAY] and ni[m, _WAY1] == integers[_C_ONLY_WAY + 1]
+                         and ni[m, _WAY2] == integers[_C_ONLY_WAY + 2]):
+            value = math.inf
+        total[k] = value
+        if math.isfinite(value):
+            any_finite = True
+    if only and not any_finite:
+        ranking = np.zeros(2, np.int64)
+        ranking[0] = -1
+        return ranking, costs
+
+    ranks = min(k_count, max(integers[_C_ROLLOUTS], 2))
+    ranking = np.empty(2 + 2 * ranks, np.int64)
+    ranking[0] = -1
+    ranking[1] = ranks
+    order = ranking[2:2 + ranks]
+    follow = ranking[2 + ranks:]
+    taken = np.zeros(k_count, np.bool_)
+    for r in range(ranks):
+        best = -1
+        for k in range(k_count):
+            if not taken[k] and (best < 0 or _before(total[k], total[best])):
+                best = k
+        taken[best] = True
+        order[r] = best
+    follow[:] = -1
+    for r in range(min(ranks, integers[_C_ROLLOUTS])):
+        k = order[r]
+        if not math.isfinite(total[k]):
+            break
+        m = leaves[k]
+        speed = nf[m, _SLOW_V] if nf[m, _SLOW_S] > 0 else nf[m, _V]
+        follow[r] = _follows(robot, facts[4, k], facts[5, k], angles[1, k], speed, settings, integers[_C_STEPS],
+                             obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, segment_starts,
+                             segment_directions, segment_lengths, half_widths)
+        if follow[r]:
+            ranking[0] = r
+            break
+    return ranking, costs

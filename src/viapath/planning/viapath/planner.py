@@ -31,7 +31,9 @@ What the paper leaves open and we chose, beyond what those modules say:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+
 import numpy as np
 
 from viapath.geometry import wrap_angle
@@ -40,19 +42,48 @@ from viapath.options import Settings
 from viapath.planning.base import Decision, Plan, Planner, Situation
 from viapath.planning.viapath.backend import backend_for
 from viapath.planning.viapath.backend import resolve as resolve_backend
-from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, grow
+from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, _candidates_of, grow
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.critics import Context, Costs, critics_for, score
+from viapath.planning.viapath.critics import (Context, Costs, Distance, Heading, Hysteresis, SidePreference,
+                                              SpeedError, Time, critics_for, score)
 from viapath.planning.viapath.escape import stop_or_escape
 from viapath.planning.viapath.follow import can_follow
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
+
+# What kernels.choose_tree found (its STEP_ONE, CANDIDATES: that module imports numba, not imported here).
+_FOUND_STEP_ONE, _FOUND_CANDIDATES = 1, 2
+# The critics kernels.choose_candidate sums, in this order (critics_for's): others take the numpy choice.
+_PAPER_CRITICS = (Distance, Time, SpeedError, Heading, SidePreference, Hysteresis)
+
+
+class _CompiledCandidates:
+    """The compiled choice's candidates: their ways round at once (what :meth:`ViaPathPlanner._keep_previous_way`
+    reads), everything else of :class:`Candidates` built from the node store when first asked for."""
+
+    def __init__(self, floats: np.ndarray, nodes: np.ndarray, leaves: np.ndarray, subgoal: np.ndarray):
+        self._store, self._leaves, self._subgoal, self._built = (floats, nodes), leaves, subgoal, None
+
+    @property
+    def ways(self) -> np.ndarray:
+        return self._store[1][self._leaves, 1:4]
+
+    def __getattr__(self, name: str):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        if self._built is None:
+            self._built = _candidates_of(self._store, self._subgoal)
+        return getattr(self._built, name)
+
+    def __len__(self) -> int:
+        return len(self._leaves)
 
 
 @dataclass
 class _Chosen:
     choice: Choice
     plan: Plan
-    candidates: Candidates | None  # None for the paper's step 1 (a free straight leg at nominal speed)
+    # None for the paper's step 1 (a free straight leg at nominal speed)
+    candidates: Candidates | _CompiledCandidates | None
 
 
 class ViaPathPlanner(Planner, name="viapath"):
@@ -114,12 +145,25 @@ class ViaPathPlanner(Planner, name="viapath"):
         """The configured speeds, the current speed and the nominal speed (mm/s resolution, within
         the limit), sorted; and where the nominal speed is in it."""
         top = self.limits.max_speed_mps
-        nominal = self.nominal_in_speed_set_mps()
-        speeds = {round(min(v, top), 3) for v in self.config.speeds} | {nominal}
-        if current_speed_mps > 0.02:
-            speeds.add(round(min(current_speed_mps, top), 3))
-        ordered = sorted(speeds)
-        return np.array(ordered), ordered.index(nominal)
+        current = round(min(current_speed_mps, top), 3) if current_speed_mps > 0.02 else None
+        # The same few sets come back cycle after cycle (one per current speed in mm/s): kept while the
+        # options, limits and nominal speed are the same objects.
+        config, limits, nominal_speed = self.config, self.limits, self.nominal_speed_mps
+        cached = self.__dict__.get("_speed_sets")
+        if cached is None or cached[0] is not config or cached[1] is not limits or cached[2] is not nominal_speed:
+            cached = self.__dict__["_speed_sets"] = (config, limits, nominal_speed, {})
+        known = cached[3]
+        found = known.get(current)
+        if found is None:
+            nominal = self.nominal_in_speed_set_mps()
+            speeds = {round(min(v, top), 3) for v in self.config.speeds} | {nominal}
+            if current is not None:
+                speeds.add(current)
+            ordered = sorted(speeds)
+            found = known[current] = (ordered, ordered.index(nominal))
+            if len(known) > 4096:  # a long run through many current speeds: start again
+                known.clear()
+        return np.array(found[0]), found[1]
 
     def nominal_in_speed_set_mps(self) -> float:
         return round(min(self.nominal_speed_mps, self.limits.max_speed_mps), 3)
@@ -132,6 +176,8 @@ class ViaPathPlanner(Planner, name="viapath"):
             back = self._way_back(checks, float(speeds[nominal_index]))
             if back is not None:
                 return back
+        if self._compiled_choice():
+            return self._choose_compiled(checks, speeds, nominal_index, previous, only_way)
         roots = RootLegs.of(checks, speeds, nominal_index)
         if roots.nominal_is_free and only_way is None:
             # Paper step 1: a free straight path at the normal speed is the plan, if the robot can
@@ -162,6 +208,141 @@ class ViaPathPlanner(Planner, name="viapath"):
                 choice = Choice(Way(int(ways[0]), int(ways[1]), int(ways[2])), int(candidates.speed_mmps[best]))
                 return _Chosen(choice, plan, candidates)
         return None
+
+    # -- the same choice in two compiled calls (docs/speed.md, "The compiled cycle") -------------------------
+
+    def _compiled_choice(self) -> bool:
+        """Whether :meth:`_choose` runs as :meth:`_choose_compiled`: the compiled whole-step kernels, the
+        paper's critics (the kernel sums exactly those) and no candidate polylines to record."""
+        backend = self.backend
+        return (backend.name == "numba" and backend.whole_steps and not self.config.record_candidates
+                and tuple(map(type, self.critics)) == _PAPER_CRITICS)
+
+    def _kernel_constants(self) -> tuple:
+        """The kernels' settings that do not change within an episode (rebuilt when the options, limits or
+        critics object is replaced)."""
+        config, limits, critics, nominal_speed = self.config, self.limits, self.critics, self.nominal_speed_mps
+        cached = self.__dict__.get("_kernel_cache")
+        if (cached is not None and cached[0] is config and cached[1] is limits and cached[2] is critics
+                and cached[3] is nominal_speed):
+            return cached[4]
+        distance, time, speed, heading, side, hysteresis = self.critics
+        settings = np.array([
+            distance.weight, time.weight, speed.weight, heading.weight, side.weight, hysteresis.weight,
+            self.nominal_speed_mps, config.rollout_heading_rad, limits.max_accel_mps2, config.rollout_dt_s,
+            limits.max_turn_rate_radps, limits.max_turn_accel_radps2, limits.max_speed_mps, config.heading_gain,
+            config.turn_in_place_min_rad, 0.0, config.horizon_s, config.corridor_check_spacing_m, 0.0, 0.0],
+            dtype=np.float64)
+        integers = np.zeros(20, dtype=np.int64)
+        integers[3:10] = (config.max_depth, config.max_root_obstacles, config.max_rollouts,
+                          max(1, int(round(config.rollout_s / config.rollout_dt_s))), heading.degrees, side.preferred,
+                          bool(config.slow_times_s))
+        slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
+        constants = (settings, integers, slow_times)
+        self.__dict__["_kernel_cache"] = (config, limits, critics, nominal_speed, constants)
+        return constants
+
+    def _choose_compiled(self, checks: LegChecks, speeds, nominal_index: int, previous: Choice | None,
+                         only_way: Way | None) -> _Chosen | None:
+        """:meth:`_choose` with two kernels doing everything up to the shield check (:func:`.kernels.choose_tree`,
+        :func:`.kernels.choose_candidate`; numpy's np.arctan2 between them). The second rolls out candidates
+        cheapest first until one follows; a candidate the shield refuses sends the search on to the next
+        ones here, as the reference does."""
+        constants, integers_0, slow_times = self._kernel_constants()
+        # This cycle's entries of the kernels' settings (indices: kernels' _F_* and _C_* constants).
+        settings = constants.copy()
+        settings[15] = checks.stop_short_m
+        settings[16] = checks.horizon_s
+        settings[18] = checks.corridor_tolerance_m
+        offset = checks.subgoal - checks.position
+        settings[19] = np.arctan2(offset[1], offset[0])  # can_follow's angle of the straight leg
+        integers = integers_0.copy()  # (one item at a time: a slice from a tuple converts it first, slower)
+        index = checks.subgoal_index
+        integers[0] = nominal_index
+        if index >= 2:  # the robot's segment matters only when a corner can lie between it and the subgoal
+            integers[1] = int(checks.path.project(checks.position)[0])
+        integers[2] = index
+        integers[10] = 1  # try the paper's step 1
+        if previous is not None:
+            way = previous.way
+            integers[11] = 1
+            integers[12] = way.obstacle
+            integers[13] = way.side
+            integers[14] = way.root
+            integers[15] = previous.speed_mmps
+        if only_way is not None:
+            integers[16] = 1
+            integers[17] = only_way.obstacle
+            integers[18] = only_way.side
+            integers[19] = only_way.root
+        slow_checks = self._slow_checks(checks)
+        backend = self.backend
+        found = backend.choose_tree(checks, slow_checks, speeds, slow_times, settings, integers)
+        if found[0][0] == _FOUND_STEP_ONE:
+            speed = float(speeds[nominal_index])
+            plan = Plan("straight", speed, checks.subgoal.copy(), waypoints=np.array([checks.position, checks.subgoal]),
+                        subgoal_index=checks.subgoal_index, candidate_count=1, chosen=0)
+            if found[0][1]:
+                plan.extras["turn_in_place"] = True
+            if self._inside_shield(plan):
+                return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
+            integers[10] = 0  # the shield refused it: the candidates decide
+            found = backend.choose_tree(checks, slow_checks, speeds, slow_times, settings, integers)
+        found, floats, nodes, facts = found
+        if found[0] != _FOUND_CANDIDATES:
+            return None
+        # Eq. 1's θ and can_follow's heading error from numpy's arctan2, as the reference takes them.
+        angles = np.arctan2(facts[0:4:2], facts[1:4:2])
+        ranking, costs = backend.choose_candidate(checks, floats, nodes, found, facts, angles, settings, integers)
+        leaves, total, ranks = found[2:], costs[7], int(ranking[1])
+        order, follow = ranking[2:2 + ranks], ranking[2 + ranks:]
+        for rank in range(min(ranks, self.config.max_rollouts)):
+            best = int(order[rank])
+            if not math.isfinite(total[best]):
+                break
+            verdict = int(follow[rank])
+            if verdict == 0:
+                continue
+            plan = self._plan_of_nodes(floats, nodes, leaves, best, total, checks)
+            if verdict < 0:  # past the first that follows: only after the shield refused that one
+                verdict = can_follow(plan, checks, self.limits, self.config)
+            elif verdict == 2:
+                plan.extras["turn_in_place"] = True
+            if verdict and self._inside_shield(plan):
+                plan.extras["cost_terms"] = self._cost_terms_of(costs, order, rank, total)
+                node = int(leaves[best])
+                way = Way(int(nodes[node, 1]), int(nodes[node, 2]), int(nodes[node, 3]))
+                return _Chosen(Choice(way, int(np.round(floats[node, 3] * 1000))), plan,
+                               _CompiledCandidates(floats, nodes, leaves, checks.subgoal))
+        return None
+
+    def _cost_terms_of(self, costs: np.ndarray, order: np.ndarray, rank: int, total: np.ndarray) -> dict:
+        """:func:`_cost_terms` from :func:`.kernels.choose_candidate`'s costs (rows: the critics' terms, E): one
+        column each as Python floats, the same values as :meth:`.critics.Costs.breakdown` takes one by one."""
+        names = [critic.name for critic in self.critics] + ["total"]
+        best = int(order[rank])
+        other = int(order[1] if rank == 0 else order[0]) if len(order) > 1 else None
+        runner_up = (dict(zip(names, costs[:7, other].tolist()))
+                     if other is not None and math.isfinite(total[other]) else None)
+        return {"chosen": dict(zip(names, costs[:7, best].tolist())), "runner_up": runner_up}
+
+    def _plan_of_nodes(self, floats, nodes, leaves, k: int, total, checks: LegChecks) -> Plan:
+        """:meth:`_plan_of` from the compiled tree's node store (columns as in :mod:`.kernels`)."""
+        node = int(leaves[k])
+        common = dict(subgoal_index=checks.subgoal_index, candidate_count=len(leaves), candidate_costs=total,
+                      candidate_polylines=[], chosen=k)
+        if floats[node, 7] > 0:
+            speed = float(floats[node, 8])
+            return Plan("wait" if speed == 0.0 else "slow", speed, checks.subgoal.copy(),
+                        waypoints=np.array([checks.position, checks.subgoal]),
+                        extras={"slow_s": float(floats[node, 7]), "speed_after_mps": float(floats[node, 3])}, **common)
+        points = [checks.subgoal]
+        while node >= 0:
+            points.append(floats[node, 0:2])
+            node = int(nodes[node, 0])
+        line = np.array(points[::-1])
+        return Plan("avoid" if len(line) > 2 else "straight", float(floats[int(leaves[k]), 3]), line[1].copy(),
+                    via_points=line[1:-1].copy(), waypoints=line, **common)
 
     def _way_back(self, checks: LegChecks, speed: float) -> _Chosen | None:
         """Beyond the paper (``return_lookahead_m``): off the path line, the paper's step 1 towards the
@@ -211,7 +392,7 @@ class ViaPathPlanner(Planner, name="viapath"):
 
     def _slow_checks(self, checks: LegChecks) -> LegChecks:
         fraction = self.config.slow_leg_inflation
-        if fraction >= 1.0 or not (np.any(checks.obstacles.position_sigma_m) or np.any(checks.obstacles.velocity_sigma_mps)):
+        if fraction >= 1.0 or not (checks.obstacles.position_sigma_m.any() or checks.obstacles.velocity_sigma_mps.any()):
             return checks
         return checks.with_less_inflation(fraction, self.robot_radius_m, self.settings, cap_too=True)
 
