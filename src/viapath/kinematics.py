@@ -108,15 +108,38 @@ def track(state: UnicycleState, target, speed_mps: float, limits: MotionLimits, 
           heading_gain: float = 2.5) -> np.ndarray:
     """Positions (steps, 2) of the robot steering for ``target`` with :func:`steer_towards`, each
     step as :func:`step` moves it (scalar arithmetic: this runs inside the planning cycle)."""
+    # steer_towards and _arc inlined, operation for operation (the positions are bit for bit theirs:
+    # tests/test_kinematics.py): a candidate that fails is rolled out in full, up to max_rollouts of them
+    # in a cycle without a free candidate, and the calls cost more than the arithmetic (docs/speed.md).
     x, y, heading = float(state.x), float(state.y), float(state.heading_rad)
     speed, turn = float(state.speed_mps), float(state.turn_rate_radps)
     target_x, target_y = float(target[0]), float(target[1])
     dv, dw = limits.max_accel_mps2 * dt_s, limits.max_turn_accel_radps2 * dt_s
-    positions = np.empty((steps, 2))
-    for k in range(steps):
-        v_cmd, w_cmd = steer_towards(x, y, heading, target_x, target_y, speed_mps, limits, heading_gain)
-        speed += _clip(v_cmd - speed, -dv, dv)
-        turn += _clip(w_cmd - turn, -dw, dw)
-        x, y, heading = _arc(x, y, heading, speed, turn, dt_s)
-        positions[k] = x, y
-    return positions
+    max_turn, top_speed = limits.max_turn_rate_radps, min(speed_mps, limits.max_speed_mps)
+    quarter_turn, eighth_turn = math.pi / 2, math.pi / 4
+    atan2, sin, cos = math.atan2, math.sin, math.cos
+    standing = speed_mps <= 0
+    positions = []
+    for _ in range(steps):
+        dx, dy = target_x - x, target_y - y
+        if dx * dx + dy * dy < 1e-18 or standing:
+            v_cmd = w_cmd = 0.0
+        else:
+            error = atan2(dy, dx) - heading
+            error = atan2(sin(error), cos(error))
+            w_cmd = heading_gain * error
+            w_cmd = -max_turn if w_cmd < -max_turn else max_turn if w_cmd > max_turn else w_cmd
+            scale = (quarter_turn - abs(error)) / eighth_turn
+            v_cmd = top_speed * (0.0 if scale < 0.0 else 1.0 if scale > 1.0 else scale)
+        change = v_cmd - speed
+        speed += -dv if change < -dv else dv if change > dv else change
+        change = w_cmd - turn
+        turn += -dw if change < -dw else dw if change > dw else change
+        new_heading = heading + turn * dt_s
+        half = 0.5 * turn * dt_s
+        chord = speed * dt_s * (1.0 - half * half / 6.0 if abs(half) < 1e-6 else sin(half) / half)
+        x += chord * cos(heading + half)
+        y += chord * sin(heading + half)
+        heading = atan2(sin(new_heading), cos(new_heading))
+        positions.append((x, y))
+    return np.array(positions).reshape(steps, 2)
