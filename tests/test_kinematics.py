@@ -64,3 +64,42 @@ def test_track_is_bit_for_bit_the_closed_loop():
             expected.append((state.x, state.y))
         assert positions.shape == (steps, 2)
         np.testing.assert_array_equal(positions, np.array(expected), err_msg=f"case {case}")
+
+
+def _rollout_reference(state, commands, limits, dt_s, steps):
+    """:func:`rollout` as it was written first (np.clip, every sine and cosine taken where it is used)."""
+    commands = np.asarray(commands, dtype=float).reshape(-1, 2)
+    v_cmd = np.clip(commands[:, 0], 0.0, limits.max_speed_mps)
+    w_cmd = np.clip(commands[:, 1], -limits.max_turn_rate_radps, limits.max_turn_rate_radps)
+    ramp = np.arange(1, steps + 1)
+    speed0, turn0 = float(state.speed_mps), float(state.turn_rate_radps)
+    dv, dw = limits.max_accel_mps2 * dt_s * ramp, limits.max_turn_accel_radps2 * dt_s * ramp
+    speed = speed0 + np.clip((v_cmd - speed0)[:, None], -dv, dv)
+    turn = turn0 + np.clip((w_cmd - turn0)[:, None], -dw, dw)
+    heading_after = float(state.heading_rad) + np.cumsum(turn * dt_s, axis=1)
+    heading_before = np.concatenate([np.full((len(commands), 1), float(state.heading_rad)), heading_after[:, :-1]],
+                                    axis=1)
+    straight = np.abs(turn) < 1e-9
+    radius = speed / np.where(straight, 1.0, turn)
+    dx = np.where(straight, speed * dt_s * np.cos(heading_before), radius * (np.sin(heading_after) - np.sin(heading_before)))
+    dy = np.where(straight, speed * dt_s * np.sin(heading_before), -radius * (np.cos(heading_after) - np.cos(heading_before)))
+    positions = np.empty((len(commands), steps, 2))
+    positions[..., 0] = float(state.x) + np.cumsum(dx, axis=1)
+    positions[..., 1] = float(state.y) + np.cumsum(dy, axis=1)
+    return positions
+
+
+def test_rollout_is_bit_for_bit_its_first_form():
+    """:func:`rollout` takes each sine and cosine once and clamps with two ufuncs: the positions must be
+    exactly those of its first form (1 000 seeded cases: the escape's fan and random commands, commands
+    outside the limits, standing and turning on the spot, other limits and step counts)."""
+    rng = np.random.default_rng(6)
+    fan = np.stack([grid.ravel() for grid in np.meshgrid([0.0, 0.1, 0.2, 0.3, 0.4, 0.5], np.linspace(-2, 2, 9))], 1)
+    for case in range(1000):
+        limits = MotionLimits() if case % 3 else MotionLimits(*rng.uniform([0.2, 0.2, 0.5, 1.0], [1.5, 2.0, 3.0, 9.0]))
+        start = UnicycleState(*rng.uniform(-5, 5, 2), rng.uniform(-3.3, 3.3), rng.uniform(0, limits.max_speed_mps),
+                              rng.uniform(-limits.max_turn_rate_radps, limits.max_turn_rate_radps) if case % 5 else 0.0)
+        commands = fan if case % 2 else rng.uniform([-0.3, -3.0], [1.0, 3.0], (int(rng.integers(1, 60)), 2))
+        dt, steps = (0.1, 30) if case % 4 else (rng.uniform(0.02, 0.3), int(rng.integers(1, 50)))
+        np.testing.assert_array_equal(rollout(start, commands, limits, dt, steps),
+                                      _rollout_reference(start, commands, limits, dt, steps), err_msg=f"case {case}")

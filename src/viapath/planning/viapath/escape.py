@@ -51,9 +51,7 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     """Commands (v, ω), where each leaves the robot, and the score of each (higher is better)."""
     position = checks.position
     top = min(max(config.speeds), limits.max_speed_mps) if config.calm_escape else limits.max_speed_mps
-    speeds = np.unique(np.concatenate([[0.0], np.minimum(config.speeds, top), [top]]))
-    turns = np.linspace(-limits.max_turn_rate_radps, limits.max_turn_rate_radps, 9)
-    commands = np.stack([grid.ravel() for grid in np.meshgrid(speeds, turns)], axis=1)
+    commands = _fan(tuple(config.speeds), top, limits.max_turn_rate_radps)
     dt = config.escape_dt_s
     steps = max(1, int(round(config.escape_s / dt)))
     state = UnicycleState(float(position[0]), float(position[1]), float(checks.heading_rad),
@@ -81,11 +79,14 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     else:
         centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
         reach = checks.check_radii[near] + checks.growth[near] * np.minimum(times[:, None], checks.growth_until_s[near])
-        offset = positions[:, :, None, :] - centres[None]
-        gap = np.hypot(offset[..., 0], offset[..., 1]) - reach[None]  # (K, S, N)
-        touching = (gap < 0) & ~overlapping
-        first = np.where(touching.any(axis=1), np.argmax(touching, axis=1), steps)  # (K, N)
-        time_to_contact = np.min(first, axis=1, initial=steps) * dt
+        # x and y apart: the same differences as of the (K, S, N, 2) offsets, without strided copies.
+        gap = np.hypot(positions[:, :, None, 0] - centres[None, :, :, 0],
+                       positions[:, :, None, 1] - centres[None, :, :, 1])
+        gap -= reach[None]  # (K, S, N)
+        # The first step at which any person not overlapped now is touched: the earliest over the
+        # people of each one's first step.
+        touched = ((gap < 0) & ~overlapping).any(axis=2)  # (K, S)
+        time_to_contact = np.where(touched.any(axis=1), np.argmax(touched, axis=1), steps) * dt
         if overlapping.any():
             gap_min, gap_last = np.min(gap[..., overlapping], axis=1), gap[:, -1, overlapping]
     if overlapping.any():
@@ -106,3 +107,22 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
         score = score - config.escape_continuity_s * np.minimum(change, 1.0)
     score = np.where(within_bound | (commands[:, 0] == 0.0), score, -np.inf)
     return commands, positions[:, -1], score
+
+
+_FANS: dict = {}
+
+
+def _fan(speeds: tuple, top: float, max_turn_rate_radps: float) -> np.ndarray:
+    """The escape's commands (v, ω): standing, the speed set up to ``top`` and ``top``, each with 9 turn
+    rates across the limits. The same every cycle of a planner, so made once (read-only)."""
+    key = (speeds, top, max_turn_rate_radps)
+    commands = _FANS.get(key)
+    if commands is None:
+        speed_grid = np.unique(np.concatenate([[0.0], np.minimum(speeds, top), [top]]))
+        turns = np.linspace(-max_turn_rate_radps, max_turn_rate_radps, 9)
+        commands = np.stack([grid.ravel() for grid in np.meshgrid(speed_grid, turns)], axis=1)
+        commands.flags.writeable = False
+        if len(_FANS) > 64:  # a long-lived process trying many settings
+            _FANS.clear()
+        _FANS[key] = commands
+    return commands

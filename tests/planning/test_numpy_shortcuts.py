@@ -1,0 +1,218 @@
+"""The numpy path's shortcuts for its slowest cycles (docs/speed.md, "numpy p99 (wave 6)") change no value.
+
+Each test holds a rewritten function to its earlier form, kept here verbatim as the reference, bit for
+bit, on seeded random situations: the robot near the path (three paths), 0-14 people around it, with
+and without uncertainty, some overlapping the robot, so that both the escape's terms (time to contact,
+separation) and roll-outs that pass, fail and turn on the spot come up.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from tests.test_kinematics import _rollout_reference
+from viapath import DesignatedPath, Obstacles, Observation, RobotState
+from viapath.geometry import wrap_angle
+from viapath.kinematics import UnicycleState
+from viapath.observation import Command
+from viapath.planning import make_planner
+from viapath.planning.base import Plan
+from viapath.planning.viapath.checks import LegChecks
+from viapath.planning.viapath.escape import escape_scores
+from viapath.planning.viapath.follow import can_follow
+from viapath.planning.viapath.planner import ViaPathConfig
+
+PATHS = [
+    DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
+    DesignatedPath([[0.0, 0.0], [3.0, 0.0], [3.0, 4.0]], half_width_m=1.2),
+    DesignatedPath([[0.0, 0.0], [2.5, 0.5], [5.0, -0.5], [8.0, 0.0]], half_width_m=1.5),
+]
+
+
+def _situations(count: int, seed: int):
+    """(planner, checks) of ``count`` random situations (a new planner per path, reset each time)."""
+    rng = np.random.default_rng(seed)
+    planners = [make_planner("viapath", path, nominal_speed_mps=0.2, backend="numpy") for path in PATHS]
+    for case in range(count):
+        planner = planners[case % len(PATHS)]
+        n = int(rng.integers(0, 15))
+        robot = np.array([rng.uniform(-0.5, 3.0), rng.uniform(-1.3, 1.3)])
+        distance = rng.uniform(0.2 if case % 4 == 0 else 0.6, 5.0, n)
+        bearing = rng.uniform(-np.pi, np.pi, n)
+        positions = robot + np.stack([distance * np.cos(bearing), distance * np.sin(bearing)], 1)
+        velocities = rng.uniform(-1.2, 1.2, (n, 2))
+        sigma = rng.uniform(0.0, 0.1, n) if case % 2 else None
+        observation = Observation(0.0, RobotState(robot, rng.uniform(-np.pi, np.pi), rng.uniform(0, 0.5),
+                                                  rng.uniform(-1, 1)),
+                                  Obstacles(positions, velocities, rng.uniform(0.2, 0.35, n), position_sigma_m=sigma,
+                                            velocity_sigma_mps=sigma))
+        planner.reset()
+        situation = planner.situation(observation)
+        yield planner, LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
+
+
+# -- the escape ------------------------------------------------------------------------------------
+
+
+def _escape_scores_reference(checks, limits, config, previous=None):
+    """:func:`viapath.planning.viapath.escape.escape_scores`' numpy path as first written."""
+    position = checks.position
+    top = min(max(config.speeds), limits.max_speed_mps) if config.calm_escape else limits.max_speed_mps
+    speeds = np.unique(np.concatenate([[0.0], np.minimum(config.speeds, top), [top]]))
+    turns = np.linspace(-limits.max_turn_rate_radps, limits.max_turn_rate_radps, 9)
+    commands = np.stack([grid.ravel() for grid in np.meshgrid(speeds, turns)], axis=1)
+    dt = config.escape_dt_s
+    steps = max(1, int(round(config.escape_s / dt)))
+    state = UnicycleState(float(position[0]), float(position[1]), float(checks.heading_rad),
+                          float(checks.speed_mps), float(checks.turn_rate_radps))
+    positions = _rollout_reference(state, commands, limits, dt, steps)  # (K, S, 2)
+    times = dt * np.arange(1, steps + 1)
+    excess = checks.path.corridor_excess(positions.reshape(-1, 2)).reshape(len(commands), steps)
+    inside = np.all(excess <= checks.corridor_tolerance_m, axis=1)
+    within_bound = np.max(excess, axis=1) <= max(config.escape_max_excess_m, checks.corridor_tolerance_m)
+
+    horizon = steps * dt
+    travel = float(np.max(np.hypot(*(positions - position).reshape(-1, 2).T)))
+    obstacles = checks.obstacles
+    gap_all = np.hypot(*(position - obstacles.positions).T) - checks.check_radii
+    growth_all = checks.growth * np.minimum(horizon, checks.growth_until_s)
+    near = gap_all - growth_all - np.hypot(*obstacles.velocities.T) * horizon - travel <= 0
+    positions_obs, velocities_obs = obstacles.positions[near], obstacles.velocities[near]
+    gap_now = gap_all[near]
+    overlapping = gap_now <= 0
+    centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
+    reach = checks.check_radii[near] + checks.growth[near] * np.minimum(times[:, None], checks.growth_until_s[near])
+    offset = positions[:, :, None, :] - centres[None]
+    gap = np.hypot(offset[..., 0], offset[..., 1]) - reach[None]  # (K, S, N)
+    touching = (gap < 0) & ~overlapping
+    first = np.where(touching.any(axis=1), np.argmax(touching, axis=1), steps)  # (K, N)
+    time_to_contact = np.min(first, axis=1, initial=steps) * dt
+    if overlapping.any():
+        gap_min, gap_last = np.min(gap[..., overlapping], axis=1), gap[:, -1, overlapping]
+        deeper = gap_min - gap_now[overlapping]
+        still_inside = gap_last
+        separation = np.sum(np.minimum(deeper, 0.0) + np.minimum(still_inside, 0.0), axis=1)
+    else:
+        separation = np.zeros(len(commands))
+    toward = checks.subgoal - position
+    toward = toward / max(float(np.hypot(*toward)), 1e-9)
+    progress = (positions[:, -1] - position) @ toward / config.escape_s
+    free = time_to_contact >= steps * dt
+    score = (1e2 * separation + 20.0 * free + 2.0 * inside + time_to_contact
+             - np.where(free, 0.005, 0.5) * commands[:, 0] + 0.01 * progress)
+    if config.calm_escape and previous is not None:
+        change = (np.abs(commands[:, 0] - previous.speed_mps) / max(top, 1e-9)
+                  + np.abs(commands[:, 1] - previous.turn_rate_radps) / limits.max_turn_rate_radps)
+        score = score - config.escape_continuity_s * np.minimum(change, 1.0)
+    score = np.where(within_bound | (commands[:, 0] == 0.0), score, -np.inf)
+    return commands, positions[:, -1], score
+
+
+def test_escape_scores_are_bit_for_bit_the_first_form():
+    """1 200 situations (with and without last cycle's escape command, with and without a calm escape)."""
+    rng = np.random.default_rng(3)
+    overlapped = contact = 0
+    hasty = ViaPathConfig(calm_escape=False)
+    for case, (planner, checks) in enumerate(_situations(1200, seed=11)):
+        config = planner.config if case % 5 else hasty
+        previous = Command(*rng.uniform([0.0, -2.0], [0.5, 2.0])) if case % 3 == 0 else None
+        got = escape_scores(checks, planner.limits, config, previous)
+        expected = _escape_scores_reference(checks, planner.limits, config, previous)
+        for a, b in zip(got, expected):
+            np.testing.assert_array_equal(a, b, err_msg=f"case {case}")
+        gaps = np.hypot(*(checks.position - checks.obstacles.positions).T) - checks.check_radii
+        overlapped += bool(np.any(gaps <= 0))
+        contact += bool(np.any(expected[2][np.isfinite(expected[2])] < 20.0))
+    assert overlapped > 100 and contact > 100  # both terms came up
+
+
+# -- the roll-outs of candidates -------------------------------------------------------------------
+
+
+def _clear_reference(checks, positions, dt):
+    """:meth:`LegChecks.clear` as first written."""
+    if len(checks.obstacles) == 0:
+        return True
+    times = dt * np.arange(1, len(positions) + 1)[:, None]
+    obstacles = checks.obstacles
+    centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
+    reach = checks.check_radii + checks.growth * np.minimum(times, checks.growth_until_s)
+    distance = np.hypot(*(positions[:, None, :] - centres).transpose(2, 0, 1))
+    now = np.hypot(*(checks.position - obstacles.positions).T)
+    return bool(np.all(distance >= np.minimum(reach, now - 1e-3)))
+
+
+def _can_follow_reference(plan, checks, limits, config):
+    """:func:`can_follow` as first written (every roll-out made, none remembered)."""
+    offset = plan.target - checks.position
+    heading_error = abs(float(wrap_angle(np.arctan2(offset[1], offset[0]) - checks.heading_rad)))
+    speed_change = abs(plan.speed_mps - checks.speed_mps)
+    if np.hypot(*offset) < 1e-6 or (heading_error <= config.rollout_heading_rad
+                                      and speed_change <= limits.max_accel_mps2 * config.rollout_dt_s * 2):
+        return True
+    dt = config.rollout_dt_s
+    steps = max(1, int(round(config.rollout_s / dt)))
+    state = UnicycleState(float(checks.position[0]), float(checks.position[1]), float(checks.heading_rad),
+                          checks.speed_mps, checks.turn_rate_radps)
+    positions = checks.backend.track(state, plan.target, plan.speed_mps, limits, dt, steps, config.heading_gain)
+    if not _clear_reference(checks, positions, dt):
+        return False
+    if np.all(checks.inside(positions)):
+        return True
+    turn_s = heading_error / limits.max_turn_rate_radps + 1.0
+    standing = np.repeat(checks.position[None], max(1, int(np.ceil(turn_s / dt))), axis=0)
+    if heading_error > config.turn_in_place_min_rad and _clear_reference(checks, standing, dt):
+        plan.extras["turn_in_place"] = True
+        return True
+    return False
+
+
+def test_clear_is_bit_for_bit_the_first_form():
+    """The obstacles' part of :meth:`LegChecks.clear` is made once per step count and cycle: its arrays
+    against the first form's, bit for bit, and the verdicts of random roll-outs against the first form's:
+    near the people (so that both verdicts come up) and with one step exactly on a person's limit (where
+    a difference in the last bit of a distance would change the verdict)."""
+    rng = np.random.default_rng(5)
+    verdicts = set()
+    for case, (_, checks) in enumerate(_situations(600, seed=12)):
+        for kind in range(4):
+            steps, dt = int(rng.choice([20, 5, 12])), float(rng.choice([0.1, 0.1, 0.05]))
+            positions = checks.position + np.cumsum(rng.normal(0.0, 0.06, (steps, 2)), axis=0)
+            if len(checks.obstacles):
+                obstacles = checks.obstacles
+                times = dt * np.arange(1, steps + 1)[:, None]
+                centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
+                reach = checks.check_radii + checks.growth * np.minimum(times, checks.growth_until_s)
+                limit = np.minimum(reach, np.hypot(*(checks.position - obstacles.positions).T) - 1e-3)
+                cached = checks._clear_limits(steps, dt)
+                for a, b in zip(cached, (centres[..., 0], centres[..., 1], limit)):
+                    np.testing.assert_array_equal(a, b)
+                if kind == 3:  # one step on the boundary of one person's limit
+                    s, j, angle = int(rng.integers(steps)), int(rng.integers(len(obstacles))), rng.uniform(0, 2 * np.pi)
+                    positions[s] = centres[s, j] + abs(limit[s, j]) * np.array([np.cos(angle), np.sin(angle)])
+            expected = _clear_reference(checks, positions, dt)
+            assert checks.clear(positions, dt) is expected, f"case {case}"
+            verdicts.add(expected)
+    assert verdicts == {True, False}
+
+
+def test_can_follow_remembers_only_what_it_would_compute_again():
+    """Plans of a cycle towards random targets, many sharing target and speed (as slow/wait candidates
+    and chains through one via point do): each verdict and turn-in-place mark equal those of the first
+    form, which rolls every one out afresh."""
+    rng = np.random.default_rng(8)
+    kinds = set()
+    for case, (planner, checks) in enumerate(_situations(500, seed=13)):
+        fresh = replace(checks)  # the same checks, nothing remembered
+        targets = checks.position + rng.uniform(-2.5, 2.5, (3, 2))
+        speeds = rng.choice([0.0, 0.1, 0.2, 0.3, 0.5], 3)
+        for _ in range(8):
+            target, speed = targets[rng.integers(0, 3)], float(speeds[rng.integers(0, 3)])
+            plan, reference = (Plan("avoid", speed, target.copy()) for _ in range(2))
+            got = can_follow(plan, checks, planner.limits, planner.config)
+            expected = _can_follow_reference(reference, fresh, planner.limits, planner.config)
+            assert got is expected and plan.extras == reference.extras, f"case {case}"
+            kinds.add((expected, bool(reference.extras.get("turn_in_place"))))
+    assert kinds == {(True, False), (True, True), (False, False)}  # passed, turned on the spot, failed
