@@ -67,7 +67,7 @@ class DesignatedPath:
         """Per point and segment: clamped arc position along the segment and offset from it."""
         rel = points[..., None, :] - self.segment_starts  # (..., S, 2)
         along = np.sum(rel * self.segment_directions, axis=-1)
-        along_clamped = np.clip(along, 0.0, self.segment_lengths_m)
+        along_clamped = np.minimum(np.maximum(along, 0.0), self.segment_lengths_m)  # np.clip without its dispatch
         closest = self.segment_starts + along_clamped[..., None] * self.segment_directions
         offset = points[..., None, :] - closest
         distance = np.hypot(offset[..., 0], offset[..., 1])

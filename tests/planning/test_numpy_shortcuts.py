@@ -53,6 +53,13 @@ def _situations(count: int, seed: int):
         yield planner, LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
 
 
+def _same_bits(a, b) -> bool:
+    a, b = np.asarray(a), np.asarray(b)
+    if a.dtype.kind == "f" and a.dtype == b.dtype and a.shape == b.shape:
+        return bool(np.array_equal(a.view(np.int64), b.view(np.int64)))
+    return a.dtype == b.dtype and np.array_equal(a, b)
+
+
 # -- the escape ------------------------------------------------------------------------------------
 
 
@@ -120,8 +127,7 @@ def test_escape_scores_are_bit_for_bit_the_first_form():
         previous = Command(*rng.uniform([0.0, -2.0], [0.5, 2.0])) if case % 3 == 0 else None
         got = escape_scores(checks, planner.limits, config, previous)
         expected = _escape_scores_reference(checks, planner.limits, config, previous)
-        for a, b in zip(got, expected):
-            np.testing.assert_array_equal(a, b, err_msg=f"case {case}")
+        assert all(_same_bits(a, b) for a, b in zip(got, expected)), f"case {case}"
         gaps = np.hypot(*(checks.position - checks.obstacles.positions).T) - checks.check_radii
         overlapped += bool(np.any(gaps <= 0))
         contact += bool(np.any(expected[2][np.isfinite(expected[2])] < 20.0))
@@ -216,3 +222,114 @@ def test_can_follow_remembers_only_what_it_would_compute_again():
             assert got is expected and plan.extras == reference.extras, f"case {case}"
             kinds.add((expected, bool(reference.extras.get("turn_in_place"))))
     assert kinds == {(True, False), (True, True), (False, False)}  # passed, turned on the spot, failed
+
+
+# -- the leg checks and via points of the candidate tree -------------------------------------------
+
+
+def _via_options_reference(starts, start_times, speeds, obstacle_positions, obstacle_velocities, via_radii, growth,
+                           growth_until_s, envelope_m, max_time_s):
+    """:func:`viapath.geometry.via_options` as first written."""
+    from viapath.geometry import VIA_SIDES, tangent_vectors, via_times
+
+    velocity = obstacle_velocities
+    centre_now = obstacle_positions + velocity * start_times[:, None]
+    reach_time = np.hypot(*(centre_now - starts).T) / speeds
+    passing_time = np.minimum(start_times + reach_time, growth_until_s)
+    radius = via_radii + growth * passing_time + envelope_m
+    distance = np.hypot(*(centre_now - starts).T)
+    radius = np.maximum(np.minimum(radius, 0.98 * distance), 0.0)
+    w, valid = tangent_vectors(starts[:, None, :], centre_now[:, None, :], radius[:, None], VIA_SIDES[None, :2])
+    t_early, t_late = via_times(w, velocity[:, None, :], speeds[:, None])
+    t_via = np.concatenate([t_early, t_late], axis=1)
+    w = np.concatenate([w, w], axis=1)
+    ok = np.broadcast_to(valid, t_early.shape)
+    ok = np.concatenate([ok, ok], axis=1) & (t_via <= max_time_s)
+    pair, option = np.nonzero(ok)
+    t_k = t_via[pair, option]
+    leg_velocity = (w[pair, option] + velocity[pair] * t_k[:, None]) / t_k[:, None]
+    via = starts[pair] + leg_velocity * t_k[:, None]
+    return pair, option, t_k, leg_velocity, via
+
+
+def _legs_first_contact_reference(starts, start_times, velocities, durations, obstacle_positions, obstacle_velocities,
+                                  radii, growth=0.0, growth_until_s=np.inf, leg_radii_m=None):
+    """:func:`viapath.geometry.legs_first_contact` as first written (with its ``_first_contact``)."""
+
+    def first_contact(px, py, vx, vy, radius, growth, duration):
+        if np.any(growth):
+            a = vx * vx + vy * vy - growth * growth
+            b = px * vx + py * vy - radius * growth
+        else:
+            a = vx * vx + vy * vy
+            b = px * vx + py * vy
+        c = px * px + py * py - radius * radius
+        discriminant = b * b - a * c
+        denominator = np.sqrt(np.maximum(discriminant, 0.0)) - b
+        ok = (discriminant >= 0) & (denominator > 0)
+        tau = c / np.where(ok, denominator, 1.0)
+        tau = np.where(ok & (tau <= duration), tau, np.inf)
+        return np.where(c <= 0, 0.0, tau)
+
+    if leg_radii_m is not None:
+        radii = np.asarray(radii, dtype=float)[None, :] + np.asarray(leg_radii_m, dtype=float)[:, None]
+    t0 = np.asarray(start_times, dtype=float)[:, None]
+    duration = np.asarray(durations, dtype=float)[:, None]
+    growth = np.asarray(growth, dtype=float)
+    ox, oy = obstacle_positions[:, 0], obstacle_positions[:, 1]
+    ovx, ovy = obstacle_velocities[:, 0], obstacle_velocities[:, 1]
+    px = starts[:, 0:1] - (ox + ovx * t0)
+    py = starts[:, 1:2] - (oy + ovy * t0)
+    vx = velocities[:, 0:1] - ovx
+    vy = velocities[:, 1:2] - ovy
+    until = np.asarray(growth_until_s, dtype=float)
+    if not np.any(growth) or not np.any(np.isfinite(until)):
+        return first_contact(px, py, vx, vy, radii + growth * t0, growth, duration)
+    cone_duration = np.clip(until - t0, 0.0, duration)
+    early = first_contact(px, py, vx, vy, radii + growth * np.minimum(t0, until), np.where(until > t0, growth, 0.0),
+                          cone_duration)
+    full_growth = growth * np.where(np.isfinite(until), until, 0.0)
+    late = first_contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy, radii + full_growth, 0.0,
+                         duration - cone_duration)
+    late = np.where(t0 + duration >= until, late + cone_duration, np.inf)
+    return np.where(np.isfinite(early), early, late)
+
+
+def test_via_options_and_leg_contacts_are_bit_for_bit_the_first_form():
+    """Random nodes (some on or inside an obstacle's disc, some at rest relative to it) against random
+    people, cones growing or not, capped or not, with and without a braking envelope: the via options
+    and each leg's first contact (of the legs to those via points and of random legs) bit for bit."""
+    from viapath.geometry import legs_first_contact, via_options
+
+    rng = np.random.default_rng(21)
+    options = contacts = 0
+    for case in range(1500):
+        pairs, n = int(rng.integers(1, 30)), int(rng.integers(1, 12))
+        starts = rng.uniform(-3, 3, (pairs, 2))
+        times = rng.uniform(0, 4, pairs) * (case % 3 > 0)
+        speeds = rng.choice([0.1, 0.2, 0.3, 0.5], pairs)
+        positions = rng.uniform(-4, 4, (pairs, 2))
+        if case % 7 == 0:
+            positions[: pairs // 2] = starts[: pairs // 2]  # a node on the obstacle
+        velocities = rng.uniform(-1.2, 1.2, (pairs, 2)) * (case % 11 > 0)
+        radii = rng.uniform(0.4, 0.8, pairs)
+        growth = rng.uniform(0, 0.2, pairs) * (case % 2)
+        until = rng.choice([np.inf, 1.5, 3.0], pairs)
+        envelope = rng.uniform(0, 0.3, pairs) * (case % 5 == 0)
+        arguments = (starts, times, speeds, positions, velocities, radii, growth, until, envelope, 30.0)
+        got, expected = via_options(*arguments), _via_options_reference(*arguments)
+        assert all(_same_bits(a, b) for a, b in zip(got, expected)), f"case {case}"
+        options += len(expected[0])
+
+        people = (rng.uniform(-4, 4, (n, 2)), rng.uniform(-1.2, 1.2, (n, 2)), rng.uniform(0.4, 0.8, n),
+                  rng.uniform(0, 0.2, n) * (case % 2), rng.choice([np.inf, 1.5, 3.0], n) if case % 4 else np.inf)
+        pair = expected[0]
+        legs = [(starts[pair], times[pair], expected[3], expected[2]),
+                (starts, times, rng.uniform(-0.5, 0.5, (pairs, 2)), rng.uniform(0, 8, pairs))]
+        for leg in legs:
+            leg_radii = rng.uniform(0, 0.3, len(leg[0])) if case % 3 == 0 else None
+            got = legs_first_contact(*leg, *people, leg_radii)
+            expected_contact = _legs_first_contact_reference(*leg, *people, leg_radii)
+            assert _same_bits(got, expected_contact), f"case {case}"
+            contacts += int(np.isfinite(expected_contact).sum())
+    assert options > 5000 and contacts > 5000

@@ -137,7 +137,7 @@ class LegChecks:
         if len(self.obstacles) == 0:
             return np.full((len(starts), 0), np.inf)
         horizon_s = self.horizon_s if horizon_s is None else horizon_s
-        checked = np.clip(horizon_s - start_times, 0.0, durations)
+        checked = np.minimum(np.maximum(horizon_s - start_times, 0.0), durations)  # np.clip, without its dispatch
         envelope = None
         if keep_envelope and self.envelope_accel_mps2 > 0:
             envelope = self.envelope_m(np.hypot(velocities[:, 0], velocities[:, 1]))
@@ -254,7 +254,7 @@ class LegChecks:
         inside = np.zeros(len(starts), dtype=bool)
         for i in (i for i in (self.subgoal_index - 1, self.subgoal_index) if i < len(path.segment_lengths_m)):
             rel = starts - path.segment_starts[i]
-            along = np.clip(rel @ path.segment_directions[i], 0.0, path.segment_lengths_m[i])
+            along = np.minimum(np.maximum(rel @ path.segment_directions[i], 0.0), path.segment_lengths_m[i])
             gap = np.hypot(*(rel - along[:, None] * path.segment_directions[i]).T) - path.half_widths_m[i]
             inside |= gap <= self.corridor_tolerance_m
         if not inside.all():
