@@ -134,6 +134,35 @@ def test_escape_scores_are_bit_for_bit_the_first_form():
     assert overlapped > 100 and contact > 100  # both terms came up
 
 
+def test_touching_is_hypot_minus_reach_below_zero():
+    """The escape's contact test without hypot where the squared distance is certain: against
+    ``np.hypot(dx, dy) - reach < 0`` on 2 000 batches of offsets on the reach's circle to within a few ulps
+    (where only hypot can tell), near it, far inside and outside, with reaches tiny (squares underflow),
+    huge (squares overflow), zero, negative, infinite and NaN, and offsets NaN, infinite and -0.0."""
+    from viapath.planning.viapath.escape import touching
+
+    rng = np.random.default_rng(9)
+    special = np.array([0.0, -0.0, 1e-300, 1e-170, 1e-150, 1e150, 1e170, 1e300, -0.3, np.inf, -np.inf, np.nan])
+    for case in range(2000):
+        reach = rng.uniform(0.2, 1.2, (6, 5)) * 10.0 ** rng.choice([0, 0, 0, -160, -300, 160], (6, 5))
+        if case % 4 == 0:
+            reach.flat[rng.integers(0, reach.size, 3)] = rng.choice(special, 3)
+        angle = rng.uniform(0, 2 * np.pi, (7, 6, 5))
+        scale = reach * (1.0 + rng.integers(-4, 5, (7, 6, 5)) * 2.0**-52 * rng.choice([1, 1, 1e3, 1e7, 1e9, 1e12]))
+        dx, dy = scale * np.cos(angle), scale * np.sin(angle)
+        if case % 3 == 0:
+            dx.flat[rng.integers(0, dx.size, 4)] = rng.choice(special, 4)
+            dy.flat[rng.integers(0, dy.size, 4)] = rng.choice(special, 4)
+        with np.errstate(all="ignore"):
+            expected = np.hypot(dx, dy) - reach < 0
+            got = touching(dx, dy, reach)
+        assert np.array_equal(got, expected), f"case {case}"
+    # and exactly on the circle: hypot decides
+    reach = np.array([0.5])
+    assert not touching(np.array([0.5]), np.array([0.0]), reach)[0]
+    assert touching(np.array([np.nextafter(0.5, 0)]), np.array([0.0]), reach)[0]
+
+
 # -- the roll-outs of candidates -------------------------------------------------------------------
 
 
@@ -333,3 +362,35 @@ def test_via_options_and_leg_contacts_are_bit_for_bit_the_first_form():
             assert _same_bits(got, expected_contact), f"case {case}"
             contacts += int(np.isfinite(expected_contact).sum())
     assert options > 5000 and contacts > 5000
+
+
+# -- the corridor ----------------------------------------------------------------------------------
+
+
+def _segment_geometry_reference(path, points):
+    """:meth:`DesignatedPath._segment_geometry` as first written."""
+    rel = points[..., None, :] - path.segment_starts
+    along = np.sum(rel * path.segment_directions, axis=-1)
+    along_clamped = np.clip(along, 0.0, path.segment_lengths_m)
+    closest = path.segment_starts + along_clamped[..., None] * path.segment_directions
+    offset = points[..., None, :] - closest
+    return along, along_clamped, np.hypot(offset[..., 0], offset[..., 1])
+
+
+def test_segment_geometry_is_the_first_form():
+    """Few and many points (the escape's 1 620), in 1-D and 2-D batches, some on the waypoints, some with
+    coordinates of -0.0, on the three paths: the distances bit for bit, the arc positions equal (np.clip
+    and np.sum may give a zero another sign), and so every corridor figure the planner uses."""
+    rng = np.random.default_rng(4)
+    for case in range(600):
+        path = PATHS[case % len(PATHS)]
+        shape = [(1,), (20,), (70,), (1620,), (30, 12), (3, 40)][case % 6]
+        points = rng.uniform(-3, 9, (*shape, 2))
+        flat = points.reshape(-1, 2)
+        flat[: len(flat) // 10] = path.waypoints[rng.integers(0, len(path.waypoints), len(flat) // 10)]
+        flat[-3:] *= -0.0 if case % 2 else 1.0
+        got, expected = path._segment_geometry(points), _segment_geometry_reference(path, points)
+        assert _same_bits(got[2], expected[2]), f"case {case}"
+        assert np.array_equal(got[0], expected[0]) and np.array_equal(got[1], expected[1]), f"case {case}"
+        excess = np.min(expected[2] - path.half_widths_m, axis=-1)
+        assert _same_bits(path.corridor_excess(points), excess), f"case {case}"

@@ -80,15 +80,15 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
         centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
         reach = checks.check_radii[near] + checks.growth[near] * np.minimum(times[:, None], checks.growth_until_s[near])
         # x and y apart: the same differences as of the (K, S, N, 2) offsets, without strided copies.
-        gap = np.hypot(positions[:, :, None, 0] - centres[None, :, :, 0],
-                       positions[:, :, None, 1] - centres[None, :, :, 1])
-        gap -= reach[None]  # (K, S, N)
-        # The first step at which any person not overlapped now is touched: the earliest over the
-        # people of each one's first step.
-        touched = ((gap < 0) & ~overlapping).any(axis=2)  # (K, S)
+        dx = positions[:, :, None, 0] - centres[None, :, :, 0]  # (K, S, N)
+        dy = positions[:, :, None, 1] - centres[None, :, :, 1]
+        # The first step at which any person not overlapped now is touched (gap < 0): the earliest over
+        # the people of each one's first step.
+        touched = (touching(dx, dy, reach) & ~overlapping).any(axis=2)  # (K, S)
         time_to_contact = np.where(touched.any(axis=1), np.argmax(touched, axis=1), steps) * dt
         if overlapping.any():
-            gap_min, gap_last = np.min(gap[..., overlapping], axis=1), gap[:, -1, overlapping]
+            gap = np.hypot(dx[..., overlapping], dy[..., overlapping]) - reach[:, overlapping]  # (K, S, M)
+            gap_min, gap_last = np.min(gap, axis=1), gap[:, -1]
     if overlapping.any():
         deeper = gap_min - gap_now[overlapping]
         still_inside = gap_last
@@ -107,6 +107,26 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
         score = score - config.escape_continuity_s * np.minimum(change, 1.0)
     score = np.where(within_bound | (commands[:, 0] == 0.0), score, -np.inf)
     return commands, positions[:, -1], score
+
+
+def touching(dx: np.ndarray, dy: np.ndarray, reach_m: np.ndarray) -> np.ndarray:
+    """``np.hypot(dx, dy) - reach_m < 0`` (broadcast), element for element, mostly without hypot: for the
+    escape's (K, S, N) offsets hypot was its costliest step by far. The squared distance (three cheap
+    operations) is within a few 1e-16 of the square of hypot's result, so outside a band of ±1e-9 (relative)
+    around the reach the answer is certain; inside it, and wherever a square could underflow or a reach
+    is not positive (or NaN), hypot itself decides (tests/planning/test_numpy_shortcuts.py tries the band)."""
+    reach_m = np.asarray(reach_m, dtype=float)
+    below = np.square(reach_m * (1.0 - 1e-9))
+    below = np.where((reach_m > 0) & (below > 1e-280), below, 0.0)  # closer than this: touching
+    above = np.maximum(np.square(reach_m * (1.0 + 1e-9)), 1e-280)  # further than this: not (NaN: never)
+    squared = dx * dx + dy * dy
+    result = squared < below
+    unsure = ~(result | (squared > above))
+    if unsure.any():
+        shape = np.broadcast_shapes(np.shape(dx), np.shape(dy), reach_m.shape)
+        pick = lambda values: np.broadcast_to(values, shape)[unsure]  # noqa: E731
+        result[unsure] = np.hypot(pick(dx), pick(dy)) - pick(reach_m) < 0
+    return result
 
 
 _FANS: dict = {}
