@@ -394,3 +394,46 @@ def test_segment_geometry_is_the_first_form():
         assert np.array_equal(got[0], expected[0]) and np.array_equal(got[1], expected[1]), f"case {case}"
         excess = np.min(expected[2] - path.half_widths_m, axis=-1)
         assert _same_bits(path.corridor_excess(points), excess), f"case {case}"
+
+
+def _legs_inside_reference(path, starts, ends, spacing_m, tolerance_m):
+    """:meth:`DesignatedPath.legs_inside` as first written (its ends in two passes)."""
+    starts = np.asarray(starts, dtype=float).reshape(-1, 2)
+    ends = np.asarray(ends, dtype=float).reshape(-1, 2)
+    tolerance = np.broadcast_to(np.asarray(tolerance_m, dtype=float), (len(starts),))
+    if len(starts) == 0:
+        return np.zeros(0, dtype=bool)
+    start_in = _segment_geometry_reference(path, starts)[2] - path.half_widths_m <= tolerance[:, None]
+    end_in = _segment_geometry_reference(path, ends)[2] - path.half_widths_m <= tolerance[:, None]
+    inside = np.any(start_in & end_in, axis=1)
+    unresolved = np.flatnonzero(~inside & start_in.any(axis=1) & end_in.any(axis=1))
+    if len(unresolved):
+        a, b = starts[unresolved], ends[unresolved]
+        longest = float(np.max(np.hypot(*(b - a).T)))
+        fractions = np.linspace(0.0, 1.0, max(2, int(np.ceil(longest / spacing_m)) + 1))
+        samples = a[:, None, :] + fractions[None, :, None] * (b - a)[:, None, :]
+        excess = np.min(_segment_geometry_reference(path, samples)[2] - path.half_widths_m, axis=-1)
+        inside[unresolved] = np.all(excess <= tolerance[unresolved, None], axis=1)
+    return inside
+
+
+def test_legs_inside_is_the_first_form():
+    """Legs within a capsule, across junctions (sampled), leaving the corridor, with ends on its edge (the
+    tolerance decides), 0 to 100 legs, per-leg tolerances or one: the verdicts of the first form."""
+    rng = np.random.default_rng(10)
+    verdicts = set()
+    for case in range(900):
+        path = PATHS[case % len(PATHS)]
+        n = int(rng.integers(0, 100))
+        starts, ends = rng.uniform(-2, 9, (n, 2)), rng.uniform(-2, 9, (n, 2))
+        if n and case % 3 == 0:  # ends on the corridor's edge
+            segment = rng.integers(0, len(path.segment_lengths_m), n)
+            normal = path.segment_directions[segment] @ np.array([[0.0, 1.0], [-1.0, 0.0]])
+            ends = path.segment_starts[segment] + rng.uniform(0, 1, (n, 1)) * path.segment_vectors[segment] \
+                + path.half_widths_m[segment, None] * normal
+        tolerance = rng.choice([1e-9, 0.0, 0.2]) if case % 2 else rng.uniform(-0.1, 0.3, n)
+        got = path.legs_inside(starts, ends, 0.05, tolerance)
+        expected = _legs_inside_reference(path, starts, ends, 0.05, tolerance)
+        assert np.array_equal(got, expected), f"case {case}"
+        verdicts |= set(expected.tolist())
+    assert verdicts == {True, False}
