@@ -79,16 +79,20 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     else:
         centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
         reach = checks.check_radii[near] + checks.growth[near] * np.minimum(times[:, None], checks.growth_until_s[near])
-        # x and y apart: the same differences as of the (K, S, N, 2) offsets, without strided copies.
-        dx = positions[:, :, None, 0] - centres[None, :, :, 0]  # (K, S, N)
-        dy = positions[:, :, None, 1] - centres[None, :, :, 1]
+        # The same differences as of the (K, S, N, 2) offsets, x and y apart and people first, (N, K, S):
+        # every large operation below then runs contiguously along the steps.
+        robot_x, robot_y = (np.ascontiguousarray(positions[..., axis]) for axis in (0, 1))  # (K, S)
+        dx = robot_x[None] - np.ascontiguousarray(centres[..., 0].T)[:, None, :]  # (N, K, S)
+        dy = robot_y[None] - np.ascontiguousarray(centres[..., 1].T)[:, None, :]
+        reach = np.ascontiguousarray(reach.T)[:, None, :]  # (N, 1, S)
         # The first step at which any person not overlapped now is touched (gap < 0): the earliest over
         # the people of each one's first step.
-        touched = (touching(dx, dy, reach) & ~overlapping).any(axis=2)  # (K, S)
+        touched = (touching(dx, dy, reach) & ~overlapping[:, None, None]).any(axis=0)  # (K, S)
         time_to_contact = np.where(touched.any(axis=1), np.argmax(touched, axis=1), steps) * dt
         if overlapping.any():
-            gap = np.hypot(dx[..., overlapping], dy[..., overlapping]) - reach[:, overlapping]  # (K, S, M)
-            gap_min, gap_last = np.min(gap, axis=1), gap[:, -1]
+            gap = np.hypot(dx[overlapping], dy[overlapping]) - reach[overlapping]  # (M, K, S)
+            # (K, M) in C order, as the score sums them along M
+            gap_min, gap_last = np.ascontiguousarray(np.min(gap, axis=2).T), np.ascontiguousarray(gap[:, :, -1].T)
     if overlapping.any():
         deeper = gap_min - gap_now[overlapping]
         still_inside = gap_last
