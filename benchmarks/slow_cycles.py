@@ -109,7 +109,8 @@ def main() -> None:
               "slowest": [{"scene": i, "ms": round(float(best[i]), 4), "status": statuses[i]} for i in slowest]}
     if args.sections:
         per_cycle, shares = section_shares(planner, [observations[i] for i in slowest], max(1, args.repeats * 8))
-        report["sections"] = {"cycle_ms": per_cycle, **{label.strip(): round(share, 3) for label, share in shares.items()}}
+        report["sections"] = {"cycle_ms": per_cycle,
+                              **{label.strip(): round(share, 3) for label, share in shares.items()}}
     print(json.dumps(report))
 
 

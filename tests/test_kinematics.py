@@ -101,5 +101,6 @@ def test_rollout_is_bit_for_bit_its_first_form():
                               rng.uniform(-limits.max_turn_rate_radps, limits.max_turn_rate_radps) if case % 5 else 0.0)
         commands = fan if case % 2 else rng.uniform([-0.3, -3.0], [1.0, 3.0], (int(rng.integers(1, 60)), 2))
         dt, steps = (0.1, 30) if case % 4 else (rng.uniform(0.02, 0.3), int(rng.integers(1, 50)))
-        got, expected = rollout(start, commands, limits, dt, steps), _rollout_reference(start, commands, limits, dt, steps)
+        got = rollout(start, commands, limits, dt, steps)
+        expected = _rollout_reference(start, commands, limits, dt, steps)
         assert np.array_equal(got.view(np.int64), expected.view(np.int64)), f"case {case}"
