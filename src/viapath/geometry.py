@@ -102,7 +102,7 @@ def first_contact_time(rel_position, rel_velocity, radius, duration, growth=0.0)
 
 
 def _first_contact(px, py, vx, vy, radius, growth, duration):
-    if np.any(growth):
+    if np.count_nonzero(growth):  # np.any's dispatch costs more than the check (legs_first_contact's hot path)
         a = vx * vx + vy * vy - growth * growth
         b = px * vx + py * vy - radius * growth
     else:
@@ -161,7 +161,7 @@ def legs_first_contact(
     vx = velocities[:, 0:1] - ovx
     vy = velocities[:, 1:2] - ovy
     until = np.asarray(growth_until_s, dtype=float)
-    if not np.any(growth) or not np.any(np.isfinite(until)):
+    if not np.count_nonzero(growth) or not np.isfinite(until).any():
         return _first_contact(px, py, vx, vy, radii + growth * t0, growth, duration)
     # Split each leg where the cone stops growing: the cone part, then the cylinder part.
     cone_duration = np.clip(until - t0, 0.0, duration)
@@ -190,18 +190,16 @@ def via_options(starts, start_times, speeds, obstacle_positions, obstacle_veloci
     tangentially)."""
     velocity = obstacle_velocities
     centre_now = obstacle_positions + velocity * start_times[:, None]
-    reach_time = np.hypot(*(centre_now - starts).T) / speeds
-    passing_time = np.minimum(start_times + reach_time, growth_until_s)
-    radius = via_radii + growth * passing_time + envelope_m
     distance = np.hypot(*(centre_now - starts).T)
+    passing_time = np.minimum(start_times + distance / speeds, growth_until_s)
+    radius = via_radii + growth * passing_time + envelope_m
     radius = np.maximum(np.minimum(radius, 0.98 * distance), 0.0)
     # Axis 1 enumerates (side, root): (left, early), (right, early), (left, late), (right, late).
     w, valid = tangent_vectors(starts[:, None, :], centre_now[:, None, :], radius[:, None], VIA_SIDES[None, :2])
     t_early, t_late = via_times(w, velocity[:, None, :], speeds[:, None])
     t_via = np.concatenate([t_early, t_late], axis=1)
     w = np.concatenate([w, w], axis=1)
-    ok = np.broadcast_to(valid, t_early.shape)
-    ok = np.concatenate([ok, ok], axis=1) & (t_via <= max_time_s)
+    ok = (t_via <= max_time_s) & valid  # valid (P, 1): the same for every option of a pair
     pair, option = np.nonzero(ok)
     t_k = t_via[pair, option]
     leg_velocity = (w[pair, option] + velocity[pair] * t_k[:, None]) / t_k[:, None]

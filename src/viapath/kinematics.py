@@ -70,20 +70,27 @@ def rollout(state: UnicycleState, commands: np.ndarray, limits: MotionLimits, dt
     command makes speed and turn rate ramp to it at the acceleration limits, so both are known in
     closed form; the positions are then running sums of the arcs)."""
     commands = np.asarray(commands, dtype=float).reshape(-1, 2)
-    v_cmd = np.clip(commands[:, 0], 0.0, limits.max_speed_mps)
-    w_cmd = np.clip(commands[:, 1], -limits.max_turn_rate_radps, limits.max_turn_rate_radps)
+    # np.clip's max-then-min as the two ufuncs (the same values; np.clip's dispatch costs more than the
+    # arithmetic on these small arrays), and each sine and cosine taken once: the heading before a step
+    # is the heading after the previous one. The escape rolls out its fan of commands every cycle
+    # without a free candidate (tests/test_kinematics.py: bit for bit the earlier, plainer form).
+    v_cmd = np.minimum(np.maximum(commands[:, 0], 0.0), limits.max_speed_mps)
+    w_cmd = np.minimum(np.maximum(commands[:, 1], -limits.max_turn_rate_radps), limits.max_turn_rate_radps)
     ramp = np.arange(1, steps + 1)
     speed0, turn0 = float(state.speed_mps), float(state.turn_rate_radps)
     dv, dw = limits.max_accel_mps2 * dt_s * ramp, limits.max_turn_accel_radps2 * dt_s * ramp
-    speed = speed0 + np.clip((v_cmd - speed0)[:, None], -dv, dv)  # (K, steps), during each step
-    turn = turn0 + np.clip((w_cmd - turn0)[:, None], -dw, dw)
-    heading_after = float(state.heading_rad) + np.cumsum(turn * dt_s, axis=1)
-    heading_before = np.concatenate([np.full((len(commands), 1), float(state.heading_rad)), heading_after[:, :-1]],
-                                    axis=1)
+    speed = speed0 + np.minimum(np.maximum((v_cmd - speed0)[:, None], -dv), dv)  # (K, steps), during each step
+    turn = turn0 + np.minimum(np.maximum((w_cmd - turn0)[:, None], -dw), dw)
+    headings = np.empty((len(commands), steps + 1))  # before the first step, then after each
+    headings[:, 0] = float(state.heading_rad)
+    headings[:, 1:] = float(state.heading_rad) + np.cumsum(turn * dt_s, axis=1)
+    sines, cosines = np.sin(headings), np.cos(headings)
+    sin_before, sin_after = sines[:, :-1], sines[:, 1:]
+    cos_before, cos_after = cosines[:, :-1], cosines[:, 1:]
     straight = np.abs(turn) < 1e-9
     radius = speed / np.where(straight, 1.0, turn)
-    dx = np.where(straight, speed * dt_s * np.cos(heading_before), radius * (np.sin(heading_after) - np.sin(heading_before)))
-    dy = np.where(straight, speed * dt_s * np.sin(heading_before), -radius * (np.cos(heading_after) - np.cos(heading_before)))
+    dx = np.where(straight, speed * dt_s * cos_before, radius * (sin_after - sin_before))
+    dy = np.where(straight, speed * dt_s * sin_before, -radius * (cos_after - cos_before))
     positions = np.empty((len(commands), steps, 2))
     positions[..., 0] = float(state.x) + np.cumsum(dx, axis=1)
     positions[..., 1] = float(state.y) + np.cumsum(dy, axis=1)
@@ -108,15 +115,38 @@ def track(state: UnicycleState, target, speed_mps: float, limits: MotionLimits, 
           heading_gain: float = 2.5) -> np.ndarray:
     """Positions (steps, 2) of the robot steering for ``target`` with :func:`steer_towards`, each
     step as :func:`step` moves it (scalar arithmetic: this runs inside the planning cycle)."""
+    # steer_towards and _arc inlined, operation for operation (the positions are bit for bit theirs:
+    # tests/test_kinematics.py): a candidate that fails is rolled out in full, up to max_rollouts of them
+    # in a cycle without a free candidate, and the calls cost more than the arithmetic (docs/speed.md).
     x, y, heading = float(state.x), float(state.y), float(state.heading_rad)
     speed, turn = float(state.speed_mps), float(state.turn_rate_radps)
     target_x, target_y = float(target[0]), float(target[1])
     dv, dw = limits.max_accel_mps2 * dt_s, limits.max_turn_accel_radps2 * dt_s
-    positions = np.empty((steps, 2))
-    for k in range(steps):
-        v_cmd, w_cmd = steer_towards(x, y, heading, target_x, target_y, speed_mps, limits, heading_gain)
-        speed += _clip(v_cmd - speed, -dv, dv)
-        turn += _clip(w_cmd - turn, -dw, dw)
-        x, y, heading = _arc(x, y, heading, speed, turn, dt_s)
-        positions[k] = x, y
-    return positions
+    max_turn, top_speed = limits.max_turn_rate_radps, min(speed_mps, limits.max_speed_mps)
+    quarter_turn, eighth_turn = math.pi / 2, math.pi / 4
+    atan2, sin, cos = math.atan2, math.sin, math.cos
+    standing = speed_mps <= 0
+    positions = []
+    for _ in range(steps):
+        dx, dy = target_x - x, target_y - y
+        if dx * dx + dy * dy < 1e-18 or standing:
+            v_cmd = w_cmd = 0.0
+        else:
+            error = atan2(dy, dx) - heading
+            error = atan2(sin(error), cos(error))
+            w_cmd = heading_gain * error
+            w_cmd = -max_turn if w_cmd < -max_turn else max_turn if w_cmd > max_turn else w_cmd
+            scale = (quarter_turn - abs(error)) / eighth_turn
+            v_cmd = top_speed * (0.0 if scale < 0.0 else 1.0 if scale > 1.0 else scale)
+        change = v_cmd - speed
+        speed += -dv if change < -dv else dv if change > dv else change
+        change = w_cmd - turn
+        turn += -dw if change < -dw else dw if change > dw else change
+        new_heading = heading + turn * dt_s
+        half = 0.5 * turn * dt_s
+        chord = speed * dt_s * (1.0 - half * half / 6.0 if abs(half) < 1e-6 else sin(half) / half)
+        x += chord * cos(heading + half)
+        y += chord * sin(heading + half)
+        heading = atan2(sin(new_heading), cos(new_heading))
+        positions.append((x, y))
+    return np.array(positions).reshape(steps, 2)

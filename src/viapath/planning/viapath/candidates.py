@@ -278,6 +278,8 @@ def _corner_nodes(checks: LegChecks, tree: _Tree, speeds: np.ndarray) -> np.ndar
     """The path's corners between the robot and the subgoal, as via points, when the straight leg
     would cut the corridor."""
     path = checks.path
+    if checks.subgoal_index < 2:
+        return np.zeros(0, int)  # no corner before the first subgoal, wherever the robot is (no projection needed)
     segment = int(path.project(checks.position)[0])
     corners = np.arange(segment + 1, checks.subgoal_index)
     if len(corners) == 0 or checks.goal_legs_inside(checks.position[None])[0]:

@@ -137,7 +137,7 @@ class LegChecks:
         if len(self.obstacles) == 0:
             return np.full((len(starts), 0), np.inf)
         horizon_s = self.horizon_s if horizon_s is None else horizon_s
-        checked = np.clip(horizon_s - start_times, 0.0, durations)
+        checked = np.minimum(np.maximum(horizon_s - start_times, 0.0), durations)  # np.clip, without its dispatch
         envelope = None
         if keep_envelope and self.envelope_accel_mps2 > 0:
             envelope = self.envelope_m(np.hypot(velocities[:, 0], velocities[:, 1]))
@@ -234,14 +234,25 @@ class LegChecks:
         """Whether robot positions (one per ``dt`` from now) keep clear of every obstacle."""
         if len(self.obstacles) == 0:
             return True
-        times = dt * np.arange(1, len(positions) + 1)[:, None]
-        obstacles = self.obstacles
-        centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
-        reach = self.check_radii + self.growth * np.minimum(times, self.growth_until_s)
-        distance = np.hypot(*(positions[:, None, :] - centres).transpose(2, 0, 1))
-        # Already inside an obstacle's margin (a close pass): only forbid getting closer still.
-        now = np.hypot(*(self.position - obstacles.positions).T)
-        return bool(np.all(distance >= np.minimum(reach, now - 1e-3)))
+        centres_x, centres_y, limit = self._clear_limits(len(positions), dt)
+        distance = np.hypot(positions[:, 0:1] - centres_x, positions[:, 1:2] - centres_y)
+        return bool(np.all(distance >= limit))
+
+    def _clear_limits(self, steps: int, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The obstacles' centres (x and y, (steps, N) each) after each ``dt`` and how close the robot may come
+        to each then: the part of :meth:`clear` that is the same for every roll-out of the cycle (up to
+        ``max_rollouts`` of them when no candidate is free), made once per step count."""
+        cache = self.__dict__.setdefault("_clear_limits_cache", {})
+        cached = cache.get((steps, dt))
+        if cached is None:
+            times = dt * np.arange(1, steps + 1)[:, None]
+            obstacles = self.obstacles
+            centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
+            reach = self.check_radii + self.growth * np.minimum(times, self.growth_until_s)
+            # Already inside an obstacle's margin (a close pass): only forbid getting closer still.
+            now = np.hypot(*(self.position - obstacles.positions).T)
+            cached = cache[(steps, dt)] = (centres[..., 0], centres[..., 1], np.minimum(reach, now - 1e-3))
+        return cached
 
     # -- against the corridor (paper step 4) ---------------------------------------------------------
 
@@ -264,7 +275,7 @@ class LegChecks:
         inside = np.zeros(len(starts), dtype=bool)
         for i in (i for i in (self.subgoal_index - 1, self.subgoal_index) if i < len(path.segment_lengths_m)):
             rel = starts - path.segment_starts[i]
-            along = np.clip(rel @ path.segment_directions[i], 0.0, path.segment_lengths_m[i])
+            along = np.minimum(np.maximum(rel @ path.segment_directions[i], 0.0), path.segment_lengths_m[i])
             gap = np.hypot(*(rel - along[:, None] * path.segment_directions[i]).T) - path.half_widths_m[i]
             inside |= gap <= self.corridor_tolerance_m
         if not inside.all():

@@ -51,9 +51,7 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     """Commands (v, ω), where each leaves the robot, and the score of each (higher is better)."""
     position = checks.position
     top = min(max(config.speeds), limits.max_speed_mps) if config.calm_escape else limits.max_speed_mps
-    speeds = np.unique(np.concatenate([[0.0], np.minimum(config.speeds, top), [top]]))
-    turns = np.linspace(-limits.max_turn_rate_radps, limits.max_turn_rate_radps, 9)
-    commands = np.stack([grid.ravel() for grid in np.meshgrid(speeds, turns)], axis=1)
+    commands = _fan(tuple(config.speeds), top, limits.max_turn_rate_radps)
     dt = config.escape_dt_s
     steps = max(1, int(round(config.escape_s / dt)))
     state = UnicycleState(float(position[0]), float(position[1]), float(checks.heading_rad),
@@ -81,13 +79,20 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     else:
         centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
         reach = checks.check_radii[near] + checks.growth[near] * np.minimum(times[:, None], checks.growth_until_s[near])
-        offset = positions[:, :, None, :] - centres[None]
-        gap = np.hypot(offset[..., 0], offset[..., 1]) - reach[None]  # (K, S, N)
-        touching = (gap < 0) & ~overlapping
-        first = np.where(touching.any(axis=1), np.argmax(touching, axis=1), steps)  # (K, N)
-        time_to_contact = np.min(first, axis=1, initial=steps) * dt
+        # The same differences as of the (K, S, N, 2) offsets, x and y apart and people first, (N, K, S):
+        # every large operation below then runs contiguously along the steps.
+        robot_x, robot_y = (np.ascontiguousarray(positions[..., axis]) for axis in (0, 1))  # (K, S)
+        dx = robot_x[None] - np.ascontiguousarray(centres[..., 0].T)[:, None, :]  # (N, K, S)
+        dy = robot_y[None] - np.ascontiguousarray(centres[..., 1].T)[:, None, :]
+        reach = np.ascontiguousarray(reach.T)[:, None, :]  # (N, 1, S)
+        # The first step at which any person not overlapped now is touched (gap < 0): the earliest over
+        # the people of each one's first step.
+        touched = (touching(dx, dy, reach) & ~overlapping[:, None, None]).any(axis=0)  # (K, S)
+        time_to_contact = np.where(touched.any(axis=1), np.argmax(touched, axis=1), steps) * dt
         if overlapping.any():
-            gap_min, gap_last = np.min(gap[..., overlapping], axis=1), gap[:, -1, overlapping]
+            gap = np.hypot(dx[overlapping], dy[overlapping]) - reach[overlapping]  # (M, K, S)
+            # (K, M) in C order, as the score sums them along M
+            gap_min, gap_last = np.ascontiguousarray(np.min(gap, axis=2).T), np.ascontiguousarray(gap[:, :, -1].T)
     if overlapping.any():
         deeper = gap_min - gap_now[overlapping]
         still_inside = gap_last
@@ -106,3 +111,42 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
         score = score - config.escape_continuity_s * np.minimum(change, 1.0)
     score = np.where(within_bound | (commands[:, 0] == 0.0), score, -np.inf)
     return commands, positions[:, -1], score
+
+
+def touching(dx: np.ndarray, dy: np.ndarray, reach_m: np.ndarray) -> np.ndarray:
+    """``np.hypot(dx, dy) - reach_m < 0`` (broadcast), element for element, mostly without hypot: for the
+    escape's (K, S, N) offsets hypot was its costliest step by far. The squared distance (three cheap
+    operations) is within a few 1e-16 of the square of hypot's result, so outside a band of ±1e-9 (relative)
+    around the reach the answer is certain; inside it, and wherever a square could underflow or a reach
+    is not positive (or NaN), hypot itself decides (tests/planning/test_numpy_shortcuts.py tries the band)."""
+    reach_m = np.asarray(reach_m, dtype=float)
+    below = np.square(reach_m * (1.0 - 1e-9))
+    below = np.where((reach_m > 0) & (below > 1e-280), below, 0.0)  # closer than this: touching
+    above = np.maximum(np.square(reach_m * (1.0 + 1e-9)), 1e-280)  # further than this: not (NaN: never)
+    squared = dx * dx + dy * dy
+    result = squared < below
+    unsure = ~(result | (squared > above))
+    if unsure.any():
+        shape = np.broadcast_shapes(np.shape(dx), np.shape(dy), reach_m.shape)
+        pick = lambda values: np.broadcast_to(values, shape)[unsure]  # noqa: E731
+        result[unsure] = np.hypot(pick(dx), pick(dy)) - pick(reach_m) < 0
+    return result
+
+
+_FANS: dict = {}
+
+
+def _fan(speeds: tuple, top: float, max_turn_rate_radps: float) -> np.ndarray:
+    """The escape's commands (v, ω): standing, the speed set up to ``top`` and ``top``, each with 9 turn
+    rates across the limits. The same every cycle of a planner, so made once (read-only)."""
+    key = (speeds, top, max_turn_rate_radps)
+    commands = _FANS.get(key)
+    if commands is None:
+        speed_grid = np.unique(np.concatenate([[0.0], np.minimum(speeds, top), [top]]))
+        turns = np.linspace(-max_turn_rate_radps, max_turn_rate_radps, 9)
+        commands = np.stack([grid.ravel() for grid in np.meshgrid(speed_grid, turns)], axis=1)
+        commands.flags.writeable = False
+        if len(_FANS) > 64:  # a long-lived process trying many settings
+            _FANS.clear()
+        _FANS[key] = commands
+    return commands

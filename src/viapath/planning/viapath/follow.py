@@ -31,18 +31,32 @@ def can_follow(plan: Plan, checks: LegChecks, limits: MotionLimits, config) -> b
     if np.hypot(*offset) < 1e-6 or (heading_error <= config.rollout_heading_rad
                                       and speed_change <= limits.max_accel_mps2 * config.rollout_dt_s * 2):
         return True
+    # Candidates of a cycle often share the first leg's target and speed (slow/wait candidates, chains
+    # through the same first via point): the roll-out and its verdict are then the same. Remembered for
+    # the cycle's checks; a cycle without a free candidate rolls out up to max_rollouts of them.
+    key = (float(plan.target[0]), float(plan.target[1]), float(plan.speed_mps), id(limits), id(config))
+    known = checks.__dict__.setdefault("_followed", {})
+    if key not in known:
+        known[key] = _roll_out(plan, checks, limits, config, heading_error)
+    followed, turn_in_place = known[key]
+    if turn_in_place:
+        plan.extras["turn_in_place"] = True
+    return followed
+
+
+def _roll_out(plan: Plan, checks: LegChecks, limits: MotionLimits, config, heading_error: float) -> tuple[bool, bool]:
+    """(followed, turn in place first) of :func:`can_follow`'s roll-out."""
     dt = config.rollout_dt_s
     steps = max(1, int(round(config.rollout_s / dt)))
     state = UnicycleState(float(checks.position[0]), float(checks.position[1]), float(checks.heading_rad),
                           checks.speed_mps, checks.turn_rate_radps)
     positions = checks.backend.track(state, plan.target, plan.speed_mps, limits, dt, steps, config.heading_gain)
     if not checks.clear(positions, dt):
-        return False
+        return False, False
     if np.all(checks.inside(positions)):
-        return True
+        return True, False
     turn_s = heading_error / limits.max_turn_rate_radps + 1.0
     standing = np.repeat(checks.position[None], max(1, int(np.ceil(turn_s / dt))), axis=0)
     if heading_error > config.turn_in_place_min_rad and checks.clear(standing, dt):
-        plan.extras["turn_in_place"] = True
-        return True
-    return False
+        return True, True
+    return False, False
