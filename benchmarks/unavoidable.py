@@ -112,13 +112,7 @@ def _faults(trace, poses, speeds, people, first_step: int, columns=None) -> np.n
     if first_step > 0:
         before_start = trace.robot_poses[first_step - 1, :2] - trace.obstacle_positions[first_step - 1, columns]
         before_end = trace.robot_poses[first_step, :2] - trace.obstacle_positions[first_step, columns]
-        ok = np.isfinite(before_start).all(-1) & np.isfinite(before_end).all(-1)
-        motion = before_end - before_start
-        speed_sq = np.sum(motion * motion, axis=-1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            tau = np.clip(np.where(speed_sq > 0, -np.sum(before_start * motion, axis=-1) / speed_sq, 0.0), 0.0, 1.0)
-        closest = before_start + motion * tau[:, None]
-        contact_before = ok & (np.hypot(closest[:, 0], closest[:, 1]) < radii + radius)
+        contact_before = _touching(before_start, before_end, radii + radius)
         absent_before = ~np.isfinite(trace.obstacle_positions[first_step - 1, columns]).all(-1)
     else:
         contact_before = np.zeros(len(radii), dtype=bool)
@@ -138,20 +132,25 @@ def _at_fault(poses, speeds, people, radii, radius, contact_before, overlapping)
     viapath.sim.metrics.at_fault_onsets, written again over K sequences)."""
     start = poses[:, :-1, None, :2] - people[None, :-1]
     end = poses[:, 1:, None, :2] - people[None, 1:]
+    contact = _touching(start, end, radii + radius)
+    previous = np.concatenate([np.broadcast_to(contact_before, (len(poses), 1, len(radii))), contact[:, :-1]], axis=1)
+    heading = poses[:, :-1, 2]
+    velocity = speeds[:, :-1, None] * np.stack([np.cos(heading), np.sin(heading)], axis=-1)
+    towards = np.einsum("kjd,kjnd->kjn", velocity, -np.nan_to_num(start, nan=1e9)) > 0.0
+    return contact & ~previous & towards & (speeds[:, :-1, None] > MIN_SPEED_MPS) & ~overlapping  # (K, J, N)
+
+
+def _touching(start: np.ndarray, end: np.ndarray, reach: np.ndarray) -> np.ndarray:
+    """Robot-minus-person offsets at a step's start and end (..., 2), NaN where the person is absent:
+    does their distance, moving linearly over the step, come under ``reach``?"""
     present = np.isfinite(start).all(-1) & np.isfinite(end).all(-1)
     start = np.where(present[..., None], start, 1e9)
-    end = np.where(present[..., None], end, 1e9)
-    motion = end - start
+    motion = np.where(present[..., None], end, 1e9) - start
     speed_sq = np.sum(motion * motion, axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
         tau = np.clip(np.where(speed_sq > 0, -np.sum(start * motion, axis=-1) / speed_sq, 0.0), 0.0, 1.0)
     closest = start + motion * tau[..., None]
-    contact = np.hypot(closest[..., 0], closest[..., 1]) < radii + radius
-    previous = np.concatenate([np.broadcast_to(contact_before, (len(poses), 1, len(radii))), contact[:, :-1]], axis=1)
-    heading = poses[:, :-1, 2]
-    velocity = speeds[:, :-1, None] * np.stack([np.cos(heading), np.sin(heading)], axis=-1)
-    towards = np.einsum("kjd,kjnd->kjn", velocity, -start) > 0.0
-    return contact & ~previous & towards & (speeds[:, :-1, None] > MIN_SPEED_MPS) & ~overlapping  # (K, J, N)
+    return present & (np.hypot(closest[..., 0], closest[..., 1]) < reach)
 
 
 def check_replay(trace, limits: MotionLimits, first_step: int, depth: int) -> None:
