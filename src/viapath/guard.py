@@ -74,6 +74,11 @@ class GuardConfig:
     brake_margin_m: float = 0.02
     tolerance: float = 1e-9
 
+    @functools.cached_property
+    def all_finite(self) -> bool:
+        """Every bound a finite number (then an inspected observation holds only finite obstacle fields)."""
+        return all(math.isfinite(float(getattr(self, name))) for name in self.__dataclass_fields__)
+
 
 DEFAULT_CONFIG = GuardConfig()
 
@@ -242,14 +247,12 @@ def braking_path(robot: RobotState, command: Command, limits: MotionLimits, peri
         turn = turn + _clip(w_cmd - turn, -dw, dw)
         x, y, heading = _arc(x, y, heading, speed, turn, dt)
         points.append((x, y))
-    v_stop = _clip(0.0, 0.0, limits.max_speed_mps)  # the stop command, limited as step limits it
-    w_stop = _clip(0.0, -limits.max_turn_rate_radps, limits.max_turn_rate_radps)
     top = max(limits.max_speed_mps, abs(speed))
     for _ in range(min(1000, int(math.ceil(top / max(limits.max_accel_mps2 * dt, 1e-9))) + 2)):
         if speed <= 1e-12:
             break
-        speed = speed + _clip(v_stop - speed, -dv, dv)
-        turn = turn + _clip(w_stop - turn, -dw, dw)
+        speed = speed + _clip(0.0 - speed, -dv, dv)  # the stop command (0, 0), within every limit
+        turn = turn + _clip(0.0 - turn, -dw, dw)
         x, y, heading = _arc(x, y, heading, speed, turn, dt)
         points.append((x, y))
     return np.array(points)
@@ -308,7 +311,6 @@ def _stop_decision(planner, observation: Observation, status: str, reasons: list
 #: The observation the innermost running guarded ``plan`` was handed after its inspection, and the
 #: configuration it was inspected with (per thread and task).
 _INSPECTED: contextvars.ContextVar = contextvars.ContextVar("viapath_guard_inspected", default=None)
-_FINITE_BOUNDS: dict[int, tuple[GuardConfig, bool]] = {}  # id → (configuration, all its numbers finite)
 
 
 def inspected(observation: Observation) -> bool:
@@ -319,14 +321,7 @@ def inspected(observation: Observation) -> bool:
     checked = _INSPECTED.get()
     if checked is None or checked[0] is not observation:
         return False
-    config = checked[1]
-    known = _FINITE_BOUNDS.get(id(config))
-    if known is None or known[0] is not config:
-        finite = all(math.isfinite(float(getattr(config, name))) for name in config.__dataclass_fields__)
-        known = _FINITE_BOUNDS[id(config)] = (config, finite)
-        if len(_FINITE_BOUNDS) > 64:
-            _FINITE_BOUNDS.clear()
-    return known[1]
+    return checked[1].all_finite
 
 
 def guard_plan(plan: Callable) -> Callable:

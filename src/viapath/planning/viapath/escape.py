@@ -26,6 +26,8 @@ Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from viapath.kinematics import UnicycleState, rollout
@@ -133,20 +135,12 @@ def touching(dx: np.ndarray, dy: np.ndarray, reach_m: np.ndarray) -> np.ndarray:
     return result
 
 
-_FANS: dict = {}
-
-
+@functools.lru_cache(maxsize=64)
 def _fan(speeds: tuple, top: float, max_turn_rate_radps: float) -> np.ndarray:
     """The escape's commands (v, ω): standing, the speed set up to ``top`` and ``top``, each with 9 turn
     rates across the limits. The same every cycle of a planner, so made once (read-only)."""
-    key = (speeds, top, max_turn_rate_radps)
-    commands = _FANS.get(key)
-    if commands is None:
-        speed_grid = np.unique(np.concatenate([[0.0], np.minimum(speeds, top), [top]]))
-        turns = np.linspace(-max_turn_rate_radps, max_turn_rate_radps, 9)
-        commands = np.stack([grid.ravel() for grid in np.meshgrid(speed_grid, turns)], axis=1)
-        commands.flags.writeable = False
-        if len(_FANS) > 64:  # a long-lived process trying many settings
-            _FANS.clear()
-        _FANS[key] = commands
+    speed_grid = np.unique(np.concatenate([[0.0], np.minimum(speeds, top), [top]]))
+    turns = np.linspace(-max_turn_rate_radps, max_turn_rate_radps, 9)
+    commands = np.stack([grid.ravel() for grid in np.meshgrid(speed_grid, turns)], axis=1)
+    commands.flags.writeable = False
     return commands
