@@ -164,3 +164,25 @@ def test_bad_options_fail_cleanly(tmp_path, args, needle):
     assert "Traceback" not in result.output
     assert needle in result.output, result.output
     assert result.stdout == ""
+
+
+def test_an_interrupt_wrapped_by_numba_is_recognised_as_one():
+    """numba turns a Ctrl-C that lands in its call back into Python into chained SystemErrors; `viapath run`
+    must still end with 'interrupted' (130), and only then."""
+    from viapath.cli import _caused_by_interrupt
+
+    def wrapped(inner):
+        try:
+            try:
+                raise inner
+            except BaseException as cause:
+                raise SystemError("returned a result with an exception set") from cause
+        except SystemError as outer:
+            try:
+                raise SystemError("again") from outer
+            except SystemError as error:
+                return error
+
+    assert _caused_by_interrupt(wrapped(KeyboardInterrupt()))
+    assert not _caused_by_interrupt(wrapped(ValueError("not an interrupt")))
+    assert not _caused_by_interrupt(SystemError("alone"))

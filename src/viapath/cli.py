@@ -29,6 +29,18 @@ def _fail(message: str, code: int = 2) -> None:
     raise typer.Exit(code)
 
 
+def _caused_by_interrupt(error: BaseException) -> bool:
+    """Whether a KeyboardInterrupt is behind ``error`` (numba turns one raised while a compiled kernel calls
+    back into Python, e.g. to unpickle a constant, into a chain of SystemErrors)."""
+    seen = set()
+    while error is not None and id(error) not in seen:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        seen.add(id(error))
+        error = error.__cause__ or error.__context__
+    return False
+
+
 def _check_output(file: Optional[Path], suffixes: set[str], option: str) -> None:
     if file is None:
         return
@@ -126,6 +138,10 @@ def run(
     except (ValueError, RuntimeError, FileNotFoundError) as error:
         _fail(f"{scenario}: {error}")
     except KeyboardInterrupt:
+        _fail("interrupted", code=130)
+    except SystemError as error:  # a Ctrl-C that landed in numba's call back into Python arrives wrapped
+        if not _caused_by_interrupt(error):
+            raise
         _fail("interrupted", code=130)
 
     if plot is not None:
