@@ -7,7 +7,7 @@ import pytest
 import typer
 from typer.testing import CliRunner
 
-from viapath.bench.report import summarize, write_report
+from viapath.bench.report import write_report
 from viapath.bench.runner import BenchError, load_suite, read_rows, run_bench
 from viapath.bench.suites import generate_suite
 
@@ -85,6 +85,35 @@ def test_time_ratio_is_relative_to_the_obstacle_free_run(tmp_path):
     assert row["free_time_s"] == pytest.approx(24.6, abs=0.3)
     assert row["time_ratio"] == pytest.approx(row["time_to_goal_s"] / row["free_time_s"])
     assert row["time_ratio"] < 0.9  # the paper's robot speeds up ahead of the person behind
+
+
+def test_free_run_is_shared_by_scenarios_that_differ_only_in_their_people(monkeypatch):
+    import copy
+
+    from viapath.bench import runner
+    from viapath.sim import loop
+
+    runs = []
+    real = loop.run_episode
+
+    def counted(scenario, **kwargs):
+        runs.append(scenario.name)
+        return real(scenario, **kwargs)
+
+    monkeypatch.setattr(loop, "run_episode", counted)
+    runner._free_run_time_s.cache_clear()
+    scenario = generate_suite("paper", 1, seed=0)[0]
+    other_people = copy.deepcopy(scenario)
+    other_people.update(name="renamed", description="someone else", obstacles=scenario["obstacles"][:0])
+    longer = copy.deepcopy(scenario)
+    longer["path"]["waypoints"][-1][0] += 1.0
+    first = runner._free_time_s(scenario)
+    assert runner._free_time_s(other_people) == first and len(runs) == 1  # the same run, not run again
+    assert runner._free_time_s(longer) > first + 4.0 and len(runs) == 2  # 1 m more at 0.2 m/s: its own run
+    from viapath.scenarios import scenario_from_dict
+
+    alone = real(scenario_from_dict({**scenario, "obstacles": []}), planner="follow", perception="oracle")
+    assert first == alone.metrics["time_to_goal_s"]  # what the run without the cache gives
 
 
 def test_bad_input_is_one_clear_line(tmp_path, small_suite):

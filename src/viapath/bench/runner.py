@@ -158,23 +158,31 @@ def _resolve_replays(scenario: dict) -> dict:
 
 # -- one episode (runs in the workers) ---------------------------------------------------------------
 
+def _free_time_s(scenario: dict) -> float | None:
+    """How long the robot takes to the goal with nobody about (path following at the nominal speed): the
+    denominator of the time ratio. Scenarios that differ only in their people, name or description share it
+    (a suite's families repeat paths and robots), so it is run once per worker for each of them."""
+    import json
+
+    empty = {key: value for key, value in scenario.items() if key not in ("obstacles", "name", "description")}
+    return _free_run_time_s(json.dumps(empty, sort_keys=True))
+
+
 @lru_cache(maxsize=4096)
-def _free_time_s(scenario_json: str) -> float | None:
+def _free_run_time_s(empty_scenario_json: str) -> float | None:
     import json
 
     from viapath.scenarios import scenario_from_dict
     from viapath.sim.loop import run_episode
 
-    data = json.loads(scenario_json)
-    data["obstacles"] = []
-    episode = run_episode(scenario_from_dict(data), planner="follow", perception="oracle")
+    data = json.loads(empty_scenario_json)
+    episode = run_episode(scenario_from_dict({**data, "name": "free run", "obstacles": []}), planner="follow",
+                          perception="oracle")
     return episode.metrics["time_to_goal_s"]
 
 
 def run_task(task: Task) -> dict[str, Any]:
     """Run one episode; never raises (an error is recorded in the row so the run goes on)."""
-    import json
-
     from viapath.scenarios import scenario_from_dict
     from viapath.sim.loop import run_episode
 
@@ -193,7 +201,7 @@ def run_task(task: Task) -> dict[str, Any]:
         for column in COLUMNS:
             if column in episode.metrics and column != "shield":
                 row[column] = episode.metrics[column]
-        free = _free_time_s(json.dumps(task.scenario, sort_keys=True))
+        free = _free_time_s(task.scenario)
         row["free_time_s"] = free
         if row["time_to_goal_s"] is not None and free:
             row["time_ratio"] = row["time_to_goal_s"] / free

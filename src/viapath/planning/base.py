@@ -53,6 +53,8 @@ class Inflation:
 
     @classmethod
     def of(cls, obstacles: Obstacles, robot_radius_m: float, settings: Mapping[str, Any]) -> "Inflation":
+        if len(obstacles) == 0:
+            return _NO_INFLATION
         margin, k = settings["safety_margin_m"], settings["uncertainty_sigmas"]
         position_term = k * obstacles.position_sigma_m
         growth = k * obstacles.velocity_sigma_mps
@@ -64,6 +66,11 @@ class Inflation:
                 until = np.where(growing, settings["max_inflation_m"] / growth, np.inf)
         return cls(obstacles.radii_m + margin + position_term,
                    obstacles.radii_m + robot_radius_m + margin + position_term, growth, until)
+
+
+# The inflation of no obstacles: one instance serves every empty scene (its arrays hold nothing to change;
+# they stay writeable, as the compiled kernels are compiled for writeable arrays).
+_NO_INFLATION = Inflation(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0))
 
 
 @dataclass

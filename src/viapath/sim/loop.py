@@ -5,6 +5,7 @@ Deterministic for a given seed: the only randomness (perception noise) draws fro
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -112,11 +113,12 @@ def run_episode(
     perceived, scan_points = [], []
     reached = False
     goal_tolerance = subgoal_policy.goal_tolerance_m
+    goal_x, goal_y = (float(value) for value in path.goal)  # the goal test in scalars: every step of every episode
     for k in range(n_steps + 1):
         rows["pose"].append((state.x, state.y, state.heading_rad))
         rows["speed"].append(state.speed_mps)
         rows["turn"].append(state.turn_rate_radps)
-        if np.hypot(*(path.goal - state.position)) <= goal_tolerance:
+        if np.hypot(goal_x - state.x, goal_y - state.y) <= goal_tolerance:
             reached = True
         if reached or k == n_steps:
             _append_idle(rows, state)
@@ -134,7 +136,7 @@ def run_episode(
         decision: Decision = the_planner.plan(observation)
         rows["plan_ms"].append((time.perf_counter() - started) * 1e3)
         command = decision.command
-        if not (np.isfinite(command.speed_mps) and np.isfinite(command.turn_rate_radps)):
+        if not (math.isfinite(command.speed_mps) and math.isfinite(command.turn_rate_radps)):
             command = Command.stop()
         rows["command"].append((command.speed_mps, command.turn_rate_radps))
         rows["plan_speed"].append(decision.plan.speed_mps)
