@@ -208,12 +208,13 @@ def _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigm
     ``max ≤ bound`` and ``min ≥ 0`` also say "finite"; a speed is inf or NaN whenever a velocity part is."""
     if len(positions) == 0:
         return True
+    largest, smallest = np.maximum.reduce, np.minimum.reduce  # what .max() and .min() call, without their wrappers
     return bool(
-        np.abs(positions).max() <= config.max_coordinate_m
-        and np.hypot(velocities[:, 0], velocities[:, 1]).max() <= config.max_obstacle_speed_mps
-        and radii.min() >= 0 and radii.max() <= config.max_radius_m
-        and velocity_sigma.min() >= 0 and velocity_sigma.max() <= config.max_velocity_sigma_mps
-        and position_sigma.min() >= 0 and position_sigma.max() <= config.max_position_sigma_m
+        largest(np.abs(positions), axis=None) <= config.max_coordinate_m
+        and largest(np.hypot(velocities[:, 0], velocities[:, 1])) <= config.max_obstacle_speed_mps
+        and smallest(radii) >= 0 and largest(radii) <= config.max_radius_m
+        and smallest(velocity_sigma) >= 0 and largest(velocity_sigma) <= config.max_velocity_sigma_mps
+        and smallest(position_sigma) >= 0 and largest(position_sigma) <= config.max_position_sigma_m
     )
 
 
@@ -308,8 +309,38 @@ def _stop_decision(planner, observation: Observation, status: str, reasons: list
     return Decision(Command.stop(), plan)
 
 
-#: The observation the innermost running guarded ``plan`` was handed after its inspection, and the
-#: configuration it was inspected with (per thread and task).
+@dataclass
+class _GuardedCycle:
+    """One cycle as the outermost guarded ``plan`` sees it: the observation its inspection handed on, the
+    configuration it was inspected with, and the last command check against that observation. A planner
+    inside another guarded one (the shield's) has its command checked by both guards; when the outer one
+    is handed the same command, it is the same check and made once."""
+
+    observation: Observation
+    config: GuardConfig
+    last_check: tuple | None = None  # (limits, radius, v, ω, what check_command returned)
+
+    def check(self, command: Any, limits: MotionLimits, robot_radius_m: float) -> tuple[Command, str | None, str | None]:
+        """:func:`check_command` of ``command`` against this cycle's observation (a pure function of its
+        arguments: a check of the same command, limits and radius is answered from the last one)."""
+        if type(command) is not Command:
+            return check_command(command, self.observation, limits, robot_radius_m, self.config)
+        v, w = command.speed_mps, command.turn_rate_radps
+        last = self.last_check
+        if (last is not None and last[0] is limits and last[1] == robot_radius_m and _same_number(last[2], v)
+                and _same_number(last[3], w)):
+            return last[4]
+        result = check_command(command, self.observation, limits, robot_radius_m, self.config)
+        self.last_check = (limits, robot_radius_m, v, w, result)
+        return result
+
+
+def _same_number(a, b) -> bool:
+    """Equal, with the same sign for zeros (a NaN is never the same: it is checked again)."""
+    return a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
+
+
+#: The cycle of the innermost running guarded ``plan`` (per thread and task).
 _INSPECTED: contextvars.ContextVar = contextvars.ContextVar("viapath_guard_inspected", default=None)
 
 
@@ -318,10 +349,10 @@ def inspected(observation: Observation) -> bool:
     inspection, with a configuration of finite numbers: then every obstacle field is finite (sound within
     finite bounds, or repaired to finite values), and :meth:`~viapath.observation.Obstacles.finite` would
     keep every obstacle."""
-    checked = _INSPECTED.get()
-    if checked is None or checked[0] is not observation:
+    cycle = _INSPECTED.get()
+    if cycle is None or cycle.observation is not observation:
         return False
-    return checked[1].all_finite
+    return cycle.config.all_finite
 
 
 def guard_plan(plan: Callable) -> Callable:
@@ -335,18 +366,19 @@ def guard_plan(plan: Callable) -> Callable:
         if getattr(self, "_guard_active", False):
             return plan(self, observation, *args, **kwargs)
         config = getattr(self, "guard_config", DEFAULT_CONFIG)
-        checked = _INSPECTED.get()
-        if checked is not None and checked[0] is observation and checked[1] == config:
+        cycle = _INSPECTED.get()
+        if cycle is not None and cycle.observation is observation and cycle.config == config:
             # A planner inside another guarded one (the shield's): this very observation came out of the
             # outer guard's inspection with the same configuration, and an inspected (or repaired)
-            # observation passes again with nothing to stop for or repair.
+            # observation passes again with nothing to stop for or repair. The cycle is the outer one's.
             inspection = Inspection(observation, [], [])
         else:
             inspection = inspect_observation(observation, config)
-        if inspection.observation is None:
-            return _stop_decision(self, observation, "guard-stop", inspection.stop_reasons + inspection.repairs)
+            if inspection.observation is None:
+                return _stop_decision(self, observation, "guard-stop", inspection.stop_reasons + inspection.repairs)
+            cycle = _GuardedCycle(inspection.observation, config)
         self._guard_active = True
-        token = _INSPECTED.set((inspection.observation, config))
+        token = _INSPECTED.set(cycle)
         try:
             decision = plan(self, inspection.observation, *args, **kwargs)
         finally:
@@ -354,8 +386,7 @@ def guard_plan(plan: Callable) -> Callable:
             self._guard_active = False
         limits = getattr(self, "limits", None) or MotionLimits()
         radius = max(float(getattr(self, "robot_radius_m", 0.0) or 0.0), float(observation.robot.radius_m))
-        command, status, reason = check_command(getattr(decision, "command", None), inspection.observation, limits,
-                                                radius, config)
+        command, status, reason = cycle.check(getattr(decision, "command", None), limits, radius)
         if status is not None:
             plan_ = getattr(decision, "plan", None)
             if status == "guard-stop" or plan_ is None:

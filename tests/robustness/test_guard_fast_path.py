@@ -163,3 +163,27 @@ def test_an_inspected_observation_has_only_finite_obstacles(observation, config)
         assert skipped == all(np.isfinite(float(getattr(config, name))) for name in config.__dataclass_fields__)
         for name in ("positions", "velocities", "radii_m", "position_sigma_m", "velocity_sigma_mps", "ids"):
             np.testing.assert_array_equal(getattr(kept, name), getattr(finite, name))
+
+
+def test_the_shields_command_is_checked_once_when_it_is_the_planners(monkeypatch):
+    """Behind the shield, both guards check the command; when the shield passes the planner's command on,
+    the outer check is the inner one's answer, and every decision of an episode among people (guard
+    brakes included) is the one of two separate checks."""
+    from viapath.scenarios import load_scenario
+    from viapath.sim.loop import run_episode
+
+    scenario = load_scenario("paper-front")
+    calls = []
+    original = guard.check_command
+    monkeypatch.setattr(guard, "check_command", lambda *a, **k: calls.append(a[0]) or original(*a, **k))
+    once = run_episode(scenario, planner="viapath", perception="oracle", shield=True)
+    checks_once = len(calls)
+    monkeypatch.setattr(guard._GuardedCycle, "check",
+                        lambda self, command, limits, radius: original(command, self.observation, limits, radius,
+                                                                       self.config))
+    twice = run_episode(scenario, planner="viapath", perception="oracle", shield=True)
+    steps = len(twice.trace.commands) - 1
+    assert checks_once < 1.5 * steps  # about one check per cycle, not two
+    assert np.array_equal(once.trace.commands, twice.trace.commands)
+    assert once.trace.plan_status == twice.trace.plan_status
+    assert np.array_equal(once.trace.robot_poses, twice.trace.robot_poses)
