@@ -101,6 +101,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         self._previous: Choice | None = None
         self._previous_escape: Command | None = None  # last cycle's command, if it escaped
         self._situation: Situation | None = None  # this cycle's, for the shield check of candidates
+        self._last_command: tuple | None = None  # (situation, plan, command) of the last command made
 
     @classmethod
     def resolved_defaults(cls) -> dict[str, str]:
@@ -400,6 +401,8 @@ class ViaPathPlanner(Planner, name="viapath"):
         previous = self._previous
         if chosen.candidates is None:
             return chosen  # a free straight leg at nominal speed (the paper's first choice)
+        if chosen.choice.way == previous.way:
+            return chosen  # the previous way chosen again (the test below would find it among the candidates)
         if previous.way.same(chosen.candidates.ways).any():
             return chosen  # the previous way is still there: chosen again, or a fair switch on cost
         obstacles = checks.obstacles
@@ -417,10 +420,16 @@ class ViaPathPlanner(Planner, name="viapath"):
     # -- step 5: the command -------------------------------------------------------------------------
 
     def _command(self, situation: Situation, plan: Plan) -> Command:
+        # With a shield the chosen plan's command was made for its check already (a plan is complete, turn in
+        # place marked, before it is checked): the same situation and plan, the same command.
+        last = self._last_command
+        if last is not None and last[0] is situation and last[1] is plan:
+            return last[2]
         command = self.steer(situation.observation, plan.target, plan.speed_mps, self.config.heading_gain)
         if plan.extras.get("turn_in_place"):
             turn = command.turn_rate_radps if command.turn_rate_radps else self._turn_towards(situation, plan.target)
             command = Command(0.0, turn)
+        self._last_command = (situation, plan, command)
         return command
 
     def _turn_towards(self, situation: Situation, target) -> float:
