@@ -26,6 +26,10 @@ after ``reset()`` (the guard, subgoal tracking and inflation included), single t
   same for p99; ``ratio_to_hrvo_call``: to HRVO's whole call, always resolved). The whole harness cycle of the
   Dummy (``harness_ms``) is printed too: it is what any navground behaviour costs behind our protocol.
 
+For viapath the cycle's own part, ``decide(situation)`` after the harness every planner gets alike (guard,
+subgoal tracking, inflation), is timed too (``decide_p50_ms``, ``decide_p99_ms``, ``ratio_decide_to_hrvo_call``):
+the figure like for like with navground's ``compute_cmd``.
+
 The machine's load average is printed with the figures: on a shared machine, run it three times.
 """
 
@@ -68,7 +72,9 @@ def build(name: str, path):
     """The planner timed under ``name`` (viapath-numpy / viapath-fast are the viapath planner's backends)."""
     if name.startswith("viapath-"):
         backend = {"numpy": "numpy", "fast": "numba"}[name.split("-", 1)[1]]
-        return make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend)
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend)
+        planner.decide = _TimedDecide(planner.decide)  # the instance's, ahead of the class's
+        return planner
     if name == "nav-dummy":
         from viapath.planning.navground_peers import _NavgroundPeer
 
@@ -114,6 +120,21 @@ class _Timed:
         setattr(self._behavior, name, value)
 
 
+class _TimedDecide:
+    """A planner's own part of the cycle, ``decide(situation)``, timed: what follows the harness every planner
+    gets alike (the guard's inspection and command check, subgoal tracking, the inflation), as navground's
+    ``compute_cmd`` follows it for the peers."""
+
+    def __init__(self, decide):
+        self.decide, self.last_ms = decide, float("nan")
+
+    def __call__(self, situation):
+        start = CLOCK[0]()
+        decision = self.decide(situation)
+        self.last_ms = (CLOCK[0]() - start) * 1e3
+        return decision
+
+
 def time_planner(planner, scenes, cycles: int, whole: bool = False) -> np.ndarray:
     """Per cycle: the whole ``plan`` call; for navground, only its ``compute_cmd`` (see the module docstring)
     unless ``whole``."""
@@ -121,13 +142,18 @@ def time_planner(planner, scenes, cycles: int, whole: bool = False) -> np.ndarra
     for scene in scenes[:5]:  # warm-up (and numba's first call)
         planner.reset()
         planner.plan(scene)
-    samples = np.empty(cycles)
+    decide = planner.__dict__.get("decide")
+    own = decide if isinstance(decide, _TimedDecide) else None
+    samples, own_samples = np.empty(cycles), np.full(cycles, np.nan)
     for i in range(cycles):
         scene = scenes[i % len(scenes)]
         planner.reset()
         start = CLOCK[0]()
         planner.plan(scene)
         samples[i] = planner.behavior.last_ms if timed else (CLOCK[0]() - start) * 1e3
+        if own is not None:
+            own_samples[i] = own.last_ms
+    planner.own_samples = own_samples  # decide alone (viapath), NaN for the others
     return samples
 
 
@@ -143,10 +169,12 @@ def run(planners: list[str], counts: list[int], cycles: int, seed: int) -> dict:
     harness: dict[str, dict] = {}
     for n in counts:
         scenes = [random_scene(rng, n, path, chooser) for _ in range(40)]
-        quantiles = {}
+        quantiles, decide_quantiles = {}, {}
         for name in wanted:
             samples = time_planner(built[name], scenes, cycles)
             quantiles[name] = np.percentile(samples, [50, 99])
+            if not np.isnan(built[name].own_samples).any():
+                decide_quantiles[name] = np.percentile(built[name].own_samples, [50, 99])
         if "nav-dummy" in quantiles:
             whole = np.percentile(time_planner(built["nav-dummy"], scenes, cycles, whole=True), [50, 99])
             harness[str(n)] = {"p50_ms": float(whole[0]), "p99_ms": float(whole[1]),
@@ -168,6 +196,10 @@ def run(planners: list[str], counts: list[int], cycles: int, seed: int) -> dict:
                 row["ratio_to_hrvo_call"] = float(own) / float(gross["nav-hrvo"][0])
             if name in NAVGROUND:
                 row["call_p50_ms"], row["call_p99_ms"] = (float(q) for q in gross[name])
+            if name in decide_quantiles:  # the planner's own part, like for like with the peers' compute_cmd
+                row["decide_p50_ms"], row["decide_p99_ms"] = (float(q) for q in decide_quantiles[name])
+                if hrvo is not None:
+                    row["ratio_decide_to_hrvo_call"] = row["decide_p50_ms"] / float(gross["nav-hrvo"][0])
             results[name][str(n)] = row
     clock = "wall (perf_counter)" if CLOCK[0] is time.perf_counter else "thread CPU time (thread_time)"
     return {"cycles": cycles, "seed": seed, "obstacles": counts, "clock": f"{clock}, single thread",
@@ -192,9 +224,14 @@ def print_table(report: dict, load_before, load_after) -> None:
         for n, row in rows.items():
             ratio = (f"{show(row['ratio_to_hrvo'], 9)} {show(row['ratio_p99_to_hrvo'], 9)} "
                      f"{show(row['ratio_to_hrvo_call'], 13)}") if "ratio_to_hrvo" in row else ""
-            print(f"{name:>14} {n:>9} {row['p50_ms']:>9.4f} {row['p99_ms']:>9.4f} {ratio}")
+            own = (f"   decide alone: {row['decide_p50_ms']:.4f} / {row['decide_p99_ms']:.4f}"
+                   + (f", p50 {row['ratio_decide_to_hrvo_call']:.1f}× HRVO's call"
+                      if "ratio_decide_to_hrvo_call" in row else "")) if "decide_p50_ms" in row else ""
+            print(f"{name:>14} {n:>9} {row['p50_ms']:>9.4f} {row['p99_ms']:>9.4f} {ratio}{own}")
     print(f"n/a: HRVO's net time is under {RESOLVED_MS} ms, within the noise of the subtraction; "
-          "'HRVO call': the ratio to HRVO's whole compute_cmd call (the Python → C++ call included)")
+          "'HRVO call': the ratio to HRVO's whole compute_cmd call (the Python → C++ call included); "
+          "'decide alone': viapath's own part of the cycle, after the guard, subgoal tracking and inflation "
+          "that every planner gets (navground's peers included)")
 
 
 def plot(report: dict, file: str) -> None:
