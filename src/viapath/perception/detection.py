@@ -40,7 +40,7 @@ import numpy as np
 
 from viapath.perception.circle_fit import _padded, fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
-from viapath.perception.scanner import ScannerModel, sanitize_ranges
+from viapath.perception.scanner import ScannerModel
 from viapath.perception.segmentation import SegmentationParams, segment_beams
 
 
@@ -145,20 +145,21 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     """Detect round obstacles in the scans of ``scanners`` (readings may encode invalid as 0/NaN/inf)."""
     scanners = tuple(scanners)
     layout = _beam_layout(scanners)
-    parts = checked_scans(scanners, scans)
-    ranges = sanitize_ranges(np.concatenate(parts), 0.0)
-    ranges[(ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = np.nan
+    ranges = np.concatenate(checked_scans(scanners, scans))
+    # sanitize_ranges and each scanner's own range limits, in one pass: NaN for every invalid reading.
+    with np.errstate(invalid="ignore"):
+        ranges[~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = np.nan
     segments = segment_beams(ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index,
                              params.segmentation)
-    fused = FusedScan(segments.all_points, layout.scan_index[segments.all_beam_index],
-                      segments.all_beam_index - layout.first_beam[layout.scan_index[segments.all_beam_index]])
+    point_scan = layout.scan_index[segments.all_beam_index]
+    fused = FusedScan(segments.all_points, point_scan, segments.all_beam_index - layout.first_beam[point_scan])
     if len(segments) == 0:
         empty = Detections.empty()
         empty.fused = fused
         return empty
     points, starts, counts = segments.points, segments.starts, segments.counts
     source, occluded = segments.scan_index, segments.occluded
-    origins = np.stack([layout.mount_x_m[source], layout.mount_y_m[source]], -1)
+    origins = layout.mount_xy_m[source]
 
     # Cheap tests first, on every segment; the circle fit only on what is left (walls are long and
     # would widen the padded fitting arrays to hundreds of points).
@@ -221,6 +222,8 @@ def _merge_duplicates(centres, radii, sigma, source, distance_m):
         return centres, radii, sigma, source
     d = np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1))
     d[source[:, None] == source[None, :]] = np.inf
+    if not (d < distance_m).any():  # nothing to merge (the common case): the loop below would stop at once
+        return centres, radii, sigma, source
     alive = np.ones(len(centres), dtype=bool)
     centres, radii, sigma = centres.copy(), radii.copy(), sigma.copy()
     for flat in np.argsort(d, axis=None):
@@ -279,10 +282,10 @@ def _chord_coordinates(padded, mask, first, chord, extent, origins):
 
 def _convexity_t(x, y, mask, mid, origins, seg: SegmentationParams) -> np.ndarray:
     """t-statistic of the curvature towards the sensor of ``y = a + b x + c x²`` fitted across each chord."""
-    count = mask.sum(1)
     x2 = x * x
-    a = (count, x.sum(1), x2.sum(1), x2.sum(1), (x2 * x).sum(1), (x2 * x2).sum(1))
-    coef, cofactors, det = solve_sym3(a, (y.sum(1), (x * y).sum(1), (x2 * y).sum(1)))
+    # The eight row sums in one reduction: each row is summed alone, as by .sum(1) (same pairwise order).
+    count, sx, sx2, sx3, sx4, sy, sxy, sx2y = np.stack([mask, x, x2, x2 * x, x2 * x2, y, x * y, x2 * y]).sum(2)
+    coef, cofactors, det = solve_sym3((count, sx, sx2, sx2, sx3, sx4), (sy, sxy, sx2y))
     inv22 = cofactors[5] / det
     distance = np.hypot(*(mid - origins).T)
     sigma = np.where(distance < seg.noise_switch_range_m, seg.noise_sigma_near_m, seg.noise_fraction_far * distance)
@@ -302,6 +305,7 @@ class _BeamLayout:
     range_max_m: np.ndarray
     mount_x_m: np.ndarray
     mount_y_m: np.ndarray
+    mount_xy_m: np.ndarray  # (S, 2): mount_x_m, mount_y_m side by side
 
 
 @lru_cache(maxsize=16)
@@ -318,4 +322,5 @@ def _beam_layout(scanners: tuple[ScannerModel, ...]) -> _BeamLayout:
         range_max_m=rep([s.range_max_m for s in scanners]),
         mount_x_m=np.array([s.mount_x_m for s in scanners]),
         mount_y_m=np.array([s.mount_y_m for s in scanners]),
+        mount_xy_m=np.array([[s.mount_x_m, s.mount_y_m] for s in scanners], dtype=float),
     )
