@@ -38,7 +38,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from viapath.perception.circle_fit import _padded, fit_circles, solve_sym3
+from viapath.perception.circle_fit import _numba_fit, _padded, fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
 from viapath.perception.scanner import ScannerModel
 from viapath.perception.segmentation import SegmentationParams, segment_beams
@@ -175,16 +175,27 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     if len(candidates):
         c_starts, c_counts, c_first, c_chord = starts[candidates], counts[candidates], first[candidates], chord[candidates]
         c_extent, c_origins = extent[candidates], origins[candidates]
-        padded, mask = _padded(points, c_starts, c_counts)
-        x, y, mid = _chord_coordinates(padded, mask, c_first, c_chord, c_extent, c_origins)
-        sagitta = np.abs(y).max(1)
-        straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
-        if params.flat_test_min_extent_m is not None:
-            long_enough = c_extent >= params.flat_test_min_extent_m
-            if long_enough.any():
-                t_convex = _convexity_t(x[long_enough], y[long_enough], mask[long_enough], mid[long_enough],
-                                        c_origins[long_enough], params.segmentation)
-                straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
+        kernel = _numba_shape_kernel() if params.fit_backend in ("numba", "auto") else None
+        if kernel is not None:  # the same sagittas and t-statistics, bit for bit, in one compiled pass
+            seg = params.segmentation
+            sagitta, t_convex = np.empty(len(candidates)), np.empty(len(candidates))
+            distance = np.hypot(*(c_first + 0.5 * c_chord - c_origins).T)  # as in _convexity_t
+            kernel(points, c_starts, c_counts, int(c_counts.max()), c_first, c_chord, c_extent, c_origins, distance,
+                   seg.noise_switch_range_m, seg.noise_sigma_near_m, seg.noise_fraction_far, sagitta, t_convex)
+            straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
+            if params.flat_test_min_extent_m is not None:
+                straight |= (c_extent >= params.flat_test_min_extent_m) & (t_convex < params.min_convexity_t)
+        else:
+            padded, mask = _padded(points, c_starts, c_counts)
+            x, y, mid = _chord_coordinates(padded, mask, c_first, c_chord, c_extent, c_origins)
+            sagitta = np.abs(y).max(1)
+            straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
+            if params.flat_test_min_extent_m is not None:
+                long_enough = c_extent >= params.flat_test_min_extent_m
+                if long_enough.any():
+                    t_convex = _convexity_t(x[long_enough], y[long_enough], mask[long_enough], mid[long_enough],
+                                            c_origins[long_enough], params.segmentation)
+                    straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
         # A flat piece with something nearer beside it: background seen between foreground objects.
         straight |= (occluded[candidates] & (c_extent >= params.occluded_min_extent_m)
                      & (sagitta < params.occluded_max_sagitta_ratio * c_extent))
@@ -215,6 +226,15 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     legs = centres[legs_mask]
     centres, radii, sigma, leg_count = _pair_legs(centres, radii, sigma, legs_mask, params)
     return Detections(centres, radii, sigma, leg_count, segment_info, legs, fused)
+
+
+def _numba_shape_kernel():
+    """The compiled shape tests (``_numba_kernels.segment_shape_kernel``), or None without numba."""
+    if _numba_fit() is None:  # numba missing or unusable
+        return None
+    from viapath.perception._numba_kernels import segment_shape_kernel
+
+    return segment_shape_kernel
 
 
 def _merge_duplicates(centres, radii, sigma, source, distance_m):
