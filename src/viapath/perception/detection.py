@@ -41,7 +41,7 @@ import numpy as np
 from viapath.perception.circle_fit import _numba_fit, _padded, fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
 from viapath.perception.scanner import ScannerModel
-from viapath.perception.segmentation import SegmentationParams, segment_beams
+from viapath.perception.segmentation import BeamTables, SegmentationParams, segment_beams
 
 
 @dataclass(frozen=True)
@@ -150,7 +150,7 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     with np.errstate(invalid="ignore"):
         ranges[~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = np.nan
     segments = segment_beams(ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index,
-                             params.segmentation)
+                             params.segmentation, _beam_tables(scanners, params.segmentation))
     point_scan = layout.scan_index[segments.all_beam_index]
     fused = FusedScan(segments.all_points, point_scan, segments.all_beam_index - layout.first_beam[point_scan])
     if len(segments) == 0:
@@ -326,6 +326,11 @@ class _BeamLayout:
     mount_x_m: np.ndarray
     mount_y_m: np.ndarray
     mount_xy_m: np.ndarray  # (S, 2): mount_x_m, mount_y_m side by side
+
+
+@lru_cache(maxsize=16)
+def _beam_tables(scanners: tuple[ScannerModel, ...], segmentation: SegmentationParams) -> BeamTables:
+    return BeamTables.of(_beam_layout(scanners).angles_rad, segmentation)
 
 
 @lru_cache(maxsize=16)
