@@ -255,17 +255,18 @@ def simulate_scans(scanners, robot_pose, centres, radii, segments=None, rng=None
     n_beams = int(layout.bounds[-1])
     origins_x = np.empty(n_beams)
     origins_y = np.empty(n_beams)
-    directions = np.empty((n_beams, 2))
+    angles = np.empty(n_beams)  # world frame
     groups = []
     for index, scanner in enumerate(scanners):
         x, y, yaw = scanner.world_pose(robot_pose)
         first, last = int(layout.bounds[index]), int(layout.bounds[index + 1])
-        angles = layout.beam_angles_rad[index] + yaw
+        np.add(layout.beam_angles_rad[index], yaw, out=angles[first:last])
         origins_x[first:last] = x
         origins_y[first:last] = y
-        directions[first:last, 0] = np.cos(angles)
-        directions[first:last, 1] = np.sin(angles)
-        groups.append((first, last - first, float(angles[0]), scanner.angle_increment_rad))
+        groups.append((first, last - first, float(angles[first]), scanner.angle_increment_rad))
+    directions = np.empty((n_beams, 2))  # cosines and sines of every scanner's beams in one call each,
+    directions[:, 0] = np.cos(angles)  # on a contiguous array, as before (numpy may take another loop
+    directions[:, 1] = np.sin(angles)  # for strided output)
     if backend == "auto":
         backend = "numba" if numba_available() else "numpy"
     if backend == "numpy":

@@ -131,8 +131,8 @@ class MultiTargetTracker:
         Returns the (track row before deletion, detection) pairs that were associated.
         """
         positions = np.asarray(positions, dtype=float).reshape(-1, 2)
-        sigmas_m = np.broadcast_to(np.asarray(sigmas_m, dtype=float), (len(positions),))
-        radii_m = np.broadcast_to(np.asarray(radii_m, dtype=float), (len(positions),))
+        sigmas_m = _per_detection(sigmas_m, len(positions))
+        radii_m = _per_detection(radii_m, len(positions))
         self.predict(time_s)
         p = self.params
         n_tracks, n_det = len(self.ids), len(positions)
@@ -271,6 +271,13 @@ class MultiTargetTracker:
 
 
 _EYE2 = np.eye(2)
+
+
+def _per_detection(values, n: int) -> np.ndarray:
+    """``values`` as a float array of ``n`` (a scalar is repeated, read-only); an array already so is kept."""
+    if type(values) is np.ndarray and values.dtype == np.float64 and values.shape == (n,):
+        return values  # the common case (detections): np.broadcast_to would only add a read-only view
+    return np.broadcast_to(np.asarray(values, dtype=float), (n,))
 
 
 @lru_cache(maxsize=8)
