@@ -2,6 +2,7 @@
 
 Each rewritten piece is held to its earlier form, kept here verbatim as the reference, bit for bit,
 on seeded random inputs:
+* the cached beam tables of the segmentation and its compiled clustering against the per-scan numpy path;
 * the numba shape tests of the detector (sagitta and convexity t-statistic of each segment) against
   the numpy path (``_padded``, ``_chord_coordinates``, ``_convexity_t``), and the kernel's copy of
   numpy's pairwise summation against ``ndarray.sum``;
@@ -176,24 +177,29 @@ def test_motion_model_equals_reference(dt, sigma_a):
 
 @pytest.mark.parametrize("seed", range(4))
 def test_segment_beams_with_tables_equals_without(seed):
-    """The cached cosines, sines and breakpoint sines (BeamTables) give the segments of the per-scan computation."""
+    """The cached cosines, sines and breakpoint sines (BeamTables), and the compiled clustering, give the
+    segments of the per-scan numpy computation."""
     from viapath.perception.detection import _beam_layout
     from viapath.perception.scanner import ScannerModel, paper_scanners
     from viapath.perception.segmentation import BeamTables, segment_beams
 
+    compiled = _numba_fit() is not None
     rng = np.random.default_rng(seed)
     scanner_sets = [paper_scanners(), (ScannerModel(name="wide", beam_count=1024, angle_increment_rad=2 * np.pi / 1024),),
                     (ScannerModel(name="odd", beam_count=181, angle_increment_rad=np.deg2rad(1.0), mount_yaw_rad=0.3),)]
     for scanners in scanner_sets:
         layout = _beam_layout(scanners)
-        for params in (SegmentationParams(), SegmentationParams(max_gap_beams=0, min_points=1, grazing_angle_rad=0.3)):
+        for params in (SegmentationParams(), SegmentationParams(max_gap_beams=0, min_points=1, grazing_angle_rad=0.3),
+                       SegmentationParams(max_gap_beams=3, min_points=5, min_jump_m=0.2)):
             tables = BeamTables.of(layout.angles_rad, params)
             for _ in range(10):
                 n = len(layout.angles_rad)
                 ranges = np.repeat(rng.uniform(0.05, 5.5, n // 10 + 1), 10)[:n] + rng.normal(0, 0.01, n)
                 ranges[rng.random(n) < rng.choice([0.0, 0.05, 0.5])] = np.nan
                 args = (ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index, params)
-                want, got = segment_beams(*args), segment_beams(*args, tables)
-                for name in ("beam_index", "points", "starts", "counts", "occluded", "scan_index", "all_points",
-                             "all_beam_index"):
-                    assert _same(getattr(got, name), getattr(want, name)), name
+                want = segment_beams(*args)
+                for got in [segment_beams(*args, tables)] + ([segment_beams(*args, tables, "numba")] if compiled else []):
+                    for name in ("beam_index", "points", "starts", "counts", "occluded", "scan_index", "all_points",
+                                 "all_beam_index"):
+                        assert getattr(got, name).dtype == getattr(want, name).dtype, name
+                        assert _same(getattr(got, name), getattr(want, name)), name

@@ -317,3 +317,54 @@ def segment_shape_kernel(points, starts, counts, width, first, chord, extent, or
         inv22 = c22 / det
         sigma = noise_sigma_near if distance[k] < noise_switch_range else noise_fraction_far * distance[k]
         t_convex[k] = -curvature / (sigma * np.sqrt(max(inv22, 1e-30)))
+
+
+@numba.njit(cache=True, nogil=True)
+def split_clusters_kernel(points, r, valid, scans, sin_gap, sin_rest, max_gap_beams, noise_switch_range,
+                          noise_sigma_near, noise_fraction_far, min_jump, min_points, starts, counts, occluded,
+                          cluster_scan, kept_points):  # pragma: no cover - compiled
+    """The clustering of :func:`~viapath.perception.segmentation.segment_beams` after the points, with
+    its breakpoint thresholds from :class:`~viapath.perception.segmentation.BeamTables`: the same
+    expressions, one pair of neighbouring valid beams at a time (elementwise: the same values).
+
+    Fills, for the clusters of at least ``min_points`` points, ``starts`` (into the valid points),
+    ``counts``, ``occluded``, ``cluster_scan`` and the kept points' indices ``kept_points``; returns
+    (clusters kept, points kept).
+    """
+    n = r.shape[0]
+    reach = max_gap_beams + 1
+    adjacent = np.empty(max(n - 1, 0), dtype=np.bool_)
+    split = np.empty(max(n - 1, 0), dtype=np.bool_)
+    for k in range(n - 1):
+        beam_step = valid[k + 1] - valid[k]
+        adjacent[k] = beam_step <= reach and scans[k + 1] == scans[k]
+        dx = points[k + 1, 0] - points[k, 0]
+        dy = points[k + 1, 1] - points[k, 1]
+        gap = np.sqrt(dx * dx + dy * dy)
+        near = min(r[k], r[k + 1])
+        row = min(beam_step, reach) - 1
+        sigma = noise_sigma_near if near < noise_switch_range else noise_fraction_far * near
+        jump = near * sin_gap[row, valid[k]] / sin_rest[row, valid[k]] + 3.0 * sigma
+        threshold = max(jump, min_jump)
+        split[k] = gap > threshold or not adjacent[k]
+    kept = 0
+    kept_total = 0
+    first = 0
+    for k in range(n):
+        if k < n - 1 and not split[k]:
+            continue
+        last = k  # the cluster is first..last
+        count = last - first + 1
+        if count >= min_points:
+            hidden = first > 0 and adjacent[first - 1] and r[first - 1] < r[first]
+            hidden = hidden or (last < n - 1 and adjacent[last] and r[last + 1] < r[last])
+            starts[kept] = first
+            counts[kept] = count
+            occluded[kept] = hidden
+            cluster_scan[kept] = scans[first]
+            for i in range(first, last + 1):
+                kept_points[kept_total] = i
+                kept_total += 1
+            kept += 1
+        first = k + 1
+    return kept, kept_total

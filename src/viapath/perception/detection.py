@@ -149,8 +149,10 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     # sanitize_ranges and each scanner's own range limits, in one pass: NaN for every invalid reading.
     with np.errstate(invalid="ignore"):
         ranges[~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = np.nan
+    compiled = params.fit_backend in ("numba", "auto") and _numba_fit() is not None
     segments = segment_beams(ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index,
-                             params.segmentation, _beam_tables(scanners, params.segmentation))
+                             params.segmentation, _beam_tables(scanners, params.segmentation),
+                             "numba" if compiled else "numpy")
     point_scan = layout.scan_index[segments.all_beam_index]
     fused = FusedScan(segments.all_points, point_scan, segments.all_beam_index - layout.first_beam[point_scan])
     if len(segments) == 0:
@@ -175,7 +177,7 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     if len(candidates):
         c_starts, c_counts, c_first, c_chord = starts[candidates], counts[candidates], first[candidates], chord[candidates]
         c_extent, c_origins = extent[candidates], origins[candidates]
-        kernel = _numba_shape_kernel() if params.fit_backend in ("numba", "auto") else None
+        kernel = _numba_shape_kernel() if compiled else None
         if kernel is not None:  # the same sagittas and t-statistics, bit for bit, in one compiled pass
             seg = params.segmentation
             sagitta, t_convex = np.empty(len(candidates)), np.empty(len(candidates))
