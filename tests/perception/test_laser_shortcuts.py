@@ -7,6 +7,7 @@ on seeded random inputs:
   the numpy path (``_padded``, ``_chord_coordinates``, ``_convexity_t``), and the kernel's copy of
   numpy's pairwise summation against ``ndarray.sum``;
 * ``_convexity_t``'s single stacked reduction against its eight separate ``.sum(1)``;
+* ``_merge_duplicates`` (its loop over the close pairs only, on Python floats);
 * ``gated_assignment``'s direct answer for one-to-one gates against the union-find path;
 * the tracker's cached motion model against the matrices it used to build every cycle.
 """
@@ -203,3 +204,45 @@ def test_segment_beams_with_tables_equals_without(seed):
                                  "all_beam_index"):
                         assert getattr(got, name).dtype == getattr(want, name).dtype, name
                         assert _same(getattr(got, name), getattr(want, name)), name
+
+
+def _merge_duplicates_reference(centres, radii, sigma, source, distance_m):
+    """``detection._merge_duplicates`` before wave 7, verbatim."""
+    if len(centres) < 2 or distance_m <= 0 or source.min() == source.max():
+        return centres, radii, sigma, source
+    d = np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1))
+    d[source[:, None] == source[None, :]] = np.inf
+    alive = np.ones(len(centres), dtype=bool)
+    centres, radii, sigma = centres.copy(), radii.copy(), sigma.copy()
+    for flat in np.argsort(d, axis=None):
+        i, j = divmod(int(flat), len(centres))
+        if d[i, j] >= distance_m:
+            break
+        if i >= j or not (alive[i] and alive[j]):
+            continue
+        wi, wj = 1.0 / sigma[i] ** 2, 1.0 / sigma[j] ** 2
+        centres[i] = (wi * centres[i] + wj * centres[j]) / (wi + wj)
+        radii[i] = max(radii[i], radii[j])
+        sigma[i] = np.sqrt(1.0 / (wi + wj))
+        alive[j] = False
+    return centres[alive], radii[alive], sigma[alive], source[alive]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_merge_duplicates_equals_reference(seed):
+    from viapath.perception.detection import _merge_duplicates
+
+    rng = np.random.default_rng(seed)
+    for _ in range(200):
+        n = int(rng.integers(0, 16))
+        centres = rng.uniform(-1.0, 1.0, (n, 2)) * rng.choice([0.3, 1.0, 3.0])
+        if n > 2:
+            centres[1] = centres[0] + rng.normal(0, 0.05, 2)  # a front/rear pair of one object
+        radii, sigma = rng.uniform(0.05, 0.4, n), rng.uniform(0.005, 0.1, n)
+        source = rng.integers(0, 2, n)
+        distance = float(rng.choice([0.0, 0.25, 0.6]))
+        got = _merge_duplicates(centres, radii, sigma, source, distance)
+        want = _merge_duplicates_reference(centres, radii, sigma, source, distance)
+        for a, b in zip(got, want, strict=True):
+            assert a.dtype == b.dtype and a.shape == b.shape and _same(a, b)
+            assert a.flags.c_contiguous

@@ -146,9 +146,9 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     scanners = tuple(scanners)
     layout = _beam_layout(scanners)
     ranges = np.concatenate(checked_scans(scanners, scans))
-    # sanitize_ranges and each scanner's own range limits, in one pass: NaN for every invalid reading.
-    with np.errstate(invalid="ignore"):
-        ranges[~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = np.nan
+    # sanitize_ranges and each scanner's own range limits, in one pass: NaN for every invalid reading
+    # (comparisons with NaN are quiet: no errstate needed).
+    ranges[~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = np.nan
     compiled = params.fit_backend in ("numba", "auto") and _numba_fit() is not None
     segments = segment_beams(ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index,
                              params.segmentation, _beam_tables(scanners, params.segmentation),
@@ -246,20 +246,24 @@ def _merge_duplicates(centres, radii, sigma, source, distance_m):
     d[source[:, None] == source[None, :]] = np.inf
     if not (d < distance_m).any():  # nothing to merge (the common case): the loop below would stop at once
         return centres, radii, sigma, source
-    alive = np.ones(len(centres), dtype=bool)
-    centres, radii, sigma = centres.copy(), radii.copy(), sigma.copy()
-    for flat in np.argsort(d, axis=None):
-        i, j = divmod(int(flat), len(centres))
-        if d[i, j] >= distance_m:
-            break
+    # Closest pairs first (argsort order); only the pairs closer than distance_m (the first n_close
+    # of that order) can merge. The centres as Python floats: the same arithmetic as on rows of two.
+    n = len(centres)
+    n_close = int(np.count_nonzero(d < distance_m))
+    alive = np.ones(n, dtype=bool)
+    cx, cy = centres[:, 0].tolist(), centres[:, 1].tolist()
+    radii, sigma = radii.copy(), sigma.copy()
+    for flat in np.argsort(d, axis=None)[:n_close].tolist():
+        i, j = divmod(flat, n)
         if i >= j or not (alive[i] and alive[j]):
             continue
-        wi, wj = 1.0 / sigma[i] ** 2, 1.0 / sigma[j] ** 2
-        centres[i] = (wi * centres[i] + wj * centres[j]) / (wi + wj)
+        wi, wj = 1.0 / sigma[i] ** 2, 1.0 / sigma[j] ** 2  # numpy scalars, as before
+        cx[i] = (wi * cx[i] + wj * cx[j]) / (wi + wj)
+        cy[i] = (wi * cy[i] + wj * cy[j]) / (wi + wj)
         radii[i] = max(radii[i], radii[j])
         sigma[i] = np.sqrt(1.0 / (wi + wj))
         alive[j] = False
-    return centres[alive], radii[alive], sigma[alive], source[alive]
+    return np.column_stack([cx, cy])[alive], radii[alive], sigma[alive], source[alive]
 
 
 def _pair_legs(centres, radii, sigma, legs_mask, params: DetectorParams):

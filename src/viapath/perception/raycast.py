@@ -257,8 +257,13 @@ def simulate_scans(scanners, robot_pose, centres, radii, segments=None, rng=None
     origins_y = np.empty(n_beams)
     angles = np.empty(n_beams)  # world frame
     groups = []
+    # ScannerModel.world_pose of each scanner, with the heading's cosine and sine computed once.
+    robot_x, robot_y, heading = (float(v) for v in robot_pose)
+    c, s = np.cos(heading), np.sin(heading)
     for index, scanner in enumerate(scanners):
-        x, y, yaw = scanner.world_pose(robot_pose)
+        x = robot_x + c * scanner.mount_x_m - s * scanner.mount_y_m
+        y = robot_y + s * scanner.mount_x_m + c * scanner.mount_y_m
+        yaw = heading + scanner.mount_yaw_rad
         first, last = int(layout.bounds[index]), int(layout.bounds[index + 1])
         np.add(layout.beam_angles_rad[index], yaw, out=angles[first:last])
         origins_x[first:last] = x
@@ -284,9 +289,9 @@ def simulate_scans(scanners, robot_pose, centres, radii, segments=None, rng=None
     reading = true_range.copy()
     if rng is not None:
         hit = np.isfinite(true_range)
-        r = true_range[hit]
-        sigma = np.where(r < layout.noise_switch_range_m[hit], layout.noise_sigma_near_m[hit],
-                         layout.noise_fraction_far[hit] * r)
+        # σ of every beam (inf where nothing was hit), then the hit ones: the same values as on the hits alone.
+        sigma = np.where(true_range < layout.noise_switch_range_m, layout.noise_sigma_near_m,
+                         layout.noise_fraction_far * true_range)[hit]
         reading[hit] += rng.standard_normal(int(hit.sum())) * sigma
     invalid = ~np.isfinite(reading) | (reading < layout.range_min_m) | (reading > layout.range_max_m)
     out = []
