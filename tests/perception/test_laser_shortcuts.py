@@ -7,7 +7,7 @@ on seeded random inputs:
   the numpy path (``_padded``, ``_chord_coordinates``, ``_convexity_t``), and the kernel's copy of
   numpy's pairwise summation against ``ndarray.sum``;
 * ``_convexity_t``'s single stacked reduction against its eight separate ``.sum(1)``;
-* ``_merge_duplicates`` (its loop over the close pairs only, on Python floats);
+* ``_merge_duplicates`` (its early return when nothing is close);
 * ``gated_assignment``'s direct answer for one-to-one gates against the union-find path;
 * the tracker's cached motion model against the matrices it used to build every cycle.
 """

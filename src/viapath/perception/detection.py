@@ -244,26 +244,22 @@ def _merge_duplicates(centres, radii, sigma, source, distance_m):
         return centres, radii, sigma, source
     d = np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1))
     d[source[:, None] == source[None, :]] = np.inf
-    if not (d < distance_m).any():  # nothing to merge (the common case): the loop below would stop at once
+    if not (d < distance_m).any():  # nothing to merge: the loop below would stop at once
         return centres, radii, sigma, source
-    # Closest pairs first (argsort order); only the pairs closer than distance_m (the first n_close
-    # of that order) can merge. The centres as Python floats: the same arithmetic as on rows of two.
-    n = len(centres)
-    n_close = int(np.count_nonzero(d < distance_m))
-    alive = np.ones(n, dtype=bool)
-    cx, cy = centres[:, 0].tolist(), centres[:, 1].tolist()
-    radii, sigma = radii.copy(), sigma.copy()
-    for flat in np.argsort(d, axis=None)[:n_close].tolist():
-        i, j = divmod(flat, n)
+    alive = np.ones(len(centres), dtype=bool)
+    centres, radii, sigma = centres.copy(), radii.copy(), sigma.copy()
+    for flat in np.argsort(d, axis=None):
+        i, j = divmod(int(flat), len(centres))
+        if d[i, j] >= distance_m:
+            break
         if i >= j or not (alive[i] and alive[j]):
             continue
-        wi, wj = 1.0 / sigma[i] ** 2, 1.0 / sigma[j] ** 2  # numpy scalars, as before
-        cx[i] = (wi * cx[i] + wj * cx[j]) / (wi + wj)
-        cy[i] = (wi * cy[i] + wj * cy[j]) / (wi + wj)
+        wi, wj = 1.0 / sigma[i] ** 2, 1.0 / sigma[j] ** 2
+        centres[i] = (wi * centres[i] + wj * centres[j]) / (wi + wj)
         radii[i] = max(radii[i], radii[j])
         sigma[i] = np.sqrt(1.0 / (wi + wj))
         alive[j] = False
-    return np.column_stack([cx, cy])[alive], radii[alive], sigma[alive], source[alive]
+    return centres[alive], radii[alive], sigma[alive], source[alive]
 
 
 def _pair_legs(centres, radii, sigma, legs_mask, params: DetectorParams):
