@@ -17,7 +17,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from viapath.perception.assignment import _components, gated_assignment, linear_sum_assignment
+from viapath.perception.assignment import (
+    _components,
+    gated_assignment,
+    linear_sum_assignment,
+)
 from viapath.perception.circle_fit import _numba_fit, _padded, solve_sym3
 from viapath.perception.detection import _chord_coordinates, _convexity_t
 from viapath.perception.segmentation import SegmentationParams

@@ -90,7 +90,7 @@ class BeamTables:
     sin_rest: np.ndarray  # (D, B); 1 there
 
     @classmethod
-    def of(cls, angles_rad: np.ndarray, params: "SegmentationParams") -> "BeamTables":
+    def of(cls, angles_rad: np.ndarray, params: SegmentationParams) -> BeamTables:
         angles_rad = np.asarray(angles_rad, dtype=float)
         n, reach = len(angles_rad), params.max_gap_beams + 1
         sin_gap, sin_rest = np.zeros((reach, n)), np.ones((reach, n))
