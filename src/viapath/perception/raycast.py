@@ -191,20 +191,22 @@ def cast_rays_from_numpy(origins_x, origins_y, directions, centres, radii, segme
             t = np.where(k <= 0.0, 0.0, t)
             np.minimum.at(best, beam, t)
     if len(segments):
-        px = segments[:, 0, 0]
-        py = segments[:, 0, 1]
-        ex = segments[:, 1, 0] - px
-        ey = segments[:, 1, 1] - py
-        wx = px - origins_x[:, None]
-        wy = py - origins_y[:, None]
-        dxc, dyc = dx[:, None], dy[:, None]
-        denom = dxc * ey - dyc * ex
+        # Walls along the first axis, beams along the second ((W, B), the transpose of cast_rays_numpy's
+        # layout): the same products and differences, but numpy's loops run over the many beams, not
+        # the few walls (about 3x faster for two walls), and the minimum over walls is elementwise.
+        px = segments[:, 0, 0, None]
+        py = segments[:, 0, 1, None]
+        ex = segments[:, 1, 0, None] - px
+        ey = segments[:, 1, 1, None] - py
+        wx = px - origins_x
+        wy = py - origins_y
+        denom = dx * ey - dy * ex
         with np.errstate(divide="ignore", invalid="ignore"):
             t = (wx * ey - wy * ex) / denom
-            s = (wx * dyc - wy * dxc) / denom
+            s = (wx * dy - wy * dx) / denom
             ok = (denom != 0.0) & (t >= 0.0) & (s >= 0.0) & (s <= 1.0)
         t = np.where(ok, t, np.inf)
-        best = np.minimum(best, t.min(axis=1))
+        best = np.minimum(best, t.min(axis=0))
     return best
 
 
