@@ -1,4 +1,4 @@
-"""Compiled (numba) kernels of the laser chain: ray casting and the batched circle fit.
+"""Compiled (numba) kernels of the laser chain: ray casting, the batched circle fit, the detector's shape tests.
 
 Source: the same closed forms as :mod:`~viapath.perception.raycast` and
 :mod:`~viapath.perception.circle_fit` (their docstrings), written as loops.
@@ -16,7 +16,7 @@ Why a module of its own, with plain module-level functions (issue 16):
   (``~/.cache/numba`` or ``$NUMBA_CACHE_DIR``). Either way the first process on a machine compiles
   and every later one loads (tested: ``tests/perception/test_numba_cache.py``).
 * No fast-math: the kernels evaluate the numpy path's expressions in the same order, so ray
-  casting agrees bit for bit and the fit to round-off (tested).
+  casting and the shape tests agree bit for bit and the fit to round-off (tested).
 """
 
 from __future__ import annotations
@@ -172,3 +172,199 @@ def fit_circles_kernel(points, starts, counts, origins, has_prior, prior, weight
         out[k, 2] = r
         out[k, 3] = rms
         out[k, 4] = np.sqrt(max(largest * sigma2, 0.0))
+
+
+# -- the detector's cheap shape tests (issue 16, wave 7) --------------------------------------------
+# These must give the numpy path's values bit for bit (the detections decide which tracks exist), so
+# they use only +, -, *, /, abs, max and sqrt (correctly rounded everywhere) and sum the way numpy
+# sums a row: ``row.sum()`` starts from 0.0 and adds numpy's pairwise sum of the row (below).
+
+
+@numba.njit(cache=True, nogil=True)
+def _pairwise_block(values, first, n):  # pragma: no cover - compiled
+    """numpy's pairwise sum of at most 128 values (see :func:`numpy_pairwise_sum`)."""
+    if n < 8:
+        res = 0.0
+        for i in range(first, first + n):
+            res += values[i]
+        return res
+    r0 = values[first]
+    r1 = values[first + 1]
+    r2 = values[first + 2]
+    r3 = values[first + 3]
+    r4 = values[first + 4]
+    r5 = values[first + 5]
+    r6 = values[first + 6]
+    r7 = values[first + 7]
+    i = 8
+    while i < n - n % 8:
+        j = first + i
+        r0 += values[j]
+        r1 += values[j + 1]
+        r2 += values[j + 2]
+        r3 += values[j + 3]
+        r4 += values[j + 4]
+        r5 += values[j + 5]
+        r6 += values[j + 6]
+        r7 += values[j + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += values[first + i]
+        i += 1
+    return res
+
+
+@numba.njit(cache=True, nogil=True)
+def numpy_pairwise_sum(values, first, n):  # pragma: no cover - compiled
+    """``values[first:first + n]`` summed in numpy's order (``pairwise_sum`` in numpy's ``loops_utils.h``):
+    fewer than 8 values one after the other, up to 128 in eight interleaved partial sums combined as
+    ``((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))`` then the remainder; a longer run is split in
+    two halves (the first a multiple of 8 long), each summed so, and the two sums added.
+
+    The halving is walked with an explicit stack, not by recursion: numba's on-disk cache does not
+    reload recursive functions safely (a cached recursive kernel crashed the next process).
+    """
+    if n <= 128:
+        return _pairwise_block(values, first, n)
+    node_first = np.empty(64, dtype=np.int64)  # depth <= log2(n): 64 is far beyond any scan
+    node_n = np.empty(64, dtype=np.int64)
+    node_stage = np.empty(64, dtype=np.int64)  # 0: visit the left half, 1: the right half, 2: add
+    partial = np.empty(64)
+    top = 0
+    done = 0
+    node_first[0], node_n[0], node_stage[0] = first, n, 0
+    while top >= 0:
+        f, m = node_first[top], node_n[top]
+        if m <= 128:
+            partial[done] = _pairwise_block(values, f, m)
+            done += 1
+            top -= 1
+            continue
+        half = m // 2
+        half -= half % 8
+        stage = node_stage[top]
+        node_stage[top] = stage + 1
+        if stage == 0:
+            top += 1
+            node_first[top], node_n[top], node_stage[top] = f, half, 0
+        elif stage == 1:
+            top += 1
+            node_first[top], node_n[top], node_stage[top] = f + half, m - half, 0
+        else:
+            done -= 1
+            partial[done - 1] = partial[done - 1] + partial[done]
+            top -= 1
+    return partial[0]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def segment_shape_kernel(points, starts, counts, width, first, chord, extent, origins, distance,
+                         noise_switch_range, noise_sigma_near, noise_fraction_far, sagitta, t_convex):  # pragma: no cover
+    """Per segment: the sagitta (largest distance from the chord) and the convexity t-statistic of
+    :func:`~viapath.perception.detection._chord_coordinates` / ``_convexity_t``, same values.
+
+    Each segment is laid out as the numpy path's padded row of ``width`` entries (padding: the
+    segment's first point, multiplied by a 0 mask), so that the pairwise sums group alike.
+    ``distance``: |mid - origin| per segment, from numpy (``np.hypot``).
+    """
+    terms = np.empty((8, width))
+    sums = np.empty(8)
+    for k in range(starts.shape[0]):
+        ux = chord[k, 0] / max(extent[k], 1e-12)
+        uy = chord[k, 1] / max(extent[k], 1e-12)
+        mx = first[k, 0] + 0.5 * chord[k, 0]
+        my = first[k, 1] + 0.5 * chord[k, 1]
+        nx = -uy
+        ny = ux
+        if (0.0 + (origins[k, 0] - mx) * nx) + (origins[k, 1] - my) * ny < 0:  # n points towards the sensor
+            nx = nx * -1.0
+            ny = ny * -1.0
+        largest = 0.0
+        for p in range(width):
+            on = p < counts[k]
+            mask = 1.0 if on else 0.0
+            i = starts[k] + p if on else starts[k]
+            rx = points[i, 0] - mx
+            ry = points[i, 1] - my
+            x = (rx * ux + ry * uy) * mask
+            y = (rx * nx + ry * ny) * mask
+            largest = max(largest, abs(y))
+            x2 = x * x
+            terms[0, p] = mask
+            terms[1, p] = x
+            terms[2, p] = x2
+            terms[3, p] = x2 * x
+            terms[4, p] = x2 * x2
+            terms[5, p] = y
+            terms[6, p] = x * y
+            terms[7, p] = x2 * y
+        sagitta[k] = largest
+        for q in range(8):
+            sums[q] = 0.0 + numpy_pairwise_sum(terms[q], 0, width)
+        # solve_sym3 on (count, Σx, Σx², Σx², Σx³, Σx⁴) and (Σy, Σxy, Σx²y): the curvature and (A⁻¹)₂₂.
+        a00, a01, a02, a11, a12, a22 = sums[0], sums[1], sums[2], sums[2], sums[3], sums[4]
+        b0, b1, b2 = sums[5], sums[6], sums[7]
+        c02 = a01 * a12 - a02 * a11
+        c12 = a01 * a02 - a00 * a12
+        c22 = a00 * a11 - a01 * a01
+        c00 = a11 * a22 - a12 * a12
+        c01 = a02 * a12 - a01 * a22
+        det = a00 * c00 + a01 * c01 + a02 * c02
+        if not abs(det) > 1e-300:
+            det = np.inf
+        curvature = (c02 * b0 + c12 * b1 + c22 * b2) / det
+        inv22 = c22 / det
+        sigma = noise_sigma_near if distance[k] < noise_switch_range else noise_fraction_far * distance[k]
+        t_convex[k] = -curvature / (sigma * np.sqrt(max(inv22, 1e-30)))
+
+
+@numba.njit(cache=True, nogil=True)
+def split_clusters_kernel(points, r, valid, scans, sin_gap, sin_rest, max_gap_beams, noise_switch_range,
+                          noise_sigma_near, noise_fraction_far, min_jump, min_points, starts, counts, occluded,
+                          cluster_scan, kept_points):  # pragma: no cover - compiled
+    """The clustering of :func:`~viapath.perception.segmentation.segment_beams` after the points, with
+    its breakpoint thresholds from :class:`~viapath.perception.segmentation.BeamTables`: the same
+    expressions, one pair of neighbouring valid beams at a time (elementwise: the same values).
+
+    Fills, for the clusters of at least ``min_points`` points, ``starts`` (into the valid points),
+    ``counts``, ``occluded``, ``cluster_scan`` and the kept points' indices ``kept_points``; returns
+    (clusters kept, points kept).
+    """
+    n = r.shape[0]
+    reach = max_gap_beams + 1
+    adjacent = np.empty(max(n - 1, 0), dtype=np.bool_)
+    split = np.empty(max(n - 1, 0), dtype=np.bool_)
+    for k in range(n - 1):
+        beam_step = valid[k + 1] - valid[k]
+        adjacent[k] = beam_step <= reach and scans[k + 1] == scans[k]
+        dx = points[k + 1, 0] - points[k, 0]
+        dy = points[k + 1, 1] - points[k, 1]
+        gap = np.sqrt(dx * dx + dy * dy)
+        near = min(r[k], r[k + 1])
+        row = min(beam_step, reach) - 1
+        sigma = noise_sigma_near if near < noise_switch_range else noise_fraction_far * near
+        jump = near * sin_gap[row, valid[k]] / sin_rest[row, valid[k]] + 3.0 * sigma
+        threshold = max(jump, min_jump)
+        split[k] = gap > threshold or not adjacent[k]
+    kept = 0
+    kept_total = 0
+    first = 0
+    for k in range(n):
+        if k < n - 1 and not split[k]:
+            continue
+        last = k  # the cluster is first..last
+        count = last - first + 1
+        if count >= min_points:
+            hidden = first > 0 and adjacent[first - 1] and r[first - 1] < r[first]
+            hidden = hidden or (last < n - 1 and adjacent[last] and r[last + 1] < r[last])
+            starts[kept] = first
+            counts[kept] = count
+            occluded[kept] = hidden
+            cluster_scan[kept] = scans[first]
+            for i in range(first, last + 1):
+                kept_points[kept_total] = i
+                kept_total += 1
+            kept += 1
+        first = k + 1
+    return kept, kept_total

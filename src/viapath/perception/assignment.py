@@ -117,6 +117,10 @@ def gated_assignment(cost, gate: float) -> list[tuple[int, int]]:
     pairs: list[tuple[int, int]] = []
     if not allowed.any():
         return pairs
+    if allowed.sum(0).max() <= 1 and allowed.sum(1).max() <= 1:
+        # Every component is one isolated pair (the common case): those pairs, in row order, as below.
+        rows, cols = np.nonzero(allowed)
+        return list(zip(rows.tolist(), cols.tolist()))
     for rows, cols in _components(allowed):
         if len(rows) == 1 and len(cols) == 1:
             pairs.append((rows[0], cols[0]))

@@ -75,7 +75,12 @@ def fit_circles(
         kernel = _numba_fit()
         if kernel is None:
             raise RuntimeError("numba back end unavailable; pip install 'viapath[fast]'")
-        origins = np.zeros((k_count, 2)) if sensor_origins is None else np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
+        if sensor_origins is None:
+            origins = np.zeros((k_count, 2))
+        elif type(sensor_origins) is np.ndarray and sensor_origins.dtype == np.float64 and sensor_origins.shape == (k_count, 2):
+            origins = sensor_origins  # one per cluster already (detection): no broadcast view needed
+        else:
+            origins = np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
         prior = fixed_radius_m if fixed_radius_m is not None else radius_prior_m
         if fixed_radius_m is not None:
             weight = 1e12

@@ -38,10 +38,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from viapath.perception.circle_fit import _padded, fit_circles, solve_sym3
+from viapath.perception.circle_fit import _numba_fit, _padded, fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
-from viapath.perception.scanner import ScannerModel, sanitize_ranges
-from viapath.perception.segmentation import SegmentationParams, segment_beams
+from viapath.perception.scanner import ScannerModel
+from viapath.perception.segmentation import BeamTables, SegmentationParams, segment_beams
 
 
 @dataclass(frozen=True)
@@ -145,20 +145,23 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     """Detect round obstacles in the scans of ``scanners`` (readings may encode invalid as 0/NaN/inf)."""
     scanners = tuple(scanners)
     layout = _beam_layout(scanners)
-    parts = checked_scans(scanners, scans)
-    ranges = sanitize_ranges(np.concatenate(parts), 0.0)
-    ranges[(ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = np.nan
+    ranges = np.concatenate(checked_scans(scanners, scans))
+    # sanitize_ranges and each scanner's own range limits, in one pass: NaN for every invalid reading
+    # (comparisons with NaN are quiet: no errstate needed).
+    ranges[~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = np.nan
+    compiled = params.fit_backend in ("numba", "auto") and _numba_fit() is not None
     segments = segment_beams(ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index,
-                             params.segmentation)
-    fused = FusedScan(segments.all_points, layout.scan_index[segments.all_beam_index],
-                      segments.all_beam_index - layout.first_beam[layout.scan_index[segments.all_beam_index]])
+                             params.segmentation, _beam_tables(scanners, params.segmentation),
+                             "numba" if compiled else "numpy")
+    point_scan = layout.scan_index[segments.all_beam_index]
+    fused = FusedScan(segments.all_points, point_scan, segments.all_beam_index - layout.first_beam[point_scan])
     if len(segments) == 0:
         empty = Detections.empty()
         empty.fused = fused
         return empty
     points, starts, counts = segments.points, segments.starts, segments.counts
     source, occluded = segments.scan_index, segments.occluded
-    origins = np.stack([layout.mount_x_m[source], layout.mount_y_m[source]], -1)
+    origins = layout.mount_xy_m[source]
 
     # Cheap tests first, on every segment; the circle fit only on what is left (walls are long and
     # would widen the padded fitting arrays to hundreds of points).
@@ -174,16 +177,27 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     if len(candidates):
         c_starts, c_counts, c_first, c_chord = starts[candidates], counts[candidates], first[candidates], chord[candidates]
         c_extent, c_origins = extent[candidates], origins[candidates]
-        padded, mask = _padded(points, c_starts, c_counts)
-        x, y, mid = _chord_coordinates(padded, mask, c_first, c_chord, c_extent, c_origins)
-        sagitta = np.abs(y).max(1)
-        straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
-        if params.flat_test_min_extent_m is not None:
-            long_enough = c_extent >= params.flat_test_min_extent_m
-            if long_enough.any():
-                t_convex = _convexity_t(x[long_enough], y[long_enough], mask[long_enough], mid[long_enough],
-                                        c_origins[long_enough], params.segmentation)
-                straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
+        kernel = _numba_shape_kernel() if compiled else None
+        if kernel is not None:  # the same sagittas and t-statistics, bit for bit, in one compiled pass
+            seg = params.segmentation
+            sagitta, t_convex = np.empty(len(candidates)), np.empty(len(candidates))
+            distance = np.hypot(*(c_first + 0.5 * c_chord - c_origins).T)  # as in _convexity_t
+            kernel(points, c_starts, c_counts, int(c_counts.max()), c_first, c_chord, c_extent, c_origins, distance,
+                   seg.noise_switch_range_m, seg.noise_sigma_near_m, seg.noise_fraction_far, sagitta, t_convex)
+            straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
+            if params.flat_test_min_extent_m is not None:
+                straight |= (c_extent >= params.flat_test_min_extent_m) & (t_convex < params.min_convexity_t)
+        else:
+            padded, mask = _padded(points, c_starts, c_counts)
+            x, y, mid = _chord_coordinates(padded, mask, c_first, c_chord, c_extent, c_origins)
+            sagitta = np.abs(y).max(1)
+            straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
+            if params.flat_test_min_extent_m is not None:
+                long_enough = c_extent >= params.flat_test_min_extent_m
+                if long_enough.any():
+                    t_convex = _convexity_t(x[long_enough], y[long_enough], mask[long_enough], mid[long_enough],
+                                            c_origins[long_enough], params.segmentation)
+                    straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
         # A flat piece with something nearer beside it: background seen between foreground objects.
         straight |= (occluded[candidates] & (c_extent >= params.occluded_min_extent_m)
                      & (sagitta < params.occluded_max_sagitta_ratio * c_extent))
@@ -216,11 +230,22 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     return Detections(centres, radii, sigma, leg_count, segment_info, legs, fused)
 
 
+def _numba_shape_kernel():
+    """The compiled shape tests (``_numba_kernels.segment_shape_kernel``), or None without numba."""
+    if _numba_fit() is None:  # numba missing or unusable
+        return None
+    from viapath.perception._numba_kernels import segment_shape_kernel
+
+    return segment_shape_kernel
+
+
 def _merge_duplicates(centres, radii, sigma, source, distance_m):
     if len(centres) < 2 or distance_m <= 0 or source.min() == source.max():
         return centres, radii, sigma, source
     d = np.hypot(*(centres[:, None, :] - centres[None, :, :]).transpose(2, 0, 1))
     d[source[:, None] == source[None, :]] = np.inf
+    if not (d < distance_m).any():  # nothing to merge: the loop below would stop at once
+        return centres, radii, sigma, source
     alive = np.ones(len(centres), dtype=bool)
     centres, radii, sigma = centres.copy(), radii.copy(), sigma.copy()
     for flat in np.argsort(d, axis=None):
@@ -279,10 +304,10 @@ def _chord_coordinates(padded, mask, first, chord, extent, origins):
 
 def _convexity_t(x, y, mask, mid, origins, seg: SegmentationParams) -> np.ndarray:
     """t-statistic of the curvature towards the sensor of ``y = a + b x + c x²`` fitted across each chord."""
-    count = mask.sum(1)
     x2 = x * x
-    a = (count, x.sum(1), x2.sum(1), x2.sum(1), (x2 * x).sum(1), (x2 * x2).sum(1))
-    coef, cofactors, det = solve_sym3(a, (y.sum(1), (x * y).sum(1), (x2 * y).sum(1)))
+    # The eight row sums in one reduction: each row is summed alone, as by .sum(1) (same pairwise order).
+    count, sx, sx2, sx3, sx4, sy, sxy, sx2y = np.stack([mask, x, x2, x2 * x, x2 * x2, y, x * y, x2 * y]).sum(2)
+    coef, cofactors, det = solve_sym3((count, sx, sx2, sx2, sx3, sx4), (sy, sxy, sx2y))
     inv22 = cofactors[5] / det
     distance = np.hypot(*(mid - origins).T)
     sigma = np.where(distance < seg.noise_switch_range_m, seg.noise_sigma_near_m, seg.noise_fraction_far * distance)
@@ -302,6 +327,12 @@ class _BeamLayout:
     range_max_m: np.ndarray
     mount_x_m: np.ndarray
     mount_y_m: np.ndarray
+    mount_xy_m: np.ndarray  # (S, 2): mount_x_m, mount_y_m side by side
+
+
+@lru_cache(maxsize=16)
+def _beam_tables(scanners: tuple[ScannerModel, ...], segmentation: SegmentationParams) -> BeamTables:
+    return BeamTables.of(_beam_layout(scanners).angles_rad, segmentation)
 
 
 @lru_cache(maxsize=16)
@@ -318,4 +349,5 @@ def _beam_layout(scanners: tuple[ScannerModel, ...]) -> _BeamLayout:
         range_max_m=rep([s.range_max_m for s in scanners]),
         mount_x_m=np.array([s.mount_x_m for s in scanners]),
         mount_y_m=np.array([s.mount_y_m for s in scanners]),
+        mount_xy_m=np.array([[s.mount_x_m, s.mount_y_m] for s in scanners], dtype=float),
     )

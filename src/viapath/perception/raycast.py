@@ -191,20 +191,22 @@ def cast_rays_from_numpy(origins_x, origins_y, directions, centres, radii, segme
             t = np.where(k <= 0.0, 0.0, t)
             np.minimum.at(best, beam, t)
     if len(segments):
-        px = segments[:, 0, 0]
-        py = segments[:, 0, 1]
-        ex = segments[:, 1, 0] - px
-        ey = segments[:, 1, 1] - py
-        wx = px - origins_x[:, None]
-        wy = py - origins_y[:, None]
-        dxc, dyc = dx[:, None], dy[:, None]
-        denom = dxc * ey - dyc * ex
+        # Walls along the first axis, beams along the second ((W, B), the transpose of cast_rays_numpy's
+        # layout): the same products and differences, but numpy's loops run over the many beams, not
+        # the few walls (about 3x faster for two walls), and the minimum over walls is elementwise.
+        px = segments[:, 0, 0, None]
+        py = segments[:, 0, 1, None]
+        ex = segments[:, 1, 0, None] - px
+        ey = segments[:, 1, 1, None] - py
+        wx = px - origins_x
+        wy = py - origins_y
+        denom = dx * ey - dy * ex
         with np.errstate(divide="ignore", invalid="ignore"):
             t = (wx * ey - wy * ex) / denom
-            s = (wx * dyc - wy * dxc) / denom
+            s = (wx * dy - wy * dx) / denom
             ok = (denom != 0.0) & (t >= 0.0) & (s >= 0.0) & (s <= 1.0)
         t = np.where(ok, t, np.inf)
-        best = np.minimum(best, t.min(axis=1))
+        best = np.minimum(best, t.min(axis=0))
     return best
 
 
@@ -255,17 +257,23 @@ def simulate_scans(scanners, robot_pose, centres, radii, segments=None, rng=None
     n_beams = int(layout.bounds[-1])
     origins_x = np.empty(n_beams)
     origins_y = np.empty(n_beams)
-    directions = np.empty((n_beams, 2))
+    angles = np.empty(n_beams)  # world frame
     groups = []
+    # ScannerModel.world_pose of each scanner, with the heading's cosine and sine computed once.
+    robot_x, robot_y, heading = (float(v) for v in robot_pose)
+    c, s = np.cos(heading), np.sin(heading)
     for index, scanner in enumerate(scanners):
-        x, y, yaw = scanner.world_pose(robot_pose)
+        x = robot_x + c * scanner.mount_x_m - s * scanner.mount_y_m
+        y = robot_y + s * scanner.mount_x_m + c * scanner.mount_y_m
+        yaw = heading + scanner.mount_yaw_rad
         first, last = int(layout.bounds[index]), int(layout.bounds[index + 1])
-        angles = layout.beam_angles_rad[index] + yaw
+        np.add(layout.beam_angles_rad[index], yaw, out=angles[first:last])
         origins_x[first:last] = x
         origins_y[first:last] = y
-        directions[first:last, 0] = np.cos(angles)
-        directions[first:last, 1] = np.sin(angles)
-        groups.append((first, last - first, float(angles[0]), scanner.angle_increment_rad))
+        groups.append((first, last - first, float(angles[first]), scanner.angle_increment_rad))
+    directions = np.empty((n_beams, 2))  # cosines and sines of every scanner's beams in one call each,
+    directions[:, 0] = np.cos(angles)  # on a contiguous array, as before (numpy may take another loop
+    directions[:, 1] = np.sin(angles)  # for strided output)
     if backend == "auto":
         backend = "numba" if numba_available() else "numpy"
     if backend == "numpy":
@@ -283,9 +291,9 @@ def simulate_scans(scanners, robot_pose, centres, radii, segments=None, rng=None
     reading = true_range.copy()
     if rng is not None:
         hit = np.isfinite(true_range)
-        r = true_range[hit]
-        sigma = np.where(r < layout.noise_switch_range_m[hit], layout.noise_sigma_near_m[hit],
-                         layout.noise_fraction_far[hit] * r)
+        # σ of every beam (inf where nothing was hit), then the hit ones: the same values as on the hits alone.
+        sigma = np.where(true_range < layout.noise_switch_range_m, layout.noise_sigma_near_m,
+                         layout.noise_fraction_far * true_range)[hit]
         reading[hit] += rng.standard_normal(int(hit.sum())) * sigma
     invalid = ~np.isfinite(reading) | (reading < layout.range_min_m) | (reading > layout.range_max_m)
     out = []

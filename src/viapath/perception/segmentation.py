@@ -72,18 +72,51 @@ def breakpoint_threshold_m(range_m: np.ndarray, beam_gap_rad: np.ndarray, params
     return np.maximum(jump, params.min_jump_m)
 
 
+@dataclass(frozen=True)
+class BeamTables:
+    """What :func:`segment_beams` computes from the beam angles alone, computed once for a fixed beam
+    layout (detection caches one per scanner set and parameters; issue 16, wave 7).
+
+    ``cos_rad``/``sin_rad``: of each beam's angle. ``sin_gap[d - 1, i]`` and ``sin_rest[d - 1, i]``:
+    ``sin(Δφ)`` and ``sin(λ - Δφ)`` of :func:`breakpoint_threshold_m` for beams ``i`` and ``i + d``
+    (``Δφ = min(|φ[i + d] - φ[i]|, λ/2)``), for ``d`` up to ``max_gap_beams + 1``: the only beam pairs
+    whose threshold matters (farther ones always split). The same numpy expressions on the same
+    numbers, elementwise: the same values as computing them per scan.
+    """
+
+    cos_rad: np.ndarray  # (B,)
+    sin_rad: np.ndarray  # (B,)
+    sin_gap: np.ndarray  # (D, B); 0 where i + d is past the last beam
+    sin_rest: np.ndarray  # (D, B); 1 there
+
+    @classmethod
+    def of(cls, angles_rad: np.ndarray, params: SegmentationParams) -> BeamTables:
+        angles_rad = np.asarray(angles_rad, dtype=float)
+        n, reach = len(angles_rad), params.max_gap_beams + 1
+        sin_gap, sin_rest = np.zeros((reach, n)), np.ones((reach, n))
+        for d in range(1, min(reach, n - 1) + 1):
+            angle = np.minimum(np.abs(angles_rad[d:] - angles_rad[:-d]), 0.5 * params.grazing_angle_rad)
+            sin_gap[d - 1, :-d] = np.sin(angle)
+            sin_rest[d - 1, :-d] = np.sin(params.grazing_angle_rad - angle)
+        return cls(np.cos(angles_rad), np.sin(angles_rad), sin_gap, sin_rest)
+
+
 def segment_scan(ranges_m: np.ndarray, angles_rad: np.ndarray, params: SegmentationParams = SegmentationParams()) -> Segments:
     """Cluster one sanitised scan (NaN = invalid) in its own frame."""
     ranges_m = np.asarray(ranges_m, dtype=float)
     return segment_beams(ranges_m, angles_rad, 0.0, 0.0, np.zeros(len(ranges_m), dtype=int), params)
 
 
-def segment_beams(ranges_m, angles_rad, origin_x_m, origin_y_m, scan_index, params: SegmentationParams = SegmentationParams()) -> Segments:
+def segment_beams(ranges_m, angles_rad, origin_x_m, origin_y_m, scan_index, params: SegmentationParams = SegmentationParams(),
+                  tables: BeamTables | None = None, backend: str = "numpy") -> Segments:
     """Cluster the beams of several scans at once (concatenated, each in beam order).
 
     ``angles_rad`` and the beam origins (``origin_x_m``, ``origin_y_m``: scalars or per beam) are in
     a common frame (the robot frame); a cluster never spans two scans (``scan_index`` per beam).
     Clusters with fewer than ``min_points`` points are dropped; ``all_points`` keeps every valid point.
+    ``tables``: :class:`BeamTables` of ``angles_rad`` and ``params`` when the caller keeps them (same result).
+    ``backend="numba"`` (with ``tables``): the clustering after the points in one compiled pass
+    (``_numba_kernels.split_clusters_kernel``), the same result bit for bit.
     """
     ranges_m = np.asarray(ranges_m, dtype=float)
     valid = np.flatnonzero(np.isfinite(ranges_m))
@@ -94,13 +127,23 @@ def segment_beams(ranges_m, angles_rad, origin_x_m, origin_y_m, scan_index, para
     ox = origin_x_m[valid] if np.ndim(origin_x_m) else origin_x_m
     oy = origin_y_m[valid] if np.ndim(origin_y_m) else origin_y_m
     points = np.empty((len(valid), 2))
-    points[:, 0] = ox + r * np.cos(a)
-    points[:, 1] = oy + r * np.sin(a)
+    points[:, 0] = ox + r * (np.cos(a) if tables is None else tables.cos_rad[valid])
+    points[:, 1] = oy + r * (np.sin(a) if tables is None else tables.sin_rad[valid])
+    scans = np.asarray(scan_index)[valid]
+    if backend == "numba" and tables is not None:
+        return _split_compiled(points, r, valid, scans, tables, params)
     step = np.diff(points, axis=0)
     gap = np.sqrt(step[:, 0] ** 2 + step[:, 1] ** 2)
-    threshold = breakpoint_threshold_m(np.minimum(r[:-1], r[1:]), np.abs(np.diff(a)), params)
-    scans = np.asarray(scan_index)[valid]
-    adjacent = (np.diff(valid) <= params.max_gap_beams + 1) & (scans[1:] == scans[:-1])
+    beam_step = np.diff(valid)
+    adjacent = (beam_step <= params.max_gap_beams + 1) & (scans[1:] == scans[:-1])
+    near = np.minimum(r[:-1], r[1:])
+    if tables is None:
+        threshold = breakpoint_threshold_m(near, np.abs(np.diff(a)), params)
+    else:  # breakpoint_threshold_m's expression with its sines from the tables (wrong only where not adjacent)
+        row = np.minimum(beam_step, params.max_gap_beams + 1) - 1
+        sigma = np.where(near < params.noise_switch_range_m, params.noise_sigma_near_m, params.noise_fraction_far * near)
+        jump = near * tables.sin_gap[row, valid[:-1]] / tables.sin_rest[row, valid[:-1]] + 3.0 * sigma
+        threshold = np.maximum(jump, params.min_jump_m)
     split = (gap > threshold) | ~adjacent
     starts = np.concatenate([[0], np.flatnonzero(split) + 1])
     counts = np.diff(np.append(starts, len(valid)))
@@ -122,6 +165,23 @@ def segment_beams(ranges_m, angles_rad, origin_x_m, origin_y_m, scan_index, para
         valid, points = valid[index], points[index]
         starts = np.cumsum(counts) - counts
     return Segments(valid, points, starts, counts, occluded, cluster_scan, all_points, all_beams)
+
+
+def _split_compiled(points, r, valid, scans, tables: BeamTables, params: SegmentationParams) -> Segments:
+    from viapath.perception._numba_kernels import split_clusters_kernel
+
+    n = len(valid)
+    starts, counts, cluster_scan = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n, dtype=scans.dtype)
+    occluded, kept_points = np.empty(n, dtype=bool), np.empty(n, dtype=np.int64)
+    kept, kept_total = split_clusters_kernel(points, r, valid, scans, tables.sin_gap, tables.sin_rest,
+                                             params.max_gap_beams, params.noise_switch_range_m,
+                                             params.noise_sigma_near_m, params.noise_fraction_far, params.min_jump_m,
+                                             params.min_points, starts, counts, occluded, cluster_scan, kept_points)
+    starts, counts, occluded, cluster_scan = starts[:kept], counts[:kept], occluded[:kept], cluster_scan[:kept]
+    if kept_total == n:  # every cluster kept: the points as they are
+        return Segments(valid, points, starts, counts, occluded, cluster_scan, points, valid)
+    index = kept_points[:kept_total]
+    return Segments(valid[index], points[index], np.cumsum(counts) - counts, counts, occluded, cluster_scan, points, valid)
 
 
 def _ranges_index(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:

@@ -36,6 +36,7 @@ What we chose where the source leaves it open:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -120,13 +121,7 @@ class MultiTargetTracker:
         self.time_s = float(time_s)
         if dt == 0 or len(self.ids) == 0:
             return
-        f = np.eye(4)
-        f[0, 2] = f[1, 3] = dt
-        q = self.params.acceleration_sigma_mps2**2
-        qm = np.zeros((4, 4))
-        qm[[0, 1], [0, 1]] = q * dt**3 / 3
-        qm[[2, 3], [2, 3]] = q * dt
-        qm[[0, 1, 2, 3], [2, 3, 0, 1]] = q * dt**2 / 2
+        f, qm = _motion_model(dt, self.params.acceleration_sigma_mps2)
         self.state = self.state @ f.T
         self.covariance = f @ self.covariance @ f.T + qm
 
@@ -136,15 +131,15 @@ class MultiTargetTracker:
         Returns the (track row before deletion, detection) pairs that were associated.
         """
         positions = np.asarray(positions, dtype=float).reshape(-1, 2)
-        sigmas_m = np.broadcast_to(np.asarray(sigmas_m, dtype=float), (len(positions),))
-        radii_m = np.broadcast_to(np.asarray(radii_m, dtype=float), (len(positions),))
+        sigmas_m = _per_detection(sigmas_m, len(positions))
+        radii_m = _per_detection(radii_m, len(positions))
         self.predict(time_s)
         p = self.params
         n_tracks, n_det = len(self.ids), len(positions)
         pairs: list[tuple[int, int]] = []
         if n_tracks and n_det:
             innovation = positions[None, :, :] - self.state[:, None, :2]  # (T, D, 2)
-            s = self.covariance[:, None, :2, :2] + (sigmas_m[None, :, None, None] ** 2) * np.eye(2)
+            s = self.covariance[:, None, :2, :2] + (sigmas_m[None, :, None, None] ** 2) * _EYE2
             det = s[..., 0, 0] * s[..., 1, 1] - s[..., 0, 1] * s[..., 1, 0]
             ix, iy = innovation[..., 0], innovation[..., 1]
             d2 = (s[..., 1, 1] * ix * ix - 2 * s[..., 0, 1] * ix * iy + s[..., 0, 0] * iy * iy) / det
@@ -260,9 +255,12 @@ class MultiTargetTracker:
     def obstacles(self, confirmed_only: bool = True) -> Obstacles:
         """Tracks as the planner's :class:`~viapath.observation.Obstacles` (world frame, at the last step's time)."""
         rows = self.confirmed if confirmed_only else np.ones(len(self.ids), dtype=bool)
-        pos_sigma, vel_sigma = self.sigmas()
-        return Obstacles(self.state[rows, :2].copy(), self.state[rows, 2:].copy(), self.radii_m[rows].copy(),
-                         position_sigma_m=pos_sigma[rows], velocity_sigma_mps=vel_sigma[rows], ids=self.ids[rows].copy())
+        state, c = self.state[rows], self.covariance[rows]
+        # The sigmas of the reported rows only (elementwise: the same values as sigmas()[rows]); every
+        # array is fresh (boolean indexing copies), so Obstacles may keep them without copying again.
+        return Obstacles.of_fresh_arrays(state[:, :2], state[:, 2:], self.radii_m[rows],
+                                         _largest_sigma(c[:, 0, 0], c[:, 0, 1], c[:, 1, 1]),
+                                         _largest_sigma(c[:, 2, 2], c[:, 2, 3], c[:, 3, 3]), self.ids[rows])
 
     def tracks(self, confirmed_only: bool = False) -> list[Track]:
         return [
@@ -270,6 +268,28 @@ class MultiTargetTracker:
                   float(self.radii_m[i]), bool(self.confirmed[i]), int(self.hits[i]), float(self.last_seen_s[i]))
             for i in range(len(self.ids)) if self.confirmed[i] or not confirmed_only
         ]
+
+
+_EYE2 = np.eye(2)
+
+
+def _per_detection(values, n: int) -> np.ndarray:
+    """``values`` as a float array of ``n`` (a scalar is repeated, read-only); an array already so is kept."""
+    if type(values) is np.ndarray and values.dtype == np.float64 and values.shape == (n,):
+        return values  # the common case (detections): np.broadcast_to would only add a read-only view
+    return np.broadcast_to(np.asarray(values, dtype=float), (n,))
+
+
+@lru_cache(maxsize=8)
+def _motion_model(dt: float, acceleration_sigma_mps2: float) -> tuple[np.ndarray, np.ndarray]:
+    """``F`` and ``Q`` of the constant-velocity model for a step of ``dt`` (cached: the cycle time
+    rarely changes; read-only, the callers only read them)."""
+    q = acceleration_sigma_mps2**2
+    a, b, c = q * dt**3 / 3, q * dt**2 / 2, q * dt
+    f = np.array([[1.0, 0.0, dt, 0.0], [0.0, 1.0, 0.0, dt], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+    qm = np.array([[a, 0.0, b, 0.0], [0.0, a, 0.0, b], [b, 0.0, c, 0.0], [0.0, b, 0.0, c]])
+    f.flags.writeable = qm.flags.writeable = False
+    return f, qm
 
 
 def _largest_sigma(a, b, c):
