@@ -592,20 +592,21 @@ def test_compiled_escape_is_the_reference(case):
     from dataclasses import replace
 
     from viapath.planning.viapath.backend import Backend
-    from viapath.planning.viapath.escape import escape_scores
+    from viapath.planning.viapath.escape import escape_fan, escape_scores
 
     planner, checks, previous = _escape_checks(case)
     commands, ends, scores = escape_scores(checks, planner.limits, planner.config, previous)
     standing = checks.contact_times(checks.position[None], np.zeros(1), np.zeros((1, 2)),
                                     np.array([planner.config.horizon_s]))
-    compiled = Backend("numba").escape(replace(checks, backend=Backend("numba")), planner.limits, planner.config,
+    fan = escape_fan(planner.limits, planner.config)
+    compiled = Backend("numba").escape(replace(checks, backend=Backend("numba")), planner.limits, planner.config, fan,
                                        previous, score_standing=True)
     assert compiled[0] == bool(np.isinf(standing).all())
     assert _same_bits(compiled[1], commands)
     assert _same_bits(compiled[2], ends)
     assert _same_bits(compiled[3], scores)
     # without score_standing, a free standing skips the scores
-    skipped = Backend("numba").escape(checks, planner.limits, planner.config, previous)
+    skipped = Backend("numba").escape(checks, planner.limits, planner.config, fan, previous)
     assert skipped[0] == compiled[0] and (skipped[1] is None) == compiled[0]
 
 
@@ -617,7 +618,7 @@ def test_compiled_stop_or_escape_decides_as_numpy(case):
     from dataclasses import replace
 
     from viapath.planning.viapath.backend import Backend
-    from viapath.planning.viapath.escape import stop_or_escape
+    from viapath.planning.viapath.escape import escape_fan, stop_or_escape
 
     planner, checks, previous = _escape_checks(case)
     expected = stop_or_escape(checks, planner.limits, planner.config, previous)
@@ -627,8 +628,9 @@ def test_compiled_stop_or_escape_decides_as_numpy(case):
         assert got.plan.status == expected.plan.status
         assert _same_bits(got.plan.target, expected.plan.target)
         assert got.plan.speed_mps == expected.plan.speed_mps
-    assert Backend("numba", whole_steps=False).escape(checks, planner.limits, planner.config, previous) is None
-    assert Backend("numpy").escape(checks, planner.limits, planner.config, previous) is None
+    fan = escape_fan(planner.limits, planner.config)
+    assert Backend("numba", whole_steps=False).escape(checks, planner.limits, planner.config, fan, previous) is None
+    assert Backend("numpy").escape(checks, planner.limits, planner.config, fan, previous) is None
 
 
 def test_escape_cases_reach_every_branch():

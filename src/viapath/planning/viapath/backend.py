@@ -193,17 +193,18 @@ class Backend:
                                        _c(check_radii), _c(growth), _c(growth_until_s),
                                        np.ascontiguousarray(overlapping, dtype=np.bool_), int(steps))
 
-    def escape(self, checks, limits: MotionLimits, config, previous=None, score_standing: bool = False):
+    def escape(self, checks, limits: MotionLimits, config, fan, previous=None, score_standing: bool = False):
         """:func:`.escape.stop_or_escape`'s figures in two compiled calls: :func:`.kernels.escape_headings` (the
         standing check, the fan's headings), numpy's sines and cosines of those headings (as
         :func:`viapath.kinematics.rollout` takes them), :func:`.kernels.escape_scores`. Returns (standing is
         free, commands (K, 2), ends (K, 2), scores (K,)), the last three None when standing is free (unless
         ``score_standing``); None on the numpy path and before the whole-step kernels are compiled (then
-        :func:`.escape.escape_scores`, the reference, runs with the smaller kernels)."""
+        :func:`.escape.escape_scores`, the reference, runs with the smaller kernels). ``fan``:
+        :func:`.escape.escape_fan`'s (top speed, commands, distinct turn commands, each command's turn)."""
         if self.name == "numpy" or not self.whole_steps:
             return None
         kernels = _kernels()
-        commands, row_turns, turn_rows = _escape_module().escape_fan(limits, config)
+        top, commands, row_turns, turn_rows = fan
         dt = config.escape_dt_s
         steps = max(1, int(round(config.escape_s / dt)))
         calm = bool(config.calm_escape and previous is not None)
@@ -211,7 +212,7 @@ class Backend:
             dt, config.escape_s, limits.max_accel_mps2 * dt, limits.max_turn_accel_radps2 * dt, limits.max_speed_mps,
             limits.max_turn_rate_radps, checks.corridor_tolerance_m,
             max(config.escape_max_excess_m, checks.corridor_tolerance_m),
-            max(_escape_module().escape_top_speed(limits, config), 1e-9), config.escape_continuity_s if calm else 0.0,
+            max(top, 1e-9), config.escape_continuity_s if calm else 0.0,
             previous.speed_mps if calm else 0.0, previous.turn_rate_radps if calm else 0.0, checks.horizon_s,
             config.horizon_s], dtype=np.float64)
         robot = checks.kernel_robot()
@@ -249,18 +250,6 @@ def _kernels():
 
 _KERNELS = None
 
-
-def _escape_module():
-    """:mod:`.escape` (imported on first use: it imports the checks, which import this module)."""
-    global _ESCAPE
-    if _ESCAPE is None:
-        from viapath.planning.viapath import escape
-
-        _ESCAPE = escape
-    return _ESCAPE
-
-
-_ESCAPE = None
 
 
 def _c(array) -> np.ndarray:

@@ -44,7 +44,7 @@ def stop_or_escape(checks: LegChecks, limits: MotionLimits, config, previous: Co
     """``previous``: last cycle's command if last cycle escaped too (for a calm escape)."""
     position = checks.position
     base = dict(subgoal_index=checks.subgoal_index)
-    compiled = checks.backend.escape(checks, limits, config, previous)  # None on the numpy path
+    compiled = checks.backend.escape(checks, limits, config, escape_fan(limits, config), previous)  # numpy: None
     if compiled is None:
         standing = checks.contact_times(position[None], np.zeros(1), np.zeros((1, 2)), np.array([config.horizon_s]))
         standing_free = np.isinf(standing).all()
@@ -162,9 +162,10 @@ def _fan(speeds: tuple, top: float, max_turn_rate_radps: float) -> np.ndarray:
 
 
 def escape_fan(limits: MotionLimits, config) -> tuple:
-    """The fan's commands (K, 2), its distinct turn commands (T,) and each command's index among them (K,),
-    for the compiled escape (:meth:`.backend.Backend.escape`), which takes the headings, sines and cosines once
-    per turn command: the commands of one turn rate share them."""
+    """The top speed, the fan's commands (K, 2), its distinct turn commands (T,) and each command's index
+    among them (K,), for the compiled escape (:meth:`.backend.Backend.escape`, given them by the caller: the
+    backend does not import this module, which imports the checks, which import the backend), which takes the
+    headings, sines and cosines once per turn command: the commands of one turn rate share them."""
     return _fan_turns(tuple(config.speeds), escape_top_speed(limits, config), limits.max_turn_rate_radps)
 
 
@@ -175,4 +176,4 @@ def _fan_turns(speeds: tuple, top: float, max_turn_rate_radps: float) -> tuple:
     turn_rows = turn_rows.astype(np.int64).reshape(-1)
     for array in (row_turns, turn_rows):
         array.flags.writeable = False
-    return commands, row_turns, turn_rows
+    return top, commands, row_turns, turn_rows

@@ -443,7 +443,7 @@ def _within(dx, dy, limit):
     return math.hypot(dx, dy) < limit
 
 
-@njit(cache=True, nogil=True, inline="always")  # a call with arrays costs their reference counts: ~20 ns
+@njit(cache=True, nogil=True, inline="always")  # inlined: a call of _excess, not inlined, measured 40 ns a point
 def _excess_at_most(px, py, segment_starts, segment_directions, segment_lengths, half_widths, limit):
     """``_excess(px, py, ...) <= limit`` (the point within ``limit`` of the corridor, NaN false), mostly without
     hypot: with ``limit`` and every half width >= 0, a capsule's ``hypot(o) - half <= limit`` is ``hypot(o) <
