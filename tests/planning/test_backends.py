@@ -248,10 +248,9 @@ def test_escape_scores_match_reference():
         situation = planner.situation(observation)
         checks = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
         commands, ends, expected = escape_scores(checks, planner.limits, planner.config)
-        _, _, got = escape_scores(replace(checks, backend=Backend("numba")), planner.limits, planner.config)
-        assert np.array_equal(np.isfinite(expected), np.isfinite(got))
-        assert np.allclose(expected[np.isfinite(expected)], got[np.isfinite(got)], rtol=0.0, atol=1e-12)
-        assert np.argmax(expected) == np.argmax(got)
+        _, got_ends, got = escape_scores(replace(checks, backend=Backend("numba", whole_steps=False)), planner.limits,
+                                         planner.config)
+        assert _same_bits(got, expected) and _same_bits(got_ends, ends)  # the small kernels: the same values
         overlapped += bool(np.any(np.hypot(*(positions - [1.0, 0.2]).T) < checks.check_radii))
     assert 5 < overlapped < 60  # both kinds of crowd came up
 
@@ -530,3 +529,238 @@ def test_compiled_choice_after_refusals_and_a_vanished_way(case, way, speed_mmps
     _plans_equal(a.plan, b.plan)
     assert a.command == b.command and offered[0] == offered[1]
     assert planners[0]._previous == planners[1]._previous
+
+
+# -- the escape compiled whole (kernels.escape_headings, kernels.escape_scores) ------------------------------------
+
+
+def _same_bits(a, b) -> bool:
+    """Equal arrays of the same dtype and shape, floats compared as bit patterns (-0.0 is not 0.0)."""
+    a, b = np.asarray(a), np.asarray(b)
+    if a.dtype != b.dtype or a.shape != b.shape:
+        return False
+    if a.dtype.kind == "f":
+        return bool(np.array_equal(a.view(np.int64), b.view(np.int64)))
+    return bool(np.array_equal(a, b))
+
+
+@st.composite
+def escape_cases(draw):
+    """A robot in a crowd that may surround, overlap or threaten it, inside the corridor or outside it, with
+    the escape's options (calm or not, last cycle's command or none, bounds on the excess)."""
+    path_index = draw(st.integers(0, len(PATHS) - 1))
+    n = draw(st.integers(0, 14))
+    floats = lambda lo, hi: st.floats(lo, hi, allow_nan=False, allow_infinity=False)  # noqa: E731
+    rng = np.random.default_rng(draw(st.integers(0, 2**31 - 1)))
+    robot = (draw(floats(-1.0, 4.0)), draw(floats(-3.0, 3.0)), draw(floats(-np.pi, np.pi)),
+             draw(st.sampled_from([0.0, 0.05, 0.3, 0.6])), draw(st.sampled_from([0.0, -1.0, 0.4, 2.0])))
+    # people from touching the robot (distance 0) to 4 m off, all round it or in a ring closing in
+    ring = draw(st.booleans())
+    distance = rng.uniform(0.0, draw(st.sampled_from([0.7, 1.5, 4.0])), n)
+    bearing = np.linspace(0.0, 2 * np.pi, n, endpoint=False) if ring else rng.uniform(-np.pi, np.pi, n)
+    unit = np.stack([np.cos(bearing), np.sin(bearing)], 1)
+    positions = np.array(robot[:2]) + distance[:, None] * unit
+    velocities = -rng.uniform(0.0, 1.0, n)[:, None] * unit if ring else rng.uniform(-1.2, 1.2, (n, 2))
+    uncertain = draw(st.booleans())
+    sigma = rng.uniform(0.0, 0.1, n) if uncertain else None
+    options = {"calm_escape": draw(st.booleans()),
+               "escape_max_excess_m": draw(st.sampled_from([0.5, 0.0, 2.0])),
+               "escape_s": draw(st.sampled_from([3.0, 1.0, 0.05]))}
+    previous = draw(st.sampled_from([None, (0.0, 0.0), (0.3, -1.0), (0.6, 2.0)]))
+    return path_index, robot, positions, velocities, rng.uniform(0.2, 0.35, n), sigma, options, previous
+
+
+def _escape_checks(case):
+    from viapath.observation import Command
+    from viapath.planning.viapath.checks import LegChecks
+
+    path_index, robot, positions, velocities, radii, sigma, options, previous = case
+    planner = make_planner("viapath", PATHS[path_index], nominal_speed_mps=0.2, backend="numpy", options=options)
+    x, y, heading, speed, turn = robot
+    observation = Observation(0.0, RobotState(np.array([x, y]), heading, speed, turn),
+                              Obstacles(positions, velocities, radii, position_sigma_m=sigma, velocity_sigma_mps=sigma))
+    situation = planner.situation(observation)
+    checks = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
+    return planner, checks, None if previous is None else Command(*previous)
+
+
+@settings(max_examples=1500, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(escape_cases())
+def test_compiled_escape_is_the_reference(case):
+    """The compiled escape's commands, ends and scores are escape_scores' (numpy) bit for bit, and its
+    standing check is the numpy path's, in every crowd."""
+    from dataclasses import replace
+
+    from viapath.planning.viapath.backend import Backend
+    from viapath.planning.viapath.escape import escape_fan, escape_scores
+
+    planner, checks, previous = _escape_checks(case)
+    commands, ends, scores = escape_scores(checks, planner.limits, planner.config, previous)
+    standing = checks.contact_times(checks.position[None], np.zeros(1), np.zeros((1, 2)),
+                                    np.array([planner.config.horizon_s]))
+    fan = escape_fan(planner.limits, planner.config)
+    compiled = Backend("numba").escape(replace(checks, backend=Backend("numba")), planner.limits, planner.config, fan,
+                                       previous, score_standing=True)
+    assert compiled[0] == bool(np.isinf(standing).all())
+    assert _same_bits(compiled[1], commands)
+    assert _same_bits(compiled[2], ends)
+    assert _same_bits(compiled[3], scores)
+    # without score_standing, a free standing skips the scores
+    skipped = Backend("numba").escape(checks, planner.limits, planner.config, fan, previous)
+    assert skipped[0] == compiled[0] and (skipped[1] is None) == compiled[0]
+
+
+@settings(max_examples=600, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(escape_cases())
+def test_compiled_stop_or_escape_decides_as_numpy(case):
+    """stop_or_escape's decision (command, status, the end it plans for) is the same on both paths; the
+    compiled kernels run only with the whole-step kernels."""
+    from dataclasses import replace
+
+    from viapath.planning.viapath.backend import Backend
+    from viapath.planning.viapath.escape import escape_fan, stop_or_escape
+
+    planner, checks, previous = _escape_checks(case)
+    expected = stop_or_escape(checks, planner.limits, planner.config, previous)
+    for backend in (Backend("numba"), Backend("numba", whole_steps=False)):
+        got = stop_or_escape(replace(checks, backend=backend), planner.limits, planner.config, previous)
+        assert got.command == expected.command
+        assert got.plan.status == expected.plan.status
+        assert _same_bits(got.plan.target, expected.plan.target)
+        assert got.plan.speed_mps == expected.plan.speed_mps
+    fan = escape_fan(planner.limits, planner.config)
+    assert Backend("numba", whole_steps=False).escape(checks, planner.limits, planner.config, fan, previous) is None
+    assert Backend("numpy").escape(checks, planner.limits, planner.config, fan, previous) is None
+
+
+def test_escape_cases_reach_every_branch():
+    """The crowds above bring every kind of escape: standing free and not, people overlapped now (the
+    separation) and none near, robots outside the corridor, every command priced out of bounds or not."""
+    from viapath.planning.viapath.escape import escape_scores
+
+    seen = set()
+
+    @settings(max_examples=300, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+    @given(escape_cases())
+    def collect(case):
+        planner, checks, previous = _escape_checks(case)
+        standing = checks.contact_times(checks.position[None], np.zeros(1), np.zeros((1, 2)),
+                                        np.array([planner.config.horizon_s]))
+        seen.add("standing free" if np.isinf(standing).all() else "standing hit")
+        gap = np.hypot(*(checks.position - checks.obstacles.positions).T) - checks.check_radii
+        seen.add("overlapped" if (gap <= 0).any() else "none overlapped")
+        if len(gap) == 0:
+            seen.add("nobody")
+        if checks.path.corridor_excess(checks.position) > 0:
+            seen.add("outside")
+        _, _, scores = escape_scores(checks, planner.limits, planner.config, previous)
+        seen.add("some out of bounds" if np.isinf(scores).any() else "all in bounds")
+        if planner.config.calm_escape and previous is not None:
+            seen.add("calm with previous")
+
+    collect()
+    assert seen == {"standing free", "standing hit", "overlapped", "none overlapped", "nobody", "outside",
+                    "some out of bounds", "all in bounds", "calm with previous"}
+
+
+def test_escape_kernel_pieces_match_numpy():
+    """The escape kernel's pieces against what they stand in for: the squared-distance shortcuts (contact,
+    corridor, furthest travel) against hypot on points within a few ulps of the limit or of each other (tiny,
+    huge, zero, negative and non-finite values too), the pairwise sum against np.sum along a row (0 to 1100
+    terms, zeros of both signs), the fma against exact rational arithmetic."""
+    from fractions import Fraction
+
+    from numba import njit
+
+    from viapath.planning.viapath import kernels
+    from viapath.planning.viapath.backend import _corridor
+
+    within = njit(lambda dx, dy, limits: np.array([kernels._within(dx.flat[i], dy.flat[i], limits.flat[i])
+                                                   for i in range(dx.size)]))
+    at_most = njit(lambda points, a, b, c, d, limit: np.array([kernels._excess_at_most(
+        points[i, 0], points[i, 1], a, b, c, d, limit) for i in range(points.shape[0])]))
+    fma = njit(lambda a, b, c: kernels._fma(a, b, c))  # an intrinsic: callable from compiled code only
+
+    rng = np.random.default_rng(23)
+    special = np.array([0.0, -0.0, 1e-300, 1e-170, 1e-150, 1e150, 1e170, 1e300, -0.3, np.inf, -np.inf, np.nan])
+    ulps = lambda shape: (rng.integers(-4, 5, shape) * 2.0**-52  # noqa: E731
+                          * rng.choice([1, 1, 1e3, 1e7, 1e9, 1e12], shape))
+    for case in range(1500):
+        # contacts: hypot(dx, dy) - reach < 0 (escape_contacts' test of the people not overlapped now)
+        reach = rng.uniform(0.2, 1.2, 30) * 10.0 ** rng.choice([0, 0, 0, -160, -300, 160], 30)
+        if case % 4 == 0:
+            reach[rng.integers(0, 30, 3)] = rng.choice(special, 3)
+        angle = rng.uniform(0, 2 * np.pi, 30)
+        scale = reach * (1.0 + ulps(30))
+        dx, dy = scale * np.cos(angle), scale * np.sin(angle)
+        if case % 3 == 0:
+            dx[rng.integers(0, 30, 4)] = rng.choice(special, 4)
+            dy[rng.integers(0, 30, 4)] = rng.choice(special, 4)
+        with np.errstate(all="ignore"):
+            assert np.array_equal(within(dx, dy, reach), np.hypot(dx, dy) - reach < 0), f"case {case}"
+        # the corridor: DesignatedPath.corridor_excess(points) <= limit, points on the capsule's edge grown by
+        # the limit (beside the segment and round its ends), near it, and far
+        path = PATHS[case % len(PATHS)]
+        limit = float(rng.choice([0.0, 1e-9, 0.3, 0.5, 2.0, -0.2, 1e-160, 1e200, np.inf, np.nan]))
+        segment = rng.integers(0, len(path.segment_lengths_m), 40)
+        along = rng.uniform(-0.3, 1.3, 40) * path.segment_lengths_m[segment]
+        side = rng.uniform(0, 2 * np.pi, 40)
+        radius = (path.half_widths_m[segment] + (limit if np.isfinite(limit) else 0.5)) * (1.0 + ulps(40))
+        foot = path.segment_starts[segment] + np.clip(along, 0, path.segment_lengths_m[segment])[:, None] * \
+            path.segment_directions[segment]
+        points = foot + radius[:, None] * np.stack([np.cos(side), np.sin(side)], 1)
+        if case % 5 == 0:
+            points[rng.integers(0, 40, 3)] = rng.uniform(-1e3, 1e3, (3, 2))
+        with np.errstate(all="ignore"):
+            expected = path.corridor_excess(points) <= limit
+        assert np.array_equal(at_most(np.ascontiguousarray(points), *_corridor(path), limit), expected), f"case {case}"
+        # the furthest travel: np.max(np.hypot(...)) of many offsets within a few ulps of each other
+        count = int(rng.integers(1, 60))
+        size = float(rng.choice([1.0, 0.01, 1e-150, 1e-300, 1e150, 0.0]))
+        angle = rng.uniform(0, 2 * np.pi, count)
+        length = size * (1.0 + ulps(count))
+        positions = (np.stack([length * np.cos(angle), length * np.sin(angle)], 1) + [0.5, -0.25]).reshape(-1, 1, 2)
+        if case % 7 == 0:
+            positions[rng.integers(0, count), 0] = rng.choice(special, 2)
+        with np.errstate(all="ignore"):
+            expected = np.max(np.hypot(positions[..., 0] - 0.5, positions[..., 1] + 0.25))
+        assert _same_bits(kernels._furthest(positions, 0.5, -0.25), expected), f"case {case}"
+    # two offsets whose squares and hypots are in opposite orders (found by a search): the smaller square has
+    # the larger hypot, so the furthest is not simply the hypot of the largest square
+    pair = np.array([[[0.8789727257469813, -0.4768720450948255]], [[0.2882984376347223, 0.9575406053308535]]])
+    squares, hypots = np.sum(pair[:, 0] ** 2, axis=1), np.hypot(pair[:, 0, 0], pair[:, 0, 1])
+    assert squares[0] < squares[1] and hypots[0] > hypots[1]
+    assert kernels._furthest(pair, 0.0, 0.0) == hypots[0]
+    for count in list(range(140)) + [255, 256, 257, 300, 1031, 1100]:
+        rows = rng.normal(0.0, 1.0, (4, count)) * rng.choice([1e-8, 1.0, 1e8], (4, count))
+        rows[1] = np.where(rng.random(count) < 0.5, -0.0, 0.0)
+        rows[2] = np.where(rng.random(count) < 0.5, rows[2], 0.0)
+        expected = np.sum(rows, axis=1)
+        got = np.array([0.0 + kernels._pairwise_sum(np.ascontiguousarray(row), 0, count) for row in rows])
+        assert _same_bits(got, expected)
+    for _ in range(2000):
+        a, b, c = (float(value) for value in rng.normal(0.0, 1.0, 3) * rng.choice([1e-5, 1.0, 1e5], 3))
+        assert fma(a, b, c) == float(Fraction(a) * Fraction(b) + Fraction(c))
+
+
+def test_the_warm_up_reaches_every_whole_step_kernel():
+    """compile_kernels' cycles reach the choice and the escape (so `auto` finds every whole-step kernel compiled
+    after it), and each whole-step kernel then has a compiled signature."""
+    from viapath.planning.viapath import backend, kernels
+    from viapath.planning.viapath.backend import warm_up_crowds
+
+    planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
+                           nominal_speed_mps=0.2, backend="numpy")
+    statuses = []
+    for people in warm_up_crowds():
+        planner.reset()
+        statuses.append(planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people)).plan.status)
+    assert statuses[0] in ("avoid", "slow", "wait") and statuses[1] == "escape"
+    assert backend.compile_kernels()
+    planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
+                           nominal_speed_mps=0.2, backend="numba")
+    for people in warm_up_crowds():  # in this process: compiled now (or loaded from the cache)
+        planner.reset()
+        planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people))
+    for kernel in (kernels.escape_headings, kernels.escape_scores, kernels.choose_tree, kernels.choose_candidate):
+        assert len(kernel.signatures) == 1  # one signature each: the planner's argument types do not vary

@@ -10,7 +10,8 @@ Source: issue 16 (a compiled hot path, the numpy path stays the reference); docs
   checks), :meth:`via_options` (via points of (node, obstacle) pairs), :meth:`legs_inside` and
   :meth:`goal_legs_inside` (corridor checks), :meth:`goal_legs` (all of a batch of legs to the subgoal:
   contacts and corridor in one call), :meth:`grow` (the whole candidate tree), :meth:`track` (motion-limit roll-outs) and, for the
-  escape, :meth:`corridor_excess` and :meth:`escape_contacts`, with the numpy signatures; the compiled ones get
+  escape, :meth:`escape` (the whole step in two calls) or, before the whole-step kernels are compiled,
+  :meth:`corridor_excess` and :meth:`escape_contacts`, with the numpy signatures; the compiled ones get
   C-contiguous float64 arrays. The planner says in ``plan.extras["backend"]`` which one ran.
 """
 
@@ -58,7 +59,8 @@ def resolve(choice: str) -> str:
 @dataclass(frozen=True)
 class Backend:
     name: str  # numpy | numba
-    # numba: also the two kernels that take over whole steps of the cycle (goal_legs, the candidate tree grow).
+    # numba: also the kernels that take over whole steps of the cycle (goal_legs, the candidate tree grow, the
+    # choice, the escape).
     # They take seconds to compile the first time, so ``auto`` uses them only once they are in numba's cache
     # (:func:`compile_kernels`, which ``viapath bench`` and the ROS 2 node call before they start); until then
     # the smaller kernels do those steps, with the same decisions.
@@ -191,6 +193,37 @@ class Backend:
                                        _c(check_radii), _c(growth), _c(growth_until_s),
                                        np.ascontiguousarray(overlapping, dtype=np.bool_), int(steps))
 
+    def escape(self, checks, limits: MotionLimits, config, fan, previous=None, score_standing: bool = False):
+        """:func:`.escape.stop_or_escape`'s figures in two compiled calls: :func:`.kernels.escape_headings` (the
+        standing check, the fan's headings), numpy's sines and cosines of those headings (as
+        :func:`viapath.kinematics.rollout` takes them), :func:`.kernels.escape_scores`. Returns (standing is
+        free, commands (K, 2), ends (K, 2), scores (K,)), the last three None when standing is free (unless
+        ``score_standing``); None on the numpy path and before the whole-step kernels are compiled (then
+        :func:`.escape.escape_scores`, the reference, runs with the smaller kernels). ``fan``:
+        :func:`.escape.escape_fan`'s (top speed, commands, distinct turn commands, each command's turn)."""
+        if self.name == "numpy" or not self.whole_steps:
+            return None
+        kernels = _kernels()
+        top, commands, row_turns, turn_rows = fan
+        dt = config.escape_dt_s
+        steps = max(1, int(round(config.escape_s / dt)))
+        calm = bool(config.calm_escape and previous is not None)
+        settings = np.array([
+            dt, config.escape_s, limits.max_accel_mps2 * dt, limits.max_turn_accel_radps2 * dt, limits.max_speed_mps,
+            limits.max_turn_rate_radps, checks.corridor_tolerance_m,
+            max(config.escape_max_excess_m, checks.corridor_tolerance_m),
+            max(top, 1e-9), config.escape_continuity_s if calm else 0.0,
+            previous.speed_mps if calm else 0.0, previous.turn_rate_radps if calm else 0.0, checks.horizon_s,
+            config.horizon_s], dtype=np.float64)
+        robot = checks.kernel_robot()
+        obstacles = checks.kernel_obstacles()
+        standing_free, headings = kernels.escape_headings(robot, *obstacles, row_turns, settings, steps)
+        if standing_free and not score_standing:
+            return True, None, None, None
+        ends, score = kernels.escape_scores(robot, commands, turn_rows, np.sin(headings), np.cos(headings), *obstacles,
+                                            *_corridor(checks.path), _c(checks.subgoal), settings, steps, calm)
+        return standing_free, commands, ends, score
+
     def track(self, state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float, steps: int,
               heading_gain: float) -> np.ndarray:
         if self.name == "numpy":
@@ -216,6 +249,7 @@ def _kernels():
 
 
 _KERNELS = None
+
 
 
 def _c(array) -> np.ndarray:
@@ -256,11 +290,12 @@ def backend_for(choice: str) -> Backend:
 
 
 def whole_steps_compiled() -> bool:
-    """Whether the kernels of whole steps (goal_legs, grow, the choice) cost no compilation now: compiled in this
-    process or in numba's on-disk cache."""
+    """Whether the kernels of whole steps (goal_legs, grow, the choice, the escape) cost no compilation now:
+    compiled in this process or in numba's on-disk cache."""
     from viapath.planning.viapath import kernels
 
-    for kernel in (kernels.goal_legs, kernels.grow, kernels.choose_tree, kernels.choose_candidate):
+    for kernel in (kernels.goal_legs, kernels.grow, kernels.choose_tree, kernels.choose_candidate,
+                   kernels.escape_headings, kernels.escape_scores):
         if kernel.signatures:
             continue
         cache_file = getattr(getattr(kernel, "_cache", None), "_cache_file", None)
@@ -273,17 +308,29 @@ def whole_steps_compiled() -> bool:
 def compile_kernels() -> bool:
     """Compile every planner kernel now if numba is there and the whole-step ones are not compiled yet
     (about 25 s of CPU once per machine, the choice kernels most of it: numba caches them on disk); True
-    when they are ready. One planning cycle whose straight leg is blocked runs all of them with the
-    planner's own argument types (goal_legs and grow inside the choice kernels)."""
+    when they are ready. Two planning cycles run all of them with the planner's own argument types: one whose
+    straight leg is blocked (goal_legs and grow inside the choice kernels), one closed in from four sides,
+    where no candidate is free and standing is hit too (the escape's kernels)."""
     if not numba_available():
         return False
     if not whole_steps_compiled():
-        from viapath.observation import Observation, Obstacles, RobotState
+        from viapath.observation import Observation, RobotState
         from viapath.path import DesignatedPath
         from viapath.planning import make_planner
 
         planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
                                nominal_speed_mps=0.2, backend="numba")
-        person = Obstacles(np.array([[2.0, 0.0]]), np.array([[-0.2, 0.0]]), np.array([0.3]))
-        planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), person))
+        for people in warm_up_crowds():
+            planner.reset()
+            planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people))
     return True
+
+
+def warm_up_crowds() -> list:
+    """:func:`compile_kernels`' people: one walking at the robot along the path (the choice), four closing in
+    on it from all sides (the escape; tests/planning/test_backends.py checks that both cycles get there)."""
+    from viapath.observation import Obstacles
+
+    sides = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+    return [Obstacles(np.array([[2.0, 0.0]]), np.array([[-0.2, 0.0]]), np.array([0.3])),
+            Obstacles(0.9 * sides, -0.3 * sides, np.full(4, 0.3))]

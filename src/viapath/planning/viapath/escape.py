@@ -22,6 +22,10 @@ Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 
 * An escape never takes the robot further than ``escape_max_excess_m`` outside the corridor (or
   further out than it already is): standing is always among the commands, and at rest the robot is
   passively safe (DESIGN §7); fleeing 10 m off the path is not.
+
+:func:`escape_scores` is the reference. On the compiled path, once the whole-step kernels are compiled,
+:meth:`.backend.Backend.escape` gives the standing check and the same scores, bit for bit, in two kernel calls
+(docs/speed.md, "The escape compiled (wave 7)"); :func:`stop_or_escape` then decides from them as here.
 """
 
 from __future__ import annotations
@@ -40,10 +44,16 @@ def stop_or_escape(checks: LegChecks, limits: MotionLimits, config, previous: Co
     """``previous``: last cycle's command if last cycle escaped too (for a calm escape)."""
     position = checks.position
     base = dict(subgoal_index=checks.subgoal_index)
-    standing = checks.contact_times(position[None], np.zeros(1), np.zeros((1, 2)), np.array([config.horizon_s]))
-    if np.isinf(standing).all():
+    compiled = checks.backend.escape(checks, limits, config, escape_fan(limits, config), previous)  # numpy: None
+    if compiled is None:
+        standing = checks.contact_times(position[None], np.zeros(1), np.zeros((1, 2)), np.array([config.horizon_s]))
+        standing_free = np.isinf(standing).all()
+    else:
+        standing_free, commands, ends, score = compiled
+    if standing_free:
         return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), **base))
-    commands, ends, score = escape_scores(checks, limits, config, previous)
+    if compiled is None:
+        commands, ends, score = escape_scores(checks, limits, config, previous)
     best = int(np.argmax(score))
     speed, turn = (float(value) for value in commands[best])
     return Decision(Command(speed, turn), Plan("escape", speed, ends[best], **base))
@@ -52,7 +62,7 @@ def stop_or_escape(checks: LegChecks, limits: MotionLimits, config, previous: Co
 def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Command | None = None):
     """Commands (v, ω), where each leaves the robot, and the score of each (higher is better)."""
     position = checks.position
-    top = min(max(config.speeds), limits.max_speed_mps) if config.calm_escape else limits.max_speed_mps
+    top = escape_top_speed(limits, config)
     commands = _fan(tuple(config.speeds), top, limits.max_turn_rate_radps)
     dt = config.escape_dt_s
     steps = max(1, int(round(config.escape_s / dt)))
@@ -115,6 +125,11 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     return commands, positions[:, -1], score
 
 
+def escape_top_speed(limits: MotionLimits, config) -> float:
+    """The escape's top speed: the top of the speed set for a calm escape, else the limits' (m/s)."""
+    return min(max(config.speeds), limits.max_speed_mps) if config.calm_escape else limits.max_speed_mps
+
+
 def touching(dx: np.ndarray, dy: np.ndarray, reach_m: np.ndarray) -> np.ndarray:
     """``np.hypot(dx, dy) - reach_m < 0`` (broadcast), element for element, mostly without hypot: for the
     escape's (K, S, N) offsets hypot was its costliest step by far. The squared distance (three cheap
@@ -144,3 +159,21 @@ def _fan(speeds: tuple, top: float, max_turn_rate_radps: float) -> np.ndarray:
     commands = np.stack([grid.ravel() for grid in np.meshgrid(speed_grid, turns)], axis=1)
     commands.flags.writeable = False
     return commands
+
+
+def escape_fan(limits: MotionLimits, config) -> tuple:
+    """The top speed, the fan's commands (K, 2), its distinct turn commands (T,) and each command's index
+    among them (K,), for the compiled escape (:meth:`.backend.Backend.escape`, given them by the caller: the
+    backend does not import this module, which imports the checks, which import the backend), which takes the
+    headings, sines and cosines once per turn command: the commands of one turn rate share them."""
+    return _fan_turns(tuple(config.speeds), escape_top_speed(limits, config), limits.max_turn_rate_radps)
+
+
+@functools.lru_cache(maxsize=64)
+def _fan_turns(speeds: tuple, top: float, max_turn_rate_radps: float) -> tuple:
+    commands = _fan(speeds, top, max_turn_rate_radps)
+    row_turns, turn_rows = np.unique(commands[:, 1], return_inverse=True)
+    turn_rows = turn_rows.astype(np.int64).reshape(-1)
+    for array in (row_turns, turn_rows):
+        array.flags.writeable = False
+    return top, commands, row_turns, turn_rows

@@ -14,6 +14,14 @@ Choices:
   every kernel is a plain module-level ``@njit(cache=True)`` function, so numba's on-disk cache
   works and a process after the first pays no compilation (docs/speed.md gives the first run's cost).
 * Inputs are C-contiguous float64 arrays (the caller makes them so): one compiled signature each.
+* Where numpy's rounding is not libm's, numpy computes and the kernels take its values: the angles of the
+  choice (np.arctan2, between :func:`choose_tree` and :func:`choose_candidate`), the sines and cosines of the
+  escape's headings (between :func:`escape_headings` and :func:`escape_scores`). Where numpy's order of
+  operations is its own, the kernels copy it: np.sum's pairwise summation (:func:`_pairwise_sum`), the
+  fused multiply-add of BLAS's matrix-vector product (:func:`_fma`).
+* hypot costs about 20 ns here; where only the sign of ``hypot - limit`` matters, the squared distance
+  decides outside a band of ±1e-9 around the limit (:func:`_within`, :func:`_excess_at_most`,
+  :func:`_furthest`), as the numpy path's :func:`viapath.planning.viapath.escape.touching` does.
 """
 
 from __future__ import annotations
@@ -22,6 +30,8 @@ import math
 
 import numpy as np
 from numba import njit
+from numba.core import types
+from numba.extending import intrinsic
 
 
 @njit(cache=True, nogil=True)
@@ -364,19 +374,389 @@ def escape_contacts(positions, times, obstacle_positions, obstacle_velocities, c
             for s in range(s_count):
                 t = times[s]
                 reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
-                gap = math.hypot(positions[k, s, 0] - (px + vx * t), positions[k, s, 1] - (py + vy * t)) - reach
+                dx = positions[k, s, 0] - (px + vx * t)
+                dy = positions[k, s, 1] - (py + vy * t)
                 if overlapping[j]:
+                    gap = math.hypot(dx, dy) - reach
                     if gap < gap_min[k, column]:
                         gap_min[k, column] = gap
                     if s == s_count - 1:
                         gap_last[k, column] = gap
-                elif gap < 0:
+                elif _within(dx, dy, reach):  # hypot - reach < 0: the sign of a difference is exact
                     if s < first[k]:
                         first[k] = s
                     break
             if overlapping[j]:
                 column += 1
     return first, gap_min, gap_last
+
+
+# -- the escape (escape.stop_or_escape) in two calls: the standing check and the fan's headings; then, with numpy's
+# sines and cosines of those headings, the roll-outs, their corridor excess, the people near, the contacts and the
+# score. numpy takes the sines and cosines between the two (as kinematics.rollout does, np.sin and np.cos of arrays:
+# numpy may dispatch its own SIMD routines for them, numba calls libm).
+
+# Entries of the escape's float settings.
+_E_DT, _E_ESCAPE_S, _E_SPEED_STEP, _E_TURN_STEP, _E_MAX_SPEED, _E_MAX_TURN, _E_TOLERANCE, _E_BOUND = range(8)
+_E_TOP, _E_CONTINUITY, _E_PREVIOUS_SPEED, _E_PREVIOUS_TURN, _E_HORIZON, _E_STANDING_S = range(8, 14)
+ESCAPE_SETTINGS = 14
+
+
+@intrinsic
+def _fma(typingctx, a, b, c):
+    """a·b + c rounded once (LLVM's llvm.fma: the FMA instruction, or libm's fma where there is none)."""
+    if not all(isinstance(value, types.Float) for value in (a, b, c)):
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.fma(*args)
+
+    return types.float64(types.float64, types.float64, types.float64), codegen
+
+
+@njit(cache=True, nogil=True)
+def _minimum(a, b):
+    """np.minimum of two scalars: NaN first, and the second of two equal values (-0.0 against 0.0), as numpy."""
+    return a if (a < b or a != a) else b
+
+
+@njit(cache=True, nogil=True)
+def _maximum(a, b):
+    """np.maximum of two scalars (as :func:`_minimum`)."""
+    return a if (a > b or a != a) else b
+
+
+@njit(cache=True, nogil=True)
+def _within(dx, dy, limit):
+    """``math.hypot(dx, dy) < limit``, mostly without hypot (about 20 ns each here, most of the escape's
+    time): outside a band of ±1e-9 (relative) around ``limit`` the squared distance (a few 1e-16 from the
+    square of hypot's result) decides; inside it, and for limits whose square could underflow or overflow
+    (or NaN), hypot decides. As :func:`viapath.planning.viapath.escape.touching` does for the numpy path."""
+    if 1e-140 < limit < 1e140:
+        squared = dx * dx + dy * dy
+        below = limit * (1.0 - 1e-9)
+        if squared < below * below:
+            return True
+        above = limit * (1.0 + 1e-9)
+        if squared > above * above:
+            return False
+    return math.hypot(dx, dy) < limit
+
+
+@njit(cache=True, nogil=True, inline="always")  # inlined: a call of _excess, not inlined, measured 40 ns a point
+def _excess_at_most(px, py, segment_starts, segment_directions, segment_lengths, half_widths, limit):
+    """``_excess(px, py, ...) <= limit`` (the point within ``limit`` of the corridor, NaN false), mostly without
+    hypot: with ``limit`` and every half width >= 0, a capsule's ``hypot(o) - half <= limit`` is ``hypot(o) <
+    half + limit`` or, on the boundary, the difference itself: decided by :func:`_within`'s band where it is
+    certain, else by hypot (tests/planning/test_backends.py tries the band)."""
+    if not limit >= 0.0:
+        return _excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths) <= limit
+    for i in range(segment_starts.shape[0]):
+        half = half_widths[i]
+        dx = segment_directions[i, 0]
+        dy = segment_directions[i, 1]
+        rx = px - segment_starts[i, 0]
+        ry = py - segment_starts[i, 1]
+        along = rx * dx + ry * dy
+        if along < 0.0:
+            along = 0.0
+        if along > segment_lengths[i]:
+            along = segment_lengths[i]
+        ox = px - (segment_starts[i, 0] + along * dx)
+        oy = py - (segment_starts[i, 1] + along * dy)
+        reach = half + limit
+        if half >= 0.0 and 1e-140 < reach < 1e140:
+            squared = ox * ox + oy * oy
+            below = reach * (1.0 - 1e-9)
+            if squared < below * below:
+                return True  # the min over the capsules is at most this one
+            above = reach * (1.0 + 1e-9)
+            if squared > above * above:
+                continue
+        if math.hypot(ox, oy) - half <= limit:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _pairwise_block(values, start, count):
+    """numpy's pairwise summation of at most 128 values: under 8 in order from -0.0, else eight running sums
+    combined in pairs, then the rest in order."""
+    if count < 8:
+        total = -0.0
+        for i in range(start, start + count):
+            total += values[i]
+        return total
+    r0, r1, r2, r3 = values[start], values[start + 1], values[start + 2], values[start + 3]
+    r4, r5, r6, r7 = values[start + 4], values[start + 5], values[start + 6], values[start + 7]
+    limit = count - count % 8
+    i = 8
+    while i < limit:
+        at = start + i
+        r0 += values[at]
+        r1 += values[at + 1]
+        r2 += values[at + 2]
+        r3 += values[at + 3]
+        r4 += values[at + 4]
+        r5 += values[at + 5]
+        r6 += values[at + 6]
+        r7 += values[at + 7]
+        i += 8
+    total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < count:
+        total += values[start + i]
+        i += 1
+    return total
+
+
+@njit(cache=True, nogil=True)
+def _pairwise_sum(values, start, count):
+    """np.add.reduce of ``values[start:start + count]`` before its initial 0.0: numpy's pairwise summation
+    along a contiguous axis (:func:`_pairwise_block`; more than 128 values split in halves at a multiple of
+    8, each summed so, then added). numpy recurses; here the recursion is a stack of (start, count, stage),
+    as numba's cache loads a self-recursive function that then crashes."""
+    if count <= 128:
+        return _pairwise_block(values, start, count)
+    frame_start = np.empty(64, np.int64)
+    frame_count = np.empty(64, np.int64)
+    frame_stage = np.empty(64, np.int64)
+    sums = np.empty(64)
+    frames = 1
+    held = 0
+    frame_start[0] = start
+    frame_count[0] = count
+    frame_stage[0] = 0
+    while frames:
+        top = frames - 1
+        first = frame_start[top]
+        size = frame_count[top]
+        half = size // 2
+        half -= half % 8
+        if size <= 128:
+            sums[held] = _pairwise_block(values, first, size)
+            held += 1
+            frames -= 1
+        elif frame_stage[top] == 0:  # the first half
+            frame_stage[top] = 1
+            frame_start[frames] = first
+            frame_count[frames] = half
+            frame_stage[frames] = 0
+            frames += 1
+        elif frame_stage[top] == 1:  # the second half
+            frame_stage[top] = 2
+            frame_start[frames] = first + half
+            frame_count[frames] = size - half
+            frame_stage[frames] = 0
+            frames += 1
+        else:  # both halves summed: their sum
+            held -= 1
+            sums[held - 1] = sums[held - 1] + sums[held]
+            frames -= 1
+    return sums[0]
+
+
+@njit(cache=True, nogil=True)
+def _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths, limit):
+    """Whether each roll-out (K, S, 2) keeps every point within ``limit`` of the corridor (excess <= limit).
+    (A function of its own: the same loop inside :func:`escape_scores` took several times as long.)"""
+    out = np.ones(positions.shape[0], np.bool_)
+    for k in range(positions.shape[0]):
+        for s in range(positions.shape[1]):
+            if not _excess_at_most(positions[k, s, 0], positions[k, s, 1], segment_starts, segment_directions,
+                                   segment_lengths, half_widths, limit):
+                out[k] = False
+                break
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _furthest(positions, x0, y0):
+    """np.max of ``np.hypot`` of the positions' (K, S, 2) offsets from (x0, y0), NaN first: hypot (about 20 ns)
+    only of the squared distances within 1e-9 (relative) of the largest, the others' hypots being certainly
+    smaller; of all of them where a square could have underflowed or overflowed, or is NaN."""
+    k_count = positions.shape[0]
+    s_count = positions.shape[1]
+    squares = np.empty((k_count, s_count))
+    largest = -math.inf
+    for k in range(k_count):
+        for s in range(s_count):
+            dx = positions[k, s, 0] - x0
+            dy = positions[k, s, 1] - y0
+            squared = dx * dx + dy * dy
+            squares[k, s] = squared
+            if squared > largest:
+                largest = squared
+    cut = largest * (1.0 - 1e-9) if 1e-280 < largest < 1e280 else -math.inf
+    furthest = -math.inf
+    for k in range(k_count):
+        for s in range(s_count):
+            squared = squares[k, s]
+            if squared >= cut or squared != squared:
+                distance = math.hypot(positions[k, s, 0] - x0, positions[k, s, 1] - y0)
+                if distance != distance:
+                    return distance
+                if distance > furthest:
+                    furthest = distance
+    return furthest
+
+
+@njit(cache=True, nogil=True)
+def escape_headings(robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, row_turns,
+                    settings, steps):
+    """The first half of :func:`viapath.planning.viapath.escape.stop_or_escape`: whether standing still is free
+    over the horizon (its ``contact_times`` of the robot's position at rest, with :func:`legs_first_contact`,
+    as the compiled path checked it before), and the headings (T, steps + 1) of the escape's roll-outs
+    (:func:`viapath.kinematics.rollout`), one row per distinct turn command ``row_turns`` (the fan's commands
+    of one turn rate share them), before the first step and after each: numpy takes their sines and cosines
+    for :func:`escape_scores`."""
+    dt = settings[_E_DT]
+    free = True
+    n_count = obstacle_positions.shape[0]
+    if n_count:
+        starts = np.empty((1, 2))
+        starts[0, 0] = robot[0]
+        starts[0, 1] = robot[1]
+        durations = np.empty(1)
+        durations[0] = _minimum(_maximum(settings[_E_HORIZON] - 0.0, 0.0), settings[_E_STANDING_S])
+        contact = legs_first_contact(starts, np.zeros(1), np.zeros((1, 2)), durations, obstacle_positions,
+                                     obstacle_velocities, radii, growth, growth_until_s, np.zeros(1))
+        for j in range(n_count):
+            if not math.isinf(contact[0, j]):
+                free = False
+    max_turn = settings[_E_MAX_TURN]
+    turn0 = robot[4]
+    heading0 = robot[2]
+    headings = np.empty((row_turns.shape[0], steps + 1))
+    for r in range(row_turns.shape[0]):
+        w_cmd = _minimum(_maximum(row_turns[r], -max_turn), max_turn)
+        headings[r, 0] = heading0
+        turned = 0.0
+        for s in range(steps):
+            dw = settings[_E_TURN_STEP] * float(s + 1)
+            turn = turn0 + _minimum(_maximum(w_cmd - turn0, -dw), dw)
+            # np.cumsum: the first term as it is, then each added in order
+            turned = turn * dt if s == 0 else turned + turn * dt
+            headings[r, s + 1] = heading0 + turned
+    return free, headings
+
+
+@njit(cache=True, nogil=True)
+def escape_scores(robot, commands, turn_rows, sines, cosines, obstacle_positions, obstacle_velocities, radii, growth,
+                  growth_until_s, segment_starts, segment_directions, segment_lengths, half_widths, subgoal, settings,
+                  steps, calm):
+    """:func:`viapath.planning.viapath.escape.escape_scores` compiled, operation for operation: the roll-outs of
+    the K commands (:func:`viapath.kinematics.rollout`: the ramps of speed and turn rate, the exact arcs, the
+    positions as running sums), their corridor excess (:func:`_excess`), the people who could come within
+    reach (the triangle-inequality bound), the contacts (:func:`escape_contacts`), the separation from the
+    people overlapped now (summed as np.sum does: :func:`_pairwise_sum`), the progress towards the subgoal and
+    the score. Returns the ends (K, 2) and the scores (K,).
+
+    ``sines`` and ``cosines`` are numpy's, of :func:`escape_headings`' rows (command k's row is
+    ``turn_rows[k]``). The progress is ``(end - position) @ toward``: numpy hands that matrix-vector product
+    to BLAS, whose kernel (OpenBLAS here) rounds ``d0·t0 + d1·t1`` as ``fma(d0, t0, d1·t1)``; so does this
+    (tests/planning/test_backends.py holds it to the reference bit for bit). ``calm``: a calm escape with
+    last cycle's command (the continuity term)."""
+    k_count = commands.shape[0]
+    dt = settings[_E_DT]
+    max_speed = settings[_E_MAX_SPEED]
+    x0 = robot[0]
+    y0 = robot[1]
+    speed0 = robot[3]
+    turn0 = robot[4]
+    max_turn = settings[_E_MAX_TURN]
+    tolerance = settings[_E_TOLERANCE]
+    bound = settings[_E_BOUND]
+    positions = np.empty((k_count, steps, 2))
+    for k in range(k_count):
+        row = turn_rows[k]
+        v_cmd = _minimum(_maximum(commands[k, 0], 0.0), max_speed)
+        w_cmd = _minimum(_maximum(commands[k, 1], -max_turn), max_turn)
+        x_sum = 0.0
+        y_sum = 0.0
+        for s in range(steps):
+            dv = settings[_E_SPEED_STEP] * float(s + 1)
+            dw = settings[_E_TURN_STEP] * float(s + 1)
+            speed = speed0 + _minimum(_maximum(v_cmd - speed0, -dv), dv)
+            turn = turn0 + _minimum(_maximum(w_cmd - turn0, -dw), dw)
+            sin_before = sines[row, s]
+            sin_after = sines[row, s + 1]
+            cos_before = cosines[row, s]
+            cos_after = cosines[row, s + 1]
+            if abs(turn) < 1e-9:
+                dx = speed * dt * cos_before
+                dy = speed * dt * sin_before
+            else:
+                radius = speed / turn
+                dx = radius * (sin_after - sin_before)
+                dy = -radius * (cos_after - cos_before)
+            x_sum = dx if s == 0 else x_sum + dx
+            y_sum = dy if s == 0 else y_sum + dy
+            px = x0 + x_sum
+            py = y0 + y_sum
+            positions[k, s, 0] = px
+            positions[k, s, 1] = py
+    # all(excess <= tolerance); np.max(excess) <= bound is all(excess <= bound), NaN included
+    inside = _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths,
+                               tolerance)
+    within_bound = _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths,
+                                     bound)
+    travel = _furthest(positions, x0, y0)
+
+    # The people who could come within reach during the roll-out.
+    horizon = steps * dt
+    n_count = obstacle_positions.shape[0]
+    near = np.zeros(n_count, np.bool_)
+    gap_now_all = np.empty(n_count)
+    for j in range(n_count):
+        gap = math.hypot(x0 - obstacle_positions[j, 0], y0 - obstacle_positions[j, 1]) - radii[j]
+        gap_now_all[j] = gap
+        grown = growth[j] * _minimum(horizon, growth_until_s[j])
+        speed_j = math.hypot(obstacle_velocities[j, 0], obstacle_velocities[j, 1])
+        near[j] = gap - grown - speed_j * horizon - travel <= 0
+    near_positions = obstacle_positions[near]
+    near_velocities = obstacle_velocities[near]
+    gap_now = gap_now_all[near]
+    overlapping = gap_now <= 0
+    times = np.empty(steps)
+    for s in range(steps):
+        times[s] = dt * float(s + 1)
+    first_step, gap_min, gap_last = escape_contacts(positions, times, near_positions, near_velocities, radii[near],
+                                                    growth[near], growth_until_s[near], overlapping, steps)
+    gap_overlapped = gap_now[overlapping]
+    m_count = gap_overlapped.shape[0]
+    terms = np.empty(m_count)
+
+    toward_x = subgoal[0] - x0
+    toward_y = subgoal[1] - y0
+    norm = math.hypot(toward_x, toward_y)
+    norm = 1e-9 if 1e-9 > norm else norm  # Python's max(norm, 1e-9)
+    toward_x = toward_x / norm
+    toward_y = toward_y / norm
+    ends = np.empty((k_count, 2))
+    score = np.empty(k_count)
+    for k in range(k_count):
+        separation = 0.0
+        if m_count:
+            for column in range(m_count):
+                deeper = gap_min[k, column] - gap_overlapped[column]
+                terms[column] = _minimum(deeper, 0.0) + _minimum(gap_last[k, column], 0.0)
+            separation = 0.0 + _pairwise_sum(terms, 0, m_count)
+        time_to_contact = first_step[k] * dt
+        free = time_to_contact >= steps * dt
+        end_x = positions[k, steps - 1, 0]
+        end_y = positions[k, steps - 1, 1]
+        ends[k, 0] = end_x
+        ends[k, 1] = end_y
+        progress = _fma(end_x - x0, toward_x, (end_y - y0) * toward_y) / settings[_E_ESCAPE_S]
+        speed = commands[k, 0]
+        value = (1e2 * separation + 20.0 * (1.0 if free else 0.0) + 2.0 * (1.0 if inside[k] else 0.0)
+                 + time_to_contact - (0.005 if free else 0.5) * speed + 0.01 * progress)
+        if calm:
+            change = (abs(speed - settings[_E_PREVIOUS_SPEED]) / settings[_E_TOP]
+                      + abs(commands[k, 1] - settings[_E_PREVIOUS_TURN]) / max_turn)
+            value = value - settings[_E_CONTINUITY] * _minimum(change, 1.0)
+        score[k] = value if (within_bound[k] or speed == 0.0) else -math.inf
+    return ends, score
 
 
 @njit(cache=True, nogil=True)
