@@ -251,7 +251,6 @@ def _kernels():
 _KERNELS = None
 
 
-
 def _c(array) -> np.ndarray:
     return np.ascontiguousarray(array, dtype=np.float64)
 

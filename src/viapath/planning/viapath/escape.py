@@ -113,7 +113,10 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
         separation = np.zeros(len(commands))
     toward = checks.subgoal - position
     toward = toward / max(float(np.hypot(*toward)), 1e-9)
-    progress = (positions[:, -1] - position) @ toward / config.escape_s
+    # (end - position) · toward written out, the same sum on every machine (``@`` hands it to BLAS, whose kernels
+    # differ in whether they fuse the multiply and the add)
+    ends = positions[:, -1]
+    progress = ((ends[:, 0] - position[0]) * toward[0] + (ends[:, 1] - position[1]) * toward[1]) / config.escape_s
     free = time_to_contact >= steps * dt
     score = (1e2 * separation + 20.0 * free + 2.0 * inside + time_to_contact
              - np.where(free, 0.005, 0.5) * commands[:, 0] + 0.01 * progress)
@@ -122,7 +125,7 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
                   + np.abs(commands[:, 1] - previous.turn_rate_radps) / limits.max_turn_rate_radps)
         score = score - config.escape_continuity_s * np.minimum(change, 1.0)
     score = np.where(within_bound | (commands[:, 0] == 0.0), score, -np.inf)
-    return commands, positions[:, -1], score
+    return commands, ends, score
 
 
 def escape_top_speed(limits: MotionLimits, config) -> float:

@@ -17,8 +17,7 @@ Choices:
 * Where numpy's rounding is not libm's, numpy computes and the kernels take its values: the angles of the
   choice (np.arctan2, between :func:`choose_tree` and :func:`choose_candidate`), the sines and cosines of the
   escape's headings (between :func:`escape_headings` and :func:`escape_scores`). Where numpy's order of
-  operations is its own, the kernels copy it: np.sum's pairwise summation (:func:`_pairwise_sum`), the
-  fused multiply-add of BLAS's matrix-vector product (:func:`_fma`).
+  operations is its own, the kernels copy it: np.sum's pairwise summation (:func:`_pairwise_sum`).
 * hypot costs about 20 ns here; where only the sign of ``hypot - limit`` matters, the squared distance
   decides outside a band of ±1e-9 around the limit (:func:`_within`, :func:`_excess_at_most`,
   :func:`_furthest`), as the numpy path's :func:`viapath.planning.viapath.escape.touching` does.
@@ -30,8 +29,6 @@ import math
 
 import numpy as np
 from numba import njit
-from numba.core import types
-from numba.extending import intrinsic
 
 
 @njit(cache=True, nogil=True)
@@ -402,18 +399,6 @@ _E_TOP, _E_CONTINUITY, _E_PREVIOUS_SPEED, _E_PREVIOUS_TURN, _E_HORIZON, _E_STAND
 ESCAPE_SETTINGS = 14
 
 
-@intrinsic
-def _fma(typingctx, a, b, c):
-    """a·b + c rounded once (LLVM's llvm.fma: the FMA instruction, or libm's fma where there is none)."""
-    if not all(isinstance(value, types.Float) for value in (a, b, c)):
-        return None
-
-    def codegen(context, builder, signature, args):
-        return builder.fma(*args)
-
-    return types.float64(types.float64, types.float64, types.float64), codegen
-
-
 @njit(cache=True, nogil=True)
 def _minimum(a, b):
     """np.minimum of two scalars: NaN first, and the second of two equal values (-0.0 against 0.0), as numpy."""
@@ -652,10 +637,7 @@ def escape_scores(robot, commands, turn_rows, sines, cosines, obstacle_positions
     the score. Returns the ends (K, 2) and the scores (K,).
 
     ``sines`` and ``cosines`` are numpy's, of :func:`escape_headings`' rows (command k's row is
-    ``turn_rows[k]``). The progress is ``(end - position) @ toward``: numpy hands that matrix-vector product
-    to BLAS, whose kernel (OpenBLAS here) rounds ``d0·t0 + d1·t1`` as ``fma(d0, t0, d1·t1)``; so does this
-    (tests/planning/test_backends.py holds it to the reference bit for bit). ``calm``: a calm escape with
-    last cycle's command (the continuity term)."""
+    ``turn_rows[k]``). ``calm``: a calm escape with last cycle's command (the continuity term)."""
     k_count = commands.shape[0]
     dt = settings[_E_DT]
     max_speed = settings[_E_MAX_SPEED]
@@ -747,7 +729,7 @@ def escape_scores(robot, commands, turn_rows, sines, cosines, obstacle_positions
         end_y = positions[k, steps - 1, 1]
         ends[k, 0] = end_x
         ends[k, 1] = end_y
-        progress = _fma(end_x - x0, toward_x, (end_y - y0) * toward_y) / settings[_E_ESCAPE_S]
+        progress = ((end_x - x0) * toward_x + (end_y - y0) * toward_y) / settings[_E_ESCAPE_S]
         speed = commands[k, 0]
         value = (1e2 * separation + 20.0 * (1.0 if free else 0.0) + 2.0 * (1.0 if inside[k] else 0.0)
                  + time_to_contact - (0.005 if free else 0.5) * speed + 0.01 * progress)
