@@ -4,8 +4,8 @@ Each rewritten piece is held to its earlier form, kept here verbatim as the refe
 on seeded random inputs:
 * the cached beam tables of the segmentation and its compiled clustering against the per-scan numpy path;
 * the numba shape tests of the detector (sagitta and convexity t-statistic of each segment) against
-  the numpy path (``_padded``, ``_chord_coordinates``, ``_convexity_t``), and the kernel's copy of
-  numpy's pairwise summation against ``ndarray.sum``;
+  the numpy path (``_padded``, ``_chord_coordinates``, ``_convexity_t``) (the pairwise summation they
+  share with the escape kernel, :mod:`viapath.compiled_sum`, is tested in tests/planning/test_backends.py);
 * ``_convexity_t``'s single stacked reduction against its eight separate ``.sum(1)``;
 * ``_merge_duplicates`` (its early return when nothing is close);
 * ``gated_assignment``'s direct answer for one-to-one gates against the union-find path;
@@ -90,19 +90,6 @@ def test_stacked_convexity_sums_equal_separate_sums(seed):
     *_, x, y, mask, mid = _numpy_shape_tests(points, starts, counts, origins, seg)
     with np.errstate(all="ignore"):
         assert _same(_convexity_t(x, y, mask, mid, origins, seg), _convexity_t_reference(x, y, mask, mid, origins, seg))
-
-
-@needs_numba
-def test_kernel_pairwise_sum_is_numpys():
-    from viapath.perception._numba_kernels import numpy_pairwise_sum
-
-    rng = np.random.default_rng(0)
-    for n in [*range(1, 140), 255, 256, 257, 300, 1000, 1029]:
-        a = rng.standard_normal((3, n)) * 10.0 ** rng.integers(-6, 6, (3, n))
-        a[rng.random((3, n)) < 0.2] = 0.0
-        a[0, : n // 2] = -0.0
-        got = np.array([0.0 + numpy_pairwise_sum(row, 0, n) for row in a])
-        assert _same(got, a.sum(1)), n
 
 
 @needs_numba

@@ -670,6 +670,7 @@ def test_escape_kernel_pieces_match_numpy():
     terms, zeros of both signs)."""
     from numba import njit
 
+    from viapath.compiled_sum import pairwise_sum
     from viapath.planning.viapath import kernels
     from viapath.planning.viapath.backend import _corridor
 
@@ -733,7 +734,7 @@ def test_escape_kernel_pieces_match_numpy():
         rows[1] = np.where(rng.random(count) < 0.5, -0.0, 0.0)
         rows[2] = np.where(rng.random(count) < 0.5, rows[2], 0.0)
         expected = np.sum(rows, axis=1)
-        got = np.array([0.0 + kernels._pairwise_sum(np.ascontiguousarray(row), 0, count) for row in rows])
+        got = np.array([0.0 + pairwise_sum(np.ascontiguousarray(row), 0, count) for row in rows])
         assert _same_bits(got, expected)
 
 

@@ -24,6 +24,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from viapath.compiled_sum import pairwise_sum
+
 
 @numba.njit(cache=True, fastmath=False, nogil=True)
 def beam_range(ox, oy, dx, dy, centres, radii, segments):  # pragma: no cover - compiled
@@ -177,85 +179,8 @@ def fit_circles_kernel(points, starts, counts, origins, has_prior, prior, weight
 # -- the detector's cheap shape tests (issue 16, wave 7) --------------------------------------------
 # These must give the numpy path's values bit for bit (the detections decide which tracks exist), so
 # they use only +, -, *, /, abs, max and sqrt (correctly rounded everywhere) and sum the way numpy
-# sums a row: ``row.sum()`` starts from 0.0 and adds numpy's pairwise sum of the row (below).
-
-
-@numba.njit(cache=True, nogil=True)
-def _pairwise_block(values, first, n):  # pragma: no cover - compiled
-    """numpy's pairwise sum of at most 128 values (see :func:`numpy_pairwise_sum`)."""
-    if n < 8:
-        res = 0.0
-        for i in range(first, first + n):
-            res += values[i]
-        return res
-    r0 = values[first]
-    r1 = values[first + 1]
-    r2 = values[first + 2]
-    r3 = values[first + 3]
-    r4 = values[first + 4]
-    r5 = values[first + 5]
-    r6 = values[first + 6]
-    r7 = values[first + 7]
-    i = 8
-    while i < n - n % 8:
-        j = first + i
-        r0 += values[j]
-        r1 += values[j + 1]
-        r2 += values[j + 2]
-        r3 += values[j + 3]
-        r4 += values[j + 4]
-        r5 += values[j + 5]
-        r6 += values[j + 6]
-        r7 += values[j + 7]
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += values[first + i]
-        i += 1
-    return res
-
-
-@numba.njit(cache=True, nogil=True)
-def numpy_pairwise_sum(values, first, n):  # pragma: no cover - compiled
-    """``values[first:first + n]`` summed in numpy's order (``pairwise_sum`` in numpy's ``loops_utils.h``):
-    fewer than 8 values one after the other, up to 128 in eight interleaved partial sums combined as
-    ``((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))`` then the remainder; a longer run is split in
-    two halves (the first a multiple of 8 long), each summed so, and the two sums added.
-
-    The halving is walked with an explicit stack, not by recursion: numba's on-disk cache does not
-    reload recursive functions safely (a cached recursive kernel crashed the next process).
-    """
-    if n <= 128:
-        return _pairwise_block(values, first, n)
-    node_first = np.empty(64, dtype=np.int64)  # depth <= log2(n): 64 is far beyond any scan
-    node_n = np.empty(64, dtype=np.int64)
-    node_stage = np.empty(64, dtype=np.int64)  # 0: visit the left half, 1: the right half, 2: add
-    partial = np.empty(64)
-    top = 0
-    done = 0
-    node_first[0], node_n[0], node_stage[0] = first, n, 0
-    while top >= 0:
-        f, m = node_first[top], node_n[top]
-        if m <= 128:
-            partial[done] = _pairwise_block(values, f, m)
-            done += 1
-            top -= 1
-            continue
-        half = m // 2
-        half -= half % 8
-        stage = node_stage[top]
-        node_stage[top] = stage + 1
-        if stage == 0:
-            top += 1
-            node_first[top], node_n[top], node_stage[top] = f, half, 0
-        elif stage == 1:
-            top += 1
-            node_first[top], node_n[top], node_stage[top] = f + half, m - half, 0
-        else:
-            done -= 1
-            partial[done - 1] = partial[done - 1] + partial[done]
-            top -= 1
-    return partial[0]
+# sums a row: ``row.sum()`` starts from 0.0 and adds numpy's pairwise sum of the row
+# (:func:`viapath.compiled_sum.pairwise_sum`).
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -301,7 +226,7 @@ def segment_shape_kernel(points, starts, counts, width, first, chord, extent, or
             terms[7, p] = x2 * y
         sagitta[k] = largest
         for q in range(8):
-            sums[q] = 0.0 + numpy_pairwise_sum(terms[q], 0, width)
+            sums[q] = 0.0 + pairwise_sum(terms[q], 0, width)
         # solve_sym3 on (count, Σx, Σx², Σx², Σx³, Σx⁴) and (Σy, Σxy, Σx²y): the curvature and (A⁻¹)₂₂.
         a00, a01, a02, a11, a12, a22 = sums[0], sums[1], sums[2], sums[2], sums[3], sums[4]
         b0, b1, b2 = sums[5], sums[6], sums[7]

@@ -17,7 +17,7 @@ Choices:
 * Where numpy's rounding is not libm's, numpy computes and the kernels take its values: the angles of the
   choice (np.arctan2, between :func:`choose_tree` and :func:`choose_candidate`), the sines and cosines of the
   escape's headings (between :func:`escape_headings` and :func:`escape_scores`). Where numpy's order of
-  operations is its own, the kernels copy it: np.sum's pairwise summation (:func:`_pairwise_sum`).
+  operations is its own, the kernels copy it: np.sum's pairwise summation (:func:`viapath.compiled_sum.pairwise_sum`).
 * hypot costs about 20 ns here; where only the sign of ``hypot - limit`` matters, the squared distance
   decides outside a band of ±1e-9 around the limit (:func:`_within`, :func:`_excess_at_most`,
   :func:`_furthest`), as the numpy path's :func:`viapath.planning.viapath.escape.touching` does.
@@ -29,6 +29,8 @@ import math
 
 import numpy as np
 from numba import njit
+
+from viapath.compiled_sum import pairwise_sum
 
 
 @njit(cache=True, nogil=True)
@@ -464,83 +466,6 @@ def _excess_at_most(px, py, segment_starts, segment_directions, segment_lengths,
 
 
 @njit(cache=True, nogil=True)
-def _pairwise_block(values, start, count):
-    """numpy's pairwise summation of at most 128 values: under 8 in order from -0.0, else eight running sums
-    combined in pairs, then the rest in order."""
-    if count < 8:
-        total = -0.0
-        for i in range(start, start + count):
-            total += values[i]
-        return total
-    r0, r1, r2, r3 = values[start], values[start + 1], values[start + 2], values[start + 3]
-    r4, r5, r6, r7 = values[start + 4], values[start + 5], values[start + 6], values[start + 7]
-    limit = count - count % 8
-    i = 8
-    while i < limit:
-        at = start + i
-        r0 += values[at]
-        r1 += values[at + 1]
-        r2 += values[at + 2]
-        r3 += values[at + 3]
-        r4 += values[at + 4]
-        r5 += values[at + 5]
-        r6 += values[at + 6]
-        r7 += values[at + 7]
-        i += 8
-    total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < count:
-        total += values[start + i]
-        i += 1
-    return total
-
-
-@njit(cache=True, nogil=True)
-def _pairwise_sum(values, start, count):
-    """np.add.reduce of ``values[start:start + count]`` before its initial 0.0: numpy's pairwise summation
-    along a contiguous axis (:func:`_pairwise_block`; more than 128 values split in halves at a multiple of
-    8, each summed so, then added). numpy recurses; here the recursion is a stack of (start, count, stage),
-    as numba's cache loads a self-recursive function that then crashes."""
-    if count <= 128:
-        return _pairwise_block(values, start, count)
-    frame_start = np.empty(64, np.int64)
-    frame_count = np.empty(64, np.int64)
-    frame_stage = np.empty(64, np.int64)
-    sums = np.empty(64)
-    frames = 1
-    held = 0
-    frame_start[0] = start
-    frame_count[0] = count
-    frame_stage[0] = 0
-    while frames:
-        top = frames - 1
-        first = frame_start[top]
-        size = frame_count[top]
-        half = size // 2
-        half -= half % 8
-        if size <= 128:
-            sums[held] = _pairwise_block(values, first, size)
-            held += 1
-            frames -= 1
-        elif frame_stage[top] == 0:  # the first half
-            frame_stage[top] = 1
-            frame_start[frames] = first
-            frame_count[frames] = half
-            frame_stage[frames] = 0
-            frames += 1
-        elif frame_stage[top] == 1:  # the second half
-            frame_stage[top] = 2
-            frame_start[frames] = first + half
-            frame_count[frames] = size - half
-            frame_stage[frames] = 0
-            frames += 1
-        else:  # both halves summed: their sum
-            held -= 1
-            sums[held - 1] = sums[held - 1] + sums[held]
-            frames -= 1
-    return sums[0]
-
-
-@njit(cache=True, nogil=True)
 def _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths, limit):
     """Whether each roll-out (K, S, 2) keeps every point within ``limit`` of the corridor (excess <= limit).
     (A function of its own: the same loop inside :func:`escape_scores` took several times as long.)"""
@@ -633,7 +558,7 @@ def escape_scores(robot, commands, turn_rows, sines, cosines, obstacle_positions
     the K commands (:func:`viapath.kinematics.rollout`: the ramps of speed and turn rate, the exact arcs, the
     positions as running sums), their corridor excess (:func:`_excess`), the people who could come within
     reach (the triangle-inequality bound), the contacts (:func:`escape_contacts`), the separation from the
-    people overlapped now (summed as np.sum does: :func:`_pairwise_sum`), the progress towards the subgoal and
+    people overlapped now (summed as np.sum does: :func:`viapath.compiled_sum.pairwise_sum`), the progress towards the subgoal and
     the score. Returns the ends (K, 2) and the scores (K,).
 
     ``sines`` and ``cosines`` are numpy's, of :func:`escape_headings`' rows (command k's row is
@@ -722,7 +647,7 @@ def escape_scores(robot, commands, turn_rows, sines, cosines, obstacle_positions
             for column in range(m_count):
                 deeper = gap_min[k, column] - gap_overlapped[column]
                 terms[column] = _minimum(deeper, 0.0) + _minimum(gap_last[k, column], 0.0)
-            separation = 0.0 + _pairwise_sum(terms, 0, m_count)
+            separation = 0.0 + pairwise_sum(terms, 0, m_count)
         time_to_contact = first_step[k] * dt
         free = time_to_contact >= steps * dt
         end_x = positions[k, steps - 1, 0]
