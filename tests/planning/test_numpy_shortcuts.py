@@ -105,7 +105,10 @@ def _escape_scores_reference(checks, limits, config, previous=None):
         separation = np.zeros(len(commands))
     toward = checks.subgoal - position
     toward = toward / max(float(np.hypot(*toward)), 1e-9)
-    progress = (positions[:, -1] - position) @ toward / config.escape_s
+    # The one line changed since the first form (wave 7): the product written out, as escape.py now has it;
+    # ``@`` went to BLAS, whose kernels differ in whether they fuse the multiply-add (episodes unchanged).
+    ends = positions[:, -1]
+    progress = ((ends[:, 0] - position[0]) * toward[0] + (ends[:, 1] - position[1]) * toward[1]) / config.escape_s
     free = time_to_contact >= steps * dt
     score = (1e2 * separation + 20.0 * free + 2.0 * inside + time_to_contact
              - np.where(free, 0.005, 0.5) * commands[:, 0] + 0.01 * progress)
