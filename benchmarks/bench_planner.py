@@ -148,6 +148,8 @@ def time_planner(planner, scenes, cycles: int, whole: bool = False) -> np.ndarra
     for i in range(cycles):
         scene = scenes[i % len(scenes)]
         planner.reset()
+        if own is not None:
+            own.last_ms = float("nan")  # a cycle that never reaches decide (at the goal, guard stop) has no own part
         start = CLOCK[0]()
         planner.plan(scene)
         samples[i] = planner.behavior.last_ms if timed else (CLOCK[0]() - start) * 1e3
@@ -173,8 +175,9 @@ def run(planners: list[str], counts: list[int], cycles: int, seed: int) -> dict:
         for name in wanted:
             samples = time_planner(built[name], scenes, cycles)
             quantiles[name] = np.percentile(samples, [50, 99])
-            if not np.isnan(built[name].own_samples).any():
-                decide_quantiles[name] = np.percentile(built[name].own_samples, [50, 99])
+            own_samples = built[name].own_samples
+            if np.isfinite(own_samples).any():  # viapath: the cycles that reached decide
+                decide_quantiles[name] = np.percentile(own_samples[np.isfinite(own_samples)], [50, 99])
         if "nav-dummy" in quantiles:
             whole = np.percentile(time_planner(built["nav-dummy"], scenes, cycles, whole=True), [50, 99])
             harness[str(n)] = {"p50_ms": float(whole[0]), "p99_ms": float(whole[1]),

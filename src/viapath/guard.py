@@ -323,9 +323,10 @@ class _GuardedCycle:
     def check(self, command: Any, limits: MotionLimits, robot_radius_m: float) -> tuple[Command, str | None, str | None]:
         """:func:`check_command` of ``command`` against this cycle's observation (a pure function of its
         arguments: a check of the same command, limits and radius is answered from the last one)."""
-        if type(command) is not Command:
+        v, w = getattr(command, "speed_mps", None), getattr(command, "turn_rate_radps", None)
+        if not (type(command) is Command and isinstance(v, float) and isinstance(w, float)):
+            # Anything else (an array, a string, an int) is checked, never compared: check_command says what it is.
             return check_command(command, self.observation, limits, robot_radius_m, self.config)
-        v, w = command.speed_mps, command.turn_rate_radps
         last = self.last_check
         if (last is not None and last[0] is limits and last[1] == robot_radius_m and _same_number(last[2], v)
                 and _same_number(last[3], w)):

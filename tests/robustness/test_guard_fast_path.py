@@ -187,3 +187,34 @@ def test_the_shields_command_is_checked_once_when_it_is_the_planners(monkeypatch
     assert np.array_equal(once.trace.commands, twice.trace.commands)
     assert once.trace.plan_status == twice.trace.plan_status
     assert np.array_equal(once.trace.robot_poses, twice.trace.robot_poses)
+
+
+def test_a_malformed_command_behind_the_shield_is_a_stop():
+    """Behind the shield both guards check the command; a command whose fields are not floats (an array, a
+    string) is never compared with the last one checked, it is checked: an array stops the robot, with the
+    shield as without it (the comparison raised before this test), a number written as a string is read."""
+    from viapath import DesignatedPath
+    from viapath.observation import Command, Decision, Plan
+    from viapath.planning.base import Planner
+    from viapath.safety.shielded import ShieldedPlanner
+
+    class Garbled(Planner):  # not registered: a planner whose command holds what a command must not
+        def __init__(self, path, command):
+            super().__init__(path)
+            self.garbled = command
+
+        def decide(self, situation):
+            return Decision(self.garbled, Plan("straight", 0.2, situation.subgoal.copy()))
+
+    path = DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0)
+    observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25),
+                              Obstacles(np.array([[3.0, 0.5]]), np.array([[-0.3, 0.0]]), np.array([0.3])))
+    for command in (Command(np.array([0.1, 0.2]), 0.0), Command(0.1, [0.0, 1.0])):
+        for planner in (Garbled(path, command), ShieldedPlanner(Garbled(path, command))):
+            decision = planner.plan(observation)
+            assert decision.plan.status == "guard-stop", (command, type(planner).__name__)
+            assert (decision.command.speed_mps, decision.command.turn_rate_radps) == (0.0, 0.0)
+    # A number written as a string is read as the number (check_command's float()), behind the shield too.
+    for planner in (Garbled(path, Command("0.1", 0.0)), ShieldedPlanner(Garbled(path, Command("0.1", 0.0)))):
+        decision = planner.plan(observation)
+        assert type(decision.command.speed_mps) is float and decision.command.speed_mps == 0.1

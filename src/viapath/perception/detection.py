@@ -66,7 +66,9 @@ class DetectorParams:
     leg_position_sigma_m: float = 0.1
     measurement_sigma_floor_m: float = 0.02
     iterations: int = 4
-    fit_backend: str = "auto"  # numba when installed (extra 'fast'), else numpy; equal to round-off
+    # numba when installed (extra 'fast'), else numpy: the circle fit (equal to round-off) and, since wave 7,
+    # the segmentation's clustering and the shape tests (equal bit for bit)
+    fit_backend: str = "auto"
     keep_segments: bool = True  # per-segment points and fits, for plots and evaluation
 
     @classmethod

@@ -38,7 +38,7 @@ class OraclePerception(Perception):
         if self.velocity_noise_mps > 0:
             velocities = velocities + self.rng.normal(0.0, self.velocity_noise_mps, velocities.shape)
         n = len(positions)
-        # Every array here is new (indexing with a mask copies), so the estimates are handed over as they are.
+        # Every array here is new (copies, or indexing with a mask), so the estimates are handed over as they are.
         return Obstacles.of_fresh_arrays(positions, velocities, radii, _sigmas(n, self.position_noise_m),
                                          _sigmas(n, self.velocity_noise_mps), ids)
 

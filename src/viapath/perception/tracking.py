@@ -257,7 +257,9 @@ class MultiTargetTracker:
         rows = self.confirmed if confirmed_only else np.ones(len(self.ids), dtype=bool)
         state, c = self.state[rows], self.covariance[rows]
         # The sigmas of the reported rows only (elementwise: the same values as sigmas()[rows]); every
-        # array is fresh (boolean indexing copies), so Obstacles may keep them without copying again.
+        # array is fresh (boolean indexing copies), so Obstacles may keep them without copying again. The
+        # positions and velocities are two column views of one such copy (not C-contiguous: the planner's
+        # kernels get contiguous copies, LegChecks.kernel_obstacles).
         return Obstacles.of_fresh_arrays(state[:, :2], state[:, 2:], self.radii_m[rows],
                                          _largest_sigma(c[:, 0, 0], c[:, 0, 1], c[:, 1, 1]),
                                          _largest_sigma(c[:, 2, 2], c[:, 2, 3], c[:, 3, 3]), self.ids[rows])

@@ -112,6 +112,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         super().reset()
         self._previous = None
         self._previous_escape = None
+        self._last_command = None
 
     # -- the recipe ----------------------------------------------------------------------------------
 
