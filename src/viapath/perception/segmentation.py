@@ -66,9 +66,16 @@ class Segments:
 
 def breakpoint_threshold_m(range_m: np.ndarray, beam_gap_rad: np.ndarray, params: SegmentationParams) -> np.ndarray:
     """Adaptive breakpoint distance ``D_max`` (Borges & Aldon) at ``range_m`` for beams ``beam_gap_rad`` apart."""
-    sigma = np.where(range_m < params.noise_switch_range_m, params.noise_sigma_near_m, params.noise_fraction_far * range_m)
     angle = np.minimum(beam_gap_rad, 0.5 * params.grazing_angle_rad)  # keep sin(λ - Δφ) > 0
-    jump = range_m * np.sin(angle) / np.sin(params.grazing_angle_rad - angle) + 3.0 * sigma
+    return _threshold_from_sines(range_m, np.sin(angle), np.sin(params.grazing_angle_rad - angle), params)
+
+
+def _threshold_from_sines(range_m: np.ndarray, sin_gap: np.ndarray, sin_rest: np.ndarray,
+                          params: SegmentationParams) -> np.ndarray:
+    """:func:`breakpoint_threshold_m` from ``sin(Δφ)`` and ``sin(λ - Δφ)`` (computed there, or read from
+    :class:`BeamTables`)."""
+    sigma = np.where(range_m < params.noise_switch_range_m, params.noise_sigma_near_m, params.noise_fraction_far * range_m)
+    jump = range_m * sin_gap / sin_rest + 3.0 * sigma
     return np.maximum(jump, params.min_jump_m)
 
 
@@ -139,11 +146,10 @@ def segment_beams(ranges_m, angles_rad, origin_x_m, origin_y_m, scan_index, para
     near = np.minimum(r[:-1], r[1:])
     if tables is None:
         threshold = breakpoint_threshold_m(near, np.abs(np.diff(a)), params)
-    else:  # breakpoint_threshold_m's expression with its sines from the tables (wrong only where not adjacent)
+    else:  # its sines from the tables (wrong only where not adjacent, and those split anyway)
         row = np.minimum(beam_step, params.max_gap_beams + 1) - 1
-        sigma = np.where(near < params.noise_switch_range_m, params.noise_sigma_near_m, params.noise_fraction_far * near)
-        jump = near * tables.sin_gap[row, valid[:-1]] / tables.sin_rest[row, valid[:-1]] + 3.0 * sigma
-        threshold = np.maximum(jump, params.min_jump_m)
+        threshold = _threshold_from_sines(near, tables.sin_gap[row, valid[:-1]], tables.sin_rest[row, valid[:-1]],
+                                          params)
     split = (gap > threshold) | ~adjacent
     starts = np.concatenate([[0], np.flatnonzero(split) + 1])
     counts = np.diff(np.append(starts, len(valid)))

@@ -439,6 +439,8 @@ def _excess_at_most(px, py, segment_starts, segment_directions, segment_lengths,
     if not limit >= 0.0:
         return _excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths) <= limit
     for i in range(segment_starts.shape[0]):
+        # _capsule_excess's projection written out again: an inlined helper returning the offset (x, y) made the
+        # escape a third slower (0.21 -> 0.30 ms a cycle, measured), so the copy stays.
         half = half_widths[i]
         dx = segment_directions[i, 0]
         dy = segment_directions[i, 1]

@@ -32,6 +32,7 @@ What the paper leaves open and we chose, beyond what those modules say:
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,7 +45,7 @@ from viapath.planning.viapath.backend import backend_for
 from viapath.planning.viapath.backend import resolve as resolve_backend
 from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, _candidates_of, grow
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.critics import (Context, Costs, Distance, Heading, Hysteresis, SidePreference,
+from viapath.planning.viapath.critics import (Context, Distance, Heading, Hysteresis, SidePreference,
                                               SpeedError, Time, critics_for, score)
 from viapath.planning.viapath.escape import stop_or_escape
 from viapath.planning.viapath.follow import can_follow
@@ -205,7 +206,7 @@ class ViaPathPlanner(Planner, name="viapath"):
                 break
             plan = self._plan_of(candidates, int(best), total, checks, polylines)
             if can_follow(plan, checks, self.limits, self.config) and self._inside_shield(plan):
-                plan.extras["cost_terms"] = _cost_terms(costs, order, rank, total)
+                plan.extras["cost_terms"] = _cost_terms(costs.breakdown, order, rank, total)
                 ways = candidates.ways[best]
                 choice = Choice(Way(int(ways[0]), int(ways[1]), int(ways[2])), int(candidates.speed_mmps[best]))
                 return _Chosen(choice, plan, candidates)
@@ -311,22 +312,18 @@ class ViaPathPlanner(Planner, name="viapath"):
             elif verdict == 2:
                 plan.extras["turn_in_place"] = True
             if verdict and self._inside_shield(plan):
-                plan.extras["cost_terms"] = self._cost_terms_of(costs, order, rank, total)
+                plan.extras["cost_terms"] = _cost_terms(self._cost_breakdown(costs), order, rank, total)
                 node = int(leaves[best])
                 way = Way(int(nodes[node, 1]), int(nodes[node, 2]), int(nodes[node, 3]))
                 return _Chosen(Choice(way, int(np.round(floats[node, 3] * 1000))), plan,
                                _CompiledCandidates(floats, nodes, leaves, checks.subgoal))
         return None
 
-    def _cost_terms_of(self, costs: np.ndarray, order: np.ndarray, rank: int, total: np.ndarray) -> dict:
-        """:func:`_cost_terms` from :func:`.kernels.choose_candidate`'s costs (rows: the critics' terms, E): one
-        column each as Python floats, the same values as :meth:`.critics.Costs.breakdown` takes one by one."""
+    def _cost_breakdown(self, costs: np.ndarray):
+        """:meth:`.critics.Costs.breakdown` for :func:`.kernels.choose_candidate`'s costs (rows: the critics' terms,
+        E): one column as Python floats, the same values as the numpy path's."""
         names = [critic.name for critic in self.critics] + ["total"]
-        best = int(order[rank])
-        other = int(order[1] if rank == 0 else order[0]) if len(order) > 1 else None
-        runner_up = (dict(zip(names, costs[:7, other].tolist()))
-                     if other is not None and math.isfinite(total[other]) else None)
-        return {"chosen": dict(zip(names, costs[:7, best].tolist())), "runner_up": runner_up}
+        return lambda k: dict(zip(names, costs[:7, k].tolist()))
 
     def _plan_of_nodes(self, floats, nodes, leaves, k: int, total, checks: LegChecks) -> Plan:
         """:meth:`_plan_of` from the compiled tree's node store (columns as in :mod:`.kernels`)."""
@@ -440,12 +437,13 @@ class ViaPathPlanner(Planner, name="viapath"):
                              self.limits.max_turn_rate_radps))
 
 
-def _cost_terms(costs: Costs, order: np.ndarray, rank: int, total: np.ndarray) -> dict:
-    """Each critic's share of E for the chosen candidate and the cheapest other one (for tuning and views)."""
+def _cost_terms(breakdown: Callable[[int], dict], order: np.ndarray, rank: int, total: np.ndarray) -> dict:
+    """Each critic's share of E for the chosen candidate and the cheapest other one (for tuning and views);
+    ``breakdown(k)``: candidate k's terms by critic name, and "total"."""
     best = int(order[rank])
     other = int(order[1] if rank == 0 else order[0]) if len(order) > 1 else None
-    runner_up = costs.breakdown(other) if other is not None and np.isfinite(total[other]) else None
-    return {"chosen": costs.breakdown(best), "runner_up": runner_up}
+    runner_up = breakdown(other) if other is not None and np.isfinite(total[other]) else None
+    return {"chosen": breakdown(best), "runner_up": runner_up}
 
 
 def ViaPathConfig(**values) -> Settings:
