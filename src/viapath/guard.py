@@ -51,9 +51,18 @@ from typing import Any, Callable
 
 import numpy as np
 
+from viapath.compiled import harness_kernels
 from viapath.kinematics import _arc, _clip
-from viapath.observation import (Command, Decision, MotionLimits, Observation, ObservationError, Obstacles, Plan,
-                                 RobotState)
+from viapath.observation import (
+    Command,
+    Decision,
+    MotionLimits,
+    Observation,
+    ObservationError,
+    Obstacles,
+    Plan,
+    RobotState,
+)
 
 __all__ = ["GuardConfig", "Inspection", "ObservationError", "check_command", "guard_plan", "inspect_observation",
            "inspected", "stopping_distance_m"]
@@ -123,6 +132,8 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
         raise ObservationError(f"robot: expected a RobotState, found {type(robot).__name__}")
     if not isinstance(obstacles, Obstacles):
         raise ObservationError(f"obstacles: expected an Obstacles, found {type(obstacles).__name__}")
+    if _plainly_sound(observation, robot, obstacles, config):
+        return Inspection(observation, [], [])  # the common case, in few operations
     stop: list[str] = []
     repairs: list[str] = []
 
@@ -201,13 +212,56 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
     return Inspection(Observation(time_s, robot, repaired), [], repairs)
 
 
+_FLOAT64 = np.dtype(np.float64)
+
+
+def _plainly_sound(observation: Observation, robot: RobotState, obstacles: Obstacles, config: GuardConfig) -> bool:
+    """The common case of :func:`inspect_observation`, in few operations (every cycle comes here): every
+    number a float and every array a float64 array of its shape, nothing to stop for, nothing to repair.
+    False says only "look closer": the checks below then decide, and name what is wrong. With every bound
+    finite (``config.all_finite``) a value within its bound is finite too."""
+    time_s, heading, speed, turn, radius = (observation.time_s, robot.heading_rad, robot.speed_mps,
+                                            robot.turn_rate_radps, robot.radius_m)
+    position, positions, velocities = robot.position, obstacles.positions, obstacles.velocities
+    if not (isinstance(time_s, float) and isinstance(heading, float) and isinstance(speed, float)
+            and isinstance(turn, float) and isinstance(radius, float) and config.all_finite
+            and type(position) is np.ndarray and position.dtype is _FLOAT64 and position.shape == (2,)
+            and type(positions) is np.ndarray and positions.dtype is _FLOAT64 and positions.ndim == 2
+            and positions.shape[1] == 2):
+        return False
+    n = positions.shape[0]
+    x, y = position.tolist()
+    if not (math.isfinite(time_s) and abs(x) <= config.max_coordinate_m and abs(y) <= config.max_coordinate_m
+            and abs(heading) <= config.max_heading_rad and abs(speed) <= config.max_state_speed_mps
+            and abs(turn) <= config.max_state_turn_rate_radps and 0.0 < radius < math.inf):
+        return False
+    for values, shape in ((velocities, (n, 2)), (obstacles.radii_m, (n,)), (obstacles.position_sigma_m, (n,)),
+                          (obstacles.velocity_sigma_mps, (n,))):
+        if not (type(values) is np.ndarray and values.dtype is _FLOAT64 and values.shape == shape):
+            return False
+    ids = obstacles.ids
+    if not (type(ids) is np.ndarray and ids.shape == (n,)):
+        return False
+    return _obstacles_sound(positions, velocities, obstacles.radii_m, obstacles.position_sigma_m,
+                            obstacles.velocity_sigma_mps, config)
+
+
 def _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config: GuardConfig) -> bool:
     """Whether no obstacle field needs a stop or a repair: the per-field checks below, as a few whole-array
     reductions (an episode's every cycle comes here; the per-index loops run only when this is False).
     A NaN fails every comparison (and ``max``/``min`` propagate it) and an infinity every bound, so
-    ``max ≤ bound`` and ``min ≥ 0`` also say "finite"; a speed is inf or NaN whenever a velocity part is."""
+    ``max ≤ bound`` and ``min ≥ 0`` also say "finite"; a speed is inf or NaN whenever a velocity part is.
+    With numba, one compiled call gives the same answer (:func:`viapath._harness_kernels.obstacles_sound`)."""
     if len(positions) == 0:
         return True
+    kernels = harness_kernels()
+    if kernels is not None:
+        try:
+            return kernels.obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma,
+                                           config.max_coordinate_m, config.max_obstacle_speed_mps, config.max_radius_m,
+                                           config.max_velocity_sigma_mps, config.max_position_sigma_m)
+        except TypeError:  # a bound that is not a float (a config built by hand): the numpy code below
+            pass
     largest, smallest = np.maximum.reduce, np.minimum.reduce  # what .max() and .min() call, without their wrappers
     return bool(
         largest(np.abs(positions), axis=None) <= config.max_coordinate_m
@@ -279,11 +333,14 @@ def check_command(command: Any, observation: Observation, limits: MotionLimits, 
     if v > 0 and len(obstacles):
         robot = observation.robot
         position = np.asarray(robot.position, dtype=float)
+        # Only obstacles the robot could reach before it is at rest, at its fastest, need the roll-out.
+        reachable_m = stopping_distance_m(max(limits.max_speed_mps, float(robot.speed_mps)), limits, config)
+        if _none_within(obstacles, position, robot_radius_m, config.brake_margin_m, reachable_m):
+            return _unchanged(command, v, w), None, None
         offsets = obstacles.positions - position
         distance = np.hypot(offsets[:, 0], offsets[:, 1])
         reach = robot_radius_m + obstacles.radii_m + config.brake_margin_m
-        # Only obstacles the robot could reach before it is at rest, at its fastest, need the roll-out.
-        near = distance - reach <= stopping_distance_m(max(limits.max_speed_mps, float(robot.speed_mps)), limits, config)
+        near = distance - reach <= reachable_m
         if near.any():
             swept = braking_path(robot, Command(v, w), limits, config.control_period_s)
             centres = obstacles.positions[near]
@@ -296,7 +353,29 @@ def check_command(command: Any, observation: Observation, limits: MotionLimits, 
                     f"command ({v:g} m/s, {w:g} rad/s) closes on obstacle {i} (id {int(obstacles.ids[i])}), "
                     f"{distance[i] - reach[i] + config.brake_margin_m:.3f} m away: braking from here would still "
                     "reach it; speed set to 0")
-    return Command(v, w), None, None
+    return _unchanged(command, v, w), None, None
+
+
+def _unchanged(command: Any, v: float, w: float) -> Command:
+    """``command`` itself when it is a Command of these very floats (float() and the clipping hand back the
+    object they were given when it is a float within the limits), else a new Command(v, w)."""
+    if type(command) is Command and command.speed_mps is v and command.turn_rate_radps is w:
+        return command
+    return Command(v, w)
+
+
+def _none_within(obstacles: Obstacles, position: np.ndarray, robot_radius_m: float, margin_m: float,
+                 limit_m: float) -> bool:
+    """True when numba says at once that no obstacle is within ``limit_m`` (:func:`viapath._harness_kernels.any_within`,
+    the same test as check_command's ``near``); False when some is, or without numba: then check_command looks."""
+    kernels = harness_kernels()
+    if kernels is None:
+        return False
+    try:
+        return not kernels.any_within(obstacles.positions, obstacles.radii_m, float(position[0]), float(position[1]),
+                                      float(robot_radius_m), float(margin_m), float(limit_m))
+    except TypeError:  # arrays of another dtype: check_command's numpy code
+        return False
 
 
 def _stop_decision(planner, observation: Observation, status: str, reasons: list[str], extras: dict | None = None):
@@ -402,7 +481,7 @@ def guard_plan(plan: Callable) -> Callable:
             return decision
         if inspection.repairs:
             decision.plan.extras["guard"] = list(inspection.repairs)
-        if command != decision.command:
+        if command is not decision.command and command != decision.command:
             decision.command = command
         return decision
 

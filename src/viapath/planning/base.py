@@ -22,9 +22,17 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from viapath.compiled import harness_kernels
 from viapath.guard import guard_plan, inspected
 from viapath.kinematics import steer_towards
-from viapath.observation import Command, Decision, MotionLimits, Observation, Obstacles, Plan
+from viapath.observation import (
+    Command,
+    Decision,
+    MotionLimits,
+    Observation,
+    Obstacles,
+    Plan,
+)
 from viapath.options import Option, OptionSet, Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.registry import Registry
@@ -56,6 +64,16 @@ class Inflation:
         if len(obstacles) == 0:
             return _NO_INFLATION
         margin, k = settings["safety_margin_m"], settings["uncertainty_sigmas"]
+        kernels = harness_kernels()
+        if kernels is not None:  # the same numbers in one compiled call (viapath._harness_kernels.inflation)
+            rows = np.empty((4, len(obstacles)))
+            try:
+                kernels.inflation(obstacles.radii_m, obstacles.position_sigma_m, obstacles.velocity_sigma_mps,
+                                  float(robot_radius_m), float(margin), float(k), float(settings["max_inflation_m"]),
+                                  rows)
+                return cls(rows[0], rows[1], rows[2], rows[3])
+            except TypeError:  # arrays of another dtype: the numpy code below
+                pass
         position_term = k * obstacles.position_sigma_m
         growth = k * obstacles.velocity_sigma_mps
         growing = growth > 0
@@ -169,9 +187,9 @@ class Planner:
 
     def steer(self, observation: Observation, target: np.ndarray, speed_mps: float, heading_gain: float = 2.5) -> Command:
         """Turn towards ``target`` and drive at ``speed_mps``, slowing for large heading errors."""
-        robot = observation.robot
-        return steer_command(robot.position[0], robot.position[1], robot.heading_rad, target, speed_mps,
-                             self.limits, heading_gain)
+        robot, position = observation.robot, observation.robot.position
+        return Command(*steer_towards(float(position[0]), float(position[1]), float(robot.heading_rad),
+                                      float(target[0]), float(target[1]), speed_mps, self.limits, heading_gain))
 
 
 Planner.plan = guard_plan(Planner.plan)  # the template is the entry of every planner: guarded too

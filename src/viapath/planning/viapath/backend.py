@@ -159,20 +159,22 @@ class Backend:
         ``integers`` are the kernel's, filled in by the planner."""
         if self.name == "numpy" or not self.whole_steps:
             return None
-        positions, velocities, radii, growth, until = checks.kernel_obstacles()
-        _, _, slow_radii, slow_growth, slow_until = slow_checks.kernel_obstacles()
+        (robot, positions, velocities, radii, growth, until, via_radii, ids, continuation, envelope, starts,
+         directions, lengths, half_widths, waypoints) = checks.kernel_choice_inputs()
+        _, _, slow_radii, slow_growth, slow_until = (
+            (positions, velocities, radii, growth, until) if slow_checks is checks else slow_checks.kernel_obstacles())
         return _kernels().choose_tree(
-            checks.kernel_robot(), _c(speeds), _c(checks.subgoal), positions, velocities, radii, growth, until,
-            checks.kernel_via_radii(), checks.kernel_ids(), slow_radii, slow_growth, slow_until, slow_times,
-            checks.kernel_continuation(), checks.kernel_envelope(), *_corridor(checks.path), _waypoints(checks.path),
-            settings, integers)
+            robot, _c(speeds), _c(checks.subgoal), positions, velocities, radii, growth, until, via_radii, ids,
+            slow_radii, slow_growth, slow_until, slow_times, continuation, envelope, starts, directions, lengths,
+            half_widths, waypoints, settings, integers)
 
     def choose_candidate(self, checks, floats, nodes, found, facts, angles, settings: np.ndarray,
                          integers: np.ndarray):
         """The second half (critics, order, roll-outs up to the first that follows): :func:`.kernels.choose_candidate`."""
-        positions, velocities, radii, growth, until = checks.kernel_obstacles()
-        return _kernels().choose_candidate(checks.kernel_robot(), floats, nodes, found, facts, angles, positions,
-                                        velocities, radii, growth, until, *_corridor(checks.path), settings, integers)
+        robot, positions, velocities, radii, growth, until, _, _, _, _, starts, directions, lengths, half_widths, _ = (
+            checks.kernel_choice_inputs())
+        return _kernels().choose_candidate(robot, floats, nodes, found, facts, angles, positions, velocities, radii,
+                                           growth, until, starts, directions, lengths, half_widths, settings, integers)
 
     def corridor_excess(self, path, points) -> np.ndarray:
         if self.name == "numpy":
@@ -262,13 +264,6 @@ def _corridor(path):
         arrays = (_c(path.segment_starts), _c(path.segment_directions), _c(path.segment_lengths_m),
                   _c(path.half_widths_m))
         path._kernel_arrays = arrays
-    return arrays
-
-
-def _waypoints(path) -> np.ndarray:
-    arrays = getattr(path, "_kernel_waypoints", None)
-    if arrays is None:
-        arrays = path._kernel_waypoints = _c(path.waypoints)
     return arrays
 
 

@@ -181,20 +181,56 @@ class LegChecks:
         """positions, velocities, check radii, growth, growth_until_s of the obstacles, for the kernels."""
         cached = self.__dict__.get("_kernel_obstacles")
         if cached is None:
-            n = len(self.obstacles)
-            cached = tuple(_contiguous(a, shape) for a, shape in (
-                (self.obstacles.positions, (n, 2)), (self.obstacles.velocities, (n, 2)), (self.check_radii, (n,)),
-                (self.growth, (n,)), (self.growth_until_s, (n,))))
-            self.__dict__["_kernel_obstacles"] = cached
+            obstacles = self.obstacles
+            n = len(obstacles.positions)
+            cached = self.__dict__["_kernel_obstacles"] = (
+                _contiguous(obstacles.positions, (n, 2)), _contiguous(obstacles.velocities, (n, 2)),
+                _contiguous(self.check_radii, (n,)), _contiguous(self.growth, (n,)),
+                _contiguous(self.growth_until_s, (n,)))
+        return cached
+
+    def kernel_choice_inputs(self) -> tuple:
+        """What both choice kernels take of this cycle (:func:`.kernels.choose_tree`'s order): the robot
+        (:meth:`kernel_robot`), the obstacles (:meth:`kernel_obstacles`), the via radii, the ids, the
+        continuation, the envelope, and the path's segment arrays and waypoints. Built in one go, every cycle:
+        the path's arrays, continuations and envelopes are kept on the path (a path is not changed after it is
+        built)."""
+        cached = self.__dict__.get("_kernel_choice_inputs")
+        if cached is not None:
+            return cached
+        path = self.path
+        kept = path.__dict__.get("_kernel_choice_arrays")
+        if kept is None:
+            kept = path.__dict__["_kernel_choice_arrays"] = (tuple(
+                _contiguous(a, np.shape(a)) for a in (path.segment_starts, path.segment_directions,
+                                                      path.segment_lengths_m, path.half_widths_m, path.waypoints)),
+                {}, {})
+        episode, continuations, envelopes = kept
+        continuation = self.continuation
+        key = None if continuation is None else (*continuation[0].tolist(), float(continuation[1]))
+        kernel_continuation = continuations.get(key)
+        if kernel_continuation is None:
+            kernel_continuation = continuations[key] = self.kernel_continuation()
+        key = (self.envelope_accel_mps2, self.envelope_period_s, self.max_accel_mps2)
+        envelope = envelopes.get(key)
+        if envelope is None:
+            envelope = envelopes[key] = self.kernel_envelope()
+        n = len(self.obstacles)
+        ids = self.obstacles.ids
+        if not (type(ids) is np.ndarray and ids.dtype == np.int64 and ids.flags.c_contiguous):
+            ids = np.ascontiguousarray(ids, dtype=np.int64)
+        cached = self.__dict__["_kernel_choice_inputs"] = (
+            self.kernel_robot(), *self.kernel_obstacles(), _contiguous(self.via_radii, (n,)), ids,
+            kernel_continuation, envelope, *episode)
         return cached
 
     def kernel_robot(self) -> np.ndarray:
         """(x, y, heading, speed, turn rate) of the robot."""
         cached = self.__dict__.get("_kernel_robot")
         if cached is None:
+            x, y = self.position.tolist()
             cached = self.__dict__["_kernel_robot"] = np.array(
-                [self.position[0], self.position[1], self.heading_rad, self.speed_mps, self.turn_rate_radps],
-                dtype=np.float64)
+                (x, y, self.heading_rad, self.speed_mps, self.turn_rate_radps), dtype=np.float64)
         return cached
 
     def kernel_via_radii(self) -> np.ndarray:
@@ -284,9 +320,12 @@ class LegChecks:
         return inside
 
 
+_FLOAT64 = np.dtype(np.float64)  # (an identity test: numpy's float64 arrays share this descriptor; another fails it)
+
+
 def _contiguous(values, shape: tuple) -> np.ndarray:
     """``values`` as a C-contiguous float64 array of ``shape`` (a scalar or a row is repeated)."""
-    if type(values) is np.ndarray and values.dtype == np.float64 and values.shape == shape and values.flags.c_contiguous:
+    if type(values) is np.ndarray and values.dtype is _FLOAT64 and values.shape == shape and values.flags.c_contiguous:
         return values  # what the conversions below return for it, without them (every cycle, every array)
     array = np.asarray(values, dtype=np.float64)
     if array.shape != shape:

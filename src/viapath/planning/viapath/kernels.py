@@ -31,6 +31,47 @@ import numpy as np
 from numba import njit
 
 from viapath.compiled_sum import pairwise_sum
+from viapath.planning.viapath.kernel_slots import (
+    C_DEGREES,
+    C_DEPTH,
+    C_NOMINAL,
+    C_ONLY,
+    C_ONLY_WAY,
+    C_PREFERRED,
+    C_PREV_MMPS,
+    C_PREV_WAY,
+    C_PREVIOUS,
+    C_ROLLOUTS,
+    C_ROOT_LIMIT,
+    C_SEGMENT,
+    C_SLOW,
+    C_STEPS,
+    C_SUBGOAL,
+    C_TRY_STRAIGHT,
+    CANDIDATES,
+    F_ACCEL,
+    F_DT,
+    F_GAIN,
+    F_HORIZON,
+    F_HYSTERESIS,
+    F_K1,
+    F_K2,
+    F_K3,
+    F_K4,
+    F_NOMINAL,
+    F_ROLLOUT_HEADING,
+    F_SIDE,
+    F_SPACING,
+    F_SPEED,
+    F_STOP_SHORT,
+    F_STRAIGHT_ANGLE,
+    F_TOLERANCE,
+    F_TURN_ACCEL,
+    F_TURN_IN_PLACE,
+    F_TURN_RATE,
+    NO_CANDIDATE,
+    STEP_ONE,
+)
 
 
 @njit(cache=True, nogil=True)
@@ -1171,15 +1212,7 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
 # motion-limit checks. Between them numpy takes the angles (np.arctan2 rounds differently from the libm atan2
 # numba calls, in about one case in twelve here: the angles are the reference's own, so the decisions are).
 
-# Entries of the integer settings.
-_C_NOMINAL, _C_SEGMENT, _C_SUBGOAL, _C_DEPTH, _C_ROOT_LIMIT, _C_ROLLOUTS, _C_STEPS, _C_DEGREES, _C_PREFERRED = range(9)
-_C_SLOW, _C_TRY_STRAIGHT, _C_PREVIOUS, _C_PREV_WAY, _C_PREV_MMPS, _C_ONLY, _C_ONLY_WAY = 9, 10, 11, 12, 15, 16, 17
-# Float settings.
-_F_K1, _F_K2, _F_K3, _F_K4, _F_SIDE, _F_HYSTERESIS, _F_NOMINAL, _F_ROLLOUT_HEADING, _F_ACCEL, _F_DT = range(10)
-_F_TURN_RATE, _F_TURN_ACCEL, _F_SPEED, _F_GAIN, _F_TURN_IN_PLACE, _F_STOP_SHORT, _F_HORIZON = range(10, 17)
-_F_SPACING, _F_TOLERANCE, _F_STRAIGHT_ANGLE = 17, 18, 19
-# What choose_tree found (result[0]).
-NO_CANDIDATE, STEP_ONE, CANDIDATES = 0, 1, 2
+# The slots of the settings arrays: .kernel_slots (C_* integers, F_* floats), imported at the top.
 
 
 @njit(cache=True, nogil=True)
@@ -1219,27 +1252,27 @@ def _follows(robot, target_x, target_y, angle, speed, settings, steps, obstacle_
     oy = target_y - robot[1]
     heading_error = abs(_wrap(angle - robot[2]))
     speed_change = abs(speed - robot[3])
-    dt = settings[_F_DT]
-    if math.hypot(ox, oy) < 1e-6 or (heading_error <= settings[_F_ROLLOUT_HEADING]
-                                     and speed_change <= settings[_F_ACCEL] * dt * 2):
+    dt = settings[F_DT]
+    if math.hypot(ox, oy) < 1e-6 or (heading_error <= settings[F_ROLLOUT_HEADING]
+                                     and speed_change <= settings[F_ACCEL] * dt * 2):
         return 1
-    positions = track(robot[0], robot[1], robot[2], robot[3], robot[4], target_x, target_y, speed, settings[_F_SPEED],
-                      settings[_F_TURN_RATE], settings[_F_ACCEL], settings[_F_TURN_ACCEL], dt, steps,
-                      settings[_F_GAIN])
+    positions = track(robot[0], robot[1], robot[2], robot[3], robot[4], target_x, target_y, speed, settings[F_SPEED],
+                      settings[F_TURN_RATE], settings[F_ACCEL], settings[F_TURN_ACCEL], dt, steps,
+                      settings[F_GAIN])
     if not _clear(positions, steps, dt, robot[0], robot[1], obstacle_positions, obstacle_velocities, radii, growth,
                   growth_until_s):
         return 0
     inside = True
     for s in range(steps):
         if not _excess(positions[s, 0], positions[s, 1], segment_starts, segment_directions, segment_lengths,
-                       half_widths) <= settings[_F_TOLERANCE]:
+                       half_widths) <= settings[F_TOLERANCE]:
             inside = False
             break
     if inside:
         return 1
-    turn_s = heading_error / settings[_F_TURN_RATE] + 1.0
+    turn_s = heading_error / settings[F_TURN_RATE] + 1.0
     count = max(1, int(math.ceil(turn_s / dt)))
-    if heading_error > settings[_F_TURN_IN_PLACE]:
+    if heading_error > settings[F_TURN_IN_PLACE]:
         standing = np.empty((count, 2))
         for s in range(count):
             standing[s, 0] = robot[0]
@@ -1257,7 +1290,7 @@ def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities,
     """The first half of the viapath planner's ``_choose`` in one call: the root legs (:func:`goal_legs`), the
     paper's step 1 (the free straight leg at the nominal speed, if the robot can follow it: follow.can_follow),
     else the candidate tree (:func:`grow`). ``robot`` is (x, y, heading, speed, turn rate); ``settings`` and
-    ``integers`` hold the scalars (the ``_F_*`` and ``_C_*`` entries above).
+    ``integers`` hold the scalars (their slots: :mod:`.kernel_slots`).
 
     Returns (found, floats, integers: grow's node store, facts). ``found`` is (NO_CANDIDATE / STEP_ONE /
     CANDIDATES, step 1 turns on the spot first, then the K leaves: the candidates' nodes); ``facts`` (6, K)
@@ -1266,12 +1299,12 @@ def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities,
     microsecond.)"""
     result = np.zeros(2, np.int64)
     s_count = speeds.shape[0]
-    nominal_index = integers[_C_NOMINAL]
-    subgoal_index = integers[_C_SUBGOAL]
-    stop_short_m = settings[_F_STOP_SHORT]
-    horizon_s = settings[_F_HORIZON]
-    spacing_m = settings[_F_SPACING]
-    tolerance_m = settings[_F_TOLERANCE]
+    nominal_index = integers[C_NOMINAL]
+    subgoal_index = integers[C_SUBGOAL]
+    stop_short_m = settings[F_STOP_SHORT]
+    horizon_s = settings[F_HORIZON]
+    spacing_m = settings[F_SPACING]
+    tolerance_m = settings[F_TOLERANCE]
     starts = np.empty((s_count, 2))
     for i in range(s_count):
         starts[i, 0] = robot[0]
@@ -1280,9 +1313,9 @@ def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities,
         starts, np.zeros(s_count), speeds, subgoal, stop_short_m, horizon_s, continuation, obstacle_positions,
         obstacle_velocities, radii, growth, growth_until_s, envelope, segment_starts, segment_directions,
         segment_lengths, half_widths, subgoal_index, spacing_m, tolerance_m)
-    if free[nominal_index] and integers[_C_TRY_STRAIGHT] and not integers[_C_ONLY]:
-        follows = _follows(robot, subgoal[0], subgoal[1], settings[_F_STRAIGHT_ANGLE], speeds[nominal_index], settings,
-                           integers[_C_STEPS], obstacle_positions, obstacle_velocities, radii, growth, growth_until_s,
+    if free[nominal_index] and integers[C_TRY_STRAIGHT] and not integers[C_ONLY]:
+        follows = _follows(robot, subgoal[0], subgoal[1], settings[F_STRAIGHT_ANGLE], speeds[nominal_index], settings,
+                           integers[C_STEPS], obstacle_positions, obstacle_velocities, radii, growth, growth_until_s,
                            segment_starts, segment_directions, segment_lengths, half_widths)
         if follows:
             result[0] = STEP_ONE
@@ -1290,10 +1323,10 @@ def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities,
             return result, np.empty((0, 10)), np.empty((0, 5), np.int64), np.empty((6, 0))
     nf, ni = grow(robot[:2].copy(), subgoal, speeds, nominal_index, directions, lengths, free, contact,
                   obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, via_radii, ids, slow_radii,
-                  slow_growth, slow_growth_until_s, slow_times, integers[_C_SLOW] != 0, stop_short_m, horizon_s,
+                  slow_growth, slow_growth_until_s, slow_times, integers[C_SLOW] != 0, stop_short_m, horizon_s,
                   continuation, envelope, segment_starts, segment_directions, segment_lengths, half_widths, waypoints,
-                  integers[_C_SEGMENT], subgoal_index, spacing_m, tolerance_m, integers[_C_DEPTH],
-                  integers[_C_ROOT_LIMIT])
+                  integers[C_SEGMENT], subgoal_index, spacing_m, tolerance_m, integers[C_DEPTH],
+                  integers[C_ROOT_LIMIT])
     k_count = 0
     for m in range(ni.shape[0]):
         if ni[m, _LEAF]:
@@ -1354,8 +1387,8 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, ob
     terms = costs[:6]
     raw_total = costs[6]
     total = costs[7]
-    nominal = settings[_F_NOMINAL]
-    only = integers[_C_ONLY] != 0
+    nominal = settings[F_NOMINAL]
+    only = integers[C_ONLY] != 0
     any_finite = False
     for k in range(k_count):
         m = leaves[k]
@@ -1365,28 +1398,28 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, ob
         slow_v = nf[m, _SLOW_V]
         driven_s = (length - slow_v * slow_s) / speed
         travel_s = slow_s + driven_s
-        terms[0, k] = settings[_F_K1] * length
-        terms[1, k] = settings[_F_K2] * travel_s
+        terms[0, k] = settings[F_K1] * length
+        terms[1, k] = settings[F_K2] * travel_s
         error = (slow_s * abs(slow_v - nominal) + driven_s * abs(speed - nominal)) / travel_s
-        terms[2, k] = settings[_F_K3] * error
+        terms[2, k] = settings[F_K3] * error
         theta = abs(_wrap(angles[0, k] - robot[2]))
-        terms[3, k] = settings[_F_K4] * (theta * (180.0 / math.pi) if integers[_C_DEGREES] else theta)
+        terms[3, k] = settings[F_K4] * (theta * (180.0 / math.pi) if integers[C_DEGREES] else theta)
         side = ni[m, _WAY1]
-        terms[4, k] = settings[_F_SIDE] * (1.0 if (side != 0 and side != integers[_C_PREFERRED]) else 0.0)
-        if integers[_C_PREVIOUS]:
-            same_way = (ni[m, _WAY0] == integers[_C_PREV_WAY] and ni[m, _WAY1] == integers[_C_PREV_WAY + 1]
-                        and ni[m, _WAY2] == integers[_C_PREV_WAY + 2])
-            same_speed = np.rint(speed * 1000) == integers[_C_PREV_MMPS]
+        terms[4, k] = settings[F_SIDE] * (1.0 if (side != 0 and side != integers[C_PREFERRED]) else 0.0)
+        if integers[C_PREVIOUS]:
+            same_way = (ni[m, _WAY0] == integers[C_PREV_WAY] and ni[m, _WAY1] == integers[C_PREV_WAY + 1]
+                        and ni[m, _WAY2] == integers[C_PREV_WAY + 2])
+            same_speed = np.rint(speed * 1000) == integers[C_PREV_MMPS]
             bonus = (1.0 if same_way else 0.0) + 0.5 * (1.0 if (same_way and same_speed) else 0.0)
-            terms[5, k] = -(settings[_F_HYSTERESIS] * bonus)
+            terms[5, k] = -(settings[F_HYSTERESIS] * bonus)
         else:
             terms[5, k] = 0.0
         value = terms[0, k] + terms[1, k]
         for c in range(2, 6):
             value = value + terms[c, k]
         raw_total[k] = value
-        if only and not (ni[m, _WAY0] == integers[_C_ONLY_WAY] and ni[m, _WAY1] == integers[_C_ONLY_WAY + 1]
-                         and ni[m, _WAY2] == integers[_C_ONLY_WAY + 2]):
+        if only and not (ni[m, _WAY0] == integers[C_ONLY_WAY] and ni[m, _WAY1] == integers[C_ONLY_WAY + 1]
+                         and ni[m, _WAY2] == integers[C_ONLY_WAY + 2]):
             value = math.inf
         total[k] = value
         if math.isfinite(value):
@@ -1396,7 +1429,7 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, ob
         ranking[0] = -1
         return ranking, costs
 
-    ranks = min(k_count, max(integers[_C_ROLLOUTS], 2))
+    ranks = min(k_count, max(integers[C_ROLLOUTS], 2))
     ranking = np.empty(2 + 2 * ranks, np.int64)
     ranking[0] = -1
     ranking[1] = ranks
@@ -1411,13 +1444,13 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, ob
         taken[best] = True
         order[r] = best
     follow[:] = -1
-    for r in range(min(ranks, integers[_C_ROLLOUTS])):
+    for r in range(min(ranks, integers[C_ROLLOUTS])):
         k = order[r]
         if not math.isfinite(total[k]):
             break
         m = leaves[k]
         speed = nf[m, _SLOW_V] if nf[m, _SLOW_S] > 0 else nf[m, _V]
-        follow[r] = _follows(robot, facts[4, k], facts[5, k], angles[1, k], speed, settings, integers[_C_STEPS],
+        follow[r] = _follows(robot, facts[4, k], facts[5, k], angles[1, k], speed, settings, integers[C_STEPS],
                              obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, segment_starts,
                              segment_directions, segment_lengths, half_widths)
         if follow[r]:

@@ -41,18 +41,34 @@ from viapath.geometry import wrap_angle
 from viapath.observation import Command
 from viapath.options import Settings
 from viapath.planning.base import Decision, Plan, Planner, Situation
+from viapath.planning.viapath import kernel_slots as slot
 from viapath.planning.viapath.backend import backend_for
 from viapath.planning.viapath.backend import resolve as resolve_backend
-from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, _candidates_of, grow
+from viapath.planning.viapath.candidates import (
+    STRAIGHT,
+    Candidates,
+    Choice,
+    RootLegs,
+    Way,
+    _candidates_of,
+    grow,
+)
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.critics import (Context, Distance, Heading, Hysteresis, SidePreference,
-                                              SpeedError, Time, critics_for, score)
+from viapath.planning.viapath.critics import (
+    Context,
+    Distance,
+    Heading,
+    Hysteresis,
+    SidePreference,
+    SpeedError,
+    Time,
+    critics_for,
+    score,
+)
 from viapath.planning.viapath.escape import stop_or_escape
 from viapath.planning.viapath.follow import can_follow
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
 
-# What kernels.choose_tree found (its STEP_ONE, CANDIDATES: that module imports numba, not imported here).
-_FOUND_STEP_ONE, _FOUND_CANDIDATES = 1, 2
 # The critics kernels.choose_candidate sums, in this order (critics_for's): others take the numpy choice.
 _PAPER_CRITICS = (Distance, Time, SpeedError, Heading, SidePreference, Hysteresis)
 
@@ -217,29 +233,44 @@ class ViaPathPlanner(Planner, name="viapath"):
     def _compiled_choice(self) -> bool:
         """Whether :meth:`_choose` runs as :meth:`_choose_compiled`: the compiled whole-step kernels, the
         paper's critics (the kernel sums exactly those) and no candidate polylines to record."""
-        backend = self.backend
-        return (backend.name == "numba" and backend.whole_steps and not self.config.record_candidates
-                and tuple(map(type, self.critics)) == _PAPER_CRITICS)
+        backend, config, critics = self.backend, self.config, self.critics
+        cached = self.__dict__.get("_compiled_choice_of")  # (backend, options, critics, the answer): every cycle asks
+        if cached is None or cached[0] is not backend or cached[1] is not config or cached[2] is not critics:
+            answer = (backend.name == "numba" and backend.whole_steps and not config.record_candidates
+                      and tuple(map(type, critics)) == _PAPER_CRITICS)
+            cached = self.__dict__["_compiled_choice_of"] = (backend, config, critics, answer)
+        return cached[3]
 
     def _kernel_constants(self) -> tuple:
         """The kernels' settings that do not change within an episode (rebuilt when the options, limits or
-        critics object is replaced)."""
+        critics object is replaced); their slots: :mod:`.kernel_slots`."""
         config, limits, critics, nominal_speed = self.config, self.limits, self.critics, self.nominal_speed_mps
         cached = self.__dict__.get("_kernel_cache")
         if (cached is not None and cached[0] is config and cached[1] is limits and cached[2] is critics
                 and cached[3] is nominal_speed):
             return cached[4]
         distance, time, speed, heading, side, hysteresis = self.critics
-        settings = np.array([
-            distance.weight, time.weight, speed.weight, heading.weight, side.weight, hysteresis.weight,
-            self.nominal_speed_mps, config.rollout_heading_rad, limits.max_accel_mps2, config.rollout_dt_s,
-            limits.max_turn_rate_radps, limits.max_turn_accel_radps2, limits.max_speed_mps, config.heading_gain,
-            config.turn_in_place_min_rad, 0.0, config.horizon_s, config.corridor_check_spacing_m, 0.0, 0.0],
-            dtype=np.float64)
-        integers = np.zeros(20, dtype=np.int64)
-        integers[3:10] = (config.max_depth, config.max_root_obstacles, config.max_rollouts,
-                          max(1, int(round(config.rollout_s / config.rollout_dt_s))), heading.degrees, side.preferred,
-                          bool(config.slow_times_s))
+        settings = np.zeros(slot.F_COUNT, dtype=np.float64)
+        settings[[slot.F_K1, slot.F_K2, slot.F_K3, slot.F_K4, slot.F_SIDE, slot.F_HYSTERESIS]] = (
+            distance.weight, time.weight, speed.weight, heading.weight, side.weight, hysteresis.weight)
+        settings[slot.F_NOMINAL] = self.nominal_speed_mps
+        settings[slot.F_ROLLOUT_HEADING] = config.rollout_heading_rad
+        settings[slot.F_ACCEL] = limits.max_accel_mps2
+        settings[slot.F_DT] = config.rollout_dt_s
+        settings[slot.F_TURN_RATE] = limits.max_turn_rate_radps
+        settings[slot.F_TURN_ACCEL] = limits.max_turn_accel_radps2
+        settings[slot.F_SPEED] = limits.max_speed_mps
+        settings[slot.F_GAIN] = config.heading_gain
+        settings[slot.F_TURN_IN_PLACE] = config.turn_in_place_min_rad
+        settings[slot.F_SPACING] = config.corridor_check_spacing_m
+        integers = np.zeros(slot.C_COUNT, dtype=np.int64)
+        integers[slot.C_DEPTH] = config.max_depth
+        integers[slot.C_ROOT_LIMIT] = config.max_root_obstacles
+        integers[slot.C_ROLLOUTS] = config.max_rollouts
+        integers[slot.C_STEPS] = max(1, int(round(config.rollout_s / config.rollout_dt_s)))
+        integers[slot.C_DEGREES] = heading.degrees
+        integers[slot.C_PREFERRED] = side.preferred
+        integers[slot.C_SLOW] = bool(config.slow_times_s)
         slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
         constants = (settings, integers, slow_times)
         self.__dict__["_kernel_cache"] = (config, limits, critics, nominal_speed, constants)
@@ -252,36 +283,35 @@ class ViaPathPlanner(Planner, name="viapath"):
         cheapest first until one follows; a candidate the shield refuses sends the search on to the next
         ones here, as the reference does."""
         constants, integers_0, slow_times = self._kernel_constants()
-        # This cycle's entries of the kernels' settings (indices: kernels' _F_* and _C_* constants).
-        settings = constants.copy()
-        settings[15] = checks.stop_short_m
-        settings[16] = checks.horizon_s
-        settings[18] = checks.corridor_tolerance_m
+        settings = constants.copy()  # with this cycle's entries:
+        settings[slot.F_STOP_SHORT] = checks.stop_short_m
+        settings[slot.F_HORIZON] = checks.horizon_s
+        settings[slot.F_TOLERANCE] = checks.corridor_tolerance_m
         offset = checks.subgoal - checks.position
-        settings[19] = np.arctan2(offset[1], offset[0])  # can_follow's angle of the straight leg
+        settings[slot.F_STRAIGHT_ANGLE] = np.arctan2(offset[1], offset[0])  # can_follow's angle of the straight leg
         integers = integers_0.copy()  # (one item at a time: a slice from a tuple converts it first, slower)
         index = checks.subgoal_index
-        integers[0] = nominal_index
+        integers[slot.C_NOMINAL] = nominal_index
         if index >= 2:  # the robot's segment matters only when a corner can lie between it and the subgoal
-            integers[1] = int(checks.path.project(checks.position)[0])
-        integers[2] = index
-        integers[10] = 1  # try the paper's step 1
+            integers[slot.C_SEGMENT] = int(checks.path.project(checks.position)[0])
+        integers[slot.C_SUBGOAL] = index
+        integers[slot.C_TRY_STRAIGHT] = 1
         if previous is not None:
             way = previous.way
-            integers[11] = 1
-            integers[12] = way.obstacle
-            integers[13] = way.side
-            integers[14] = way.root
-            integers[15] = previous.speed_mmps
+            integers[slot.C_PREVIOUS] = 1
+            integers[slot.C_PREV_WAY] = way.obstacle
+            integers[slot.C_PREV_WAY + 1] = way.side
+            integers[slot.C_PREV_WAY + 2] = way.root
+            integers[slot.C_PREV_MMPS] = previous.speed_mmps
         if only_way is not None:
-            integers[16] = 1
-            integers[17] = only_way.obstacle
-            integers[18] = only_way.side
-            integers[19] = only_way.root
+            integers[slot.C_ONLY] = 1
+            integers[slot.C_ONLY_WAY] = only_way.obstacle
+            integers[slot.C_ONLY_WAY + 1] = only_way.side
+            integers[slot.C_ONLY_WAY + 2] = only_way.root
         slow_checks = self._slow_checks(checks)
         backend = self.backend
         found = backend.choose_tree(checks, slow_checks, speeds, slow_times, settings, integers)
-        if found[0][0] == _FOUND_STEP_ONE:
+        if found[0][0] == slot.STEP_ONE:
             speed = float(speeds[nominal_index])
             plan = Plan("straight", speed, checks.subgoal.copy(), waypoints=np.array([checks.position, checks.subgoal]),
                         subgoal_index=checks.subgoal_index, candidate_count=1, chosen=0)
@@ -289,21 +319,24 @@ class ViaPathPlanner(Planner, name="viapath"):
                 plan.extras["turn_in_place"] = True
             if self._inside_shield(plan):
                 return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
-            integers[10] = 0  # the shield refused it: the candidates decide
+            integers[slot.C_TRY_STRAIGHT] = 0  # the shield refused it: the candidates decide
             found = backend.choose_tree(checks, slow_checks, speeds, slow_times, settings, integers)
         found, floats, nodes, facts = found
-        if found[0] != _FOUND_CANDIDATES:
+        if found[0] != slot.CANDIDATES:
             return None
         # Eq. 1's θ and can_follow's heading error from numpy's arctan2, as the reference takes them.
         angles = np.arctan2(facts[0:4:2], facts[1:4:2])
         ranking, costs = backend.choose_candidate(checks, floats, nodes, found, facts, angles, settings, integers)
+        first = int(ranking[0])  # the first rank that follows (the ranks before it do not), -1: none of those tried
+        if first < 0:
+            return None
         leaves, total, ranks = found[2:], costs[7], int(ranking[1])
-        order, follow = ranking[2:2 + ranks], ranking[2 + ranks:]
-        for rank in range(min(ranks, self.config.max_rollouts)):
-            best = int(order[rank])
+        order, follow = ranking[2:2 + ranks].tolist(), ranking[2 + ranks:].tolist()
+        for rank in range(first, min(ranks, self.config.max_rollouts)):
+            best = order[rank]
             if not math.isfinite(total[best]):
                 break
-            verdict = int(follow[rank])
+            verdict = follow[rank]
             if verdict == 0:
                 continue
             plan = self._plan_of_nodes(floats, nodes, leaves, best, total, checks)
@@ -314,34 +347,38 @@ class ViaPathPlanner(Planner, name="viapath"):
             if verdict and self._inside_shield(plan):
                 plan.extras["cost_terms"] = _cost_terms(self._cost_breakdown(costs), order, rank, total)
                 node = int(leaves[best])
-                way = Way(int(nodes[node, 1]), int(nodes[node, 2]), int(nodes[node, 3]))
-                return _Chosen(Choice(way, int(np.round(floats[node, 3] * 1000))), plan,
+                way, speed = nodes[node, 1:4].tolist(), float(floats[node, 3])
+                return _Chosen(Choice(Way(*way), int(round(speed * 1000))), plan,
                                _CompiledCandidates(floats, nodes, leaves, checks.subgoal))
         return None
 
     def _cost_breakdown(self, costs: np.ndarray):
         """:meth:`.critics.Costs.breakdown` for :func:`.kernels.choose_candidate`'s costs (rows: the critics' terms,
         E): one column as Python floats, the same values as the numpy path's."""
-        names = [critic.name for critic in self.critics] + ["total"]
+        critics = self.critics
+        cached = self.__dict__.get("_cost_names")
+        if cached is None or cached[0] is not critics:
+            cached = self.__dict__["_cost_names"] = (critics, tuple(critic.name for critic in critics) + ("total",))
+        names = cached[1]
         return lambda k: dict(zip(names, costs[:7, k].tolist()))
 
     def _plan_of_nodes(self, floats, nodes, leaves, k: int, total, checks: LegChecks) -> Plan:
         """:meth:`_plan_of` from the compiled tree's node store (columns as in :mod:`.kernels`)."""
         node = int(leaves[k])
-        common = dict(subgoal_index=checks.subgoal_index, candidate_count=len(leaves), candidate_costs=total,
-                      candidate_polylines=[], chosen=k)
-        if floats[node, 7] > 0:
-            speed = float(floats[node, 8])
-            return Plan("wait" if speed == 0.0 else "slow", speed, checks.subgoal.copy(),
-                        waypoints=np.array([checks.position, checks.subgoal]),
-                        extras={"slow_s": float(floats[node, 7]), "speed_after_mps": float(floats[node, 3])}, **common)
+        _, _, _, speed_after, _, _, _, slow_s, slow_speed, _ = floats[node].tolist()  # columns: kernels._X.._GOAL
+        if slow_s > 0:
+            return Plan("wait" if slow_speed == 0.0 else "slow", slow_speed, checks.subgoal.copy(),
+                        waypoints=np.array([checks.position, checks.subgoal]), subgoal_index=checks.subgoal_index,
+                        candidate_count=len(leaves), candidate_costs=total, candidate_polylines=[], chosen=k,
+                        extras={"slow_s": slow_s, "speed_after_mps": speed_after})
         points = [checks.subgoal]
         while node >= 0:
             points.append(floats[node, 0:2])
             node = int(nodes[node, 0])
         line = np.array(points[::-1])
-        return Plan("avoid" if len(line) > 2 else "straight", float(floats[int(leaves[k]), 3]), line[1].copy(),
-                    via_points=line[1:-1].copy(), waypoints=line, **common)
+        return Plan("avoid" if len(line) > 2 else "straight", speed_after, line[1].copy(), via_points=line[1:-1].copy(),
+                    waypoints=line, subgoal_index=checks.subgoal_index, candidate_count=len(leaves),
+                    candidate_costs=total, candidate_polylines=[], chosen=k)
 
     def _way_back(self, checks: LegChecks, speed: float) -> _Chosen | None:
         """Beyond the paper (``return_lookahead_m``): off the path line, the paper's step 1 towards the
@@ -391,7 +428,9 @@ class ViaPathPlanner(Planner, name="viapath"):
 
     def _slow_checks(self, checks: LegChecks) -> LegChecks:
         fraction = self.config.slow_leg_inflation
-        if fraction >= 1.0 or not (checks.obstacles.position_sigma_m.any() or checks.obstacles.velocity_sigma_mps.any()):
+        # (np.count_nonzero: what .any() answers here, NaN counting as not zero, without .any()'s Python wrapper)
+        if fraction >= 1.0 or not (np.count_nonzero(checks.obstacles.position_sigma_m)
+                                   or np.count_nonzero(checks.obstacles.velocity_sigma_mps)):
             return checks
         return checks.with_less_inflation(fraction, self.robot_radius_m, self.settings, cap_too=True)
 
