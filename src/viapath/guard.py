@@ -235,15 +235,16 @@ def _plainly_sound(observation: Observation, robot: RobotState, obstacles: Obsta
             and abs(heading) <= config.max_heading_rad and abs(speed) <= config.max_state_speed_mps
             and abs(turn) <= config.max_state_turn_rate_radps and 0.0 < radius < math.inf):
         return False
-    for values, shape in ((velocities, (n, 2)), (obstacles.radii_m, (n,)), (obstacles.position_sigma_m, (n,)),
-                          (obstacles.velocity_sigma_mps, (n,))):
-        if not (type(values) is np.ndarray and values.dtype is _FLOAT64 and values.shape == shape):
-            return False
-    ids = obstacles.ids
-    if not (type(ids) is np.ndarray and ids.shape == (n,)):
+    radii, position_sigma, velocity_sigma, ids = (obstacles.radii_m, obstacles.position_sigma_m,
+                                                  obstacles.velocity_sigma_mps, obstacles.ids)
+    rows, row = (n, 2), (n,)
+    if not (type(velocities) is np.ndarray and velocities.dtype is _FLOAT64 and velocities.shape == rows
+            and type(radii) is np.ndarray and radii.dtype is _FLOAT64 and radii.shape == row
+            and type(position_sigma) is np.ndarray and position_sigma.dtype is _FLOAT64 and position_sigma.shape == row
+            and type(velocity_sigma) is np.ndarray and velocity_sigma.dtype is _FLOAT64 and velocity_sigma.shape == row
+            and type(ids) is np.ndarray and ids.shape == row):
         return False
-    return _obstacles_sound(positions, velocities, obstacles.radii_m, obstacles.position_sigma_m,
-                            obstacles.velocity_sigma_mps, config)
+    return _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config)
 
 
 def _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config: GuardConfig) -> bool:
@@ -330,7 +331,7 @@ def check_command(command: Any, observation: Observation, limits: MotionLimits, 
     v = min(max(v, 0.0), limits.max_speed_mps)
     w = min(max(w, -limits.max_turn_rate_radps), limits.max_turn_rate_radps)
     obstacles = observation.obstacles
-    if v > 0 and len(obstacles):
+    if v > 0 and len(obstacles.positions):
         robot = observation.robot
         position = np.asarray(robot.position, dtype=float)
         # Only obstacles the robot could reach before it is at rest, at its fastest, need the roll-out.

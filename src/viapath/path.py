@@ -196,7 +196,10 @@ class SubgoalTracker:
         return self.path.waypoints[self.index]
 
     def goal_reached(self, position) -> bool:
-        return self.is_final and float(np.hypot(*(self.path.goal - position))) <= self.policy.goal_tolerance_m
+        if not self.is_final:
+            return False
+        (gx, gy), (x, y) = self.path.goal.tolist(), np.asarray(position, dtype=float).tolist()
+        return float(np.hypot(gx - x, gy - y)) <= self.policy.goal_tolerance_m
 
     def is_blocked(self, obstacle_positions, obstacle_radii, robot_radius_m: float = 0.0) -> bool:
         """Whether an obstacle sits on the current intermediate subgoal (the goal is never blocked)."""

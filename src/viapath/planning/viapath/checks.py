@@ -81,14 +81,14 @@ class LegChecks:
     def of(cls, situation: Situation, config, tracker: SubgoalTracker, policy: SubgoalPolicy,
            robot_radius_m: float, backend: Backend = NUMPY) -> "LegChecks":
         robot, path, obstacles, inflation = situation.robot, tracker.path, situation.obstacles, situation.inflation
-        blocked = tracker.is_blocked(obstacles.positions, obstacles.radii_m, robot_radius_m)
+        final = tracker.is_final
+        blocked = not final and tracker.is_blocked(obstacles.positions, obstacles.radii_m, robot_radius_m)
         index = situation.subgoal_index
-        continuation = None if (tracker.is_final or blocked) else (
-            path.segment_directions[index], path.segment_lengths_m[index])
+        continuation = None if (final or blocked) else (path.segment_directions[index], path.segment_lengths_m[index])
         return cls(
             path=path, position=situation.position, heading_rad=robot.heading_rad,
             speed_mps=float(robot.speed_mps), turn_rate_radps=float(robot.turn_rate_radps),
-            subgoal=situation.subgoal, subgoal_index=index, is_final_subgoal=tracker.is_final,
+            subgoal=situation.subgoal, subgoal_index=index, is_final_subgoal=final,
             obstacles=obstacles, check_radii=inflation.check_radii, growth=inflation.growth,
             growth_until_s=inflation.growth_until_s, via_radii=inflation.check_radii + config.planning_margin_m,
             horizon_s=config.horizon_s, stop_short_m=policy.bypass_distance_m if blocked else 0.0,

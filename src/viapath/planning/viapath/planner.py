@@ -359,8 +359,8 @@ class ViaPathPlanner(Planner, name="viapath"):
         cached = self.__dict__.get("_cost_names")
         if cached is None or cached[0] is not critics:
             cached = self.__dict__["_cost_names"] = (critics, tuple(critic.name for critic in critics) + ("total",))
-        names = cached[1]
-        return lambda k: dict(zip(names, costs[:7, k].tolist()))
+        names, terms = cached[1], costs[:7]
+        return lambda k: dict(zip(names, terms[:, k].tolist()))
 
     def _plan_of_nodes(self, floats, nodes, leaves, k: int, total, checks: LegChecks) -> Plan:
         """:meth:`_plan_of` from the compiled tree's node store (columns as in :mod:`.kernels`)."""
@@ -428,9 +428,10 @@ class ViaPathPlanner(Planner, name="viapath"):
 
     def _slow_checks(self, checks: LegChecks) -> LegChecks:
         fraction = self.config.slow_leg_inflation
-        # (np.count_nonzero: what .any() answers here, NaN counting as not zero, without .any()'s Python wrapper)
-        if fraction >= 1.0 or not (np.count_nonzero(checks.obstacles.position_sigma_m)
-                                   or np.count_nonzero(checks.obstacles.velocity_sigma_mps)):
+        # (np.logical_or.reduce: what .any() answers, NaN counting as not zero, without .any()'s Python wrapper)
+        any_nonzero = np.logical_or.reduce
+        if fraction >= 1.0 or not (any_nonzero(checks.obstacles.position_sigma_m)
+                                   or any_nonzero(checks.obstacles.velocity_sigma_mps)):
             return checks
         return checks.with_less_inflation(fraction, self.robot_radius_m, self.settings, cap_too=True)
 
@@ -481,7 +482,7 @@ def _cost_terms(breakdown: Callable[[int], dict], order: np.ndarray, rank: int, 
     ``breakdown(k)``: candidate k's terms by critic name, and "total"."""
     best = int(order[rank])
     other = int(order[1] if rank == 0 else order[0]) if len(order) > 1 else None
-    runner_up = breakdown(other) if other is not None and np.isfinite(total[other]) else None
+    runner_up = breakdown(other) if other is not None and math.isfinite(total[other]) else None
     return {"chosen": breakdown(best), "runner_up": runner_up}
 
 
