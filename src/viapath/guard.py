@@ -53,16 +53,8 @@ import numpy as np
 
 from viapath.compiled import harness_kernels
 from viapath.kinematics import _arc, _clip
-from viapath.observation import (
-    Command,
-    Decision,
-    MotionLimits,
-    Observation,
-    ObservationError,
-    Obstacles,
-    Plan,
-    RobotState,
-)
+from viapath.observation import (Command, Decision, MotionLimits, Observation, ObservationError, Obstacles, Plan,
+                                 RobotState)
 
 __all__ = ["GuardConfig", "Inspection", "ObservationError", "check_command", "guard_plan", "inspect_observation",
            "inspected", "stopping_distance_m"]
@@ -261,7 +253,7 @@ def _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigm
             return kernels.obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma,
                                            config.max_coordinate_m, config.max_obstacle_speed_mps, config.max_radius_m,
                                            config.max_velocity_sigma_mps, config.max_position_sigma_m)
-        except TypeError:  # a bound that is not a float (a config built by hand): the numpy code below
+        except TypeError:  # arrays of another dtype (a direct call; the inspection hands float64): numpy below
             pass
     largest, smallest = np.maximum.reduce, np.minimum.reduce  # what .max() and .min() call, without their wrappers
     return bool(

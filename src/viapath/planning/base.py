@@ -25,14 +25,7 @@ import numpy as np
 from viapath.compiled import harness_kernels
 from viapath.guard import guard_plan, inspected
 from viapath.kinematics import steer_towards
-from viapath.observation import (
-    Command,
-    Decision,
-    MotionLimits,
-    Observation,
-    Obstacles,
-    Plan,
-)
+from viapath.observation import Command, Decision, MotionLimits, Observation, Obstacles, Plan
 from viapath.options import Option, OptionSet, Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.registry import Registry
@@ -194,9 +187,3 @@ class Planner:
 
 Planner.plan = guard_plan(Planner.plan)  # the template is the entry of every planner: guarded too
 
-
-def steer_command(x: float, y: float, heading_rad: float, target, speed_mps: float, limits: MotionLimits,
-                  heading_gain: float = 2.5) -> Command:
-    """Turn towards ``target`` and drive at ``speed_mps``, slowing for large heading errors."""
-    return Command(*steer_towards(float(x), float(y), float(heading_rad), float(target[0]), float(target[1]),
-                                  speed_mps, limits, heading_gain))

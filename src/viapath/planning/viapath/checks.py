@@ -228,21 +228,9 @@ class LegChecks:
         """(x, y, heading, speed, turn rate) of the robot."""
         cached = self.__dict__.get("_kernel_robot")
         if cached is None:
-            x, y = self.position.tolist()
             cached = self.__dict__["_kernel_robot"] = np.array(
-                (x, y, self.heading_rad, self.speed_mps, self.turn_rate_radps), dtype=np.float64)
-        return cached
-
-    def kernel_via_radii(self) -> np.ndarray:
-        cached = self.__dict__.get("_kernel_via_radii")
-        if cached is None:
-            cached = self.__dict__["_kernel_via_radii"] = _contiguous(self.via_radii, (len(self.obstacles),))
-        return cached
-
-    def kernel_ids(self) -> np.ndarray:
-        cached = self.__dict__.get("_kernel_ids")
-        if cached is None:
-            cached = self.__dict__["_kernel_ids"] = np.ascontiguousarray(self.obstacles.ids, dtype=np.int64)
+                [self.position[0], self.position[1], self.heading_rad, self.speed_mps, self.turn_rate_radps],
+                dtype=np.float64)
         return cached
 
     def kernel_continuation(self) -> np.ndarray:

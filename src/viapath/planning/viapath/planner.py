@@ -44,27 +44,10 @@ from viapath.planning.base import Decision, Plan, Planner, Situation
 from viapath.planning.viapath import kernel_slots as slot
 from viapath.planning.viapath.backend import backend_for
 from viapath.planning.viapath.backend import resolve as resolve_backend
-from viapath.planning.viapath.candidates import (
-    STRAIGHT,
-    Candidates,
-    Choice,
-    RootLegs,
-    Way,
-    _candidates_of,
-    grow,
-)
+from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, _candidates_of, grow
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.critics import (
-    Context,
-    Distance,
-    Heading,
-    Hysteresis,
-    SidePreference,
-    SpeedError,
-    Time,
-    critics_for,
-    score,
-)
+from viapath.planning.viapath.critics import (Context, Distance, Heading, Hysteresis, SidePreference,
+                                              SpeedError, Time, critics_for, score)
 from viapath.planning.viapath.escape import stop_or_escape
 from viapath.planning.viapath.follow import can_follow
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
