@@ -4,9 +4,9 @@ of a dozen small numpy operations. Loaded by :func:`viapath.compiled.harness_ker
 
 * :func:`obstacles_sound` is :func:`viapath.guard._obstacles_sound`: whether no obstacle field needs a stop
   or a repair.
-* :func:`any_within` is ``(distance - reach <= limit_m).any()`` of :func:`viapath.guard.check_command`:
-  whether any obstacle is within the robot's stopping distance (then the guard's numpy code rolls out the
-  braking path, as before).
+* :func:`first_touched` is :func:`viapath.guard.check_command`'s braking test: the first obstacle within the
+  robot's stopping distance that holding the command and then braking (:func:`viapath.guard.braking_path`)
+  would touch.
 * :func:`inflation` is :meth:`viapath.planning.base.Inflation.of`'s arithmetic.
 
 They agree with the numpy code bit for bit: the same operations in the same order on each element (no
@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 
@@ -47,16 +48,6 @@ def obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma
     return True
 
 
-@njit("boolean(float64[:, :], float64[:], float64, float64, float64, float64, float64)", cache=True, nogil=True)
-def any_within(positions, radii, x, y, robot_radius_m, margin_m, limit_m):
-    """Whether some obstacle's gap to the robot at (x, y), ``hypot - (robot_radius_m + radius + margin_m)``,
-    is at most ``limit_m``."""
-    for i in range(positions.shape[0]):
-        if math.hypot(positions[i, 0] - x, positions[i, 1] - y) - (robot_radius_m + radii[i] + margin_m) <= limit_m:
-            return True
-    return False
-
-
 @njit("void(float64[:], float64[:], float64[:], float64, float64, float64, float64, float64[:, ::1])", cache=True,
       nogil=True)
 def inflation(radii, position_sigma, velocity_sigma, robot_radius_m, margin_m, sigmas, max_inflation_m, out):
@@ -69,3 +60,90 @@ def inflation(radii, position_sigma, velocity_sigma, robot_radius_m, margin_m, s
         out[1, i] = radii[i] + robot_radius_m + margin_m + position_term
         out[2, i] = growth
         out[3, i] = max_inflation_m / growth if growth > 0 else math.inf
+
+
+@njit("float64(float64, float64, float64)", cache=True, nogil=True)
+def _clip(value, low, high):
+    """viapath.kinematics._clip."""
+    return low if value < low else high if value > high else value
+
+
+@njit("UniTuple(float64, 3)(float64, float64, float64, float64, float64, float64)", cache=True, nogil=True)
+def _arc(x, y, heading, speed, turn, dt_s):
+    """viapath.kinematics._arc, operation for operation (libm's sin, cos and atan2, as Python's math)."""
+    new_heading = heading + turn * dt_s
+    half = 0.5 * turn * dt_s
+    chord = speed * dt_s * (1.0 - half * half / 6.0 if abs(half) < 1e-6 else math.sin(half) / half)
+    x += chord * math.cos(heading + half)
+    y += chord * math.sin(heading + half)
+    return x, y, math.atan2(math.sin(new_heading), math.cos(new_heading))
+
+
+@njit("int64(float64[:], float64, float64, float64[:], float64[:, :], float64[:], float64, float64, float64, int64)",
+      cache=True, nogil=True)
+def first_touched(robot, v_cmd, w_cmd, limits, positions, radii, robot_radius_m, margin_m, reachable_m,
+                  samples_per_period):
+    """check_command's braking test in one call: the first obstacle (index) that the robot, holding (v_cmd, w_cmd)
+    for one control period and then braking at the limits (:func:`viapath.guard.braking_path`), would touch
+    while its first sample moves towards it, among those within ``reachable_m`` now; -1 if none.
+    ``robot``: x, y, heading, speed, turn rate; ``limits``: max speed, max turn rate, max accel, max turn
+    accel, control period."""
+    x0, y0 = robot[0], robot[1]
+    n = positions.shape[0]
+    near = np.zeros(n, np.bool_)
+    distance = np.empty(n)
+    reach = np.empty(n)
+    any_near = False
+    for j in range(n):
+        distance[j] = math.hypot(positions[j, 0] - x0, positions[j, 1] - y0)
+        reach[j] = robot_radius_m + radii[j] + margin_m
+        if distance[j] - reach[j] <= reachable_m:
+            near[j] = True
+            any_near = True
+    if not any_near:
+        return -1
+    # braking_path's samples
+    max_speed, max_turn, accel, turn_accel, period_s = limits[0], limits[1], limits[2], limits[3], limits[4]
+    dt = period_s / samples_per_period
+    x, y, heading, speed, turn = x0, y0, robot[2], robot[3], robot[4]
+    dv = accel * dt
+    dw = turn_accel * dt
+    if not (math.isfinite(v_cmd) and math.isfinite(w_cmd)):
+        v_cmd, w_cmd = 0.0, 0.0
+    v_cmd = _clip(v_cmd, 0.0, max_speed)
+    w_cmd = _clip(w_cmd, -max_turn, max_turn)
+    swept = np.empty((samples_per_period + 1000, 2))  # braking_path's braking steps are at most 1000
+    count = 0
+    for _ in range(samples_per_period):
+        speed = speed + _clip(v_cmd - speed, -dv, dv)
+        turn = turn + _clip(w_cmd - turn, -dw, dw)
+        x, y, heading = _arc(x, y, heading, speed, turn, dt)
+        swept[count, 0] = x
+        swept[count, 1] = y
+        count += 1
+    top = max(max_speed, abs(speed))  # (the speed after the held command, as braking_path takes it)
+    for _ in range(min(1000, int(math.ceil(top / max(accel * dt, 1e-9))) + 2)):
+        if speed <= 1e-12:
+            break
+        speed = speed + _clip(0.0 - speed, -dv, dv)
+        turn = turn + _clip(0.0 - turn, -dw, dw)
+        x, y, heading = _arc(x, y, heading, speed, turn, dt)
+        swept[count, 0] = x
+        swept[count, 1] = y
+        count += 1
+    # the first near obstacle some sample touches (the smallest gap, NaN-propagating as numpy's min, at most 0)
+    # while the first sample is closer to it than the robot is now
+    for j in range(n):
+        if not near[j]:
+            continue
+        smallest = math.inf
+        for s in range(count):
+            gap = math.hypot(swept[s, 0] - positions[j, 0], swept[s, 1] - positions[j, 1]) - reach[j]
+            if gap != gap or smallest != smallest:
+                smallest = math.nan
+            elif gap < smallest:
+                smallest = gap
+        closer = math.hypot(swept[0, 0] - positions[j, 0], swept[0, 1] - positions[j, 1]) < distance[j] - 1e-12
+        if smallest <= 0 and closer:
+            return j
+    return -1

@@ -272,8 +272,11 @@ def stopping_distance_m(speed_mps: float, limits: MotionLimits, config: GuardCon
     return v * config.control_period_s + v * v / (2.0 * max(limits.max_accel_mps2, 1e-9)) + config.brake_margin_m
 
 
+BRAKING_SAMPLES_PER_PERIOD = 5  # braking_path's samples of the held command
+
+
 def braking_path(robot: RobotState, command: Command, limits: MotionLimits, period_s: float,
-                 samples_per_period: int = 5) -> np.ndarray:
+                 samples_per_period: int = BRAKING_SAMPLES_PER_PERIOD) -> np.ndarray:
     """Positions (S, 2) of the robot holding ``command`` for ``period_s`` and then commanded to stop
     until at rest, stepped by :func:`viapath.kinematics.step` (the drive's acceleration limits), from
     the first sample on (the current position excluded)."""
@@ -328,25 +331,46 @@ def check_command(command: Any, observation: Observation, limits: MotionLimits, 
         position = np.asarray(robot.position, dtype=float)
         # Only obstacles the robot could reach before it is at rest, at its fastest, need the roll-out.
         reachable_m = stopping_distance_m(max(limits.max_speed_mps, float(robot.speed_mps)), limits, config)
-        if _none_within(obstacles, position, robot_radius_m, config.brake_margin_m, reachable_m):
-            return _unchanged(command, v, w), None, None
-        offsets = obstacles.positions - position
-        distance = np.hypot(offsets[:, 0], offsets[:, 1])
-        reach = robot_radius_m + obstacles.radii_m + config.brake_margin_m
-        near = distance - reach <= reachable_m
-        if near.any():
-            swept = braking_path(robot, Command(v, w), limits, config.control_period_s)
-            centres = obstacles.positions[near]
-            gaps = np.hypot(*(swept[:, None, :] - centres[None]).transpose(2, 0, 1)) - reach[near][None]
-            closer = np.hypot(*(swept[0] - centres).T) < distance[near] - 1e-12  # the first sample moves towards it
-            touches = (gaps.min(axis=0) <= 0) & closer
-            if touches.any():
-                i = int(np.flatnonzero(near)[np.argmax(touches)])
-                return Command(0.0, w), "guard-brake", (
-                    f"command ({v:g} m/s, {w:g} rad/s) closes on obstacle {i} (id {int(obstacles.ids[i])}), "
-                    f"{distance[i] - reach[i] + config.brake_margin_m:.3f} m away: braking from here would still "
-                    "reach it; speed set to 0")
+        i = _first_touched(robot, position, v, w, limits, obstacles, robot_radius_m, config, reachable_m)
+        if i >= 0:
+            distance_m = float(np.hypot(*(obstacles.positions[i] - position)))
+            reach_m = robot_radius_m + obstacles.radii_m[i] + config.brake_margin_m
+            return Command(0.0, w), "guard-brake", (
+                f"command ({v:g} m/s, {w:g} rad/s) closes on obstacle {i} (id {int(obstacles.ids[i])}), "
+                f"{distance_m - reach_m + config.brake_margin_m:.3f} m away: braking from here would still "
+                "reach it; speed set to 0")
     return _unchanged(command, v, w), None, None
+
+
+def _first_touched(robot: RobotState, position: np.ndarray, v: float, w: float, limits: MotionLimits,
+                   obstacles: Obstacles, robot_radius_m: float, config: GuardConfig, reachable_m: float) -> int:
+    """The first obstacle (index) within ``reachable_m`` now that the robot, holding (v, w) for a control period
+    and then braking (:func:`braking_path`), would touch while its first sample moves towards it; -1 if none.
+    With numba one compiled call (:func:`viapath._harness_kernels.first_touched`, the same answer)."""
+    kernels = harness_kernels()
+    if kernels is not None:
+        try:
+            return kernels.first_touched(
+                np.array([position[0], position[1], robot.heading_rad, robot.speed_mps, robot.turn_rate_radps],
+                         dtype=float), v, w,
+                np.array([limits.max_speed_mps, limits.max_turn_rate_radps, limits.max_accel_mps2,
+                          limits.max_turn_accel_radps2, config.control_period_s], dtype=float),
+                obstacles.positions, obstacles.radii_m, float(robot_radius_m), float(config.brake_margin_m),
+                float(reachable_m), BRAKING_SAMPLES_PER_PERIOD)
+        except TypeError:  # arrays of another dtype (a direct call; the inspection hands float64): numpy below
+            pass
+    offsets = obstacles.positions - position
+    distance = np.hypot(offsets[:, 0], offsets[:, 1])
+    reach = robot_radius_m + obstacles.radii_m + config.brake_margin_m
+    near = distance - reach <= reachable_m
+    if not near.any():
+        return -1
+    swept = braking_path(robot, Command(v, w), limits, config.control_period_s)
+    centres = obstacles.positions[near]
+    gaps = np.hypot(*(swept[:, None, :] - centres[None]).transpose(2, 0, 1)) - reach[near][None]
+    closer = np.hypot(*(swept[0] - centres).T) < distance[near] - 1e-12  # the first sample moves towards it
+    touches = (gaps.min(axis=0) <= 0) & closer
+    return int(np.flatnonzero(near)[np.argmax(touches)]) if touches.any() else -1
 
 
 def _unchanged(command: Any, v: float, w: float) -> Command:
@@ -355,20 +379,6 @@ def _unchanged(command: Any, v: float, w: float) -> Command:
     if type(command) is Command and command.speed_mps is v and command.turn_rate_radps is w:
         return command
     return Command(v, w)
-
-
-def _none_within(obstacles: Obstacles, position: np.ndarray, robot_radius_m: float, margin_m: float,
-                 limit_m: float) -> bool:
-    """True when numba says at once that no obstacle is within ``limit_m`` (:func:`viapath._harness_kernels.any_within`,
-    the same test as check_command's ``near``); False when some is, or without numba: then check_command looks."""
-    kernels = harness_kernels()
-    if kernels is None:
-        return False
-    try:
-        return not kernels.any_within(obstacles.positions, obstacles.radii_m, float(position[0]), float(position[1]),
-                                      float(robot_radius_m), float(margin_m), float(limit_m))
-    except TypeError:  # arrays of another dtype: check_command's numpy code
-        return False
 
 
 def _stop_decision(planner, observation: Observation, status: str, reasons: list[str], extras: dict | None = None):

@@ -1,7 +1,7 @@
 """The per-cycle harness compiled (:mod:`viapath._harness_kernels`, extra ``fast``) answers exactly as its numpy
-code: the guard's soundness test of the obstacles and its "anyone within stopping distance" test, and the safety
-inflation, bit for bit; and the guard's common-case shortcut (``guard._plainly_sound``) lets through only
-observations the full inspection would hand on unchanged. Each is checked against the numpy code it replaces
+code: the guard's soundness test of the obstacles and its braking test, and the safety inflation, bit for
+bit; and the guard's common-case shortcut (``guard._plainly_sound``) lets through only observations the full
+inspection would hand on unchanged. Each is checked against the numpy code it replaces
 (``viapath.compiled.harness_kernels`` patched to None) on random fields with NaN, infinities, negative, zero,
 boundary and too large values sprinkled in."""
 
@@ -63,21 +63,39 @@ def test_obstacles_sound_agrees_with_the_numpy_reductions(numpy_only):
     assert 0.2 < np.mean(numpy_answers) < 0.8  # both answers well represented
 
 
-def test_any_within_agrees_with_check_commands_numpy_test():
-    kernels = compiled.harness_kernels()
+def test_the_braking_test_agrees_with_check_commands_numpy_code(monkeypatch):
+    """guard._first_touched compiled and in numpy, on robots among people close enough for the braking
+    roll-out to decide: the same obstacle (or none) every time."""
     rng = np.random.default_rng(1)
-    answers = []
+    limits = MotionLimits()
+    cases = []
     for _ in range(3000):
-        fields = _fields(rng, int(rng.integers(1, 6)))
-        positions, radii = fields["positions"] * rng.uniform(0.05, 1.0), fields["radii"]
-        x, y = rng.uniform(-1, 1, 2)
-        robot_radius, margin, limit = 0.25, 0.02, float(rng.uniform(0.0, 1.5))
-        offsets = positions - np.array([x, y])
-        with np.errstate(invalid="ignore"):  # inf - inf: NaN, never within
-            reference = bool((np.hypot(offsets[:, 0], offsets[:, 1]) - (robot_radius + radii + margin) <= limit).any())
-        assert kernels.any_within(positions, radii, x, y, robot_radius, margin, limit) == reference
-        answers.append(reference)
-    assert 0.2 < np.mean(answers) < 0.8
+        n = int(rng.integers(1, 6))
+        obstacles = Obstacles(rng.uniform(-1.2, 1.2, (n, 2)), np.zeros((n, 2)), rng.uniform(0.1, 0.4, n))
+        robot = RobotState(rng.uniform(-0.2, 0.2, 2), float(rng.uniform(-np.pi, np.pi)),
+                           float(rng.choice([0.0, rng.uniform(0, 0.6), limits.max_speed_mps])),
+                           float(rng.uniform(-1.0, 1.0)), 0.25)
+        v, w = float(rng.uniform(0, limits.max_speed_mps)), float(rng.uniform(-1, 1) * limits.max_turn_rate_radps)
+        reachable = guard.stopping_distance_m(max(limits.max_speed_mps, robot.speed_mps), limits, CONFIG)
+        cases.append((robot, np.asarray(robot.position, dtype=float), v, w, limits, obstacles, 0.25, CONFIG,
+                      reachable))
+    compiled_answers = [guard._first_touched(*case) for case in cases]
+    monkeypatch.setattr(guard, "harness_kernels", lambda: None)
+    numpy_answers = [guard._first_touched(*case) for case in cases]
+    assert compiled_answers == numpy_answers
+    touched = np.array(numpy_answers) >= 0
+    assert 0.2 < touched.mean() < 0.8  # both answers well represented
+
+
+def test_the_compiled_arc_is_kinematics_arc_bit_for_bit():
+    from viapath import kinematics
+
+    kernels = compiled.harness_kernels()
+    rng = np.random.default_rng(4)
+    for _ in range(20000):
+        args = (*rng.uniform(-5, 5, 2), float(rng.uniform(-4, 4)), float(rng.uniform(0, 1)),
+                float(rng.choice([0.0, 1e-9, -1e-7, rng.uniform(-2, 2)])), float(rng.choice([0.02, 0.1])))
+        assert kernels._arc(*args) == kinematics._arc(*args)
 
 
 @pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")  # numpy's 0·inf and inf/inf, NaN both ways
