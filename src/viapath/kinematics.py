@@ -64,27 +64,36 @@ def _clip(value: float, low: float, high: float) -> float:
     return low if value < low else high if value > high else value
 
 
-def rollout(state: UnicycleState, commands: np.ndarray, limits: MotionLimits, dt_s: float, steps: int) -> np.ndarray:
+def rollout(state: UnicycleState, commands: np.ndarray, limits: MotionLimits, dt_s: float, steps: int,
+            turns: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Positions (K, steps, 2) after each step of holding each of K commands (v, ω) from ``state``:
     the same limited arcs as :func:`step`, vectorised over the commands and the steps (a held
     command makes speed and turn rate ramp to it at the acceleration limits, so both are known in
-    closed form; the positions are then running sums of the arcs)."""
+    closed form; the positions are then running sums of the arcs). ``turns``, when given: the distinct
+    turn commands (T,) and each command's index among them (K,)."""
     commands = np.asarray(commands, dtype=float).reshape(-1, 2)
     # np.clip's max-then-min as the two ufuncs (the same values; np.clip's dispatch costs more than the
     # arithmetic on these small arrays), and each sine and cosine taken once: the heading before a step
     # is the heading after the previous one. The escape rolls out its fan of commands every cycle
     # without a free candidate (tests/test_kinematics.py: bit for bit the earlier, plainer form).
     v_cmd = np.minimum(np.maximum(commands[:, 0], 0.0), limits.max_speed_mps)
-    w_cmd = np.minimum(np.maximum(commands[:, 1], -limits.max_turn_rate_radps), limits.max_turn_rate_radps)
     ramp = np.arange(1, steps + 1)
     speed0, turn0 = float(state.speed_mps), float(state.turn_rate_radps)
     dv, dw = limits.max_accel_mps2 * dt_s * ramp, limits.max_turn_accel_radps2 * dt_s * ramp
     speed = speed0 + np.minimum(np.maximum((v_cmd - speed0)[:, None], -dv), dv)  # (K, steps), during each step
+    # Turn rates and headings depend on the turn command alone: with ``turns`` (the escape's fan: 9 turn rates
+    # for its 63 commands) they, and their sines and cosines, are made once per turn command and copied to
+    # its commands, the same values row for row.
+    w_cmd = np.minimum(np.maximum(commands[:, 1] if turns is None else turns[0], -limits.max_turn_rate_radps),
+                       limits.max_turn_rate_radps)
     turn = turn0 + np.minimum(np.maximum((w_cmd - turn0)[:, None], -dw), dw)
-    headings = np.empty((len(commands), steps + 1))  # before the first step, then after each
+    headings = np.empty((len(w_cmd), steps + 1))  # before the first step, then after each
     headings[:, 0] = float(state.heading_rad)
     headings[:, 1:] = float(state.heading_rad) + np.cumsum(turn * dt_s, axis=1)
     sines, cosines = np.sin(headings), np.cos(headings)
+    if turns is not None:
+        rows = turns[1]
+        turn, sines, cosines = turn[rows], sines[rows], cosines[rows]
     sin_before, sin_after = sines[:, :-1], sines[:, 1:]
     cos_before, cos_after = cosines[:, :-1], cosines[:, 1:]
     straight = np.abs(turn) < 1e-9

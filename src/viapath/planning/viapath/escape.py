@@ -62,13 +62,12 @@ def stop_or_escape(checks: LegChecks, limits: MotionLimits, config, previous: Co
 def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Command | None = None):
     """Commands (v, ω), where each leaves the robot, and the score of each (higher is better)."""
     position = checks.position
-    top = escape_top_speed(limits, config)
-    commands = _fan(tuple(config.speeds), top, limits.max_turn_rate_radps)
+    top, commands, row_turns, turn_rows = escape_fan(limits, config)
     dt = config.escape_dt_s
     steps = max(1, int(round(config.escape_s / dt)))
     state = UnicycleState(float(position[0]), float(position[1]), float(checks.heading_rad),
                           float(checks.speed_mps), float(checks.turn_rate_radps))
-    positions = rollout(state, commands, limits, dt, steps)  # (K, S, 2)
+    positions = rollout(state, commands, limits, dt, steps, (row_turns, turn_rows))  # (K, S, 2)
     times = dt * np.arange(1, steps + 1)
     excess = checks.backend.corridor_excess(checks.path, positions.reshape(-1, 2)).reshape(len(commands), steps)
     inside = np.all(excess <= checks.corridor_tolerance_m, axis=1)
@@ -166,9 +165,10 @@ def _fan(speeds: tuple, top: float, max_turn_rate_radps: float) -> np.ndarray:
 
 def escape_fan(limits: MotionLimits, config) -> tuple:
     """The top speed, the fan's commands (K, 2), its distinct turn commands (T,) and each command's index
-    among them (K,), for the compiled escape (:meth:`.backend.Backend.escape`, given them by the caller: the
-    backend does not import this module, which imports the checks, which import the backend), which takes the
-    headings, sines and cosines once per turn command: the commands of one turn rate share them."""
+    among them (K,), for :func:`escape_scores`' roll-out and the compiled escape (:meth:`.backend.Backend.escape`,
+    given them by the caller: the backend does not import this module, which imports the checks, which import
+    the backend), which take the headings, sines and cosines once per turn command: the commands of one turn
+    rate share them."""
     return _fan_turns(tuple(config.speeds), escape_top_speed(limits, config), limits.max_turn_rate_radps)
 
 
