@@ -6,7 +6,9 @@ simulator drives the robot with, so a plan the robot cannot follow is caught bef
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -124,9 +126,17 @@ def track(state: UnicycleState, target, speed_mps: float, limits: MotionLimits, 
           heading_gain: float = 2.5) -> np.ndarray:
     """Positions (steps, 2) of the robot steering for ``target`` with :func:`steer_towards`, each
     step as :func:`step` moves it (scalar arithmetic: this runs inside the planning cycle)."""
+    positions = list(itertools.islice(tracking(state, target, speed_mps, limits, dt_s, heading_gain), steps))
+    return np.array(positions).reshape(steps, 2)
+
+
+def tracking(state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float,
+             heading_gain: float = 2.5) -> Iterator[tuple[float, float]]:
+    """:func:`track`'s positions (x, y) one step at a time, without end: a caller that checks them as they
+    come stops a roll-out at its first bad step (the roll-outs of failing candidates, :mod:`.follow`)."""
     # steer_towards and _arc inlined, operation for operation (the positions are bit for bit theirs:
-    # tests/test_kinematics.py): a candidate that fails is rolled out in full, up to max_rollouts of them
-    # in a cycle without a free candidate, and the calls cost more than the arithmetic (docs/speed.md).
+    # tests/test_kinematics.py): a candidate that fails is rolled out, up to max_rollouts of them in a
+    # cycle without a free candidate, and the calls cost more than the arithmetic (docs/speed.md).
     x, y, heading = float(state.x), float(state.y), float(state.heading_rad)
     speed, turn = float(state.speed_mps), float(state.turn_rate_radps)
     target_x, target_y = float(target[0]), float(target[1])
@@ -135,8 +145,7 @@ def track(state: UnicycleState, target, speed_mps: float, limits: MotionLimits, 
     quarter_turn, eighth_turn = math.pi / 2, math.pi / 4
     atan2, sin, cos = math.atan2, math.sin, math.cos
     standing = speed_mps <= 0
-    positions = []
-    for _ in range(steps):
+    while True:
         dx, dy = target_x - x, target_y - y
         if dx * dx + dy * dy < 1e-18 or standing:
             v_cmd = w_cmd = 0.0
@@ -157,5 +166,4 @@ def track(state: UnicycleState, target, speed_mps: float, limits: MotionLimits, 
         x += chord * cos(heading + half)
         y += chord * sin(heading + half)
         heading = atan2(sin(new_heading), cos(new_heading))
-        positions.append((x, y))
-    return np.array(positions).reshape(steps, 2)
+        yield x, y

@@ -230,11 +230,14 @@ class LegChecks:
             self.__dict__["_kernel_envelope"] = cached
         return cached
 
-    def clear(self, positions: np.ndarray, dt: float) -> bool:
-        """Whether robot positions (one per ``dt`` from now) keep clear of every obstacle."""
+    def clear(self, positions: np.ndarray, dt: float, after_steps: int = 0) -> bool:
+        """Whether robot positions (one per ``dt`` from now, or from ``after_steps`` steps from now on) keep
+        clear of every obstacle."""
         if len(self.obstacles) == 0:
             return True
-        centres_x, centres_y, limit = self._clear_limits(len(positions), dt)
+        centres_x, centres_y, limit = self._clear_limits(after_steps + len(positions), dt)
+        if after_steps:
+            centres_x, centres_y, limit = centres_x[after_steps:], centres_y[after_steps:], limit[after_steps:]
         distance = np.hypot(positions[:, 0:1] - centres_x, positions[:, 1:2] - centres_y)
         return bool(np.all(distance >= limit))
 

@@ -13,10 +13,12 @@ after an escape, a robot facing a little outwards would otherwise never get goin
 
 from __future__ import annotations
 
+from itertools import islice
+
 import numpy as np
 
 from viapath.geometry import wrap_angle
-from viapath.kinematics import UnicycleState
+from viapath.kinematics import UnicycleState, tracking
 from viapath.observation import MotionLimits
 from viapath.planning.base import Plan
 from viapath.planning.viapath.checks import LegChecks
@@ -50,9 +52,22 @@ def _roll_out(plan: Plan, checks: LegChecks, limits: MotionLimits, config, headi
     steps = max(1, int(round(config.rollout_s / dt)))
     state = UnicycleState(float(checks.position[0]), float(checks.position[1]), float(checks.heading_rad),
                           checks.speed_mps, checks.turn_rate_radps)
-    positions = checks.backend.track(state, plan.target, plan.speed_mps, limits, dt, steps, config.heading_gain)
-    if not checks.clear(positions, dt):
-        return False, False
+    if checks.backend.name == "numpy":
+        # A failing candidate mostly meets someone early in its roll-out (in the slowest cycles, up to 8
+        # candidates fail within the first second): its first half is checked before the rest is rolled
+        # out. The same positions and verdict; a roll-out that passes pays one more (small) check.
+        rolling = tracking(state, plan.target, plan.speed_mps, limits, dt, config.heading_gain)
+        head = np.array(list(islice(rolling, steps // 2))).reshape(-1, 2)
+        if not checks.clear(head, dt):
+            return False, False
+        tail = np.array(list(islice(rolling, steps - len(head)))).reshape(-1, 2)
+        if not checks.clear(tail, dt, after_steps=len(head)):
+            return False, False
+        positions = np.concatenate([head, tail])
+    else:
+        positions = checks.backend.track(state, plan.target, plan.speed_mps, limits, dt, steps, config.heading_gain)
+        if not checks.clear(positions, dt):
+            return False, False
     if np.all(checks.inside(positions)):
         return True, False
     turn_s = heading_error / limits.max_turn_rate_radps + 1.0
