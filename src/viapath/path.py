@@ -147,14 +147,19 @@ class DesignatedPath:
         """
         starts = np.asarray(starts, dtype=float).reshape(-1, 2)
         ends = np.asarray(ends, dtype=float).reshape(-1, 2)
-        tolerance = np.broadcast_to(np.asarray(tolerance_m, dtype=float), (len(starts),))
         if len(starts) == 0:
             return np.zeros(0, dtype=bool)
+        # One tolerance for all (the planner's case) is compared as it is: the same verdicts as against
+        # its copies, without making them.
+        tolerance = tolerance_m if np.ndim(tolerance_m) == 0 else np.asarray(tolerance_m, dtype=float)[:, None]
         # Both ends in one pass (the same values as two; a call costs more than these few points).
         excess = self._segment_geometry(np.concatenate([starts, ends]))[2] - self.half_widths_m
-        start_in = excess[:len(starts)] <= tolerance[:, None]
-        end_in = excess[len(starts):] <= tolerance[:, None]
+        start_in = excess[:len(starts)] <= tolerance
+        end_in = excess[len(starts):] <= tolerance
         inside = (start_in & end_in).any(axis=1)
+        if len(self.half_widths_m) == 1 or inside.all():
+            return inside  # no leg across a junction (one capsule: both ends in it or the leg is out)
+        tolerance = np.broadcast_to(np.asarray(tolerance_m, dtype=float), (len(starts),))
         unresolved = np.flatnonzero(~inside & start_in.any(axis=1) & end_in.any(axis=1))
         if len(unresolved):
             a, b = starts[unresolved], ends[unresolved]

@@ -171,7 +171,7 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
     frontier = tree.extend(
         position=np.broadcast_to(checks.position, (n_speeds, 2)), time_s=np.zeros(n_speeds), speed=speeds,
         parent=np.full(n_speeds, -1), length_m=np.zeros(n_speeds), first_direction=roots.directions,
-        way=np.stack([np.full(n_speeds, STRAIGHT), np.zeros(n_speeds, int), np.zeros(n_speeds, int)], 1),
+        way=_ways(n_speeds, STRAIGHT),
     )
     leaves, goal_length = [frontier[roots.free]], [roots.lengths[roots.free]]
     if config.slow_times_s and len(checks.obstacles):
@@ -230,6 +230,13 @@ def _candidates_of(store, subgoal: np.ndarray) -> Candidates | None:
     )
 
 
+def _ways(count: int, obstacle, side=0, root=0) -> np.ndarray:
+    """(count, 3) ways round: the obstacle, side and root of each row (a number for all, or one per row)."""
+    ways = np.empty((count, 3), dtype=int)
+    ways[:, 0], ways[:, 1], ways[:, 2] = obstacle, side, root
+    return ways
+
+
 def _root_pairs(contact: np.ndarray, limit: int):
     """(row, obstacle) pairs to branch on at the root: each obstacle the leg hits, earliest first."""
     rows, cols = np.nonzero(np.isfinite(contact))
@@ -264,7 +271,7 @@ def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: 
     parent = node_index[pair]
     if is_root:
         first_direction = leg_velocity[good] / speeds_k[good, None]
-        way = np.stack([obstacles.ids[obstacle_index[pair]], _SIDES[option], _ROOTS[option]], axis=1)
+        way = _ways(len(pair), obstacles.ids[obstacle_index[pair]], _SIDES[option], _ROOTS[option])
     else:
         first_direction = data["first_direction"][parent]
         way = data["way"][parent]
@@ -300,7 +307,7 @@ def _corner_nodes(checks: LegChecks, tree: _Tree, speeds: np.ndarray) -> np.ndar
         position=targets[good], time_s=duration[good], speed=speed[good],
         parent=np.searchsorted(speeds, speed[good]),  # the root node of that speed
         length_m=length[good], first_direction=direction[good],
-        way=np.stack([np.full(count, CORNER), np.zeros(count, int), corner[good]], 1),
+        way=_ways(count, CORNER, 0, corner[good]),
     )
 
 
@@ -312,8 +319,9 @@ def _slow_candidates(checks: LegChecks, slow_checks: LegChecks, tree: _Tree, spe
         return None  # slowing down runs along the straight leg, which would leave the corridor
     nominal = speeds[nominal_index]
     slow_speeds = np.concatenate([[0.0], speeds[speeds < nominal - 1e-9]])
-    duration, slow_speed = (grid.ravel() for grid in np.meshgrid(np.asarray(config.slow_times_s, float),
-                                                                 slow_speeds))
+    # Every slow time with every slow speed, as np.meshgrid(times, slow_speeds) would pair them (row-major).
+    times = np.asarray(config.slow_times_s, float)
+    duration, slow_speed = np.tile(times, len(slow_speeds)), np.repeat(slow_speeds, len(times))
     offset = checks.subgoal - checks.position
     direction = offset / max(float(np.hypot(*offset)), 1e-12)
     # Never past the subgoal while slowing down.
@@ -337,7 +345,7 @@ def _slow_candidates(checks: LegChecks, slow_checks: LegChecks, tree: _Tree, spe
     index = tree.extend(
         position=ends[free], time_s=d[free], speed=v_after[free], parent=np.full(count, -1),
         length_m=(v_slow * d)[free], first_direction=np.broadcast_to(direction, (count, 2)).copy(),
-        way=np.stack([np.full(count, SLOW), np.zeros(count, int), np.zeros(count, int)], 1),
+        way=_ways(count, SLOW),
         slow_s=d[free], slow_speed=v_slow[free],
     )
     return index, lengths[free]

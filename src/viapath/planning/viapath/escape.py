@@ -98,7 +98,10 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
         reach = np.ascontiguousarray(reach.T)[:, None, :]  # (N, 1, S)
         # The first step at which any person not overlapped now is touched (gap < 0): the earliest over
         # the people of each one's first step.
-        touched = (touching(dx, dy, reach) & ~overlapping[:, None, None]).any(axis=0)  # (K, S)
+        touched = touching(dx, dy, reach)
+        if overlapping.any():  # (with no one overlapped, as mostly, the mask would change nothing)
+            touched &= ~overlapping[:, None, None]
+        touched = touched.any(axis=0)  # (K, S)
         time_to_contact = np.where(touched.any(axis=1), np.argmax(touched, axis=1), steps) * dt
         if overlapping.any():
             gap = np.hypot(dx[overlapping], dy[overlapping]) - reach[overlapping]  # (M, K, S)
