@@ -23,6 +23,8 @@ Everything here is vectorised numpy with broadcasting over leading axes.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 LEFT = 1
@@ -43,6 +45,10 @@ def rotate(vectors: np.ndarray, angle_rad: np.ndarray | float) -> np.ndarray:
 
 def wrap_angle(angle_rad):
     """Wrap to (-pi, pi]."""
+    if type(angle_rad) in (float, np.float64):
+        # One angle (each roll-out's heading error): a float's % is np.mod's (fmod, then the divisor added
+        # when the signs differ), without making an array of it.
+        return np.float64(math.pi - (math.pi - angle_rad) % math.tau)
     return np.pi - np.mod(np.pi - np.asarray(angle_rad), 2.0 * np.pi)
 
 

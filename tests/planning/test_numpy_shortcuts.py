@@ -440,3 +440,18 @@ def test_legs_inside_is_the_first_form():
         assert np.array_equal(got, expected), f"case {case}"
         verdicts |= set(expected.tolist())
     assert verdicts == {True, False}
+
+
+def test_wrap_angle_of_one_angle_is_that_of_an_array():
+    """:func:`viapath.geometry.wrap_angle` takes one angle (a float or np.float64) with a float's ``%``: bit for
+    bit what np.mod gives in an array, on 200 000 angles (many turns, tiny, huge, on ±pi and 2 pi, inf, NaN)."""
+    rng = np.random.default_rng(17)
+    angles = np.concatenate([rng.uniform(-20, 20, 150_000), rng.uniform(-1e9, 1e9, 40_000),
+                             rng.uniform(-1e-300, 1e-300, 10_000),
+                             [np.pi, -np.pi, 0.0, -0.0, 3 * np.pi, -3 * np.pi, np.nextafter(np.pi, 4),
+                              np.nextafter(-np.pi, -4), 2 * np.pi, -2 * np.pi, np.inf, -np.inf, np.nan]])
+    with np.errstate(invalid="ignore"):
+        expected = wrap_angle(angles)
+        for kind in (float, np.float64):
+            got = np.array([wrap_angle(kind(angle)) for angle in angles])
+            assert _same_bits(got, expected), kind

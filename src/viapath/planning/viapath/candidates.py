@@ -34,7 +34,7 @@ positions.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -69,33 +69,41 @@ class Choice:
     speed_mmps: int
 
 
-@dataclass
 class _Tree:
     """Growable columns of search nodes: where and when the robot is, at which speed, how it got there."""
 
-    position: list = field(default_factory=list)
-    time_s: list = field(default_factory=list)
-    speed: list = field(default_factory=list)
-    parent: list = field(default_factory=list)
-    length_m: list = field(default_factory=list)
-    first_direction: list = field(default_factory=list)
-    way: list = field(default_factory=list)  # (obstacle, side, root) of the first branch
-    slow_s: list = field(default_factory=list)  # how long the candidate first drives slower (or stands)
-    slow_speed: list = field(default_factory=list)  # and at which speed
-    _size: int = 0
+    # name: (shape of a row, dtype)
+    COLUMNS = {
+        "position": ((2,), float),
+        "time_s": ((), float),
+        "speed": ((), float),
+        "parent": ((), int),
+        "length_m": ((), float),
+        "first_direction": ((2,), float),
+        "way": ((3,), int),  # (obstacle, side, root) of the first branch
+        "slow_s": ((), float),  # how long the candidate first drives slower (or stands); 0 if not given
+        "slow_speed": ((), float),  # and at which speed
+    }
+
+    def __init__(self, capacity: int = 128):
+        # Filled in place, doubled when full: a cycle extends the tree a few times and reads it after each.
+        self._columns = {name: np.empty((capacity, *shape), dtype) for name, (shape, dtype) in self.COLUMNS.items()}
+        self._size = 0
 
     def extend(self, **columns) -> np.ndarray:
-        count = len(columns["position"])
-        defaults = {"slow_s": np.zeros(count), "slow_speed": np.zeros(count)}
-        for name in self.__dataclass_fields__:
-            if not name.startswith("_"):
-                getattr(self, name).append(columns.get(name, defaults.get(name)))
-        start, self._size = self._size, self._size + count
-        return np.arange(start, start + count)
+        start = self._size
+        end = start + len(columns["position"])
+        if end > len(self._columns["position"]):
+            self._columns = {name: np.concatenate([array[:start], np.empty((2 * end, *array.shape[1:]), array.dtype)])
+                             for name, array in self._columns.items()}
+        for name, array in self._columns.items():
+            array[start:end] = columns.get(name, 0.0)
+        self._size = end
+        return np.arange(start, end)
 
     def stacked(self) -> dict[str, np.ndarray]:
-        return {name: np.concatenate(getattr(self, name)) for name in self.__dataclass_fields__
-                if not name.startswith("_")}
+        """The columns of the nodes so far (views: later nodes do not change them)."""
+        return {name: array[:self._size] for name, array in self._columns.items()}
 
 
 @dataclass
@@ -150,7 +158,7 @@ class RootLegs:
 
     @classmethod
     def of(cls, checks: LegChecks, speeds: np.ndarray, nominal_index: int) -> "RootLegs":
-        starts = np.broadcast_to(checks.position, (len(speeds), 2))
+        starts = checks.position[None].repeat(len(speeds), axis=0)  # (np.broadcast_to's Python costs more)
         directions, lengths, free, contact = checks.goal_legs(starts, np.zeros(len(speeds)), speeds)
         return cls(speeds, nominal_index, directions, lengths, free, contact)
 
@@ -169,7 +177,7 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
     n_speeds = len(speeds)
     tree = _Tree()
     frontier = tree.extend(
-        position=np.broadcast_to(checks.position, (n_speeds, 2)), time_s=np.zeros(n_speeds), speed=speeds,
+        position=checks.position[None].repeat(n_speeds, axis=0), time_s=np.zeros(n_speeds), speed=speeds,
         parent=np.full(n_speeds, -1), length_m=np.zeros(n_speeds), first_direction=roots.directions,
         way=_ways(n_speeds, STRAIGHT),
     )
@@ -267,17 +275,17 @@ def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: 
     good[good] = checks.legs_inside(starts_k[good], via[good])
     if not good.any():
         return None
-    pair, option, t_k = pair[good], option[good], t_k[good]
+    pair, option, t_k, speeds_k = pair[good], option[good], t_k[good], speeds_k[good]
     parent = node_index[pair]
     if is_root:
-        first_direction = leg_velocity[good] / speeds_k[good, None]
+        first_direction = leg_velocity[good] / speeds_k[:, None]
         way = _ways(len(pair), obstacles.ids[obstacle_index[pair]], _SIDES[option], _ROOTS[option])
     else:
         first_direction = data["first_direction"][parent]
         way = data["way"][parent]
     return dict(
-        position=via[good], time_s=times_k[good] + t_k, speed=speeds_k[good], parent=parent,
-        length_m=data["length_m"][parent] + speeds_k[good] * t_k, first_direction=first_direction, way=way,
+        position=via[good], time_s=times_k[good] + t_k, speed=speeds_k, parent=parent,
+        length_m=data["length_m"][parent] + speeds_k * t_k, first_direction=first_direction, way=way,
     )
 
 
@@ -327,7 +335,7 @@ def _slow_candidates(checks: LegChecks, slow_checks: LegChecks, tree: _Tree, spe
     # Never past the subgoal while slowing down.
     ok = slow_speed * duration < np.hypot(*offset) - 1e-6
     duration, slow_speed = duration[ok], slow_speed[ok]
-    starts = np.broadcast_to(checks.position, (len(duration), 2))
+    starts = checks.position[None].repeat(len(duration), axis=0)
     free = slow_checks.legs_free(starts, np.zeros(len(duration)), direction * slow_speed[:, None], duration)
     if not free.any():
         return None

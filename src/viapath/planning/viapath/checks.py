@@ -239,7 +239,7 @@ class LegChecks:
         if after_steps:
             centres_x, centres_y, limit = centres_x[after_steps:], centres_y[after_steps:], limit[after_steps:]
         distance = np.hypot(positions[:, 0:1] - centres_x, positions[:, 1:2] - centres_y)
-        return bool(np.all(distance >= limit))
+        return bool((distance >= limit).all())
 
     def _clear_limits(self, steps: int, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The obstacles' centres (x and y, (steps, N) each) after each ``dt`` and how close the robot may come
