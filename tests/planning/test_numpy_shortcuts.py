@@ -455,3 +455,24 @@ def test_wrap_angle_of_one_angle_is_that_of_an_array():
         for kind in (float, np.float64):
             got = np.array([wrap_angle(kind(angle)) for angle in angles])
             assert _same_bits(got, expected), kind
+
+
+def test_first_leg_is_where_the_plan_first_heads():
+    """The planner asks can_follow's verdict before making a candidate's plan (:meth:`Candidates.first_leg`): the
+    target must be the plan's as first made, its polyline's second point (the subgoal at the slow speed for
+    a slow/wait candidate), bit for bit, for every candidate of 400 situations."""
+    from viapath.planning.viapath.candidates import RootLegs, grow
+
+    kinds = set()
+    for planner, checks in _situations(400, seed=14):
+        speeds, nominal_index = planner.speed_set(checks.speed_mps)
+        candidates = grow(checks, RootLegs.of(checks, speeds, nominal_index), planner.config)
+        for k in range(len(candidates) if candidates is not None else 0):
+            target, speed = candidates.first_leg(k)
+            if candidates.slow_s[k] > 0:
+                expected = (checks.subgoal, float(candidates.slow_speed_mps[k]))
+            else:
+                expected = (candidates.polyline(k)[1], float(candidates.speed_mps[k]))
+            assert _same_bits(target, expected[0]) and _same_bits(speed, expected[1])
+            kinds.add("slow" if candidates.slow_s[k] > 0 else len(candidates.polyline(k)))
+    assert {"slow", 2, 3, 4} <= kinds  # slow/wait, straight, one and two via points

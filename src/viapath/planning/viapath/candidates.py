@@ -135,6 +135,18 @@ class Candidates:
     def speed_mmps(self) -> np.ndarray:
         return np.round(self.speed_mps * 1000).astype(int)
 
+    def first_leg(self, k: int) -> tuple[np.ndarray, float]:
+        """Where candidate ``k`` first heads, and at which speed (its plan's target and speed): the subgoal at
+        the slow speed for a slow/wait candidate, else its first via point (the subgoal for a straight leg)."""
+        if self.slow_s[k] > 0:
+            return self.subgoal, float(self.slow_speed_mps[k])
+        parent, node = self.nodes["parent"], int(self.leaves[k])
+        if parent[node] < 0:
+            return self.subgoal, float(self.speed_mps[k])
+        while parent[parent[node]] >= 0:  # up to the node after the root
+            node = int(parent[node])
+        return self.nodes["position"][node], float(self.speed_mps[k])
+
     def polyline(self, k: int) -> np.ndarray:
         """Candidate ``k`` from the robot through its via points to the subgoal."""
         nodes, node = self.nodes, int(self.leaves[k])
