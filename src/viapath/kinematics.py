@@ -163,7 +163,8 @@ def tracking(state: UnicycleState, target, speed_mps: float, limits: MotionLimit
         new_heading = heading + turn * dt_s
         half = 0.5 * turn * dt_s
         chord = speed * dt_s * (1.0 - half * half / 6.0 if abs(half) < 1e-6 else sin(half) / half)
-        x += chord * cos(heading + half)
-        y += chord * sin(heading + half)
+        mean_heading = heading + half
+        x += chord * cos(mean_heading)
+        y += chord * sin(mean_heading)
         heading = atan2(sin(new_heading), cos(new_heading))
         yield x, y

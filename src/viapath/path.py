@@ -113,6 +113,8 @@ class DesignatedPath:
             if math.isfinite(x) and math.isfinite(y):
                 return self._point_excess(x, y)
         _, _, distance = self._segment_geometry(points)
+        if len(self.half_widths_m) == 1:
+            return distance[..., 0] - self.half_widths_m[0]  # the one segment's (a minimum of one is that one)
         return np.min(distance - self.half_widths_m, axis=-1)
 
     def _point_excess(self, x: float, y: float) -> np.float64:

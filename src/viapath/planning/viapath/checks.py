@@ -275,12 +275,15 @@ class LegChecks:
         # The subgoal ends both capsules next to it; a leg from a point inside one of them is inside
         # that capsule (convex). Only other legs need the general check.
         path = self.path
-        inside = np.zeros(len(starts), dtype=bool)
-        for i in (i for i in (self.subgoal_index - 1, self.subgoal_index) if i < len(path.segment_lengths_m)):
+        inside = None
+        for i in (self.subgoal_index - 1, self.subgoal_index):  # the first is always there
+            if i == len(path.segment_lengths_m):
+                break
             rel = starts - path.segment_starts[i]
             along = np.minimum(np.maximum(rel @ path.segment_directions[i], 0.0), path.segment_lengths_m[i])
             gap = np.hypot(*(rel - along[:, None] * path.segment_directions[i]).T) - path.half_widths_m[i]
-            inside |= gap <= self.corridor_tolerance_m
+            inside_capsule = gap <= self.corridor_tolerance_m
+            inside = inside_capsule if inside is None else inside | inside_capsule
         if not inside.all():
             rest = np.flatnonzero(~inside)
             inside[rest] = self.legs_inside(starts[rest], np.broadcast_to(self.subgoal, (len(rest), 2)))
