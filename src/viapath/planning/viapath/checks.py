@@ -171,7 +171,9 @@ class LegChecks:
             contact = np.minimum(both[:count], both[count:] + durations[:, None])
         else:
             contact = self.contact_times(starts, start_times, velocities, durations, horizon_s, keep_envelope=True)
-        free = np.isinf(contact).all(axis=1) & self.goal_legs_inside(starts)
+        free = np.isinf(contact).all(axis=1)
+        if free.any():  # (when every leg meets someone, as in the slowest cycles, the corridor cannot free one)
+            free &= self.goal_legs_inside(starts)
         return directions, lengths, free, contact
 
     # -- the same facts as the compiled kernels take them (C-contiguous float64, made once per LegChecks: a
@@ -230,14 +232,15 @@ class LegChecks:
             self.__dict__["_kernel_envelope"] = cached
         return cached
 
-    def clear(self, positions: np.ndarray, dt: float, after_steps: int = 0) -> bool:
-        """Whether robot positions (one per ``dt`` from now, or from ``after_steps`` steps from now on) keep
-        clear of every obstacle."""
+    def clear(self, positions: np.ndarray, dt: float, after_steps: int = 0, of_steps: int | None = None) -> bool:
+        """Whether robot positions (one per ``dt`` from now, or from ``after_steps`` steps from now on; part of
+        a roll-out of ``of_steps`` steps, if given) keep clear of every obstacle."""
         if len(self.obstacles) == 0:
             return True
-        centres_x, centres_y, limit = self._clear_limits(after_steps + len(positions), dt)
-        if after_steps:
-            centres_x, centres_y, limit = centres_x[after_steps:], centres_y[after_steps:], limit[after_steps:]
+        end = after_steps + len(positions)
+        centres_x, centres_y, limit = self._clear_limits(end if of_steps is None else of_steps, dt)
+        if after_steps or end < len(limit):  # the rows of these steps (the same values as made for them alone)
+            centres_x, centres_y, limit = centres_x[after_steps:end], centres_y[after_steps:end], limit[after_steps:end]
         distance = np.hypot(positions[:, 0:1] - centres_x, positions[:, 1:2] - centres_y)
         return bool((distance >= limit).all())
 

@@ -66,10 +66,10 @@ def _roll_out(target: np.ndarray, speed_mps: float, checks: LegChecks, limits: M
         # out. The same positions and verdict; a roll-out that passes pays one more (small) check.
         rolling = tracking(state, target, speed_mps, limits, dt, config.heading_gain)
         head = np.array(list(islice(rolling, steps // 2))).reshape(-1, 2)
-        if not checks.clear(head, dt):
+        if not checks.clear(head, dt, of_steps=steps):
             return False, False
         tail = np.array(list(islice(rolling, steps - len(head)))).reshape(-1, 2)
-        if not checks.clear(tail, dt, after_steps=len(head)):
+        if not checks.clear(tail, dt, after_steps=len(head), of_steps=steps):
             return False, False
         positions = np.concatenate([head, tail])
     else:
