@@ -83,8 +83,8 @@ def rollout(state: UnicycleState, commands: np.ndarray, limits: MotionLimits, dt
     speed0, turn0 = float(state.speed_mps), float(state.turn_rate_radps)
     dv, dw = limits.max_accel_mps2 * dt_s * ramp, limits.max_turn_accel_radps2 * dt_s * ramp
     speed = speed0 + np.minimum(np.maximum((v_cmd - speed0)[:, None], -dv), dv)  # (K, steps), during each step
-    # Turn rates and headings depend on the turn command alone: with ``turns`` (the escape's fan: 9 turn rates
-    # for its 63 commands) they, and their sines and cosines, are made once per turn command and copied to
+    # Turn rates and headings depend on the turn command alone: with ``turns`` (the escape's fan: 9 turn rates,
+    # each with every speed) they, and their sines and cosines, are made once per turn command and copied to
     # its commands, the same values row for row.
     w_cmd = np.minimum(np.maximum(commands[:, 1] if turns is None else turns[0], -limits.max_turn_rate_radps),
                        limits.max_turn_rate_radps)
@@ -133,7 +133,7 @@ def track(state: UnicycleState, target, speed_mps: float, limits: MotionLimits, 
 def tracking(state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float,
              heading_gain: float = 2.5) -> Iterator[tuple[float, float]]:
     """:func:`track`'s positions (x, y) one step at a time, without end: a caller that checks them as they
-    come stops a roll-out at its first bad step (the roll-outs of failing candidates, :mod:`.follow`)."""
+    come can stop a roll-out that has failed (the roll-outs of failing candidates, :mod:`.follow`)."""
     # steer_towards and _arc inlined, operation for operation (the positions are bit for bit theirs:
     # tests/test_kinematics.py): a candidate that fails is rolled out, up to max_rollouts of them in a
     # cycle without a free candidate, and the calls cost more than the arithmetic (docs/speed.md).
