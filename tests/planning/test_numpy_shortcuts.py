@@ -499,3 +499,29 @@ def test_clear_in_parts_is_clear_of_the_whole():
         assert parts is whole, f"case {case}"
         verdicts.add(whole)
     assert verdicts == {True, False}
+
+
+def test_tree_columns_are_the_pieces_concatenated():
+    """The candidate tree's columns, filled in place and grown when full, are its pieces concatenated (as
+    the tree first kept them), bit for bit; columns read earlier keep their values (a small capacity, so that
+    it grows several times; a cycle rarely reaches the default)."""
+    from viapath.planning.viapath.candidates import _Tree, _ways
+
+    rng = np.random.default_rng(19)
+    tree, pieces, reads = _Tree(capacity=3), [], []
+    for count in (2, 0, 5, 1, 9, 4):
+        piece = dict(position=rng.normal(size=(count, 2)), time_s=rng.uniform(0, 3, count), speed=rng.uniform(0, 1, count),
+                     parent=rng.integers(-1, 5, count), length_m=rng.uniform(0, 9, count),
+                     first_direction=rng.normal(size=(count, 2)), way=_ways(count, -2, 1, rng.integers(0, 3, count)))
+        if count % 2:
+            piece.update(slow_s=rng.uniform(0, 2, count), slow_speed=rng.uniform(0, 0.2, count))
+        nodes = tree.extend(**piece)
+        start = sum(len(p["position"]) for p in pieces)
+        assert np.array_equal(nodes, np.arange(start, start + count))
+        pieces.append(piece)
+        reads.append((tree.stacked(), len(pieces)))
+    for stacked, count in reads:
+        for name in _Tree.COLUMNS:
+            expected = np.concatenate([p.get(name, np.zeros(len(p["position"]))) for p in pieces[:count]])
+            assert _same_bits(stacked[name], expected.astype(stacked[name].dtype)), name
+            assert stacked[name].dtype == expected.dtype, name
