@@ -91,7 +91,7 @@ def rollout(state: UnicycleState, commands: np.ndarray, limits: MotionLimits, dt
     turn = turn0 + np.minimum(np.maximum((w_cmd - turn0)[:, None], -dw), dw)
     headings = np.empty((len(w_cmd), steps + 1))  # before the first step, then after each
     headings[:, 0] = float(state.heading_rad)
-    headings[:, 1:] = float(state.heading_rad) + np.cumsum(turn * dt_s, axis=1)
+    headings[:, 1:] = float(state.heading_rad) + (turn * dt_s).cumsum(axis=1)
     sines, cosines = np.sin(headings), np.cos(headings)
     if turns is not None:
         rows = turns[1]
@@ -103,8 +103,8 @@ def rollout(state: UnicycleState, commands: np.ndarray, limits: MotionLimits, dt
     dx = np.where(straight, speed * dt_s * cos_before, radius * (sin_after - sin_before))
     dy = np.where(straight, speed * dt_s * sin_before, -radius * (cos_after - cos_before))
     positions = np.empty((len(commands), steps, 2))
-    positions[..., 0] = float(state.x) + np.cumsum(dx, axis=1)
-    positions[..., 1] = float(state.y) + np.cumsum(dy, axis=1)
+    positions[..., 0] = float(state.x) + dx.cumsum(axis=1)
+    positions[..., 1] = float(state.y) + dy.cumsum(axis=1)
     return positions
 
 

@@ -68,7 +68,7 @@ class DesignatedPath:
         if points.size > 128:  # x and y apart: the same values, faster on many points (the escape's roll-outs)
             return self._segment_geometry_xy(points)
         rel = points[..., None, :] - self.segment_starts  # (..., S, 2)
-        along = np.sum(rel * self.segment_directions, axis=-1)
+        along = np.add.reduce(rel * self.segment_directions, axis=-1)  # np.sum's own reduction, without its Python
         along_clamped = np.minimum(np.maximum(along, 0.0), self.segment_lengths_m)  # np.clip without its dispatch
         closest = self.segment_starts + along_clamped[..., None] * self.segment_directions
         offset = points[..., None, :] - closest
@@ -94,7 +94,7 @@ class DesignatedPath:
         """
         points = np.asarray(points, dtype=float)
         along, along_clamped, distance = self._segment_geometry(points)
-        index = np.argmin(distance, axis=-1)
+        index = distance.argmin(axis=-1)
         take = lambda a: np.take_along_axis(a, index[..., None], axis=-1)[..., 0]  # noqa: E731
         rel = points - self.segment_starts[index]
         side = np.sign(cross2(self.segment_directions[index], rel))
@@ -115,7 +115,7 @@ class DesignatedPath:
         _, _, distance = self._segment_geometry(points)
         if len(self.half_widths_m) == 1:
             return distance[..., 0] - self.half_widths_m[0]  # the one segment's (a minimum of one is that one)
-        return np.min(distance - self.half_widths_m, axis=-1)
+        return (distance - self.half_widths_m).min(axis=-1)
 
     def _point_excess(self, x: float, y: float) -> np.float64:
         """:meth:`corridor_excess` of one finite point (the robot's, every cycle) in scalar arithmetic: the

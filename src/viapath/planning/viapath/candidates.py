@@ -210,7 +210,7 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
                 pair_nodes = frontier[blocked][rows]
             else:
                 pair_nodes = frontier[blocked]
-                pair_obstacles = np.argmin(contact[blocked], axis=1)
+                pair_obstacles = contact[blocked].argmin(axis=1)
             children = _via_children(checks, data, pair_nodes, pair_obstacles, is_root=(depth == 0))
             if children is not None:
                 next_frontier.append(tree.extend(**children))

@@ -54,7 +54,7 @@ def stop_or_escape(checks: LegChecks, limits: MotionLimits, config, previous: Co
         return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), **base))
     if compiled is None:
         commands, ends, score = escape_scores(checks, limits, config, previous)
-    best = int(np.argmax(score))
+    best = int(score.argmax())
     speed, turn = (float(value) for value in commands[best])
     return Decision(Command(speed, turn), Plan("escape", speed, ends[best], **base))
 
@@ -70,11 +70,11 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     positions = rollout(state, commands, limits, dt, steps, (row_turns, turn_rows))  # (K, S, 2)
     times = dt * np.arange(1, steps + 1)
     excess = checks.backend.corridor_excess(checks.path, positions.reshape(-1, 2)).reshape(len(commands), steps)
-    inside = np.all(excess <= checks.corridor_tolerance_m, axis=1)
-    within_bound = np.max(excess, axis=1) <= max(config.escape_max_excess_m, checks.corridor_tolerance_m)
+    inside = (excess <= checks.corridor_tolerance_m).all(axis=1)
+    within_bound = excess.max(axis=1) <= max(config.escape_max_excess_m, checks.corridor_tolerance_m)
 
     horizon = steps * dt
-    travel = float(np.max(np.hypot(*(positions - position).reshape(-1, 2).T)))
+    travel = float(np.hypot(*(positions - position).reshape(-1, 2).T).max())
     obstacles = checks.obstacles
     gap_all = np.hypot(*(position - obstacles.positions).T) - checks.check_radii
     growth_all = checks.growth * np.minimum(horizon, checks.growth_until_s)
@@ -102,7 +102,7 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
         if overlapping.any():  # (with no one overlapped, as mostly, the mask would change nothing)
             touched &= ~overlapping[:, None, None]
         touched = touched.any(axis=0)  # (K, S)
-        time_to_contact = np.where(touched.any(axis=1), np.argmax(touched, axis=1), steps) * dt
+        time_to_contact = np.where(touched.any(axis=1), touched.argmax(axis=1), steps) * dt
         if overlapping.any():
             gap = np.hypot(dx[overlapping], dy[overlapping]) - reach[overlapping]  # (M, K, S)
             # (K, M) in C order, as the score sums them along M
@@ -110,7 +110,7 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     if overlapping.any():
         deeper = gap_min - gap_now[overlapping]
         still_inside = gap_last
-        separation = np.sum(np.minimum(deeper, 0.0) + np.minimum(still_inside, 0.0), axis=1)
+        separation = (np.minimum(deeper, 0.0) + np.minimum(still_inside, 0.0)).sum(axis=1)
     else:
         separation = np.zeros(len(commands))
     toward = checks.subgoal - position

@@ -76,7 +76,7 @@ def _roll_out(target: np.ndarray, speed_mps: float, checks: LegChecks, limits: M
         positions = checks.backend.track(state, target, speed_mps, limits, dt, steps, config.heading_gain)
         if not checks.clear(positions, dt):
             return False, False
-    if np.all(checks.inside(positions)):
+    if checks.inside(positions).all():
         return True, False
     turn_s = heading_error / limits.max_turn_rate_radps + 1.0
     standing = np.repeat(checks.position[None], max(1, int(np.ceil(turn_s / dt))), axis=0)
