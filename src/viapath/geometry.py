@@ -208,7 +208,7 @@ def via_options(starts, start_times, speeds, obstacle_positions, obstacle_veloci
     t_via = np.concatenate([t_early, t_late], axis=1)
     w = np.concatenate([w, w], axis=1)
     ok = (t_via <= max_time_s) & valid  # valid (P, 1): the same for every option of a pair
-    pair, option = np.nonzero(ok)
+    pair, option = ok.nonzero()
     t_k = t_via[pair, option]
     leg_velocity = (w[pair, option] + velocity[pair] * t_k[:, None]) / t_k[:, None]
     via = starts[pair] + leg_velocity * t_k[:, None]

@@ -203,7 +203,7 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
     data = tree.stacked()
     for depth in range(config.max_depth):
         next_frontier = [_corner_nodes(checks, tree, speeds)] if depth == 0 else []
-        blocked = np.flatnonzero(~free & np.isfinite(contact).any(axis=1))
+        blocked = (~free & np.isfinite(contact).any(axis=1)).nonzero()[0]
         if len(blocked) and len(checks.obstacles):
             if depth == 0:
                 rows, pair_obstacles = _root_pairs(contact[blocked], config.max_root_obstacles)
@@ -259,7 +259,7 @@ def _ways(count: int, obstacle, side=0, root=0) -> np.ndarray:
 
 def _root_pairs(contact: np.ndarray, limit: int):
     """(row, obstacle) pairs to branch on at the root: each obstacle the leg hits, earliest first."""
-    rows, cols = np.nonzero(np.isfinite(contact))
+    rows, cols = np.isfinite(contact).nonzero()
     if limit and len(rows) > limit:
         order = np.lexsort((contact[rows, cols], rows))
         rows, cols = rows[order], cols[order]
@@ -339,9 +339,10 @@ def _slow_candidates(checks: LegChecks, slow_checks: LegChecks, tree: _Tree, spe
         return None  # slowing down runs along the straight leg, which would leave the corridor
     nominal = speeds[nominal_index]
     slow_speeds = np.concatenate([[0.0], speeds[speeds < nominal - 1e-9]])
-    # Every slow time with every slow speed, as np.meshgrid(times, slow_speeds) would pair them (row-major).
+    # Every slow time with every slow speed, as np.meshgrid(times, slow_speeds) would pair them (row-major;
+    # np.tile and np.repeat as the array methods: their Python costs more than these few copies).
     times = np.asarray(config.slow_times_s, float)
-    duration, slow_speed = np.tile(times, len(slow_speeds)), np.repeat(slow_speeds, len(times))
+    duration, slow_speed = times[None].repeat(len(slow_speeds), axis=0).ravel(), slow_speeds.repeat(len(times))
     offset = checks.subgoal - checks.position
     direction = offset / max(float(np.hypot(*offset)), 1e-12)
     # Never past the subgoal while slowing down.
@@ -355,8 +356,8 @@ def _slow_candidates(checks: LegChecks, slow_checks: LegChecks, tree: _Tree, spe
     # Then at least the nominal speed: waiting only makes sense when the way is clear afterwards
     # (slowing down for good is the straight candidates' job).
     after = speeds[speeds >= nominal - 1e-9]
-    d, v_slow = np.repeat(duration, len(after)), np.repeat(slow_speed, len(after))
-    v_after = np.tile(after, len(duration))
+    d, v_slow = duration.repeat(len(after)), slow_speed.repeat(len(after))
+    v_after = after[None].repeat(len(duration), axis=0).ravel()
     ends = checks.position + direction * (v_slow * d)[:, None]
     _, lengths, free, _ = checks.goal_legs(ends, d, v_after, np.inf)
     if not free.any():

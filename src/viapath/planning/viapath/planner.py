@@ -200,7 +200,7 @@ class ViaPathPlanner(Planner, name="viapath"):
             if not np.isfinite(total).any():
                 return None
         polylines = [candidates.polyline(k) for k in range(len(candidates))] if self.config.record_candidates else []
-        order = np.argsort(total, kind="stable")
+        order = total.argsort(kind="stable")
         for rank, best in enumerate(order[:self.config.max_rollouts]):
             if not np.isfinite(total[best]):
                 break
