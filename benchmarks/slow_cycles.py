@@ -52,7 +52,9 @@ SECTIONS = [  # (module, owner in it or None, function, label): the parts of a c
     ("viapath.planning.viapath.checks", "LegChecks", "goal_legs", "  legs to the subgoal (goal_legs)"),
     ("viapath.planning.viapath.candidates", None, "_slow_candidates", "  slow/wait candidates"),
     ("viapath.planning.viapath.planner", None, "can_follow", "roll-outs of candidates (can_follow)"),
-    ("viapath.planning.viapath.backend", "Backend", "track", "  track"),
+    ("viapath.planning.viapath.planner", None, "follows", "roll-outs of candidates (follows, numpy choice)"),
+    ("viapath.planning.viapath.follow", None, "_roll_out", "  roll-out and its checks"),
+    ("viapath.planning.viapath.backend", "Backend", "track", "  track (compiled, or numpy before wave 8)"),
     ("viapath.planning.viapath.checks", "LegChecks", "clear", "  clear"),
     ("viapath.planning.viapath.planner", None, "stop_or_escape", "stop or escape"),
     ("viapath.planning.viapath.planner", None, "score", "costs"),
@@ -76,7 +78,8 @@ def section_shares(planner, observations, repeats: int) -> tuple[float, dict[str
     for module_name, owner, name, label in SECTIONS:
         module = importlib.import_module(module_name)
         holder = getattr(module, owner) if owner else module
-        setattr(holder, name, timed(getattr(holder, name), label))
+        if hasattr(holder, name):  # (code of an earlier wave may not have it)
+            setattr(holder, name, timed(getattr(holder, name), label))
     total = 0.0
     for _ in range(repeats):
         for observation in observations:

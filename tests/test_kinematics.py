@@ -104,3 +104,25 @@ def test_rollout_is_bit_for_bit_its_first_form():
         got = rollout(start, commands, limits, dt, steps)
         expected = _rollout_reference(start, commands, limits, dt, steps)
         assert np.array_equal(got.view(np.int64), expected.view(np.int64)), f"case {case}"
+
+
+def test_rollout_per_turn_command_is_bit_for_bit_per_command():
+    """With ``turns`` (the escape's fan) the headings, sines and cosines are made once per distinct turn
+    command: the positions must be exactly those made per command (600 seeded cases: the fan, random
+    commands sharing a few turn rates, turn rates outside the limits)."""
+    rng = np.random.default_rng(16)
+    fan = np.stack([grid.ravel() for grid in np.meshgrid([0.0, 0.1, 0.2, 0.3, 0.4, 0.5], np.linspace(-2, 2, 9))], 1)
+    for case in range(600):
+        limits = MotionLimits() if case % 3 else MotionLimits(*rng.uniform([0.2, 0.2, 0.5, 1.0], [1.5, 2.0, 3.0, 9.0]))
+        start = UnicycleState(*rng.uniform(-5, 5, 2), rng.uniform(-3.3, 3.3), rng.uniform(0, limits.max_speed_mps),
+                              rng.uniform(-limits.max_turn_rate_radps, limits.max_turn_rate_radps) if case % 5 else 0.0)
+        if case % 2:
+            commands = fan
+        else:
+            count = int(rng.integers(1, 60))
+            commands = np.stack([rng.uniform(-0.3, 1.0, count), rng.choice(rng.uniform(-3.0, 3.0, 4), count)], 1)
+        row_turns, turn_rows = np.unique(commands[:, 1], return_inverse=True)
+        dt, steps = (0.1, 30) if case % 4 else (rng.uniform(0.02, 0.3), int(rng.integers(1, 50)))
+        got = rollout(start, commands, limits, dt, steps, (row_turns, turn_rows.reshape(-1)))
+        expected = rollout(start, commands, limits, dt, steps)
+        assert np.array_equal(got.view(np.int64), expected.view(np.int64)), f"case {case}"

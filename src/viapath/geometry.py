@@ -23,6 +23,8 @@ Everything here is vectorised numpy with broadcasting over leading axes.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 LEFT = 1
@@ -43,6 +45,10 @@ def rotate(vectors: np.ndarray, angle_rad: np.ndarray | float) -> np.ndarray:
 
 def wrap_angle(angle_rad):
     """Wrap to (-pi, pi]."""
+    if type(angle_rad) in (float, np.float64):
+        # One angle (each roll-out's heading error): a float's % is np.mod's (fmod, then the divisor added
+        # when the signs differ), without making an array of it.
+        return np.float64(math.pi - (math.pi - angle_rad) % math.tau)
     return np.pi - np.mod(np.pi - np.asarray(angle_rad), 2.0 * np.pi)
 
 
@@ -61,7 +67,9 @@ def tangent_vectors(origin: np.ndarray, centres: np.ndarray, radii: np.ndarray, 
     length = np.sqrt(np.maximum(distance_sq - radius_sq, 0.0))
     scale = length / np.where(valid, distance_sq, 1.0)
     side_radius = side * radii
-    w = np.stack([scale * (length * dx - side_radius * dy), scale * (side_radius * dx + length * dy)], axis=-1)
+    wx, wy = scale * (length * dx - side_radius * dy), scale * (side_radius * dx + length * dy)
+    w = np.empty(np.shape(wx) + (2,))  # filled in place: np.stack's Python costs more than both products
+    w[..., 0], w[..., 1] = wx, wy
     return w, valid
 
 
@@ -200,7 +208,7 @@ def via_options(starts, start_times, speeds, obstacle_positions, obstacle_veloci
     t_via = np.concatenate([t_early, t_late], axis=1)
     w = np.concatenate([w, w], axis=1)
     ok = (t_via <= max_time_s) & valid  # valid (P, 1): the same for every option of a pair
-    pair, option = np.nonzero(ok)
+    pair, option = ok.nonzero()
     t_k = t_via[pair, option]
     leg_velocity = (w[pair, option] + velocity[pair] * t_k[:, None]) / t_k[:, None]
     via = starts[pair] + leg_velocity * t_k[:, None]

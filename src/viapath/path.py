@@ -68,7 +68,7 @@ class DesignatedPath:
         if points.size > 128:  # x and y apart: the same values, faster on many points (the escape's roll-outs)
             return self._segment_geometry_xy(points)
         rel = points[..., None, :] - self.segment_starts  # (..., S, 2)
-        along = np.sum(rel * self.segment_directions, axis=-1)
+        along = np.add.reduce(rel * self.segment_directions, axis=-1)  # np.sum's own reduction, without its Python
         along_clamped = np.minimum(np.maximum(along, 0.0), self.segment_lengths_m)  # np.clip without its dispatch
         closest = self.segment_starts + along_clamped[..., None] * self.segment_directions
         offset = points[..., None, :] - closest
@@ -94,7 +94,7 @@ class DesignatedPath:
         """
         points = np.asarray(points, dtype=float)
         along, along_clamped, distance = self._segment_geometry(points)
-        index = np.argmin(distance, axis=-1)
+        index = distance.argmin(axis=-1)
         take = lambda a: np.take_along_axis(a, index[..., None], axis=-1)[..., 0]  # noqa: E731
         rel = points - self.segment_starts[index]
         side = np.sign(cross2(self.segment_directions[index], rel))
@@ -113,7 +113,9 @@ class DesignatedPath:
             if math.isfinite(x) and math.isfinite(y):
                 return self._point_excess(x, y)
         _, _, distance = self._segment_geometry(points)
-        return np.min(distance - self.half_widths_m, axis=-1)
+        if len(self.half_widths_m) == 1:
+            return distance[..., 0] - self.half_widths_m[0]  # the one segment's (a minimum of one is that one)
+        return (distance - self.half_widths_m).min(axis=-1)
 
     def _point_excess(self, x: float, y: float) -> np.float64:
         """:meth:`corridor_excess` of one finite point (the robot's, every cycle) in scalar arithmetic: the
@@ -147,14 +149,19 @@ class DesignatedPath:
         """
         starts = np.asarray(starts, dtype=float).reshape(-1, 2)
         ends = np.asarray(ends, dtype=float).reshape(-1, 2)
-        tolerance = np.broadcast_to(np.asarray(tolerance_m, dtype=float), (len(starts),))
         if len(starts) == 0:
             return np.zeros(0, dtype=bool)
+        # One tolerance for all (the planner's case) is compared as it is: the same verdicts as against
+        # its copies, without making them.
+        tolerance = tolerance_m if np.ndim(tolerance_m) == 0 else np.asarray(tolerance_m, dtype=float)[:, None]
         # Both ends in one pass (the same values as two; a call costs more than these few points).
         excess = self._segment_geometry(np.concatenate([starts, ends]))[2] - self.half_widths_m
-        start_in = excess[:len(starts)] <= tolerance[:, None]
-        end_in = excess[len(starts):] <= tolerance[:, None]
+        start_in = excess[:len(starts)] <= tolerance
+        end_in = excess[len(starts):] <= tolerance
         inside = (start_in & end_in).any(axis=1)
+        if len(self.half_widths_m) == 1 or inside.all():
+            return inside  # no leg across a junction (one capsule: both ends in it or the leg is out)
+        tolerance = np.broadcast_to(np.asarray(tolerance_m, dtype=float), (len(starts),))
         unresolved = np.flatnonzero(~inside & start_in.any(axis=1) & end_in.any(axis=1))
         if len(unresolved):
             a, b = starts[unresolved], ends[unresolved]

@@ -440,3 +440,88 @@ def test_legs_inside_is_the_first_form():
         assert np.array_equal(got, expected), f"case {case}"
         verdicts |= set(expected.tolist())
     assert verdicts == {True, False}
+
+
+def test_wrap_angle_of_one_angle_is_that_of_an_array():
+    """:func:`viapath.geometry.wrap_angle` takes one angle (a float or np.float64) with a float's ``%``: bit for
+    bit what np.mod gives in an array, on 200 000 angles (many turns, tiny, huge, on ±pi and 2 pi, inf, NaN)."""
+    rng = np.random.default_rng(17)
+    angles = np.concatenate([rng.uniform(-20, 20, 150_000), rng.uniform(-1e9, 1e9, 40_000),
+                             rng.uniform(-1e-300, 1e-300, 10_000),
+                             [np.pi, -np.pi, 0.0, -0.0, 3 * np.pi, -3 * np.pi, np.nextafter(np.pi, 4),
+                              np.nextafter(-np.pi, -4), 2 * np.pi, -2 * np.pi, np.inf, -np.inf, np.nan]])
+    with np.errstate(invalid="ignore"):
+        expected = wrap_angle(angles)
+        for kind in (float, np.float64):
+            got = np.array([wrap_angle(kind(angle)) for angle in angles])
+            assert _same_bits(got, expected), kind
+
+
+def test_first_leg_is_where_the_plan_first_heads():
+    """The planner asks can_follow's verdict before making a candidate's plan (:meth:`Candidates.first_leg`): the
+    target must be the plan's as first made, its polyline's second point (the subgoal at the slow speed for
+    a slow/wait candidate), bit for bit, for every candidate of 400 situations."""
+    from viapath.planning.viapath.candidates import RootLegs, grow
+
+    kinds = set()
+    for planner, checks in _situations(400, seed=14):
+        speeds, nominal_index = planner.speed_set(checks.speed_mps)
+        candidates = grow(checks, RootLegs.of(checks, speeds, nominal_index), planner.config)
+        for k in range(len(candidates) if candidates is not None else 0):
+            target, speed = candidates.first_leg(k)
+            if candidates.slow_s[k] > 0:
+                expected = (checks.subgoal, float(candidates.slow_speed_mps[k]))
+            else:
+                expected = (candidates.polyline(k)[1], float(candidates.speed_mps[k]))
+            assert _same_bits(target, expected[0]) and _same_bits(speed, expected[1])
+            kinds.add("slow" if candidates.slow_s[k] > 0 else len(candidates.polyline(k)))
+    assert {"slow", 2, 3, 4} <= kinds  # slow/wait, straight, one and two via points
+
+
+def test_clear_in_parts_is_clear_of_the_whole():
+    """The numpy roll-out checks its first half before rolling out the rest (``after_steps``, ``of_steps``): the
+    two verdicts together must be the whole roll-out's, split anywhere, with one step exactly on a person's limit
+    in a quarter of the cases (600 situations)."""
+    rng = np.random.default_rng(18)
+    verdicts = set()
+    for case, (_, checks) in enumerate(_situations(600, seed=15)):
+        steps, dt = int(rng.choice([20, 7, 12])), float(rng.choice([0.1, 0.05]))
+        positions = checks.position + np.cumsum(rng.normal(0.0, 0.06, (steps, 2)), axis=0)
+        if len(checks.obstacles) and case % 4 == 0:
+            centres_x, centres_y, limit = checks._clear_limits(steps, dt)
+            s, j, angle = int(rng.integers(steps)), int(rng.integers(len(checks.obstacles))), rng.uniform(0, 2 * np.pi)
+            positions[s] = (centres_x[s, j], centres_y[s, j]) + abs(limit[s, j]) * np.array([np.cos(angle), np.sin(angle)])
+        whole = _clear_reference(checks, positions, dt)
+        split = int(rng.integers(0, steps + 1))
+        fresh = replace(checks)  # nothing remembered: the parts make their rows from the whole roll-out's
+        parts = (fresh.clear(positions[:split], dt, of_steps=steps)
+                 and fresh.clear(positions[split:], dt, after_steps=split, of_steps=steps))
+        assert parts is whole, f"case {case}"
+        verdicts.add(whole)
+    assert verdicts == {True, False}
+
+
+def test_tree_columns_are_the_pieces_concatenated():
+    """The candidate tree's columns, filled in place and grown when full, are its pieces concatenated (as
+    the tree first kept them), bit for bit; columns read earlier keep their values (a small capacity, so that
+    it grows several times; a cycle rarely reaches the default)."""
+    from viapath.planning.viapath.candidates import _Tree, _ways
+
+    rng = np.random.default_rng(19)
+    tree, pieces, reads = _Tree(capacity=3), [], []
+    for count in (2, 0, 5, 1, 9, 4):
+        piece = dict(position=rng.normal(size=(count, 2)), time_s=rng.uniform(0, 3, count), speed=rng.uniform(0, 1, count),
+                     parent=rng.integers(-1, 5, count), length_m=rng.uniform(0, 9, count),
+                     first_direction=rng.normal(size=(count, 2)), way=_ways(count, -2, 1, rng.integers(0, 3, count)))
+        if count % 2:
+            piece.update(slow_s=rng.uniform(0, 2, count), slow_speed=rng.uniform(0, 0.2, count))
+        nodes = tree.extend(**piece)
+        start = sum(len(p["position"]) for p in pieces)
+        assert np.array_equal(nodes, np.arange(start, start + count))
+        pieces.append(piece)
+        reads.append((tree.stacked(), len(pieces)))
+    for stacked, count in reads:
+        for name in _Tree.COLUMNS:
+            expected = np.concatenate([p.get(name, np.zeros(len(p["position"]))) for p in pieces[:count]])
+            assert _same_bits(stacked[name], expected.astype(stacked[name].dtype)), name
+            assert stacked[name].dtype == expected.dtype, name

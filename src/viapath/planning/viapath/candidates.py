@@ -34,7 +34,7 @@ positions.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -69,33 +69,41 @@ class Choice:
     speed_mmps: int
 
 
-@dataclass
 class _Tree:
     """Growable columns of search nodes: where and when the robot is, at which speed, how it got there."""
 
-    position: list = field(default_factory=list)
-    time_s: list = field(default_factory=list)
-    speed: list = field(default_factory=list)
-    parent: list = field(default_factory=list)
-    length_m: list = field(default_factory=list)
-    first_direction: list = field(default_factory=list)
-    way: list = field(default_factory=list)  # (obstacle, side, root) of the first branch
-    slow_s: list = field(default_factory=list)  # how long the candidate first drives slower (or stands)
-    slow_speed: list = field(default_factory=list)  # and at which speed
-    _size: int = 0
+    # name: (shape of a row, dtype)
+    COLUMNS = {
+        "position": ((2,), float),
+        "time_s": ((), float),
+        "speed": ((), float),
+        "parent": ((), int),
+        "length_m": ((), float),
+        "first_direction": ((2,), float),
+        "way": ((3,), int),  # (obstacle, side, root) of the first branch
+        "slow_s": ((), float),  # how long the candidate first drives slower (or stands); 0 if not given
+        "slow_speed": ((), float),  # and at which speed
+    }
+
+    def __init__(self, capacity: int = 128):
+        # Filled in place, doubled when full: a cycle extends the tree a few times and reads it after each.
+        self._columns = {name: np.empty((capacity, *shape), dtype) for name, (shape, dtype) in self.COLUMNS.items()}
+        self._size = 0
 
     def extend(self, **columns) -> np.ndarray:
-        count = len(columns["position"])
-        defaults = {"slow_s": np.zeros(count), "slow_speed": np.zeros(count)}
-        for name in self.__dataclass_fields__:
-            if not name.startswith("_"):
-                getattr(self, name).append(columns.get(name, defaults.get(name)))
-        start, self._size = self._size, self._size + count
-        return np.arange(start, start + count)
+        start = self._size
+        end = start + len(columns["position"])
+        if end > len(self._columns["position"]):
+            self._columns = {name: np.concatenate([array[:start], np.empty((2 * end, *array.shape[1:]), array.dtype)])
+                             for name, array in self._columns.items()}
+        for name, array in self._columns.items():
+            array[start:end] = columns.get(name, 0.0)
+        self._size = end
+        return np.arange(start, end)
 
     def stacked(self) -> dict[str, np.ndarray]:
-        return {name: np.concatenate(getattr(self, name)) for name in self.__dataclass_fields__
-                if not name.startswith("_")}
+        """The columns of the nodes so far (views: later nodes do not change them)."""
+        return {name: array[:self._size] for name, array in self._columns.items()}
 
 
 @dataclass
@@ -127,6 +135,18 @@ class Candidates:
     def speed_mmps(self) -> np.ndarray:
         return np.round(self.speed_mps * 1000).astype(int)
 
+    def first_leg(self, k: int) -> tuple[np.ndarray, float]:
+        """Where candidate ``k`` first heads, and at which speed (its plan's target and speed): the subgoal at
+        the slow speed for a slow/wait candidate, else its first via point (the subgoal for a straight leg)."""
+        if self.slow_s[k] > 0:
+            return self.subgoal, float(self.slow_speed_mps[k])
+        parent, node = self.nodes["parent"], int(self.leaves[k])
+        if parent[node] < 0:
+            return self.subgoal, float(self.speed_mps[k])
+        while parent[parent[node]] >= 0:  # up to the node after the root
+            node = int(parent[node])
+        return self.nodes["position"][node], float(self.speed_mps[k])
+
     def polyline(self, k: int) -> np.ndarray:
         """Candidate ``k`` from the robot through its via points to the subgoal."""
         nodes, node = self.nodes, int(self.leaves[k])
@@ -150,7 +170,7 @@ class RootLegs:
 
     @classmethod
     def of(cls, checks: LegChecks, speeds: np.ndarray, nominal_index: int) -> "RootLegs":
-        starts = np.broadcast_to(checks.position, (len(speeds), 2))
+        starts = checks.position[None].repeat(len(speeds), axis=0)  # (np.broadcast_to's Python costs more)
         directions, lengths, free, contact = checks.goal_legs(starts, np.zeros(len(speeds)), speeds)
         return cls(speeds, nominal_index, directions, lengths, free, contact)
 
@@ -169,9 +189,9 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
     n_speeds = len(speeds)
     tree = _Tree()
     frontier = tree.extend(
-        position=np.broadcast_to(checks.position, (n_speeds, 2)), time_s=np.zeros(n_speeds), speed=speeds,
+        position=checks.position[None].repeat(n_speeds, axis=0), time_s=np.zeros(n_speeds), speed=speeds,
         parent=np.full(n_speeds, -1), length_m=np.zeros(n_speeds), first_direction=roots.directions,
-        way=np.stack([np.full(n_speeds, STRAIGHT), np.zeros(n_speeds, int), np.zeros(n_speeds, int)], 1),
+        way=_ways(n_speeds, STRAIGHT),
     )
     leaves, goal_length = [frontier[roots.free]], [roots.lengths[roots.free]]
     if config.slow_times_s and len(checks.obstacles):
@@ -183,14 +203,14 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
     data = tree.stacked()
     for depth in range(config.max_depth):
         next_frontier = [_corner_nodes(checks, tree, speeds)] if depth == 0 else []
-        blocked = np.flatnonzero(~free & np.isfinite(contact).any(axis=1))
+        blocked = (~free & np.isfinite(contact).any(axis=1)).nonzero()[0]
         if len(blocked) and len(checks.obstacles):
             if depth == 0:
                 rows, pair_obstacles = _root_pairs(contact[blocked], config.max_root_obstacles)
                 pair_nodes = frontier[blocked][rows]
             else:
                 pair_nodes = frontier[blocked]
-                pair_obstacles = np.argmin(contact[blocked], axis=1)
+                pair_obstacles = contact[blocked].argmin(axis=1)
             children = _via_children(checks, data, pair_nodes, pair_obstacles, is_root=(depth == 0))
             if children is not None:
                 next_frontier.append(tree.extend(**children))
@@ -230,9 +250,16 @@ def _candidates_of(store, subgoal: np.ndarray) -> Candidates | None:
     )
 
 
+def _ways(count: int, obstacle, side=0, root=0) -> np.ndarray:
+    """(count, 3) ways round: the obstacle, side and root of each row (a number for all, or one per row)."""
+    ways = np.empty((count, 3), dtype=int)
+    ways[:, 0], ways[:, 1], ways[:, 2] = obstacle, side, root
+    return ways
+
+
 def _root_pairs(contact: np.ndarray, limit: int):
     """(row, obstacle) pairs to branch on at the root: each obstacle the leg hits, earliest first."""
-    rows, cols = np.nonzero(np.isfinite(contact))
+    rows, cols = np.isfinite(contact).nonzero()
     if limit and len(rows) > limit:
         order = np.lexsort((contact[rows, cols], rows))
         rows, cols = rows[order], cols[order]
@@ -260,17 +287,17 @@ def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: 
     good[good] = checks.legs_inside(starts_k[good], via[good])
     if not good.any():
         return None
-    pair, option, t_k = pair[good], option[good], t_k[good]
+    pair, option, t_k, speeds_k = pair[good], option[good], t_k[good], speeds_k[good]
     parent = node_index[pair]
     if is_root:
-        first_direction = leg_velocity[good] / speeds_k[good, None]
-        way = np.stack([obstacles.ids[obstacle_index[pair]], _SIDES[option], _ROOTS[option]], axis=1)
+        first_direction = leg_velocity[good] / speeds_k[:, None]
+        way = _ways(len(pair), obstacles.ids[obstacle_index[pair]], _SIDES[option], _ROOTS[option])
     else:
         first_direction = data["first_direction"][parent]
         way = data["way"][parent]
     return dict(
-        position=via[good], time_s=times_k[good] + t_k, speed=speeds_k[good], parent=parent,
-        length_m=data["length_m"][parent] + speeds_k[good] * t_k, first_direction=first_direction, way=way,
+        position=via[good], time_s=times_k[good] + t_k, speed=speeds_k, parent=parent,
+        length_m=data["length_m"][parent] + speeds_k * t_k, first_direction=first_direction, way=way,
     )
 
 
@@ -300,7 +327,7 @@ def _corner_nodes(checks: LegChecks, tree: _Tree, speeds: np.ndarray) -> np.ndar
         position=targets[good], time_s=duration[good], speed=speed[good],
         parent=np.searchsorted(speeds, speed[good]),  # the root node of that speed
         length_m=length[good], first_direction=direction[good],
-        way=np.stack([np.full(count, CORNER), np.zeros(count, int), corner[good]], 1),
+        way=_ways(count, CORNER, 0, corner[good]),
     )
 
 
@@ -312,14 +339,16 @@ def _slow_candidates(checks: LegChecks, slow_checks: LegChecks, tree: _Tree, spe
         return None  # slowing down runs along the straight leg, which would leave the corridor
     nominal = speeds[nominal_index]
     slow_speeds = np.concatenate([[0.0], speeds[speeds < nominal - 1e-9]])
-    duration, slow_speed = (grid.ravel() for grid in np.meshgrid(np.asarray(config.slow_times_s, float),
-                                                                 slow_speeds))
+    # Every slow time with every slow speed, as np.meshgrid(times, slow_speeds) would pair them (row-major;
+    # np.tile and np.repeat as the array methods: their Python costs more than these few copies).
+    times = np.asarray(config.slow_times_s, float)
+    duration, slow_speed = times[None].repeat(len(slow_speeds), axis=0).ravel(), slow_speeds.repeat(len(times))
     offset = checks.subgoal - checks.position
     direction = offset / max(float(np.hypot(*offset)), 1e-12)
     # Never past the subgoal while slowing down.
     ok = slow_speed * duration < np.hypot(*offset) - 1e-6
     duration, slow_speed = duration[ok], slow_speed[ok]
-    starts = np.broadcast_to(checks.position, (len(duration), 2))
+    starts = checks.position[None].repeat(len(duration), axis=0)
     free = slow_checks.legs_free(starts, np.zeros(len(duration)), direction * slow_speed[:, None], duration)
     if not free.any():
         return None
@@ -327,8 +356,8 @@ def _slow_candidates(checks: LegChecks, slow_checks: LegChecks, tree: _Tree, spe
     # Then at least the nominal speed: waiting only makes sense when the way is clear afterwards
     # (slowing down for good is the straight candidates' job).
     after = speeds[speeds >= nominal - 1e-9]
-    d, v_slow = np.repeat(duration, len(after)), np.repeat(slow_speed, len(after))
-    v_after = np.tile(after, len(duration))
+    d, v_slow = duration.repeat(len(after)), slow_speed.repeat(len(after))
+    v_after = after[None].repeat(len(duration), axis=0).ravel()
     ends = checks.position + direction * (v_slow * d)[:, None]
     _, lengths, free, _ = checks.goal_legs(ends, d, v_after, np.inf)
     if not free.any():
@@ -337,7 +366,7 @@ def _slow_candidates(checks: LegChecks, slow_checks: LegChecks, tree: _Tree, spe
     index = tree.extend(
         position=ends[free], time_s=d[free], speed=v_after[free], parent=np.full(count, -1),
         length_m=(v_slow * d)[free], first_direction=np.broadcast_to(direction, (count, 2)).copy(),
-        way=np.stack([np.full(count, SLOW), np.zeros(count, int), np.zeros(count, int)], 1),
+        way=_ways(count, SLOW),
         slow_s=d[free], slow_speed=v_slow[free],
     )
     return index, lengths[free]

@@ -171,7 +171,9 @@ class LegChecks:
             contact = np.minimum(both[:count], both[count:] + durations[:, None])
         else:
             contact = self.contact_times(starts, start_times, velocities, durations, horizon_s, keep_envelope=True)
-        free = np.isinf(contact).all(axis=1) & self.goal_legs_inside(starts)
+        free = np.isinf(contact).all(axis=1)
+        if free.any():  # (when every leg meets someone, as in the slowest cycles, the corridor cannot free one)
+            free &= self.goal_legs_inside(starts)
         return directions, lengths, free, contact
 
     # -- the same facts as the compiled kernels take them (C-contiguous float64, made once per LegChecks: a
@@ -254,13 +256,17 @@ class LegChecks:
             self.__dict__["_kernel_envelope"] = cached
         return cached
 
-    def clear(self, positions: np.ndarray, dt: float) -> bool:
-        """Whether robot positions (one per ``dt`` from now) keep clear of every obstacle."""
+    def clear(self, positions: np.ndarray, dt: float, after_steps: int = 0, of_steps: int | None = None) -> bool:
+        """Whether robot positions (one per ``dt`` from now, or from ``after_steps`` steps from now on; part of
+        a roll-out of ``of_steps`` steps, if given) keep clear of every obstacle."""
         if len(self.obstacles) == 0:
             return True
-        centres_x, centres_y, limit = self._clear_limits(len(positions), dt)
+        end = after_steps + len(positions)
+        centres_x, centres_y, limit = self._clear_limits(end if of_steps is None else of_steps, dt)
+        if after_steps or end < len(limit):  # the rows of these steps (the same values as made for them alone)
+            centres_x, centres_y, limit = centres_x[after_steps:end], centres_y[after_steps:end], limit[after_steps:end]
         distance = np.hypot(positions[:, 0:1] - centres_x, positions[:, 1:2] - centres_y)
-        return bool(np.all(distance >= limit))
+        return bool((distance >= limit).all())
 
     def _clear_limits(self, steps: int, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The obstacles' centres (x and y, (steps, N) each) after each ``dt`` and how close the robot may come
@@ -296,12 +302,15 @@ class LegChecks:
         # The subgoal ends both capsules next to it; a leg from a point inside one of them is inside
         # that capsule (convex). Only other legs need the general check.
         path = self.path
-        inside = np.zeros(len(starts), dtype=bool)
-        for i in (i for i in (self.subgoal_index - 1, self.subgoal_index) if i < len(path.segment_lengths_m)):
+        inside = None
+        for i in (self.subgoal_index - 1, self.subgoal_index):  # the first is always there
+            if i == len(path.segment_lengths_m):
+                break
             rel = starts - path.segment_starts[i]
             along = np.minimum(np.maximum(rel @ path.segment_directions[i], 0.0), path.segment_lengths_m[i])
             gap = np.hypot(*(rel - along[:, None] * path.segment_directions[i]).T) - path.half_widths_m[i]
-            inside |= gap <= self.corridor_tolerance_m
+            inside_capsule = gap <= self.corridor_tolerance_m
+            inside = inside_capsule if inside is None else inside | inside_capsule
         if not inside.all():
             rest = np.flatnonzero(~inside)
             inside[rest] = self.legs_inside(starts[rest], np.broadcast_to(self.subgoal, (len(rest), 2)))

@@ -54,7 +54,7 @@ def stop_or_escape(checks: LegChecks, limits: MotionLimits, config, previous: Co
         return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), **base))
     if compiled is None:
         commands, ends, score = escape_scores(checks, limits, config, previous)
-    best = int(np.argmax(score))
+    best = int(score.argmax())
     speed, turn = (float(value) for value in commands[best])
     return Decision(Command(speed, turn), Plan("escape", speed, ends[best], **base))
 
@@ -62,20 +62,19 @@ def stop_or_escape(checks: LegChecks, limits: MotionLimits, config, previous: Co
 def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Command | None = None):
     """Commands (v, ω), where each leaves the robot, and the score of each (higher is better)."""
     position = checks.position
-    top = escape_top_speed(limits, config)
-    commands = _fan(tuple(config.speeds), top, limits.max_turn_rate_radps)
+    top, commands, row_turns, turn_rows = escape_fan(limits, config)
     dt = config.escape_dt_s
     steps = max(1, int(round(config.escape_s / dt)))
     state = UnicycleState(float(position[0]), float(position[1]), float(checks.heading_rad),
                           float(checks.speed_mps), float(checks.turn_rate_radps))
-    positions = rollout(state, commands, limits, dt, steps)  # (K, S, 2)
+    positions = rollout(state, commands, limits, dt, steps, (row_turns, turn_rows))  # (K, S, 2)
     times = dt * np.arange(1, steps + 1)
     excess = checks.backend.corridor_excess(checks.path, positions.reshape(-1, 2)).reshape(len(commands), steps)
-    inside = np.all(excess <= checks.corridor_tolerance_m, axis=1)
-    within_bound = np.max(excess, axis=1) <= max(config.escape_max_excess_m, checks.corridor_tolerance_m)
+    inside = (excess <= checks.corridor_tolerance_m).all(axis=1)
+    within_bound = excess.max(axis=1) <= max(config.escape_max_excess_m, checks.corridor_tolerance_m)
 
     horizon = steps * dt
-    travel = float(np.max(np.hypot(*(positions - position).reshape(-1, 2).T)))
+    travel = float(np.hypot(*(positions - position).reshape(-1, 2).T).max())
     obstacles = checks.obstacles
     gap_all = np.hypot(*(position - obstacles.positions).T) - checks.check_radii
     growth_all = checks.growth * np.minimum(horizon, checks.growth_until_s)
@@ -99,8 +98,11 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
         reach = np.ascontiguousarray(reach.T)[:, None, :]  # (N, 1, S)
         # The first step at which any person not overlapped now is touched (gap < 0): the earliest over
         # the people of each one's first step.
-        touched = (touching(dx, dy, reach) & ~overlapping[:, None, None]).any(axis=0)  # (K, S)
-        time_to_contact = np.where(touched.any(axis=1), np.argmax(touched, axis=1), steps) * dt
+        touched = touching(dx, dy, reach)
+        if overlapping.any():  # (with no one overlapped, as mostly, the mask would change nothing)
+            touched &= ~overlapping[:, None, None]
+        touched = touched.any(axis=0)  # (K, S)
+        time_to_contact = np.where(touched.any(axis=1), touched.argmax(axis=1), steps) * dt
         if overlapping.any():
             gap = np.hypot(dx[overlapping], dy[overlapping]) - reach[overlapping]  # (M, K, S)
             # (K, M) in C order, as the score sums them along M
@@ -108,7 +110,7 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     if overlapping.any():
         deeper = gap_min - gap_now[overlapping]
         still_inside = gap_last
-        separation = np.sum(np.minimum(deeper, 0.0) + np.minimum(still_inside, 0.0), axis=1)
+        separation = (np.minimum(deeper, 0.0) + np.minimum(still_inside, 0.0)).sum(axis=1)
     else:
         separation = np.zeros(len(commands))
     toward = checks.subgoal - position
@@ -166,9 +168,10 @@ def _fan(speeds: tuple, top: float, max_turn_rate_radps: float) -> np.ndarray:
 
 def escape_fan(limits: MotionLimits, config) -> tuple:
     """The top speed, the fan's commands (K, 2), its distinct turn commands (T,) and each command's index
-    among them (K,), for the compiled escape (:meth:`.backend.Backend.escape`, given them by the caller: the
-    backend does not import this module, which imports the checks, which import the backend), which takes the
-    headings, sines and cosines once per turn command: the commands of one turn rate share them."""
+    among them (K,), for :func:`escape_scores`' roll-out and the compiled escape (:meth:`.backend.Backend.escape`,
+    given them by the caller: the backend does not import this module, which imports the checks, which import
+    the backend), which take the headings, sines and cosines once per turn command: the commands of one turn
+    rate share them."""
     return _fan_turns(tuple(config.speeds), escape_top_speed(limits, config), limits.max_turn_rate_radps)
 
 

@@ -49,7 +49,7 @@ from viapath.planning.viapath.checks import LegChecks
 from viapath.planning.viapath.critics import (Context, Distance, Heading, Hysteresis, SidePreference,
                                               SpeedError, Time, critics_for, score)
 from viapath.planning.viapath.escape import stop_or_escape
-from viapath.planning.viapath.follow import can_follow
+from viapath.planning.viapath.follow import can_follow, follows
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
 
 # The critics kernels.choose_candidate sums, in this order (critics_for's): others take the numpy choice.
@@ -199,12 +199,19 @@ class ViaPathPlanner(Planner, name="viapath"):
             if not np.isfinite(total).any():
                 return None
         polylines = [candidates.polyline(k) for k in range(len(candidates))] if self.config.record_candidates else []
-        order = np.argsort(total, kind="stable")
+        order = total.argsort(kind="stable")
         for rank, best in enumerate(order[:self.config.max_rollouts]):
             if not np.isfinite(total[best]):
                 break
+            # can_follow's verdict before the plan is made: in a cycle without a free candidate (the slowest
+            # cycles) every plan would be made for nothing.
+            followed, turn_in_place = follows(*candidates.first_leg(int(best)), checks, self.limits, self.config)
+            if not followed:
+                continue
             plan = self._plan_of(candidates, int(best), total, checks, polylines)
-            if can_follow(plan, checks, self.limits, self.config) and self._inside_shield(plan):
+            if turn_in_place:
+                plan.extras["turn_in_place"] = True
+            if self._inside_shield(plan):
                 plan.extras["cost_terms"] = _cost_terms(costs.breakdown, order, rank, total)
                 ways = candidates.ways[best]
                 choice = Choice(Way(int(ways[0]), int(ways[1]), int(ways[2])), int(candidates.speed_mmps[best]))
@@ -399,14 +406,14 @@ class ViaPathPlanner(Planner, name="viapath"):
     def _plan_of(self, candidates: Candidates, k: int, total, checks: LegChecks, polylines) -> Plan:
         common = dict(subgoal_index=checks.subgoal_index, candidate_count=len(candidates), candidate_costs=total,
                       candidate_polylines=polylines, chosen=k)
+        target, speed = candidates.first_leg(k)
         if candidates.slow_s[k] > 0:
-            speed = float(candidates.slow_speed_mps[k])
-            return Plan("wait" if speed == 0.0 else "slow", speed, checks.subgoal.copy(),
+            return Plan("wait" if speed == 0.0 else "slow", speed, target.copy(),
                         waypoints=np.array([checks.position, checks.subgoal]),
                         extras={"slow_s": float(candidates.slow_s[k]),
                                 "speed_after_mps": float(candidates.speed_mps[k])}, **common)
         line = candidates.polyline(k)
-        return Plan("avoid" if len(line) > 2 else "straight", float(candidates.speed_mps[k]), line[1].copy(),
+        return Plan("avoid" if len(line) > 2 else "straight", speed, target.copy(),
                     via_points=line[1:-1].copy(), waypoints=line, **common)
 
     def _slow_checks(self, checks: LegChecks) -> LegChecks:
