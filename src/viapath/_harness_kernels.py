@@ -27,6 +27,8 @@ import math
 import numpy as np
 from numba import njit
 
+from viapath import kinematics
+
 
 @njit("boolean(float64[:, :], float64[:, :], float64[:], float64[:], float64[:], float64, float64, float64, "
       "float64, float64)", cache=True, nogil=True)
@@ -62,21 +64,11 @@ def inflation(radii, position_sigma, velocity_sigma, robot_radius_m, margin_m, s
         out[3, i] = max_inflation_m / growth if growth > 0 else math.inf
 
 
-@njit("float64(float64, float64, float64)", cache=True, nogil=True)
-def _clip(value, low, high):
-    """viapath.kinematics._clip."""
-    return low if value < low else high if value > high else value
-
-
-@njit("UniTuple(float64, 3)(float64, float64, float64, float64, float64, float64)", cache=True, nogil=True)
-def _arc(x, y, heading, speed, turn, dt_s):
-    """viapath.kinematics._arc, operation for operation (libm's sin, cos and atan2, as Python's math)."""
-    new_heading = heading + turn * dt_s
-    half = 0.5 * turn * dt_s
-    chord = speed * dt_s * (1.0 - half * half / 6.0 if abs(half) < 1e-6 else math.sin(half) / half)
-    x += chord * math.cos(heading + half)
-    y += chord * math.sin(heading + half)
-    return x, y, math.atan2(math.sin(new_heading), math.cos(new_heading))
+# braking_path's steps compiled from their own source (kinematics' _clip and exact arc; libm's sin, cos and atan2,
+# as Python's math): one definition, and the same numbers.
+_clip = njit("float64(float64, float64, float64)", cache=True, nogil=True)(kinematics._clip)
+_arc = njit("UniTuple(float64, 3)(float64, float64, float64, float64, float64, float64)", cache=True,
+            nogil=True)(kinematics._arc)
 
 
 @njit("int64(float64[:], float64, float64, float64[:], float64[:, :], float64[:], float64, float64, float64, int64)",
