@@ -170,3 +170,30 @@ def test_check_command_hands_back_the_command_it_leaves_alone():
     near = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.3, 0.0, 0.25),
                        Obstacles(np.array([[0.6, 0.0]]), np.zeros((1, 2)), np.array([0.3])))
     assert guard.check_command(Command(0.3, 0.0), near, limits, 0.25)[1] == "guard-brake"
+
+
+def test_a_harness_that_cannot_load_leaves_the_numpy_code_working(monkeypatch):
+    """numba installed but failing (no cache directory it may write, a broken install): the guard warns once
+    and runs its numpy code; the planner still plans and the guard still brakes."""
+    import builtins
+
+    from viapath import DesignatedPath
+    from viapath.planning import make_planner
+
+    monkeypatch.setattr(compiled, "_HARNESS", compiled._UNKNOWN)
+    real_import = builtins.__import__
+
+    def failing_import(name, globals=None, locals=None, fromlist=(), level=0):
+        if fromlist and "_harness_kernels" in fromlist:
+            raise RuntimeError("cannot cache function: no locator available")
+        return real_import(name, globals, locals, fromlist, level)
+
+    monkeypatch.setattr(builtins, "__import__", failing_import)
+    with pytest.warns(RuntimeWarning, match="using the numpy code"):
+        assert compiled.harness_kernels() is None
+    assert compiled.harness_kernels() is None  # decided once
+    planner = make_planner("follow", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.3)
+    in_front = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.3, 0.0, 0.25),
+                           Obstacles(np.array([[0.6, 0.0]]), np.zeros((1, 2)), np.array([0.3])))
+    decision = planner.plan(in_front)
+    assert decision.plan.status == "guard-brake" and decision.command.speed_mps == 0.0
