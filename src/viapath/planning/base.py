@@ -186,4 +186,3 @@ class Planner:
 
 
 Planner.plan = guard_plan(Planner.plan)  # the template is the entry of every planner: guarded too
-

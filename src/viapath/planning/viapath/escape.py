@@ -82,6 +82,7 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     positions_obs, velocities_obs = obstacles.positions[near], obstacles.velocities[near]
     gap_now = gap_all[near]
     overlapping = gap_now <= 0
+    any_overlapping = bool(overlapping.any())
     compiled = checks.backend.escape_contacts(positions, times, positions_obs, velocities_obs, checks.check_radii[near],
                                               checks.growth[near], checks.growth_until_s[near], overlapping, steps)
     if compiled is not None:  # the same figures, without the (K, S, N) arrays
@@ -99,15 +100,15 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
         # The first step at which any person not overlapped now is touched (gap < 0): the earliest over
         # the people of each one's first step.
         touched = touching(dx, dy, reach)
-        if overlapping.any():  # (with no one overlapped, as mostly, the mask would change nothing)
+        if any_overlapping:  # (with no one overlapped, as mostly, the mask would change nothing)
             touched &= ~overlapping[:, None, None]
         touched = touched.any(axis=0)  # (K, S)
         time_to_contact = np.where(touched.any(axis=1), touched.argmax(axis=1), steps) * dt
-        if overlapping.any():
+        if any_overlapping:
             gap = np.hypot(dx[overlapping], dy[overlapping]) - reach[overlapping]  # (M, K, S)
             # (K, M) in C order, as the score sums them along M
             gap_min, gap_last = np.ascontiguousarray(np.min(gap, axis=2).T), np.ascontiguousarray(gap[:, :, -1].T)
-    if overlapping.any():
+    if any_overlapping:
         deeper = gap_min - gap_now[overlapping]
         still_inside = gap_last
         separation = (np.minimum(deeper, 0.0) + np.minimum(still_inside, 0.0)).sum(axis=1)

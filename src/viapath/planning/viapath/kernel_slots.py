@@ -16,10 +16,10 @@ C_COUNT = 20
 
 # settings: Eq. 1's weights and the critics' (k1..k4, side preference, hysteresis), the nominal speed, ...
 F_K1, F_K2, F_K3, F_K4, F_SIDE, F_HYSTERESIS, F_NOMINAL, F_ROLLOUT_HEADING, F_ACCEL, F_DT = range(10)
-# ... the motion limits and the controller, ...
+# ... the motion limits and the controller, the corridor check's spacing (the episode's); and the cycle's: how far
+# short of a blocked subgoal legs end, the horizon, the corridor tolerance, the angle of the straight leg to
+# the subgoal (numpy's arctan2).
 F_TURN_RATE, F_TURN_ACCEL, F_SPEED, F_GAIN, F_TURN_IN_PLACE = range(10, 15)
-# ... and the cycle's: how far short of a blocked subgoal legs end, the horizon, the corridor spacing and
-# tolerance, the angle of the straight leg to the subgoal (numpy's arctan2).
 F_STOP_SHORT, F_HORIZON, F_SPACING, F_TOLERANCE, F_STRAIGHT_ANGLE = range(15, 20)
 F_COUNT = 20
 
