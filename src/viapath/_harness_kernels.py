@@ -7,7 +7,9 @@ of a dozen small numpy operations. Loaded by :func:`viapath.compiled.harness_ker
 * :func:`first_touched` is :func:`viapath.guard.check_command`'s braking test: the first obstacle within the
   robot's stopping distance that holding the command and then braking (:func:`viapath.guard.braking_path`)
   would touch.
-* :func:`inflation` is :meth:`viapath.planning.base.Inflation.of`'s arithmetic.
+* :func:`inflation` is :meth:`viapath.planning.base.Inflation.of`'s arithmetic; :func:`situation_numbers` is the
+  same and :meth:`viapath.path.DesignatedPath.corridor_excess` of the robot's position, in the one call
+  :meth:`viapath.planning.base.Planner.situation` makes every cycle.
 
 They agree with the numpy code bit for bit: the same operations in the same order on each element (no
 fused multiply-add: numba does not contract without fastmath), ``math.hypot`` compiles to libm's hypot,
@@ -64,6 +66,25 @@ def inflation(radii, position_sigma, velocity_sigma, robot_radius_m, margin_m, s
         out[3, i] = max_inflation_m / growth if growth > 0 else math.inf
 
 
+@njit("float64(float64[:], float64[:], float64[:], float64, float64, float64, float64, float64[:, ::1], float64, "
+      "float64, float64[:, :], float64[:, :], float64[:], float64[:])", cache=True, nogil=True)
+def situation_numbers(radii, position_sigma, velocity_sigma, robot_radius_m, margin_m, sigmas, max_inflation_m, out,
+                      x, y, segment_starts, segment_directions, segment_lengths, half_widths):
+    """:func:`inflation` into ``out``, and returns how far the finite point (x, y) is outside the corridor: the
+    path's ``_point_excess``, operation for operation (the clamp as np.clip's max-then-min)."""
+    inflation(radii, position_sigma, velocity_sigma, robot_radius_m, margin_m, sigmas, max_inflation_m, out)
+    best = math.inf
+    for i in range(segment_lengths.shape[0]):
+        sx, sy, dx, dy = segment_starts[i, 0], segment_starts[i, 1], segment_directions[i, 0], segment_directions[i, 1]
+        along = (x - sx) * dx + (y - sy) * dy
+        along = along if along > 0.0 else 0.0
+        along = along if along < segment_lengths[i] else segment_lengths[i]
+        excess = math.hypot(x - (sx + along * dx), y - (sy + along * dy)) - half_widths[i]
+        if excess < best:
+            best = excess
+    return best
+
+
 # braking_path's steps compiled from their own source (kinematics' _clip and exact arc; libm's sin, cos and atan2,
 # as Python's math): one definition, and the same numbers.
 _clip = njit("float64(float64, float64, float64)", cache=True, nogil=True)(kinematics._clip)
@@ -71,16 +92,15 @@ _arc = njit("UniTuple(float64, 3)(float64, float64, float64, float64, float64, f
             nogil=True)(kinematics._arc)
 
 
-@njit("int64(float64[:], float64, float64, float64[:], float64[:, :], float64[:], float64, float64, float64, int64)",
-      cache=True, nogil=True)
-def first_touched(robot, v_cmd, w_cmd, limits, positions, radii, robot_radius_m, margin_m, reachable_m,
-                  samples_per_period):
+@njit("int64(float64, float64, float64, float64, float64, float64, float64, float64[:], float64[:, :], float64[:], "
+      "float64, float64, float64, int64)", cache=True, nogil=True)
+def first_touched(x0, y0, heading0, speed0, turn0, v_cmd, w_cmd, limits, positions, radii, robot_radius_m, margin_m,
+                  reachable_m, samples_per_period):
     """check_command's braking test in one call: the first obstacle (index) that the robot, holding (v_cmd, w_cmd)
     for one control period and then braking at the limits (:func:`viapath.guard.braking_path`), would touch
-    while its first sample moves towards it, among those within ``reachable_m`` now; -1 if none.
-    ``robot``: x, y, heading, speed, turn rate; ``limits``: max speed, max turn rate, max accel, max turn
-    accel, control period."""
-    x0, y0 = robot[0], robot[1]
+    while its first sample moves towards it, among those within ``reachable_m`` now; -1 if none. The robot
+    is at (x0, y0) with its heading, speed and turn rate; ``limits``: max speed, max turn rate, max accel, max
+    turn accel, control period."""
     n = positions.shape[0]
     near = np.zeros(n, np.bool_)
     distance = np.empty(n)
@@ -97,7 +117,7 @@ def first_touched(robot, v_cmd, w_cmd, limits, positions, radii, robot_radius_m,
     # braking_path's samples
     max_speed, max_turn, accel, turn_accel, period_s = limits[0], limits[1], limits[2], limits[3], limits[4]
     dt = period_s / samples_per_period
-    x, y, heading, speed, turn = x0, y0, robot[2], robot[3], robot[4]
+    x, y, heading, speed, turn = x0, y0, heading0, speed0, turn0
     dv = accel * dt
     dw = turn_accel * dt
     if not (math.isfinite(v_cmd) and math.isfinite(w_cmd)):

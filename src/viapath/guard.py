@@ -351,12 +351,10 @@ def _first_touched(robot: RobotState, position: np.ndarray, v: float, w: float, 
     if kernels is not None:
         try:
             return kernels.first_touched(
-                np.array([position[0], position[1], robot.heading_rad, robot.speed_mps, robot.turn_rate_radps],
-                         dtype=float), v, w,
-                np.array([limits.max_speed_mps, limits.max_turn_rate_radps, limits.max_accel_mps2,
-                          limits.max_turn_accel_radps2, config.control_period_s], dtype=float),
-                obstacles.positions, obstacles.radii_m, float(robot_radius_m), float(config.brake_margin_m),
-                float(reachable_m), BRAKING_SAMPLES_PER_PERIOD)
+                float(position[0]), float(position[1]), float(robot.heading_rad), float(robot.speed_mps),
+                float(robot.turn_rate_radps), v, w, _limits_row(limits, config), obstacles.positions,
+                obstacles.radii_m, float(robot_radius_m), float(config.brake_margin_m), float(reachable_m),
+                BRAKING_SAMPLES_PER_PERIOD)
         except TypeError:  # arrays of another dtype (a direct call; the inspection hands float64): numpy below
             pass
     offsets = obstacles.positions - position
@@ -371,6 +369,22 @@ def _first_touched(robot: RobotState, position: np.ndarray, v: float, w: float, 
     closer = np.hypot(*(swept[0] - centres).T) < distance[near] - 1e-12  # the first sample moves towards it
     touches = (gaps.min(axis=0) <= 0) & closer
     return int(np.flatnonzero(near)[np.argmax(touches)]) if touches.any() else -1
+
+
+_LIMITS_ROW: tuple = (None, None, None)  # the last (limits, config, row), replaced whole (threads may plan at once)
+
+
+def _limits_row(limits: MotionLimits, config: GuardConfig) -> np.ndarray:
+    """:func:`viapath._harness_kernels.first_touched`'s ``limits``: max speed, max turn rate, max accel, max turn
+    accel, control period (both dataclasses are frozen: the row of the same two objects is kept)."""
+    global _LIMITS_ROW
+    last = _LIMITS_ROW
+    if last[0] is limits and last[1] is config:
+        return last[2]
+    row = np.array([limits.max_speed_mps, limits.max_turn_rate_radps, limits.max_accel_mps2,
+                    limits.max_turn_accel_radps2, config.control_period_s], dtype=float)
+    _LIMITS_ROW = (limits, config, row)
+    return row
 
 
 def _unchanged(command: Any, v: float, w: float) -> Command:

@@ -117,6 +117,47 @@ def test_inflation_is_the_numpy_inflation_bit_for_bit(numpy_only):
             assert np.array_equal(_bits(getattr(fast, name)), _bits(getattr(slow, name))), name
 
 
+@pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")
+def test_the_situations_inflation_and_corridor_excess_are_the_numpy_ones_bit_for_bit(numpy_only):
+    """Planner.situation's one compiled call (situation_numbers) against Inflation.of and the path's
+    corridor_excess on their numpy code: random paths of 1-4 segments, robots inside, on the edge of and far
+    outside the corridor, on segment ends and corners."""
+    from viapath.path import DesignatedPath
+    from viapath.planning import make_planner
+
+    rng = np.random.default_rng(5)
+    cases = []
+    for _ in range(1500):
+        waypoints = np.cumsum(rng.uniform(-4, 4, (int(rng.integers(2, 6)), 2)), axis=0)
+        half_widths = rng.choice([0.3, 1.0, 1.5, 2.25], len(waypoints) - 1)
+        path = DesignatedPath(waypoints, half_widths_m=half_widths)
+        kind = rng.integers(3)
+        if kind == 0:  # on a waypoint
+            position = waypoints[rng.integers(len(waypoints))].copy()
+        elif kind == 1:  # anywhere around
+            position = rng.uniform(-12, 12, 2)
+        else:  # abreast of the first waypoint, up to the corridor's edge on either side
+            (dx, dy), normal = path.segment_directions[0], rng.uniform(-1, 1) * half_widths[0]
+            position = waypoints[0] + normal * np.array([-dy, dx])
+        f = _fields(rng, int(rng.integers(1, 6)))
+        obstacles = Obstacles(np.abs(f["positions"]) % 5, f["velocities"] % 1, np.abs(f["radii"]) % 1 + 0.1,
+                              np.abs(f["position_sigma"]) % 0.3, np.abs(f["velocity_sigma"]) % 0.6)
+        planner = make_planner("follow", path, robot_radius_m=float(rng.choice([0.2, 0.25])),
+                               uncertainty_sigmas=float(rng.choice([0.0, 2.0])),
+                               max_inflation_m=float(rng.choice([0.0, 0.15])))
+        cases.append((planner, obstacles, position))
+    fast = [case[0]._inflation_and_excess(case[1], case[2]) for case in cases]
+    numpy_only()
+    outside = 0
+    for case, (fast_inflation, fast_excess) in zip(cases, fast):
+        inflation, excess = case[0]._inflation_and_excess(case[1], case[2])
+        assert type(fast_excess) is float and _bits(np.array(fast_excess)) == _bits(np.array(excess))
+        for name in ("obstacle_radii_m", "check_radii", "growth", "growth_until_s"):
+            assert np.array_equal(_bits(getattr(fast_inflation, name)), _bits(getattr(inflation, name))), name
+        outside += excess > 0
+    assert 0.2 < outside / len(cases) < 0.9  # both inside and outside the corridor, often
+
+
 def _observation(rng) -> Observation:
     """Observations of every kind the guard meets: sound, with odd values, with other number types."""
     fields = _fields(rng, int(rng.integers(0, 5)))

@@ -16,6 +16,7 @@ error. Options are declared once as an :class:`~viapath.options.OptionSet` in th
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -162,12 +163,37 @@ class Planner:
         # Out of the guard's inspection every obstacle is finite already: finite() would keep them all.
         obstacles = observation.obstacles if inspected(observation) else observation.obstacles.finite()
         self.subgoals.update(position, self.robot_radius_m, obstacles.positions, obstacles.radii_m)
+        inflation, excess_m = self._inflation_and_excess(obstacles, position)
         return Situation(
-            observation=observation, position=position, obstacles=obstacles,
-            inflation=Inflation.of(obstacles, self.robot_radius_m, self.settings),
-            subgoal=self.subgoals.subgoal, subgoal_index=self.subgoals.index,
-            corridor_excess_m=max(0.0, float(self.path.corridor_excess(position))),
+            observation=observation, position=position, obstacles=obstacles, inflation=inflation,
+            subgoal=self.subgoals.subgoal, subgoal_index=self.subgoals.index, corridor_excess_m=max(0.0, excess_m),
         )
+
+    def _inflation_and_excess(self, obstacles: Obstacles, position: np.ndarray) -> tuple[Inflation, float]:
+        """:meth:`Inflation.of` the obstacles and how far the robot is outside the corridor (the path's
+        ``corridor_excess``). With numba both in one compiled call (:func:`viapath._harness_kernels.situation_numbers`,
+        the same numbers): every cycle, where each call costs more than its arithmetic."""
+        kernels, n = harness_kernels(), len(obstacles)
+        if kernels is not None and n and position.shape == (2,):
+            x, y = float(position[0]), float(position[1])
+            if math.isfinite(x) and math.isfinite(y):
+                settings, path = self.settings, self.path
+                cached = self.__dict__.get("_inflation_settings")  # (settings, its three numbers): read every cycle
+                if cached is None or cached[0] is not settings:
+                    cached = self.__dict__["_inflation_settings"] = (settings, (
+                        float(settings["safety_margin_m"]), float(settings["uncertainty_sigmas"]),
+                        float(settings["max_inflation_m"])))
+                margin_m, sigmas, max_inflation_m = cached[1]
+                rows = np.empty((4, n))
+                try:
+                    excess_m = kernels.situation_numbers(
+                        obstacles.radii_m, obstacles.position_sigma_m, obstacles.velocity_sigma_mps,
+                        self.robot_radius_m, margin_m, sigmas, max_inflation_m, rows, x, y, path.segment_starts,
+                        path.segment_directions, path.segment_lengths_m, path.half_widths_m)
+                    return Inflation(rows[0], rows[1], rows[2], rows[3]), excess_m
+                except TypeError:  # arrays of another dtype: the numpy code below
+                    pass
+        return Inflation.of(obstacles, self.robot_radius_m, self.settings), float(self.path.corridor_excess(position))
 
     def episode_metrics(self) -> dict[str, Any]:
         """Metrics of the planner over the episode (e.g. the shield's interventions)."""
