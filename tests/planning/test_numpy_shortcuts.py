@@ -8,6 +8,7 @@ separation) and roll-outs that pass, fail and turn on the spot come up.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -185,7 +186,7 @@ def _clear_reference(checks, positions, dt):
 def _can_follow_reference(plan, checks, limits, config):
     """:func:`can_follow` as first written (every roll-out made, none remembered)."""
     offset = plan.target - checks.position
-    heading_error = abs(float(wrap_angle(np.arctan2(offset[1], offset[0]) - checks.heading_rad)))
+    heading_error = abs(float(wrap_angle(math.atan2(offset[1], offset[0]) - checks.heading_rad)))
     speed_change = abs(plan.speed_mps - checks.speed_mps)
     if np.hypot(*offset) < 1e-6 or (heading_error <= config.rollout_heading_rad
                                       and speed_change <= limits.max_accel_mps2 * config.rollout_dt_s * 2):

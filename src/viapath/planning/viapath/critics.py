@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from viapath.geometry import LEFT, RIGHT, wrap_angle
+from viapath.geometry import LEFT, RIGHT, angles_of, wrap_angle
 from viapath.planning.viapath.candidates import Candidates, Choice
 
 
@@ -89,7 +89,7 @@ class Heading(Critic):
 
     def score(self, candidates, context):
         first = candidates.first_direction
-        theta = np.abs(wrap_angle(np.arctan2(first[:, 1], first[:, 0]) - context.heading_rad))
+        theta = np.abs(wrap_angle(angles_of(first) - context.heading_rad))
         return self.weight * (np.degrees(theta) if self.degrees else theta)
 
 

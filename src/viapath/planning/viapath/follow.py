@@ -13,6 +13,7 @@ after an escape, a robot facing a little outwards would otherwise never get goin
 
 from __future__ import annotations
 
+import math
 from itertools import islice
 
 import numpy as np
@@ -38,7 +39,8 @@ def follows(target: np.ndarray, speed_mps: float, checks: LegChecks, limits: Mot
     """:func:`can_follow` of a plan that steers for ``target`` at ``speed_mps``, before the plan is made (in a
     cycle without a free candidate every plan would be made for nothing): (followed, turn in place first)."""
     offset = target - checks.position
-    heading_error = abs(float(wrap_angle(np.arctan2(offset[1], offset[0]) - checks.heading_rad)))
+    dx, dy = offset.tolist()
+    heading_error = abs(float(wrap_angle(math.atan2(dy, dx) - checks.heading_rad)))  # libm's (geometry.angles_of)
     speed_change = abs(speed_mps - checks.speed_mps)
     if np.hypot(*offset) < 1e-6 or (heading_error <= config.rollout_heading_rad
                                       and speed_change <= limits.max_accel_mps2 * config.rollout_dt_s * 2):

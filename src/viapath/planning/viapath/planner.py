@@ -277,8 +277,8 @@ class ViaPathPlanner(Planner, name="viapath"):
         settings[slot.F_STOP_SHORT] = checks.stop_short_m
         settings[slot.F_HORIZON] = checks.horizon_s
         settings[slot.F_TOLERANCE] = checks.corridor_tolerance_m
-        offset = checks.subgoal - checks.position
-        settings[slot.F_STRAIGHT_ANGLE] = np.arctan2(offset[1], offset[0])  # can_follow's angle of the straight leg
+        (x, y), (subgoal_x, subgoal_y) = checks.position.tolist(), checks.subgoal.tolist()
+        settings[slot.F_STRAIGHT_ANGLE] = math.atan2(subgoal_y - y, subgoal_x - x)  # can_follow's, of the straight leg
         integers = integers_0.copy()  # (one item at a time: a slice from a tuple converts it first, slower)
         index = checks.subgoal_index
         integers[slot.C_NOMINAL] = nominal_index
@@ -314,8 +314,10 @@ class ViaPathPlanner(Planner, name="viapath"):
         found, floats, nodes, facts = found
         if found[0] != slot.CANDIDATES:
             return None
-        # Eq. 1's θ and can_follow's heading error from numpy's arctan2, as the reference takes them.
-        angles = np.arctan2(facts[0:4:2], facts[1:4:2])
+        # Eq. 1's θ and can_follow's heading error, libm's angles as the reference takes them (geometry.angles_of).
+        first_y, first_x, target_y, target_x = facts[:4].tolist()
+        angles = np.array([[math.atan2(dy, dx) for dy, dx in zip(first_y, first_x)],
+                           [math.atan2(dy, dx) for dy, dx in zip(target_y, target_x)]]).reshape(2, -1)
         ranking, costs = backend.choose_candidate(checks, floats, nodes, found, facts, angles, settings, integers)
         first = int(ranking[0])  # the first rank that follows (the ranks before it do not), -1: none of those tried
         if first < 0:
@@ -462,7 +464,7 @@ class ViaPathPlanner(Planner, name="viapath"):
 
     def _turn_towards(self, situation: Situation, target) -> float:
         offset = np.asarray(target) - situation.position
-        error = float(wrap_angle(np.arctan2(offset[1], offset[0]) - situation.robot.heading_rad))
+        error = float(wrap_angle(math.atan2(offset[1], offset[0]) - situation.robot.heading_rad))
         return float(np.clip(self.config.heading_gain * error, -self.limits.max_turn_rate_radps,
                              self.limits.max_turn_rate_radps))
 
