@@ -9,6 +9,8 @@ calm escape) is exercised too.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -484,12 +486,17 @@ def test_compiled_choice_is_the_numpy_choice(case, options):
 
 
 def test_compiled_choice_scalars_match_reference():
-    """The scalar pieces of kernels.choose against the numpy operations they stand in for: wrap_angle
-    (np.mod's sign convention), np.degrees, np.round to mm/s."""
+    """The scalar pieces of kernels.choose against the reference's operations they stand in for: atan2
+    (geometry.angles_of, libm's), wrap_angle (np.mod's sign convention), np.degrees, np.round to mm/s."""
     from numba import njit
 
-    from viapath.geometry import wrap_angle
+    from viapath.geometry import angles_of, wrap_angle
     from viapath.planning.viapath import kernels
+
+    vectors = np.concatenate([np.random.default_rng(4).normal(size=(4000, 2)) * np.logspace(-6, 3, 4000)[:, None],
+                              [[0.0, 0.0], [-0.0, 0.0], [0.0, -0.0], [-1.0, 0.0], [-1.0, -0.0], [0.0, 1.0], [1e-300, 1]]])
+    atan2 = njit(lambda values: np.array([math.atan2(y, x) for x, y in values]))
+    np.testing.assert_array_equal(atan2(vectors), angles_of(vectors))
 
     rng = np.random.default_rng(5)
     angles = np.concatenate([rng.uniform(-20, 20, 4000), [0.0, -0.0, np.pi, -np.pi, 2 * np.pi, -2 * np.pi, 3 * np.pi,
@@ -757,5 +764,5 @@ def test_the_warm_up_reaches_every_whole_step_kernel():
     for people in warm_up_crowds():  # in this process: compiled now (or loaded from the cache)
         planner.reset()
         planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people))
-    for kernel in (kernels.escape_headings, kernels.escape_scores, kernels.choose_tree, kernels.choose_candidate):
+    for kernel in (kernels.escape_headings, kernels.escape_scores, kernels.choose):
         assert len(kernel.signatures) == 1  # one signature each: the planner's argument types do not vary

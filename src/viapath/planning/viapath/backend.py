@@ -152,29 +152,21 @@ class Backend:
             index, float(checks.corridor_check_spacing_m), float(checks.corridor_tolerance_m), int(config.max_depth),
             int(config.max_root_obstacles))
 
-    def choose_tree(self, checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.ndarray,
-                    integers: np.ndarray):
-        """The first half of the planner's choice in one compiled call (roots, step 1, the candidate tree):
-        :func:`.kernels.choose_tree`; None on the numpy path. ``slow_times`` (float64), ``settings`` and
-        ``integers`` are the kernel's, filled in by the planner."""
+    def choose(self, checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.ndarray, integers: np.ndarray):
+        """The planner's choice up to its shield check in one compiled call (roots, step 1, the candidate tree,
+        Eq. 1's critics, the order and the roll-outs up to the first candidate that follows):
+        :func:`.kernels.choose`; None on the numpy path. ``slow_times`` (float64), ``settings`` and ``integers``
+        are the kernel's, filled in by the planner."""
         if self.name == "numpy" or not self.whole_steps:
             return None
         (robot, positions, velocities, radii, growth, until, via_radii, ids, continuation, envelope, starts,
          directions, lengths, half_widths, waypoints) = checks.kernel_choice_inputs()
         _, _, slow_radii, slow_growth, slow_until = (
             (positions, velocities, radii, growth, until) if slow_checks is checks else slow_checks.kernel_obstacles())
-        return _kernels().choose_tree(
+        return _kernels().choose(
             robot, _c(speeds), _c(checks.subgoal), positions, velocities, radii, growth, until, via_radii, ids,
             slow_radii, slow_growth, slow_until, slow_times, continuation, envelope, starts, directions, lengths,
             half_widths, waypoints, settings, integers)
-
-    def choose_candidate(self, checks, floats, nodes, found, facts, angles, settings: np.ndarray,
-                         integers: np.ndarray):
-        """The second half (critics, order, roll-outs up to the first that follows): :func:`.kernels.choose_candidate`."""
-        robot, positions, velocities, radii, growth, until, _, _, _, _, starts, directions, lengths, half_widths, _ = (
-            checks.kernel_choice_inputs())
-        return _kernels().choose_candidate(robot, floats, nodes, found, facts, angles, positions, velocities, radii,
-                                           growth, until, starts, directions, lengths, half_widths, settings, integers)
 
     def corridor_excess(self, path, points) -> np.ndarray:
         if self.name == "numpy":
@@ -288,7 +280,7 @@ def whole_steps_compiled() -> bool:
     compiled in this process or in numba's on-disk cache."""
     from viapath.planning.viapath import kernels
 
-    for kernel in (kernels.goal_legs, kernels.grow, kernels.choose_tree, kernels.choose_candidate,
+    for kernel in (kernels.goal_legs, kernels.grow, kernels.choose,
                    kernels.escape_headings, kernels.escape_scores):
         if kernel.signatures:
             continue

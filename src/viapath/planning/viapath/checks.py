@@ -192,7 +192,7 @@ class LegChecks:
         return cached
 
     def kernel_choice_inputs(self) -> tuple:
-        """What both choice kernels take of this cycle (:func:`.kernels.choose_tree`'s order): the robot
+        """What the choice kernel takes of this cycle (:func:`.kernels.choose`'s order): the robot
         (:meth:`kernel_robot`), the obstacles (:meth:`kernel_obstacles`), the via radii, the ids, the
         continuation, the envelope, and the path's segment arrays and waypoints. Built in one go, every cycle:
         the path's arrays, continuations and envelopes are kept on the path (a path is not changed after it is

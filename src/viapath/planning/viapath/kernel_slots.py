@@ -1,6 +1,6 @@
-"""The slots of the choice kernels' two settings arrays (:func:`.kernels.choose_tree`,
-:func:`.kernels.choose_candidate`): named once, for the kernels that read them and the planner that fills
-them (this module imports no numba, so the planner can).
+"""The slots of the choice kernel's two settings arrays (:func:`.kernels.choose` and its halves): named once,
+for the kernels that read them and the planner that fills them (this module imports no numba, so the planner
+can).
 
 ``settings`` (float64, ``F_COUNT``) and ``integers`` (int64, ``C_COUNT``). numba compiles these numbers into
 the kernels as constants and its cache does not notice a change here: after changing one, delete the
@@ -17,11 +17,10 @@ C_COUNT = 20
 # settings: Eq. 1's weights and the critics' (k1..k4, side preference, hysteresis), the nominal speed, ...
 F_K1, F_K2, F_K3, F_K4, F_SIDE, F_HYSTERESIS, F_NOMINAL, F_ROLLOUT_HEADING, F_ACCEL, F_DT = range(10)
 # ... the motion limits and the controller, the corridor check's spacing (the episode's); and the cycle's: how far
-# short of a blocked subgoal legs end, the horizon, the corridor tolerance, the angle of the straight leg to
-# the subgoal (numpy's arctan2).
+# short of a blocked subgoal legs end, the horizon, the corridor tolerance.
 F_TURN_RATE, F_TURN_ACCEL, F_SPEED, F_GAIN, F_TURN_IN_PLACE = range(10, 15)
-F_STOP_SHORT, F_HORIZON, F_SPACING, F_TOLERANCE, F_STRAIGHT_ANGLE = range(15, 20)
-F_COUNT = 20
+F_STOP_SHORT, F_HORIZON, F_SPACING, F_TOLERANCE = range(15, 19)
+F_COUNT = 19
 
 # What choose_tree found (the first entry of its ``found``).
 NO_CANDIDATE, STEP_ONE, CANDIDATES = 0, 1, 2

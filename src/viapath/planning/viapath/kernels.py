@@ -14,10 +14,11 @@ Choices:
   every kernel is a plain module-level ``@njit(cache=True)`` function, so numba's on-disk cache
   works and a process after the first pays no compilation (docs/speed.md gives the first run's cost).
 * Inputs are C-contiguous float64 arrays (the caller makes them so): one compiled signature each.
-* Where numpy's rounding is not libm's, numpy computes and the kernels take its values: the angles of the
-  choice (np.arctan2, between :func:`choose_tree` and :func:`choose_candidate`), the sines and cosines of the
-  escape's headings (between :func:`escape_headings` and :func:`escape_scores`). Where numpy's order of
-  operations is its own, the kernels copy it: np.sum's pairwise summation (:func:`viapath.compiled_sum.pairwise_sum`).
+* Where numpy's rounding is not libm's, numpy computes and the kernels take its values: the sines and cosines
+  of the escape's headings (between :func:`escape_headings` and :func:`escape_scores`). The choice's angles
+  are libm's atan2 on both paths (:func:`viapath.geometry.angles_of`), so :func:`choose` takes them itself.
+  Where numpy's order of operations is its own, the kernels copy it: np.sum's pairwise summation
+  (:func:`viapath.compiled_sum.pairwise_sum`).
 * hypot costs about 20 ns here; where only the sign of ``hypot - limit`` matters, the squared distance
   decides outside a band of ±1e-9 around the limit (:func:`_within`, :func:`_excess_at_most`,
   :func:`_furthest`), as the numpy path's :func:`viapath.planning.viapath.escape.touching` does.
@@ -35,7 +36,7 @@ from viapath.planning.viapath.kernel_slots import (
     C_DEGREES, C_DEPTH, C_NOMINAL, C_ONLY, C_ONLY_WAY, C_PREFERRED, C_PREV_MMPS, C_PREV_WAY, C_PREVIOUS, C_ROLLOUTS,
     C_ROOT_LIMIT, C_SEGMENT, C_SLOW, C_STEPS, C_SUBGOAL, C_TRY_STRAIGHT, CANDIDATES, F_ACCEL, F_DT, F_GAIN,
     F_HORIZON, F_HYSTERESIS, F_K1, F_K2, F_K3, F_K4, F_NOMINAL, F_ROLLOUT_HEADING, F_SIDE, F_SPACING, F_SPEED,
-    F_STOP_SHORT, F_STRAIGHT_ANGLE, F_TOLERANCE, F_TURN_ACCEL, F_TURN_IN_PLACE, F_TURN_RATE, NO_CANDIDATE, STEP_ONE)
+    F_STOP_SHORT, F_TOLERANCE, F_TURN_ACCEL, F_TURN_IN_PLACE, F_TURN_RATE, NO_CANDIDATE, STEP_ONE)
 
 
 @njit(cache=True, nogil=True)
@@ -1172,9 +1173,9 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
     return nf[:m].copy(), ni[:m].copy()
 
 
-# -- the choice (planner._choose) in two calls: roots, step 1 and the tree; then Eq. 1's critics, the order and the
-# motion-limit checks. Between them numpy takes the angles (np.arctan2 rounds differently from the libm atan2
-# numba calls, in about one case in twelve here: the angles are the reference's own, so the decisions are).
+# -- the choice (planner._choose) in one call, :func:`choose`, of two halves: roots, step 1 and the tree
+# (:func:`choose_tree`); then Eq. 1's critics, the order and the motion-limit checks (:func:`choose_candidate`).
+# Between them the candidates' angles, by libm's atan2 as the reference takes them (geometry.angles_of).
 
 # The slots of the settings arrays: .kernel_slots (C_* integers, F_* floats), imported at the top.
 
@@ -1210,8 +1211,8 @@ def _clear(positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_
 @njit(cache=True, nogil=True)
 def _follows(robot, target_x, target_y, angle, speed, settings, steps, obstacle_positions, obstacle_velocities, radii,
              growth, growth_until_s, segment_starts, segment_directions, segment_lengths, half_widths):
-    """follow.can_follow: 0 cannot, 1 can, 2 can after turning on the spot first. ``angle``: np.arctan2 of
-    the offset from the robot to the target."""
+    """follow.can_follow: 0 cannot, 1 can, 2 can after turning on the spot first. ``angle``: atan2 of the
+    offset from the robot to the target."""
     ox = target_x - robot[0]
     oy = target_y - robot[1]
     heading_error = abs(_wrap(angle - robot[2]))
@@ -1258,7 +1259,7 @@ def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities,
 
     Returns (found, floats, integers: grow's node store, facts). ``found`` is (NO_CANDIDATE / STEP_ONE /
     CANDIDATES, step 1 turns on the spot first, then the K leaves: the candidates' nodes); ``facts`` (6, K)
-    is each candidate's first direction (y, x) and its target's offset from the robot (y, x), for np.arctan2,
+    is each candidate's first direction (y, x) and its target's offset from the robot (y, x), for atan2,
     and the target (x, y): the point it steers for first. (Few arrays: each one returned costs about a
     microsecond.)"""
     result = np.zeros(2, np.int64)
@@ -1278,7 +1279,8 @@ def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities,
         obstacle_velocities, radii, growth, growth_until_s, envelope, segment_starts, segment_directions,
         segment_lengths, half_widths, subgoal_index, spacing_m, tolerance_m)
     if free[nominal_index] and integers[C_TRY_STRAIGHT] and not integers[C_ONLY]:
-        follows = _follows(robot, subgoal[0], subgoal[1], settings[F_STRAIGHT_ANGLE], speeds[nominal_index], settings,
+        straight_angle = math.atan2(subgoal[1] - robot[1], subgoal[0] - robot[0])
+        follows = _follows(robot, subgoal[0], subgoal[1], straight_angle, speeds[nominal_index], settings,
                            integers[C_STEPS], obstacle_positions, obstacle_velocities, radii, growth, growth_until_s,
                            segment_starts, segment_directions, segment_lengths, half_widths)
         if follows:
@@ -1340,7 +1342,7 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, ob
     there, summed in :func:`.critics.critics_for`'s order), with ``only_way`` the other ways priced out, the
     cheapest-first order (np.argsort's, stable) of the first ``max_rollouts`` candidates (and at least two,
     for the runner-up), and follow.can_follow of each in that order until one passes. ``found`` and ``facts``
-    are :func:`choose_tree`'s, ``angles`` (2, K) np.arctan2 of its facts.
+    are :func:`choose_tree`'s, ``angles`` (2, K) atan2 of its facts.
 
     Returns (ranking, costs). ``ranking`` is (the rank that follows or -1, R: the ranks in order (0: with
     only_way, no candidate goes that way), the order (R), can_follow of each rank tried (R): 0/1/2, -1 not
@@ -1421,3 +1423,28 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, ob
             ranking[0] = r
             break
     return ranking, costs
+
+
+@njit(cache=True, nogil=True)
+def choose(robot, speeds, subgoal, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, via_radii,
+           ids, slow_radii, slow_growth, slow_growth_until_s, slow_times, continuation, envelope, segment_starts,
+           segment_directions, segment_lengths, half_widths, waypoints, settings, integers):
+    """``_choose`` up to its shield check in one call (each array handed back to Python costs about a
+    microsecond): :func:`choose_tree`, then, when it found candidates, their angles and :func:`choose_candidate`.
+    Takes :func:`choose_tree`'s arguments; returns (found, floats, integers: the node store, ranking, costs),
+    ranking and costs empty unless ``found`` says CANDIDATES."""
+    found, nf, ni, facts = choose_tree(
+        robot, speeds, subgoal, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, via_radii, ids,
+        slow_radii, slow_growth, slow_growth_until_s, slow_times, continuation, envelope, segment_starts,
+        segment_directions, segment_lengths, half_widths, waypoints, settings, integers)
+    if found[0] != CANDIDATES:
+        return found, nf, ni, np.empty(0, np.int64), np.empty((8, 0))
+    k_count = facts.shape[1]
+    angles = np.empty((2, k_count))
+    for k in range(k_count):
+        angles[0, k] = math.atan2(facts[0, k], facts[1, k])
+        angles[1, k] = math.atan2(facts[2, k], facts[3, k])
+    ranking, costs = choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, obstacle_velocities,
+                                      radii, growth, growth_until_s, segment_starts, segment_directions,
+                                      segment_lengths, half_widths, settings, integers)
+    return found, nf, ni, ranking, costs

@@ -52,7 +52,7 @@ from viapath.planning.viapath.escape import stop_or_escape
 from viapath.planning.viapath.follow import can_follow, follows
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
 
-# The critics kernels.choose_candidate sums, in this order (critics_for's): others take the numpy choice.
+# The critics kernels.choose sums, in this order (critics_for's): others take the numpy choice.
 _PAPER_CRITICS = (Distance, Time, SpeedError, Heading, SidePreference, Hysteresis)
 
 
@@ -268,17 +268,14 @@ class ViaPathPlanner(Planner, name="viapath"):
 
     def _choose_compiled(self, checks: LegChecks, speeds, nominal_index: int, previous: Choice | None,
                          only_way: Way | None) -> _Chosen | None:
-        """:meth:`_choose` with two kernels doing everything up to the shield check (:func:`.kernels.choose_tree`,
-        :func:`.kernels.choose_candidate`; numpy's np.arctan2 between them). The second rolls out candidates
-        cheapest first until one follows; a candidate the shield refuses sends the search on to the next
-        ones here, as the reference does."""
+        """:meth:`_choose` with one kernel doing everything up to the shield check (:func:`.kernels.choose`): it
+        rolls out candidates cheapest first until one follows; a candidate the shield refuses sends the search
+        on to the next ones here, as the reference does."""
         constants, integers_0, slow_times = self._kernel_constants()
         settings = constants.copy()  # with this cycle's entries:
         settings[slot.F_STOP_SHORT] = checks.stop_short_m
         settings[slot.F_HORIZON] = checks.horizon_s
         settings[slot.F_TOLERANCE] = checks.corridor_tolerance_m
-        (x, y), (subgoal_x, subgoal_y) = checks.position.tolist(), checks.subgoal.tolist()
-        settings[slot.F_STRAIGHT_ANGLE] = math.atan2(subgoal_y - y, subgoal_x - x)  # can_follow's, of the straight leg
         integers = integers_0.copy()  # (one item at a time: a slice from a tuple converts it first, slower)
         index = checks.subgoal_index
         integers[slot.C_NOMINAL] = nominal_index
@@ -300,25 +297,20 @@ class ViaPathPlanner(Planner, name="viapath"):
             integers[slot.C_ONLY_WAY + 2] = only_way.root
         slow_checks = self._slow_checks(checks)
         backend = self.backend
-        found = backend.choose_tree(checks, slow_checks, speeds, slow_times, settings, integers)
-        if found[0][0] == slot.STEP_ONE:
+        chosen = backend.choose(checks, slow_checks, speeds, slow_times, settings, integers)
+        if chosen[0][0] == slot.STEP_ONE:
             speed = float(speeds[nominal_index])
             plan = Plan("straight", speed, checks.subgoal.copy(), waypoints=np.array([checks.position, checks.subgoal]),
                         subgoal_index=checks.subgoal_index, candidate_count=1, chosen=0)
-            if found[0][1]:
+            if chosen[0][1]:
                 plan.extras["turn_in_place"] = True
             if self._inside_shield(plan):
                 return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
             integers[slot.C_TRY_STRAIGHT] = 0  # the shield refused it: the candidates decide
-            found = backend.choose_tree(checks, slow_checks, speeds, slow_times, settings, integers)
-        found, floats, nodes, facts = found
+            chosen = backend.choose(checks, slow_checks, speeds, slow_times, settings, integers)
+        found, floats, nodes, ranking, costs = chosen
         if found[0] != slot.CANDIDATES:
             return None
-        # Eq. 1's θ and can_follow's heading error, libm's angles as the reference takes them (geometry.angles_of).
-        first_y, first_x, target_y, target_x = facts[:4].tolist()
-        angles = np.array([[math.atan2(dy, dx) for dy, dx in zip(first_y, first_x)],
-                           [math.atan2(dy, dx) for dy, dx in zip(target_y, target_x)]]).reshape(2, -1)
-        ranking, costs = backend.choose_candidate(checks, floats, nodes, found, facts, angles, settings, integers)
         first = int(ranking[0])  # the first rank that follows (the ranks before it do not), -1: none of those tried
         if first < 0:
             return None
@@ -345,7 +337,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         return None
 
     def _cost_breakdown(self, costs: np.ndarray):
-        """:meth:`.critics.Costs.breakdown` for :func:`.kernels.choose_candidate`'s costs (rows: the critics' terms,
+        """:meth:`.critics.Costs.breakdown` for :func:`.kernels.choose`'s costs (rows: the critics' terms,
         E): one column as Python floats, the same values as the numpy path's."""
         critics = self.critics
         cached = self.__dict__.get("_cost_names")
