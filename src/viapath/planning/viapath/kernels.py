@@ -1431,14 +1431,15 @@ def choose(robot, speeds, subgoal, obstacle_positions, obstacle_velocities, radi
            segment_directions, segment_lengths, half_widths, waypoints, settings, integers):
     """``_choose`` up to its shield check in one call (each array handed back to Python costs about a
     microsecond): :func:`choose_tree`, then, when it found candidates, their angles and :func:`choose_candidate`.
-    Takes :func:`choose_tree`'s arguments; returns (found, floats, integers: the node store, ranking, costs),
-    ranking and costs empty unless ``found`` says CANDIDATES."""
+    Takes :func:`choose_tree`'s arguments; returns (found, floats, integers: the node store, costs): ``found``
+    is :func:`choose_tree`'s, followed by :func:`choose_candidate`'s ranking when it says CANDIDATES (one array
+    fewer to hand back), ``costs`` (8, K) :func:`choose_candidate`'s, empty unless CANDIDATES."""
     found, nf, ni, facts = choose_tree(
         robot, speeds, subgoal, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, via_radii, ids,
         slow_radii, slow_growth, slow_growth_until_s, slow_times, continuation, envelope, segment_starts,
         segment_directions, segment_lengths, half_widths, waypoints, settings, integers)
     if found[0] != CANDIDATES:
-        return found, nf, ni, np.empty(0, np.int64), np.empty((8, 0))
+        return found, nf, ni, np.empty((8, 0))
     k_count = facts.shape[1]
     angles = np.empty((2, k_count))
     for k in range(k_count):
@@ -1447,4 +1448,7 @@ def choose(robot, speeds, subgoal, obstacle_positions, obstacle_velocities, radi
     ranking, costs = choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, obstacle_velocities,
                                       radii, growth, growth_until_s, segment_starts, segment_directions,
                                       segment_lengths, half_widths, settings, integers)
-    return found, nf, ni, ranking, costs
+    found_and_ranking = np.empty(found.shape[0] + ranking.shape[0], np.int64)
+    found_and_ranking[:found.shape[0]] = found
+    found_and_ranking[found.shape[0]:] = ranking
+    return found_and_ranking, nf, ni, costs

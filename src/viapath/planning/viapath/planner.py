@@ -308,13 +308,15 @@ class ViaPathPlanner(Planner, name="viapath"):
                 return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
             integers[slot.C_TRY_STRAIGHT] = 0  # the shield refused it: the candidates decide
             chosen = backend.choose(checks, slow_checks, speeds, slow_times, settings, integers)
-        found, floats, nodes, ranking, costs = chosen
+        found, floats, nodes, costs = chosen
         if found[0] != slot.CANDIDATES:
             return None
+        leaves_end = 2 + costs.shape[1]  # found: status, turn on the spot, the K leaves, then the ranking
+        leaves, ranking = found[2:leaves_end], found[leaves_end:]
         first = int(ranking[0])  # the first rank that follows (the ranks before it do not), -1: none of those tried
         if first < 0:
             return None
-        leaves, total, ranks = found[2:], costs[7], int(ranking[1])
+        total, ranks = costs[7], int(ranking[1])
         order, follow = ranking[2:2 + ranks].tolist(), ranking[2 + ranks:].tolist()
         for rank in range(first, min(ranks, self.config.max_rollouts)):
             best = order[rank]
