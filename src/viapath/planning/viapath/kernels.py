@@ -358,7 +358,14 @@ def escape_contacts(positions, times, obstacle_positions, obstacle_velocities, c
     the first step at which each command touches someone it does not overlap now (``steps`` if never),
     and, for the people it overlaps now (``overlapping``), the smallest gap over the roll-out and the gap
     at its end, (K, N_overlapping) each: the arrays :func:`viapath.planning.viapath.escape.escape_scores`
-    scores with."""
+    scores with.
+
+    Only the first contact counts, so a person not overlapped now is looked at up to the roll-out's first
+    contact found so far, and over the steps in which the gap cannot close: between two steps it closes by
+    at most the robot's longest step plus what the person walks and grows in a step (the triangle
+    inequality), so a gap of g leaves g / that steps free. The skip keeps a margin (1e-6 m, and 1e-9
+    relative) far above the rounding of the gaps, so the steps it passes over are those the full scan finds
+    free: the same first contacts (tests/planning/test_backends.py checks it on crowds that close fast)."""
     k_count = positions.shape[0]
     s_count = positions.shape[1]
     n_count = obstacle_positions.shape[0]
@@ -369,30 +376,48 @@ def escape_contacts(positions, times, obstacle_positions, obstacle_velocities, c
     first = np.full(k_count, steps, np.int64)
     gap_min = np.full((k_count, n_overlapping), np.inf)
     gap_last = np.empty((k_count, n_overlapping))
+    tick = 0.0  # the longest time between two steps
+    for s in range(1, s_count):
+        tick = _maximum(tick, times[s] - times[s - 1])
     for k in range(k_count):
+        hop_squared = 0.0  # the robot's longest step in roll-out k (NaN: no skipping)
+        for s in range(1, s_count):
+            dx = positions[k, s, 0] - positions[k, s - 1, 0]
+            dy = positions[k, s, 1] - positions[k, s - 1, 1]
+            hop_squared = _maximum(hop_squared, dx * dx + dy * dy)
+        hop = math.sqrt(hop_squared)
         column = 0
         for j in range(n_count):
             px = obstacle_positions[j, 0]
             py = obstacle_positions[j, 1]
             vx = obstacle_velocities[j, 0]
             vy = obstacle_velocities[j, 1]
-            for s in range(s_count):
-                t = times[s]
-                reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
-                dx = positions[k, s, 0] - (px + vx * t)
-                dy = positions[k, s, 1] - (py + vy * t)
-                if overlapping[j]:
-                    gap = math.hypot(dx, dy) - reach
+            if overlapping[j]:
+                for s in range(s_count):
+                    t = times[s]
+                    reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
+                    gap = math.hypot(positions[k, s, 0] - (px + vx * t), positions[k, s, 1] - (py + vy * t)) - reach
                     if gap < gap_min[k, column]:
                         gap_min[k, column] = gap
                     if s == s_count - 1:
                         gap_last[k, column] = gap
-                elif _within(dx, dy, reach):  # hypot - reach < 0: the sign of a difference is exact
-                    if s < first[k]:
-                        first[k] = s
-                    break
-            if overlapping[j]:
                 column += 1
+                continue
+            # (at least 1e-300: a gap that cannot close leaves every step free; NaN stays NaN)
+            closing = _maximum((hop + (math.hypot(vx, vy) + abs(growth[j])) * tick) * (1.0 + 1e-9), 1e-300)
+            s = 0
+            while s < first[k]:  # (first[k] <= steps, the roll-out's length)
+                t = times[s]
+                reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
+                dx = positions[k, s, 0] - (px + vx * t)
+                dy = positions[k, s, 1] - (py + vy * t)
+                if _within(dx, dy, reach):  # hypot - reach < 0: the sign of a difference is exact
+                    first[k] = s
+                    break
+                free_steps = (math.sqrt(dx * dx + dy * dy) - reach - 1e-6) * (1.0 - 1e-9) / closing
+                if free_steps >= s_count:  # (NaN: not skipped)
+                    break
+                s += 1 + (int(free_steps) if free_steps >= 1.0 else 0)
     return first, gap_min, gap_last
 
 
