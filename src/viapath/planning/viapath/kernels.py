@@ -499,11 +499,14 @@ def _excess_at_most(px, py, segment_starts, segment_directions, segment_lengths,
 
 
 @njit(cache=True, nogil=True)
-def _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths, limit):
-    """Whether each roll-out (K, S, 2) keeps every point within ``limit`` of the corridor (excess <= limit).
-    (A function of its own: the same loop inside :func:`escape_scores` took several times as long.)"""
+def _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths, limit, known):
+    """Whether each roll-out (K, S, 2) keeps every point within ``limit`` of the corridor (excess <= limit);
+    those ``known`` to are not looked at. (A function of its own: the same loop inside :func:`escape_scores`
+    took several times as long.)"""
     out = np.ones(positions.shape[0], np.bool_)
     for k in range(positions.shape[0]):
+        if known[k]:
+            continue
         for s in range(positions.shape[1]):
             if not _excess_at_most(positions[k, s, 0], positions[k, s, 1], segment_starts, segment_directions,
                                    segment_lengths, half_widths, limit):
@@ -635,11 +638,12 @@ def escape_scores(robot, commands, turn_rows, sines, cosines, obstacle_positions
             py = y0 + y_sum
             positions[k, s, 0] = px
             positions[k, s, 1] = py
-    # all(excess <= tolerance); np.max(excess) <= bound is all(excess <= bound), NaN included
+    # all(excess <= tolerance); np.max(excess) <= bound is all(excess <= bound), NaN included: with the bound
+    # at least the tolerance (as the caller sets it), true of every roll-out inside
     inside = _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths,
-                               tolerance)
+                               tolerance, np.zeros(k_count, np.bool_))
     within_bound = _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths,
-                                     bound)
+                                     bound, inside if bound >= tolerance else np.zeros(k_count, np.bool_))
     travel = _furthest(positions, x0, y0)
 
     # The people who could come within reach during the roll-out.
