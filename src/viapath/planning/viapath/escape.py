@@ -55,7 +55,7 @@ def stop_or_escape(checks: LegChecks, limits: MotionLimits, config, previous: Co
     if compiled is None:
         commands, ends, score = escape_scores(checks, limits, config, previous)
     best = int(score.argmax())
-    speed, turn = (float(value) for value in commands[best])
+    speed, turn = commands[best].tolist()
     return Decision(Command(speed, turn), Plan("escape", speed, ends[best], **base))
 
 
