@@ -1201,8 +1201,19 @@ def _clear(positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_
             limit = reach if (reach != reach or reach < now) else now  # np.minimum, NaN first
             if now != now:
                 limit = now
-            distance = math.hypot(positions[s, 0] - cx, positions[s, 1] - cy)
-            if not distance >= limit:
+            dx = positions[s, 0] - cx
+            dy = positions[s, 1] - cy
+            # hypot >= limit by the squared distance outside a ±1e-9 band (as _within), else by hypot itself:
+            # NaN offsets or limits, and limits whose square could underflow or overflow, go to hypot.
+            if 1e-140 < limit < 1e140:
+                squared = dx * dx + dy * dy
+                above = limit * (1.0 + 1e-9)
+                if squared > above * above:
+                    continue
+                below = limit * (1.0 - 1e-9)
+                if squared < below * below:
+                    return False
+            if not math.hypot(dx, dy) >= limit:
                 return False
     return True
 
@@ -1228,8 +1239,8 @@ def _follows(robot, target_x, target_y, angle, speed, settings, steps, obstacle_
         return 0
     inside = True
     for s in range(steps):
-        if not _excess(positions[s, 0], positions[s, 1], segment_starts, segment_directions, segment_lengths,
-                       half_widths) <= settings[F_TOLERANCE]:
+        if not _excess_at_most(positions[s, 0], positions[s, 1], segment_starts, segment_directions, segment_lengths,
+                               half_widths, settings[F_TOLERANCE]):
             inside = False
             break
     if inside:
