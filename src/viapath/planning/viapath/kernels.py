@@ -38,7 +38,7 @@ from viapath.planning.viapath.kernel_slots import (
     F_STOP_SHORT, F_STRAIGHT_ANGLE, F_TOLERANCE, F_TURN_ACCEL, F_TURN_IN_PLACE, F_TURN_RATE, NO_CANDIDATE, STEP_ONE)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")  # inlined: called per leg and obstacle, a few hundred a cycle
 def _contact(px, py, vx, vy, radius, growth, duration):
     """Scalar :func:`viapath.geometry._first_contact`: first τ in [0, duration] with
     |p + v τ| <= radius + growth τ; inf if none, 0 if already touching. (The reference drops the
@@ -58,6 +58,54 @@ def _contact(px, py, vx, vy, radius, growth, duration):
     return math.inf
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _leg_contact(starts, start_times, velocities, durations, obstacle_positions, obstacle_velocities, radii, growth,
+                 growth_until_s, leg_radius, cylinder_only, k, j):
+    """The first contact of leg ``k`` with obstacle ``j``: one entry of :func:`legs_first_contact` (inlined:
+    :func:`_legs_free` asks it leg by leg and stops at the first contact)."""
+    t0 = start_times[k]
+    duration = durations[k]
+    ovx = obstacle_velocities[j, 0]
+    ovy = obstacle_velocities[j, 1]
+    px = starts[k, 0] - (obstacle_positions[j, 0] + ovx * t0)
+    py = starts[k, 1] - (obstacle_positions[j, 1] + ovy * t0)
+    vx = velocities[k, 0] - ovx
+    vy = velocities[k, 1] - ovy
+    g = growth[j]
+    if cylinder_only:
+        return _contact(px, py, vx, vy, (radii[j] + leg_radius) + g * t0, g, duration)
+    until = growth_until_s[j]
+    cone_duration = until - t0
+    if cone_duration < 0.0:
+        cone_duration = 0.0
+    if cone_duration > duration:
+        cone_duration = duration
+    early = _contact(px, py, vx, vy, (radii[j] + leg_radius) + g * (t0 if t0 < until else until),
+                     g if until > t0 else 0.0, cone_duration)
+    if math.isfinite(early):
+        return early
+    if t0 + duration >= until:
+        full_growth = g * (until if math.isfinite(until) else 0.0)
+        late = _contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy,
+                        (radii[j] + leg_radius) + full_growth, 0.0, duration - cone_duration)
+        return late + cone_duration
+    return math.inf
+
+
+@njit(cache=True, nogil=True)
+def _cylinder_only(growth, growth_until_s):
+    """Whether no obstacle's radius stops growing within the legs' time (no growth, or none capped): then
+    one cylinder per obstacle."""
+    any_growth = False
+    any_finite_until = False
+    for j in range(growth.shape[0]):
+        if growth[j] != 0.0:
+            any_growth = True
+        if math.isfinite(growth_until_s[j]):
+            any_finite_until = True
+    return (not any_growth) or (not any_finite_until)
+
+
 @njit(cache=True, nogil=True)
 def legs_first_contact(starts, start_times, velocities, durations, obstacle_positions, obstacle_velocities,
                        radii, growth, growth_until_s, leg_radii):
@@ -68,46 +116,12 @@ def legs_first_contact(starts, start_times, velocities, durations, obstacle_posi
     k_count = starts.shape[0]
     n_count = obstacle_positions.shape[0]
     out = np.empty((k_count, n_count))
-    any_growth = False
-    any_finite_until = False
-    for j in range(n_count):
-        if growth[j] != 0.0:
-            any_growth = True
-        if math.isfinite(growth_until_s[j]):
-            any_finite_until = True
-    cylinder_only = (not any_growth) or (not any_finite_until)
+    cylinder_only = _cylinder_only(growth, growth_until_s)
     for k in range(k_count):
-        t0 = start_times[k]
-        duration = durations[k]
         for j in range(n_count):
-            ovx = obstacle_velocities[j, 0]
-            ovy = obstacle_velocities[j, 1]
-            px = starts[k, 0] - (obstacle_positions[j, 0] + ovx * t0)
-            py = starts[k, 1] - (obstacle_positions[j, 1] + ovy * t0)
-            vx = velocities[k, 0] - ovx
-            vy = velocities[k, 1] - ovy
-            g = growth[j]
-            if cylinder_only:
-                out[k, j] = _contact(px, py, vx, vy, (radii[j] + leg_radii[k]) + g * t0, g, duration)
-                continue
-            until = growth_until_s[j]
-            cone_duration = until - t0
-            if cone_duration < 0.0:
-                cone_duration = 0.0
-            if cone_duration > duration:
-                cone_duration = duration
-            early = _contact(px, py, vx, vy, (radii[j] + leg_radii[k]) + g * (t0 if t0 < until else until),
-                             g if until > t0 else 0.0, cone_duration)
-            if math.isfinite(early):
-                out[k, j] = early
-                continue
-            if t0 + duration >= until:
-                full_growth = g * (until if math.isfinite(until) else 0.0)
-                late = _contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy,
-                                (radii[j] + leg_radii[k]) + full_growth, 0.0, duration - cone_duration)
-                out[k, j] = late + cone_duration
-            else:
-                out[k, j] = math.inf
+            out[k, j] = _leg_contact(starts, start_times, velocities, durations, obstacle_positions,
+                                     obstacle_velocities, radii, growth, growth_until_s, leg_radii[k], cylinder_only,
+                                     k, j)
     return out
 
 
@@ -844,18 +858,21 @@ def _add(nf, ni, m, x, y, t, v, parent, length, fx, fy, way0, way1, way2, slow_s
 @njit(cache=True, nogil=True)
 def _legs_free(starts, start_times, velocities, durations, horizon_s, obstacle_positions, obstacle_velocities, radii,
                growth, growth_until_s):
-    """LegChecks.legs_free: no contact up to the horizon, plain radii (no braking envelope)."""
+    """LegChecks.legs_free: no contact up to the horizon, plain radii (no braking envelope). Leg by leg, up to
+    its first contact: whether any contact is finite (or NaN) is all that is asked."""
     k_count = starts.shape[0]
     checked = np.empty(k_count)
     for k in range(k_count):
         checked[k] = _clip(horizon_s - start_times[k], 0.0, durations[k])
-    contact = legs_first_contact(starts, start_times, velocities, checked, obstacle_positions, obstacle_velocities,
-                                 radii, growth, growth_until_s, np.zeros(k_count))
+    cylinder_only = _cylinder_only(growth, growth_until_s)
     free = np.empty(k_count, np.bool_)
     for k in range(k_count):
         ok = True
-        for j in range(contact.shape[1]):
-            if not math.isinf(contact[k, j]):
+        for j in range(obstacle_positions.shape[0]):
+            # leg radius 0.0, as legs_first_contact with np.zeros(k_count)
+            if not math.isinf(_leg_contact(starts, start_times, velocities, checked, obstacle_positions,
+                                           obstacle_velocities, radii, growth, growth_until_s, 0.0, cylinder_only, k,
+                                           j)):
                 ok = False
                 break
         free[k] = ok
