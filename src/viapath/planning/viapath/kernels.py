@@ -761,17 +761,23 @@ def goal_legs(starts, start_times, speeds, subgoal, stop_short_m, horizon_s, con
                     elif later < value:
                         value = later
                 contact[k, j] = value
-    inside = _goal_legs_inside_all(segment_starts, segment_directions, segment_lengths, half_widths, starts, subgoal,
-                                   subgoal_index, spacing_m, tolerance_m)
+    # Free: no contact, then inside. The corridor check only when some leg has no contact (a blocked batch,
+    # the usual case in the tree, needs none); then of all the legs, as the sample spacing is the longest's.
     free = np.empty(k_count, np.bool_)
+    any_clear = False
     for k in range(k_count):
-        ok = inside[k]
-        if ok:
-            for j in range(n_count):
-                if not math.isinf(contact[k, j]):
-                    ok = False
-                    break
+        ok = True
+        for j in range(n_count):
+            if not math.isinf(contact[k, j]):
+                ok = False
+                break
         free[k] = ok
+        any_clear = any_clear or ok
+    if any_clear:
+        inside = _goal_legs_inside_all(segment_starts, segment_directions, segment_lengths, half_widths, starts,
+                                       subgoal, subgoal_index, spacing_m, tolerance_m)
+        for k in range(k_count):
+            free[k] = free[k] and inside[k]
     return directions, lengths, free, contact
 
 
