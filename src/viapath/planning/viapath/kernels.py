@@ -827,7 +827,7 @@ _NONE, _ZERO = np.int64(-1), np.int64(0)
 _I_STRAIGHT, _I_SLOW, _I_CORNER = np.int64(_STRAIGHT), np.int64(_SLOW), np.int64(_CORNER)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _reserve(nf, ni, m, count):
     """Room for ``count`` more nodes after the first ``m`` (the store doubles when full)."""
     if m + count <= nf.shape[0]:
@@ -840,7 +840,7 @@ def _reserve(nf, ni, m, count):
     return bigger_f, bigger_i
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")  # inlined: a call passed 16 arguments for each node
 def _add(nf, ni, m, x, y, t, v, parent, length, fx, fy, way0, way1, way2, slow_s, slow_v):
     nf, ni = _reserve(nf, ni, m, 1)
     nf[m, _X] = x
