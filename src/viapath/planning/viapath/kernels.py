@@ -1205,7 +1205,10 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
 @njit(cache=True, nogil=True)
 def _wrap(angle):
     """:func:`viapath.geometry.wrap_angle` of a scalar (np.mod's sign convention is Python's %)."""
-    return math.pi - ((math.pi - angle) % (2.0 * math.pi))
+    turned = math.pi - angle
+    if 0.0 <= turned < 2.0 * math.pi:  # % leaves it as it is (fmod exact; ±0.0 gives pi either way): skip it
+        return math.pi - turned
+    return math.pi - (turned % (2.0 * math.pi))
 
 
 @njit(cache=True, nogil=True)
