@@ -165,6 +165,55 @@ def track(x, y, heading, speed, turn, target_x, target_y, speed_mps, max_speed_m
     return positions
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _via_pair(sx, sy, t0, speed, ox, oy, vx, vy, via_radius, growth, until, envelope_m, t_via, w_via):
+    """:func:`via_options` of one pair (a leg from (sx, sy) at t0 at ``speed``, the obstacle at (ox, oy) now
+    moving at (vx, vy)): the four options' via times into ``t_via`` (inf: none) and the two sides' offsets
+    into ``w_via``; False when the start is within the via radius (no option). Inlined: :func:`grow` takes
+    its pairs' options with it straight from its node store."""
+    cx = ox + vx * t0
+    cy = oy + vy * t0
+    distance = math.hypot(cx - sx, cy - sy)
+    passing_time = t0 + distance / speed
+    if until < passing_time:
+        passing_time = until
+    radius = via_radius + growth * passing_time + envelope_m
+    limit = 0.98 * distance
+    if limit < radius:
+        radius = limit
+    if radius < 0.0:
+        radius = 0.0
+    # tangent_vectors, both sides
+    dx = cx - sx
+    dy = cy - sy
+    distance_sq = dx * dx + dy * dy
+    radius_sq = radius * radius
+    valid = distance_sq > radius_sq
+    gap = distance_sq - radius_sq
+    length = math.sqrt(gap if gap > 0.0 else 0.0)
+    scale = length / (distance_sq if valid else 1.0)
+    for s in range(2):
+        side_radius = (1.0 if s == 0 else -1.0) * radius
+        wx = scale * (length * dx - side_radius * dy)
+        wy = scale * (side_radius * dx + length * dy)
+        w_via[s, 0] = wx
+        w_via[s, 1] = wy
+        # via_times
+        w_length = math.sqrt(wx * wx + wy * wy)
+        positive = w_length > 0
+        inverse = 1.0 / (w_length if positive else 1.0)
+        along = (wx * vx + wy * vy) * inverse
+        across = (wx * vy - wy * vx) * inverse
+        discriminant = speed * speed - across * across
+        root = math.sqrt(discriminant if discriminant > 0.0 else 0.0)
+        s_early = root - along
+        s_late = -along - root
+        ok = positive and discriminant >= 0
+        t_via[s] = w_length / s_early if (ok and s_early > 1e-12) else math.inf
+        t_via[2 + s] = w_length / s_late if (ok and s_late > 1e-12 and discriminant > 0) else math.inf
+    return valid
+
+
 @njit(cache=True, nogil=True)
 def via_options(starts, start_times, speeds, obstacle_positions, obstacle_velocities, via_radii, growth,
                 growth_until_s, envelope_m, max_time_s):
@@ -179,54 +228,9 @@ def via_options(starts, start_times, speeds, obstacle_positions, obstacle_veloci
     t_via = np.empty(4)
     w_via = np.empty((2, 2))
     for p in range(count):
-        sx = starts[p, 0]
-        sy = starts[p, 1]
-        t0 = start_times[p]
-        speed = speeds[p]
-        vx = obstacle_velocities[p, 0]
-        vy = obstacle_velocities[p, 1]
-        cx = obstacle_positions[p, 0] + vx * t0
-        cy = obstacle_positions[p, 1] + vy * t0
-        distance = math.hypot(cx - sx, cy - sy)
-        passing_time = t0 + distance / speed
-        until = growth_until_s[p]
-        if until < passing_time:
-            passing_time = until
-        radius = via_radii[p] + growth[p] * passing_time + envelope_m[p]
-        limit = 0.98 * distance
-        if limit < radius:
-            radius = limit
-        if radius < 0.0:
-            radius = 0.0
-        # tangent_vectors, both sides
-        dx = cx - sx
-        dy = cy - sy
-        distance_sq = dx * dx + dy * dy
-        radius_sq = radius * radius
-        valid = distance_sq > radius_sq
-        gap = distance_sq - radius_sq
-        length = math.sqrt(gap if gap > 0.0 else 0.0)
-        scale = length / (distance_sq if valid else 1.0)
-        for s in range(2):
-            side_radius = (1.0 if s == 0 else -1.0) * radius
-            wx = scale * (length * dx - side_radius * dy)
-            wy = scale * (side_radius * dx + length * dy)
-            w_via[s, 0] = wx
-            w_via[s, 1] = wy
-            # via_times
-            w_length = math.sqrt(wx * wx + wy * wy)
-            positive = w_length > 0
-            inverse = 1.0 / (w_length if positive else 1.0)
-            along = (wx * vx + wy * vy) * inverse
-            across = (wx * vy - wy * vx) * inverse
-            discriminant = speed * speed - across * across
-            root = math.sqrt(discriminant if discriminant > 0.0 else 0.0)
-            s_early = root - along
-            s_late = -along - root
-            ok = positive and discriminant >= 0
-            t_via[s] = w_length / s_early if (ok and s_early > 1e-12) else math.inf
-            t_via[2 + s] = w_length / s_late if (ok and s_late > 1e-12 and discriminant > 0) else math.inf
-        if not valid:
+        if not _via_pair(starts[p, 0], starts[p, 1], start_times[p], speeds[p], obstacle_positions[p, 0],
+                         obstacle_positions[p, 1], obstacle_velocities[p, 0], obstacle_velocities[p, 1], via_radii[p],
+                         growth[p], growth_until_s[p], envelope_m[p], t_via, w_via):
             continue
         for o in range(4):
             if t_via[o] <= max_time_s:
@@ -1093,48 +1097,54 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                         pair_obstacles[pairs] = best
                         pairs += 1
             if pairs:
-                # The via points of each pair (_via_children): both sides, both roots, legs checked.
-                starts = np.empty((pairs, 2))
-                times = np.empty(pairs)
-                pair_speeds = np.empty(pairs)
-                centres = np.empty((pairs, 2))
-                moving = np.empty((pairs, 2))
-                pair_via_radii = np.empty(pairs)
-                pair_growth = np.empty(pairs)
-                pair_until = np.empty(pairs)
-                pair_envelope = np.empty(pairs)
+                # The via points of each pair (_via_children): both sides, both roots, legs checked. The pairs'
+                # options as via_options gives them, its arithmetic (_via_pair) on the nodes and obstacles
+                # themselves: no copies of them per pair.
+                pair = np.empty(4 * pairs, np.int64)
+                option = np.empty(4 * pairs, np.int64)
+                t_k = np.empty(4 * pairs)
+                starts_k = np.empty((4 * pairs, 2))
+                times_k = np.empty(4 * pairs)
+                leg_velocity = np.empty((4 * pairs, 2))
+                via = np.empty((4 * pairs, 2))
+                t_via = np.empty(4)
+                w_via = np.empty((2, 2))
+                max_time_s = 3 * horizon_s
+                count = 0
                 for p in range(pairs):
                     node = pair_nodes[p]
                     j = pair_obstacles[p]
-                    starts[p, 0] = nf[node, _X]
-                    starts[p, 1] = nf[node, _Y]
-                    times[p] = nf[node, _T]
-                    pair_speeds[p] = nf[node, _V]
-                    centres[p, 0] = obstacle_positions[j, 0]
-                    centres[p, 1] = obstacle_positions[j, 1]
-                    moving[p, 0] = obstacle_velocities[j, 0]
-                    moving[p, 1] = obstacle_velocities[j, 1]
-                    pair_via_radii[p] = via_radii[j]
-                    pair_growth[p] = growth[j]
-                    pair_until[p] = growth_until_s[j]
+                    sx = nf[node, _X]
+                    sy = nf[node, _Y]
+                    t0 = nf[node, _T]
+                    speed = nf[node, _V]
                     if envelope[0] > 0:
-                        stop_s = envelope[1] + pair_speeds[p] / envelope[2]
-                        pair_envelope[p] = half_accel * (stop_s * stop_s)
+                        stop_s = envelope[1] + speed / envelope[2]
+                        margin = half_accel * (stop_s * stop_s)
                     else:
-                        pair_envelope[p] = 0.0
-                pair, option, t_k, leg_velocity, via = via_options(starts, times, pair_speeds, centres, moving,
-                                                                   pair_via_radii, pair_growth, pair_until,
-                                                                   pair_envelope, 3 * horizon_s)
-                count = pair.shape[0]
+                        margin = 0.0
+                    ovx = obstacle_velocities[j, 0]
+                    ovy = obstacle_velocities[j, 1]
+                    if not _via_pair(sx, sy, t0, speed, obstacle_positions[j, 0], obstacle_positions[j, 1], ovx, ovy,
+                                     via_radii[j], growth[j], growth_until_s[j], margin, t_via, w_via):
+                        continue
+                    for o in range(4):
+                        t = t_via[o]
+                        if t <= max_time_s:
+                            pair[count] = p
+                            option[count] = o
+                            t_k[count] = t
+                            starts_k[count, 0] = sx
+                            starts_k[count, 1] = sy
+                            times_k[count] = t0
+                            leg_velocity[count, 0] = (w_via[o % 2, 0] + ovx * t) / t
+                            leg_velocity[count, 1] = (w_via[o % 2, 1] + ovy * t) / t
+                            via[count, 0] = sx + leg_velocity[count, 0] * t
+                            via[count, 1] = sy + leg_velocity[count, 1] * t
+                            count += 1
                 if count:
-                    starts_k = np.empty((count, 2))
-                    times_k = np.empty(count)
-                    for q in range(count):
-                        starts_k[q, 0] = starts[pair[q], 0]
-                        starts_k[q, 1] = starts[pair[q], 1]
-                        times_k[q] = times[pair[q]]
-                    good = _legs_free(starts_k, times_k, leg_velocity, t_k, horizon_s, obstacle_positions,
-                                      obstacle_velocities, radii, growth, growth_until_s)
+                    good = _legs_free(starts_k[:count], times_k[:count], leg_velocity[:count], t_k[:count], horizon_s,
+                                      obstacle_positions, obstacle_velocities, radii, growth, growth_until_s)
                     kept = 0
                     for q in range(count):
                         if good[q]:
@@ -1162,7 +1172,7 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                                 continue
                             p = pair[q]
                             parent = pair_nodes[p]
-                            speed = pair_speeds[p]
+                            speed = nf[parent, _V]
                             if depth == 0:
                                 fx = leg_velocity[q, 0] / speed
                                 fy = leg_velocity[q, 1] / speed
