@@ -39,7 +39,7 @@ from viapath.planning.viapath.kernel_slots import (
     F_STOP_SHORT, F_TOLERANCE, F_TURN_ACCEL, F_TURN_IN_PLACE, F_TURN_RATE, NO_CANDIDATE, STEP_ONE)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")  # inlined: called per leg and obstacle, a few hundred a cycle
 def _contact(px, py, vx, vy, radius, growth, duration):
     """Scalar :func:`viapath.geometry._first_contact`: first τ in [0, duration] with
     |p + v τ| <= radius + growth τ; inf if none, 0 if already touching. (The reference drops the
@@ -59,6 +59,54 @@ def _contact(px, py, vx, vy, radius, growth, duration):
     return math.inf
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _leg_contact(starts, start_times, velocities, durations, obstacle_positions, obstacle_velocities, radii, growth,
+                 growth_until_s, leg_radius, cylinder_only, k, j):
+    """The first contact of leg ``k`` with obstacle ``j``: one entry of :func:`legs_first_contact` (inlined:
+    :func:`_legs_free` asks it leg by leg and stops at the first contact)."""
+    t0 = start_times[k]
+    duration = durations[k]
+    ovx = obstacle_velocities[j, 0]
+    ovy = obstacle_velocities[j, 1]
+    px = starts[k, 0] - (obstacle_positions[j, 0] + ovx * t0)
+    py = starts[k, 1] - (obstacle_positions[j, 1] + ovy * t0)
+    vx = velocities[k, 0] - ovx
+    vy = velocities[k, 1] - ovy
+    g = growth[j]
+    if cylinder_only:
+        return _contact(px, py, vx, vy, (radii[j] + leg_radius) + g * t0, g, duration)
+    until = growth_until_s[j]
+    cone_duration = until - t0
+    if cone_duration < 0.0:
+        cone_duration = 0.0
+    if cone_duration > duration:
+        cone_duration = duration
+    early = _contact(px, py, vx, vy, (radii[j] + leg_radius) + g * (t0 if t0 < until else until),
+                     g if until > t0 else 0.0, cone_duration)
+    if math.isfinite(early):
+        return early
+    if t0 + duration >= until:
+        full_growth = g * (until if math.isfinite(until) else 0.0)
+        late = _contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy,
+                        (radii[j] + leg_radius) + full_growth, 0.0, duration - cone_duration)
+        return late + cone_duration
+    return math.inf
+
+
+@njit(cache=True, nogil=True)
+def _cylinder_only(growth, growth_until_s):
+    """Whether no obstacle's radius stops growing within the legs' time (no growth, or none capped): then
+    one cylinder per obstacle."""
+    any_growth = False
+    any_finite_until = False
+    for j in range(growth.shape[0]):
+        if growth[j] != 0.0:
+            any_growth = True
+        if math.isfinite(growth_until_s[j]):
+            any_finite_until = True
+    return (not any_growth) or (not any_finite_until)
+
+
 @njit(cache=True, nogil=True)
 def legs_first_contact(starts, start_times, velocities, durations, obstacle_positions, obstacle_velocities,
                        radii, growth, growth_until_s, leg_radii):
@@ -69,46 +117,12 @@ def legs_first_contact(starts, start_times, velocities, durations, obstacle_posi
     k_count = starts.shape[0]
     n_count = obstacle_positions.shape[0]
     out = np.empty((k_count, n_count))
-    any_growth = False
-    any_finite_until = False
-    for j in range(n_count):
-        if growth[j] != 0.0:
-            any_growth = True
-        if math.isfinite(growth_until_s[j]):
-            any_finite_until = True
-    cylinder_only = (not any_growth) or (not any_finite_until)
+    cylinder_only = _cylinder_only(growth, growth_until_s)
     for k in range(k_count):
-        t0 = start_times[k]
-        duration = durations[k]
         for j in range(n_count):
-            ovx = obstacle_velocities[j, 0]
-            ovy = obstacle_velocities[j, 1]
-            px = starts[k, 0] - (obstacle_positions[j, 0] + ovx * t0)
-            py = starts[k, 1] - (obstacle_positions[j, 1] + ovy * t0)
-            vx = velocities[k, 0] - ovx
-            vy = velocities[k, 1] - ovy
-            g = growth[j]
-            if cylinder_only:
-                out[k, j] = _contact(px, py, vx, vy, (radii[j] + leg_radii[k]) + g * t0, g, duration)
-                continue
-            until = growth_until_s[j]
-            cone_duration = until - t0
-            if cone_duration < 0.0:
-                cone_duration = 0.0
-            if cone_duration > duration:
-                cone_duration = duration
-            early = _contact(px, py, vx, vy, (radii[j] + leg_radii[k]) + g * (t0 if t0 < until else until),
-                             g if until > t0 else 0.0, cone_duration)
-            if math.isfinite(early):
-                out[k, j] = early
-                continue
-            if t0 + duration >= until:
-                full_growth = g * (until if math.isfinite(until) else 0.0)
-                late = _contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy,
-                                (radii[j] + leg_radii[k]) + full_growth, 0.0, duration - cone_duration)
-                out[k, j] = late + cone_duration
-            else:
-                out[k, j] = math.inf
+            out[k, j] = _leg_contact(starts, start_times, velocities, durations, obstacle_positions,
+                                     obstacle_velocities, radii, growth, growth_until_s, leg_radii[k], cylinder_only,
+                                     k, j)
     return out
 
 
@@ -152,6 +166,55 @@ def track(x, y, heading, speed, turn, target_x, target_y, speed_mps, max_speed_m
     return positions
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _via_pair(sx, sy, t0, speed, ox, oy, vx, vy, via_radius, growth, until, envelope_m, t_via, w_via):
+    """:func:`via_options` of one pair (a leg from (sx, sy) at t0 at ``speed``, the obstacle at (ox, oy) now
+    moving at (vx, vy)): the four options' via times into ``t_via`` (inf: none) and the two sides' offsets
+    into ``w_via``; False when the start is within the via radius (no option). Inlined: :func:`grow` takes
+    its pairs' options with it straight from its node store."""
+    cx = ox + vx * t0
+    cy = oy + vy * t0
+    distance = math.hypot(cx - sx, cy - sy)
+    passing_time = t0 + distance / speed
+    if until < passing_time:
+        passing_time = until
+    radius = via_radius + growth * passing_time + envelope_m
+    limit = 0.98 * distance
+    if limit < radius:
+        radius = limit
+    if radius < 0.0:
+        radius = 0.0
+    # tangent_vectors, both sides
+    dx = cx - sx
+    dy = cy - sy
+    distance_sq = dx * dx + dy * dy
+    radius_sq = radius * radius
+    valid = distance_sq > radius_sq
+    gap = distance_sq - radius_sq
+    length = math.sqrt(gap if gap > 0.0 else 0.0)
+    scale = length / (distance_sq if valid else 1.0)
+    for s in range(2):
+        side_radius = (1.0 if s == 0 else -1.0) * radius
+        wx = scale * (length * dx - side_radius * dy)
+        wy = scale * (side_radius * dx + length * dy)
+        w_via[s, 0] = wx
+        w_via[s, 1] = wy
+        # via_times
+        w_length = math.sqrt(wx * wx + wy * wy)
+        positive = w_length > 0
+        inverse = 1.0 / (w_length if positive else 1.0)
+        along = (wx * vx + wy * vy) * inverse
+        across = (wx * vy - wy * vx) * inverse
+        discriminant = speed * speed - across * across
+        root = math.sqrt(discriminant if discriminant > 0.0 else 0.0)
+        s_early = root - along
+        s_late = -along - root
+        ok = positive and discriminant >= 0
+        t_via[s] = w_length / s_early if (ok and s_early > 1e-12) else math.inf
+        t_via[2 + s] = w_length / s_late if (ok and s_late > 1e-12 and discriminant > 0) else math.inf
+    return valid
+
+
 @njit(cache=True, nogil=True)
 def via_options(starts, start_times, speeds, obstacle_positions, obstacle_velocities, via_radii, growth,
                 growth_until_s, envelope_m, max_time_s):
@@ -166,54 +229,9 @@ def via_options(starts, start_times, speeds, obstacle_positions, obstacle_veloci
     t_via = np.empty(4)
     w_via = np.empty((2, 2))
     for p in range(count):
-        sx = starts[p, 0]
-        sy = starts[p, 1]
-        t0 = start_times[p]
-        speed = speeds[p]
-        vx = obstacle_velocities[p, 0]
-        vy = obstacle_velocities[p, 1]
-        cx = obstacle_positions[p, 0] + vx * t0
-        cy = obstacle_positions[p, 1] + vy * t0
-        distance = math.hypot(cx - sx, cy - sy)
-        passing_time = t0 + distance / speed
-        until = growth_until_s[p]
-        if until < passing_time:
-            passing_time = until
-        radius = via_radii[p] + growth[p] * passing_time + envelope_m[p]
-        limit = 0.98 * distance
-        if limit < radius:
-            radius = limit
-        if radius < 0.0:
-            radius = 0.0
-        # tangent_vectors, both sides
-        dx = cx - sx
-        dy = cy - sy
-        distance_sq = dx * dx + dy * dy
-        radius_sq = radius * radius
-        valid = distance_sq > radius_sq
-        gap = distance_sq - radius_sq
-        length = math.sqrt(gap if gap > 0.0 else 0.0)
-        scale = length / (distance_sq if valid else 1.0)
-        for s in range(2):
-            side_radius = (1.0 if s == 0 else -1.0) * radius
-            wx = scale * (length * dx - side_radius * dy)
-            wy = scale * (side_radius * dx + length * dy)
-            w_via[s, 0] = wx
-            w_via[s, 1] = wy
-            # via_times
-            w_length = math.sqrt(wx * wx + wy * wy)
-            positive = w_length > 0
-            inverse = 1.0 / (w_length if positive else 1.0)
-            along = (wx * vx + wy * vy) * inverse
-            across = (wx * vy - wy * vx) * inverse
-            discriminant = speed * speed - across * across
-            root = math.sqrt(discriminant if discriminant > 0.0 else 0.0)
-            s_early = root - along
-            s_late = -along - root
-            ok = positive and discriminant >= 0
-            t_via[s] = w_length / s_early if (ok and s_early > 1e-12) else math.inf
-            t_via[2 + s] = w_length / s_late if (ok and s_late > 1e-12 and discriminant > 0) else math.inf
-        if not valid:
+        if not _via_pair(starts[p, 0], starts[p, 1], start_times[p], speeds[p], obstacle_positions[p, 0],
+                         obstacle_positions[p, 1], obstacle_velocities[p, 0], obstacle_velocities[p, 1], via_radii[p],
+                         growth[p], growth_until_s[p], envelope_m[p], t_via, w_via):
             continue
         for o in range(4):
             if t_via[o] <= max_time_s:
@@ -777,17 +795,23 @@ def goal_legs(starts, start_times, speeds, subgoal, stop_short_m, horizon_s, con
                     elif later < value:
                         value = later
                 contact[k, j] = value
-    inside = _goal_legs_inside_all(segment_starts, segment_directions, segment_lengths, half_widths, starts, subgoal,
-                                   subgoal_index, spacing_m, tolerance_m)
+    # Free: no contact, then inside. The corridor check only when some leg has no contact (a blocked batch,
+    # the usual case in the tree, needs none); then of all the legs, as the sample spacing is the longest's.
     free = np.empty(k_count, np.bool_)
+    any_clear = False
     for k in range(k_count):
-        ok = inside[k]
-        if ok:
-            for j in range(n_count):
-                if not math.isinf(contact[k, j]):
-                    ok = False
-                    break
+        ok = True
+        for j in range(n_count):
+            if not math.isinf(contact[k, j]):
+                ok = False
+                break
         free[k] = ok
+        any_clear = any_clear or ok
+    if any_clear:
+        inside = _goal_legs_inside_all(segment_starts, segment_directions, segment_lengths, half_widths, starts,
+                                       subgoal, subgoal_index, spacing_m, tolerance_m)
+        for k in range(k_count):
+            free[k] = free[k] and inside[k]
     return directions, lengths, free, contact
 
 
@@ -837,7 +861,7 @@ _NONE, _ZERO = np.int64(-1), np.int64(0)
 _I_STRAIGHT, _I_SLOW, _I_CORNER = np.int64(_STRAIGHT), np.int64(_SLOW), np.int64(_CORNER)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _reserve(nf, ni, m, count):
     """Room for ``count`` more nodes after the first ``m`` (the store doubles when full)."""
     if m + count <= nf.shape[0]:
@@ -850,7 +874,7 @@ def _reserve(nf, ni, m, count):
     return bigger_f, bigger_i
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")  # inlined: a call passed 16 arguments for each node
 def _add(nf, ni, m, x, y, t, v, parent, length, fx, fy, way0, way1, way2, slow_s, slow_v):
     nf, ni = _reserve(nf, ni, m, 1)
     nf[m, _X] = x
@@ -874,18 +898,21 @@ def _add(nf, ni, m, x, y, t, v, parent, length, fx, fy, way0, way1, way2, slow_s
 @njit(cache=True, nogil=True)
 def _legs_free(starts, start_times, velocities, durations, horizon_s, obstacle_positions, obstacle_velocities, radii,
                growth, growth_until_s):
-    """LegChecks.legs_free: no contact up to the horizon, plain radii (no braking envelope)."""
+    """LegChecks.legs_free: no contact up to the horizon, plain radii (no braking envelope). Leg by leg, up to
+    its first contact: whether any contact is finite (or NaN) is all that is asked."""
     k_count = starts.shape[0]
     checked = np.empty(k_count)
     for k in range(k_count):
         checked[k] = _clip(horizon_s - start_times[k], 0.0, durations[k])
-    contact = legs_first_contact(starts, start_times, velocities, checked, obstacle_positions, obstacle_velocities,
-                                 radii, growth, growth_until_s, np.zeros(k_count))
+    cylinder_only = _cylinder_only(growth, growth_until_s)
     free = np.empty(k_count, np.bool_)
     for k in range(k_count):
         ok = True
-        for j in range(contact.shape[1]):
-            if not math.isinf(contact[k, j]):
+        for j in range(obstacle_positions.shape[0]):
+            # leg radius 0.0, as legs_first_contact with np.zeros(k_count)
+            if not math.isinf(_leg_contact(starts, start_times, velocities, checked, obstacle_positions,
+                                           obstacle_velocities, radii, growth, growth_until_s, 0.0, cylinder_only, k,
+                                           j)):
                 ok = False
                 break
         free[k] = ok
@@ -1100,48 +1127,54 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                         pair_obstacles[pairs] = best
                         pairs += 1
             if pairs:
-                # The via points of each pair (_via_children): both sides, both roots, legs checked.
-                starts = np.empty((pairs, 2))
-                times = np.empty(pairs)
-                pair_speeds = np.empty(pairs)
-                centres = np.empty((pairs, 2))
-                moving = np.empty((pairs, 2))
-                pair_via_radii = np.empty(pairs)
-                pair_growth = np.empty(pairs)
-                pair_until = np.empty(pairs)
-                pair_envelope = np.empty(pairs)
+                # The via points of each pair (_via_children): both sides, both roots, legs checked. The pairs'
+                # options as via_options gives them, its arithmetic (_via_pair) on the nodes and obstacles
+                # themselves: no copies of them per pair.
+                pair = np.empty(4 * pairs, np.int64)
+                option = np.empty(4 * pairs, np.int64)
+                t_k = np.empty(4 * pairs)
+                starts_k = np.empty((4 * pairs, 2))
+                times_k = np.empty(4 * pairs)
+                leg_velocity = np.empty((4 * pairs, 2))
+                via = np.empty((4 * pairs, 2))
+                t_via = np.empty(4)
+                w_via = np.empty((2, 2))
+                max_time_s = 3 * horizon_s
+                count = 0
                 for p in range(pairs):
                     node = pair_nodes[p]
                     j = pair_obstacles[p]
-                    starts[p, 0] = nf[node, _X]
-                    starts[p, 1] = nf[node, _Y]
-                    times[p] = nf[node, _T]
-                    pair_speeds[p] = nf[node, _V]
-                    centres[p, 0] = obstacle_positions[j, 0]
-                    centres[p, 1] = obstacle_positions[j, 1]
-                    moving[p, 0] = obstacle_velocities[j, 0]
-                    moving[p, 1] = obstacle_velocities[j, 1]
-                    pair_via_radii[p] = via_radii[j]
-                    pair_growth[p] = growth[j]
-                    pair_until[p] = growth_until_s[j]
+                    sx = nf[node, _X]
+                    sy = nf[node, _Y]
+                    t0 = nf[node, _T]
+                    speed = nf[node, _V]
                     if envelope[0] > 0:
-                        stop_s = envelope[1] + pair_speeds[p] / envelope[2]
-                        pair_envelope[p] = half_accel * (stop_s * stop_s)
+                        stop_s = envelope[1] + speed / envelope[2]
+                        margin = half_accel * (stop_s * stop_s)
                     else:
-                        pair_envelope[p] = 0.0
-                pair, option, t_k, leg_velocity, via = via_options(starts, times, pair_speeds, centres, moving,
-                                                                   pair_via_radii, pair_growth, pair_until,
-                                                                   pair_envelope, 3 * horizon_s)
-                count = pair.shape[0]
+                        margin = 0.0
+                    ovx = obstacle_velocities[j, 0]
+                    ovy = obstacle_velocities[j, 1]
+                    if not _via_pair(sx, sy, t0, speed, obstacle_positions[j, 0], obstacle_positions[j, 1], ovx, ovy,
+                                     via_radii[j], growth[j], growth_until_s[j], margin, t_via, w_via):
+                        continue
+                    for o in range(4):
+                        t = t_via[o]
+                        if t <= max_time_s:
+                            pair[count] = p
+                            option[count] = o
+                            t_k[count] = t
+                            starts_k[count, 0] = sx
+                            starts_k[count, 1] = sy
+                            times_k[count] = t0
+                            leg_velocity[count, 0] = (w_via[o % 2, 0] + ovx * t) / t
+                            leg_velocity[count, 1] = (w_via[o % 2, 1] + ovy * t) / t
+                            via[count, 0] = sx + leg_velocity[count, 0] * t
+                            via[count, 1] = sy + leg_velocity[count, 1] * t
+                            count += 1
                 if count:
-                    starts_k = np.empty((count, 2))
-                    times_k = np.empty(count)
-                    for q in range(count):
-                        starts_k[q, 0] = starts[pair[q], 0]
-                        starts_k[q, 1] = starts[pair[q], 1]
-                        times_k[q] = times[pair[q]]
-                    good = _legs_free(starts_k, times_k, leg_velocity, t_k, horizon_s, obstacle_positions,
-                                      obstacle_velocities, radii, growth, growth_until_s)
+                    good = _legs_free(starts_k[:count], times_k[:count], leg_velocity[:count], t_k[:count], horizon_s,
+                                      obstacle_positions, obstacle_velocities, radii, growth, growth_until_s)
                     kept = 0
                     for q in range(count):
                         if good[q]:
@@ -1169,7 +1202,7 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                                 continue
                             p = pair[q]
                             parent = pair_nodes[p]
-                            speed = pair_speeds[p]
+                            speed = nf[parent, _V]
                             if depth == 0:
                                 fx = leg_velocity[q, 0] / speed
                                 fy = leg_velocity[q, 1] / speed
@@ -1212,7 +1245,10 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
 @njit(cache=True, nogil=True)
 def _wrap(angle):
     """:func:`viapath.geometry.wrap_angle` of a scalar (np.mod's sign convention is Python's %)."""
-    return math.pi - ((math.pi - angle) % (2.0 * math.pi))
+    turned = math.pi - angle
+    if 0.0 <= turned < 2.0 * math.pi:  # % leaves it as it is (fmod exact; ±0.0 gives pi either way): skip it
+        return math.pi - turned
+    return math.pi - (turned % (2.0 * math.pi))
 
 
 @njit(cache=True, nogil=True)
@@ -1231,8 +1267,19 @@ def _clear(positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_
             limit = reach if (reach != reach or reach < now) else now  # np.minimum, NaN first
             if now != now:
                 limit = now
-            distance = math.hypot(positions[s, 0] - cx, positions[s, 1] - cy)
-            if not distance >= limit:
+            dx = positions[s, 0] - cx
+            dy = positions[s, 1] - cy
+            # hypot >= limit by the squared distance outside a ±1e-9 band (as _within), else by hypot itself:
+            # NaN offsets or limits, and limits whose square could underflow or overflow, go to hypot.
+            if 1e-140 < limit < 1e140:
+                squared = dx * dx + dy * dy
+                above = limit * (1.0 + 1e-9)
+                if squared > above * above:
+                    continue
+                below = limit * (1.0 - 1e-9)
+                if squared < below * below:
+                    return False
+            if not math.hypot(dx, dy) >= limit:
                 return False
     return True
 
@@ -1258,8 +1305,8 @@ def _follows(robot, target_x, target_y, angle, speed, settings, steps, obstacle_
         return 0
     inside = True
     for s in range(steps):
-        if not _excess(positions[s, 0], positions[s, 1], segment_starts, segment_directions, segment_lengths,
-                       half_widths) <= settings[F_TOLERANCE]:
+        if not _excess_at_most(positions[s, 0], positions[s, 1], segment_starts, segment_directions, segment_lengths,
+                               half_widths, settings[F_TOLERANCE]):
             inside = False
             break
     if inside:

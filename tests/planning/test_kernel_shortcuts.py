@@ -1,0 +1,134 @@
+"""The compiled choice's shortcuts (kernels.py: _wrap, _clear, _legs_free) give what the full computation gives.
+
+Each test holds a shortcut to the earlier form, compiled here as the reference, on seeded random cases
+and on values placed right at the boundaries the shortcuts decide by: angles at ±pi and multiples of 2 pi
+(and one ulp beyond), distances equal to the limit (and within the ±1e-9 band around it), NaN.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+numba = pytest.importorskip("numba")
+
+from viapath.planning.viapath import kernels
+
+
+@numba.njit(cache=False)
+def _wrap_reference(angle):
+    return math.pi - ((math.pi - angle) % (2.0 * math.pi))
+
+
+# The reference as the kernel had it (x != x: NaN, the kernels' idiom).
+@numba.njit(cache=False)
+def _clear_reference(positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth,
+                     growth_until_s):
+    for j in range(obstacle_positions.shape[0]):
+        now = math.hypot(robot_x - obstacle_positions[j, 0], robot_y - obstacle_positions[j, 1]) - 1e-3
+        for s in range(count):
+            t = dt * (s + 1)
+            cx = obstacle_positions[j, 0] + obstacle_velocities[j, 0] * t
+            cy = obstacle_positions[j, 1] + obstacle_velocities[j, 1] * t
+            until = growth_until_s[j]
+            capped = until if until != until else (t if t < until else until)  # noqa: PLR0124, FURB136
+            reach = radii[j] + growth[j] * capped
+            limit = reach if (reach != reach or reach < now) else now  # noqa: PLR0124
+            if now != now:  # noqa: PLR0124
+                limit = now
+            distance = math.hypot(positions[s, 0] - cx, positions[s, 1] - cy)
+            if not distance >= limit:
+                return False
+    return True
+
+
+def _bits(value: float) -> int:
+    return int(np.float64(value).view(np.int64))
+
+
+def test_wrap_skips_the_modulo_only_where_it_changes_nothing():
+    two_pi = 2.0 * math.pi
+    special = [0.0, -0.0, math.pi, -math.pi, two_pi, -two_pi, 3 * math.pi, -3 * math.pi, 1e-300, -1e-300, 1e-20,
+               math.inf, -math.inf, math.nan, 1e300, -1e300]
+    for k in range(-6, 7):
+        for base in (k * math.pi, k * two_pi):
+            special += [base, np.nextafter(base, math.inf), np.nextafter(base, -math.inf)]
+    rng = np.random.default_rng(3)
+    angles = np.concatenate([special, rng.uniform(-20.0, 20.0, 5000), rng.uniform(-4.0, 4.0, 5000),
+                             rng.normal(0.0, 1e3, 500)])
+    for angle in angles.tolist():
+        got, expected = kernels._wrap(angle), _wrap_reference(angle)
+        assert _bits(got) == _bits(expected) or (math.isnan(got) and math.isnan(expected)), angle
+
+
+def _clear_cases(rng, count: int):
+    """(arguments of _clear) with some positions exactly at, or within 1e-9 of, the limit."""
+    for case in range(count):
+        n = int(rng.integers(1, 6))
+        steps = int(rng.integers(1, 8))
+        dt = 0.2
+        robot = rng.uniform(-1.0, 1.0, 2)
+        positions_obs = robot + rng.uniform(-3.0, 3.0, (n, 2))
+        velocities = rng.uniform(-1.0, 1.0, (n, 2))
+        radii = rng.uniform(0.1, 0.8, n)
+        growth = np.where(rng.random(n) < 0.5, 0.0, rng.uniform(0.0, 0.3, n))
+        until = np.where(rng.random(n) < 0.5, math.inf, rng.uniform(0.0, 1.0, n))
+        positions = robot + rng.uniform(-2.0, 2.0, (steps, 2))
+        if case % 3 == 0:  # a position placed at the limit of an obstacle, or just inside or outside it
+            j = int(rng.integers(n))
+            s = int(rng.integers(steps))
+            t = dt * (s + 1)
+            now = math.hypot(robot[0] - positions_obs[j, 0], robot[1] - positions_obs[j, 1]) - 1e-3
+            reach = radii[j] + growth[j] * min(t, until[j])
+            limit = min(reach, now)
+            scale = limit * (1.0 + rng.choice([0.0, 1e-10, -1e-10, 2e-9, -2e-9, 5e-16, -5e-16]))
+            angle = rng.uniform(-math.pi, math.pi)
+            centre = positions_obs[j] + velocities[j] * t
+            positions[s] = centre + scale * np.array([math.cos(angle), math.sin(angle)])
+        if case % 17 == 0:  # NaN: a position, a radius or a person's position
+            which = case // 17 % 3
+            if which == 0:
+                positions[int(rng.integers(steps)), int(rng.integers(2))] = math.nan
+            elif which == 1:
+                radii[int(rng.integers(n))] = math.nan
+            else:
+                positions_obs[int(rng.integers(n)), 0] = math.nan
+        yield (np.ascontiguousarray(positions), steps, dt, float(robot[0]), float(robot[1]), positions_obs,
+               velocities, radii, growth, until)
+
+
+def test_clear_by_squared_distance_matches_hypot():
+    rng = np.random.default_rng(5)
+    answers = []
+    for arguments in _clear_cases(rng, 600):
+        expected = _clear_reference(*arguments)
+        assert kernels._clear(*arguments) == expected
+        answers.append(expected)
+    assert any(answers) and not all(answers)  # both answers came up
+
+
+def test_legs_free_stops_at_the_first_contact_and_agrees():
+    rng = np.random.default_rng(7)
+    for case in range(300):
+        k, n = int(rng.integers(1, 8)), int(rng.integers(0, 6))
+        starts = rng.uniform(-2.0, 2.0, (k, 2))
+        start_times = rng.uniform(0.0, 2.0, k)
+        velocities = rng.uniform(-1.0, 1.0, (k, 2))
+        durations = rng.uniform(0.0, 4.0, k)
+        positions = rng.uniform(-4.0, 4.0, (n, 2))
+        obstacle_velocities = rng.uniform(-1.0, 1.0, (n, 2))
+        radii = rng.uniform(0.1, 0.6, n)
+        growth = np.where(rng.random(n) < 0.5, 0.0, rng.uniform(0.0, 0.3, n))
+        until = np.where(rng.random(n) < 0.5, math.inf, rng.uniform(0.0, 3.0, n))
+        if case % 23 == 0 and n:
+            radii[0] = math.nan
+        horizon = float(rng.uniform(0.5, 5.0))
+        checked = np.array([kernels._clip(horizon - start_times[i], 0.0, durations[i]) for i in range(k)])
+        contact = kernels.legs_first_contact(starts, start_times, velocities, checked, positions, obstacle_velocities,
+                                             radii, growth, until, np.zeros(k))
+        expected = ~(~np.isinf(contact)).any(axis=1)
+        got = kernels._legs_free(starts, start_times, velocities, durations, horizon, positions, obstacle_velocities,
+                                 radii, growth, until)
+        assert np.array_equal(got, expected)
