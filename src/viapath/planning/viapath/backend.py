@@ -293,7 +293,7 @@ def whole_steps_compiled() -> bool:
 
 def compile_kernels() -> bool:
     """Compile every planner kernel now if numba is there and the whole-step ones are not compiled yet
-    (about 25 s of CPU once per machine, the choice kernels most of it: numba caches them on disk); True
+    (about 30 s of CPU once per machine, the choice kernel most of it: numba caches them on disk); True
     when they are ready. Two planning cycles run all of them with the planner's own argument types: one whose
     straight leg is blocked (goal_legs and grow inside the choice kernels), one closed in from four sides,
     where no candidate is free and standing is hit too (the escape's kernels)."""
