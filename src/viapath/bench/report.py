@@ -19,11 +19,12 @@ Aggregates, per planner, over its episodes (rows with an error are counted apart
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from viapath.io.jsonable import dumps as json_dumps
 
 TABLE_COLUMNS = [
     ("planner", "planner", "{}"),
@@ -143,7 +144,7 @@ def write_report(rows: list[dict[str, Any]], out_dir: Path, plots: bool = True,
     summary = summarize(rows, order=order)
     if order:
         rows = sorted(rows, key=lambda r: order.index(r["planner"]) if r["planner"] in order else len(order))
-    (out_dir / "summary.json").write_text(json.dumps(summary, indent=2))
+    (out_dir / "summary.json").write_text(json_dumps(summary, indent=2))
     text = ["# Benchmark summary", "", markdown_table(summary), "",
             "Per family: success / collision / at-fault collision rate.", "", family_table(rows), ""]
     from viapath.bench.identity import crash_lines
