@@ -137,7 +137,7 @@ def sample_discs(segments: np.ndarray, shape_ids: np.ndarray, robot_radius_m: fl
         return (*empty, np.zeros(0, dtype=np.int64)) if with_owner else empty
     a, b = segments[:, 0], segments[:, 1]
     lengths = np.hypot(*(b - a).T)
-    pieces = np.maximum(np.ceil(lengths / spacing_m), 1).astype(np.int64)
+    pieces = np.maximum(np.ceil(lengths / spacing_m - 1e-9), 1).astype(np.int64)
     pieces[lengths == 0] = 0
     counts = pieces + 1
     counts[lengths == 0] = 1

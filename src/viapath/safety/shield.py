@@ -311,6 +311,12 @@ class Shield:
         substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
         sweep = braking_sweep(position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps,
                               float(robot.speed_mps))
+        low = sweep.positions.min(axis=(0, 1)) - reach.max() - float(sweep.sagitta_m.max(initial=0.0))
+        high = sweep.positions.max(axis=(0, 1)) + reach.max() + float(sweep.sagitta_m.max(initial=0.0))
+        inside = ((centres >= low) & (centres <= high)).all(axis=1)  # only discs the sweeps' box can reach
+        if not inside.any():
+            return
+        centres, reach, distance = centres[inside], reach[inside], distance[inside]
         a, b = sweep.positions[:, :-1], sweep.positions[:, 1:]  # (K, T-1, 2) chords
         chord = b - a
         length2 = np.einsum("kti,kti->kt", chord, chord)
