@@ -106,12 +106,15 @@ class StaticObstacleLayer:
         self._seen_s = np.zeros(0)  # when each remembered segment was last part of a scan
 
     def update(self, time_s: float, robot_pose, scans, track_positions: np.ndarray,
-               track_radii_m: np.ndarray) -> StaticLayer:
+               track_radii_m: np.ndarray, scanners=None) -> StaticLayer:
+        """This cycle's layer; ``scanners``: the models of ``scans`` when not all of this layer's (a silent
+        scanner's scan missing)."""
         if not self.params.enabled:
             return StaticLayer.empty()
         pose = np.asarray(robot_pose, dtype=float)
-        current = self._from_scans(pose, scans, track_positions, track_radii_m)
-        kept = self._remembered(time_s, pose, scans)
+        scanners = self.scanners if scanners is None else tuple(scanners)
+        current = self._from_scans(scanners, pose, scans, track_positions, track_radii_m)
+        kept = self._remembered(scanners, time_s, pose, scans)
         layer = merge_close_shapes(current.concatenate(kept), self.params.merge_gap_m)
         self._seen_s = np.concatenate([np.full(len(current), float(time_s)), self._seen_s[self._kept_rows]])
         self.layer = layer
@@ -119,10 +122,10 @@ class StaticObstacleLayer:
 
     # -- marking ---------------------------------------------------------------------------------
 
-    def _from_scans(self, pose: np.ndarray, scans, track_positions, track_radii_m) -> StaticLayer:
+    def _from_scans(self, scanners, pose: np.ndarray, scans, track_positions, track_radii_m) -> StaticLayer:
         p = self.params
         segments, runs, radii = [], [], []
-        for index, (scanner, ranges) in enumerate(zip(self.scanners, scans, strict=True)):
+        for index, (scanner, ranges) in enumerate(zip(scanners, scans, strict=True)):
             ranges = np.asarray(ranges, dtype=float).reshape(-1)
             if len(ranges) != scanner.beam_count:
                 continue
@@ -139,7 +142,7 @@ class StaticObstacleLayer:
                 distance = np.hypot(offset[..., 0], offset[..., 1])
                 explained = (distance <= np.asarray(track_radii_m)[None] + p.explained_margin_m).any(axis=1)
                 points, beams = points[~explained], beams[~explained]
-            for earlier, earlier_ranges in zip(self.scanners[:index], scans[:index]):
+            for earlier, earlier_ranges in zip(scanners[:index], scans[:index]):
                 # Where an earlier scanner returned the same point, its run has it already.
                 again = self._returned_by(earlier, pose, np.asarray(earlier_ranges, dtype=float).reshape(-1), points)
                 points, beams = points[~again], beams[~again]
@@ -157,7 +160,7 @@ class StaticObstacleLayer:
 
     # -- memory ----------------------------------------------------------------------------------
 
-    def _remembered(self, time_s: float, pose: np.ndarray, scans) -> StaticLayer:
+    def _remembered(self, scanners, time_s: float, pose: np.ndarray, scans) -> StaticLayer:
         previous = self.layer
         self._kept_rows = np.zeros(0, dtype=int)
         if len(previous) == 0:
@@ -166,10 +169,10 @@ class StaticObstacleLayer:
         a, b = previous.segments[:, 0], previous.segments[:, 1]
         probes = np.stack([a, 0.5 * (a + b), b], axis=1).reshape(-1, 2)  # (3M, 2)
         seen = np.zeros(len(probes), dtype=bool)
-        for scanner, ranges in zip(self.scanners, scans, strict=True):
+        for scanner, ranges in zip(scanners, scans, strict=True):
             seen |= self._seen_by(scanner, pose, np.asarray(ranges, dtype=float).reshape(-1), probes)
         beyond = np.ones(len(probes), dtype=bool)  # beyond every scanner's range: not worth remembering
-        for scanner in self.scanners:
+        for scanner in scanners:
             x, y, _ = scanner.world_pose(pose)
             beyond &= np.hypot(probes[:, 0] - x, probes[:, 1] - y) > scanner.range_max_m
         hidden = ~(seen | beyond).reshape(-1, 3).all(axis=1)
