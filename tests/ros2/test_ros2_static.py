@@ -64,3 +64,29 @@ def test_a_known_map_keeps_the_robot_from_a_wall_it_cannot_see():
         speed = core.cycle(t).command.speed_mps
         pose = pose + 0.1 * speed * np.array([1.0, 0.0, 0.0])
     assert 0.0 < pose[0] + core.settings.robot_radius_m < 1.0 and speed == 0.0
+
+
+def test_markers_draw_the_static_layer():
+    import pytest
+
+    from viapath.ros2 import rclpy_available
+
+    ok, why = rclpy_available()
+    if not ok:
+        pytest.skip(why)
+    from viapath.observation import Command, Decision, Obstacles, Plan
+    from viapath.path import DesignatedPath
+    from viapath.planning import make_planner
+    from viapath.ros2.convert import time_msg
+    from viapath.ros2.core import CycleResult
+    from viapath.ros2.markers import MarkerScenes, marker_array
+
+    path = DesignatedPath([[0.0, 0.0], [4.0, 0.0]], half_widths_m=[1.0])
+    static = StaticLayer(np.array([[[1.0, -1.0], [1.0, 1.0]], [[2.0, 0.5], [2.5, 0.5]]]))
+    result = CycleResult(Command(0.0, 0.0), "driving", [], 1.0, Decision(Command(0.0, 0.0), Plan("blocked", 0.0, np.zeros(2))),
+                         Obstacles.empty(), np.zeros(3), static=static)
+    scenes = MarkerScenes(robot_radius_m=0.25)
+    markers = marker_array(scenes.scene(path, make_planner("viapath", path), result), None, "odom", time_msg(1.0))
+    (line,) = [m for m in markers.markers if m.ns == "static"]
+    points = np.array([[p.x, p.y] for p in line.points])
+    assert np.allclose(points, static.segments.reshape(-1, 2))

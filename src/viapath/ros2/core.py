@@ -104,6 +104,7 @@ class CycleResult:
     speed_cap_mps: float | None = None
     cycle_time_ms: float | None = None
     status: dict[str, dict[str, str]] = field(default_factory=dict)  # name -> key/values, for diagnostics
+    static: StaticLayer = field(default_factory=StaticLayer.empty)  # the static layer the planner was given
 
 
 def urg04lx_models(settings: NodeSettings) -> list[ScannerModel]:
@@ -436,8 +437,8 @@ class PlannerCore:
             o = self.odometry
             robot = RobotState(pose[:2].copy(), float(pose[2]), max(o.speed_mps, 0.0), o.turn_rate_radps,
                                self.settings.robot_radius_m)
-            decision = self.planner.plan(Observation(stamp, robot, obstacles,
-                                                     self.map_layer.concatenate(self.static_now)))
+            static = self.map_layer.concatenate(self.static_now)
+            decision = self.planner.plan(Observation(stamp, robot, obstacles, static))
             command = self._limit(decision.command, cap)
             mode = "driving" if cap is None else "degraded"
             if cap is not None:
@@ -459,7 +460,8 @@ class PlannerCore:
         self.cycle_times_ms.append(elapsed)
         if len(self.cycle_times_ms) > 1000:
             del self.cycle_times_ms[:-100]
-        result = CycleResult(command, mode, reasons, stamp, decision, obstacles, pose, sectors, cap, elapsed)
+        result = CycleResult(command, mode, reasons, stamp, decision, obstacles, pose, sectors, cap, elapsed,
+                             static=self.map_layer.concatenate(self.static_now))
         result.status = self._status(result, now_s)
         self.last_result = result
         return result
