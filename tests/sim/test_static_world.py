@@ -151,3 +151,28 @@ def test_returns_of_a_tracked_person_are_not_static():
     person_at = np.array([[2.0 + front.mount_x_m + 0.1, 0.0]])
     assert len(layer.update(0.0, np.zeros(3), [ranges], person_at, np.array([0.2]))) == 0
     assert len(StaticObstacleLayer((front,)).update(0.0, np.zeros(3), [ranges], np.zeros((0, 2)), np.zeros(0))) >= 1
+
+
+def test_navground_peers_get_every_shape_as_static_discs():
+    pytest.importorskip("navground.core", reason="needs the navground extra")
+    from viapath.planning import make_planner
+    from viapath.path import DesignatedPath
+    from viapath.observation import Observation, Obstacles, RobotState
+    from viapath.static import StaticLayer, box_edges
+
+    scenario = scenario_from_dict(BOX)
+    path = DesignatedPath(CORRIDOR["waypoints"], half_widths_m=[1.0])
+    planner = make_planner("nav-orca", path, nominal_speed_mps=0.4)
+    shapes = StaticLayer.of_shapes([edges for edges, _ in scenario.static_shapes()])
+    person = Obstacles(np.array([[5.0, 0.0]]), np.array([[-0.3, 0.0]]), np.array([0.25]))
+    planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.4), person, shapes))
+    state = planner.behavior.environment_state
+    assert len(state.neighbors) == 1
+    discs = np.array([d.position for d in state.static_obstacles])
+    assert len(discs) > 0
+    # every edge of the box and both walls is covered by the discs handed over
+    for edges in [box_edges([3.0, 0.1], [0.6, 0.6], 0.3)]:
+        for a, b in edges:
+            for f in np.linspace(0, 1, 7):
+                point = a + f * (b - a)
+                assert np.hypot(*(discs - point).T).min() <= 0.15
