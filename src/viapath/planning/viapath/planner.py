@@ -23,6 +23,24 @@ What the paper leaves open and we chose, beyond what those modules say:
   then flips and flips back. If last cycle's way is gone, it is searched for once more with
   ``keep_previous_inflation`` of the uncertainty inflation (the safety margin stays) and kept if,
   with the usual hysteresis, it still costs less than the new choice.
+* **Static obstacles** (DESIGN §10; the paper draws its path boundary round static things and plans for
+  moving ones only). A static obstacle is a vertical prism in x-y-t: the guarded entry hands the planner
+  the observation's static layer as discs of velocity 0 sampled along its segments (within a few mm of
+  the segments' capsules, :mod:`viapath.static`), so the legs are checked against it exactly as against
+  people (a cylinder of velocity 0 is the prism), and the same via-point code makes its avoiding lines
+  (v_i = 0: t* = |w|/v). What is ours: (1) via points go round a whole **shape**, not the one disc a leg
+  met first: a pair (node, static disc) becomes the two discs of that disc's shape that reach furthest
+  left and right as seen from the node (the tangents to the shape's inflated outline,
+  :func:`.candidates._round_static_shapes`), and the root branches once per shape; (2) static legs are
+  checked to their end, past the horizon (a leg into a wall is not made free by driving it slowly), and
+  without the shield's braking envelope, which is for where people may walk; (3) static discs farther
+  outside the corridor than their reach are left out of the cycle (no candidate can meet them); (4) a
+  **closed way** (no free candidate, standing is safe, and the straight leg to the subgoal meets static
+  geometry before any person) is not a plain stop: the robot drives on along that leg to
+  ``blocked_gap_m`` short of touching it, at a speed from which it stops there, and waits with status
+  ``blocked``; every cycle looks again, so it goes on when the door opens. The candidate tree of a
+  cycle with static geometry runs the numpy recipe with the compiled leg checks and via points
+  (:data:`.backend.STEPWISE`): the shapes' extremes are not compiled.
 * The way back (``return_lookahead_m``, off by default): off the path line, the paper's step 1 is
   tried first towards the path point that far ahead instead of the subgoal. The paper heads for the
   subgoal; when that is metres away the robot drifts back to the path on a shallow line after a pass,
