@@ -27,6 +27,10 @@ Beyond the paper (DESIGN §2 and §5.2 future work):
   was pushed back, or a blocked subgoal was given up), the path's own corners between the robot and
   the subgoal become via points: the way back along the designated path.
 
+**Static geometry** (DESIGN §10): a static disc met by a leg stands for its whole shape. The root branches
+once per shape a leg meets, and the via points are those of the shape's two extreme discs as seen from the
+node (the tangents to its inflated outline); via points round static geometry keep no braking envelope.
+
 Each candidate records its **way round** — the first obstacle it avoids, the side and the root
 (:class:`Way`) — so that the next cycle can prefer the same way (hysteresis) without comparing
 positions.
@@ -280,8 +284,7 @@ def _one_per_shape(checks: LegChecks, contact: np.ndarray) -> np.ndarray:
     if len(hit) == 0:
         return contact
     labels = checks.static_labels()
-    columns = hit
-    columns = columns[np.argsort(labels[columns], kind="stable")]
+    columns = hit[np.argsort(labels[hit], kind="stable")]
     starts = np.flatnonzero(np.diff(labels[columns], prepend=-2))
     block = contact[:, columns]
     earliest = np.repeat(np.minimum.reduceat(block, starts, axis=1), np.diff(np.append(starts, len(columns))), axis=1)

@@ -12,6 +12,8 @@ What the paper leaves open and we chose:
   on along the next segment; past the final goal nothing is checked (the mission ends there). A
   blocked intermediate subgoal is given up within the bypass distance (paper Fig. 3), so legs towards
   it need to be free only up to there.
+* Static geometry (rows of the obstacles marked static, velocity 0) is checked over a leg's whole length,
+  past the horizon (its forecast is certain), and keeps no braking envelope (:meth:`LegChecks.contact_times`).
 * The corridor check covers whole legs, not only via points. A robot already outside the corridor
   may not go further out, but may come back (``corridor_tolerance_m``). All corridor checks of the
   planner go through :meth:`LegChecks.inside`, :meth:`LegChecks.legs_inside` and
