@@ -4,8 +4,8 @@
 
 For each planner and perception mode it prints: static contacts (episodes with one, and in all), other
 collisions, reachable goals reached, median time ratio of the ``walls`` scenes (time to goal over
-length / nominal speed), and for each ``door`` scene the robot's gap to the door when it stood waiting
-(its smallest surface distance to the door while the door was closed) and whether it touched it.
+length / nominal speed), and for each ``door`` scene the robot's gap to the door where it stood waiting
+for it to open (None: it never had to wait).
 A door scene whose description says "unreachable" counts as unreachable; every other goal is reachable.
 """
 
@@ -26,14 +26,16 @@ from viapath.static import point_segment_distances
 
 
 def door_gap_m(scenario: dict, trace) -> float | None:
-    """The robot's smallest surface distance to the door while it stood (the last wall of a door scene)."""
+    """The robot's surface distance to the closed door where it stood waiting (the last wall of a door
+    scene; at rest = below 0.02 m/s while the door is closed), the smallest if it waited more than once;
+    None when it never had to wait (the door opened before it came near)."""
     door = scenario["walls"][-1]
     points = np.array(door["points"], dtype=float)
     until = door.get("until_s", math.inf)
-    closed = trace.times_s < until
-    if not closed.any():
+    waiting = (trace.times_s < until) & (trace.robot_speeds_mps < 0.02) & (trace.times_s > 1.0)
+    if not waiting.any():
         return None
-    gap = point_segment_distances(trace.robot_poses[closed, :2], points[None])[:, 0] - trace.robot_radius_m
+    gap = point_segment_distances(trace.robot_poses[waiting, :2], points[None])[:, 0] - trace.robot_radius_m
     return float(gap.min())
 
 
