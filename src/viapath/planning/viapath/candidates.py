@@ -299,22 +299,20 @@ def _round_static_shapes(checks: LegChecks, positions: np.ndarray, node_index: n
     from the node (:meth:`.checks.LegChecks.static_extremes`): via points go round the whole shape, not
     round the one disc a leg met first. Pairs of people stay as they are; repeated pairs are made once."""
     labels = checks.static_labels()
-    nodes, obstacles, known = [], [], {}
+    pairs, known = {}, {}  # (node, obstacle) in the order made, once each
     for node, obstacle in zip(node_index.tolist(), obstacle_index.tolist()):
         if labels[obstacle] < 0:
-            nodes.append(node)
-            obstacles.append(obstacle)
+            pairs[node, obstacle] = None
             continue
         start = positions[node]
         key = (float(start[0]), float(start[1]), int(labels[obstacle]))
         extremes = known.get(key)
         if extremes is None:
             extremes = known[key] = checks.static_extremes(start, obstacle)
-        for extreme in dict.fromkeys(extremes):
-            nodes.append(node)
-            obstacles.append(extreme)
-    pairs = np.unique(np.array([nodes, obstacles], dtype=np.int64).reshape(2, -1), axis=1)
-    return pairs[0], pairs[1]
+        for extreme in extremes:
+            pairs[node, extreme] = None
+    made = np.array(list(pairs), dtype=np.int64).reshape(-1, 2)
+    return made[:, 0], made[:, 1]
 
 
 def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: bool):
