@@ -66,7 +66,7 @@ def corridor_borders(waypoints: np.ndarray, half_widths: np.ndarray) -> list[tup
 class _NavgroundPeer(Planner):
     behavior_type = ""
     options = COMMON_OPTIONS + OptionSet([
-        Option("horizon_s", 5.0, "navground behaviour's horizon", "s", minimum=0.0, exclusive_minimum=True),
+        Option("horizon_s", 5.0, "navground behaviour's horizon", "s", minimum=0.0, exclusive_minimum=True, maximum=60.0),
         Option("corridor_walls", True, "give navground the corridor borders as line obstacles"),
     ], owner="navground")
 
