@@ -95,8 +95,8 @@ def test_every_duration_over_its_step_is_at_most_the_cap(name, data):
         a, b = options[duration], options[step]
         values = {duration: data.draw(st.floats(max(a.minimum, 1e-3), a.maximum)),
                   step: data.draw(st.floats(b.minimum, b.maximum))}
-        if values[duration] / values[step] > MAX_STEPS_PER_ROLLOUT:
-            with pytest.raises(OptionError, match=f"{duration} / {step}"):
+        if not 1 <= values[duration] / values[step] <= MAX_STEPS_PER_ROLLOUT:
+            with pytest.raises(OptionError, match=f"planner.{duration}: "):
                 options.validate(values, where="planner")
         else:
             options.validate(values, where="planner")
@@ -121,3 +121,61 @@ def test_the_largest_accepted_roll_outs_plan_a_cycle():
     planner = shielded(inner, True, 0.1)
     decision = planner.plan(Observation(0.0, robot(speed=0.2), one_obstacle((0.9, 0.0), velocity=(-0.5, 0.0))))
     assert np.isfinite([decision.command.speed_mps, decision.command.turn_rate_radps]).all()
+
+
+_BAD_IDS = st.one_of(st.text(min_size=1, max_size=5), st.none(), st.complex_numbers(allow_nan=False),
+                     st.floats(min_value=2.0 ** 64, allow_infinity=True), st.just(math.nan),
+                     st.binary(min_size=1, max_size=3), st.integers(min_value=2 ** 64, max_value=2 ** 200))
+
+
+@_CASES
+@given(bad=_BAD_IDS, position=st.integers(0, 2))
+def test_ids_that_are_not_integers_are_the_documented_error(bad, position):
+    from viapath.observation import ObservationError, Obstacles
+
+    ids = [0, 1, 2]
+    ids[position] = bad
+    with pytest.raises(ObservationError, match="obstacles.ids"):
+        Obstacles(np.zeros((3, 2)) + [[1, 0]], np.zeros((3, 2)), np.full(3, 0.3), ids=ids)
+
+
+@_CASES
+@given(name=st.sampled_from(planners()), ident=st.integers(-(2 ** 63), 2 ** 63 - 1))
+def test_any_int64_id_plans(name, ident):
+    """Perception hands int64 ids as they are (Obstacles.of_fresh_arrays); navground takes 32-bit ones."""
+    from viapath.observation import Obstacles
+
+    obstacles = Obstacles.of_fresh_arrays(np.array([[1.5, 0.3]]), np.zeros((1, 2)), np.array([0.3]), np.zeros(1),
+                                          np.zeros(1), np.array([ident], dtype=np.int64))
+    decision = fresh(name).plan(Observation(0.0, robot(), obstacles))
+    assert np.isfinite([decision.command.speed_mps, decision.command.turn_rate_radps]).all()
+
+
+@settings(max_examples=12, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+@given(name=st.sampled_from([n for n in planners() if n != "viapath"]), data=st.data())
+def test_option_values_inside_their_bounds_plan_a_cycle(name, data):
+    _plan_with_options(name, data)
+
+
+@settings(max_examples=12, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+@given(data=st.data())
+def test_viapath_option_values_inside_their_bounds_plan_a_cycle(data):
+    _plan_with_options("viapath", data)
+
+
+def _plan_with_options(name, data):
+    from tests.robustness._hostile import option_values
+    from viapath.observation import Obstacles
+
+    values = data.draw(option_values(planner_class(name).options))
+    try:
+        planner = make_planner(name, corridor(), nominal_speed_mps=0.2, limits=LIMITS, robot_radius_m=0.25,
+                               options=values)
+    except OptionError as error:
+        assert "steps; at most" in str(error) or "at least one step" in str(error), error  # the cross-check only
+        return
+    obstacles = Obstacles(np.array([[1.2, 0.1], [2.0, -0.4], [0.8, 0.9]]),
+                          np.array([[-0.4, 0.0], [0.0, 0.3], [0.1, -0.2]]), np.full(3, 0.3))
+    for t in range(3):
+        decision = planner.plan(Observation(0.1 * t, robot(x=0.02 * t), obstacles))
+        assert np.isfinite([decision.command.speed_mps, decision.command.turn_rate_radps]).all()

@@ -108,7 +108,7 @@ class _NavgroundPeer(Planner):
         behavior.angular_speed = float(robot.turn_rate_radps)
         radii = situation.inflation.obstacle_radii_m
         state = behavior.environment_state
-        state.neighbors = [core.Neighbor(p, float(r), v, int(i)) for p, r, v, i in
+        state.neighbors = [core.Neighbor(p, float(r), v, int(i) % 2**31) for p, r, v, i in  # navground's ids: int32
                            zip(obstacles.positions, radii, obstacles.velocities, obstacles.ids)]
         state.line_obstacles = self._walls
         tolerance = self.subgoal_policy.goal_tolerance_m if self.subgoals.is_final else self.subgoal_policy.reach_threshold_m
