@@ -92,3 +92,30 @@ def far_coordinates(draw) -> tuple[str, str]:
 def hostile_yaml():
     """Any text of the oversized kinds (each must be refused quickly with a short message)."""
     return st.one_of(alias_bombs(), deep_nesting(), many_nodes())
+
+
+@st.composite
+def option_values(draw, options) -> dict:
+    """Values for a random subset of ``options`` (an OptionSet), each inside its own bounds, often at
+    an end of them: what the schema accepts must give a cycle of bounded work."""
+    values = {}
+    for option in options:
+        if not draw(st.booleans()):
+            continue
+        if option.choices:
+            values[option.path] = draw(st.sampled_from(option.choices))
+        elif option.kind is bool:
+            values[option.path] = draw(st.booleans())
+        elif option.kind in (int, float, tuple):
+            low = option.minimum if option.minimum is not None else 0.0
+            high = option.maximum
+            if option.kind is int:
+                number = st.sampled_from([int(low), int(high)]) | st.integers(int(low), int(high))
+            else:
+                inner = low * 1.001 + 1e-6 if option.exclusive_minimum else low
+                number = st.sampled_from([inner, high]) | st.floats(inner, high)
+            if option.kind is tuple:
+                values[option.path] = draw(st.lists(number, min_size=1, max_size=8))
+            else:
+                values[option.path] = draw(number)
+    return values

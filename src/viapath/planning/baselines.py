@@ -98,12 +98,12 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
 
     options = COMMON_OPTIONS + OptionSet([
         Option("horizon_s", 3.0, "an arc touching an obstacle this far ahead is inadmissible", "s",
-               minimum=0.0, exclusive_minimum=True, maximum=30.0),
-        Option("sample_dt_s", 0.1, "time step of the sampled arcs", "s", minimum=0.01, maximum=1.0),
+               minimum=0.0, exclusive_minimum=True, maximum=10.0),
+        Option("sample_dt_s", 0.1, "time step of the sampled arcs", "s", minimum=0.05, maximum=1.0),
         Option("window_s", 0.1, "the control period: velocities reachable within it form the window", "s",
                minimum=0.0, exclusive_minimum=True, maximum=10.0),
-        Option("n_speeds", 7, "speeds sampled in the window", minimum=1, maximum=101),
-        Option("n_turn_rates", 15, "turn rates sampled in the window", minimum=1, maximum=101),
+        Option("n_speeds", 7, "speeds sampled in the window", minimum=1, maximum=21),
+        Option("n_turn_rates", 15, "turn rates sampled in the window", minimum=1, maximum=41),
         Option("corridor_horizon_s", 1.5, "an arc must stay in the corridor this long", "s", minimum=0.0, maximum=30.0),
         Option("heading_lookahead_s", 1.0, "where along the arc heading and path terms are evaluated", "s",
                minimum=0.0, maximum=30.0),
@@ -198,8 +198,8 @@ class VOPlanner(_SubgoalFollower, name="vo"):
     options = COMMON_OPTIONS + OptionSet([
         Option("horizon_s", 5.0, "truncation of the velocity obstacles", "s", minimum=0.0, exclusive_minimum=True,
                maximum=60.0),
-        Option("n_speeds", 7, "speeds sampled up to the top speed", minimum=1, maximum=101),
-        Option("n_headings", 37, "headings sampled around the direction to the subgoal", minimum=1, maximum=361),
+        Option("n_speeds", 7, "speeds sampled up to the top speed", minimum=1, maximum=51),
+        Option("n_headings", 37, "headings sampled around the direction to the subgoal", minimum=1, maximum=181),
         Option("heading_span_rad", float(np.pi / 2), "headings within ± this of the direction to the subgoal",
                "rad", minimum=0.0, maximum=float(np.pi)),
         Option("corridor_horizon_s", 2.0, "a velocity must keep the robot in the corridor this long", "s",

@@ -14,7 +14,7 @@ from viapath.planning.viapath.backend import BACKENDS
 _OWN = [
     # The paper (§3, §4.2).
     Option("speeds", (0.1, 0.2, 0.3, 0.4, 0.5), "the speed set: candidates are built for each, plus the current "
-           "and the nominal speed", "m/s", minimum=0.0, exclusive_minimum=True, maximum=50.0),
+           "and the nominal speed", "m/s", minimum=0.01, maximum=50.0),
     Option("k1", 0.1, "Eq. 1 weight of the path length Dist", "1/m", minimum=0.0, maximum=1000.0, group="weights"),
     Option("k2", 0.001, "Eq. 1 weight of the travel time", "1/s", minimum=0.0, maximum=1000.0, group="weights"),
     Option("k3", 0.08, "Eq. 1 weight of |v - v_nominal|", "s/m", minimum=0.0, maximum=1000.0, group="weights"),
