@@ -26,7 +26,7 @@ from typing import Any
 import yaml
 
 MAX_YAML_BYTES = 4 * 1024 * 1024  # B; the largest shipped scenario is a few kB
-MAX_YAML_NODES = 200_000  # scalars and collections after alias expansion
+MAX_YAML_NODES = 50_000  # scalars and collections after alias expansion; a generated crowd scenario has ~5 000
 MAX_YAML_DEPTH = 64  # nested mappings and lists
 MAX_INT_DIGITS = 19  # a 64-bit integer
 MAX_TEXT_BYTES = 64 * 1024 * 1024  # B; the largest ETH/UCY trajectory file is about 1.2 MB
@@ -134,8 +134,8 @@ def _check_events(text: str, origin: str) -> None:
         anchors: dict[str, int] = {}
         stack: list[_Frame] = []
         total = 0
-        while parser.check_event():
-            event = parser.get_event()
+        get_event = parser.get_event
+        while (event := get_event()) is not None:
             kind = type(event)
             if kind in (yaml.MappingStartEvent, yaml.SequenceStartEvent):
                 stack.append(_Frame(event.anchor, kind is yaml.MappingStartEvent))
