@@ -257,6 +257,6 @@ class OptionSet:
             value = load_yaml(raw, name)
         except InputError as error:
             if "not valid YAML" not in str(error):
-                raise OptionError([(name, str(error).split(": ", 1)[-1])]) from None
+                raise OptionError([(name, str(error).split(": ", 1)[-1].replace("(top level): ", ""))]) from None
             value = raw
         return name, value
