@@ -145,7 +145,7 @@ class OptionSet:
 
     ``steps`` pairs a duration option with its time step (``("rollout_s", "rollout_dt_s")``): each value
     is inside its own bounds, and together they must not make more than :data:`MAX_STEPS_PER_ROLLOUT`
-    steps, else one cycle's roll-out would take unbounded time and memory (and at least one)."""
+    steps, else one cycle's roll-out would take unbounded time and memory."""
 
     def __init__(self, options: Iterable[Option], owner: str = "", steps: Iterable[tuple[str, str]] = ()):
         self.owner = owner  # e.g. the planner's name, for messages
@@ -222,12 +222,7 @@ class OptionSet:
         errors = []
         for duration, step in self.steps:
             steps = flat[duration] / flat[step]
-            if steps < 1:
-                path = self[duration].path
-                errors.append((f"{where}.{path}" if where else path,
-                               f"{duration} = {flat[duration]:g} s is shorter than one {step} ({flat[step]:g} s); "
-                               f"a roll-out needs at least one step"))
-            elif steps > MAX_STEPS_PER_ROLLOUT:
+            if steps > MAX_STEPS_PER_ROLLOUT:
                 path = self[duration].path
                 field = f"{where}.{path}" if where else path
                 errors.append((field, f"{duration} / {step} = {flat[duration]:g} s / {flat[step]:g} s = {steps:,.0f} "

@@ -95,7 +95,7 @@ def test_every_duration_over_its_step_is_at_most_the_cap(name, data):
         a, b = options[duration], options[step]
         values = {duration: data.draw(st.floats(max(a.minimum, 1e-3), a.maximum)),
                   step: data.draw(st.floats(b.minimum, b.maximum))}
-        if not 1 <= values[duration] / values[step] <= MAX_STEPS_PER_ROLLOUT:
+        if values[duration] / values[step] > MAX_STEPS_PER_ROLLOUT:
             with pytest.raises(OptionError, match=f"planner.{duration}: "):
                 options.validate(values, where="planner")
         else:
@@ -172,7 +172,7 @@ def _plan_with_options(name, data):
         planner = make_planner(name, corridor(), nominal_speed_mps=0.2, limits=LIMITS, robot_radius_m=0.25,
                                options=values)
     except OptionError as error:
-        assert "steps; at most" in str(error) or "at least one step" in str(error), error  # the cross-check only
+        assert "steps; at most" in str(error), error  # only the cross-check may refuse values inside bounds
         return
     obstacles = Obstacles(np.array([[1.2, 0.1], [2.0, -0.4], [0.8, 0.9]]),
                           np.array([[-0.4, 0.0], [0.0, 0.3], [0.1, -0.2]]), np.full(3, 0.3))

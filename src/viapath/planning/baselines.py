@@ -98,7 +98,7 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
 
     options = COMMON_OPTIONS + OptionSet([
         Option("horizon_s", 3.0, "an arc touching an obstacle this far ahead is inadmissible", "s",
-               minimum=0.0, exclusive_minimum=True, maximum=10.0),
+               minimum=0.25, maximum=10.0),  # at least a quarter of the longest sample_dt_s: arcs of 2 samples
         Option("sample_dt_s", 0.1, "time step of the sampled arcs", "s", minimum=0.05, maximum=1.0),
         Option("window_s", 0.1, "the control period: velocities reachable within it form the window", "s",
                minimum=0.0, exclusive_minimum=True, maximum=10.0),
