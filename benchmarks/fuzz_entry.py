@@ -2,7 +2,7 @@
 on many more generated observations, counting instead of stopping at the first failure.
 
 Usage: python benchmarks/fuzz_entry.py [--cases 100000] [--planners all] [--laser-cases 5000]
-                                       [--seed 0] [--json]
+                                       [--input-cases 300] [--construction-cases 300] [--seed 0] [--json]
 
 Observations come from the same hypothesis strategy as the tests (tests/robustness/_fuzz.py:
 NaN / inf / negative / huge fields and wrong shapes mixed into valid ones, five cycles per
@@ -12,7 +12,11 @@ ObservationError, how the guard answered (``guard-stop``, ``guard-brake``, repai
 normally), and the violations, which must all be 0: another exception, a command not finite or
 outside the limits, a command closing on an obstacle within stopping distance (independent
 brute-force roll-out). The laser part feeds generated scan sets (0/NaN/inf ranges, wrong lengths,
-a scanner missing) through LaserPerception.process into the viapath planner.
+a scanner missing) through LaserPerception.process into the viapath planner. The input part feeds
+hostile scenario texts (alias bombs, deep nesting, huge integer literals, far coordinates:
+tests/robustness/_hostile.py) to the scenario and preset readers (each must be refused with a short
+message naming the file and field; the slowest refusal is reported); the construction part builds
+planners from bad descriptions (refused) and from option values inside their bounds (must plan).
 """
 
 from __future__ import annotations
@@ -127,11 +131,141 @@ def fuzz_laser(cases: int, base_seed: int) -> dict:
             "cpu_s": time.process_time() - cpu, "violation_examples": examples[:5]}
 
 
+def fuzz_inputs(cases: int, base_seed: int) -> dict:
+    """Hostile scenario text (tests/robustness/_hostile.py: alias bombs, deep nesting, too many nodes,
+    integer literals of thousands of digits, coordinates near the float limit) through the scenario and
+    preset readers: each must be refused with their error, a short message naming the file (and the
+    field), quickly."""
+    from hypothesis import strategies as st
+
+    from _hostile import far_coordinates, hostile_yaml, long_integers  # noqa: E402
+    from viapath.presets import PresetError, parse_preset
+    from viapath.scenarios import ScenarioError
+    from viapath.scenarios.loader import _parse
+
+    counts: Counter = Counter()
+    examples: list[str] = []
+    slowest = [0.0, 0.0]  # wall, CPU
+    cases_strategy = st.one_of(hostile_yaml().map(lambda text: (text, None)), long_integers(), far_coordinates())
+
+    @seed(base_seed)
+    @settings(max_examples=cases, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+    @given(cases_strategy)
+    def run(case):
+        text, field = case
+        counts["inputs"] += 1
+        for reader, expected in ((lambda: _parse(text, "s.yaml", base_dir=None), ScenarioError),
+                                 (lambda: parse_preset(text, "s.yaml"), PresetError)):
+            started, cpu = time.perf_counter(), time.process_time()
+            try:
+                reader()
+            except expected as error:
+                message = str(error)
+                if not message.startswith("s.yaml") or len(message) > 600:
+                    counts["VIOLATION message unclear or long"] += 1
+                    examples.append(message[:200])
+                elif field is not None and expected is ScenarioError and f": {field}: " not in message:
+                    counts["VIOLATION field not named"] += 1
+                    examples.append(f"{field}: {message[:200]}")
+                else:
+                    counts["refused"] += 1
+            except Exception as error:  # noqa: BLE001 - counted
+                counts["VIOLATION other exception"] += 1
+                examples.append(f"{type(error).__name__}: {str(error)[:200]}")
+            else:
+                counts["VIOLATION accepted"] += 1
+            slowest[0] = max(slowest[0], time.perf_counter() - started)
+            slowest[1] = max(slowest[1], time.process_time() - cpu)
+
+    started = time.perf_counter()
+    run()
+    return {"planner": "hostile inputs", **dict(counts), "slowest_refusal_s": slowest[0],
+            "slowest_refusal_cpu_s": slowest[1],
+            "wall_s": time.perf_counter() - started, "violation_examples": examples[:5]}
+
+
+def fuzz_construction(cases: int, base_seed: int) -> dict:
+    """Planners built from generated descriptions and options: a bad robot radius, nominal speed or
+    motion limit must be refused (OptionError naming it); option values inside their bounds must build a
+    planner whose cycles give finite commands inside the limits (or be refused by the step cross-check)."""
+    import math
+
+    from hypothesis import strategies as st
+
+    from _helpers import LIMITS, corridor, robot  # noqa: E402
+    from _hostile import option_values  # noqa: E402
+    from viapath.limits import LIMIT_BOUNDS
+    from viapath.observation import MotionLimits, Obstacles
+    from viapath.options import OptionError
+    from viapath.planning import make_planner, planner_class
+
+    bad = st.sampled_from([math.nan, math.inf, -math.inf, 0.0, -1.0, 1e-9, 1e308, "x", None])
+    counts: Counter = Counter()
+    examples: list[str] = []
+    slowest = [0.0]
+    obstacles = Obstacles(np.array([[1.2, 0.1], [2.0, -0.4], [0.8, 0.9]]),
+                          np.array([[-0.4, 0.0], [0.0, 0.3], [0.1, -0.2]]), np.full(3, 0.3))
+
+    @seed(base_seed)
+    @settings(max_examples=cases, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+    @given(st.sampled_from(available_planners()), st.sampled_from(["radius", "speed", "limits", "options"]), st.data())
+    def run(name, kind, data):
+        counts["planners built"] += 1
+        kwargs = {"nominal_speed_mps": 0.2, "limits": LIMITS, "robot_radius_m": 0.25}
+        if kind == "radius":
+            kwargs["robot_radius_m"] = data.draw(bad.filter(lambda r: r != 1e-9))  # a tiny radius is a radius
+        elif kind == "speed":
+            kwargs["nominal_speed_mps"] = data.draw(bad)
+        elif kind == "limits":
+            field = data.draw(st.sampled_from(sorted(LIMIT_BOUNDS)))
+            kwargs["limits"] = MotionLimits(**{**LIMITS.__dict__, field: data.draw(bad)})
+        else:
+            kwargs["options"] = data.draw(option_values(planner_class(name).options))
+        try:
+            planner = make_planner(name, corridor(), **kwargs)
+        except OptionError as error:
+            if kind == "options" and "step" not in str(error):
+                counts["VIOLATION option inside its bounds refused"] += 1
+                examples.append(str(error)[:200])
+            else:
+                counts["refused (OptionError)"] += 1
+            return
+        except Exception as error:  # noqa: BLE001 - counted
+            counts["VIOLATION other exception"] += 1
+            examples.append(f"{type(error).__name__}: {str(error)[:200]}")
+            return
+        if kind != "options":
+            counts["VIOLATION bad description accepted"] += 1
+            examples.append(f"{name} {kind} {kwargs}")
+            return
+        started = time.perf_counter()
+        try:
+            for t in range(3):
+                decision = planner.plan(Observation(0.1 * t, robot(x=0.02 * t), obstacles))
+                if not inside_limits(decision.command, planner.limits):
+                    counts["VIOLATION bad command"] += 1
+                    examples.append(f"{name} {decision.command}")
+                    return
+        except Exception as error:  # noqa: BLE001 - counted
+            counts["VIOLATION other exception"] += 1
+            examples.append(f"{name} {type(error).__name__}: {str(error)[:200]}")
+            return
+        slowest[0] = max(slowest[0], (time.perf_counter() - started) / 3)
+        counts["planned with generated options"] += 1
+
+    started = time.perf_counter()
+    run()
+    return {"planner": "construction", **dict(counts), "slowest_cycle_s": slowest[0],
+            "wall_s": time.perf_counter() - started, "violation_examples": examples[:5]}
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=100_000, help="observations in total, over the planners")
     parser.add_argument("--planners", default="all")
     parser.add_argument("--laser-cases", type=int, default=5_000)
+    parser.add_argument("--input-cases", type=int, default=300, help="hostile scenario/preset texts")
+    parser.add_argument("--construction-cases", type=int, default=300, help="generated planner constructions")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
@@ -145,6 +279,11 @@ def main(argv=None) -> int:
         results.append(fuzz_laser(args.laser_cases, args.seed))
         if not args.json:
             print(json.dumps(results[-1]), flush=True)
+    for count, fuzz in ((args.input_cases, fuzz_inputs), (args.construction_cases, fuzz_construction)):
+        if count:
+            results.append(fuzz(count, args.seed))
+            if not args.json:
+                print(json.dumps(results[-1]), flush=True)
     total = sum(r.get("observations", 0) for r in results)
     violations = sum(v for r in results for k, v in r.items() if k.startswith("VIOLATION"))
     summary = {"observations": total, "violations": violations, "results": results}

@@ -149,6 +149,7 @@ def test_other_paper_scenarios_reach_the_goal(name):
         (["--plot", "no/such/folder/x.png"], "does not exist"),
         (["--trace", "x.json"], "--trace"),
         (["--animate", "x.avi"], "--animate"),
+        (["--animate", "x.gif", "--frame-stride", "0"], "--frame-stride"),
         (["--planner", "nosuch"], "--planner"),
         (["--perception", "radar"], "--perception"),
         (["--position-noise", "nan"], "--position-noise"),

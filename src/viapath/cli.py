@@ -69,6 +69,8 @@ def run(
     plot: Optional[Path] = typer.Option(None, "--plot", help="Write a figure (PNG/PDF/SVG) of the episode."),
     trace: Optional[Path] = typer.Option(None, "--trace", help="Write the per-step trace as CSV."),
     animate: Optional[Path] = typer.Option(None, "--animate", help="Write an animation (GIF, or MP4 with ffmpeg)."),
+    frame_stride: Optional[int] = typer.Option(None, "--frame-stride", help="With --animate: one frame every N "
+                                               "steps (default: enough to keep at most 400 frames)."),
     option: list[str] = typer.Option([], "--option", "-o", metavar="NAME=VALUE",
                                      help="Set a planner option (repeatable); `viapath planners NAME` lists them."),
     weights: Optional[str] = typer.Option(None, "--weights", help="A weights preset (`viapath presets`) or preset "
@@ -92,6 +94,8 @@ def run(
     _check_output(trace, {".csv"}, "--trace")
     _check_noise(position_noise, "--position-noise")
     _check_noise(velocity_noise, "--velocity-noise")
+    if frame_stride is not None and frame_stride < 1:
+        _fail(f"--frame-stride: expected an integer >= 1, found {frame_stride}")
     if seed is not None and seed < 0:
         _fail(f"--seed: expected an integer >= 0, found {seed}")
     from viapath.perception.modes import PERCEPTION_MODES
@@ -159,7 +163,7 @@ def run(
 
         progress, done = animation_progress(errors)
         try:
-            animate_episode(episode, animate, progress=progress)
+            animate_episode(episode, animate, progress=progress, stride=frame_stride)
         except (RuntimeError, ValueError) as error:
             _fail(str(error))
         finally:

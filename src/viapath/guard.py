@@ -20,8 +20,8 @@ subclass, plug-ins and navground peers included), so each cycle goes:
    * an obstacle with a known position and a bad **velocity** (NaN, inf, faster than
      ``max_obstacle_speed_mps``) is **kept** standing still with the largest velocity uncertainty
      ``max_velocity_sigma_mps`` (a planner under uncertainty grows it into a cone in every
-     direction); a bad **radius** (NaN, inf, negative) becomes ``default_radius_m`` (a person), one
-     above ``max_radius_m`` is cut to it; a bad **σ** (NaN, inf, negative, above the largest) becomes
+     direction); a bad **radius** (NaN, inf, negative) becomes ``default_radius_m`` (a person); one
+     above ``max_radius_m`` is never shrunk: the robot **stops**; a bad **σ** (NaN, inf, negative, above the largest) becomes
      the largest σ. The planner sees the repaired obstacles; ``plan.extras["guard"]`` lists each repair.
 3. **The command** (:func:`check_command`): it must be finite and inside the limits
    (0 ≤ v ≤ ``max_speed_mps``, |ω| ≤ ``max_turn_rate_radps``), else it becomes a stop
@@ -187,11 +187,11 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
         repairs.append(f"obstacles.radii_m[{i}]: expected a finite number ≥ 0, found {radii[i]:g}; "
                        f"kept with radius {config.default_radius_m:g} m")
     radii[bad_radius] = config.default_radius_m
-    too_big = radii > config.max_radius_m
-    for i in np.flatnonzero(too_big & ~bad_position):
-        repairs.append(f"obstacles.radii_m[{i}]: expected at most {config.max_radius_m:g} m, found {radii[i]:g}; "
-                       f"kept with radius {config.max_radius_m:g} m")
-    radii[too_big] = config.max_radius_m
+    for i in np.flatnonzero((radii > config.max_radius_m) & ~bad_position):
+        # Never shrunk: a smaller disc would let the robot drive into its edge. How far it reaches is not
+        # plausible, so the robot stops, as for an obstacle whose position is unknown.
+        stop.append(f"obstacles.radii_m[{i}]: expected at most {config.max_radius_m:g} m, found {radii[i]:g}; "
+                    "an implausible size: stopping")
     for name, values, largest, unit in (("velocity_sigma_mps", velocity_sigma, config.max_velocity_sigma_mps, "m/s"),
                                         ("position_sigma_m", position_sigma, config.max_position_sigma_m, "m")):
         bad = ~(np.isfinite(values) & (values >= 0) & (values <= largest))
@@ -521,7 +521,11 @@ def guard_plan(plan: Callable) -> Callable:
             _INSPECTED.reset(token)
             self._guard_active = False
         limits = getattr(self, "limits", None) or MotionLimits()
-        radius = max(float(getattr(self, "robot_radius_m", 0.0) or 0.0), float(observation.robot.radius_m))
+        own_radius = float(getattr(self, "robot_radius_m", 0.0) or 0.0)
+        if not math.isfinite(own_radius):  # max(nan, r) is nan, which no check would brake for
+            return _stop_decision(self, observation, "guard-stop",
+                                  inspection.repairs + [f"robot_radius_m: expected a finite number, found {own_radius:g}"])
+        radius = max(own_radius, float(observation.robot.radius_m))
         command, status, reason = cycle.check(getattr(decision, "command", None), limits, radius)
         if status is not None:
             plan_ = getattr(decision, "plan", None)

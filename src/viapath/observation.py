@@ -68,6 +68,11 @@ class RobotState:
         return self.speed_mps * np.array([np.cos(self.heading_rad), np.sin(self.heading_rad)])
 
 
+def _is_number(value) -> bool:
+    """A real number (not text, None or a complex): what an obstacle id may be made of."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
+
 @dataclass(frozen=True)
 class Obstacles:
     """Tracked obstacles under a constant-velocity forecast.
@@ -112,11 +117,13 @@ class Obstacles:
             if ids.ndim > 1 or ids.size != n:
                 raise ObservationError(f"obstacles.ids: expected {n} ids (one per position), found shape {ids.shape}")
             try:
+                if np.iscomplexobj(ids) or ids.dtype.kind in "USO" and not all(_is_number(i) for i in ids.ravel()):
+                    raise TypeError("not numbers")
                 ids = ids.astype(float).reshape(n)
-            except (TypeError, ValueError):
+            except (TypeError, ValueError, OverflowError):
                 raise ObservationError(f"obstacles.ids: expected {n} integers, found {self.ids!r}") from None
-            if not (np.isfinite(ids).all() and np.all(ids == np.round(ids))):
-                raise ObservationError(f"obstacles.ids: expected {n} integers, found {ids.tolist()}")
+            if not (np.isfinite(ids).all() and np.all(ids == np.round(ids)) and np.all(np.abs(ids) <= 2.0 ** 63)):
+                raise ObservationError(f"obstacles.ids: expected {n} 64-bit integers, found {ids.tolist()}")
             ids = ids.astype(int)
         object.__setattr__(self, "ids", ids)
 

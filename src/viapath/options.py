@@ -25,6 +25,9 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
 
 
+MAX_LIST_ITEMS = 64  # items of a list option (a speed set): each adds work to every cycle
+
+
 @dataclass(frozen=True)
 class Option:
     """One tunable value: what it is called, its default, its unit and range, and what it does."""
@@ -80,7 +83,8 @@ class Option:
             from typing import Annotated
 
             element = Annotated[float, Field(**limits)] if limits else float
-            return (tuple[element, ...], Field(self.default, min_length=1, description=self.describe()))
+            return (tuple[element, ...], Field(self.default, min_length=1, max_length=MAX_LIST_ITEMS,
+                                               description=self.describe()))
         return (self._annotation(), Field(self.default, description=self.describe(), **limits))
 
 
@@ -133,11 +137,19 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, strict=False)
 
 
-class OptionSet:
-    """An ordered set of options with unique names; validates nested (YAML) or flat mappings."""
+MAX_STEPS_PER_ROLLOUT = 2000  # a duration over its time step: bounds the work and memory of one cycle
 
-    def __init__(self, options: Iterable[Option], owner: str = ""):
+
+class OptionSet:
+    """An ordered set of options with unique names; validates nested (YAML) or flat mappings.
+
+    ``steps`` pairs a duration option with its time step (``("rollout_s", "rollout_dt_s")``): each value
+    is inside its own bounds, and together they must not make more than :data:`MAX_STEPS_PER_ROLLOUT`
+    steps, else one cycle's roll-out would take unbounded time and memory."""
+
+    def __init__(self, options: Iterable[Option], owner: str = "", steps: Iterable[tuple[str, str]] = ()):
         self.owner = owner  # e.g. the planner's name, for messages
+        self.steps = tuple(steps)
         self._options: dict[str, Option] = {}
         for option in options:
             if option.name in self._options:
@@ -158,7 +170,7 @@ class OptionSet:
         return self._options[name]
 
     def __add__(self, other: "OptionSet") -> "OptionSet":
-        return OptionSet([*self, *other], owner=other.owner or self.owner)
+        return OptionSet([*self, *other], owner=other.owner or self.owner, steps=(*self.steps, *other.steps))
 
     @property
     def names(self) -> list[str]:
@@ -201,7 +213,21 @@ class OptionSet:
         for option in self:
             value = getattr(getattr(model, option.group), option.name) if option.group else getattr(model, option.name)
             flat[option.name] = tuple(float(v) for v in value) if option.kind is tuple else value
+        errors = self._step_errors(flat, where)
+        if errors:
+            raise OptionError(errors)
         return Settings(flat)
+
+    def _step_errors(self, flat: Mapping[str, Any], where: str) -> list[tuple[str, str]]:
+        errors = []
+        for duration, step in self.steps:
+            steps = flat[duration] / flat[step]
+            if steps > MAX_STEPS_PER_ROLLOUT:
+                path = self[duration].path
+                field = f"{where}.{path}" if where else path
+                errors.append((field, f"{duration} / {step} = {flat[duration]:g} s / {flat[step]:g} s = {steps:,.0f} "
+                                      f"steps; at most {MAX_STEPS_PER_ROLLOUT:,} (shorten {duration} or raise {step})"))
+        return errors
 
     def _explain(self, item: Mapping[str, Any], where: str) -> tuple[str, str]:
         location = ".".join(str(part) for part in item["loc"])
@@ -210,19 +236,22 @@ class OptionSet:
             owner = f"planner {self.owner!r} has" if self.owner else "known"
             return field, (f"unknown option {item['loc'][-1]!r}; {owner} options: "
                            f"{', '.join(option.path for option in self) or 'none'}")
-        found = item.get("input")
-        return field, f"{item['msg']}; found {found!r}"
+        from viapath.io.safe_read import short_repr
+
+        return field, f"{item['msg']}; found {short_repr(item.get('input'))}"
 
     def parse_assignment(self, text: str) -> tuple[str, Any]:
         """``NAME=VALUE`` from the command line (VALUE parsed as YAML: numbers, true/false, lists)."""
-        import yaml
+        from viapath.io.safe_read import InputError, load_yaml, short_repr
 
         name, sep, raw = text.partition("=")
         name = name.strip()
         if not sep or not name:
-            raise OptionError([("", f"expected NAME=VALUE, found {text!r}")])
+            raise OptionError([("", f"expected NAME=VALUE, found {short_repr(text)}")])
         try:
-            value = yaml.safe_load(raw)
-        except yaml.YAMLError:
+            value = load_yaml(raw, name)
+        except InputError as error:
+            if "not valid YAML" not in str(error):
+                raise OptionError([(name, str(error).split(": ", 1)[-1].replace("(top level): ", ""))]) from None
             value = raw
         return name, value

@@ -113,3 +113,24 @@ def test_laser_scanner_without_a_message_is_all_invalid_not_an_error():
     perception = LaserPerception()
     obstacles = perception.process(0.0, np.zeros(3), [None, np.full(perception.scanners[1].beam_count, np.nan)])
     assert len(obstacles) == 0
+
+
+def test_the_long_fuzz_runs_the_hostile_input_and_construction_parts():
+    """benchmarks/fuzz_entry.py's input and construction parts, a few cases each: no violation."""
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[2] / "benchmarks" / "fuzz_entry.py"
+    spec = importlib.util.spec_from_file_location("fuzz_entry", script)
+    fuzz = importlib.util.module_from_spec(spec)
+    sys.path.insert(0, str(script.parents[1] / "tests" / "robustness"))
+    try:
+        spec.loader.exec_module(fuzz)
+        inputs = fuzz.fuzz_inputs(15, 1)
+        construction = fuzz.fuzz_construction(30, 1)
+    finally:
+        sys.path.remove(str(script.parents[1] / "tests" / "robustness"))
+    for result in (inputs, construction):
+        assert not any(key.startswith("VIOLATION") for key in result), result
+    assert inputs["refused"] == 30 and construction["refused (OptionError)"] > 0

@@ -39,7 +39,7 @@ BAD = {
     "empty_speed_set": ("speeds: [0.1, 0.2, 0.3, 0.4, 0.5]", "speeds: []",
                         "planner.speeds", "at least 1 item", "found []", 1),
     "zero_speed_in_set": ("speeds: [0.1, 0.2, 0.3, 0.4, 0.5]", "speeds: [0.0, 0.2]",
-                          "planner.speeds.0", "greater than 0", "found 0.0", 1),
+                          "planner.speeds.0", "greater than or equal to 0.01", "found 0.0", 1),
     "unknown_field": ("heading: 0.0", "headng: 0.0",
                       "robot.headng", "unknown field", "found 0.0", 1),
     "unknown_top_level_field": ("duration_s: 60", "duration_s: 60\nduraton: 30",

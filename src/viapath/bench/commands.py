@@ -65,10 +65,12 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Run planners on a suite in parallel; write per-episode results, tables and plots.
 
-        Exit code 0: every episode ran; 3: some episode crashed (listed; rerun to retry them);
-        2: bad input; 130: interrupted (Ctrl-C; rerun the same command to resume)."""
+        Exit code 0: every episode ran; 3: some episode crashed (listed; rerun to retry them) or a worker
+        process died (the finished rows are kept); 2: bad input, or another bench is writing into --out;
+        130: interrupted (Ctrl-C or SIGTERM; the finished rows are kept, rerun the same command to resume)."""
         from viapath.bench.report import markdown_table, write_report
-        from viapath.bench.runner import BenchError, BenchInterrupted, load_suite, run_bench
+        from viapath.bench.runner import (BenchError, BenchInterrupted, BenchWorkerLost, FolderBusy, load_suite,
+                                          results_lock, run_bench, terminate_as_interrupt)
         from viapath.bench.suites import SuiteError
 
         names = [p.strip() for p in planners.split(",") if p.strip()]
@@ -95,22 +97,31 @@ def register(app: typer.Typer) -> None:
                 _fail(f"--weights: {error}")
         created = not out.exists()  # a run refused before any episode must leave no folder behind
         try:
-            scenarios = load_suite(suite, out, count=count, seed=seed, workers=workers if backend == "loky" else 1)
-            result = run_bench(scenarios, names, out, workers=workers, backend=backend, scheduler=scheduler,
-                               perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json,
-                               shield=shield, force=force, planner_options=planner_options)
-            summary = write_report(result["rows"], out, plots=plots, order=names)
-            if mcap_failures is not None:
-                from viapath.viz.foxglove import write_failure_mcaps
+            with terminate_as_interrupt(), results_lock(out):
+                scenarios = load_suite(suite, out, count=count, seed=seed, workers=workers if backend == "loky" else 1)
+                result = run_bench(scenarios, names, out, workers=workers, backend=backend, scheduler=scheduler,
+                                   perception=perception, seed=seed, progress=sys.stderr.isatty() and not as_json,
+                                   shield=shield, force=force, planner_options=planner_options,
+                                   note=lambda text: typer.echo(f"note: {text}", err=True))
+                summary = write_report(result["rows"], out, plots=plots, order=names)
+                if mcap_failures is not None:
+                    from viapath.viz.foxglove import write_failure_mcaps
 
-                write_failure_mcaps(result["rows"], scenarios, mcap_failures,
-                                    progress=lambda text: typer.echo(f"mcap: {text}", err=True))
+                    write_failure_mcaps(result["rows"], scenarios, mcap_failures,
+                                        progress=lambda text: typer.echo(f"mcap: {text}", err=True))
         except BenchInterrupted as stopped:
             typer.echo(f"\n{stopped}; rerun the same command to resume ({stopped.total - stopped.finished} left)",
                        err=True)
             raise typer.Exit(code=130) from None
+        except BenchWorkerLost as lost:
+            typer.echo(f"\n{lost}; rerun the same command to run the {lost.total - lost.finished} left", err=True)
+            raise typer.Exit(code=3) from None
+        except KeyboardInterrupt as interrupt:  # before or after the episodes (loading the suite, the report)
+            typer.echo(f"\n{getattr(interrupt, 'reason', 'interrupted')}; rows already written are kept in "
+                       f"{out / 'episodes.csv'}", err=True)
+            raise typer.Exit(code=130) from None
         except (BenchError, SuiteError, OSError) as error:
-            if created and not (out / "episodes.csv").exists():
+            if created and not (out / "episodes.csv").exists() and not isinstance(error, FolderBusy):
                 import shutil
 
                 shutil.rmtree(out, ignore_errors=True)

@@ -16,14 +16,16 @@
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import math
+import os
 import time
 import zlib
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Iterable, Iterator
+from typing import Any, Callable, Iterable, Iterator
 
 from viapath.bench.suites import ETH_UCY_FOLDER, data_root, generate_suite, suite_names, write_suite
 
@@ -45,6 +47,10 @@ BACKENDS = ("loky", "dask", "ray")
 
 class BenchError(ValueError):
     """Bad benchmark input (unknown planner or backend, empty suite, missing extra)."""
+
+
+class FolderBusy(BenchError):
+    """Another run holds the results folder (:func:`results_lock`)."""
 
 
 @dataclass(frozen=True)
@@ -224,6 +230,67 @@ def _ignore_sigint_in_workers() -> None:
 
 # -- results file ----------------------------------------------------------------------------------
 
+LOCK_FILE = ".viapath-bench.lock"
+_HELD_LOCKS: dict[str, int] = {}  # resolved folder -> the descriptor holding its lock (this process)
+
+
+@contextlib.contextmanager
+def results_lock(out_dir: Path) -> Iterator[None]:
+    """Hold the results folder for this run: one writer at a time. Another run into the same folder is
+    refused (:class:`BenchError`) while this one holds it. The lock is the kernel's (``flock`` on a file in
+    the folder), so a run that crashes or is killed leaves no lock behind. Re-entrant in one process."""
+    import fcntl
+
+    out_dir = Path(out_dir)
+    key = str(out_dir.resolve())
+    if key in _HELD_LOCKS:
+        yield
+        return
+    out_dir.mkdir(parents=True, exist_ok=True)
+    fd = os.open(out_dir / LOCK_FILE, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        holder = os.read(fd, 32).decode(errors="replace").strip() or "?"
+        os.close(fd)
+        raise FolderBusy(f"{out_dir}: another viapath bench (pid {holder}) is writing into this folder; "
+                         "wait for it to end or use another --out") from None
+    os.ftruncate(fd, 0)
+    os.write(fd, f"{os.getpid()}\n".encode())
+    _HELD_LOCKS[key] = fd
+    try:
+        yield
+    finally:
+        del _HELD_LOCKS[key]
+        os.close(fd)  # releases the lock
+
+
+def repair_torn_tail(csv_path: Path) -> str | None:
+    """Cut a last row that was cut off mid-write (a run killed while writing it: no newline at the end),
+    so that the next row is not glued onto it; returns what was done, or None when the file is whole."""
+    csv_path = Path(csv_path)
+    if not csv_path.exists() or csv_path.stat().st_size == 0:
+        return None
+    with open(csv_path, "rb+") as handle:
+        size = handle.seek(0, os.SEEK_END)
+        handle.seek(size - 1)
+        if handle.read(1) == b"\n":
+            return None
+        end = size
+        while end > 0:
+            start = max(0, end - 65536)
+            handle.seek(start)
+            found = handle.read(end - start).rfind(b"\n")
+            if found >= 0:
+                end = start + found + 1
+                break
+            end = start
+        handle.truncate(end)
+    what = "its header" if end == 0 else "its last row"
+    return (f"{csv_path}: {what} was cut off mid-write ({size - end} bytes; a run stopped while writing it); "
+            "removed, that episode runs again")
+
+
 def read_rows(csv_path: Path) -> list[dict[str, Any]]:
     if not Path(csv_path).exists():
         return []
@@ -232,7 +299,16 @@ def read_rows(csv_path: Path) -> list[dict[str, Any]]:
         if reader.fieldnames is not None and list(reader.fieldnames) != COLUMNS:
             raise BenchError(f"{csv_path}: written by another version of viapath (columns differ); "
                              "use a new --out folder")
-        return [_parse(row) for row in reader]
+        rows = []
+        for row in reader:
+            try:
+                if None in row or any(row[column] is None for column in COLUMNS):
+                    raise ValueError(f"{len(row) - (None in row)} fields, expected {len(COLUMNS)}")
+                rows.append(_parse(row))
+            except ValueError as error:
+                raise BenchError(f"{csv_path}: line {reader.line_num}: not a row of this file ({error}); remove "
+                                 "that line or use a new --out folder") from None
+        return rows
 
 
 def _parse(row: dict[str, str]) -> dict[str, Any]:
@@ -366,6 +442,7 @@ def run_bench(
     shield: str | None = None,
     force: bool = False,
     planner_options: dict[str, dict] | None = None,
+    note: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:
     """Run every episode not already done in ``out_dir/episodes.csv`` (a row is identified by the
     scenario's content hash, planner, options, perception, seed and viapath version; an episode that
@@ -374,15 +451,25 @@ def run_bench(
 
     Returns ``{"rows": this run's rows, "ran": episodes run now, "skipped": already done,
     "errors": crashed episodes among the rows, "wall_s": ...}``. Ctrl-C stops the workers, keeps the
-    finished rows and raises :class:`BenchInterrupted` saying how many are done.
+    finished rows and raises :class:`BenchInterrupted` saying how many are done; a worker process that
+    dies (killed, out of memory) does the same with :class:`BenchWorkerLost`. The folder is held for the
+    whole run (:func:`results_lock`); a last row cut off mid-write is removed first (``note`` is told,
+    and the result's ``"repaired"`` says so).
     """
-    import os
+    with results_lock(Path(out_dir)):
+        return _run_bench(scenarios, planners, Path(out_dir), workers, backend, scheduler, perception, seed, progress,
+                          shield, force, planner_options, note or (lambda text: None))
 
+
+def _run_bench(scenarios, planners, out_dir: Path, workers, backend, scheduler, perception, seed, progress, shield,
+               force, planner_options, note) -> dict[str, Any]:
     from viapath.bench.identity import check_folder, manifest
 
-    out_dir = Path(out_dir)
     csv_path = out_dir / "episodes.csv"
     tasks = make_tasks(scenarios, planners, perception, seed, shield, planner_options)
+    repaired = repair_torn_tail(csv_path)
+    if repaired:
+        note(repaired)
     latest = _latest(read_rows(csv_path))
     ok_names = {row["scenario"] for row in latest.values() if not row.get("error")}
     crashed_only = {row["scenario"] for row in latest.values()} - ok_names
@@ -403,11 +490,15 @@ def run_bench(
         parallel, close = _parallel(backend, workers, scheduler)
         try:
             _run_and_write(parallel, todo, csv_path, progress)
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as interrupt:
             _stop_workers(parallel)
-            latest = _latest(read_rows(csv_path))
-            finished = sum(1 for t in tasks if t.key in latest and not latest[t.key].get("error"))
-            raise BenchInterrupted(finished, len(tasks), csv_path) from None
+            finished = _finished(tasks, csv_path)
+            raise BenchInterrupted(finished, len(tasks), csv_path, getattr(interrupt, "reason", "")) from None
+        except Exception as error:
+            if not _worker_lost(error):
+                raise
+            _stop_workers(parallel)
+            raise BenchWorkerLost(_finished(tasks, csv_path), len(tasks), csv_path, error) from None
         finally:
             close()
     wall = time.perf_counter() - started
@@ -415,15 +506,66 @@ def run_bench(
     rows = [latest[t.key] for t in tasks if t.key in latest]
     write_parquet(rows, out_dir / "episodes.parquet")
     return {"rows": rows, "ran": len(todo), "skipped": len(tasks) - len(todo),
-            "errors": sum(1 for r in rows if r.get("error")), "wall_s": wall}
+            "errors": sum(1 for r in rows if r.get("error")), "wall_s": wall, "repaired": repaired}
+
+
+def _finished(tasks: list[Task], csv_path: Path) -> int:
+    latest = _latest(read_rows(csv_path))
+    return sum(1 for t in tasks if t.key in latest and not latest[t.key].get("error"))
+
+
+def _worker_lost(error: BaseException) -> bool:
+    """Whether ``error`` says a worker process died under the run (loky's TerminatedWorkerError, a broken
+    process pool, dask's or ray's lost worker), rather than a bug of the run itself."""
+    names = {cls.__name__ for cls in type(error).__mro__}
+    return bool(names & {"TerminatedWorkerError", "BrokenProcessPool", "BrokenExecutor", "KilledWorker",
+                         "WorkerCrashedError", "RayActorError"})
 
 
 class BenchInterrupted(Exception):
-    """Ctrl-C during a run: the finished rows are kept in the CSV; rerunning the command resumes."""
+    """Ctrl-C (or SIGTERM) during a run: the finished rows are kept in the CSV; rerunning resumes."""
 
-    def __init__(self, finished: int, total: int, csv_path: Path):
-        super().__init__(f"interrupted: {finished} of {total} episodes done and kept in {csv_path}")
+    def __init__(self, finished: int, total: int, csv_path: Path, reason: str = ""):
+        super().__init__(f"{reason or 'interrupted'}: {finished} of {total} episodes done and kept in {csv_path}")
         self.finished, self.total, self.csv_path = finished, total, csv_path
+
+
+class BenchWorkerLost(Exception):
+    """A worker process died during the run (killed, out of memory): the others are stopped, the finished
+    rows are kept; rerunning the command runs the rest."""
+
+    def __init__(self, finished: int, total: int, csv_path: Path, error: BaseException):
+        cause = str(error).splitlines()[0][:200] if str(error) else type(error).__name__
+        super().__init__(f"a worker process died during the run ({type(error).__name__}: {cause}); the other "
+                         f"workers were stopped; {finished} of {total} episodes done and kept in {csv_path}")
+        self.finished, self.total, self.csv_path = finished, total, csv_path
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread so a run ends as on Ctrl-C (see :func:`terminate_as_interrupt`)."""
+
+    reason = "terminated (SIGTERM)"
+
+
+@contextlib.contextmanager
+def terminate_as_interrupt() -> Iterator[None]:
+    """While inside: SIGTERM raises :class:`Terminated` (a KeyboardInterrupt) in the main thread, so the
+    workers are stopped and the finished rows kept, as on Ctrl-C."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def _raise(signum, frame):
+        raise Terminated()
+
+    previous = signal.signal(signal.SIGTERM, _raise)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _latest(rows: list[dict]) -> dict[tuple, dict]:

@@ -10,6 +10,7 @@ step), as a tracker would: a replayed person is never forecast from the future.
 
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -27,12 +28,18 @@ class PedestrianTrack:
 
 def load_tracks(file: str | Path, dt_s: float) -> list[PedestrianTrack]:
     """Read a 4-column trajectory file; scene time of a row is ``frame / 10 * dt_s``."""
+    from viapath.io.safe_read import InputError, read_text_file
+
     path = Path(file)
-    try:
-        table = np.loadtxt(path, ndmin=2)
-    except OSError as error:
+    if not path.exists():
         where = path if path.is_absolute() else f"{path} (resolved: {path.resolve()})"
-        raise FileNotFoundError(f"{where}: cannot read trajectory file: {error.strerror or error}") from None
+        raise FileNotFoundError(f"{where}: cannot read trajectory file: No such file or directory")
+    try:
+        text = read_text_file(path, what="trajectory file (4 columns 'frame ped_id x y')")
+    except InputError as error:
+        raise ValueError(str(error)) from None
+    try:
+        table = np.loadtxt(io.StringIO(text), ndmin=2)
     except ValueError as error:
         raise ValueError(f"{path}: expected 4 numeric columns 'frame ped_id x y': {error}") from None
     if table.shape[1] != 4:

@@ -34,10 +34,12 @@ from viapath.registry import Registry
 PLANNERS: Registry[type["Planner"]] = Registry("planner")
 
 COMMON_OPTIONS = OptionSet([
-    Option("safety_margin_m", 0.05, "clearance added to every combined robot + obstacle radius", "m", minimum=0.0),
+    Option("safety_margin_m", 0.05, "clearance added to every combined robot + obstacle radius", "m", minimum=0.0,
+           maximum=2.0),
     Option("uncertainty_sigmas", 2.0, "how many σ of position/velocity uncertainty inflate an obstacle", "",
-           minimum=0.0),
-    Option("max_inflation_m", 0.15, "cap on the growth of the velocity-uncertainty cone", "m", minimum=0.0),
+           minimum=0.0, maximum=10.0),
+    Option("max_inflation_m", 0.15, "cap on the growth of the velocity-uncertainty cone", "m", minimum=0.0,
+           maximum=5.0),
 ], owner="planner")
 
 
@@ -136,6 +138,7 @@ class Planner:
         options: Mapping[str, Any] | None = None,
         **option_values: Any,
     ):
+        _check_description(self, nominal_speed_mps, limits or MotionLimits(), robot_radius_m)
         self.path = path
         self.nominal_speed_mps = float(nominal_speed_mps)
         self.limits = limits or MotionLimits()
@@ -209,6 +212,17 @@ class Planner:
         robot, position = observation.robot, observation.robot.position
         return Command(*steer_towards(float(position[0]), float(position[1]), float(robot.heading_rad),
                                       float(target[0]), float(target[1]), speed_mps, self.limits, heading_gain))
+
+
+def _check_description(planner: Planner, nominal_speed_mps, limits: MotionLimits, robot_radius_m) -> None:
+    """Refuse a robot description no robot has (:mod:`viapath.limits`), naming each bad field."""
+    from viapath.limits import planner_description_errors
+    from viapath.options import OptionError
+
+    errors = planner_description_errors(nominal_speed_mps, limits, robot_radius_m)
+    if errors:
+        where = f"planner {planner.name or type(planner).__name__}"
+        raise OptionError([(f"{where}: {field}", message) for field, message in errors])
 
 
 Planner.plan = guard_plan(Planner.plan)  # the template is the entry of every planner: guarded too

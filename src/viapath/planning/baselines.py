@@ -73,7 +73,7 @@ class StopPlanner(_SubgoalFollower, name="stop"):
 
     options = COMMON_OPTIONS + OptionSet([
         Option("horizon_s", 4.0, "stop while the straight leg touches an obstacle this far ahead", "s",
-               minimum=0.0, exclusive_minimum=True),
+               minimum=0.0, exclusive_minimum=True, maximum=60.0),
     ], owner="stop")
 
     def decide(self, situation: Situation) -> Decision:
@@ -98,20 +98,20 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
 
     options = COMMON_OPTIONS + OptionSet([
         Option("horizon_s", 3.0, "an arc touching an obstacle this far ahead is inadmissible", "s",
-               minimum=0.0, exclusive_minimum=True),
-        Option("sample_dt_s", 0.1, "time step of the sampled arcs", "s", minimum=0.0, exclusive_minimum=True),
+               minimum=0.25, maximum=10.0),  # at least a quarter of the longest sample_dt_s: arcs of 2 samples
+        Option("sample_dt_s", 0.1, "time step of the sampled arcs", "s", minimum=0.05, maximum=1.0),
         Option("window_s", 0.1, "the control period: velocities reachable within it form the window", "s",
-               minimum=0.0, exclusive_minimum=True),
-        Option("n_speeds", 7, "speeds sampled in the window", minimum=1),
-        Option("n_turn_rates", 15, "turn rates sampled in the window", minimum=1),
-        Option("corridor_horizon_s", 1.5, "an arc must stay in the corridor this long", "s", minimum=0.0),
+               minimum=0.0, exclusive_minimum=True, maximum=10.0),
+        Option("n_speeds", 7, "speeds sampled in the window", minimum=1, maximum=21),
+        Option("n_turn_rates", 15, "turn rates sampled in the window", minimum=1, maximum=41),
+        Option("corridor_horizon_s", 1.5, "an arc must stay in the corridor this long", "s", minimum=0.0, maximum=30.0),
         Option("heading_lookahead_s", 1.0, "where along the arc heading and path terms are evaluated", "s",
-               minimum=0.0),
-        Option("heading_weight", 1.0, "α, weight of the heading to the subgoal", minimum=0.0),
-        Option("clearance_weight", 0.3, "β, weight of the time to the first contact", minimum=0.0),
-        Option("velocity_weight", 0.3, "γ, weight of closeness to the nominal speed", minimum=0.0),
-        Option("path_weight", 0.5, "weight of staying near the designated path (our addition)", minimum=0.0),
-    ], owner="dwa")
+               minimum=0.0, maximum=30.0),
+        Option("heading_weight", 1.0, "α, weight of the heading to the subgoal", minimum=0.0, maximum=1000.0),
+        Option("clearance_weight", 0.3, "β, weight of the time to the first contact", minimum=0.0, maximum=1000.0),
+        Option("velocity_weight", 0.3, "γ, weight of closeness to the nominal speed", minimum=0.0, maximum=1000.0),
+        Option("path_weight", 0.5, "weight of staying near the designated path (our addition)", minimum=0.0, maximum=1000.0),
+    ], owner="dwa", steps=[("horizon_s", "sample_dt_s")])
 
     def decide(self, situation: Situation) -> Decision:
         config, limits = self.config, self.limits
@@ -196,15 +196,17 @@ class VOPlanner(_SubgoalFollower, name="vo"):
     """Sampling-based velocity obstacles (Fiorini & Shiller 1998) with the corridor."""
 
     options = COMMON_OPTIONS + OptionSet([
-        Option("horizon_s", 5.0, "truncation of the velocity obstacles", "s", minimum=0.0, exclusive_minimum=True),
-        Option("n_speeds", 7, "speeds sampled up to the top speed", minimum=1),
-        Option("n_headings", 37, "headings sampled around the direction to the subgoal", minimum=1),
+        Option("horizon_s", 5.0, "truncation of the velocity obstacles", "s", minimum=0.0, exclusive_minimum=True,
+               maximum=60.0),
+        Option("n_speeds", 7, "speeds sampled up to the top speed", minimum=1, maximum=51),
+        Option("n_headings", 37, "headings sampled around the direction to the subgoal", minimum=1, maximum=181),
         Option("heading_span_rad", float(np.pi / 2), "headings within ± this of the direction to the subgoal",
-               "rad", minimum=0.0),
+               "rad", minimum=0.0, maximum=float(np.pi)),
         Option("corridor_horizon_s", 2.0, "a velocity must keep the robot in the corridor this long", "s",
-               minimum=0.0),
+               minimum=0.0, maximum=30.0),
         Option("preferred_side", "left", "exact ties (head-on) go round this side", choices=("left", "right")),
-        Option("penalty_weight", 0.5, "with no free velocity: weight of 1/time-to-contact", "s", minimum=0.0),
+        Option("penalty_weight", 0.5, "with no free velocity: weight of 1/time-to-contact", "s", minimum=0.0,
+               maximum=1000.0),
     ], owner="vo")
 
     def decide(self, situation: Situation) -> Decision:

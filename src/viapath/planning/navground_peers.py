@@ -66,7 +66,7 @@ def corridor_borders(waypoints: np.ndarray, half_widths: np.ndarray) -> list[tup
 class _NavgroundPeer(Planner):
     behavior_type = ""
     options = COMMON_OPTIONS + OptionSet([
-        Option("horizon_s", 5.0, "navground behaviour's horizon", "s", minimum=0.0, exclusive_minimum=True),
+        Option("horizon_s", 5.0, "navground behaviour's horizon", "s", minimum=0.0, exclusive_minimum=True, maximum=60.0),
         Option("corridor_walls", True, "give navground the corridor borders as line obstacles"),
     ], owner="navground")
 
@@ -109,7 +109,7 @@ class _NavgroundPeer(Planner):
         radii = situation.inflation.obstacle_radii_m
         state = behavior.environment_state
         people = ~obstacles.is_static
-        state.neighbors = [core.Neighbor(p, float(r), v, int(i)) for p, r, v, i in
+        state.neighbors = [core.Neighbor(p, float(r), v, int(i) % 2**31) for p, r, v, i in  # navground's ids: int32
                            zip(obstacles.positions[people], radii[people], obstacles.velocities[people],
                                obstacles.ids[people])]
         # Static geometry (walls, boxes, scan returns) as navground's static discs: they do not reciprocate.

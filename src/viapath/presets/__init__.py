@@ -90,18 +90,22 @@ def load_preset(name_or_file: str | Path) -> Preset:
     path = Path(text_name)
     if not path.is_file():
         raise PresetError(f"{text_name}: not a preset name ({', '.join(preset_names())}) nor a preset file")
+    from viapath.io.safe_read import MAX_YAML_BYTES, InputError, read_text_file
+
     try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as error:
-        raise PresetError(f"{text_name}: cannot read: {error}") from None
+        text = read_text_file(path, MAX_YAML_BYTES, "preset YAML file")
+    except InputError as error:
+        raise PresetError(str(error)) from None
     return parse_preset(text, text_name)
 
 
 def parse_preset(text: str, origin: str = "<preset>") -> Preset:
+    from viapath.io.safe_read import InputError, load_yaml
+
     try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as error:
-        raise PresetError(f"{origin}: not valid YAML: {getattr(error, 'problem', None) or error}") from None
+        data = load_yaml(text, origin)
+    except InputError as error:
+        raise PresetError(str(error)) from None
     return preset_from_dict(data, origin)
 
 

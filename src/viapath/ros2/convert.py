@@ -57,14 +57,17 @@ def load_path_file(source: str) -> tuple[np.ndarray, list[float] | None]:
     path = Path(source)
     if not path.is_file():
         raise PathFileError(f"{source}: no such path file (or built-in scenario)")
-    text = path.read_text()
-    if path.suffix.lower() in (".yaml", ".yml"):
-        import yaml
+    from viapath.io.safe_read import MAX_YAML_BYTES, InputError, load_yaml, read_text_file
 
+    try:
+        text = read_text_file(path, MAX_YAML_BYTES, "path file")
+    except InputError as error:
+        raise PathFileError(str(error)) from None
+    if path.suffix.lower() in (".yaml", ".yml"):
         try:
-            data = yaml.safe_load(text)
-        except yaml.YAMLError as error:
-            raise PathFileError(f"{source}: not valid YAML ({error})") from None
+            data = load_yaml(text, source)
+        except InputError as error:
+            raise PathFileError(str(error)) from None
         if isinstance(data, dict) and "robot" in data:
             try:
                 spec = load_scenario(path)

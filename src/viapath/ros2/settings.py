@@ -291,15 +291,16 @@ def _flatten(data: dict, prefix: str = "") -> dict[str, Any]:
 
 def read_params_file(path, node_name: str = NODE_NAME) -> dict[str, Any]:
     """The node's values from a ROS 2 parameters file (``/**`` and ``node_name`` sections merged)."""
-    import yaml
+    from viapath.io.safe_read import InputError, read_yaml_file
 
     path = Path(path)
-    if not path.is_file():
+    if not path.exists():
         raise ParameterError(f"{path}: no such parameters file")
+
     try:
-        data = yaml.safe_load(path.read_text()) or {}
-    except yaml.YAMLError as error:
-        raise ParameterError(f"{path}: not valid YAML ({error})") from None
+        data = read_yaml_file(path, "parameters file") or {}
+    except InputError as error:
+        raise ParameterError(str(error)) from None
     if not isinstance(data, dict):
         raise ParameterError(f"{path}: expected a map of node names to {{ros__parameters: ...}}")
     values: dict[str, Any] = {}

@@ -9,6 +9,7 @@ from typing import Any
 import yaml
 from pydantic import ValidationError
 
+from viapath.io.safe_read import MAX_YAML_BYTES, InputError, load_yaml, read_text_file, short_repr
 from viapath.options import OptionError
 from viapath.scenarios.models import Scenario
 
@@ -68,22 +69,53 @@ def load_scenario(source: str | Path) -> Scenario:
     if path.is_dir():
         raise ScenarioError(f"{source_str}: is a folder, expected a scenario YAML file")
     try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as error:
-        raise ScenarioError(f"{source_str}: cannot read: {error}") from None
+        text = read_text_file(path, MAX_YAML_BYTES, "scenario YAML file")
+    except InputError as error:
+        raise ScenarioError(str(error)) from None
     return _parse(text, source_str, base_dir=path.parent)
 
 
+MAX_REPORTED_ERRORS = 20  # field errors listed in one message; the rest are counted
+
+
 def scenario_from_dict(data: dict[str, Any], origin: str = "<dict>") -> Scenario:
+    """Every field error is reported (up to :data:`MAX_REPORTED_ERRORS`), the planner block's too."""
     try:
         scenario = Scenario.model_validate(data)
     except ValidationError as error:
-        raise ScenarioError(format_validation_error(error, origin)) from None
+        lines = format_validation_error(error, origin).splitlines()
+        lines += _planner_block_errors(data, origin) if not any(": planner" in line for line in lines) else []
+        raise ScenarioError(_capped(lines)) from None
     try:
         planner_settings(scenario)
     except (KeyError, OptionError) as error:
-        raise ScenarioError(_planner_error(error, origin)) from None
+        raise ScenarioError(_capped(_planner_error(error, origin).splitlines())) from None
     return scenario
+
+
+def _planner_block_errors(data: Any, origin: str) -> list[str]:
+    """The planner block's own errors, when the rest of the scenario has some too."""
+    from viapath.scenarios.models import PlannerSpec
+
+    block = data.get("planner") if isinstance(data, dict) else None
+    if not isinstance(block, dict):
+        return []
+    try:
+        spec = PlannerSpec.model_validate(block)
+        from viapath.planning import planner_class
+
+        planner_class(spec.name).options.validate(_with_preset(spec.given(), spec.name), where="planner")
+    except (ValidationError, KeyError, OptionError) as error:
+        if isinstance(error, ValidationError):
+            return []  # the scenario model reported it
+        return _planner_error(error, origin).splitlines()
+    return []
+
+
+def _capped(lines: list[str]) -> str:
+    if len(lines) <= MAX_REPORTED_ERRORS:
+        return "\n".join(lines)
+    return "\n".join([*lines[:MAX_REPORTED_ERRORS], f"... and {len(lines) - MAX_REPORTED_ERRORS} more errors"])
 
 
 def planner_settings(scenario: Scenario, planner_name: str | None = None) -> dict[str, Any]:
@@ -123,20 +155,17 @@ def _with_preset(given: dict[str, Any], planner_name: str) -> dict[str, Any]:
 def _planner_error(error: Exception, origin: str) -> str:
     if isinstance(error, OptionError):
         return "\n".join(f"{origin}: {field}: {message}" for field, message in error.errors)
-    return f"{origin}: planner.name: {error.args[0]}"
+    return f"{origin}: planner.name: {short_repr(error.args[0]) if not isinstance(error.args[0], str) else error.args[0]}"
 
 
 def _parse(text: str, origin: str, base_dir: Path | None) -> Scenario:
     try:
-        data = yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+        data = load_yaml(text, origin, _UniqueKeyLoader)
     except _DuplicateKey as error:
-        raise ScenarioError(f"{origin}: line {error.line}: duplicate key {error.key!r} (first given on line "
+        raise ScenarioError(f"{origin}: line {error.line}: duplicate key {short_repr(error.key)} (first given on line "
                             f"{error.first_line}); each field may appear once") from None
-    except yaml.YAMLError as error:
-        mark = getattr(error, "problem_mark", None)
-        where = f" line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(error, "problem", None) or str(error)
-        raise ScenarioError(f"{origin}:{where}: not valid YAML: {problem}") from None
+    except InputError as error:
+        raise ScenarioError(str(error)) from None
     if data is None and not any(line.strip() and not line.lstrip().startswith("#") for line in text.splitlines()):
         raise ScenarioError(f"{origin}: the file is empty; expected a mapping of scenario fields "
                             "(name, robot, path, ...)")
@@ -162,14 +191,14 @@ def format_validation_error(error: ValidationError, origin: str) -> str:
         location = ".".join(str(part) for part in _without_union_tags(item["loc"])) or "(top level)"
         message = item["msg"]
         found = item.get("input")
-        found_text = "" if item["type"] in ("missing",) or isinstance(found, dict) else f"; found {found!r}"
+        found_text = "" if item["type"] in ("missing",) or isinstance(found, dict) else f"; found {short_repr(found)}"
         if item["type"] == "extra_forbidden":
             message = "unknown field (check the spelling; extra fields are not allowed)"
         elif item["type"] == "missing" and item["loc"] and isinstance(item["loc"][-1], int):
             # A list too short for a fixed-size tuple such as a point [x, y]: name the whole list.
             location = location.rsplit(".", 1)[0]
             message = "too few items (a point is [x, y], a velocity [vx, vy], a wall [[x, y], [x, y]])"
-            found_text = f"; found {found!r}"
+            found_text = f"; found {short_repr(found)}"
         elif item["type"] == "missing":
             message = "required field is missing"
         elif item["type"] in ("too_long", "tuple_type"):

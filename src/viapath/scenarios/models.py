@@ -21,10 +21,19 @@ from pydantic import (
     model_validator,
 )
 
+from viapath.limits import LIMIT_BOUNDS, ROBOT_RADIUS_BOUNDS_M
 from viapath.perception.modes import PERCEPTION_MODES
 from viapath.static import box_edges, polygon_edges, polyline_edges
 
-Point = tuple[float, float]
+MAX_COORDINATE_M = 1.0e6  # m; a scenario spans metres to kilometres, and 1e308 overflows every distance
+MAX_SPEED_MPS = 100.0  # m/s; robots and people move at a few m/s
+MAX_RADIUS_M = 10.0  # m; the guard stops for a larger obstacle (GuardConfig.max_radius_m)
+Coordinate = Annotated[float, Field(ge=-MAX_COORDINATE_M, le=MAX_COORDINATE_M)]
+Point = tuple[Coordinate, Coordinate]
+Velocity = tuple[Annotated[float, Field(ge=-MAX_SPEED_MPS, le=MAX_SPEED_MPS)],
+                 Annotated[float, Field(ge=-MAX_SPEED_MPS, le=MAX_SPEED_MPS)]]
+Speed = Annotated[float, Field(gt=0.0, le=MAX_SPEED_MPS)]
+Radius = Annotated[float, Field(gt=0.0, le=MAX_RADIUS_M)]
 MAX_STEPS = 1_000_000  # a day at 10 Hz is 864 000; more is a typo in dt_s that would hang a run (issue 12)
 Segment = tuple[Point, Point]
 
@@ -33,18 +42,23 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
 
 
+def _limit(name: str) -> Any:
+    low, high = LIMIT_BOUNDS[name]
+    return Annotated[float, Field(ge=low, le=high)]
+
+
 class LimitsSpec(_Strict):
-    max_speed_mps: PositiveFloat = 0.6
-    max_accel_mps2: PositiveFloat = 0.8
-    max_turn_rate_radps: PositiveFloat = 2.0
-    max_turn_accel_radps2: PositiveFloat = 6.0
+    max_speed_mps: _limit("max_speed_mps") = 0.6
+    max_accel_mps2: _limit("max_accel_mps2") = 0.8
+    max_turn_rate_radps: _limit("max_turn_rate_radps") = 2.0
+    max_turn_accel_radps2: _limit("max_turn_accel_radps2") = 6.0
 
 
 class RobotSpec(_Strict):
     start: Point
-    heading: float = 0.0
-    speed: PositiveFloat = Field(0.2, description="nominal speed, m/s")
-    radius: PositiveFloat = 0.25
+    heading: Annotated[float, Field(ge=-MAX_COORDINATE_M, le=MAX_COORDINATE_M)] = 0.0
+    speed: Speed = Field(0.2, description="nominal speed, m/s")
+    radius: Annotated[float, Field(gt=ROBOT_RADIUS_BOUNDS_M[0], le=ROBOT_RADIUS_BOUNDS_M[1])] = 0.25
     limits: LimitsSpec = Field(default_factory=LimitsSpec)
 
     @model_validator(mode="after")
@@ -81,10 +95,10 @@ class ObstacleSpec(_Strict):
     waypoint: e.g. a precomputed crowd whose speed varies)."""
 
     start: Point
-    radius: PositiveFloat = 0.25
-    velocity: Point | None = None
+    radius: Radius = 0.25
+    velocity: Velocity | None = None
     waypoints: list[Point] | None = None
-    speed: PositiveFloat | None = None
+    speed: Speed | None = None
     loop: bool = False
     start_time_s: NonNegativeFloat = 0.0  # stands still at ``start`` until then
     times_s: list[NonNegativeFloat] | None = None  # timed waypoints: when it is at start, then each waypoint
@@ -116,7 +130,7 @@ class ReplaySpec(_Strict):
     dt_s: PositiveFloat = 0.4
     start_s: NonNegativeFloat = 0.0
     offset: Point = (0.0, 0.0)
-    radius: PositiveFloat = 0.25
+    radius: Radius = 0.25
     react: bool = False  # people give way to the robot (viapath.sim.reactive)
 
 

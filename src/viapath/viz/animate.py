@@ -1,26 +1,64 @@
-"""Animation of an episode: robot, obstacles, corridor, current via point and plan (GIF or MP4)."""
+"""Animation of an episode: robot, obstacles, corridor, current via point and plan (GIF or MP4).
+
+What does not move (corridor, path, goal, walls, axes, layout) is drawn once; each frame restores that
+picture and draws only the moving artists on it (blitting, on matplotlib's Agg canvas), then hands the
+pixels to Pillow (GIF, no ffmpeg needed) or to ffmpeg through a pipe (MP4). Redrawing the whole
+figure for every frame, with the layout recomputed each time, took minutes for a 24 s run.
+"""
 
 from __future__ import annotations
 
+import shutil
+import subprocess
 from pathlib import Path
 
 import numpy as np
 
 from viapath.viz.plot import _fit_view, _matplotlib, corridor_polygons
 
+MAX_FRAMES = 400
 
-def animate_episode(episode, file: str | Path, fps: int = 10, max_frames: int = 400, progress=None) -> Path:
+
+def frame_indices(steps: int, max_frames: int = MAX_FRAMES, stride: int | None = None) -> list[int]:
+    """The trace steps shown: every ``stride``-th (default: as few as keep at most ``max_frames``),
+    and the last step always, so the animation ends where the episode ends."""
+    if steps <= 0:
+        return []
+    stride = max(1, int(stride)) if stride else max(1, int(np.ceil(steps / max_frames)))
+    frames = list(range(0, steps, stride))
+    if frames[-1] != steps - 1:
+        frames.append(steps - 1)
+    return frames
+
+
+def animate_episode(episode, file: str | Path, fps: int = 10, max_frames: int = MAX_FRAMES, progress=None,
+                    stride: int | None = None, dpi: int = 100) -> Path:
     """Write the animation; ``progress(frame, total)`` is called as each frame is written."""
+    file = Path(file)
+    suffix = file.suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise ValueError(f"{file}: animation must end in .gif or .mp4")
+    if suffix == ".mp4" and shutil.which("ffmpeg") is None:
+        raise RuntimeError("writing .mp4 needs ffmpeg on the PATH (e.g. apt-get install ffmpeg); use .gif otherwise")
     plt = _matplotlib()
-    from matplotlib import animation
+    fig, draw = _scene(plt, episode.trace, dpi)
+    try:
+        frames = frame_indices(len(episode.trace.times_s), max_frames, stride)
+        images = (draw(k) for k in frames)
+        if suffix == ".gif":
+            _write_gif(images, file, fps, len(frames), progress)
+        else:
+            _write_mp4(images, file, fps, len(frames), progress, fig)
+    finally:
+        plt.close(fig)
+    return file
+
+
+def _scene(plt, trace, dpi: int):
+    """The figure with its still parts drawn once, and ``draw(k)``: the RGBA pixels of step k."""
     from matplotlib.patches import Circle, Polygon
 
-    trace = episode.trace
-    file = Path(file)
-    n = len(trace.times_s)
-    stride = max(1, int(np.ceil(n / max_frames)))
-    frames = list(range(0, n, stride))
-    fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(8, 5), dpi=dpi, constrained_layout=True)
     for outline in corridor_polygons(trace.path):
         ax.add_patch(Polygon(outline, closed=True, facecolor="#dfe9f5", edgecolor="none", zorder=0))
     ax.plot(*trace.path.waypoints.T, ls=(0, (4, 3)), color="#2f6eb5", lw=1.2)
@@ -31,23 +69,31 @@ def animate_episode(episode, file: str | Path, fps: int = 10, max_frames: int = 
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    robot = Circle((0, 0), trace.robot_radius_m, fc="#1f9e89", ec="k", zorder=5)
-    ax.add_patch(robot)
-    heading, = ax.plot([], [], color="k", lw=1.5, zorder=6)
     trail, = ax.plot([], [], color="0.4", lw=0.8)
-    plan_line, = ax.plot([], [], color="#8e44ad", lw=1.0, ls="--", zorder=4)
-    via_marker, = ax.plot([], [], "x", color="#8e44ad", ms=9, mew=2, zorder=6)
     scan, = ax.plot([], [], ".", color="0.2", ms=2, zorder=2)
+    plan_line, = ax.plot([], [], color="#8e44ad", lw=1.0, ls="--", zorder=4)
     obstacles = [Circle((np.nan, np.nan), r, fc="#e6a19a", ec="#c0392b", zorder=4) for r in trace.obstacle_radii_m]
     for patch in obstacles:
         ax.add_patch(patch)
+    robot = Circle((0, 0), trace.robot_radius_m, fc="#1f9e89", ec="k", zorder=5)
+    ax.add_patch(robot)
+    heading, = ax.plot([], [], color="k", lw=1.5, zorder=6)
+    via_marker, = ax.plot([], [], "x", color="#8e44ad", ms=9, mew=2, zorder=6)
     label = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", fontsize=9, family="monospace")
+    moving = [trail, scan, plan_line, *obstacles, robot, heading, via_marker, label]  # in drawing order
+    for artist in moving:
+        artist.set_animated(True)
+    canvas = fig.canvas
+    canvas.draw()  # the layout is worked out here, once
+    fig.set_layout_engine("none")
+    background = canvas.copy_from_bbox(fig.bbox)
+    poses, radius = trace.robot_poses, trace.robot_radius_m
 
-    def update(k):
-        x, y, h = trace.robot_poses[k]
+    def draw(k: int) -> np.ndarray:
+        x, y, h = poses[k]
         robot.center = (x, y)
-        heading.set_data([x, x + trace.robot_radius_m * np.cos(h)], [y, y + trace.robot_radius_m * np.sin(h)])
-        trail.set_data(*trace.robot_poses[: k + 1, :2].T)
+        heading.set_data([x, x + radius * np.cos(h)], [y, y + radius * np.sin(h)])
+        trail.set_data(poses[: k + 1, 0], poses[: k + 1, 1])
         via = trace.via_points[k]
         target = trace.plan_targets[k]
         plan_line.set_data([x, target[0]], [y, target[1]])
@@ -56,20 +102,47 @@ def animate_episode(episode, file: str | Path, fps: int = 10, max_frames: int = 
             patch.center = tuple(trace.obstacle_positions[k, j])
         if trace.scan_points and k < len(trace.scan_points) and len(trace.scan_points[k]):
             scan.set_data(*np.asarray(trace.scan_points[k]).T)
-        status = trace.plan_status[k]
-        label.set_text(f"t = {trace.times_s[k]:5.1f} s  v = {trace.robot_speeds_mps[k]:.2f} m/s  {status}")
-        return [robot, heading, trail, plan_line, via_marker, scan, label, *obstacles]
+        label.set_text(f"t = {trace.times_s[k]:5.1f} s  v = {trace.robot_speeds_mps[k]:.2f} m/s  {trace.plan_status[k]}")
+        canvas.restore_region(background)
+        for artist in moving:
+            ax.draw_artist(artist)
+        return np.asarray(canvas.buffer_rgba())
 
-    movie = animation.FuncAnimation(fig, update, frames=frames, blit=False)
-    if file.suffix.lower() == ".gif":
-        movie.save(file, writer=animation.PillowWriter(fps=fps), progress_callback=progress)
-    elif file.suffix.lower() == ".mp4":
-        if not animation.writers.is_available("ffmpeg"):
-            plt.close(fig)
-            raise RuntimeError("writing .mp4 needs ffmpeg on the PATH (e.g. apt-get install ffmpeg); use .gif otherwise")
-        movie.save(file, writer=animation.FFMpegWriter(fps=fps), progress_callback=progress)
-    else:
-        plt.close(fig)
-        raise ValueError(f"{file}: animation must end in .gif or .mp4")
-    plt.close(fig)
-    return file
+    return fig, draw
+
+
+def _write_gif(images, file: Path, fps: int, total: int, progress) -> None:
+    """Pillow's GIF writer, one shared palette (taken from the first frame, which shows every colour
+    but the moving ones' overlaps), no dithering: flat colours stay flat and the frames small."""
+    from PIL import Image
+
+    frames = []
+    palette = None
+    for i, rgba in enumerate(images):
+        image = Image.fromarray(rgba[..., :3])
+        if palette is None:
+            palette = image.quantize(colors=64, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+        frames.append(image.quantize(palette=palette, dither=Image.Dither.NONE))
+        if progress is not None:
+            progress(i, total)
+    if frames:
+        frames[0].save(file, save_all=True, append_images=frames[1:], duration=round(1000 / fps), loop=0,
+                       optimize=False, disposal=1)
+
+
+def _write_mp4(images, file: Path, fps: int, total: int, progress, fig) -> None:
+    width, height = fig.canvas.get_width_height()
+    command = ["ffmpeg", "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgba", "-s", f"{width}x{height}",
+               "-r", str(fps), "-i", "-", "-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+               "-vcodec", "libx264", str(file)]
+    with subprocess.Popen(command, stdin=subprocess.PIPE, stderr=subprocess.PIPE) as ffmpeg:
+        try:
+            for i, rgba in enumerate(images):
+                ffmpeg.stdin.write(np.ascontiguousarray(rgba).tobytes())
+                if progress is not None:
+                    progress(i, total)
+        finally:
+            ffmpeg.stdin.close()
+            error = ffmpeg.stderr.read().decode(errors="replace")
+        if ffmpeg.wait() != 0:
+            raise RuntimeError(f"ffmpeg could not write {file}: {error.strip()[-500:]}")
