@@ -14,7 +14,7 @@ from viapath.options import OptionError
 from viapath.scenarios.models import Scenario
 
 _BUILTIN_PACKAGE = "viapath.scenarios.builtin"
-_UNION_TAGS = {"moving", "replay"}
+_UNION_TAGS = {"moving", "replay", "segment", "spec"}
 
 
 class _DuplicateKey(yaml.YAMLError):
@@ -208,7 +208,7 @@ def format_validation_error(error: ValidationError, origin: str) -> str:
 
 
 def _without_union_tags(loc: tuple) -> list:
-    """Drop the tag pydantic inserts after a list index for the tagged obstacle union.
+    """Drop the tag pydantic inserts after a list index for the tagged unions (obstacles, walls).
 
     Only a tag right after an index is dropped: ``replay`` is also a real field name
     (``obstacles.1.replay.file``), which must stay in the path.
