@@ -167,6 +167,18 @@ def params(
     print(out)
 
 
+@app.command()
+def interfaces() -> None:
+    """Generate and build nav2_msgs / tf2_msgs (FollowPath, SpeedLimit, ClearEntireCostmap, TFMessage) once; print where."""
+    from viapath.ros2 import interfaces as generated
+
+    try:
+        prefix = generated.build(progress=lambda text: _errors.print(text, highlight=False))
+    except generated.InterfaceBuildError as error:
+        _fail(str(error))
+    print(prefix)
+
+
 def register(root: typer.Typer) -> None:
     root.add_typer(app, name="ros2")
 
