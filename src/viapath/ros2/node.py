@@ -92,6 +92,7 @@ def make_node_class():
             self._subs: list = []
             self._pubs: dict[str, Any] = {}
             self._timer = None
+            self._nav2 = None
             self._last_now_s: float | None = None
             try:
                 self.declare_parameter("planner_name", "viapath")
@@ -134,7 +135,15 @@ def make_node_class():
             for index, scanner in enumerate(s.scanners):
                 self._subs.append(self.create_subscription(
                     LaserScan, scanner.topic, lambda msg, i=index: self._on_scan(i, msg), qos_profile_sensor_data))
-            if not s.path_file:
+            if s.interface == "nav2":
+                try:
+                    self._nav2 = Nav2Interface(self)
+                except Exception as error:  # interfaces that cannot be generated here: say why, do not drive
+                    self.error = f"nav2 interface: {error}"
+                    self.get_logger().error(f"refusing to start: {self.error}")
+                    self._teardown()
+                    return TransitionCallbackReturn.FAILURE
+            elif not s.path_file:
                 latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
                 self._subs.append(self.create_subscription(PathMsg, s.path_topic, self._on_path, latched))
             self.core.active = False
@@ -152,6 +161,8 @@ def make_node_class():
         def on_deactivate(self, state) -> TransitionCallbackReturn:
             self.publish_stop()
             self.core.active = False
+            if self._nav2 is not None:
+                self._nav2.deactivated()
             return super().on_deactivate(state)
 
         def on_cleanup(self, state) -> TransitionCallbackReturn:
@@ -164,6 +175,9 @@ def make_node_class():
             return TransitionCallbackReturn.SUCCESS
 
         def _teardown(self) -> None:
+            if self._nav2 is not None:
+                self._nav2.destroy()
+                self._nav2 = None
             if self._timer is not None:
                 self.destroy_timer(self._timer)
                 self._timer = None
@@ -205,8 +219,13 @@ def make_node_class():
         def _on_scan(self, index: int, msg) -> None:
             due = self.core.on_scan(index, self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id,
                                     msg.angle_min, msg.angle_increment, msg.ranges, msg.range_min, msg.range_max)
+            if self._nav2 is not None and not self._nav2.mounts_done:
+                self._nav2.resolve_mounts()
             if due:
-                self._publish(self.core.cycle(self._now_s()))
+                result = self.core.cycle(self._now_s())
+                self._publish(result)
+                if self._nav2 is not None:
+                    self._nav2.supervise(result, self._now_s())
 
         def _on_watchdog(self) -> None:
             if self.core is None:
@@ -214,6 +233,8 @@ def make_node_class():
             result = self.core.watchdog(self._now_s())
             if result is not None:
                 self._publish(result, markers=False)
+            if self._nav2 is not None:
+                self._nav2.supervise(result, self._now_s())
 
         # -- outputs -------------------------------------------------------------------------
         def _stamp(self, seconds: float) -> Time:
@@ -284,6 +305,9 @@ def make_node_class():
                     break
 
     _ = rclpy
+    from viapath.ros2.nav2 import make_nav2_interface_class
+
+    Nav2Interface = make_nav2_interface_class()
     return ViaPathNode
 
 
