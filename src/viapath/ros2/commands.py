@@ -116,6 +116,7 @@ def sim(
     duration: Optional[float] = typer.Option(None, "--duration", help="End the episode after this many seconds (default: the scenario's)."),
     tf: bool = typer.Option(True, "--tf/--no-tf", help="Publish TF: /tf odom->base_link, /tf_static map->odom and base_link->laser_NAME."),
     map_offset: str = typer.Option("0,0,0", "--map-offset", help="map->odom as X,Y,YAW (m, m, rad): the pose of odom in map."),
+    max_wait: float = typer.Option(10.0, "--max-wait", help="With --lockstep: wait at most this long (wall s) for the node each step."),
     linger: float = typer.Option(0.0, "--linger", help="After the goal, keep simulating this long (s; not in the metrics)."),
 ) -> None:
     """Simulated scans, odometry and /clock from a scenario; drives the robot with cmd_vel; prints the metrics."""
@@ -147,7 +148,7 @@ def sim(
             _fail(f"{option} {file}: expected a {suffix} file in an existing folder")
     _need_rclpy()
     try:
-        code = run_sim(scenario, rate=rate, lockstep=lockstep, as_json=as_json, seed=seed, faults=faults,
+        code = run_sim(scenario, rate=rate, lockstep=lockstep, max_wait_s=max(max_wait, 0.0), as_json=as_json, seed=seed, faults=faults,
                        trace_file=str(trace) if trace else None, wait_for_node_s=wait_s,
                        commands_file=str(commands) if commands else None, ros_args=ros_args,
                        duration_s=duration, status_file=str(status_log) if status_log else None, tf=tf, map_offset=offset,

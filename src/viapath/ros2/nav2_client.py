@@ -159,11 +159,16 @@ def run_follow(source: str, action: str = "follow_path", frame: str = "map", off
                 if handle.accepted:
                     if label == "path":
                         state["goal"] = handle
-                    handle.get_result_async().add_done_callback(lambda r, i=i: write(
-                        kind="result", goal=i, label=label, t=now(), status=int(r.result().status),
-                        error_code=int(r.result().result.error_code), error_msg=r.result().result.error_msg))
+                    handle.get_result_async().add_done_callback(lambda r, i=i: finished(i, label, r.result()))
             future.add_done_callback(accepted)
             return future
+
+        def finished(index: int, label: str, response) -> None:
+            message = response.result.error_msg
+            write(kind="result", goal=index, label=label, t=now(), status=int(response.status),
+                  error_code=int(response.result.error_code), error_msg=message)
+            if label == "path" and message != "preempted by a new path":
+                state["resend"] = False  # as the behaviour tree: the goal is over (succeeded, failed, canceled)
 
         # wait for the simulated clock to start the episode (warm-up ticks lie below it)
         while now() < -0.999 and not stop["flag"] and time.monotonic() - started < wait_s:
