@@ -22,6 +22,9 @@ What we chose:
 * No command can be computed (inputs stale: scans, odometry) for ``failure_tolerance_s`` while a
   goal runs: NO_VALID_CONTROL. No progress: FAILED_TO_MAKE_PROGRESS. Deactivation: the robot is
   stopped and the goal aborted (UNKNOWN, "controller deactivated"); goals are refused while inactive.
+* A goal is held in the action's ACCEPTED state while it runs and executed only as it ends (its
+  final state and result at once): rclpy's events executor resumes a coroutine that awaits the end
+  of a goal without pause, which kept a core busy. Feedback flows meanwhile.
 * The costmap-clearing service Nav2's behaviour tree calls on the controller's costmap is answered
   (there is no costmap; the tracks are not touched) and counted.
 * Scanner mounts: ``base_frame → scanner frame`` from ``/tf_static`` (or ``/tf``) when there, else
@@ -77,8 +80,10 @@ def make_nav2_interface_class():
             self.finished: list[tuple[str, int, str]] = []
             self._subs = []
             self._GoalResponse, self._CancelResponse = GoalResponse, CancelResponse
+            self._outcomes: dict[bytes, tuple[str, object]] = {}
             self.server = ActionServer(node, FollowPath, self.s.follow_path_action, self._execute,
-                                       goal_callback=self._on_goal, cancel_callback=lambda handle: CancelResponse.ACCEPT)
+                                       goal_callback=self._on_goal, handle_accepted_callback=self._on_accepted,
+                                       cancel_callback=lambda handle: CancelResponse.ACCEPT)
             self._subs.append(node.create_subscription(SpeedLimit, self.s.speed_limit_topic, self._on_speed_limit, 10))
             self.service = node.create_service(ClearEntireCostmap, self.s.clear_costmap_service, self._on_clear)
             if self.s.use_tf:
@@ -165,16 +170,15 @@ def make_nav2_interface_class():
                 points = np.vstack([[o.x, o.y], points])
             return R.NONE, "", points
 
-        async def _execute(self, handle):
-            from rclpy.task import Future
-
-            now = self.node._now_s()
-            goal = _Goal(handle, Future(), handle.request.path, now)
+        def _on_accepted(self, handle) -> None:
+            """A new goal: checked, then it replaces the running one. Its execution (the action's
+            EXECUTING state and result) is started only when it ends, by :meth:`_end`: a goal
+            waiting in a coroutine would be resumed without pause by rclpy's events executor."""
+            goal = _Goal(handle, None, handle.request.path, self.node._now_s())
             code, message, points = self._path_in_odom(goal.request_path)
             if code != self.Result.NONE:
-                handle.abort()
-                self.finished.append(("abort", code, message))
-                return self._result(code, message)
+                self._end(goal, "abort", code, message)
+                return
             previous = self.goal
             if previous is not None:
                 goal.checkpoint = previous.checkpoint  # a preempt is no fresh start for the progress check
@@ -182,7 +186,15 @@ def make_nav2_interface_class():
             self.goal = goal
             if points is not None:
                 self._use_path(goal, points)
-            outcome, result = await goal.future
+
+        def _end(self, goal: _Goal, outcome: str, code: int, message: str) -> None:
+            self.finished.append((outcome, int(code), message))
+            self._outcomes[bytes(goal.handle.goal_id.uuid)] = (outcome, self._result(code, message))
+            goal.handle.execute()
+
+        def _execute(self, handle):
+            """Runs once a goal has ended: its final state and result."""
+            outcome, result = self._outcomes.pop(bytes(handle.goal_id.uuid), ("abort", self._result(self.Result.UNKNOWN, "")))
             if handle.is_active:
                 {"succeed": handle.succeed, "canceled": handle.canceled}.get(outcome, handle.abort)()
             return result
@@ -209,10 +221,8 @@ def make_nav2_interface_class():
                 return
             if not keep_path:
                 self.core.clear_path()
-            self.finished.append((outcome, int(code), message))
             self.core.events.append(f"follow_path: {outcome} ({code}{': ' + message if message else ''})")
-            if not goal.future.done():
-                goal.future.set_result((outcome, self._result(code, message)))
+            self._end(goal, outcome, code, message)
 
         def deactivated(self) -> None:
             self._finish_goal("abort", self.Result.UNKNOWN, "controller deactivated")

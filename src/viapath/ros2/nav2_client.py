@@ -139,7 +139,8 @@ def run_follow(source: str, action: str = "follow_path", frame: str = "map", off
                 print(f"error: no action server {action}", file=sys.stderr)
                 return 3
 
-        state = {"points": load_points(source), "goal": None, "sent": -math.inf, "resend": True, "count": 0, "due": True}
+        state = {"points": load_points(source), "goal": None, "sent": -math.inf, "resend": True, "count": 0, "due": True,
+                 "cancel": False}
 
         def send(points, label: str):
             index = state["count"]
@@ -159,6 +160,8 @@ def run_follow(source: str, action: str = "follow_path", frame: str = "map", off
                 if handle.accepted:
                     if label == "path":
                         state["goal"] = handle
+                        if state["cancel"]:  # sent before the cancel, accepted after it: cancel it too
+                            handle.cancel_goal_async()
                     handle.get_result_async().add_done_callback(lambda r, i=i: finished(i, label, r.result()))
             future.add_done_callback(accepted)
             return future
@@ -188,7 +191,7 @@ def run_follow(source: str, action: str = "follow_path", frame: str = "map", off
                     state["points"] = load_points(arg)
                     state["resend"] = state["due"] = True
                 elif kind == "cancel":
-                    state["resend"] = False
+                    state["resend"], state["cancel"] = False, True
                     if state["goal"] is not None:
                         state["goal"].cancel_goal_async()
                 elif kind == "stop":

@@ -353,13 +353,7 @@ def run_node(ros_args: list[str] | None = None) -> int:
                 print(f"error: {node.error}", file=sys.stderr)
                 return 2
             node.trigger_activate()
-        kind = str(node.get_parameter("executor").value)
-        if kind == "events" and str(node.get_parameter("interface").value) == "nav2":
-            # rclpy's EventsExecutor resumes a waiting coroutine at once, again and again: the running
-            # FollowPath goal (a coroutine awaiting its end) would keep a core busy. The
-            # SingleThreadedExecutor resumes it only when something arrives.
-            kind = "single-threaded"
-        executor = _executor(kind)
+        executor = _executor(str(node.get_parameter("executor").value))
         executor.add_node(node)
         while not stop["flag"] and rclpy.ok():
             executor.spin_once(timeout_sec=0.05)

@@ -95,8 +95,7 @@ NODE_OPTIONS: tuple[Option, ...] = (
     _opt("reset_hold_s", 0.5, "s", 0.0, 10.0, "after a time jump backwards the robot stands this long (tracks re-confirm)"),
     _opt("autostart", True, "", help="configure and activate the lifecycle node at start"),
     _opt("executor", "events", "", help="rclpy executor: events (rclpy's EventsExecutor, callbacks dispatched "
-         "from C++: lower latency; with interface nav2 the single-threaded one is used) or single-threaded (rclpy's "
-         "pure-Python SingleThreadedExecutor)",
+         "from C++: lower latency) or single-threaded (rclpy's pure-Python SingleThreadedExecutor)",
          choices=("events", "single-threaded")),
     _opt("interface", "topics", "", help="topics: the designated path comes on path_topic; nav2: as Nav2's controller "
          "server, paths come as FollowPath goals (docs/nav2.md)", choices=("topics", "nav2")),
