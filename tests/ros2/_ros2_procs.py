@@ -19,9 +19,28 @@ from pathlib import Path
 _counter = itertools.count()
 
 
+def _domains_in_use() -> set[int]:
+    """ROS_DOMAIN_IDs of processes running on this machine (other test runs share it)."""
+    used = set()
+    for environ in Path("/proc").glob("[0-9]*/environ"):
+        try:
+            for item in environ.read_bytes().split(b"\0"):
+                if item.startswith(b"ROS_DOMAIN_ID="):
+                    used.add(int(item.split(b"=", 1)[1] or 0))
+        except (OSError, ValueError):
+            continue
+    return used
+
+
 def domain_id() -> int:
-    """A ROS_DOMAIN_ID in 1..100 unique within this run (offset by the pid against parallel runs)."""
-    return 1 + (os.getpid() * 17 + next(_counter)) % 100
+    """A ROS_DOMAIN_ID in 1..100 unique within this run (offset by the pid against parallel runs),
+    skipping those that processes on this machine use now (DDS in one domain would mix the runs)."""
+    used = _domains_in_use()
+    for _ in range(100):
+        domain = 1 + (os.getpid() * 17 + next(_counter)) % 100
+        if domain not in used:
+            return domain
+    return domain
 
 
 def ros_env(domain: int) -> dict[str, str]:
@@ -130,17 +149,17 @@ class Nav2Run:
                                                         *(["--ros-args", *params] if params else [])), self.domain)
         self.sim = procs.start(f"{name}_sim", viapath("ros2", "sim", scenario, "--rate", str(rate), *(["--lockstep"] if lockstep else []),
                                                       "--json", "--trace", str(self.trace), "--map-offset", self.MAP_OFFSET,
-                                                      "--linger", "1.5", *sim_args), self.domain)
+                                                      "--linger", "1.5", "--wait-s", "300", *sim_args), self.domain)
         self.client = procs.start(f"{name}_client", viapath("ros2", "follow", scenario, "--map-offset", self.MAP_OFFSET,
                                                             "--lifecycle", "controller_server", "--log", str(self.log),
-                                                            *client_args), self.domain)
+                                                            "--wait-s", "300", *client_args), self.domain)
 
     def records(self) -> list[dict]:
         if not self.log.is_file():
             return []
         return [json.loads(line) for line in self.log.read_text().splitlines() if line.strip()]
 
-    def finish(self, timeout_s: float = 240.0) -> tuple[dict, list[dict]]:
+    def finish(self, timeout_s: float = 420.0) -> tuple[dict, list[dict]]:
         code = self.procs.wait(self.sim, timeout_s)
         out, err = self.procs.output(self.sim)
         # the last result may still be on its way

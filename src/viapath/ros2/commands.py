@@ -221,6 +221,7 @@ def follow(
     log: Optional[Path] = typer.Option(None, "--log", help="Append every goal, result and feedback as JSON lines here."),
     until: float = typer.Option(float("inf"), "--until", help="End at this episode time (s)."),
     use_sim_time: bool = typer.Option(True, "--use-sim-time/--wall-time", help="Episode time from /clock (the simulator's)."),
+    wait_s: float = typer.Option(120.0, "--wait-s", help="How long to wait for the node's lifecycle service and action server."),
 ) -> None:
     """Play Nav2's part against a controller (viapath ros2 nav2): lifecycle, FollowPath goals re-sent every second."""
     import math
@@ -240,7 +241,7 @@ def follow(
         ros_args = [*ros_args, "-p", "use_sim_time:=true"] if ros_args else ["-p", "use_sim_time:=true"]
     _need_rclpy()
     raise typer.Exit(run_follow(source, action, frame, offset, spacing, resend, lifecycle, list(at),
-                                str(log) if log else None, until, ros_args))
+                                str(log) if log else None, until, ros_args, wait_s=wait_s))
 
 
 @app.command()

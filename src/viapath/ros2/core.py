@@ -32,6 +32,9 @@ What we chose where the sources are silent:
 * **A time jump backwards** (a scan or odometry stamp earlier than the last cycle's): the tracker and
   odometry are reset, and the robot is held stopped for ``reset_hold_s`` of the new time so that
   tracks confirm again before it moves.
+* **Static geometry**: every scan return no person track explains (:mod:`viapath.perception.static_layer`,
+  parameter ``static_layer``) and, with ``map_topic``, a known map's occupied cells are the observation's
+  static layer: the planner, the guard and the shield keep clear of them (DESIGN §10).
 * **Every command** is finite and inside the limits: speed in [0, max_speed_mps], turn rate in
   ±max_turn_rate_radps, and within one cycle's acceleration of the measured speed and turn rate.
 """
@@ -49,9 +52,11 @@ from viapath.path import DesignatedPath, SubgoalPolicy
 from viapath.perception.detection import DetectorParams, detect
 from viapath.perception.fusion import blind_region
 from viapath.perception.scanner import ScannerModel
+from viapath.perception.static_layer import StaticLayerParams, StaticObstacleLayer
 from viapath.perception.tracking import MultiTargetTracker, TrackerParams
 from viapath.planning import Decision, make_planner
 from viapath.ros2.settings import NodeSettings
+from viapath.static import StaticLayer
 
 FORWARD_CONE_RAD = math.radians(30.0)
 
@@ -100,6 +105,7 @@ class CycleResult:
     speed_cap_mps: float | None = None
     cycle_time_ms: float | None = None
     status: dict[str, dict[str, str]] = field(default_factory=dict)  # name -> key/values, for diagnostics
+    static: StaticLayer = field(default_factory=StaticLayer.empty)  # the static layer the planner was given
 
 
 def urg04lx_models(settings: NodeSettings) -> list[ScannerModel]:
@@ -127,6 +133,8 @@ class PlannerCore:
         else:
             self.detector_params = DetectorParams(keep_segments=False, fit_backend=s.fit_backend)
         self.tracker = MultiTargetTracker(TrackerParams(acceleration_sigma_mps2=s.tracker_acceleration_sigma_mps2))
+        self.static_layer = StaticObstacleLayer((), StaticLayerParams(enabled=bool(s.static_layer)))
+        self.map_layer = StaticLayer.empty()  # a known map (set_map), in the odometry frame
         self.path: DesignatedPath | None = None
         self.planner = None
         self.odometry: Odometry | None = None
@@ -144,6 +152,7 @@ class PlannerCore:
         self._now_s = 0.0
         self._first_scan_s: float | None = None
         self.odom_problem = ""
+        self.static_now = StaticLayer.empty()  # the last cycle's static layer from the scans
 
     def _make_planner(self, path: DesignatedPath, subgoal_policy: SubgoalPolicy):
         """The configured planner on ``path``, behind the shield when ``use_shield`` says so."""
@@ -319,8 +328,15 @@ class PlannerCore:
             live |= {i for i, other in enumerate(self.health) if other.good == 0}
         return waited_a_period or all(self.health[i].pending is not None for i in live)
 
+    def set_map(self, layer: StaticLayer) -> None:
+        """A known map's static geometry (e.g. from a nav_msgs/OccupancyGrid), in the odometry frame."""
+        self.map_layer = layer.finite()
+        self.events.append(f"map: {len(self.map_layer)} static segments")
+
     def _time_jump(self, why: str) -> None:
         self.tracker.reset()
+        self.static_layer.reset()
+        self.static_now = StaticLayer.empty()
         for h in self.health:
             h.pending = None
         self.odometry = None
@@ -455,6 +471,8 @@ class PlannerCore:
                 self.hold_until_stamp_s = stamp + self.settings.reset_hold_s
             self.tracker.step(stamp, detections.centres, detections.position_sigma_m, detections.radii_m)
             obstacles = self.tracker.obstacles().finite()
+            self.static_now = self.static_layer.update(stamp, pose, [r for _, r in scans], self.tracker.state[:, :2],
+                                                       self.tracker.radii_m, scanners=[m for m, _ in scans])
             self.last_cycle_stamp_s = stamp
         cap, sectors = self.blind_speed_cap(live)
         decision = None
@@ -465,7 +483,8 @@ class PlannerCore:
             o = self.odometry
             robot = RobotState(pose[:2].copy(), float(pose[2]), max(o.speed_mps, 0.0), o.turn_rate_radps,
                                self.settings.robot_radius_m)
-            decision = self.planner.plan(Observation(stamp, robot, obstacles))
+            static = self.map_layer.concatenate(self.static_now)
+            decision = self.planner.plan(Observation(stamp, robot, obstacles, static))
             limit = cap if self.speed_limit_mps is None else (self.speed_limit_mps if cap is None else min(cap, self.speed_limit_mps))
             command = self._limit(decision.command, limit)
             mode = "driving" if cap is None else "degraded"
@@ -488,7 +507,8 @@ class PlannerCore:
         self.cycle_times_ms.append(elapsed)
         if len(self.cycle_times_ms) > 1000:
             del self.cycle_times_ms[:-100]
-        result = CycleResult(command, mode, reasons, stamp, decision, obstacles, pose, sectors, cap, elapsed)
+        result = CycleResult(command, mode, reasons, stamp, decision, obstacles, pose, sectors, cap, elapsed,
+                             static=self.map_layer.concatenate(self.static_now))
         result.status = self._status(result, now_s)
         self.last_result = result
         return result

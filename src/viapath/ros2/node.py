@@ -135,6 +135,7 @@ def make_node_class():
             for index, scanner in enumerate(s.scanners):
                 self._subs.append(self.create_subscription(
                     LaserScan, scanner.topic, lambda msg, i=index: self._on_scan(i, msg), qos_profile_sensor_data))
+            latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
             if s.interface == "nav2":
                 try:
                     self._nav2 = Nav2Interface(self)
@@ -144,8 +145,11 @@ def make_node_class():
                     self._teardown()
                     return TransitionCallbackReturn.FAILURE
             elif not s.path_file:
-                latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
                 self._subs.append(self.create_subscription(PathMsg, s.path_topic, self._on_path, latched))
+            if s.map_topic:
+                from nav_msgs.msg import OccupancyGrid
+
+                self._subs.append(self.create_subscription(OccupancyGrid, s.map_topic, self._on_map, latched))
             self.core.active = False
             self._timer = self.create_timer(s.cycle_period_s, self._on_watchdog)
             self.get_logger().info(f"configured: planner {s.planner_name}, scanners "
@@ -200,6 +204,18 @@ def make_node_class():
         def _on_odom(self, msg) -> None:
             x, y, yaw, v, w = convert.odometry_values(msg)
             self.core.on_odometry(self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id, x, y, yaw, v, w)
+
+        def _on_map(self, msg) -> None:
+            expected = self.core.settings.odom_frame
+            if expected and msg.header.frame_id and msg.header.frame_id != expected:
+                self.core.events.append(f"map refused: frame_id {msg.header.frame_id!r}, expected {expected!r}")
+                self.get_logger().error(self.core.events[-1])
+                return
+            try:
+                self.core.set_map(convert.occupancy_layer_from_message(msg, self.core.settings.map_occupied_threshold))
+            except ValueError as error:
+                self.core.events.append(f"map refused: {error}")
+                self.get_logger().error(self.core.events[-1])
 
         def _on_path(self, msg) -> None:
             expected = self.core.settings.odom_frame
