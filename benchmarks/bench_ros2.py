@@ -1,7 +1,11 @@
 """ROS 2 node latency: scan in -> cmd_vel out over DDS, with 10 and 50 simulated people; CPU per cycle.
 
 Usage: python benchmarks/bench_ros2.py [--people 10 50] [--cycles 150] [--executor events|single-threaded]
-                                      [--profile node.prof] [--json]
+                                      [--profile node.prof] [--nav2] [--json]
+
+``--nav2`` starts ``viapath ros2 nav2`` (autostart) instead and gives it the path as a FollowPath goal
+(odom frame, 100 m long) from this process, so its action server, feedback and TF subscriptions run
+in every cycle.
 
 Needs the ``ros2`` extra. Starts ``viapath ros2 node`` as a separate process (its own ROS domain,
 DDS kept on this machine) and drives it from this process at the scan rate (10 Hz, real time):
@@ -37,7 +41,7 @@ def _cpu_seconds(pid: int) -> float:
 
 
 def run(people_counts, cycles: int, seed: int = 0, profile: str | None = None,
-        node_args: tuple[str, ...] = ()) -> list[dict]:
+        node_args: tuple[str, ...] = (), nav2: bool = False) -> list[dict]:
     domain = 150 + os.getpid() % 50
     os.environ.update(ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(domain))
     import rclpy
@@ -51,10 +55,10 @@ def run(people_counts, cycles: int, seed: int = 0, profile: str | None = None,
     from viapath.perception.scanner import paper_scanners
     from viapath.ros2 import convert
 
+    command = ["ros2", "nav2", "--ros-args", "-p", "autostart:=true"] if nav2 else ["ros2", "node", "--ros-args", "-p", "path_file:=paper-front"]
     node_proc = subprocess.Popen(
-        [sys.executable, *(["-m", "cProfile", "-o", profile] if profile else []), "-m", "viapath.cli", "ros2", "node",
-         "--ros-args", "-p", "path_file:=paper-front", "-p", "scan_timeout_s:=5.0", "-p", "odom_timeout_s:=5.0",
-         *node_args],
+        [sys.executable, *(["-m", "cProfile", "-o", profile] if profile else []), "-m", "viapath.cli", *command,
+         "-p", "scan_timeout_s:=5.0", "-p", "odom_timeout_s:=5.0", *node_args],
         env=dict(os.environ), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     rclpy.init()
     node = rclpy.create_node("viapath_bench")
@@ -78,6 +82,8 @@ def run(people_counts, cycles: int, seed: int = 0, profile: str | None = None,
             if time.monotonic() > deadline or node_proc.poll() is not None:
                 raise RuntimeError("the node did not come up: " + (node_proc.stderr.read().decode()[-2000:] if node_proc.poll() is not None else "timeout"))
             rclpy.spin_once(node, timeout_sec=0.05)
+        if nav2:
+            _send_goal(node, [[-1.0, 0.0], [100.0, 0.0]])
         end = time.monotonic() + 1.0
         while time.monotonic() < end:
             rclpy.spin_once(node, timeout_sec=0.05)
@@ -147,6 +153,29 @@ def run(people_counts, cycles: int, seed: int = 0, profile: str | None = None,
     return results
 
 
+def _send_goal(node, waypoints) -> None:
+    """A FollowPath goal in the odometry frame (no TF needed), accepted before the cycles start."""
+    import rclpy
+    from rclpy.action import ActionClient
+
+    from viapath.ros2 import convert, interfaces
+
+    interfaces.load()
+    from nav2_msgs.action import FollowPath
+
+    client = ActionClient(node, FollowPath, "follow_path")
+    if not client.wait_for_server(timeout_sec=60):
+        raise RuntimeError("no follow_path action server")
+    goal = FollowPath.Goal()
+    goal.path = convert.path_message(waypoints, "odom", convert.time_msg(0.0))
+    future = client.send_goal_async(goal)
+    end = time.monotonic() + 30
+    while not future.done() and time.monotonic() < end:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    if not (future.done() and future.result().accepted):
+        raise RuntimeError("the FollowPath goal was not accepted")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--people", type=int, nargs="+", default=[10, 50])
@@ -156,15 +185,16 @@ def main() -> None:
     parser.add_argument("--executor", choices=("events", "single-threaded"), default=None,
                         help="the node's executor parameter (default: the node's default)")
     parser.add_argument("--profile", metavar="FILE", help="run the node under cProfile, stats written to FILE")
+    parser.add_argument("--nav2", action="store_true", help="viapath ros2 nav2 with a FollowPath goal instead of viapath ros2 node")
     args = parser.parse_args()
     started = time.time()
     node_args = ("-p", f"executor:={args.executor}") if args.executor else ()
-    results = run(args.people, args.cycles, args.seed, args.profile, node_args)
+    results = run(args.people, args.cycles, args.seed, args.profile, node_args, nav2=args.nav2)
     load = os.getloadavg()[0]
     if args.json:
-        print(json.dumps({"benchmark": "ros2", "load_avg_1min": load, "wall_s": time.time() - started, "results": results}))
+        print(json.dumps({"benchmark": "ros2", "node": "nav2" if args.nav2 else "node", "load_avg_1min": load, "wall_s": time.time() - started, "results": results}))
         return
-    print(f"viapath ros2 node, scan in -> cmd_vel out over DDS ({args.cycles} cycles at 10 Hz; load avg {load:.1f})")
+    print(f"viapath ros2 {'nav2 (FollowPath goal)' if args.nav2 else 'node'}, scan in -> cmd_vel out over DDS ({args.cycles} cycles at 10 Hz; load avg {load:.1f})")
     print(f"{'people':>6} {'lat p50':>8} {'lat p99':>8} {'lat max':>8} {'cpu/cycle':>10} {'cycle p50':>10} {'cycle p99':>10} {'tracks':>6} {'missed':>6}")
     for r in results:
         print(f"{r['people']:>6} {r['latency_p50_ms']:>7.2f}ms {r['latency_p99_ms']:>7.2f}ms {r['latency_max_ms']:>7.2f}ms "

@@ -19,9 +19,28 @@ from pathlib import Path
 _counter = itertools.count()
 
 
+def _domains_in_use() -> set[int]:
+    """ROS_DOMAIN_IDs of processes running on this machine (other test runs share it)."""
+    used = set()
+    for environ in Path("/proc").glob("[0-9]*/environ"):
+        try:
+            for item in environ.read_bytes().split(b"\0"):
+                if item.startswith(b"ROS_DOMAIN_ID="):
+                    used.add(int(item.split(b"=", 1)[1] or 0))
+        except (OSError, ValueError):
+            continue
+    return used
+
+
 def domain_id() -> int:
-    """A ROS_DOMAIN_ID in 1..100 unique within this run (offset by the pid against parallel runs)."""
-    return 1 + (os.getpid() * 17 + next(_counter)) % 100
+    """A ROS_DOMAIN_ID in 1..100 unique within this run (offset by the pid against parallel runs),
+    skipping those that processes on this machine use now (DDS in one domain would mix the runs)."""
+    used = _domains_in_use()
+    for _ in range(100):
+        domain = 1 + (os.getpid() * 17 + next(_counter)) % 100
+        if domain not in used:
+            return domain
+    return domain
 
 
 def ros_env(domain: int) -> dict[str, str]:
@@ -111,3 +130,45 @@ def wait_until(predicate, timeout_s: float, period_s: float = 0.05) -> bool:
             return True
         time.sleep(period_s)
     return predicate()
+
+
+class Nav2Run:
+    """viapath as Nav2's controller (``viapath ros2 nav2``), the simulator with TF, and a client of
+    ours in Nav2's part (``viapath ros2 follow``: lifecycle, goals re-sent every second), in one domain."""
+
+    MAP_OFFSET = "1.5,-2.0,0.6"  # map -> odom: the paths go in the map frame, the node must use TF
+
+    def __init__(self, procs: Processes, name: str, scenario: str, node_params=(), client_args=(), sim_args=(),
+                 rate: float = 20.0, lockstep: bool = True):
+        self.procs, self.name = procs, name
+        self.domain = domain_id()
+        self.trace = procs.folder / f"{name}_trace.csv"
+        self.log = procs.folder / f"{name}_client.jsonl"
+        params = [a for p in node_params for a in ("-p", p)]
+        self.node = procs.start(f"{name}_node", viapath("ros2", "nav2", "--use-sim-time",
+                                                        *(["--ros-args", *params] if params else [])), self.domain)
+        self.sim = procs.start(f"{name}_sim", viapath("ros2", "sim", scenario, "--rate", str(rate), *(["--lockstep"] if lockstep else []),
+                                                      "--json", "--trace", str(self.trace), "--map-offset", self.MAP_OFFSET,
+                                                      "--linger", "1.5", "--wait-s", "300", *sim_args), self.domain)
+        self.client = procs.start(f"{name}_client", viapath("ros2", "follow", scenario, "--map-offset", self.MAP_OFFSET,
+                                                            "--lifecycle", "controller_server", "--log", str(self.log),
+                                                            "--wait-s", "300", *client_args), self.domain)
+
+    def records(self) -> list[dict]:
+        if not self.log.is_file():
+            return []
+        return [json.loads(line) for line in self.log.read_text().splitlines() if line.strip()]
+
+    def finish(self, timeout_s: float = 420.0) -> tuple[dict, list[dict]]:
+        code = self.procs.wait(self.sim, timeout_s)
+        out, err = self.procs.output(self.sim)
+        # the last result may still be on its way
+        wait_until(lambda: any(r["kind"] == "result" and r["label"] == "path" and r["error_msg"] != "preempted by a new path"
+                               for r in self.records()), 5.0)
+        self.procs.stop(self.client)
+        self.procs.stop(self.node)
+        _, node_err = self.procs.output(self.node)
+        _, client_err = self.procs.output(self.client)
+        assert code == 0, f"{self.name}: sim exited {code}: {err[-3000:]}\nnode: {node_err[-2000:]}\nclient: {client_err[-1500:]}"
+        self.sim_stderr, self.node_stderr = err, node_err
+        return json.loads(out.strip().splitlines()[-1]), self.records()

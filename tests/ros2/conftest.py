@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from _ros2_procs import Pair, Processes, domain_id, viapath  # noqa: F401
+from _ros2_procs import Nav2Run, Pair, Processes, domain_id, viapath  # noqa: F401
 
 DATA = Path(os.environ.get("VIAPATH_DATA", Path(__file__).resolve().parents[3] / "shared" / "data"))
 BAG = DATA / "leg_tracker_laser" / "positive_2.bag"
@@ -36,6 +36,33 @@ def reference_metrics(name: str) -> dict:
     spec = spec.model_copy(update={"perception": spec.perception.model_copy(
         update={"options": {"detector": {"keep_segments": False, "fit_backend": "numpy"}}})})
     return run_episode(spec, perception="laser").metrics
+NAV2_EMPTY = """name: nav2-corridor
+robot: {start: [0.0, 0.0], heading: 0.0, speed: 0.3, radius: 0.25}
+path: {waypoints: [[0.0, 0.0], [8.0, 0.0]], half_width: 1.0}
+obstacles: []
+duration_s: 12
+"""
+NAV2_BEND = "waypoints: [[0.0, 0.0], [1.0, 0.0], [4.0, 1.0], [8.0, 1.0]]\n"
+NAV2_BLOCKED = """name: nav2-blocked
+robot: {start: [0.0, 0.0], heading: 0.0, speed: 0.3, radius: 0.25}
+path: {waypoints: [[0.0, 0.0], [6.0, 0.0]], half_width: 0.4}
+obstacles:
+  - {start: [1.8, 0.0], velocity: [0.0, 0.0], radius: 0.3}
+duration_s: 12
+"""
+NAV2_PREEMPT_EVENTS = ["1:clear", "2:preempt:{bend}", "4.5:speed-limit:25", "7:cancel"]
+NAV2_DEACTIVATE_AT_S = 2.0
+NAV2_PATIENCE_S = 3.0
+
+
+def mixed_scenario(folder: Path) -> tuple[Path, dict]:
+    """One scene of the ``mixed`` suite (seed 0, three people): the same file ``viapath suite mixed`` writes."""
+    from viapath.bench.suites import generate_suite, write_suite
+
+    scenario = generate_suite("mixed", 5, seed=0)[4]
+    return write_suite([scenario], folder / "mixed")[0], scenario
+
+
 PLAY_PARAMS = """viapath:
   ros__parameters:
     scanner_names: ["laser"]
@@ -75,6 +102,9 @@ class Launcher:
             "front": Pair(procs, "front", str(scenario), ["--duration", str(FRONT_DURATION_S), *faults(FRONT_FAULTS)], node_args),
             "rear": Pair(procs, "rear", str(scenario), ["--duration", str(REAR_DURATION_S), *faults(REAR_FAULTS)], node_args),
         }
+        from viapath.ros2 import interfaces
+
+        interfaces.build()  # once, before any process needs it (about 45 s on a fresh machine)
         if BAG.is_file():
             params = folder / "play.yaml"
             params.write_text(PLAY_PARAMS)
@@ -86,6 +116,37 @@ class Launcher:
                                                          "--lockstep", "--status-log", str(record)), domain),
                 "record": record,
             }
+
+    def start_nav2(self) -> None:
+        """Started when the first Nav2 test asks (after the other groups are collected), so that the
+        two sets of processes do not compete for the cores at start-up."""
+        procs, folder = self.procs, self.folder
+        empty, bend, blocked = folder / "nav2_empty.yaml", folder / "nav2_bend.yaml", folder / "nav2_blocked.yaml"
+        empty.write_text(NAV2_EMPTY)
+        bend.write_text(NAV2_BEND)
+        blocked.write_text(NAV2_BLOCKED)
+        mixed, spec = mixed_scenario(folder)
+        at = lambda items: sum((["--at", e] for e in items), [])  # noqa: E731
+        runs = {name: Nav2Run(procs, f"nav2_{name}", name, client_args=at(["0:empty", "0:nan"]) if name == "paper-front" else ())
+                for name in PAPER}
+        runs["mixed"] = Nav2Run(procs, "nav2_mixed", str(mixed), node_params=[
+            f"half_width_m:={spec['path']['half_width']}", f"nominal_speed_mps:={spec['robot']['speed']}"])
+        runs["preempt"] = Nav2Run(procs, "nav2_preempt", str(empty), node_params=["nominal_speed_mps:=0.3"],
+                                  client_args=at([e.format(bend=bend) for e in NAV2_PREEMPT_EVENTS]),
+                                  sim_args=["--duration", "10"])
+        runs["deactivate"] = Nav2Run(procs, "nav2_deactivate", str(empty), node_params=["nominal_speed_mps:=0.3"],
+                                     client_args=at([f"{NAV2_DEACTIVATE_AT_S}:deactivate"]),
+                                     sim_args=["--duration", "4", "--max-wait", "0.3"])  # inactive: no command, no wait
+        runs["blocked"] = Nav2Run(procs, "nav2_blocked", str(blocked), node_params=[
+            "half_width_m:=0.4", "nominal_speed_mps:=0.3", f"progress_patience_s:={NAV2_PATIENCE_S}"], sim_args=["--duration", "10"])
+        self.groups["nav2"] = {"runs": runs, "mixed": spec}
+
+    def nav2(self):
+        if "nav2" not in self.groups:
+            self.start_nav2()
+        if "nav2" not in self.results:
+            self.results["nav2"] = {name: run.finish() for name, run in self.groups["nav2"]["runs"].items()}
+        return self.results["nav2"]
 
     def paper(self):
         if "paper" not in self.results:
@@ -144,13 +205,13 @@ def ros2_launcher(tmp_path_factory):
 def pytest_collection_modifyitems(session, config, items):
     """Tests that read the launched processes go last, so the fast ones run while those processes work."""
     items.sort(key=lambda item: "ros2_launcher" in getattr(item, "fixturenames", ()) or
-               any(name in getattr(item, "fixturenames", ()) for name in ("paper_runs", "fault_runs", "play_tracks")))
+               any(name in getattr(item, "fixturenames", ()) for name in ("paper_runs", "fault_runs", "play_tracks", "nav2_runs")))
 
 
 @pytest.fixture(scope="session", autouse=True)
 def _start_ros2_processes_early(request):
     """Start the launcher with the first test when any collected test needs it."""
-    wanted = ("ros2_launcher", "paper_runs", "fault_runs", "play_tracks", "in_process")
+    wanted = ("ros2_launcher", "paper_runs", "fault_runs", "play_tracks", "in_process", "nav2_runs")
     if any(any(n in getattr(item, "fixturenames", ()) for n in wanted) for item in request.session.items):
         from viapath.ros2 import rclpy_available
 

@@ -72,6 +72,35 @@ def node(
 
 
 @app.command(context_settings=_CONTEXT)
+def nav2(
+    ctx: typer.Context,
+    params_file: Optional[Path] = typer.Option(None, "--params-file", help="ROS 2 parameters file (controller_server: ros__parameters: ...)."),
+    use_sim_time: bool = typer.Option(False, "--use-sim-time", help="Run on /clock."),
+    name: str = typer.Option("controller_server", "--name", help="Node name (Nav2's lifecycle manager manages nodes by name)."),
+) -> None:
+    """The planner as Nav2's controller server: serves follow_path, honours speed_limit, reads TF (see docs/nav2.md)."""
+    from viapath.ros2.settings import ParameterError, read_params_file, validate
+
+    ros_args = _ros_args(ctx.args)
+    if params_file is not None:
+        try:
+            values = read_params_file(params_file, node_name=name)
+            values.pop("use_sim_time", None)
+            values.setdefault("interface", "nav2")
+            validate(values)
+        except ParameterError as error:
+            _fail(f"{params_file}: {error}")
+        ros_args = ["--params-file", str(params_file), *ros_args]
+    ros_args = ["-r", f"__node:={name}", "-p", "interface:=nav2", "-p", "autostart:=false", *ros_args]
+    if use_sim_time:
+        ros_args = [*ros_args, "-p", "use_sim_time:=true"]
+    _need_rclpy()
+    from viapath.ros2.node import run_node
+
+    raise typer.Exit(run_node(ros_args))
+
+
+@app.command(context_settings=_CONTEXT)
 def sim(
     ctx: typer.Context,
     scenario: str = typer.Argument(..., help="Built-in scenario name (viapath scenarios) or a YAML file."),
@@ -85,6 +114,10 @@ def sim(
     status_log: Optional[Path] = typer.Option(None, "--status-log", help="Write every planner status received (JSON lines)."),
     wait_s: float = typer.Option(60.0, "--wait-s", help="How long to wait for a planner node to appear."),
     duration: Optional[float] = typer.Option(None, "--duration", help="End the episode after this many seconds (default: the scenario's)."),
+    tf: bool = typer.Option(True, "--tf/--no-tf", help="Publish TF: /tf odom->base_link, /tf_static map->odom and base_link->laser_NAME."),
+    map_offset: str = typer.Option("0,0,0", "--map-offset", help="map->odom as X,Y,YAW (m, m, rad): the pose of odom in map."),
+    max_wait: float = typer.Option(10.0, "--max-wait", help="With --lockstep: wait at most this long (wall s) for the node each step."),
+    linger: float = typer.Option(0.0, "--linger", help="After the goal, keep simulating this long (s; not in the metrics)."),
 ) -> None:
     """Simulated scans, odometry and /clock from a scenario; drives the robot with cmd_vel; prints the metrics."""
     import math
@@ -100,6 +133,12 @@ def sim(
     if duration is not None and not (math.isfinite(duration) and duration > 0):
         _fail(f"--duration: expected a number > 0, found {duration}")
     try:
+        offset = tuple(float(v) for v in map_offset.split(","))
+    except ValueError:
+        offset = ()
+    if len(offset) != 3 or not all(math.isfinite(v) for v in offset):
+        _fail(f"--map-offset: expected X,Y,YAW (three finite numbers), found {map_offset!r}")
+    try:
         load_scenario(scenario)
         faults = [Fault.parse(f) for f in fault]
     except (ScenarioError, ValueError) as error:
@@ -109,10 +148,11 @@ def sim(
             _fail(f"{option} {file}: expected a {suffix} file in an existing folder")
     _need_rclpy()
     try:
-        code = run_sim(scenario, rate=rate, lockstep=lockstep, as_json=as_json, seed=seed, faults=faults,
+        code = run_sim(scenario, rate=rate, lockstep=lockstep, max_wait_s=max(max_wait, 0.0), as_json=as_json, seed=seed, faults=faults,
                        trace_file=str(trace) if trace else None, wait_for_node_s=wait_s,
                        commands_file=str(commands) if commands else None, ros_args=ros_args,
-                       duration_s=duration, status_file=str(status_log) if status_log else None)
+                       duration_s=duration, status_file=str(status_log) if status_log else None, tf=tf, map_offset=offset,
+                       linger_s=max(linger, 0.0))
     except ValueError as error:
         _fail(str(error))
     raise typer.Exit(code)
@@ -165,6 +205,55 @@ def params(
         _fail(f"{out}: folder {out.parent} does not exist")
     write_example_params(out, planner)
     print(out)
+
+
+@app.command(context_settings=_CONTEXT)
+def follow(
+    ctx: typer.Context,
+    source: str = typer.Argument(..., help="Path: a built-in scenario, a scenario YAML, or a path file (YAML/CSV of x y)."),
+    action: str = typer.Option("follow_path", "--action", help="FollowPath action name."),
+    frame: str = typer.Option("map", "--frame", help="Frame the path is sent in."),
+    map_offset: str = typer.Option("0,0,0", "--map-offset", help="Pose of the path's odometry frame in --frame: X,Y,YAW."),
+    spacing: float = typer.Option(0.05, "--spacing", help="Densify the path to poses this far apart (m), as a planner's path."),
+    resend: float = typer.Option(1.0, "--resend", help="Re-send the path every S seconds (0: once), as Nav2's behaviour tree."),
+    lifecycle: Optional[str] = typer.Option(None, "--lifecycle", help="Configure and activate this lifecycle node first."),
+    at: List[str] = typer.Option([], "--at", help="Event TIME:KIND[:ARG]: empty, nan, preempt:PATH, cancel, deactivate, activate, speed-limit:PERCENT, clear, stop."),
+    log: Optional[Path] = typer.Option(None, "--log", help="Append every goal, result and feedback as JSON lines here."),
+    until: float = typer.Option(float("inf"), "--until", help="End at this episode time (s)."),
+    use_sim_time: bool = typer.Option(True, "--use-sim-time/--wall-time", help="Episode time from /clock (the simulator's)."),
+    wait_s: float = typer.Option(120.0, "--wait-s", help="How long to wait for the node's lifecycle service and action server."),
+) -> None:
+    """Play Nav2's part against a controller (viapath ros2 nav2): lifecycle, FollowPath goals re-sent every second."""
+    import math
+
+    from viapath.ros2.nav2_client import parse_event, run_follow
+
+    ros_args = _ros_args(ctx.args)
+    try:
+        offset = tuple(float(v) for v in map_offset.split(","))
+        for item in at:
+            parse_event(item)
+    except ValueError as error:
+        _fail(str(error))
+    if len(offset) != 3 or not all(math.isfinite(v) for v in offset):
+        _fail(f"--map-offset: expected X,Y,YAW, found {map_offset!r}")
+    if use_sim_time:
+        ros_args = [*ros_args, "-p", "use_sim_time:=true"] if ros_args else ["-p", "use_sim_time:=true"]
+    _need_rclpy()
+    raise typer.Exit(run_follow(source, action, frame, offset, spacing, resend, lifecycle, list(at),
+                                str(log) if log else None, until, ros_args, wait_s=wait_s))
+
+
+@app.command()
+def interfaces() -> None:
+    """Generate and build nav2_msgs / tf2_msgs (FollowPath, SpeedLimit, ClearEntireCostmap, TFMessage) once; print where."""
+    from viapath.ros2 import interfaces as generated
+
+    try:
+        prefix = generated.build(progress=lambda text: _errors.print(text, highlight=False))
+    except generated.InterfaceBuildError as error:
+        _fail(str(error))
+    print(prefix)
 
 
 def register(root: typer.Typer) -> None:

@@ -72,6 +72,7 @@ class ScannerHealth:
     refused: dict[str, int] = field(default_factory=dict)
     last_problem: str = ""
     invalid_fraction: float = 0.0
+    mount: tuple[float, float, float] | None = None  # from TF; None: the parameters'
 
     def refuse(self, reason: str, detail: str) -> None:
         self.refused[reason] = self.refused.get(reason, 0) + 1
@@ -147,6 +148,7 @@ class PlannerCore:
         self.events: list[str] = []  # things reported once (time jumps, refused path)
         self.active = True
         self.goal_reached = False
+        self.speed_limit_mps: float | None = None  # from Nav2's speed_limit topic (None: no limit)
         self._now_s = 0.0
         self._first_scan_s: float | None = None
         self.odom_problem = ""
@@ -204,6 +206,49 @@ class PlannerCore:
         self.planner = self._make_planner(path, self.subgoal_policy)
         self.goal_reached = False
 
+    def clear_path(self) -> None:
+        """No path any more (a cancelled goal): the cycles brake the robot to rest."""
+        self.path = None
+        self.planner = None
+        self.goal_reached = False
+
+    def same_path(self, waypoints, tolerance_m: float = 1e-3) -> bool:
+        """Whether ``waypoints`` are the current path's (a re-sent path: keep the planner as it is)."""
+        if self.path is None:
+            return False
+        waypoints = np.asarray(waypoints, dtype=float).reshape(-1, 2)
+        current = np.asarray(self.path.waypoints, dtype=float)
+        return current.shape == waypoints.shape and bool(np.all(np.abs(current - waypoints) <= tolerance_m))
+
+    def distance_to_goal(self) -> float | None:
+        """Distance along the path from the robot's projection to the goal (m), or None."""
+        if self.path is None or self.odometry is None:
+            return None
+        _, arc, _ = self.path.project(np.array([self.odometry.x, self.odometry.y]))
+        return max(float(self.path.length_m - arc), 0.0)
+
+    def set_speed_limit(self, limit: float, percentage: bool) -> None:
+        """Nav2's ``SpeedLimit``: a percentage of ``max_speed_mps`` or m/s; 0 (or not finite) lifts it."""
+        if not math.isfinite(limit) or limit <= 0.0:
+            self.speed_limit_mps = None
+        else:
+            self.speed_limit_mps = (limit / 100.0 * self.limits.max_speed_mps) if percentage else float(limit)
+
+    def set_mount(self, index: int, x_m: float, y_m: float, yaw_rad: float) -> bool:
+        """Scanner ``index``'s mount from TF (the parameters' mount is the fallback); True when it changed."""
+        h = self.health[index]
+        mount = (float(x_m), float(y_m), float(yaw_rad))
+        if getattr(h, "mount", None) == mount:
+            return False
+        h.mount = mount
+        if h.model is not None:
+            if self.settings.scan_geometry == "urg04lx":
+                yaw = mount[2]
+            else:  # the model's axis is the middle beam of the message's layout
+                yaw = mount[2] + h.angle_min_rad + 0.5 * (h.model.beam_count - 1) * h.model.angle_increment_rad
+            h.model = replace(h.model, mount_x_m=mount[0], mount_y_m=mount[1], mount_yaw_rad=_wrap(yaw))
+        return True
+
     def on_odometry(self, now_s: float, stamp_s: float, frame_id: str, x: float, y: float, heading_rad: float,
                     speed_mps: float, turn_rate_radps: float) -> bool:
         """Store one odometry message; False (and counted) when refused."""
@@ -242,8 +287,9 @@ class PlannerCore:
                 h.refuse("layout", f"{len(ranges)} beams, increment {angle_increment_rad}")
                 return False
             n = len(ranges)
-            h.model = ScannerModel(name=setting.name, mount_x_m=setting.mount_x_m, mount_y_m=setting.mount_y_m,
-                                   mount_yaw_rad=_wrap(setting.mount_yaw_rad + angle_min_rad + 0.5 * (n - 1) * angle_increment_rad),
+            mx, my, myaw = getattr(h, "mount", None) or (setting.mount_x_m, setting.mount_y_m, setting.mount_yaw_rad)
+            h.model = ScannerModel(name=setting.name, mount_x_m=mx, mount_y_m=my,
+                                   mount_yaw_rad=_wrap(myaw + angle_min_rad + 0.5 * (n - 1) * angle_increment_rad),
                                    beam_count=n, angle_increment_rad=angle_increment_rad,
                                    range_min_m=max(float(range_min_m), 0.0) if math.isfinite(range_min_m) else 0.0,
                                    range_max_m=float(range_max_m) if math.isfinite(range_max_m) and range_max_m > range_min_m else 5.6)
@@ -439,7 +485,8 @@ class PlannerCore:
                                self.settings.robot_radius_m)
             static = self.map_layer.concatenate(self.static_now)
             decision = self.planner.plan(Observation(stamp, robot, obstacles, static))
-            command = self._limit(decision.command, cap)
+            limit = cap if self.speed_limit_mps is None else (self.speed_limit_mps if cap is None else min(cap, self.speed_limit_mps))
+            command = self._limit(decision.command, limit)
             mode = "driving" if cap is None else "degraded"
             if cap is not None:
                 reasons.append("scanner(s) silent: " + ", ".join(self.settings.scanners[i].name for i in range(len(self.health))
@@ -517,6 +564,7 @@ class PlannerCore:
                 "topic": s.topic, "good_scans": str(h.good),
                 "refused": ", ".join(f"{k}: {v}" for k, v in sorted(h.refused.items())) or "none",
                 "last_problem": h.last_problem, "invalid_fraction": f"{h.invalid_fraction:.3f}",
+                "mount_source": "tf" if h.mount is not None else "parameters",
             }
         out["odometry"] = {
             "state": "ok" if self.odometry_fresh(now_s) else "stale",
@@ -529,6 +577,41 @@ class PlannerCore:
             "cycle_time_p99_ms": f"{times[min(len(times) - 1, int(0.99 * len(times)))]:.3f}" if times else "",
         }
         return out
+
+
+def simplify_polyline(points, tolerance_m: float) -> np.ndarray:
+    """Douglas-Peucker: the fewest of ``points`` (first and last kept) within ``tolerance_m`` of all."""
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    if len(points) <= 2 or tolerance_m <= 0:
+        return _without_repeats(points)
+    keep = np.zeros(len(points), dtype=bool)
+    keep[0] = keep[-1] = True
+    stack = [(0, len(points) - 1)]
+    while stack:
+        i, j = stack.pop()
+        if j <= i + 1:
+            continue
+        a, b = points[i], points[j]
+        d = b - a
+        length = float(np.hypot(*d))
+        rel = points[i + 1:j] - a
+        if length < 1e-12:
+            dist = np.hypot(rel[:, 0], rel[:, 1])
+        else:
+            dist = np.abs(d[0] * rel[:, 1] - d[1] * rel[:, 0]) / length
+        k = int(np.argmax(dist))
+        if dist[k] > tolerance_m:
+            keep[i + 1 + k] = True
+            stack += [(i, i + 1 + k), (i + 1 + k, j)]
+    return _without_repeats(points[keep])
+
+
+def _without_repeats(points: np.ndarray) -> np.ndarray:
+    """Drop repeated points (a path that stands still), keeping the last."""
+    if len(points) < 2:
+        return points
+    step = np.hypot(*np.diff(points, axis=0).T)
+    return np.vstack([points[:-1][step > 1e-6], points[-1:]])
 
 
 def parse_tracks(text: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -92,6 +92,7 @@ def make_node_class():
             self._subs: list = []
             self._pubs: dict[str, Any] = {}
             self._timer = None
+            self._nav2 = None
             self._last_now_s: float | None = None
             try:
                 self.declare_parameter("planner_name", "viapath")
@@ -135,7 +136,15 @@ def make_node_class():
                 self._subs.append(self.create_subscription(
                     LaserScan, scanner.topic, lambda msg, i=index: self._on_scan(i, msg), qos_profile_sensor_data))
             latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
-            if not s.path_file:
+            if s.interface == "nav2":
+                try:
+                    self._nav2 = Nav2Interface(self)
+                except Exception as error:  # interfaces that cannot be generated here: say why, do not drive
+                    self.error = f"nav2 interface: {error}"
+                    self.get_logger().error(f"refusing to start: {self.error}")
+                    self._teardown()
+                    return TransitionCallbackReturn.FAILURE
+            elif not s.path_file:
                 self._subs.append(self.create_subscription(PathMsg, s.path_topic, self._on_path, latched))
             if s.map_topic:
                 from nav_msgs.msg import OccupancyGrid
@@ -156,6 +165,8 @@ def make_node_class():
         def on_deactivate(self, state) -> TransitionCallbackReturn:
             self.publish_stop()
             self.core.active = False
+            if self._nav2 is not None:
+                self._nav2.deactivated()
             return super().on_deactivate(state)
 
         def on_cleanup(self, state) -> TransitionCallbackReturn:
@@ -168,6 +179,9 @@ def make_node_class():
             return TransitionCallbackReturn.SUCCESS
 
         def _teardown(self) -> None:
+            if self._nav2 is not None:
+                self._nav2.destroy()
+                self._nav2 = None
             if self._timer is not None:
                 self.destroy_timer(self._timer)
                 self._timer = None
@@ -221,8 +235,13 @@ def make_node_class():
         def _on_scan(self, index: int, msg) -> None:
             due = self.core.on_scan(index, self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id,
                                     msg.angle_min, msg.angle_increment, msg.ranges, msg.range_min, msg.range_max)
+            if self._nav2 is not None and not self._nav2.mounts_done:
+                self._nav2.resolve_mounts()
             if due:
-                self._publish(self.core.cycle(self._now_s()))
+                result = self.core.cycle(self._now_s())
+                self._publish(result)
+                if self._nav2 is not None:
+                    self._nav2.supervise(result, self._now_s())
 
         def _on_watchdog(self) -> None:
             if self.core is None:
@@ -230,6 +249,8 @@ def make_node_class():
             result = self.core.watchdog(self._now_s())
             if result is not None:
                 self._publish(result, markers=False)
+            if self._nav2 is not None:
+                self._nav2.supervise(result, self._now_s())
 
         # -- outputs -------------------------------------------------------------------------
         def _stamp(self, seconds: float) -> Time:
@@ -300,6 +321,9 @@ def make_node_class():
                     break
 
     _ = rclpy
+    from viapath.ros2.nav2 import make_nav2_interface_class
+
+    Nav2Interface = make_nav2_interface_class()
     return ViaPathNode
 
 

@@ -102,6 +102,19 @@ NODE_OPTIONS: tuple[Option, ...] = (
     _opt("executor", "events", "", help="rclpy executor: events (rclpy's EventsExecutor, callbacks dispatched "
          "from C++: lower latency) or single-threaded (rclpy's pure-Python SingleThreadedExecutor)",
          choices=("events", "single-threaded")),
+    _opt("interface", "topics", "", help="topics: the designated path comes on path_topic; nav2: as Nav2's controller "
+         "server, paths come as FollowPath goals (docs/nav2.md)", choices=("topics", "nav2")),
+    _opt("use_tf", True, "", help="nav2: take the path frame's transform to odom_frame and the scanner mounts from /tf and "
+         "/tf_static (the scanners.* mounts stay the fallback)"),
+    _opt("follow_path_action", "follow_path", "", help="nav2: name of the nav2_msgs/FollowPath action served"),
+    _opt("speed_limit_topic", "speed_limit", "", help="nav2: nav2_msgs/SpeedLimit topic honoured"),
+    _opt("clear_costmap_service", "local_costmap/clear_entirely_local_costmap", "", help="nav2: the costmap-clearing "
+         "service Nav2's behaviour tree calls on the controller's costmap (answered; there is no costmap)"),
+    _opt("progress_radius_m", 0.5, "m", 0.01, 100.0, "nav2: the robot must move this far within progress_patience_s"),
+    _opt("progress_patience_s", 10.0, "s", 0.1, 3600.0, "nav2: no progress this long ends the goal (FAILED_TO_MAKE_PROGRESS)"),
+    _opt("failure_tolerance_s", 2.0, "s", 0.0, 3600.0, "nav2: no command can be computed this long (inputs stale, path "
+         "frame unknown) ends the goal (NO_VALID_CONTROL)"),
+    _opt("path_simplify_m", 0.05, "m", 0.0, 10.0, "nav2: a goal's dense path is simplified to subgoals within this"),
     _opt("use_shield", "default", "", help="passive-safety shield around the planner (DESIGN §7); default: as "
          "viapath run (on for viapath)", choices=("default", "on", "off")),
 ) + _scanner_options("front", "scan_front", "laser_front", 0.145, 0.0) + _scanner_options("rear", "scan_rear", "laser_rear", -0.145, math.pi)

@@ -77,6 +77,54 @@ class Fault:
         raise ValueError(f"--fault {text!r}: unknown kind {kind!r}; one of silence, nan, short, odom, clock-back")
 
 
+def _resolved(node, topic: str) -> str:
+    """The topic name after remapping (``count_publishers`` does not remap)."""
+    try:
+        return node.resolve_topic_name(topic)
+    except Exception:
+        return topic
+
+
+def _tf_publishers(node, scanners, map_offset):
+    """Publish TF as a robot driver (and a localisation) would: ``/tf_static`` map -> odom (the
+    offset) and base_link -> each scanner, once; returns a function publishing odom -> base_link."""
+    try:
+        from viapath.ros2 import interfaces
+
+        interfaces.load()
+        from geometry_msgs.msg import TransformStamped
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+        from tf2_msgs.msg import TFMessage
+    except Exception as error:  # no compiler here: simulate without TF (the node falls back to its parameters)
+        print(f"warning: no TF published ({error})", file=sys.stderr)
+        return None
+    from viapath.ros2 import convert
+
+    def transform(parent, child, stamp, x, y, yaw):
+        t = TransformStamped()
+        t.header.frame_id, t.header.stamp, t.child_frame_id = parent, stamp, child
+        t.transform.translation.x, t.transform.translation.y = float(x), float(y)
+        q = convert.quaternion_from_yaw(yaw)
+        t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z, t.transform.rotation.w = q
+        return t
+
+    static = node.create_publisher(TFMessage, "/tf_static", QoSProfile(
+        depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    dynamic = node.create_publisher(TFMessage, "/tf", 100)
+    zero = convert.time_msg(0.0)
+    message = TFMessage()
+    message.transforms = [transform("map", "odom", zero, *map_offset)] + [
+        transform("base_link", f"laser_{s.name}", zero, s.mount_x_m, s.mount_y_m, s.mount_yaw_rad) for s in scanners]
+    static.publish(message)
+
+    def publish(stamp, x, y, yaw):
+        out = TFMessage()
+        out.transforms = [transform("odom", "base_link", stamp, x, y, yaw)]
+        dynamic.publish(out)
+
+    return publish
+
+
 @dataclass
 class StepRecord:
     command: tuple[float, float] = (0.0, 0.0)
@@ -91,7 +139,8 @@ class StepRecord:
 def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max_wait_s: float = 10.0,
             as_json: bool = False, seed: int | None = None, faults: list[Fault] | None = None,
             trace_file: str | None = None, wait_for_node_s: float = 60.0, commands_file: str | None = None,
-            ros_args: list[str] | None = None, duration_s: float | None = None, status_file: str | None = None) -> int:
+            ros_args: list[str] | None = None, duration_s: float | None = None, status_file: str | None = None,
+            tf: bool = True, map_offset: tuple[float, float, float] = (0.0, 0.0, 0.0), linger_s: float = 0.0) -> int:
     """Run one episode against whatever node listens; prints metrics; returns the exit code."""
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
@@ -165,6 +214,7 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
                         got["watchdog"].append(stamp)
 
         node.create_subscription(Twist, "cmd_vel", on_twist, 10)
+        tf_pub = _tf_publishers(node, laser.scanners, map_offset) if tf else None
         node.create_subscription(DiagnosticArray, "viapath/status", on_status, 50)
 
         def spin_until(deadline: float, done=lambda: False) -> None:
@@ -180,7 +230,7 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
         path_pub.publish(convert.path_message(spec.path.waypoints, "odom", convert.time_msg(0.0)))
         # Wait for a planner node: someone listening to the scans and publishing commands.
         started = time.monotonic()
-        while not stop["flag"] and (node.count_subscribers(f"scan_{names[0]}") == 0 or node.count_publishers("cmd_vel") == 0):
+        while not stop["flag"] and (node.count_subscribers(f"scan_{names[0]}") == 0 or node.count_publishers(_resolved(node, "cmd_vel")) == 0):
             if time.monotonic() - started > wait_for_node_s:
                 print(f"error: no planner node (subscriber of scan_{names[0]}, publisher of cmd_vel) within "
                       f"{wait_for_node_s:g} s", file=sys.stderr)
@@ -233,6 +283,8 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
             stamp = convert.time_msg(stamp_s)
             clock.clock = stamp
             clock_pub.publish(clock)
+            if tf_pub is not None:
+                tf_pub(stamp, state.x, state.y, state.heading_rad)
             if not any(f.kind == "odom" and f.active(t) for f in faults):
                 odom_pub.publish(convert.odometry("odom", "base_link", stamp, state.x, state.y, state.heading_rad,
                                                   state.speed_mps, state.turn_rate_radps))
@@ -279,6 +331,30 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
             worlds.append((key, world))
             state = kinematics.step(state, Command(v, w), limits, dt)
 
+        if reached and linger_s > 0:  # keep the world going a little (not recorded): the node may report its goal
+            last = min(len(records) - 1, n_steps)
+            v, w = 0.0, 0.0
+            for j in range(int(round(linger_s / dt))):
+                if stop["flag"]:
+                    break
+                t = float(times[last]) + (j + 1) * dt
+                stamp_s = max(t + offset_s, 0.0) + 1.0
+                stamp = convert.time_msg(stamp_s)
+                clock.clock = stamp
+                clock_pub.publish(clock)
+                if tf_pub is not None:
+                    tf_pub(stamp, state.x, state.y, state.heading_rad)
+                odom_pub.publish(convert.odometry("odom", "base_link", stamp, state.x, state.y, state.heading_rad,
+                                                  state.speed_mps, state.turn_rate_radps))
+                pose = np.array([state.x, state.y, state.heading_rad])
+                world = WorldSnapshot(t, pose, spec.robot.radius, positions[last], velocities[last] * 0.0, radii, walls)
+                for scanner, ranges in zip(laser.scanners, laser.scan(world), strict=True):
+                    scan_pubs[scanner.name].publish(convert.laser_scan(
+                        f"laser_{scanner.name}", stamp, scanner.angle_min_rad, scanner.angle_increment_rad, ranges,
+                        scanner.range_min_m, scanner.range_max_m, scanner.scan_period_s))
+                spin_until(time.monotonic() + period)
+                v, w = got["cmd"] if got["cmd"] is not None else (0.0, 0.0)
+                state = kinematics.step(state, Command(v, w), limits, dt)
         spin_until(time.monotonic() + 0.5)  # the last reports
         for rec, (key, world) in zip(records, worlds):
             status = got["by_stamp"].get(key, {})
