@@ -94,7 +94,11 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
             if lockstep:  # wait for the node's cycle on this scan (a slow machine then changes nothing)
                 key = round(m.stamp_s, 6)
                 end = time.monotonic() + max_wait_s
+                beat = time.monotonic()
                 while key not in cycles and time.monotonic() < end and not stop["flag"]:
+                    if time.monotonic() - beat >= 0.05:  # waiting, not stopped: keep /clock alive
+                        clock_pub.publish(clock)
+                        beat = time.monotonic()
                     rclpy.spin_once(node, timeout_sec=0.01)
                 wall0 += max(time.monotonic() - due, 0.0)  # the recording's timing resumes from here
         end = time.monotonic() + 1.0

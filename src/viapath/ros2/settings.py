@@ -83,6 +83,16 @@ NODE_OPTIONS: tuple[Option, ...] = (
     _opt("bypass_distance_m", 1.0, "m", 0.0, 100.0, "a blocked subgoal is given up within this"),
     _opt("scan_timeout_s", 0.3, "s", 0.05, 10.0, "a scanner silent this long is blind; all silent: brake to a stop"),
     _opt("odom_timeout_s", 0.5, "s", 0.05, 10.0, "no odometry this long: brake to a stop"),
+    _opt("odom_speed_tolerance_mps", 0.1, "m/s", 0.0, 1.0, "odometry speed beyond max_speed_mps, or above every "
+         "speed commanded in the last odom_timeout_s, by more than this is a fault: brake"),
+    _opt("odom_turn_tolerance_radps", 0.3, "rad/s", 0.0, 5.0, "odometry turn rate beyond max_turn_rate_radps, or "
+         "outside the turn rates commanded in the last odom_timeout_s, by more than this is a fault: brake"),
+    _opt("odom_pose_tolerance_m", 0.05, "m", 0.001, 1.0, "odometry pose change off what its twist explains by more "
+         "than this (plus the acceleration limits' share) is a fault: brake"),
+    _opt("odom_heading_tolerance_rad", 0.1, "rad", 0.001, 1.0, "odometry heading change off what its turn rate "
+         "explains by more than this (plus the acceleration limits' share) is a fault: brake"),
+    _opt("wall_timeout_s", 0.5, "s", 0.05, 10.0, "no input and no move of the node's clock (/clock with "
+         "use_sim_time) for this long on the wall clock: brake to a stop"),
     _opt("cycle_period_s", 0.1, "s", 0.01, 1.0, "scan period; also the watchdog period"),
     _opt("max_invalid_fraction", 0.5, "", 0.0, 1.0, "a scan with more NaN/zero readings than this counts as failed"),
     _opt("detector", "people", "", help="detector preset", choices=("people", "legs")),

@@ -164,11 +164,19 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
         node.create_subscription(Twist, "cmd_vel", on_twist, 10)
         node.create_subscription(DiagnosticArray, "viapath/status", on_status, 50)
 
-        def spin_until(deadline: float, done=lambda: False) -> None:
+        def spin_until(deadline: float, done=lambda: False, heartbeat: bool = False) -> None:
+            """Spin until ``deadline`` or ``done()``; with ``heartbeat``, publish the (unchanged) clock every
+            50 ms meanwhile: the simulation waits, it has not stopped (the node's wall-clock watchdog
+            takes a silent /clock for a dead simulator)."""
+            beat = time.monotonic()
             while not stop["flag"]:
-                remaining = deadline - time.monotonic()
+                now = time.monotonic()
+                remaining = deadline - now
                 if remaining <= 0 or done():
                     return
+                if heartbeat and now - beat >= 0.05:
+                    clock_pub.publish(clock)
+                    beat = now
                 rclpy.spin_once(node, timeout_sec=min(remaining, 0.01))
 
         clock = Clock()
@@ -262,7 +270,7 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
 
             deadline = wall_start + (k + 1) * period
             if lockstep:
-                spin_until(time.monotonic() + max_wait_s, cycle_reported)
+                spin_until(time.monotonic() + max_wait_s, cycle_reported, heartbeat=True)
             spin_until(deadline)  # hold the rate
             on_time = cycle_reported() and got["cmd_count"] > count_before
             late += not on_time
