@@ -120,10 +120,16 @@ def make_node_class():
                     self.core = PlannerCore(settings)
                     self.core.warm_up()
                     if settings.path_file:
-                        waypoints, widths = convert.load_path_file(settings.path_file)
-                        self.core.set_path(waypoints, widths)
-                except (ParameterError, ValueError) as error:
-                    self.error = str(error) if isinstance(error, ParameterError) else f"parameter path_file: {error}"
+                        try:
+                            waypoints, widths = convert.load_path_file(settings.path_file)
+                            self.core.set_path(waypoints, widths)
+                        except ValueError as error:
+                            raise ParameterError(f"parameter path_file: {error}") from None
+                except ParameterError as error:
+                    self.error = str(error)
+                except Exception as error:  # noqa: BLE001 - e.g. MemoryError building the planner: say what
+                    self.error = f"could not build the planner with these parameters: {type(error).__name__}" + (
+                        f": {error}" if str(error) else "")
             if self.error is not None:
                 self.get_logger().error(f"refusing to start: {self.error}")
                 return TransitionCallbackReturn.FAILURE
@@ -340,7 +346,7 @@ def run_node(ros_args: list[str] | None = None) -> int:
             from rclpy.lifecycle import TransitionCallbackReturn
 
             if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
-                print(f"error: {node.error}", file=sys.stderr)
+                print(f"error: {node.error or 'configuring the node failed (see the log above)'}", file=sys.stderr)
                 return 2
             node.trigger_activate()
         executor = _executor(str(node.get_parameter("executor").value))
