@@ -36,15 +36,7 @@ def reference_metrics(name: str) -> dict:
     spec = spec.model_copy(update={"perception": spec.perception.model_copy(
         update={"options": {"detector": {"keep_segments": False, "fit_backend": "numpy"}}})})
     return run_episode(spec, perception="laser").metrics
-PLAY_PARAMS = """viapath:
-  ros__parameters:
-    scanner_names: ["laser"]
-    scanners:
-      laser: {topic: scan_front, frame_id: "", mount_x_m: 0.0, mount_y_m: 0.0, mount_yaw_rad: 0.0}
-    scan_geometry: from_message
-    detector: legs
-    tracker_acceleration_sigma_mps2: 0.5
-"""
+PLAY_PARAMS = Path(__file__).resolve().parents[2] / "docs" / "ros2_real_scans.yaml"  # the documented recipe's file
 
 
 class Launcher:
@@ -76,15 +68,21 @@ class Launcher:
             "rear": Pair(procs, "rear", str(scenario), ["--duration", str(REAR_DURATION_S), *faults(REAR_FAULTS)], node_args),
         }
         if BAG.is_file():
-            params = folder / "play.yaml"
-            params.write_text(PLAY_PARAMS)
             domain = domain_id()
             record = folder / "play_status.jsonl"
-            self.groups["play"] = {
-                "node": procs.start("play_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(params)), domain),
+            self.groups["play"] = {  # the commands of docs/ros2.md, "Real scans" (+ --rate, --lockstep, --status-log)
+                "node": procs.start("play_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(PLAY_PARAMS)), domain),
                 "play": procs.start("play_play", viapath("ros2", "play", str(BAG), "--topic", "right_scan", "--rate", "4",
                                                          "--lockstep", "--status-log", str(record)), domain),
                 "record": record,
+            }
+            refusing = folder / "refusing.yaml"  # the bag's frame_id is not laser_refusing: every scan refused
+            refusing.write_text(PLAY_PARAMS.read_text().replace('frame_id: ""', "frame_id: laser_refusing"))
+            domain = domain_id()
+            self.groups["play_refused"] = {
+                "node": procs.start("refused_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(refusing)), domain),
+                "play": procs.start("refused_play", viapath("ros2", "play", str(BAG), "--topic", "right_scan", "--rate", "4",
+                                                            "--lockstep"), domain),
             }
 
     def paper(self):
@@ -111,6 +109,14 @@ class Launcher:
                 out[name] = (metrics, read_trace(pair.trace), pair.statuses)
             self.results["faults"] = out
         return self.results["faults"]
+
+    def play_refused(self) -> tuple[int, str]:
+        if "play_refused" not in self.groups:
+            pytest.skip(f"{BAG} not found (../shared/data absent)")
+        group = self.groups["play_refused"]
+        code = self.procs.wait(group["play"], 150)
+        self.procs.stop(group["node"])
+        return code, self.procs.output(group["play"])[1]
 
     def play(self):
         if "play" not in self.groups:

@@ -94,6 +94,9 @@ def test_metrics_agree_with_viapath_run(paper_runs, in_process, name):
     assert metrics["shield"] == reference["shield"] and metrics["shield_interventions"] == reference["shield_interventions"]
     assert abs(metrics["track_samples"] - reference["track_samples"]) <= 3
     assert abs(metrics["track_position_rmse_m"] - reference["track_position_rmse_m"]) <= 0.005
+    for key in ("perception_time_p50_ms", "perception_time_p99_ms", "plan_time_p50_ms", "plan_time_p99_ms"):
+        # measured on both sides (null only where a value does not exist); the node's are its own cycle's parts
+        assert reference[key] is not None and metrics[key] is not None and 0.0 < metrics[key] < 1000.0, key
 
 
 def test_every_command_was_finite_and_inside_the_limits(paper_runs, tmp_path_factory):

@@ -121,6 +121,8 @@ class CycleResult:
     blind_sectors_rad: list[tuple[float, float]] = field(default_factory=list)
     speed_cap_mps: float | None = None
     cycle_time_ms: float | None = None
+    perception_time_ms: float | None = None  # detection and tracking of this cycle's scans
+    plan_time_ms: float | None = None  # the planner's own call
     status: dict[str, dict[str, str]] = field(default_factory=dict)  # name -> key/values, for diagnostics
 
 
@@ -688,13 +690,16 @@ class PlannerCore:
             reasons.append("no scan in this cycle")
         pose = self._pose_at(stamp)
         obstacles = Obstacles.empty()
+        perception_ms = plan_ms = None
         if used and pose is not None:
+            perceiving = time.perf_counter()
             detections = detect([m for m, _ in scans], [r for _, r in scans], self.detector_params).transformed(pose)
             if self.tracker.time_s is not None and stamp < self.tracker.time_s:
                 self._time_jump("scan stamp before the tracker's time")
                 self.hold_until_stamp_s = stamp + self.settings.reset_hold_s
             self.tracker.step(stamp, detections.centres, detections.position_sigma_m, detections.radii_m)
             obstacles = self.tracker.obstacles().finite()
+            perception_ms = (time.perf_counter() - perceiving) * 1e3
             self.last_cycle_stamp_s = stamp
         cap, sectors = self.blind_speed_cap(live)
         decision = None
@@ -706,7 +711,9 @@ class PlannerCore:
             robot = RobotState(pose[:2].copy(), float(pose[2]), min(max(o.speed_mps, 0.0), self.limits.max_speed_mps),
                                o.turn_rate_radps, self.settings.robot_radius_m)
             try:
+                planning = time.perf_counter()
                 decision = self.planner.plan(Observation(stamp, robot, obstacles))
+                plan_ms = (time.perf_counter() - planning) * 1e3
             except Exception as error:  # noqa: BLE001 - the robot brakes and the status says why
                 reasons.append(f"planner error: {type(error).__name__}: {error}")
                 self.events.append(reasons[-1])
@@ -734,7 +741,8 @@ class PlannerCore:
         self.cycle_times_ms.append(elapsed)
         if len(self.cycle_times_ms) > 1000:
             del self.cycle_times_ms[:-100]
-        result = CycleResult(command, mode, reasons, stamp, decision, obstacles, pose, sectors, cap, elapsed)
+        result = CycleResult(command, mode, reasons, stamp, decision, obstacles, pose, sectors, cap, elapsed,
+                             perception_ms, plan_ms)
         result.status = self._status(result, now_s)
         self.last_result = result
         return result
@@ -758,6 +766,9 @@ class PlannerCore:
             "source": "cycle" if result.cycle_time_ms is not None else "watchdog",
             "cycle_time_ms": f"{result.cycle_time_ms:.3f}" if result.cycle_time_ms is not None else "",
         }
+        for key in ("perception_time_ms", "plan_time_ms"):
+            if getattr(result, key) is not None:
+                planner[key] = f"{getattr(result, key):.4f}"
         if plan is not None:
             from viapath.sim.metrics import plan_side
 
