@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -67,6 +68,15 @@ class Launcher:
             "front": Pair(procs, "front", str(scenario), ["--duration", str(FRONT_DURATION_S), *faults(FRONT_FAULTS)], node_args),
             "rear": Pair(procs, "rear", str(scenario), ["--duration", str(REAR_DURATION_S), *faults(REAR_FAULTS)], node_args),
         }
+        domain = domain_id()
+        out = folder / "hostile.json"
+        self.groups["hostile"] = {
+            "node": procs.start("hostile_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(PLAY_PARAMS)),
+                                domain),
+            "driver": procs.start("hostile_driver", [sys.executable, str(Path(__file__).with_name("_hostile_driver.py")),
+                                                     str(out)], domain),
+            "out": out,
+        }
         if BAG.is_file():
             domain = domain_id()
             record = folder / "play_status.jsonl"
@@ -109,6 +119,18 @@ class Launcher:
                 out[name] = (metrics, read_trace(pair.trace), pair.statuses)
             self.results["faults"] = out
         return self.results["faults"]
+
+    def hostile(self) -> dict:
+        """The phases recorded by _hostile_driver.py against a node run with the real-scans parameters."""
+        if "hostile" not in self.results:
+            group = self.groups["hostile"]
+            code = self.procs.wait(group["driver"], 240)
+            _, err = self.procs.output(group["driver"])
+            node_alive = group["node"].poll() is None
+            self.procs.stop(group["node"])
+            assert code == 0, err
+            self.results["hostile"] = (json.loads(group["out"].read_text()), node_alive, self.procs.output(group["node"])[1])
+        return self.results["hostile"]
 
     def play_refused(self) -> tuple[int, str]:
         if "play_refused" not in self.groups:
