@@ -355,3 +355,28 @@ def test_when_clock_and_inputs_stop_the_wall_watchdog_brakes_to_a_stop():
     assert commands[0] == pytest.approx(max(0.0, speed - STEP))
     assert all(b == pytest.approx(max(0.0, a - STEP)) for a, b in zip(commands[:-1], commands[1:]))
     assert commands[-1] == 0.0
+
+
+def test_a_cycle_that_cannot_run_brakes_with_the_reason():
+    """What the node publishes when a cycle raises (it catches it): one cycle's braking and why."""
+    core = make_core()
+    robot = Robot(people=[(6.0, 2.0)])
+    t = drive_honestly(core, robot, 6)
+    before = core.last_command
+    result = core.fault_result(t, "cycle failed: RuntimeError: boom")
+    assert_braking(result, before)
+    assert result.reasons[-1] == "cycle failed: RuntimeError: boom" and "boom" in result.status["planner"]["events"]
+
+
+def test_a_planner_that_raises_brakes_the_robot(monkeypatch):
+    core = make_core()
+    robot = Robot(people=[(6.0, 2.0)])
+    t = drive_honestly(core, robot, 6)
+
+    def boom(observation):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(core.planner, "plan", boom)
+    result, before = cycle(core, robot, t)
+    assert_braking(result, before)
+    assert result.mode in ("braking", "stopped") and "planner error: RuntimeError: boom" in result.reasons

@@ -619,6 +619,18 @@ class PlannerCore:
         self.last_result = result
         return result
 
+    def fault_result(self, now_s: float, why: str) -> CycleResult:
+        """A cycle that could not run (``why``): one cycle's braking, with the reason in the status."""
+        self._now_s = now_s
+        self.events.append(why)
+        command = self.brake_command()
+        self._record_command(command, now_s)
+        mode = "stopped" if command.speed_mps == 0.0 and command.turn_rate_radps == 0.0 else "braking"
+        result = CycleResult(command, mode, self._stop_reasons(now_s) + [why], now_s, robot_pose=self._pose_at(now_s))
+        result.status = self._status(result, now_s)
+        self.last_result = result
+        return result
+
     def note_alive(self, wall_s: float) -> None:
         """An input arrived, or the node's clock moved, at wall time ``wall_s`` (a monotonic clock)."""
         self._alive_wall_s = wall_s

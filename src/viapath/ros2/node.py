@@ -204,21 +204,39 @@ def make_node_class():
             return now
 
         # -- inputs --------------------------------------------------------------------------
+        def _failed(self, what: str, error: Exception) -> str:
+            text = f"{what} failed: {type(error).__name__}: {error}"
+            self.get_logger().error(text)
+            return text
+
         def _on_odom(self, msg) -> None:
-            x, y, q, v, w = convert.odometry_values(msg)
-            self.core.on_odometry_quaternion(self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id,
-                                             x, y, q, v, w)
+            try:
+                x, y, q, v, w = convert.odometry_values(msg)
+                self.core.on_odometry_quaternion(self._now_s(), convert.stamp_seconds(msg.header.stamp),
+                                                 msg.header.frame_id, x, y, q, v, w)
+            except Exception as error:  # noqa: BLE001 - refused, with the reason; the node lives on
+                self.core.refuse_odometry(self._now_s(), "error", self._failed("reading odometry", error))
 
         def _on_path(self, msg) -> None:
-            accepted, what = self.core.on_path(msg.header.frame_id, convert.waypoints_from_path(msg),
-                                               convert.orientations_from_path(msg))
+            try:
+                accepted, what = self.core.on_path(msg.header.frame_id, convert.waypoints_from_path(msg),
+                                                   convert.orientations_from_path(msg))
+            except Exception as error:  # noqa: BLE001 - refused, with the reason; the node lives on
+                self.core.paths_refused += 1
+                accepted, what = False, self._failed("path refused: reading it", error)
+                self.core.events.append(what)
             (self.get_logger().info if accepted else self.get_logger().error)(what)
 
         def _on_scan(self, index: int, msg) -> None:
             due = self.core.on_scan(index, self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id,
                                     msg.angle_min, msg.angle_increment, msg.ranges, msg.range_min, msg.range_max)
             if due:
-                self._publish(self.core.cycle(self._now_s()))
+                now = self._now_s()
+                try:
+                    result = self.core.cycle(now)
+                except Exception as error:  # noqa: BLE001 - the robot brakes and the status says why
+                    result = self.core.fault_result(now, self._failed("cycle", error))
+                self._publish(result)
 
         def _on_watchdog(self) -> None:
             if self.core is None:
