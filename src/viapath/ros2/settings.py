@@ -288,9 +288,10 @@ def validate(values: dict[str, Any]) -> NodeSettings:
     for length, step in (("rollout_s", "rollout_dt_s"), ("escape_s", "escape_dt_s")):
         if length in planner_values and step in planner_values and not {PLANNER_PREFIX + length, PLANNER_PREFIX + step} & bad:
             steps = planner_values[length] / planner_values[step]
-            if steps > MAX_ROLLOUT_STEPS:
-                errors.append(f"parameter {PLANNER_PREFIX}{length}: {length} / {step} is {steps:.0f} steps of a roll-out, "
-                              f"at most {MAX_ROLLOUT_STEPS}")
+            if steps > MAX_ROLLOUT_STEPS:  # both named: either may be the one to change
+                for name in (length, step):
+                    errors.append(f"parameter {PLANNER_PREFIX}{name}: {length} {planner_values[length]:g} s / {step} "
+                                  f"{planner_values[step]:g} s is {steps:.4g} steps of a roll-out, at most {MAX_ROLLOUT_STEPS}")
     from viapath.options import OptionError
     from viapath.planning import planner_class
 

@@ -49,18 +49,16 @@ _OWN = [
     # Motion limits: roll-outs of the first leg.
     Option("rollout_heading_rad", 0.35, "a candidate whose first leg turns more than this is rolled out", "rad",
            minimum=0.0),
-    Option("rollout_s", 2.0, "how long a candidate's first leg is rolled out", "s", minimum=0.0, exclusive_minimum=True,
-           maximum=30.0),
-    Option("rollout_dt_s", 0.1, "step of the roll-outs", "s", minimum=0.01),
+    Option("rollout_s", 2.0, "how long a candidate's first leg is rolled out", "s", minimum=0.0, exclusive_minimum=True),
+    Option("rollout_dt_s", 0.1, "step of the roll-outs", "s", minimum=0.0, exclusive_minimum=True),
     Option("turn_in_place_min_rad", 0.02, "a plan whose roll-out leaves the corridor turns on the spot first when "
            "its heading error is above this", "rad", minimum=0.0),
     Option("max_rollouts", 8, "candidates rolled out, cheapest first, before falling back", minimum=1),
     Option("heading_gain", 2.5, "turn rate per radian of heading error when steering for the target", "1/s",
            minimum=0.0, exclusive_minimum=True),
     # No free candidate.
-    Option("escape_s", 3.0, "how long each escape command is rolled out", "s", minimum=0.0, exclusive_minimum=True,
-           maximum=30.0),
-    Option("escape_dt_s", 0.1, "step of the escape roll-outs", "s", minimum=0.01),
+    Option("escape_s", 3.0, "how long each escape command is rolled out", "s", minimum=0.0, exclusive_minimum=True),
+    Option("escape_dt_s", 0.1, "step of the escape roll-outs", "s", minimum=0.0, exclusive_minimum=True),
     Option("calm_escape", True, "escape no faster than the top of the speed set, without flipping from one "
            "cycle to the next"),
     Option("escape_continuity_s", 0.5, "with calm_escape: time to contact an escape command pays for being "
@@ -68,6 +66,8 @@ _OWN = [
     Option("escape_max_excess_m", 0.5, "an escape may take the robot at most this far outside the corridor "
            "(standing is always allowed)", "m", minimum=0.0),
     # Speed (docs/speed.md).
+    Option("blocked_gap_m", 0.3, "when static geometry closes the way (a closed door), the robot stops this far "
+           "short of touching it (its margin included) and waits", "m", minimum=0.0, maximum=5.0),
     Option("backend", "auto", "arithmetic of the hot path: auto = compiled (numba, extra 'fast') when numba is "
            "importable, else numpy; the decisions are the same", choices=BACKENDS),
     # Display.
