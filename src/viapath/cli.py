@@ -12,6 +12,8 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from viapath.io.jsonable import dumps as json_dumps
+
 app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
@@ -164,7 +166,7 @@ def run(
             done()
 
     if as_json:
-        print(json.dumps(episode.metrics, allow_nan=False))
+        print(json_dumps(episode.metrics))
         return
     _print_metrics(episode.metrics)
     for label, file in (("plot", plot), ("trace", trace), ("animation", animate), ("mcap", mcap)):

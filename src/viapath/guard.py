@@ -55,6 +55,7 @@ from viapath.compiled import harness_kernels
 from viapath.kinematics import _arc, _clip
 from viapath.observation import (Command, Decision, MotionLimits, Observation, ObservationError, Obstacles, Plan,
                                  RobotState)
+from viapath.static import STATIC_ID_BASE
 
 __all__ = ["GuardConfig", "Inspection", "ObservationError", "check_command", "guard_plan", "inspect_observation",
            "inspected", "stopping_distance_m"]
@@ -72,6 +73,8 @@ class GuardConfig:
     max_state_speed_mps: float = 50.0  # odometry beyond these is a sensor fault, not a robot state
     max_state_turn_rate_radps: float = 100.0
     control_period_s: float = 0.1  # the scan period (DESIGN §2): how long a command is held
+    static_spacing_m: float = 0.15  # static segments become discs this far apart at most (viapath.static)
+    static_range_m: float = 12.0  # static geometry farther from the robot than this is left out of a cycle
     brake_margin_m: float = 0.02
     tolerance: float = 1e-9
 
@@ -200,11 +203,45 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
         return Inspection(None, stop, repairs)
     if not repairs:
         return Inspection(observation, [], [])
-    repaired = Obstacles(positions, velocities, radii, position_sigma, velocity_sigma, ids)
-    return Inspection(Observation(time_s, robot, repaired), [], repairs)
+    repaired = Obstacles(positions, velocities, radii, position_sigma, velocity_sigma, ids, obstacles.static_mask)
+    return Inspection(Observation(time_s, robot, repaired, observation.static), [], repairs)
 
 
 _FLOAT64 = np.dtype(np.float64)
+
+
+def with_static_rows(observation: Observation, config: GuardConfig = DEFAULT_CONFIG,
+                     repairs: list[str] | None = None) -> Observation:
+    """The observation with its static layer as static rows of its obstacles (discs of velocity 0 and
+    σ 0 sampled along the segments, :func:`viapath.static.sample_discs`, within ``static_range_m`` of the
+    robot) and no static layer left: what every planner, this guard's command check and the shield see.
+    Segments with a coordinate that is not finite or beyond ``max_coordinate_m`` are left out (and
+    listed in ``repairs``): a static return says where something is, and a bad one says nothing."""
+    static = observation.static
+    bound = config.max_coordinate_m
+    good = np.isfinite(static.segments).all(axis=(1, 2)) & (np.abs(static.segments) <= bound).all(axis=(1, 2))
+    if not good.all():
+        if repairs is not None:
+            for i in np.flatnonzero(~good)[:5]:
+                repairs.append(f"static.segments[{i}]: expected finite coordinates within ±{bound:g} m, found "
+                               f"{_show(static.segments[i].ravel())}; left out")
+        static = static.subset(good)
+    centres, radii, shape_ids = static.discs(float(observation.robot.radius_m), config.static_spacing_m)
+    position = np.asarray(observation.robot.position, dtype=float)
+    near = np.hypot(*(centres - position).T) - radii <= config.static_range_m
+    if not near.all():
+        centres, radii, shape_ids = centres[near], radii[near], shape_ids[near]
+    people, n = observation.obstacles, len(centres)
+    if n == 0:
+        return Observation(observation.time_s, observation.robot, people)
+    zeros = np.zeros(n)
+    merged = Obstacles(
+        np.concatenate([people.positions, centres]), np.concatenate([people.velocities, np.zeros((n, 2))]),
+        np.concatenate([people.radii_m, radii]), np.concatenate([people.position_sigma_m, zeros]),
+        np.concatenate([people.velocity_sigma_mps, zeros]),
+        np.concatenate([np.asarray(people.ids, dtype=np.int64), STATIC_ID_BASE + shape_ids]),
+        np.concatenate([people.is_static, np.ones(n, dtype=bool)]))
+    return Observation(observation.time_s, observation.robot, merged)
 
 
 def _plainly_sound(observation: Observation, robot: RobotState, obstacles: Obstacles, config: GuardConfig) -> bool:
@@ -473,6 +510,8 @@ def guard_plan(plan: Callable) -> Callable:
             inspection = inspect_observation(observation, config)
             if inspection.observation is None:
                 return _stop_decision(self, observation, "guard-stop", inspection.stop_reasons + inspection.repairs)
+            if len(inspection.observation.static):
+                inspection.observation = with_static_rows(inspection.observation, config, inspection.repairs)
             cycle = _GuardedCycle(inspection.observation, config)
         self._guard_active = True
         token = _INSPECTED.set(cycle)

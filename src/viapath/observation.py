@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from viapath.static import StaticLayer
+
 
 class ObservationError(ValueError):
     """An observation that cannot be read as one: a field of the wrong shape or type. The message
@@ -80,8 +82,11 @@ class Obstacles:
     position_sigma_m: np.ndarray | None = None  # (N,)
     velocity_sigma_mps: np.ndarray | None = None  # (N,)
     ids: np.ndarray | None = None  # (N,) int
+    # (N,) bool: rows that are static geometry (viapath.static), not people; None = none is.
+    static_mask: np.ndarray | None = None
 
     def __post_init__(self) -> None:
+        self._set_static_mask()
         # Shapes are checked here, once, with the field named (a transposed (2, N) array or lists of
         # different lengths must never be reshaped into phantom obstacles). Values (NaN, a negative
         # radius) are the guard's business: see viapath.guard.
@@ -114,6 +119,33 @@ class Obstacles:
                 raise ObservationError(f"obstacles.ids: expected {n} integers, found {ids.tolist()}")
             ids = ids.astype(int)
         object.__setattr__(self, "ids", ids)
+
+    def _set_static_mask(self) -> None:
+        n = np.shape(self.positions)[0] if np.ndim(self.positions) == 2 else -1
+        mask = self.static_mask
+        if mask is None or n < 0:
+            return
+        mask = np.asarray(mask, dtype=bool).reshape(-1)
+        if mask.shape != (n,):
+            raise ObservationError(f"obstacles.static_mask: expected {n} flags (one per position), found {mask.size}")
+        object.__setattr__(self, "static_mask", mask if mask.any() else None)
+
+    @property
+    def is_static(self) -> np.ndarray:
+        """(N,) bool: which rows are static geometry."""
+        return np.zeros(len(self.positions), dtype=bool) if self.static_mask is None else self.static_mask
+
+    @property
+    def static_count(self) -> int:
+        return 0 if self.static_mask is None else int(self.static_mask.sum())
+
+    def people(self) -> "Obstacles":
+        """The rows that are not static geometry."""
+        return self if self.static_mask is None else self.subset(~self.static_mask)
+
+    def statics(self) -> "Obstacles":
+        """The rows that are static geometry."""
+        return self.subset(self.is_static)
 
     @classmethod
     def of_fresh_arrays(cls, positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids) -> "Obstacles":
@@ -196,6 +228,7 @@ class Obstacles:
             self.position_sigma_m[mask_or_index],
             self.velocity_sigma_mps[mask_or_index],
             self.ids[mask_or_index],
+            None if self.static_mask is None else self.static_mask[mask_or_index],
         )
 
 
@@ -206,6 +239,9 @@ class Observation:
     time_s: float
     robot: RobotState
     obstacles: Obstacles = field(default_factory=Obstacles.empty)
+    # Static geometry in the world frame (walls, boxes, unexplained scan returns): see viapath.static.
+    # The guarded entry of every planner (viapath.guard) turns it into static rows of ``obstacles``.
+    static: StaticLayer = field(default_factory=StaticLayer.empty)
 
 
 @dataclass(frozen=True)

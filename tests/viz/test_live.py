@@ -21,7 +21,7 @@ pytest.importorskip("foxglove", reason="needs the viz extra (foxglove-sdk)")
 ws_client = pytest.importorskip("websockets.sync.client", reason="needs the viz-test extra (websockets)")
 
 SRC = Path(__file__).resolve().parents[2] / "src"
-TOPICS = {"/tf", "/robot/footprint", "/perception/tracks", "/path", "/plan/candidates", "/plan/chosen",
+TOPICS = {"/tf", "/robot/footprint", "/perception/tracks", "/path", "/world/static", "/plan/candidates", "/plan/chosen",
           "/plan/costs", "/xyt", "/metrics"}
 
 

@@ -33,6 +33,7 @@ COMMON = {
     "/robot/footprint": "foxglove.SceneUpdate",
     "/perception/tracks": "foxglove.SceneUpdate",
     "/path": "foxglove.SceneUpdate",
+    "/world/static": "foxglove.SceneUpdate",
     "/plan/candidates": "foxglove.SceneUpdate",
     "/plan/chosen": "foxglove.SceneUpdate",
     "/plan/costs": "viapath.PlanCosts",
@@ -284,3 +285,22 @@ def test_cli_writes_mcap_and_refuses_bad_paths(tmp_path):
         assert words in result.output and "Traceback" not in result.output
     assert not (tmp_path / "run.txt").exists()
     assert runner.invoke(app, ["run", "paper-behind", "--rate", "4"]).exit_code == 2
+
+
+def test_static_layer_is_drawn_as_the_planner_was_told(tmp_path):
+    """A box and a wall: each cycle's /world/static line list holds exactly the segments of the observation."""
+    from viapath.scenarios.loader import scenario_from_dict
+
+    scenario = scenario_from_dict({
+        "name": "box", "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.4, "radius": 0.25},
+        "path": {"waypoints": [[0.0, 0.0], [4.0, 0.0]], "half_width": 1.0}, "duration_s": 3.0,
+        "boxes": [{"center": [2.0, 0.0], "size": [0.5, 0.5]}], "walls": [[[0.0, 1.3], [4.0, 1.3]]]})
+    file = tmp_path / "static.mcap"
+    episode, kept = _record(scenario, file)
+    updates = _decoded(file, "/world/static")
+    assert len(updates) == len(kept) > 0
+    expected = np.concatenate([scenario.static_shapes()[k][0] for k in range(2)]).reshape(-1, 2)
+    for _, update in updates:
+        (entity,) = update.entities
+        points = np.array([[p.x, p.y] for p in entity.lines[0].points])
+        assert np.allclose(np.sort(points, axis=0), np.sort(expected, axis=0))

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 from typing import Optional
 
 import typer
+
+from viapath.io.jsonable import dumps as json_dumps
 
 
 def _fail(message: str) -> None:
@@ -21,7 +22,7 @@ def register(app: typer.Typer) -> None:
     @app.command("suite")
     def suite_command(
         name: str = typer.Argument(..., help="suite name: mixed, crossing, head-on, overtaken, overtaking, multi, "
-                                             "group, crowd, hallway, paper, eth-ucy, eth-ucy-react"),
+                                             "group, crowd, hallway, paper, static, eth-ucy, eth-ucy-react"),
         count: int = typer.Option(200, "--count", "-n", help="number of scenarios"),
         seed: int = typer.Option(0, "--seed", help="same seed, same suite"),
         out: Path = typer.Option(..., "--out", help="folder to write the scenario YAML files to"),
@@ -118,7 +119,7 @@ def register(app: typer.Typer) -> None:
 
         crashed = crash_lines(result["rows"])
         if as_json:
-            typer.echo(json.dumps(summary, indent=2))
+            typer.echo(json_dumps(summary, indent=2))
         else:
             typer.echo(markdown_table(summary))
             typer.echo(f"\n{result['ran']} episodes run, {result['skipped']} already done, {result['wall_s']:.1f} s; "

@@ -19,11 +19,12 @@ Aggregates, per planner, over its episodes (rows with an error are counted apart
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from viapath.io.jsonable import dumps as json_dumps
 
 TABLE_COLUMNS = [
     ("planner", "planner", "{}"),
@@ -32,6 +33,7 @@ TABLE_COLUMNS = [
     ("collision_rate", "collision", "{:.1%}"),
     ("at_fault_collision_rate", "at-fault", "{:.1%}"),
     ("at_fault_seen_1s_rate", "at-fault, seen ≥ 1 s", "{:.1%}"),
+    ("static_contact_rate", "static contact", "{:.1%}"),
     ("time_ratio_median", "time ratio (median)", "{:.2f}"),
     ("mean_lateral_deviation_m", "mean lat. dev. [m]", "{:.3f}"),
     ("max_lateral_deviation_m", "max lat. dev. [m]", "{:.2f}"),
@@ -83,6 +85,7 @@ def summarize(rows: list[dict[str, Any]], by: str = "planner", order: list[str] 
             "collision_rate": rate("collision"),
             "at_fault_collision_rate": rate("at_fault_collision"),
             "at_fault_seen_1s_rate": rate("at_fault_collision_seen_1s"),
+            "static_contact_rate": (sum(bool(r.get("static_contact")) for r in ok) / n) if n else None,
             "time_ratio_median": _stat(np.median, ratios),
             "time_ratio_mean": _stat(np.mean, ratios),
             "mean_lateral_deviation_m": _stat(np.mean, _values(ok, "mean_lateral_deviation_m")),
@@ -143,7 +146,7 @@ def write_report(rows: list[dict[str, Any]], out_dir: Path, plots: bool = True,
     summary = summarize(rows, order=order)
     if order:
         rows = sorted(rows, key=lambda r: order.index(r["planner"]) if r["planner"] in order else len(order))
-    (out_dir / "summary.json").write_text(json.dumps(summary, indent=2))
+    (out_dir / "summary.json").write_text(json_dumps(summary, indent=2))
     text = ["# Benchmark summary", "", markdown_table(summary), "",
             "Per family: success / collision / at-fault collision rate.", "", family_table(rows), ""]
     from viapath.bench.identity import crash_lines

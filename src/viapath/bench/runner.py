@@ -30,7 +30,7 @@ from viapath.bench.suites import ETH_UCY_FOLDER, data_root, generate_suite, suit
 COLUMNS = [
     "scenario", "family", "planner", "perception", "seed", "scenario_hash", "options_hash", "viapath_version",
     "reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s", "overlapping_at_appearance",
-    "min_clearance_m",
+    "static_contact", "min_clearance_m",
     "time_to_goal_s",
     "free_time_s", "time_ratio", "path_length_m", "mean_lateral_deviation_m", "max_lateral_deviation_m",
     "time_outside_corridor_s", "min_speed_mps", "max_speed_mps", "plan_time_p50_ms", "plan_time_p99_ms",
@@ -39,7 +39,7 @@ COLUMNS = [
 _BOOLS = {"reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s"}
 _TEXT = {"scenario", "family", "planner", "perception", "error", "shield", "scenario_hash", "options_hash",
          "viapath_version"}
-_INTS = {"seed", "command_flips", "escape_cycles", "overlapping_at_appearance"}
+_INTS = {"seed", "command_flips", "escape_cycles", "overlapping_at_appearance", "static_contact"}
 BACKENDS = ("loky", "dask", "ray")
 
 

@@ -20,6 +20,8 @@ Families (the scenario name is ``<family>-<index>``):
   by the social-force model with the walls.
 * ``paper``: the paper's three (behind, front, side): the first three exactly as in the paper, the
   rest with jittered speeds and offsets.
+* ``static``: boxes, carts, pillars and doors on and beside the path, walls along the corridor,
+  people among them (:func:`static`; not part of ``mixed``).
 * ``eth-ucy``: real pedestrians (ETH/UCY replays) with a designated path placed across each of the
   five standard scenes (eth, hotel, univ, zara1, zara2) at many start times; see :func:`eth_ucy`.
 * ``eth-ucy-react``: the same scenarios (same paths and start times for the same seed), with people who
@@ -332,6 +334,69 @@ def paper(rng, index) -> dict:
 
 # The nine of ``mixed``, in its order (registered above in this order; checked in the tests).
 SYNTHETIC_FAMILIES = FAMILIES.ordered()
+
+
+# -- static geometry (registered after the nine of ``mixed``, which stay as they were) ----------------
+
+STATIC_KINDS = ("box", "cart", "pillars", "door", "walls")
+
+
+@FAMILIES.register("static")
+def static(rng, index) -> dict:
+    """Static geometry on and beside the path, people among it (kind ``index mod 5``, :data:`STATIC_KINDS`):
+
+    * ``box``: a box of 0.3-0.6 m on the path (offset ≤ 0.2 m), room to pass on both sides; a crossing
+      person in half of them;
+    * ``cart``: a 0.4-0.6 x 0.8-1.2 m cart at any yaw beside or on the path, a person head-on;
+    * ``pillars``: two or three pillars (octagons, 0.15-0.3 m radius) within 0.6 m of the path;
+    * ``door``: walls along the corridor and a closed door across it 3-5 m ahead that opens at 8-20 s
+      (in a third of them it never opens: the goal is unreachable, ``description`` says so);
+    * ``walls``: walls 0.05-0.4 m outside the corridor on both sides, a person head-on.
+    """
+    kind = STATIC_KINDS[index % len(STATIC_KINDS)]
+    scenario = _base(rng, "static", f"Static geometry: {kind}.")
+    length, half_width = _length(scenario), scenario["path"]["half_width"]
+    if kind == "box":
+        size = float(rng.uniform(0.3, 0.6))
+        scenario["boxes"] = [{"center": [float(rng.uniform(2.5, length - 2.0)), float(rng.uniform(-0.2, 0.2))],
+                              "size": [size, float(rng.uniform(0.3, 0.6))], "yaw": float(rng.uniform(-0.5, 0.5))}]
+        if rng.random() < 0.5:
+            scenario["obstacles"].append(_crossing_person(rng, scenario))
+    elif kind == "cart":
+        on_path = rng.random() < 0.5
+        centre = [float(rng.uniform(2.5, length - 2.0)),
+                  float(rng.uniform(-0.15, 0.15)) if on_path else float(rng.choice([-1, 1]) * (half_width - 0.1))]
+        scenario["boxes"] = [{"center": centre, "size": [float(rng.uniform(0.8, 1.2)), float(rng.uniform(0.4, 0.6))],
+                              "yaw": float(rng.uniform(-np.pi, np.pi)) if on_path else 0.0}]
+        scenario["obstacles"].append(_head_on_person(rng, scenario))
+    elif kind == "pillars":
+        angles = np.linspace(0.0, 2 * np.pi, 9)[:-1]
+        xs = np.sort(rng.uniform(2.0, length - 1.5, int(rng.integers(2, 4))))
+        xs = xs[0] + np.concatenate([[0.0], np.cumsum(np.maximum(np.diff(xs), 1.2))])
+        pillars = []
+        for x in xs[xs < length - 1.0]:
+            r, y = float(rng.uniform(0.15, 0.3)), float(rng.uniform(-0.6, 0.6))
+            if abs(y) < r + 0.45 and half_width - abs(y) - r < 0.45:  # leave a way round inside the corridor
+                y = 0.0
+            pillars.append({"points": (np.c_[x + r * np.cos(angles), y + r * np.sin(angles)]).tolist()})
+        scenario["polygons"] = pillars
+        if rng.random() < 0.5:
+            scenario["obstacles"].append(_crossing_person(rng, scenario))
+    elif kind == "door":
+        wall_y = half_width + 0.05
+        door_x = float(rng.uniform(3.0, min(5.0, length - 1.5)))
+        opens = rng.random() >= 1 / 3
+        door = {"points": [[door_x, -wall_y], [door_x, wall_y]]}
+        if opens:
+            door["until_s"] = float(rng.uniform(8.0, 20.0))
+        else:
+            scenario["description"] = "Static geometry: door, closed for the whole run (the goal is unreachable)."
+        scenario["walls"] = [[[-3.0, wall_y], [length + 3.0, wall_y]], [[-3.0, -wall_y], [length + 3.0, -wall_y]], door]
+    else:
+        wall_y = half_width + float(rng.uniform(0.05, 0.4))
+        scenario["walls"] = [[[-3.0, wall_y], [length + 3.0, wall_y]], [[-3.0, -wall_y], [length + 3.0, -wall_y]]]
+        scenario["obstacles"].append(_head_on_person(rng, scenario))
+    return scenario
 
 
 # -- ETH/UCY ---------------------------------------------------------------------------------------

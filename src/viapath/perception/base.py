@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from viapath.observation import Obstacles
+from viapath.static import StaticLayer
 
 
 @dataclass(frozen=True)
@@ -26,6 +27,12 @@ class WorldSnapshot:
     obstacle_velocities: np.ndarray  # (N, 2)
     obstacle_radii_m: np.ndarray  # (N,)
     walls: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 2)))  # (W, 2, 2) static segments
+    static: StaticLayer | None = None  # the same segments with their shapes (None: ``walls``, one shape each)
+
+    def static_layer(self) -> StaticLayer:
+        if self.static is not None:
+            return self.static
+        return StaticLayer(self.walls) if len(self.walls) else StaticLayer.empty()
 
     def present(self) -> np.ndarray:
         return np.isfinite(self.obstacle_positions).all(axis=1)
@@ -45,6 +52,11 @@ class Perception:
 
     def observe(self, world: WorldSnapshot) -> Obstacles:  # pragma: no cover - interface
         raise NotImplementedError
+
+    def static_layer(self, world: WorldSnapshot) -> StaticLayer:
+        """The static geometry the planner is told about this cycle (DESIGN §10), after :meth:`observe`:
+        by default the known map (the world's static shapes); laser models tell what their scans show."""
+        return world.static_layer()
 
     def episode_metrics(self) -> dict[str, Any]:
         """Metrics of the model over the episode (e.g. tracking errors), merged into the episode's."""

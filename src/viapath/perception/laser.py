@@ -12,6 +12,8 @@ What we chose:
   to a known-radius fit (more accurate when every obstacle has the same, known size).
 * Tentative tracks are never reported; a confirmed track that is occluded keeps being reported
   (coasting, with growing sigmas) until ``max_unseen_s``.
+* Every return no track explains is static geometry (:mod:`~viapath.perception.static_layer`, option
+  ``static_layer``), handed to the planner as the observation's static layer.
 * ``position_noise_m`` / ``velocity_noise_mps`` are oracle options; they are accepted (a scenario's
   ``perception:`` block may carry them) and must be 0 / absent: the laser chain makes its own noise.
 """
@@ -25,11 +27,13 @@ import time
 import numpy as np
 
 from viapath.observation import Obstacles
+from viapath.static import StaticLayer
 from viapath.perception.detection import DetectorParams, Detections, detect
 from viapath.perception.fusion import BlindRegion, blind_region
 from viapath.perception.raycast import simulate_scans
 from viapath.perception.scanner import ScannerModel, paper_scanners
 from viapath.perception.segmentation import SegmentationParams
+from viapath.perception.static_layer import StaticLayerParams, StaticObstacleLayer
 from viapath.perception.tracking import MultiTargetTracker, Track, TrackerParams
 from viapath.perception.base import Perception, WorldSnapshot
 
@@ -66,6 +70,7 @@ class LaserPerception(Perception):
         mode: str | None = None,
         position_noise_m: float | None = None,
         velocity_noise_mps: float | None = None,
+        static_layer=None,
     ):
         if mode not in (None, "laser"):
             raise ValueError(f"LaserPerception got mode={mode!r}")
@@ -95,10 +100,13 @@ class LaserPerception(Perception):
         self.blind_region: BlindRegion = blind_region(self.scanners, self.robot_radius_m)
         self.rng = np.random.default_rng(0)
         self._tracker = MultiTargetTracker(self.tracker_params)
+        self._static = StaticObstacleLayer(self.scanners, _dataclass_from(StaticLayerParams, static_layer, "static_layer"))
         self._clear()
 
     def _clear(self) -> None:
         self._tracker.reset()
+        self._static.reset()
+        self.last_static = StaticLayer.empty()
         self.last_scans: list[np.ndarray] = []
         self.last_points_world = np.zeros((0, 2))
         self.last_points_scanner = np.zeros(0, dtype=int)
@@ -149,8 +157,14 @@ class LaserPerception(Perception):
         self.last_points_scanner = detections.fused.scanner_index
         detections = detections.transformed(robot_pose)
         self.last_detections_world = detections
-        self._tracker.step(time_s, detections.centres, detections.position_sigma_m, detections.radii_m)
-        return self._tracker.obstacles().finite()
+        tracker = self._tracker
+        tracker.step(time_s, detections.centres, detections.position_sigma_m, detections.radii_m)
+        self.last_static = self._static.update(time_s, robot_pose, scans, tracker.state[:, :2], tracker.radii_m)
+        return tracker.obstacles().finite()
+
+    def static_layer(self, world: WorldSnapshot) -> StaticLayer:
+        """What the last scans show of static geometry (:mod:`.static_layer`), not the world's map."""
+        return self.last_static
 
     def observe(self, world: WorldSnapshot) -> Obstacles:
         scans = self.scan(world)

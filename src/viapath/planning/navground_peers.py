@@ -108,8 +108,13 @@ class _NavgroundPeer(Planner):
         behavior.angular_speed = float(robot.turn_rate_radps)
         radii = situation.inflation.obstacle_radii_m
         state = behavior.environment_state
+        people = ~obstacles.is_static
         state.neighbors = [core.Neighbor(p, float(r), v, int(i)) for p, r, v, i in
-                           zip(obstacles.positions, radii, obstacles.velocities, obstacles.ids)]
+                           zip(obstacles.positions[people], radii[people], obstacles.velocities[people],
+                               obstacles.ids[people])]
+        # Static geometry (walls, boxes, scan returns) as navground's static discs: they do not reciprocate.
+        state.static_obstacles = [core.Disc(p, float(r)) for p, r in
+                                  zip(obstacles.positions[~people], radii[~people])]
         state.line_obstacles = self._walls
         tolerance = self.subgoal_policy.goal_tolerance_m if self.subgoals.is_final else self.subgoal_policy.reach_threshold_m
         behavior.target = core.Target.Point(subgoal, tolerance=0.5 * tolerance)

@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from viapath.static import StaticLayer
+
 
 QUATERNION_TOLERANCE = 0.01  # |norm - 1| above this is not a rotation (ROS producers normalise to ~1e-9)
 
@@ -175,3 +177,37 @@ def odometry_values(msg) -> tuple[float, float, tuple[float, float, float, float
     child frame); the quaternion is checked by the core (:func:`checked_yaw`)."""
     p, q, t = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist
     return float(p.x), float(p.y), (float(q.x), float(q.y), float(q.z), float(q.w)), float(t.linear.x), float(t.angular.z)
+
+
+def occupancy_layer(cells: np.ndarray, resolution_m: float, origin_x: float, origin_y: float, origin_yaw: float,
+                    threshold: int = 65) -> StaticLayer:
+    """The occupied cells of an occupancy grid (``cells``: (height, width) of -1 unknown / 0-100) as static
+    geometry in the grid's frame: each row's runs of occupied cells as one segment through their centres,
+    a single cell as a point, each with the half-diagonal of a cell as its radius (so the segments with
+    their radii cover every occupied cell)."""
+    cells = np.asarray(cells)
+    if cells.ndim != 2 or not (math.isfinite(resolution_m) and resolution_m > 0):
+        raise ValueError(f"occupancy grid: expected (height, width) cells and a resolution > 0, found shape "
+                         f"{cells.shape}, resolution {resolution_m}")
+    occupied = cells >= threshold
+    padded = np.zeros((occupied.shape[0], occupied.shape[1] + 2), dtype=bool)
+    padded[:, 1:-1] = occupied
+    change = np.diff(padded.astype(np.int8), axis=1)
+    rows, starts = np.nonzero(change == 1)
+    _, ends = np.nonzero(change == -1)  # row-major order pairs each start with its end
+    if len(rows) == 0:
+        return StaticLayer.empty()
+    local = np.stack([np.stack([starts + 0.5, rows + 0.5], axis=1), np.stack([ends - 0.5, rows + 0.5], axis=1)],
+                     axis=1) * resolution_m  # (S, 2, 2) cell centres, grid frame
+    c, s = math.cos(origin_yaw), math.sin(origin_yaw)
+    world = local @ np.array([[c, s], [-s, c]]) + np.array([origin_x, origin_y])
+    return StaticLayer(world, np.arange(len(world)), np.full(len(world), resolution_m * math.sqrt(0.5)))
+
+
+def occupancy_layer_from_message(msg, threshold: int = 65) -> StaticLayer:
+    info = msg.info
+    origin = info.origin
+    q = origin.orientation
+    cells = np.asarray(msg.data, dtype=np.int16).reshape(int(info.height), int(info.width))
+    return occupancy_layer(cells, float(info.resolution), float(origin.position.x), float(origin.position.y),
+                           checked_yaw(q.x, q.y, q.z, q.w), threshold)

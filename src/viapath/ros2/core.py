@@ -50,6 +50,9 @@ What we chose where the sources are silent:
 * **A time jump backwards** (a scan or odometry stamp earlier than the last cycle's): the tracker and
   odometry are reset, and the robot is held stopped for ``reset_hold_s`` of the new time so that
   tracks confirm again before it moves.
+* **Static geometry**: every scan return no person track explains (:mod:`viapath.perception.static_layer`,
+  parameter ``static_layer``) and, with ``map_topic``, a known map's occupied cells are the observation's
+  static layer: the planner, the guard and the shield keep clear of them (DESIGN §10).
 * **Every command** is finite and inside the limits: speed in [0, max_speed_mps], turn rate in
   ±max_turn_rate_radps, at most one cycle's acceleration above the measured speed, and at most one
   cycle's braking below the *lower* of the measured and the last commanded speed (a turn rate may
@@ -70,9 +73,11 @@ from viapath.path import DesignatedPath, SubgoalPolicy
 from viapath.perception.detection import DetectorParams, detect
 from viapath.perception.fusion import blind_region
 from viapath.perception.scanner import ScannerModel
+from viapath.perception.static_layer import StaticLayerParams, StaticObstacleLayer
 from viapath.perception.tracking import MultiTargetTracker, TrackerParams
 from viapath.planning import Decision, make_planner
 from viapath.ros2.settings import NodeSettings
+from viapath.static import StaticLayer
 
 FORWARD_CONE_RAD = math.radians(30.0)
 NO_PATH = "no designated path"
@@ -124,6 +129,7 @@ class CycleResult:
     perception_time_ms: float | None = None  # detection and tracking of this cycle's scans
     plan_time_ms: float | None = None  # the planner's own call
     status: dict[str, dict[str, str]] = field(default_factory=dict)  # name -> key/values, for diagnostics
+    static: StaticLayer = field(default_factory=StaticLayer.empty)  # the static layer the planner was given
 
 
 def urg04lx_models(settings: NodeSettings) -> list[ScannerModel]:
@@ -168,6 +174,8 @@ class PlannerCore:
         else:
             self.detector_params = DetectorParams(keep_segments=False, fit_backend=s.fit_backend)
         self.tracker = MultiTargetTracker(TrackerParams(acceleration_sigma_mps2=s.tracker_acceleration_sigma_mps2))
+        self.static_layer = StaticObstacleLayer((), StaticLayerParams(enabled=bool(s.static_layer)))
+        self.map_layer = StaticLayer.empty()  # a known map (set_map), in the odometry frame
         self.path: DesignatedPath | None = None
         self.path_cleared = False  # by an empty path message
         self.paths_refused = 0
@@ -192,6 +200,7 @@ class PlannerCore:
         self._commands_armed = False  # from the first planned cycle on (not the start-up watchdog's stops)
         self.hold_reason = ""
         self._alive_wall_s: float | None = None  # wall time of the last input or move of the node's clock
+        self.static_now = StaticLayer.empty()  # the last cycle's static layer from the scans
 
     def _make_planner(self, path: DesignatedPath, subgoal_policy: SubgoalPolicy):
         """The configured planner on ``path``, behind the shield when ``use_shield`` says so."""
@@ -500,8 +509,15 @@ class PlannerCore:
             live |= {i for i, other in enumerate(self.health) if other.good == 0}
         return waited_a_period or all(self.health[i].pending is not None for i in live)
 
+    def set_map(self, layer: StaticLayer) -> None:
+        """A known map's static geometry (e.g. from a nav_msgs/OccupancyGrid), in the odometry frame."""
+        self.map_layer = layer.finite()
+        self.events.append(f"map: {len(self.map_layer)} static segments")
+
     def _time_jump(self, why: str) -> None:
         self.tracker.reset()
+        self.static_layer.reset()
+        self.static_now = StaticLayer.empty()
         for h in self.health:
             h.pending = None
         self.odometry = None
@@ -711,6 +727,8 @@ class PlannerCore:
                 self.hold_until_stamp_s = stamp + self.settings.reset_hold_s
             self.tracker.step(stamp, detections.centres, detections.position_sigma_m, detections.radii_m)
             obstacles = self.tracker.obstacles().finite()
+            self.static_now = self.static_layer.update(stamp, pose, [r for _, r in scans], self.tracker.state[:, :2],
+                                                       self.tracker.radii_m, scanners=[m for m, _ in scans])
             perception_ms = (time.perf_counter() - perceiving) * 1e3
             self.last_cycle_stamp_s = stamp
         cap, sectors = self.blind_speed_cap(live)
@@ -722,9 +740,10 @@ class PlannerCore:
             o = self.odometry
             robot = RobotState(pose[:2].copy(), float(pose[2]), min(max(o.speed_mps, 0.0), self.limits.max_speed_mps),
                                o.turn_rate_radps, self.settings.robot_radius_m)
+            static = self.map_layer.concatenate(self.static_now)
             try:
                 planning = time.perf_counter()
-                decision = self.planner.plan(Observation(stamp, robot, obstacles))
+                decision = self.planner.plan(Observation(stamp, robot, obstacles, static))
                 plan_ms = (time.perf_counter() - planning) * 1e3
             except Exception as error:  # noqa: BLE001 - the robot brakes and the status says why
                 reasons.append(f"planner error: {type(error).__name__}: {error}")
@@ -754,7 +773,8 @@ class PlannerCore:
         if len(self.cycle_times_ms) > 1000:
             del self.cycle_times_ms[:-100]
         result = CycleResult(command, mode, reasons, stamp, decision, obstacles, pose, sectors, cap, elapsed,
-                             perception_ms, plan_ms)
+                             perception_time_ms=perception_ms, plan_time_ms=plan_ms,
+                             static=self.map_layer.concatenate(self.static_now))
         result.status = self._status(result, now_s)
         self.last_result = result
         return result

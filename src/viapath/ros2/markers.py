@@ -9,7 +9,8 @@ turns it into messages.
 
 What we chose:
 * Namespaces ``corridor`` (one LINE_STRIP per segment: the capsule outline of
-  :func:`viapath.viz.scene.path_view`), ``path``, ``tracks`` (one CYLINDER per track, id = track id),
+  :func:`viapath.viz.scene.path_view`), ``path``, ``static`` (one LINE_LIST of the static layer the planner
+  was told about), ``tracks`` (one CYLINDER per track, id = track id),
   ``velocities`` (ARROW), ``forecasts`` (one LINE_LIST per track: the scene's x-y-t cylinder, its
   three rings at 0, where the uncertainty cone stops growing, and the horizon, with four generator
   lines between, drawn at height ``time_scale_m_per_s`` · t), ``via_points`` (SPHERE_LIST), ``plan``
@@ -59,7 +60,8 @@ class MarkerScenes:
         plan_time_ms = result.cycle_time_ms if result.cycle_time_ms is not None else float("nan")
         self.step += 1
         return self.builder(path, planner).build(self.step - 1, result.stamp_s, pose, 0.0, 0.0,
-                                                 Observation(result.stamp_s, robot, result.obstacles), decision,
+                                                 Observation(result.stamp_s, robot, result.obstacles, result.static),
+                                                 decision,
                                                  plan_time_ms)
 
 
@@ -108,6 +110,9 @@ def marker_array(scene: CycleScene, path: PathView | None, frame_id: str, stamp)
             marker("corridor", k, Marker.LINE_STRIP, (0.2, 0.4, 1.0, 0.8)).points = _points(Point, outline)
         marker("path", 0, Marker.LINE_STRIP, (0.2, 0.4, 1.0, 0.4), (0.02, 0.02, 0.02)).points = _points(
             Point, path.waypoints)
+    if len(scene.static_segments):
+        marker("static", 0, Marker.LINE_LIST, (0.1, 0.1, 0.1, 0.9), (0.03, 0.03, 0.03)).points = _points(
+            Point, scene.static_segments.reshape(-1, 2))
     tracks = scene.tracks
     scale = scene.xyt.settings.time_scale_m_per_s
     rings = scene.xyt.all_rings(RING_SEGMENTS)  # (P, 3, C, 3), in the order of scene.xyt.persons = tracks

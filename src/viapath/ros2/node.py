@@ -148,9 +148,13 @@ def make_node_class():
                 self._subs.append(self.create_subscription(
                     Clock, "/clock", lambda msg: self.core.note_alive(time.monotonic()),
                     QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)))
+            latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
             if not s.path_file:
-                latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
                 self._subs.append(self.create_subscription(PathMsg, s.path_topic, self._on_path, latched))
+            if s.map_topic:
+                from nav_msgs.msg import OccupancyGrid
+
+                self._subs.append(self.create_subscription(OccupancyGrid, s.map_topic, self._on_map, latched))
             self.core.active = False
             self._timer = self.create_timer(s.cycle_period_s, self._on_watchdog)
             # The same period on the wall clock: with use_sim_time the timer above stops with /clock.
@@ -216,6 +220,18 @@ def make_node_class():
                                                  msg.header.frame_id, x, y, q, v, w)
             except Exception as error:  # noqa: BLE001 - refused, with the reason; the node lives on
                 self.core.refuse_odometry(self._now_s(), "error", self._failed("reading odometry", error))
+
+        def _on_map(self, msg) -> None:
+            expected = self.core.settings.odom_frame
+            if expected and msg.header.frame_id and msg.header.frame_id != expected:
+                self.core.events.append(f"map refused: frame_id {msg.header.frame_id!r}, expected {expected!r}")
+                self.get_logger().error(self.core.events[-1])
+                return
+            try:
+                self.core.set_map(convert.occupancy_layer_from_message(msg, self.core.settings.map_occupied_threshold))
+            except Exception as error:  # noqa: BLE001 - refused, with the reason; the node lives on
+                self.core.events.append(f"map refused: {error}")
+                self.get_logger().error(self.core.events[-1])
 
         def _on_path(self, msg) -> None:
             try:

@@ -72,6 +72,11 @@ NODE_OPTIONS: tuple[Option, ...] = (
     _opt("odom_topic", "odom", "", help="nav_msgs/Odometry topic"),
     _opt("path_topic", "designated_path", "", help="nav_msgs/Path topic of the designated path (transient local)"),
     _opt("path_file", "", "", help="designated path from a file instead (scenario YAML, or YAML/CSV of x y waypoints)"),
+    _opt("map_topic", "", "", help="nav_msgs/OccupancyGrid topic (transient local) of a known map in the odometry "
+         "frame, turned into static geometry ('' : none)"),
+    _opt("map_occupied_threshold", 65, "", 1, 100, "occupancy (0-100) from which a map cell is an obstacle"),
+    _opt("static_layer", True, "", help="every scan return no person track explains is static geometry "
+         "(planner, guard and shield keep clear of it)"),
     _opt("cmd_vel_topic", "cmd_vel", "", help="command topic"),
     _opt("cmd_vel_stamped", False, "", help="publish geometry_msgs/TwistStamped instead of Twist"),
     _opt("markers_topic", "viapath/markers", "", help="visualization_msgs/MarkerArray topic"),

@@ -114,7 +114,9 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
     from viapath.sim import robot as kinematics
     from viapath.sim.loop import Trace
     from viapath.sim.metrics import compute_metrics
+    from viapath.io.jsonable import dumps as json_dumps
     from viapath.sim.obstacles import scenario_obstacle_states
+    from viapath.sim.static_world import StaticWorld
     from viapath.sim.perception import WorldSnapshot
     from viapath.observation import Obstacles
 
@@ -124,7 +126,8 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
     n_steps = int(round((spec.duration_s if duration_s is None else min(duration_s, spec.duration_s)) / dt))
     times = np.arange(n_steps + 1) * dt
     positions, velocities, radii = scenario_obstacle_states(spec, times)
-    walls = np.asarray(spec.walls, dtype=float).reshape(-1, 2, 2)
+    static_world = StaticWorld.of_scenario(spec)
+    walls = static_world.segments
     path = DesignatedPath(spec.path.waypoints, half_widths_m=spec.path.widths())
     limits = MotionLimits(**spec.robot.limits.model_dump())
     goal_tolerance = SubgoalPolicy(**spec.subgoals.model_dump()).goal_tolerance_m
@@ -244,7 +247,9 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
                 odom_pub.publish(convert.odometry("odom", "base_link", stamp, state.x, state.y, state.heading_rad,
                                                   state.speed_mps, state.turn_rate_radps))
             pose = np.array([state.x, state.y, state.heading_rad])
-            world = WorldSnapshot(t, pose, spec.robot.radius, positions[k], velocities[k], radii, walls)
+            standing = static_world.at(t)
+            world = WorldSnapshot(t, pose, spec.robot.radius, positions[k], velocities[k], radii, standing.segments,
+                                  standing)
             scans = laser.scan(world)
             for scanner, ranges in zip(laser.scanners, scans, strict=True):
                 active = [f for f in faults if f.scanner == scanner.name and f.active(t)]
@@ -307,7 +312,7 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
             plan_speeds_mps=np.array([r.plan_speed for r in records]),
             plan_targets=np.tile(path.goal, (len(records), 1)), plan_status=[r.status for r in records],
             via_points=[r.via for r in records], plan_times_ms=np.array([r.cycle_ms for r in records[:-1]] + [np.nan]),
-            reached_goal=reached, walls=walls, extras={"nominal_speed_mps": spec.robot.speed, "seed": spec.seed if seed is None else seed},
+            reached_goal=reached, walls=walls, wall_until_s=static_world.until_s, extras={"nominal_speed_mps": spec.robot.speed, "seed": spec.seed if seed is None else seed},
             plan_sides=np.array([r.side for r in records], dtype=int),
         )
         metrics = compute_metrics(trace)
@@ -337,7 +342,7 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
               f"rate {rate:g}{' lockstep' if lockstep else ''}, {time.monotonic() - wall_start:.1f} s"
               + (f" (late steps: {late_steps[:10]})" if late_steps else ""), file=sys.stderr)
         if as_json:
-            print(json.dumps(metrics, allow_nan=False))
+            print(json_dumps(metrics))
         else:
             for key, value in metrics.items():
                 print(f"{key}: {value}")

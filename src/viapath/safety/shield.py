@@ -85,6 +85,7 @@ from viapath.safety.options import check_options
 
 _STRAIGHT = 1e-9
 _CHUNK = 24  # candidates tested at once when the planner's command fails
+_NEVER = np.full(1, np.inf)
 
 
 @dataclass(frozen=True)
@@ -278,9 +279,62 @@ class Shield:
 
     def _evaluate(self, observation: Observation, commands: np.ndarray) -> dict[str, np.ndarray]:
         if self.backend == "numba":
-            return self._evaluate_compiled(observation, commands)
+            out = self._evaluate_compiled(observation, commands)
+        else:
+            out = self._evaluate_people(observation, commands)
+        if observation.obstacles.static_mask is not None:
+            self._and_static(observation, out)
+        return out
+
+    def _and_static(self, observation: Observation, out: dict[str, np.ndarray]) -> None:
+        """Static geometry (DESIGN §10) in the verdicts of ``out``: a command is admissible only if its
+        braking sweep also keeps the robot ``margin_m`` from every static disc, unless the sweep never
+        brings it nearer to that disc than it is now (a robot that is too close already may move away).
+        Static discs do not move, so their radius does not grow (no σ, no person acceleration).
+        Exact per sub-interval: the distance from a disc centre to the robot's chord, less the chord's
+        sagitta pad. Sets ``static_meet_time_s`` (inf: never) and ANDs ``admissible`` and ``friendly``."""
         config, robot = self.config, observation.robot
-        people = observation.obstacles.finite()
+        statics = observation.obstacles.statics()
+        achieved = out["achieved"]
+        k = len(achieved)
+        meet = np.full(k, np.inf)
+        out["static_meet_time_s"] = meet
+        position = np.asarray(robot.position, dtype=float)
+        distance = np.hypot(*(statics.positions - position).T)
+        reach = float(robot.radius_m) + statics.radii_m + config.margin_m
+        fastest = float(np.max(np.abs(achieved[:, 0]), initial=0.0))
+        t_bound = fastest / max(self.limits.max_accel_mps2, 1e-9) + 2.0 * self.dt_s
+        near = distance - reach <= fastest * t_bound + 1e-6
+        if not near.any() or fastest == 0.0:
+            return
+        centres, reach, distance = statics.positions[near], reach[near], distance[near]
+        substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
+        sweep = braking_sweep(position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps,
+                              float(robot.speed_mps))
+        low = sweep.positions.min(axis=(0, 1)) - reach.max() - float(sweep.sagitta_m.max(initial=0.0))
+        high = sweep.positions.max(axis=(0, 1)) + reach.max() + float(sweep.sagitta_m.max(initial=0.0))
+        inside = ((centres >= low) & (centres <= high)).all(axis=1)  # only discs the sweeps' box can reach
+        if not inside.any():
+            return
+        centres, reach, distance = centres[inside], reach[inside], distance[inside]
+        a, b = sweep.positions[:, :-1], sweep.positions[:, 1:]  # (K, T-1, 2) chords
+        chord = b - a
+        length2 = np.einsum("kti,kti->kt", chord, chord)
+        rel = centres[None, None] - a[:, :, None]  # (K, T-1, n, 2)
+        f = np.clip(np.einsum("ktni,kti->ktn", rel, chord) / np.where(length2 > 0, length2, 1.0)[..., None], 0.0, 1.0)
+        closest = rel - f[..., None] * chord[:, :, None]
+        gap = np.hypot(closest[..., 0], closest[..., 1]) - sweep.sagitta_m[..., None]  # (K, T-1, n)
+        meets = (gap < reach[None, None]) & (gap < distance[None, None] - 1e-9) & sweep.moving[..., None]
+        hit = meets.any(axis=2)  # (K, T-1)
+        when = np.where(hit.any(axis=1), sweep.times_s[np.argmax(hit, axis=1)], np.inf)
+        meet[:] = when
+        ok = ~np.isfinite(when)
+        out["admissible"] = out["admissible"] & ok
+        out["friendly"] = out["friendly"] & ok
+
+    def _evaluate_people(self, observation: Observation, commands: np.ndarray) -> dict[str, np.ndarray]:
+        config, robot = self.config, observation.robot
+        people = observation.obstacles.people().finite()
         achieved = achieved_first_period(commands, float(robot.speed_mps), float(robot.turn_rate_radps),
                                          self.limits, self.dt_s)
         k = len(achieved)
@@ -401,7 +455,7 @@ class Shield:
         same verdicts), with the achieved (v, ω) and the dropping of non-finite people in the same call."""
         from viapath.safety import kernels
 
-        config, robot, people = self.config, observation.robot, observation.obstacles
+        config, robot, people = self.config, observation.robot, observation.obstacles.people()
         limits_array, settings = self._settings_arrays()
         state = _robot_array(robot)
         achieved, admissible, friendly, meet, person, contact = kernels.shield(
@@ -491,16 +545,20 @@ class Shield:
         if own_friendly if friendly_mode else own_ok:
             return ShieldResult(command, original, False, "admissible", True, True if friendly_mode else None,
                                 candidates=1, admissible_candidates=1)
-        ids = observation.obstacles.finite().ids
+        ids = observation.obstacles.people().finite().ids
         first = int(own["person"][0])
         person_id = int(ids[first]) if first >= 0 else None
         meet = float(own["meet_time_s"][0]) if math.isfinite(own["meet_time_s"][0]) else None
+        static_meet = float(own.get("static_meet_time_s", _NEVER)[0])
+        if math.isfinite(static_meet) and (meet is None or static_meet < meet):
+            person_id, meet = None, static_meet
         stop = Command.stop()
         if bool(own["contact"][0]):
             return ShieldResult(stop, original, not _same(original, stop),
                                 f"contact already happening with person {person_id}: at rest", False,
                                 False if friendly_mode else None, person_id=person_id, meet_time_s=0.0, candidates=1)
-        why = (f"would meet person {person_id} {meet:.2f} s ahead before at rest" if meet is not None
+        why = (f"would meet person {person_id} {meet:.2f} s ahead before at rest" if person_id is not None
+               else f"would touch static geometry {meet:.2f} s ahead before at rest" if meet is not None
                else "the person would have no room to stop")
         pick, passive_pick, tested, passing, reached = self._search(observation, command)
         if pick is not None:
@@ -523,7 +581,7 @@ class Shield:
         """The window search when the planner's command fails: the wanted (friendly in passive-friendly
         mode, else admissible) candidate closest to it, the closest admissible one, how many were tested
         and passed, and the candidates' achieved (v, ω)."""
-        if self.backend == "numba":
+        if self.backend == "numba" and observation.obstacles.static_mask is None:
             return self._search_compiled(observation, command)
         friendly_mode = self.config.mode == "passive-friendly"
         limits = self.limits

@@ -6,6 +6,7 @@ into one message naming the file, the field path, what was expected and what was
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Any, Union
 
 from pydantic import (
@@ -21,6 +22,7 @@ from pydantic import (
 )
 
 from viapath.perception.modes import PERCEPTION_MODES
+from viapath.static import box_edges, polygon_edges, polyline_edges
 
 Point = tuple[float, float]
 MAX_STEPS = 1_000_000  # a day at 10 Hz is 864 000; more is a typo in dt_s that would hang a run (issue 12)
@@ -164,6 +166,54 @@ class PerceptionSpec(_Strict):
         return value
 
 
+class _StaticShape(_Strict):
+    """Something static the robot can touch; ``until_s`` removes it at that time (a door that opens)."""
+
+    until_s: NonNegativeFloat | None = None
+
+    def edges(self):  # pragma: no cover - interface
+        raise NotImplementedError
+
+
+class WallSpec(_StaticShape):
+    """A wall: a polyline through ``points`` (two points: one straight piece)."""
+
+    points: list[Point] = Field(min_length=2)
+
+    def edges(self):
+        return polyline_edges(self.points)
+
+
+class BoxSpec(_StaticShape):
+    """A rectangle (a box, a cart, a pillar): ``size`` = (length along ``yaw``, width), m."""
+
+    center: Point
+    size: tuple[PositiveFloat, PositiveFloat]
+    yaw: float = 0.0
+
+    def edges(self):
+        return box_edges(self.center, self.size, self.yaw)
+
+
+class PolygonSpec(_StaticShape):
+    """A closed polygon through ``points`` (at least three)."""
+
+    points: list[Point] = Field(min_length=3)
+
+    def edges(self):
+        return polygon_edges(self.points)
+
+
+def _wall_kind(value: Any) -> str:
+    return "spec" if isinstance(value, (dict, WallSpec)) else "segment"
+
+
+WallItem = Annotated[
+    Union[Annotated[Segment, Tag("segment")], Annotated[WallSpec, Tag("spec")]],
+    Discriminator(_wall_kind),
+]
+
+
 class SubgoalSpec(_Strict):
     reach_threshold_m: PositiveFloat = 0.2
     goal_tolerance_m: PositiveFloat = 0.1
@@ -177,13 +227,27 @@ class Scenario(_Strict):
     robot: RobotSpec
     path: PathSpec
     obstacles: list[ObstacleItem] = Field(default_factory=list)
-    walls: list[Segment] = Field(default_factory=list)
+    walls: list[WallItem] = Field(default_factory=list)
+    boxes: list[BoxSpec] = Field(default_factory=list)
+    polygons: list[PolygonSpec] = Field(default_factory=list)
     planner: PlannerSpec = Field(default_factory=PlannerSpec)
     perception: PerceptionSpec = Field(default_factory=PerceptionSpec)
     subgoals: SubgoalSpec = Field(default_factory=SubgoalSpec)
     duration_s: PositiveFloat = 60.0
     dt_s: PositiveFloat = 0.1
     seed: int = Field(0, ge=0)  # numpy's generator takes no negative seed
+
+    def static_shapes(self) -> list[tuple[Any, float]]:
+        """Every static shape as (edges (E, 2, 2), until_s or inf): walls, boxes, polygons, in that order."""
+        shapes = []
+        for wall in self.walls:
+            if isinstance(wall, WallSpec):
+                shapes.append((wall.edges(), math.inf if wall.until_s is None else wall.until_s))
+            else:
+                shapes.append((polyline_edges(wall), math.inf))
+        for shape in (*self.boxes, *self.polygons):
+            shapes.append((shape.edges(), math.inf if shape.until_s is None else shape.until_s))
+        return shapes
 
     @field_validator("duration_s")
     @classmethod

@@ -23,6 +23,7 @@ from viapath.sim.obstacles import scenario_obstacle_states
 from viapath.perception.base import WorldSnapshot
 from viapath.perception.modes import make_perception
 from viapath.sim.reactive import obstacle_motion
+from viapath.sim.static_world import StaticWorld
 from viapath.sim.step_record import StepRecord
 
 
@@ -50,7 +51,8 @@ class Trace:
     via_points: list[np.ndarray]  # per step, (k, 2)
     plan_times_ms: np.ndarray  # (K,)
     reached_goal: bool
-    walls: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 2)))
+    walls: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 2)))  # (W, 2, 2) every static edge
+    wall_until_s: np.ndarray | None = None  # (W,) each edge stands while t < this (None: always)
     perceived: list[Any] = field(default_factory=list)  # per step Obstacles, when recorded
     scan_points: list[np.ndarray] = field(default_factory=list)  # per step, world frame, laser only
     extras: dict[str, Any] = field(default_factory=dict)
@@ -88,7 +90,7 @@ def run_episode(
     motion = obstacle_motion(scenario, times)  # None unless some replayed person reacts to the robot
     positions, velocities, radii = (scenario_obstacle_states(scenario, times) if motion is None
                                     else (motion.positions, motion.velocities, motion.radii))
-    walls = np.asarray(scenario.walls, dtype=float).reshape(-1, 2, 2)
+    static_world = StaticWorld.of_scenario(scenario)
 
     path = DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths())
     spec = scenario.robot
@@ -123,15 +125,17 @@ def run_episode(
         if reached or k == n_steps:
             _append_idle(rows, state)
             break
+        standing = static_world.at(float(times[k]))
         world = WorldSnapshot(float(times[k]), np.array([state.x, state.y, state.heading_rad]), spec.radius,
-                              positions[k], velocities[k], radii, walls)
+                              positions[k], velocities[k], radii, standing.segments, standing)
         observed = sensing.observe(world)
         if record_perceived:
             perceived.append(observed)
         if mode == "laser":
             scan_points.append(np.asarray(sensing.last_points_world))
         observation = Observation(float(times[k]), RobotState(state.position, state.heading_rad, state.speed_mps,
-                                                              state.turn_rate_radps, spec.radius), observed)
+                                                              state.turn_rate_radps, spec.radius), observed,
+                                  sensing.static_layer(world))
         started = time.perf_counter()
         decision: Decision = the_planner.plan(observation)
         rows["plan_ms"].append((time.perf_counter() - started) * 1e3)
@@ -159,7 +163,8 @@ def run_episode(
         commands=np.array(rows["command"]), obstacle_positions=positions[:n], obstacle_velocities=velocities[:n],
         obstacle_radii_m=radii, plan_speeds_mps=np.array(rows["plan_speed"]), plan_targets=np.array(rows["target"]),
         plan_status=rows["status"], via_points=rows["via"], plan_times_ms=np.array(rows["plan_ms"]),
-        reached_goal=reached, walls=walls, perceived=perceived, scan_points=scan_points,
+        reached_goal=reached, walls=static_world.segments, wall_until_s=static_world.until_s, perceived=perceived,
+        scan_points=scan_points,
         extras={"nominal_speed_mps": spec.speed, "seed": scenario.seed if seed is None else seed},
         plan_sides=np.array(rows["side"], dtype=int),
     )

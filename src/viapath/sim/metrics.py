@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 
 from viapath.geometry import closest_approach
+from viapath.static import segment_distances
 
 
 def clearance_per_step(trace) -> np.ndarray:
@@ -80,6 +81,30 @@ def overlap_on_appearance(trace) -> np.ndarray:
     return appeared & overlapping
 
 
+def static_clearance_per_step(trace) -> np.ndarray:
+    """Smallest distance from the robot's surface to static geometry standing during each step (K-1,),
+    exact for the straight chord between the step's poses (the distance between that chord and each
+    static edge); negative means overlap. inf without static geometry."""
+    poses = trace.robot_poses[:, :2]
+    walls = np.asarray(getattr(trace, "walls", np.zeros((0, 2, 2))), dtype=float).reshape(-1, 2, 2)
+    steps = max(len(poses) - 1, 0)
+    if len(walls) == 0 or steps == 0:
+        return np.full(steps, np.inf)
+    distance = segment_distances(poses[:-1], poses[1:], walls)  # (K-1, W)
+    until = getattr(trace, "wall_until_s", None)
+    if until is not None:
+        standing = np.asarray(until)[None, :] > np.asarray(trace.times_s[:-1])[:, None]
+        distance = np.where(standing, distance, np.inf)
+    return distance.min(axis=1) - trace.robot_radius_m
+
+
+def static_contact_onsets(trace, static_clearance: np.ndarray | None = None) -> np.ndarray:
+    """(K-1,): a contact with static geometry begins in step k (overlap in k, none in k - 1)."""
+    clearance = static_clearance_per_step(trace) if static_clearance is None else static_clearance
+    contact = clearance < 0.0
+    return contact & ~np.concatenate([[False], contact[:-1]])
+
+
 def present_for(trace, seconds: float) -> np.ndarray:
     """(K-1, N): obstacle n was present at step k and at each of the steps of the ``seconds`` before."""
     window = int(np.ceil(seconds / trace.dt_s - 1e-9)) + 1  # samples spanning `seconds`
@@ -94,7 +119,12 @@ def compute_metrics(trace) -> dict[str, Any]:
     dt = trace.dt_s
     clearance = clearance_per_step(trace)
     faults = at_fault_onsets(trace)
-    min_clearance = float(clearance.min()) if len(clearance) else float("inf")
+    static_clearance = static_clearance_per_step(trace)
+    static_onsets = static_contact_onsets(trace, static_clearance)
+    # Static geometry does not move: touching it is the robot's fault whenever the robot moves.
+    static_faults = static_onsets & (trace.robot_speeds_mps[:-1] > 0.05) if len(static_onsets) else static_onsets
+    min_static = float(static_clearance.min()) if len(static_clearance) else float("inf")
+    min_clearance = min(float(clearance.min()) if len(clearance) else float("inf"), min_static)
     lateral = np.abs(trace.path.lateral_deviation(poses))
     outside = trace.path.corridor_excess(poses) > 1e-6
     plan_ms = trace.plan_times_ms[np.isfinite(trace.plan_times_ms)]
@@ -105,8 +135,10 @@ def compute_metrics(trace) -> dict[str, Any]:
         "perception": trace.perception_mode,
         "reached_goal": bool(trace.reached_goal),
         "collision": bool(min_clearance < 0.0),
-        "at_fault_collision": bool(np.any(faults)),
-        "at_fault_collision_seen_1s": bool(np.any(faults & present_for(trace, 1.0))),
+        "at_fault_collision": bool(np.any(faults) or np.any(static_faults)),
+        "at_fault_collision_seen_1s": bool(np.any(faults & present_for(trace, 1.0)) or np.any(static_faults)),
+        "static_contact": int(np.count_nonzero(static_onsets)),
+        "min_static_clearance_m": _finite_or_none(min_static),
         "overlapping_at_appearance": int(np.count_nonzero(overlap_on_appearance(trace))),
         "min_clearance_m": _finite_or_none(min_clearance),
         "time_to_goal_s": float(trace.times_s[-1]) if trace.reached_goal else None,

@@ -71,6 +71,7 @@ BLIND = "/perception/blind_sectors"
 DETECTIONS = "/perception/detections"
 TRACKS = "/perception/tracks"
 PATH = "/path"
+STATIC = "/world/static"
 CANDIDATES = "/plan/candidates"
 CHOSEN = "/plan/chosen"
 COSTS = "/plan/costs"
@@ -116,7 +117,7 @@ def scanner_frame(name: str) -> str:
 def expected_topics(scanner_names: list[str] | tuple[str, ...] = ()) -> dict[str, str]:
     """Topic → schema name of a run (laser topics only when there are scanners)."""
     topics = {TF: "foxglove.FrameTransforms", FOOTPRINT: "foxglove.SceneUpdate", TRACKS: "foxglove.SceneUpdate",
-              PATH: "foxglove.SceneUpdate", CANDIDATES: "foxglove.SceneUpdate", CHOSEN: "foxglove.SceneUpdate",
+              PATH: "foxglove.SceneUpdate", STATIC: "foxglove.SceneUpdate", CANDIDATES: "foxglove.SceneUpdate", CHOSEN: "foxglove.SceneUpdate",
               COSTS: "viapath.PlanCosts", XYT: "foxglove.SceneUpdate", METRICS: "viapath.Metrics"}
     if scanner_names:
         topics.update({BLIND: "foxglove.SceneUpdate", DETECTIONS: "foxglove.SceneUpdate"})
@@ -162,7 +163,7 @@ class FoxglovePublisher:
         # against Foxglove's own schema, so these channels take bytes.
         self.channels[TF] = Channel(TF, message_encoding="protobuf", schema=self.m.FrameTransforms.get_schema(),
                                     context=ctx)
-        topics = [FOOTPRINT, TRACKS, PATH, CANDIDATES, CHOSEN, XYT]
+        topics = [FOOTPRINT, TRACKS, PATH, STATIC, CANDIDATES, CHOSEN, XYT]
         if scene.scanners:
             topics[1:1] = [BLIND, DETECTIONS]
         scene_schema = self.m.SceneUpdate.get_schema()
@@ -216,6 +217,7 @@ class FoxglovePublisher:
             ch[DETECTIONS].log(self._detections(scene, ns), log_time=ns)
         ch[TRACKS].log(self._tracks(scene, ns), log_time=ns)
         ch[PATH].log(self._path(scene), log_time=ns)
+        ch[STATIC].log(self._static(scene), log_time=ns)
         ch[CANDIDATES].log(self._candidates(scene, ns), log_time=ns)
         ch[CHOSEN].log(self._chosen(scene, ns), log_time=ns)
         ch[COSTS].log(_JSON.encode(costs_message(scene)).encode(), log_time=ns)
@@ -240,7 +242,7 @@ class FoxglovePublisher:
             "path": C(0.2, 0.2, 0.2), "corridor": C(0.2, 0.6, 0.2, 0.7), "subgoal": C(0.9, 0.7, 0.0),
             "subgoal_text": C(0.5, 0.4, 0.0), "chosen": C(0.0, 0.45, 1.0), "chosen_text": C(0.0, 0.2, 0.6),
             "via": C(0.0, 0.0, 0.0), "mesh": C(0.9, 0.2, 0.2, 0.35), "ring": C(0.7, 0.1, 0.1, 0.9),
-            "axis": C(0.5, 0.0, 0.0), "time_axis": C(0.4, 0.4, 0.4, 0.6),
+            "axis": C(0.5, 0.0, 0.0), "time_axis": C(0.4, 0.4, 0.4, 0.6), "static": C(0.1, 0.1, 0.1, 0.9),
         }
         self.identity = self._pose()
         self.delete_all = m.SceneEntityDeletion(type=m.SceneEntityDeletionType.All)
@@ -401,6 +403,24 @@ class FoxglovePublisher:
                 "texts": [self._text(sx, sy, 0.25, f"subgoal {scene.subgoal_index}", c["subgoal_text"])],
             })
         return self.static[key]
+
+    def _static(self, scene: CycleScene) -> bytes:
+        """The static layer the planner was told about, as one line list (a known map: the same message
+        every cycle, encoded once)."""
+        segments = scene.static_segments
+        key = ("static", segments.tobytes())
+        cached = self.static.get("static_last")
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        m = self.m
+        if len(segments):
+            line = m.LinePrimitive(type=m.LinePrimitiveLineType.LineList, pose=self.identity, thickness=0.03,
+                                   points=self._points(segments.reshape(-1, 2), 0.02), color=self.colours["static"])
+            message = self._update(None, WORLD, "static", {"lines": [line]})
+        else:
+            message = self.wire["deletions"]
+        self.static["static_last"] = (key, message)
+        return message
 
     def _candidates(self, scene: CycleScene, ns: int) -> bytes:
         plan = scene.plan

@@ -109,9 +109,11 @@ def cycle_input(record) -> tuple:
         truth = len(world.obstacle_radii_m)
         pieces += [world.obstacle_positions.reshape(-1), world.obstacle_velocities.reshape(-1),
                    world.obstacle_radii_m]
+    static = np.asarray(record.observation.static.segments, dtype=float)
+    pieces.append(static.reshape(-1))
     counts = (len(tracks), truth if world is not None else -1, len(via) // 2, len(waypoints) // 2, len(costs),
               tuple(len(line) // 2 for line in lines), tuple(len(ranges) for ranges in scans), len(radii),
-              len(points), len(blind))
+              len(points), len(blind), len(static))
     extras = plan.extras or {}
     kept = {name: extras[name] for name in _SCENE_EXTRAS if name in extras}
     shield = extras.get("shield")
@@ -135,7 +137,7 @@ def scene_inputs(payload: tuple, static: tuple) -> tuple:
      plan_speed, target_x, target_y, subgoal_index, candidate_count, chosen, extras, sectors, counts,
      numbers) = payload
     n, truth_count, via_count, waypoint_count, cost_count, line_counts, scan_counts, detection_count, point_count, \
-        blind_count = counts
+        blind_count, static_count = counts
     cursor = _Cursor(numbers)
     tracks = _obstacles(cursor.rows(n, 2), cursor.rows(n, 2), cursor.rows(n), cursor.rows(n), cursor.rows(n),
                         cursor.rows(n).astype(int))
@@ -156,13 +158,15 @@ def scene_inputs(payload: tuple, static: tuple) -> tuple:
             zeros = np.zeros(int(present.sum()))
             truth = _obstacles(positions[present], velocities[present], truth_radii[present], zeros, zeros,
                                np.flatnonzero(present))
+    static_segments = cursor.rows(static_count, 4).reshape(-1, 2, 2)
     plan = Plan(status, plan_speed, np.array([target_x, target_y]), via, waypoints, subgoal_index, candidate_count,
                 costs, lines, chosen, extras)
     _, scanner_statics = static
     scanners = [ScannerView(name, mount, angle_min, increment, ranges, range_min, range_max)
                 for (name, mount, angle_min, increment, range_min, range_max), ranges in zip(scanner_statics, scans)]
     decision = Decision(Command(command_speed, command_turn_rate), plan)
-    return (step, time_s, (x, y, heading), speed, turn_rate, _Tracks(tracks), decision, plan_time_ms, truth,
+    return (step, time_s, (x, y, heading), speed, turn_rate, _Tracks(tracks, static_segments), decision, plan_time_ms,
+            truth,
             (scanners, detections, radii, points, sectors, blind))
 
 
@@ -182,12 +186,13 @@ class _Cursor:
 
 
 class _Tracks:
-    """An observation as far as a scene reads one: its tracks."""
+    """An observation as far as a scene reads one: its tracks and its static segments."""
 
-    __slots__ = ("obstacles",)
+    __slots__ = ("obstacles", "static_segments")
 
-    def __init__(self, obstacles) -> None:
+    def __init__(self, obstacles, static_segments) -> None:
         self.obstacles = obstacles
+        self.static_segments = static_segments
 
 
 def _obstacles(positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids):

@@ -36,7 +36,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
 
@@ -269,6 +269,7 @@ class CycleScene:
     plan: PlanView
     xyt: XYTScene
     series: dict[str, float]  # speed, turn rate, clearance, lateral deviation, plan time, shield count
+    static_segments: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 2)))  # (S, 2, 2) the static layer told
 
     def footprint(self, segments: int = 32) -> np.ndarray:
         """The robot's disc as a closed polygon in the robot (base) frame: (segments + 1, 2)."""
@@ -296,6 +297,16 @@ def path_view(path, resolution: int = 24) -> PathView:
         outline = np.vstack([end, start])
         outlines.append(np.vstack([outline, outline[:1]]))
     return PathView(np.asarray(path.waypoints, dtype=float), np.asarray(path.half_widths_m, dtype=float), outlines)
+
+
+def static_segments_of(observation) -> np.ndarray:
+    """(S, 2, 2) the observation's static layer (an observation as the MCAP writer rebuilds it holds the
+    segments alone)."""
+    segments = getattr(observation, "static_segments", None)
+    if segments is None:
+        static = getattr(observation, "static", None)
+        segments = np.zeros((0, 2, 2)) if static is None else static.segments
+    return np.asarray(segments, dtype=float).reshape(-1, 2, 2)
 
 
 class SceneBuilder:
@@ -354,6 +365,7 @@ class SceneBuilder:
             scanners=scanners, blind_sectors_rad=sectors, blind_polygon_world=blind, true_people=true_people,
             subgoal=np.asarray(plan.target if plan.status == "goal" else self._subgoal(plan), dtype=float),
             subgoal_index=int(plan.subgoal_index), plan=plan_view, xyt=xyt, series=series,
+            static_segments=static_segments_of(observation),
         )
 
     def _subgoal(self, plan) -> np.ndarray:

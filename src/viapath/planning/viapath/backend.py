@@ -320,3 +320,8 @@ def warm_up_crowds() -> list:
     sides = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
     return [Obstacles(np.array([[2.0, 0.0]]), np.array([[-0.2, 0.0]]), np.array([0.3])),
             Obstacles(0.9 * sides, -0.3 * sides, np.full(4, 0.3))]
+
+
+#: The compiled backend without its whole-step kernels (the recipe's steps in numpy, their leg checks and via
+#: points compiled): what a cycle with static geometry runs on (planner._cycle_backend).
+STEPWISE = {"numba": Backend("numba", whole_steps=False)}

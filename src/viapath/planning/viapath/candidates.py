@@ -27,6 +27,10 @@ Beyond the paper (DESIGN §2 and §5.2 future work):
   was pushed back, or a blocked subgoal was given up), the path's own corners between the robot and
   the subgoal become via points: the way back along the designated path.
 
+**Static geometry** (DESIGN §10): a static disc met by a leg stands for its whole shape. The root branches
+once per shape a leg meets, and the via points are those of the shape's two extreme discs as seen from the
+node (the tangents to its inflated outline); via points round static geometry keep no braking envelope.
+
 Each candidate records its **way round** — the first obstacle it avoids, the side and the root
 (:class:`Way`) — so that the next cycle can prefer the same way (hysteresis) without comparing
 positions.
@@ -206,11 +210,13 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
         blocked = (~free & np.isfinite(contact).any(axis=1)).nonzero()[0]
         if len(blocked) and len(checks.obstacles):
             if depth == 0:
-                rows, pair_obstacles = _root_pairs(contact[blocked], config.max_root_obstacles)
+                rows, pair_obstacles = _root_pairs(_one_per_shape(checks, contact[blocked]), config.max_root_obstacles)
                 pair_nodes = frontier[blocked][rows]
             else:
                 pair_nodes = frontier[blocked]
                 pair_obstacles = contact[blocked].argmin(axis=1)
+            if checks.obstacles.static_mask is not None:
+                pair_nodes, pair_obstacles = _round_static_shapes(checks, data["position"], pair_nodes, pair_obstacles)
             children = _via_children(checks, data, pair_nodes, pair_obstacles, is_root=(depth == 0))
             if children is not None:
                 next_frontier.append(tree.extend(**children))
@@ -269,6 +275,48 @@ def _root_pairs(contact: np.ndarray, limit: int):
     return rows, cols
 
 
+def _one_per_shape(checks: LegChecks, contact: np.ndarray) -> np.ndarray:
+    """``contact`` with only the earliest discs of each static shape kept per leg: the root branches on the
+    shapes a leg meets, not on the many discs of one wall."""
+    if checks.obstacles.static_mask is None:
+        return contact
+    hit = np.flatnonzero(checks.obstacles.static_mask & np.isfinite(contact).any(axis=0))
+    if len(hit) == 0:
+        return contact
+    labels = checks.static_labels()
+    columns = hit[np.argsort(labels[hit], kind="stable")]
+    starts = np.flatnonzero(np.diff(labels[columns], prepend=-2))
+    block = contact[:, columns]
+    earliest = np.repeat(np.minimum.reduceat(block, starts, axis=1), np.diff(np.append(starts, len(columns))), axis=1)
+    kept = contact.copy()
+    kept[:, columns] = np.where(block == earliest, block, np.inf)
+    return kept
+
+
+def _round_static_shapes(checks: LegChecks, positions: np.ndarray, node_index: np.ndarray,
+                         obstacle_index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(node, obstacle) pairs with each static disc replaced by the two extreme discs of its shape as seen
+    from the node (:meth:`.checks.LegChecks.static_extremes`): via points go round the whole shape, not
+    round the one disc a leg met first. Pairs of people stay as they are; repeated pairs are made once."""
+    labels = checks.static_labels()
+    nodes, obstacles, known = [], [], {}
+    for node, obstacle in zip(node_index.tolist(), obstacle_index.tolist()):
+        if labels[obstacle] < 0:
+            nodes.append(node)
+            obstacles.append(obstacle)
+            continue
+        start = positions[node]
+        key = (float(start[0]), float(start[1]), int(labels[obstacle]))
+        extremes = known.get(key)
+        if extremes is None:
+            extremes = known[key] = checks.static_extremes(start, obstacle)
+        for extreme in dict.fromkeys(extremes):
+            nodes.append(node)
+            obstacles.append(extreme)
+    pairs = np.unique(np.array([nodes, obstacles], dtype=np.int64).reshape(2, -1), axis=1)
+    return pairs[0], pairs[1]
+
+
 def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: bool):
     """Via-point children of each (node, obstacle) pair: both sides, both roots, legs checked."""
     starts = data["position"][node_index]
@@ -279,7 +327,7 @@ def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: 
     pair, option, t_k, leg_velocity, via = checks.backend.via_options(
         starts, times, speeds, obstacles.positions[obstacle_index], obstacles.velocities[obstacle_index],
         checks.via_radii[obstacle_index], checks.growth[obstacle_index], checks.growth_until_s[obstacle_index],
-        checks.envelope_m(speeds), 3 * checks.horizon_s)
+        _envelope_of_pairs(checks, speeds, obstacle_index), 3 * checks.horizon_s)
     if len(pair) == 0:
         return None
     starts_k, times_k, speeds_k = starts[pair], times[pair], speeds[pair]
@@ -299,6 +347,15 @@ def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: 
         position=via[good], time_s=times_k[good] + t_k, speed=speeds_k, parent=parent,
         length_m=data["length_m"][parent] + speeds_k * t_k, first_direction=first_direction, way=way,
     )
+
+
+def _envelope_of_pairs(checks: LegChecks, speeds: np.ndarray, obstacle_index: np.ndarray) -> np.ndarray:
+    """The braking envelope of each pair's via point: none round static geometry (it stays put)."""
+    envelope = checks.envelope_m(speeds)
+    static = checks.obstacles.static_mask
+    if static is None:
+        return envelope
+    return np.where(static[obstacle_index], 0.0, envelope)
 
 
 def _corner_nodes(checks: LegChecks, tree: _Tree, speeds: np.ndarray) -> np.ndarray:

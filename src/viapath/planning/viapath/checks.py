@@ -12,6 +12,8 @@ What the paper leaves open and we chose:
   on along the next segment; past the final goal nothing is checked (the mission ends there). A
   blocked intermediate subgoal is given up within the bypass distance (paper Fig. 3), so legs towards
   it need to be free only up to there.
+* Static geometry (rows of the obstacles marked static, velocity 0) is checked over a leg's whole length,
+  past the horizon (its forecast is certain), and keeps no braking envelope (:meth:`LegChecks.contact_times`).
 * The corridor check covers whole legs, not only via points. A robot already outside the corridor
   may not go further out, but may come back (``corridor_tolerance_m``). All corridor checks of the
   planner go through :meth:`LegChecks.inside`, :meth:`LegChecks.legs_inside` and
@@ -141,9 +143,47 @@ class LegChecks:
         envelope = None
         if keep_envelope and self.envelope_accel_mps2 > 0:
             envelope = self.envelope_m(np.hypot(velocities[:, 0], velocities[:, 1]))
-        return self.backend.legs_first_contact(starts, start_times, velocities, checked, self.obstacles.positions,
-                                               self.obstacles.velocities, self.check_radii, self.growth,
+        obstacles = self.obstacles
+        if obstacles.static_mask is not None:
+            # Static geometry stays put: its forecast holds past the horizon (a leg into a wall is not made free
+            # by driving it slowly) and the braking envelope, for where a person may walk, does not apply.
+            static = obstacles.static_mask
+            contact = np.empty((len(starts), len(obstacles)))
+            for rows, leg_radii, until in ((~static, envelope, checked), (static, None, durations)):
+                contact[:, rows] = self.backend.legs_first_contact(
+                    starts, start_times, velocities, until, obstacles.positions[rows], obstacles.velocities[rows],
+                    self.check_radii[rows], self.growth[rows], self.growth_until_s[rows], leg_radii)
+            return contact
+        return self.backend.legs_first_contact(starts, start_times, velocities, checked, obstacles.positions,
+                                               obstacles.velocities, self.check_radii, self.growth,
                                                self.growth_until_s, envelope)
+
+    def static_labels(self) -> np.ndarray:
+        """(N,) for each obstacle the static shape it belongs to (its id; -1: a person)."""
+        cached = self.__dict__.get("_static_labels")
+        if cached is None:
+            cached = self.__dict__["_static_labels"] = np.where(self.obstacles.is_static, self.obstacles.ids, -1)
+        return cached
+
+    def static_extremes(self, start: np.ndarray, obstacle: int) -> tuple[int, int]:
+        """The discs of ``obstacle``'s static shape whose via discs reach furthest to the left and to the right as
+        seen from ``start`` (DESIGN §10: the tangents to a shape's inflated outline are the tangents to its
+        extreme discs); the obstacle itself twice for a person or when ``start`` is inside the shape's reach."""
+        labels = self.static_labels()
+        label = labels[obstacle]
+        if label < 0:
+            return obstacle, obstacle
+        members = np.flatnonzero(labels == label)
+        offset = self.obstacles.positions[members] - start
+        distance = np.hypot(offset[:, 0], offset[:, 1])
+        radii = self.via_radii[members]
+        if np.any(distance <= radii):
+            return obstacle, obstacle
+        heading = np.arctan2(offset[:, 1], offset[:, 0])
+        reference = heading[members == obstacle][0]
+        relative = (heading - reference + np.pi) % (2 * np.pi) - np.pi
+        half = np.arcsin(radii / distance)
+        return int(members[np.argmax(relative + half)]), int(members[np.argmin(relative - half)])
 
     def legs_free(self, starts, start_times, velocities, durations) -> np.ndarray:
         return np.isinf(self.contact_times(starts, start_times, velocities, durations)).all(axis=1)

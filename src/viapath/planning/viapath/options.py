@@ -66,6 +66,8 @@ _OWN = [
     Option("escape_max_excess_m", 0.5, "an escape may take the robot at most this far outside the corridor "
            "(standing is always allowed)", "m", minimum=0.0),
     # Speed (docs/speed.md).
+    Option("blocked_gap_m", 0.3, "when static geometry closes the way (a closed door), the robot stops this far "
+           "short of touching it (its margin included) and waits", "m", minimum=0.0, maximum=5.0),
     Option("backend", "auto", "arithmetic of the hot path: auto = compiled (numba, extra 'fast') when numba is "
            "importable, else numpy; the decisions are the same", choices=BACKENDS),
     # Display.

@@ -23,6 +23,24 @@ What the paper leaves open and we chose, beyond what those modules say:
   then flips and flips back. If last cycle's way is gone, it is searched for once more with
   ``keep_previous_inflation`` of the uncertainty inflation (the safety margin stays) and kept if,
   with the usual hysteresis, it still costs less than the new choice.
+* **Static obstacles** (DESIGN §10; the paper draws its path boundary round static things and plans for
+  moving ones only). A static obstacle is a vertical prism in x-y-t: the guarded entry hands the planner
+  the observation's static layer as discs of velocity 0 sampled along its segments (within a few mm of
+  the segments' capsules, :mod:`viapath.static`), so the legs are checked against it exactly as against
+  people (a cylinder of velocity 0 is the prism), and the same via-point code makes its avoiding lines
+  (v_i = 0: t* = |w|/v). What is ours: (1) via points go round a whole **shape**, not the one disc a leg
+  met first: a pair (node, static disc) becomes the two discs of that disc's shape that reach furthest
+  left and right as seen from the node (the tangents to the shape's inflated outline,
+  :func:`.candidates._round_static_shapes`), and the root branches once per shape; (2) static legs are
+  checked to their end, past the horizon (a leg into a wall is not made free by driving it slowly), and
+  without the shield's braking envelope, which is for where people may walk; (3) static discs farther
+  outside the corridor than their reach are left out of the cycle (no candidate can meet them); (4) a
+  **closed way** (no free candidate, standing is safe, and the straight leg to the subgoal meets static
+  geometry before any person) is not a plain stop: the robot drives on along that leg to
+  ``blocked_gap_m`` short of touching it, at a speed from which it stops there, and waits with status
+  ``blocked``; every cycle looks again, so it goes on when the door opens. The candidate tree of a
+  cycle with static geometry runs the numpy recipe with the compiled leg checks and via points
+  (:data:`.backend.STEPWISE`): the shapes' extremes are not compiled.
 * The way back (``return_lookahead_m``, off by default): off the path line, the paper's step 1 is
   tried first towards the path point that far ahead instead of the subgoal. The paper heads for the
   subgoal; when that is metres away the robot drifts back to the path on a shallow line after a pass,
@@ -31,6 +49,7 @@ What the paper leaves open and we chose, beyond what those modules say:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -40,9 +59,9 @@ import numpy as np
 from viapath.geometry import wrap_angle
 from viapath.observation import Command
 from viapath.options import Settings
-from viapath.planning.base import Decision, Plan, Planner, Situation
+from viapath.planning.base import Decision, Inflation, Plan, Planner, Situation
 from viapath.planning.viapath import kernel_slots as slot
-from viapath.planning.viapath.backend import backend_for
+from viapath.planning.viapath.backend import STEPWISE, backend_for
 from viapath.planning.viapath.backend import resolve as resolve_backend
 from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, _candidates_of, grow
 from viapath.planning.viapath.checks import LegChecks
@@ -122,9 +141,11 @@ class ViaPathPlanner(Planner, name="viapath"):
         return decision
 
     def _decide(self, situation: Situation) -> Decision:
+        if situation.obstacles.static_mask is not None:
+            situation = self._near_corridor(situation)
         self._situation = situation
         checks = LegChecks.of(situation, self.config, self.subgoals, self.subgoal_policy, self.robot_radius_m,
-                              self.backend)
+                              self._cycle_backend(situation))
         if self.shield is not None and self.shield.config.enabled:
             # Set on the checks just built (dataclasses.replace would copy every field again, every cycle).
             checks.envelope_accel_mps2 = self.shield.config.person_accel_mps2
@@ -136,12 +157,68 @@ class ViaPathPlanner(Planner, name="viapath"):
             self._previous = None
             decision = stop_or_escape(checks, self.limits, self.config, self._previous_escape)
             self._previous_escape = decision.command if decision.plan.status == "escape" else None
+            if decision.plan.status == "stop" and checks.obstacles.static_mask is not None:
+                return self._blocked(situation, checks, float(speeds[nominal_index])) or decision
             return decision
         self._previous_escape = None
         if self.config.keep_previous_way and self._previous is not None:
             chosen = self._keep_previous_way(chosen, checks, speeds, nominal_index)
         self._previous = chosen.choice
         return Decision(self._command(situation, chosen.plan), chosen.plan)
+
+    def _near_corridor(self, situation: Situation) -> Situation:
+        """The situation without the static discs no candidate can meet: every leg of a candidate stays in the
+        corridor (or within the escape's bound of it), so a static disc farther outside than its check
+        radius cannot touch one. Walls of other rooms cost nothing then."""
+        obstacles, inflation = situation.obstacles, situation.inflation
+        reach = inflation.check_radii + max(situation.corridor_tolerance_m, self.config.escape_max_excess_m)
+        far = obstacles.is_static & (self.path.corridor_excess(obstacles.positions) > reach)
+        if not far.any():
+            return situation
+        keep = ~far
+        kept = Inflation(*(getattr(inflation, name)[keep] for name in ("obstacle_radii_m", "check_radii", "growth",
+                                                                         "growth_until_s")))
+        return dataclasses.replace(situation, obstacles=obstacles.subset(keep), inflation=kept)
+
+    def _cycle_backend(self, situation: Situation):
+        """The backend of this cycle: with static geometry in view the candidate tree runs on the numpy
+        recipe (the extremes of static shapes, :func:`.candidates._round_static_shapes`, are not compiled),
+        its leg checks and via points still on the compiled kernels when they are there."""
+        backend = self.backend
+        if situation.obstacles.static_mask is None or not backend.whole_steps or backend.name == "numpy":
+            return backend
+        return STEPWISE.get(backend.name, backend)
+
+    def _blocked(self, situation: Situation, checks: LegChecks, speed_mps: float) -> Decision | None:
+        """No candidate is free and standing is safe: if static geometry closes the way to the subgoal (a
+        closed door, a wall across the corridor) and nothing else meets the straight leg before it, drive on
+        along that leg to ``blocked_gap_m`` short of where the robot would touch it, at a speed from which
+        it stops there, and wait; status ``blocked``. Each cycle looks again, so the robot goes on when
+        the way opens. None when people block the way first (the caller's stop stands)."""
+        position, subgoal = checks.position, checks.subgoal
+        offset = subgoal - position
+        length = float(np.hypot(*offset))
+        if length < 1e-6:
+            return None
+        direction = offset / length
+        contact = checks.contact_times(position[None], np.zeros(1), direction[None] * speed_mps,
+                                       np.array([length / speed_mps]), np.inf)[0]
+        first = int(np.argmin(contact))
+        if not (math.isfinite(contact[first]) and checks.obstacles.is_static[first]):
+            return None
+        ahead_m = max(0.0, speed_mps * float(contact[first]) - self.config.blocked_gap_m)
+        stop_at = position + direction * ahead_m
+        speed = min(speed_mps, math.sqrt(self.limits.max_accel_mps2 * ahead_m))
+        if speed < 0.02 or ahead_m < 0.02:
+            speed, stop_at = 0.0, position.copy()
+        elif not (checks.legs_free(position[None], np.zeros(1), direction[None] * speed, np.array([ahead_m / speed]))[0]
+                  and checks.legs_inside(position[None], stop_at[None])[0]):
+            return None
+        plan = Plan("blocked", speed, stop_at, waypoints=np.array([position, stop_at]),
+                    subgoal_index=checks.subgoal_index,
+                    extras={"blocked": f"static geometry closes the way {speed_mps * float(contact[first]):.2f} m ahead"})
+        command = Command.stop() if speed == 0.0 else self._command(situation, plan)
+        return Decision(command, plan)
 
     def speed_set(self, current_speed_mps: float) -> tuple[np.ndarray, int]:
         """The configured speeds, the current speed and the nominal speed (mm/s resolution, within
@@ -178,7 +255,7 @@ class ViaPathPlanner(Planner, name="viapath"):
             back = self._way_back(checks, float(speeds[nominal_index]))
             if back is not None:
                 return back
-        if self._compiled_choice():
+        if checks.backend is self.backend and self._compiled_choice():
             return self._choose_compiled(checks, speeds, nominal_index, previous, only_way)
         roots = RootLegs.of(checks, speeds, nominal_index)
         if roots.nominal_is_free and only_way is None:

@@ -1,0 +1,251 @@
+"""The static world: everything the robot can touch that does not move (DESIGN §10).
+
+Source: DESIGN §10 (a static obstacle is a vertical prism in the paper's x-y-t space, velocity 0);
+the shapes come from a known map (walls, boxes, polygons) or from scan returns no person explains.
+
+Representation, and why: a :class:`StaticLayer` is a set of **segments** (M, 2, 2) in the world
+frame, each with a shape id (a point is a segment of length 0). Segments are what maps and scans
+give (a wall, a box's edges, a run of scan returns), and the exact distance from a point or a
+segment to them is closed form (:func:`segment_distances`), which the simulator's contact count uses.
+
+The planner, the guard and the shield check the robot against **discs** sampled along the segments
+(:func:`sample_discs`): a static disc is an obstacle of velocity 0, so every x-y-t check that exists
+for people (legs against oblique cylinders, via points on avoiding lines, the braking sweep) is
+already exact for it, on the numpy and the compiled paths alike, and no planner needs a second kind
+of obstacle. The sampling is conservative by a known, small amount: along a segment cut into pieces
+of length ``h`` (at most ``spacing_m``), discs of radius ``ρ = sqrt(r² + (h/2)²) − r`` at the piece
+ends, inflated by any ``R ≥ r``, cover the segment's capsule of radius R (a point within R of the
+segment is within ``sqrt(R² + (h/2)²) ≤ R + ρ`` of the nearest sample). With the robot radius r =
+0.25 m and h = 0.1 m, ρ = 5 mm. Discs of one shape carry the shape's id, so the planner's way round
+a wall keeps its name from cycle to cycle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+# Static obstacles' ids in a merged obstacle set: far above any tracker's ids, so the two never meet.
+STATIC_ID_BASE = 1 << 40
+
+
+@dataclass(frozen=True)
+class StaticLayer:
+    """Static segments in the world frame; ``shape_ids`` groups them (a box's four edges share one)."""
+
+    segments: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 2)))  # (M, 2, 2) m
+    shape_ids: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))  # (M,)
+    # (M,) m: how far the geometry may lie from each segment (a polyline simplified from scan returns); 0: exact
+    radii_m: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        segments = np.asarray(self.segments, dtype=float)
+        if segments.size == 0:
+            segments = np.zeros((0, 2, 2))
+        if segments.ndim != 3 or segments.shape[1:] != (2, 2):
+            raise ValueError(f"static.segments: expected an (M, 2, 2) array of [[x1, y1], [x2, y2]] rows, "
+                             f"found shape {segments.shape}")
+        ids = np.asarray(self.shape_ids, dtype=np.int64).reshape(-1)
+        if ids.size == 0 and len(segments):
+            ids = np.arange(len(segments), dtype=np.int64)
+        if ids.shape != (len(segments),):
+            raise ValueError(f"static.shape_ids: expected {len(segments)} ids (one per segment), found {ids.size}")
+        object.__setattr__(self, "segments", segments)
+        object.__setattr__(self, "shape_ids", ids)
+        if self.radii_m is not None:
+            radii = np.broadcast_to(np.asarray(self.radii_m, dtype=float), (len(segments),)).copy()
+            if not (np.isfinite(radii).all() and (radii >= 0).all()):
+                raise ValueError("static.radii_m: expected finite numbers >= 0")
+            object.__setattr__(self, "radii_m", radii)
+
+    def __len__(self) -> int:
+        return len(self.segments)
+
+    @classmethod
+    def empty(cls) -> "StaticLayer":
+        return _EMPTY
+
+    @classmethod
+    def of_shapes(cls, shapes: list[np.ndarray]) -> "StaticLayer":
+        """One shape per item, each an (E, 2, 2) array of its edges."""
+        shapes = [np.asarray(s, dtype=float).reshape(-1, 2, 2) for s in shapes]
+        if not shapes:
+            return _EMPTY
+        ids = np.concatenate([np.full(len(s), k, dtype=np.int64) for k, s in enumerate(shapes)])
+        return cls(np.concatenate(shapes), ids)
+
+    @classmethod
+    def of_points(cls, points: np.ndarray, shape_ids: np.ndarray | None = None) -> "StaticLayer":
+        """Points as segments of length 0 (e.g. scan returns)."""
+        points = np.asarray(points, dtype=float).reshape(-1, 2)
+        ids = np.arange(len(points), dtype=np.int64) if shape_ids is None else shape_ids
+        return cls(np.stack([points, points], axis=1), ids)
+
+    def finite(self) -> "StaticLayer":
+        """Without segments that have a NaN or infinite coordinate (a bad row says nothing about where
+        something is; scanners report 'no return' that way)."""
+        ok = np.isfinite(self.segments).all(axis=(1, 2))
+        if ok.all():
+            return self
+        return self.subset(ok)
+
+    def subset(self, mask_or_index) -> "StaticLayer":
+        return StaticLayer(self.segments[mask_or_index], self.shape_ids[mask_or_index],
+                           None if self.radii_m is None else self.radii_m[mask_or_index])
+
+    @property
+    def padding_m(self) -> np.ndarray:
+        return np.zeros(len(self.segments)) if self.radii_m is None else self.radii_m
+
+    def concatenate(self, other: "StaticLayer") -> "StaticLayer":
+        if len(other) == 0:
+            return self
+        if len(self) == 0:
+            return other
+        offset = int(self.shape_ids.max()) + 1 - int(other.shape_ids.min())
+        radii = None if self.radii_m is None and other.radii_m is None else np.concatenate(
+            [self.padding_m, other.padding_m])
+        return StaticLayer(np.concatenate([self.segments, other.segments]),
+                           np.concatenate([self.shape_ids, other.shape_ids + offset]), radii)
+
+    def discs(self, robot_radius_m: float, spacing_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:func:`sample_discs` of this layer, kept for the last (radius, spacing) asked: a map is the same
+        object cycle after cycle."""
+        key = (float(robot_radius_m), float(spacing_m))
+        cached = self.__dict__.get("_discs")
+        if cached is None or cached[0] != key:
+            centres, radii, ids, owner = sample_discs(self.segments, self.shape_ids, *key, with_owner=True)
+            if self.radii_m is not None:
+                radii = radii + self.radii_m[owner]
+            cached = (key, (centres, radii, ids))
+            object.__setattr__(self, "_discs", cached)
+        return cached[1]
+
+
+_EMPTY = StaticLayer()
+
+
+def sample_discs(segments: np.ndarray, shape_ids: np.ndarray, robot_radius_m: float, spacing_m: float,
+                 with_owner: bool = False) -> tuple:
+    """Disc centres (N, 2), radii (N,) and shape ids (N,) covering ``segments`` for any robot radius of at
+    least ``robot_radius_m`` (see the module docstring); a segment of length 0 is one disc of radius 0.
+    With ``with_owner`` also the segment of each disc (N,)."""
+    if len(segments) == 0:
+        empty = (np.zeros((0, 2)), np.zeros(0), np.zeros(0, dtype=np.int64))
+        return (*empty, np.zeros(0, dtype=np.int64)) if with_owner else empty
+    a, b = segments[:, 0], segments[:, 1]
+    lengths = np.hypot(*(b - a).T)
+    pieces = np.maximum(np.ceil(lengths / spacing_m - 1e-9), 1).astype(np.int64)
+    pieces[lengths == 0] = 0
+    counts = pieces + 1
+    counts[lengths == 0] = 1
+    # A polyline's segments share their ends: the second copy of a shared end is left out.
+    shared = np.zeros(len(segments), dtype=bool)
+    shared[1:] = (segments[1:, 0] == segments[:-1, 1]).all(axis=1) & (shape_ids[1:] == shape_ids[:-1]) & (pieces[1:] > 0)
+    owner = np.repeat(np.arange(len(segments)), counts)
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    k = np.arange(len(owner)) - np.repeat(start, counts)
+    fraction = np.where(pieces[owner] > 0, k / np.maximum(pieces[owner], 1), 0.0)
+    centres = a[owner] + fraction[:, None] * (b - a)[owner]
+    unique = ~(shared[owner] & (k == 0))
+    if not unique.all():
+        centres, owner = centres[unique], owner[unique]
+    half_piece = np.where(pieces > 0, lengths / np.maximum(pieces, 1), 0.0) / 2
+    r = float(robot_radius_m)
+    pad = np.sqrt(r * r + half_piece ** 2) - r
+    if with_owner:
+        return centres, pad[owner], shape_ids[owner], owner
+    return centres, pad[owner], shape_ids[owner]
+
+
+def point_segment_distances(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
+    """(P, M) exact distances from points (P, 2) to segments (M, 2, 2)."""
+    a, b = segments[None, :, 0], segments[None, :, 1]
+    d = b - a
+    dd = np.einsum("pmi,pmi->pm", d, d)
+    rel = points[:, None, :] - a
+    t = np.clip(np.einsum("pmi,pmi->pm", rel, d) / np.where(dd > 0, dd, 1.0), 0.0, 1.0)
+    closest = rel - t[..., None] * d
+    return np.hypot(closest[..., 0], closest[..., 1])
+
+
+def segment_distances(starts: np.ndarray, ends: np.ndarray, segments: np.ndarray) -> np.ndarray:
+    """(P, M) exact distances between the segments ``starts[p]``–``ends[p]`` (e.g. the robot centre's motion in
+    one step) and the static segments (M, 2, 2). Two segments that do not cross are closest at an end of
+    one of them; crossing ones are at distance 0."""
+    if len(segments) == 0:
+        return np.full((len(starts), 0), np.inf)
+    moving = np.stack([starts, ends], axis=1)
+    distance = np.minimum(point_segment_distances(starts, segments), point_segment_distances(ends, segments))
+    distance = np.minimum(distance, point_segment_distances(segments[:, 0], moving).T)
+    distance = np.minimum(distance, point_segment_distances(segments[:, 1], moving).T)
+    p, r = starts[:, None, :], (ends - starts)[:, None, :]
+    q, s = segments[None, :, 0], (segments[:, 1] - segments[:, 0])[None]
+    denominator = r[..., 0] * s[..., 1] - r[..., 1] * s[..., 0]
+    qp = q - p
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qp[..., 0] * s[..., 1] - qp[..., 1] * s[..., 0]) / denominator
+        u = (qp[..., 0] * r[..., 1] - qp[..., 1] * r[..., 0]) / denominator
+    crossing = (denominator != 0) & (t >= 0) & (t <= 1) & (u >= 0) & (u <= 1)
+    return np.where(crossing, 0.0, distance)
+
+
+def box_edges(center, size, yaw_rad: float = 0.0) -> np.ndarray:
+    """The four edges (4, 2, 2) of a rectangle of ``size`` (length along ``yaw_rad``, width) at ``center``."""
+    half = np.asarray(size, dtype=float) / 2
+    corners = np.array([[half[0], half[1]], [-half[0], half[1]], [-half[0], -half[1]], [half[0], -half[1]]])
+    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+    corners = corners @ np.array([[c, s], [-s, c]]) + np.asarray(center, dtype=float)
+    return polygon_edges(corners)
+
+
+def polygon_edges(points) -> np.ndarray:
+    """The closed outline (E, 2, 2) of a polygon given by its vertices (E, 2)."""
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    return np.stack([points, np.roll(points, -1, axis=0)], axis=1)
+
+
+def polyline_edges(points) -> np.ndarray:
+    """The open polyline (E - 1, 2, 2) through ``points`` (E, 2)."""
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    return np.stack([points[:-1], points[1:]], axis=1)
+
+
+def merge_close_shapes(layer: StaticLayer, gap_m: float) -> StaticLayer:
+    """The layer with shapes whose bounding boxes come within ``gap_m`` of each other given one id (the
+    smallest): pieces of one thing seen as several (two scanners' views of a box, a wall broken by a
+    shadow) are one shape to go round. Bounding boxes overlap more often than shapes do; a merged shape
+    is only ever a larger thing to go round, never a smaller one."""
+    if len(layer) == 0:
+        return layer
+    ids, inverse = np.unique(layer.shape_ids, return_inverse=True)
+    if len(ids) == 1:
+        return layer
+    points = layer.segments.reshape(-1, 2)
+    owner = np.repeat(inverse, 2)
+    low = np.full((len(ids), 2), np.inf)
+    high = np.full((len(ids), 2), -np.inf)
+    np.minimum.at(low, owner, points)
+    np.maximum.at(high, owner, points)
+    pad = layer.padding_m
+    grow = np.zeros(len(ids))
+    np.maximum.at(grow, inverse, pad)
+    low, high = low - grow[:, None] - gap_m / 2, high + grow[:, None] + gap_m / 2
+    overlap = ((low[:, None, :] <= high[None]) & (low[None] <= high[:, None, :])).all(axis=2)
+    first, second = np.nonzero(np.triu(overlap, 1))
+    parent = np.arange(len(ids))
+    for i, j in zip(first.tolist(), second.tolist()):
+        while parent[i] != i:
+            i = parent[i]
+        while parent[j] != j:
+            j = parent[j]
+        if i != j:
+            parent[max(i, j)] = min(i, j)
+    for k in range(len(parent)):
+        root = k
+        while parent[root] != root:
+            root = parent[root]
+        parent[k] = root
+    return StaticLayer(layer.segments, ids[parent][inverse], layer.radii_m)
