@@ -107,3 +107,16 @@ def test_every_command_was_finite_and_inside_the_limits(paper_runs, tmp_path_fac
         assert np.all((v >= 0) & (v <= 0.6 + 1e-9)) and np.all(np.abs(w) <= 2.0 + 1e-9)
         assert np.all(np.abs(v - trace["speed_mps"][:-1]) <= 0.08 + 1e-6)
         assert "0 without the node's command in time" in stderr, stderr
+
+
+def test_the_table_in_the_docs_is_what_the_runs_print(paper_runs, in_process):
+    """docs/ros2.md's table is generated (benchmarks/ros2_paper_table.py), never typed: the same runs give it."""
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    sys.path.insert(0, str(root / "benchmarks"))
+    from ros2_paper_table import table
+
+    text = table({name: paper_runs[name][0] for name in PAPER}, {name: in_process[name] for name in PAPER})
+    assert text in (root / "docs" / "ros2.md").read_text(), "regenerate it: python benchmarks/ros2_paper_table.py\n" + text
