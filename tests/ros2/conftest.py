@@ -83,7 +83,7 @@ class Launcher:
             self.groups["play"] = {  # the commands of docs/ros2.md, "Real scans" (+ --rate, --lockstep, --status-log)
                 "node": procs.start("play_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(PLAY_PARAMS)), domain),
                 "play": procs.start("play_play", viapath("ros2", "play", str(BAG), "--topic", "right_scan", "--rate", "4",
-                                                         "--lockstep", "--status-log", str(record)), domain),
+                                                         "--lockstep", "--wait-s", "180", "--status-log", str(record)), domain),
                 "record": record,
             }
             refusing = folder / "refusing.yaml"  # the bag's frame_id is not laser_refusing: every scan refused
@@ -92,7 +92,7 @@ class Launcher:
             self.groups["play_refused"] = {
                 "node": procs.start("refused_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(refusing)), domain),
                 "play": procs.start("refused_play", viapath("ros2", "play", str(BAG), "--topic", "right_scan", "--rate", "4",
-                                                            "--lockstep"), domain),
+                                                            "--lockstep", "--wait-s", "180"), domain),
             }
 
     def paper(self):
@@ -136,7 +136,7 @@ class Launcher:
         if "play_refused" not in self.groups:
             pytest.skip(f"{BAG} not found (../shared/data absent)")
         group = self.groups["play_refused"]
-        code = self.procs.wait(group["play"], 150)
+        code = self.procs.wait(group["play"], 300)
         self.procs.stop(group["node"])
         return code, self.procs.output(group["play"])[1]
 
@@ -145,7 +145,7 @@ class Launcher:
             pytest.skip(f"{BAG} not found (../shared/data absent)")
         if "play" not in self.results:
             group = self.groups["play"]
-            code = self.procs.wait(group["play"], 150)
+            code = self.procs.wait(group["play"], 300)
             _, err = self.procs.output(group["play"])
             assert code == 0, err
             self.procs.stop(group["node"])

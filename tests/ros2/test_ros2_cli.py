@@ -28,7 +28,7 @@ def test_bad_parameters_are_refused_by_name(tmp_path):
     try:
         started = {name: procs.start(name, viapath("ros2", "node", *args), domain_id()) for name, (args, _) in cases.items()}
         for name, proc in started.items():
-            assert procs.wait(proc, 90) == 2, procs.output(proc)
+            assert procs.wait(proc, 240) == 2, procs.output(proc)  # slow only on a loaded machine
             _, err = procs.output(proc)
             assert cases[name][1] in err
             assert "active: commanding" not in err
@@ -62,7 +62,7 @@ def test_every_mistake_is_named_and_values_that_exhaust_memory_are_refused(tmp_p
     try:
         started = {name: procs.start(name, viapath("ros2", "node", *args), domain_id()) for name, (args, _) in cases.items()}
         for name, proc in started.items():
-            assert procs.wait(proc, 90) == 2, procs.output(proc)
+            assert procs.wait(proc, 240) == 2, procs.output(proc)  # slow only on a loaded machine
             _, err = procs.output(proc)
             assert all(words in err for words in cases[name][1]), err
             assert "error: None" not in err and "active: commanding" not in err
