@@ -2,7 +2,7 @@
 on many more generated observations, counting instead of stopping at the first failure.
 
 Usage: python benchmarks/fuzz_entry.py [--cases 100000] [--planners all] [--laser-cases 5000]
-                                       [--input-cases 300] [--construction-cases 300] [--seed 0] [--json]
+                                       [--input-cases 300] [--construction-cases 300] [--ros-cases 300] [--seed 0] [--json]
 
 Observations come from the same hypothesis strategy as the tests (tests/robustness/_fuzz.py:
 NaN / inf / negative / huge fields and wrong shapes mixed into valid ones, five cycles per
@@ -17,6 +17,12 @@ hostile scenario texts (alias bombs, deep nesting, huge integer literals, far co
 tests/robustness/_hostile.py) to the scenario and preset readers (each must be refused with a short
 message naming the file and field; the slowest refusal is reported); the construction part builds
 planners from bad descriptions (refused) and from option values inside their bounds (must plan).
+The ROS part drives the ROS 2 node's cycle (viapath.ros2.core.PlannerCore, no rclpy) with generated episodes: an honest base
+and odometry that starts to lie (twist beyond the limits, never commanded, not borne out by the pose,
+pose and heading jumps, quaternions that are no rotation), malformed scans (first ones included) and
+empty or bad paths; violations: an exception, a command not finite or outside the limits, a command
+faster than one cycle's braking from the last command while the status reports an odometry fault
+or no path.
 """
 
 from __future__ import annotations
@@ -259,6 +265,90 @@ def fuzz_construction(cases: int, base_seed: int) -> dict:
             "wall_s": time.perf_counter() - started, "violation_examples": examples[:5]}
 
 
+def fuzz_ros(cases: int, base_seed: int) -> dict:
+    """Generated hostile episodes through the ROS 2 node's cycle logic (see the module notes)."""
+    import math
+
+    from hypothesis import strategies as st
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "ros2"))
+    from test_ros2_hostile import DT, FRAMES, SCANNERS, STEP, Robot, make_core  # noqa: E402
+
+    counts: Counter = Counter()
+    examples: list[str] = []
+    number = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.floats(-2.0, 2.0))
+    events = st.lists(st.one_of(
+        st.tuples(st.just("honest")),
+        st.tuples(st.just("twist"), number, number),
+        st.tuples(st.just("jump"), number, number, number),
+        st.tuples(st.just("quaternion"), st.tuples(number, number, number, number)),
+        st.tuples(st.just("scan"), st.integers(0, 2000), number, number, number),
+        st.tuples(st.just("path"), st.lists(st.tuples(number, number), max_size=4))), min_size=5, max_size=25)
+
+    @seed(base_seed)
+    @settings(max_examples=cases, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+    @given(events, st.sampled_from(["urg04lx", "from_message"]))
+    def run(episode, geometry):
+        core = make_core(scan_geometry=geometry)
+        robot = Robot(people=[(2.0, 0.3)])
+        t = 1.0
+        counts["episodes"] += 1
+        for event in episode:
+            kind = event[0]
+            odom = [robot.x, robot.y, robot.heading, robot.v, robot.w]
+            quaternion = (0.0, 0.0, math.sin(0.5 * robot.heading), math.cos(0.5 * robot.heading))
+            if kind == "twist":
+                odom[3], odom[4] = event[1], event[2]
+            elif kind == "jump":
+                odom[0], odom[1], odom[2] = odom[0] + event[1], odom[1] + event[2], odom[2] + event[3]
+                quaternion = None
+            elif kind == "quaternion":
+                quaternion = event[1]
+            try:
+                if quaternion is None:
+                    core.on_odometry(t, t, "odom", *odom)
+                else:
+                    core.on_odometry_quaternion(t, t, "odom", odom[0], odom[1], quaternion, odom[3], odom[4])
+                for i, (s, ranges) in enumerate(zip(SCANNERS, robot.scans(), strict=True)):
+                    if kind == "scan" and i == 0:
+                        beams, increment, low, high = event[1:]
+                        core.on_scan(i, t, t, FRAMES[i], s.angle_min_rad, increment, np.full(beams, 2.0), low, high)
+                    else:
+                        core.on_scan(i, t, t, FRAMES[i], s.angle_min_rad, s.angle_increment_rad, ranges)
+                if kind == "path":
+                    core.on_path("odom", np.array(event[1], dtype=float).reshape(-1, 2))
+                before = core.last_command
+                result = core.cycle(t)
+            except Exception as error:  # noqa: BLE001 - counted
+                counts["VIOLATION exception"] += 1
+                examples.append(f"{kind}: {type(error).__name__}: {error}")
+                return
+            counts["cycles"] += 1
+            c = result.command
+            lim = core.limits
+            if not (math.isfinite(c.speed_mps) and math.isfinite(c.turn_rate_radps) and 0.0 <= c.speed_mps <= lim.max_speed_mps
+                    and abs(c.turn_rate_radps) <= lim.max_turn_rate_radps):
+                counts["VIOLATION bad command"] += 1
+                examples.append(f"{kind}: {c}")
+            faults = [r for r in result.reasons if r.startswith(("odometry fault", "no designated path", "designated path"))]
+            if faults:
+                counts["braking for " + faults[0].split(":")[0]] += 1
+                if c.speed_mps > max(0.0, before.speed_mps - STEP) + 1e-9:
+                    counts["VIOLATION not braking on a fault"] += 1
+                    examples.append(f"{kind}: {c} after {before} ({faults[0]})")
+            robot.drive(c)
+            t += DT
+        counts["odometry refused"] += sum(core.odom_refused.values())
+        counts["scans refused"] += sum(sum(h.refused.values()) for h in core.health)
+        counts["paths refused"] += core.paths_refused
+
+    started = time.perf_counter()
+    cpu = time.process_time()
+    run()
+    return {"planner": "ros2 node cycle", **dict(counts), "wall_s": time.perf_counter() - started,
+            "cpu_s": time.process_time() - cpu, "violation_examples": examples[:5]}
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=100_000, help="observations in total, over the planners")
@@ -266,6 +356,7 @@ def main(argv=None) -> int:
     parser.add_argument("--laser-cases", type=int, default=5_000)
     parser.add_argument("--input-cases", type=int, default=300, help="hostile scenario/preset texts")
     parser.add_argument("--construction-cases", type=int, default=300, help="generated planner constructions")
+    parser.add_argument("--ros-cases", type=int, default=300, help="generated episodes through the ROS 2 node's cycle")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
@@ -284,6 +375,10 @@ def main(argv=None) -> int:
             results.append(fuzz(count, args.seed))
             if not args.json:
                 print(json.dumps(results[-1]), flush=True)
+    if args.ros_cases:
+        results.append(fuzz_ros(args.ros_cases, args.seed))
+        if not args.json:
+            print(json.dumps(results[-1]), flush=True)
     total = sum(r.get("observations", 0) for r in results)
     violations = sum(v for r in results for k, v in r.items() if k.startswith("VIOLATION"))
     summary = {"observations": total, "violations": violations, "results": results}

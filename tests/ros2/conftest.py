@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -63,15 +64,7 @@ def mixed_scenario(folder: Path) -> tuple[Path, dict]:
     return write_suite([scenario], folder / "mixed")[0], scenario
 
 
-PLAY_PARAMS = """viapath:
-  ros__parameters:
-    scanner_names: ["laser"]
-    scanners:
-      laser: {topic: scan_front, frame_id: "", mount_x_m: 0.0, mount_y_m: 0.0, mount_yaw_rad: 0.0}
-    scan_geometry: from_message
-    detector: legs
-    tracker_acceleration_sigma_mps2: 0.5
-"""
+PLAY_PARAMS = Path(__file__).resolve().parents[2] / "docs" / "ros2_real_scans.yaml"  # the documented recipe's file
 
 
 class Launcher:
@@ -105,16 +98,31 @@ class Launcher:
         from viapath.ros2 import interfaces
 
         interfaces.build()  # once, before any process needs it (about 45 s on a fresh machine)
+        domain = domain_id()
+        out = folder / "hostile.json"
+        self.groups["hostile"] = {
+            "node": procs.start("hostile_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(PLAY_PARAMS)),
+                                domain),
+            "driver": procs.start("hostile_driver", [sys.executable, str(Path(__file__).with_name("_hostile_driver.py")),
+                                                     str(out)], domain),
+            "out": out,
+        }
         if BAG.is_file():
-            params = folder / "play.yaml"
-            params.write_text(PLAY_PARAMS)
             domain = domain_id()
             record = folder / "play_status.jsonl"
-            self.groups["play"] = {
-                "node": procs.start("play_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(params)), domain),
+            self.groups["play"] = {  # the commands of docs/ros2.md, "Real scans" (+ --rate, --lockstep, --status-log)
+                "node": procs.start("play_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(PLAY_PARAMS)), domain),
                 "play": procs.start("play_play", viapath("ros2", "play", str(BAG), "--topic", "right_scan", "--rate", "4",
-                                                         "--lockstep", "--status-log", str(record)), domain),
+                                                         "--lockstep", "--wait-s", "180", "--status-log", str(record)), domain),
                 "record": record,
+            }
+            refusing = folder / "refusing.yaml"  # the bag's frame_id is not laser_refusing: every scan refused
+            refusing.write_text(PLAY_PARAMS.read_text().replace('frame_id: ""', "frame_id: laser_refusing"))
+            domain = domain_id()
+            self.groups["play_refused"] = {
+                "node": procs.start("refused_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(refusing)), domain),
+                "play": procs.start("refused_play", viapath("ros2", "play", str(BAG), "--topic", "right_scan", "--rate", "4",
+                                                            "--lockstep", "--wait-s", "180"), domain),
             }
 
     def start_nav2(self) -> None:
@@ -173,12 +181,32 @@ class Launcher:
             self.results["faults"] = out
         return self.results["faults"]
 
+    def hostile(self) -> dict:
+        """The phases recorded by _hostile_driver.py against a node run with the real-scans parameters."""
+        if "hostile" not in self.results:
+            group = self.groups["hostile"]
+            code = self.procs.wait(group["driver"], 240)
+            _, err = self.procs.output(group["driver"])
+            node_alive = group["node"].poll() is None
+            self.procs.stop(group["node"])
+            assert code == 0, err
+            self.results["hostile"] = (json.loads(group["out"].read_text()), node_alive, self.procs.output(group["node"])[1])
+        return self.results["hostile"]
+
+    def play_refused(self) -> tuple[int, str]:
+        if "play_refused" not in self.groups:
+            pytest.skip(f"{BAG} not found (../shared/data absent)")
+        group = self.groups["play_refused"]
+        code = self.procs.wait(group["play"], 300)
+        self.procs.stop(group["node"])
+        return code, self.procs.output(group["play"])[1]
+
     def play(self):
         if "play" not in self.groups:
             pytest.skip(f"{BAG} not found (../shared/data absent)")
         if "play" not in self.results:
             group = self.groups["play"]
-            code = self.procs.wait(group["play"], 150)
+            code = self.procs.wait(group["play"], 300)
             _, err = self.procs.output(group["play"])
             assert code == 0, err
             self.procs.stop(group["node"])

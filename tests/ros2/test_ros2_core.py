@@ -33,7 +33,14 @@ def scans_at(pose, people=np.array([[2.0, 0.0]])):
     return [simulate_scan(s, np.asarray(pose, float), people, radii) for s in SCANNERS]
 
 
-def feed(core, t, pose=(0.0, 0.0, 0.0), speed=0.2, scans=None, which=(0, 1), odom=True):
+def feed(core, t, pose=None, speed=0.2, scans=None, which=(0, 1), odom=True):
+    """Odometry and scans at ``t``; without ``pose`` the robot drives along x at ``speed`` (honest odometry:
+    the pose moves as the twist says)."""
+    if pose is None:
+        last = getattr(core, "_fed", None)
+        x = 0.0 if last is None else last[1] + 0.5 * (last[2] + speed) * (t - last[0])
+        core._fed = (t, x, speed)
+        pose = (x, 0.0, 0.0)
     if odom:
         core.on_odometry(t, t, "odom", pose[0], pose[1], pose[2], speed, 0.0)
     scans = scans_at(pose) if scans is None else scans
@@ -44,13 +51,18 @@ def feed(core, t, pose=(0.0, 0.0, 0.0), speed=0.2, scans=None, which=(0, 1), odo
     return due
 
 
-def check_command(core, command, measured_speed):
+def check_command(core, command, measured_speed, before=None):
+    """Finite, inside the limits, at most one cycle's acceleration above the measured speed and at most one
+    cycle's braking below the lower of it and the command ``before`` (when given)."""
     lim = core.limits
     dt = core.settings.cycle_period_s
     assert math.isfinite(command.speed_mps) and math.isfinite(command.turn_rate_radps)
     assert 0.0 <= command.speed_mps <= lim.max_speed_mps + 1e-12
     assert abs(command.turn_rate_radps) <= lim.max_turn_rate_radps + 1e-12
-    assert abs(command.speed_mps - min(max(measured_speed, 0.0), lim.max_speed_mps)) <= lim.max_accel_mps2 * dt + 1e-9
+    measured = min(max(measured_speed, 0.0), lim.max_speed_mps)
+    assert command.speed_mps <= measured + lim.max_accel_mps2 * dt + 1e-9
+    low = measured if before is None else min(measured, before.speed_mps)
+    assert command.speed_mps >= low - lim.max_accel_mps2 * dt - 1e-9
 
 
 def test_a_normal_cycle_drives_and_tracks_the_person():
@@ -95,15 +107,18 @@ def test_inf_readings_are_no_return_not_a_failure():
 
 
 def test_no_scan_brakes_to_a_stop_within_the_limits():
-    core = make_core()
-    for k in range(3):
-        feed(core, 1.0 + 0.1 * k, speed=0.5)
-        core.cycle(1.0 + 0.1 * k)
+    core = make_core(nominal_speed_mps=0.5)
     speed = 0.5
+    for k in range(3):
+        feed(core, 1.0 + 0.1 * k, speed=speed)
+        speed = core.cycle(1.0 + 0.1 * k).command.speed_mps
+    speed = start = core.last_command.speed_mps  # the base follows the commands
     speeds = []
+    x = core._fed[1]
     for k in range(12):  # scans stop; odometry goes on, the robot slows as commanded
         t = 1.3 + 0.1 * k
-        core.on_odometry(t, t, "odom", 0.0, 0.0, 0.0, speed, 0.0)
+        x += 0.1 * speed
+        core.on_odometry(t, t, "odom", x, 0.0, 0.0, speed, 0.0)
         result = core.watchdog(t)
         if t - 1.2 <= 0.3 + 1e-9:
             assert result is None  # within the timeout the scan cycles are still expected
@@ -113,8 +128,8 @@ def test_no_scan_brakes_to_a_stop_within_the_limits():
         speed = result.command.speed_mps
         speeds.append(speed)
     assert speeds[-1] == 0.0 and result.mode == "stopped"
-    # hardest braking: 0.5 m/s at 0.8 m/s² is 0.625 s, so the seventh tick is at rest
-    assert speeds.index(0.0) == math.ceil(0.5 / (0.8 * 0.1) - 1e-9) - 1
+    # hardest braking: at 0.8 m/s² one tick takes 0.08 m/s off the speed the robot had when scans stopped
+    assert speeds.index(0.0) == math.ceil(start / (0.8 * 0.1) - 1e-9) - 1
 
 
 def test_no_odometry_brakes_from_the_last_command_to_zero():
@@ -182,8 +197,9 @@ def test_time_jump_backwards_resets_and_holds_the_robot():
     for k in range(10):
         t = 3.0 + 0.1 * k  # the clock went back 2.5 s
         feed(core, t, speed=speed)
+        before = core.last_command
         result = core.cycle(t)
-        check_command(core, result.command, speed)
+        check_command(core, result.command, speed, before)
         speed = result.command.speed_mps
         speeds.append((t, speed, result.mode))
     assert any("time jump backwards" in e for e in core.events)
@@ -209,13 +225,20 @@ def test_any_scan_and_odometry_give_a_finite_command_inside_the_limits(garbage, 
         core.on_odometry(t, t, "odom", 0.5, 0.1, heading, speed, turn)
         core.on_scan(0, t, t, FRAMES[0], s.angle_min_rad, s.angle_increment_rad, ranges)
         core.on_scan(1, t, t, FRAMES[1], s.angle_min_rad, s.angle_increment_rad, np.roll(ranges, 7))
+        before = core.last_command  # a stop before anything was commanded
         result = core.cycle(t)
         c = result.command
         assert math.isfinite(c.speed_mps) and math.isfinite(c.turn_rate_radps)
         assert 0.0 <= c.speed_mps <= core.limits.max_speed_mps
         assert abs(c.turn_rate_radps) <= core.limits.max_turn_rate_radps
-        v_meas = min(max(speed, 0.0), core.limits.max_speed_mps)
-        assert abs(c.speed_mps - v_meas) <= core.limits.max_accel_mps2 * 0.1 + 1e-9
+        step = core.limits.max_accel_mps2 * 0.1 + 1e-9
+        if core.odometry_trusted(t):  # within one cycle's acceleration of the measured speed, or slower
+            v_meas = min(max(speed, 0.0), core.limits.max_speed_mps)
+            assert c.speed_mps <= v_meas + step
+            assert c.speed_mps >= min(v_meas, before.speed_mps) - step
+        else:  # a refused measurement is no base: braking from what was commanded
+            assert "odometry" in result.status["planner"]["reasons"]
+            assert c.speed_mps <= max(0.0, before.speed_mps - step + 2e-9)
 
 
 @pytest.mark.parametrize("use_shield, expected", [("default", True), ("off", False)])

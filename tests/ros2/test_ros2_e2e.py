@@ -94,6 +94,9 @@ def test_metrics_agree_with_viapath_run(paper_runs, in_process, name):
     assert metrics["shield"] == reference["shield"] and metrics["shield_interventions"] == reference["shield_interventions"]
     assert abs(metrics["track_samples"] - reference["track_samples"]) <= 3
     assert abs(metrics["track_position_rmse_m"] - reference["track_position_rmse_m"]) <= 0.005
+    for key in ("perception_time_p50_ms", "perception_time_p99_ms", "plan_time_p50_ms", "plan_time_p99_ms"):
+        # measured on both sides (null only where a value does not exist); the node's are its own cycle's parts
+        assert reference[key] is not None and metrics[key] is not None and 0.0 < metrics[key] < 1000.0, key
 
 
 def test_every_command_was_finite_and_inside_the_limits(paper_runs, tmp_path_factory):
@@ -104,3 +107,16 @@ def test_every_command_was_finite_and_inside_the_limits(paper_runs, tmp_path_fac
         assert np.all((v >= 0) & (v <= 0.6 + 1e-9)) and np.all(np.abs(w) <= 2.0 + 1e-9)
         assert np.all(np.abs(v - trace["speed_mps"][:-1]) <= 0.08 + 1e-6)
         assert "0 without the node's command in time" in stderr, stderr
+
+
+def test_the_table_in_the_docs_is_what_the_runs_print(paper_runs, in_process):
+    """docs/ros2.md's table is generated (benchmarks/ros2_paper_table.py), never typed: the same runs give it."""
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    sys.path.insert(0, str(root / "benchmarks"))
+    from ros2_paper_table import table
+
+    text = table({name: paper_runs[name][0] for name in PAPER}, {name: in_process[name] for name in PAPER})
+    assert text in (root / "docs" / "ros2.md").read_text(), "regenerate it: python benchmarks/ros2_paper_table.py\n" + text

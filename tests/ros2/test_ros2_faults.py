@@ -95,3 +95,51 @@ def test_rear_scanner_silent_or_short_caps_the_speed(fault_runs):
         assert np.all(capped <= CAP_MPS + 1e-6) and capped.min() >= CAP_MPS - 0.02  # slower, but still driving
         assert speed[window(trace, end + 0.4, end + 1.0)].max() >= 0.25  # and back to nominal after
     assert any("length" in s.get("reasons", "") or "silent: rear" in s.get("reasons", "") for s in statuses)
+
+
+@pytest.fixture(scope="module")
+def hostile_run(ros2_launcher):
+    return ros2_launcher.hostile()
+
+
+def _planner(phase):
+    return [s for s in phase["statuses"] if s["_name"] == "planner"]
+
+
+def test_a_malformed_first_scan_is_refused_and_the_node_lives_on(hostile_run):
+    phases, node_alive, node_err = hostile_run
+    assert node_alive, node_err[-2000:]
+    scanner = [s for s in phases["malformed_first_scan"]["statuses"] + phases["driving"]["statuses"]
+               if s["_name"] == "scanner laser"]
+    assert any("layout: 1" in s["refused"] and "not below range_max" in s["last_problem"] for s in scanner), scanner[-1:]
+    assert phases["driving"]["commands"][-1][1] >= 0.15  # and it drives on the good scans that follow
+
+
+def test_a_zero_quaternion_is_an_odometry_fault_and_the_robot_brakes(hostile_run):
+    phases, _, _ = hostile_run
+    statuses = _planner(phases["zero_quaternion"])
+    assert any("odometry fault: orientation" in s["reasons"] for s in statuses), [s["reasons"] for s in statuses]
+    speeds = [c[1] for c in phases["zero_quaternion"]["commands"]]
+    assert speeds and all(b <= a + 1e-9 for a, b in zip(speeds[:-1], speeds[1:]))
+    assert phases["after_quaternion"]["commands"][-1][1] >= 0.15  # driving again after reset_hold_s
+
+
+def test_an_empty_path_stops_the_robot(hostile_run):
+    phases, _, _ = hostile_run
+    statuses = _planner(phases["empty_path"])
+    assert any("designated path cleared by an empty path" in s["reasons"] for s in statuses)
+    assert phases["empty_path"]["commands"][-1][1] == 0.0
+
+
+def test_when_clock_and_inputs_stop_the_node_still_brakes_on_the_wall_clock(hostile_run):
+    phases, _, _ = hostile_run
+    phase = phases["clock_stops"]
+    stop_wall, speed = phase["stopped_at_wall"]["wall"], phase["stopped_at_wall"]["speed"]
+    assert speed >= 0.15
+    after = [(w - stop_wall, v) for w, v, _ in phase["commands"] if w > stop_wall]
+    assert after, "no command after /clock and the inputs stopped"
+    assert 0.3 <= after[0][0] <= 1.5, after[:3]  # wall_timeout_s (0.5 s) after the last input, give or take a load
+    speeds = [v for _, v in after]
+    assert speeds[0] <= speed - 0.08 + 1e-6 and all(b <= a + 1e-9 for a, b in zip(speeds[:-1], speeds[1:]))
+    assert speeds[-1] == 0.0
+    assert any("of wall time" in s["reasons"] and s["source"] == "wall watchdog" for s in _planner(phase))

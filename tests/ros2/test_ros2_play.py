@@ -69,3 +69,10 @@ def test_node_tracks_match_viapath_scans(play_tracks, reference):
     # Identical input and code: every scan's confirmed tracks agree to the centimetre, except where
     # the node missed a scan at start-up (its tracker then runs one cycle behind for a while).
     assert same >= 0.9 * len(with_tracks), f"{same} of {len(with_tracks)} scans agree"
+
+
+def test_play_fails_loudly_when_the_node_refuses_every_scan(ros2_launcher):
+    """A node that takes none of the scans (here: another frame_id) is a failed run, with the node's reason."""
+    code, err = ros2_launcher.play_refused()
+    assert code == 4, err
+    assert "error: the node ran no cycle" in err and "frame_id" in err and "laser_refusing" in err

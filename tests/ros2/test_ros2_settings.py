@@ -103,3 +103,56 @@ def test_the_shipped_example_params_file_is_valid():
     assert example.is_file()
     settings = validate(read_params_file(example))
     assert settings.scan_timeout_s == 0.3 and settings.odom_timeout_s == 0.5
+
+
+def test_every_mistake_is_reported_not_only_the_first(tmp_path):
+    path = tmp_path / "two.yaml"
+    path.write_text("viapath:\n  ros__parameters:\n    nominal_speed_mps: -1.0\n    odom_topc: x\n"
+                    "    planner:\n      rollout_s: 1.0e9\n      weights: {k1: -2}\n")
+    with pytest.raises(ParameterError) as caught:
+        validate(read_params_file(path))
+    named = [line.split(":")[0] for line in caught.value.errors]
+    assert sorted(named) == sorted(["parameter nominal_speed_mps", "parameter odom_topc", "parameter planner.rollout_s",
+                                    "parameter planner.weights.k1"]), caught.value.errors
+    assert str(caught.value).count("\n") == 3
+
+
+@pytest.mark.parametrize("values, named", [
+    ({"planner.rollout_s": 1e9}, "planner.rollout_s"),
+    ({"planner.rollout_dt_s": 1e-9}, "planner.rollout_dt_s"),
+    ({"planner.escape_s": 1e9}, "planner.escape_s"),
+    ({"planner.escape_dt_s": 1e-9}, "planner.escape_dt_s"),
+    ({"planner.rollout_s": 30.0, "planner.rollout_dt_s": 0.01}, "planner.rollout_s"),  # 3000 steps
+    ({"planner.escape_s": 25.0, "planner.escape_dt_s": 0.01}, "planner.escape_s"),
+])
+def test_roll_outs_that_would_exhaust_memory_are_refused(values, named):
+    with pytest.raises(ParameterError, match=f"parameter {named}:"):
+        validate(values)
+    validate({"planner.rollout_s": 20.0, "planner.rollout_dt_s": 0.01})  # 2000 steps: the most allowed
+
+
+from hypothesis import given, settings as hsettings, strategies as st  # noqa: E402
+
+NUMERIC = [o for o in all_options() if isinstance(o.default, float) and (o.minimum is not None or o.maximum is not None)]
+
+
+@hsettings(max_examples=40, deadline=None, derandomize=True)
+@given(chosen=st.lists(st.sampled_from(NUMERIC), min_size=1, max_size=6, unique_by=lambda o: o.name),
+       how=st.sampled_from(["below", "above", "text", "nan"]))
+def test_generated_parameter_sets_name_every_bad_value(chosen, how):
+    values = {}
+    for o in chosen:
+        if how == "below" and o.minimum is not None:
+            values[o.name] = o.minimum - 1.0
+        elif how == "above" and o.maximum is not None:
+            values[o.name] = o.maximum + 1.0
+        elif how == "text":
+            values[o.name] = "fast"
+        elif how == "nan":
+            values[o.name] = float("nan")
+    if not values:
+        return
+    with pytest.raises(ParameterError) as caught:
+        validate(values)
+    for name in values:
+        assert any(line.startswith(f"parameter {name}:") for line in caught.value.errors), (name, caught.value.errors)

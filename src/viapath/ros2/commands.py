@@ -171,7 +171,9 @@ def play(
     lockstep: bool = typer.Option(False, "--lockstep", help="Wait for the node's cycle on each scan before the next."),
     status_log: Optional[Path] = typer.Option(None, "--status-log", help="Write the node's planner statuses (JSON lines)."),
 ) -> None:
-    """Publish a recording's scans with their timing (and /clock), so the node tracks real people."""
+    """Publish a recording's scans with their timing (and /clock), so the node tracks real people.
+
+    Exits 4 when the node ran no cycle on them (it refused every scan, or no node reported)."""
     import math
 
     from viapath.ros2.play import run_play

@@ -5,7 +5,9 @@ Source: REP 103 (x forward, y left, yaw counter-clockwise), REP 117 (LaserScan: 
 that the pure helpers (yaw, path files) work without rclpy.
 
 What we chose:
-* Yaw from a quaternion is the rotation about z (roll and pitch are ignored: a planar robot).
+* Yaw from a quaternion is the rotation about z (roll and pitch are ignored: a planar robot). A
+  quaternion that is not finite or not of unit length (within ``QUATERNION_TOLERANCE``; (0, 0, 0, 0)
+  included) is no orientation: :func:`checked_yaw` refuses it rather than read some yaw from it.
 * A path file is a built-in scenario name, a scenario YAML (its ``path:`` block, widths included),
   a YAML map ``{waypoints: [[x, y], ...], half_width: w}`` / a plain YAML list of [x, y], or a CSV
   / whitespace text of x y rows.
@@ -21,12 +23,26 @@ import numpy as np
 from viapath.static import StaticLayer
 
 
+QUATERNION_TOLERANCE = 0.01  # |norm - 1| above this is not a rotation (ROS producers normalise to ~1e-9)
+
+
 class PathFileError(ValueError):
     """A path file that cannot be used; the message names the file."""
 
 
 def yaw_from_quaternion(x: float, y: float, z: float, w: float) -> float:
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def checked_yaw(x: float, y: float, z: float, w: float) -> float:
+    """Yaw of a unit quaternion; ``ValueError`` saying why for one that is not finite or not of unit length."""
+    values = (float(x), float(y), float(z), float(w))
+    if not all(math.isfinite(v) for v in values):
+        raise ValueError(f"quaternion {values} is not finite")
+    norm = math.sqrt(sum(v * v for v in values))
+    if abs(norm - 1.0) > QUATERNION_TOLERANCE:
+        raise ValueError(f"quaternion ({', '.join(f'{v:.4g}' for v in values)}) has length {norm:.4g}, not 1")
+    return yaw_from_quaternion(*(v / norm for v in values))
 
 
 def quaternion_from_yaw(yaw: float) -> tuple[float, float, float, float]:
@@ -121,6 +137,12 @@ def waypoints_from_path(msg) -> np.ndarray:
     return np.array([[p.pose.position.x, p.pose.position.y] for p in msg.poses], dtype=float).reshape(-1, 2)
 
 
+def orientations_from_path(msg) -> np.ndarray:
+    """(N, 4) quaternions (x, y, z, w) of a ``nav_msgs/Path``'s poses."""
+    return np.array([[p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z, p.pose.orientation.w]
+                     for p in msg.poses], dtype=float).reshape(-1, 4)
+
+
 def laser_scan(frame_id: str, stamp, angle_min: float, angle_increment: float, ranges, range_min: float,
                range_max: float, scan_time: float = 0.1):
     from sensor_msgs.msg import LaserScan
@@ -153,10 +175,11 @@ def odometry(frame_id: str, child_frame_id: str, stamp, x: float, y: float, yaw:
     return msg
 
 
-def odometry_values(msg) -> tuple[float, float, float, float, float]:
-    """(x, y, yaw, forward speed, turn rate) of a ``nav_msgs/Odometry`` (twist in the child frame)."""
+def odometry_values(msg) -> tuple[float, float, tuple[float, float, float, float], float, float]:
+    """(x, y, quaternion (x, y, z, w), forward speed, turn rate) of a ``nav_msgs/Odometry`` (twist in the
+    child frame); the quaternion is checked by the core (:func:`checked_yaw`)."""
     p, q, t = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist
-    return float(p.x), float(p.y), yaw_from_quaternion(q.x, q.y, q.z, q.w), float(t.linear.x), float(t.angular.z)
+    return float(p.x), float(p.y), (float(q.x), float(q.y), float(q.z), float(q.w)), float(t.linear.x), float(t.angular.z)
 
 
 def occupancy_layer(cells: np.ndarray, resolution_m: float, origin_x: float, origin_y: float, origin_yaw: float,
@@ -190,4 +213,4 @@ def occupancy_layer_from_message(msg, threshold: int = 65) -> StaticLayer:
     q = origin.orientation
     cells = np.asarray(msg.data, dtype=np.int16).reshape(int(info.height), int(info.width))
     return occupancy_layer(cells, float(info.resolution), float(origin.position.x), float(origin.position.y),
-                           yaw_from_quaternion(q.x, q.y, q.z, q.w), threshold)
+                           checked_yaw(q.x, q.y, q.z, q.w), threshold)

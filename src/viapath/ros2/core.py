@@ -16,10 +16,28 @@ What we chose where the sources are silent:
 * **Bad scans** are refused and counted per reason: wrong frame_id, a beam count or angle range
   other than the scanner's, a stamp older than the scanner's previous one, more than
   ``max_invalid_fraction`` of NaN / zero readings (a failing scanner; +inf is "no return" and fine).
-  A scanner with no good scan for ``scan_timeout_s`` is *silent*.
+  With ``scan_geometry: from_message`` the first good scan sets the layout, so a first scan whose
+  layout is no scanner's (range_min not below range_max, beams × increment beyond a full turn, a
+  non-positive increment) is refused (``layout``) and the next one tried. A scan that cannot be read
+  at all is refused as ``error``: no message ends the node. A scanner with no good scan for
+  ``scan_timeout_s`` is *silent*.
+* **Odometry that lies** is a fault: a twist beyond the limits (plus ``odom_speed_tolerance_mps`` /
+  ``odom_turn_tolerance_radps``), above every speed (or outside the turn rates) commanded in the last
+  ``odom_timeout_s`` once the node has driven, a twist its own pose change does not bear out, a
+  quaternion that is no rotation: the message is refused. A pose or heading that moves further than
+  the twist explains is a jump: kept as the new reference, tracks reset, the robot held for
+  ``reset_hold_s``. Either way the robot brakes for ``reset_hold_s`` (status: "odometry fault: …"),
+  from the last *commanded* speed: a faulty measurement is never the base of a command. (The first
+  message after start or a reset has nothing to be compared with but the limits.)
+* **The designated path**: an empty ``nav_msgs/Path`` clears it (the robot brakes to a stop, status
+  "designated path cleared by an empty path"); a path with a NaN position, a bad quaternion or another
+  frame is refused and the previous path stays.
 * **All scanners silent**, or no odometry for ``odom_timeout_s``, or no path: the robot brakes to a
   stop within its limits (the command ramps down by ``max_accel_mps2`` per cycle from the measured
-  speed) and the status says why. The watchdog runs every ``cycle_period_s``.
+  speed) and the status says why. The watchdog runs every ``cycle_period_s`` of the node's clock,
+  and a second one on the wall clock: with ``use_sim_time`` the node's clock stops with /clock, so
+  when nothing at all (no input, no /clock) arrived for ``wall_timeout_s`` of wall time, it brakes
+  from the last command.
 * **Some scanners silent**: the cycle goes on with the others; their field of view is the one the
   planner has, and the rest is *blind* (:func:`viapath.perception.fusion.blind_region` of the live
   scanners). The robot never drives into a blind sector: if the directions within 30° of its heading
@@ -36,7 +54,10 @@ What we chose where the sources are silent:
   parameter ``static_layer``) and, with ``map_topic``, a known map's occupied cells are the observation's
   static layer: the planner, the guard and the shield keep clear of them (DESIGN §10).
 * **Every command** is finite and inside the limits: speed in [0, max_speed_mps], turn rate in
-  ±max_turn_rate_radps, and within one cycle's acceleration of the measured speed and turn rate.
+  ±max_turn_rate_radps, at most one cycle's acceleration above the measured speed, and at most one
+  cycle's braking below the *lower* of the measured and the last commanded speed (a turn rate may
+  likewise go toward zero from either): the ramp slows a stop down but never turns a planner's stop
+  into motion that was not commanded.
 """
 
 from __future__ import annotations
@@ -59,6 +80,8 @@ from viapath.ros2.settings import NodeSettings
 from viapath.static import StaticLayer
 
 FORWARD_CONE_RAD = math.radians(30.0)
+NO_PATH = "no designated path"
+PATH_CLEARED = "designated path cleared by an empty path"
 
 
 @dataclass
@@ -104,6 +127,8 @@ class CycleResult:
     blind_sectors_rad: list[tuple[float, float]] = field(default_factory=list)
     speed_cap_mps: float | None = None
     cycle_time_ms: float | None = None
+    perception_time_ms: float | None = None  # detection and tracking of this cycle's scans
+    plan_time_ms: float | None = None  # the planner's own call
     status: dict[str, dict[str, str]] = field(default_factory=dict)  # name -> key/values, for diagnostics
     static: StaticLayer = field(default_factory=StaticLayer.empty)  # the static layer the planner was given
 
@@ -115,6 +140,23 @@ def urg04lx_models(settings: NodeSettings) -> list[ScannerModel]:
 
 def _wrap(angle: float) -> float:
     return math.atan2(math.sin(angle), math.cos(angle))
+
+
+def scan_layout_problem(beams: int, angle_increment_rad: float, range_min_m: float, range_max_m: float) -> str:
+    """Why a scan's beam layout cannot be a scanner's ('' when it can): the first scan of a scanner
+    with ``scan_geometry: from_message`` sets its layout, so it must make sense on its own."""
+    if beams < 2:
+        return f"{beams} beams (at least 2)"
+    if not (math.isfinite(angle_increment_rad) and angle_increment_rad > 0.0):
+        return f"angle_increment {angle_increment_rad} rad (must be > 0)"
+    if (beams - 1) * angle_increment_rad > 2.0 * math.pi + 1e-6:
+        return (f"{beams} beams x {angle_increment_rad:.6g} rad = {math.degrees((beams - 1) * angle_increment_rad):.1f} deg, "
+                f"more than a full turn")
+    if not (math.isfinite(range_min_m) and math.isfinite(range_max_m)):
+        return f"range_min {range_min_m} / range_max {range_max_m} m (must be finite)"
+    if not max(range_min_m, 0.0) < range_max_m:
+        return f"range_min {range_min_m:g} m is not below range_max {range_max_m:g} m"
+    return ""
 
 
 class PlannerCore:
@@ -136,6 +178,8 @@ class PlannerCore:
         self.static_layer = StaticObstacleLayer((), StaticLayerParams(enabled=bool(s.static_layer)))
         self.map_layer = StaticLayer.empty()  # a known map (set_map), in the odometry frame
         self.path: DesignatedPath | None = None
+        self.path_cleared = False  # by an empty path message
+        self.paths_refused = 0
         self.planner = None
         self.odometry: Odometry | None = None
         self.odom_refused: dict[str, int] = {}
@@ -152,6 +196,12 @@ class PlannerCore:
         self._now_s = 0.0
         self._first_scan_s: float | None = None
         self.odom_problem = ""
+        self.odom_fault: tuple[float, str] | None = None  # (until, why) on the node's clock
+        self._odom_history: list[Odometry] = []  # recent finite messages, refused ones too
+        self._commands: list[tuple[float, float, float]] = []  # (time, v, w) sent while driving
+        self._commands_armed = False  # from the first planned cycle on (not the start-up watchdog's stops)
+        self.hold_reason = ""
+        self._alive_wall_s: float | None = None  # wall time of the last input or move of the node's clock
         self.static_now = StaticLayer.empty()  # the last cycle's static layer from the scans
 
     def _make_planner(self, path: DesignatedPath, subgoal_policy: SubgoalPolicy):
@@ -202,9 +252,64 @@ class PlannerCore:
         else:
             path = DesignatedPath(waypoints, half_widths_m=widths)
 
-        self.path = path
-        self.planner = self._make_planner(path, self.subgoal_policy)
+        planner = self._make_planner(path, self.subgoal_policy)
+        self.path, self.planner = path, planner
         self.goal_reached = False
+        self.path_cleared = False
+
+    def clear_path(self, why: str) -> None:
+        """No designated path any more: the robot brakes to a stop and the status says why."""
+        self.path, self.planner = None, None
+        self.goal_reached = False
+        self.path_cleared = True
+        self.events.append(f"designated path cleared ({why}): stopping")
+
+    def on_path(self, frame_id: str, waypoints, orientations=None) -> tuple[bool, str]:
+        """A ``nav_msgs/Path`` as arrays: (N, 2) positions and (N, 4) quaternions. An empty path clears the
+        designated path (the robot stops); a bad one is refused (the old path stays). Returns (accepted, what)."""
+        from viapath.ros2.convert import checked_yaw
+
+        expected = self.settings.odom_frame
+        if expected and frame_id and frame_id != expected:
+            return self._path_refused(f"frame_id {frame_id!r}, expected {expected!r}")
+        try:
+            points = np.asarray(waypoints, dtype=float).reshape(-1, 2)
+            quaternions = None if orientations is None else np.asarray(orientations, dtype=float).reshape(-1, 4)
+        except (TypeError, ValueError) as error:
+            return self._path_refused(f"not (x, y) positions: {error}")
+        if len(points) == 0:
+            self.clear_path("an empty path was received")
+            return True, self.events[-1]
+        if not np.isfinite(points).all():
+            return self._path_refused("a NaN or infinite position")
+        for k, q in enumerate(() if quaternions is None else quaternions):
+            try:
+                checked_yaw(*q)
+            except ValueError as error:
+                return self._path_refused(f"pose {k}: {error}")
+        try:
+            self.set_path(points)
+        except ValueError as error:
+            return self._path_refused(str(error))
+        return True, f"designated path: {len(points)} waypoints, goal ({points[-1][0]:.2f}, {points[-1][1]:.2f})"
+
+    def _path_refused(self, why: str) -> tuple[bool, str]:
+        self.paths_refused += 1
+        self.events.append(f"path refused: {why}" + (" (the previous path stays)" if self.path is not None else ""))
+        return False, self.events[-1]
+
+    def on_odometry_quaternion(self, now_s: float, stamp_s: float, frame_id: str, x: float, y: float, quaternion,
+                               speed_mps: float, turn_rate_radps: float) -> bool:
+        """:meth:`on_odometry` with the orientation as a quaternion (x, y, z, w): one that is not a rotation
+        (not finite, not of unit length) is refused as a fault, never read as some heading."""
+        from viapath.ros2.convert import checked_yaw
+
+        try:
+            heading = checked_yaw(*quaternion)
+        except (TypeError, ValueError) as error:
+            self.refuse_odometry(now_s, "quaternion", f"orientation: {error}")
+            return False
+        return self.on_odometry(now_s, stamp_s, frame_id, x, y, heading, speed_mps, turn_rate_radps)
 
     def clear_path(self) -> None:
         """No path any more (a cancelled goal): the cycles brake the robot to rest."""
@@ -251,28 +356,146 @@ class PlannerCore:
 
     def on_odometry(self, now_s: float, stamp_s: float, frame_id: str, x: float, y: float, heading_rad: float,
                     speed_mps: float, turn_rate_radps: float) -> bool:
-        """Store one odometry message; False (and counted) when refused."""
+        """Store one odometry message; False (counted, and a fault that brakes the robot) when refused.
+
+        A message is refused when its twist is beyond the limits (plus ``odom_speed_tolerance_mps`` /
+        ``odom_turn_tolerance_radps``), above every speed (or outside the turn rates) commanded in the
+        last ``odom_timeout_s``, or larger than its own pose change over the recent messages explains.
+        A pose (or heading) that moved further than the twist explains is a jump: the message is kept
+        as the new reference, but tracks are reset and the robot is held for ``reset_hold_s``."""
         expected = self.settings.odom_frame
         if expected and frame_id and frame_id != expected:
-            self.odom_refused["frame"] = self.odom_refused.get("frame", 0) + 1
-            self.odom_problem = f"frame_id {frame_id!r}, expected {expected!r}"
+            self.refuse_odometry(now_s, "frame", f"frame_id {frame_id!r}, expected {expected!r}", fault=False)
             return False
         values = (stamp_s, x, y, heading_rad, speed_mps, turn_rate_radps)
         if not all(math.isfinite(v) for v in values):
-            self.odom_refused["not_finite"] = self.odom_refused.get("not_finite", 0) + 1
-            self.odom_problem = "a NaN or infinite value"
+            self.refuse_odometry(now_s, "not_finite", "a NaN or infinite value")
             return False
         if self.odometry is not None and stamp_s < self.odometry.stamp_s - 1e-9:
             self._time_jump(f"odometry stamp went back {self.odometry.stamp_s - stamp_s:.3f} s")
-        self.odometry = Odometry(stamp_s, now_s, x, y, heading_rad, speed_mps, turn_rate_radps)
+        elif self._odom_history and stamp_s < self._odom_history[-1].stamp_s - 1e-9:
+            self._odom_history.clear()  # a refused message's stamp: nothing to compare with
+        sample = Odometry(stamp_s, now_s, x, y, heading_rad, speed_mps, turn_rate_radps)
+        problem = self._twist_problem(sample, now_s)
+        jump = None
+        if problem is None:
+            problem, jump = self._pose_problem(sample)
+        window = self.settings.odom_timeout_s
+        self._odom_history = [o for o in self._odom_history if o.stamp_s >= stamp_s - window] + [sample]
+        if jump:  # the pose is the new reference: tracks placed in the old one are wrong
+            self._odom_history = [sample]
+            self.refuse_odometry(now_s, "jump", problem, counted_as_refused=False)
+            self._reset_tracks(f"odometry: {problem}")
+            self.odometry = sample
+            return True
+        if problem is not None:
+            self.refuse_odometry(now_s, problem[0], problem[1])
+            return False
+        self.odometry = sample
         return True
+
+    def refuse_odometry(self, now_s: float, reason: str, detail: str, fault: bool = True,
+                        counted_as_refused: bool = True) -> None:
+        """Count a bad odometry message; a fault (all but a wrong frame) brakes the robot for ``reset_hold_s``."""
+        key = reason if counted_as_refused else f"{reason} (kept, tracks reset)"
+        self.odom_refused[key] = self.odom_refused.get(key, 0) + 1
+        self.odom_problem = detail
+        if fault:
+            self.odom_fault = (now_s + max(self.settings.reset_hold_s, self.settings.cycle_period_s), detail)
+
+    def _twist_problem(self, o: Odometry, now_s: float) -> tuple[str, str] | None:
+        """Why the twist cannot be the robot's: beyond the limits, or not what was commanded."""
+        s, lim = self.settings, self.limits
+        v_tol, w_tol = s.odom_speed_tolerance_mps, s.odom_turn_tolerance_radps
+        if abs(o.speed_mps) > lim.max_speed_mps + v_tol:
+            return "limits", f"speed {o.speed_mps:.4g} m/s beyond the limit {lim.max_speed_mps:g} m/s"
+        if abs(o.turn_rate_radps) > lim.max_turn_rate_radps + w_tol:
+            return "limits", f"turn rate {o.turn_rate_radps:.4g} rad/s beyond the limit {lim.max_turn_rate_radps:g} rad/s"
+        commanded = self._recent_commands(now_s)
+        if commanded:
+            v_high = max(c[1] for c in commanded)
+            w_low, w_high = min(c[2] for c in commanded), max(c[2] for c in commanded)
+            if o.speed_mps > v_high + v_tol:
+                return "command", (f"speed {o.speed_mps:.4g} m/s, but at most {v_high:.3f} m/s was commanded in the "
+                                   f"last {s.odom_timeout_s:g} s")
+            if not w_low - w_tol <= o.turn_rate_radps <= w_high + w_tol:
+                return "command", (f"turn rate {o.turn_rate_radps:.4g} rad/s, but {w_low:.3f} to {w_high:.3f} rad/s "
+                                   f"was commanded in the last {s.odom_timeout_s:g} s")
+        return None
+
+    def _pose_problem(self, o: Odometry) -> tuple[tuple[str, str] | None, bool]:
+        """Whether the pose change since the recent messages is what their twists explain: (problem, is a jump).
+        Checked from the previous message (a jump) and from the oldest one kept (a twist that drifts off)."""
+        history = self._odom_history
+        if not history:
+            return None, False
+        s, lim = self.settings, self.limits
+        for start in (len(history) - 1, 0):
+            samples = history[start:] + [o]
+            dx = dy = dh = 0.0
+            slack_m = s.odom_pose_tolerance_m
+            slack_rad = s.odom_heading_tolerance_rad
+            travelled = twist_m = 0.0
+            for a, b in zip(samples[:-1], samples[1:]):
+                dt = b.stamp_s - a.stamp_s
+                v, w = 0.5 * (a.speed_mps + b.speed_mps), 0.5 * (a.turn_rate_radps + b.turn_rate_radps)
+                mid = a.heading_rad + 0.5 * _wrap(b.heading_rad - a.heading_rad)
+                dx += (b.x - a.x) - v * dt * math.cos(mid)
+                dy += (b.y - a.y) - v * dt * math.sin(mid)
+                dh += _wrap(b.heading_rad - a.heading_rad - w * dt)
+                slack_m += 0.5 * lim.max_accel_mps2 * dt * dt + 0.5 * abs(v) * dt * abs(_wrap(b.heading_rad - a.heading_rad))
+                slack_rad += 0.5 * lim.max_turn_accel_radps2 * dt * dt
+                travelled += math.hypot(b.x - a.x, b.y - a.y)
+                twist_m += abs(v) * dt
+            span = o.stamp_s - samples[0].stamp_s
+            error = math.hypot(dx, dy)
+            if error > slack_m:
+                if travelled > twist_m:
+                    return ("jump", f"pose moved {travelled:.3f} m in {span:.3f} s, its twist explains "
+                                    f"{twist_m:.3f} m"), True
+                return ("pose", f"twist says {twist_m:.3f} m in {span:.3f} s, the pose moved {travelled:.3f} m"), False
+            if abs(dh) > slack_rad:
+                return ("jump", f"heading changed {dh:+.3f} rad more than its turn rate explains in {span:.3f} s"), True
+        return None, False
+
+    def _recent_commands(self, now_s: float) -> list[tuple[float, float, float]]:
+        """Commands sent while driving in the last ``odom_timeout_s`` (and the one in effect before them)."""
+        if not self._commands:
+            return []
+        start = now_s - self.settings.odom_timeout_s
+        recent = [c for c in self._commands if c[0] >= start]
+        older = [c for c in self._commands if c[0] < start]
+        return ([older[-1]] if older else []) + recent
+
+    def _record_command(self, command: Command, now_s: float, planned: bool = False) -> None:
+        self.last_command, self.last_command_s = command, now_s
+        if not self.active:
+            self._commands = []
+            self._commands_armed = False
+            return
+        self._commands_armed |= planned
+        if self._commands_armed:
+            start = now_s - 2.0 * self.settings.odom_timeout_s
+            self._commands = [c for c in self._commands if c[0] >= start] + [(now_s, command.speed_mps, command.turn_rate_radps)]
 
     def on_scan(self, index: int, now_s: float, stamp_s: float, frame_id: str, angle_min_rad: float,
                 angle_increment_rad: float, ranges, range_min_m: float = 0.02, range_max_m: float = 5.6) -> bool:
-        """Store one scan of scanner ``index``; returns whether a cycle is due now."""
+        """Store one scan of scanner ``index``; returns whether a cycle is due now. A scan that cannot be
+        read at all is refused (reason ``error``, with the exception's text) like any other bad scan."""
+        try:
+            return self._on_scan(index, now_s, stamp_s, frame_id, angle_min_rad, angle_increment_rad, ranges,
+                                 range_min_m, range_max_m)
+        except Exception as error:  # noqa: BLE001 - one bad message must not end the node
+            self.health[index].refuse("error", f"{type(error).__name__}: {error}")
+            return False
+
+    def _on_scan(self, index: int, now_s: float, stamp_s: float, frame_id: str, angle_min_rad: float,
+                 angle_increment_rad: float, ranges, range_min_m: float, range_max_m: float) -> bool:
         h = self.health[index]
         setting = self.settings.scanners[index]
         ranges = np.asarray(ranges, dtype=float).reshape(-1)
+        stamp_s, angle_min_rad, angle_increment_rad = float(stamp_s), float(angle_min_rad), float(angle_increment_rad)
+        range_min_m, range_max_m = float(range_min_m), float(range_max_m)
         if h.expected_frame and frame_id != h.expected_frame:
             h.refuse("frame", f"frame_id {frame_id!r}, expected {h.expected_frame!r}")
             return False
@@ -283,16 +506,20 @@ class PlannerCore:
             ranges = ranges[::-1]
             angle_min_rad, angle_increment_rad = angle_min_rad + (len(ranges) - 1) * angle_increment_rad, -angle_increment_rad
         if h.model is None:
-            if len(ranges) < 2 or angle_increment_rad <= 0:
-                h.refuse("layout", f"{len(ranges)} beams, increment {angle_increment_rad}")
+            problem = scan_layout_problem(len(ranges), angle_increment_rad, range_min_m, range_max_m)
+            if problem:
+                h.refuse("layout", problem)
                 return False
             n = len(ranges)
             mx, my, myaw = getattr(h, "mount", None) or (setting.mount_x_m, setting.mount_y_m, setting.mount_yaw_rad)
-            h.model = ScannerModel(name=setting.name, mount_x_m=mx, mount_y_m=my,
-                                   mount_yaw_rad=_wrap(myaw + angle_min_rad + 0.5 * (n - 1) * angle_increment_rad),
-                                   beam_count=n, angle_increment_rad=angle_increment_rad,
-                                   range_min_m=max(float(range_min_m), 0.0) if math.isfinite(range_min_m) else 0.0,
-                                   range_max_m=float(range_max_m) if math.isfinite(range_max_m) and range_max_m > range_min_m else 5.6)
+            try:
+                h.model = ScannerModel(name=setting.name, mount_x_m=mx, mount_y_m=my,
+                                       mount_yaw_rad=_wrap(myaw + angle_min_rad + 0.5 * (n - 1) * angle_increment_rad),
+                                       beam_count=n, angle_increment_rad=float(angle_increment_rad),
+                                       range_min_m=max(float(range_min_m), 0.0), range_max_m=float(range_max_m))
+            except ValueError as error:  # anything the scanner model refuses that the check above let through
+                h.refuse("layout", str(error))
+                return False
             h.angle_min_rad = angle_min_rad
         model = h.model
         expected_min = getattr(h, "angle_min_rad", model.angle_min_rad)
@@ -340,11 +567,22 @@ class PlannerCore:
         for h in self.health:
             h.pending = None
         self.odometry = None
+        self._odom_history = []
+        self._commands, self._commands_armed = [], False
+        self.odom_fault = None
         self.last_cycle_stamp_s = None
         self.last_command_s = None
         self.hold_until_stamp_s = -math.inf  # set from the next cycle's stamp
+        self.hold_reason = "a time jump backwards"
         self.events.append(f"time jump backwards ({why}): tracks and odometry reset, robot held for "
                            f"{self.settings.reset_hold_s:g} s")
+
+    def _reset_tracks(self, why: str) -> None:
+        """The world frame moved under the tracks: forget them and hold the robot while they confirm again."""
+        self.tracker.reset()
+        self.hold_until_stamp_s = -math.inf
+        self.hold_reason = "an odometry jump"
+        self.events.append(f"{why}: tracks reset, robot held for {self.settings.reset_hold_s:g} s")
 
     def clock_jumped_back(self, why: str) -> None:
         """The node's own clock went back (e.g. /clock restarted): forget receipt times too."""
@@ -360,34 +598,57 @@ class PlannerCore:
     def odometry_fresh(self, now_s: float) -> bool:
         return self.odometry is not None and now_s - self.odometry.received_s <= self.settings.odom_timeout_s + 1e-9
 
+    def odometry_fault_active(self, now_s: float) -> bool:
+        return self.odom_fault is not None and now_s < self.odom_fault[0]
+
+    def odometry_trusted(self, now_s: float) -> bool:
+        """Fresh and without a fault: only then is its twist the base of a command."""
+        return self.odometry_fresh(now_s) and not self.odometry_fault_active(now_s)
+
     def _stop_reasons(self, now_s: float) -> list[str]:
         reasons = []
         if not self.active:
             reasons.append("inactive")
         if self.path is None:
-            reasons.append("no designated path")
+            reasons.append(PATH_CLEARED if self.path_cleared else NO_PATH)
         if not self.odometry_fresh(now_s):
             reasons.append("no odometry for %.2f s" % self.settings.odom_timeout_s if self.odometry is not None or any(
                 h.good for h in self.health) else "no odometry yet")
+        if self.odometry_fault_active(now_s):
+            reasons.append(f"odometry fault: {self.odom_fault[1]}")
         if not self.live_scanners(now_s):
             reasons.append(f"no scan for {self.settings.scan_timeout_s:g} s" if any(h.good for h in self.health)
                            else "no scan yet")
         return reasons
 
     def _measured(self) -> tuple[float, float, float]:
-        """Speed, turn rate and the time over which they may change now: the odometry's while fresh
+        """Speed, turn rate and the time over which they may change now: the odometry's while trusted
         (one cycle), else what was last commanded (the time since that command, at most one cycle)."""
         dt = self.settings.cycle_period_s
-        if self.odometry is not None and self.odometry_fresh(self._now_s):
+        if self.odometry is not None and self.odometry_trusted(self._now_s):
             return self.odometry.speed_mps, self.odometry.turn_rate_radps, dt
         since = dt if self.last_command_s is None else min(max(self._now_s - self.last_command_s, 0.0), dt)
         return self.last_command.speed_mps, self.last_command.turn_rate_radps, since
 
+    def _bases(self) -> tuple[float, float, float, float, float]:
+        """(speed to ramp down from, speed to ramp up from, turn rates ramped from (low, high), dt).
+        Slowing down ramps from the lower of the measured and the last commanded speed, and a turn rate
+        may go toward zero from either: a measurement can never hold the robot in motion (or spinning)
+        that was not commanded."""
+        lim = self.limits
+        v_meas, w_meas, dt = self._measured()
+        v_meas = min(max(v_meas, 0.0), lim.max_speed_mps)
+        last = self.last_command  # a stop before anything was commanded
+        v_down = min(v_meas, last.speed_mps)
+        w_low, w_high = min(w_meas, last.turn_rate_radps), max(w_meas, last.turn_rate_radps)
+        return v_down, v_meas, w_low, w_high, dt
+
     def brake_command(self) -> Command:
         """One cycle's hardest braking within the limits, from the measured (or last commanded) motion."""
-        v, w, dt = self._measured()
-        v_new = max(0.0, min(v, self.limits.max_speed_mps) - self.limits.max_accel_mps2 * dt)
+        v_down, _, w_low, w_high, dt = self._bases()
+        v_new = max(0.0, v_down - self.limits.max_accel_mps2 * dt)
         dw = self.limits.max_turn_accel_radps2 * dt
+        w = 0.0 if w_low <= 0.0 <= w_high else (w_low if w_low > 0.0 else w_high)  # the one nearer zero
         w_new = 0.0 if abs(w) <= dw else w - math.copysign(dw, w)
         return self._limit(Command(v_new, w_new))
 
@@ -396,14 +657,13 @@ class PlannerCore:
         if not (math.isfinite(v) and math.isfinite(w)):
             v, w = 0.0, 0.0
         lim = self.limits
-        v_meas, w_meas, dt = self._measured()
-        v_meas = min(max(v_meas, 0.0), lim.max_speed_mps)
+        v_down, v_up, w_low, w_high, dt = self._bases()
         v = min(max(v, 0.0), lim.max_speed_mps)
         if speed_cap_mps is not None:
             v = min(v, speed_cap_mps)
-        v = min(max(v, v_meas - lim.max_accel_mps2 * dt), v_meas + lim.max_accel_mps2 * dt)
+        v = min(max(v, v_down - lim.max_accel_mps2 * dt), v_up + lim.max_accel_mps2 * dt)
         v = min(max(v, 0.0), lim.max_speed_mps)
-        w = min(max(w, w_meas - lim.max_turn_accel_radps2 * dt), w_meas + lim.max_turn_accel_radps2 * dt)
+        w = min(max(w, w_low - lim.max_turn_accel_radps2 * dt), w_high + lim.max_turn_accel_radps2 * dt)
         w = min(max(w, -lim.max_turn_rate_radps), lim.max_turn_rate_radps)
         return Command(float(v), float(w))
 
@@ -414,10 +674,50 @@ class PlannerCore:
         if not reasons:
             return None
         command = self.brake_command()
-        self.last_command, self.last_command_s = command, now_s
+        self._record_command(command, now_s)
         mode = "stopped" if command.speed_mps == 0.0 and command.turn_rate_radps == 0.0 else "braking"
         result = CycleResult(command, mode, reasons, now_s, robot_pose=self._pose_at(now_s))
         result.status = self._status(result, now_s)
+        self.last_result = result
+        return result
+
+    def fault_result(self, now_s: float, why: str) -> CycleResult:
+        """A cycle that could not run (``why``): one cycle's braking, with the reason in the status."""
+        self._now_s = now_s
+        self.events.append(why)
+        command = self.brake_command()
+        self._record_command(command, now_s)
+        mode = "stopped" if command.speed_mps == 0.0 and command.turn_rate_radps == 0.0 else "braking"
+        result = CycleResult(command, mode, self._stop_reasons(now_s) + [why], now_s, robot_pose=self._pose_at(now_s))
+        result.status = self._status(result, now_s)
+        self.last_result = result
+        return result
+
+    def note_alive(self, wall_s: float) -> None:
+        """An input arrived, or the node's clock moved, at wall time ``wall_s`` (a monotonic clock)."""
+        self._alive_wall_s = wall_s
+
+    def wall_watchdog(self, wall_s: float) -> CycleResult | None:
+        """Called every cycle period on the wall clock: when nothing arrived and the node's clock did not
+        move for ``wall_timeout_s`` (with ``use_sim_time``, /clock stopped too, so :meth:`watchdog` is not
+        called), brake from the last command; None otherwise."""
+        timeout = self.settings.wall_timeout_s
+        if self._alive_wall_s is None or wall_s - self._alive_wall_s <= timeout + 1e-9:
+            return None
+        lim, dt = self.limits, self.settings.cycle_period_s
+        last = self.last_command
+        dw = lim.max_turn_accel_radps2 * dt
+        w = last.turn_rate_radps
+        command = Command(max(0.0, min(last.speed_mps, lim.max_speed_mps) - lim.max_accel_mps2 * dt),
+                          0.0 if abs(w) <= dw else min(max(w - math.copysign(dw, w), -lim.max_turn_rate_radps),
+                                                       lim.max_turn_rate_radps))
+        self._record_command(command, self._now_s)
+        mode = "stopped" if command.speed_mps == 0.0 and command.turn_rate_radps == 0.0 else "braking"
+        reasons = self._stop_reasons(self._now_s) + [f"no input and no clock for {wall_s - self._alive_wall_s:.2f} s "
+                                                     "of wall time"]
+        result = CycleResult(command, mode, reasons, self._now_s, robot_pose=self._pose_at(self._now_s))
+        result.status = self._status(result, self._now_s)
+        result.status["planner"]["source"] = "wall watchdog"
         self.last_result = result
         return result
 
@@ -464,7 +764,9 @@ class PlannerCore:
             reasons.append("no scan in this cycle")
         pose = self._pose_at(stamp)
         obstacles = Obstacles.empty()
+        perception_ms = plan_ms = None
         if used and pose is not None:
+            perceiving = time.perf_counter()
             detections = detect([m for m, _ in scans], [r for _, r in scans], self.detector_params).transformed(pose)
             if self.tracker.time_s is not None and stamp < self.tracker.time_s:
                 self._time_jump("scan stamp before the tracker's time")
@@ -473,6 +775,7 @@ class PlannerCore:
             obstacles = self.tracker.obstacles().finite()
             self.static_now = self.static_layer.update(stamp, pose, [r for _, r in scans], self.tracker.state[:, :2],
                                                        self.tracker.radii_m, scanners=[m for m, _ in scans])
+            perception_ms = (time.perf_counter() - perceiving) * 1e3
             self.last_cycle_stamp_s = stamp
         cap, sectors = self.blind_speed_cap(live)
         decision = None
@@ -481,10 +784,19 @@ class PlannerCore:
             mode = "braking"
         else:
             o = self.odometry
-            robot = RobotState(pose[:2].copy(), float(pose[2]), max(o.speed_mps, 0.0), o.turn_rate_radps,
-                               self.settings.robot_radius_m)
+            robot = RobotState(pose[:2].copy(), float(pose[2]), min(max(o.speed_mps, 0.0), self.limits.max_speed_mps),
+                               o.turn_rate_radps, self.settings.robot_radius_m)
             static = self.map_layer.concatenate(self.static_now)
-            decision = self.planner.plan(Observation(stamp, robot, obstacles, static))
+            try:
+                planning = time.perf_counter()
+                decision = self.planner.plan(Observation(stamp, robot, obstacles, static))
+                plan_ms = (time.perf_counter() - planning) * 1e3
+            except Exception as error:  # noqa: BLE001 - the robot brakes and the status says why
+                reasons.append(f"planner error: {type(error).__name__}: {error}")
+                self.events.append(reasons[-1])
+                command = self.brake_command()
+                mode = "braking"
+        if decision is not None:
             limit = cap if self.speed_limit_mps is None else (self.speed_limit_mps if cap is None else min(cap, self.speed_limit_mps))
             command = self._limit(decision.command, limit)
             mode = "driving" if cap is None else "degraded"
@@ -497,24 +809,25 @@ class PlannerCore:
             if self.hold_until_stamp_s is not None and stamp < self.hold_until_stamp_s:
                 command = self.brake_command()
                 mode = "braking"
-                reasons.append("holding after a time jump backwards")
+                reasons.append(f"holding after {self.hold_reason}")
             elif self.hold_until_stamp_s is not None:
                 self.hold_until_stamp_s = None
         if command.speed_mps == 0.0 and command.turn_rate_radps == 0.0 and mode == "braking":
             mode = "stopped"
-        self.last_command, self.last_command_s = command, now_s
+        self._record_command(command, now_s, planned=decision is not None)
         elapsed = (time.perf_counter() - started) * 1e3
         self.cycle_times_ms.append(elapsed)
         if len(self.cycle_times_ms) > 1000:
             del self.cycle_times_ms[:-100]
         result = CycleResult(command, mode, reasons, stamp, decision, obstacles, pose, sectors, cap, elapsed,
+                             perception_time_ms=perception_ms, plan_time_ms=plan_ms,
                              static=self.map_layer.concatenate(self.static_now))
         result.status = self._status(result, now_s)
         self.last_result = result
         return result
 
     def stop_command(self) -> Command:
-        self.last_command = Command.stop()
+        self._record_command(Command.stop(), self._now_s)
         return self.last_command
 
     # -- reporting -----------------------------------------------------------------------------
@@ -532,6 +845,9 @@ class PlannerCore:
             "source": "cycle" if result.cycle_time_ms is not None else "watchdog",
             "cycle_time_ms": f"{result.cycle_time_ms:.3f}" if result.cycle_time_ms is not None else "",
         }
+        for key in ("perception_time_ms", "plan_time_ms"):
+            if getattr(result, key) is not None:
+                planner[key] = f"{getattr(result, key):.4f}"
         if plan is not None:
             from viapath.sim.metrics import plan_side
 
@@ -547,6 +863,8 @@ class PlannerCore:
                 for i, p, v, r in zip(o.ids.tolist(), o.positions, o.velocities, o.radii_m.tolist(), strict=True))
         if result.speed_cap_mps is not None:
             planner["speed_cap_mps"] = f"{result.speed_cap_mps:.4f}"
+        if self.paths_refused:
+            planner["paths_refused"] = str(self.paths_refused)
         if self.events:
             planner["events"] = " | ".join(self.events[-3:])
         out["planner"] = planner
@@ -567,8 +885,9 @@ class PlannerCore:
                 "mount_source": "tf" if h.mount is not None else "parameters",
             }
         out["odometry"] = {
-            "state": "ok" if self.odometry_fresh(now_s) else "stale",
+            "state": "fault" if self.odometry_fault_active(now_s) else "ok" if self.odometry_fresh(now_s) else "stale",
             "refused": ", ".join(f"{k}: {v}" for k, v in sorted(self.odom_refused.items())) or "none",
+            "last_problem": self.odom_problem,
         }
         times = sorted(self.cycle_times_ms[-100:])  # the last 100 cycles (np.percentile costs 0.7 ms a call)
         out["timing"] = {
@@ -629,6 +948,6 @@ def severity(result: CycleResult) -> int:
     """Diagnostic level: 0 OK (driving, goal), 1 WARN (degraded, waiting), 2 ERROR (braking or stopped for a fault)."""
     if result.mode in ("driving", "goal"):
         return 0
-    if result.mode == "degraded" or result.reasons in (["no designated path"], ["inactive"]):
+    if result.mode == "degraded" or result.reasons in ([NO_PATH], [PATH_CLEARED], ["inactive"]):
         return 1
     return 2

@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 import signal
 import sys
+import time
 from typing import Any
 
 from viapath.ros2.core import CycleResult, PlannerCore, severity
@@ -74,8 +75,10 @@ def make_node_class():
     from geometry_msgs.msg import Twist, TwistStamped
     from nav_msgs.msg import Odometry
     from nav_msgs.msg import Path as PathMsg
+    from rclpy.clock import Clock as RosClock, ClockType
     from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+    from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import LaserScan
     from visualization_msgs.msg import MarkerArray
 
@@ -93,6 +96,7 @@ def make_node_class():
             self._pubs: dict[str, Any] = {}
             self._timer = None
             self._nav2 = None
+            self._wall_timer = None
             self._last_now_s: float | None = None
             try:
                 self.declare_parameter("planner_name", "viapath")
@@ -117,10 +121,16 @@ def make_node_class():
                     self.core = PlannerCore(settings)
                     self.core.warm_up()
                     if settings.path_file:
-                        waypoints, widths = convert.load_path_file(settings.path_file)
-                        self.core.set_path(waypoints, widths)
-                except (ParameterError, ValueError) as error:
-                    self.error = str(error) if isinstance(error, ParameterError) else f"parameter path_file: {error}"
+                        try:
+                            waypoints, widths = convert.load_path_file(settings.path_file)
+                            self.core.set_path(waypoints, widths)
+                        except ValueError as error:
+                            raise ParameterError(f"parameter path_file: {error}") from None
+                except ParameterError as error:
+                    self.error = str(error)
+                except Exception as error:  # noqa: BLE001 - e.g. MemoryError building the planner: say what
+                    self.error = f"could not build the planner with these parameters: {type(error).__name__}" + (
+                        f": {error}" if str(error) else "")
             if self.error is not None:
                 self.get_logger().error(f"refusing to start: {self.error}")
                 return TransitionCallbackReturn.FAILURE
@@ -135,6 +145,10 @@ def make_node_class():
             for index, scanner in enumerate(s.scanners):
                 self._subs.append(self.create_subscription(
                     LaserScan, scanner.topic, lambda msg, i=index: self._on_scan(i, msg), qos_profile_sensor_data))
+            if self.get_parameter("use_sim_time").value:  # a /clock message is a sign of life, moving or not
+                self._subs.append(self.create_subscription(
+                    Clock, "/clock", lambda msg: self.core.note_alive(time.monotonic()),
+                    QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)))
             latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
             if s.interface == "nav2":
                 try:
@@ -152,6 +166,9 @@ def make_node_class():
                 self._subs.append(self.create_subscription(OccupancyGrid, s.map_topic, self._on_map, latched))
             self.core.active = False
             self._timer = self.create_timer(s.cycle_period_s, self._on_watchdog)
+            # The same period on the wall clock: with use_sim_time the timer above stops with /clock.
+            self._wall_timer = self.create_timer(s.cycle_period_s, self._on_wall_watchdog,
+                                                 clock=RosClock(clock_type=ClockType.STEADY_TIME))
             self.get_logger().info(f"configured: planner {s.planner_name}, scanners "
                                    f"{', '.join(sc.topic for sc in s.scanners)}, odometry {s.odom_topic}")
             return TransitionCallbackReturn.SUCCESS
@@ -182,9 +199,10 @@ def make_node_class():
             if self._nav2 is not None:
                 self._nav2.destroy()
                 self._nav2 = None
-            if self._timer is not None:
-                self.destroy_timer(self._timer)
-                self._timer = None
+            for timer in (self._timer, self._wall_timer):
+                if timer is not None:
+                    self.destroy_timer(timer)
+            self._timer = self._wall_timer = None
             for sub in self._subs:
                 self.destroy_subscription(sub)
             self._subs = []
@@ -193,17 +211,29 @@ def make_node_class():
             self._pubs = {}
 
         # -- time ----------------------------------------------------------------------------
-        def _now_s(self) -> float:
+        def _now_s(self, alive: bool = True) -> float:
+            """The node's clock; ``alive``: an input arrived now (for the wall-clock watchdog)."""
             now = self.get_clock().now().nanoseconds * 1e-9
             if self._last_now_s is not None and now < self._last_now_s - 1e-9 and self.core is not None:
                 self.core.clock_jumped_back(f"the node's clock went back {self._last_now_s - now:.3f} s")
+            if self.core is not None and (alive or self._last_now_s is None or now != self._last_now_s):
+                self.core.note_alive(time.monotonic())
             self._last_now_s = now
             return now
 
         # -- inputs --------------------------------------------------------------------------
+        def _failed(self, what: str, error: Exception) -> str:
+            text = f"{what} failed: {type(error).__name__}: {error}"
+            self.get_logger().error(text)
+            return text
+
         def _on_odom(self, msg) -> None:
-            x, y, yaw, v, w = convert.odometry_values(msg)
-            self.core.on_odometry(self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id, x, y, yaw, v, w)
+            try:
+                x, y, q, v, w = convert.odometry_values(msg)
+                self.core.on_odometry_quaternion(self._now_s(), convert.stamp_seconds(msg.header.stamp),
+                                                 msg.header.frame_id, x, y, q, v, w)
+            except Exception as error:  # noqa: BLE001 - refused, with the reason; the node lives on
+                self.core.refuse_odometry(self._now_s(), "error", self._failed("reading odometry", error))
 
         def _on_map(self, msg) -> None:
             expected = self.core.settings.odom_frame
@@ -213,24 +243,19 @@ def make_node_class():
                 return
             try:
                 self.core.set_map(convert.occupancy_layer_from_message(msg, self.core.settings.map_occupied_threshold))
-            except ValueError as error:
+            except Exception as error:  # noqa: BLE001 - refused, with the reason; the node lives on
                 self.core.events.append(f"map refused: {error}")
                 self.get_logger().error(self.core.events[-1])
 
         def _on_path(self, msg) -> None:
-            expected = self.core.settings.odom_frame
-            waypoints = convert.waypoints_from_path(msg)
-            if expected and msg.header.frame_id and msg.header.frame_id != expected:
-                self.core.events.append(f"path refused: frame_id {msg.header.frame_id!r}, expected {expected!r}")
-                self.get_logger().error(self.core.events[-1])
-                return
             try:
-                self.core.set_path(waypoints)
-            except ValueError as error:
-                self.core.events.append(f"path refused: {error}")
-                self.get_logger().error(self.core.events[-1])
-                return
-            self.get_logger().info(f"designated path: {len(waypoints)} waypoints, goal ({waypoints[-1][0]:.2f}, {waypoints[-1][1]:.2f})")
+                accepted, what = self.core.on_path(msg.header.frame_id, convert.waypoints_from_path(msg),
+                                                   convert.orientations_from_path(msg))
+            except Exception as error:  # noqa: BLE001 - refused, with the reason; the node lives on
+                self.core.paths_refused += 1
+                accepted, what = False, self._failed("path refused: reading it", error)
+                self.core.events.append(what)
+            (self.get_logger().info if accepted else self.get_logger().error)(what)
 
         def _on_scan(self, index: int, msg) -> None:
             due = self.core.on_scan(index, self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id,
@@ -238,7 +263,11 @@ def make_node_class():
             if self._nav2 is not None and not self._nav2.mounts_done:
                 self._nav2.resolve_mounts()
             if due:
-                result = self.core.cycle(self._now_s())
+                now = self._now_s()
+                try:
+                    result = self.core.cycle(now)
+                except Exception as error:  # noqa: BLE001 - the robot brakes and the status says why
+                    result = self.core.fault_result(now, self._failed("cycle", error))
                 self._publish(result)
                 if self._nav2 is not None:
                     self._nav2.supervise(result, self._now_s())
@@ -246,7 +275,15 @@ def make_node_class():
         def _on_watchdog(self) -> None:
             if self.core is None:
                 return
-            result = self.core.watchdog(self._now_s())
+            result = self.core.watchdog(self._now_s(alive=False))
+            if result is not None:
+                self._publish(result, markers=False)
+
+        def _on_wall_watchdog(self) -> None:
+            if self.core is None:
+                return
+            self._now_s(alive=False)  # the node's clock moving counts as alive
+            result = self.core.wall_watchdog(time.monotonic())
             if result is not None:
                 self._publish(result, markers=False)
             if self._nav2 is not None:
@@ -313,7 +350,7 @@ def make_node_class():
             if self.core is None or "cmd" not in self._pubs:
                 return
             self.core.stop_command()
-            now = self._now_s()
+            now = self._now_s(alive=False)
             for _ in range(3):  # best effort against a lossy link; the subscriber's depth keeps them
                 try:
                     self._pubs["cmd"].publish(self._command_msg(0.0, 0.0, now))
@@ -366,7 +403,7 @@ def run_node(ros_args: list[str] | None = None) -> int:
             from rclpy.lifecycle import TransitionCallbackReturn
 
             if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
-                print(f"error: {node.error}", file=sys.stderr)
+                print(f"error: {node.error or 'configuring the node failed (see the log above)'}", file=sys.stderr)
                 return 2
             node.trigger_activate()
         executor = _executor(str(node.get_parameter("executor").value))

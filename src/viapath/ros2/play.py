@@ -15,6 +15,9 @@ What we chose:
 * ``--lockstep`` waits after each scan (up to ``max_wait_s``) for the node's cycle on it (its
   DiagnosticArray), then goes on with the recording's timing: on a slow machine the node then
   still sees every scan. ``--status-log`` writes the node's planner statuses (JSON lines).
+* No node cycle on the published scans (the node refused them: wrong topic, frame or layout; or no
+  node reported) is a failure: exit code 4 and a message with what the node said about each
+  scanner (with ``--lockstep`` after five scans).
 """
 
 from __future__ import annotations
@@ -49,9 +52,15 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
         odom_pub = node.create_publisher(Odometry, "odom", 10) if odom else None
         statuses: list[dict] = []
         cycles: set[float] = set()
+        scanner_problems: dict[str, str] = {}  # what the node says about each scanner (refused scans)
 
         def on_status(msg):
             for st in msg.status:
+                if ": scanner " in st.name:
+                    values = {kv.key: kv.value for kv in st.values}
+                    if values.get("refused", "none") != "none":
+                        scanner_problems[st.name.split(": scanner ", 1)[1]] = (
+                            f"topic {values.get('topic', '?')}: refused {values['refused']} ({values.get('last_problem', '')})")
                 if st.name.endswith(": planner"):
                     values = {kv.key: kv.value for kv in st.values}
                     statuses.append(values)
@@ -94,9 +103,15 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
             if lockstep:  # wait for the node's cycle on this scan (a slow machine then changes nothing)
                 key = round(m.stamp_s, 6)
                 end = time.monotonic() + max_wait_s
+                beat = time.monotonic()
                 while key not in cycles and time.monotonic() < end and not stop["flag"]:
+                    if time.monotonic() - beat >= 0.05:  # waiting, not stopped: keep /clock alive
+                        clock_pub.publish(clock)
+                        beat = time.monotonic()
                     rclpy.spin_once(node, timeout_sec=0.01)
                 wall0 += max(time.monotonic() - due, 0.0)  # the recording's timing resumes from here
+                if sent >= 5 and not cycles:
+                    break  # the node takes none of them: say so now, not after max_wait_s per scan
         end = time.monotonic() + 1.0
         while time.monotonic() < end:  # let the last messages go out
             rclpy.spin_once(node, timeout_sec=0.05)
@@ -105,6 +120,12 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
                 for values in statuses:
                     handle.write(json.dumps(values) + "\n")
         print(f"viapath ros2 play: {sent} scans from {bag} on {out_topic}, {len(cycles)} node cycles seen", file=sys.stderr)
+        if sent and not cycles:
+            why = "; ".join(f"scanner {name}: {problem}" for name, problem in sorted(scanner_problems.items()))
+            print(f"error: the node ran no cycle on the {sent} scans published on {out_topic}: "
+                  + (f"it refused them ({why})" if why else f"no status on {status_topic} (is a viapath node listening "
+                     f"on {out_topic}, with use_sim_time?)"), file=sys.stderr)
+            return 4
         return 0
     finally:
         finish_ros_process(node, previous)

@@ -43,8 +43,16 @@ SHIELD_PREFIX = "shield."
 WEIGHTS_PRESET = "weights_preset"  # issue 15: one parameter selects a preset (viapath.presets); planner.* stays the schema
 
 
+MAX_ROLLOUT_STEPS = 2000  # steps of one roll-out (rollout_s / rollout_dt_s, escape_s / escape_dt_s)
+
+
 class ParameterError(ValueError):
-    """A parameter value the node refuses; the message names the parameter."""
+    """Parameter values the node refuses; the message names each parameter, one line per mistake
+    (``errors`` holds the lines)."""
+
+    def __init__(self, message: str | list[str]):
+        self.errors = [message] if isinstance(message, str) else list(message)
+        super().__init__("\n".join(self.errors))
 
 
 def _scanner_options(name: str, topic: str, frame: str, x: float, yaw: float) -> tuple[Option, ...]:
@@ -88,6 +96,16 @@ NODE_OPTIONS: tuple[Option, ...] = (
     _opt("bypass_distance_m", 1.0, "m", 0.0, 100.0, "a blocked subgoal is given up within this"),
     _opt("scan_timeout_s", 0.3, "s", 0.05, 10.0, "a scanner silent this long is blind; all silent: brake to a stop"),
     _opt("odom_timeout_s", 0.5, "s", 0.05, 10.0, "no odometry this long: brake to a stop"),
+    _opt("odom_speed_tolerance_mps", 0.1, "m/s", 0.0, 1.0, "odometry speed beyond max_speed_mps, or above every "
+         "speed commanded in the last odom_timeout_s, by more than this is a fault: brake"),
+    _opt("odom_turn_tolerance_radps", 0.3, "rad/s", 0.0, 5.0, "odometry turn rate beyond max_turn_rate_radps, or "
+         "outside the turn rates commanded in the last odom_timeout_s, by more than this is a fault: brake"),
+    _opt("odom_pose_tolerance_m", 0.05, "m", 0.001, 1.0, "odometry pose change off what its twist explains by more "
+         "than this (plus the acceleration limits' share) is a fault: brake"),
+    _opt("odom_heading_tolerance_rad", 0.1, "rad", 0.001, 1.0, "odometry heading change off what its turn rate "
+         "explains by more than this (plus the acceleration limits' share) is a fault: brake"),
+    _opt("wall_timeout_s", 0.5, "s", 0.05, 10.0, "no input and no move of the node's clock (/clock with "
+         "use_sim_time) for this long on the wall clock: brake to a stop"),
     _opt("cycle_period_s", 0.1, "s", 0.01, 1.0, "scan period; also the watchdog period"),
     _opt("max_invalid_fraction", 0.5, "", 0.0, 1.0, "a scan with more NaN/zero readings than this counts as failed"),
     _opt("detector", "people", "", help="detector preset", choices=("people", "legs")),
@@ -248,19 +266,23 @@ def validate(values: dict[str, Any]) -> NodeSettings:
     if len(set(scanner_names)) != len(scanner_names):
         raise ParameterError(f"parameter scanner_names: names repeat: {scanner_names}")
     options = {o.name: o for o in all_options(planner_name, scanner_names)}
-    unknown = sorted(set(values) - set(options) - {"use_sim_time"})
-    if unknown:
-        raise ParameterError(f"parameter {unknown[0]}: unknown parameter" + (f" (and {len(unknown) - 1} more)" if len(unknown) > 1 else ""))
-    checked = {name: check_value(o, values.get(name, o.default)) for name, o in options.items()}
+    errors = [f"parameter {name}: unknown parameter" for name in sorted(set(values) - set(options) - {"use_sim_time"})]
+    checked, bad = {}, set()
+    for name, o in options.items():
+        try:
+            checked[name] = check_value(o, values.get(name, o.default))
+        except ParameterError as error:  # go on with the default, to report every mistake at once
+            errors.append(str(error))
+            checked[name], bad = o.default, bad | {name}
     scanners = tuple(ScannerSetting(n, checked[f"scanners.{n}.topic"], checked[f"scanners.{n}.frame_id"],
                                     checked[f"scanners.{n}.mount_x_m"], checked[f"scanners.{n}.mount_y_m"],
                                     checked[f"scanners.{n}.mount_yaw_rad"]) for n in scanner_names)
     for s in scanners:
         if not s.topic:
-            raise ParameterError(f"parameter scanners.{s.name}.topic: expected a topic name, found ''")
-    if checked["nominal_speed_mps"] > checked["max_speed_mps"]:
-        raise ParameterError(f"parameter nominal_speed_mps: expected <= max_speed_mps ({checked['max_speed_mps']:g} m/s), "
-                             f"found {checked['nominal_speed_mps']}")
+            errors.append(f"parameter scanners.{s.name}.topic: expected a topic name, found ''")
+    if checked["nominal_speed_mps"] > checked["max_speed_mps"] and not {"nominal_speed_mps", "max_speed_mps"} & bad:
+        errors.append(f"parameter nominal_speed_mps: expected <= max_speed_mps ({checked['max_speed_mps']:g} m/s), "
+                      f"found {checked['nominal_speed_mps']}")
     planner_values = {k[len(PLANNER_PREFIX):]: v for k, v in checked.items() if k.startswith(PLANNER_PREFIX)}
     if checked.get(WEIGHTS_PRESET):
         from viapath.presets import PresetError, load_preset
@@ -268,25 +290,38 @@ def validate(values: dict[str, Any]) -> NodeSettings:
         try:
             preset = load_preset(checked[WEIGHTS_PRESET])
         except PresetError as error:
-            raise ParameterError(f"parameter {WEIGHTS_PRESET}: {error}") from None
-        if preset.planner != planner_name:
-            raise ParameterError(f"parameter {WEIGHTS_PRESET}: preset {preset.name!r} is for planner "
-                                 f"{preset.planner!r}, not {planner_name!r}")
-        # A parameter set to other than its default wins over the preset. (The node declares every
-        # parameter and hands all values over, so "given" can only be told apart from "default" by value.)
-        for path, value in preset.dotted().items():
-            name = PLANNER_PREFIX + path
-            if checked[name] == options[name].default:
-                planner_values[path] = value
-                checked[name] = value
+            preset = None
+            errors.append(f"parameter {WEIGHTS_PRESET}: {error}")
+        if preset is not None and preset.planner != planner_name:
+            errors.append(f"parameter {WEIGHTS_PRESET}: preset {preset.name!r} is for planner "
+                          f"{preset.planner!r}, not {planner_name!r}")
+        elif preset is not None:
+            # A parameter set to other than its default wins over the preset. (The node declares every
+            # parameter and hands all values over, so "given" can only be told apart from "default" by value.)
+            for path, value in preset.dotted().items():
+                name = PLANNER_PREFIX + path
+                if checked[name] == options[name].default:
+                    planner_values[path] = value
+                    checked[name] = value
+    for length, step in (("rollout_s", "rollout_dt_s"), ("escape_s", "escape_dt_s")):
+        if length in planner_values and step in planner_values and not {PLANNER_PREFIX + length, PLANNER_PREFIX + step} & bad:
+            steps = planner_values[length] / planner_values[step]
+            if steps > MAX_ROLLOUT_STEPS:  # both named: either may be the one to change
+                for name in (length, step):
+                    errors.append(f"parameter {PLANNER_PREFIX}{name}: {length} {planner_values[length]:g} s / {step} "
+                                  f"{planner_values[step]:g} s is {steps:.4g} steps of a roll-out, at most {MAX_ROLLOUT_STEPS}")
     from viapath.options import OptionError
     from viapath.planning import planner_class
 
     try:  # the planner's own schema has the last word (e.g. checks across options)
         planner_class(planner_name).options.validate(planner_values)
     except OptionError as error:
-        where, message = error.errors[0] if error.errors else ("", str(error))
-        raise ParameterError(f"parameter {PLANNER_PREFIX}{where}: {message}") from None
+        for where, message in error.errors or [("", str(error))]:
+            line = f"parameter {PLANNER_PREFIX}{where}: {message}"
+            if line not in errors and PLANNER_PREFIX + where not in bad:
+                errors.append(line)
+    if errors:
+        raise ParameterError(errors)
     shield_values = {k[len(SHIELD_PREFIX):]: v for k, v in checked.items() if k.startswith(SHIELD_PREFIX)}
     return NodeSettings(checked, scanners, planner_name, planner_values, shield_values)
 

@@ -16,9 +16,10 @@ What we chose:
   before driving, so a slow machine changes the timing of nothing: the command of step k is applied
   in step k, as in ``viapath run``. Without it a late command is applied a step later, as on a robot.
 * The planner's side of the trace (plan speed, status, side, via points, cycle time, tracks) comes
-  from the node's DiagnosticArray (its planner status carries them as key/values); ``plan_time_*`` are the node's whole cycle
-  (perception and planning), ``perception_time_*`` are not known here (null), and the tracking
-  errors compare the node's reported tracks with the true people at the same stamps.
+  from the node's DiagnosticArray (its planner status carries them as key/values); ``plan_time_*``
+  are the node's planner call and ``perception_time_*`` its detection and tracking, as ``viapath run``
+  times them (null only when the node reported no such cycle), and the tracking errors compare the
+  node's reported tracks with the true people at the same stamps.
 * Fault injection for tests (``--fault KIND@T[-END]``, from T to END s or for good): ``silence:NAME``
   (scanner NAME publishes nothing), ``nan:NAME`` (all-NaN ranges), ``short:NAME`` (scans 10 beams
   short), ``odom`` (no odometry), ``clock-back:D`` (at T the clock and all stamps jump back by D
@@ -133,6 +134,7 @@ class StepRecord:
     side: int = 0
     via: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     cycle_ms: float = float("nan")
+    perception_ms: float = float("nan")
     late: bool = False
 
 
@@ -217,11 +219,19 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
         tf_pub = _tf_publishers(node, laser.scanners, map_offset) if tf else None
         node.create_subscription(DiagnosticArray, "viapath/status", on_status, 50)
 
-        def spin_until(deadline: float, done=lambda: False) -> None:
+        def spin_until(deadline: float, done=lambda: False, heartbeat: bool = False) -> None:
+            """Spin until ``deadline`` or ``done()``; with ``heartbeat``, publish the (unchanged) clock every
+            50 ms meanwhile: the simulation waits, it has not stopped (the node's wall-clock watchdog
+            takes a silent /clock for a dead simulator)."""
+            beat = time.monotonic()
             while not stop["flag"]:
-                remaining = deadline - time.monotonic()
+                now = time.monotonic()
+                remaining = deadline - now
                 if remaining <= 0 or done():
                     return
+                if heartbeat and now - beat >= 0.05:
+                    clock_pub.publish(clock)
+                    beat = now
                 rclpy.spin_once(node, timeout_sec=min(remaining, 0.01))
 
         clock = Clock()
@@ -319,7 +329,7 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
 
             deadline = wall_start + (k + 1) * period
             if lockstep:
-                spin_until(time.monotonic() + max_wait_s, cycle_reported)
+                spin_until(time.monotonic() + max_wait_s, cycle_reported, heartbeat=True)
             spin_until(deadline)  # hold the rate
             on_time = cycle_reported() and got["cmd_count"] > count_before
             late += not on_time
@@ -361,7 +371,8 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
             rec.plan_speed = float(status.get("plan_speed_mps", rec.command[0]))
             rec.status = status.get("plan_status", status.get("mode", "none"))
             rec.side = int(status.get("plan_side", 0))
-            rec.cycle_ms = float(status.get("cycle_time_ms") or "nan")
+            rec.cycle_ms = float(status.get("plan_time_ms") or status.get("cycle_time_ms") or "nan")
+            rec.perception_ms = float(status.get("perception_time_ms") or "nan")
             if status:
                 ids, pos, vel, rad = parse_tracks(status.get("tracks_xyv", ""))
                 rec.via = parse_points(status.get("via_xy", ""))
@@ -387,8 +398,10 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
         if shielded_cycles:
             metrics["shield_mode"] = shielded_cycles[-1].get("shield_mode")
         metrics.update(tracking_errors(reported, truth))
-        metrics["perception_time_p50_ms"] = None
-        metrics["perception_time_p99_ms"] = None
+        perception_ms = np.array([r.perception_ms for r in records], dtype=float)
+        perception_ms = perception_ms[np.isfinite(perception_ms)]
+        metrics["perception_time_p50_ms"] = float(np.percentile(perception_ms, 50)) if len(perception_ms) else None
+        metrics["perception_time_p99_ms"] = float(np.percentile(perception_ms, 99)) if len(perception_ms) else None
         metrics = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in metrics.items()}
         if trace_file:
             from viapath.io.trace import write_trace_csv
