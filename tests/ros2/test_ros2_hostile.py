@@ -380,3 +380,12 @@ def test_a_planner_that_raises_brakes_the_robot(monkeypatch):
     result, before = cycle(core, robot, t)
     assert_braking(result, before)
     assert result.mode in ("braking", "stopped") and "planner error: RuntimeError: boom" in result.reasons
+
+
+def test_a_path_beyond_the_coordinate_bound_is_refused_and_the_old_one_kept():
+    core = make_core()
+    old = core.path
+    for far in (1e308, -1e308, float("nan"), 2e6):
+        with pytest.raises(ValueError, match="path waypoints"):
+            core.set_path([[0.0, 0.0], [far, 0.0]])
+        assert core.path is old

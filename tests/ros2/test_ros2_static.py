@@ -90,3 +90,4 @@ def test_markers_draw_the_static_layer():
     (line,) = [m for m in markers.markers if m.ns == "static"]
     points = np.array([[p.x, p.y] for p in line.points])
     assert np.allclose(points, static.segments.reshape(-1, 2))
+

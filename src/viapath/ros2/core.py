@@ -68,6 +68,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from viapath.guard import DEFAULT_CONFIG as GUARD_DEFAULTS
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.path import DesignatedPath, SubgoalPolicy
 from viapath.perception.detection import DetectorParams, detect
@@ -239,6 +240,10 @@ class PlannerCore:
     def set_path(self, waypoints, half_widths_m=None) -> None:
         """A new designated path (world frame = odometry frame); the planner starts again on it."""
         waypoints = np.asarray(waypoints, dtype=float).reshape(-1, 2)
+        bound = GUARD_DEFAULTS.max_coordinate_m
+        if not (np.isfinite(waypoints).all() and (np.abs(waypoints) <= bound).all()):
+            worst = waypoints[~(np.isfinite(waypoints) & (np.abs(waypoints) <= bound)).all(axis=1)][0]
+            raise ValueError(f"path waypoints: expected finite coordinates within ±{bound:g} m, found {worst.tolist()}")
         s = self.settings
         if half_widths_m is None:
             widths = [w if w > 0 else s.half_width_m for w in s.half_widths_m] if any(w > 0 for w in s.half_widths_m) else None
