@@ -262,12 +262,14 @@ class PlannerCore:
         self.goal_reached = False
         self.path_cleared = False
 
-    def clear_path(self, why: str) -> None:
-        """No designated path any more: the robot brakes to a stop and the status says why."""
+    def clear_path(self, why: str | None = None) -> None:
+        """No designated path any more: the cycles brake the robot to rest. With ``why`` (an empty path
+        message) the status says the path was cleared and why; without (a goal that ended), "no designated path"."""
         self.path, self.planner = None, None
         self.goal_reached = False
-        self.path_cleared = True
-        self.events.append(f"designated path cleared ({why}): stopping")
+        self.path_cleared = why is not None
+        if why is not None:
+            self.events.append(f"designated path cleared ({why}): stopping")
 
     def on_path(self, frame_id: str, waypoints, orientations=None) -> tuple[bool, str]:
         """A ``nav_msgs/Path`` as arrays: (N, 2) positions and (N, 4) quaternions. An empty path clears the
@@ -315,12 +317,6 @@ class PlannerCore:
             self.refuse_odometry(now_s, "quaternion", f"orientation: {error}")
             return False
         return self.on_odometry(now_s, stamp_s, frame_id, x, y, heading, speed_mps, turn_rate_radps)
-
-    def clear_path(self) -> None:
-        """No path any more (a cancelled goal): the cycles brake the robot to rest."""
-        self.path = None
-        self.planner = None
-        self.goal_reached = False
 
     def same_path(self, waypoints, tolerance_m: float = 1e-3) -> bool:
         """Whether ``waypoints`` are the current path's (a re-sent path: keep the planner as it is)."""
