@@ -76,13 +76,6 @@ class StaticLayer:
         ids = np.concatenate([np.full(len(s), k, dtype=np.int64) for k, s in enumerate(shapes)])
         return cls(np.concatenate(shapes), ids)
 
-    @classmethod
-    def of_points(cls, points: np.ndarray, shape_ids: np.ndarray | None = None) -> "StaticLayer":
-        """Points as segments of length 0 (e.g. scan returns)."""
-        points = np.asarray(points, dtype=float).reshape(-1, 2)
-        ids = np.arange(len(points), dtype=np.int64) if shape_ids is None else shape_ids
-        return cls(np.stack([points, points], axis=1), ids)
-
     def finite(self) -> "StaticLayer":
         """Without segments that have a NaN or infinite coordinate (a bad row says nothing about where
         something is; scanners report 'no return' that way)."""
