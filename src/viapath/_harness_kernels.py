@@ -1,4 +1,4 @@
-"""The per-cycle harness every planner gets, compiled where it costs most (extra ``fast``; issue 16): the
+"""The per-cycle harness every planner gets, compiled where it costs most (extra ``fast``): the
 guard's two tests of every observation and every command, and the safety inflation, in one call each instead
 of a dozen small numpy operations. Loaded by :func:`viapath.compiled.harness_kernels`.
 

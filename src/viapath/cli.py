@@ -276,7 +276,7 @@ def _register_plugins() -> None:
 
 
 _register_plugins()
-__import__("viapath.cli_extras").cli_extras.install(app)  # --version, plain flags (issue 12)
+__import__("viapath.cli_extras").cli_extras.install(app)  # --version, plain flags
 
 
 def main() -> None:  # pragma: no cover

@@ -1,4 +1,4 @@
-"""Pedestrian forecasts and their displacement errors (issue 11 item 5), numpy only (core: goes on a robot).
+"""Pedestrian forecasts and their displacement errors, numpy only (core: goes on a robot).
 
 Forecasts, from a person's observed positions at a fixed row step ``dt_s``:
 

@@ -1,4 +1,4 @@
-"""The guarded entry of every planner: bad input never becomes motion (issue 12; DESIGN §4, §7).
+"""The guarded entry of every planner: bad input never becomes motion (DESIGN §4, §7).
 
 Every planner's ``plan`` is wrapped by :func:`guard_plan` (the planner base does it for each
 subclass, plug-ins and navground peers included), so each cycle goes:

@@ -1,4 +1,4 @@
-"""What a benchmark row is, so that a results folder never mixes runs up (issue 12, finding 4).
+"""What a benchmark row is, so that a results folder never mixes runs up.
 
 * A row is identified by the scenario's **content hash**, the planner, a hash of the planner's
   **options**, the perception, the episode seed and the **viapath version** (columns

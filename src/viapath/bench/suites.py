@@ -48,7 +48,7 @@ import yaml
 from viapath.registry import Registry
 from viapath.sim.social_force import simulate_crowd
 
-_SAFE_DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)  # libyaml's emitter where present (issue 16)
+_SAFE_DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)  # libyaml's emitter where present
 
 FAMILIES: Registry[Callable[[np.random.Generator, int], dict]] = Registry("scenario family")
 
@@ -91,7 +91,7 @@ def generate_suite(name: str, count: int, seed: int = 0, data: Path | None = Non
 
     ``workers`` > 1 generates the synthetic scenarios in that many processes (joblib/loky, whose
     workers the benchmark then reuses): each scenario has its own generator ``[seed, index]``, so
-    the suite is the same (issue 16: the social-force families made generation the longest part
+    the suite is the same (the social-force families made generation the longest part
     of a 1000-scenario benchmark)."""
     if name not in suite_names():
         raise SuiteError(f"unknown suite {name!r}; available: {', '.join(suite_names())}")

@@ -1,4 +1,4 @@
-"""A multi-objective study of the planner's weights k1..k4 (issue 15; paper §4.2 and its open question §5.2).
+"""A multi-objective study of the planner's weights k1..k4 (paper §4.2 and its open question §5.2).
 
 Method: Optuna (Akiba et al., KDD 2019). Each trial picks option values, runs the whole suite through
 the benchmark runner (:func:`viapath.bench.runner.run_bench`: the same workers, episode seeds and

@@ -3,7 +3,7 @@
 Source: the same closed forms as :mod:`~viapath.perception.raycast` and
 :mod:`~viapath.perception.circle_fit` (their docstrings), written as loops.
 
-Why a module of its own, with plain module-level functions (issue 16):
+Why a module of its own, with plain module-level functions:
 * numba's on-disk cache (``cache=True``) only works for functions it can find again by module and
   qualified name, with no closure variables. The kernels used to be built inside functions
   (``_build_numba_fit.<locals>.fit``); the fit kernel closed over the ``solve`` dispatcher, whose
@@ -176,7 +176,7 @@ def fit_circles_kernel(points, starts, counts, origins, has_prior, prior, weight
         out[k, 4] = np.sqrt(max(largest * sigma2, 0.0))
 
 
-# -- the detector's cheap shape tests (issue 16, wave 7) --------------------------------------------
+# -- the detector's cheap shape tests ----------------------------------------------------------
 # These must give the numpy path's values bit for bit (the detections decide which tracks exist), so
 # they use only +, -, *, /, abs, max and sqrt (correctly rounded everywhere) and sum the way numpy
 # sums a row: ``row.sum()`` starts from 0.0 and adds numpy's pairwise sum of the row

@@ -66,7 +66,7 @@ class DetectorParams:
     leg_position_sigma_m: float = 0.1
     measurement_sigma_floor_m: float = 0.02
     iterations: int = 4
-    # numba when installed (extra 'fast'), else numpy: the circle fit (equal to round-off) and, since wave 7,
+    # numba when installed (extra 'fast'), else numpy: the circle fit (equal to round-off) and
     # the segmentation's clustering and the shape tests (equal bit for bit)
     fit_backend: str = "auto"
     keep_segments: bool = True  # per-segment points and fits, for plots and evaluation
@@ -115,7 +115,7 @@ def checked_scans(scanners, scans) -> list[np.ndarray]:
     """One float array per scanner, checked: one scan per scanner, in order (``None`` for a scanner
     with no reading this cycle, e.g. a dropped message: all its beams count as invalid), each with
     the scanner's beam count. Anything else raises :class:`~viapath.observation.ObservationError`
-    naming the scan and the scanner (issue 12: bad input never becomes motion)."""
+    naming the scan and the scanner (bad input never becomes motion)."""
     from viapath.observation import ObservationError
 
     names = ", ".join(repr(s.name) for s in scanners)

@@ -132,7 +132,7 @@ def simulate_scan(scanner, robot_pose, centres, radii, segments=None, rng=None, 
     return scanner.measure(true_range, rng)
 
 
-# -- all scanners of a robot in one call (issue 16: the laser loop) ---------------------------------
+# -- all scanners of a robot in one call (the laser loop) ------------------------------------------
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 Source: the chain of :mod:`~viapath.perception.detection` and :mod:`~viapath.perception.tracking`,
 applied to real ``sensor_msgs/LaserScan`` messages (:mod:`viapath.io.rosbag`); the evaluation
-protocol of issue 3 for the leg_tracker training bag (Leigh et al., ICRA 2015, data README §4).
+protocol for the leg_tracker training bag (Leigh et al., ICRA 2015, data README §4).
 
 What we chose:
 * The sensor does not move in these recordings: the world frame is the laser frame (a moving

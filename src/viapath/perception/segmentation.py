@@ -82,7 +82,7 @@ def _threshold_from_sines(range_m: np.ndarray, sin_gap: np.ndarray, sin_rest: np
 @dataclass(frozen=True)
 class BeamTables:
     """What :func:`segment_beams` computes from the beam angles alone, computed once for a fixed beam
-    layout (detection caches one per scanner set and parameters; issue 16, wave 7).
+    layout (detection caches one per scanner set and parameters).
 
     ``cos_rad``/``sin_rad``: of each beam's angle. ``sin_gap[d - 1, i]`` and ``sin_rest[d - 1, i]``:
     ``sin(Δφ)`` and ``sin(λ - Δφ)`` of :func:`breakpoint_threshold_m` for beams ``i`` and ``i + d``

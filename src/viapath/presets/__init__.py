@@ -1,6 +1,6 @@
 """Named sets of planner option values ("presets"), shipped as YAML and validated by the planner's schema.
 
-Source: issue 15 (the weights k1..k4 of Eq. 1, paper §4.2 and §5.2). A preset is a YAML file::
+Source: the weights k1..k4 of Eq. 1 (paper §4.2 and §5.2). A preset is a YAML file::
 
     name: close-to-path
     description: one line

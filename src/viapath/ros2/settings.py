@@ -40,7 +40,7 @@ def _opt(name: str, default, unit: str = "", minimum=None, maximum=None, help: s
 NODE_NAME = "viapath"
 PLANNER_PREFIX = "planner."
 SHIELD_PREFIX = "shield."
-WEIGHTS_PRESET = "weights_preset"  # issue 15: one parameter selects a preset (viapath.presets); planner.* stays the schema
+WEIGHTS_PRESET = "weights_preset"  # one parameter selects a preset (viapath.presets); planner.* stays the schema
 
 
 MAX_ROLLOUT_STEPS = 2000  # steps of one roll-out (rollout_s / rollout_dt_s, escape_s / escape_dt_s)

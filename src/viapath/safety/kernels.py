@@ -1,7 +1,7 @@
 """The compiled shield (extra ``fast``: numba): :meth:`viapath.safety.shield.Shield.evaluate` as one
 scalar loop, the same arithmetic as the numpy reference in :mod:`viapath.safety.shield` (DESIGN §7).
 
-Source: issue 16 and the profile of ``benchmarks/bench_shield.py`` (docs/speed.md): per cycle the
+Source: the profile of ``benchmarks/bench_shield.py`` (docs/speed.md): per cycle the
 shield spends nearly all its time in ``evaluate`` (the (command, person, sub-interval) swept-disc and
 "towards" tests, a few dozen array operations on (K, N, T) arrays) and in ``braking_sweep`` (the
 braking roll-outs of the K commands); once those were compiled, the Python around them did (the

@@ -57,7 +57,7 @@ Choices where the sources are silent:
 * A person is skipped when it cannot come within reach of the robot before the longest braking
   ends (a bound: its distance minus its forecast reach exceeds the robot's longest sweep).
 
-Speed (issue 16, docs/speed.md): the numpy code here is the reference; option ``backend`` (``auto``
+Speed (docs/speed.md): the numpy code here is the reference; option ``backend`` (``auto``
 | ``numpy`` | ``numba``, as the planner's, env ``VIAPATH_PLANNER_BACKEND`` overriding ``auto``) may
 run :meth:`Shield.evaluate` and the window search of :meth:`Shield.filter` on
 :mod:`viapath.safety.kernels` instead, the same arithmetic compiled (extra ``fast``), with the same

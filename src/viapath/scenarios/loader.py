@@ -26,7 +26,7 @@ class _DuplicateKey(yaml.YAMLError):
 class _UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
     """PyYAML's safe loader, refusing a mapping that gives a key twice (PyYAML keeps the last silently).
 
-    On libyaml's parser where PyYAML has it (issue 16: a 1000-scenario suite spent most of a minute
+    On libyaml's parser where PyYAML has it (a 1000-scenario suite spent most of a minute
     in the pure-Python parser); the constructor, hence the data, is the same either way."""
 
     def construct_mapping(self, node, deep=False):

@@ -34,7 +34,7 @@ Velocity = tuple[Annotated[float, Field(ge=-MAX_SPEED_MPS, le=MAX_SPEED_MPS)],
                  Annotated[float, Field(ge=-MAX_SPEED_MPS, le=MAX_SPEED_MPS)]]
 Speed = Annotated[float, Field(gt=0.0, le=MAX_SPEED_MPS)]
 Radius = Annotated[float, Field(gt=0.0, le=MAX_RADIUS_M)]
-MAX_STEPS = 1_000_000  # a day at 10 Hz is 864 000; more is a typo in dt_s that would hang a run (issue 12)
+MAX_STEPS = 1_000_000  # a day at 10 Hz is 864 000; more is a typo in dt_s that would hang a run
 Segment = tuple[Point, Point]
 
 

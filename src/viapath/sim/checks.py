@@ -1,4 +1,4 @@
-"""Warnings about scenarios that are valid but will mislead (issue 12, finding 6 and 7).
+"""Warnings about scenarios that are valid but will mislead.
 
 A scenario that cannot run is an error (:mod:`viapath.scenarios.models`, e.g. more than
 ``MAX_STEPS`` steps); one that runs but whose numbers would be misread gets a warning here, printed

@@ -154,7 +154,7 @@ def compute_metrics(trace) -> dict[str, Any]:
     }
 
 
-# -- smoothness (issue 4) --------------------------------------------------------------------------
+# -- smoothness ------------------------------------------------------------------------------------
 # Taken from what the robot actually did (``robot_speeds_mps``, ``robot_turn_rates_radps``: one sample
 # per step, after the drive's limits), not from the raw commands, which may jump: a planner that
 # commands bang-bang speed changes shows up here as acceleration at the limit and large jerk.

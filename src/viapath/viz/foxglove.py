@@ -1,7 +1,7 @@
 """Runs as Foxglove sees them: one MCAP per run, or a live WebSocket view, built from the scene.
 
 Source: DESIGN §9 (foxglove-sdk writes MCAP and serves a live WebSocket view with Foxglove's
-schemas; the paper's Fig. 4 as a 3-D scene, time as the height) and issue 14. Every message is
+schemas; the paper's Fig. 4 as a 3-D scene, time as the height). Every message is
 built from a :class:`viapath.viz.scene.CycleScene`, the neutral description the ROS 2 node's
 MarkerArray shares. Needs the ``viz`` extra (``foxglove-sdk``); imported only when asked for.
 
@@ -226,7 +226,7 @@ class FoxglovePublisher:
         self.cycles += 1
 
     # -- pieces --------------------------------------------------------------------------------
-    # Built for speed (issue 14: writing must cost little beside the run). What is the same all run
+    # Built for speed (writing must cost little beside the run). What is the same all run
     # (colours, poses, the footprint, the blind region, the path for a given subgoal) is encoded
     # once, with foxglove-sdk's classes; what changes every cycle is encoded by
     # viapath.viz.protobuf_wire (one struct.pack per pose, numpy for point lists); a track that did

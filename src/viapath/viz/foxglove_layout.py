@@ -1,6 +1,6 @@
 """The Foxglove layout for viapath runs (``docs/foxglove/viapath-layout.json``), built with foxglove-sdk.
 
-Source: issue 14 (a layout in the repository arranges the panels), Foxglove's layout model
+Source: a layout in the repository arranges the panels, Foxglove's layout model
 (``foxglove.layouts``). Left: the world seen from above (scans, tracks, corridor, candidates, the
 chosen plan); middle: the x-y-t view of the paper's Fig. 4 in its own 3-D panel (frame ``xyt``,
 time as the height); right: time series (speed, clearance, lateral deviation, plan time, shield

@@ -6,7 +6,7 @@ delimited sub-messages, packed repeated scalars) and the field numbers of Foxglo
 hold, as stored in the MCAP schema record). Why: building one Python object per vertex or field
 (``foxglove.messages.Point3``, ``Pose``, ...) cost about a microsecond each; a person's x-y-t
 cylinder has ~50 vertices, a cycle's candidates hundreds, and the writer's CPU per cycle is what
-an MCAP costs a run (issue 14). Here a point list is one structured numpy array turned into bytes
+an MCAP costs a run. Here a point list is one structured numpy array turned into bytes
 (up to 8 points, one ``struct.pack`` each), a pose one ``struct.pack``.
 
 What we chose:

@@ -1,7 +1,7 @@
 """One planning cycle drawn with matplotlib: the world from above and the paper's Fig. 4 in x-y-t.
 
 Source: Yamada, Sa, Ohya Fig. 4 (obstacles as oblique cylinders in x-y-t, the robot's plan as a
-polyline through its via points) and issue 14 (a picture of what the Foxglove view shows, made by
+polyline through its via points) and the need for a picture of what the Foxglove view shows, made by
 our own code for the README). Draws a :class:`viapath.viz.scene.CycleScene`, the same content as
 the MCAP's ``/xyt`` and plan topics. matplotlib is imported lazily.
 

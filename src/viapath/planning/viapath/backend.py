@@ -1,6 +1,6 @@
 """Which arithmetic the viapath planner runs: the numpy reference or the compiled kernels (extra ``fast``).
 
-Source: issue 16 (a compiled hot path, the numpy path stays the reference); docs/speed.md.
+Source: a compiled hot path, the numpy path staying the reference; docs/speed.md.
 
 * Option ``backend`` (:mod:`.options`): ``auto`` (default) uses numba when it is importable, ``numpy``
   and ``numba`` force one (``numba`` without numba installed is an error naming the extra). The

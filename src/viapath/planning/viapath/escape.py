@@ -14,7 +14,7 @@ Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 
 * When contact cannot be avoided, fleeing fast mostly runs into someone else: a contact at speed
   counts 0.5 s of time to contact per m/s against the command (a tie-break, no more: the longest time
   to contact still decides).
-* A calm escape (``calm_escape``, issue 11): never faster than the top of the speed set (the limits'
+* A calm escape (``calm_escape``): never faster than the top of the speed set (the limits'
   top speed is for nothing the paper plans), and no flip from one cycle to the next: a command far
   from last cycle's escape command (speed change per top speed, turn change per turn-rate limit) pays
   up to ``escape_continuity_s`` seconds of time to contact. Before this, on ETH/UCY the speed command
@@ -25,7 +25,7 @@ Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 
 
 :func:`escape_scores` is the reference. On the compiled path, once the whole-step kernels are compiled,
 :meth:`.backend.Backend.escape` gives the standing check and the same scores, bit for bit, in two kernel calls
-(docs/speed.md, "The escape compiled (wave 7)"); :func:`stop_or_escape` then decides from them as here.
+(docs/speed.md, "The escape compiled"); :func:`stop_or_escape` then decides from them as here.
 """
 
 from __future__ import annotations
