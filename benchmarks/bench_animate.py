@@ -48,8 +48,10 @@ def main() -> None:
                 started = time.perf_counter()
                 module.animate_episode(episode, file, **kwargs)
                 wall = time.perf_counter() - started
-                print(f"{name} ({steps} steps, {episode.trace.times_s[-1]:.1f} s) {label}: {wall:.1f} s wall, "
-                      f"{file.stat().st_size / 1e6:.2f} MB")
+                print(
+                    f"{name} ({steps} steps, {episode.trace.times_s[-1]:.1f} s) {label}: {wall:.1f} s wall, "
+                    f"{file.stat().st_size / 1e6:.2f} MB"
+                )
 
 
 if __name__ == "__main__":

@@ -27,9 +27,15 @@ def _episode(file: str, calm: bool) -> dict:
     episode = run_episode(scenario, planner="viapath", planner_overrides={"calm_escape": calm})
     trace, m = episode.trace, episode.metrics
     excess = trace.path.corridor_excess(trace.robot_poses[:, :2])
-    return {"collision": m["collision"], "at_fault": m["at_fault_collision"], "reached": m["reached_goal"],
-            "escape_cycles": m["escape_cycles"], "command_flips": m["command_flips"],
-            "max_speed_mps": m["max_speed_mps"], "max_excess_m": float(np.max(excess))}
+    return {
+        "collision": m["collision"],
+        "at_fault": m["at_fault_collision"],
+        "reached": m["reached_goal"],
+        "escape_cycles": m["escape_cycles"],
+        "command_flips": m["command_flips"],
+        "max_speed_mps": m["max_speed_mps"],
+        "max_excess_m": float(np.max(excess)),
+    }
 
 
 def main(argv=None) -> int:
@@ -41,7 +47,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     files = sorted(str(f) for f in Path(args.suite).glob("*.yaml"))
     if args.limit:
-        files = files[:args.limit]
+        files = files[: args.limit]
     if not files:
         print(f"{args.suite}: no scenario files", file=sys.stderr)
         return 2
@@ -51,9 +57,12 @@ def main(argv=None) -> int:
         escape = sum(r["escape_cycles"] for r in rows)
         flips = sum(r["command_flips"] for r in rows)
         results["calm" if calm else "before"] = {
-            "episodes": len(rows), "collision": sum(r["collision"] for r in rows),
-            "at_fault_collision": sum(r["at_fault"] for r in rows), "reached_goal": sum(r["reached"] for r in rows),
-            "escape_cycles": escape, "command_flips": flips,
+            "episodes": len(rows),
+            "collision": sum(r["collision"] for r in rows),
+            "at_fault_collision": sum(r["at_fault"] for r in rows),
+            "reached_goal": sum(r["reached"] for r in rows),
+            "escape_cycles": escape,
+            "command_flips": flips,
             "flips_per_escape_cycle": flips / escape if escape else 0.0,
             "max_speed_mps": max(r["max_speed_mps"] for r in rows),
             "max_excess_m": max(r["max_excess_m"] for r in rows),
@@ -62,7 +71,9 @@ def main(argv=None) -> int:
         print(json.dumps(results, indent=2))
     else:
         for name, r in results.items():
-            print(f"{name:>7}: " + ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in r.items()))
+            print(
+                f"{name:>7}: " + ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}" for k, v in r.items())
+            )
     return 0
 
 

@@ -53,8 +53,7 @@ SCENES = {
     "zara2": [("crowds_zara02.txt", 0.4)],
 }
 TRAINING = [("crowds_zara03.txt", 0.4), ("uni_examples.txt", 0.4)]
-GRID = [SocialForecastParams(strength_m2ps2=v0, relaxation_time_s=tau)
-        for v0 in (0.5, 1.0, 2.1) for tau in (0.5, 1.0)]
+GRID = [SocialForecastParams(strength_m2ps2=v0, relaxation_time_s=tau) for v0 in (0.5, 1.0, 2.1) for tau in (0.5, 1.0)]
 SIGMA_FLOOR_MPS = 0.05
 K_SIGMAS = 2.0
 SAMPLES = 20
@@ -69,8 +68,21 @@ def windows_of(folder: Path, files):
 
 def evaluate(folder: Path, files, params: SocialForecastParams | None, sigma_heading: float | None, rng):
     """Per-pair errors of every forecast over the windows of ``files``."""
-    out = {key: [] for key in ("cv_ade", "cv_fde", "sf_ade", "sf_fde", "best_ade", "best_fde",
-                               "covered_today", "covered_fitted", "growth_fitted", "required_heading")}
+    out = {
+        key: []
+        for key in (
+            "cv_ade",
+            "cv_fde",
+            "sf_ade",
+            "sf_fde",
+            "best_ade",
+            "best_fde",
+            "covered_today",
+            "covered_fitted",
+            "growth_fitted",
+            "required_heading",
+        )
+    }
     for window, dt in windows_of(folder, files):
         n = len(window.observed)
         cv = constant_velocity_forecast(window.observed, PREDICTED_ROWS, dt)
@@ -81,7 +93,9 @@ def evaluate(folder: Path, files, params: SocialForecastParams | None, sigma_hea
         error = np.linalg.norm(cv - window.future, axis=-1)  # (n, steps)
         speed = np.hypot(*backward_velocity(window.observed[:, -1], window.observed[:, -2], dt).T)
         # sigma_heading each error would need: |err| <= k (sigma_0 + s |v|) t.
-        out["required_heading"].append(((error / (K_SIGMAS * t) - SIGMA_FLOOR_MPS) / np.maximum(speed, 0.1)[:, None]).ravel())
+        out["required_heading"].append(
+            ((error / (K_SIGMAS * t) - SIGMA_FLOOR_MPS) / np.maximum(speed, 0.1)[:, None]).ravel()
+        )
         # Today: oracle replays give sigma_v = 0 (no growth at all); the noisy-perception setting 0.05 m/s.
         out["covered_today"].append((error <= K_SIGMAS * SIGMA_FLOOR_MPS * t[None, :]).ravel())
         if params is not None:
@@ -104,7 +118,12 @@ def evaluate(folder: Path, files, params: SocialForecastParams | None, sigma_hea
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", type=Path, default=None, help="folder holding eth_ucy_trajectron/ (default: VIAPATH_DATA or ../shared/data)")
+    parser.add_argument(
+        "--data",
+        type=Path,
+        default=None,
+        help="folder holding eth_ucy_trajectron/ (default: VIAPATH_DATA or ../shared/data)",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--seed", type=int, default=0, help="seed of the CVM-S samples")
     args = parser.parse_args(argv)
@@ -125,8 +144,14 @@ def main(argv=None) -> int:
     grid = []
     for params in GRID:
         fit = evaluate(folder, TRAINING, params, None, rng)
-        grid.append({"strength_m2ps2": params.strength_m2ps2, "relaxation_time_s": params.relaxation_time_s,
-                     "ade_m": float(fit["sf_ade"].mean()), "fde_m": float(fit["sf_fde"].mean())})
+        grid.append(
+            {
+                "strength_m2ps2": params.strength_m2ps2,
+                "relaxation_time_s": params.relaxation_time_s,
+                "ade_m": float(fit["sf_ade"].mean()),
+                "fde_m": float(fit["sf_fde"].mean()),
+            }
+        )
     best = min(range(len(GRID)), key=lambda i: grid[i]["ade_m"])
     params = GRID[best]
 
@@ -139,22 +164,29 @@ def main(argv=None) -> int:
             "cv": {"ade_m": float(result["cv_ade"].mean()), "fde_m": float(result["cv_fde"].mean())},
             "social_force": {"ade_m": float(result["sf_ade"].mean()), "fde_m": float(result["sf_fde"].mean())},
             "cv_heading": {
-                "best_of_20_ade_m": float(result["best_ade"].mean()), "best_of_20_fde_m": float(result["best_fde"].mean()),
+                "best_of_20_ade_m": float(result["best_ade"].mean()),
+                "best_of_20_fde_m": float(result["best_fde"].mean()),
                 "coverage_fitted": float(result["covered_fitted"].mean()),
                 "coverage_sigma_floor_only": float(result["covered_today"].mean()),
                 "mean_growth_at_4_8_s_m": float(result["growth_fitted"].mean()),
             },
         }
-    mean = {key: {m: float(np.mean([s[key][m] for s in scenes.values()])) for m in ("ade_m", "fde_m")}
-            for key in ("cv", "social_force")}
+    mean = {
+        key: {m: float(np.mean([s[key][m] for s in scenes.values()])) for m in ("ade_m", "fde_m")}
+        for key in ("cv", "social_force")
+    }
     report = {
         "protocol": "8 observed / 12 predicted rows, stride 1, people present in all 20 rows, >= 2 per window",
         "training_files": [f for f, _ in TRAINING],
         "social_force_grid_on_training": grid,
         "social_force_chosen": grid[best],
         "cv_on_training": {"ade_m": float(train_cv["cv_ade"].mean()), "fde_m": float(train_cv["cv_fde"].mean())},
-        "cv_heading_fit": {"sigma_floor_mps": SIGMA_FLOOR_MPS, "k_sigmas": K_SIGMAS, "target_coverage": 0.95,
-                           "sigma_heading_rad": sigma_heading},
+        "cv_heading_fit": {
+            "sigma_floor_mps": SIGMA_FLOOR_MPS,
+            "k_sigmas": K_SIGMAS,
+            "target_coverage": 0.95,
+            "sigma_heading_rad": sigma_heading,
+        },
         "scenes": scenes,
         "mean_over_scenes": mean,
         "wall_s": time.perf_counter() - started,
@@ -162,20 +194,28 @@ def main(argv=None) -> int:
     if args.json:
         print(json.dumps(report, indent=2))
         return 0
-    print(f"social force on training files: V0 = {params.strength_m2ps2} m²/s², tau = {params.relaxation_time_s} s "
-          f"(ADE {grid[best]['ade_m']:.3f} m, CV {report['cv_on_training']['ade_m']:.3f} m); "
-          f"sigma_heading fitted = {sigma_heading:.3f} rad")
-    print("| scene | pairs | CV ADE/FDE [m] | social force ADE/FDE [m] | CVM-S best-of-20 ADE/FDE [m] "
-          "| disc coverage σ_v=0.05 / fitted | growth at 4.8 s [m] |")
+    print(
+        f"social force on training files: V0 = {params.strength_m2ps2} m²/s², tau = {params.relaxation_time_s} s "
+        f"(ADE {grid[best]['ade_m']:.3f} m, CV {report['cv_on_training']['ade_m']:.3f} m); "
+        f"sigma_heading fitted = {sigma_heading:.3f} rad"
+    )
+    print(
+        "| scene | pairs | CV ADE/FDE [m] | social force ADE/FDE [m] | CVM-S best-of-20 ADE/FDE [m] "
+        "| disc coverage σ_v=0.05 / fitted | growth at 4.8 s [m] |"
+    )
     print("|---|---|---|---|---|---|---|")
     for scene, s in scenes.items():
         h = s["cv_heading"]
-        print(f"| {scene} | {s['pairs']} | {s['cv']['ade_m']:.3f} / {s['cv']['fde_m']:.3f} | "
-              f"{s['social_force']['ade_m']:.3f} / {s['social_force']['fde_m']:.3f} | "
-              f"{h['best_of_20_ade_m']:.3f} / {h['best_of_20_fde_m']:.3f} | "
-              f"{h['coverage_sigma_floor_only']:.1%} / {h['coverage_fitted']:.1%} | {h['mean_growth_at_4_8_s_m']:.2f} |")
-    print(f"| mean | | {mean['cv']['ade_m']:.3f} / {mean['cv']['fde_m']:.3f} | "
-          f"{mean['social_force']['ade_m']:.3f} / {mean['social_force']['fde_m']:.3f} | | | |")
+        print(
+            f"| {scene} | {s['pairs']} | {s['cv']['ade_m']:.3f} / {s['cv']['fde_m']:.3f} | "
+            f"{s['social_force']['ade_m']:.3f} / {s['social_force']['fde_m']:.3f} | "
+            f"{h['best_of_20_ade_m']:.3f} / {h['best_of_20_fde_m']:.3f} | "
+            f"{h['coverage_sigma_floor_only']:.1%} / {h['coverage_fitted']:.1%} | {h['mean_growth_at_4_8_s_m']:.2f} |"
+        )
+    print(
+        f"| mean | | {mean['cv']['ade_m']:.3f} / {mean['cv']['fde_m']:.3f} | "
+        f"{mean['social_force']['ade_m']:.3f} / {mean['social_force']['fde_m']:.3f} | | | |"
+    )
     print(f"({report['wall_s']:.1f} s)")
     return 0
 

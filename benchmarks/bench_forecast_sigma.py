@@ -24,8 +24,8 @@ import viapath.sim.loop as loop
 from viapath.bench.suites import generate_suite
 from viapath.forecast import velocity_sigma_mps
 from viapath.observation import Obstacles
-from viapath.scenarios.models import Scenario
 from viapath.perception.oracle import OraclePerception
+from viapath.scenarios.models import Scenario
 
 
 class HeadingSigmaOracle(OraclePerception):
@@ -38,8 +38,14 @@ class HeadingSigmaOracle(OraclePerception):
     def observe(self, world):
         seen = super().observe(world)
         sigma = velocity_sigma_mps(seen.velocities, self.sigma_floor_mps, self.sigma_heading_rad)
-        return Obstacles(seen.positions, seen.velocities, seen.radii_m, position_sigma_m=seen.position_sigma_m,
-                         velocity_sigma_mps=sigma, ids=seen.ids)
+        return Obstacles(
+            seen.positions,
+            seen.velocities,
+            seen.radii_m,
+            position_sigma_m=seen.position_sigma_m,
+            velocity_sigma_mps=sigma,
+            ids=seen.ids,
+        )
 
 
 def run(scenarios, planner, perception_factory=None):
@@ -50,14 +56,25 @@ def run(scenarios, planner, perception_factory=None):
         rows = []
         for data in scenarios:
             m = loop.run_episode(Scenario.model_validate(data), planner=planner).metrics
-            rows.append((bool(m["reached_goal"]) and not m["collision"], bool(m["collision"]),
-                         bool(m["at_fault_collision"]), bool(m["reached_goal"])))
+            rows.append(
+                (
+                    bool(m["reached_goal"]) and not m["collision"],
+                    bool(m["collision"]),
+                    bool(m["at_fault_collision"]),
+                    bool(m["reached_goal"]),
+                )
+            )
     finally:
         loop.make_perception = original
     rows = np.array(rows)
-    return {"episodes": len(rows), "success_rate": float(rows[:, 0].mean()), "collision_rate": float(rows[:, 1].mean()),
-            "at_fault_collision_rate": float(rows[:, 2].mean()), "reached_goal_rate": float(rows[:, 3].mean()),
-            "at_fault_episodes": [s["name"] for s, r in zip(scenarios, rows) if r[2]]}
+    return {
+        "episodes": len(rows),
+        "success_rate": float(rows[:, 0].mean()),
+        "collision_rate": float(rows[:, 1].mean()),
+        "at_fault_collision_rate": float(rows[:, 2].mean()),
+        "reached_goal_rate": float(rows[:, 3].mean()),
+        "at_fault_episodes": [s["name"] for s, r in zip(scenarios, rows) if r[2]],
+    }
 
 
 def main(argv=None) -> int:
@@ -73,10 +90,14 @@ def main(argv=None) -> int:
     scenarios = generate_suite(args.suite, args.count, args.seed)
     started = time.perf_counter()
     report = {
-        "suite": args.suite, "count": args.count, "seed": args.seed, "planner": args.planner,
+        "suite": args.suite,
+        "count": args.count,
+        "seed": args.seed,
+        "planner": args.planner,
         "today": run(scenarios, args.planner),
         "heading_sigma": run(scenarios, args.planner, lambda: HeadingSigmaOracle(args.sigma_floor, args.sigma_heading)),
-        "sigma_floor_mps": args.sigma_floor, "sigma_heading_rad": args.sigma_heading,
+        "sigma_floor_mps": args.sigma_floor,
+        "sigma_heading_rad": args.sigma_heading,
     }
     report["wall_s"] = time.perf_counter() - started
     if args.json:
@@ -86,8 +107,10 @@ def main(argv=None) -> int:
     print("|---|---|---|---|---|---|")
     for key in ("today", "heading_sigma"):
         r = report[key]
-        print(f"| {key} | {r['episodes']} | {r['success_rate']:.1%} | {r['collision_rate']:.1%} | "
-              f"{r['at_fault_collision_rate']:.1%} | {r['reached_goal_rate']:.1%} |")
+        print(
+            f"| {key} | {r['episodes']} | {r['success_rate']:.1%} | {r['collision_rate']:.1%} | "
+            f"{r['at_fault_collision_rate']:.1%} | {r['reached_goal_rate']:.1%} |"
+        )
     return 0
 
 

@@ -29,10 +29,10 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_perception import scene  # noqa: E402
+from bench_perception import scene
 
-from viapath.perception.laser import LaserPerception  # noqa: E402
-from viapath.perception.raycast import numba_available  # noqa: E402
+from viapath.perception.laser import LaserPerception
+from viapath.perception.raycast import numba_available
 
 
 def laser_chain(backend: str, steps: int) -> float:
@@ -56,18 +56,27 @@ def closed_loop_scenario(backend: str, steps: int):
     for _ in range(10):
         y = rng.uniform(-3.0, 3.0)
         x = rng.uniform(2.0, 14.0)
-        obstacles.append({"start": [float(x), float(y)], "velocity": [float(rng.uniform(-0.4, 0.4)), float(-np.sign(y) * 0.1)],
-                          "radius": 0.25})
-    return scenario_from_dict({
-        "name": "bench-10",
-        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2, "radius": 0.25},
-        "path": {"waypoints": [[0.0, 0.0], [15.0, 0.0]], "half_width": 1.5},
-        "obstacles": obstacles,
-        "walls": [[[-2.0, -4.0], [20.0, -4.0]], [[-2.0, 4.0], [20.0, 4.0]]],
-        "duration_s": steps * 0.1,
-        "perception": {"mode": "laser", "options": {"ray_backend": backend,
-                                                     "detector": {"fit_backend": backend, "keep_segments": False}}},
-    })
+        obstacles.append(
+            {
+                "start": [float(x), float(y)],
+                "velocity": [float(rng.uniform(-0.4, 0.4)), float(-np.sign(y) * 0.1)],
+                "radius": 0.25,
+            }
+        )
+    return scenario_from_dict(
+        {
+            "name": "bench-10",
+            "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2, "radius": 0.25},
+            "path": {"waypoints": [[0.0, 0.0], [15.0, 0.0]], "half_width": 1.5},
+            "obstacles": obstacles,
+            "walls": [[[-2.0, -4.0], [20.0, -4.0]], [[-2.0, 4.0], [20.0, 4.0]]],
+            "duration_s": steps * 0.1,
+            "perception": {
+                "mode": "laser",
+                "options": {"ray_backend": backend, "detector": {"fit_backend": backend, "keep_segments": False}},
+            },
+        }
+    )
 
 
 def closed_loop(backend: str, steps: int) -> float:
@@ -93,14 +102,19 @@ def main(argv=None) -> int:
     for run in range(args.runs):
         row = {"run": run + 1, "load_average": os.getloadavg()}
         for backend in backends:
-            row[f"laser_steps_per_s_{backend}"], row[f"laser_steps_per_cpu_s_{backend}"] = laser_chain(backend, args.steps)
+            row[f"laser_steps_per_s_{backend}"], row[f"laser_steps_per_cpu_s_{backend}"] = laser_chain(
+                backend, args.steps
+            )
             if args.loop_steps > 0:
-                (row[f"closed_loop_steps_per_s_{backend}"],
-                 row[f"closed_loop_steps_per_cpu_s_{backend}"]) = closed_loop(backend, args.loop_steps)
+                (row[f"closed_loop_steps_per_s_{backend}"], row[f"closed_loop_steps_per_cpu_s_{backend}"]) = (
+                    closed_loop(backend, args.loop_steps)
+                )
         results["runs"].append(row)
         if not args.json:
             load = " ".join(f"{v:.2f}" for v in row["load_average"])
-            figures = "  ".join(f"{k.replace('_steps_per', '')} {v:6.0f}" for k, v in row.items() if k.endswith(tuple(backends)))
+            figures = "  ".join(
+                f"{k.replace('_steps_per', '')} {v:6.0f}" for k, v in row.items() if k.endswith(tuple(backends))
+            )
             print(f"run {run + 1} (load {load}): steps per wall s / per CPU s:  {figures}")
     if args.json:
         print(json.dumps(results, indent=2))

@@ -51,8 +51,10 @@ from viapath.viz.foxglove import display_overrides, record_episode
 try:
     from viapath.viz.mcap_process import wait_for_writers
 except ImportError:  # an older viapath (measured for comparison) waits for its writer itself
+
     def wait_for_writers() -> None:
         return None
+
 
 DEFAULT = ("paper-front", "paper-side:laser", "zara01")
 
@@ -62,11 +64,12 @@ def _zara01() -> dict | None:
     if not file.exists():
         return None
     return {
-        "name": "zara01-bench", "dt_s": 0.1, "duration_s": 20.0,
+        "name": "zara01-bench",
+        "dt_s": 0.1,
+        "duration_s": 20.0,
         "robot": {"start": [3.0, 5.0], "heading": 0.0, "speed": 0.3, "radius": 0.25},
         "path": {"waypoints": [[3.0, 5.0], [12.0, 5.0]], "half_width": 1.5},
-        "obstacles": [{"replay": {"file": str(file), "dt_s": 0.4, "start_s": 120, "offset": [0, 0],
-                                  "radius": 0.25}}],
+        "obstacles": [{"replay": {"file": str(file), "dt_s": 0.4, "start_s": 120, "offset": [0, 0], "radius": 0.25}}],
     }
 
 
@@ -103,31 +106,46 @@ def measure(name: str, repeats: int, folder: Path) -> dict | None:
         cpu[kind].append(time.process_time() - cpu_start)
         cpu_all[kind].append(cpu[kind][-1] + children_cpu() - child_start)
         return result
+
     for k in range(repeats):
         episode = timed("plain", lambda: run_episode(scenario, perception=perception))
         timed("candidates", lambda: run_episode(scenario, perception=perception, planner_overrides=overrides))
         file = folder / f"{base}-{k}.mcap"
         recorded = timed("mcap", lambda: record_episode(scenario, file, perception=perception, force=True))
         cycles, size = len(recorded.trace.times_s) - 1, file.stat().st_size
-        timed("here", lambda: record_episode(scenario, folder / "here.mcap", perception=perception, force=True,
-                                             in_process=True))
+        timed(
+            "here",
+            lambda: record_episode(scenario, folder / "here.mcap", perception=perception, force=True, in_process=True),
+        )
         assert len(episode.trace.times_s) == len(recorded.trace.times_s)
     med = {kind: statistics.median(values) for kind, values in wall.items()}
     med_cpu = {kind: statistics.median(values) for kind, values in cpu.items()}
     med_cpu_all = {kind: statistics.median(values) for kind, values in cpu_all.items()}
     p, m, c, h = med["plain"], med["mcap"], med["candidates"], med["here"]
-    percent = lambda a, b: 100.0 * (a - b) / b  # noqa: E731
-    return {"scenario": name, "perception": perception, "cycles": cycles, "wall_s": wall, "cpu_s": cpu,
-            "cpu_with_writer_s": cpu_all,
-            "plain_median_s": p, "mcap_median_s": m, "candidates_median_s": c, "here_median_s": h,
-            "overhead_percent": percent(m, p), "here_overhead_percent": percent(h, p),
-            "candidates_overhead_percent": percent(c, p),
-            "cpu_overhead_percent": percent(med_cpu["mcap"], med_cpu["plain"]),
-            "cpu_with_writer_overhead_percent": percent(med_cpu_all["mcap"], med_cpu_all["plain"]),
-            "mcap_ms_per_cycle": 1e3 * (m - p) / max(cycles, 1), "file_bytes": size,
-            "writer_cpu_ms_per_cycle": 1e3 * statistics.median(
-                a - b for a, b in zip(cpu_all["mcap"], cpu["mcap"])) / max(cycles, 1),
-            "load_average_1min": os.getloadavg()[0]}
+    percent = lambda a, b: 100.0 * (a - b) / b
+    return {
+        "scenario": name,
+        "perception": perception,
+        "cycles": cycles,
+        "wall_s": wall,
+        "cpu_s": cpu,
+        "cpu_with_writer_s": cpu_all,
+        "plain_median_s": p,
+        "mcap_median_s": m,
+        "candidates_median_s": c,
+        "here_median_s": h,
+        "overhead_percent": percent(m, p),
+        "here_overhead_percent": percent(h, p),
+        "candidates_overhead_percent": percent(c, p),
+        "cpu_overhead_percent": percent(med_cpu["mcap"], med_cpu["plain"]),
+        "cpu_with_writer_overhead_percent": percent(med_cpu_all["mcap"], med_cpu_all["plain"]),
+        "mcap_ms_per_cycle": 1e3 * (m - p) / max(cycles, 1),
+        "file_bytes": size,
+        "writer_cpu_ms_per_cycle": 1e3
+        * statistics.median(a - b for a, b in zip(cpu_all["mcap"], cpu["mcap"]))
+        / max(cycles, 1),
+        "load_average_1min": os.getloadavg()[0],
+    }
 
 
 def measure_command(name: str, repeats: int, folder: Path) -> dict | None:
@@ -151,8 +169,14 @@ def measure_command(name: str, repeats: int, folder: Path) -> dict | None:
             subprocess.run(command + extra, check=True, capture_output=True)
             wall[kind].append(time.perf_counter() - started)
     p, m = statistics.median(wall["plain"]), statistics.median(wall["mcap"])
-    return {"scenario": name, "command_wall_s": wall, "command_plain_median_s": p, "command_mcap_median_s": m,
-            "command_overhead_percent": 100.0 * (m - p) / p, "load_average_1min": os.getloadavg()[0]}
+    return {
+        "scenario": name,
+        "command_wall_s": wall,
+        "command_plain_median_s": p,
+        "command_mcap_median_s": m,
+        "command_overhead_percent": 100.0 * (m - p) / p,
+        "load_average_1min": os.getloadavg()[0],
+    }
 
 
 def main() -> None:
@@ -160,8 +184,11 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--scenarios", nargs="+", default=list(DEFAULT))
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.add_argument("--loop-only", action="store_true",
-                        help="skip timing the whole `viapath run` command (a fresh process) without and with --mcap")
+    parser.add_argument(
+        "--loop-only",
+        action="store_true",
+        help="skip timing the whole `viapath run` command (a fresh process) without and with --mcap",
+    )
     args = parser.parse_args()
     results = []
     with tempfile.TemporaryDirectory() as folder:
@@ -171,27 +198,40 @@ def main() -> None:
                 print(f"{name}: skipped (data not found under {data_root()})") if not args.json else None
                 continue
             results.append(result)
-        commands = [c for c in (measure_command(name, args.repeats, Path(folder)) for name in args.scenarios)
-                    if c is not None] if not args.loop_only else []
+        commands = (
+            [c for c in (measure_command(name, args.repeats, Path(folder)) for name in args.scenarios) if c is not None]
+            if not args.loop_only
+            else []
+        )
     if args.json:
-        print(json.dumps({"python": platform.python_version(), "repeats": args.repeats, "results": results,
-                          "commands": commands}))
+        print(
+            json.dumps(
+                {"python": platform.python_version(), "repeats": args.repeats, "results": results, "commands": commands}
+            )
+        )
         return
     print(f"python {platform.python_version()}, {platform.machine()}, {args.repeats} repeats each (medians)")
-    print(f"{'scenario':18s} {'cycles':>6s} {'plain s':>8s} {'mcap s':>8s} {'wall +':>8s} {'here +':>8s} "
-          f"{'cand. +':>8s} {'CPU run +':>10s} {'CPU all +':>10s} {'writer':>7s} {'ms/cycle':>9s} {'file':>8s} "
-          f"{'load':>5s}")
+    print(
+        f"{'scenario':18s} {'cycles':>6s} {'plain s':>8s} {'mcap s':>8s} {'wall +':>8s} {'here +':>8s} "
+        f"{'cand. +':>8s} {'CPU run +':>10s} {'CPU all +':>10s} {'writer':>7s} {'ms/cycle':>9s} {'file':>8s} "
+        f"{'load':>5s}"
+    )
     for r in results:
-        print(f"{r['scenario']:18s} {r['cycles']:6d} {r['plain_median_s']:8.2f} {r['mcap_median_s']:8.2f} "
-              f"{r['overhead_percent']:7.1f}% {r['here_overhead_percent']:7.1f}% "
-              f"{r['candidates_overhead_percent']:7.1f}% {r['cpu_overhead_percent']:9.1f}% "
-              f"{r['cpu_with_writer_overhead_percent']:9.1f}% {r['writer_cpu_ms_per_cycle']:7.2f} "
-              f"{r['mcap_ms_per_cycle']:9.2f} "
-              f"{r['file_bytes'] / 1e6:6.2f}MB {r['load_average_1min']:5.1f}")
+        print(
+            f"{r['scenario']:18s} {r['cycles']:6d} {r['plain_median_s']:8.2f} {r['mcap_median_s']:8.2f} "
+            f"{r['overhead_percent']:7.1f}% {r['here_overhead_percent']:7.1f}% "
+            f"{r['candidates_overhead_percent']:7.1f}% {r['cpu_overhead_percent']:9.1f}% "
+            f"{r['cpu_with_writer_overhead_percent']:9.1f}% {r['writer_cpu_ms_per_cycle']:7.2f} "
+            f"{r['mcap_ms_per_cycle']:9.2f} "
+            f"{r['file_bytes'] / 1e6:6.2f}MB {r['load_average_1min']:5.1f}"
+        )
     for c in commands:
-        print(f"{c['scenario']:18s} whole command: {c['command_plain_median_s']:.2f} s -> "
-              f"{c['command_mcap_median_s']:.2f} s with --mcap ({c['command_overhead_percent']:+.1f} %), "
-              f"load {c['load_average_1min']:.1f}")
+        print(
+            f"{c['scenario']:18s} whole command: {c['command_plain_median_s']:.2f} s -> "
+            f"{c['command_mcap_median_s']:.2f} s with --mcap ({c['command_overhead_percent']:+.1f} %), "
+            f"load {c['load_average_1min']:.1f}"
+        )
+
 
 if __name__ == "__main__":
     main()

@@ -24,22 +24,36 @@ from viapath.sim.loop import run_episode
 DEFAULT_SCENARIOS = ("paper-side", "paper-front")
 
 
-def run_one(scenario_name: str, seed: int, position_noise_m: float, velocity_noise_mps: float,
-            planner: str | None = None) -> dict:
-    episode = run_episode(load_scenario(scenario_name), planner=planner, perception="oracle", seed=seed,
-                          position_noise_m=position_noise_m, velocity_noise_mps=velocity_noise_mps)
+def run_one(
+    scenario_name: str, seed: int, position_noise_m: float, velocity_noise_mps: float, planner: str | None = None
+) -> dict:
+    episode = run_episode(
+        load_scenario(scenario_name),
+        planner=planner,
+        perception="oracle",
+        seed=seed,
+        position_noise_m=position_noise_m,
+        velocity_noise_mps=velocity_noise_mps,
+    )
     return {**episode.metrics, "seed": seed}
 
 
-def run_noise(scenarios=DEFAULT_SCENARIOS, seeds: int = 20, position_noise_m: float = 0.03,
-              velocity_noise_mps: float = 0.05, planner: str | None = None, jobs: int = 1) -> dict[str, list[dict]]:
+def run_noise(
+    scenarios=DEFAULT_SCENARIOS,
+    seeds: int = 20,
+    position_noise_m: float = 0.03,
+    velocity_noise_mps: float = 0.05,
+    planner: str | None = None,
+    jobs: int = 1,
+) -> dict[str, list[dict]]:
     """Metrics of every (scenario, seed) run, grouped by scenario."""
     tasks = [(name, seed) for name in scenarios for seed in range(seeds)]
     if jobs != 1:
         from joblib import Parallel, delayed
 
         results = Parallel(n_jobs=jobs)(
-            delayed(run_one)(name, seed, position_noise_m, velocity_noise_mps, planner) for name, seed in tasks)
+            delayed(run_one)(name, seed, position_noise_m, velocity_noise_mps, planner) for name, seed in tasks
+        )
     else:
         results = [run_one(name, seed, position_noise_m, velocity_noise_mps, planner) for name, seed in tasks]
     grouped: dict[str, list[dict]] = {name: [] for name in scenarios}
@@ -77,16 +91,22 @@ def main(argv=None) -> None:
         parser.error("--seeds must be >= 1 and the noise levels >= 0")
     started = time.perf_counter()
     grouped = run_noise(args.scenarios, args.seeds, args.position_noise, args.velocity_noise, args.planner, args.jobs)
-    print(f"oracle perception, position σ {args.position_noise} m, velocity σ {args.velocity_noise} m/s, "
-          f"seeds 0..{args.seeds - 1}, planner {args.planner or 'from scenario'}")
-    header = (f"{'scenario':<16} {'runs':>4} {'goal':>4} {'coll':>4} {'out':>4} {'clr min':>8} {'clr med':>8} "
-              f"{'switch med':>10} {'flips med':>9}  collided seeds")
+    print(
+        f"oracle perception, position σ {args.position_noise} m, velocity σ {args.velocity_noise} m/s, "
+        f"seeds 0..{args.seeds - 1}, planner {args.planner or 'from scenario'}"
+    )
+    header = (
+        f"{'scenario':<16} {'runs':>4} {'goal':>4} {'coll':>4} {'out':>4} {'clr min':>8} {'clr med':>8} "
+        f"{'switch med':>10} {'flips med':>9}  collided seeds"
+    )
     print(header)
     for name, runs in grouped.items():
         s = summarise(runs)
-        print(f"{name:<16} {s['runs']:>4} {s['reached_goal']:>4} {s['collisions']:>4} {s['outside_corridor']:>4} "
-              f"{s['min_clearance_min_m']:>8.3f} {s['min_clearance_median_m']:>8.3f} "
-              f"{s['plan_switches_median']:>10.1f} {s['side_flips_median']:>9.1f}  {s['collided_seeds']}")
+        print(
+            f"{name:<16} {s['runs']:>4} {s['reached_goal']:>4} {s['collisions']:>4} {s['outside_corridor']:>4} "
+            f"{s['min_clearance_min_m']:>8.3f} {s['min_clearance_median_m']:>8.3f} "
+            f"{s['plan_switches_median']:>10.1f} {s['side_flips_median']:>9.1f}  {s['collided_seeds']}"
+        )
     print(f"({time.perf_counter() - started:.1f} s)")
 
 

@@ -52,9 +52,11 @@ def main(argv=None) -> int:
             cold, warm = one(cache), one(cache)
         runs.append({"run": run + 1, "load_average": load, "first_process": cold, "second_process": warm})
         if not args.json:
-            print(f"run {run + 1} (load {' '.join(f'{v:.2f}' for v in load)}): first process (compiles) "
-                  f"{cold['wall_s']:.2f} s wall / {cold['cpu_s']:.2f} s CPU; second (cache) "
-                  f"{warm['wall_s']:.2f} s wall / {warm['cpu_s']:.2f} s CPU")
+            print(
+                f"run {run + 1} (load {' '.join(f'{v:.2f}' for v in load)}): first process (compiles) "
+                f"{cold['wall_s']:.2f} s wall / {cold['cpu_s']:.2f} s CPU; second (cache) "
+                f"{warm['wall_s']:.2f} s wall / {warm['cpu_s']:.2f} s CPU"
+            )
     if args.json:
         print(json.dumps({"runs": runs}, indent=2))
     return 0

@@ -54,11 +54,15 @@ def main() -> None:
     parser.add_argument("--obstacles", type=int, default=10)
     parser.add_argument("--steps", type=int, default=300, help="closed-loop steps per scenario (0: skip)")
     args = parser.parse_args()
-    print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}, numba: {numba_available()}")
+    print(
+        f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}, numba: {numba_available()}"
+    )
 
     worlds = [scene(args.obstacles, k) for k in range(args.cycles)]
     fits = ["numpy"] + (["numba"] if numba_available() else [])
-    print(f"\nprocessing (fusion, segmentation, circle fits, association, Kalman), 2 x 683 beams, {args.obstacles} obstacles:")
+    print(
+        f"\nprocessing (fusion, segmentation, circle fits, association, Kalman), 2 x 683 beams, {args.obstacles} obstacles:"
+    )
     for fit in fits:
         perception = LaserPerception(detector={"keep_segments": False, "fit_backend": fit})
         perception.reset(np.random.default_rng(1))
@@ -72,8 +76,10 @@ def main() -> None:
             obstacles = perception.process(world.time_s, world.robot_pose, scan)
             process_s.append(time.perf_counter() - started)
             counts.append(len(obstacles))
-        print(f"  circle fit {fit:6s}          {percentiles(process_s)}   "
-              f"(median {np.median(counts[50:]):.0f} confirmed tracks)   target p99 <= 2 ms")
+        print(
+            f"  circle fit {fit:6s}          {percentiles(process_s)}   "
+            f"(median {np.median(counts[50:]):.0f} confirmed tracks)   target p99 <= 2 ms"
+        )
 
     print(f"\nray casting, both scanners, {args.obstacles} discs + 2 walls:")
     backends = ["numpy"] + (["numba"] if numba_available() else [])
@@ -109,8 +115,13 @@ def closed_loop(steps: int, backends) -> None:
     for i in range(10):
         y = rng.uniform(-3.0, 3.0)
         x = rng.uniform(2.0, 14.0)
-        obstacles.append({"start": [float(x), float(y)], "velocity": [float(rng.uniform(-0.4, 0.4)), float(-np.sign(y) * 0.1)],
-                          "radius": 0.25})
+        obstacles.append(
+            {
+                "start": [float(x), float(y)],
+                "velocity": [float(rng.uniform(-0.4, 0.4)), float(-np.sign(y) * 0.1)],
+                "radius": 0.25,
+            }
+        )
     base = {
         "name": "bench-10",
         "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2, "radius": 0.25},
@@ -120,7 +131,9 @@ def closed_loop(steps: int, backends) -> None:
         "duration_s": steps * 0.1,
     }
     print(f"\nclosed loop, 10 obstacles, both scanners + tracking + planning, {steps} steps:")
-    for mode, options in [("oracle", {})] + [("laser", {"ray_backend": b, "detector": {"fit_backend": b, "keep_segments": False}}) for b in backends]:
+    for mode, options in [("oracle", {})] + [
+        ("laser", {"ray_backend": b, "detector": {"fit_backend": b, "keep_segments": False}}) for b in backends
+    ]:
         scenario = scenario_from_dict({**base, "perception": {"mode": mode, "options": options}})
         run_episode(scenario, seed=0)  # warm-up (numba compile, caches)
         started = time.perf_counter()
@@ -131,8 +144,10 @@ def closed_loop(steps: int, backends) -> None:
         extra = ""
         if mode == "laser":
             m = episode.metrics
-            extra = (f"   track RMSE {m['track_position_rmse_m']:.3f} m, {m['track_velocity_rmse_mps']:.3f} m/s;"
-                     f" perception p99 {m['perception_time_p99_ms']:.2f} ms")
+            extra = (
+                f"   track RMSE {m['track_position_rmse_m']:.3f} m, {m['track_velocity_rmse_mps']:.3f} m/s;"
+                f" perception p99 {m['perception_time_p99_ms']:.2f} ms"
+            )
         print(f"  {label:12s} {n / elapsed:8.0f} steps/s  ({n} steps, collision {episode.metrics['collision']}){extra}")
     print("  target: >= 300 steps/s with numpy alone")
 

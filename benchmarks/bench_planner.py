@@ -42,7 +42,7 @@ import time
 
 import numpy as np
 
-from viapath import DesignatedPath, Obstacles, Observation, RobotState
+from viapath import DesignatedPath, Observation, Obstacles, RobotState
 from viapath.planning import make_planner
 
 DEFAULT_PLANNERS = "viapath-numpy,viapath-fast,dwa,vo,nav-hl,nav-orca,nav-hrvo"
@@ -180,9 +180,12 @@ def run(planners: list[str], counts: list[int], cycles: int, seed: int) -> dict:
                 decide_quantiles[name] = np.percentile(own_samples[np.isfinite(own_samples)], [50, 99])
         if "nav-dummy" in quantiles:
             whole = np.percentile(time_planner(built["nav-dummy"], scenes, cycles, whole=True), [50, 99])
-            harness[str(n)] = {"p50_ms": float(whole[0]), "p99_ms": float(whole[1]),
-                               "call_p50_ms": float(quantiles["nav-dummy"][0]),
-                               "call_p99_ms": float(quantiles["nav-dummy"][1])}
+            harness[str(n)] = {
+                "p50_ms": float(whole[0]),
+                "p99_ms": float(whole[1]),
+                "call_p50_ms": float(quantiles["nav-dummy"][0]),
+                "call_p99_ms": float(quantiles["nav-dummy"][1]),
+            }
             gross = {name: quantiles[name].copy() for name in NAVGROUND if name in quantiles}
             for name in gross:
                 quantiles[name] = np.maximum(quantiles[name] - quantiles["nav-dummy"], 0.0)
@@ -205,36 +208,69 @@ def run(planners: list[str], counts: list[int], cycles: int, seed: int) -> dict:
                     row["ratio_decide_to_hrvo_call"] = row["decide_p50_ms"] / float(gross["nav-hrvo"][0])
             results[name][str(n)] = row
     clock = "wall (perf_counter)" if CLOCK[0] is time.perf_counter else "thread CPU time (thread_time)"
-    return {"cycles": cycles, "seed": seed, "obstacles": counts, "clock": f"{clock}, single thread",
-            "navground_net_of_harness": bool(harness), "harness_ms": harness, "results": results}
+    return {
+        "cycles": cycles,
+        "seed": seed,
+        "obstacles": counts,
+        "clock": f"{clock}, single thread",
+        "navground_net_of_harness": bool(harness),
+        "harness_ms": harness,
+        "results": results,
+    }
 
 
 def print_table(report: dict, load_before, load_after) -> None:
-    print(f"planning time per cycle, {report['cycles']} cycles per cell, pid {os.getpid()}, {report['clock']}; "
-          f"load average {load_before[0]:.2f} {load_before[1]:.2f} {load_before[2]:.2f} before, "
-          f"{load_after[0]:.2f} {load_after[1]:.2f} {load_after[2]:.2f} after")
+    print(
+        f"planning time per cycle, {report['cycles']} cycles per cell, pid {os.getpid()}, {report['clock']}; "
+        f"load average {load_before[0]:.2f} {load_before[1]:.2f} {load_before[2]:.2f} before, "
+        f"{load_after[0]:.2f} {load_after[1]:.2f} {load_after[2]:.2f} after"
+    )
     if report["harness_ms"]:
-        print("navground: compute_cmd only, net of the call as navground's Dummy measures it (p50/p99 ms per "
-              "obstacle count: " + ", ".join(f"{n}: {h['call_p50_ms']:.4f}/{h['call_p99_ms']:.4f}"
-                                            for n, h in report["harness_ms"].items()) + ")")
-        print("  the whole harness cycle around a navground behaviour (Dummy, p50/p99 ms): "
-              + ", ".join(f"{n}: {h['p50_ms']:.3f}/{h['p99_ms']:.3f}" for n, h in report["harness_ms"].items()))
-    header = (f"{'planner':>14} {'obstacles':>9} {'p50 ms':>9} {'p99 ms':>9} {'p50/HRVO':>9} {'p99/HRVO':>9} "
-              f"{'p50/HRVO call':>13}")
+        print(
+            "navground: compute_cmd only, net of the call as navground's Dummy measures it (p50/p99 ms per "
+            "obstacle count: "
+            + ", ".join(f"{n}: {h['call_p50_ms']:.4f}/{h['call_p99_ms']:.4f}" for n, h in report["harness_ms"].items())
+            + ")"
+        )
+        print(
+            "  the whole harness cycle around a navground behaviour (Dummy, p50/p99 ms): "
+            + ", ".join(f"{n}: {h['p50_ms']:.3f}/{h['p99_ms']:.3f}" for n, h in report["harness_ms"].items())
+        )
+    header = (
+        f"{'planner':>14} {'obstacles':>9} {'p50 ms':>9} {'p99 ms':>9} {'p50/HRVO':>9} {'p99/HRVO':>9} "
+        f"{'p50/HRVO call':>13}"
+    )
     print(header)
-    show = lambda value, width: f"{'n/a':>{width}}" if value is None else f"{value:>{width}.1f}"  # noqa: E731
+    show = lambda value, width: f"{'n/a':>{width}}" if value is None else f"{value:>{width}.1f}"
     for name, rows in report["results"].items():
         for n, row in rows.items():
-            ratio = (f"{show(row['ratio_to_hrvo'], 9)} {show(row['ratio_p99_to_hrvo'], 9)} "
-                     f"{show(row['ratio_to_hrvo_call'], 13)}") if "ratio_to_hrvo" in row else ""
-            own = (f"   decide alone: {row['decide_p50_ms']:.4f} / {row['decide_p99_ms']:.4f}"
-                   + (f", p50 {row['ratio_decide_to_hrvo_call']:.1f}× HRVO's call"
-                      if "ratio_decide_to_hrvo_call" in row else "")) if "decide_p50_ms" in row else ""
+            ratio = (
+                (
+                    f"{show(row['ratio_to_hrvo'], 9)} {show(row['ratio_p99_to_hrvo'], 9)} "
+                    f"{show(row['ratio_to_hrvo_call'], 13)}"
+                )
+                if "ratio_to_hrvo" in row
+                else ""
+            )
+            own = (
+                (
+                    f"   decide alone: {row['decide_p50_ms']:.4f} / {row['decide_p99_ms']:.4f}"
+                    + (
+                        f", p50 {row['ratio_decide_to_hrvo_call']:.1f}× HRVO's call"
+                        if "ratio_decide_to_hrvo_call" in row
+                        else ""
+                    )
+                )
+                if "decide_p50_ms" in row
+                else ""
+            )
             print(f"{name:>14} {n:>9} {row['p50_ms']:>9.4f} {row['p99_ms']:>9.4f} {ratio}{own}")
-    print(f"n/a: HRVO's net time is under {RESOLVED_MS} ms, within the noise of the subtraction; "
-          "'HRVO call': the ratio to HRVO's whole compute_cmd call (the Python → C++ call included); "
-          "'decide alone': viapath's own part of the cycle, after the guard, subgoal tracking and inflation "
-          "that every planner gets (navground's peers included)")
+    print(
+        f"n/a: HRVO's net time is under {RESOLVED_MS} ms, within the noise of the subtraction; "
+        "'HRVO call': the ratio to HRVO's whole compute_cmd call (the Python → C++ call included); "
+        "'decide alone': viapath's own part of the cycle, after the guard, subgoal tracking and inflation "
+        "that every planner gets (navground's peers included)"
+    )
 
 
 def plot(report: dict, file: str) -> None:
@@ -259,8 +295,11 @@ def plot(report: dict, file: str) -> None:
     axis.set_ylabel("planning time per cycle [ms]")
     net = " (navground: net of harness)" if report["navground_net_of_harness"] else ""
     load = report.get("load_average")
-    axis.set_title(f"p50 (solid) and p99 (dashed) per cycle{net}\n{report['clock']}"
-                   + (f", load average {load[0]:.2f}" if load else ""), fontsize=10)
+    axis.set_title(
+        f"p50 (solid) and p99 (dashed) per cycle{net}\n{report['clock']}"
+        + (f", load average {load[0]:.2f}" if load else ""),
+        fontsize=10,
+    )
     axis.grid(True, which="both", alpha=0.3)
     axis.legend(fontsize=7, ncol=2, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     figure.tight_layout()
@@ -276,9 +315,13 @@ def main() -> None:
     parser.add_argument("--planners", default=DEFAULT_PLANNERS, help="comma-separated; navground ones need the extra")
     parser.add_argument("--plot", metavar="FILE.png", help="plot p50/p99 against the number of obstacles")
     parser.add_argument("--json", action="store_true", help="print the figures as JSON instead of a table")
-    parser.add_argument("--clock", choices=sorted(CLOCKS), default="wall",
-                        help="wall: perf_counter; cpu: the thread's CPU time (on a loaded machine it leaves out the "
-                             "time the process waits for a core)")
+    parser.add_argument(
+        "--clock",
+        choices=sorted(CLOCKS),
+        default="wall",
+        help="wall: perf_counter; cpu: the thread's CPU time (on a loaded machine it leaves out the "
+        "time the process waits for a core)",
+    )
     args = parser.parse_args()
     CLOCK[0] = CLOCKS[args.clock]
     planners = [name.strip() for name in args.planners.split(",") if name.strip()]

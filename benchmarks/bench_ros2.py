@@ -40,8 +40,14 @@ def _cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def run(people_counts, cycles: int, seed: int = 0, profile: str | None = None,
-        node_args: tuple[str, ...] = (), nav2: bool = False) -> list[dict]:
+def run(
+    people_counts,
+    cycles: int,
+    seed: int = 0,
+    profile: str | None = None,
+    node_args: tuple[str, ...] = (),
+    nav2: bool = False,
+) -> list[dict]:
     domain = 150 + os.getpid() % 50
     os.environ.update(ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(domain))
     import rclpy
@@ -55,11 +61,28 @@ def run(people_counts, cycles: int, seed: int = 0, profile: str | None = None,
     from viapath.perception.scanner import paper_scanners
     from viapath.ros2 import convert
 
-    command = ["ros2", "nav2", "--ros-args", "-p", "autostart:=true"] if nav2 else ["ros2", "node", "--ros-args", "-p", "path_file:=paper-front"]
+    command = (
+        ["ros2", "nav2", "--ros-args", "-p", "autostart:=true"]
+        if nav2
+        else ["ros2", "node", "--ros-args", "-p", "path_file:=paper-front"]
+    )
     node_proc = subprocess.Popen(
-        [sys.executable, *(["-m", "cProfile", "-o", profile] if profile else []), "-m", "viapath.cli", *command,
-         "-p", "scan_timeout_s:=5.0", "-p", "odom_timeout_s:=5.0", *node_args],
-        env=dict(os.environ), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        [
+            sys.executable,
+            *(["-m", "cProfile", "-o", profile] if profile else []),
+            "-m",
+            "viapath.cli",
+            *command,
+            "-p",
+            "scan_timeout_s:=5.0",
+            "-p",
+            "odom_timeout_s:=5.0",
+            *node_args,
+        ],
+        env=dict(os.environ),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
     rclpy.init()
     node = rclpy.create_node("viapath_bench")
     results = []
@@ -80,7 +103,10 @@ def run(people_counts, cycles: int, seed: int = 0, profile: str | None = None,
         deadline = time.monotonic() + 120
         while node.count_publishers("cmd_vel") == 0 or node.count_subscribers("scan_rear") == 0:
             if time.monotonic() > deadline or node_proc.poll() is not None:
-                raise RuntimeError("the node did not come up: " + (node_proc.stderr.read().decode()[-2000:] if node_proc.poll() is not None else "timeout"))
+                raise RuntimeError(
+                    "the node did not come up: "
+                    + (node_proc.stderr.read().decode()[-2000:] if node_proc.poll() is not None else "timeout")
+                )
             rclpy.spin_once(node, timeout_sec=0.05)
         if nav2:
             _send_goal(node, [[-1.0, 0.0], [100.0, 0.0]])
@@ -105,8 +131,18 @@ def run(people_counts, cycles: int, seed: int = 0, profile: str | None = None,
                 pose = np.array([x, 0.0, 0.0])
                 scans = [simulate_scan(s, pose, people, np.full(count, 0.25), None, rng) for s in scanners]
                 stamp = convert.time_msg(node.get_clock().now().nanoseconds * 1e-9)
-                msgs = [convert.laser_scan(f"laser_{s.name}", stamp, s.angle_min_rad, s.angle_increment_rad, r,
-                                           s.range_min_m, s.range_max_m) for s, r in zip(scanners, scans)]
+                msgs = [
+                    convert.laser_scan(
+                        f"laser_{s.name}",
+                        stamp,
+                        s.angle_min_rad,
+                        s.angle_increment_rad,
+                        r,
+                        s.range_min_m,
+                        s.range_max_m,
+                    )
+                    for s, r in zip(scanners, scans)
+                ]
                 odom = convert.odometry("odom", "base_link", stamp, x, 0.0, 0.0, 0.2, 0.0)
                 if k == WARMUP_CYCLES:
                     cpu0, wall0 = _cpu_seconds(node_proc.pid), time.monotonic()
@@ -129,17 +165,23 @@ def run(people_counts, cycles: int, seed: int = 0, profile: str | None = None,
             wall = time.monotonic() - wall0
             cycle_ms = [float(s["cycle_time_ms"]) for s in got["status"][-cycles:] if s.get("cycle_time_ms")]
             lat = np.array(latencies)
-            results.append({
-                "people": count, "cycles": cycles, "missed_cycles": missed,
-                "latency_p50_ms": float(np.percentile(lat, 50)) if len(lat) else None,
-                "latency_p99_ms": float(np.percentile(lat, 99)) if len(lat) else None,
-                "latency_max_ms": float(lat.max()) if len(lat) else None,
-                "node_cpu_per_cycle_ms": 1e3 * cpu / cycles,
-                "node_cpu_share": cpu / wall,
-                "cycle_p50_ms": float(np.percentile(cycle_ms, 50)) if cycle_ms else None,
-                "cycle_p99_ms": float(np.percentile(cycle_ms, 99)) if cycle_ms else None,
-                "tracks_p50": float(np.median([int(s.get("tracks", 0)) for s in got["status"][-cycles:]])) if got["status"] else None,
-            })
+            results.append(
+                {
+                    "people": count,
+                    "cycles": cycles,
+                    "missed_cycles": missed,
+                    "latency_p50_ms": float(np.percentile(lat, 50)) if len(lat) else None,
+                    "latency_p99_ms": float(np.percentile(lat, 99)) if len(lat) else None,
+                    "latency_max_ms": float(lat.max()) if len(lat) else None,
+                    "node_cpu_per_cycle_ms": 1e3 * cpu / cycles,
+                    "node_cpu_share": cpu / wall,
+                    "cycle_p50_ms": float(np.percentile(cycle_ms, 50)) if cycle_ms else None,
+                    "cycle_p99_ms": float(np.percentile(cycle_ms, 99)) if cycle_ms else None,
+                    "tracks_p50": float(np.median([int(s.get("tracks", 0)) for s in got["status"][-cycles:]]))
+                    if got["status"]
+                    else None,
+                }
+            )
     finally:
         node.destroy_node()
         rclpy.shutdown()
@@ -182,24 +224,46 @@ def main() -> None:
     parser.add_argument("--cycles", type=int, default=150)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.add_argument("--executor", choices=("events", "single-threaded"), default=None,
-                        help="the node's executor parameter (default: the node's default)")
+    parser.add_argument(
+        "--executor",
+        choices=("events", "single-threaded"),
+        default=None,
+        help="the node's executor parameter (default: the node's default)",
+    )
     parser.add_argument("--profile", metavar="FILE", help="run the node under cProfile, stats written to FILE")
-    parser.add_argument("--nav2", action="store_true", help="viapath ros2 nav2 with a FollowPath goal instead of viapath ros2 node")
+    parser.add_argument(
+        "--nav2", action="store_true", help="viapath ros2 nav2 with a FollowPath goal instead of viapath ros2 node"
+    )
     args = parser.parse_args()
     started = time.time()
     node_args = ("-p", f"executor:={args.executor}") if args.executor else ()
     results = run(args.people, args.cycles, args.seed, args.profile, node_args, nav2=args.nav2)
     load = os.getloadavg()[0]
     if args.json:
-        print(json.dumps({"benchmark": "ros2", "node": "nav2" if args.nav2 else "node", "load_avg_1min": load, "wall_s": time.time() - started, "results": results}))
+        print(
+            json.dumps(
+                {
+                    "benchmark": "ros2",
+                    "node": "nav2" if args.nav2 else "node",
+                    "load_avg_1min": load,
+                    "wall_s": time.time() - started,
+                    "results": results,
+                }
+            )
+        )
         return
-    print(f"viapath ros2 {'nav2 (FollowPath goal)' if args.nav2 else 'node'}, scan in -> cmd_vel out over DDS ({args.cycles} cycles at 10 Hz; load avg {load:.1f})")
-    print(f"{'people':>6} {'lat p50':>8} {'lat p99':>8} {'lat max':>8} {'cpu/cycle':>10} {'cycle p50':>10} {'cycle p99':>10} {'tracks':>6} {'missed':>6}")
+    print(
+        f"viapath ros2 {'nav2 (FollowPath goal)' if args.nav2 else 'node'}, scan in -> cmd_vel out over DDS ({args.cycles} cycles at 10 Hz; load avg {load:.1f})"
+    )
+    print(
+        f"{'people':>6} {'lat p50':>8} {'lat p99':>8} {'lat max':>8} {'cpu/cycle':>10} {'cycle p50':>10} {'cycle p99':>10} {'tracks':>6} {'missed':>6}"
+    )
     for r in results:
-        print(f"{r['people']:>6} {r['latency_p50_ms']:>7.2f}ms {r['latency_p99_ms']:>7.2f}ms {r['latency_max_ms']:>7.2f}ms "
-              f"{r['node_cpu_per_cycle_ms']:>8.2f}ms {r['cycle_p50_ms']:>8.2f}ms {r['cycle_p99_ms']:>8.2f}ms "
-              f"{r['tracks_p50']:>6.0f} {r['missed_cycles']:>6}")
+        print(
+            f"{r['people']:>6} {r['latency_p50_ms']:>7.2f}ms {r['latency_p99_ms']:>7.2f}ms {r['latency_max_ms']:>7.2f}ms "
+            f"{r['node_cpu_per_cycle_ms']:>8.2f}ms {r['cycle_p50_ms']:>8.2f}ms {r['cycle_p99_ms']:>8.2f}ms "
+            f"{r['tracks_p50']:>6.0f} {r['missed_cycles']:>6}"
+        )
 
 
 if __name__ == "__main__":

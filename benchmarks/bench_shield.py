@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from viapath import DesignatedPath, Obstacles, Observation, RobotState
+from viapath import DesignatedPath, Observation, Obstacles, RobotState
 from viapath.observation import Command, MotionLimits
 from viapath.planning import make_planner
 from viapath.safety import ShieldConfig, ShieldedPlanner
@@ -58,8 +58,11 @@ def one_run(cycles: int, seed: int, backend: str = "auto") -> list[dict]:
     path = DesignatedPath([[0.0, 0.0], [10.0, 0.0]], half_width_m=1.5)
     limits = MotionLimits()
     bare = make_planner("viapath", path, nominal_speed_mps=0.2, limits=limits)
-    guarded = ShieldedPlanner(make_planner("viapath", path, nominal_speed_mps=0.2, limits=limits), dt_s=0.1,
-                              config=ShieldConfig(backend=backend))
+    guarded = ShieldedPlanner(
+        make_planner("viapath", path, nominal_speed_mps=0.2, limits=limits),
+        dt_s=0.1,
+        config=ShieldConfig(backend=backend),
+    )
     shield = guarded.shield
     rows = []
     for n_people in (1, 10, 50, 100):
@@ -91,10 +94,23 @@ def one_run(cycles: int, seed: int, backend: str = "auto") -> list[dict]:
         for name, function in cases.items():
             samples = _time(function, scenes, cycles)
             p50, p99 = np.percentile(samples, [50, 99])
-            rows.append({"people": n_people, "case": name, "backend": shield.backend, "p50_ms": float(p50), "p99_ms": float(p99),
-                         "max_ms": float(max(samples)),
-                         "intervened_fraction": float(intervened if name in ("shield", "viapath+shield") else
-                                                      searched if name == "shield-search" else 0.0)})
+            rows.append(
+                {
+                    "people": n_people,
+                    "case": name,
+                    "backend": shield.backend,
+                    "p50_ms": float(p50),
+                    "p99_ms": float(p99),
+                    "max_ms": float(max(samples)),
+                    "intervened_fraction": float(
+                        intervened
+                        if name in ("shield", "viapath+shield")
+                        else searched
+                        if name == "shield-search"
+                        else 0.0
+                    ),
+                }
+            )
     return rows
 
 
@@ -103,21 +119,32 @@ def main() -> None:
     parser.add_argument("--cycles", type=int, default=300)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--runs", type=int, default=3)
-    parser.add_argument("--backend", choices=("auto", "numpy", "numba", "both"), default="auto",
-                        help="the shield's arithmetic (both: each row on numpy, then on numba)")
+    parser.add_argument(
+        "--backend",
+        choices=("auto", "numpy", "numba", "both"),
+        default="auto",
+        help="the shield's arithmetic (both: each row on numpy, then on numba)",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON object (all runs)")
     args = parser.parse_args()
     backends = ("numpy", "numba") if args.backend == "both" else (args.backend,)
     runs = [[row for backend in backends for row in one_run(args.cycles, args.seed, backend)] for _ in range(args.runs)]
     if args.json:
-        print(json.dumps({"cycles": args.cycles, "seed": args.seed, "backend": args.backend, "pid": os.getpid(), "runs": runs}, indent=1))
+        print(
+            json.dumps(
+                {"cycles": args.cycles, "seed": args.seed, "backend": args.backend, "pid": os.getpid(), "runs": runs},
+                indent=1,
+            )
+        )
         return
     for number, rows in enumerate(runs, 1):
         print(f"run {number}: {args.cycles} cycles per row, pid {os.getpid()}, single thread")
         print(f"{'people':>6} {'case':>15} {'shield':>7} {'p50 ms':>8} {'p99 ms':>8} {'max ms':>8} {'replaced':>8}")
         for row in rows:
-            print(f"{row['people']:>6} {row['case']:>15} {row['backend']:>7} {row['p50_ms']:>8.3f} {row['p99_ms']:>8.3f} "
-                  f"{row['max_ms']:>8.3f} {row['intervened_fraction']:>8.0%}")
+            print(
+                f"{row['people']:>6} {row['case']:>15} {row['backend']:>7} {row['p50_ms']:>8.3f} {row['p99_ms']:>8.3f} "
+                f"{row['max_ms']:>8.3f} {row['intervened_fraction']:>8.0%}"
+            )
 
 
 if __name__ == "__main__":

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from viapath import DesignatedPath, Obstacles, Observation, RobotState
+from viapath import DesignatedPath, Observation, Obstacles, RobotState
 from viapath.bench.suites import data_root
 from viapath.guard import with_static_rows
 from viapath.io.rosbag import read_laser_scans
@@ -77,8 +77,14 @@ def scenes(rng, count: int, people: int, static) -> list[Observation]:
         positions = np.stack([distance * np.cos(bearing), distance * np.sin(bearing)], 1)
         speed, heading = rng.uniform(0.3, 1.5, people), rng.uniform(-np.pi, np.pi, people)
         velocities = np.stack([speed * np.cos(heading), speed * np.sin(heading)], 1)
-        out.append(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.23),
-                               Obstacles(positions, velocities, np.full(people, 0.25)), static))
+        out.append(
+            Observation(
+                0.0,
+                RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.23),
+                Obstacles(positions, velocities, np.full(people, 0.25)),
+                static,
+            )
+        )
     return out
 
 
@@ -101,8 +107,13 @@ def time_planner(backend: str, observations, cycles: int) -> dict:
         samples.append((clock() - started) * 1e3)
         statuses[decision.plan.status] = statuses.get(decision.plan.status, 0) + 1
     samples = np.array(samples)
-    return {"p50_ms": float(np.percentile(samples, 50)), "p99_ms": float(np.percentile(samples, 99)),
-            "max_ms": float(samples.max()), "statuses": statuses, "backend": decision.plan.extras.get("backend")}
+    return {
+        "p50_ms": float(np.percentile(samples, 50)),
+        "p99_ms": float(np.percentile(samples, 99)),
+        "max_ms": float(samples.max()),
+        "statuses": statuses,
+        "backend": decision.plan.extras.get("backend"),
+    }
 
 
 def main() -> None:
@@ -125,21 +136,29 @@ def main() -> None:
     observations = scenes(np.random.default_rng(args.seed), 40, args.people, static)
     merged = with_static_rows(observations[0]).obstacles
     figures = {
-        "returns": returns, "segments": len(static), "static_discs": merged.static_count, "people": args.people,
+        "returns": returns,
+        "segments": len(static),
+        "static_discs": merged.static_count,
+        "people": args.people,
         "layer_p50_ms": float(np.percentile(layer_times, 50)),
         "numpy": time_planner("numpy", observations, args.cycles),
         "compiled": time_planner("numba", observations, args.cycles),
-        "load_average": os.getloadavg()[0], "clock": args.clock,
+        "load_average": os.getloadavg()[0],
+        "clock": args.clock,
     }
     if args.json:
         print(json.dumps(figures))
         return
-    print(f"{returns} returns -> {len(static)} segments -> {merged.static_count} static discs; {args.people} people; "
-          f"layer p50 {figures['layer_p50_ms']:.2f} ms; load {figures['load_average']:.1f}")
+    print(
+        f"{returns} returns -> {len(static)} segments -> {merged.static_count} static discs; {args.people} people; "
+        f"layer p50 {figures['layer_p50_ms']:.2f} ms; load {figures['load_average']:.1f}"
+    )
     for name in ("numpy", "compiled"):
         f = figures[name]
-        print(f"  viapath {name:8s} p50 {f['p50_ms']:.2f} ms  p99 {f['p99_ms']:.2f} ms  max {f['max_ms']:.2f} ms  "
-              f"{f['statuses']}")
+        print(
+            f"  viapath {name:8s} p50 {f['p50_ms']:.2f} ms  p99 {f['p99_ms']:.2f} ms  max {f['max_ms']:.2f} ms  "
+            f"{f['statuses']}"
+        )
 
 
 if __name__ == "__main__":

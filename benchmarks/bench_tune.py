@@ -25,12 +25,24 @@ from viapath.bench.tune import PAPER_WEIGHTS, PLANNER
 def one_trial(scenarios, workers: int, seed: int) -> dict:
     started = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="viapath-bench-tune-") as folder:
-        rows = run_bench(scenarios, [PLANNER], Path(folder), workers=workers, seed=seed, progress=False,
-                         planner_options={PLANNER: dict(PAPER_WEIGHTS)})["rows"]
+        rows = run_bench(
+            scenarios,
+            [PLANNER],
+            Path(folder),
+            workers=workers,
+            seed=seed,
+            progress=False,
+            planner_options={PLANNER: dict(PAPER_WEIGHTS)},
+        )["rows"]
     wall = time.perf_counter() - started
     episodes = [r["episode_wall_s"] for r in rows]
-    return {"workers": workers, "wall_s": round(wall, 2), "episodes_sum_s": round(sum(episodes), 2),
-            "longest_episode_s": round(max(episodes), 2), "load_average_1min": round(os.getloadavg()[0], 2)}
+    return {
+        "workers": workers,
+        "wall_s": round(wall, 2),
+        "episodes_sum_s": round(sum(episodes), 2),
+        "longest_episode_s": round(max(episodes), 2),
+        "load_average_1min": round(os.getloadavg()[0], 2),
+    }
 
 
 def main() -> None:
@@ -50,8 +62,10 @@ def main() -> None:
     print(f"{len(scenarios)} scenarios; one trial = one run of the suite")
     print(f"{'workers':>7} {'wall [s]':>9} {'episodes sum [s]':>17} {'longest [s]':>12} {'load':>6}")
     for r in rows:
-        print(f"{r['workers']:7d} {r['wall_s']:9.1f} {r['episodes_sum_s']:17.1f} {r['longest_episode_s']:12.1f} "
-              f"{r['load_average_1min']:6.2f}")
+        print(
+            f"{r['workers']:7d} {r['wall_s']:9.1f} {r['episodes_sum_s']:17.1f} {r['longest_episode_s']:12.1f} "
+            f"{r['load_average_1min']:6.2f}"
+        )
 
 
 if __name__ == "__main__":

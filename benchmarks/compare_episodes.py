@@ -40,8 +40,12 @@ def compare(before: dict, after: dict) -> dict:
         for column in sorted((set(a) | set(b)) - IGNORED - set(KEY)):
             if a.get(column) != b.get(column):
                 changed.append({"row": list(key), "column": column, "before": a.get(column), "after": b.get(column)})
-    return {"rows_compared": len(set(before) & set(after)), "only_before": [list(k) for k in only_before],
-            "only_after": [list(k) for k in only_after], "differences": changed}
+    return {
+        "rows_compared": len(set(before) & set(after)),
+        "only_before": [list(k) for k in only_before],
+        "only_after": [list(k) for k in only_after],
+        "differences": changed,
+    }
 
 
 def main(argv=None) -> int:
@@ -55,8 +59,10 @@ def main(argv=None) -> int:
     if args.json:
         print(json.dumps({**result, "identical": same}, indent=2))
     else:
-        print(f"{result['rows_compared']} rows compared; {len(result['differences'])} differing values; "
-              f"{len(result['only_before'])} rows only before, {len(result['only_after'])} only after")
+        print(
+            f"{result['rows_compared']} rows compared; {len(result['differences'])} differing values; "
+            f"{len(result['only_before'])} rows only before, {len(result['only_after'])} only after"
+        )
         for item in result["differences"][:50]:
             print(f"  {'/'.join(item['row'])}: {item['column']}: {item['before']} -> {item['after']}")
     return 0 if same else 1

@@ -62,16 +62,21 @@ def main() -> None:
         data = yaml.safe_load(file.read_text())
         name = data.get("name", file.stem)
         for spec in args.presets.split(","):
-            episode = run_episode(scenario_from_dict(data, name), planner="viapath", seed=episode_seed(args.seed, name),
-                                  planner_overrides=options_of(spec))
+            episode = run_episode(
+                scenario_from_dict(data, name),
+                planner="viapath",
+                seed=episode_seed(args.seed, name),
+                planner_overrides=options_of(spec),
+            )
             key = (family_of(name), spec)
             totals[key].update(shares(episode))
             totals[key]["all"] += episode.metrics["mean_lateral_deviation_m"]
             counts[key] += 1
     for key in sorted(totals):
         parts = {status: value / counts[key] for status, value in totals[key].items()}
-        listed = ", ".join(f"{status} {value:.3f}" for status, value in sorted(parts.items(), key=lambda kv: -kv[1])
-                           if value >= 0.0005)
+        listed = ", ".join(
+            f"{status} {value:.3f}" for status, value in sorted(parts.items(), key=lambda kv: -kv[1]) if value >= 0.0005
+        )
         print(f"{key[0]:12s} {key[1]:40s} episodes {counts[key]:3d}: {listed}")
 
 

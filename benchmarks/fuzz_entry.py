@@ -39,11 +39,11 @@ from hypothesis import HealthCheck, given, seed, settings
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "robustness"))
 
-from _fuzz import observation_batches, scan_sets  # noqa: E402
-from _helpers import fresh, inside_limits, moves_towards_close_obstacle  # noqa: E402
+from _fuzz import observation_batches, scan_sets
+from _helpers import fresh, inside_limits, moves_towards_close_obstacle
 
-from viapath.observation import Observation, ObservationError, RobotState  # noqa: E402
-from viapath.planning import available_planners  # noqa: E402
+from viapath.observation import Observation, ObservationError, RobotState
+from viapath.planning import available_planners
 
 BATCH = 5
 
@@ -58,7 +58,7 @@ def classify(planner, observation, counts: Counter, examples: list) -> None:
     except ObservationError:
         counts["refused (ObservationError)"] += 1
         return
-    except Exception as error:  # noqa: BLE001 - counted
+    except Exception as error:
         counts["VIOLATION other exception"] += 1
         examples.append(f"{type(error).__name__}: {error}")
         return
@@ -84,8 +84,9 @@ def fuzz_planner(name: str, cases: int, base_seed: int) -> dict:
     examples: list[str] = []
 
     @seed(base_seed)
-    @settings(max_examples=max(1, cases // BATCH), deadline=None, database=None,
-              suppress_health_check=list(HealthCheck))
+    @settings(
+        max_examples=max(1, cases // BATCH), deadline=None, database=None, suppress_health_check=list(HealthCheck)
+    )
     @given(observation_batches(BATCH))
     def run(batch):
         for observation in batch:
@@ -94,8 +95,13 @@ def fuzz_planner(name: str, cases: int, base_seed: int) -> dict:
     started = time.perf_counter()
     cpu = time.process_time()
     run()
-    return {"planner": name, **dict(counts), "wall_s": time.perf_counter() - started,
-            "cpu_s": time.process_time() - cpu, "violation_examples": examples[:5]}
+    return {
+        "planner": name,
+        **dict(counts),
+        "wall_s": time.perf_counter() - started,
+        "cpu_s": time.process_time() - cpu,
+        "violation_examples": examples[:5],
+    }
 
 
 def fuzz_laser(cases: int, base_seed: int) -> dict:
@@ -121,20 +127,26 @@ def fuzz_laser(cases: int, base_seed: int) -> dict:
         except ObservationError:
             counts["refused (ObservationError)"] += 1
             return
-        except Exception as error:  # noqa: BLE001 - counted
+        except Exception as error:
             counts["VIOLATION perception exception"] += 1
             examples.append(f"{type(error).__name__}: {error}")
             return
         if not (np.isfinite(obstacles.positions).all() and np.isfinite(obstacles.velocities).all()):
             counts["VIOLATION non-finite track"] += 1
-        classify(planner, Observation(clock["t"], RobotState(pose[:2], pose[2], 0.2, 0.0, 0.25), obstacles),
-                 counts, examples)
+        classify(
+            planner, Observation(clock["t"], RobotState(pose[:2], pose[2], 0.2, 0.0, 0.25), obstacles), counts, examples
+        )
 
     started = time.perf_counter()
     cpu = time.process_time()
     run()
-    return {"planner": "laser->viapath", **dict(counts), "wall_s": time.perf_counter() - started,
-            "cpu_s": time.process_time() - cpu, "violation_examples": examples[:5]}
+    return {
+        "planner": "laser->viapath",
+        **dict(counts),
+        "wall_s": time.perf_counter() - started,
+        "cpu_s": time.process_time() - cpu,
+        "violation_examples": examples[:5],
+    }
 
 
 def fuzz_inputs(cases: int, base_seed: int) -> dict:
@@ -142,9 +154,9 @@ def fuzz_inputs(cases: int, base_seed: int) -> dict:
     integer literals of thousands of digits, coordinates near the float limit) through the scenario and
     preset readers: each must be refused with their error, a short message naming the file (and the
     field), quickly."""
+    from _hostile import far_coordinates, hostile_yaml, long_integers
     from hypothesis import strategies as st
 
-    from _hostile import far_coordinates, hostile_yaml, long_integers  # noqa: E402
     from viapath.presets import PresetError, parse_preset
     from viapath.scenarios import ScenarioError
     from viapath.scenarios.loader import _parse
@@ -160,8 +172,10 @@ def fuzz_inputs(cases: int, base_seed: int) -> dict:
     def run(case):
         text, field = case
         counts["inputs"] += 1
-        for reader, expected in ((lambda: _parse(text, "s.yaml", base_dir=None), ScenarioError),
-                                 (lambda: parse_preset(text, "s.yaml"), PresetError)):
+        for reader, expected in (
+            (lambda: _parse(text, "s.yaml", base_dir=None), ScenarioError),
+            (lambda: parse_preset(text, "s.yaml"), PresetError),
+        ):
             started, cpu = time.perf_counter(), time.process_time()
             try:
                 reader()
@@ -175,7 +189,7 @@ def fuzz_inputs(cases: int, base_seed: int) -> dict:
                     examples.append(f"{field}: {message[:200]}")
                 else:
                     counts["refused"] += 1
-            except Exception as error:  # noqa: BLE001 - counted
+            except Exception as error:
                 counts["VIOLATION other exception"] += 1
                 examples.append(f"{type(error).__name__}: {str(error)[:200]}")
             else:
@@ -185,9 +199,14 @@ def fuzz_inputs(cases: int, base_seed: int) -> dict:
 
     started = time.perf_counter()
     run()
-    return {"planner": "hostile inputs", **dict(counts), "slowest_refusal_s": slowest[0],
-            "slowest_refusal_cpu_s": slowest[1],
-            "wall_s": time.perf_counter() - started, "violation_examples": examples[:5]}
+    return {
+        "planner": "hostile inputs",
+        **dict(counts),
+        "slowest_refusal_s": slowest[0],
+        "slowest_refusal_cpu_s": slowest[1],
+        "wall_s": time.perf_counter() - started,
+        "violation_examples": examples[:5],
+    }
 
 
 def fuzz_construction(cases: int, base_seed: int) -> dict:
@@ -196,10 +215,10 @@ def fuzz_construction(cases: int, base_seed: int) -> dict:
     planner whose cycles give finite commands inside the limits (or be refused by the step cross-check)."""
     import math
 
+    from _helpers import LIMITS, corridor, robot
+    from _hostile import option_values
     from hypothesis import strategies as st
 
-    from _helpers import LIMITS, corridor, robot  # noqa: E402
-    from _hostile import option_values  # noqa: E402
     from viapath.limits import LIMIT_BOUNDS
     from viapath.observation import MotionLimits, Obstacles
     from viapath.options import OptionError
@@ -209,8 +228,11 @@ def fuzz_construction(cases: int, base_seed: int) -> dict:
     counts: Counter = Counter()
     examples: list[str] = []
     slowest = [0.0]
-    obstacles = Obstacles(np.array([[1.2, 0.1], [2.0, -0.4], [0.8, 0.9]]),
-                          np.array([[-0.4, 0.0], [0.0, 0.3], [0.1, -0.2]]), np.full(3, 0.3))
+    obstacles = Obstacles(
+        np.array([[1.2, 0.1], [2.0, -0.4], [0.8, 0.9]]),
+        np.array([[-0.4, 0.0], [0.0, 0.3], [0.1, -0.2]]),
+        np.full(3, 0.3),
+    )
 
     @seed(base_seed)
     @settings(max_examples=cases, deadline=None, database=None, suppress_health_check=list(HealthCheck))
@@ -236,7 +258,7 @@ def fuzz_construction(cases: int, base_seed: int) -> dict:
             else:
                 counts["refused (OptionError)"] += 1
             return
-        except Exception as error:  # noqa: BLE001 - counted
+        except Exception as error:
             counts["VIOLATION other exception"] += 1
             examples.append(f"{type(error).__name__}: {str(error)[:200]}")
             return
@@ -252,7 +274,7 @@ def fuzz_construction(cases: int, base_seed: int) -> dict:
                     counts["VIOLATION bad command"] += 1
                     examples.append(f"{name} {decision.command}")
                     return
-        except Exception as error:  # noqa: BLE001 - counted
+        except Exception as error:
             counts["VIOLATION other exception"] += 1
             examples.append(f"{name} {type(error).__name__}: {str(error)[:200]}")
             return
@@ -261,8 +283,13 @@ def fuzz_construction(cases: int, base_seed: int) -> dict:
 
     started = time.perf_counter()
     run()
-    return {"planner": "construction", **dict(counts), "slowest_cycle_s": slowest[0],
-            "wall_s": time.perf_counter() - started, "violation_examples": examples[:5]}
+    return {
+        "planner": "construction",
+        **dict(counts),
+        "slowest_cycle_s": slowest[0],
+        "wall_s": time.perf_counter() - started,
+        "violation_examples": examples[:5],
+    }
 
 
 def fuzz_ros(cases: int, base_seed: int) -> dict:
@@ -272,18 +299,23 @@ def fuzz_ros(cases: int, base_seed: int) -> dict:
     from hypothesis import strategies as st
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "ros2"))
-    from test_ros2_hostile import DT, FRAMES, SCANNERS, STEP, Robot, make_core  # noqa: E402
+    from test_ros2_hostile import DT, FRAMES, SCANNERS, STEP, Robot, make_core
 
     counts: Counter = Counter()
     examples: list[str] = []
     number = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.floats(-2.0, 2.0))
-    events = st.lists(st.one_of(
-        st.tuples(st.just("honest")),
-        st.tuples(st.just("twist"), number, number),
-        st.tuples(st.just("jump"), number, number, number),
-        st.tuples(st.just("quaternion"), st.tuples(number, number, number, number)),
-        st.tuples(st.just("scan"), st.integers(0, 2000), number, number, number),
-        st.tuples(st.just("path"), st.lists(st.tuples(number, number), max_size=4))), min_size=5, max_size=25)
+    events = st.lists(
+        st.one_of(
+            st.tuples(st.just("honest")),
+            st.tuples(st.just("twist"), number, number),
+            st.tuples(st.just("jump"), number, number, number),
+            st.tuples(st.just("quaternion"), st.tuples(number, number, number, number)),
+            st.tuples(st.just("scan"), st.integers(0, 2000), number, number, number),
+            st.tuples(st.just("path"), st.lists(st.tuples(number, number), max_size=4)),
+        ),
+        min_size=5,
+        max_size=25,
+    )
 
     @seed(base_seed)
     @settings(max_examples=cases, deadline=None, database=None, suppress_health_check=list(HealthCheck))
@@ -319,18 +351,24 @@ def fuzz_ros(cases: int, base_seed: int) -> dict:
                     core.on_path("odom", np.array(event[1], dtype=float).reshape(-1, 2))
                 before = core.last_command
                 result = core.cycle(t)
-            except Exception as error:  # noqa: BLE001 - counted
+            except Exception as error:
                 counts["VIOLATION exception"] += 1
                 examples.append(f"{kind}: {type(error).__name__}: {error}")
                 return
             counts["cycles"] += 1
             c = result.command
             lim = core.limits
-            if not (math.isfinite(c.speed_mps) and math.isfinite(c.turn_rate_radps) and 0.0 <= c.speed_mps <= lim.max_speed_mps
-                    and abs(c.turn_rate_radps) <= lim.max_turn_rate_radps):
+            if not (
+                math.isfinite(c.speed_mps)
+                and math.isfinite(c.turn_rate_radps)
+                and 0.0 <= c.speed_mps <= lim.max_speed_mps
+                and abs(c.turn_rate_radps) <= lim.max_turn_rate_radps
+            ):
                 counts["VIOLATION bad command"] += 1
                 examples.append(f"{kind}: {c}")
-            faults = [r for r in result.reasons if r.startswith(("odometry fault", "no designated path", "designated path"))]
+            faults = [
+                r for r in result.reasons if r.startswith(("odometry fault", "no designated path", "designated path"))
+            ]
             if faults:
                 counts["braking for " + faults[0].split(":")[0]] += 1
                 if c.speed_mps > max(0.0, before.speed_mps - STEP) + 1e-9:
@@ -345,8 +383,13 @@ def fuzz_ros(cases: int, base_seed: int) -> dict:
     started = time.perf_counter()
     cpu = time.process_time()
     run()
-    return {"planner": "ros2 node cycle", **dict(counts), "wall_s": time.perf_counter() - started,
-            "cpu_s": time.process_time() - cpu, "violation_examples": examples[:5]}
+    return {
+        "planner": "ros2 node cycle",
+        **dict(counts),
+        "wall_s": time.perf_counter() - started,
+        "cpu_s": time.process_time() - cpu,
+        "violation_examples": examples[:5],
+    }
 
 
 def main(argv=None) -> int:

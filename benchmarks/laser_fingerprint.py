@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_perception import scene  # noqa: E402
+from bench_perception import scene
 
-from viapath.perception.laser import LaserPerception  # noqa: E402
-from viapath.perception.raycast import numba_available  # noqa: E402
+from viapath.perception.laser import LaserPerception
+from viapath.perception.raycast import numba_available
 
 
 def fingerprint(backend: str, steps: int) -> tuple[str, int]:
@@ -32,8 +32,14 @@ def fingerprint(backend: str, steps: int) -> tuple[str, int]:
     for k in range(steps):
         obstacles = perception.observe(scene(10, k))
         reported += len(obstacles)
-        for array in (obstacles.positions, obstacles.velocities, obstacles.radii_m, obstacles.position_sigma_m,
-                      obstacles.velocity_sigma_mps, obstacles.ids):
+        for array in (
+            obstacles.positions,
+            obstacles.velocities,
+            obstacles.radii_m,
+            obstacles.position_sigma_m,
+            obstacles.velocity_sigma_mps,
+            obstacles.ids,
+        ):
             digest.update(np.ascontiguousarray(array).tobytes())
     return digest.hexdigest(), reported
 

@@ -35,10 +35,15 @@ def save(path: str) -> int:
                 trace = episode.trace
                 out[f"{scenario.name}/{planner}"] = dict(
                     metrics={k: v for k, v in episode.metrics.items() if not any(w in k for w in WALL_CLOCK)},
-                    poses=trace.robot_poses.copy(), commands=trace.commands.copy(), status=list(trace.plan_status),
-                    perceived=[(o.positions.copy(), o.velocities.copy(), o.radii_m.copy(), np.asarray(o.ids).copy())
-                               for o in trace.perceived],
-                    scan_points=[np.asarray(p).copy() for p in trace.scan_points])
+                    poses=trace.robot_poses.copy(),
+                    commands=trace.commands.copy(),
+                    status=list(trace.plan_status),
+                    perceived=[
+                        (o.positions.copy(), o.velocities.copy(), o.radii_m.copy(), np.asarray(o.ids).copy())
+                        for o in trace.perceived
+                    ],
+                    scan_points=[np.asarray(p).copy() for p in trace.scan_points],
+                )
     with open(path, "wb") as handle:
         pickle.dump(out, handle)
     print(f"{len(out)} episodes saved to {path}")
@@ -70,8 +75,10 @@ def compare(before_path: str, after_path: str) -> int:
     for key in before:
         a, b = before[key], after[key]
         ok = a["metrics"].keys() == b["metrics"].keys() and all(
-            a["metrics"][m] == b["metrics"][m] or (a["metrics"][m] != a["metrics"][m] and b["metrics"][m] != b["metrics"][m])
-            for m in a["metrics"])
+            a["metrics"][m] == b["metrics"][m]
+            or (a["metrics"][m] != a["metrics"][m] and b["metrics"][m] != b["metrics"][m])
+            for m in a["metrics"]
+        )
         if not ok:
             notes.append(f"{key}: metrics differ")
         ok &= same(a["poses"], b["poses"], f"{key} poses") & same(a["commands"], b["commands"], f"{key} commands")

@@ -76,8 +76,12 @@ def main() -> None:
 
     def replay(file: str) -> None:
         context = foxglove.Context()
-        writer = foxglove.open_mcap(file, allow_overwrite=True, context=context,
-                                    writer_options=MCAPWriteOptions(compression=MCAPCompression.Lz4))
+        writer = foxglove.open_mcap(
+            file,
+            allow_overwrite=True,
+            context=context,
+            writer_options=MCAPWriteOptions(compression=MCAPCompression.Lz4),
+        )
         publisher = FoxglovePublisher(context, path, scenario.robot.radius)
         publisher.start(static[0])
         for message in messages:
@@ -98,11 +102,13 @@ def main() -> None:
             started = time.process_time()
             replay(file)
             times.append(time.process_time() - started)
-    per_cycle = lambda seconds: 1e3 * seconds / cycles  # noqa: E731
-    print(f"{args.scenario} ({args.perception}): {cycles} cycles; run {per_cycle(run_s):.3f} ms/cycle CPU, "
-          f"hand-off {per_cycle(pack_s[0]):.3f}, payload {statistics.mean(map(len, messages)):.0f} B; writer "
-          f"{per_cycle(min(times)):.3f} best / {per_cycle(statistics.median(times)):.3f} median ms/cycle CPU; "
-          f"load {os.getloadavg()[0]:.2f}")
+    per_cycle = lambda seconds: 1e3 * seconds / cycles
+    print(
+        f"{args.scenario} ({args.perception}): {cycles} cycles; run {per_cycle(run_s):.3f} ms/cycle CPU, "
+        f"hand-off {per_cycle(pack_s[0]):.3f}, payload {statistics.mean(map(len, messages)):.0f} B; writer "
+        f"{per_cycle(min(times)):.3f} best / {per_cycle(statistics.median(times)):.3f} median ms/cycle CPU; "
+        f"load {os.getloadavg()[0]:.2f}"
+    )
 
 
 if __name__ == "__main__":

@@ -44,15 +44,17 @@ def texts(metrics: dict[str, dict]) -> dict[str, str]:
     """The README's generated blocks, from the metrics."""
     behind, front, side = metrics["paper-behind"], metrics["paper-front"], metrics["paper-side"]
     bare = metrics["paper-front-no-shield"]
-    every_goal = all(m["reached_goal"] and not m["collision"] and not m["shield_interventions"]
-                     for m in (behind, front, side))
+    every_goal = all(
+        m["reached_goal"] and not m["collision"] and not m["shield_interventions"] for m in (behind, front, side)
+    )
     caption = (
         "*`viapath run paper-front --plot front.png`: a person walks towards the robot at 0.3 m/s (circles,\n"
         "every 1 s). The robot (drawn every 0.5 s, size ∝ speed; stars while it heads for a via point ×)\n"
         f"speeds up to {_m(front['max_speed_mps'], 1)} m/s towards a via point on the left (wide enough that it "
         "could brake in time, the shield's envelope), passes\n"
         f"{_m(front['min_clearance_m'])} m from the person at the closest, and returns to its nominal 0.2 m/s — "
-        "never leaving the corridor (blue).*")
+        "never leaving the corridor (blue).*"
+    )
     paper = (
         "* **The paper's three experiments** (`viapath run paper-behind|paper-front|paper-side --json`,\n"
         "  oracle perception, shield on as by default): from behind the robot speeds up to "
@@ -68,7 +70,8 @@ def texts(metrics: dict[str, dict]) -> dict[str, str]:
         "(min clearance\n"
         f"  {_m(behind['min_clearance_m'])} / {_m(front['min_clearance_m'])} / {_m(side['min_clearance_m'])} m; "
         "`benchmarks/readme_figures.py`). Tested in `tests/planning/test_paper_behaviours.py`, for every shipped\n"
-        "  weights preset too.")
+        "  weights preset too."
+    )
     return {"paper-front-caption": caption, "paper-experiments": paper}
 
 

@@ -38,18 +38,31 @@ def over_ros2(names, rate: float) -> dict[str, dict]:
         for k, name in enumerate(names):
             domain = 101 + (os.getpid() * 7 + k) % 100  # 101..200: apart from the tests' 1..100
             logs = [open(Path(folder) / f"{name}_{part}.err", "w") for part in ("node", "sim")]
-            node = subprocess.Popen([*cli, "ros2", "node", "--use-sim-time"], env=_env(domain), stdout=subprocess.DEVNULL,
-                                    stderr=logs[0], stdin=subprocess.DEVNULL)
-            sim = subprocess.Popen([*cli, "ros2", "sim", name, "--rate", str(rate), "--lockstep", "--json"], env=_env(domain),
-                                   stdout=subprocess.PIPE, stderr=logs[1], stdin=subprocess.DEVNULL, text=True)
+            node = subprocess.Popen(
+                [*cli, "ros2", "node", "--use-sim-time"],
+                env=_env(domain),
+                stdout=subprocess.DEVNULL,
+                stderr=logs[0],
+                stdin=subprocess.DEVNULL,
+            )
+            sim = subprocess.Popen(
+                [*cli, "ros2", "sim", name, "--rate", str(rate), "--lockstep", "--json"],
+                env=_env(domain),
+                stdout=subprocess.PIPE,
+                stderr=logs[1],
+                stdin=subprocess.DEVNULL,
+                text=True,
+            )
             runs[name] = (node, sim, logs)
         out = {}
         try:
             for name, (node, sim, logs) in runs.items():
                 stdout, _ = sim.communicate(timeout=900)
                 if sim.returncode != 0:
-                    raise SystemExit(f"{name}: viapath ros2 sim exited {sim.returncode}: "
-                                     f"{(Path(folder) / f'{name}_sim.err').read_text()[-2000:]}")
+                    raise SystemExit(
+                        f"{name}: viapath ros2 sim exited {sim.returncode}: "
+                        f"{(Path(folder) / f'{name}_sim.err').read_text()[-2000:]}"
+                    )
                 out[name] = json.loads(stdout.strip().splitlines()[-1])
         finally:
             for node, sim, logs in runs.values():
@@ -72,23 +85,32 @@ def with_run(name: str) -> dict:
     from viapath.sim.loop import run_episode
 
     spec = load_scenario(name)
-    spec = spec.model_copy(update={"perception": spec.perception.model_copy(
-        update={"options": {"detector": {"keep_segments": False, "fit_backend": "numpy"}}})})
+    spec = spec.model_copy(
+        update={
+            "perception": spec.perception.model_copy(
+                update={"options": {"detector": {"keep_segments": False, "fit_backend": "numpy"}}}
+            )
+        }
+    )
     return run_episode(spec, perception="laser").metrics
 
 
 def _pair(a: dict, b: dict, key: str, fmt: str, unit: str = "") -> str:
-    show = lambda v: "—" if v is None else format(v, fmt)  # noqa: E731
+    show = lambda v: "—" if v is None else format(v, fmt)
     return f"{show(a.get(key))}{unit} / {show(b.get(key))}{unit}"
 
 
 def table(ros: dict[str, dict], run: dict[str, dict]) -> str:
-    lines = ["| scenario | time to goal, ROS 2 / run | min clearance, ROS 2 / run | max speed | shield interventions |",
-             "|---|---|---|---|---|"]
+    lines = [
+        "| scenario | time to goal, ROS 2 / run | min clearance, ROS 2 / run | max speed | shield interventions |",
+        "|---|---|---|---|---|",
+    ]
     for name in ros:
         r, v = ros[name], run[name]
-        lines.append(f"| {name} | {_pair(r, v, 'time_to_goal_s', '.1f', ' s')} | {_pair(r, v, 'min_clearance_m', '.4f', ' m')} "
-                     f"| {_pair(r, v, 'max_speed_mps', '.2f')} m/s | {_pair(r, v, 'shield_interventions', 'd')} |")
+        lines.append(
+            f"| {name} | {_pair(r, v, 'time_to_goal_s', '.1f', ' s')} | {_pair(r, v, 'min_clearance_m', '.4f', ' m')} "
+            f"| {_pair(r, v, 'max_speed_mps', '.2f')} m/s | {_pair(r, v, 'shield_interventions', 'd')} |"
+        )
     return "\n".join(lines)
 
 

@@ -22,9 +22,9 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import bench_planner  # noqa: E402
+import bench_planner
 
-from viapath import DesignatedPath  # noqa: E402
+from viapath import DesignatedPath
 
 
 def scenes(n_obstacles: int, seed: int = 0):
@@ -73,6 +73,7 @@ def section_shares(planner, observations, repeats: int) -> tuple[float, dict[str
                 return function(*args, **kwargs)
             finally:
                 spent[label] += time.thread_time() - start
+
         return wrapper
 
     for module_name, owner, name, label in SECTIONS:
@@ -103,17 +104,23 @@ def main() -> None:
     name = {"numpy": "viapath-numpy", "numba": "viapath-fast"}[args.backend]
     planner = bench_planner.build(name, path)
     best = fastest_cycles(planner, observations, args.repeats)
-    slowest = [int(i) for i in np.argsort(best)[::-1][:args.top]]
+    slowest = [int(i) for i in np.argsort(best)[::-1][: args.top]]
     statuses = {}
     for i in slowest:
         planner.reset()
         statuses[i] = planner.plan(observations[i]).plan.status
-    report = {"load_average": os.getloadavg()[0], "median_ms": float(np.median(best)), "sum_ms": float(best.sum()),
-              "slowest": [{"scene": i, "ms": round(float(best[i]), 4), "status": statuses[i]} for i in slowest]}
+    report = {
+        "load_average": os.getloadavg()[0],
+        "median_ms": float(np.median(best)),
+        "sum_ms": float(best.sum()),
+        "slowest": [{"scene": i, "ms": round(float(best[i]), 4), "status": statuses[i]} for i in slowest],
+    }
     if args.sections:
         per_cycle, shares = section_shares(planner, [observations[i] for i in slowest], max(1, args.repeats * 8))
-        report["sections"] = {"cycle_ms": per_cycle,
-                              **{label.strip(): round(share, 3) for label, share in shares.items()}}
+        report["sections"] = {
+            "cycle_ms": per_cycle,
+            **{label.strip(): round(share, 3) for label, share in shares.items()},
+        }
     print(json.dumps(report))
 
 

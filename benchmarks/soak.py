@@ -59,8 +59,9 @@ def hall_walls() -> np.ndarray:
 class Crowd:
     def __init__(self, count: int, rng: np.random.Generator, radius_m: float = 0.25):
         self.radius_m = radius_m
-        self.positions = np.column_stack([rng.uniform(HALL_X[0] + 0.5, HALL_X[1] - 0.5, count),
-                                          rng.uniform(HALL_Y[0] + 0.5, HALL_Y[1] - 0.5, count)])
+        self.positions = np.column_stack(
+            [rng.uniform(HALL_X[0] + 0.5, HALL_X[1] - 0.5, count), rng.uniform(HALL_Y[0] + 0.5, HALL_Y[1] - 0.5, count)]
+        )
         # Nobody starts on the robot's start.
         close = np.hypot(*self.positions.T) < 1.5
         self.positions[close, 1] = np.where(self.positions[close, 1] >= 0, 2.5, -2.5)
@@ -79,8 +80,15 @@ class Crowd:
             self.velocities[below | above, axis] *= -1
 
 
-def run(sim_hours: float, people: int, planner_name: str, seed: int, report_every_s: float,
-        use_tracemalloc: bool, progress: bool) -> dict:
+def run(
+    sim_hours: float,
+    people: int,
+    planner_name: str,
+    seed: int,
+    report_every_s: float,
+    use_tracemalloc: bool,
+    progress: bool,
+) -> dict:
     rng = np.random.default_rng(seed)
     limits = MotionLimits()
     radius = 0.25
@@ -118,11 +126,16 @@ def run(sim_hours: float, people: int, planner_name: str, seed: int, report_ever
             scans = perception.scan(world)
             obstacles = perception.process(t, pose, scans)
             tock = time.perf_counter()
-            decision = planner.plan(Observation(t, RobotState(state.position, state.heading_rad, state.speed_mps,
-                                                              state.turn_rate_radps, radius), obstacles))
+            decision = planner.plan(
+                Observation(
+                    t,
+                    RobotState(state.position, state.heading_rad, state.speed_mps, state.turn_rate_radps, radius),
+                    obstacles,
+                )
+            )
             perception_ms[k] = (tock - tick) * 1e3
             plan_ms[k] = (time.perf_counter() - tock) * 1e3
-        except Exception as error:  # noqa: BLE001 - counted: must be none
+        except Exception as error:
             exceptions.append(f"t={t:.1f}: {type(error).__name__}: {error}")
             decision = None
         if decision is None:
@@ -131,8 +144,12 @@ def run(sim_hours: float, people: int, planner_name: str, seed: int, report_ever
             command = decision.command
             statuses[decision.plan.status] += 1
             v, w = command.speed_mps, command.turn_rate_radps
-            if not (math.isfinite(v) and math.isfinite(w) and -1e-9 <= v <= limits.max_speed_mps + 1e-9
-                    and abs(w) <= limits.max_turn_rate_radps + 1e-9):
+            if not (
+                math.isfinite(v)
+                and math.isfinite(w)
+                and -1e-9 <= v <= limits.max_speed_mps + 1e-9
+                and abs(w) <= limits.max_turn_rate_radps + 1e-9
+            ):
                 bad_commands.append(f"t={t:.1f}: ({v}, {w})")
         # Contacts: onsets, at-fault when the robot moved towards the person at > 0.05 m/s.
         offsets = crowd.positions - state.position
@@ -151,8 +168,11 @@ def run(sim_hours: float, people: int, planner_name: str, seed: int, report_ever
             leg += 1
             planner = new_planner(ends[leg % 2], ends[(leg + 1) % 2])
         if (k + 1) % every == 0 or k == cycles - 1:
-            sample = {"sim_s": round((k + 1) * DT_S, 1), "wall_s": round(time.perf_counter() - started, 1),
-                      "rss_mb": round(rss_mb(), 1)}
+            sample = {
+                "sim_s": round((k + 1) * DT_S, 1),
+                "wall_s": round(time.perf_counter() - started, 1),
+                "rss_mb": round(rss_mb(), 1),
+            }
             if use_tracemalloc:
                 sample["heap_mb"] = round(tracemalloc.get_traced_memory()[0] / 1e6, 2)
             samples.append(sample)
@@ -162,15 +182,25 @@ def run(sim_hours: float, people: int, planner_name: str, seed: int, report_ever
     first, last = samples[0], samples[-1]
     hours_between = max((last["sim_s"] - first["sim_s"]) / 3600.0, 1e-9)
     result = {
-        "sim_hours": sim_hours, "people": people, "planner": planner_name, "seed": seed, "cycles": cycles,
-        "bad_commands": len(bad_commands), "bad_command_examples": bad_commands[:5],
-        "exceptions": len(exceptions), "exception_examples": exceptions[:5],
-        "legs_completed": leg, "contact_onsets": contacts, "at_fault_onsets": at_fault,
+        "sim_hours": sim_hours,
+        "people": people,
+        "planner": planner_name,
+        "seed": seed,
+        "cycles": cycles,
+        "bad_commands": len(bad_commands),
+        "bad_command_examples": bad_commands[:5],
+        "exceptions": len(exceptions),
+        "exception_examples": exceptions[:5],
+        "legs_completed": leg,
+        "contact_onsets": contacts,
+        "at_fault_onsets": at_fault,
         "statuses": dict(statuses.most_common()),
-        "plan_p50_ms": float(np.nanpercentile(plan_ms, 50)), "plan_p99_ms": float(np.nanpercentile(plan_ms, 99)),
+        "plan_p50_ms": float(np.nanpercentile(plan_ms, 50)),
+        "plan_p99_ms": float(np.nanpercentile(plan_ms, 99)),
         "perception_p50_ms": float(np.nanpercentile(perception_ms, 50)),
         "perception_p99_ms": float(np.nanpercentile(perception_ms, 99)),
-        "wall_s": wall, "memory_samples": samples,
+        "wall_s": wall,
+        "memory_samples": samples,
         "rss_growth_mb_per_sim_hour_after_first_sample": (last["rss_mb"] - first["rss_mb"]) / hours_between,
     }
     if use_tracemalloc:
@@ -188,8 +218,9 @@ def main(argv=None) -> int:
     parser.add_argument("--tracemalloc", action="store_true")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
-    result = run(args.sim_hours, args.people, args.planner, args.seed, args.report_every_s, args.tracemalloc,
-                 progress=True)
+    result = run(
+        args.sim_hours, args.people, args.planner, args.seed, args.report_every_s, args.tracemalloc, progress=True
+    )
     if args.json:
         print(json.dumps(result, indent=2))
     else:

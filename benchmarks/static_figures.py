@@ -52,14 +52,23 @@ def run(planners: list[str], modes: list[str], count: int, seed: int) -> dict:
                 kind = spec["description"].split(":")[1].strip().split(",")[0].rstrip(".")
                 reachable = "unreachable" not in spec["description"]
                 length = spec["path"]["waypoints"][-1][0]
-                ratio = (metrics["time_to_goal_s"] / (length / spec["robot"]["speed"])
-                         if metrics["time_to_goal_s"] else None)
+                ratio = (
+                    metrics["time_to_goal_s"] / (length / spec["robot"]["speed"]) if metrics["time_to_goal_s"] else None
+                )
                 static_clearance = static_clearance_per_step(trace)
-                rows.append(dict(
-                    name=spec["name"], kind=kind, reachable=reachable, reached=metrics["reached_goal"],
-                    static_contact=metrics["static_contact"], collision=metrics["collision"],
-                    min_static_clearance_m=float(static_clearance.min()) if len(static_clearance) else None,
-                    time_ratio=ratio, door_gap_m=door_gap_m(spec, trace) if kind == "door" else None))
+                rows.append(
+                    dict(
+                        name=spec["name"],
+                        kind=kind,
+                        reachable=reachable,
+                        reached=metrics["reached_goal"],
+                        static_contact=metrics["static_contact"],
+                        collision=metrics["collision"],
+                        min_static_clearance_m=float(static_clearance.min()) if len(static_clearance) else None,
+                        time_ratio=ratio,
+                        door_gap_m=door_gap_m(spec, trace) if kind == "door" else None,
+                    )
+                )
             reachable = [r for r in rows if r["reachable"]]
             walls = [r["time_ratio"] for r in rows if r["kind"] == "walls" and r["time_ratio"] is not None]
             doors = [r for r in rows if r["kind"] == "door"]
@@ -73,8 +82,9 @@ def run(planners: list[str], modes: list[str], count: int, seed: int) -> dict:
                 "walls_median_time_ratio": float(np.median(walls)) if walls else None,
                 "walls_unreached": sum(1 for r in rows if r["kind"] == "walls" and not r["reached"]),
                 "door_gaps_m": [None if r["door_gap_m"] is None else round(r["door_gap_m"], 3) for r in doors],
-                "min_static_clearance_m": min((r["min_static_clearance_m"] for r in rows
-                                               if r["min_static_clearance_m"] is not None), default=None),
+                "min_static_clearance_m": min(
+                    (r["min_static_clearance_m"] for r in rows if r["min_static_clearance_m"] is not None), default=None
+                ),
                 "failed": [r["name"] for r in reachable if not r["reached"]],
                 "wall_s": round(time.perf_counter() - started, 1),
             }
@@ -94,11 +104,13 @@ def main() -> None:
         print(json.dumps(figures, indent=2))
         return
     for key, f in figures.items():
-        print(f"{key}: static contact in {f['episodes_with_static_contact']}/{f['episodes']} episodes "
-              f"({f['static_contacts']} contacts), collisions {f['collisions']}, reachable goals reached "
-              f"{f['reachable_reached']}/{f['reachable']}, walls median time ratio {f['walls_median_time_ratio']}, "
-              f"door gaps [m] {f['door_gaps_m']}, min static clearance {f['min_static_clearance_m']}, "
-              f"failed {f['failed']} ({f['wall_s']} s)")
+        print(
+            f"{key}: static contact in {f['episodes_with_static_contact']}/{f['episodes']} episodes "
+            f"({f['static_contacts']} contacts), collisions {f['collisions']}, reachable goals reached "
+            f"{f['reachable_reached']}/{f['reachable']}, walls median time ratio {f['walls_median_time_ratio']}, "
+            f"door gaps [m] {f['door_gaps_m']}, min static clearance {f['min_static_clearance_m']}, "
+            f"failed {f['failed']} ({f['wall_s']} s)"
+        )
 
 
 if __name__ == "__main__":

@@ -84,8 +84,18 @@ def search(trace, first_step: int, depth: int, limits: MotionLimits):
     combos = np.array(list(itertools.product(range(len(choices)), repeat=depth)))  # (15^D, D)
     speed_deltas, turn_deltas = choices[combos, 0] * dv, choices[combos, 1] * dw
     x, y, heading = trace.robot_poses[first_step]
-    poses, speeds = drive(x, y, heading, trace.robot_speeds_mps[first_step], trace.robot_turn_rates_radps[first_step],
-                          speed_deltas, turn_deltas, limits, dt, braking)
+    poses, speeds = drive(
+        x,
+        y,
+        heading,
+        trace.robot_speeds_mps[first_step],
+        trace.robot_turn_rates_radps[first_step],
+        speed_deltas,
+        turn_deltas,
+        limits,
+        dt,
+        braking,
+    )
     last = first_step + depth + braking
     people = _people_window(trace, first_step, last)
     # Only people present somewhere in the window matter; sequences in chunks keep the (K, J, N, 2) arrays small.
@@ -157,18 +167,18 @@ def check_replay(trace, limits: MotionLimits, first_step: int, depth: int) -> No
     """The search's model against the episode itself: the real commands give the trace's poses and onsets."""
     dt = trace.dt_s
     steps = min(depth, len(trace.robot_poses) - 1 - first_step)
-    speeds_true = trace.robot_speeds_mps[first_step:first_step + steps + 1]
-    turns_true = trace.robot_turn_rates_radps[first_step:first_step + steps + 1]
+    speeds_true = trace.robot_speeds_mps[first_step : first_step + steps + 1]
+    turns_true = trace.robot_turn_rates_radps[first_step : first_step + steps + 1]
     speed_deltas = np.diff(speeds_true)[None]
     turn_deltas = np.diff(turns_true)[None]
     x, y, heading = trace.robot_poses[first_step]
     poses, speeds = drive(x, y, heading, speeds_true[0], turns_true[0], speed_deltas, turn_deltas, limits, dt, 0)
-    error = np.max(np.abs(poses[0, :, :2] - trace.robot_poses[first_step:first_step + steps + 1, :2]))
+    error = np.max(np.abs(poses[0, :, :2] - trace.robot_poses[first_step : first_step + steps + 1, :2]))
     if error > 1e-9:
         raise SystemExit(f"the search's drive model is off the trace by {error:.2e} m")
     people = _people_window(trace, first_step, first_step + steps)
     mine = _faults(trace, poses, speeds, people, first_step)[0]
-    metric = at_fault_onsets(trace)[first_step:first_step + steps]
+    metric = at_fault_onsets(trace)[first_step : first_step + steps]
     if not np.array_equal(mine, metric):
         raise SystemExit("the search's at-fault rule disagrees with viapath.sim.metrics.at_fault_onsets on the trace")
 
@@ -185,17 +195,28 @@ def main() -> None:
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     with open(args.out / "episodes.csv") as handle:
-        rows = [r for r in csv.DictReader(handle) if r["planner"] == args.planner and r["shield"] == args.shield
-                and r["at_fault_collision"] == "True"]
+        rows = [
+            r
+            for r in csv.DictReader(handle)
+            if r["planner"] == args.planner and r["shield"] == args.shield and r["at_fault_collision"] == "True"
+        ]
     overrides = preset_values(args.weights, args.planner) if args.weights else None
     results = []
-    for row in rows[:args.limit]:
+    for row in rows[: args.limit]:
         scenario = load_scenario((args.suite or args.out / "suite") / f"{row['scenario']}.yaml")
-        if any(getattr(o, "replay", None) is not None and getattr(o.replay, "react", False)
-               for o in getattr(scenario, "obstacles", []) or []):
+        if any(
+            getattr(o, "replay", None) is not None and getattr(o.replay, "react", False)
+            for o in getattr(scenario, "obstacles", []) or []
+        ):
             continue
-        episode = loop.run_episode(scenario, planner=args.planner, seed=int(row["seed"]), shield=args.shield != "off",
-                                   planner_overrides=overrides, shield_options={"mode": "passive-friendly" if args.shield == "friendly" else "passive"})
+        episode = loop.run_episode(
+            scenario,
+            planner=args.planner,
+            seed=int(row["seed"]),
+            shield=args.shield != "off",
+            planner_overrides=overrides,
+            shield_options={"mode": "passive-friendly" if args.shield == "friendly" else "passive"},
+        )
         trace = episode.trace
         limits = MotionLimits(**scenario.robot.limits.model_dump())
         onsets = at_fault_onsets(trace)
@@ -204,23 +225,38 @@ def main() -> None:
             print(f"{row['scenario']}: the re-run has no at-fault onset (other options than the bench's? --weights)")
             continue
         for k, person in zip(*np.nonzero(onsets)):
-            present = np.flatnonzero(np.isfinite(trace.obstacle_positions[:k + 1, person, 0]))
+            present = np.flatnonzero(np.isfinite(trace.obstacle_positions[: k + 1, person, 0]))
             appeared = int(present[0])
             first = max(appeared, int(k) - args.depth)
             check_replay(trace, limits, first, args.depth)
             avoiding, tried = search(trace, first, args.depth, limits)
-            results.append(dict(scenario=row["scenario"], person=int(person), onset_s=float(trace.times_s[k]),
-                                appeared_s=float(trace.times_s[appeared]), search_from_s=float(trace.times_s[first]),
-                                seen_1s=bool(seen[k, person]), robot_speed_at_search_mps=float(trace.robot_speeds_mps[first]),
-                                sequences=tried, avoiding=avoiding, avoidable=avoiding > 0))
+            results.append(
+                dict(
+                    scenario=row["scenario"],
+                    person=int(person),
+                    onset_s=float(trace.times_s[k]),
+                    appeared_s=float(trace.times_s[appeared]),
+                    search_from_s=float(trace.times_s[first]),
+                    seen_1s=bool(seen[k, person]),
+                    robot_speed_at_search_mps=float(trace.robot_speeds_mps[first]),
+                    sequences=tried,
+                    avoiding=avoiding,
+                    avoidable=avoiding > 0,
+                )
+            )
     if args.json:
         print(json.dumps(results, indent=2))
         return
     for r in results:
-        verdict = f"AVOIDABLE by {r['avoiding']} of {r['sequences']}" if r["avoidable"] else \
-            f"unavoidable: none of {r['sequences']} sequences"
-        print(f"{r['scenario']} person {r['person']}: onset {r['onset_s']:.1f} s, appeared {r['appeared_s']:.1f} s, "
-              f"searched from {r['search_from_s']:.1f} s at {r['robot_speed_at_search_mps']:.2f} m/s: {verdict}")
+        verdict = (
+            f"AVOIDABLE by {r['avoiding']} of {r['sequences']}"
+            if r["avoidable"]
+            else f"unavoidable: none of {r['sequences']} sequences"
+        )
+        print(
+            f"{r['scenario']} person {r['person']}: onset {r['onset_s']:.1f} s, appeared {r['appeared_s']:.1f} s, "
+            f"searched from {r['search_from_s']:.1f} s at {r['robot_speed_at_search_mps']:.2f} m/s: {verdict}"
+        )
 
 
 if __name__ == "__main__":

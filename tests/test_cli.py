@@ -20,9 +20,18 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 BUILTIN_DIR = SRC / "viapath" / "scenarios" / "builtin"
 
 DESIGN_METRICS = [
-    "reached_goal", "collision", "min_clearance_m", "time_to_goal_s", "path_length_m",
-    "mean_lateral_deviation_m", "max_lateral_deviation_m", "time_outside_corridor_s",
-    "min_speed_mps", "max_speed_mps", "plan_time_p50_ms", "plan_time_p99_ms",
+    "reached_goal",
+    "collision",
+    "min_clearance_m",
+    "time_to_goal_s",
+    "path_length_m",
+    "mean_lateral_deviation_m",
+    "max_lateral_deviation_m",
+    "time_outside_corridor_s",
+    "min_speed_mps",
+    "max_speed_mps",
+    "plan_time_p50_ms",
+    "plan_time_p99_ms",
 ]
 
 
@@ -73,8 +82,9 @@ def test_run_json_via_process_prints_one_object():
     env = {**os.environ, "PYTHONPATH": str(SRC)}
     script = Path(sys.executable).parent / "viapath"
     command = [str(script)] if script.exists() else [sys.executable, "-m", "viapath.cli"]
-    done = subprocess.run([*command, "run", "paper-front", "--json"], capture_output=True, text=True, env=env,
-                          timeout=120)
+    done = subprocess.run(
+        [*command, "run", "paper-front", "--json"], capture_output=True, text=True, env=env, timeout=120
+    )
     assert done.returncode == 0, done.stderr
     data = json.loads(done.stdout)  # the whole of stdout is one JSON document
     assert data["reached_goal"] is True and data["collision"] is False

@@ -22,8 +22,13 @@ def straight_observed(start, velocity, rows, dt_s):
 
 
 @settings(max_examples=60, deadline=None, derandomize=True)
-@given(x=st.floats(-20, 20), y=st.floats(-20, 20), vx=st.floats(-2, 2), vy=st.floats(-2, 2),
-       dt=st.sampled_from([0.4, 2.0 / 3.0, 0.1]))
+@given(
+    x=st.floats(-20, 20),
+    y=st.floats(-20, 20),
+    vx=st.floats(-2, 2),
+    vy=st.floats(-2, 2),
+    dt=st.sampled_from([0.4, 2.0 / 3.0, 0.1]),
+)
 def test_constant_velocity_is_exact_on_straight_line_tracks(x, y, vx, vy, dt):
     track = straight_observed((x, y), (vx, vy), 20, dt)
     predicted = constant_velocity_forecast(track[None, :8], 12, dt)
@@ -43,8 +48,10 @@ def test_ade_fde_against_a_brute_force_loop():
     predicted, truth = rng.normal(size=(7, 12, 2)), rng.normal(size=(7, 12, 2))
     ade, fde = displacement_errors(predicted, truth)
     for i in range(7):
-        errors = [np.sqrt((predicted[i, k, 0] - truth[i, k, 0]) ** 2 + (predicted[i, k, 1] - truth[i, k, 1]) ** 2)
-                  for k in range(12)]
+        errors = [
+            np.sqrt((predicted[i, k, 0] - truth[i, k, 0]) ** 2 + (predicted[i, k, 1] - truth[i, k, 1]) ** 2)
+            for k in range(12)
+        ]
         assert ade[i] == pytest.approx(sum(errors) / 12, rel=1e-12)
         assert fde[i] == pytest.approx(errors[-1], rel=1e-12)
     with pytest.raises(ValueError, match="predicted"):
@@ -70,7 +77,7 @@ def test_protocol_windows_against_a_brute_force_enumeration(seed):
     lookup = {(f, p): (x, y) for f, p, x, y in table}
     expected = []
     for start in range(len(frames) - 20 + 1):
-        window = frames[start:start + 20]
+        window = frames[start : start + 20]
         full = [p for p in sorted(set(table[:, 1])) if all((f, p) in lookup for f in window)]
         if len(full) >= 2:
             expected.append((window, full))
@@ -83,7 +90,7 @@ def test_protocol_windows_against_a_brute_force_enumeration(seed):
         # Everyone present at the last observed frame is seen, scored people first.
         present = [p for p in sorted(set(table[:, 1])) if (frames_of[7], p) in lookup]
         assert len(window.seen_last) == len(present)
-        np.testing.assert_array_equal(window.seen_last[:len(full)], truth[:, 7])
+        np.testing.assert_array_equal(window.seen_last[: len(full)], truth[:, 7])
 
 
 def test_protocol_windows_rejects_a_bad_table():
@@ -104,7 +111,7 @@ def test_social_force_keeps_two_head_on_walkers_apart_where_constant_velocity_ov
     previous = last - np.array([[1.2, 0.0], [-1.2, 0.0]]) * dt
     cv = constant_velocity_forecast(np.stack([previous, last], axis=1), 12, dt)
     sf = social_force_forecast(last, previous, 12, dt)
-    gap = lambda p: np.hypot(*(p[0] - p[1]).T).min() - 0.5  # noqa: E731 (radius 0.25 m each)
+    gap = lambda p: np.hypot(*(p[0] - p[1]).T).min() - 0.5
     assert gap(cv) < -0.35  # the straight lines go through each other
     assert gap(sf) > 0.0  # the forecast sees the other and passes
     assert sf[0, -1, 0] > 1.5 and sf[1, -1, 0] < -1.5  # and still gets past

@@ -200,11 +200,14 @@ def test_via_points_root_cases(name, which):
     t_early, t_late = _check_via_roots(origin, centre, obstacle_velocity, float(speed), float(radius_m), which)
     n_roots = int(np.isfinite(t_early)) + int(np.isfinite(t_late))
     expected_roots = {
-        "robot_faster_head_on": 1, "obstacle_standing": 1, "obstacle_faster_from_behind_two_roots": 2,
+        "robot_faster_head_on": 1,
+        "obstacle_standing": 1,
+        "obstacle_faster_from_behind_two_roots": 2,
         # Right tangent: pass behind it early or let it go by; left (ahead of it, on its far side): none.
         "obstacle_faster_crossing_two_roots": 2 if which == RIGHT else 0,
         "obstacle_faster_running_away_no_root": 0,
-        "equal_speeds_approaching": 1, "equal_speeds_receding": 0,
+        "equal_speeds_approaching": 1,
+        "equal_speeds_receding": 0,
     }[name]
     assert n_roots == expected_roots
 
@@ -294,8 +297,9 @@ def test_first_contact_time_matches_sampling(rel_position, rel_velocity, radius_
 
 @core_settings
 @given(point, velocity, radius, st.floats(0.0, 0.6), st.floats(0.1, 30.0), st.booleans(), miss)
-def test_first_contact_time_growing_radius_matches_sampling(rel_position, rel_velocity, radius_m, growth, duration,
-                                                            aimed, miss_point):
+def test_first_contact_time_growing_radius_matches_sampling(
+    rel_position, rel_velocity, radius_m, growth, duration, aimed, miss_point
+):
     rel_velocity = _aim(rel_position, rel_velocity, aimed, miss_point)
     tau_code = float(first_contact_time(rel_position, rel_velocity, radius_m, duration, growth=growth))
     _check_first_contact(tau_code, rel_position, rel_velocity, radius_m, growth, duration)
@@ -331,7 +335,10 @@ def test_first_contact_named_cases(name):
 
 @core_settings
 @given(
-    st.integers(1, 4), st.integers(1, 4), st.floats(0.0, 0.4), st.booleans(),
+    st.integers(1, 4),
+    st.integers(1, 4),
+    st.floats(0.0, 0.4),
+    st.booleans(),
     st.randoms(use_true_random=False),
 )
 def test_legs_first_contact_matches_sampling(n_legs, n_obstacles, growth_scale, per_obstacle_growth, rnd):
@@ -344,8 +351,9 @@ def test_legs_first_contact_matches_sampling(n_legs, n_obstacles, growth_scale, 
     obstacle_velocities = rng.uniform(-0.6, 0.6, (n_obstacles, 2))
     radii = rng.uniform(0.3, 1.0, n_obstacles)
     growth = growth_scale * rng.uniform(0, 1, n_obstacles) if per_obstacle_growth else growth_scale
-    contact = legs_first_contact(starts, start_times, velocities, durations, positions, obstacle_velocities, radii,
-                                 growth)
+    contact = legs_first_contact(
+        starts, start_times, velocities, durations, positions, obstacle_velocities, radii, growth
+    )
     assert contact.shape == (n_legs, n_obstacles)
     g = np.broadcast_to(np.asarray(growth, dtype=float), (n_obstacles,))
     for k in range(n_legs):
@@ -355,8 +363,7 @@ def test_legs_first_contact_matches_sampling(n_legs, n_obstacles, growth_scale, 
             rel_position = starts[k] - centre_at_start
             rel_velocity = velocities[k] - obstacle_velocities[j]
             radius_at_start = radii[j] + g[j] * start_times[k]
-            _check_first_contact(float(contact[k, j]), rel_position, rel_velocity, radius_at_start, g[j],
-                                 durations[k])
+            _check_first_contact(float(contact[k, j]), rel_position, rel_velocity, radius_at_start, g[j], durations[k])
 
 
 def test_legs_first_contact_already_in_contact_and_separated():

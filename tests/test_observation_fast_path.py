@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from viapath.observation import Obstacles
 
@@ -22,9 +23,14 @@ def _fields(draw):
     sigma = draw(st.sampled_from([None, "array", "scalar"]))
     sigma = {None: None, "array": rng.uniform(0.0, 0.1, n), "scalar": 0.05}[sigma]
     ids = draw(st.sampled_from([None, "int", "uint", "float", "huge", "list"]))
-    ids = {None: None, "int": rng.integers(-5, 1000, n), "uint": rng.integers(0, 1000, n).astype(np.uint32),
-           "float": np.arange(n, dtype=float), "huge": np.full(n, 2**60 + 1, dtype=np.int64),
-           "list": list(range(n))}[ids]
+    ids = {
+        None: None,
+        "int": rng.integers(-5, 1000, n),
+        "uint": rng.integers(0, 1000, n).astype(np.uint32),
+        "float": np.arange(n, dtype=float),
+        "huge": np.full(n, 2**60 + 1, dtype=np.int64),
+        "list": list(range(n)),
+    }[ids]
     if draw(st.booleans()) and n:
         positions = np.asfortranarray(np.concatenate([positions, positions]))[::2]  # a strided view
     return positions, velocities, radii, sigma, ids
@@ -73,9 +79,17 @@ def test_fresh_arrays_make_the_obstacles_the_constructor_makes(fields):
     positions, velocities, radii, sigma, ids = fields
     n = len(positions)
     sigma = np.full(n, 0.05) if sigma is None else sigma
-    candidates = [(positions, velocities, radii, sigma, sigma, ids),
-                  (np.ascontiguousarray(positions), velocities, np.broadcast_to(np.asarray(radii, float), (n,)).copy(),
-                   np.broadcast_to(np.asarray(sigma, float), (n,)).copy(), np.zeros(n), np.arange(n))]
+    candidates = [
+        (positions, velocities, radii, sigma, sigma, ids),
+        (
+            np.ascontiguousarray(positions),
+            velocities,
+            np.broadcast_to(np.asarray(radii, float), (n,)).copy(),
+            np.broadcast_to(np.asarray(sigma, float), (n,)).copy(),
+            np.zeros(n),
+            np.arange(n),
+        ),
+    ]
     for args in candidates:
         fresh, built = Obstacles.of_fresh_arrays(*args), Obstacles(*args)
         for name in ("positions", "velocities", "radii_m", "position_sigma_m", "velocity_sigma_mps", "ids"):
@@ -90,8 +104,14 @@ def test_oracle_observes_as_before():
     from viapath.perception.base import WorldSnapshot
     from viapath.perception.oracle import OraclePerception
 
-    world = WorldSnapshot(0.0, np.zeros(3), 0.25, np.array([[1.0, 2.0], [np.nan, np.nan], [3.0, -1.0]]),
-                          np.array([[0.1, 0.0], [0.0, 0.0], [-0.3, 0.2]]), np.array([0.3, 0.25, 0.35]))
+    world = WorldSnapshot(
+        0.0,
+        np.zeros(3),
+        0.25,
+        np.array([[1.0, 2.0], [np.nan, np.nan], [3.0, -1.0]]),
+        np.array([[0.1, 0.0], [0.0, 0.0], [-0.3, 0.2]]),
+        np.array([0.3, 0.25, 0.35]),
+    )
     for noise in (0.0, 0.05):
         oracle = OraclePerception(noise, noise)
         oracle.rng = np.random.default_rng(1)
@@ -99,8 +119,9 @@ def test_oracle_observes_as_before():
         rng = np.random.default_rng(1)
         positions = world.obstacle_positions[[0, 2]] + (rng.normal(0.0, noise, (2, 2)) if noise else 0.0)
         velocities = world.obstacle_velocities[[0, 2]] + (rng.normal(0.0, noise, (2, 2)) if noise else 0.0)
-        expected = Obstacles(positions, velocities, np.array([0.3, 0.35]), np.full(2, noise), np.full(2, noise),
-                             np.array([0, 2]))
+        expected = Obstacles(
+            positions, velocities, np.array([0.3, 0.35]), np.full(2, noise), np.full(2, noise), np.array([0, 2])
+        )
         for name in ("positions", "velocities", "radii_m", "position_sigma_m", "velocity_sigma_mps", "ids"):
             a, b = getattr(seen, name), getattr(expected, name)
             assert a.dtype == b.dtype

@@ -11,8 +11,8 @@ from typer.testing import CliRunner
 
 from viapath.cli import app
 from viapath.options import Option, OptionError, OptionSet
-from viapath.planning import available_planners, make_planner, planner_options
 from viapath.path import DesignatedPath
+from viapath.planning import available_planners, make_planner, planner_options
 
 SCENARIO = """\
 name: options-test
@@ -43,15 +43,26 @@ def test_a_set_refuses_two_options_of_one_name():
 
 
 def test_defaults_types_and_bounds_come_from_the_definition():
-    schema = OptionSet([Option("gap_m", 0.5, "a gap", "m", minimum=0.0, exclusive_minimum=True),
-                        Option("count", 3, "how many", minimum=1, maximum=5),
-                        Option("side", "left", "a side", choices=("left", "right")),
-                        Option("k1", 0.1, "a weight", group="weights")], owner="demo")
+    schema = OptionSet(
+        [
+            Option("gap_m", 0.5, "a gap", "m", minimum=0.0, exclusive_minimum=True),
+            Option("count", 3, "how many", minimum=1, maximum=5),
+            Option("side", "left", "a side", choices=("left", "right")),
+            Option("k1", 0.1, "a weight", group="weights"),
+        ],
+        owner="demo",
+    )
     assert dict(schema.validate({})) == {"gap_m": 0.5, "count": 3, "side": "left", "k1": 0.1}
     assert schema.validate({"weights": {"k1": 0.3}}).k1 == 0.3
     assert schema.validate({"weights.k1": 0.4}).k1 == 0.4  # dotted, as ROS parameters name it
-    for bad, field in (({"gap_m": 0.0}, "gap_m"), ({"count": 6}, "count"), ({"side": "up"}, "side"),
-                       ({"count": "many"}, "count"), ({"gap_m": float("nan")}, "gap_m"), ({"gapm": 1}, "gapm")):
+    for bad, field in (
+        ({"gap_m": 0.0}, "gap_m"),
+        ({"count": 6}, "count"),
+        ({"side": "up"}, "side"),
+        ({"count": "many"}, "count"),
+        ({"gap_m": float("nan")}, "gap_m"),
+        ({"gapm": 1}, "gapm"),
+    ):
         with pytest.raises(OptionError) as info:
             schema.validate(bad, where="planner")
         assert info.value.errors[0][0] == f"planner.{field}", info.value.errors
@@ -74,18 +85,23 @@ def test_the_planner_block_sets_the_planner_it_names(tmp_path):
     assert json.loads(result.stdout)["max_speed_mps"] <= 0.3 + 1e-9
 
 
-@pytest.mark.parametrize("block, needles", [
-    # An option the named planner does not have: the file, the field, and the options it has.
-    ("{name: dwa, speeds: [0.1, 0.2]}", ["s.yaml: planner.speeds: unknown option 'speeds'",
-                                          "planner 'dwa' has options:", "n_speeds"]),
-    # The older spelling (params) is checked the same way.
-    ("{name: vo, params: {keep_previous_way: false}}", ["planner.keep_previous_way: unknown option"]),
-    ("{max_depth: deep}", ["planner.max_depth: Input should be a valid integer", "found 'deep'"]),
-    ("{max_depth: 9}", ["planner.max_depth: Input should be less than or equal to 6", "found 9"]),
-    ("{weights: {k4: -0.3}}", ["planner.weights.k4: Input should be greater than or equal to 0"]),
-    ("{preferred_side: up}", ["planner.preferred_side: Input should be 'left' or 'right'"]),
-    ("{name: nobody}", ["planner.name: unknown planner 'nobody'; available:"]),
-])
+@pytest.mark.parametrize(
+    "block, needles",
+    [
+        # An option the named planner does not have: the file, the field, and the options it has.
+        (
+            "{name: dwa, speeds: [0.1, 0.2]}",
+            ["s.yaml: planner.speeds: unknown option 'speeds'", "planner 'dwa' has options:", "n_speeds"],
+        ),
+        # The older spelling (params) is checked the same way.
+        ("{name: vo, params: {keep_previous_way: false}}", ["planner.keep_previous_way: unknown option"]),
+        ("{max_depth: deep}", ["planner.max_depth: Input should be a valid integer", "found 'deep'"]),
+        ("{max_depth: 9}", ["planner.max_depth: Input should be less than or equal to 6", "found 9"]),
+        ("{weights: {k4: -0.3}}", ["planner.weights.k4: Input should be greater than or equal to 0"]),
+        ("{preferred_side: up}", ["planner.preferred_side: Input should be 'left' or 'right'"]),
+        ("{name: nobody}", ["planner.name: unknown planner 'nobody'; available:"]),
+    ],
+)
 def test_bad_planner_blocks_name_file_field_and_expectation(tmp_path, block, needles):
     file, result = _run(tmp_path, block)
     _clean_failure(result, *needles)
@@ -100,12 +116,15 @@ def test_a_block_for_viapath_run_with_another_planner_runs_it_with_its_defaults(
     assert "runs with its own defaults" in result.stderr
 
 
-@pytest.mark.parametrize("assignment, needles", [
-    ("k9=1", ["--option k9: unknown option 'k9'", "planner 'viapath' has options:", "weights.k1"]),
-    ("k1=-1", ["--option weights.k1: Input should be greater than or equal to 0", "found -1"]),
-    ("speeds=[]", ["--option speeds:", "at least 1 item", "found []"]),
-    ("max_depth", ["expected NAME=VALUE"]),
-])
+@pytest.mark.parametrize(
+    "assignment, needles",
+    [
+        ("k9=1", ["--option k9: unknown option 'k9'", "planner 'viapath' has options:", "weights.k1"]),
+        ("k1=-1", ["--option weights.k1: Input should be greater than or equal to 0", "found -1"]),
+        ("speeds=[]", ["--option speeds:", "at least 1 item", "found []"]),
+        ("max_depth", ["expected NAME=VALUE"]),
+    ],
+)
 def test_bad_command_line_options_are_refused(tmp_path, assignment, needles):
     _, result = _run(tmp_path, "{name: viapath}", "--option", assignment)
     _clean_failure(result, *needles)

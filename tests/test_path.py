@@ -368,13 +368,20 @@ def test_corridor_excess_of_one_point_equals_the_array_path():
     arithmetic gives for the same point among others, on corners, ends, inside and outside, and
     on the segments' own lines (where the clamp decides)."""
     rng = np.random.default_rng(3)
-    paths = [DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
-             DesignatedPath([[0.0, 0.0], [3.0, 0.0], [3.0, 4.0], [-1.0, 4.5]], half_widths_m=[1.2, 0.7, 2.0]),
-             DesignatedPath([[0.3, -0.1], [2.5, 0.5], [5.0, -0.5], [8.0, 0.0]], half_width_m=1.5)]
+    paths = [
+        DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
+        DesignatedPath([[0.0, 0.0], [3.0, 0.0], [3.0, 4.0], [-1.0, 4.5]], half_widths_m=[1.2, 0.7, 2.0]),
+        DesignatedPath([[0.3, -0.1], [2.5, 0.5], [5.0, -0.5], [8.0, 0.0]], half_width_m=1.5),
+    ]
     for path in paths:
-        points = np.concatenate([rng.uniform(-3.0, 10.0, (400, 2)), path.waypoints,
-                                 path.waypoints[:-1] + 0.5 * path.segment_vectors,
-                                 path.waypoints[:-1] - 0.3 * path.segment_vectors])
+        points = np.concatenate(
+            [
+                rng.uniform(-3.0, 10.0, (400, 2)),
+                path.waypoints,
+                path.waypoints[:-1] + 0.5 * path.segment_vectors,
+                path.waypoints[:-1] - 0.3 * path.segment_vectors,
+            ]
+        )
         many = path.corridor_excess(points)
         for point, expected in zip(points, many):
             one = path.corridor_excess(point)

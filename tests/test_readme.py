@@ -48,7 +48,7 @@ def test_readme_plugin_planner_example_registers_and_drives(monkeypatch):
     from viapath.scenarios import load_scenario
     from viapath.sim.loop import run_episode
 
-    (block,) = [b for b in _blocks("python") if "name=\"mine\"" in b]
+    (block,) = [b for b in _blocks("python") if 'name="mine"' in b]
     monkeypatch.setattr(PLANNERS, "_entries", dict(PLANNERS._entries))
     exec(compile(block, "README.md plug-in example", "exec"), {})
     assert "mine" in available_planners()

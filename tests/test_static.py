@@ -4,8 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from viapath.static import (StaticLayer, box_edges, merge_close_shapes, point_segment_distances, polygon_edges,
-                            sample_discs, segment_distances)
+from viapath.static import (
+    StaticLayer,
+    box_edges,
+    merge_close_shapes,
+    point_segment_distances,
+    polygon_edges,
+    sample_discs,
+    segment_distances,
+)
 
 
 def _dense_points(segments: np.ndarray, per_segment: int = 400) -> np.ndarray:
@@ -32,7 +39,7 @@ def test_discs_cover_the_capsule_of_every_segment():
         assert np.all(covered[near])
         # ... and no disc reaches further than R + pad from its segment: the sampling is not a fattening.
         assert np.all(point_segment_distances(centres, segments).min(axis=1) <= 1e-9)
-        assert radii.max() <= np.sqrt(robot_radius ** 2 + (spacing / 2) ** 2) - robot_radius + 1e-12
+        assert radii.max() <= np.sqrt(robot_radius**2 + (spacing / 2) ** 2) - robot_radius + 1e-12
 
 
 def test_shared_polyline_ends_are_sampled_once():

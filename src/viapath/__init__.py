@@ -4,8 +4,8 @@ The core (``geometry``, ``path``, ``observation``, ``planning``) is pure numpy a
 robot; the simulator, scenarios, I/O and plotting sit around it.
 """
 
-from viapath.observation import Command, Obstacles, Observation, RobotState
+from viapath.observation import Command, Observation, Obstacles, RobotState
 from viapath.path import DesignatedPath
 
-__all__ = ["Command", "DesignatedPath", "Obstacles", "Observation", "RobotState"]
+__all__ = ["Command", "DesignatedPath", "Observation", "Obstacles", "RobotState"]
 __version__ = "0.1.0"

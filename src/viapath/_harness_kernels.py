@@ -32,10 +32,24 @@ from numba import njit
 from viapath import kinematics
 
 
-@njit("boolean(float64[:, :], float64[:, :], float64[:], float64[:], float64[:], float64, float64, float64, "
-      "float64, float64)", cache=True, nogil=True)
-def obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, max_coordinate_m,
-                    max_obstacle_speed_mps, max_radius_m, max_velocity_sigma_mps, max_position_sigma_m):
+@njit(
+    "boolean(float64[:, :], float64[:, :], float64[:], float64[:], float64[:], float64, float64, float64, "
+    "float64, float64)",
+    cache=True,
+    nogil=True,
+)
+def obstacles_sound(
+    positions,
+    velocities,
+    radii,
+    position_sigma,
+    velocity_sigma,
+    max_coordinate_m,
+    max_obstacle_speed_mps,
+    max_radius_m,
+    max_velocity_sigma_mps,
+    max_position_sigma_m,
+):
     """Every position within ±``max_coordinate_m``, every speed at most ``max_obstacle_speed_mps``, every
     radius and σ in [0, its largest]; all finite."""
     for i in range(positions.shape[0]):
@@ -52,8 +66,11 @@ def obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma
     return True
 
 
-@njit("void(float64[:], float64[:], float64[:], float64, float64, float64, float64, float64[:, ::1])", cache=True,
-      nogil=True)
+@njit(
+    "void(float64[:], float64[:], float64[:], float64, float64, float64, float64, float64[:, ::1])",
+    cache=True,
+    nogil=True,
+)
 def inflation(radii, position_sigma, velocity_sigma, robot_radius_m, margin_m, sigmas, max_inflation_m, out):
     """Rows of ``out`` (4, N): obstacle radius + margin + k·σ_position; the same + the robot's radius (added
     where numpy adds it); the cone's growth k·σ_velocity; when it stops growing (∞ if it does not grow)."""
@@ -66,10 +83,28 @@ def inflation(radii, position_sigma, velocity_sigma, robot_radius_m, margin_m, s
         out[3, i] = max_inflation_m / growth if growth > 0 else math.inf
 
 
-@njit("float64(float64[:], float64[:], float64[:], float64, float64, float64, float64, float64[:, ::1], float64, "
-      "float64, float64[:, :], float64[:, :], float64[:], float64[:])", cache=True, nogil=True)
-def situation_numbers(radii, position_sigma, velocity_sigma, robot_radius_m, margin_m, sigmas, max_inflation_m, out,
-                      x, y, segment_starts, segment_directions, segment_lengths, half_widths):
+@njit(
+    "float64(float64[:], float64[:], float64[:], float64, float64, float64, float64, float64[:, ::1], float64, "
+    "float64, float64[:, :], float64[:, :], float64[:], float64[:])",
+    cache=True,
+    nogil=True,
+)
+def situation_numbers(
+    radii,
+    position_sigma,
+    velocity_sigma,
+    robot_radius_m,
+    margin_m,
+    sigmas,
+    max_inflation_m,
+    out,
+    x,
+    y,
+    segment_starts,
+    segment_directions,
+    segment_lengths,
+    half_widths,
+):
     """:func:`inflation` into ``out``, and returns how far the finite point (x, y) is outside the corridor: the
     path's ``_point_excess``, operation for operation (the clamp as np.clip's max-then-min)."""
     inflation(radii, position_sigma, velocity_sigma, robot_radius_m, margin_m, sigmas, max_inflation_m, out)
@@ -88,14 +123,33 @@ def situation_numbers(radii, position_sigma, velocity_sigma, robot_radius_m, mar
 # braking_path's steps compiled from their own source (kinematics' _clip and exact arc; libm's sin, cos and atan2,
 # as Python's math): one definition, and the same numbers.
 _clip = njit("float64(float64, float64, float64)", cache=True, nogil=True)(kinematics._clip)
-_arc = njit("UniTuple(float64, 3)(float64, float64, float64, float64, float64, float64)", cache=True,
-            nogil=True)(kinematics._arc)
+_arc = njit("UniTuple(float64, 3)(float64, float64, float64, float64, float64, float64)", cache=True, nogil=True)(
+    kinematics._arc
+)
 
 
-@njit("int64(float64, float64, float64, float64, float64, float64, float64, float64[:], float64[:, :], float64[:], "
-      "float64, float64, float64, int64)", cache=True, nogil=True)
-def first_touched(x0, y0, heading0, speed0, turn0, v_cmd, w_cmd, limits, positions, radii, robot_radius_m, margin_m,
-                  reachable_m, samples_per_period):
+@njit(
+    "int64(float64, float64, float64, float64, float64, float64, float64, float64[:], float64[:, :], float64[:], "
+    "float64, float64, float64, int64)",
+    cache=True,
+    nogil=True,
+)
+def first_touched(
+    x0,
+    y0,
+    heading0,
+    speed0,
+    turn0,
+    v_cmd,
+    w_cmd,
+    limits,
+    positions,
+    radii,
+    robot_radius_m,
+    margin_m,
+    reachable_m,
+    samples_per_period,
+):
     """check_command's braking test in one call: the first obstacle (index) that the robot, holding (v_cmd, w_cmd)
     for one control period and then braking at the limits (:func:`viapath.guard.braking_path`), would touch
     while its first sample moves towards it, among those within ``reachable_m`` now; -1 if none. The robot

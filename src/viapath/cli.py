@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Optional
 
 import typer
 from rich.console import Console
@@ -43,7 +42,7 @@ def _caused_by_interrupt(error: BaseException) -> bool:
     return False
 
 
-def _check_output(file: Optional[Path], suffixes: set[str], option: str) -> None:
+def _check_output(file: Path | None, suffixes: set[str], option: str) -> None:
     if file is None:
         return
     if file.suffix.lower() not in suffixes:
@@ -52,7 +51,7 @@ def _check_output(file: Optional[Path], suffixes: set[str], option: str) -> None
         _fail(f"{option} {file}: folder {file.parent} does not exist")
 
 
-def _check_noise(value: Optional[float], option: str) -> None:
+def _check_noise(value: float | None, option: str) -> None:
     if value is not None and (not math.isfinite(value) or value < 0):
         _fail(f"{option}: expected a finite number >= 0, found {value}")
 
@@ -60,28 +59,43 @@ def _check_noise(value: Optional[float], option: str) -> None:
 @app.command()
 def run(
     scenario: str = typer.Argument(..., help="Built-in scenario name (see `viapath scenarios`) or a YAML file."),
-    planner: Optional[str] = typer.Option(None, "--planner", help="Planner name (default: the scenario's)."),
-    perception: Optional[str] = typer.Option(None, "--perception", help="oracle | laser (default: the scenario's)."),
-    seed: Optional[int] = typer.Option(None, "--seed", help="Random seed (default: the scenario's)."),
-    position_noise: Optional[float] = typer.Option(None, "--position-noise", help="Oracle position noise σ in m."),
-    velocity_noise: Optional[float] = typer.Option(None, "--velocity-noise", help="Oracle velocity noise σ in m/s."),
+    planner: str | None = typer.Option(None, "--planner", help="Planner name (default: the scenario's)."),
+    perception: str | None = typer.Option(None, "--perception", help="oracle | laser (default: the scenario's)."),
+    seed: int | None = typer.Option(None, "--seed", help="Random seed (default: the scenario's)."),
+    position_noise: float | None = typer.Option(None, "--position-noise", help="Oracle position noise σ in m."),
+    velocity_noise: float | None = typer.Option(None, "--velocity-noise", help="Oracle velocity noise σ in m/s."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object of metrics."),
-    plot: Optional[Path] = typer.Option(None, "--plot", help="Write a figure (PNG/PDF/SVG) of the episode."),
-    trace: Optional[Path] = typer.Option(None, "--trace", help="Write the per-step trace as CSV."),
-    animate: Optional[Path] = typer.Option(None, "--animate", help="Write an animation (GIF, or MP4 with ffmpeg)."),
-    frame_stride: Optional[int] = typer.Option(None, "--frame-stride", help="With --animate: one frame every N "
-                                               "steps (default: enough to keep at most 400 frames)."),
-    option: list[str] = typer.Option([], "--option", "-o", metavar="NAME=VALUE",
-                                     help="Set a planner option (repeatable); `viapath planners NAME` lists them."),
-    weights: Optional[str] = typer.Option(None, "--weights", help="A weights preset (`viapath presets`) or preset "
-                                          "YAML file for the viapath planner; --option values win over it."),
-    mcap: Optional[Path] = typer.Option(None, "--mcap", help="Write the run as MCAP for Foxglove (extra viz)."),
+    plot: Path | None = typer.Option(None, "--plot", help="Write a figure (PNG/PDF/SVG) of the episode."),
+    trace: Path | None = typer.Option(None, "--trace", help="Write the per-step trace as CSV."),
+    animate: Path | None = typer.Option(None, "--animate", help="Write an animation (GIF, or MP4 with ffmpeg)."),
+    frame_stride: int | None = typer.Option(
+        None,
+        "--frame-stride",
+        help="With --animate: one frame every N steps (default: enough to keep at most 400 frames).",
+    ),
+    option: list[str] = typer.Option(
+        [],
+        "--option",
+        "-o",
+        metavar="NAME=VALUE",
+        help="Set a planner option (repeatable); `viapath planners NAME` lists them.",
+    ),
+    weights: str | None = typer.Option(
+        None,
+        "--weights",
+        help="A weights preset (`viapath presets`) or preset "
+        "YAML file for the viapath planner; --option values win over it.",
+    ),
+    mcap: Path | None = typer.Option(None, "--mcap", help="Write the run as MCAP for Foxglove (extra viz)."),
     force: bool = typer.Option(False, "--force", help="Overwrite an existing --mcap file."),
     live: bool = typer.Option(False, "--live", help="Serve the run live to Foxglove on 127.0.0.1 (extra viz)."),
     rate: float = typer.Option(1.0, "--rate", help="With --live: simulated seconds per wall-clock second."),
     port: int = typer.Option(8765, "--port", help="With --live: the WebSocket port (0: any free one)."),
-    shield: Optional[str] = typer.Option(None, "--shield", help="on | off: passive-safety shield on the planner's "
-                                         "commands (default: on for viapath, off for the others)."),
+    shield: str | None = typer.Option(
+        None,
+        "--shield",
+        help="on | off: passive-safety shield on the planner's commands (default: on for viapath, off for the others).",
+    ),
     shield_mode: str = typer.Option("passive", "--shield-mode", help="passive | passive-friendly."),
 ) -> None:
     """Run one scenario in the simulator and report its metrics."""
@@ -101,7 +115,9 @@ def run(
     from viapath.perception.modes import PERCEPTION_MODES
 
     if perception is not None and perception not in PERCEPTION_MODES:
-        _fail(f"--perception: expected {' or '.join(repr(m) for m in PERCEPTION_MODES.ordered())}, found {perception!r}")
+        _fail(
+            f"--perception: expected {' or '.join(repr(m) for m in PERCEPTION_MODES.ordered())}, found {perception!r}"
+        )
     if shield not in (None, "on", "off"):
         _fail(f"--shield: expected 'on' or 'off', found {shield!r}")
     if shield_mode not in ("passive", "passive-friendly"):
@@ -126,19 +142,38 @@ def run(
         except PresetError as error:
             _fail(f"--weights: {error}")
     if planner_name != spec.planner.name and spec.planner.given():
-        errors.print(f"note: {scenario}'s planner block configures {spec.planner.name!r}; {planner_name!r} runs with "
-                     "its own defaults (and any --option)", highlight=False)
+        errors.print(
+            f"note: {scenario}'s planner block configures {spec.planner.name!r}; {planner_name!r} runs with "
+            "its own defaults (and any --option)",
+            highlight=False,
+        )
     from viapath.viz.foxglove import ViewError, open_views
 
     try:
-        views = open_views(spec, planner_name, mcap=mcap, force=force, live=live, rate=rate, port=port,
-                           announce=lambda text: errors.print(text, highlight=False))
+        views = open_views(
+            spec,
+            planner_name,
+            mcap=mcap,
+            force=force,
+            live=live,
+            rate=rate,
+            port=port,
+            announce=lambda text: errors.print(text, highlight=False),
+        )
         with views:
-            episode = run_episode(spec, planner=planner_name, perception=perception, seed=seed,
-                                  position_noise_m=position_noise, velocity_noise_mps=velocity_noise,
-                                  record_perceived=plot is not None or animate is not None,
-                                  planner_overrides={**overrides, **(views.planner_overrides or {})}, on_step=views.on_step,
-                                  shield=None if shield is None else shield == "on", shield_options={"mode": shield_mode})
+            episode = run_episode(
+                spec,
+                planner=planner_name,
+                perception=perception,
+                seed=seed,
+                position_noise_m=position_noise,
+                velocity_noise_mps=velocity_noise,
+                record_perceived=plot is not None or animate is not None,
+                planner_overrides={**overrides, **(views.planner_overrides or {})},
+                on_step=views.on_step,
+                shield=None if shield is None else shield == "on",
+                shield_options={"mode": shield_mode},
+            )
     except ViewError as error:
         _fail(str(error))
     except (ValueError, RuntimeError, FileNotFoundError) as error:
@@ -186,7 +221,11 @@ def _print_metrics(metrics: dict) -> None:
         if key in ("scenario", "planner", "perception"):
             continue
         if isinstance(value, bool):
-            text = ("[red]yes[/]" if value else "[green]no[/]") if "collision" in key else ("yes" if value else "[red]no[/]")
+            text = (
+                ("[red]yes[/]" if value else "[green]no[/]")
+                if "collision" in key
+                else ("yes" if value else "[red]no[/]")
+            )
         elif isinstance(value, float):
             text = f"{value:.3f}"
         elif value is None:
@@ -231,7 +270,7 @@ def parse_options(assignments: list[str], planner_name: str) -> dict:
 
 @app.command()
 def planners(
-    name: Optional[str] = typer.Argument(None, help="A planner: list its options with defaults, units and bounds."),
+    name: str | None = typer.Argument(None, help="A planner: list its options with defaults, units and bounds."),
     as_json: bool = typer.Option(False, "--json", help="Print the options as JSON."),
 ) -> None:
     """List the registered planners, or one planner's options."""
@@ -248,16 +287,36 @@ def planners(
     # What an option's default resolves to on this machine (viapath's backend: numpy or numba).
     resolved = getattr(planner_class(name), "resolved_defaults", dict)()
     if as_json:
-        print(json.dumps([{"name": o.path, "default": o.default, "unit": o.unit, "minimum": o.minimum,
-                           "maximum": o.maximum, "choices": o.choices, "help": o.help}
-                          | ({"resolved": resolved[o.path]} if o.path in resolved else {}) for o in schema]))
+        print(
+            json.dumps(
+                [
+                    {
+                        "name": o.path,
+                        "default": o.default,
+                        "unit": o.unit,
+                        "minimum": o.minimum,
+                        "maximum": o.maximum,
+                        "choices": o.choices,
+                        "help": o.help,
+                    }
+                    | ({"resolved": resolved[o.path]} if o.path in resolved else {})
+                    for o in schema
+                ]
+            )
+        )
         return
-    console.print(f"[bold]{name}[/] options (scenario: planner: {{name: {name}, OPTION: VALUE}}; "
-                  "command line: --option NAME=VALUE)")
+    console.print(
+        f"[bold]{name}[/] options (scenario: planner: {{name: {name}, OPTION: VALUE}}; "
+        "command line: --option NAME=VALUE)"
+    )
     for o in schema:
         default = "[" + ", ".join(f"{v:g}" for v in o.default) + "]" if isinstance(o.default, tuple) else o.default
-        console.print(f"  [bold]{o.path}[/] = {default}" + (f" {o.unit}" if o.unit else "")
-                      + (f" (here: {resolved[o.path]})" if o.path in resolved else ""), highlight=False)
+        console.print(
+            f"  [bold]{o.path}[/] = {default}"
+            + (f" {o.unit}" if o.unit else "")
+            + (f" (here: {resolved[o.path]})" if o.path in resolved else ""),
+            highlight=False,
+        )
         console.print(f"      {escape(o.describe())}", highlight=False)
 
 
@@ -265,8 +324,12 @@ def _register_plugins() -> None:
     """Commands that live beside their subsystem (laser scans, benchmark)."""
     import importlib
 
-    for module in ("viapath.commands.scans", "viapath.bench.commands", "viapath.ros2.commands",
-                   "viapath.commands.tune"):
+    for module in (
+        "viapath.commands.scans",
+        "viapath.bench.commands",
+        "viapath.ros2.commands",
+        "viapath.commands.tune",
+    ):
         try:
             spec = importlib.util.find_spec(module)
         except ModuleNotFoundError:

@@ -4,7 +4,7 @@ warnings before a run, and a progress bar while an animation is written."""
 
 from __future__ import annotations
 
-from typing import Callable, Optional
+from collections.abc import Callable
 
 import typer
 
@@ -40,8 +40,11 @@ def install(app: typer.Typer) -> None:
     _plain_flags()
 
     @app.callback()
-    def _main(version: Optional[bool] = typer.Option(None, "--version", callback=_version, is_eager=True,
-                                                     help="Print the viapath version and exit.")) -> None:
+    def _main(
+        version: bool | None = typer.Option(
+            None, "--version", callback=_version, is_eager=True, help="Print the viapath version and exit."
+        ),
+    ) -> None:
         """Follow a designated path and avoid moving obstacles by choosing speed as well as direction."""
 
 
@@ -56,11 +59,27 @@ def print_warnings(scenario, console) -> None:
 
 def animation_progress(console) -> tuple[Callable[[int, int], None], Callable[[], None]]:
     """A ``progress_callback(frame, total)`` for matplotlib's ``Animation.save`` and a ``close``."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
 
-    bar = Progress(TextColumn("writing frames"), BarColumn(), MofNCompleteColumn(), TextColumn("elapsed"),
-                   TimeElapsedColumn(), TextColumn("/"), TimeRemainingColumn(), TextColumn("left"),
-                   console=console, transient=True)
+    bar = Progress(
+        TextColumn("writing frames"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("elapsed"),
+        TimeElapsedColumn(),
+        TextColumn("/"),
+        TimeRemainingColumn(),
+        TextColumn("left"),
+        console=console,
+        transient=True,
+    )
     state: dict = {}
 
     def update(frame: int, total: int) -> None:
@@ -72,4 +91,5 @@ def animation_progress(console) -> tuple[Callable[[int, int], None], Callable[[]
     def close() -> None:
         if "job" in state:
             bar.stop()
+
     return update, close

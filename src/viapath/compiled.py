@@ -23,9 +23,13 @@ def harness_kernels():
             from viapath import _harness_kernels as kernels
         except ImportError:
             kernels = None
-        except Exception as error:  # noqa: BLE001 - an accelerator that fails must leave the numpy code working
-            warnings.warn(f"viapath: the compiled harness kernels could not be loaded ({type(error).__name__}: "
-                          f"{error}); using the numpy code", RuntimeWarning, stacklevel=2)
+        except Exception as error:
+            warnings.warn(
+                f"viapath: the compiled harness kernels could not be loaded ({type(error).__name__}: "
+                f"{error}); using the numpy code",
+                RuntimeWarning,
+                stacklevel=2,
+            )
             kernels = None
         _HARNESS = kernels
     return _HARNESS

@@ -42,6 +42,7 @@ PREDICTED_ROWS = 12
 
 # -- the usual ETH/UCY windows ---------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class Window:
     """One protocol window: the scored people's observed and future rows, and everyone seen."""
@@ -52,8 +53,13 @@ class Window:
     seen_previous: np.ndarray  # (M, 2) their position one row earlier (NaN when not present then)
 
 
-def protocol_windows(table: np.ndarray, observed_rows: int = OBSERVED_ROWS, predicted_rows: int = PREDICTED_ROWS,
-                     min_people: int = 2, frames_per_row: int = 10):
+def protocol_windows(
+    table: np.ndarray,
+    observed_rows: int = OBSERVED_ROWS,
+    predicted_rows: int = PREDICTED_ROWS,
+    min_people: int = 2,
+    frames_per_row: int = 10,
+):
     """Yield the protocol's :class:`Window` s of a 4-column table ``frame id x y`` (rows sorted or not).
 
     Frames are taken on the file's own grid: the distinct frames, in order (as S-GAN does); a window
@@ -70,7 +76,7 @@ def protocol_windows(table: np.ndarray, observed_rows: int = OBSERVED_ROWS, pred
     grid[frame_index, id_index] = table[:, 2:4]
     length = observed_rows + predicted_rows
     for start in range(len(frames) - length + 1):
-        block = grid[start:start + length]
+        block = grid[start : start + length]
         full = np.all(np.isfinite(block[..., 0]), axis=0)
         if full.sum() < min_people:
             continue
@@ -97,6 +103,7 @@ def displacement_errors(predicted: np.ndarray, truth: np.ndarray):
 
 # -- constant velocity (today's planner) -------------------------------------------------------------
 
+
 def backward_velocity(last: np.ndarray, previous: np.ndarray, dt_s: float) -> np.ndarray:
     """Velocity over one row step, from past positions only; 0 where ``previous`` is unknown (NaN)."""
     velocity = (np.asarray(last, float) - np.asarray(previous, float)) / float(dt_s)
@@ -113,15 +120,19 @@ def constant_velocity_forecast(observed: np.ndarray, steps: int, dt_s: float) ->
 
 # -- constant velocity with heading uncertainty -------------------------------------------------------
 
-def heading_uncertainty_samples(observed: np.ndarray, steps: int, dt_s: float, sigma_heading_rad: float,
-                                samples: int, rng: np.random.Generator) -> np.ndarray:
+
+def heading_uncertainty_samples(
+    observed: np.ndarray, steps: int, dt_s: float, sigma_heading_rad: float, samples: int, rng: np.random.Generator
+) -> np.ndarray:
     """CVM-S: (samples, N, steps, 2), each person's velocity turned by one ``N(0, sigma)`` angle per sample."""
     observed = np.asarray(observed, float)
     velocity = backward_velocity(observed[:, -1], observed[:, -2], dt_s)
     angle = rng.normal(0.0, sigma_heading_rad, (samples, len(observed)))
     c, s = np.cos(angle), np.sin(angle)
-    turned = np.stack([c * velocity[None, :, 0] - s * velocity[None, :, 1],
-                       s * velocity[None, :, 0] + c * velocity[None, :, 1]], axis=-1)
+    turned = np.stack(
+        [c * velocity[None, :, 0] - s * velocity[None, :, 1], s * velocity[None, :, 0] + c * velocity[None, :, 1]],
+        axis=-1,
+    )
     k = np.arange(1, steps + 1) * float(dt_s)
     return observed[None, :, -1, None, :] + k[None, None, :, None] * turned[:, :, None, :]
 
@@ -133,6 +144,7 @@ def velocity_sigma_mps(velocities: np.ndarray, sigma_floor_mps: float, sigma_hea
 
 
 # -- social force ----------------------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class SocialForecastParams:
@@ -174,8 +186,9 @@ def _repulsion(positions: np.ndarray, velocities: np.ndarray, params: SocialFore
     return np.sum(weight[..., None] * force, axis=1)
 
 
-def social_force_forecast(last: np.ndarray, previous: np.ndarray, steps: int, dt_s: float,
-                          params: SocialForecastParams | None = None) -> np.ndarray:
+def social_force_forecast(
+    last: np.ndarray, previous: np.ndarray, steps: int, dt_s: float, params: SocialForecastParams | None = None
+) -> np.ndarray:
     """Joint roll-out of everyone seen: ``last`` / ``previous`` (M, 2) positions at the last two rows
     (``previous`` NaN: standing) → (M, steps, 2) at row times. Desired velocity: the observed one."""
     params = params or SocialForecastParams()

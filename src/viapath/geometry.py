@@ -181,11 +181,13 @@ def legs_first_contact(
         return _first_contact(px, py, vx, vy, radii + growth * t0, growth, duration)
     # Split each leg where the cone stops growing: the cone part, then the cylinder part.
     cone_duration = np.clip(until - t0, 0.0, duration)
-    early = _first_contact(px, py, vx, vy, radii + growth * np.minimum(t0, until), np.where(until > t0, growth, 0.0),
-                           cone_duration)
+    early = _first_contact(
+        px, py, vx, vy, radii + growth * np.minimum(t0, until), np.where(until > t0, growth, 0.0), cone_duration
+    )
     full_growth = growth * np.where(np.isfinite(until), until, 0.0)
-    late = _first_contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy, radii + full_growth, 0.0,
-                          duration - cone_duration)
+    late = _first_contact(
+        px + vx * cone_duration, py + vy * cone_duration, vx, vy, radii + full_growth, 0.0, duration - cone_duration
+    )
     # The cylinder part exists only for legs that reach the end of the cone.
     late = np.where(t0 + duration >= until, late + cone_duration, np.inf)
     return np.where(np.isfinite(early), early, late)
@@ -195,8 +197,18 @@ VIA_SIDES = np.array([LEFT, RIGHT, LEFT, RIGHT])  # of the via options: (left, e
 VIA_ROOTS = np.array([0, 0, 1, 1])  # ... 0 = pass early (before the obstacle), 1 = late (behind it)
 
 
-def via_options(starts, start_times, speeds, obstacle_positions, obstacle_velocities, via_radii, growth,
-                growth_until_s, envelope_m, max_time_s):
+def via_options(
+    starts,
+    start_times,
+    speeds,
+    obstacle_positions,
+    obstacle_velocities,
+    via_radii,
+    growth,
+    growth_until_s,
+    envelope_m,
+    max_time_s,
+):
     """Via points of P (node, obstacle) pairs (one row per pair: the node's position, time and speed,
     that obstacle's position, velocity, via radius, cone growth and cap, the braking envelope), on both
     sides and both roots: ``(pair, option, t, leg_velocity, via)`` for every option whose via time is

@@ -46,19 +46,36 @@ from __future__ import annotations
 import contextvars
 import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
 from viapath.compiled import harness_kernels
 from viapath.kinematics import _arc, _clip
-from viapath.observation import (Command, Decision, MotionLimits, Observation, ObservationError, Obstacles, Plan,
-                                 RobotState)
+from viapath.observation import (
+    Command,
+    Decision,
+    MotionLimits,
+    Observation,
+    ObservationError,
+    Obstacles,
+    Plan,
+    RobotState,
+)
 from viapath.static import STATIC_ID_BASE
 
-__all__ = ["GuardConfig", "Inspection", "ObservationError", "check_command", "guard_plan", "inspect_observation",
-           "inspected", "stopping_distance_m"]
+__all__ = [
+    "GuardConfig",
+    "Inspection",
+    "ObservationError",
+    "check_command",
+    "guard_plan",
+    "inspect_observation",
+    "inspected",
+    "stopping_distance_m",
+]
 
 
 @dataclass(frozen=True)
@@ -121,7 +138,9 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
     """Check an observation once; raise :class:`ObservationError` on wrong structure, else return
     the repaired observation or the reasons to stop (see the module docstring)."""
     if not isinstance(observation, Observation):
-        raise ObservationError(f"observation: expected a viapath.observation.Observation, found {type(observation).__name__}")
+        raise ObservationError(
+            f"observation: expected a viapath.observation.Observation, found {type(observation).__name__}"
+        )
     robot, obstacles = observation.robot, observation.obstacles
     if not isinstance(robot, RobotState):
         raise ObservationError(f"robot: expected a RobotState, found {type(robot).__name__}")
@@ -137,13 +156,20 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
         stop.append(f"time_s: expected a finite number, found {time_s:g}")
     position = _array("robot.position", robot.position, (2,))
     x, y = float(position[0]), float(position[1])  # a NaN fails the bound too; an inf is not finite
-    if not (math.isfinite(x) and math.isfinite(y) and abs(x) <= config.max_coordinate_m
-            and abs(y) <= config.max_coordinate_m):
-        stop.append(f"robot.position: expected 2 finite numbers within ±{config.max_coordinate_m:g} m, "
-                    f"found {_show(position)}")
-    for name, bound, unit in (("heading_rad", config.max_heading_rad, "rad"),
-                              ("speed_mps", config.max_state_speed_mps, "m/s"),
-                              ("turn_rate_radps", config.max_state_turn_rate_radps, "rad/s")):
+    if not (
+        math.isfinite(x)
+        and math.isfinite(y)
+        and abs(x) <= config.max_coordinate_m
+        and abs(y) <= config.max_coordinate_m
+    ):
+        stop.append(
+            f"robot.position: expected 2 finite numbers within ±{config.max_coordinate_m:g} m, found {_show(position)}"
+        )
+    for name, bound, unit in (
+        ("heading_rad", config.max_heading_rad, "rad"),
+        ("speed_mps", config.max_state_speed_mps, "m/s"),
+        ("turn_rate_radps", config.max_state_turn_rate_radps, "rad/s"),
+    ):
         value = _scalar(f"robot.{name}", getattr(robot, name))
         if not (math.isfinite(value) and abs(value) <= bound):
             stop.append(f"robot.{name}: expected a finite number within ±{bound:g} {unit}, found {value:g}")
@@ -156,7 +182,9 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
     except (TypeError, ValueError):
         raise ObservationError("obstacles.positions: expected an (N, 2) array of numbers") from None
     if positions.ndim != 2 or positions.shape[1] != 2:
-        raise ObservationError(f"obstacles.positions: expected an (N, 2) array of [x, y] rows, found shape {positions.shape}")
+        raise ObservationError(
+            f"obstacles.positions: expected an (N, 2) array of [x, y] rows, found shape {positions.shape}"
+        )
     n = len(positions)
     velocities = _array("obstacles.velocities", obstacles.velocities, (n, 2))
     radii = _array("obstacles.radii_m", obstacles.radii_m, (n,))
@@ -172,32 +200,44 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
 
     bad_position = ~(np.isfinite(positions).all(axis=1) & (np.abs(positions) <= config.max_coordinate_m).all(axis=1))
     for i in np.flatnonzero(bad_position):
-        stop.append(f"obstacles.positions[{i}]: expected 2 finite numbers within ±{config.max_coordinate_m:g} m, "
-                    f"found {_show(positions[i])}; where it is is unknown: stopping")
+        stop.append(
+            f"obstacles.positions[{i}]: expected 2 finite numbers within ±{config.max_coordinate_m:g} m, "
+            f"found {_show(positions[i])}; where it is is unknown: stopping"
+        )
     speed = np.hypot(velocities[:, 0], velocities[:, 1]) if n else np.zeros(0)
     bad_velocity = ~(np.isfinite(velocities).all(axis=1) & (speed <= config.max_obstacle_speed_mps))
     for i in np.flatnonzero(bad_velocity & ~bad_position):
-        repairs.append(f"obstacles.velocities[{i}]: expected 2 finite numbers (speed ≤ {config.max_obstacle_speed_mps:g} "
-                       f"m/s), found {_show(velocities[i])}; kept standing with velocity σ "
-                       f"{config.max_velocity_sigma_mps:g} m/s")
+        repairs.append(
+            f"obstacles.velocities[{i}]: expected 2 finite numbers (speed ≤ {config.max_obstacle_speed_mps:g} "
+            f"m/s), found {_show(velocities[i])}; kept standing with velocity σ "
+            f"{config.max_velocity_sigma_mps:g} m/s"
+        )
     velocities[bad_velocity] = 0.0
     velocity_sigma[bad_velocity] = config.max_velocity_sigma_mps
     bad_radius = ~(np.isfinite(radii) & (radii >= 0))
     for i in np.flatnonzero(bad_radius & ~bad_position):
-        repairs.append(f"obstacles.radii_m[{i}]: expected a finite number ≥ 0, found {radii[i]:g}; "
-                       f"kept with radius {config.default_radius_m:g} m")
+        repairs.append(
+            f"obstacles.radii_m[{i}]: expected a finite number ≥ 0, found {radii[i]:g}; "
+            f"kept with radius {config.default_radius_m:g} m"
+        )
     radii[bad_radius] = config.default_radius_m
     for i in np.flatnonzero((radii > config.max_radius_m) & ~bad_position):
         # Never shrunk: a smaller disc would let the robot drive into its edge. How far it reaches is not
         # plausible, so the robot stops, as for an obstacle whose position is unknown.
-        stop.append(f"obstacles.radii_m[{i}]: expected at most {config.max_radius_m:g} m, found {radii[i]:g}; "
-                    "an implausible size: stopping")
-    for name, values, largest, unit in (("velocity_sigma_mps", velocity_sigma, config.max_velocity_sigma_mps, "m/s"),
-                                        ("position_sigma_m", position_sigma, config.max_position_sigma_m, "m")):
+        stop.append(
+            f"obstacles.radii_m[{i}]: expected at most {config.max_radius_m:g} m, found {radii[i]:g}; "
+            "an implausible size: stopping"
+        )
+    for name, values, largest, unit in (
+        ("velocity_sigma_mps", velocity_sigma, config.max_velocity_sigma_mps, "m/s"),
+        ("position_sigma_m", position_sigma, config.max_position_sigma_m, "m"),
+    ):
         bad = ~(np.isfinite(values) & (values >= 0) & (values <= largest))
         for i in np.flatnonzero(bad & ~bad_position):
-            repairs.append(f"obstacles.{name}[{i}]: expected a finite number in [0, {largest:g}] {unit}, "
-                           f"found {values[i]:g}; kept with the largest σ {largest:g} {unit}")
+            repairs.append(
+                f"obstacles.{name}[{i}]: expected a finite number in [0, {largest:g}] {unit}, "
+                f"found {values[i]:g}; kept with the largest σ {largest:g} {unit}"
+            )
         values[bad] = largest
     if stop:
         return Inspection(None, stop, repairs)
@@ -210,8 +250,9 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
 _FLOAT64 = np.dtype(np.float64)
 
 
-def with_static_rows(observation: Observation, config: GuardConfig = DEFAULT_CONFIG,
-                     repairs: list[str] | None = None) -> Observation:
+def with_static_rows(
+    observation: Observation, config: GuardConfig = DEFAULT_CONFIG, repairs: list[str] | None = None
+) -> Observation:
     """The observation with its static layer as static rows of its obstacles (discs of velocity 0 and
     σ 0 sampled along the segments, :func:`viapath.static.sample_discs`, within ``static_range_m`` of the
     robot) and no static layer left: what every planner, this guard's command check and the shield see.
@@ -223,8 +264,10 @@ def with_static_rows(observation: Observation, config: GuardConfig = DEFAULT_CON
     if not good.all():
         if repairs is not None:
             for i in np.flatnonzero(~good)[:5]:
-                repairs.append(f"static.segments[{i}]: expected finite coordinates within ±{bound:g} m, found "
-                               f"{_show(static.segments[i].ravel())}; left out")
+                repairs.append(
+                    f"static.segments[{i}]: expected finite coordinates within ±{bound:g} m, found "
+                    f"{_show(static.segments[i].ravel())}; left out"
+                )
         static = static.subset(good)
     centres, radii, shape_ids = static.discs(float(observation.robot.radius_m), config.static_spacing_m)
     position = np.asarray(observation.robot.position, dtype=float)
@@ -236,11 +279,14 @@ def with_static_rows(observation: Observation, config: GuardConfig = DEFAULT_CON
         return Observation(observation.time_s, observation.robot, people)
     zeros = np.zeros(n)
     merged = Obstacles(
-        np.concatenate([people.positions, centres]), np.concatenate([people.velocities, np.zeros((n, 2))]),
-        np.concatenate([people.radii_m, radii]), np.concatenate([people.position_sigma_m, zeros]),
+        np.concatenate([people.positions, centres]),
+        np.concatenate([people.velocities, np.zeros((n, 2))]),
+        np.concatenate([people.radii_m, radii]),
+        np.concatenate([people.position_sigma_m, zeros]),
         np.concatenate([people.velocity_sigma_mps, zeros]),
         np.concatenate([np.asarray(people.ids, dtype=np.int64), STATIC_ID_BASE + shape_ids]),
-        np.concatenate([people.is_static, np.ones(n, dtype=bool)]))
+        np.concatenate([people.is_static, np.ones(n, dtype=bool)]),
+    )
     return Observation(observation.time_s, observation.robot, merged)
 
 
@@ -249,29 +295,65 @@ def _plainly_sound(observation: Observation, robot: RobotState, obstacles: Obsta
     number a float and every array a float64 array of its shape, nothing to stop for, nothing to repair.
     False says only "look closer": the checks below then decide, and name what is wrong. With every bound
     finite (``config.all_finite``) a value within its bound is finite too."""
-    time_s, heading, speed, turn, radius = (observation.time_s, robot.heading_rad, robot.speed_mps,
-                                            robot.turn_rate_radps, robot.radius_m)
+    time_s, heading, speed, turn, radius = (
+        observation.time_s,
+        robot.heading_rad,
+        robot.speed_mps,
+        robot.turn_rate_radps,
+        robot.radius_m,
+    )
     position, positions, velocities = robot.position, obstacles.positions, obstacles.velocities
-    if not (isinstance(time_s, float) and isinstance(heading, float) and isinstance(speed, float)
-            and isinstance(turn, float) and isinstance(radius, float) and config.all_finite
-            and type(position) is np.ndarray and position.dtype is _FLOAT64 and position.shape == (2,)
-            and type(positions) is np.ndarray and positions.dtype is _FLOAT64 and positions.ndim == 2
-            and positions.shape[1] == 2):
+    if not (
+        isinstance(time_s, float)
+        and isinstance(heading, float)
+        and isinstance(speed, float)
+        and isinstance(turn, float)
+        and isinstance(radius, float)
+        and config.all_finite
+        and type(position) is np.ndarray
+        and position.dtype is _FLOAT64
+        and position.shape == (2,)
+        and type(positions) is np.ndarray
+        and positions.dtype is _FLOAT64
+        and positions.ndim == 2
+        and positions.shape[1] == 2
+    ):
         return False
     n = positions.shape[0]
     x, y = position.tolist()
-    if not (math.isfinite(time_s) and abs(x) <= config.max_coordinate_m and abs(y) <= config.max_coordinate_m
-            and abs(heading) <= config.max_heading_rad and abs(speed) <= config.max_state_speed_mps
-            and abs(turn) <= config.max_state_turn_rate_radps and 0.0 < radius < math.inf):
+    if not (
+        math.isfinite(time_s)
+        and abs(x) <= config.max_coordinate_m
+        and abs(y) <= config.max_coordinate_m
+        and abs(heading) <= config.max_heading_rad
+        and abs(speed) <= config.max_state_speed_mps
+        and abs(turn) <= config.max_state_turn_rate_radps
+        and 0.0 < radius < math.inf
+    ):
         return False
-    radii, position_sigma, velocity_sigma, ids = (obstacles.radii_m, obstacles.position_sigma_m,
-                                                  obstacles.velocity_sigma_mps, obstacles.ids)
+    radii, position_sigma, velocity_sigma, ids = (
+        obstacles.radii_m,
+        obstacles.position_sigma_m,
+        obstacles.velocity_sigma_mps,
+        obstacles.ids,
+    )
     rows, row = (n, 2), (n,)
-    if not (type(velocities) is np.ndarray and velocities.dtype is _FLOAT64 and velocities.shape == rows
-            and type(radii) is np.ndarray and radii.dtype is _FLOAT64 and radii.shape == row
-            and type(position_sigma) is np.ndarray and position_sigma.dtype is _FLOAT64 and position_sigma.shape == row
-            and type(velocity_sigma) is np.ndarray and velocity_sigma.dtype is _FLOAT64 and velocity_sigma.shape == row
-            and type(ids) is np.ndarray and ids.shape == row):
+    if not (
+        type(velocities) is np.ndarray
+        and velocities.dtype is _FLOAT64
+        and velocities.shape == rows
+        and type(radii) is np.ndarray
+        and radii.dtype is _FLOAT64
+        and radii.shape == row
+        and type(position_sigma) is np.ndarray
+        and position_sigma.dtype is _FLOAT64
+        and position_sigma.shape == row
+        and type(velocity_sigma) is np.ndarray
+        and velocity_sigma.dtype is _FLOAT64
+        and velocity_sigma.shape == row
+        and type(ids) is np.ndarray
+        and ids.shape == row
+    ):
         return False
     return _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config)
 
@@ -287,18 +369,30 @@ def _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigm
     kernels = harness_kernels()
     if kernels is not None:
         try:
-            return kernels.obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma,
-                                           config.max_coordinate_m, config.max_obstacle_speed_mps, config.max_radius_m,
-                                           config.max_velocity_sigma_mps, config.max_position_sigma_m)
+            return kernels.obstacles_sound(
+                positions,
+                velocities,
+                radii,
+                position_sigma,
+                velocity_sigma,
+                config.max_coordinate_m,
+                config.max_obstacle_speed_mps,
+                config.max_radius_m,
+                config.max_velocity_sigma_mps,
+                config.max_position_sigma_m,
+            )
         except TypeError:  # arrays of another dtype (a direct call; the inspection hands float64): numpy below
             pass
     largest, smallest = np.maximum.reduce, np.minimum.reduce  # what .max() and .min() call, without their wrappers
     return bool(
         largest(np.abs(positions), axis=None) <= config.max_coordinate_m
         and largest(np.hypot(velocities[:, 0], velocities[:, 1])) <= config.max_obstacle_speed_mps
-        and smallest(radii) >= 0 and largest(radii) <= config.max_radius_m
-        and smallest(velocity_sigma) >= 0 and largest(velocity_sigma) <= config.max_velocity_sigma_mps
-        and smallest(position_sigma) >= 0 and largest(position_sigma) <= config.max_position_sigma_m
+        and smallest(radii) >= 0
+        and largest(radii) <= config.max_radius_m
+        and smallest(velocity_sigma) >= 0
+        and largest(velocity_sigma) <= config.max_velocity_sigma_mps
+        and smallest(position_sigma) >= 0
+        and largest(position_sigma) <= config.max_position_sigma_m
     )
 
 
@@ -312,8 +406,13 @@ def stopping_distance_m(speed_mps: float, limits: MotionLimits, config: GuardCon
 BRAKING_SAMPLES_PER_PERIOD = 5  # braking_path's samples of the held command
 
 
-def braking_path(robot: RobotState, command: Command, limits: MotionLimits, period_s: float,
-                 samples_per_period: int = BRAKING_SAMPLES_PER_PERIOD) -> np.ndarray:
+def braking_path(
+    robot: RobotState,
+    command: Command,
+    limits: MotionLimits,
+    period_s: float,
+    samples_per_period: int = BRAKING_SAMPLES_PER_PERIOD,
+) -> np.ndarray:
     """Positions (S, 2) of the robot holding ``command`` for ``period_s`` and then commanded to stop
     until at rest, stepped by :func:`viapath.kinematics.step` (the drive's acceleration limits), from
     the first sample on (the current position excluded)."""
@@ -346,8 +445,13 @@ def braking_path(robot: RobotState, command: Command, limits: MotionLimits, peri
     return np.array(points)
 
 
-def check_command(command: Any, observation: Observation, limits: MotionLimits, robot_radius_m: float,
-                  config: GuardConfig = DEFAULT_CONFIG) -> tuple[Command, str | None, str | None]:
+def check_command(
+    command: Any,
+    observation: Observation,
+    limits: MotionLimits,
+    robot_radius_m: float,
+    config: GuardConfig = DEFAULT_CONFIG,
+) -> tuple[Command, str | None, str | None]:
     """The command to send, the status if it was replaced (``guard-stop`` / ``guard-brake``) and why."""
     try:
         v, w = float(command.speed_mps), float(command.turn_rate_radps)
@@ -357,9 +461,14 @@ def check_command(command: Any, observation: Observation, limits: MotionLimits, 
     if not (math.isfinite(v) and math.isfinite(w)):
         return Command.stop(), "guard-stop", f"command ({v:g}, {w:g}): not finite"
     if not (-tol <= v <= limits.max_speed_mps + tol and abs(w) <= limits.max_turn_rate_radps + tol):
-        return Command.stop(), "guard-stop", (
-            f"command ({v:g} m/s, {w:g} rad/s): outside the limits 0 ≤ v ≤ {limits.max_speed_mps:g} m/s, "
-            f"|ω| ≤ {limits.max_turn_rate_radps:g} rad/s")
+        return (
+            Command.stop(),
+            "guard-stop",
+            (
+                f"command ({v:g} m/s, {w:g} rad/s): outside the limits 0 ≤ v ≤ {limits.max_speed_mps:g} m/s, "
+                f"|ω| ≤ {limits.max_turn_rate_radps:g} rad/s"
+            ),
+        )
     v = min(max(v, 0.0), limits.max_speed_mps)
     w = min(max(w, -limits.max_turn_rate_radps), limits.max_turn_rate_radps)
     obstacles = observation.obstacles
@@ -372,15 +481,29 @@ def check_command(command: Any, observation: Observation, limits: MotionLimits, 
         if i >= 0:
             distance_m = float(np.hypot(*(obstacles.positions[i] - position)))
             reach_m = robot_radius_m + obstacles.radii_m[i] + config.brake_margin_m
-            return Command(0.0, w), "guard-brake", (
-                f"command ({v:g} m/s, {w:g} rad/s) closes on obstacle {i} (id {int(obstacles.ids[i])}), "
-                f"{distance_m - reach_m + config.brake_margin_m:.3f} m away: braking from here would still "
-                "reach it; speed set to 0")
+            return (
+                Command(0.0, w),
+                "guard-brake",
+                (
+                    f"command ({v:g} m/s, {w:g} rad/s) closes on obstacle {i} (id {int(obstacles.ids[i])}), "
+                    f"{distance_m - reach_m + config.brake_margin_m:.3f} m away: braking from here would still "
+                    "reach it; speed set to 0"
+                ),
+            )
     return _unchanged(command, v, w), None, None
 
 
-def _first_touched(robot: RobotState, position: np.ndarray, v: float, w: float, limits: MotionLimits,
-                   obstacles: Obstacles, robot_radius_m: float, config: GuardConfig, reachable_m: float) -> int:
+def _first_touched(
+    robot: RobotState,
+    position: np.ndarray,
+    v: float,
+    w: float,
+    limits: MotionLimits,
+    obstacles: Obstacles,
+    robot_radius_m: float,
+    config: GuardConfig,
+    reachable_m: float,
+) -> int:
     """The first obstacle (index) within ``reachable_m`` now that the robot, holding (v, w) for a control period
     and then braking (:func:`braking_path`), would touch while its first sample moves towards it; -1 if none.
     With numba one compiled call (:func:`viapath._harness_kernels.first_touched`, the same answer)."""
@@ -388,10 +511,21 @@ def _first_touched(robot: RobotState, position: np.ndarray, v: float, w: float, 
     if kernels is not None:
         try:
             return kernels.first_touched(
-                float(position[0]), float(position[1]), float(robot.heading_rad), float(robot.speed_mps),
-                float(robot.turn_rate_radps), v, w, _limits_row(limits, config), obstacles.positions,
-                obstacles.radii_m, float(robot_radius_m), float(config.brake_margin_m), float(reachable_m),
-                BRAKING_SAMPLES_PER_PERIOD)
+                float(position[0]),
+                float(position[1]),
+                float(robot.heading_rad),
+                float(robot.speed_mps),
+                float(robot.turn_rate_radps),
+                v,
+                w,
+                _limits_row(limits, config),
+                obstacles.positions,
+                obstacles.radii_m,
+                float(robot_radius_m),
+                float(config.brake_margin_m),
+                float(reachable_m),
+                BRAKING_SAMPLES_PER_PERIOD,
+            )
         except TypeError:  # arrays of another dtype (a direct call; the inspection hands float64): numpy below
             pass
     offsets = obstacles.positions - position
@@ -418,8 +552,16 @@ def _limits_row(limits: MotionLimits, config: GuardConfig) -> np.ndarray:
     last = _LIMITS_ROW
     if last[0] is limits and last[1] is config:
         return last[2]
-    row = np.array([limits.max_speed_mps, limits.max_turn_rate_radps, limits.max_accel_mps2,
-                    limits.max_turn_accel_radps2, config.control_period_s], dtype=float)
+    row = np.array(
+        [
+            limits.max_speed_mps,
+            limits.max_turn_rate_radps,
+            limits.max_accel_mps2,
+            limits.max_turn_accel_radps2,
+            config.control_period_s,
+        ],
+        dtype=float,
+    )
     _LIMITS_ROW = (limits, config, row)
     return row
 
@@ -435,7 +577,7 @@ def _unchanged(command: Any, v: float, w: float) -> Command:
 def _stop_decision(planner, observation: Observation, status: str, reasons: list[str], extras: dict | None = None):
     try:
         target = np.asarray(observation.robot.position, dtype=float).reshape(2).copy()
-    except Exception:  # noqa: BLE001 - the target is for display only
+    except Exception:
         target = np.zeros(2)
     subgoal_index = getattr(getattr(planner, "subgoals", None), "index", 1)
     plan = Plan(status, 0.0, target, subgoal_index=subgoal_index, extras={"guard": list(reasons), **(extras or {})})
@@ -453,7 +595,9 @@ class _GuardedCycle:
     config: GuardConfig
     last_check: tuple | None = None  # (limits, radius, v, ω, what check_command returned)
 
-    def check(self, command: Any, limits: MotionLimits, robot_radius_m: float) -> tuple[Command, str | None, str | None]:
+    def check(
+        self, command: Any, limits: MotionLimits, robot_radius_m: float
+    ) -> tuple[Command, str | None, str | None]:
         """:func:`check_command` of ``command`` against this cycle's observation (a pure function of its
         arguments: a check of the same command, limits and radius is answered from the last one)."""
         v, w = getattr(command, "speed_mps", None), getattr(command, "turn_rate_radps", None)
@@ -461,8 +605,13 @@ class _GuardedCycle:
             # Anything else (an array, a string, an int) is checked, never compared: check_command says what it is.
             return check_command(command, self.observation, limits, robot_radius_m, self.config)
         last = self.last_check
-        if (last is not None and last[0] is limits and last[1] == robot_radius_m and _same_number(last[2], v)
-                and _same_number(last[3], w)):
+        if (
+            last is not None
+            and last[0] is limits
+            and last[1] == robot_radius_m
+            and _same_number(last[2], v)
+            and _same_number(last[3], w)
+        ):
             return last[4]
         result = check_command(command, self.observation, limits, robot_radius_m, self.config)
         self.last_check = (limits, robot_radius_m, v, w, result)
@@ -523,16 +672,21 @@ def guard_plan(plan: Callable) -> Callable:
         limits = getattr(self, "limits", None) or MotionLimits()
         own_radius = float(getattr(self, "robot_radius_m", 0.0) or 0.0)
         if not math.isfinite(own_radius):  # max(nan, r) is nan, which no check would brake for
-            return _stop_decision(self, observation, "guard-stop",
-                                  inspection.repairs + [f"robot_radius_m: expected a finite number, found {own_radius:g}"])
+            return _stop_decision(
+                self,
+                observation,
+                "guard-stop",
+                inspection.repairs + [f"robot_radius_m: expected a finite number, found {own_radius:g}"],
+            )
         radius = max(own_radius, float(observation.robot.radius_m))
         command, status, reason = cycle.check(getattr(decision, "command", None), limits, radius)
         if status is not None:
             plan_ = getattr(decision, "plan", None)
             if status == "guard-stop" or plan_ is None:
                 original = getattr(plan_, "status", None)
-                return _stop_decision(self, observation, "guard-stop", inspection.repairs + [reason],
-                                      {"guard_planner_status": original})
+                return _stop_decision(
+                    self, observation, "guard-stop", inspection.repairs + [reason], {"guard_planner_status": original}
+                )
             plan_.extras["guard"] = inspection.repairs + [reason]
             plan_.extras["guard_planner_status"] = plan_.status
             plan_.status = status

@@ -66,8 +66,14 @@ def _clip(value: float, low: float, high: float) -> float:
     return low if value < low else high if value > high else value
 
 
-def rollout(state: UnicycleState, commands: np.ndarray, limits: MotionLimits, dt_s: float, steps: int,
-            turns: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+def rollout(
+    state: UnicycleState,
+    commands: np.ndarray,
+    limits: MotionLimits,
+    dt_s: float,
+    steps: int,
+    turns: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
     """Positions (K, steps, 2) after each step of holding each of K commands (v, ω) from ``state``:
     the same limited arcs as :func:`step`, vectorised over the commands and the steps (a held
     command makes speed and turn rate ramp to it at the acceleration limits, so both are known in
@@ -86,8 +92,10 @@ def rollout(state: UnicycleState, commands: np.ndarray, limits: MotionLimits, dt
     # Turn rates and headings depend on the turn command alone: with ``turns`` (the escape's fan: 9 turn rates,
     # each with every speed) they, and their sines and cosines, are made once per turn command and copied to
     # its commands, the same values row for row.
-    w_cmd = np.minimum(np.maximum(commands[:, 1] if turns is None else turns[0], -limits.max_turn_rate_radps),
-                       limits.max_turn_rate_radps)
+    w_cmd = np.minimum(
+        np.maximum(commands[:, 1] if turns is None else turns[0], -limits.max_turn_rate_radps),
+        limits.max_turn_rate_radps,
+    )
     turn = turn0 + np.minimum(np.maximum((w_cmd - turn0)[:, None], -dw), dw)
     headings = np.empty((len(w_cmd), steps + 1))  # before the first step, then after each
     headings[:, 0] = float(state.heading_rad)
@@ -108,8 +116,16 @@ def rollout(state: UnicycleState, commands: np.ndarray, limits: MotionLimits, dt
     return positions
 
 
-def steer_towards(x: float, y: float, heading_rad: float, target_x: float, target_y: float, speed_mps: float,
-                  limits: MotionLimits, heading_gain: float = 2.5) -> tuple[float, float]:
+def steer_towards(
+    x: float,
+    y: float,
+    heading_rad: float,
+    target_x: float,
+    target_y: float,
+    speed_mps: float,
+    limits: MotionLimits,
+    heading_gain: float = 2.5,
+) -> tuple[float, float]:
     """The controller: turn towards the target and drive at ``speed_mps``, slowing for large
     heading errors (full speed up to 45° off, none from 90°: a sharp turn is made nearly on the spot)."""
     dx, dy = target_x - x, target_y - y
@@ -122,16 +138,24 @@ def steer_towards(x: float, y: float, heading_rad: float, target_x: float, targe
     return min(speed_mps, limits.max_speed_mps) * scale, turn
 
 
-def track(state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float, steps: int,
-          heading_gain: float = 2.5) -> np.ndarray:
+def track(
+    state: UnicycleState,
+    target,
+    speed_mps: float,
+    limits: MotionLimits,
+    dt_s: float,
+    steps: int,
+    heading_gain: float = 2.5,
+) -> np.ndarray:
     """Positions (steps, 2) of the robot steering for ``target`` with :func:`steer_towards`, each
     step as :func:`step` moves it (scalar arithmetic: this runs inside the planning cycle)."""
     positions = list(itertools.islice(tracking(state, target, speed_mps, limits, dt_s, heading_gain), steps))
     return np.array(positions).reshape(steps, 2)
 
 
-def tracking(state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float,
-             heading_gain: float = 2.5) -> Iterator[tuple[float, float]]:
+def tracking(
+    state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float, heading_gain: float = 2.5
+) -> Iterator[tuple[float, float]]:
     """:func:`track`'s positions (x, y) one step at a time, without end: a caller that checks them as they
     come can stop a roll-out that has failed (the roll-outs of failing candidates, :mod:`.follow`)."""
     # steer_towards and _arc inlined, operation for operation (the positions are bit for bit theirs:

@@ -35,14 +35,19 @@ def _number(value: Any) -> float | None:
     return number
 
 
-def bounded_error(field: str, value: Any, bounds: tuple[float, float], unit: str,
-                  above_low: bool = False) -> tuple[str, str] | None:
+def bounded_error(
+    field: str, value: Any, bounds: tuple[float, float], unit: str, above_low: bool = False
+) -> tuple[str, str] | None:
     """(field, message) when ``value`` is not a finite number within ``bounds`` (above the smallest
     rather than at least it, with ``above_low``), else None."""
     low, high = bounds
     number = _number(value)
-    if (number is None or not math.isfinite(number) or not number <= high
-            or not (number > low if above_low else number >= low)):
+    if (
+        number is None
+        or not math.isfinite(number)
+        or not number <= high
+        or not (number > low if above_low else number >= low)
+    ):
         from viapath.io.safe_read import short_repr
 
         interval = f"{'(' if above_low else '['}{low:g}, {high:g}]"
@@ -53,8 +58,12 @@ def bounded_error(field: str, value: Any, bounds: tuple[float, float], unit: str
 def limits_errors(limits: Any, where: str = "limits") -> list[tuple[str, str]]:
     """Each field of a :class:`~viapath.observation.MotionLimits` (or anything with those attributes)
     that is missing, not finite or outside :data:`LIMIT_BOUNDS`."""
-    units = {"max_speed_mps": "m/s", "max_accel_mps2": "m/s²", "max_turn_rate_radps": "rad/s",
-             "max_turn_accel_radps2": "rad/s²"}
+    units = {
+        "max_speed_mps": "m/s",
+        "max_accel_mps2": "m/s²",
+        "max_turn_rate_radps": "rad/s",
+        "max_turn_accel_radps2": "rad/s²",
+    }
     errors = []
     for name, bounds in LIMIT_BOUNDS.items():
         error = bounded_error(f"{where}.{name}", getattr(limits, name, None), bounds, units[name])
@@ -65,9 +74,13 @@ def limits_errors(limits: Any, where: str = "limits") -> list[tuple[str, str]]:
 
 def planner_description_errors(nominal_speed_mps: Any, limits: Any, robot_radius_m: Any) -> list[tuple[str, str]]:
     """What is wrong with a planner's nominal speed, limits and robot radius (empty when nothing is)."""
-    errors = [error for error in (
-        bounded_error("robot_radius_m", robot_radius_m, ROBOT_RADIUS_BOUNDS_M, "m", above_low=True),
-        bounded_error("nominal_speed_mps", nominal_speed_mps, NOMINAL_SPEED_BOUNDS_MPS, "m/s"),
-    ) if error is not None]
+    errors = [
+        error
+        for error in (
+            bounded_error("robot_radius_m", robot_radius_m, ROBOT_RADIUS_BOUNDS_M, "m", above_low=True),
+            bounded_error("nominal_speed_mps", nominal_speed_mps, NOMINAL_SPEED_BOUNDS_MPS, "m/s"),
+        )
+        if error is not None
+    ]
     errors += limits_errors(limits)
     return errors

@@ -37,8 +37,9 @@ def _points(field_name: str, value) -> np.ndarray:
         return array.reshape(1, 2)
     if array.ndim != 2 or array.shape[1] != 2:
         hint = " (transposed? rows are obstacles)" if array.ndim == 2 and array.shape[0] == 2 else ""
-        raise ObservationError(f"obstacles.{field_name}: expected an (N, 2) array of [x, y] rows, "
-                               f"found shape {array.shape}{hint}")
+        raise ObservationError(
+            f"obstacles.{field_name}: expected an (N, 2) array of [x, y] rows, found shape {array.shape}{hint}"
+        )
     return array.copy()
 
 
@@ -48,8 +49,9 @@ def _per_obstacle(field_name: str, value, n: int) -> np.ndarray:
     if array.ndim == 0:
         return np.full(n, float(array))
     if array.shape != (n,):
-        raise ObservationError(f"obstacles.{field_name}: expected {n} numbers (one per position) or one number, "
-                               f"found shape {array.shape}")
+        raise ObservationError(
+            f"obstacles.{field_name}: expected {n} numbers (one per position) or one number, found shape {array.shape}"
+        )
     return array.copy()
 
 
@@ -101,8 +103,9 @@ class Obstacles:
         n = len(positions)
         velocities = _points("velocities", self.velocities)
         if len(velocities) != n:
-            raise ObservationError(f"obstacles.velocities: expected {n} rows of [vx, vy] (one per position), "
-                                   f"found {len(velocities)}")
+            raise ObservationError(
+                f"obstacles.velocities: expected {n} rows of [vx, vy] (one per position), found {len(velocities)}"
+            )
         object.__setattr__(self, "positions", positions)
         object.__setattr__(self, "velocities", velocities)
         object.__setattr__(self, "radii_m", _per_obstacle("radii_m", self.radii_m, n))
@@ -117,12 +120,12 @@ class Obstacles:
             if ids.ndim > 1 or ids.size != n:
                 raise ObservationError(f"obstacles.ids: expected {n} ids (one per position), found shape {ids.shape}")
             try:
-                if np.iscomplexobj(ids) or ids.dtype.kind in "USO" and not all(_is_number(i) for i in ids.ravel()):
+                if np.iscomplexobj(ids) or (ids.dtype.kind in "USO" and not all(_is_number(i) for i in ids.ravel())):
                     raise TypeError("not numbers")
                 ids = ids.astype(float).reshape(n)
             except (TypeError, ValueError, OverflowError):
                 raise ObservationError(f"obstacles.ids: expected {n} integers, found {self.ids!r}") from None
-            if not (np.isfinite(ids).all() and np.all(ids == np.round(ids)) and np.all(np.abs(ids) <= 2.0 ** 63)):
+            if not (np.isfinite(ids).all() and np.all(ids == np.round(ids)) and np.all(np.abs(ids) <= 2.0**63)):
                 raise ObservationError(f"obstacles.ids: expected {n} 64-bit integers, found {ids.tolist()}")
             ids = ids.astype(int)
         object.__setattr__(self, "ids", ids)
@@ -146,30 +149,47 @@ class Obstacles:
     def static_count(self) -> int:
         return 0 if self.static_mask is None else int(self.static_mask.sum())
 
-    def people(self) -> "Obstacles":
+    def people(self) -> Obstacles:
         """The rows that are not static geometry."""
         return self if self.static_mask is None else self.subset(~self.static_mask)
 
-    def statics(self) -> "Obstacles":
+    def statics(self) -> Obstacles:
         """The rows that are static geometry."""
         return self.subset(self.is_static)
 
     @classmethod
-    def of_fresh_arrays(cls, positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids) -> "Obstacles":
+    def of_fresh_arrays(cls, positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids) -> Obstacles:
         """Obstacles from arrays made for them and used by no one else (a perception's estimates): when
         they are well formed (float64 (N, 2), (N, 2), (N,), (N,), (N,) and (N,) integer ids) they are
         kept as they are instead of copied; anything else goes through the checks of the constructor."""
         n = len(positions) if type(positions) is np.ndarray and positions.ndim == 2 else -1
-        if (n >= 0 and positions.dtype == np.float64 and positions.shape == (n, 2)
-                and isinstance(ids, np.ndarray) and ids.shape == (n,) and ids.dtype == np.int64
-                and all(type(a) is np.ndarray and a.dtype == np.float64 and a.shape == shape
-                        for a, shape in ((velocities, (n, 2)), (radii_m, (n,)), (position_sigma_m, (n,)),
-                                         (velocity_sigma_mps, (n,))))):
+        if (
+            n >= 0
+            and positions.dtype == np.float64
+            and positions.shape == (n, 2)
+            and isinstance(ids, np.ndarray)
+            and ids.shape == (n,)
+            and ids.dtype == np.int64
+            and all(
+                type(a) is np.ndarray and a.dtype == np.float64 and a.shape == shape
+                for a, shape in (
+                    (velocities, (n, 2)),
+                    (radii_m, (n,)),
+                    (position_sigma_m, (n,)),
+                    (velocity_sigma_mps, (n,)),
+                )
+            )
+        ):
             obstacles = object.__new__(cls)
             ids = ids.astype(float).astype(int)  # as the constructor: through float (ids past 2**53 round)
-            for name, value in (("positions", positions), ("velocities", velocities), ("radii_m", radii_m),
-                                ("position_sigma_m", position_sigma_m), ("velocity_sigma_mps", velocity_sigma_mps),
-                                ("ids", ids)):
+            for name, value in (
+                ("positions", positions),
+                ("velocities", velocities),
+                ("radii_m", radii_m),
+                ("position_sigma_m", position_sigma_m),
+                ("velocity_sigma_mps", velocity_sigma_mps),
+                ("ids", ids),
+            ):
                 object.__setattr__(obstacles, name, value)
             return obstacles
         return cls(positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids)
@@ -178,8 +198,12 @@ class Obstacles:
         """The common case (perception hands float64 arrays of the right shapes, integer ids): the same
         copies as the general path below, without its conversions and checks; False for anything else."""
         positions, velocities, radii = self.positions, self.velocities, self.radii_m
-        if not (type(positions) is np.ndarray and positions.dtype == np.float64 and positions.ndim == 2
-                and positions.shape[1] == 2):
+        if not (
+            type(positions) is np.ndarray
+            and positions.dtype == np.float64
+            and positions.ndim == 2
+            and positions.shape[1] == 2
+        ):
             return False
         n = positions.shape[0]
         arrays = [velocities, radii, self.position_sigma_m, self.velocity_sigma_mps]
@@ -208,10 +232,10 @@ class Obstacles:
         return len(self.positions)
 
     @classmethod
-    def empty(cls) -> "Obstacles":
+    def empty(cls) -> Obstacles:
         return cls(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0))
 
-    def finite(self) -> "Obstacles":
+    def finite(self) -> Obstacles:
         """Drop rows with a NaN or infinite field: a bad estimate must never reach a command."""
         if len(self.positions) == 0:
             return self
@@ -227,7 +251,7 @@ class Obstacles:
             return self
         return self.subset(ok)
 
-    def subset(self, mask_or_index) -> "Obstacles":
+    def subset(self, mask_or_index) -> Obstacles:
         return Obstacles(
             self.positions[mask_or_index],
             self.velocities[mask_or_index],
@@ -269,7 +293,7 @@ class Command:
     turn_rate_radps: float
 
     @classmethod
-    def stop(cls) -> "Command":
+    def stop(cls) -> Command:
         return cls(0.0, 0.0)
 
 

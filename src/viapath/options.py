@@ -24,7 +24,6 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
 
-
 MAX_LIST_ITEMS = 64  # items of a list option (a speed set): each adds work to every cycle
 
 
@@ -83,8 +82,10 @@ class Option:
             from typing import Annotated
 
             element = Annotated[float, Field(**limits)] if limits else float
-            return (tuple[element, ...], Field(self.default, min_length=1, max_length=MAX_LIST_ITEMS,
-                                               description=self.describe()))
+            return (
+                tuple[element, ...],
+                Field(self.default, min_length=1, max_length=MAX_LIST_ITEMS, description=self.describe()),
+            )
         return (self._annotation(), Field(self.default, description=self.describe(), **limits))
 
 
@@ -97,8 +98,11 @@ class Settings(Mapping):
         # read is one lookup, not a failed one and then __getattr__. Names the class has (keys, get, ...) stay
         # the class's, as with __getattr__ alone.
         cls = type(self)
-        self.__dict__.update((name, value) for name, value in self._values.items()
-                             if isinstance(name, str) and not name.startswith("_") and not hasattr(cls, name))
+        self.__dict__.update(
+            (name, value)
+            for name, value in self._values.items()
+            if isinstance(name, str) and not name.startswith("_") and not hasattr(cls, name)
+        )
 
     def __getattr__(self, name: str) -> Any:
         try:
@@ -121,7 +125,7 @@ class Settings(Mapping):
     def __repr__(self) -> str:
         return f"Settings({self._values!r})"
 
-    def replace(self, **changes: Any) -> "Settings":
+    def replace(self, **changes: Any) -> Settings:
         return Settings({**self._values, **changes})
 
 
@@ -169,7 +173,7 @@ class OptionSet:
     def __getitem__(self, name: str) -> Option:
         return self._options[name]
 
-    def __add__(self, other: "OptionSet") -> "OptionSet":
+    def __add__(self, other: OptionSet) -> OptionSet:
         return OptionSet([*self, *other], owner=other.owner or self.owner, steps=(*self.steps, *other.steps))
 
     @property
@@ -225,8 +229,13 @@ class OptionSet:
             if steps > MAX_STEPS_PER_ROLLOUT:
                 path = self[duration].path
                 field = f"{where}.{path}" if where else path
-                errors.append((field, f"{duration} / {step} = {flat[duration]:g} s / {flat[step]:g} s = {steps:,.0f} "
-                                      f"steps; at most {MAX_STEPS_PER_ROLLOUT:,} (shorten {duration} or raise {step})"))
+                errors.append(
+                    (
+                        field,
+                        f"{duration} / {step} = {flat[duration]:g} s / {flat[step]:g} s = {steps:,.0f} "
+                        f"steps; at most {MAX_STEPS_PER_ROLLOUT:,} (shorten {duration} or raise {step})",
+                    )
+                )
         return errors
 
     def _explain(self, item: Mapping[str, Any], where: str) -> tuple[str, str]:
@@ -234,8 +243,10 @@ class OptionSet:
         field = f"{where}.{location}" if where else location
         if item["type"] == "extra_forbidden":
             owner = f"planner {self.owner!r} has" if self.owner else "known"
-            return field, (f"unknown option {item['loc'][-1]!r}; {owner} options: "
-                           f"{', '.join(option.path for option in self) or 'none'}")
+            return field, (
+                f"unknown option {item['loc'][-1]!r}; {owner} options: "
+                f"{', '.join(option.path for option in self) or 'none'}"
+            )
         from viapath.io.safe_read import short_repr
 
         return field, f"{item['msg']}; found {short_repr(item.get('input'))}"

@@ -83,8 +83,10 @@ class DesignatedPath:
         px, py = points[..., 0, None], points[..., 1, None]  # (..., 1)
         along = (px - starts[:, 0]) * directions[:, 0] + (py - starts[:, 1]) * directions[:, 1]  # (..., S)
         along_clamped = np.minimum(np.maximum(along, 0.0), self.segment_lengths_m)
-        distance = np.hypot(px - (starts[:, 0] + along_clamped * directions[:, 0]),
-                            py - (starts[:, 1] + along_clamped * directions[:, 1]))
+        distance = np.hypot(
+            px - (starts[:, 0] + along_clamped * directions[:, 0]),
+            py - (starts[:, 1] + along_clamped * directions[:, 1]),
+        )
         return along, along_clamped, distance
 
     def project(self, points):
@@ -95,7 +97,7 @@ class DesignatedPath:
         points = np.asarray(points, dtype=float)
         along, along_clamped, distance = self._segment_geometry(points)
         index = distance.argmin(axis=-1)
-        take = lambda a: np.take_along_axis(a, index[..., None], axis=-1)[..., 0]  # noqa: E731
+        take = lambda a: np.take_along_axis(a, index[..., None], axis=-1)[..., 0]
         rel = points - self.segment_starts[index]
         side = np.sign(cross2(self.segment_directions[index], rel))
         side = np.where(side == 0, 1.0, side)
@@ -125,8 +127,10 @@ class DesignatedPath:
         if segments is None:
             segments = self._segments = [
                 (float(sx), float(sy), float(dx), float(dy), float(length), float(half))
-                for (sx, sy), (dx, dy), length, half in zip(self.segment_starts, self.segment_directions,
-                                                            self.segment_lengths_m, self.half_widths_m)]
+                for (sx, sy), (dx, dy), length, half in zip(
+                    self.segment_starts, self.segment_directions, self.segment_lengths_m, self.half_widths_m
+                )
+            ]
         best = math.inf
         hypot = np.hypot
         for sx, sy, dx, dy, length, half in segments:
@@ -156,8 +160,8 @@ class DesignatedPath:
         tolerance = tolerance_m if np.ndim(tolerance_m) == 0 else np.asarray(tolerance_m, dtype=float)[:, None]
         # Both ends in one pass (the same values as two; a call costs more than these few points).
         excess = self._segment_geometry(np.concatenate([starts, ends]))[2] - self.half_widths_m
-        start_in = excess[:len(starts)] <= tolerance
-        end_in = excess[len(starts):] <= tolerance
+        start_in = excess[: len(starts)] <= tolerance
+        end_in = excess[len(starts) :] <= tolerance
         inside = (start_in & end_in).any(axis=1)
         if len(self.half_widths_m) == 1 or inside.all():
             return inside  # no leg across a junction (one capsule: both ends in it or the leg is out)
@@ -173,7 +177,11 @@ class DesignatedPath:
 
     def point_at(self, arc_length_m: float) -> np.ndarray:
         arc = float(np.clip(arc_length_m, 0.0, self.length_m))
-        index = int(np.clip(np.searchsorted(self.cumulative_length_m, arc, side="right") - 1, 0, len(self.segment_lengths_m) - 1))
+        index = int(
+            np.clip(
+                np.searchsorted(self.cumulative_length_m, arc, side="right") - 1, 0, len(self.segment_lengths_m) - 1
+            )
+        )
         return self.segment_starts[index] + (arc - self.cumulative_length_m[index]) * self.segment_directions[index]
 
 
@@ -212,7 +220,9 @@ class SubgoalTracker:
         """Whether an obstacle sits on the current intermediate subgoal (the goal is never blocked)."""
         if self.is_final or obstacle_positions is None or len(obstacle_positions) == 0:
             return False
-        gaps = np.hypot(*(np.asarray(obstacle_positions) - self.subgoal).T) - np.asarray(obstacle_radii) - robot_radius_m
+        gaps = (
+            np.hypot(*(np.asarray(obstacle_positions) - self.subgoal).T) - np.asarray(obstacle_radii) - robot_radius_m
+        )
         return bool(np.min(gaps) <= self.policy.blocked_clearance_m)
 
     def update(self, position, robot_radius_m: float = 0.0, obstacle_positions=None, obstacle_radii=None) -> int:
@@ -226,7 +236,9 @@ class SubgoalTracker:
             if distance <= self.policy.reach_threshold_m or passed:
                 self.index += 1
                 continue
-            if distance <= self.policy.bypass_distance_m and self.is_blocked(obstacle_positions, obstacle_radii, robot_radius_m):
+            if distance <= self.policy.bypass_distance_m and self.is_blocked(
+                obstacle_positions, obstacle_radii, robot_radius_m
+            ):
                 self.bypassed.append(self.index)
                 self.index += 1
                 continue

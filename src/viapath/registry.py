@@ -33,8 +33,9 @@ class Registry(Generic[T]):
             raise ValueError(f"a {self.kind} needs a name")
         existing = self._entries.get(name)
         if existing is not None and existing is not entry:
-            raise DuplicateNameError(f"{self.kind} {name!r} is already registered ({_describe(existing)}); "
-                                     f"refusing {_describe(entry)}")
+            raise DuplicateNameError(
+                f"{self.kind} {name!r} is already registered ({_describe(existing)}); refusing {_describe(entry)}"
+            )
         self._entries[name] = entry
         return entry
 

@@ -45,8 +45,10 @@ class StaticLayer:
         if segments.size == 0:
             segments = np.zeros((0, 2, 2))
         if segments.ndim != 3 or segments.shape[1:] != (2, 2):
-            raise ValueError(f"static.segments: expected an (M, 2, 2) array of [[x1, y1], [x2, y2]] rows, "
-                             f"found shape {segments.shape}")
+            raise ValueError(
+                f"static.segments: expected an (M, 2, 2) array of [[x1, y1], [x2, y2]] rows, "
+                f"found shape {segments.shape}"
+            )
         ids = np.asarray(self.shape_ids, dtype=np.int64).reshape(-1)
         if ids.size == 0 and len(segments):
             ids = np.arange(len(segments), dtype=np.int64)
@@ -64,11 +66,11 @@ class StaticLayer:
         return len(self.segments)
 
     @classmethod
-    def empty(cls) -> "StaticLayer":
+    def empty(cls) -> StaticLayer:
         return _EMPTY
 
     @classmethod
-    def of_shapes(cls, shapes: list[np.ndarray]) -> "StaticLayer":
+    def of_shapes(cls, shapes: list[np.ndarray]) -> StaticLayer:
         """One shape per item, each an (E, 2, 2) array of its edges."""
         shapes = [np.asarray(s, dtype=float).reshape(-1, 2, 2) for s in shapes]
         if not shapes:
@@ -76,7 +78,7 @@ class StaticLayer:
         ids = np.concatenate([np.full(len(s), k, dtype=np.int64) for k, s in enumerate(shapes)])
         return cls(np.concatenate(shapes), ids)
 
-    def finite(self) -> "StaticLayer":
+    def finite(self) -> StaticLayer:
         """Without segments that have a NaN or infinite coordinate (a bad row says nothing about where
         something is; scanners report 'no return' that way)."""
         ok = np.isfinite(self.segments).all(axis=(1, 2))
@@ -84,24 +86,33 @@ class StaticLayer:
             return self
         return self.subset(ok)
 
-    def subset(self, mask_or_index) -> "StaticLayer":
-        return StaticLayer(self.segments[mask_or_index], self.shape_ids[mask_or_index],
-                           None if self.radii_m is None else self.radii_m[mask_or_index])
+    def subset(self, mask_or_index) -> StaticLayer:
+        return StaticLayer(
+            self.segments[mask_or_index],
+            self.shape_ids[mask_or_index],
+            None if self.radii_m is None else self.radii_m[mask_or_index],
+        )
 
     @property
     def padding_m(self) -> np.ndarray:
         return np.zeros(len(self.segments)) if self.radii_m is None else self.radii_m
 
-    def concatenate(self, other: "StaticLayer") -> "StaticLayer":
+    def concatenate(self, other: StaticLayer) -> StaticLayer:
         if len(other) == 0:
             return self
         if len(self) == 0:
             return other
         offset = int(self.shape_ids.max()) + 1 - int(other.shape_ids.min())
-        radii = None if self.radii_m is None and other.radii_m is None else np.concatenate(
-            [self.padding_m, other.padding_m])
-        return StaticLayer(np.concatenate([self.segments, other.segments]),
-                           np.concatenate([self.shape_ids, other.shape_ids + offset]), radii)
+        radii = (
+            None
+            if self.radii_m is None and other.radii_m is None
+            else np.concatenate([self.padding_m, other.padding_m])
+        )
+        return StaticLayer(
+            np.concatenate([self.segments, other.segments]),
+            np.concatenate([self.shape_ids, other.shape_ids + offset]),
+            radii,
+        )
 
     def discs(self, robot_radius_m: float, spacing_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:func:`sample_discs` of this layer, kept for the last (radius, spacing) asked: a map is the same
@@ -120,8 +131,9 @@ class StaticLayer:
 _EMPTY = StaticLayer()
 
 
-def sample_discs(segments: np.ndarray, shape_ids: np.ndarray, robot_radius_m: float, spacing_m: float,
-                 with_owner: bool = False) -> tuple:
+def sample_discs(
+    segments: np.ndarray, shape_ids: np.ndarray, robot_radius_m: float, spacing_m: float, with_owner: bool = False
+) -> tuple:
     """Disc centres (N, 2), radii (N,) and shape ids (N,) covering ``segments`` for any robot radius of at
     least ``robot_radius_m`` (see the module docstring); a segment of length 0 is one disc of radius 0.
     With ``with_owner`` also the segment of each disc (N,)."""
@@ -136,7 +148,9 @@ def sample_discs(segments: np.ndarray, shape_ids: np.ndarray, robot_radius_m: fl
     counts[lengths == 0] = 1
     # A polyline's segments share their ends: the second copy of a shared end is left out.
     shared = np.zeros(len(segments), dtype=bool)
-    shared[1:] = (segments[1:, 0] == segments[:-1, 1]).all(axis=1) & (shape_ids[1:] == shape_ids[:-1]) & (pieces[1:] > 0)
+    shared[1:] = (
+        (segments[1:, 0] == segments[:-1, 1]).all(axis=1) & (shape_ids[1:] == shape_ids[:-1]) & (pieces[1:] > 0)
+    )
     owner = np.repeat(np.arange(len(segments)), counts)
     start = np.concatenate([[0], np.cumsum(counts)[:-1]])
     k = np.arange(len(owner)) - np.repeat(start, counts)
@@ -147,7 +161,7 @@ def sample_discs(segments: np.ndarray, shape_ids: np.ndarray, robot_radius_m: fl
         centres, owner = centres[unique], owner[unique]
     half_piece = np.where(pieces > 0, lengths / np.maximum(pieces, 1), 0.0) / 2
     r = float(robot_radius_m)
-    pad = np.sqrt(r * r + half_piece ** 2) - r
+    pad = np.sqrt(r * r + half_piece**2) - r
     if with_owner:
         return centres, pad[owner], shape_ids[owner], owner
     return centres, pad[owner], shape_ids[owner]

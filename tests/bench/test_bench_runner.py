@@ -153,8 +153,21 @@ def test_cli_suite_and_bench_json(tmp_path):
     result = runner.invoke(app, ["suite", "head-on", "--count", "2", "--seed", "3", "--out", str(tmp_path / "s")])
     assert result.exit_code == 0, result.output
     assert len(list((tmp_path / "s").glob("*.yaml"))) == 2
-    result = runner.invoke(app, ["bench", str(tmp_path / "s"), "--planners", "follow,stop", "--workers", "1",
-                                 "--out", str(tmp_path / "r"), "--json", "--no-plots"])
+    result = runner.invoke(
+        app,
+        [
+            "bench",
+            str(tmp_path / "s"),
+            "--planners",
+            "follow,stop",
+            "--workers",
+            "1",
+            "--out",
+            str(tmp_path / "r"),
+            "--json",
+            "--no-plots",
+        ],
+    )
     assert result.exit_code == 0, result.output
     table = json.loads(result.output)
     assert [entry["planner"] for entry in table] == ["follow", "stop"]

@@ -73,8 +73,23 @@ def _alive(pid: int) -> bool:
 
 
 def _bench(suite: Path, out: Path, planners: str = "viapath", workers: int = 2) -> subprocess.Popen:
-    return subprocess.Popen([VIAPATH, "bench", str(suite), "--planners", planners, "--out", str(out), "--workers",
-                             str(workers), "--no-plots"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [
+            VIAPATH,
+            "bench",
+            str(suite),
+            "--planners",
+            planners,
+            "--out",
+            str(out),
+            "--workers",
+            str(workers),
+            "--no-plots",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def _valid_rows(csv_path: Path) -> list[dict]:
@@ -87,10 +102,18 @@ def _valid_rows(csv_path: Path) -> list[dict]:
 
 def _hold(out: Path) -> subprocess.Popen:
     """Another process holding the results folder (as a running bench does)."""
-    holder = subprocess.Popen([sys.executable, "-c", "import sys, time\nfrom pathlib import Path\n"
-                               "from viapath.bench.runner import results_lock\n"
-                               f"with results_lock(Path({str(out)!r})):\n    print('held', flush=True)\n"
-                               "    time.sleep(600)\n"], stdout=subprocess.PIPE, text=True)
+    holder = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import sys, time\nfrom pathlib import Path\n"
+            "from viapath.bench.runner import results_lock\n"
+            f"with results_lock(Path({str(out)!r})):\n    print('held', flush=True)\n"
+            "    time.sleep(600)\n",
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     assert holder.stdout.readline().strip() == "held"
     return holder
 
@@ -99,8 +122,12 @@ def test_a_second_bench_into_a_busy_folder_is_refused_naming_it(tmp_path):
     suite, out = _suite(tmp_path / "suite", "paper", 1), tmp_path / "out"
     holder = _hold(out)
     try:
-        second = subprocess.run([VIAPATH, "bench", str(suite), "--planners", "follow", "--out", str(out),
-                                 "--workers", "1", "--no-plots"], capture_output=True, text=True, timeout=WAIT_S)
+        second = subprocess.run(
+            [VIAPATH, "bench", str(suite), "--planners", "follow", "--out", str(out), "--workers", "1", "--no-plots"],
+            capture_output=True,
+            text=True,
+            timeout=WAIT_S,
+        )
     finally:
         holder.kill()
         holder.wait(timeout=WAIT_S)
@@ -113,8 +140,14 @@ def test_sigterm_ends_like_ctrl_c_keeps_rows_and_stops_the_workers(tmp_path):
     suite, out = _suite(tmp_path / "suite", count=12), tmp_path / "out"
     bench = _bench(suite, out)
     try:
-        workers = _wait_for(lambda: [pid for pid in _children(bench.pid) if _is_worker(pid)]
-                            if _rows_written(out / "episodes.csv") >= 1 else [], "a row and the workers")
+        workers = _wait_for(
+            lambda: (
+                [pid for pid in _children(bench.pid) if _is_worker(pid)]
+                if _rows_written(out / "episodes.csv") >= 1
+                else []
+            ),
+            "a row and the workers",
+        )
         bench.send_signal(signal.SIGTERM)
         _, stderr = bench.communicate(timeout=WAIT_S)
     finally:
@@ -131,8 +164,14 @@ def test_a_killed_worker_ends_the_run_with_exit_3_and_keeps_the_rows(tmp_path):
     suite, out = _suite(tmp_path / "suite"), tmp_path / "out"
     bench = _bench(suite, out)
     try:
-        workers = _wait_for(lambda: [pid for pid in _children(bench.pid) if _is_worker(pid)]
-                            if _rows_written(out / "episodes.csv") >= 1 else [], "a row and the workers")
+        workers = _wait_for(
+            lambda: (
+                [pid for pid in _children(bench.pid) if _is_worker(pid)]
+                if _rows_written(out / "episodes.csv") >= 1
+                else []
+            ),
+            "a row and the workers",
+        )
         os.kill(workers[0], signal.SIGKILL)
         _, stderr = bench.communicate(timeout=WAIT_S)
     finally:

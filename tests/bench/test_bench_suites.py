@@ -116,8 +116,17 @@ def test_families_are_a_registry_and_mixed_keeps_its_nine(monkeypatch):
     from viapath.registry import DuplicateNameError
 
     # mixed's order is its definition (scenario i is family i mod 9): changing it would change every suite.
-    assert SYNTHETIC_FAMILIES == ["crossing", "head-on", "overtaken", "overtaking", "multi", "group", "crowd",
-                                  "hallway", "paper"]
+    assert SYNTHETIC_FAMILIES == [
+        "crossing",
+        "head-on",
+        "overtaken",
+        "overtaking",
+        "multi",
+        "group",
+        "crowd",
+        "hallway",
+        "paper",
+    ]
     before = generate_suite("mixed", 18, seed=3)
     monkeypatch.setattr(FAMILIES, "_entries", dict(FAMILIES._entries))  # undone after the test
     with pytest.raises(DuplicateNameError, match="crossing"):
@@ -129,6 +138,7 @@ def test_families_are_a_registry_and_mixed_keeps_its_nine(monkeypatch):
         scenario = crossing(rng, index)
         scenario["obstacles"] = scenario["obstacles"] * 2
         return scenario
+
     assert "two-crossings" in suite_names()
     made = generate_suite("two-crossings", 2, seed=0)
     assert [s["name"] for s in made] == ["two-crossings-0000", "two-crossings-0001"]

@@ -40,4 +40,6 @@ def test_suite_written_and_read_in_workers_equals_serial(tmp_path):
     files = sorted(p.name for p in (tmp_path / "serial" / "suite").iterdir())
     assert files == sorted(p.name for p in (tmp_path / "parallel" / "suite").iterdir()) and len(files) == 60
     for name in files:
-        assert (tmp_path / "serial" / "suite" / name).read_text() == (tmp_path / "parallel" / "suite" / name).read_text()
+        assert (tmp_path / "serial" / "suite" / name).read_text() == (
+            tmp_path / "parallel" / "suite" / name
+        ).read_text()

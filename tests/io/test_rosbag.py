@@ -15,8 +15,9 @@ REPO = Path(__file__).resolve().parents[2]
 DATA = Path(os.environ.get("VIAPATH_DATA", REPO.parent / "shared" / "data")) / "leg_tracker_laser"
 POSITIVE = DATA / "positive_2_extracted.bag"
 DEMO = DATA / "demo_stationary_simple_environment.bag"
-needs_data = pytest.mark.skipif(not POSITIVE.exists() or not DEMO.exists(),
-                                reason=f"leg_tracker bags not found in {DATA} (set VIAPATH_DATA)")
+needs_data = pytest.mark.skipif(
+    not POSITIVE.exists() or not DEMO.exists(), reason=f"leg_tracker bags not found in {DATA} (set VIAPATH_DATA)"
+)
 
 
 def laser_messages(typestore, n=5):
@@ -29,10 +30,20 @@ def laser_messages(typestore, n=5):
         ranges[80:101] = 2.0 - 0.01 * k
         ranges[10] = 0.0
         ranges[11] = np.nan
-        out.append(LaserScan(header=Header(stamp=Time(sec=100 + k // 10, nanosec=(k % 10) * 100_000_000), frame_id="laser"),
-                             angle_min=-np.pi / 2, angle_max=np.pi / 2, angle_increment=np.pi / 180, time_increment=0.0,
-                             scan_time=0.1, range_min=0.02, range_max=5.6, ranges=ranges,
-                             intensities=np.zeros(0, dtype=np.float32)))
+        out.append(
+            LaserScan(
+                header=Header(stamp=Time(sec=100 + k // 10, nanosec=(k % 10) * 100_000_000), frame_id="laser"),
+                angle_min=-np.pi / 2,
+                angle_max=np.pi / 2,
+                angle_increment=np.pi / 180,
+                time_increment=0.0,
+                scan_time=0.1,
+                range_min=0.02,
+                range_max=5.6,
+                ranges=ranges,
+                intensities=np.zeros(0, dtype=np.float32),
+            )
+        )
     return out
 
 
@@ -48,7 +59,9 @@ def test_ros2_bag_round_trip(tmp_path, storage):
         connection = writer.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=typestore)
         for k, message in enumerate(laser_messages(typestore)):
             writer.write(connection, 1_000 + k, typestore.serialize_cdr(message, "sensor_msgs/msg/LaserScan"))
-    for source in [path] + ([next(path.glob("*.mcap"))] if storage == "mcap" else []):  # folder, and the bare .mcap file
+    for source in [path] + (
+        [next(path.glob("*.mcap"))] if storage == "mcap" else []
+    ):  # folder, and the bare .mcap file
         scans = list(read_laser_scans(source))
         assert len(scans) == 5
         assert scans[3].stamp_s == pytest.approx(100.3)
@@ -71,10 +84,23 @@ def test_ros1_bag_round_trip_and_topic_errors(tmp_path):
         other = writer.add_connection("/rear/scan", "sensor_msgs/msg/LaserScan", typestore=typestore)
         for k, m in enumerate(messages):
             m1 = typestore.types["sensor_msgs/msg/LaserScan"](
-                header=typestore.types["std_msgs/msg/Header"](seq=k, stamp=typestore.types["builtin_interfaces/msg/Time"](
-                    sec=m.header.stamp.sec, nanosec=m.header.stamp.nanosec), frame_id="laser"),
-                angle_min=m.angle_min, angle_max=m.angle_max, angle_increment=m.angle_increment, time_increment=0.0,
-                scan_time=0.1, range_min=0.02, range_max=5.6, ranges=m.ranges, intensities=m.intensities)
+                header=typestore.types["std_msgs/msg/Header"](
+                    seq=k,
+                    stamp=typestore.types["builtin_interfaces/msg/Time"](
+                        sec=m.header.stamp.sec, nanosec=m.header.stamp.nanosec
+                    ),
+                    frame_id="laser",
+                ),
+                angle_min=m.angle_min,
+                angle_max=m.angle_max,
+                angle_increment=m.angle_increment,
+                time_increment=0.0,
+                scan_time=0.1,
+                range_min=0.02,
+                range_max=5.6,
+                ranges=m.ranges,
+                intensities=m.intensities,
+            )
             raw = typestore.serialize_ros1(m1, "sensor_msgs/msg/LaserScan")
             writer.write(connection, 1_000 + k, raw)
             writer.write(other, 1_000 + k, raw)
@@ -146,8 +172,20 @@ def test_scans_command_end_to_end(tmp_path):
     runner = CliRunner()
     out = tmp_path / "tracks.csv"
     plot = tmp_path / "tracks.png"
-    result = runner.invoke(app, ["scans", str(POSITIVE), "--labels", "/leg_cluster_positions", "--json", "--out", str(out),
-                                 "--plot", str(plot)])
+    result = runner.invoke(
+        app,
+        [
+            "scans",
+            str(POSITIVE),
+            "--labels",
+            "/leg_cluster_positions",
+            "--json",
+            "--out",
+            str(out),
+            "--plot",
+            str(plot),
+        ],
+    )
     assert result.exit_code == 0, result.output
     report = json.loads(result.stdout)
     assert report["scans"] == 83 and report["evaluation"]["person_recall"] >= 0.9

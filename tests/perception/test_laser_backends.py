@@ -14,11 +14,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from viapath.perception.detection import DetectorParams, detect
+from viapath.perception.base import WorldSnapshot
+from viapath.perception.detection import detect
 from viapath.perception.laser import LaserPerception
 from viapath.perception.raycast import numba_available, simulate_scan, simulate_scans
 from viapath.perception.scanner import ScannerModel, paper_scanners
-from viapath.perception.base import WorldSnapshot
 
 coordinate = st.floats(-6.0, 6.0, allow_nan=False)
 
@@ -31,14 +31,29 @@ def scenes(draw):
     radii = np.array([draw(st.floats(0.0, 0.8)) for _ in range(n)])
     if n and draw(st.booleans()):  # a disc over (or next to) the robot: a scanner may sit inside it
         centres[0] = pose[:2] + np.array([draw(st.floats(-0.4, 0.4)), draw(st.floats(-0.4, 0.4))])
-    walls = np.array([[[draw(coordinate), draw(coordinate)], [draw(coordinate), draw(coordinate)]]
-                      for _ in range(draw(st.integers(0, 3)))]).reshape(-1, 2, 2)
+    walls = np.array(
+        [
+            [[draw(coordinate), draw(coordinate)], [draw(coordinate), draw(coordinate)]]
+            for _ in range(draw(st.integers(0, 3)))
+        ]
+    ).reshape(-1, 2, 2)
     return pose, centres, radii, walls, draw(st.integers(0, 2**31))
 
 
-SCANNER_SETS = [paper_scanners(), paper_scanners(invalid_encoding="zero"),
-                (ScannerModel(name="wide", beam_count=1024, angle_increment_rad=2 * np.pi / 1024, invalid_encoding="nan",
-                              mount_x_m=0.05, mount_yaw_rad=0.3),)]
+SCANNER_SETS = [
+    paper_scanners(),
+    paper_scanners(invalid_encoding="zero"),
+    (
+        ScannerModel(
+            name="wide",
+            beam_count=1024,
+            angle_increment_rad=2 * np.pi / 1024,
+            invalid_encoding="nan",
+            mount_x_m=0.05,
+            mount_yaw_rad=0.3,
+        ),
+    ),
+]
 
 
 @settings(max_examples=150, deadline=None, derandomize=True)
@@ -71,8 +86,15 @@ needs_numba = pytest.mark.skipif(not numba_available(), reason="numba not instal
 
 def _world(k, centres0, velocities, walls):
     t = 0.1 * k
-    return WorldSnapshot(t, np.array([0.2 * t, 0.0, 0.05 * t]), 0.25, centres0 + velocities * t, velocities,
-                         np.full(len(centres0), 0.25), walls)
+    return WorldSnapshot(
+        t,
+        np.array([0.2 * t, 0.0, 0.05 * t]),
+        0.25,
+        centres0 + velocities * t,
+        velocities,
+        np.full(len(centres0), 0.25),
+        walls,
+    )
 
 
 @needs_numba

@@ -35,8 +35,11 @@ def _random_segments(rng, count):
     points, starts, counts, origins = [], [], [], []
     start = 0
     for _ in range(count):
-        n = int(rng.choice([3, 4, 7, 8, 9, 15, 16, 17, 40, 127, 128, 129, 200, 300])) if rng.random() < 0.5 \
+        n = (
+            int(rng.choice([3, 4, 7, 8, 9, 15, 16, 17, 40, 127, 128, 129, 200, 300]))
+            if rng.random() < 0.5
             else int(rng.integers(3, 60))
+        )
         origin = rng.uniform(-0.2, 0.2, 2)
         if rng.random() < 0.6:  # arc of a disc, seen from the origin
             centre = origin + rng.uniform(0.5, 5.0) * np.array([np.cos(a := rng.uniform(-np.pi, np.pi)), np.sin(a)])
@@ -105,8 +108,22 @@ def test_numba_shape_tests_equal_numpy(seed):
         t_numpy = _convexity_t(x, y, mask, mid, origins, seg)
     got_sagitta, got_t = np.empty(len(starts)), np.empty(len(starts))
     distance = np.hypot(*(first + 0.5 * chord - origins).T)
-    segment_shape_kernel(points, starts, counts, int(counts.max()), first, chord, extent, origins, distance,
-                         seg.noise_switch_range_m, seg.noise_sigma_near_m, seg.noise_fraction_far, got_sagitta, got_t)
+    segment_shape_kernel(
+        points,
+        starts,
+        counts,
+        int(counts.max()),
+        first,
+        chord,
+        extent,
+        origins,
+        distance,
+        seg.noise_switch_range_m,
+        seg.noise_sigma_near_m,
+        seg.noise_fraction_far,
+        got_sagitta,
+        got_t,
+    )
     assert _same(got_sagitta, sagitta)
     assert _same(got_t, t_numpy)
     # and on a subset of the rows padded to the full width, as detect() hands the long segments to _convexity_t
@@ -177,12 +194,18 @@ def test_segment_beams_with_tables_equals_without(seed):
 
     compiled = _numba_fit() is not None
     rng = np.random.default_rng(seed)
-    scanner_sets = [paper_scanners(), (ScannerModel(name="wide", beam_count=1024, angle_increment_rad=2 * np.pi / 1024),),
-                    (ScannerModel(name="odd", beam_count=181, angle_increment_rad=np.deg2rad(1.0), mount_yaw_rad=0.3),)]
+    scanner_sets = [
+        paper_scanners(),
+        (ScannerModel(name="wide", beam_count=1024, angle_increment_rad=2 * np.pi / 1024),),
+        (ScannerModel(name="odd", beam_count=181, angle_increment_rad=np.deg2rad(1.0), mount_yaw_rad=0.3),),
+    ]
     for scanners in scanner_sets:
         layout = _beam_layout(scanners)
-        for params in (SegmentationParams(), SegmentationParams(max_gap_beams=0, min_points=1, grazing_angle_rad=0.3),
-                       SegmentationParams(max_gap_beams=3, min_points=5, min_jump_m=0.2)):
+        for params in (
+            SegmentationParams(),
+            SegmentationParams(max_gap_beams=0, min_points=1, grazing_angle_rad=0.3),
+            SegmentationParams(max_gap_beams=3, min_points=5, min_jump_m=0.2),
+        ):
             tables = BeamTables.of(layout.angles_rad, params)
             for _ in range(10):
                 n = len(layout.angles_rad)
@@ -190,9 +213,19 @@ def test_segment_beams_with_tables_equals_without(seed):
                 ranges[rng.random(n) < rng.choice([0.0, 0.05, 0.5])] = np.nan
                 args = (ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index, params)
                 want = segment_beams(*args)
-                for got in [segment_beams(*args, tables)] + ([segment_beams(*args, tables, "numba")] if compiled else []):
-                    for name in ("beam_index", "points", "starts", "counts", "occluded", "scan_index", "all_points",
-                                 "all_beam_index"):
+                for got in [segment_beams(*args, tables)] + (
+                    [segment_beams(*args, tables, "numba")] if compiled else []
+                ):
+                    for name in (
+                        "beam_index",
+                        "points",
+                        "starts",
+                        "counts",
+                        "occluded",
+                        "scan_index",
+                        "all_points",
+                        "all_beam_index",
+                    ):
                         assert getattr(got, name).dtype == getattr(want, name).dtype, name
                         assert _same(getattr(got, name), getattr(want, name)), name
 

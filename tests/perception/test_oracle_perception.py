@@ -19,8 +19,14 @@ def _reference(world: WorldSnapshot, position_noise_m: float, velocity_noise_mps
     if velocity_noise_mps > 0:
         velocities = velocities + rng.normal(0.0, velocity_noise_mps, velocities.shape)
     n = len(positions)
-    return Obstacles(positions, velocities, world.obstacle_radii_m[present], np.full(n, position_noise_m),
-                     np.full(n, velocity_noise_mps), np.flatnonzero(present))
+    return Obstacles(
+        positions,
+        velocities,
+        world.obstacle_radii_m[present],
+        np.full(n, position_noise_m),
+        np.full(n, velocity_noise_mps),
+        np.flatnonzero(present),
+    )
 
 
 @pytest.mark.parametrize("noise", [(0.0, 0.0), (0.05, 0.0), (0.0, 0.1), (0.03, 0.05)])
@@ -31,8 +37,9 @@ def test_oracle_matches_the_masked_form(noise):
         positions = world_rng.uniform(-5, 5, (n, 2))
         if n and trial % 3 == 0:  # some people not in the scene yet (replays): NaN rows
             positions[world_rng.random(n) < 0.4] = np.nan
-        world = WorldSnapshot(0.1 * trial, np.zeros(3), 0.25, positions, world_rng.uniform(-1, 1, (n, 2)),
-                              world_rng.uniform(0.2, 0.4, n))
+        world = WorldSnapshot(
+            0.1 * trial, np.zeros(3), 0.25, positions, world_rng.uniform(-1, 1, (n, 2)), world_rng.uniform(0.2, 0.4, n)
+        )
         oracle = OraclePerception(*noise)
         oracle.reset(np.random.default_rng(trial))
         expected_rng = np.random.default_rng(trial)

@@ -6,7 +6,7 @@ speeds up along the path; from the front it passes inside the corridor; from the
 down and lets the obstacle cross.
 """
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
@@ -15,7 +15,7 @@ from viapath.scenarios import load_scenario
 from viapath.sim import loop as sim
 
 
-@lru_cache(maxsize=None)
+@cache
 def episode(name: str, seed: int):
     return sim.run_episode(load_scenario(name), perception="laser", seed=seed)
 

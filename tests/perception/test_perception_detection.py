@@ -9,8 +9,8 @@ from viapath.perception.circle_fit import fit_circle, fit_circles
 from viapath.perception.detection import DetectorParams, detect
 from viapath.perception.fusion import blind_region, covered, fuse_scans
 from viapath.perception.raycast import simulate_scan
-from viapath.perception.scanner import ScannerModel, paper_scanners, sanitize_ranges
-from viapath.perception.segmentation import breakpoint_threshold_m, segment_scan, SegmentationParams
+from viapath.perception.scanner import paper_scanners
+from viapath.perception.segmentation import SegmentationParams, breakpoint_threshold_m, segment_scan
 
 
 def arc(centre, radius, sensor, n, noise, rng, half_angle=np.pi / 2):
@@ -47,7 +47,10 @@ def test_free_fit_and_prior_fit_beat_the_centroid_on_noisy_half_arcs():
 
 def test_batched_fit_equals_one_by_one():
     rng = np.random.default_rng(3)
-    arcs = [arc((rng.uniform(1, 3), rng.uniform(-1, 1)), r, (0, 0), n, 0.01, rng) for r, n in ((0.06, 8), (0.25, 30), (0.1, 12))]
+    arcs = [
+        arc((rng.uniform(1, 3), rng.uniform(-1, 1)), r, (0, 0), n, 0.01, rng)
+        for r, n in ((0.06, 8), (0.25, 30), (0.1, 12))
+    ]
     points = np.concatenate(arcs)
     counts = np.array([len(a) for a in arcs])
     fits = fit_circles(points, np.cumsum(counts) - counts, counts, radius_prior_m=0.1)
@@ -149,13 +152,27 @@ def test_blind_region_of_the_paper_set_up_and_of_narrow_scanners():
     assert len(polygons) == 2 and all(p.shape[1] == 2 for p in polygons)
 
 
-@pytest.mark.skipif(not __import__("viapath.perception.raycast", fromlist=["x"]).numba_available(),
-                    reason="numba not installed (pip install 'viapath[fast]')")
-@pytest.mark.parametrize("options", [dict(), dict(radius_prior_m=0.2, radius_prior_sigma_m=0.05), dict(fixed_radius_m=0.25)])
+@pytest.mark.skipif(
+    not __import__("viapath.perception.raycast", fromlist=["x"]).numba_available(),
+    reason="numba not installed (pip install 'viapath[fast]')",
+)
+@pytest.mark.parametrize(
+    "options", [dict(), dict(radius_prior_m=0.2, radius_prior_sigma_m=0.05), dict(fixed_radius_m=0.25)]
+)
 def test_numba_circle_fit_equals_numpy(options):
     rng = np.random.default_rng(11)
-    arcs = [arc((rng.uniform(0.5, 4), rng.uniform(-2, 2)), rng.uniform(0.04, 0.3), (0, 0), int(rng.integers(3, 60)), 0.01, rng,
-                half_angle=rng.uniform(0.3, 1.5)) for _ in range(25)]
+    arcs = [
+        arc(
+            (rng.uniform(0.5, 4), rng.uniform(-2, 2)),
+            rng.uniform(0.04, 0.3),
+            (0, 0),
+            int(rng.integers(3, 60)),
+            0.01,
+            rng,
+            half_angle=rng.uniform(0.3, 1.5),
+        )
+        for _ in range(25)
+    ]
     points = np.concatenate(arcs)
     counts = np.array([len(a) for a in arcs])
     starts = np.cumsum(counts) - counts

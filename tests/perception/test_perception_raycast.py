@@ -76,7 +76,13 @@ def test_ray_casting_matches_brute_force_marching(centres, radii, walls, angle):
 
 
 def test_disc_straight_ahead_and_wall_behind_it():
-    ranges = cast_rays((0.0, 0.0), [0.0, np.pi / 2, np.pi], [[2.0, 0.0]], [0.25], [[[5.0, -1.0], [5.0, 1.0]], [[-1.0, -1.0], [-1.0, 1.0]]])
+    ranges = cast_rays(
+        (0.0, 0.0),
+        [0.0, np.pi / 2, np.pi],
+        [[2.0, 0.0]],
+        [0.25],
+        [[[5.0, -1.0], [5.0, 1.0]], [[-1.0, -1.0], [-1.0, 1.0]]],
+    )
     assert ranges[0] == pytest.approx(1.75)  # the disc occludes the wall at x = 5
     assert np.isinf(ranges[1])
     assert ranges[2] == pytest.approx(1.0)
@@ -107,7 +113,9 @@ def test_invalid_readings_encoded_like_drivers_and_sanitised(encoding, check):
     scanner = ScannerModel(invalid_encoding=encoding)
     readings = simulate_scan(scanner, (0, 0, 0), [[1.0, 0.0]], [0.2], rng=np.random.default_rng(0))
     miss = np.ones(scanner.beam_count, dtype=bool)
-    miss[np.isfinite(cast_rays(scanner.world_pose((0, 0, 0))[:2], scanner.beam_angles_rad(), [[1.0, 0.0]], [0.2]))] = False
+    miss[np.isfinite(cast_rays(scanner.world_pose((0, 0, 0))[:2], scanner.beam_angles_rad(), [[1.0, 0.0]], [0.2]))] = (
+        False
+    )
     assert check(readings[miss]).all()
     assert np.isfinite(readings[~miss]).all() and (readings[~miss] > 0).all()
     clean = sanitize_ranges(readings, scanner.range_min_m, scanner.range_max_m)

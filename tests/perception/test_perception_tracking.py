@@ -14,8 +14,13 @@ from viapath.sim.perception import WorldSnapshot
 
 
 @settings(max_examples=60, deadline=None, derandomize=True)
-@given(st.integers(1, 5).flatmap(lambda n: st.integers(1, 5).flatmap(
-    lambda m: arrays(float, (n, m), elements=st.floats(0, 100, allow_nan=False)))))
+@given(
+    st.integers(1, 5).flatmap(
+        lambda n: st.integers(1, 5).flatmap(
+            lambda m: arrays(float, (n, m), elements=st.floats(0, 100, allow_nan=False))
+        )
+    )
+)
 def test_hungarian_matches_brute_force(cost):
     rows, cols = linear_sum_assignment(cost)
     ref_rows, ref_cols = brute_force_assignment(cost)
@@ -46,7 +51,7 @@ def test_velocity_of_a_synthetic_walker_after_one_second():
         t, truth, v, z = walker_measurements(rng)
         tracker = MultiTargetTracker()
         for k in range(len(t)):
-            tracker.step(t[k], z[k:k + 1], 0.03, 0.25)
+            tracker.step(t[k], z[k : k + 1], 0.03, 0.25)
             if k >= 10:  # after 1 s of tracking
                 obstacles = tracker.obstacles()
                 assert len(obstacles) == 1
@@ -108,8 +113,15 @@ def test_a_single_clutter_hit_never_becomes_a_track():
 
 def snapshot(t, pose, positions, velocities, radius=0.25, walls=None):
     positions = np.asarray(positions, float)
-    return WorldSnapshot(t, np.asarray(pose, float), 0.25, positions, np.asarray(velocities, float),
-                         np.full(len(positions), radius), np.zeros((0, 2, 2)) if walls is None else np.asarray(walls, float))
+    return WorldSnapshot(
+        t,
+        np.asarray(pose, float),
+        0.25,
+        positions,
+        np.asarray(velocities, float),
+        np.full(len(positions), radius),
+        np.zeros((0, 2, 2)) if walls is None else np.asarray(walls, float),
+    )
 
 
 def run(perception, frames):
@@ -160,7 +172,9 @@ def test_options_are_checked():
         LaserPerception(tracker={"confirm_hit": 3})
     with pytest.raises(ValueError, match="oracle option"):
         LaserPerception(position_noise_m=0.05)
-    p = LaserPerception(scanners=[{"name": "front", "beam_count": 513}], tracker={"confirm_hits": 2}, fixed_radius_m=0.3)
+    p = LaserPerception(
+        scanners=[{"name": "front", "beam_count": 513}], tracker={"confirm_hits": 2}, fixed_radius_m=0.3
+    )
     assert p.scanners[0].beam_count == 513 and p.detector_params.fixed_radius_m == 0.3
     assert len(p.blind_sectors) >= 1  # one 180° scanner leaves the back unseen
 
@@ -206,7 +220,9 @@ def test_scans_command_error_keeps_brackets_of_the_install_hint(monkeypatch):
     from viapath.commands.scans import register
 
     def missing():
-        raise rosbag.RosbagsMissingError("reading ROS bags needs the 'rosbags' package; install it with: pip install 'viapath[ros]'")
+        raise rosbag.RosbagsMissingError(
+            "reading ROS bags needs the 'rosbags' package; install it with: pip install 'viapath[ros]'"
+        )
 
     monkeypatch.setattr(rosbag, "_anyreader", missing)
     app = typer.Typer()

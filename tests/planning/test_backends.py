@@ -16,7 +16,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from viapath import DesignatedPath, Obstacles, Observation, RobotState
+from viapath import DesignatedPath, Observation, Obstacles, RobotState
 from viapath.planning import make_planner
 from viapath.planning.viapath.backend import ENVIRONMENT_VARIABLE, numba_available, resolve
 from viapath.safety.shielded import ShieldedPlanner
@@ -34,13 +34,18 @@ PATHS = [
 def cases(draw):
     path_index = draw(st.integers(0, len(PATHS) - 1))
     n = draw(st.integers(0, 12))
-    floats = lambda lo, hi: st.floats(lo, hi, allow_nan=False, allow_infinity=False)  # noqa: E731
+    floats = lambda lo, hi: st.floats(lo, hi, allow_nan=False, allow_infinity=False)
     seed = draw(st.integers(0, 2**31 - 1))
     rng = np.random.default_rng(seed)
     # The robot near the path, mostly heading along it; people mostly ahead of it (some behind, some
     # touching it: escapes), so that every kind of plan comes up.
-    robot = (draw(floats(-0.5, 3.0)), draw(floats(-1.3, 1.3)), draw(floats(-0.8, 0.8)) * draw(st.sampled_from([1, 4])),
-             draw(floats(0.0, 0.5)), draw(floats(-1.0, 1.0)))
+    robot = (
+        draw(floats(-0.5, 3.0)),
+        draw(floats(-1.3, 1.3)),
+        draw(floats(-0.8, 0.8)) * draw(st.sampled_from([1, 4])),
+        draw(floats(0.0, 0.5)),
+        draw(floats(-1.0, 1.0)),
+    )
     distance = rng.uniform(draw(st.sampled_from([0.3, 0.8])), 6.0, n)
     bearing = rng.normal(0.0, draw(st.sampled_from([0.5, 3.0])), n)
     positions = np.array(robot[:2]) + np.stack([distance * np.cos(bearing), distance * np.sin(bearing)], 1)
@@ -63,10 +68,16 @@ def _observations(case):
     _, robot, positions, velocities, radii, sigma_p, sigma_v, _, step = case
     x, y, heading, speed, turn = robot
     for cycle in range(2):
-        obstacles = Obstacles(positions + cycle * (step + 0.1 * velocities), velocities, radii,
-                              position_sigma_m=sigma_p, velocity_sigma_mps=sigma_v)
-        state = RobotState(np.array([x + 0.02 * cycle * np.cos(heading), y + 0.02 * cycle * np.sin(heading)]),
-                           heading, speed, turn)
+        obstacles = Obstacles(
+            positions + cycle * (step + 0.1 * velocities),
+            velocities,
+            radii,
+            position_sigma_m=sigma_p,
+            velocity_sigma_mps=sigma_v,
+        )
+        state = RobotState(
+            np.array([x + 0.02 * cycle * np.cos(heading), y + 0.02 * cycle * np.sin(heading)]), heading, speed, turn
+        )
         yield Observation(0.1 * cycle, state, obstacles)
 
 
@@ -110,12 +121,27 @@ def test_kernels_match_reference_on_edge_cases():
     with np.errstate(divide="ignore"):
         until = np.where(growth > 0, 0.15 / growth, np.inf)
     envelope = rng.uniform(0.0, 0.3, k) * (rng.uniform(size=k) < 0.5)  # a braking envelope, some legs
-    for g, u, legs in ((growth, until, None), (np.zeros(n), np.full(n, np.inf), None),
-                       (growth, np.full(n, np.inf), None), (growth, until, envelope)):
-        expected = legs_first_contact(starts, times, velocities, durations, positions, obstacle_velocities, radii, g, u,
-                                      legs)
-        got = kernels.legs_first_contact(starts, times, velocities, durations, positions, obstacle_velocities,
-                                         radii, g, u, np.zeros(k) if legs is None else legs)
+    for g, u, legs in (
+        (growth, until, None),
+        (np.zeros(n), np.full(n, np.inf), None),
+        (growth, np.full(n, np.inf), None),
+        (growth, until, envelope),
+    ):
+        expected = legs_first_contact(
+            starts, times, velocities, durations, positions, obstacle_velocities, radii, g, u, legs
+        )
+        got = kernels.legs_first_contact(
+            starts,
+            times,
+            velocities,
+            durations,
+            positions,
+            obstacle_velocities,
+            radii,
+            g,
+            u,
+            np.zeros(k) if legs is None else legs,
+        )
         assert np.array_equal(np.isinf(expected), np.isinf(got))
         assert np.allclose(expected, got, rtol=0.0, atol=1e-12)
         assert np.isfinite(expected).any() and np.isinf(expected).any()  # both kinds of legs are there
@@ -145,8 +171,9 @@ def test_track_kernel_matches_reference():
     compiled = Backend("numba")
     worst = 0.0
     for _ in range(200):
-        state = UnicycleState(*rng.uniform(-2, 2, 2), rng.uniform(-np.pi, np.pi), rng.uniform(0, 0.6),
-                              rng.uniform(-2, 2))
+        state = UnicycleState(
+            *rng.uniform(-2, 2, 2), rng.uniform(-np.pi, np.pi), rng.uniform(0, 0.6), rng.uniform(-2, 2)
+        )
         target, speed = rng.uniform(-3, 3, 2), rng.uniform(0, 0.6)
         expected = track(state, target, speed, limits, 0.1, 20, 2.5)
         got = compiled.track(state, target, speed, limits, 0.1, 20, 2.5)
@@ -214,11 +241,26 @@ def test_corridor_kernels_match_reference(path):
         assert np.array_equal(compiled.legs_inside(path, starts, ends, 0.05, tolerance), expected)
         assert expected.any() and not expected.all()
     for subgoal_index in range(len(path.waypoints)):
-        checks = LegChecks(path=path, position=np.zeros(2), heading_rad=0.0, speed_mps=0.0, turn_rate_radps=0.0,
-                           subgoal=path.waypoints[subgoal_index], subgoal_index=subgoal_index,
-                           is_final_subgoal=False, obstacles=None, check_radii=None, growth=None, growth_until_s=None,
-                           via_radii=None, horizon_s=10.0, stop_short_m=0.0, continuation=None,
-                           corridor_tolerance_m=1e-9, corridor_check_spacing_m=0.05)
+        checks = LegChecks(
+            path=path,
+            position=np.zeros(2),
+            heading_rad=0.0,
+            speed_mps=0.0,
+            turn_rate_radps=0.0,
+            subgoal=path.waypoints[subgoal_index],
+            subgoal_index=subgoal_index,
+            is_final_subgoal=False,
+            obstacles=None,
+            check_radii=None,
+            growth=None,
+            growth_until_s=None,
+            via_radii=None,
+            horizon_s=10.0,
+            stop_short_m=0.0,
+            continuation=None,
+            corridor_tolerance_m=1e-9,
+            corridor_check_spacing_m=0.05,
+        )
         expected = checks.goal_legs_inside(starts)
         got = compiled.goal_legs_inside(path, starts, checks.subgoal, subgoal_index, 0.05, 1e-9)
         assert np.array_equal(got, expected)
@@ -243,15 +285,18 @@ def test_escape_scores_match_reference():
         positions = rng.uniform(-1.5, 1.5, (n, 2)) + [1.0, 0.0]
         velocities = rng.uniform(-1, 1, (n, 2))
         sigma = rng.uniform(0, 0.1, n)
-        observation = Observation(0.0, RobotState(np.array([1.0, 0.2]), rng.uniform(-3, 3), rng.uniform(0, 0.5)),
-                                  Obstacles(positions, velocities, np.full(n, 0.3), position_sigma_m=sigma,
-                                            velocity_sigma_mps=sigma))
+        observation = Observation(
+            0.0,
+            RobotState(np.array([1.0, 0.2]), rng.uniform(-3, 3), rng.uniform(0, 0.5)),
+            Obstacles(positions, velocities, np.full(n, 0.3), position_sigma_m=sigma, velocity_sigma_mps=sigma),
+        )
         planner.reset()
         situation = planner.situation(observation)
         checks = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
         commands, ends, expected = escape_scores(checks, planner.limits, planner.config)
-        _, got_ends, got = escape_scores(replace(checks, backend=Backend("numba", whole_steps=False)), planner.limits,
-                                         planner.config)
+        _, got_ends, got = escape_scores(
+            replace(checks, backend=Backend("numba", whole_steps=False)), planner.limits, planner.config
+        )
         assert _same_bits(got, expected) and _same_bits(got_ends, ends)  # the small kernels: the same values
         overlapped += bool(np.any(np.hypot(*(positions - [1.0, 0.2]).T) < checks.check_radii))
     assert 5 < overlapped < 60  # both kinds of crowd came up
@@ -271,14 +316,22 @@ def test_goal_legs_kernel_matches_reference(path):
     compared = 0
     for trial in range(60):
         n = int(rng.integers(0, 9))
-        robot = RobotState(np.array([rng.uniform(-0.5, 3.0), rng.uniform(-1.3, 1.3)]), rng.uniform(-0.8, 0.8),
-                           rng.uniform(0.0, 0.5), 0.0)
+        robot = RobotState(
+            np.array([rng.uniform(-0.5, 3.0), rng.uniform(-1.3, 1.3)]),
+            rng.uniform(-0.8, 0.8),
+            rng.uniform(0.0, 0.5),
+            0.0,
+        )
         positions = robot.position + rng.uniform(-4.0, 6.0, (n, 2))
         velocities = rng.uniform(-1.2, 1.2, (n, 2))
         uncertain = trial % 2 == 0
-        obstacles = Obstacles(positions, velocities, rng.uniform(0.2, 0.35, n),
-                              position_sigma_m=rng.uniform(0.0, 0.05, n) if uncertain else None,
-                              velocity_sigma_mps=rng.uniform(0.0, 0.1, n) if uncertain else None)
+        obstacles = Obstacles(
+            positions,
+            velocities,
+            rng.uniform(0.2, 0.35, n),
+            position_sigma_m=rng.uniform(0.0, 0.05, n) if uncertain else None,
+            velocity_sigma_mps=rng.uniform(0.0, 0.1, n) if uncertain else None,
+        )
         planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend="numpy")
         situation = planner.situation(Observation(0.0, robot, obstacles))
         base = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25, NUMPY)
@@ -293,8 +346,14 @@ def test_goal_legs_kernel_matches_reference(path):
         for continuation in continuations:
             for envelope in (0.0, 2.0):
                 for stop_short in (0.0, 0.6):
-                    checks = replace(base, continuation=continuation, envelope_accel_mps2=envelope,
-                                     envelope_period_s=0.1, max_accel_mps2=0.8, stop_short_m=stop_short)
+                    checks = replace(
+                        base,
+                        continuation=continuation,
+                        envelope_accel_mps2=envelope,
+                        envelope_period_s=0.1,
+                        max_accel_mps2=0.8,
+                        stop_short_m=stop_short,
+                    )
                     compiled = replace(checks, backend=Backend("numba"))
                     for horizon in (None, np.inf, 3.0):
                         expected = checks.goal_legs(starts, times, speeds, horizon)
@@ -319,11 +378,16 @@ def _tree_inputs(case, backend, path=None):
     inner = getattr(planner, "inner", planner)
     observation = next(_observations(case))
     situation = inner.situation(observation)
-    checks = LegChecks.of(situation, inner.config, inner.subgoals, inner.subgoal_policy, inner.robot_radius_m,
-                          Backend(backend))
+    checks = LegChecks.of(
+        situation, inner.config, inner.subgoals, inner.subgoal_policy, inner.robot_radius_m, Backend(backend)
+    )
     if shield:
-        checks = replace(checks, envelope_accel_mps2=inner.shield.config.person_accel_mps2,
-                         envelope_period_s=inner.shield.dt_s, max_accel_mps2=inner.limits.max_accel_mps2)
+        checks = replace(
+            checks,
+            envelope_accel_mps2=inner.shield.config.person_accel_mps2,
+            envelope_period_s=inner.shield.dt_s,
+            max_accel_mps2=inner.limits.max_accel_mps2,
+        )
     speeds, nominal_index = inner.speed_set(observation.robot.speed_mps)
     return checks, RootLegs.of(checks, speeds, nominal_index), inner._slow_checks(checks), inner.config
 
@@ -373,14 +437,24 @@ def test_tree_kernel_builds_the_same_corner_candidates(path_index):
         n = int(rng.integers(0, 6))
         # Where the straight leg to the last waypoint cuts the corridor: near the start of either path.
         robot = np.array([rng.uniform(-0.3, 1.0), rng.uniform(-0.7, 0.7)])
-        case = (path_index, (robot[0], robot[1], rng.uniform(-0.5, 0.5), rng.uniform(0.0, 0.4), 0.0),
-                robot + rng.uniform(-3.0, 5.0, (n, 2)), rng.uniform(-1.0, 1.0, (n, 2)), rng.uniform(0.2, 0.35, n),
-                None, None, bool(trial % 2), np.zeros((n, 2)))
+        case = (
+            path_index,
+            (robot[0], robot[1], rng.uniform(-0.5, 0.5), rng.uniform(0.0, 0.4), 0.0),
+            robot + rng.uniform(-3.0, 5.0, (n, 2)),
+            rng.uniform(-1.0, 1.0, (n, 2)),
+            rng.uniform(0.2, 0.35, n),
+            None,
+            None,
+            bool(trial % 2),
+            np.zeros((n, 2)),
+        )
         found = []
         for backend in ("numpy", "numba"):
             checks, _, slow, config = _tree_inputs(case, backend, path)
             checks = replace(checks, subgoal=path.waypoints[last].copy(), subgoal_index=last, continuation=None)
-            slow = replace(slow, subgoal=checks.subgoal, subgoal_index=last, continuation=None, backend=Backend(backend))
+            slow = replace(
+                slow, subgoal=checks.subgoal, subgoal_index=last, continuation=None, backend=Backend(backend)
+            )
             roots = RootLegs.of(checks, np.array([0.1, 0.2, 0.3, 0.5]), 1)
             found.append(grow(checks, roots, config, slow))
         reference, compiled = found
@@ -440,8 +514,7 @@ def test_numba_decides_as_numpy_with_the_way_back(case):
     path = PATHS[case[0]]
     planners = []
     for backend in ("numpy", "numba"):
-        planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend, return_lookahead_m=0.5,
-                               k2=0.01)
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend, return_lookahead_m=0.5, k2=0.01)
         planners.append(ShieldedPlanner(planner) if case[7] else planner)
     reference, compiled = planners
     for observation in _observations(case):
@@ -463,8 +536,17 @@ def _plans_equal(a, b):
 
 
 @settings(max_examples=600, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
-@given(cases(), st.sampled_from([{}, {"theta_unit": "deg", "preferred_side": "right"}, {"max_rollouts": 1},
-                                 {"keep_previous_way": False, "hysteresis": 0.2, "slow_times_s": (1.0,)}]))
+@given(
+    cases(),
+    st.sampled_from(
+        [
+            {},
+            {"theta_unit": "deg", "preferred_side": "right"},
+            {"max_rollouts": 1},
+            {"keep_previous_way": False, "hysteresis": 0.2, "slow_times_s": (1.0,)},
+        ]
+    ),
+)
 def test_compiled_choice_is_the_numpy_choice(case, options):
     """kernels.choose (roots, step 1, tree, critics, order and roll-outs in one call) against the numpy
     planner: the same plan bit for bit — status, target, via points, every candidate's cost, each critic's
@@ -494,14 +576,30 @@ def test_compiled_choice_scalars_match_reference():
     from viapath.planning.viapath import kernels
 
     signed_zeros_and_axes = [[0.0, 0.0], [-0.0, 0.0], [0.0, -0.0], [-1.0, 0.0], [-1.0, -0.0], [0.0, 1.0], [1e-300, 1]]
-    vectors = np.concatenate([np.random.default_rng(4).normal(size=(4000, 2)) * np.logspace(-6, 3, 4000)[:, None],
-                              signed_zeros_and_axes])
+    vectors = np.concatenate(
+        [np.random.default_rng(4).normal(size=(4000, 2)) * np.logspace(-6, 3, 4000)[:, None], signed_zeros_and_axes]
+    )
     atan2 = njit(lambda values: np.array([math.atan2(y, x) for x, y in values]))
     np.testing.assert_array_equal(atan2(vectors), angles_of(vectors))
 
     rng = np.random.default_rng(5)
-    angles = np.concatenate([rng.uniform(-20, 20, 4000), [0.0, -0.0, np.pi, -np.pi, 2 * np.pi, -2 * np.pi, 3 * np.pi,
-                                                           np.nextafter(np.pi, 4), np.nextafter(-np.pi, -4), 1e-300]])
+    angles = np.concatenate(
+        [
+            rng.uniform(-20, 20, 4000),
+            [
+                0.0,
+                -0.0,
+                np.pi,
+                -np.pi,
+                2 * np.pi,
+                -2 * np.pi,
+                3 * np.pi,
+                np.nextafter(np.pi, 4),
+                np.nextafter(-np.pi, -4),
+                1e-300,
+            ],
+        ]
+    )
     wrap = njit(lambda values: np.array([kernels._wrap(v) for v in values]))
     np.testing.assert_array_equal(wrap(angles), wrap_angle(angles))
     degrees = njit(lambda values: np.array([v * (180.0 / np.pi) for v in values]))
@@ -521,13 +619,17 @@ def test_compiled_choice_after_refusals_and_a_vanished_way(case, way, speed_mmps
     from viapath.planning.viapath.candidates import Choice, Way
 
     path_index, _, positions, _, _, sigma_p, _, _, _ = case
-    planners = [make_planner("viapath", PATHS[path_index], nominal_speed_mps=0.2, backend=backend)
-                for backend in ("numpy", "numba")]
+    planners = [
+        make_planner("viapath", PATHS[path_index], nominal_speed_mps=0.2, backend=backend)
+        for backend in ("numpy", "numba")
+    ]
     offered = [[], []]
     for planner, seen in zip(planners, offered):
+
         def inside_shield(plan, seen=seen):
             seen.append((plan.status, plan.chosen, plan.target.tolist()))
             return len(seen) % 2 == 0  # refuse every other one: step 1 is always refused
+
         planner._inside_shield = inside_shield
         if len(positions) and sigma_p is not None:
             planner._previous = Choice(Way(0, (1, -1)[way % 2], way // 2), speed_mmps)
@@ -558,10 +660,15 @@ def escape_cases(draw):
     the escape's options (calm or not, last cycle's command or none, bounds on the excess)."""
     path_index = draw(st.integers(0, len(PATHS) - 1))
     n = draw(st.integers(0, 14))
-    floats = lambda lo, hi: st.floats(lo, hi, allow_nan=False, allow_infinity=False)  # noqa: E731
+    floats = lambda lo, hi: st.floats(lo, hi, allow_nan=False, allow_infinity=False)
     rng = np.random.default_rng(draw(st.integers(0, 2**31 - 1)))
-    robot = (draw(floats(-1.0, 4.0)), draw(floats(-3.0, 3.0)), draw(floats(-np.pi, np.pi)),
-             draw(st.sampled_from([0.0, 0.05, 0.3, 0.6])), draw(st.sampled_from([0.0, -1.0, 0.4, 2.0])))
+    robot = (
+        draw(floats(-1.0, 4.0)),
+        draw(floats(-3.0, 3.0)),
+        draw(floats(-np.pi, np.pi)),
+        draw(st.sampled_from([0.0, 0.05, 0.3, 0.6])),
+        draw(st.sampled_from([0.0, -1.0, 0.4, 2.0])),
+    )
     # people from touching the robot (distance 0) to 4 m off, all round it or in a ring closing in
     ring = draw(st.booleans())
     distance = rng.uniform(0.0, draw(st.sampled_from([0.7, 1.5, 4.0])), n)
@@ -571,9 +678,11 @@ def escape_cases(draw):
     velocities = -rng.uniform(0.0, 1.0, n)[:, None] * unit if ring else rng.uniform(-1.2, 1.2, (n, 2))
     uncertain = draw(st.booleans())
     sigma = rng.uniform(0.0, 0.1, n) if uncertain else None
-    options = {"calm_escape": draw(st.booleans()),
-               "escape_max_excess_m": draw(st.sampled_from([0.5, 0.0, 2.0])),
-               "escape_s": draw(st.sampled_from([3.0, 1.0, 0.05]))}
+    options = {
+        "calm_escape": draw(st.booleans()),
+        "escape_max_excess_m": draw(st.sampled_from([0.5, 0.0, 2.0])),
+        "escape_s": draw(st.sampled_from([3.0, 1.0, 0.05])),
+    }
     previous = draw(st.sampled_from([None, (0.0, 0.0), (0.3, -1.0), (0.6, 2.0)]))
     return path_index, robot, positions, velocities, rng.uniform(0.2, 0.35, n), sigma, options, previous
 
@@ -585,8 +694,11 @@ def _escape_checks(case):
     path_index, robot, positions, velocities, radii, sigma, options, previous = case
     planner = make_planner("viapath", PATHS[path_index], nominal_speed_mps=0.2, backend="numpy", options=options)
     x, y, heading, speed, turn = robot
-    observation = Observation(0.0, RobotState(np.array([x, y]), heading, speed, turn),
-                              Obstacles(positions, velocities, radii, position_sigma_m=sigma, velocity_sigma_mps=sigma))
+    observation = Observation(
+        0.0,
+        RobotState(np.array([x, y]), heading, speed, turn),
+        Obstacles(positions, velocities, radii, position_sigma_m=sigma, velocity_sigma_mps=sigma),
+    )
     situation = planner.situation(observation)
     checks = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
     return planner, checks, None if previous is None else Command(*previous)
@@ -604,11 +716,13 @@ def test_compiled_escape_is_the_reference(case):
 
     planner, checks, previous = _escape_checks(case)
     commands, ends, scores = escape_scores(checks, planner.limits, planner.config, previous)
-    standing = checks.contact_times(checks.position[None], np.zeros(1), np.zeros((1, 2)),
-                                    np.array([planner.config.horizon_s]))
+    standing = checks.contact_times(
+        checks.position[None], np.zeros(1), np.zeros((1, 2)), np.array([planner.config.horizon_s])
+    )
     fan = escape_fan(planner.limits, planner.config)
-    compiled = Backend("numba").escape(replace(checks, backend=Backend("numba")), planner.limits, planner.config, fan,
-                                       previous, score_standing=True)
+    compiled = Backend("numba").escape(
+        replace(checks, backend=Backend("numba")), planner.limits, planner.config, fan, previous, score_standing=True
+    )
     assert compiled[0] == bool(np.isinf(standing).all())
     assert _same_bits(compiled[1], commands)
     assert _same_bits(compiled[2], ends)
@@ -652,8 +766,9 @@ def test_escape_cases_reach_every_branch():
     @given(escape_cases())
     def collect(case):
         planner, checks, previous = _escape_checks(case)
-        standing = checks.contact_times(checks.position[None], np.zeros(1), np.zeros((1, 2)),
-                                        np.array([planner.config.horizon_s]))
+        standing = checks.contact_times(
+            checks.position[None], np.zeros(1), np.zeros((1, 2)), np.array([planner.config.horizon_s])
+        )
         seen.add("standing free" if np.isinf(standing).all() else "standing hit")
         gap = np.hypot(*(checks.position - checks.obstacles.positions).T) - checks.check_radii
         seen.add("overlapped" if (gap <= 0).any() else "none overlapped")
@@ -667,8 +782,17 @@ def test_escape_cases_reach_every_branch():
             seen.add("calm with previous")
 
     collect()
-    assert seen == {"standing free", "standing hit", "overlapped", "none overlapped", "nobody", "outside",
-                    "some out of bounds", "all in bounds", "calm with previous"}
+    assert seen == {
+        "standing free",
+        "standing hit",
+        "overlapped",
+        "none overlapped",
+        "nobody",
+        "outside",
+        "some out of bounds",
+        "all in bounds",
+        "calm with previous",
+    }
 
 
 def _contacts_brute_force(positions, times, people, velocities, radii, growth, until, overlapping):
@@ -709,14 +833,26 @@ def test_escape_contacts_skip_only_free_steps():
         until = rng.choice([np.inf, 1.0, 0.3, 2.0], n_count)
         if case % 4 == 0 and n_count:  # someone right at the robot's first position, or just outside it
             j = int(rng.integers(0, n_count))
-            people[j] = positions[0, 0] + rng.choice([-1, 1]) * (radii[j] + rng.choice([-0.05, 1e-7, 0.02])) * \
-                np.array([1.0, 0.0]) - velocities[j] * times[0]
+            people[j] = (
+                positions[0, 0]
+                + rng.choice([-1, 1]) * (radii[j] + rng.choice([-0.05, 1e-7, 0.02])) * np.array([1.0, 0.0])
+                - velocities[j] * times[0]
+            )
         start = positions[0, 0] - steps[0, 0]
         overlapping = np.hypot(*(start - people).T) - radii <= 0
         if case % 9 == 0 and not overlapping.all():  # a NaN cap: that person is never touched
             until[rng.choice(np.flatnonzero(~overlapping))] = np.nan
-        args = (positions, np.ascontiguousarray(times), np.ascontiguousarray(people),
-                np.ascontiguousarray(velocities), radii, growth, until, overlapping, s_count)
+        args = (
+            positions,
+            np.ascontiguousarray(times),
+            np.ascontiguousarray(people),
+            np.ascontiguousarray(velocities),
+            radii,
+            growth,
+            until,
+            overlapping,
+            s_count,
+        )
         got = kernels.escape_contacts(*args)
         expected = _contacts_brute_force(*args[:-1])
         np.testing.assert_array_equal(got[0], expected[0], err_msg=f"case {case}: first contact")
@@ -734,15 +870,20 @@ def test_escape_kernel_pieces_match_numpy():
     from viapath.planning.viapath import kernels
     from viapath.planning.viapath.backend import _corridor
 
-    within = njit(lambda dx, dy, limits: np.array([kernels._within(dx.flat[i], dy.flat[i], limits.flat[i])
-                                                   for i in range(dx.size)]))
-    at_most = njit(lambda points, a, b, c, d, limit: np.array([kernels._excess_at_most(
-        points[i, 0], points[i, 1], a, b, c, d, limit) for i in range(points.shape[0])]))
+    within = njit(
+        lambda dx, dy, limits: np.array(
+            [kernels._within(dx.flat[i], dy.flat[i], limits.flat[i]) for i in range(dx.size)]
+        )
+    )
+    at_most = njit(
+        lambda points, a, b, c, d, limit: np.array(
+            [kernels._excess_at_most(points[i, 0], points[i, 1], a, b, c, d, limit) for i in range(points.shape[0])]
+        )
+    )
 
     rng = np.random.default_rng(23)
     special = np.array([0.0, -0.0, 1e-300, 1e-170, 1e-150, 1e150, 1e170, 1e300, -0.3, np.inf, -np.inf, np.nan])
-    ulps = lambda shape: (rng.integers(-4, 5, shape) * 2.0**-52  # noqa: E731
-                          * rng.choice([1, 1, 1e3, 1e7, 1e9, 1e12], shape))
+    ulps = lambda shape: rng.integers(-4, 5, shape) * 2.0**-52 * rng.choice([1, 1, 1e3, 1e7, 1e9, 1e12], shape)
     for case in range(1500):
         # contacts: hypot(dx, dy) - reach < 0 (escape_contacts' test of the people not overlapped now)
         reach = rng.uniform(0.2, 1.2, 30) * 10.0 ** rng.choice([0, 0, 0, -160, -300, 160], 30)
@@ -764,8 +905,10 @@ def test_escape_kernel_pieces_match_numpy():
         along = rng.uniform(-0.3, 1.3, 40) * path.segment_lengths_m[segment]
         side = rng.uniform(0, 2 * np.pi, 40)
         radius = (path.half_widths_m[segment] + (limit if np.isfinite(limit) else 0.5)) * (1.0 + ulps(40))
-        foot = path.segment_starts[segment] + np.clip(along, 0, path.segment_lengths_m[segment])[:, None] * \
-            path.segment_directions[segment]
+        foot = (
+            path.segment_starts[segment]
+            + np.clip(along, 0, path.segment_lengths_m[segment])[:, None] * path.segment_directions[segment]
+        )
         points = foot + radius[:, None] * np.stack([np.cos(side), np.sin(side)], 1)
         if case % 5 == 0:
             points[rng.integers(0, 40, 3)] = rng.uniform(-1e3, 1e3, (3, 2))
@@ -804,16 +947,20 @@ def test_the_warm_up_reaches_every_whole_step_kernel():
     from viapath.planning.viapath import backend, kernels
     from viapath.planning.viapath.backend import warm_up_crowds
 
-    planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
-                           nominal_speed_mps=0.2, backend="numpy")
+    planner = make_planner(
+        "viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2, backend="numpy"
+    )
     statuses = []
     for people in warm_up_crowds():
         planner.reset()
-        statuses.append(planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people)).plan.status)
+        statuses.append(
+            planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people)).plan.status
+        )
     assert statuses[0] in ("avoid", "slow", "wait") and statuses[1] == "escape"
     assert backend.compile_kernels()
-    planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
-                           nominal_speed_mps=0.2, backend="numba")
+    planner = make_planner(
+        "viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2, backend="numba"
+    )
     for people in warm_up_crowds():  # in this process: compiled now (or loaded from the cache)
         planner.reset()
         planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people))

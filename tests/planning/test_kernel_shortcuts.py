@@ -24,8 +24,9 @@ def _wrap_reference(angle):
 
 # The reference as the kernel had it (x != x: NaN, the kernels' idiom).
 @numba.njit(cache=False)
-def _clear_reference(positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth,
-                     growth_until_s):
+def _clear_reference(
+    positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
+):
     for j in range(obstacle_positions.shape[0]):
         now = math.hypot(robot_x - obstacle_positions[j, 0], robot_y - obstacle_positions[j, 1]) - 1e-3
         for s in range(count):
@@ -33,10 +34,10 @@ def _clear_reference(positions, count, dt, robot_x, robot_y, obstacle_positions,
             cx = obstacle_positions[j, 0] + obstacle_velocities[j, 0] * t
             cy = obstacle_positions[j, 1] + obstacle_velocities[j, 1] * t
             until = growth_until_s[j]
-            capped = until if until != until else (t if t < until else until)  # noqa: PLR0124, FURB136
+            capped = until if until != until else (t if t < until else until)
             reach = radii[j] + growth[j] * capped
-            limit = reach if (reach != reach or reach < now) else now  # noqa: PLR0124
-            if now != now:  # noqa: PLR0124
+            limit = reach if (reach != reach or reach < now) else now
+            if now != now:
                 limit = now
             distance = math.hypot(positions[s, 0] - cx, positions[s, 1] - cy)
             if not distance >= limit:
@@ -50,14 +51,31 @@ def _bits(value: float) -> int:
 
 def test_wrap_skips_the_modulo_only_where_it_changes_nothing():
     two_pi = 2.0 * math.pi
-    special = [0.0, -0.0, math.pi, -math.pi, two_pi, -two_pi, 3 * math.pi, -3 * math.pi, 1e-300, -1e-300, 1e-20,
-               math.inf, -math.inf, math.nan, 1e300, -1e300]
+    special = [
+        0.0,
+        -0.0,
+        math.pi,
+        -math.pi,
+        two_pi,
+        -two_pi,
+        3 * math.pi,
+        -3 * math.pi,
+        1e-300,
+        -1e-300,
+        1e-20,
+        math.inf,
+        -math.inf,
+        math.nan,
+        1e300,
+        -1e300,
+    ]
     for k in range(-6, 7):
         for base in (k * math.pi, k * two_pi):
             special += [base, np.nextafter(base, math.inf), np.nextafter(base, -math.inf)]
     rng = np.random.default_rng(3)
-    angles = np.concatenate([special, rng.uniform(-20.0, 20.0, 5000), rng.uniform(-4.0, 4.0, 5000),
-                             rng.normal(0.0, 1e3, 500)])
+    angles = np.concatenate(
+        [special, rng.uniform(-20.0, 20.0, 5000), rng.uniform(-4.0, 4.0, 5000), rng.normal(0.0, 1e3, 500)]
+    )
     for angle in angles.tolist():
         got, expected = kernels._wrap(angle), _wrap_reference(angle)
         assert _bits(got) == _bits(expected) or (math.isnan(got) and math.isnan(expected)), angle
@@ -95,8 +113,18 @@ def _clear_cases(rng, count: int):
                 radii[int(rng.integers(n))] = math.nan
             else:
                 positions_obs[int(rng.integers(n)), 0] = math.nan
-        yield (np.ascontiguousarray(positions), steps, dt, float(robot[0]), float(robot[1]), positions_obs,
-               velocities, radii, growth, until)
+        yield (
+            np.ascontiguousarray(positions),
+            steps,
+            dt,
+            float(robot[0]),
+            float(robot[1]),
+            positions_obs,
+            velocities,
+            radii,
+            growth,
+            until,
+        )
 
 
 def test_clear_by_squared_distance_matches_hypot():
@@ -126,9 +154,11 @@ def test_legs_free_stops_at_the_first_contact_and_agrees():
             radii[0] = math.nan
         horizon = float(rng.uniform(0.5, 5.0))
         checked = np.array([kernels._clip(horizon - start_times[i], 0.0, durations[i]) for i in range(k)])
-        contact = kernels.legs_first_contact(starts, start_times, velocities, checked, positions, obstacle_velocities,
-                                             radii, growth, until, np.zeros(k))
+        contact = kernels.legs_first_contact(
+            starts, start_times, velocities, checked, positions, obstacle_velocities, radii, growth, until, np.zeros(k)
+        )
         expected = ~(~np.isinf(contact)).any(axis=1)
-        got = kernels._legs_free(starts, start_times, velocities, durations, horizon, positions, obstacle_velocities,
-                                 radii, growth, until)
+        got = kernels._legs_free(
+            starts, start_times, velocities, durations, horizon, positions, obstacle_velocities, radii, growth, until
+        )
         assert np.array_equal(got, expected)

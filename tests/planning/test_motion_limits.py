@@ -15,12 +15,14 @@ from viapath.sim.loop import run_episode
 
 EPS = 1e-9
 
-limits_strategy = st.fixed_dictionaries({
-    "max_speed_mps": st.floats(0.3, 1.0),
-    "max_accel_mps2": st.floats(0.1, 2.0),
-    "max_turn_rate_radps": st.floats(0.3, 3.0),
-    "max_turn_accel_radps2": st.floats(0.5, 10.0),
-})
+limits_strategy = st.fixed_dictionaries(
+    {
+        "max_speed_mps": st.floats(0.3, 1.0),
+        "max_accel_mps2": st.floats(0.1, 2.0),
+        "max_turn_rate_radps": st.floats(0.3, 3.0),
+        "max_turn_accel_radps2": st.floats(0.5, 10.0),
+    }
+)
 
 
 @st.composite
@@ -35,17 +37,24 @@ def small_scenarios(draw):
         y = draw(st.floats(-2.0, 2.0))
         if np.hypot(x, y) < 0.9:
             x += 1.5
-        obstacles.append({
-            "start": [x, y],
-            "velocity": [draw(st.floats(-0.6, 0.6)), draw(st.floats(-0.6, 0.6))],
-            "radius": draw(st.floats(0.15, 0.35)),
-        })
+        obstacles.append(
+            {
+                "start": [x, y],
+                "velocity": [draw(st.floats(-0.6, 0.6)), draw(st.floats(-0.6, 0.6))],
+                "radius": draw(st.floats(0.15, 0.35)),
+            }
+        )
     bend = draw(st.booleans())
     waypoints = [[0.0, 0.0], [3.0, 0.0], [3.0, 2.5]] if bend else [[0.0, 0.0], [5.0, 0.0]]
     data = {
         "name": "random-limits",
-        "robot": {"start": [0.0, 0.0], "heading": draw(st.floats(-0.5, 0.5)), "speed": speed, "radius": 0.25,
-                  "limits": limits},
+        "robot": {
+            "start": [0.0, 0.0],
+            "heading": draw(st.floats(-0.5, 0.5)),
+            "speed": speed,
+            "radius": 0.25,
+            "limits": limits,
+        },
         "path": {"waypoints": waypoints, "half_width": draw(st.floats(0.6, 1.5))},
         "obstacles": obstacles,
         "duration_s": 12.0,
@@ -69,11 +78,20 @@ def _check_drive(trace, limits: MotionLimits) -> None:
 
 
 @settings(max_examples=30, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
-@given(scenario=small_scenarios(), planner=st.sampled_from(["viapath", "viapath", "viapath", "vo", "follow"]),
-       noise=st.booleans(), seed=st.integers(0, 1000))
+@given(
+    scenario=small_scenarios(),
+    planner=st.sampled_from(["viapath", "viapath", "viapath", "vo", "follow"]),
+    noise=st.booleans(),
+    seed=st.integers(0, 1000),
+)
 def test_every_step_respects_the_robot_limits(scenario, planner, noise, seed):
-    episode = run_episode(scenario, planner=planner, seed=seed,
-                          position_noise_m=0.03 if noise else 0.0, velocity_noise_mps=0.05 if noise else 0.0)
+    episode = run_episode(
+        scenario,
+        planner=planner,
+        seed=seed,
+        position_noise_m=0.03 if noise else 0.0,
+        velocity_noise_mps=0.05 if noise else 0.0,
+    )
     trace = episode.trace
     limits = MotionLimits(**scenario.robot.limits.model_dump())
     _check_drive(trace, limits)
@@ -89,8 +107,14 @@ finite = st.floats(-5.0, 5.0)
 
 
 @settings(max_examples=60, deadline=None, derandomize=True)
-@given(limits=limits_strategy, speed=st.floats(0.0, 1.0), turn=finite, v_cmd=st.one_of(finite, st.just(np.nan)),
-       w_cmd=st.one_of(finite, st.just(np.inf)), dt=st.floats(0.01, 0.5))
+@given(
+    limits=limits_strategy,
+    speed=st.floats(0.0, 1.0),
+    turn=finite,
+    v_cmd=st.one_of(finite, st.just(np.nan)),
+    w_cmd=st.one_of(finite, st.just(np.inf)),
+    dt=st.floats(0.01, 0.5),
+)
 def test_limit_command_moves_by_at_most_one_step_of_acceleration(limits, speed, turn, v_cmd, w_cmd, dt):
     limits = MotionLimits(**limits)
     speed = min(speed, limits.max_speed_mps)

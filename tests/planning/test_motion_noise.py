@@ -61,8 +61,10 @@ def _noisy_overtaking_flips() -> dict:
         scenario = load_scenario("overtaking")
         params = {**scenario.planner.params, "keep_previous_way": keep}
         scenario = scenario.model_copy(update={"planner": scenario.planner.model_copy(update={"params": params})})
-        runs = [run_episode(scenario, seed=seed, position_noise_m=0.03, velocity_noise_mps=0.05).metrics
-                for seed in range(4)]
+        runs = [
+            run_episode(scenario, seed=seed, position_noise_m=0.03, velocity_noise_mps=0.05).metrics
+            for seed in range(4)
+        ]
         for metrics in runs:
             assert metrics["reached_goal"] and not metrics["collision"], (keep, metrics)
         flips[keep] = float(np.median([m["plan_side_flips"] for m in runs]))
@@ -82,11 +84,15 @@ def test_keeping_the_previous_way_cuts_side_flips_and_stays_safe(noisy_overtakin
     assert flips[True] <= flips[False], flips
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "known regression (issue 11): since the legs back to the path keep the shield's braking envelope, "
-    "the noisy built-in overtaking (1.0 m half-width, walker in the middle) leaves too little room to "
-    "pass on either side: ~75 flips and ~73 s to the goal instead of ~8 and ~31 s (clean: 0 flips, "
-    "31 s, was 71 and 70 s); mixed goes from 91.5 % to 95 % success, see docs/safety.md"))
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "known regression (issue 11): since the legs back to the path keep the shield's braking envelope, "
+        "the noisy built-in overtaking (1.0 m half-width, walker in the middle) leaves too little room to "
+        "pass on either side: ~75 flips and ~73 s to the goal instead of ~8 and ~31 s (clean: 0 flips, "
+        "31 s, was 71 and 70 s); mixed goes from 91.5 % to 95 % success, see docs/safety.md"
+    ),
+)
 def test_noisy_overtaking_flips_sides_rarely(noisy_overtaking_flips):
     # Before the shield (on by default for viapath since issue 11) and the checked slow legs, the
     # plain planner flipped sides 49 times per run and keeping the way halved that; it then flipped
@@ -100,15 +106,20 @@ def test_a_previous_way_that_only_lost_on_cost_is_not_searched_again_with_less_i
     # must not come back in a tighter, less inflated form.
     import numpy as np
 
-    from viapath import DesignatedPath, Obstacles, Observation, RobotState
+    from viapath import DesignatedPath, Observation, Obstacles, RobotState
     from viapath.planning import make_planner
     from viapath.planning.viapath.candidates import Choice, Way
     from viapath.planning.viapath.planner import ViaPathPlanner
 
     path = DesignatedPath([[0.0, 0.0], [8.0, 0.0]], half_width_m=1.5)
     planner = make_planner("viapath", path, nominal_speed_mps=0.25)
-    head_on = Obstacles(positions=[[3.0, 0.05]], velocities=[[-0.3, 0.0]], radii_m=[0.25],
-                        position_sigma_m=[0.03], velocity_sigma_mps=[0.05])
+    head_on = Obstacles(
+        positions=[[3.0, 0.05]],
+        velocities=[[-0.3, 0.0]],
+        radii_m=[0.25],
+        position_sigma_m=[0.03],
+        velocity_sigma_mps=[0.05],
+    )
     observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.25), head_on)
 
     searches = []

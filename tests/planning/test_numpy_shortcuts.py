@@ -14,7 +14,7 @@ from dataclasses import replace
 import numpy as np
 
 from tests.test_kinematics import _rollout_reference
-from viapath import DesignatedPath, Obstacles, Observation, RobotState
+from viapath import DesignatedPath, Observation, Obstacles, RobotState
 from viapath.geometry import wrap_angle
 from viapath.kinematics import UnicycleState
 from viapath.observation import Command
@@ -45,10 +45,13 @@ def _situations(count: int, seed: int):
         positions = robot + np.stack([distance * np.cos(bearing), distance * np.sin(bearing)], 1)
         velocities = rng.uniform(-1.2, 1.2, (n, 2))
         sigma = rng.uniform(0.0, 0.1, n) if case % 2 else None
-        observation = Observation(0.0, RobotState(robot, rng.uniform(-np.pi, np.pi), rng.uniform(0, 0.5),
-                                                  rng.uniform(-1, 1)),
-                                  Obstacles(positions, velocities, rng.uniform(0.2, 0.35, n), position_sigma_m=sigma,
-                                            velocity_sigma_mps=sigma))
+        observation = Observation(
+            0.0,
+            RobotState(robot, rng.uniform(-np.pi, np.pi), rng.uniform(0, 0.5), rng.uniform(-1, 1)),
+            Obstacles(
+                positions, velocities, rng.uniform(0.2, 0.35, n), position_sigma_m=sigma, velocity_sigma_mps=sigma
+            ),
+        )
         planner.reset()
         situation = planner.situation(observation)
         yield planner, LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
@@ -73,8 +76,13 @@ def _escape_scores_reference(checks, limits, config, previous=None):
     commands = np.stack([grid.ravel() for grid in np.meshgrid(speeds, turns)], axis=1)
     dt = config.escape_dt_s
     steps = max(1, int(round(config.escape_s / dt)))
-    state = UnicycleState(float(position[0]), float(position[1]), float(checks.heading_rad),
-                          float(checks.speed_mps), float(checks.turn_rate_radps))
+    state = UnicycleState(
+        float(position[0]),
+        float(position[1]),
+        float(checks.heading_rad),
+        float(checks.speed_mps),
+        float(checks.turn_rate_radps),
+    )
     positions = _rollout_reference(state, commands, limits, dt, steps)  # (K, S, 2)
     times = dt * np.arange(1, steps + 1)
     excess = checks.path.corridor_excess(positions.reshape(-1, 2)).reshape(len(commands), steps)
@@ -111,11 +119,19 @@ def _escape_scores_reference(checks, limits, config, previous=None):
     ends = positions[:, -1]
     progress = ((ends[:, 0] - position[0]) * toward[0] + (ends[:, 1] - position[1]) * toward[1]) / config.escape_s
     free = time_to_contact >= steps * dt
-    score = (1e2 * separation + 20.0 * free + 2.0 * inside + time_to_contact
-             - np.where(free, 0.005, 0.5) * commands[:, 0] + 0.01 * progress)
+    score = (
+        1e2 * separation
+        + 20.0 * free
+        + 2.0 * inside
+        + time_to_contact
+        - np.where(free, 0.005, 0.5) * commands[:, 0]
+        + 0.01 * progress
+    )
     if config.calm_escape and previous is not None:
-        change = (np.abs(commands[:, 0] - previous.speed_mps) / max(top, 1e-9)
-                  + np.abs(commands[:, 1] - previous.turn_rate_radps) / limits.max_turn_rate_radps)
+        change = (
+            np.abs(commands[:, 0] - previous.speed_mps) / max(top, 1e-9)
+            + np.abs(commands[:, 1] - previous.turn_rate_radps) / limits.max_turn_rate_radps
+        )
         score = score - config.escape_continuity_s * np.minimum(change, 1.0)
     score = np.where(within_bound | (commands[:, 0] == 0.0), score, -np.inf)
     return commands, positions[:, -1], score
@@ -188,13 +204,19 @@ def _can_follow_reference(plan, checks, limits, config):
     offset = plan.target - checks.position
     heading_error = abs(float(wrap_angle(math.atan2(offset[1], offset[0]) - checks.heading_rad)))
     speed_change = abs(plan.speed_mps - checks.speed_mps)
-    if np.hypot(*offset) < 1e-6 or (heading_error <= config.rollout_heading_rad
-                                      and speed_change <= limits.max_accel_mps2 * config.rollout_dt_s * 2):
+    if np.hypot(*offset) < 1e-6 or (
+        heading_error <= config.rollout_heading_rad and speed_change <= limits.max_accel_mps2 * config.rollout_dt_s * 2
+    ):
         return True
     dt = config.rollout_dt_s
     steps = max(1, int(round(config.rollout_s / dt)))
-    state = UnicycleState(float(checks.position[0]), float(checks.position[1]), float(checks.heading_rad),
-                          checks.speed_mps, checks.turn_rate_radps)
+    state = UnicycleState(
+        float(checks.position[0]),
+        float(checks.position[1]),
+        float(checks.heading_rad),
+        checks.speed_mps,
+        checks.turn_rate_radps,
+    )
     positions = checks.backend.track(state, plan.target, plan.speed_mps, limits, dt, steps, config.heading_gain)
     if not _clear_reference(checks, positions, dt):
         return False
@@ -260,8 +282,18 @@ def test_can_follow_remembers_only_what_it_would_compute_again():
 # -- the leg checks and via points of the candidate tree -------------------------------------------
 
 
-def _via_options_reference(starts, start_times, speeds, obstacle_positions, obstacle_velocities, via_radii, growth,
-                           growth_until_s, envelope_m, max_time_s):
+def _via_options_reference(
+    starts,
+    start_times,
+    speeds,
+    obstacle_positions,
+    obstacle_velocities,
+    via_radii,
+    growth,
+    growth_until_s,
+    envelope_m,
+    max_time_s,
+):
     """:func:`viapath.geometry.via_options` as first written."""
     from viapath.geometry import VIA_SIDES, tangent_vectors, via_times
 
@@ -285,8 +317,18 @@ def _via_options_reference(starts, start_times, speeds, obstacle_positions, obst
     return pair, option, t_k, leg_velocity, via
 
 
-def _legs_first_contact_reference(starts, start_times, velocities, durations, obstacle_positions, obstacle_velocities,
-                                  radii, growth=0.0, growth_until_s=np.inf, leg_radii_m=None):
+def _legs_first_contact_reference(
+    starts,
+    start_times,
+    velocities,
+    durations,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth=0.0,
+    growth_until_s=np.inf,
+    leg_radii_m=None,
+):
     """:func:`viapath.geometry.legs_first_contact` as first written (with its ``_first_contact``)."""
 
     def first_contact(px, py, vx, vy, radius, growth, duration):
@@ -319,11 +361,13 @@ def _legs_first_contact_reference(starts, start_times, velocities, durations, ob
     if not np.any(growth) or not np.any(np.isfinite(until)):
         return first_contact(px, py, vx, vy, radii + growth * t0, growth, duration)
     cone_duration = np.clip(until - t0, 0.0, duration)
-    early = first_contact(px, py, vx, vy, radii + growth * np.minimum(t0, until), np.where(until > t0, growth, 0.0),
-                          cone_duration)
+    early = first_contact(
+        px, py, vx, vy, radii + growth * np.minimum(t0, until), np.where(until > t0, growth, 0.0), cone_duration
+    )
     full_growth = growth * np.where(np.isfinite(until), until, 0.0)
-    late = first_contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy, radii + full_growth, 0.0,
-                         duration - cone_duration)
+    late = first_contact(
+        px + vx * cone_duration, py + vy * cone_duration, vx, vy, radii + full_growth, 0.0, duration - cone_duration
+    )
     late = np.where(t0 + duration >= until, late + cone_duration, np.inf)
     return np.where(np.isfinite(early), early, late)
 
@@ -354,11 +398,18 @@ def test_via_options_and_leg_contacts_are_bit_for_bit_the_first_form():
         assert all(_same_bits(a, b) for a, b in zip(got, expected)), f"case {case}"
         options += len(expected[0])
 
-        people = (rng.uniform(-4, 4, (n, 2)), rng.uniform(-1.2, 1.2, (n, 2)), rng.uniform(0.4, 0.8, n),
-                  rng.uniform(0, 0.2, n) * (case % 2), rng.choice([np.inf, 1.5, 3.0], n) if case % 4 else np.inf)
+        people = (
+            rng.uniform(-4, 4, (n, 2)),
+            rng.uniform(-1.2, 1.2, (n, 2)),
+            rng.uniform(0.4, 0.8, n),
+            rng.uniform(0, 0.2, n) * (case % 2),
+            rng.choice([np.inf, 1.5, 3.0], n) if case % 4 else np.inf,
+        )
         pair = expected[0]
-        legs = [(starts[pair], times[pair], expected[3], expected[2]),
-                (starts, times, rng.uniform(-0.5, 0.5, (pairs, 2)), rng.uniform(0, 8, pairs))]
+        legs = [
+            (starts[pair], times[pair], expected[3], expected[2]),
+            (starts, times, rng.uniform(-0.5, 0.5, (pairs, 2)), rng.uniform(0, 8, pairs)),
+        ]
         for leg in legs:
             leg_radii = rng.uniform(0, 0.3, len(leg[0])) if case % 3 == 0 else None
             got = legs_first_contact(*leg, *people, leg_radii)
@@ -433,8 +484,11 @@ def test_legs_inside_is_the_first_form():
         if n and case % 3 == 0:  # ends on the corridor's edge
             segment = rng.integers(0, len(path.segment_lengths_m), n)
             normal = path.segment_directions[segment] @ np.array([[0.0, 1.0], [-1.0, 0.0]])
-            ends = path.segment_starts[segment] + rng.uniform(0, 1, (n, 1)) * path.segment_vectors[segment] \
+            ends = (
+                path.segment_starts[segment]
+                + rng.uniform(0, 1, (n, 1)) * path.segment_vectors[segment]
                 + path.half_widths_m[segment, None] * normal
+            )
         tolerance = rng.choice([1e-9, 0.0, 0.2]) if case % 2 else rng.uniform(-0.1, 0.3, n)
         got = path.legs_inside(starts, ends, 0.05, tolerance)
         expected = _legs_inside_reference(path, starts, ends, 0.05, tolerance)
@@ -447,10 +501,28 @@ def test_wrap_angle_of_one_angle_is_that_of_an_array():
     """:func:`viapath.geometry.wrap_angle` takes one angle (a float or np.float64) with a float's ``%``: bit for
     bit what np.mod gives in an array, on 200 000 angles (many turns, tiny, huge, on ±pi and 2 pi, inf, NaN)."""
     rng = np.random.default_rng(17)
-    angles = np.concatenate([rng.uniform(-20, 20, 150_000), rng.uniform(-1e9, 1e9, 40_000),
-                             rng.uniform(-1e-300, 1e-300, 10_000),
-                             [np.pi, -np.pi, 0.0, -0.0, 3 * np.pi, -3 * np.pi, np.nextafter(np.pi, 4),
-                              np.nextafter(-np.pi, -4), 2 * np.pi, -2 * np.pi, np.inf, -np.inf, np.nan]])
+    angles = np.concatenate(
+        [
+            rng.uniform(-20, 20, 150_000),
+            rng.uniform(-1e9, 1e9, 40_000),
+            rng.uniform(-1e-300, 1e-300, 10_000),
+            [
+                np.pi,
+                -np.pi,
+                0.0,
+                -0.0,
+                3 * np.pi,
+                -3 * np.pi,
+                np.nextafter(np.pi, 4),
+                np.nextafter(-np.pi, -4),
+                2 * np.pi,
+                -2 * np.pi,
+                np.inf,
+                -np.inf,
+                np.nan,
+            ],
+        ]
+    )
     with np.errstate(invalid="ignore"):
         expected = wrap_angle(angles)
         for kind in (float, np.float64):
@@ -491,12 +563,15 @@ def test_clear_in_parts_is_clear_of_the_whole():
         if len(checks.obstacles) and case % 4 == 0:
             centres_x, centres_y, limit = checks._clear_limits(steps, dt)
             s, j, angle = int(rng.integers(steps)), int(rng.integers(len(checks.obstacles))), rng.uniform(0, 2 * np.pi)
-            positions[s] = (centres_x[s, j], centres_y[s, j]) + abs(limit[s, j]) * np.array([np.cos(angle), np.sin(angle)])
+            positions[s] = (centres_x[s, j], centres_y[s, j]) + abs(limit[s, j]) * np.array(
+                [np.cos(angle), np.sin(angle)]
+            )
         whole = _clear_reference(checks, positions, dt)
         split = int(rng.integers(0, steps + 1))
         fresh = replace(checks)  # nothing remembered: the parts make their rows from the whole roll-out's
-        parts = (fresh.clear(positions[:split], dt, of_steps=steps)
-                 and fresh.clear(positions[split:], dt, after_steps=split, of_steps=steps))
+        parts = fresh.clear(positions[:split], dt, of_steps=steps) and fresh.clear(
+            positions[split:], dt, after_steps=split, of_steps=steps
+        )
         assert parts is whole, f"case {case}"
         verdicts.add(whole)
     assert verdicts == {True, False}
@@ -511,9 +586,15 @@ def test_tree_columns_are_the_pieces_concatenated():
     rng = np.random.default_rng(19)
     tree, pieces, reads = _Tree(capacity=3), [], []
     for count in (2, 0, 5, 1, 9, 4):
-        piece = dict(position=rng.normal(size=(count, 2)), time_s=rng.uniform(0, 3, count), speed=rng.uniform(0, 1, count),
-                     parent=rng.integers(-1, 5, count), length_m=rng.uniform(0, 9, count),
-                     first_direction=rng.normal(size=(count, 2)), way=_ways(count, -2, 1, rng.integers(0, 3, count)))
+        piece = dict(
+            position=rng.normal(size=(count, 2)),
+            time_s=rng.uniform(0, 3, count),
+            speed=rng.uniform(0, 1, count),
+            parent=rng.integers(-1, 5, count),
+            length_m=rng.uniform(0, 9, count),
+            first_direction=rng.normal(size=(count, 2)),
+            way=_ways(count, -2, 1, rng.integers(0, 3, count)),
+        )
         if count % 2:
             piece.update(slow_s=rng.uniform(0, 2, count), slow_speed=rng.uniform(0, 0.2, count))
         nodes = tree.extend(**piece)

@@ -16,5 +16,6 @@ def test_stop_only_when_standing_still_is_safe():
     path = DesignatedPath([[0.0, 0.0], [2.0, 0.0]], half_width_m=0.4)
     robot = RobotState(np.array([0.0, 0.0]), 0.0, 0.0, radius_m=0.25)
     obstacles = Obstacles(np.array([[-0.22107801, 0.48306426]]), np.array([[0.5, 0.0]]), np.array([0.25]))
-    safety.check_plan_against_status((path, Observation(0.0, robot, obstacles), 0.5,
-                                      MotionLimits(max_speed_mps=0.5, max_turn_rate_radps=1.0)))
+    safety.check_plan_against_status(
+        (path, Observation(0.0, robot, obstacles), 0.5, MotionLimits(max_speed_mps=0.5, max_turn_rate_radps=1.0))
+    )

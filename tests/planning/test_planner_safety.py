@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import assume, given
+from hypothesis import given
 from hypothesis import strategies as st
 
 from tests.planning._planner_helpers import SAMPLE_DT_S, obstacle_gaps, piecewise_track, planner_settings, robot_track
@@ -48,8 +48,9 @@ def situations(draw, min_gap: float = MIN_START_GAP):
     path = DesignatedPath([[0.0, 0.0], [length, 0.0]], half_width_m=half_width)
     x = draw(_finite(0.0, length - 0.3))
     y = draw(_finite(-half_width, half_width))
-    robot = RobotState(np.array([x, y]), draw(_finite(-math.pi, math.pi)), draw(_finite(0.0, 0.6)),
-                       radius_m=ROBOT_RADIUS)
+    robot = RobotState(
+        np.array([x, y]), draw(_finite(-math.pi, math.pi)), draw(_finite(0.0, 0.6)), radius_m=ROBOT_RADIUS
+    )
     n = draw(st.integers(1, 4))
     positions, velocities, radii = [], [], []
     for _ in range(n):
@@ -62,7 +63,9 @@ def situations(draw, min_gap: float = MIN_START_GAP):
         radii.append(radius)
     with_sigma = draw(st.booleans())  # tracker-like uncertainty (the planner inflates by it) or none
     obstacles = Obstacles(
-        np.array(positions), np.array(velocities), np.array(radii),
+        np.array(positions),
+        np.array(velocities),
+        np.array(radii),
         position_sigma_m=draw(_finite(0.001, 0.05)) if with_sigma else 0.0,
         velocity_sigma_mps=draw(_finite(0.001, 0.1)) if with_sigma else 0.0,
     )
@@ -72,8 +75,14 @@ def situations(draw, min_gap: float = MIN_START_GAP):
 
 
 def _planner(path, nominal, limits, config=None):
-    return make_planner("viapath", path, nominal_speed_mps=nominal, limits=limits, robot_radius_m=ROBOT_RADIUS,
-                        config=config or ViaPathConfig())
+    return make_planner(
+        "viapath",
+        path,
+        nominal_speed_mps=nominal,
+        limits=limits,
+        robot_radius_m=ROBOT_RADIUS,
+        config=config or ViaPathConfig(),
+    )
 
 
 def _motion_pieces(plan, position):
@@ -149,7 +158,8 @@ def check_plan_against_status(situation):
         gaps = obstacle_gaps(times, points, obstacles.positions, obstacles.velocities, _true_radii(obstacles))
         worst = np.unravel_index(np.argmin(gaps), gaps.shape)
         assert gaps.min() > 0.0, (
-            f"{status} plan hits obstacle {worst[1]} at t={times[worst[0]]:.3f} s (gap {gaps.min():.4f} m)")
+            f"{status} plan hits obstacle {worst[1]} at t={times[worst[0]]:.3f} s (gap {gaps.min():.4f} m)"
+        )
         # The whole chosen polyline stays in the corridor (the robot starts inside it).
         line = np.asarray(plan.waypoints, float)
         f = np.linspace(0.0, 1.0, 400)
@@ -179,8 +189,12 @@ def check_plan_against_status(situation):
 # -- bad estimates, empty scenes, the goal -------------------------------------------------------
 
 _PATH = DesignatedPath([[0.0, 0.0], [5.0, 0.0]], half_width_m=1.0)
-_GOOD = Obstacles(np.array([[2.0, 0.0], [1.0, -1.0]]), np.array([[-0.3, 0.0], [0.0, 0.3]]), np.array([0.25, 0.25]),
-                  ids=np.array([0, 1]))
+_GOOD = Obstacles(
+    np.array([[2.0, 0.0], [1.0, -1.0]]),
+    np.array([[-0.3, 0.0], [0.0, 0.3]]),
+    np.array([0.25, 0.25]),
+    ids=np.array([0, 1]),
+)
 _BAD_ROWS = {
     "nan position": ([np.nan, 0.5], [0.0, 0.0], 0.25, 0.0, 0.0),
     "inf position": ([np.inf, 0.5], [0.0, 0.0], 0.25, 0.0, 0.0),
@@ -195,10 +209,15 @@ _BAD_ROWS = {
 
 def _with_row(base: Obstacles, row, at: int) -> Obstacles:
     position, velocity, radius, p_sigma, v_sigma = row
-    insert = lambda a, v: np.insert(np.asarray(a, float), at, v, axis=0)  # noqa: E731
-    return Obstacles(insert(base.positions, position), insert(base.velocities, velocity), insert(base.radii_m, radius),
-                     insert(base.position_sigma_m, p_sigma), insert(base.velocity_sigma_mps, v_sigma),
-                     np.insert(base.ids, at, 99))
+    insert = lambda a, v: np.insert(np.asarray(a, float), at, v, axis=0)
+    return Obstacles(
+        insert(base.positions, position),
+        insert(base.velocities, velocity),
+        insert(base.radii_m, radius),
+        insert(base.position_sigma_m, p_sigma),
+        insert(base.velocity_sigma_mps, v_sigma),
+        np.insert(base.ids, at, 99),
+    )
 
 
 _UNKNOWN_POSITION = ("nan position", "inf position")
@@ -227,7 +246,6 @@ _REPAIRED = {
     "nan sigma": ([1.0, 0.3], [0.1, 0.0], 0.25, 0.5, 0.0),
     "inf velocity sigma": ([1.0, 0.3], [0.1, 0.0], 0.25, 0.0, 1.0),
 }
-
 
 
 @pytest.mark.parametrize("at", [0, 1, 2])
@@ -279,10 +297,14 @@ def test_reached_goal_stops(offset):
 
 # -- closed loop: determinism and noise ----------------------------------------------------------
 
+
 @pytest.mark.parametrize("name", ["paper-side", "paper-front"])
 def test_same_seed_same_trace_with_noise(name):
-    run = lambda seed: run_episode(load_scenario(name), perception="oracle", seed=seed,  # noqa: E731
-                                   position_noise_m=0.03, velocity_noise_mps=0.05).trace
+    run = lambda seed: (
+        run_episode(
+            load_scenario(name), perception="oracle", seed=seed, position_noise_m=0.03, velocity_noise_mps=0.05
+        ).trace
+    )
     a, b, other = run(7), run(7), run(8)
     np.testing.assert_array_equal(a.robot_poses, b.robot_poses)
     np.testing.assert_array_equal(a.commands, b.commands)
@@ -295,9 +317,13 @@ def test_same_seed_same_trace_with_noise(name):
 def noisy_episodes():
     """tests/motion/test_motion_noise.py checks seeds 0-3 for goal and collisions; here seeds 0-4,
     and also the corridor, recomputed from the poses."""
-    return {(name, seed): run_episode(load_scenario(name), perception="oracle", seed=seed,
-                                      position_noise_m=0.03, velocity_noise_mps=0.05)
-            for name in ("paper-side", "paper-front") for seed in range(5)}
+    return {
+        (name, seed): run_episode(
+            load_scenario(name), perception="oracle", seed=seed, position_noise_m=0.03, velocity_noise_mps=0.05
+        )
+        for name in ("paper-side", "paper-front")
+        for seed in range(5)
+    }
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -307,7 +333,9 @@ def test_noisy_runs_safe_and_inside(noisy_episodes, name, seed):
     trace = episode.trace
     assert episode.metrics["reached_goal"]
     robot = trace.robot_poses[:, None, :2]
-    clearance = np.hypot(*(robot - trace.obstacle_positions).transpose(2, 0, 1)) - trace.obstacle_radii_m - trace.robot_radius_m
+    clearance = (
+        np.hypot(*(robot - trace.obstacle_positions).transpose(2, 0, 1)) - trace.obstacle_radii_m - trace.robot_radius_m
+    )
     assert np.nanmin(clearance) > 0.0
     assert episode.metrics["time_outside_corridor_s"] == 0
     assert np.all(trace.path.corridor_excess(trace.robot_poses[:, :2]) <= 0.0)

@@ -46,6 +46,8 @@ def test_a_broken_plugin_warns_and_leaves_the_built_ins(monkeypatch, fresh_regis
 
 def test_a_second_planner_of_a_taken_name_is_refused(fresh_registry):
     with pytest.raises(DuplicateNameError, match="'dwa' is already registered"):
+
         class AnotherDWA(planning.Planner, name="dwa"):
             pass
+
     assert planning.planner_class("dwa").__name__ == "DWAPlanner"

@@ -17,12 +17,25 @@ from viapath.sim.loop import run_episode
 def _checks(position, subgoal_index=1) -> LegChecks:
     path = DesignatedPath([[0.0, 0.0], [8.0, 0.0], [8.0, 4.0]], half_width_m=1.0)
     return LegChecks(
-        path=path, position=np.asarray(position, float), heading_rad=0.0, speed_mps=0.25, turn_rate_radps=0.0,
-        subgoal=path.waypoints[subgoal_index], subgoal_index=subgoal_index, is_final_subgoal=False,
-        obstacles=Obstacles.empty(), check_radii=np.zeros(0), growth=np.zeros(0), growth_until_s=np.zeros(0),
-        via_radii=np.zeros(0), horizon_s=10.0, stop_short_m=0.0,
+        path=path,
+        position=np.asarray(position, float),
+        heading_rad=0.0,
+        speed_mps=0.25,
+        turn_rate_radps=0.0,
+        subgoal=path.waypoints[subgoal_index],
+        subgoal_index=subgoal_index,
+        is_final_subgoal=False,
+        obstacles=Obstacles.empty(),
+        check_radii=np.zeros(0),
+        growth=np.zeros(0),
+        growth_until_s=np.zeros(0),
+        via_radii=np.zeros(0),
+        horizon_s=10.0,
+        stop_short_m=0.0,
         continuation=(path.segment_directions[subgoal_index], path.segment_lengths_m[subgoal_index]),
-        corridor_tolerance_m=0.0, corridor_check_spacing_m=0.05)
+        corridor_tolerance_m=0.0,
+        corridor_check_spacing_m=0.05,
+    )
 
 
 def test_the_way_back_aims_at_the_path_point_ahead_and_checks_on_to_the_subgoal():
@@ -44,9 +57,17 @@ def overtaking():
     """The built-in overtaking scenario (k2 = 0.01: it passes the slow walker), as the paper does it
     and with the way back."""
     scenario = load_scenario("overtaking")
-    return {lookahead: run_episode(scenario, perception="oracle", seed=0, position_noise_m=0.0,
-                                   velocity_noise_mps=0.0, planner_overrides={"return_lookahead_m": lookahead})
-            for lookahead in (0.0, 1.0)}
+    return {
+        lookahead: run_episode(
+            scenario,
+            perception="oracle",
+            seed=0,
+            position_noise_m=0.0,
+            velocity_noise_mps=0.0,
+            planner_overrides={"return_lookahead_m": lookahead},
+        )
+        for lookahead in (0.0, 1.0)
+    }
 
 
 def _back_on_the_line_x(trace, walker_passed_x_m: float, within_m: float = 0.05) -> float:
@@ -76,7 +97,7 @@ def test_the_way_back_is_off_by_default_and_changes_nothing_on_the_path(overtaki
     # Before the pass the robot is on the line: both runs are the same up to there.
     paper, back = overtaking[0.0].trace, overtaking[1.0].trace
     first_off = int(np.argmax(np.abs(paper.path.lateral_deviation(paper.robot_poses[:, :2])) > 0.01))
-    np.testing.assert_array_equal(paper.robot_poses[:first_off + 1], back.robot_poses[:first_off + 1])
+    np.testing.assert_array_equal(paper.robot_poses[: first_off + 1], back.robot_poses[: first_off + 1])
 
 
 def test_the_way_back_decides_the_same_with_both_backends():
@@ -86,7 +107,15 @@ def test_the_way_back_decides_the_same_with_both_backends():
     if not numba_available():
         pytest.skip("numba (extra 'fast') is not installed")
     scenario = load_scenario("overtaking")
-    runs = [run_episode(scenario, perception="oracle", seed=0, position_noise_m=0.0, velocity_noise_mps=0.0,
-                        planner_overrides={"return_lookahead_m": 0.5, "backend": backend})
-            for backend in ("numpy", "numba")]
+    runs = [
+        run_episode(
+            scenario,
+            perception="oracle",
+            seed=0,
+            position_noise_m=0.0,
+            velocity_noise_mps=0.0,
+            planner_overrides={"return_lookahead_m": 0.5, "backend": backend},
+        )
+        for backend in ("numpy", "numba")
+    ]
     np.testing.assert_array_equal(runs[0].trace.robot_poses, runs[1].trace.robot_poses)

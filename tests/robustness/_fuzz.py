@@ -93,7 +93,9 @@ def scan_sets(draw, beam_counts: tuple[int, ...]):
         if kind == "none":
             scans.append(None)
             continue
-        length = {"short": count - draw(st.integers(1, count)), "long": count + draw(st.integers(1, 50))}.get(kind, count)
+        length = {"short": count - draw(st.integers(1, count)), "long": count + draw(st.integers(1, 50))}.get(
+            kind, count
+        )
         fill = draw(st.sampled_from(["walls", "mixed", "person"]))
         if kind == "all-invalid":
             values = np.full(length, draw(st.sampled_from([0.0, math.nan, math.inf])))
@@ -102,7 +104,7 @@ def scan_sets(draw, beam_counts: tuple[int, ...]):
         elif fill == "person":
             values = np.full(length, math.inf)
             start = draw(st.integers(0, max(0, length - 20)))
-            values[start:start + 15] = draw(st.floats(0.4, 3.0))
+            values[start : start + 15] = draw(st.floats(0.4, 3.0))
         else:
             values = np.array([draw(range_value) for _ in range(min(length, 40))])
             values = np.resize(values, length) if length else values[:0]

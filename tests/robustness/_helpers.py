@@ -31,14 +31,22 @@ def robot(x=0.0, y=0.0, heading=0.0, speed=0.2, turn=0.0) -> RobotState:
 
 
 def one_obstacle(position=(0.6, 0.0), velocity=(0.0, 0.0), radius=0.25, velocity_sigma=0.0) -> Obstacles:
-    return Obstacles(np.array([position], dtype=float), np.array([velocity], dtype=float), np.array([radius]),
-                     velocity_sigma_mps=np.array([velocity_sigma]))
+    return Obstacles(
+        np.array([position], dtype=float),
+        np.array([velocity], dtype=float),
+        np.array([radius]),
+        velocity_sigma_mps=np.array([velocity_sigma]),
+    )
 
 
 def inside_limits(command: Command, limits: MotionLimits = LIMITS) -> bool:
     v, w = command.speed_mps, command.turn_rate_radps
-    return (math.isfinite(v) and math.isfinite(w) and -1e-9 <= v <= limits.max_speed_mps + 1e-9
-            and abs(w) <= limits.max_turn_rate_radps + 1e-9)
+    return (
+        math.isfinite(v)
+        and math.isfinite(w)
+        and -1e-9 <= v <= limits.max_speed_mps + 1e-9
+        and abs(w) <= limits.max_turn_rate_radps + 1e-9
+    )
 
 
 def brute_stopping_distance_m(speed_mps: float, limits: MotionLimits = LIMITS, period_s: float = 0.1) -> float:
@@ -58,8 +66,13 @@ def _towards(value: float, goal: float, step: float) -> float:
     return min(goal, value + step) if goal > value else max(goal, value - step)
 
 
-def moves_towards_close_obstacle(command: Command, observation: Observation, period_s: float = 0.1,
-                                 limits: MotionLimits = LIMITS, robot_radius_m: float = ROBOT_RADIUS_M) -> int | None:
+def moves_towards_close_obstacle(
+    command: Command,
+    observation: Observation,
+    period_s: float = 0.1,
+    limits: MotionLimits = LIMITS,
+    robot_radius_m: float = ROBOT_RADIUS_M,
+) -> int | None:
     """Independent brute force (1 ms Euler steps, not viapath.kinematics): the robot holds the command
     for one period and is then commanded to stop, speed and turn rate ramping at the limits. Returns
     the index of an obstacle with a valid position that this motion touches (as it stands now) after

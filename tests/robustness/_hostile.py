@@ -20,7 +20,7 @@ def alias_bombs(draw) -> str:
     dozen lines expand to fan**levels values (always past the node cap), under some field."""
     fan = draw(st.integers(2, 12))
     levels = 1
-    while fan ** levels <= 4 * MAX_YAML_NODES:
+    while fan**levels <= 4 * MAX_YAML_NODES:
         levels += 1
     levels += draw(st.integers(0, 3))
     flow = draw(st.booleans())
@@ -42,7 +42,9 @@ def deep_nesting(draw) -> str:
     elif kind == "flow-map":
         value = "{a: " * depth + "1" + "}" * depth
     else:
-        value = "\n" + "".join("  " * (i + 1) + "-\n" for i in range(min(depth, 400) - 1)) + "  " * min(depth, 400) + "- 1"
+        value = (
+            "\n" + "".join("  " * (i + 1) + "-\n" for i in range(min(depth, 400) - 1)) + "  " * min(depth, 400) + "- 1"
+        )
     return SCENARIO_HEAD + f"{draw(st.sampled_from(FIELDS))}: {value}\n"
 
 
@@ -58,13 +60,17 @@ def long_integers(draw) -> tuple[str, str]:
     digits = draw(st.integers(20, 20000))
     sign = draw(st.sampled_from(["", "-", "+"]))
     literal = sign + draw(st.sampled_from("123456789")) + "0" * (digits - 1)
-    where = draw(st.sampled_from([
-        ("robot: {start: [%s, 0]}", "robot.start.0"),
-        ("seed: %s", "seed"),
-        ("duration_s: %s", "duration_s"),
-        ("obstacles: [{start: [1, %s], velocity: [0, 0]}]", "obstacles.0.start.1"),
-        ("planner: {name: viapath, max_depth: %s}", "planner.max_depth"),
-    ]))
+    where = draw(
+        st.sampled_from(
+            [
+                ("robot: {start: [%s, 0]}", "robot.start.0"),
+                ("seed: %s", "seed"),
+                ("duration_s: %s", "duration_s"),
+                ("obstacles: [{start: [1, %s], velocity: [0, 0]}]", "obstacles.0.start.1"),
+                ("planner: {name: viapath, max_depth: %s}", "planner.max_depth"),
+            ]
+        )
+    )
     text = "name: big\npath: {waypoints: [[0, 0], [5, 0]], half_width: 1.0}\n" + (where[0] % literal) + "\n"
     if not where[0].startswith("robot"):
         text += "robot: {start: [0, 0]}\n"
@@ -75,12 +81,16 @@ def long_integers(draw) -> tuple[str, str]:
 def far_coordinates(draw) -> tuple[str, str]:
     """(scenario text, field) with one coordinate between 1e7 and the float limit (or its negative)."""
     value = draw(st.floats(1e7, 1.7e308)) * draw(st.sampled_from([1, -1]))
-    where = draw(st.sampled_from([
-        ("robot: {start: [%r, 0]}", "robot.start.0"),
-        ("path: {waypoints: [[0, 0], [%r, 1]], half_width: 1.0}", "path.waypoints.1.0"),
-        ("obstacles: [{start: [1, %r], velocity: [0, 0]}]", "obstacles.0.start.1"),
-        ("walls: [[[0, 1], [%r, 1]]]", "walls.0.1.0"),
-    ]))
+    where = draw(
+        st.sampled_from(
+            [
+                ("robot: {start: [%r, 0]}", "robot.start.0"),
+                ("path: {waypoints: [[0, 0], [%r, 1]], half_width: 1.0}", "path.waypoints.1.0"),
+                ("obstacles: [{start: [1, %r], velocity: [0, 0]}]", "obstacles.0.start.1"),
+                ("walls: [[[0, 1], [%r, 1]]]", "walls.0.1.0"),
+            ]
+        )
+    )
     text = "name: far\n" + (where[0] % value) + "\n"
     if not where[0].startswith("robot"):
         text += "robot: {start: [0, 0]}\n"

@@ -13,9 +13,8 @@ import sys
 import time
 from pathlib import Path
 
-import yaml
-
 import pytest
+import yaml
 from typer.testing import CliRunner
 
 from viapath.bench.runner import BenchError, load_suite, read_rows, run_bench
@@ -45,8 +44,10 @@ def test_finding_4_another_suite_is_refused_not_reused(tmp_path):
     other = load_suite(str(_suite(tmp_path / "b", shift=0.3)))  # same scenario names, other people
     with pytest.raises(BenchError, match="another suite"):
         run_bench(other, ["follow"], out, progress=False)
-    result = CliRunner().invoke(_app(), ["bench", str(tmp_path / "b"), "--planners", "follow", "--out", str(out),
-                                         "--workers", "1", "--no-plots"])
+    result = CliRunner().invoke(
+        _app(),
+        ["bench", str(tmp_path / "b"), "--planners", "follow", "--out", str(out), "--workers", "1", "--no-plots"],
+    )
     assert result.exit_code == 2 and "another suite" in result.output and "--force" in result.output
     forced = run_bench(other, ["follow"], out, progress=False, force=True)
     assert forced["ran"] == 2 and forced["skipped"] == 0  # nothing of the other suite reused
@@ -98,8 +99,18 @@ def test_finding_5_ctrl_c_stops_workers_keeps_rows_and_says_how_to_resume(tmp_pa
     folder = tmp_path / "suite"
     write_suite(generate_suite("crossing", 12, seed=0), folder)
     out = tmp_path / "out"
-    command = [VIAPATH, "bench", str(folder), "--planners", "viapath,dwa", "--out", str(out), "--workers", "2",
-               "--no-plots"]
+    command = [
+        VIAPATH,
+        "bench",
+        str(folder),
+        "--planners",
+        "viapath,dwa",
+        "--out",
+        str(out),
+        "--workers",
+        "2",
+        "--no-plots",
+    ]
     csv_path = out / "episodes.csv"
 
     def start_and_interrupt(after_rows: int):
@@ -107,8 +118,12 @@ def test_finding_5_ctrl_c_stops_workers_keeps_rows_and_says_how_to_resume(tmp_pa
         workers: set[int] = set()
         deadline = time.monotonic() + 300
         while time.monotonic() < deadline and process.poll() is None:
-            workers |= set(int(p) for p in subprocess.run(["pgrep", "-P", str(process.pid)], capture_output=True,
-                                                           text=True).stdout.split())
+            workers |= set(
+                int(p)
+                for p in subprocess.run(
+                    ["pgrep", "-P", str(process.pid)], capture_output=True, text=True
+                ).stdout.split()
+            )
             if csv_path.exists() and len(csv_path.read_text().splitlines()) >= after_rows + 1:  # + header
                 break
             time.sleep(0.2)
@@ -132,8 +147,11 @@ def test_finding_5_ctrl_c_stops_workers_keeps_rows_and_says_how_to_resume(tmp_pa
     assert kept, "no finished row was kept"
     assert workers, "no worker process was seen"
     time.sleep(1.0)
-    alive = [pid for pid in workers if Path(f"/proc/{pid}").exists()
-             and "Z" not in Path(f"/proc/{pid}/stat").read_text().split()[2]]
+    alive = [
+        pid
+        for pid in workers
+        if Path(f"/proc/{pid}").exists() and "Z" not in Path(f"/proc/{pid}/stat").read_text().split()[2]
+    ]
     assert alive == [], f"worker processes still alive after Ctrl-C: {alive}"
     # Resume: the kept rows are not run again (no identity twice in the file), new ones are added.
     code, _, _, _ = start_and_interrupt(after_rows=len(kept) + 1)

@@ -11,11 +11,10 @@ import math
 import numpy as np
 import pytest
 
+from tests.robustness._helpers import fresh, inside_limits, moves_towards_close_obstacle, one_obstacle, planners, robot
 from viapath.observation import Observation, ObservationError, Obstacles
 from viapath.scenarios import scenario_from_dict
 from viapath.sim.loop import run_episode
-
-from tests.robustness._helpers import fresh, inside_limits, moves_towards_close_obstacle, one_obstacle, planners, robot
 
 BAD_FIELDS = {
     "velocity-nan": dict(velocity=(math.nan, 0.0)),
@@ -43,13 +42,15 @@ def test_finding_1_obstacle_with_known_position_is_kept(name, bad):
 
 
 def _obstacle_in_closed_loop(**fields):
-    return scenario_from_dict({
-        "name": "bad-field-ahead",
-        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2, "radius": 0.25},
-        "path": {"waypoints": [[0.0, 0.0], [5.0, 0.0]], "half_width": 1.0},
-        "obstacles": [{"start": [1.5, 0.0], "velocity": [0.0, 0.0], "radius": 0.25}],
-        "duration_s": 6.0,
-    })
+    return scenario_from_dict(
+        {
+            "name": "bad-field-ahead",
+            "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2, "radius": 0.25},
+            "path": {"waypoints": [[0.0, 0.0], [5.0, 0.0]], "half_width": 1.0},
+            "obstacles": [{"start": [1.5, 0.0], "velocity": [0.0, 0.0], "radius": 0.25}],
+            "duration_s": 6.0,
+        }
+    )
 
 
 @pytest.mark.parametrize("bad", ["velocity-nan", "radius-nan", "sigma-nan"])
@@ -103,14 +104,19 @@ def test_finding_3_transposed_array_is_refused():
         Obstacles(positions, np.zeros((2, 3)), np.full(3, 0.25))
 
 
-@pytest.mark.parametrize("fields, field", [
-    (dict(positions=np.zeros((2, 2)), velocities=np.zeros((1, 2)), radii_m=np.full(2, 0.2)), "velocities"),
-    (dict(positions=np.zeros((3, 2)), velocities=np.zeros((3, 2)), radii_m=np.full(2, 0.2)), "radii_m"),
-    (dict(positions=np.zeros((3, 2)), velocities=np.zeros((3, 2)), radii_m=0.2,
-          velocity_sigma_mps=np.zeros(4)), "velocity_sigma_mps"),
-    (dict(positions=np.zeros((3, 2)), velocities=np.zeros((3, 2)), radii_m=0.2, ids=[1, 2]), "ids"),
-    (dict(positions=np.zeros(3), velocities=np.zeros(3), radii_m=0.2), "positions"),
-])
+@pytest.mark.parametrize(
+    "fields, field",
+    [
+        (dict(positions=np.zeros((2, 2)), velocities=np.zeros((1, 2)), radii_m=np.full(2, 0.2)), "velocities"),
+        (dict(positions=np.zeros((3, 2)), velocities=np.zeros((3, 2)), radii_m=np.full(2, 0.2)), "radii_m"),
+        (
+            dict(positions=np.zeros((3, 2)), velocities=np.zeros((3, 2)), radii_m=0.2, velocity_sigma_mps=np.zeros(4)),
+            "velocity_sigma_mps",
+        ),
+        (dict(positions=np.zeros((3, 2)), velocities=np.zeros((3, 2)), radii_m=0.2, ids=[1, 2]), "ids"),
+        (dict(positions=np.zeros(3), velocities=np.zeros(3), radii_m=0.2), "positions"),
+    ],
+)
 def test_finding_3_mismatched_lengths_name_the_field(fields, field):
     with pytest.raises(ObservationError, match=rf"obstacles\.{field}: expected"):
         Obstacles(**fields)

@@ -9,9 +9,7 @@ relative path; a refused bench left an empty folder behind; there was no --versi
 from __future__ import annotations
 
 import re
-import sys
 import time
-from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
@@ -42,8 +40,10 @@ def test_finding_6_too_many_steps_is_an_error_naming_dt(tmp_path):
     with pytest.raises(ScenarioError, match=r"dt_s: .*40,000,000 steps; at most 1,000,000"):
         scenario_from_dict(_base(dt_s=0.000001, duration_s=40.0))
     file = tmp_path / "tiny-dt.yaml"
-    file.write_text("name: t\nrobot: {start: [0, 0]}\npath: {waypoints: [[0, 0], [5, 0]], half_width: 1.0}\n"
-                    "duration_s: 40\ndt_s: 0.000001\n")
+    file.write_text(
+        "name: t\nrobot: {start: [0, 0]}\npath: {waypoints: [[0, 0], [5, 0]], half_width: 1.0}\n"
+        "duration_s: 40\ndt_s: 0.000001\n"
+    )
     started = time.monotonic()
     result = CliRunner().invoke(_app(), ["run", str(file)])
     assert result.exit_code == 2 and "dt_s" in result.output
@@ -70,20 +70,23 @@ def test_finding_7_corridor_narrower_than_robot_warns(tmp_path):
     from viapath.sim.checks import scenario_warnings
 
     narrow = scenario_from_dict(_base(path={"waypoints": [[0.0, 0.0], [3.0, 0.0]], "half_width": 0.1}))
-    assert any(w.startswith("path.half_width = 0.1 m is less than the robot radius 0.25 m") for w in
-               scenario_warnings(narrow))
+    assert any(
+        w.startswith("path.half_width = 0.1 m is less than the robot radius 0.25 m") for w in scenario_warnings(narrow)
+    )
     assert scenario_warnings(scenario_from_dict(_base())) == []
     file = tmp_path / "narrow.yaml"
-    file.write_text("name: n\nrobot: {start: [0, 0]}\npath: {waypoints: [[0, 0], [1, 0]], half_width: 0.1}\n"
-                    "duration_s: 10\n")
+    file.write_text(
+        "name: n\nrobot: {start: [0, 0]}\npath: {waypoints: [[0, 0], [1, 0]], half_width: 0.1}\nduration_s: 10\n"
+    )
     result = CliRunner().invoke(_app(), ["run", str(file), "--planner", "follow"])
     assert result.exit_code == 0 and "warning:" in result.output and "narrower than the robot" in result.output
 
 
 def test_duplicate_yaml_key_names_both_lines(tmp_path):
     file = tmp_path / "dup.yaml"
-    file.write_text("name: a\nrobot: {start: [0, 0]}\npath:\n  waypoints: [[0, 0], [5, 0]]\n  half_width: 1.0\n"
-                    "  half_width: 0.5\n")
+    file.write_text(
+        "name: a\nrobot: {start: [0, 0]}\npath:\n  waypoints: [[0, 0], [5, 0]]\n  half_width: 1.0\n  half_width: 0.5\n"
+    )
     with pytest.raises(ScenarioError, match=r"dup\.yaml: line 6: duplicate key 'half_width' \(first given on line 5\)"):
         load_scenario(file)
 
@@ -91,8 +94,10 @@ def test_duplicate_yaml_key_names_both_lines(tmp_path):
 def test_missing_replay_file_shows_resolved_path(tmp_path, monkeypatch):
     folder = tmp_path / "suite"
     folder.mkdir()
-    (folder / "r.yaml").write_text("name: r\nrobot: {start: [0, 0]}\npath: {waypoints: [[0, 0], [5, 0]], "
-                                   "half_width: 1.0}\nobstacles:\n  - replay: {file: data/nothere.txt}\n")
+    (folder / "r.yaml").write_text(
+        "name: r\nrobot: {start: [0, 0]}\npath: {waypoints: [[0, 0], [5, 0]], "
+        "half_width: 1.0}\nobstacles:\n  - replay: {file: data/nothere.txt}\n"
+    )
     monkeypatch.chdir(tmp_path)
     result = CliRunner().invoke(_app(), ["run", "suite/r.yaml"])
     assert result.exit_code == 2

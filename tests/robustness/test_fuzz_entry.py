@@ -15,11 +15,10 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from viapath.observation import ObservationError, Observation, RobotState
-from viapath.planning import available_planners
-
 from tests.robustness._fuzz import observation_batches, scan_sets
 from tests.robustness._helpers import fresh, inside_limits, moves_towards_close_obstacle
+from viapath.observation import Observation, ObservationError, RobotState
+from viapath.planning import available_planners
 
 BATCH = 5
 EXAMPLES_PER_PLANNER = 240  # x BATCH = 1 200 observations per planner
@@ -34,14 +33,16 @@ def check_one(planner, observation) -> str | None:
         decision = planner.plan(observation)
     except ObservationError:
         return None
-    except Exception as error:  # noqa: BLE001 - the property under test
+    except Exception as error:
         return f"raised {type(error).__name__}: {error}"
     command = decision.command
     if not inside_limits(command, planner.limits):
         return f"command {command} not finite or outside the limits (status {decision.plan.status})"
     towards = moves_towards_close_obstacle(command, observation)
     if towards is not None:
-        return f"command {command} closes on obstacle {towards} within stopping distance (status {decision.plan.status})"
+        return (
+            f"command {command} closes on obstacle {towards} within stopping distance (status {decision.plan.status})"
+        )
     return None
 
 
@@ -49,8 +50,13 @@ def check_one(planner, observation) -> str | None:
 def test_fuzz_planner_entry(name):
     planner = _PLANNERS.setdefault(name, fresh(name))  # one planner, a stream of cycles: as on a robot
 
-    @settings(max_examples=EXAMPLES_PER_PLANNER, deadline=None, derandomize=True, database=None,
-              suppress_health_check=list(HealthCheck))
+    @settings(
+        max_examples=EXAMPLES_PER_PLANNER,
+        deadline=None,
+        derandomize=True,
+        database=None,
+        suppress_health_check=list(HealthCheck),
+    )
     @given(observation_batches(BATCH))
     def run(batch):
         for observation in batch:
@@ -74,8 +80,7 @@ def test_laser_path_never_turns_bad_scans_into_motion():
     planner = fresh("viapath")
     clock = {"t": 0.0}
 
-    @settings(max_examples=250, deadline=None, derandomize=True, database=None,
-              suppress_health_check=list(HealthCheck))
+    @settings(max_examples=250, deadline=None, derandomize=True, database=None, suppress_health_check=list(HealthCheck))
     @given(scan_sets(counts))
     def run(scans):
         clock["t"] += 0.1
@@ -92,11 +97,14 @@ def test_laser_path_never_turns_bad_scans_into_motion():
     run()
 
 
-@pytest.mark.parametrize("scans, match", [
-    ([np.full(683, 2.0)], r"scans: expected 2 scans, one per scanner \('front', 'rear'\)"),
-    ([np.full(683, 2.0), np.full(600, 2.0)], r"scans\[1\] \(scanner 'rear'\): expected 683 ranges.*\(600,\)"),
-    ([np.full((2, 683), 2.0), np.full(683, 2.0)], r"scans\[0\] \(scanner 'front'\)"),
-])
+@pytest.mark.parametrize(
+    "scans, match",
+    [
+        ([np.full(683, 2.0)], r"scans: expected 2 scans, one per scanner \('front', 'rear'\)"),
+        ([np.full(683, 2.0), np.full(600, 2.0)], r"scans\[1\] \(scanner 'rear'\): expected 683 ranges.*\(600,\)"),
+        ([np.full((2, 683), 2.0), np.full(683, 2.0)], r"scans\[0\] \(scanner 'front'\)"),
+    ],
+)
 def test_laser_path_names_the_bad_scan(scans, match):
     from viapath.perception.laser import LaserPerception
 

@@ -5,7 +5,8 @@ too large values sprinkled in, the inspection with the shortcut equals the one w
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from viapath import guard
 from viapath.observation import Observation, Obstacles, RobotState
@@ -17,16 +18,23 @@ _ODD = [np.nan, np.inf, -np.inf, -0.1, 0.0, 0.3, 0.6, 0.9, 1.2, 11.0, 2e6, -2e6]
 def _observations(draw):
     n = draw(st.integers(0, 4))
     fields = {}
-    for name, shape, base in (("positions", (n, 2), 3.0), ("velocities", (n, 2), 1.0), ("radii", (n,), 0.3),
-                              ("position_sigma", (n,), 0.1), ("velocity_sigma", (n,), 0.1)):
-        values = np.full(shape, base) * np.array(draw(st.lists(st.floats(0.0, 1.0), min_size=int(np.prod(shape)),
-                                                              max_size=int(np.prod(shape))))).reshape(shape)
+    for name, shape, base in (
+        ("positions", (n, 2), 3.0),
+        ("velocities", (n, 2), 1.0),
+        ("radii", (n,), 0.3),
+        ("position_sigma", (n,), 0.1),
+        ("velocity_sigma", (n,), 0.1),
+    ):
+        values = np.full(shape, base) * np.array(
+            draw(st.lists(st.floats(0.0, 1.0), min_size=int(np.prod(shape)), max_size=int(np.prod(shape))))
+        ).reshape(shape)
         flat = values.reshape(-1)
         for index in draw(st.lists(st.integers(0, max(0, flat.size - 1)), max_size=2)) if flat.size else []:
             flat[index] = draw(st.sampled_from(_ODD))
         fields[name] = values
-    obstacles = Obstacles(fields["positions"], fields["velocities"], fields["radii"], fields["position_sigma"],
-                          fields["velocity_sigma"])
+    obstacles = Obstacles(
+        fields["positions"], fields["velocities"], fields["radii"], fields["position_sigma"], fields["velocity_sigma"]
+    )
     speed = draw(st.sampled_from([0.2, 0.2, np.nan, 60.0]))
     return Observation(0.0, RobotState(np.zeros(2), 0.0, speed, 0.0, 0.25), obstacles)
 
@@ -50,12 +58,23 @@ def test_shortcut_decides_as_the_per_field_checks(monkeypatch_observation):
 
 def test_sound_obstacles_take_the_shortcut():
     obstacles = Obstacles(np.array([[1.0, 2.0]]), np.array([[0.3, 0.0]]), np.array([0.3]))
-    assert guard._obstacles_sound(obstacles.positions, obstacles.velocities, obstacles.radii_m,
-                                  obstacles.position_sigma_m, obstacles.velocity_sigma_mps, guard.DEFAULT_CONFIG)
+    assert guard._obstacles_sound(
+        obstacles.positions,
+        obstacles.velocities,
+        obstacles.radii_m,
+        obstacles.position_sigma_m,
+        obstacles.velocity_sigma_mps,
+        guard.DEFAULT_CONFIG,
+    )
     for bad in (np.nan, np.inf, -1.0, 20.0):
-        assert not guard._obstacles_sound(obstacles.positions, obstacles.velocities, np.array([bad]),
-                                          obstacles.position_sigma_m, obstacles.velocity_sigma_mps,
-                                          guard.DEFAULT_CONFIG)
+        assert not guard._obstacles_sound(
+            obstacles.positions,
+            obstacles.velocities,
+            np.array([bad]),
+            obstacles.position_sigma_m,
+            obstacles.velocity_sigma_mps,
+            guard.DEFAULT_CONFIG,
+        )
 
 
 def test_a_planner_inside_a_guarded_one_is_not_inspected_again(monkeypatch):
@@ -67,10 +86,18 @@ def test_a_planner_inside_a_guarded_one_is_not_inspected_again(monkeypatch):
     from viapath.safety.shielded import ShieldedPlanner
 
     path = DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0)
-    observations = [Observation(0.1 * k, RobotState(np.array([0.1 * k, 0.0]), 0.0, 0.2, 0.0, 0.25),
-                                Obstacles(np.array([[3.0, 0.1 * k], [2.0, 1.0]]),
-                                          np.array([[-0.3, 0.0], [np.nan if k == 2 else 0.0, -0.2]]),
-                                          np.array([0.3, 0.3]))) for k in range(4)]  # cycle 2: a repair
+    observations = [
+        Observation(
+            0.1 * k,
+            RobotState(np.array([0.1 * k, 0.0]), 0.0, 0.2, 0.0, 0.25),
+            Obstacles(
+                np.array([[3.0, 0.1 * k], [2.0, 1.0]]),
+                np.array([[-0.3, 0.0], [np.nan if k == 2 else 0.0, -0.2]]),
+                np.array([0.3, 0.3]),
+            ),
+        )
+        for k in range(4)
+    ]  # cycle 2: a repair
     calls = []
     original = guard.inspect_observation
     monkeypatch.setattr(guard, "inspect_observation", lambda *a, **k: calls.append(1) or original(*a, **k))
@@ -110,8 +137,13 @@ def test_braking_path_steps_as_the_drive_model():
 
     def reference(robot, command, limits, period_s, samples=5):
         dt = period_s / samples
-        state = UnicycleState(float(robot.position[0]), float(robot.position[1]), float(robot.heading_rad),
-                              float(robot.speed_mps), float(robot.turn_rate_radps))
+        state = UnicycleState(
+            float(robot.position[0]),
+            float(robot.position[1]),
+            float(robot.heading_rad),
+            float(robot.speed_mps),
+            float(robot.turn_rate_radps),
+        )
         points = []
         for _ in range(samples):
             state = step(state, command, limits, dt)
@@ -132,13 +164,22 @@ def test_braking_path_steps_as_the_drive_model():
         if trial % 50 == 0:
             v = np.nan
         command = Command(v, w)
-        np.testing.assert_array_equal(guard.braking_path(robot, command, limits, 0.1),
-                                      reference(robot, command, limits, 0.1))
+        np.testing.assert_array_equal(
+            guard.braking_path(robot, command, limits, 0.1), reference(robot, command, limits, 0.1)
+        )
 
 
 @settings(max_examples=400, deadline=None, derandomize=True)
-@given(_observations(), st.sampled_from([guard.DEFAULT_CONFIG, guard.GuardConfig(max_velocity_sigma_mps=np.inf),
-                                         guard.GuardConfig(max_coordinate_m=np.inf)]))
+@given(
+    _observations(),
+    st.sampled_from(
+        [
+            guard.DEFAULT_CONFIG,
+            guard.GuardConfig(max_velocity_sigma_mps=np.inf),
+            guard.GuardConfig(max_coordinate_m=np.inf),
+        ]
+    ),
+)
 def test_an_inspected_observation_has_only_finite_obstacles(observation, config):
     """The planners' situation keeps every obstacle of an observation the guard has just inspected (or
     repaired) without looking again (``guard.inspected``): with finite bounds that is what
@@ -178,9 +219,11 @@ def test_the_shields_command_is_checked_once_when_it_is_the_planners(monkeypatch
     monkeypatch.setattr(guard, "check_command", lambda *a, **k: calls.append(a[0]) or original(*a, **k))
     once = run_episode(scenario, planner="viapath", perception="oracle", shield=True)
     checks_once = len(calls)
-    monkeypatch.setattr(guard._GuardedCycle, "check",
-                        lambda self, command, limits, radius: original(command, self.observation, limits, radius,
-                                                                       self.config))
+    monkeypatch.setattr(
+        guard._GuardedCycle,
+        "check",
+        lambda self, command, limits, radius: original(command, self.observation, limits, radius, self.config),
+    )
     twice = run_episode(scenario, planner="viapath", perception="oracle", shield=True)
     steps = len(twice.trace.commands) - 1
     assert checks_once < 1.5 * steps  # about one check per cycle, not two
@@ -207,8 +250,11 @@ def test_a_malformed_command_behind_the_shield_is_a_stop():
             return Decision(self.garbled, Plan("straight", 0.2, situation.subgoal.copy()))
 
     path = DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0)
-    observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25),
-                              Obstacles(np.array([[3.0, 0.5]]), np.array([[-0.3, 0.0]]), np.array([0.3])))
+    observation = Observation(
+        0.0,
+        RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25),
+        Obstacles(np.array([[3.0, 0.5]]), np.array([[-0.3, 0.0]]), np.array([0.3])),
+    )
     for command in (Command(np.array([0.1, 0.2]), 0.0), Command(0.1, [0.0, 1.0])):
         for planner in (Garbled(path, command), ShieldedPlanner(Garbled(path, command))):
             decision = planner.plan(observation)

@@ -22,13 +22,18 @@ from viapath.options import MAX_STEPS_PER_ROLLOUT, OptionError
 from viapath.planning import make_planner, planner_class
 
 _CASES = settings(max_examples=30, deadline=None, database=None, suppress_health_check=list(HealthCheck))
-_BAD_NUMBERS = st.one_of(st.sampled_from([math.nan, math.inf, -math.inf, 0.0, -0.0, 1e-9, 1e308, "fast", None]),
-                         st.floats(max_value=0.0, allow_nan=False), st.floats(min_value=1e4, allow_infinity=False))
+_BAD_NUMBERS = st.one_of(
+    st.sampled_from([math.nan, math.inf, -math.inf, 0.0, -0.0, 1e-9, 1e308, "fast", None]),
+    st.floats(max_value=0.0, allow_nan=False),
+    st.floats(min_value=1e4, allow_infinity=False),
+)
 
 
 @_CASES
-@given(name=st.sampled_from(planners()),
-       radius=_BAD_NUMBERS.filter(lambda r: not (isinstance(r, float) and 0.0 < r <= 10.0)))
+@given(
+    name=st.sampled_from(planners()),
+    radius=_BAD_NUMBERS.filter(lambda r: not (isinstance(r, float) and 0.0 < r <= 10.0)),
+)
 def test_a_bad_robot_radius_is_refused_naming_the_field(name, radius):
     with pytest.raises(OptionError, match="robot_radius_m: expected a finite number"):
         make_planner(name, corridor(), nominal_speed_mps=0.2, limits=LIMITS, robot_radius_m=radius)
@@ -42,8 +47,11 @@ def test_a_bad_nominal_speed_is_refused_naming_the_field(name, speed):
 
 
 @_CASES
-@given(name=st.sampled_from(planners()), field=st.sampled_from(sorted(LIMIT_BOUNDS)),
-       value=st.one_of(_BAD_NUMBERS, st.floats(0.0, 0.0099)))
+@given(
+    name=st.sampled_from(planners()),
+    field=st.sampled_from(sorted(LIMIT_BOUNDS)),
+    value=st.one_of(_BAD_NUMBERS, st.floats(0.0, 0.0099)),
+)
 def test_bad_motion_limits_are_refused_naming_the_field(name, field, value):
     limits = MotionLimits(**{**LIMITS.__dict__, field: value})
     with pytest.raises(OptionError, match=f"limits.{field}: expected a finite number"):
@@ -59,8 +67,9 @@ def test_a_radius_made_nan_after_construction_stops_the_robot(name):
 
 
 @_CASES
-@given(name=st.sampled_from(planners()), radius=st.floats(10.001, 1e5), gap=st.floats(0.01, 0.5),
-       side=st.floats(-0.5, 0.5))
+@given(
+    name=st.sampled_from(planners()), radius=st.floats(10.001, 1e5), gap=st.floats(0.01, 0.5), side=st.floats(-0.5, 0.5)
+)
 def test_an_implausibly_large_obstacle_is_never_shrunk(name, radius, gap, side):
     """Just ahead of the robot, its edge ``gap`` away: the robot stops and the plan says why."""
     planner = fresh(name)
@@ -93,8 +102,10 @@ def test_every_duration_over_its_step_is_at_most_the_cap(name, data):
     options = planner_class(name).options
     for duration, step in options.steps:
         a, b = options[duration], options[step]
-        values = {duration: data.draw(st.floats(max(a.minimum, 1e-3), a.maximum)),
-                  step: data.draw(st.floats(b.minimum, b.maximum))}
+        values = {
+            duration: data.draw(st.floats(max(a.minimum, 1e-3), a.maximum)),
+            step: data.draw(st.floats(b.minimum, b.maximum)),
+        }
         if values[duration] / values[step] > MAX_STEPS_PER_ROLLOUT:
             with pytest.raises(OptionError, match=f"planner.{duration}: "):
                 options.validate(values, where="planner")
@@ -102,11 +113,20 @@ def test_every_duration_over_its_step_is_at_most_the_cap(name, data):
             options.validate(values, where="planner")
 
 
-@pytest.mark.parametrize("values", [
-    {"rollout_s": 1e9}, {"rollout_dt_s": 1e-9}, {"escape_s": 1e9}, {"escape_dt_s": 1e-9},
-    {"rollout_s": 30.0, "rollout_dt_s": 0.01}, {"escape_s": 25.0, "escape_dt_s": 0.012},
-    {"corridor_check_spacing_m": 1e-9}, {"speeds": [0.1] * 1000}, {"slow_times_s": [1e9]},
-])
+@pytest.mark.parametrize(
+    "values",
+    [
+        {"rollout_s": 1e9},
+        {"rollout_dt_s": 1e-9},
+        {"escape_s": 1e9},
+        {"escape_dt_s": 1e-9},
+        {"rollout_s": 30.0, "rollout_dt_s": 0.01},
+        {"escape_s": 25.0, "escape_dt_s": 0.012},
+        {"corridor_check_spacing_m": 1e-9},
+        {"speeds": [0.1] * 1000},
+        {"slow_times_s": [1e9]},
+    ],
+)
 def test_viapath_options_that_made_a_cycle_unbounded_are_refused(values):
     with pytest.raises(OptionError):
         make_planner("viapath", corridor(), nominal_speed_mps=0.2, limits=LIMITS, robot_radius_m=0.25, **values)
@@ -115,17 +135,32 @@ def test_viapath_options_that_made_a_cycle_unbounded_are_refused(values):
 def test_the_largest_accepted_roll_outs_plan_a_cycle():
     from viapath.safety.shielded import shielded
 
-    inner = make_planner("viapath", corridor(), nominal_speed_mps=0.2, limits=LIMITS, robot_radius_m=0.25,
-                         rollout_s=20.0, rollout_dt_s=0.01, escape_s=20.0, escape_dt_s=0.01,
-                         max_rollouts=1000)
+    inner = make_planner(
+        "viapath",
+        corridor(),
+        nominal_speed_mps=0.2,
+        limits=LIMITS,
+        robot_radius_m=0.25,
+        rollout_s=20.0,
+        rollout_dt_s=0.01,
+        escape_s=20.0,
+        escape_dt_s=0.01,
+        max_rollouts=1000,
+    )
     planner = shielded(inner, True, 0.1)
     decision = planner.plan(Observation(0.0, robot(speed=0.2), one_obstacle((0.9, 0.0), velocity=(-0.5, 0.0))))
     assert np.isfinite([decision.command.speed_mps, decision.command.turn_rate_radps]).all()
 
 
-_BAD_IDS = st.one_of(st.text(min_size=1, max_size=5), st.none(), st.complex_numbers(allow_nan=False),
-                     st.floats(min_value=2.0 ** 64, allow_infinity=True), st.just(math.nan),
-                     st.binary(min_size=1, max_size=3), st.integers(min_value=2 ** 64, max_value=2 ** 200))
+_BAD_IDS = st.one_of(
+    st.text(min_size=1, max_size=5),
+    st.none(),
+    st.complex_numbers(allow_nan=False),
+    st.floats(min_value=2.0**64, allow_infinity=True),
+    st.just(math.nan),
+    st.binary(min_size=1, max_size=3),
+    st.integers(min_value=2**64, max_value=2**200),
+)
 
 
 @_CASES
@@ -140,13 +175,19 @@ def test_ids_that_are_not_integers_are_the_documented_error(bad, position):
 
 
 @_CASES
-@given(name=st.sampled_from(planners()), ident=st.integers(-(2 ** 63), 2 ** 63 - 1))
+@given(name=st.sampled_from(planners()), ident=st.integers(-(2**63), 2**63 - 1))
 def test_any_int64_id_plans(name, ident):
     """Perception hands int64 ids as they are (Obstacles.of_fresh_arrays); navground takes 32-bit ones."""
     from viapath.observation import Obstacles
 
-    obstacles = Obstacles.of_fresh_arrays(np.array([[1.5, 0.3]]), np.zeros((1, 2)), np.array([0.3]), np.zeros(1),
-                                          np.zeros(1), np.array([ident], dtype=np.int64))
+    obstacles = Obstacles.of_fresh_arrays(
+        np.array([[1.5, 0.3]]),
+        np.zeros((1, 2)),
+        np.array([0.3]),
+        np.zeros(1),
+        np.zeros(1),
+        np.array([ident], dtype=np.int64),
+    )
     decision = fresh(name).plan(Observation(0.0, robot(), obstacles))
     assert np.isfinite([decision.command.speed_mps, decision.command.turn_rate_radps]).all()
 
@@ -169,13 +210,17 @@ def _plan_with_options(name, data):
 
     values = data.draw(option_values(planner_class(name).options))
     try:
-        planner = make_planner(name, corridor(), nominal_speed_mps=0.2, limits=LIMITS, robot_radius_m=0.25,
-                               options=values)
+        planner = make_planner(
+            name, corridor(), nominal_speed_mps=0.2, limits=LIMITS, robot_radius_m=0.25, options=values
+        )
     except OptionError as error:
         assert "steps; at most" in str(error), error  # only the cross-check may refuse values inside bounds
         return
-    obstacles = Obstacles(np.array([[1.2, 0.1], [2.0, -0.4], [0.8, 0.9]]),
-                          np.array([[-0.4, 0.0], [0.0, 0.3], [0.1, -0.2]]), np.full(3, 0.3))
+    obstacles = Obstacles(
+        np.array([[1.2, 0.1], [2.0, -0.4], [0.8, 0.9]]),
+        np.array([[-0.4, 0.0], [0.0, 0.3], [0.1, -0.2]]),
+        np.full(3, 0.3),
+    )
     for t in range(3):
         decision = planner.plan(Observation(0.1 * t, robot(x=0.02 * t), obstacles))
         assert np.isfinite([decision.command.speed_mps, decision.command.turn_rate_radps]).all()

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from tests.robustness._hostile import SCENARIO_HEAD, alias_bombs, far_coordinates, hostile_yaml, long_integers
+from tests.robustness._hostile import SCENARIO_HEAD, far_coordinates, hostile_yaml, long_integers
 from viapath.io.safe_read import MAX_YAML_BYTES, InputError, load_yaml, read_text_file
 from viapath.presets import PresetError, load_preset, parse_preset
 from viapath.scenarios import ScenarioError, load_scenario
@@ -118,8 +118,10 @@ def test_ros_path_file_and_parameters_file_use_the_safe_reader(tmp_path):
     from viapath.ros2.settings import ParameterError, read_params_file
 
     bomb = tmp_path / "bomb.yaml"
-    bomb.write_text("a: &a [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
-        f"{chr(98 + i)}: &{chr(98 + i)} [{', '.join([f'*{chr(97 + i)}'] * 10)}]\n" for i in range(8)))
+    bomb.write_text(
+        "a: &a [x, x, x, x, x, x, x, x, x, x]\n"
+        + "".join(f"{chr(98 + i)}: &{chr(98 + i)} [{', '.join([f'*{chr(97 + i)}'] * 10)}]\n" for i in range(8))
+    )
     with pytest.raises(PathFileError, match="aliases"):
         load_path_file(str(bomb))
     with pytest.raises(ParameterError, match="aliases"):
@@ -147,15 +149,35 @@ def _limited():
 def test_cli_refuses_a_bomb_with_exit_2_and_bounded_memory(tmp_path, command):
     bomb = tmp_path / "suite" / "bomb.yaml"
     bomb.parent.mkdir()
-    bomb.write_text(SCENARIO_HEAD + "a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n" + "".join(
-        f"{chr(98 + i)}: &{chr(98 + i)} [{', '.join([f'*{chr(97 + i)}'] * 9)}]\n" for i in range(8))
-        + "obstacles: *i\n")
-    args = {"run": ["run", str(bomb)],
-            "bench": ["bench", str(bomb.parent), "--planners", "follow", "--out", str(tmp_path / "out"), "--workers", "1",
-                      "--no-plots"],
-            "weights": ["run", "hallway", "--weights", str(bomb)]}[command]
-    result = subprocess.run([VIAPATH, *args], capture_output=True, text=True, timeout=60, preexec_fn=_limited,
-                            env={**os.environ, "COLUMNS": "200"})
+    bomb.write_text(
+        SCENARIO_HEAD
+        + "a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n"
+        + "".join(f"{chr(98 + i)}: &{chr(98 + i)} [{', '.join([f'*{chr(97 + i)}'] * 9)}]\n" for i in range(8))
+        + "obstacles: *i\n"
+    )
+    args = {
+        "run": ["run", str(bomb)],
+        "bench": [
+            "bench",
+            str(bomb.parent),
+            "--planners",
+            "follow",
+            "--out",
+            str(tmp_path / "out"),
+            "--workers",
+            "1",
+            "--no-plots",
+        ],
+        "weights": ["run", "hallway", "--weights", str(bomb)],
+    }[command]
+    result = subprocess.run(
+        [VIAPATH, *args],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        preexec_fn=_limited,
+        env={**os.environ, "COLUMNS": "200"},
+    )
     assert result.returncode == 2, result.stderr[-2000:]
     assert "Traceback" not in result.stderr and "aliases" in result.stderr, result.stderr[-2000:]
     assert len(result.stderr) < 2000

@@ -28,8 +28,8 @@ def main(out_path: str) -> int:
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import Twist
-    from nav_msgs.msg import Path as PathMsg
     from nav_msgs.msg import Odometry
+    from nav_msgs.msg import Path as PathMsg
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import LaserScan
@@ -41,10 +41,14 @@ def main(out_path: str) -> int:
     latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
     clock_pub = node.create_publisher(Clock, "/clock", 10)
     odom_pub = node.create_publisher(Odometry, "odom", 10)
-    scan_pub = node.create_publisher(LaserScan, "scan_front", QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+    scan_pub = node.create_publisher(
+        LaserScan, "scan_front", QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    )
     path_pub = node.create_publisher(PathMsg, "designated_path", latched)
     got = {"statuses": [], "commands": []}
-    node.create_subscription(Twist, "cmd_vel", lambda m: got["commands"].append((time.monotonic(), m.linear.x, m.angular.z)), 50)
+    node.create_subscription(
+        Twist, "cmd_vel", lambda m: got["commands"].append((time.monotonic(), m.linear.x, m.angular.z)), 50
+    )
 
     def on_status(msg):
         for s in msg.status:
@@ -79,7 +83,9 @@ def main(out_path: str) -> int:
     phases: dict[str, dict] = {}
 
     def path(points):
-        path_pub.publish(convert.path_message(np.asarray(points, float).reshape(-1, 2), "odom", convert.time_msg(state["t"])))
+        path_pub.publish(
+            convert.path_message(np.asarray(points, float).reshape(-1, 2), "odom", convert.time_msg(state["t"]))
+        )
 
     def step(quaternion=None, range_min=0.02, range_max=5.6):
         """One simulated step: clock, odometry, scan; wait for the node's cycle; drive the last command."""
@@ -92,15 +98,20 @@ def main(out_path: str) -> int:
             q = odom.pose.pose.orientation
             q.x, q.y, q.z, q.w = quaternion
         odom_pub.publish(odom)
-        scan_pub.publish(convert.laser_scan("right_laser", stamp, angle_min, increment, np.full(beams, np.inf),
-                                            range_min, range_max))
+        scan_pub.publish(
+            convert.laser_scan("right_laser", stamp, angle_min, increment, np.full(beams, np.inf), range_min, range_max)
+        )
         key = f"{state['t']:.6f}"
         if range_min < range_max:
-            spin(10.0, lambda: any(s.get("stamp_s") == key and s.get("source") == "cycle" for s in got["statuses"]), clock)
+            spin(
+                10.0,
+                lambda: any(s.get("stamp_s") == key and s.get("source") == "cycle" for s in got["statuses"]),
+                clock,
+            )
         else:  # refused: no cycle comes; wait for the scanner's status to say so
             spin(5.0, lambda: any("layout" in s.get("refused", "") for s in got["statuses"]), clock)
         spin(0.02)
-        v, w = (got["commands"][-1][1:] if got["commands"] else (0.0, 0.0))
+        v, w = got["commands"][-1][1:] if got["commands"] else (0.0, 0.0)
         state["v"], state["w"] = v, w
         state["x"] += v * 0.1 * math.cos(state["h"] + 0.05 * w)
         state["y"] += v * 0.1 * math.sin(state["h"] + 0.05 * w)

@@ -63,8 +63,9 @@ class Processes:
 
     def start(self, name: str, args: list[str], domain: int) -> subprocess.Popen:
         out, err = self.folder / f"{name}.out", self.folder / f"{name}.err"
-        proc = subprocess.Popen(args, env=ros_env(domain), stdout=out.open("w"), stderr=err.open("w"),
-                                stdin=subprocess.DEVNULL)
+        proc = subprocess.Popen(
+            args, env=ros_env(domain), stdout=out.open("w"), stderr=err.open("w"), stdin=subprocess.DEVNULL
+        )
         self.started.append((proc, out, err))
         return proc
 
@@ -79,7 +80,9 @@ class Processes:
             return proc.wait(timeout=timeout_s)
         except subprocess.TimeoutExpired:
             out, err = self.output(proc)
-            raise AssertionError(f"process {proc.args} still running after {timeout_s} s; stderr: {err[-2000:]}") from None
+            raise AssertionError(
+                f"process {proc.args} still running after {timeout_s} s; stderr: {err[-2000:]}"
+            ) from None
 
     @staticmethod
     def stop(proc, timeout_s: float = 10.0) -> None:
@@ -107,10 +110,26 @@ class Pair:
         self.commands = procs.folder / f"{name}_commands.csv"
         self.status = procs.folder / f"{name}_status.jsonl"
         self.node = procs.start(f"{name}_node", viapath("ros2", "node", "--use-sim-time", *node_args), self.domain)
-        self.sim = procs.start(f"{name}_sim", viapath("ros2", "sim", scenario, "--rate", str(rate), "--lockstep", "--json",
-                                                      "--trace", str(self.trace), "--commands", str(self.commands),
-                                                      "--status-log", str(self.status),
-                                                      *sim_args), self.domain)
+        self.sim = procs.start(
+            f"{name}_sim",
+            viapath(
+                "ros2",
+                "sim",
+                scenario,
+                "--rate",
+                str(rate),
+                "--lockstep",
+                "--json",
+                "--trace",
+                str(self.trace),
+                "--commands",
+                str(self.commands),
+                "--status-log",
+                str(self.status),
+                *sim_args,
+            ),
+            self.domain,
+        )
 
     def finish(self, timeout_s: float = 150.0) -> dict:
         code = self.procs.wait(self.sim, timeout_s)
@@ -138,21 +157,67 @@ class Nav2Run:
 
     MAP_OFFSET = "1.5,-2.0,0.6"  # map -> odom: the paths go in the map frame, the node must use TF
 
-    def __init__(self, procs: Processes, name: str, scenario: str, node_params=(), client_args=(), sim_args=(),
-                 rate: float = 20.0, lockstep: bool = True):
+    def __init__(
+        self,
+        procs: Processes,
+        name: str,
+        scenario: str,
+        node_params=(),
+        client_args=(),
+        sim_args=(),
+        rate: float = 20.0,
+        lockstep: bool = True,
+    ):
         self.procs, self.name = procs, name
         self.domain = domain_id()
         self.trace = procs.folder / f"{name}_trace.csv"
         self.log = procs.folder / f"{name}_client.jsonl"
         params = [a for p in node_params for a in ("-p", p)]
-        self.node = procs.start(f"{name}_node", viapath("ros2", "nav2", "--use-sim-time",
-                                                        *(["--ros-args", *params] if params else [])), self.domain)
-        self.sim = procs.start(f"{name}_sim", viapath("ros2", "sim", scenario, "--rate", str(rate), *(["--lockstep"] if lockstep else []),
-                                                      "--json", "--trace", str(self.trace), "--map-offset", self.MAP_OFFSET,
-                                                      "--linger", "1.5", "--wait-s", "300", *sim_args), self.domain)
-        self.client = procs.start(f"{name}_client", viapath("ros2", "follow", scenario, "--map-offset", self.MAP_OFFSET,
-                                                            "--lifecycle", "controller_server", "--log", str(self.log),
-                                                            "--wait-s", "300", *client_args), self.domain)
+        self.node = procs.start(
+            f"{name}_node",
+            viapath("ros2", "nav2", "--use-sim-time", *(["--ros-args", *params] if params else [])),
+            self.domain,
+        )
+        self.sim = procs.start(
+            f"{name}_sim",
+            viapath(
+                "ros2",
+                "sim",
+                scenario,
+                "--rate",
+                str(rate),
+                *(["--lockstep"] if lockstep else []),
+                "--json",
+                "--trace",
+                str(self.trace),
+                "--map-offset",
+                self.MAP_OFFSET,
+                "--linger",
+                "1.5",
+                "--wait-s",
+                "300",
+                *sim_args,
+            ),
+            self.domain,
+        )
+        self.client = procs.start(
+            f"{name}_client",
+            viapath(
+                "ros2",
+                "follow",
+                scenario,
+                "--map-offset",
+                self.MAP_OFFSET,
+                "--lifecycle",
+                "controller_server",
+                "--log",
+                str(self.log),
+                "--wait-s",
+                "300",
+                *client_args,
+            ),
+            self.domain,
+        )
 
     def records(self) -> list[dict]:
         if not self.log.is_file():
@@ -163,12 +228,19 @@ class Nav2Run:
         code = self.procs.wait(self.sim, timeout_s)
         out, err = self.procs.output(self.sim)
         # the last result may still be on its way
-        wait_until(lambda: any(r["kind"] == "result" and r["label"] == "path" and r["error_msg"] != "preempted by a new path"
-                               for r in self.records()), 5.0)
+        wait_until(
+            lambda: any(
+                r["kind"] == "result" and r["label"] == "path" and r["error_msg"] != "preempted by a new path"
+                for r in self.records()
+            ),
+            5.0,
+        )
         self.procs.stop(self.client)
         self.procs.stop(self.node)
         _, node_err = self.procs.output(self.node)
         _, client_err = self.procs.output(self.client)
-        assert code == 0, f"{self.name}: sim exited {code}: {err[-3000:]}\nnode: {node_err[-2000:]}\nclient: {client_err[-1500:]}"
+        assert code == 0, (
+            f"{self.name}: sim exited {code}: {err[-3000:]}\nnode: {node_err[-2000:]}\nclient: {client_err[-1500:]}"
+        )
         self.sim_stderr, self.node_stderr = err, node_err
         return json.loads(out.strip().splitlines()[-1]), self.records()

@@ -10,8 +10,7 @@ import sys
 from pathlib import Path
 
 import pytest
-
-from _ros2_procs import Nav2Run, Pair, Processes, domain_id, viapath  # noqa: F401
+from _ros2_procs import Nav2Run, Pair, Processes, domain_id, viapath
 
 DATA = Path(os.environ.get("VIAPATH_DATA", Path(__file__).resolve().parents[3] / "shared" / "data"))
 BAG = DATA / "leg_tracker_laser" / "positive_2.bag"
@@ -34,9 +33,16 @@ def reference_metrics(name: str) -> dict:
     from viapath.sim.loop import run_episode
 
     spec = load_scenario(name)
-    spec = spec.model_copy(update={"perception": spec.perception.model_copy(
-        update={"options": {"detector": {"keep_segments": False, "fit_backend": "numpy"}}})})
+    spec = spec.model_copy(
+        update={
+            "perception": spec.perception.model_copy(
+                update={"options": {"detector": {"keep_segments": False, "fit_backend": "numpy"}}}
+            )
+        }
+    )
     return run_episode(spec, perception="laser").metrics
+
+
 NAV2_EMPTY = """name: nav2-corridor
 robot: {start: [0.0, 0.0], heading: 0.0, speed: 0.3, radius: 0.25}
 path: {waypoints: [[0.0, 0.0], [8.0, 0.0]], half_width: 1.0}
@@ -84,16 +90,22 @@ class Launcher:
         import threading
 
         references: dict[str, dict] = {}
-        thread = threading.Thread(target=lambda: references.update({n: reference_metrics(n) for n in PAPER}), daemon=True)
+        thread = threading.Thread(
+            target=lambda: references.update({n: reference_metrics(n) for n in PAPER}), daemon=True
+        )
         thread.start()
         self.groups["paper"]["references"] = (thread, references)
         scenario = folder / "empty.yaml"
         scenario.write_text(EMPTY)
         node_args = ["--ros-args", "-p", "nominal_speed_mps:=0.3"]
-        faults = lambda items: sum((["--fault", f] for f in items), [])  # noqa: E731
+        faults = lambda items: sum((["--fault", f] for f in items), [])
         self.groups["faults"] = {
-            "front": Pair(procs, "front", str(scenario), ["--duration", str(FRONT_DURATION_S), *faults(FRONT_FAULTS)], node_args),
-            "rear": Pair(procs, "rear", str(scenario), ["--duration", str(REAR_DURATION_S), *faults(REAR_FAULTS)], node_args),
+            "front": Pair(
+                procs, "front", str(scenario), ["--duration", str(FRONT_DURATION_S), *faults(FRONT_FAULTS)], node_args
+            ),
+            "rear": Pair(
+                procs, "rear", str(scenario), ["--duration", str(REAR_DURATION_S), *faults(REAR_FAULTS)], node_args
+            ),
         }
         from viapath.ros2 import interfaces
 
@@ -101,28 +113,66 @@ class Launcher:
         domain = domain_id()
         out = folder / "hostile.json"
         self.groups["hostile"] = {
-            "node": procs.start("hostile_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(PLAY_PARAMS)),
-                                domain),
-            "driver": procs.start("hostile_driver", [sys.executable, str(Path(__file__).with_name("_hostile_driver.py")),
-                                                     str(out)], domain),
+            "node": procs.start(
+                "hostile_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(PLAY_PARAMS)), domain
+            ),
+            "driver": procs.start(
+                "hostile_driver",
+                [sys.executable, str(Path(__file__).with_name("_hostile_driver.py")), str(out)],
+                domain,
+            ),
             "out": out,
         }
         if BAG.is_file():
             domain = domain_id()
             record = folder / "play_status.jsonl"
             self.groups["play"] = {  # the commands of docs/ros2.md, "Real scans" (+ --rate, --lockstep, --status-log)
-                "node": procs.start("play_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(PLAY_PARAMS)), domain),
-                "play": procs.start("play_play", viapath("ros2", "play", str(BAG), "--topic", "right_scan", "--rate", "4",
-                                                         "--lockstep", "--wait-s", "180", "--status-log", str(record)), domain),
+                "node": procs.start(
+                    "play_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(PLAY_PARAMS)), domain
+                ),
+                "play": procs.start(
+                    "play_play",
+                    viapath(
+                        "ros2",
+                        "play",
+                        str(BAG),
+                        "--topic",
+                        "right_scan",
+                        "--rate",
+                        "4",
+                        "--lockstep",
+                        "--wait-s",
+                        "180",
+                        "--status-log",
+                        str(record),
+                    ),
+                    domain,
+                ),
                 "record": record,
             }
             refusing = folder / "refusing.yaml"  # the bag's frame_id is not laser_refusing: every scan refused
             refusing.write_text(PLAY_PARAMS.read_text().replace('frame_id: ""', "frame_id: laser_refusing"))
             domain = domain_id()
             self.groups["play_refused"] = {
-                "node": procs.start("refused_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(refusing)), domain),
-                "play": procs.start("refused_play", viapath("ros2", "play", str(BAG), "--topic", "right_scan", "--rate", "4",
-                                                            "--lockstep", "--wait-s", "180"), domain),
+                "node": procs.start(
+                    "refused_node", viapath("ros2", "node", "--use-sim-time", "--params-file", str(refusing)), domain
+                ),
+                "play": procs.start(
+                    "refused_play",
+                    viapath(
+                        "ros2",
+                        "play",
+                        str(BAG),
+                        "--topic",
+                        "right_scan",
+                        "--rate",
+                        "4",
+                        "--lockstep",
+                        "--wait-s",
+                        "180",
+                    ),
+                    domain,
+                ),
             }
 
     def start_nav2(self) -> None:
@@ -134,19 +184,42 @@ class Launcher:
         bend.write_text(NAV2_BEND)
         blocked.write_text(NAV2_BLOCKED)
         mixed, spec = mixed_scenario(folder)
-        at = lambda items: sum((["--at", e] for e in items), [])  # noqa: E731
-        runs = {name: Nav2Run(procs, f"nav2_{name}", name, client_args=at(["0:empty", "0:nan"]) if name == "paper-front" else ())
-                for name in PAPER}
-        runs["mixed"] = Nav2Run(procs, "nav2_mixed", str(mixed), node_params=[
-            f"half_width_m:={spec['path']['half_width']}", f"nominal_speed_mps:={spec['robot']['speed']}"])
-        runs["preempt"] = Nav2Run(procs, "nav2_preempt", str(empty), node_params=["nominal_speed_mps:=0.3"],
-                                  client_args=at([e.format(bend=bend) for e in NAV2_PREEMPT_EVENTS]),
-                                  sim_args=["--duration", "10"])
-        runs["deactivate"] = Nav2Run(procs, "nav2_deactivate", str(empty), node_params=["nominal_speed_mps:=0.3"],
-                                     client_args=at([f"{NAV2_DEACTIVATE_AT_S}:deactivate"]),
-                                     sim_args=["--duration", "4", "--max-wait", "0.3"])  # inactive: no command, no wait
-        runs["blocked"] = Nav2Run(procs, "nav2_blocked", str(blocked), node_params=[
-            "half_width_m:=0.4", "nominal_speed_mps:=0.3", f"progress_patience_s:={NAV2_PATIENCE_S}"], sim_args=["--duration", "10"])
+        at = lambda items: sum((["--at", e] for e in items), [])
+        runs = {
+            name: Nav2Run(
+                procs, f"nav2_{name}", name, client_args=at(["0:empty", "0:nan"]) if name == "paper-front" else ()
+            )
+            for name in PAPER
+        }
+        runs["mixed"] = Nav2Run(
+            procs,
+            "nav2_mixed",
+            str(mixed),
+            node_params=[f"half_width_m:={spec['path']['half_width']}", f"nominal_speed_mps:={spec['robot']['speed']}"],
+        )
+        runs["preempt"] = Nav2Run(
+            procs,
+            "nav2_preempt",
+            str(empty),
+            node_params=["nominal_speed_mps:=0.3"],
+            client_args=at([e.format(bend=bend) for e in NAV2_PREEMPT_EVENTS]),
+            sim_args=["--duration", "10"],
+        )
+        runs["deactivate"] = Nav2Run(
+            procs,
+            "nav2_deactivate",
+            str(empty),
+            node_params=["nominal_speed_mps:=0.3"],
+            client_args=at([f"{NAV2_DEACTIVATE_AT_S}:deactivate"]),
+            sim_args=["--duration", "4", "--max-wait", "0.3"],
+        )  # inactive: no command, no wait
+        runs["blocked"] = Nav2Run(
+            procs,
+            "nav2_blocked",
+            str(blocked),
+            node_params=["half_width_m:=0.4", "nominal_speed_mps:=0.3", f"progress_patience_s:={NAV2_PATIENCE_S}"],
+            sim_args=["--duration", "10"],
+        )
         self.groups["nav2"] = {"runs": runs, "mixed": spec}
 
     def nav2(self):
@@ -190,7 +263,11 @@ class Launcher:
             node_alive = group["node"].poll() is None
             self.procs.stop(group["node"])
             assert code == 0, err
-            self.results["hostile"] = (json.loads(group["out"].read_text()), node_alive, self.procs.output(group["node"])[1])
+            self.results["hostile"] = (
+                json.loads(group["out"].read_text()),
+                node_alive,
+                self.procs.output(group["node"])[1],
+            )
         return self.results["hostile"]
 
     def play_refused(self) -> tuple[int, str]:
@@ -232,8 +309,15 @@ def ros2_launcher(tmp_path_factory):
 
 def pytest_collection_modifyitems(session, config, items):
     """Tests that read the launched processes go last, so the fast ones run while those processes work."""
-    items.sort(key=lambda item: "ros2_launcher" in getattr(item, "fixturenames", ()) or
-               any(name in getattr(item, "fixturenames", ()) for name in ("paper_runs", "fault_runs", "play_tracks", "nav2_runs")))
+    items.sort(
+        key=lambda item: (
+            "ros2_launcher" in getattr(item, "fixturenames", ())
+            or any(
+                name in getattr(item, "fixturenames", ())
+                for name in ("paper_runs", "fault_runs", "play_tracks", "nav2_runs")
+            )
+        )
+    )
 
 
 @pytest.fixture(scope="session", autouse=True)

@@ -21,12 +21,17 @@ def test_bad_parameters_are_refused_by_name(tmp_path):
     bad_file.write_text("viapath:\n  ros__parameters:\n    planner:\n      horizn_s: 3.0\n")
     cases = {
         "negative": (["--ros-args", "-p", "nominal_speed_mps:=-1.0"], "parameter nominal_speed_mps: expected >= 0.01"),
-        "choice": (["--ros-args", "-p", "planner.preferred_side:=up"], "parameter planner.preferred_side: expected one of left, right"),
+        "choice": (
+            ["--ros-args", "-p", "planner.preferred_side:=up"],
+            "parameter planner.preferred_side: expected one of left, right",
+        ),
         "file": (["--params-file", str(bad_file)], "parameter planner.horizn_s: unknown parameter"),
     }
     procs = Processes(tmp_path)
     try:
-        started = {name: procs.start(name, viapath("ros2", "node", *args), domain_id()) for name, (args, _) in cases.items()}
+        started = {
+            name: procs.start(name, viapath("ros2", "node", *args), domain_id()) for name, (args, _) in cases.items()
+        }
         for name, proc in started.items():
             assert procs.wait(proc, 240) == 2, procs.output(proc)  # slow only on a loaded machine
             _, err = procs.output(proc)
@@ -51,16 +56,35 @@ def test_every_mistake_is_named_and_values_that_exhaust_memory_are_refused(tmp_p
     two = tmp_path / "two.yaml"
     two.write_text("viapath:\n  ros__parameters:\n    nominal_speed_mps: -1.0\n    planner:\n      horizn_s: 3.0\n")
     cases = {
-        "two": (["--params-file", str(two)], ["parameter nominal_speed_mps: expected >= 0.01",
-                                              "parameter planner.horizn_s: unknown parameter"]),
-        "memory": (["--ros-args", "-p", "planner.rollout_s:=1e9", "-p", "planner.rollout_dt_s:=1e-9",
-                    "-p", "planner.escape_s:=1e9", "-p", "planner.escape_dt_s:=1e-9"],
-                   ["parameter planner.rollout_s:", "parameter planner.rollout_dt_s:", "parameter planner.escape_s:",
-                    "parameter planner.escape_dt_s:"]),
+        "two": (
+            ["--params-file", str(two)],
+            ["parameter nominal_speed_mps: expected >= 0.01", "parameter planner.horizn_s: unknown parameter"],
+        ),
+        "memory": (
+            [
+                "--ros-args",
+                "-p",
+                "planner.rollout_s:=1e9",
+                "-p",
+                "planner.rollout_dt_s:=1e-9",
+                "-p",
+                "planner.escape_s:=1e9",
+                "-p",
+                "planner.escape_dt_s:=1e-9",
+            ],
+            [
+                "parameter planner.rollout_s:",
+                "parameter planner.rollout_dt_s:",
+                "parameter planner.escape_s:",
+                "parameter planner.escape_dt_s:",
+            ],
+        ),
     }
     procs = Processes(tmp_path)
     try:
-        started = {name: procs.start(name, viapath("ros2", "node", *args), domain_id()) for name, (args, _) in cases.items()}
+        started = {
+            name: procs.start(name, viapath("ros2", "node", *args), domain_id()) for name, (args, _) in cases.items()
+        }
         for name, proc in started.items():
             assert procs.wait(proc, 240) == 2, procs.output(proc)  # slow only on a loaded machine
             _, err = procs.output(proc)
@@ -75,8 +99,8 @@ def test_a_failure_while_configuring_is_reported_with_its_text(monkeypatch):
     import os
 
     import rclpy
-
     from _ros2_procs import ros_env
+
     from viapath.ros2.core import PlannerCore
     from viapath.ros2.node import make_node_class
 

@@ -11,7 +11,8 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from viapath.perception.raycast import simulate_scan
 from viapath.perception.scanner import ScannerModel
@@ -75,9 +76,16 @@ def test_a_normal_cycle_drives_and_tracks_the_person():
     assert result.command.speed_mps > 0.0
 
 
-@pytest.mark.parametrize("fault, reason", [
-    ("nan", "invalid"), ("zeros", "invalid"), ("short", "length"), ("frame", "frame"), ("angles", "angles"),
-])
+@pytest.mark.parametrize(
+    "fault, reason",
+    [
+        ("nan", "invalid"),
+        ("zeros", "invalid"),
+        ("short", "length"),
+        ("frame", "frame"),
+        ("angles", "angles"),
+    ],
+)
 def test_bad_scans_are_refused_and_counted(fault, reason):
     core = make_core()
     s = SCANNERS[0]
@@ -156,7 +164,10 @@ def _blind_ahead_brute_force(scanners, robot_radius_m: float, cone_rad: float) -
             seen = False
             for s in scanners:
                 d = p - np.array([s.mount_x_m, s.mount_y_m])
-                bearing = math.atan2(math.sin(math.atan2(d[1], d[0]) - s.mount_yaw_rad), math.cos(math.atan2(d[1], d[0]) - s.mount_yaw_rad))
+                bearing = math.atan2(
+                    math.sin(math.atan2(d[1], d[0]) - s.mount_yaw_rad),
+                    math.cos(math.atan2(d[1], d[0]) - s.mount_yaw_rad),
+                )
                 seen |= abs(bearing) <= s.field_of_view_rad / 2 and s.range_min_m <= np.hypot(*d) <= s.range_max_m
             if not seen:
                 return True
@@ -210,8 +221,11 @@ def test_time_jump_backwards_resets_and_holds_the_robot():
 
 @settings(max_examples=15, deadline=None, derandomize=True)
 @given(
-    garbage=st.lists(st.sampled_from([0.0, -1.0, float("nan"), float("inf"), float("-inf"), 1e9, 0.3, 1.5, 4.0]),
-                     min_size=683, max_size=683),
+    garbage=st.lists(
+        st.sampled_from([0.0, -1.0, float("nan"), float("inf"), float("-inf"), 1e9, 0.3, 1.5, 4.0]),
+        min_size=683,
+        max_size=683,
+    ),
     speed=st.floats(-1.0, 2.0),
     turn=st.floats(-5.0, 5.0),
     heading=st.floats(-10.0, 10.0),

@@ -25,8 +25,11 @@ PAPER = ("paper-behind", "paper-front", "paper-side")
 def read_trace(file) -> dict[str, np.ndarray]:
     with open(file) as handle:
         rows = list(csv.DictReader(handle))
-    return {key: np.array([float(r[key]) if r[key] not in ("", None) else np.nan for r in rows])
-            for key in rows[0] if key != "plan_status"}
+    return {
+        key: np.array([float(r[key]) if r[key] not in ("", None) else np.nan for r in rows])
+        for key in rows[0]
+        if key != "plan_status"
+    }
 
 
 @pytest.fixture(scope="module")
@@ -91,7 +94,10 @@ def test_metrics_agree_with_viapath_run(paper_runs, in_process, name):
     assert abs(metrics["path_length_m"] - reference["path_length_m"]) <= 0.05
     assert abs(metrics["max_lateral_deviation_m"] - reference["max_lateral_deviation_m"]) <= 0.02
     assert abs(metrics["max_speed_mps"] - reference["max_speed_mps"]) <= 0.02
-    assert metrics["shield"] == reference["shield"] and metrics["shield_interventions"] == reference["shield_interventions"]
+    assert (
+        metrics["shield"] == reference["shield"]
+        and metrics["shield_interventions"] == reference["shield_interventions"]
+    )
     assert abs(metrics["track_samples"] - reference["track_samples"]) <= 3
     assert abs(metrics["track_position_rmse_m"] - reference["track_position_rmse_m"]) <= 0.005
     for key in ("perception_time_p50_ms", "perception_time_p99_ms", "plan_time_p50_ms", "plan_time_p99_ms"):
@@ -119,4 +125,6 @@ def test_the_table_in_the_docs_is_what_the_runs_print(paper_runs, in_process):
     from ros2_paper_table import table
 
     text = table({name: paper_runs[name][0] for name in PAPER}, {name: in_process[name] for name in PAPER})
-    assert text in (root / "docs" / "ros2.md").read_text(), "regenerate it: python benchmarks/ros2_paper_table.py\n" + text
+    assert text in (root / "docs" / "ros2.md").read_text(), (
+        "regenerate it: python benchmarks/ros2_paper_table.py\n" + text
+    )

@@ -109,9 +109,14 @@ def _planner(phase):
 def test_a_malformed_first_scan_is_refused_and_the_node_lives_on(hostile_run):
     phases, node_alive, node_err = hostile_run
     assert node_alive, node_err[-2000:]
-    scanner = [s for s in phases["malformed_first_scan"]["statuses"] + phases["driving"]["statuses"]
-               if s["_name"] == "scanner laser"]
-    assert any("layout: 1" in s["refused"] and "not below range_max" in s["last_problem"] for s in scanner), scanner[-1:]
+    scanner = [
+        s
+        for s in phases["malformed_first_scan"]["statuses"] + phases["driving"]["statuses"]
+        if s["_name"] == "scanner laser"
+    ]
+    assert any("layout: 1" in s["refused"] and "not below range_max" in s["last_problem"] for s in scanner), scanner[
+        -1:
+    ]
     assert phases["driving"]["commands"][-1][1] >= 0.15  # and it drives on the good scans that follow
 
 

@@ -11,7 +11,8 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from viapath.observation import Command
 from viapath.perception.raycast import simulate_scan
@@ -81,6 +82,7 @@ def assert_braking(result, before):
 
 # -- 1. odometry that lies ------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("twist", [1e9, 40.0, 0.6])
 def test_lying_odometry_never_moves_a_standing_robot_towards_a_person(twist):
     """A person 0.3 m ahead of the body, the robot stands; the odometry's twist says it drives."""
@@ -99,8 +101,13 @@ def test_lying_odometry_never_moves_a_standing_robot_towards_a_person(twist):
 
 
 @settings(max_examples=200, deadline=None, derandomize=True)
-@given(measured=st.floats(-1.0, 0.7), measured_turn=st.floats(-2.3, 2.3), last=st.floats(0.0, 0.6),
-       last_turn=st.floats(-2.0, 2.0), wanted_turn=st.floats(-2.0, 2.0))
+@given(
+    measured=st.floats(-1.0, 0.7),
+    measured_turn=st.floats(-2.3, 2.3),
+    last=st.floats(0.0, 0.6),
+    last_turn=st.floats(-2.0, 2.0),
+    wanted_turn=st.floats(-2.0, 2.0),
+)
 def test_a_planner_stop_is_never_turned_into_motion_by_the_ramp(measured, measured_turn, last, last_turn, wanted_turn):
     """Whatever the (accepted) odometry says, a stop asked for by the planner is at least one cycle's
     braking from the last command, and braking never speeds up or turns faster than commanded."""
@@ -113,12 +120,17 @@ def test_a_planner_stop_is_never_turned_into_motion_by_the_ramp(measured, measur
     brake = core.brake_command()
     assert brake.speed_mps <= max(0.0, last - STEP) + EPS
     assert abs(brake.turn_rate_radps) <= max(0.0, min(abs(last_turn), abs(measured_turn)) - 6.0 * DT) + EPS or (
-        last_turn * measured_turn <= 0 and brake.turn_rate_radps == 0.0)
+        last_turn * measured_turn <= 0 and brake.turn_rate_radps == 0.0
+    )
 
 
 @settings(FEW, max_examples=40)
-@given(kind=st.sampled_from(["fast", "negative", "stuck", "turn", "spin-stuck", "jump", "heading"]),
-       size=st.floats(0.0, 1.0), cycles=st.integers(3, 8), speed=st.floats(0.1, 0.5))
+@given(
+    kind=st.sampled_from(["fast", "negative", "stuck", "turn", "spin-stuck", "jump", "heading"]),
+    size=st.floats(0.0, 1.0),
+    cycles=st.integers(3, 8),
+    speed=st.floats(0.1, 0.5),
+)
 def test_generated_lying_odometry_brakes_and_says_why(kind, size, cycles, speed):
     core = make_core(nominal_speed_mps=speed)
     robot = Robot(people=[(6.0, 1.5)])
@@ -145,8 +157,13 @@ def test_generated_lying_odometry_brakes_and_says_why(kind, size, cycles, speed)
         if kind in ("jump", "heading") and k > 0:
             lie = None  # one jump, then the odometry goes on from there (checked below: still braking)
             odom = core.odometry
-            lie = (odom.x + robot.v * DT * math.cos(odom.heading_rad), odom.y + robot.v * DT * math.sin(odom.heading_rad),
-                   odom.heading_rad, robot.v, robot.w)
+            lie = (
+                odom.x + robot.v * DT * math.cos(odom.heading_rad),
+                odom.y + robot.v * DT * math.sin(odom.heading_rad),
+                odom.heading_rad,
+                robot.v,
+                robot.w,
+            )
         result, before = cycle(core, robot, t, odom=lie)
         if kind in ("jump", "heading") and k * DT >= core.settings.reset_hold_s - EPS:
             break  # held for reset_hold_s after a jump; then it may go on from the new pose
@@ -176,21 +193,34 @@ def test_honest_odometry_is_never_a_fault(cycles, speed, turn):
 
 # -- 2. malformed scans, the first one included -----------------------------------------------------
 
-def first_scan(core, index=0, t=1.0, beams=683, increment=math.radians(0.352), range_min=0.02, range_max=5.6,
-               angle_min=None, ranges=None):
+
+def first_scan(
+    core,
+    index=0,
+    t=1.0,
+    beams=683,
+    increment=math.radians(0.352),
+    range_min=0.02,
+    range_max=5.6,
+    angle_min=None,
+    ranges=None,
+):
     ranges = np.full(beams, 2.0) if ranges is None else ranges
     angle_min = -0.5 * (beams - 1) * increment if angle_min is None else angle_min
     return core.on_scan(index, t, t, FRAMES[index], angle_min, increment, ranges, range_min, range_max)
 
 
-@pytest.mark.parametrize("layout, words", [
-    ({"range_min": 6.0, "range_max": 1.0}, "not below range_max"),
-    ({"beams": 2000, "increment": 0.01}, "more than a full turn"),
-    ({"increment": 0.0}, "must be > 0"),
-    ({"beams": 1}, "beams"),
-    ({"range_max": float("nan")}, "finite"),
-    ({"range_min": float("inf")}, "finite"),
-])
+@pytest.mark.parametrize(
+    "layout, words",
+    [
+        ({"range_min": 6.0, "range_max": 1.0}, "not below range_max"),
+        ({"beams": 2000, "increment": 0.01}, "more than a full turn"),
+        ({"increment": 0.0}, "must be > 0"),
+        ({"beams": 1}, "beams"),
+        ({"range_max": float("nan")}, "finite"),
+        ({"range_min": float("inf")}, "finite"),
+    ],
+)
 def test_a_malformed_first_scan_is_refused_and_the_next_good_one_is_taken(layout, words):
     core = make_core(scan_geometry="from_message")
     assert not first_scan(core, **layout)
@@ -207,14 +237,25 @@ finite_or_not = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.sam
 
 
 @settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
-@given(beams=st.integers(0, 4000), increment=finite_or_not, range_min=finite_or_not, range_max=finite_or_not,
-       angle_min=finite_or_not, geometry=st.sampled_from(["from_message", "urg04lx"]),
-       readings=st.sampled_from(["ok", "nan", "strings", "nested"]))
-def test_generated_malformed_scans_are_refused_never_raised(beams, increment, range_min, range_max, angle_min, geometry,
-                                                            readings):
+@given(
+    beams=st.integers(0, 4000),
+    increment=finite_or_not,
+    range_min=finite_or_not,
+    range_max=finite_or_not,
+    angle_min=finite_or_not,
+    geometry=st.sampled_from(["from_message", "urg04lx"]),
+    readings=st.sampled_from(["ok", "nan", "strings", "nested"]),
+)
+def test_generated_malformed_scans_are_refused_never_raised(
+    beams, increment, range_min, range_max, angle_min, geometry, readings
+):
     core = make_core(scan_geometry=geometry)
-    ranges = {"ok": np.full(beams, 2.0), "nan": np.full(beams, np.nan), "strings": ["x"] * beams,
-              "nested": [[1.0, 2.0]] * beams}[readings]
+    ranges = {
+        "ok": np.full(beams, 2.0),
+        "nan": np.full(beams, np.nan),
+        "strings": ["x"] * beams,
+        "nested": [[1.0, 2.0]] * beams,
+    }[readings]
     accepted = core.on_scan(0, 1.0, 1.0, FRAMES[0], angle_min, increment, ranges, range_min, range_max)
     h = core.health[0]
     assert h.good + sum(h.refused.values()) == 1
@@ -230,6 +271,7 @@ def test_generated_malformed_scans_are_refused_never_raised(beams, increment, ra
 
 
 # -- 5. quaternions -----------------------------------------------------------------------------------
+
 
 def test_a_zero_quaternion_is_refused_and_the_robot_does_not_spin():
     core = make_core()
@@ -248,13 +290,20 @@ def test_a_zero_quaternion_is_refused_and_the_robot_does_not_spin():
     assert any("odometry fault: orientation" in r for r in result.reasons)
 
 
-unit = st.tuples(*[st.floats(-1.0, 1.0)] * 4).filter(lambda q: sum(v * v for v in q) > 1e-3).map(
-    lambda q: tuple(v / math.sqrt(sum(u * u for u in q)) for v in q))
+unit = (
+    st.tuples(*[st.floats(-1.0, 1.0)] * 4)
+    .filter(lambda q: sum(v * v for v in q) > 1e-3)
+    .map(lambda q: tuple(v / math.sqrt(sum(u * u for u in q)) for v in q))
+)
 anything = st.tuples(*[finite_or_not] * 4)
 
 
 @settings(max_examples=100, deadline=None, derandomize=True)
-@given(q=st.one_of(unit, anything, unit.map(lambda q: tuple(1.05 * v for v in q)), unit.map(lambda q: tuple(0.5 * v for v in q))))
+@given(
+    q=st.one_of(
+        unit, anything, unit.map(lambda q: tuple(1.05 * v for v in q)), unit.map(lambda q: tuple(0.5 * v for v in q))
+    )
+)
 def test_generated_quaternions_are_a_heading_only_when_they_are_rotations(q):
     core = make_core()
     with np.errstate(all="ignore"):
@@ -267,8 +316,12 @@ def test_generated_quaternions_are_a_heading_only_when_they_are_rotations(q):
 
         def mul(a, b):
             (ax, ay, az, aw), (bx, by, bz, bw) = a, b
-            return (aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
-                    aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz)
+            return (
+                aw * bx + ax * bw + ay * bz - az * by,
+                aw * by - ax * bz + ay * bw + az * bx,
+                aw * bz + ax * by - ay * bx + az * bw,
+                aw * bw - ax * bx - ay * by - az * bz,
+            )
 
         axis = mul(mul((x, y, z, w), (1.0, 0.0, 0.0, 0.0)), (-x, -y, -z, w))
         if math.hypot(axis[0], axis[1]) > 1e-6:  # not pointing straight up or down
@@ -284,6 +337,7 @@ def test_generated_quaternions_are_a_heading_only_when_they_are_rotations(q):
 
 
 # -- 4. paths: empty means stop; bad ones are refused --------------------------------------------------
+
 
 def test_an_empty_path_stops_the_robot_and_the_status_says_so():
     core = make_core()
@@ -330,6 +384,7 @@ def test_generated_paths_replace_clear_or_leave_the_path(paths):
 
 
 # -- 3. a stopped clock: the watchdog on the wall clock ------------------------------------------------
+
 
 def test_when_clock_and_inputs_stop_the_wall_watchdog_brakes_to_a_stop():
     core = make_core()

@@ -75,7 +75,8 @@ def test_topics_carry_the_hashes_over_dds(prefix, tmp_path):
     from _ros2_procs import domain_id, ros_env
 
     script = tmp_path / "probe.py"
-    script.write_text(textwrap.dedent("""
+    script.write_text(
+        textwrap.dedent("""
         import time
         from viapath.ros2 import interfaces
         interfaces.load()
@@ -99,8 +100,11 @@ def test_topics_carry_the_hashes_over_dds(prefix, tmp_path):
                 break
         node.destroy_node()
         rclpy.shutdown()
-    """))
-    out = subprocess.run([sys.executable, str(script)], env=ros_env(domain_id()), capture_output=True, text=True, timeout=60)
+    """)
+    )
+    out = subprocess.run(
+        [sys.executable, str(script)], env=ros_env(domain_id()), capture_output=True, text=True, timeout=60
+    )
     assert out.returncode == 0, out.stderr[-2000:]
     seen = {line.split()[1]: line.split()[2] for line in out.stdout.splitlines() if line.startswith("/")}
     assert seen == {

@@ -29,13 +29,31 @@ def test_markers_of_a_cycle():
 
     path = DesignatedPath([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]], half_widths_m=[1.0, 0.5])
     planner = make_planner("viapath", path, nominal_speed_mps=0.2)
-    tracks = Obstacles(np.array([[2.0, 0.5], [3.0, -0.5]]), np.array([[-0.3, 0.0], [0.0, 0.4]]),
-                       np.array([0.25, 0.3]), position_sigma_m=np.array([0.05, 0.05]),
-                       velocity_sigma_mps=np.array([0.02, 0.0]), ids=np.array([7, 9]))
-    plan = Plan("avoid", 0.2, np.array([1.5, 0.9]), via_points=np.array([[1.5, 0.9]]),
-                waypoints=np.array([[0.0, 0.0], [1.5, 0.9], [4.0, 0.0]]))
-    result = CycleResult(Command(0.2, 0.1), "driving", [], 12.5, Decision(Command(0.2, 0.1), plan), tracks,
-                         np.array([0.0, 0.0, 0.0]), cycle_time_ms=3.0)
+    tracks = Obstacles(
+        np.array([[2.0, 0.5], [3.0, -0.5]]),
+        np.array([[-0.3, 0.0], [0.0, 0.4]]),
+        np.array([0.25, 0.3]),
+        position_sigma_m=np.array([0.05, 0.05]),
+        velocity_sigma_mps=np.array([0.02, 0.0]),
+        ids=np.array([7, 9]),
+    )
+    plan = Plan(
+        "avoid",
+        0.2,
+        np.array([1.5, 0.9]),
+        via_points=np.array([[1.5, 0.9]]),
+        waypoints=np.array([[0.0, 0.0], [1.5, 0.9], [4.0, 0.0]]),
+    )
+    result = CycleResult(
+        Command(0.2, 0.1),
+        "driving",
+        [],
+        12.5,
+        Decision(Command(0.2, 0.1), plan),
+        tracks,
+        np.array([0.0, 0.0, 0.0]),
+        cycle_time_ms=3.0,
+    )
     scenes = MarkerScenes(robot_radius_m=0.23)
     scene = scenes.scene(path, planner, result)
     msg = marker_array(scene, scenes.builder(path, planner).path_view, "odom", time_msg(12.5))
@@ -47,13 +65,17 @@ def test_markers_of_a_cycle():
     assert set(by_ns) == {"corridor", "path", "tracks", "velocities", "forecasts", "via_points", "plan"}
     # Corridor: one capsule outline per segment, every point at the half width from its segment.
     assert len(by_ns["corridor"]) == 2
-    for marker, (a, b), half_width in zip(sorted(by_ns["corridor"], key=lambda m: m.id),
-                                          [(path.waypoints[0], path.waypoints[1]), (path.waypoints[1], path.waypoints[2])],
-                                          [1.0, 0.5]):
+    for marker, (a, b), half_width in zip(
+        sorted(by_ns["corridor"], key=lambda m: m.id),
+        [(path.waypoints[0], path.waypoints[1]), (path.waypoints[1], path.waypoints[2])],
+        [1.0, 0.5],
+    ):
         points = np.array([[p.x, p.y] for p in marker.points])
         assert len(points) > 8 and np.allclose(_segment_distance(points, a, b), half_width, atol=1e-9)
     ids, positions, velocities = tracks_from_markers(msg)
-    assert list(ids) == [7, 9] and np.allclose(positions, tracks.positions) and np.allclose(velocities, tracks.velocities)
+    assert (
+        list(ids) == [7, 9] and np.allclose(positions, tracks.positions) and np.allclose(velocities, tracks.velocities)
+    )
     # Track 7's forecast at the horizon T: a ring around p + v T of the combined radius grown by the
     # planner's cone (k σ_v T, capped), drawn at height T · scale.
     settings = scene.xyt.settings
@@ -84,8 +106,9 @@ def test_a_braking_cycle_without_a_decision_still_shows_the_tracks():
     tracks = Obstacles(np.array([[1.0, 0.0]]), np.array([[0.0, 0.0]]), np.array([0.25]), ids=np.array([3]))
     result = CycleResult(Command(0.0, 0.0), "braking", ["no odometry"], 1.0, None, tracks, np.zeros(3))
     scenes = MarkerScenes(robot_radius_m=0.23)
-    msg = marker_array(scenes.scene(path, planner, result), scenes.builder(path, planner).path_view, "odom",
-                       time_msg(1.0))
+    msg = marker_array(
+        scenes.scene(path, planner, result), scenes.builder(path, planner).path_view, "odom", time_msg(1.0)
+    )
     ids, positions, _ = tracks_from_markers(msg)
     assert list(ids) == [3] and np.allclose(positions, [[1.0, 0.0]])
     assert "plan" not in {m.ns for m in msg.markers}

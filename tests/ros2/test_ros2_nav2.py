@@ -24,8 +24,10 @@ INVALID_PATH, FAILED_TO_MAKE_PROGRESS = 103, 105
 def nav2_runs(ros2_launcher):
     from test_ros2_e2e import read_trace
 
-    return {name: (metrics, records, read_trace(ros2_launcher.groups["nav2"]["runs"][name].trace))
-            for name, (metrics, records) in ros2_launcher.nav2().items()}
+    return {
+        name: (metrics, records, read_trace(ros2_launcher.groups["nav2"]["runs"][name].trace))
+        for name, (metrics, records) in ros2_launcher.nav2().items()
+    }
 
 
 def results(records, label="path"):
@@ -47,10 +49,14 @@ def test_reaches_the_goal_as_nav2s_controller(nav2_runs, name):
     assert metrics["time_outside_corridor_s"] == 0.0
     last = final(records)["goal"]
     sent = [r["goal"] for r in records if r["kind"] == "sent" and r["label"] == "path" and r["goal"] < last]
-    assert len(sent) + 1 >= 0.5 * metrics["time_to_goal_s"]  # re-sent about once a second (the client may lag under load)
+    assert (
+        len(sent) + 1 >= 0.5 * metrics["time_to_goal_s"]
+    )  # re-sent about once a second (the client may lag under load)
     # every re-sent (equal) path was a preempt: the old goal aborted with an empty result, the robot went on
     preempted = {r["goal"]: r for r in results(records) if r["error_msg"] == "preempted by a new path"}
-    assert set(sent) <= set(preempted) and all(r["status"] == ABORTED and r["error_code"] == 0 for r in preempted.values())
+    assert set(sent) <= set(preempted) and all(
+        r["status"] == ABORTED and r["error_code"] == 0 for r in preempted.values()
+    )
 
 
 @pytest.mark.parametrize("name", PAPER)
@@ -132,4 +138,4 @@ def _assert_rests_within_braking_distance(trace, at_s: float, latency_s: float =
     v0, a_max = float(v[k]), 0.8
     travelled = np.hypot(x[-1] - x[k], y[-1] - y[k])
     assert v[-1] == 0.0 and v0 > 0.1
-    assert travelled <= v0 ** 2 / (2 * a_max) + v0 * latency_s + 1e-6, (travelled, v0)
+    assert travelled <= v0**2 / (2 * a_max) + v0 * latency_s + 1e-6, (travelled, v0)

@@ -6,12 +6,19 @@ No rclpy needed: these check :mod:`viapath.ros2.settings` and :mod:`viapath.ros2
 from __future__ import annotations
 
 import math
+
 import pytest
 
 from viapath.planning import make_planner, planner_class
 from viapath.ros2.options import planner_kwargs
-from viapath.ros2.settings import (ParameterError, all_options, describe, read_params_file, validate,
-                                   write_example_params)
+from viapath.ros2.settings import (
+    ParameterError,
+    all_options,
+    describe,
+    read_params_file,
+    validate,
+    write_example_params,
+)
 
 
 def test_every_planner_option_becomes_a_parameter_with_its_default():
@@ -21,7 +28,13 @@ def test_every_planner_option_becomes_a_parameter_with_its_default():
         param = params[f"planner.{option.path}"]
         assert param.default == option.default and param.unit == option.unit
         assert (param.minimum, param.maximum, param.choices) == (option.minimum, option.maximum, option.choices)
-    assert {"planner.horizon_s", "planner.weights.k1", "planner.speeds", "planner_name", "scanners.front.mount_x_m"} <= set(params)
+    assert {
+        "planner.horizon_s",
+        "planner.weights.k1",
+        "planner.speeds",
+        "planner_name",
+        "scanners.front.mount_x_m",
+    } <= set(params)
     assert len([n for n in params if n.startswith("planner.")]) == len(schema)
 
 
@@ -35,7 +48,9 @@ def test_defaults_rebuild_the_default_planner():
     changed = validate({"planner.weights.k1": 0.3, "planner.speeds": [0.1, 0.3]})
     planner = make_planner("viapath", path, **planner_kwargs("viapath", changed.planner_values))
     assert planner.settings["k1"] == 0.3 and tuple(planner.settings["speeds"]) == (0.1, 0.3)
-    assert settings.scanners[0].mount_x_m == pytest.approx(0.145) and settings.scanners[1].mount_x_m == pytest.approx(-0.145)
+    assert settings.scanners[0].mount_x_m == pytest.approx(0.145) and settings.scanners[1].mount_x_m == pytest.approx(
+        -0.145
+    )
     assert settings.scanners[1].mount_yaw_rad == pytest.approx(math.pi)
 
 
@@ -45,25 +60,28 @@ def test_descriptions_carry_unit_and_bounds():
     assert "unit: s" in text and "range: [0.05, 10]" in text
 
 
-@pytest.mark.parametrize("values, named", [
-    ({"nominal_speed_mps": -0.2}, "nominal_speed_mps"),
-    ({"nominal_speed_mps": float("nan")}, "nominal_speed_mps"),
-    ({"max_accel_mps2": "fast"}, "max_accel_mps2"),
-    ({"planner.horizon_s": -1.0}, "planner.horizon_s"),
-    ({"planner.preferred_side": "up"}, "planner.preferred_side"),
-    ({"planner.speeds": [0.1, -0.2]}, "planner.speeds"),
-    ({"planner.speeds": [0.0]}, "planner.speeds"),
-    ({"planner.weights.k1": -0.1}, "planner.weights.k1"),
-    ({"planner.max_depth": 0}, "planner.max_depth"),
-    ({"scan_geometry": "whatever"}, "scan_geometry"),
-    ({"planner_name": "nope"}, "planner_name"),
-    ({"nominal_speed_mps": 0.8, "max_speed_mps": 0.6}, "nominal_speed_mps"),
-    ({"scanner_names": ["front", "front"]}, "scanner_names"),
-    ({"not_a_parameter": 1.0}, "not_a_parameter"),
-    ({"scanners.front.mount_yaw_rad": 7.0}, "scanners.front.mount_yaw_rad"),
-    ({"autostart": "yes"}, "autostart"),
-    ({"executor": "multi-threaded"}, "executor"),
-])
+@pytest.mark.parametrize(
+    "values, named",
+    [
+        ({"nominal_speed_mps": -0.2}, "nominal_speed_mps"),
+        ({"nominal_speed_mps": float("nan")}, "nominal_speed_mps"),
+        ({"max_accel_mps2": "fast"}, "max_accel_mps2"),
+        ({"planner.horizon_s": -1.0}, "planner.horizon_s"),
+        ({"planner.preferred_side": "up"}, "planner.preferred_side"),
+        ({"planner.speeds": [0.1, -0.2]}, "planner.speeds"),
+        ({"planner.speeds": [0.0]}, "planner.speeds"),
+        ({"planner.weights.k1": -0.1}, "planner.weights.k1"),
+        ({"planner.max_depth": 0}, "planner.max_depth"),
+        ({"scan_geometry": "whatever"}, "scan_geometry"),
+        ({"planner_name": "nope"}, "planner_name"),
+        ({"nominal_speed_mps": 0.8, "max_speed_mps": 0.6}, "nominal_speed_mps"),
+        ({"scanner_names": ["front", "front"]}, "scanner_names"),
+        ({"not_a_parameter": 1.0}, "not_a_parameter"),
+        ({"scanners.front.mount_yaw_rad": 7.0}, "scanners.front.mount_yaw_rad"),
+        ({"autostart": "yes"}, "autostart"),
+        ({"executor": "multi-threaded"}, "executor"),
+    ],
+)
 def test_a_bad_value_is_refused_with_its_name(values, named):
     with pytest.raises(ParameterError) as error:
         validate(values)
@@ -107,38 +125,55 @@ def test_the_shipped_example_params_file_is_valid():
 
 def test_every_mistake_is_reported_not_only_the_first(tmp_path):
     path = tmp_path / "two.yaml"
-    path.write_text("viapath:\n  ros__parameters:\n    nominal_speed_mps: -1.0\n    odom_topc: x\n"
-                    "    planner:\n      rollout_s: 1.0e9\n      weights: {k1: -2}\n")
+    path.write_text(
+        "viapath:\n  ros__parameters:\n    nominal_speed_mps: -1.0\n    odom_topc: x\n"
+        "    planner:\n      rollout_s: 1.0e9\n      weights: {k1: -2}\n"
+    )
     with pytest.raises(ParameterError) as caught:
         validate(read_params_file(path))
     named = [line.split(":")[0] for line in caught.value.errors]
-    assert sorted(named) == sorted(["parameter nominal_speed_mps", "parameter odom_topc", "parameter planner.rollout_s",
-                                    "parameter planner.weights.k1"]), caught.value.errors
+    assert sorted(named) == sorted(
+        [
+            "parameter nominal_speed_mps",
+            "parameter odom_topc",
+            "parameter planner.rollout_s",
+            "parameter planner.weights.k1",
+        ]
+    ), caught.value.errors
     assert str(caught.value).count("\n") == 3
 
 
-@pytest.mark.parametrize("values, named", [
-    ({"planner.rollout_s": 1e9}, "planner.rollout_s"),
-    ({"planner.rollout_dt_s": 1e-9}, "planner.rollout_dt_s"),
-    ({"planner.escape_s": 1e9}, "planner.escape_s"),
-    ({"planner.escape_dt_s": 1e-9}, "planner.escape_dt_s"),
-    ({"planner.rollout_s": 30.0, "planner.rollout_dt_s": 0.01}, "planner.rollout_s"),  # 3000 steps
-    ({"planner.escape_s": 25.0, "planner.escape_dt_s": 0.01}, "planner.escape_s"),
-])
+@pytest.mark.parametrize(
+    "values, named",
+    [
+        ({"planner.rollout_s": 1e9}, "planner.rollout_s"),
+        ({"planner.rollout_dt_s": 1e-9}, "planner.rollout_dt_s"),
+        ({"planner.escape_s": 1e9}, "planner.escape_s"),
+        ({"planner.escape_dt_s": 1e-9}, "planner.escape_dt_s"),
+        ({"planner.rollout_s": 30.0, "planner.rollout_dt_s": 0.01}, "planner.rollout_s"),  # 3000 steps
+        ({"planner.escape_s": 25.0, "planner.escape_dt_s": 0.01}, "planner.escape_s"),
+    ],
+)
 def test_roll_outs_that_would_exhaust_memory_are_refused(values, named):
     with pytest.raises(ParameterError, match=f"parameter {named}:"):
         validate(values)
     validate({"planner.rollout_s": 20.0, "planner.rollout_dt_s": 0.01})  # 2000 steps: the most allowed
 
 
-from hypothesis import given, settings as hsettings, strategies as st  # noqa: E402
+from hypothesis import given  # noqa: E402
+from hypothesis import settings as hsettings
+from hypothesis import strategies as st
 
-NUMERIC = [o for o in all_options() if isinstance(o.default, float) and (o.minimum is not None or o.maximum is not None)]
+NUMERIC = [
+    o for o in all_options() if isinstance(o.default, float) and (o.minimum is not None or o.maximum is not None)
+]
 
 
 @hsettings(max_examples=40, deadline=None, derandomize=True)
-@given(chosen=st.lists(st.sampled_from(NUMERIC), min_size=1, max_size=6, unique_by=lambda o: o.name),
-       how=st.sampled_from(["below", "above", "text", "nan"]))
+@given(
+    chosen=st.lists(st.sampled_from(NUMERIC), min_size=1, max_size=6, unique_by=lambda o: o.name),
+    how=st.sampled_from(["below", "above", "text", "nan"]),
+)
 def test_generated_parameter_sets_name_every_bad_value(chosen, how):
     values = {}
     for o in chosen:

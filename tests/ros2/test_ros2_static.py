@@ -83,11 +83,18 @@ def test_markers_draw_the_static_layer():
 
     path = DesignatedPath([[0.0, 0.0], [4.0, 0.0]], half_widths_m=[1.0])
     static = StaticLayer(np.array([[[1.0, -1.0], [1.0, 1.0]], [[2.0, 0.5], [2.5, 0.5]]]))
-    result = CycleResult(Command(0.0, 0.0), "driving", [], 1.0, Decision(Command(0.0, 0.0), Plan("blocked", 0.0, np.zeros(2))),
-                         Obstacles.empty(), np.zeros(3), static=static)
+    result = CycleResult(
+        Command(0.0, 0.0),
+        "driving",
+        [],
+        1.0,
+        Decision(Command(0.0, 0.0), Plan("blocked", 0.0, np.zeros(2))),
+        Obstacles.empty(),
+        np.zeros(3),
+        static=static,
+    )
     scenes = MarkerScenes(robot_radius_m=0.25)
     markers = marker_array(scenes.scene(path, make_planner("viapath", path), result), None, "odom", time_msg(1.0))
     (line,) = [m for m in markers.markers if m.ns == "static"]
     points = np.array([[p.x, p.y] for p in line.points])
     assert np.allclose(points, static.segments.reshape(-1, 2))
-

@@ -14,9 +14,15 @@ from __future__ import annotations
 import numpy as np
 
 
-def brute_admissible(case: dict, commands: np.ndarray, extra_m: float = 0.0, fine: int = 8,
-                     friendly: bool = False, towards_only: bool = True,
-                     towards_slack: float = 0.0) -> np.ndarray:
+def brute_admissible(
+    case: dict,
+    commands: np.ndarray,
+    extra_m: float = 0.0,
+    fine: int = 8,
+    friendly: bool = False,
+    towards_only: bool = True,
+    towards_slack: float = 0.0,
+) -> np.ndarray:
     """(B, K) bool: command k of case b is admissible (and friendly, if asked) with radii grown by ``extra_m``.
 
     ``towards_only``: a meeting counts only at instants when the robot's velocity has a positive

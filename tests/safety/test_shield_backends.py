@@ -32,25 +32,41 @@ def make_case(rng: np.random.Generator, n: int, mode: str, towards_only: bool, f
     wmax, alphamax = rng.uniform(0.5, 3.0), rng.uniform(1.0, 10.0)
     limits = MotionLimits(vmax, amax, wmax, alphamax)
     dt = float(rng.choice([0.05, 0.1, 0.2]))
-    config = ShieldConfig(mode=mode, towards_only=towards_only, margin_m=rng.uniform(0.0, 0.2),
-                          person_accel_mps2=rng.uniform(0.0, 2.0) * float(rng.choice([0.0, 1.0, 1.0])),
-                          sigma_multiplier=rng.uniform(0.0, 3.0), samples=int(rng.integers(3, 12)),
-                          substep_s=float(rng.choice([0.01, 0.025, 0.05, 0.2])))
+    config = ShieldConfig(
+        mode=mode,
+        towards_only=towards_only,
+        margin_m=rng.uniform(0.0, 0.2),
+        person_accel_mps2=rng.uniform(0.0, 2.0) * float(rng.choice([0.0, 1.0, 1.0])),
+        sigma_multiplier=rng.uniform(0.0, 3.0),
+        samples=int(rng.integers(3, 12)),
+        substep_s=float(rng.choice([0.01, 0.025, 0.05, 0.2])),
+    )
     position = rng.uniform(-5, 5, 2)
     speed = vmax * float(rng.choice([0.0, 1.0, 1.0])) * rng.uniform(0, 1)
-    robot = RobotState(position, rng.uniform(-np.pi, np.pi), speed,
-                       wmax * rng.uniform(-1, 1) * float(rng.choice([0, 1])), rng.uniform(0.15, 0.4))
+    robot = RobotState(
+        position,
+        rng.uniform(-np.pi, np.pi),
+        speed,
+        wmax * rng.uniform(-1, 1) * float(rng.choice([0, 1])),
+        rng.uniform(0.15, 0.4),
+    )
     # People mostly within a few metres (a few touching the robot, a share ``far`` beyond any reach),
     # half walking at it, some standing.
     distance = np.where(rng.uniform(size=n) < far, rng.uniform(5.0, 30.0, n), rng.uniform(0.2, 4.0, n))
     bearing = rng.uniform(-np.pi, np.pi, n)
     positions = position + np.stack([distance * np.cos(bearing), distance * np.sin(bearing)], 1)
     walking = rng.uniform(0.0, 2.0, n) * rng.choice([0.0, 1.0, 1.0, 1.0], n)
-    direction = np.where(rng.uniform(size=n) < 0.5, bearing + np.pi + rng.normal(0, 0.4, n),
-                         rng.uniform(-np.pi, np.pi, n))
+    direction = np.where(
+        rng.uniform(size=n) < 0.5, bearing + np.pi + rng.normal(0, 0.4, n), rng.uniform(-np.pi, np.pi, n)
+    )
     velocities = np.stack([walking * np.cos(direction), walking * np.sin(direction)], 1)
-    people = Obstacles(positions, velocities, rng.uniform(0.1, 0.35, n),
-                       rng.uniform(0.0, 0.1, n) if uncertain else None, rng.uniform(0.0, 0.3, n) if uncertain else None)
+    people = Obstacles(
+        positions,
+        velocities,
+        rng.uniform(0.1, 0.35, n),
+        rng.uniform(0.0, 0.1, n) if uncertain else None,
+        rng.uniform(0.0, 0.3, n) if uncertain else None,
+    )
     # Commands: inside and outside the window, the extreme corner, and a few not finite.
     commands = np.stack([rng.uniform(-0.3, 1.5, k) * vmax, rng.uniform(-1.5, 1.5, k) * wmax], 1)
     commands[rng.uniform(size=k) < 0.1] = [vmax, wmax]
@@ -62,9 +78,15 @@ def make_case(rng: np.random.Generator, n: int, mode: str, towards_only: bool, f
 @st.composite
 def cases(draw):
     rng = np.random.default_rng(draw(st.integers(0, 2**31 - 1)))
-    return make_case(rng, draw(st.integers(0, MAX_PEOPLE)), draw(st.sampled_from(["passive", "passive-friendly"])),
-                     draw(st.booleans()), draw(st.sampled_from([0.0, 0.2, 1.0])), draw(st.booleans()),
-                     draw(st.integers(1, 30)))
+    return make_case(
+        rng,
+        draw(st.integers(0, MAX_PEOPLE)),
+        draw(st.sampled_from(["passive", "passive-friendly"])),
+        draw(st.booleans()),
+        draw(st.sampled_from([0.0, 0.2, 1.0])),
+        draw(st.booleans()),
+        draw(st.integers(1, 30)),
+    )
 
 
 def _shields(limits, dt, config):
@@ -89,9 +111,15 @@ def test_numba_shield_gives_the_numpy_verdicts(case):
         a = numpy_shield.filter(observation, Command(*command))
         b = numba_shield.filter(observation, Command(*command))
         assert (b.command.speed_mps, b.command.turn_rate_radps) == pytest.approx(
-            (a.command.speed_mps, a.command.turn_rate_radps), abs=1e-9)
-        assert (b.intervened, b.reason, b.admissible, b.friendly, b.person_id) == \
-            (a.intervened, a.reason, a.admissible, a.friendly, a.person_id)
+            (a.command.speed_mps, a.command.turn_rate_radps), abs=1e-9
+        )
+        assert (b.intervened, b.reason, b.admissible, b.friendly, b.person_id) == (
+            a.intervened,
+            a.reason,
+            a.admissible,
+            a.friendly,
+            a.person_id,
+        )
         assert (b.candidates, b.admissible_candidates) == (a.candidates, a.admissible_candidates)
         assert (a.meet_time_s is None) == (b.meet_time_s is None)
         if a.meet_time_s is not None:
@@ -105,9 +133,15 @@ def test_the_cases_reach_every_branch():
     seen = {"contact": 0, "met": 0, "clear": 0, "unfriendly": 0, "replaced": 0, "none admissible": 0}
     for i in range(300):
         mode = ("passive", "passive-friendly")[i % 2]
-        limits, dt, config, observation, commands = make_case(rng, int(rng.integers(0, MAX_PEOPLE + 1)), mode,
-                                                               bool(i % 3), float(rng.choice([0.0, 0.2, 1.0])),
-                                                               bool(i % 5), int(rng.integers(1, 31)))
+        limits, dt, config, observation, commands = make_case(
+            rng,
+            int(rng.integers(0, MAX_PEOPLE + 1)),
+            mode,
+            bool(i % 3),
+            float(rng.choice([0.0, 0.2, 1.0])),
+            bool(i % 5),
+            int(rng.integers(1, 31)),
+        )
         shield = Shield(limits, dt, ShieldConfig(**{**config.__dict__, "backend": "numba"}))
         verdict = shield.evaluate(observation, commands)
         contact = bool(verdict["contact"][0])

@@ -36,14 +36,19 @@ def random_cases(rng: np.random.Generator, count: int, min_accel_p: float = 0.0)
     amax = rng.uniform(0.4, 2.0, count)
     wmax = rng.uniform(0.5, 3.0, count)
     case = {
-        "x": rng.uniform(-5, 5, count), "y": rng.uniform(-5, 5, count),
+        "x": rng.uniform(-5, 5, count),
+        "y": rng.uniform(-5, 5, count),
         "heading": rng.uniform(-np.pi, np.pi, count),
         "speed": vmax * rng.choice([0.0, 1.0, 1.0, 1.0], count) * rng.uniform(0, 1, count),
         "turn": wmax * rng.uniform(-1, 1, count),
         "radius": rng.uniform(0.15, 0.4, count),
-        "vmax": vmax, "amax": amax, "wmax": wmax, "alphamax": rng.uniform(1.0, 10.0, count),
+        "vmax": vmax,
+        "amax": amax,
+        "wmax": wmax,
+        "alphamax": rng.uniform(1.0, 10.0, count),
         "dt": rng.choice([0.05, 0.1, 0.2], count),
-        "margin": rng.uniform(0.0, 0.2, count), "accel_p": rng.uniform(min_accel_p, 2.0, count),
+        "margin": rng.uniform(0.0, 0.2, count),
+        "accel_p": rng.uniform(min_accel_p, 2.0, count),
         "k_sigma": rng.uniform(0.0, 3.0, count),
     }
     n_people = rng.integers(0, MAX_PEOPLE + 1, count)
@@ -58,10 +63,14 @@ def random_cases(rng: np.random.Generator, count: int, min_accel_p: float = 0.0)
     absent = np.arange(MAX_PEOPLE)[None, :] >= n_people[:, None]
     P[absent] = 1e4  # far away: never relevant
     V[absent] = 0.0
-    case.update(P=P, V=V, r=rng.uniform(0.1, 0.35, (count, MAX_PEOPLE)),
-                sigma_v=rng.uniform(0.0, 0.3, (count, MAX_PEOPLE)) * rng.choice([0, 1], (count, MAX_PEOPLE)),
-                sigma_p=rng.uniform(0.0, 0.1, (count, MAX_PEOPLE)) * rng.choice([0, 1], (count, MAX_PEOPLE)),
-                n_people=n_people)
+    case.update(
+        P=P,
+        V=V,
+        r=rng.uniform(0.1, 0.35, (count, MAX_PEOPLE)),
+        sigma_v=rng.uniform(0.0, 0.3, (count, MAX_PEOPLE)) * rng.choice([0, 1], (count, MAX_PEOPLE)),
+        sigma_p=rng.uniform(0.0, 0.1, (count, MAX_PEOPLE)) * rng.choice([0, 1], (count, MAX_PEOPLE)),
+        n_people=n_people,
+    )
     return case
 
 
@@ -75,14 +84,25 @@ def run_shield(case: dict, commands: np.ndarray, mode: str, towards_only: bool =
     for b in range(len(commands)):
         n = int(case["n_people"][b])
         limits = MotionLimits(case["vmax"][b], case["amax"][b], case["wmax"][b], case["alphamax"][b])
-        config = ShieldConfig(margin_m=case["margin"][b], person_accel_mps2=case["accel_p"][b],
-                              sigma_multiplier=case["k_sigma"][b], mode=mode, towards_only=towards_only,
-                              backend=backend)
+        config = ShieldConfig(
+            margin_m=case["margin"][b],
+            person_accel_mps2=case["accel_p"][b],
+            sigma_multiplier=case["k_sigma"][b],
+            mode=mode,
+            towards_only=towards_only,
+            backend=backend,
+        )
         shield = Shield(limits, float(case["dt"][b]), config)
-        people = Obstacles(case["P"][b, :n], case["V"][b, :n], case["r"][b, :n], case["sigma_p"][b, :n],
-                           case["sigma_v"][b, :n])
-        robot = RobotState(np.array([case["x"][b], case["y"][b]]), case["heading"][b], case["speed"][b],
-                           case["turn"][b], case["radius"][b])
+        people = Obstacles(
+            case["P"][b, :n], case["V"][b, :n], case["r"][b, :n], case["sigma_p"][b, :n], case["sigma_v"][b, :n]
+        )
+        robot = RobotState(
+            np.array([case["x"][b], case["y"][b]]),
+            case["heading"][b],
+            case["speed"][b],
+            case["turn"][b],
+            case["radius"][b],
+        )
         result = shield.filter(Observation(0.0, robot, people), Command(*commands[b]))
         outputs[b] = result.command.speed_mps, result.command.turn_rate_radps
         claimed[b] = result.friendly if mode == "passive-friendly" else result.admissible
@@ -129,14 +149,17 @@ def _batches(case: dict, size: int):
     periods = (case["speed"] + case["amax"] * case["dt"]) / (case["amax"] * case["dt"])
     order = np.argsort(periods)
     for start in range(0, len(order), size):
-        yield order[start:start + size]
+        yield order[start : start + size]
 
 
-@pytest.mark.parametrize("mode,towards_only,count,seed", [
-    ("passive", True, 10_000, 0),  # the default: meetings count while the robot moves towards the person
-    ("passive", False, 3_000, 2),  # DESIGN §7 to the letter: any meeting before rest counts
-    ("passive-friendly", True, 1_000, 1),
-])
+@pytest.mark.parametrize(
+    "mode,towards_only,count,seed",
+    [
+        ("passive", True, 10_000, 0),  # the default: meetings count while the robot moves towards the person
+        ("passive", False, 3_000, 2),  # DESIGN §7 to the letter: any meeting before rest counts
+        ("passive-friendly", True, 1_000, 1),
+    ],
+)
 def test_shield_against_brute_force(mode, towards_only, count, seed):
     rng = np.random.default_rng(seed)
     # Friendly: people brake at >= 0.3 m/s² (near 0 their stopping room is unbounded: nothing is friendly).

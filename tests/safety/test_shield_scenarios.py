@@ -62,20 +62,24 @@ def test_passive_friendly_stops_where_passive_creeps():
     observation = _observation(0.0, 1.1, person_vx=-1.0)
     passive = Shield(LIMITS, 0.1, ShieldConfig(**config)).filter(observation, Command(0.3, 0.0))
     assert not passive.intervened
-    friendly = Shield(LIMITS, 0.1, ShieldConfig(mode="passive-friendly", **config)).filter(observation, Command(0.3, 0.0))
+    friendly = Shield(LIMITS, 0.1, ShieldConfig(mode="passive-friendly", **config)).filter(
+        observation, Command(0.3, 0.0)
+    )
     assert friendly.intervened and friendly.friendly
     assert friendly.command.speed_mps == 0.0
 
 
 def _walk_in(planner: str, shield: bool):
-    scenario = scenario_from_dict({
-        "name": "walk-in",
-        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.3, "radius": 0.25},
-        "path": {"waypoints": [[0.0, 0.0], [8.0, 0.0]], "half_width": 1.0},
-        "obstacles": [{"start": [5.0, 0.0], "velocity": [-1.0, 0.0], "radius": 0.25}],
-        "planner": {"name": planner},
-        "duration_s": 12,
-    })
+    scenario = scenario_from_dict(
+        {
+            "name": "walk-in",
+            "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.3, "radius": 0.25},
+            "path": {"waypoints": [[0.0, 0.0], [8.0, 0.0]], "half_width": 1.0},
+            "obstacles": [{"start": [5.0, 0.0], "velocity": [-1.0, 0.0], "radius": 0.25}],
+            "planner": {"name": planner},
+            "duration_s": 12,
+        }
+    )
     return run_episode(scenario, planner=planner, shield=shield)
 
 
@@ -88,8 +92,7 @@ def test_person_walking_into_the_robot_finds_it_at_rest():
     trace = guarded.trace
     assert guarded.metrics["collision"] and not guarded.metrics["at_fault_collision"]
     assert guarded.metrics["shield_interventions"] > 0
-    gap = (np.hypot(*(trace.robot_poses[:, None, :2] - trace.obstacle_positions).transpose(2, 0, 1))[:, 0]
-           - 0.5)
+    gap = np.hypot(*(trace.robot_poses[:, None, :2] - trace.obstacle_positions).transpose(2, 0, 1))[:, 0] - 0.5
     onset = int(np.argmax(gap < 0))
     assert onset > 0
     assert trace.robot_speeds_mps[onset - 1] == 0.0 and trace.robot_speeds_mps[onset] == 0.0
@@ -120,12 +123,15 @@ def test_passing_a_slow_walker_keeps_the_braking_envelope_and_gets_past():
     little behind, where every forward command moves towards the walker closer than it can stop:
     the shield admitted only creeping at the walker's pace, and the goal was missed after 54 s. Legs to
     the subgoal now keep the braking envelope at their speed, so the pass leaves room to drive on."""
-    scenario = scenario_from_dict({
-        "name": "overtaking-0066", "duration_s": 54.0,
-        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2798, "radius": 0.25},
-        "path": {"waypoints": [[0.0, 0.0], [6.0251, 0.0]], "half_width": 1.2107},
-        "obstacles": [{"start": [1.836, 0.1565], "velocity": [0.0364, 0.0], "radius": 0.25}],
-    })
+    scenario = scenario_from_dict(
+        {
+            "name": "overtaking-0066",
+            "duration_s": 54.0,
+            "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2798, "radius": 0.25},
+            "path": {"waypoints": [[0.0, 0.0], [6.0251, 0.0]], "half_width": 1.2107},
+            "obstacles": [{"start": [1.836, 0.1565], "velocity": [0.0364, 0.0], "radius": 0.25}],
+        }
+    )
     episode = run_episode(scenario)
     metrics = episode.metrics
     assert metrics["reached_goal"] and not metrics["collision"], metrics

@@ -40,20 +40,28 @@ def random_cases(rng: np.random.Generator, count: int) -> dict:
     vmax = rng.uniform(0.2, 1.2, count)
     wmax = rng.uniform(0.5, 3.0, count)
     case = {
-        "x": rng.uniform(-5, 5, count), "y": rng.uniform(-5, 5, count),
+        "x": rng.uniform(-5, 5, count),
+        "y": rng.uniform(-5, 5, count),
         "heading": rng.uniform(-np.pi, np.pi, count),
         "speed": vmax * rng.choice([0.0, 1.0, 1.0, 1.0], count) * rng.uniform(0, 1, count),
-        "turn": wmax * rng.uniform(-1, 1, count), "radius": rng.uniform(0.15, 0.4, count),
-        "vmax": vmax, "amax": rng.uniform(0.4, 2.0, count), "wmax": wmax, "alphamax": rng.uniform(1.0, 10.0, count),
-        "dt": rng.choice([0.05, 0.1, 0.2], count), "margin": rng.uniform(0.0, 0.2, count),
-        "accel_p": rng.uniform(0.0, 2.0, count), "k_sigma": rng.uniform(0.0, 3.0, count),
+        "turn": wmax * rng.uniform(-1, 1, count),
+        "radius": rng.uniform(0.15, 0.4, count),
+        "vmax": vmax,
+        "amax": rng.uniform(0.4, 2.0, count),
+        "wmax": wmax,
+        "alphamax": rng.uniform(1.0, 10.0, count),
+        "dt": rng.choice([0.05, 0.1, 0.2], count),
+        "margin": rng.uniform(0.0, 0.2, count),
+        "accel_p": rng.uniform(0.0, 2.0, count),
+        "k_sigma": rng.uniform(0.0, 3.0, count),
     }
     # Static: segments of 0-3 m (a quarter of them points) with their middle 0.1-3 m from the robot.
     n_static = rng.integers(1, MAX_STATIC + 1, count)
     distance = rng.uniform(0.1, 3.0, (count, MAX_STATIC))
     bearing = rng.uniform(-np.pi, np.pi, (count, MAX_STATIC))
-    middle = np.stack([case["x"][:, None] + distance * np.cos(bearing),
-                       case["y"][:, None] + distance * np.sin(bearing)], -1)
+    middle = np.stack(
+        [case["x"][:, None] + distance * np.cos(bearing), case["y"][:, None] + distance * np.sin(bearing)], -1
+    )
     length = rng.uniform(0.0, 3.0, (count, MAX_STATIC)) * (rng.uniform(size=(count, MAX_STATIC)) > 0.25)
     angle = rng.uniform(-np.pi, np.pi, (count, MAX_STATIC))
     half = 0.5 * length[..., None] * np.stack([np.cos(angle), np.sin(angle)], -1)
@@ -71,8 +79,14 @@ def random_cases(rng: np.random.Generator, count: int) -> dict:
     V = np.stack([speed * np.cos(heading), speed * np.sin(heading)], -1)
     absent = np.arange(MAX_PEOPLE)[None, :] >= n_people[:, None]
     P[absent], V[absent] = 1e4, 0.0
-    case.update(P=P, V=V, r=rng.uniform(0.1, 0.35, (count, MAX_PEOPLE)), sigma_v=np.zeros((count, MAX_PEOPLE)),
-                sigma_p=np.zeros((count, MAX_PEOPLE)), n_people=n_people)
+    case.update(
+        P=P,
+        V=V,
+        r=rng.uniform(0.1, 0.35, (count, MAX_PEOPLE)),
+        sigma_v=np.zeros((count, MAX_PEOPLE)),
+        sigma_p=np.zeros((count, MAX_PEOPLE)),
+        n_people=n_people,
+    )
     return case
 
 
@@ -130,13 +144,22 @@ def run_shield(case: dict, commands: np.ndarray) -> tuple[np.ndarray, np.ndarray
     largest_pad = np.zeros(len(commands))
     for b in range(len(commands)):
         limits = MotionLimits(case["vmax"][b], case["amax"][b], case["wmax"][b], case["alphamax"][b])
-        config = ShieldConfig(margin_m=case["margin"][b], person_accel_mps2=case["accel_p"][b],
-                              sigma_multiplier=case["k_sigma"][b], backend="numpy")
+        config = ShieldConfig(
+            margin_m=case["margin"][b],
+            person_accel_mps2=case["accel_p"][b],
+            sigma_multiplier=case["k_sigma"][b],
+            backend="numpy",
+        )
         n = int(case["n_people"][b])
         people = Obstacles(case["P"][b, :n], case["V"][b, :n], case["r"][b, :n])
-        robot = RobotState(np.array([case["x"][b], case["y"][b]]), case["heading"][b], case["speed"][b],
-                           case["turn"][b], case["radius"][b])
-        static = StaticLayer(case["segments"][b, :int(case["n_static"][b])])
+        robot = RobotState(
+            np.array([case["x"][b], case["y"][b]]),
+            case["heading"][b],
+            case["speed"][b],
+            case["turn"][b],
+            case["radius"][b],
+        )
+        static = StaticLayer(case["segments"][b, : int(case["n_static"][b])])
         observation = with_static_rows(Observation(0.0, robot, people, static))
         largest_pad[b] = observation.obstacles.statics().radii_m.max()
         result = Shield(limits, float(case["dt"][b]), config).filter(observation, Command(*commands[b]))
@@ -149,7 +172,9 @@ def test_static_discs_cover_segments_within_the_pad():
     """The sampling the guard applies (spacing and pad) is what the soundness bound below relies on."""
     assert DEFAULT_CONFIG.static_spacing_m <= 0.15
     robot = RobotState(np.zeros(2), 0.0, 0.0, 0.0, 0.15)
-    observation = with_static_rows(Observation(0.0, robot, Obstacles.empty(), StaticLayer(np.array([[[1.0, 0], [4.0, 0]]]))))
+    observation = with_static_rows(
+        Observation(0.0, robot, Obstacles.empty(), StaticLayer(np.array([[[1.0, 0], [4.0, 0]]])))
+    )
     assert observation.obstacles.statics().radii_m.max() <= 0.02
 
 
@@ -181,7 +206,9 @@ def test_shield_with_static_geometry_against_brute_force(count: int = 10_000):
             continue
         grid = window_grid(sub, GRID)
         grid_closest, _ = brute_static(sub, grid)
-        robust = np.all(grid_closest >= reach[:, None] + ROBUST_M, axis=2) & brute_admissible(sub, grid, extra_m=ROBUST_M)
+        robust = np.all(grid_closest >= reach[:, None] + ROBUST_M, axis=2) & brute_admissible(
+            sub, grid, extra_m=ROBUST_M
+        )
         exists = robust.any(axis=1)
         clear_now = np.all(now >= reach + ROBUST_M, axis=1)
         bad = np.flatnonzero(exists & ~(static_ok & people_ok))

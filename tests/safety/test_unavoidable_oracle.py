@@ -24,8 +24,9 @@ def oracle():
     return module
 
 
-def _head_on_trace(appear_distance_m: float, robot_speed_mps=0.3, person_speed_mps=1.6, steps=40, appear_step=10,
-                   brake=True):
+def _head_on_trace(
+    appear_distance_m: float, robot_speed_mps=0.3, person_speed_mps=1.6, steps=40, appear_step=10, brake=True
+):
     """The robot drives along x at ``robot_speed_mps`` and brakes hard (``brake``) from the step a person
     appears ``appear_distance_m`` ahead, walking straight at it (eth-0020's shape)."""
     dt, limits = 0.1, MotionLimits()
@@ -43,9 +44,16 @@ def _head_on_trace(appear_distance_m: float, robot_speed_mps=0.3, person_speed_m
             person[k, 0] = start_x - person_speed_mps * dt * (k - appear_step), 0.05
         command = Command(0.0, 0.0) if (brake and start_x is not None) else Command(robot_speed_mps, 0.0)
         state = step(state, command, limits, dt)
-    return SimpleNamespace(dt_s=dt, robot_poses=np.array(poses), robot_speeds_mps=np.array(speeds),
-                           robot_turn_rates_radps=np.array(turns), obstacle_positions=person,
-                           obstacle_radii_m=np.array([0.3]), robot_radius_m=0.25, times_s=dt * np.arange(steps + 1))
+    return SimpleNamespace(
+        dt_s=dt,
+        robot_poses=np.array(poses),
+        robot_speeds_mps=np.array(speeds),
+        robot_turn_rates_radps=np.array(turns),
+        obstacle_positions=person,
+        obstacle_radii_m=np.array([0.3]),
+        robot_radius_m=0.25,
+        times_s=dt * np.arange(steps + 1),
+    )
 
 
 def test_the_oracle_replays_the_trace_and_agrees_with_the_metric(oracle):
@@ -60,7 +68,7 @@ def test_a_person_appearing_close_is_unavoidable_and_one_further_away_is_not(ora
     limits = MotionLimits()
     near, tried = oracle.search(_head_on_trace(1.0), 10, 4, limits)
     far, _ = oracle.search(_head_on_trace(2.0), 10, 4, limits)
-    assert tried == 15 ** 4
+    assert tried == 15**4
     assert near == 0  # eth-0020's shape: braking from 0.3 m/s cannot reach 0.05 m/s in time
     assert far > 0  # 2 m leaves time to be at rest when the person arrives
     # The hard braking the trace itself did is among the sequences searched, and at 2 m it is not at fault.

@@ -63,8 +63,10 @@ def test_overtaking_robot_passes_the_slow_walker():
     episode = run_episode(load_scenario("overtaking"), shield=False)
     trace = episode.trace
     lead = float(np.max(trace.robot_poses[:, 0] - trace.obstacle_positions[:, 0, 0]))
-    assert lead > 0.5, (f"the robot never got ahead of the walker (best lead {lead:.2f} m; "
-                        f"time to goal {episode.metrics['time_to_goal_s']} s)")
+    assert lead > 0.5, (
+        f"the robot never got ahead of the walker (best lead {lead:.2f} m; "
+        f"time to goal {episode.metrics['time_to_goal_s']} s)"
+    )
 
 
 def test_overtaking_behind_the_shield_reaches_the_goal_without_being_the_one_moving_into_the_walker():
@@ -80,13 +82,14 @@ def test_robot_outside_the_corridor_facing_outwards_turns_back_instead_of_standi
     # After an escape (group-0194 of the mixed suite) the robot stood 0.13 m outside the corridor,
     # facing 0.05 rad outwards, with everyone gone: every roll-out of the way back first swung
     # further out, so the planner stopped for the rest of the episode.
-    from viapath import DesignatedPath, Obstacles, Observation, RobotState
+    from viapath import DesignatedPath, Observation, Obstacles, RobotState
     from viapath.planning import make_planner
 
     path = DesignatedPath([[0, 0], [7.8118, 0]], half_width_m=1.3622)
     planner = make_planner("viapath", path, nominal_speed_mps=0.2572)
-    people_leaving = Obstacles(positions=[[-3.7, y] for y in (1.2, 0.5, -0.2, -0.9)],
-                               velocities=[[-0.43, 0.0]] * 4, radii_m=[0.25] * 4)
+    people_leaving = Obstacles(
+        positions=[[-3.7, y] for y in (1.2, 0.5, -0.2, -0.9)], velocities=[[-0.43, 0.0]] * 4, radii_m=[0.25] * 4
+    )
     robot = RobotState(position=np.array([1.33, -1.49]), heading_rad=-0.05, speed_mps=0.0)
     decision = planner.plan(Observation(time_s=0.0, robot=robot, obstacles=people_leaving))
     assert decision.plan.status != "stop"
@@ -96,14 +99,18 @@ def test_robot_outside_the_corridor_facing_outwards_turns_back_instead_of_standi
 def _group_abreast_metrics() -> dict:
     from viapath.scenarios.loader import scenario_from_dict
 
-    group = [{"start": [13.56, y], "velocity": [-0.4312, 0.0], "radius": 0.25}
-             for y in (1.1905, 0.4913, -0.2078, -0.9069)]
-    scenario = scenario_from_dict({
-        "name": "group-abreast", "duration_s": 76.0,
-        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2572, "radius": 0.25},
-        "path": {"waypoints": [[0.0, 0.0], [7.8118, 0.0]], "half_width": 1.3622},
-        "obstacles": group,
-    })
+    group = [
+        {"start": [13.56, y], "velocity": [-0.4312, 0.0], "radius": 0.25} for y in (1.1905, 0.4913, -0.2078, -0.9069)
+    ]
+    scenario = scenario_from_dict(
+        {
+            "name": "group-abreast",
+            "duration_s": 76.0,
+            "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2572, "radius": 0.25},
+            "path": {"waypoints": [[0.0, 0.0], [7.8118, 0.0]], "half_width": 1.3622},
+            "obstacles": group,
+        }
+    )
     return run_episode(scenario).metrics
 
 
@@ -114,10 +121,14 @@ def test_group_abreast_head_on_robot_returns_to_the_corridor_and_reaches_the_goa
     assert metrics["time_outside_corridor_s"] < 10.0, metrics
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "known regression (issue 11): since the legs back to the path keep the shield's braking envelope, "
-    "the robot flees along the corridor instead of stepping out of it and the group walks into it at "
-    "rest at the corridor's end (not at fault); with k2 = 0.01 the code before did the same"))
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "known regression (issue 11): since the legs back to the path keep the shield's braking envelope, "
+        "the robot flees along the corridor instead of stepping out of it and the group walks into it at "
+        "rest at the corridor's end (not at fault); with k2 = 0.01 the code before did the same"
+    ),
+)
 def test_group_abreast_head_on_no_contact():
     assert not _group_abreast_metrics()["collision"]
 

@@ -32,44 +32,123 @@ duration_s: 60
 
 # id: (old text, new text, field path, expected-part, found-part or None, number of error lines)
 BAD = {
-    "nan_radius": ("speed: 0.2, radius: 0.25", "speed: 0.2, radius: .nan",
-                   "robot.radius", "finite number", "found nan", 1),
-    "negative_radius": ("speed: 0.2, radius: 0.25", "speed: 0.2, radius: -0.25",
-                        "robot.radius", "greater than 0", "found -0.25", 1),
-    "empty_speed_set": ("speeds: [0.1, 0.2, 0.3, 0.4, 0.5]", "speeds: []",
-                        "planner.speeds", "at least 1 item", "found []", 1),
-    "zero_speed_in_set": ("speeds: [0.1, 0.2, 0.3, 0.4, 0.5]", "speeds: [0.0, 0.2]",
-                          "planner.speeds.0", "greater than or equal to 0.01", "found 0.0", 1),
-    "unknown_field": ("heading: 0.0", "headng: 0.0",
-                      "robot.headng", "unknown field", "found 0.0", 1),
-    "unknown_top_level_field": ("duration_s: 60", "duration_s: 60\nduraton: 30",
-                                "duraton", "unknown field", "found 30", 1),
-    "wrong_type": ("speed: 0.2,", "speed: fast,",
-                   "robot.speed", "valid number", "found 'fast'", 1),
-    "missing_required": ("path: {waypoints: [[0.0, 0.0], [5.0, 0.0]], half_width: 1.0}\n", "",
-                         "path", "required field is missing", None, 1),
-    "nan_waypoint": ("[5.0, 0.0]]", "[5.0, .nan]]",
-                     "path.waypoints.1.1", "finite number", "found nan", 1),
-    "infinite_obstacle_velocity": ("velocity: [-0.3, 0.0]", "velocity: [-.inf, 0.0]",
-                                   "obstacles.0.velocity.0", "finite number", "found -inf", 1),
-    "negative_obstacle_radius": ("velocity: [-0.3, 0.0], radius: 0.25", "velocity: [-0.3, 0.0], radius: -1",
-                                 "obstacles.0.radius", "greater than 0", "found -1", 1),
-    "replay_typo": ("radius: 0.25}\nplanner", "radius: 0.25}\n  - {replay: {file: eth.txt, dt_z: 0.4}}\nplanner",
-                    "obstacles.1.replay.dt_z", "unknown field", "found 0.4", 1),
-    "unknown_perception_mode": ("duration_s: 60", "perception: {mode: lidar}\nduration_s: 60",
-                                "perception.mode", "'oracle' or 'laser'", "found 'lidar'", 1),
-    "negative_seed": ("duration_s: 60", "duration_s: 60\nseed: -3",
-                      "seed", "greater than or equal to 0", "found -3", 1),
-    "step_longer_than_episode": ("duration_s: 60", "duration_s: 5\ndt_s: 10",
-                                 "dt_s", "must not exceed duration_s", "found 10", 1),
-    "one_number_velocity": ("velocity: [-0.3, 0.0]", "velocity: [-0.3]",
-                            "obstacles.0.velocity", "too few items", "found [-0.3]", 1),
-    "empty_velocity": ("velocity: [-0.3, 0.0]", "velocity: []",
-                       "obstacles.0.velocity", "too few items", "found []", 1),
-    "three_number_start": ("start: [2.0, 0.0]", "start: [2.0, 0.0, 1.0]",
-                           "obstacles.0.start", "list of 2 items", "found [2.0, 0.0, 1.0]", 1),
-    "negative_weight": ("k1: 0.1", "k1: -0.1",
-                        "planner.weights.k1", "greater than or equal to 0", "found -0.1", 1),
+    "nan_radius": (
+        "speed: 0.2, radius: 0.25",
+        "speed: 0.2, radius: .nan",
+        "robot.radius",
+        "finite number",
+        "found nan",
+        1,
+    ),
+    "negative_radius": (
+        "speed: 0.2, radius: 0.25",
+        "speed: 0.2, radius: -0.25",
+        "robot.radius",
+        "greater than 0",
+        "found -0.25",
+        1,
+    ),
+    "empty_speed_set": (
+        "speeds: [0.1, 0.2, 0.3, 0.4, 0.5]",
+        "speeds: []",
+        "planner.speeds",
+        "at least 1 item",
+        "found []",
+        1,
+    ),
+    "zero_speed_in_set": (
+        "speeds: [0.1, 0.2, 0.3, 0.4, 0.5]",
+        "speeds: [0.0, 0.2]",
+        "planner.speeds.0",
+        "greater than or equal to 0.01",
+        "found 0.0",
+        1,
+    ),
+    "unknown_field": ("heading: 0.0", "headng: 0.0", "robot.headng", "unknown field", "found 0.0", 1),
+    "unknown_top_level_field": (
+        "duration_s: 60",
+        "duration_s: 60\nduraton: 30",
+        "duraton",
+        "unknown field",
+        "found 30",
+        1,
+    ),
+    "wrong_type": ("speed: 0.2,", "speed: fast,", "robot.speed", "valid number", "found 'fast'", 1),
+    "missing_required": (
+        "path: {waypoints: [[0.0, 0.0], [5.0, 0.0]], half_width: 1.0}\n",
+        "",
+        "path",
+        "required field is missing",
+        None,
+        1,
+    ),
+    "nan_waypoint": ("[5.0, 0.0]]", "[5.0, .nan]]", "path.waypoints.1.1", "finite number", "found nan", 1),
+    "infinite_obstacle_velocity": (
+        "velocity: [-0.3, 0.0]",
+        "velocity: [-.inf, 0.0]",
+        "obstacles.0.velocity.0",
+        "finite number",
+        "found -inf",
+        1,
+    ),
+    "negative_obstacle_radius": (
+        "velocity: [-0.3, 0.0], radius: 0.25",
+        "velocity: [-0.3, 0.0], radius: -1",
+        "obstacles.0.radius",
+        "greater than 0",
+        "found -1",
+        1,
+    ),
+    "replay_typo": (
+        "radius: 0.25}\nplanner",
+        "radius: 0.25}\n  - {replay: {file: eth.txt, dt_z: 0.4}}\nplanner",
+        "obstacles.1.replay.dt_z",
+        "unknown field",
+        "found 0.4",
+        1,
+    ),
+    "unknown_perception_mode": (
+        "duration_s: 60",
+        "perception: {mode: lidar}\nduration_s: 60",
+        "perception.mode",
+        "'oracle' or 'laser'",
+        "found 'lidar'",
+        1,
+    ),
+    "negative_seed": (
+        "duration_s: 60",
+        "duration_s: 60\nseed: -3",
+        "seed",
+        "greater than or equal to 0",
+        "found -3",
+        1,
+    ),
+    "step_longer_than_episode": (
+        "duration_s: 60",
+        "duration_s: 5\ndt_s: 10",
+        "dt_s",
+        "must not exceed duration_s",
+        "found 10",
+        1,
+    ),
+    "one_number_velocity": (
+        "velocity: [-0.3, 0.0]",
+        "velocity: [-0.3]",
+        "obstacles.0.velocity",
+        "too few items",
+        "found [-0.3]",
+        1,
+    ),
+    "empty_velocity": ("velocity: [-0.3, 0.0]", "velocity: []", "obstacles.0.velocity", "too few items", "found []", 1),
+    "three_number_start": (
+        "start: [2.0, 0.0]",
+        "start: [2.0, 0.0, 1.0]",
+        "obstacles.0.start",
+        "list of 2 items",
+        "found [2.0, 0.0, 1.0]",
+        1,
+    ),
+    "negative_weight": ("k1: 0.1", "k1: -0.1", "planner.weights.k1", "greater than or equal to 0", "found -0.1", 1),
 }
 
 
@@ -184,8 +263,15 @@ def test_all_builtins_load():
 
 # --------------------------------------------------------------------------- through the CLI
 
-CLI_CASES = ["nan_radius", "negative_radius", "empty_speed_set", "unknown_field", "wrong_type", "missing_required",
-             "replay_typo"]
+CLI_CASES = [
+    "nan_radius",
+    "negative_radius",
+    "empty_speed_set",
+    "unknown_field",
+    "wrong_type",
+    "missing_required",
+    "replay_typo",
+]
 
 
 def _assert_clean_failure(exit_code: int, output: str, *needles: str) -> None:
@@ -230,19 +316,33 @@ def test_cli_bad_input_via_subprocess(tmp_path):
     """The real process: exit code, stderr message, no traceback."""
     file, (field, expected, found, _) = _write_bad(tmp_path, "nan_radius")
     env = {**os.environ, "PYTHONPATH": str(SRC)}
-    done = subprocess.run([sys.executable, "-m", "viapath.cli", "run", str(file), "--json"],
-                          capture_output=True, text=True, env=env, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "-m", "viapath.cli", "run", str(file), "--json"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
     _assert_clean_failure(done.returncode, done.stdout + done.stderr, str(file), f": {field}: ", expected, found)
     assert done.stdout == ""
 
 
-@pytest.mark.parametrize("old, new, needle", [
-    ("name: viapath,", "name: viapth,", ": planner.name: unknown planner 'viapth'"),
-    ("duration_s: 60", "duration_s: 60\nperception: {mode: laser, options: {bogus: 1}}",
-     ": perception.options: unknown option(s) bogus"),
-    ("duration_s: 60", "duration_s: 60\nperception: {mode: laser, options: {tracker: {gate: 3}}}",
-     ": perception.options: tracker: unknown option(s) gate"),
-])
+@pytest.mark.parametrize(
+    "old, new, needle",
+    [
+        ("name: viapath,", "name: viapth,", ": planner.name: unknown planner 'viapth'"),
+        (
+            "duration_s: 60",
+            "duration_s: 60\nperception: {mode: laser, options: {bogus: 1}}",
+            ": perception.options: unknown option(s) bogus",
+        ),
+        (
+            "duration_s: 60",
+            "duration_s: 60\nperception: {mode: laser, options: {tracker: {gate: 3}}}",
+            ": perception.options: tracker: unknown option(s) gate",
+        ),
+    ],
+)
 def test_cli_names_the_field_of_errors_found_after_loading(tmp_path, old, new, needle):
     file = tmp_path / "late.yaml"
     file.write_text(GOOD.replace(old, new, 1))

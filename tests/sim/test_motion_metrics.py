@@ -30,22 +30,40 @@ def _trace(speeds, turns, plan_speeds=None, sides=None):
     plan_speeds = np.zeros(cycles) if plan_speeds is None else np.asarray(plan_speeds, dtype=float)
     sides = np.zeros(cycles, dtype=int) if sides is None else np.asarray(sides, dtype=int)
     return SimpleNamespace(
-        scenario_name="synthetic", planner_name="none", perception_mode="oracle", dt_s=DT,
-        path=DesignatedPath([[0.0, 0.0], [100.0, 0.0]], half_widths_m=[1.0]), robot_radius_m=0.25,
-        times_s=np.arange(k) * DT, robot_poses=np.column_stack([x, np.zeros(k), np.zeros(k)]),
-        robot_speeds_mps=speeds, robot_turn_rates_radps=np.asarray(turns, dtype=float),
-        commands=np.zeros((k, 2)), obstacle_positions=np.zeros((k, 0, 2)), obstacle_velocities=np.zeros((k, 0, 2)),
-        obstacle_radii_m=np.zeros(0), plan_speeds_mps=np.append(plan_speeds, 0.0),
-        plan_status=["straight"] * cycles + ["end"], plan_sides=np.append(sides, 0),
-        plan_times_ms=np.append(np.full(cycles, 0.1), np.nan), reached_goal=True,
+        scenario_name="synthetic",
+        planner_name="none",
+        perception_mode="oracle",
+        dt_s=DT,
+        path=DesignatedPath([[0.0, 0.0], [100.0, 0.0]], half_widths_m=[1.0]),
+        robot_radius_m=0.25,
+        times_s=np.arange(k) * DT,
+        robot_poses=np.column_stack([x, np.zeros(k), np.zeros(k)]),
+        robot_speeds_mps=speeds,
+        robot_turn_rates_radps=np.asarray(turns, dtype=float),
+        commands=np.zeros((k, 2)),
+        obstacle_positions=np.zeros((k, 0, 2)),
+        obstacle_velocities=np.zeros((k, 0, 2)),
+        obstacle_radii_m=np.zeros(0),
+        plan_speeds_mps=np.append(plan_speeds, 0.0),
+        plan_status=["straight"] * cycles + ["end"],
+        plan_sides=np.append(sides, 0),
+        plan_times_ms=np.append(np.full(cycles, 0.1), np.nan),
+        reached_goal=True,
     )
 
 
 def test_constant_speed_has_no_acceleration_jerk_or_turning():
     m = smoothness_metrics(_trace(np.full(50, 0.2), np.zeros(50)))
-    assert m == {"max_abs_accel_mps2": 0.0, "max_abs_jerk_mps3": 0.0, "max_abs_turn_rate_radps": 0.0,
-                 "steering_reversals": 0, "plan_switches": 0, "plan_side_flips": 0, "command_flips": 0,
-                 "escape_cycles": 0}
+    assert m == {
+        "max_abs_accel_mps2": 0.0,
+        "max_abs_jerk_mps3": 0.0,
+        "max_abs_turn_rate_radps": 0.0,
+        "steering_reversals": 0,
+        "plan_switches": 0,
+        "plan_side_flips": 0,
+        "command_flips": 0,
+        "escape_cycles": 0,
+    }
 
 
 def test_command_flips_count_speed_jumps_and_turn_reversals_against_brute_force():

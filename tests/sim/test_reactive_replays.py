@@ -24,8 +24,9 @@ def write_track(folder: Path, start=(-6.0, 0.0), velocity=(WALK_MPS, 0.0), rows=
     """One straight-line walker in the 4-column ETH/UCY format (row step 10 frames = ROW_S s)."""
     k = np.arange(rows)
     t = k * ROW_S
-    table = np.column_stack([(first_row + k) * 10, np.full(rows, ped_id), start[0] + velocity[0] * t,
-                             start[1] + velocity[1] * t])
+    table = np.column_stack(
+        [(first_row + k) * 10, np.full(rows, ped_id), start[0] + velocity[0] * t, start[1] + velocity[1] * t]
+    )
     file = folder / f"walker{ped_id}.txt"
     np.savetxt(file, table, fmt="%.6f", delimiter="\t")
     return file
@@ -102,7 +103,8 @@ def test_reactive_track_returns_to_the_recording_once_the_robot_is_gone(tmp_path
 
 def test_undisturbed_reactive_people_stay_exactly_on_the_recording(tmp_path):
     tracks = load_tracks(write_track(tmp_path), ROW_S) + load_tracks(
-        write_track(tmp_path, start=(0.0, -5.0), velocity=(0.0, 0.9), rows=20, ped_id=2, first_row=10), ROW_S)
+        write_track(tmp_path, start=(0.0, -5.0), velocity=(0.0, 0.9), rows=20, ped_id=2, first_row=10), ROW_S
+    )
     times = episode_times()
     recorded, recorded_velocity = replay_states(tracks, times + 0.7, ROW_S, offset=(3.0, -1.0))
     reactive = ReactiveReplay(tracks, times, 0.7, ROW_S, offset=(3.0, -1.0))
@@ -125,13 +127,15 @@ def test_reported_velocity_is_a_backward_difference_of_the_actual_positions(tmp_
 
 
 def scenario_with(file: Path, react: bool, extra_obstacles=()):
-    return Scenario.model_validate({
-        "name": "stand-on-track",
-        "robot": {"start": [0.0, 0.0], "heading": 1.5707963, "speed": 0.2, "radius": 0.25},
-        "path": {"waypoints": [[0.0, 0.0], [0.0, 6.0]], "half_width": 1.0},
-        "obstacles": [{"replay": {"file": str(file), "dt_s": ROW_S, "react": react}}, *extra_obstacles],
-        "duration_s": 14.0,
-    })
+    return Scenario.model_validate(
+        {
+            "name": "stand-on-track",
+            "robot": {"start": [0.0, 0.0], "heading": 1.5707963, "speed": 0.2, "radius": 0.25},
+            "path": {"waypoints": [[0.0, 0.0], [0.0, 6.0]], "half_width": 1.0},
+            "obstacles": [{"replay": {"file": str(file), "dt_s": ROW_S, "react": react}}, *extra_obstacles],
+            "duration_s": 14.0,
+        }
+    )
 
 
 @pytest.fixture
@@ -174,9 +178,16 @@ def test_non_reactive_obstacles_keep_their_precomputed_states_beside_reactive_on
     np.testing.assert_array_equal(episode.trace.obstacle_positions, expected)
     np.testing.assert_array_equal(episode.trace.obstacle_velocities, expected_v)
 
-    mixed = Scenario.model_validate({**plain.model_dump(), "obstacles": [
-        {"replay": {"file": str(file), "dt_s": ROW_S, "react": True}},
-        {"replay": {"file": str(file), "dt_s": ROW_S}}, walker]})
+    mixed = Scenario.model_validate(
+        {
+            **plain.model_dump(),
+            "obstacles": [
+                {"replay": {"file": str(file), "dt_s": ROW_S, "react": True}},
+                {"replay": {"file": str(file), "dt_s": ROW_S}},
+                walker,
+            ],
+        }
+    )
     episode = run_episode(mixed, planner=standstill)
     expected, expected_v, _ = scenario_obstacle_states(mixed, episode.trace.times_s)
     np.testing.assert_array_equal(episode.trace.obstacle_positions[:, 1:], expected[:, 1:])
@@ -187,8 +198,12 @@ def test_non_reactive_obstacles_keep_their_precomputed_states_beside_reactive_on
 def test_react_must_be_a_boolean(tmp_path):
     file = write_track(tmp_path)
     with pytest.raises(ValidationError, match="react"):
-        Scenario.model_validate({**scenario_with(file, False).model_dump(),
-                                 "obstacles": [{"replay": {"file": str(file), "react": "sometimes"}}]})
+        Scenario.model_validate(
+            {
+                **scenario_with(file, False).model_dump(),
+                "obstacles": [{"replay": {"file": str(file), "react": "sometimes"}}],
+            }
+        )
 
 
 @needs_data
@@ -242,7 +257,10 @@ def test_nobody_enters_inside_the_robot(tmp_path):
     drive(reactive, lambda k: (0.0, 0.0))
     gap = surface_gap(reactive.positions[:, 0], robot)
     assert np.nanmin(gap) >= 0.3 - 1e-9  # enters 0.3 m from it, and no closer afterwards
-    np.testing.assert_allclose(reactive.positions[entry, 0] / np.hypot(*reactive.positions[entry, 0]),
-                               np.array([0.1, 0.05]) / np.hypot(0.1, 0.05), atol=0.05)  # straight away from the centre
+    np.testing.assert_allclose(
+        reactive.positions[entry, 0] / np.hypot(*reactive.positions[entry, 0]),
+        np.array([0.1, 0.05]) / np.hypot(0.1, 0.05),
+        atol=0.05,
+    )  # straight away from the centre
     last = np.flatnonzero(np.isfinite(recorded[:, 0, 0]))[-1]
     assert np.hypot(*(reactive.positions[last, 0] - recorded[last, 0])) < 0.05  # then back on the track

@@ -21,12 +21,19 @@ CORRIDOR = {"waypoints": [[0.0, 0.0], [7.0, 0.0]], "half_width": 1.0}
 
 
 def _scene(**extra) -> dict:
-    return {"name": "static-test", "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.4, "radius": 0.25},
-            "path": CORRIDOR, "duration_s": 40.0, **extra}
+    return {
+        "name": "static-test",
+        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.4, "radius": 0.25},
+        "path": CORRIDOR,
+        "duration_s": 40.0,
+        **extra,
+    }
 
 
-BOX = _scene(boxes=[{"center": [3.0, 0.1], "size": [0.6, 0.6], "yaw": 0.3}],
-             walls=[[[-1.0, 1.3], [8.0, 1.3]], {"points": [[-1.0, -1.3], [8.0, -1.3]]}])
+BOX = _scene(
+    boxes=[{"center": [3.0, 0.1], "size": [0.6, 0.6], "yaw": 0.3}],
+    walls=[[[-1.0, 1.3], [8.0, 1.3]], {"points": [[-1.0, -1.3], [8.0, -1.3]]}],
+)
 
 
 @pytest.mark.parametrize("perception", ["oracle", "laser"])
@@ -69,8 +76,13 @@ def test_walls_along_the_corridor_cost_no_time():
 def test_static_contacts_are_counted_from_the_trace():
     """A robot moving through a wall counts one contact (its onset), and clearance is to the wall's edge."""
     poses = np.c_[np.linspace(0.0, 2.0, 21), np.zeros(21), np.zeros(21)]
-    trace = SimpleNamespace(robot_poses=poses, robot_radius_m=0.25, times_s=np.arange(21) * 0.1,
-                            walls=np.array([[[1.0, -1.0], [1.0, 1.0]]]), wall_until_s=np.array([np.inf]))
+    trace = SimpleNamespace(
+        robot_poses=poses,
+        robot_radius_m=0.25,
+        times_s=np.arange(21) * 0.1,
+        walls=np.array([[[1.0, -1.0], [1.0, 1.0]]]),
+        wall_until_s=np.array([np.inf]),
+    )
     clearance = static_clearance_per_step(trace)
     # brute force: distance of densely sampled robot positions to the wall, less the radius
     dense = np.c_[np.linspace(0.0, 2.0, 2001), np.zeros(2001)]
@@ -105,6 +117,7 @@ def test_scenario_shapes_are_validated_with_the_field_named(tmp_path):
 
 # -- the laser's static layer ------------------------------------------------------------------------
 
+
 def test_thinned_runs_cover_every_return():
     rng = np.random.default_rng(3)
     x = np.linspace(0.0, 4.0, 300)
@@ -122,7 +135,7 @@ def test_thinned_runs_cover_every_return():
 def _scan_with_return(scanner, bearing_rad: float, range_m: float, others_m: float = np.inf) -> np.ndarray:
     ranges = np.full(scanner.beam_count, others_m)
     beam = int(round((bearing_rad - scanner.angle_min_rad) / scanner.angle_increment_rad))
-    ranges[beam - 2:beam + 3] = range_m
+    ranges[beam - 2 : beam + 3] = range_m
     return ranges
 
 
@@ -155,9 +168,9 @@ def test_returns_of_a_tracked_person_are_not_static():
 
 def test_navground_peers_get_every_shape_as_static_discs():
     pytest.importorskip("navground.core", reason="needs the navground extra")
-    from viapath.planning import make_planner
-    from viapath.path import DesignatedPath
     from viapath.observation import Observation, Obstacles, RobotState
+    from viapath.path import DesignatedPath
+    from viapath.planning import make_planner
     from viapath.static import StaticLayer, box_edges
 
     scenario = scenario_from_dict(BOX)

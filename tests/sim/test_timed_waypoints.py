@@ -22,11 +22,14 @@ def test_timed_waypoints_interpolate_and_report_piece_velocity():
     np.testing.assert_allclose(velocities[:, 0], [[0.0, 0.0], [1.0, 0.0], [0.0, 0.5], [0.0, 0.0]])
 
 
-@pytest.mark.parametrize("bad, words", [
-    ({"times_s": [0.0, 1.0]}, "one time for start"),
-    ({"times_s": [0.0, 2.0, 1.0]}, "increase"),
-    ({"times_s": [0.0, 1.0, 2.0], "speed": 1.0}, "no speed"),
-])
+@pytest.mark.parametrize(
+    "bad, words",
+    [
+        ({"times_s": [0.0, 1.0]}, "one time for start"),
+        ({"times_s": [0.0, 2.0, 1.0]}, "increase"),
+        ({"times_s": [0.0, 1.0, 2.0], "speed": 1.0}, "no speed"),
+    ],
+)
 def test_timed_waypoints_reject_inconsistent_times(bad, words):
     obstacle = {"start": [0.0, 1.0], "waypoints": [[1.0, 1.0], [1.0, 3.0]], **bad}
     with pytest.raises(ScenarioError, match=words):

@@ -18,9 +18,13 @@ DURATION_S = {"tiny-crossing-0": 25.0, "tiny-head-on-1": 9.5}
 
 
 def tiny_scenario(name: str, obstacle: dict, length_m: float = 2.4, duration_s: float = 25.0) -> dict:
-    return {"name": name, "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.25, "radius": 0.25},
-            "path": {"waypoints": [[0.0, 0.0], [length_m, 0.0]], "half_width": 1.0},
-            "obstacles": [{**obstacle, "radius": 0.25}], "duration_s": duration_s}
+    return {
+        "name": name,
+        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.25, "radius": 0.25},
+        "path": {"waypoints": [[0.0, 0.0], [length_m, 0.0]], "half_width": 1.0},
+        "obstacles": [{**obstacle, "radius": 0.25}],
+        "duration_s": duration_s,
+    }
 
 
 def write_tiny_suite(folder: Path, names=None) -> Path:

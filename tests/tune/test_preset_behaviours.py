@@ -16,8 +16,17 @@ CASES = ("paper-behind", "paper-front", "paper-side")
 @pytest.fixture(scope="module", params=preset_names())
 def episodes(request):
     values = preset_values(request.param)
-    return {name: run_episode(load_scenario(name), perception="oracle", seed=0, position_noise_m=0.0,
-                              velocity_noise_mps=0.0, planner_overrides=values) for name in CASES}
+    return {
+        name: run_episode(
+            load_scenario(name),
+            perception="oracle",
+            seed=0,
+            position_noise_m=0.0,
+            velocity_noise_mps=0.0,
+            planner_overrides=values,
+        )
+        for name in CASES
+    }
 
 
 @pytest.mark.parametrize("name", CASES)

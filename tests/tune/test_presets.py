@@ -97,7 +97,7 @@ def test_bench_weights_enter_the_row_identity():
     plain = make_tasks([scenario], ["viapath", "follow"])
     paper = make_tasks([scenario], ["viapath", "follow"], planner_options={"viapath": load_preset("paper").options})
     other = make_tasks([scenario], ["viapath", "follow"], planner_options={"viapath": {"k2": 0.05}})
-    by = lambda tasks: {t.planner: t for t in tasks}  # noqa: E731
+    by = lambda tasks: {t.planner: t for t in tasks}
     # The paper's weights are the defaults: the same options, the same row.
     assert by(plain)["viapath"].key == by(paper)["viapath"].key
     assert by(other)["viapath"].key != by(plain)["viapath"].key

@@ -40,10 +40,18 @@ def study_run(tmp_path_factory):
     first = _invoke("tune", *common, "--trials", "4")
     assert first.exit_code == 0, first.output
     first_trials = {t.number: dict(t.params) for t in optuna.load_study(study_name="tiny", storage=storage).trials}
-    second = _invoke("tune", *common, "--trials", "7", "--export", folder / "picked.yaml", "--plot", folder / "front.png")
+    second = _invoke(
+        "tune", *common, "--trials", "7", "--export", folder / "picked.yaml", "--plot", folder / "front.png"
+    )
     assert second.exit_code == 0, second.output
-    return {"folder": folder, "suite": suite, "storage": storage, "first": json.loads(first.stdout),
-            "first_trials": first_trials, "second": json.loads(second.stdout)}
+    return {
+        "folder": folder,
+        "suite": suite,
+        "storage": storage,
+        "first": json.loads(first.stdout),
+        "first_trials": first_trials,
+        "second": json.loads(second.stdout),
+    }
 
 
 def _objectives(trial):
@@ -56,13 +64,17 @@ def _dominates(a, b):
 
 
 def _feasible(metrics):  # the command-line defaults: 0 at-fault, 0.25 s/episode outside, 0 misses (without contact)
-    return (metrics["at_fault"] <= 0 and metrics["outside_s_per_episode"] <= 0.25
-            and metrics["misses_without_contact"] <= 0)
+    return (
+        metrics["at_fault"] <= 0 and metrics["outside_s_per_episode"] <= 0.25 and metrics["misses_without_contact"] <= 0
+    )
 
 
 def test_front_is_the_non_dominated_feasible_set(study_run):
-    trials = [t for t in optuna.load_study(study_name="tiny", storage=study_run["storage"]).trials
-              if t.state == optuna.trial.TrialState.COMPLETE]
+    trials = [
+        t
+        for t in optuna.load_study(study_name="tiny", storage=study_run["storage"]).trials
+        if t.state == optuna.trial.TrialState.COMPLETE
+    ]
     feasible = [t for t in trials if _feasible(t.user_attrs["metrics"])]
     infeasible = [t for t in trials if not _feasible(t.user_attrs["metrics"])]
     assert feasible and infeasible, "the tiny suite is made to give both kinds of trial"
@@ -72,7 +84,8 @@ def test_front_is_the_non_dominated_feasible_set(study_run):
         beaten = any(_dominates(_objectives(o), _objectives(trial)) for o in feasible)
         assert (trial.number in front) == (not beaten) or (
             # equal objectives: Optuna keeps every copy of a non-dominated point
-            not beaten and any(_objectives(o) == _objectives(trial) for o in feasible if o.number in front))
+            not beaten and any(_objectives(o) == _objectives(trial) for o in feasible if o.number in front)
+        )
 
 
 def test_constraints_are_marked_from_the_metrics(study_run):
@@ -102,8 +115,21 @@ def test_a_rerun_continues_the_study(study_run):
         assert study.trials[number].params == params
     later = [tuple(sorted(t.params.items())) for t in study.trials[4:]]
     assert not set(later) & {tuple(sorted(p.items())) for p in study_run["first_trials"].values()}
-    again = _invoke("tune", study_run["suite"], "--workers", "1", "--storage", study_run["storage"], "--study", "tiny",
-                    "--seed", "3", "--trials", "7", "--json")
+    again = _invoke(
+        "tune",
+        study_run["suite"],
+        "--workers",
+        "1",
+        "--storage",
+        study_run["storage"],
+        "--study",
+        "tiny",
+        "--seed",
+        "3",
+        "--trials",
+        "7",
+        "--json",
+    )
     assert again.exit_code == 0 and json.loads(again.stdout)["ran"] == 0
 
 
@@ -119,25 +145,42 @@ def test_exported_preset_gives_the_trials_metrics_again(study_run):
     assert preset.options == trial.params
     assert (folder / "front.png").stat().st_size > 10_000
     out = folder / "bench"
-    result = _invoke("bench", study_run["suite"], "--planners", "viapath", "--weights", folder / "picked.yaml",
-                     "--workers", "1", "--seed", "3", "--out", out, "--no-plots", "--json")
+    result = _invoke(
+        "bench",
+        study_run["suite"],
+        "--planners",
+        "viapath",
+        "--weights",
+        folder / "picked.yaml",
+        "--workers",
+        "1",
+        "--seed",
+        "3",
+        "--out",
+        out,
+        "--no-plots",
+        "--json",
+    )
     assert result.exit_code == 0, result.output
     again = suite_metrics(read_rows(out / "episodes.csv"))
     for key, value in trial.user_attrs["metrics"].items():
         assert again[key] == pytest.approx(value), key
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--param", "k9=0.1:1"], "unknown option 'k9'"),
-    (["--param", "k1=1:0.5"], "empty range"),
-    (["--param", "k1=0.5"], "expected NAME=LOW:HIGH"),
-    (["--param", "preferred_side=0:1"], "not a number"),
-    (["--storage", "sqlite:///{tmp}/missing/folder/t.db"], "does not exist"),
-    (["--storage", "sqlite:///{tmp}/junk.db"], "not an SQLite database"),
-    (["--storage", "nonsense"], "expected a database URL"),
-    (["--suite", "no-such-suite"], "not a folder of scenario files nor a suite name"),
-    (["--test", "no-such-suite"], "not a folder of scenario files nor a suite name"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--param", "k9=0.1:1"], "unknown option 'k9'"),
+        (["--param", "k1=1:0.5"], "empty range"),
+        (["--param", "k1=0.5"], "expected NAME=LOW:HIGH"),
+        (["--param", "preferred_side=0:1"], "not a number"),
+        (["--storage", "sqlite:///{tmp}/missing/folder/t.db"], "does not exist"),
+        (["--storage", "sqlite:///{tmp}/junk.db"], "not an SQLite database"),
+        (["--storage", "nonsense"], "expected a database URL"),
+        (["--suite", "no-such-suite"], "not a folder of scenario files nor a suite name"),
+        (["--test", "no-such-suite"], "not a folder of scenario files nor a suite name"),
+    ],
+)
 def test_bad_input_is_one_message_exit_2_nothing_written(tmp_path, args, message):
     suite = write_tiny_suite(tmp_path / "suite")
     (tmp_path / "junk.db").write_text("not a database")

@@ -29,14 +29,32 @@ def _suite(folder):
 
 def _failed(row: dict) -> bool:
     """A failure as issue 14 defines it, from the CSV text (independent of viapath's own helper)."""
-    return (row["collision"] == "True" or row["at_fault_collision"] == "True"
-            or float(row["time_outside_corridor_s"] or 0) > 0 or row["reached_goal"] != "True")
+    return (
+        row["collision"] == "True"
+        or row["at_fault_collision"] == "True"
+        or float(row["time_outside_corridor_s"] or 0) > 0
+        or row["reached_goal"] != "True"
+    )
 
 
 def test_bench_writes_an_mcap_for_each_failed_episode(tmp_path):
     suite, out, failures = _suite(tmp_path / "suite"), tmp_path / "out", tmp_path / "failures"
-    result = CliRunner().invoke(app, ["bench", str(suite), "--planners", "viapath,stop", "--workers", "1",
-                                      "--out", str(out), "--no-plots", "--mcap-failures", str(failures)])
+    result = CliRunner().invoke(
+        app,
+        [
+            "bench",
+            str(suite),
+            "--planners",
+            "viapath,stop",
+            "--workers",
+            "1",
+            "--out",
+            str(out),
+            "--no-plots",
+            "--mcap-failures",
+            str(failures),
+        ],
+    )
     assert result.exit_code == 0, result.output
     with open(out / "episodes.csv", newline="") as handle:
         rows = list(csv.DictReader(handle))
@@ -65,7 +83,21 @@ def test_bench_refuses_an_unusable_failures_folder_before_running(tmp_path):
     blocker = tmp_path / "a-file"
     blocker.write_text("")
     for bad, words in ((blocker, "is a file"), (tmp_path / "no" / "where", "does not exist")):
-        result = CliRunner().invoke(app, ["bench", str(suite), "--planners", "stop", "--workers", "1",
-                                          "--out", str(out), "--no-plots", "--mcap-failures", str(bad)])
+        result = CliRunner().invoke(
+            app,
+            [
+                "bench",
+                str(suite),
+                "--planners",
+                "stop",
+                "--workers",
+                "1",
+                "--out",
+                str(out),
+                "--no-plots",
+                "--mcap-failures",
+                str(bad),
+            ],
+        )
         assert result.exit_code == 2 and words in result.output, result.output
     assert not out.exists()  # nothing ran

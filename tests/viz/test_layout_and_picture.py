@@ -10,8 +10,8 @@ import pytest
 
 pytest.importorskip("foxglove.layouts", reason="needs the viz extra (foxglove-sdk)")
 
-from viapath.viz.foxglove import METRICS_SCHEMA, expected_topics  # noqa: E402
-from viapath.viz.foxglove_layout import LAYOUT_FILE, layout_json  # noqa: E402
+from viapath.viz.foxglove import METRICS_SCHEMA, expected_topics
+from viapath.viz.foxglove_layout import LAYOUT_FILE, layout_json
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -27,8 +27,7 @@ def _walk(node):
 
 
 def test_committed_layout_is_current():
-    assert (REPO / LAYOUT_FILE).read_text() == layout_json(), \
-        "regenerate with: python -m viapath.viz.foxglove_layout"
+    assert (REPO / LAYOUT_FILE).read_text() == layout_json(), "regenerate with: python -m viapath.viz.foxglove_layout"
 
 
 def test_layout_names_only_published_topics_and_fields():

@@ -21,8 +21,18 @@ pytest.importorskip("foxglove", reason="needs the viz extra (foxglove-sdk)")
 ws_client = pytest.importorskip("websockets.sync.client", reason="needs the viz-test extra (websockets)")
 
 SRC = Path(__file__).resolve().parents[2] / "src"
-TOPICS = {"/tf", "/robot/footprint", "/perception/tracks", "/path", "/world/static", "/plan/candidates", "/plan/chosen",
-          "/plan/costs", "/xyt", "/metrics"}
+TOPICS = {
+    "/tf",
+    "/robot/footprint",
+    "/perception/tracks",
+    "/path",
+    "/world/static",
+    "/plan/candidates",
+    "/plan/chosen",
+    "/plan/costs",
+    "/xyt",
+    "/metrics",
+}
 
 
 class _Run:
@@ -32,8 +42,12 @@ class _Run:
         env = {**os.environ, "PYTHONPATH": str(SRC) + os.pathsep + os.environ.get("PYTHONPATH", "")}
         self.out, self.err = folder / "stdout.txt", folder / "stderr.txt"
         with open(self.out, "w") as out, open(self.err, "w") as err:
-            self.process = subprocess.Popen([sys.executable, "-m", "viapath.cli", "run", *args, "--live", "--port", "0"],
-                                            stdout=out, stderr=err, env=env)
+            self.process = subprocess.Popen(
+                [sys.executable, "-m", "viapath.cli", "run", *args, "--live", "--port", "0"],
+                stdout=out,
+                stderr=err,
+                env=env,
+            )
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
             found = re.search(r"ws://127\.0\.0\.1:(\d+)", self.err.read_text())
@@ -60,8 +74,9 @@ class _Client:
     """Subscribes to every advertised channel; keeps (topic -> [log_time_ns]) and receive times."""
 
     def __init__(self, port: int):
-        self._connection = ws_client.connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"],
-                                             open_timeout=10)
+        self._connection = ws_client.connect(
+            f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"], open_timeout=10
+        )
         self.socket = self._connection.__enter__()  # left in close()
         self.channels: dict[int, dict] = {}
         self.log_times: dict[str, list[int]] = {}

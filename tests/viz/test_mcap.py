@@ -54,11 +54,18 @@ def _record(scenario, file: Path, **kwargs):
     """Run with the MCAP view and keep, beside it, what the loop handed out (independent of the file)."""
     kept = []
     with Views(scenario, kwargs.pop("planner", scenario.planner.name), mcap=file) as views:
+
         def on_step(record):
-            kept.append({"time_s": record.time_s, "world": record.world,
-                         "scans": None if record.scans is None else [np.array(s) for s in record.scans],
-                         "tracks": record.observation.obstacles})
+            kept.append(
+                {
+                    "time_s": record.time_s,
+                    "world": record.world,
+                    "scans": None if record.scans is None else [np.array(s) for s in record.scans],
+                    "tracks": record.observation.obstacles,
+                }
+            )
             views.on_step(record)
+
         episode = run_episode(scenario, planner_overrides=views.planner_overrides, on_step=on_step, **kwargs)
     return episode, kept
 
@@ -99,7 +106,7 @@ def test_channels_schemas_and_one_message_per_cycle(request, case, topics):
     assert len(kept) == cycles
     channels = _channels(file)
     assert {topic: schema for topic, (schema, _) in channels.items()} == topics
-    assert {topic: count for topic, (_, count) in channels.items()} == {topic: cycles for topic in topics}
+    assert {topic: count for topic, (_, count) in channels.items()} == dict.fromkeys(topics, cycles)
 
 
 def test_log_times_are_simulated_time_and_poses_are_the_trace(front):
@@ -159,13 +166,16 @@ def test_xyt_cylinders_are_where_the_true_future_puts_the_person(front):
 
     def radius(step, person):
         return kept[step]["world"].obstacle_radii_m[person] + robot_radius
+
     _check_cylinders(file, centre, radius, min_checked=50)
 
 
 def test_plan_candidates_costs_and_chosen(front):
     _, _, _, file = front
     with open(file, "rb") as handle:
-        costs = [json.loads(m.data) for _, _, m in mcap_reader.make_reader(handle).iter_messages(topics=["/plan/costs"])]
+        costs = [
+            json.loads(m.data) for _, _, m in mcap_reader.make_reader(handle).iter_messages(topics=["/plan/costs"])
+        ]
     candidates = _decoded(file, "/plan/candidates")
     chosen = _decoded(file, "/plan/chosen")
     avoiding = [i for i, c in enumerate(costs) if c["status"] == "avoid" and c["runner_up"] is not None]
@@ -238,17 +248,28 @@ def test_replayed_people_cylinders_follow_their_reported_velocity(tmp_path):
     """Replayed ETH/UCY people do not walk straight, so the check is against the forecast the planner
     was given: centre = reported position + reported velocity · t (oracle, no noise)."""
     data = {
-        "name": "zara01-mcap", "dt_s": 0.1, "duration_s": 8.0,
+        "name": "zara01-mcap",
+        "dt_s": 0.1,
+        "duration_s": 8.0,
         "robot": {"start": [3.0, 5.0], "heading": 0.0, "speed": 0.3, "radius": 0.25},
         "path": {"waypoints": [[3.0, 5.0], [12.0, 5.0]], "half_width": 1.5},
-        "obstacles": [{"replay": {"file": str(ETH_UCY / "crowds_zara01.txt"), "dt_s": 0.4, "start_s": 120,
-                                  "offset": [0, 0], "radius": 0.25}}],
+        "obstacles": [
+            {
+                "replay": {
+                    "file": str(ETH_UCY / "crowds_zara01.txt"),
+                    "dt_s": 0.4,
+                    "start_s": 120,
+                    "offset": [0, 0],
+                    "radius": 0.25,
+                }
+            }
+        ],
     }
     scenario = scenario_from_dict(data)
     file = tmp_path / "zara.mcap"
     episode, kept = _record(scenario, file, perception="oracle", seed=0, position_noise_m=0.0, velocity_noise_mps=0.0)
     cycles = len(episode.trace.times_s) - 1
-    assert {topic: count for topic, (_, count) in _channels(file).items()} == {topic: cycles for topic in COMMON}
+    assert {topic: count for topic, (_, count) in _channels(file).items()} == dict.fromkeys(COMMON, cycles)
 
     def centre(step, person, t):
         world = kept[step]["world"]
@@ -256,6 +277,7 @@ def test_replayed_people_cylinders_follow_their_reported_velocity(tmp_path):
 
     def radius(step, person):
         return kept[step]["world"].obstacle_radii_m[person] + scenario.robot.radius
+
     checked = _check_cylinders(file, centre, radius, min_checked=cycles)
     # Every person present in a cycle has a cylinder in it.
     present = sum(int(np.isfinite(k["world"].obstacle_positions).all(axis=1).sum()) for k in kept)
@@ -278,8 +300,12 @@ def test_cli_writes_mcap_and_refuses_bad_paths(tmp_path):
     forced = runner.invoke(app, ["run", "paper-behind", "--mcap", str(file), "--force", "--json"])
     assert forced.exit_code == 0, forced.output
     (tmp_path / "a.mcap").mkdir()
-    for bad, words in ((tmp_path / "missing" / "run.mcap", "does not exist"), (tmp_path / "run.txt", ".mcap"),
-                       (Path("/proc/run.mcap"), "cannot write"), (tmp_path / "a.mcap", "is a folder")):
+    for bad, words in (
+        (tmp_path / "missing" / "run.mcap", "does not exist"),
+        (tmp_path / "run.txt", ".mcap"),
+        (Path("/proc/run.mcap"), "cannot write"),
+        (tmp_path / "a.mcap", "is a folder"),
+    ):
         result = runner.invoke(app, ["run", "paper-behind", "--mcap", str(bad)])
         assert result.exit_code == 2, (bad, result.output)
         assert words in result.output and "Traceback" not in result.output
@@ -291,10 +317,16 @@ def test_static_layer_is_drawn_as_the_planner_was_told(tmp_path):
     """A box and a wall: each cycle's /world/static line list holds exactly the segments of the observation."""
     from viapath.scenarios.loader import scenario_from_dict
 
-    scenario = scenario_from_dict({
-        "name": "box", "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.4, "radius": 0.25},
-        "path": {"waypoints": [[0.0, 0.0], [4.0, 0.0]], "half_width": 1.0}, "duration_s": 3.0,
-        "boxes": [{"center": [2.0, 0.0], "size": [0.5, 0.5]}], "walls": [[[0.0, 1.3], [4.0, 1.3]]]})
+    scenario = scenario_from_dict(
+        {
+            "name": "box",
+            "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.4, "radius": 0.25},
+            "path": {"waypoints": [[0.0, 0.0], [4.0, 0.0]], "half_width": 1.0},
+            "duration_s": 3.0,
+            "boxes": [{"center": [2.0, 0.0], "size": [0.5, 0.5]}],
+            "walls": [[[0.0, 1.3], [4.0, 1.3]]],
+        }
+    )
     file = tmp_path / "static.mcap"
     episode, kept = _record(scenario, file)
     updates = _decoded(file, "/world/static")

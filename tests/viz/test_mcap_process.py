@@ -15,7 +15,7 @@ mcap_reader = pytest.importorskip("mcap.reader", reason="needs the viz extra (mc
 
 from viapath.scenarios import load_scenario  # noqa: E402
 from viapath.sim.loop import run_episode  # noqa: E402
-from viapath.viz.foxglove import FoxglovePublisher, Views, ViewError  # noqa: E402
+from viapath.viz.foxglove import FoxglovePublisher, ViewError, Views  # noqa: E402
 from viapath.viz.mcap_process import MCAPWriterProcess  # noqa: E402
 
 
@@ -36,9 +36,11 @@ def _record(scenario, file: Path, in_process: bool, perception: str = "oracle", 
             if stop_after is not None and record.step >= stop_after:
                 raise KeyboardInterrupt
             views.on_step(record)
+
         try:
-            return run_episode(scenario, perception=perception, planner_overrides=views.planner_overrides,
-                               on_step=on_step, seed=0)
+            return run_episode(
+                scenario, perception=perception, planner_overrides=views.planner_overrides, on_step=on_step, seed=0
+            )
         except KeyboardInterrupt:
             return None
 
@@ -69,16 +71,16 @@ def test_a_run_stopped_part_way_keeps_its_cycles(tmp_path):
 def test_a_writer_that_dies_is_reported(tmp_path):
     scenario = load_scenario("paper-front")
     file = tmp_path / "killed.mcap"
-    with pytest.raises(ViewError, match="writer"):
-        with Views(scenario, scenario.planner.name, mcap=file) as views:
-            writer = views.on_step
+    with pytest.raises(ViewError, match="writer"), Views(scenario, scenario.planner.name, mcap=file) as views:
+        writer = views.on_step
 
-            def on_step(record):
-                if record.step == 5:
-                    os.kill(writer.process.pid, signal.SIGKILL)
-                    writer.process.join()
-                views.on_step(record)
-            run_episode(scenario, planner_overrides=views.planner_overrides, on_step=on_step)
+        def on_step(record):
+            if record.step == 5:
+                os.kill(writer.process.pid, signal.SIGKILL)
+                writer.process.join()
+            views.on_step(record)
+
+        run_episode(scenario, planner_overrides=views.planner_overrides, on_step=on_step)
     assert writer.process is None  # ended and reaped
 
 
@@ -104,17 +106,25 @@ def test_ctrl_c_ends_the_run_and_keeps_a_readable_file(tmp_path):
     import yaml
 
     long_run = {
-        "name": "long-corridor", "dt_s": 0.1, "duration_s": 300.0,
+        "name": "long-corridor",
+        "dt_s": 0.1,
+        "duration_s": 300.0,
         "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.3, "radius": 0.25},
         "path": {"waypoints": [[0.0, 0.0], [80.0, 0.0]], "half_width": 1.5},
-        "obstacles": [{"start": [6.0 + 3.0 * k, (-1) ** k * 0.4], "velocity": [-0.3, 0.0], "radius": 0.25}
-                      for k in range(20)],
+        "obstacles": [
+            {"start": [6.0 + 3.0 * k, (-1) ** k * 0.4], "velocity": [-0.3, 0.0], "radius": 0.25} for k in range(20)
+        ],
     }
     scenario = tmp_path / "long.yaml"
     scenario.write_text(yaml.safe_dump(long_run))
     file = tmp_path / "long.mcap"
-    process = subprocess.Popen([sys.executable, "-m", "viapath.cli", "run", str(scenario), "--mcap", str(file)],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "viapath.cli", "run", str(scenario), "--mcap", str(file)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     try:
         deadline = time.monotonic() + 60
         while not (file.exists() and file.stat().st_size > 20_000) and time.monotonic() < deadline:
@@ -139,8 +149,9 @@ def test_a_writer_that_cannot_open_its_file_says_so_without_holding_up_the_run(t
 
     scenario = load_scenario("paper-front")
     path = DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths())
-    writer = MCAPWriterProcess(tmp_path / "missing" / "x.mcap", False, path, scenario.robot.radius,
-                               FoxglovePublisher, ViewError)
+    writer = MCAPWriterProcess(
+        tmp_path / "missing" / "x.mcap", False, path, scenario.robot.radius, FoxglovePublisher, ViewError
+    )
     with pytest.raises(ViewError, match="could not start"):
         writer.close()
     assert writer.process is None
@@ -167,11 +178,10 @@ def test_a_ctrl_c_during_a_send_waits_for_the_whole_message(tmp_path):
         def __getattr__(self, name):
             return getattr(self.connection, name)
 
-    with pytest.raises(KeyboardInterrupt):
-        with Views(scenario, scenario.planner.name, mcap=file) as views:
-            writer = views.on_step
-            writer._connection = Interrupting(writer._connection)
-            run_episode(scenario, planner_overrides=views.planner_overrides, on_step=writer, seed=0)
+    with pytest.raises(KeyboardInterrupt), Views(scenario, scenario.planner.name, mcap=file) as views:
+        writer = views.on_step
+        writer._connection = Interrupting(writer._connection)
+        run_episode(scenario, planner_overrides=views.planner_overrides, on_step=writer, seed=0)
     assert len(sends) >= 4  # three batches, then what was kept and "done" from the clean-up
     cycles = sum(topic == "/tf" for topic, _, _ in _messages(file))
     assert cycles == writer.cycles > 0

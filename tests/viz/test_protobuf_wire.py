@@ -31,22 +31,45 @@ def test_scene_update_matches_the_sdk_encoding():
     stamp_ns = 12_300_000_000 + 45
     text = m.TextPrimitive(pose=pose, billboard=True, font_size=11.0, text="t = 2 s", color=colour)
 
-    points = lambda a: [m.Point3(x=x, y=y, z=z) for x, y, z in a.tolist()]  # noqa: E731
+    points = lambda a: [m.Point3(x=x, y=y, z=z) for x, y, z in a.tolist()]
     sdk = m.SceneUpdate(
         deletions=[m.SceneEntityDeletion(type=m.SceneEntityDeletionType.All)],
-        entities=[m.SceneEntity(
-            timestamp=m.Timestamp(12, 300_000_045), frame_id="xyt", id="person-4",
-            lines=[m.LinePrimitive(type=m.LinePrimitiveLineType.LineLoop, pose=pose, thickness=0.02,
-                                   points=points(line_xyz), color=colour)],
-            triangles=[m.TriangleListPrimitive(pose=pose, points=points(vertices), color=colour,
-                                               indices=triangles.ravel().tolist())],
-            texts=[text])]).encode()
+        entities=[
+            m.SceneEntity(
+                timestamp=m.Timestamp(12, 300_000_045),
+                frame_id="xyt",
+                id="person-4",
+                lines=[
+                    m.LinePrimitive(
+                        type=m.LinePrimitiveLineType.LineLoop,
+                        pose=pose,
+                        thickness=0.02,
+                        points=points(line_xyz),
+                        color=colour,
+                    )
+                ],
+                triangles=[
+                    m.TriangleListPrimitive(
+                        pose=pose, points=points(vertices), color=colour, indices=triangles.ravel().tolist()
+                    )
+                ],
+                texts=[text],
+            )
+        ],
+    ).encode()
     ours = wire.scene_update(
         [m.SceneEntityDeletion(type=m.SceneEntityDeletionType.All).encode()],
-        [wire.scene_entity(stamp_ns, "xyt", "person-4",
-                           lines=[wire.line_primitive(line_xyz, colour.encode(), pose.encode(), 0.02, wire.LINE_LOOP)],
-                           triangles=[wire.triangle_list_primitive(vertices, triangles, colour.encode(), pose.encode())],
-                           other=m.SceneEntity(texts=[text]).encode())])
+        [
+            wire.scene_entity(
+                stamp_ns,
+                "xyt",
+                "person-4",
+                lines=[wire.line_primitive(line_xyz, colour.encode(), pose.encode(), 0.02, wire.LINE_LOOP)],
+                triangles=[wire.triangle_list_primitive(vertices, triangles, colour.encode(), pose.encode())],
+                other=m.SceneEntity(texts=[text]).encode(),
+            )
+        ],
+    )
     cls = _scene_update_class()
     assert cls.FromString(ours) == cls.FromString(sdk)
     decoded = cls.FromString(ours)

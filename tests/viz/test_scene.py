@@ -20,15 +20,31 @@ def _scenes(name: str, **kwargs):
 
     def on_step(record):
         if not builder:
-            builder.append(SceneBuilder(record.planner.path, record.observation.robot.radius_m,
-                                        ForecastSettings.from_planner(record.planner)))
+            builder.append(
+                SceneBuilder(
+                    record.planner.path,
+                    record.observation.robot.radius_m,
+                    ForecastSettings.from_planner(record.planner),
+                )
+            )
         state = record.state
-        scenes.append(builder[0].build(record.step, record.time_s, (state.x, state.y, state.heading_rad),
-                                       state.speed_mps, state.turn_rate_radps, record.observation, record.decision,
-                                       record.plan_time_ms, record.perception))
+        scenes.append(
+            builder[0].build(
+                record.step,
+                record.time_s,
+                (state.x, state.y, state.heading_rad),
+                state.speed_mps,
+                state.turn_rate_radps,
+                record.observation,
+                record.decision,
+                record.plan_time_ms,
+                record.perception,
+            )
+        )
 
-    episode = run_episode(scenario, perception="oracle", seed=0, position_noise_m=0.0, velocity_noise_mps=0.0,
-                          on_step=on_step, **kwargs)
+    episode = run_episode(
+        scenario, perception="oracle", seed=0, position_noise_m=0.0, velocity_noise_mps=0.0, on_step=on_step, **kwargs
+    )
     return scenario, episode, scenes
 
 
@@ -74,9 +90,8 @@ def test_via_points_lie_on_the_inflated_cylinder_at_their_time(front):
     obstacle's disc grown by its margins at the passing time. If the times were wrong, the via
     point would not lie on that cylinder at that height."""
     scenario, _, scenes = front
-    from viapath.scenarios.loader import planner_settings
-
     from viapath.safety import ShieldConfig
+    from viapath.scenarios.loader import planner_settings
 
     settings = planner_settings(scenario)
     avoiding = [s for s in scenes if len(s.xyt.via_points_xyt)]
@@ -84,7 +99,7 @@ def test_via_points_lie_on_the_inflated_cylinder_at_their_time(front):
     for scene in avoiding[:20]:
         # With the shield behind it (on by default) the planner keeps its braking envelope as well.
         stop_s = 0.1 + scene.plan.speed_mps / scenario.robot.limits.max_accel_mps2
-        envelope = 0.5 * ShieldConfig().person_accel_mps2 * stop_s ** 2
+        envelope = 0.5 * ShieldConfig().person_accel_mps2 * stop_s**2
         grown = settings.safety_margin_m + settings.planning_margin_m + envelope
         previous = None
         for x, y, t in scene.xyt.via_points_xyt:
@@ -146,8 +161,14 @@ def test_runner_up_and_shield_count():
     from viapath.observation import Observation, RobotState
 
     observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles.empty())
-    plan = Plan("avoid", 0.2, np.array([1.0, 0.0]), candidate_costs=np.array([0.7, 0.2, np.inf, 0.4]), chosen=1,
-                extras={"shield": {"intervened": True}})
+    plan = Plan(
+        "avoid",
+        0.2,
+        np.array([1.0, 0.0]),
+        candidate_costs=np.array([0.7, 0.2, np.inf, 0.4]),
+        chosen=1,
+        extras={"shield": {"intervened": True}},
+    )
     first = builder.build(0, 0.0, (0, 0, 0), 0.2, 0.0, observation, Decision(Command(0.2, 0.0), plan))
     assert (first.plan.chosen, first.plan.runner_up) == (1, 3)
     assert first.plan.runner_up_cost == pytest.approx(0.4)
@@ -161,17 +182,24 @@ def test_runner_up_and_shield_count():
 def test_cost_terms_are_published_when_the_planner_gives_them():
     """After the planner redesign, extras["cost_terms"] holds the per-term breakdown: the costs
     message carries it for the chosen and the runner-up candidate, beside their totals."""
+    from viapath.observation import Observation, RobotState
     from viapath.path import DesignatedPath
     from viapath.viz.foxglove import costs_message
 
-    from viapath.observation import Observation, RobotState
-
     builder = SceneBuilder(DesignatedPath([[0, 0], [5, 0]], half_width_m=1.0), 0.25)
     observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles.empty())
-    terms = {"chosen": {"distance": 0.5, "time": 0.02, "speed": 0.0, "heading": 0.1},
-             "runner_up": {"distance": 0.52, "time": 0.03, "speed": 0.008, "heading": np.inf}}
-    plan = Plan("avoid", 0.2, np.array([1.0, 0.0]), candidate_costs=np.array([0.62, 0.9, 0.7]), chosen=0,
-                extras={"cost_terms": terms})
+    terms = {
+        "chosen": {"distance": 0.5, "time": 0.02, "speed": 0.0, "heading": 0.1},
+        "runner_up": {"distance": 0.52, "time": 0.03, "speed": 0.008, "heading": np.inf},
+    }
+    plan = Plan(
+        "avoid",
+        0.2,
+        np.array([1.0, 0.0]),
+        candidate_costs=np.array([0.62, 0.9, 0.7]),
+        chosen=0,
+        extras={"cost_terms": terms},
+    )
     message = costs_message(builder.build(0, 0.0, (0, 0, 0), 0.2, 0.0, observation, Decision(Command(0.2, 0.0), plan)))
     assert message["terms_available"] is True
     assert message["chosen"] == {"index": 0, "E": 0.62, "terms": terms["chosen"]}
@@ -199,8 +227,10 @@ def test_lateral_deviation_of_one_point_is_the_paths():
     for _ in range(100):
         waypoints = np.cumsum(rng.normal(size=(rng.integers(2, 6), 2)) * 3, axis=0)
         path = DesignatedPath(waypoints, half_width_m=1.0)
-        segments = list(zip(path.segment_starts.tolist(), path.segment_directions.tolist(),
-                            path.segment_lengths_m.tolist()))
+        segments = list(
+            zip(path.segment_starts.tolist(), path.segment_directions.tolist(), path.segment_lengths_m.tolist())
+        )
         for point in rng.normal(size=(20, 2)) * 5:
             assert lateral_deviation_m(segments, *point.tolist()) == pytest.approx(
-                float(path.lateral_deviation(point)), abs=1e-12)
+                float(path.lateral_deviation(point)), abs=1e-12
+            )

@@ -46,9 +46,12 @@ FRAME_TRANSFORMS = _message_class(m.FrameTransforms, "foxglove.FrameTransforms")
 
 # -- the reference: foxglove-sdk's classes only ------------------------------------------------------
 
+
 def _pose(x=0.0, y=0.0, z=0.0, yaw=0.0):
-    return m.Pose(position=m.Vector3(x=float(x), y=float(y), z=float(z)),
-                  orientation=m.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)))
+    return m.Pose(
+        position=m.Vector3(x=float(x), y=float(y), z=float(z)),
+        orientation=m.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)),
+    )
 
 
 def _points(xyz) -> list:
@@ -61,13 +64,15 @@ def _line(xyz, colour, thickness, loop=False):
 
 
 def _disc(x, y, radius, colour, z=0.0, height=0.01):
-    return m.CylinderPrimitive(pose=_pose(x, y, z + 0.5 * height), size=m.Vector3(x=2 * radius, y=2 * radius, z=height),
-                               color=colour)
+    return m.CylinderPrimitive(
+        pose=_pose(x, y, z + 0.5 * height), size=m.Vector3(x=2 * radius, y=2 * radius, z=height), color=colour
+    )
 
 
 def _text(x, y, z, text, colour, size=12.0):
-    return m.TextPrimitive(pose=_pose(x, y, z), billboard=True, font_size=size, scale_invariant=True, color=colour,
-                           text=text)
+    return m.TextPrimitive(
+        pose=_pose(x, y, z), billboard=True, font_size=size, scale_invariant=True, color=colour, text=text
+    )
 
 
 def _stamp(ns):
@@ -75,43 +80,75 @@ def _stamp(ns):
 
 
 def _update(entities):
-    return m.SceneUpdate(deletions=[m.SceneEntityDeletion(type=m.SceneEntityDeletionType.All)],
-                         entities=entities).encode()
+    return m.SceneUpdate(
+        deletions=[m.SceneEntityDeletion(type=m.SceneEntityDeletionType.All)], entities=entities
+    ).encode()
 
 
 def reference(topic: str, scene, ns: int, colours: dict, k_sigma: float, segments: int, scanner=None):
     c, stamp = colours, _stamp(ns)
     if topic == fx.TF:
+
         def tf(parent, child, px, py, yaw):
-            return m.FrameTransform(timestamp=stamp, parent_frame_id=parent, child_frame_id=child,
-                                    translation=m.Vector3(x=float(px), y=float(py), z=0.0),
-                                    rotation=m.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)))
+            return m.FrameTransform(
+                timestamp=stamp,
+                parent_frame_id=parent,
+                child_frame_id=child,
+                translation=m.Vector3(x=float(px), y=float(py), z=0.0),
+                rotation=m.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)),
+            )
+
         x, y, heading = scene.robot_pose
-        return m.FrameTransforms(transforms=[tf("world", "base", x, y, heading), tf("world", "xyt", 0.0, 0.0, 0.0)] + [
-            tf("base", fx.scanner_frame(s.name), *s.mount_pose) for s in scene.scanners]).encode()
+        return m.FrameTransforms(
+            transforms=[tf("world", "base", x, y, heading), tf("world", "xyt", 0.0, 0.0, 0.0)]
+            + [tf("base", fx.scanner_frame(s.name), *s.mount_pose) for s in scene.scanners]
+        ).encode()
     if topic == "scan":
         ranges = np.asarray(scanner.ranges_m, dtype=float)
         valid = np.isfinite(ranges) & (ranges >= max(scanner.range_min_m, 1e-9)) & (ranges <= scanner.range_max_m)
-        return m.LaserScan(timestamp=stamp, frame_id=fx.scanner_frame(scanner.name), pose=_pose(),
-                           start_angle=scanner.angle_min_rad, end_angle=scanner.angle_max_rad,
-                           ranges=np.where(valid, ranges, np.nan).tolist()).encode()
+        return m.LaserScan(
+            timestamp=stamp,
+            frame_id=fx.scanner_frame(scanner.name),
+            pose=_pose(),
+            start_angle=scanner.angle_min_rad,
+            end_angle=scanner.angle_max_rad,
+            ranges=np.where(valid, ranges, np.nan).tolist(),
+        ).encode()
     if topic == fx.DETECTIONS:
-        discs = [_disc(x, y, r, c["detection"], height=0.02)
-                 for (x, y), r in zip(scene.detections_world.tolist(), scene.detection_radii_m.tolist())]
+        discs = [
+            _disc(x, y, r, c["detection"], height=0.02)
+            for (x, y), r in zip(scene.detections_world.tolist(), scene.detection_radii_m.tolist())
+        ]
         return _update([m.SceneEntity(timestamp=stamp, frame_id="world", id="detections", cylinders=discs)])
     if topic == fx.TRACKS:
         t, entities = scene.tracks, []
-        for (px, py), (vx, vy), r, sp, sv, track in zip(t.positions.tolist(), t.velocities.tolist(), t.radii_m.tolist(),
-                                                        t.position_sigma_m.tolist(), t.velocity_sigma_mps.tolist(),
-                                                        t.ids.tolist()):
+        for (px, py), (vx, vy), r, sp, sv, track in zip(
+            t.positions.tolist(),
+            t.velocities.tolist(),
+            t.radii_m.tolist(),
+            t.position_sigma_m.tolist(),
+            t.velocity_sigma_mps.tolist(),
+            t.ids.tolist(),
+        ):
             speed = math.hypot(vx, vy)
-            primitives = {"cylinders": [_disc(px, py, r, c["track"], height=0.1),
-                                        _disc(px, py, r + k_sigma * sp, c["track_sigma"], height=0.005)],
-                          "texts": [_text(px, py, 0.3, f"{track}: {speed:.2f} m/s ±{sv:.2f}", c["track_text"])]}
+            primitives = {
+                "cylinders": [
+                    _disc(px, py, r, c["track"], height=0.1),
+                    _disc(px, py, r + k_sigma * sp, c["track_sigma"], height=0.005),
+                ],
+                "texts": [_text(px, py, 0.3, f"{track}: {speed:.2f} m/s ±{sv:.2f}", c["track_text"])],
+            }
             if speed > 1e-6:
-                primitives["arrows"] = [m.ArrowPrimitive(
-                    pose=_pose(px, py, 0.12, math.atan2(vy, vx)), shaft_length=speed, shaft_diameter=0.03,
-                    head_length=0.1, head_diameter=0.08, color=c["arrow"])]
+                primitives["arrows"] = [
+                    m.ArrowPrimitive(
+                        pose=_pose(px, py, 0.12, math.atan2(vy, vx)),
+                        shaft_length=speed,
+                        shaft_diameter=0.03,
+                        head_length=0.1,
+                        head_diameter=0.08,
+                        color=c["arrow"],
+                    )
+                ]
             entities.append(m.SceneEntity(timestamp=stamp, frame_id="world", id=f"track-{track}", **primitives))
         return _update(entities)
     plan = scene.plan
@@ -128,13 +165,23 @@ def reference(topic: str, scene, ns: int, colours: dict, k_sigma: float, segment
         return _update([m.SceneEntity(timestamp=stamp, frame_id="world", id="candidates", lines=lines)])
     if topic == fx.CHOSEN:
         line = plan.waypoints if len(plan.waypoints) else np.array([scene.robot_pose[:2], plan.target])
-        spheres = [m.SpherePrimitive(pose=_pose(x, y, 0.03), size=m.Vector3(x=0.1, y=0.1, z=0.1), color=c["via"])
-                   for x, y in plan.via_points.tolist()]
+        spheres = [
+            m.SpherePrimitive(pose=_pose(x, y, 0.03), size=m.Vector3(x=0.1, y=0.1, z=0.1), color=c["via"])
+            for x, y in plan.via_points.tolist()
+        ]
         tx, ty = plan.target.tolist()
-        return _update([m.SceneEntity(
-            timestamp=stamp, frame_id="world", id="chosen",
-            lines=[_line(np.column_stack([line, np.full(len(line), 0.02)]), c["chosen"], 0.04)], spheres=spheres,
-            texts=[_text(tx, ty, 0.3, f"{plan.status} {plan.speed_mps:.2f} m/s", c["chosen_text"])])])
+        return _update(
+            [
+                m.SceneEntity(
+                    timestamp=stamp,
+                    frame_id="world",
+                    id="chosen",
+                    lines=[_line(np.column_stack([line, np.full(len(line), 0.02)]), c["chosen"], 0.04)],
+                    spheres=spheres,
+                    texts=[_text(tx, ty, 0.3, f"{plan.status} {plan.speed_mps:.2f} m/s", c["chosen_text"])],
+                )
+            ]
+        )
     assert topic == fx.XYT
     xyt = scene.xyt
     scale = xyt.settings.time_scale_m_per_s
@@ -148,30 +195,56 @@ def reference(topic: str, scene, ns: int, colours: dict, k_sigma: float, segment
         ends = np.array([0.0, xyt.settings.horizon_s])
         axis = np.column_stack([person.centre_at(ends), ends]) * stretch  # the caps' centres too
         vertices = np.concatenate([rings.reshape(-1, 3), axis])
-        entities.append(m.SceneEntity(
-            timestamp=stamp, frame_id="xyt", id=f"person-{person.id}",
-            lines=[_line(ring, c["ring"], 0.01, loop=True) for ring in rings] + [_line(axis, c["axis"], 0.01)],
-            triangles=[m.TriangleListPrimitive(pose=_pose(), points=_points(vertices), color=c["mesh"],
-                                               indices=fx.wire_triangles(segments).ravel().tolist())]))
+        entities.append(
+            m.SceneEntity(
+                timestamp=stamp,
+                frame_id="xyt",
+                id=f"person-{person.id}",
+                lines=[_line(ring, c["ring"], 0.01, loop=True) for ring in rings] + [_line(axis, c["axis"], 0.01)],
+                triangles=[
+                    m.TriangleListPrimitive(
+                        pose=_pose(),
+                        points=_points(vertices),
+                        color=c["mesh"],
+                        indices=fx.wire_triangles(segments).ravel().tolist(),
+                    )
+                ],
+            )
+        )
     x, y = scene.robot_pose[:2].tolist()
     horizon = xyt.settings.horizon_s
-    entities.append(m.SceneEntity(
-        timestamp=stamp, frame_id="xyt", id="robot-plan",
-        lines=[_line(xyt.plan_xyt * stretch, c["chosen"], 0.04),
-               _line([[x, y, 0.0], [x, y, horizon * scale]], c["time_axis"], 0.01)],
-        spheres=[m.SpherePrimitive(pose=_pose(px, py, pt * scale), size=m.Vector3(x=0.1, y=0.1, z=0.1), color=c["via"])
-                 for px, py, pt in xyt.via_points_xyt.tolist()],
-        texts=[_text(x - 0.3, y, t * scale, f"{t:g} s", c["grey"], 11.0) for t in (0.0, 0.5 * horizon, horizon)],
-        cylinders=[_disc(x, y, scene.robot_radius_m, c["robot_fill"])]))
+    entities.append(
+        m.SceneEntity(
+            timestamp=stamp,
+            frame_id="xyt",
+            id="robot-plan",
+            lines=[
+                _line(xyt.plan_xyt * stretch, c["chosen"], 0.04),
+                _line([[x, y, 0.0], [x, y, horizon * scale]], c["time_axis"], 0.01),
+            ],
+            spheres=[
+                m.SpherePrimitive(pose=_pose(px, py, pt * scale), size=m.Vector3(x=0.1, y=0.1, z=0.1), color=c["via"])
+                for px, py, pt in xyt.via_points_xyt.tolist()
+            ],
+            texts=[_text(x - 0.3, y, t * scale, f"{t:g} s", c["grey"], 11.0) for t in (0.0, 0.5 * horizon, horizon)],
+            cylinders=[_disc(x, y, scene.robot_radius_m, c["robot_fill"])],
+        )
+    )
     return _update(entities)
 
 
 # -- the comparison ---------------------------------------------------------------------------------
 
+
 def _ours(publisher, topic: str, scene, ns: int, scanner=None) -> bytes:
-    return {"scan": lambda: publisher._scan(scanner, ns), fx.DETECTIONS: lambda: publisher._detections(scene, ns),
-            fx.TRACKS: lambda: publisher._tracks(scene, ns), fx.CANDIDATES: lambda: publisher._candidates(scene, ns),
-            fx.CHOSEN: lambda: publisher._chosen(scene, ns), fx.XYT: lambda: publisher._xyt(scene, ns)}[topic]()
+    return {
+        "scan": lambda: publisher._scan(scanner, ns),
+        fx.DETECTIONS: lambda: publisher._detections(scene, ns),
+        fx.TRACKS: lambda: publisher._tracks(scene, ns),
+        fx.CANDIDATES: lambda: publisher._candidates(scene, ns),
+        fx.CHOSEN: lambda: publisher._chosen(scene, ns),
+        fx.XYT: lambda: publisher._xyt(scene, ns),
+    }[topic]()
 
 
 def _compare_run(scenario, perception: str, every: int = 1) -> dict[str, int]:
@@ -204,8 +277,14 @@ def _compare_run(scenario, perception: str, every: int = 1) -> dict[str, int]:
             del ours.ranges[:], theirs.ranges[:]
             assert ours == theirs
             seen["scans"] = seen.get("scans", 0) + 1
-    run_episode(scenario, perception=perception, planner_overrides=fx.display_overrides(scenario, "viapath"),
-                on_step=on_step, seed=1)
+
+    run_episode(
+        scenario,
+        perception=perception,
+        planner_overrides=fx.display_overrides(scenario, "viapath"),
+        on_step=on_step,
+        seed=1,
+    )
     return seen
 
 
@@ -221,12 +300,16 @@ def test_front_run_candidates_and_via_points_decode_to_the_sdk_messages():
 
 
 def test_still_people_reuse_their_track_encoding_and_still_match():
-    scenario = scenario_from_dict({
-        "name": "still-crowd", "dt_s": 0.1, "duration_s": 3.0,
-        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2, "radius": 0.25},
-        "path": {"waypoints": [[0.0, 0.0], [6.0, 0.0]], "half_width": 1.5},
-        "obstacles": [{"start": [3.0, 1.2 * (-1) ** k], "velocity": [0.0, 0.0], "radius": 0.25} for k in range(2)]
-        + [{"start": [5.0, -1.0], "velocity": [-0.2, 0.1], "radius": 0.3}],
-    })
+    scenario = scenario_from_dict(
+        {
+            "name": "still-crowd",
+            "dt_s": 0.1,
+            "duration_s": 3.0,
+            "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2, "radius": 0.25},
+            "path": {"waypoints": [[0.0, 0.0], [6.0, 0.0]], "half_width": 1.5},
+            "obstacles": [{"start": [3.0, 1.2 * (-1) ** k], "velocity": [0.0, 0.0], "radius": 0.25} for k in range(2)]
+            + [{"start": [5.0, -1.0], "velocity": [-0.2, 0.1], "radius": 0.3}],
+        }
+    )
     seen = _compare_run(scenario, "oracle")
     assert seen["cylinders"] > 0

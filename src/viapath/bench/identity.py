@@ -31,7 +31,7 @@ def viapath_version() -> str:
         from importlib.metadata import version
 
         return version("viapath")
-    except Exception:  # noqa: BLE001 - a source checkout without metadata
+    except Exception:
         import viapath
 
         return getattr(viapath, "__version__", "unknown")
@@ -67,23 +67,31 @@ def options_hash(scenario: dict, planner: str, overrides: dict | None = None) ->
     from viapath.scenarios.loader import planner_settings
 
     try:
-        options = {**planner_settings(scenario_from_dict(scenario, scenario.get("name", "?")), planner),
-                   **(overrides or {})}
+        options = {
+            **planner_settings(scenario_from_dict(scenario, scenario.get("name", "?")), planner),
+            **(overrides or {}),
+        }
         # viapath's backend chooses the arithmetic, not the decisions (docs/speed.md): same rows.
         options = {key: value for key, value in options.items() if key != "backend"}
         text = repr(sorted(options.items()))
-    except Exception as error:  # noqa: BLE001 - the episode itself will report it
+    except Exception as error:
         text = f"error: {error}"
     return hashlib.sha256(f"{planner}:{text}".encode()).hexdigest()[:16]
 
 
 def manifest(scenario_hashes: dict[str, str], perception: str, seed: int) -> dict[str, Any]:
     """What a run is: its scenarios (name -> content hash), perception, bench seed, viapath version."""
-    return {"scenarios": dict(sorted(scenario_hashes.items())), "perception": perception, "seed": seed,
-            "viapath_version": viapath_version()}
+    return {
+        "scenarios": dict(sorted(scenario_hashes.items())),
+        "perception": perception,
+        "seed": seed,
+        "viapath_version": viapath_version(),
+    }
 
 
-def check_folder(out_dir: Path, wanted: dict[str, Any], force: bool, crashed_only: set[str] = frozenset()) -> str | None:
+def check_folder(
+    out_dir: Path, wanted: dict[str, Any], force: bool, crashed_only: set[str] = frozenset()
+) -> str | None:
     """None if the folder may be used (and then records ``wanted`` in it), else why not.
 
     Refused: another perception, bench seed or viapath version; a scenario of the same name whose
@@ -97,24 +105,32 @@ def check_folder(out_dir: Path, wanted: dict[str, Any], force: bool, crashed_onl
             found = json.loads(path.read_text())
         except (OSError, ValueError):
             found = {}
-        problems = [f"{key}: folder has {found.get(key)!r}, this run {wanted[key]!r}"
-                    for key in ("perception", "seed", "viapath_version") if found.get(key) != wanted[key]]
+        problems = [
+            f"{key}: folder has {found.get(key)!r}, this run {wanted[key]!r}"
+            for key in ("perception", "seed", "viapath_version")
+            if found.get(key) != wanted[key]
+        ]
         old, new = found.get("scenarios") or {}, wanted["scenarios"]
         changed = sorted(name for name in set(old) & set(new) if old[name] != new[name] and name not in crashed_only)
         if changed:
-            problems.append(f"{len(changed)} scenario(s) of the same name have other contents (e.g. {changed[0]!r}): "
-                            "another suite")
+            problems.append(
+                f"{len(changed)} scenario(s) of the same name have other contents (e.g. {changed[0]!r}): another suite"
+            )
         elif old and not set(old) & set(new):
             problems.append("no scenario in common: another suite")
         if problems and not force:
-            return (f"{out_dir} holds results of another suite or configuration ({'; '.join(problems)}); "
-                    "use a new --out folder, or --force to add this run's rows beside them "
-                    "(the old rows are kept but never reused or reported)")
+            return (
+                f"{out_dir} holds results of another suite or configuration ({'; '.join(problems)}); "
+                "use a new --out folder, or --force to add this run's rows beside them "
+                "(the old rows are kept but never reused or reported)"
+            )
         if not problems:
             recorded["scenarios"] = {**old, **new}
     elif (Path(out_dir) / "episodes.csv").exists() and not force:
-        return (f"{out_dir} holds an episodes.csv without {MANIFEST} (written before rows were identified by "
-                "content); use a new --out folder, or --force")
+        return (
+            f"{out_dir} holds an episodes.csv without {MANIFEST} (written before rows were identified by "
+            "content); use a new --out folder, or --force"
+        )
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(recorded, indent=2))
     return None

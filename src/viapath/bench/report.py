@@ -63,7 +63,9 @@ def _stat(function, values):
 def summarize(rows: list[dict[str, Any]], by: str = "planner", order: list[str] | None = None) -> list[dict[str, Any]]:
     """One dict of aggregates per value of ``by`` (planner by default), in ``order`` then first-seen order."""
     keyed = label if by == "planner" else (lambda row: row[by])
-    groups: dict[str, list[dict]] = {f"{key}{mark}": [] for key in order or [] for mark in ("", " +shield", " +friendly")}
+    groups: dict[str, list[dict]] = {
+        f"{key}{mark}": [] for key in order or [] for mark in ("", " +shield", " +friendly")
+    }
     for row in rows:
         groups.setdefault(keyed(row), []).append(row)
     summary = []
@@ -76,30 +78,32 @@ def summarize(rows: list[dict[str, Any]], by: str = "planner", order: list[str] 
         success = sum(bool(r["reached_goal"]) and not r["collision"] for r in ok) / n if n else None
         ratios = _values(ok, "time_ratio")
         outside = _values(ok, "time_outside_corridor_s")
-        summary.append({
-            by: key,
-            "episodes": n,
-            "errors": len(group) - n,
-            "success_rate": success,
-            "reached_goal_rate": rate("reached_goal"),
-            "collision_rate": rate("collision"),
-            "at_fault_collision_rate": rate("at_fault_collision"),
-            "at_fault_seen_1s_rate": rate("at_fault_collision_seen_1s"),
-            "static_contact_rate": (sum(bool(r.get("static_contact")) for r in ok) / n) if n else None,
-            "time_ratio_median": _stat(np.median, ratios),
-            "time_ratio_mean": _stat(np.mean, ratios),
-            "mean_lateral_deviation_m": _stat(np.mean, _values(ok, "mean_lateral_deviation_m")),
-            "mean_max_lateral_deviation_m": _stat(np.mean, _values(ok, "max_lateral_deviation_m")),
-            "max_lateral_deviation_m": _stat(np.max, _values(ok, "max_lateral_deviation_m")),
-            "time_outside_corridor_s": _stat(np.mean, outside),
-            "outside_corridor_rate": float(np.mean(outside > 0)) if len(outside) else None,
-            "min_clearance_m": _stat(np.min, _values(ok, "min_clearance_m")),
-            "median_min_clearance_m": _stat(np.median, _values(ok, "min_clearance_m")),
-            "plan_time_p50_ms": _stat(np.median, _values(ok, "plan_time_p50_ms")),
-            "plan_time_p99_ms": _stat(lambda v: np.percentile(v, 99), _values(ok, "plan_time_p99_ms")),
-            "shield": group[0].get("shield") or "off",
-            "shield_interventions_per_episode": _stat(np.mean, _values(ok, "shield_interventions")),
-        })
+        summary.append(
+            {
+                by: key,
+                "episodes": n,
+                "errors": len(group) - n,
+                "success_rate": success,
+                "reached_goal_rate": rate("reached_goal"),
+                "collision_rate": rate("collision"),
+                "at_fault_collision_rate": rate("at_fault_collision"),
+                "at_fault_seen_1s_rate": rate("at_fault_collision_seen_1s"),
+                "static_contact_rate": (sum(bool(r.get("static_contact")) for r in ok) / n) if n else None,
+                "time_ratio_median": _stat(np.median, ratios),
+                "time_ratio_mean": _stat(np.mean, ratios),
+                "mean_lateral_deviation_m": _stat(np.mean, _values(ok, "mean_lateral_deviation_m")),
+                "mean_max_lateral_deviation_m": _stat(np.mean, _values(ok, "max_lateral_deviation_m")),
+                "max_lateral_deviation_m": _stat(np.max, _values(ok, "max_lateral_deviation_m")),
+                "time_outside_corridor_s": _stat(np.mean, outside),
+                "outside_corridor_rate": float(np.mean(outside > 0)) if len(outside) else None,
+                "min_clearance_m": _stat(np.min, _values(ok, "min_clearance_m")),
+                "median_min_clearance_m": _stat(np.median, _values(ok, "min_clearance_m")),
+                "plan_time_p50_ms": _stat(np.median, _values(ok, "plan_time_p50_ms")),
+                "plan_time_p99_ms": _stat(lambda v: np.percentile(v, 99), _values(ok, "plan_time_p99_ms")),
+                "shield": group[0].get("shield") or "off",
+                "shield_interventions_per_episode": _stat(np.mean, _values(ok, "shield_interventions")),
+            }
+        )
     return summary
 
 
@@ -139,23 +143,38 @@ def family_table(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def write_report(rows: list[dict[str, Any]], out_dir: Path, plots: bool = True,
-                 order: list[str] | None = None) -> list[dict[str, Any]]:
+def write_report(
+    rows: list[dict[str, Any]], out_dir: Path, plots: bool = True, order: list[str] | None = None
+) -> list[dict[str, Any]]:
     """Write ``summary.json``, ``summary.md`` and (optionally) the plots; returns the summary."""
     out_dir = Path(out_dir)
     summary = summarize(rows, order=order)
     if order:
         rows = sorted(rows, key=lambda r: order.index(r["planner"]) if r["planner"] in order else len(order))
     (out_dir / "summary.json").write_text(json_dumps(summary, indent=2))
-    text = ["# Benchmark summary", "", markdown_table(summary), "",
-            "Per family: success / collision / at-fault collision rate.", "", family_table(rows), ""]
+    text = [
+        "# Benchmark summary",
+        "",
+        markdown_table(summary),
+        "",
+        "Per family: success / collision / at-fault collision rate.",
+        "",
+        family_table(rows),
+        "",
+    ]
     from viapath.bench.identity import crash_lines
 
     crashed = crash_lines(rows)
     if crashed:
         count = sum(1 for r in rows if r.get("error"))
-        text += [f"## {count} episode(s) crashed", "",
-                 "Not in the rates above; rerunning the same command runs them again.", "", *crashed, ""]
+        text += [
+            f"## {count} episode(s) crashed",
+            "",
+            "Not in the rates above; rerunning the same command runs them again.",
+            "",
+            *crashed,
+            "",
+        ]
     (out_dir / "summary.md").write_text("\n".join(text))
     if plots and rows:
         plot_rates(summary, out_dir / "rates.png")
@@ -170,8 +189,11 @@ def plot_rates(summary: list[dict[str, Any]], file: Path) -> None:
     import matplotlib.pyplot as plt
 
     names = [s["planner"] for s in summary]
-    metrics = [("success_rate", "success", "tab:green"), ("collision_rate", "collision", "tab:orange"),
-               ("at_fault_collision_rate", "at-fault collision", "tab:red")]
+    metrics = [
+        ("success_rate", "success", "tab:green"),
+        ("collision_rate", "collision", "tab:orange"),
+        ("at_fault_collision_rate", "at-fault collision", "tab:red"),
+    ]
     x = np.arange(len(names))
     width = 0.8 / len(metrics)
     fig, ax = plt.subplots(figsize=(max(6, 0.9 * len(names) + 2), 4))
@@ -201,8 +223,9 @@ def plot_deviation_vs_time(rows: list[dict[str, Any]], file: Path) -> None:
     done = [r for r in rows if r.get("time_ratio") is not None and r.get("max_lateral_deviation_m") is not None]
     columns = min(3, len(planners))
     lines = int(np.ceil(len(planners) / columns))
-    fig, axes = plt.subplots(lines, columns, figsize=(3.6 * columns, 2.8 * lines), sharex=True, sharey=True,
-                             squeeze=False)
+    fig, axes = plt.subplots(
+        lines, columns, figsize=(3.6 * columns, 2.8 * lines), sharex=True, sharey=True, squeeze=False
+    )
     all_ratio = np.array([r["time_ratio"] for r in done])
     all_deviation = np.array([r["max_lateral_deviation_m"] for r in done])
     for ax, planner in zip(axes.flat, planners):
@@ -215,7 +238,7 @@ def plot_deviation_vs_time(rows: list[dict[str, Any]], file: Path) -> None:
             ax.scatter([np.median(ratio)], [np.median(deviation)], s=60, marker="x", color="tab:red", zorder=3)
         ax.set_title(f"{planner} ({len(mine)} reached)", fontsize=9)
         ax.grid(alpha=0.3)
-    for ax in axes.flat[len(planners):]:
+    for ax in axes.flat[len(planners) :]:
         ax.set_visible(False)
     beyond = ""
     if len(all_ratio):
@@ -226,8 +249,7 @@ def plot_deviation_vs_time(rows: list[dict[str, Any]], file: Path) -> None:
         axes[0, 0].set_ylim(-0.05, deviation_top)
         clipped = int(np.sum((all_ratio > ratio_top) | (all_deviation > deviation_top)))
         beyond = f"; {clipped} of {len(all_ratio)} beyond the axes" if clipped else ""
-    fig.supxlabel(f"time to goal / obstacle-free time (episodes that reached the goal; x = median{beyond})",
-                  fontsize=9)
+    fig.supxlabel(f"time to goal / obstacle-free time (episodes that reached the goal; x = median{beyond})", fontsize=9)
     fig.supylabel("max lateral deviation [m]", fontsize=9)
     fig.tight_layout()
     fig.savefig(file, dpi=110)

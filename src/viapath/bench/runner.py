@@ -22,25 +22,60 @@ import math
 import os
 import time
 import zlib
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator
+from typing import Any
 
 from viapath.bench.suites import ETH_UCY_FOLDER, data_root, generate_suite, suite_names, write_suite
 
 COLUMNS = [
-    "scenario", "family", "planner", "perception", "seed", "scenario_hash", "options_hash", "viapath_version",
-    "reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s", "overlapping_at_appearance",
-    "static_contact", "min_clearance_m",
+    "scenario",
+    "family",
+    "planner",
+    "perception",
+    "seed",
+    "scenario_hash",
+    "options_hash",
+    "viapath_version",
+    "reached_goal",
+    "collision",
+    "at_fault_collision",
+    "at_fault_collision_seen_1s",
+    "overlapping_at_appearance",
+    "static_contact",
+    "min_clearance_m",
     "time_to_goal_s",
-    "free_time_s", "time_ratio", "path_length_m", "mean_lateral_deviation_m", "max_lateral_deviation_m",
-    "time_outside_corridor_s", "min_speed_mps", "max_speed_mps", "plan_time_p50_ms", "plan_time_p99_ms",
-    "episode_wall_s", "error", "shield", "shield_interventions", "command_flips", "escape_cycles",
+    "free_time_s",
+    "time_ratio",
+    "path_length_m",
+    "mean_lateral_deviation_m",
+    "max_lateral_deviation_m",
+    "time_outside_corridor_s",
+    "min_speed_mps",
+    "max_speed_mps",
+    "plan_time_p50_ms",
+    "plan_time_p99_ms",
+    "episode_wall_s",
+    "error",
+    "shield",
+    "shield_interventions",
+    "command_flips",
+    "escape_cycles",
 ]
 _BOOLS = {"reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s"}
-_TEXT = {"scenario", "family", "planner", "perception", "error", "shield", "scenario_hash", "options_hash",
-         "viapath_version"}
+_TEXT = {
+    "scenario",
+    "family",
+    "planner",
+    "perception",
+    "error",
+    "shield",
+    "scenario_hash",
+    "options_hash",
+    "viapath_version",
+}
 _INTS = {"seed", "command_flips", "escape_cycles", "overlapping_at_appearance", "static_contact"}
 BACKENDS = ("loky", "dask", "ray")
 
@@ -68,13 +103,27 @@ class Task:
     @property
     def key(self) -> tuple:
         # What a row is (see viapath.bench.identity): never the scenario name alone.
-        return (self.scenario_hash, self.planner, self.options_hash, self.perception, str(self.seed),
-                self.viapath_version, self.shield)
+        return (
+            self.scenario_hash,
+            self.planner,
+            self.options_hash,
+            self.perception,
+            str(self.seed),
+            self.viapath_version,
+            self.shield,
+        )
 
 
 def row_key(row: dict) -> tuple:
-    return (row["scenario_hash"], row["planner"], row["options_hash"], row["perception"], str(row["seed"]),
-            row["viapath_version"], row["shield"])
+    return (
+        row["scenario_hash"],
+        row["planner"],
+        row["options_hash"],
+        row["perception"],
+        str(row["seed"]),
+        row["viapath_version"],
+        row["shield"],
+    )
 
 
 def episode_seed(bench_seed: int, scenario_name: str) -> int:
@@ -88,7 +137,10 @@ def family_of(name: str) -> str:
 
 # -- loading suites ---------------------------------------------------------------------------------
 
-def load_suite(suite: str, out_dir: Path | None = None, count: int = 200, seed: int = 0, workers: int = 1) -> list[dict]:
+
+def load_suite(
+    suite: str, out_dir: Path | None = None, count: int = 200, seed: int = 0, workers: int = 1
+) -> list[dict]:
     """Scenario dicts of SUITE: a folder of scenario YAML files, or a suite name (generated with
     ``count`` and ``seed`` and written to ``out_dir/suite`` so it can be inspected and rerun)."""
     folder = Path(suite)
@@ -106,9 +158,10 @@ def load_suite(suite: str, out_dir: Path | None = None, count: int = 200, seed: 
             # a few seconds per thousand scenarios: done in the workers, chunk by chunk, in order.
             import joblib
 
-            chunks = [scenarios[start:start + 50] for start in range(0, len(scenarios), 50)]
+            chunks = [scenarios[start : start + 50] for start in range(0, len(scenarios), 50)]
             parts = joblib.Parallel(n_jobs=workers, backend="loky")(
-                joblib.delayed(_write_and_read)(chunk, folder) for chunk in chunks)
+                joblib.delayed(_write_and_read)(chunk, folder) for chunk in chunks
+            )
             loaded = [scenario for part in parts for scenario in part]
         else:
             loaded = _write_and_read(scenarios, folder)
@@ -154,8 +207,10 @@ def _resolve_replays(scenario: dict) -> dict:
         if not path.exists():
             candidate = data_root() / ETH_UCY_FOLDER / path.name
             if not candidate.exists():
-                raise BenchError(f"{scenario['name']}: replay file {replay['file']} not found (nor {candidate}); "
-                                 "set VIAPATH_DATA to the data folder")
+                raise BenchError(
+                    f"{scenario['name']}: replay file {replay['file']} not found (nor {candidate}); "
+                    "set VIAPATH_DATA to the data folder"
+                )
             replay["file"] = str(candidate)
         else:
             replay["file"] = str(path.resolve())
@@ -163,6 +218,7 @@ def _resolve_replays(scenario: dict) -> dict:
 
 
 # -- one episode (runs in the workers) ---------------------------------------------------------------
+
 
 def _free_time_s(scenario: dict) -> float | None:
     """How long the robot takes to the goal with nobody about (path following at the nominal speed): the
@@ -182,8 +238,9 @@ def _free_run_time_s(empty_scenario_json: str) -> float | None:
     from viapath.sim.loop import run_episode
 
     data = json.loads(empty_scenario_json)
-    episode = run_episode(scenario_from_dict({**data, "name": "free run", "obstacles": []}), planner="follow",
-                          perception="oracle")
+    episode = run_episode(
+        scenario_from_dict({**data, "name": "free run", "obstacles": []}), planner="follow", perception="oracle"
+    )
     return episode.metrics["time_to_goal_s"]
 
 
@@ -193,17 +250,32 @@ def run_task(task: Task) -> dict[str, Any]:
     from viapath.sim.loop import run_episode
 
     started = time.perf_counter()
-    row: dict[str, Any] = {column: None for column in COLUMNS}
+    row: dict[str, Any] = dict.fromkeys(COLUMNS)
     name = task.scenario["name"]
-    row.update(scenario=name, family=family_of(name), planner=task.planner, perception=task.perception,
-               seed=task.seed, scenario_hash=task.scenario_hash, options_hash=task.options_hash,
-               viapath_version=task.viapath_version, error="", shield=task.shield)
+    row.update(
+        scenario=name,
+        family=family_of(name),
+        planner=task.planner,
+        perception=task.perception,
+        seed=task.seed,
+        scenario_hash=task.scenario_hash,
+        options_hash=task.options_hash,
+        viapath_version=task.viapath_version,
+        error="",
+        shield=task.shield,
+    )
     _ignore_sigint_in_workers()
     try:
         scenario = scenario_from_dict(task.scenario, name)
-        episode = run_episode(scenario, planner=task.planner, perception=task.perception, seed=task.seed,
-                              shield=task.shield != "off", planner_overrides=dict(task.options),
-                              shield_options={"mode": "passive-friendly" if task.shield == "friendly" else "passive"})
+        episode = run_episode(
+            scenario,
+            planner=task.planner,
+            perception=task.perception,
+            seed=task.seed,
+            shield=task.shield != "off",
+            planner_overrides=dict(task.options),
+            shield_options={"mode": "passive-friendly" if task.shield == "friendly" else "passive"},
+        )
         for column in COLUMNS:
             if column in episode.metrics and column != "shield":
                 row[column] = episode.metrics[column]
@@ -211,7 +283,7 @@ def run_task(task: Task) -> dict[str, Any]:
         row["free_time_s"] = free
         if row["time_to_goal_s"] is not None and free:
             row["time_ratio"] = row["time_to_goal_s"] / free
-    except Exception as error:  # noqa: BLE001 - one bad episode must not stop a long run
+    except Exception as error:
         row["error"] = f"{type(error).__name__}: {error}".replace("\n", " ")[:300]
     row["episode_wall_s"] = time.perf_counter() - started
     return row
@@ -253,8 +325,10 @@ def results_lock(out_dir: Path) -> Iterator[None]:
     except OSError:
         holder = os.read(fd, 32).decode(errors="replace").strip() or "?"
         os.close(fd)
-        raise FolderBusy(f"{out_dir}: another viapath bench (pid {holder}) is writing into this folder; "
-                         "wait for it to end or use another --out") from None
+        raise FolderBusy(
+            f"{out_dir}: another viapath bench (pid {holder}) is writing into this folder; "
+            "wait for it to end or use another --out"
+        ) from None
     os.ftruncate(fd, 0)
     os.write(fd, f"{os.getpid()}\n".encode())
     _HELD_LOCKS[key] = fd
@@ -287,8 +361,10 @@ def repair_torn_tail(csv_path: Path) -> str | None:
             end = start
         handle.truncate(end)
     what = "its header" if end == 0 else "its last row"
-    return (f"{csv_path}: {what} was cut off mid-write ({size - end} bytes; a run stopped while writing it); "
-            "removed, that episode runs again")
+    return (
+        f"{csv_path}: {what} was cut off mid-write ({size - end} bytes; a run stopped while writing it); "
+        "removed, that episode runs again"
+    )
 
 
 def read_rows(csv_path: Path) -> list[dict[str, Any]]:
@@ -297,8 +373,9 @@ def read_rows(csv_path: Path) -> list[dict[str, Any]]:
     with open(csv_path, newline="") as handle:
         reader = csv.DictReader(handle)
         if reader.fieldnames is not None and list(reader.fieldnames) != COLUMNS:
-            raise BenchError(f"{csv_path}: written by another version of viapath (columns differ); "
-                             "use a new --out folder")
+            raise BenchError(
+                f"{csv_path}: written by another version of viapath (columns differ); use a new --out folder"
+            )
         rows = []
         for row in reader:
             try:
@@ -306,8 +383,10 @@ def read_rows(csv_path: Path) -> list[dict[str, Any]]:
                     raise ValueError(f"{len(row) - (None in row)} fields, expected {len(COLUMNS)}")
                 rows.append(_parse(row))
             except ValueError as error:
-                raise BenchError(f"{csv_path}: line {reader.line_num}: not a row of this file ({error}); remove "
-                                 "that line or use a new --out folder") from None
+                raise BenchError(
+                    f"{csv_path}: line {reader.line_num}: not a row of this file ({error}); remove "
+                    "that line or use a new --out folder"
+                ) from None
         return rows
 
 
@@ -350,8 +429,15 @@ def write_parquet(rows: list[dict], path: Path) -> bool:
 
 # -- the run ---------------------------------------------------------------------------------------
 
-def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "oracle", seed: int = 0,
-               shield: str | None = None, planner_options: dict[str, dict] | None = None) -> list[Task]:
+
+def make_tasks(
+    scenarios: list[dict],
+    planners: list[str],
+    perception: str = "oracle",
+    seed: int = 0,
+    shield: str | None = None,
+    planner_options: dict[str, dict] | None = None,
+) -> list[Task]:
     """``shield``: on | off | friendly for every planner, None for each planner's default (viapath.safety).
     ``planner_options``: planner name → option values set over every scenario's block (``--weights``)."""
     from viapath.planning import available_planners
@@ -371,9 +457,21 @@ def make_tasks(scenarios: list[dict], planners: list[str], perception: str = "or
     version = viapath_version()
     hashes = [scenario_hash(s) for s in scenarios]
     extra = {p: tuple(sorted((planner_options or {}).get(p, {}).items())) for p in planners}
-    return [Task(s, p, perception, episode_seed(seed, s["name"]), h, options_hash(s, p, dict(extra[p])), version,
-                 setting[p], extra[p])
-            for s, h in zip(scenarios, hashes) for p in planners]
+    return [
+        Task(
+            s,
+            p,
+            perception,
+            episode_seed(seed, s["name"]),
+            h,
+            options_hash(s, p, dict(extra[p])),
+            version,
+            setting[p],
+            extra[p],
+        )
+        for s, h in zip(scenarios, hashes)
+        for p in planners
+    ]
 
 
 def _parallel(backend: str, workers: int, scheduler: str | None):
@@ -407,6 +505,7 @@ def _parallel(backend: str, workers: int, scheduler: str | None):
             client.close()
             if not scheduler:
                 cluster.close()
+
         return parallel, close
     try:
         import ray
@@ -426,6 +525,7 @@ def _parallel(backend: str, workers: int, scheduler: str | None):
     def close():
         context.__exit__(None, None, None)
         ray.shutdown()
+
     return parallel, close
 
 
@@ -457,12 +557,38 @@ def run_bench(
     and the result's ``"repaired"`` says so).
     """
     with results_lock(Path(out_dir)):
-        return _run_bench(scenarios, planners, Path(out_dir), workers, backend, scheduler, perception, seed, progress,
-                          shield, force, planner_options, note or (lambda text: None))
+        return _run_bench(
+            scenarios,
+            planners,
+            Path(out_dir),
+            workers,
+            backend,
+            scheduler,
+            perception,
+            seed,
+            progress,
+            shield,
+            force,
+            planner_options,
+            note or (lambda text: None),
+        )
 
 
-def _run_bench(scenarios, planners, out_dir: Path, workers, backend, scheduler, perception, seed, progress, shield,
-               force, planner_options, note) -> dict[str, Any]:
+def _run_bench(
+    scenarios,
+    planners,
+    out_dir: Path,
+    workers,
+    backend,
+    scheduler,
+    perception,
+    seed,
+    progress,
+    shield,
+    force,
+    planner_options,
+    note,
+) -> dict[str, Any]:
     from viapath.bench.identity import check_folder, manifest
 
     csv_path = out_dir / "episodes.csv"
@@ -473,8 +599,9 @@ def _run_bench(scenarios, planners, out_dir: Path, workers, backend, scheduler, 
     latest = _latest(read_rows(csv_path))
     ok_names = {row["scenario"] for row in latest.values() if not row.get("error")}
     crashed_only = {row["scenario"] for row in latest.values()} - ok_names
-    refused = check_folder(out_dir, manifest({t.scenario['name']: t.scenario_hash for t in tasks}, perception, seed),
-                           force, crashed_only)
+    refused = check_folder(
+        out_dir, manifest({t.scenario["name"]: t.scenario_hash for t in tasks}, perception, seed), force, crashed_only
+    )
     if refused:
         raise BenchError(refused)
     done = {key for key, row in latest.items() if not row.get("error")}
@@ -505,8 +632,14 @@ def _run_bench(scenarios, planners, out_dir: Path, workers, backend, scheduler, 
     latest = _latest(read_rows(csv_path))
     rows = [latest[t.key] for t in tasks if t.key in latest]
     write_parquet(rows, out_dir / "episodes.parquet")
-    return {"rows": rows, "ran": len(todo), "skipped": len(tasks) - len(todo),
-            "errors": sum(1 for r in rows if r.get("error")), "wall_s": wall, "repaired": repaired}
+    return {
+        "rows": rows,
+        "ran": len(todo),
+        "skipped": len(tasks) - len(todo),
+        "errors": sum(1 for r in rows if r.get("error")),
+        "wall_s": wall,
+        "repaired": repaired,
+    }
 
 
 def _finished(tasks: list[Task], csv_path: Path) -> int:
@@ -518,8 +651,17 @@ def _worker_lost(error: BaseException) -> bool:
     """Whether ``error`` says a worker process died under the run (loky's TerminatedWorkerError, a broken
     process pool, dask's or ray's lost worker), rather than a bug of the run itself."""
     names = {cls.__name__ for cls in type(error).__mro__}
-    return bool(names & {"TerminatedWorkerError", "BrokenProcessPool", "BrokenExecutor", "KilledWorker",
-                         "WorkerCrashedError", "RayActorError"})
+    return bool(
+        names
+        & {
+            "TerminatedWorkerError",
+            "BrokenProcessPool",
+            "BrokenExecutor",
+            "KilledWorker",
+            "WorkerCrashedError",
+            "RayActorError",
+        }
+    )
 
 
 class BenchInterrupted(Exception):
@@ -536,8 +678,10 @@ class BenchWorkerLost(Exception):
 
     def __init__(self, finished: int, total: int, csv_path: Path, error: BaseException):
         cause = str(error).splitlines()[0][:200] if str(error) else type(error).__name__
-        super().__init__(f"a worker process died during the run ({type(error).__name__}: {cause}); the other "
-                         f"workers were stopped; {finished} of {total} episodes done and kept in {csv_path}")
+        super().__init__(
+            f"a worker process died during the run ({type(error).__name__}: {cause}); the other "
+            f"workers were stopped; {finished} of {total} episodes done and kept in {csv_path}"
+        )
         self.finished, self.total, self.csv_path = finished, total, csv_path
 
 
@@ -583,7 +727,7 @@ def _stop_workers(parallel) -> None:
             workers.terminate(kill_workers=True)
         elif backend is not None and hasattr(backend, "abort_everything"):
             backend.abort_everything(ensure_ready=False)
-    except Exception:  # noqa: BLE001 - best effort on the way out
+    except Exception:
         pass
 
 
@@ -598,8 +742,11 @@ def _run_and_write(parallel, tasks: list[Task], csv_path: Path, progress: bool) 
             handle.flush()
         if parallel.return_as == "list":
             chunk = max(8, 4 * max(1, parallel.n_jobs))
-            results: Iterable[dict] = (row for start in range(0, len(tasks), chunk)
-                                       for row in parallel(joblib.delayed(run_task)(t) for t in tasks[start:start + chunk]))
+            results: Iterable[dict] = (
+                row
+                for start in range(0, len(tasks), chunk)
+                for row in parallel(joblib.delayed(run_task)(t) for t in tasks[start : start + chunk])
+            )
         else:
             results = parallel(joblib.delayed(run_task)(task) for task in tasks)
         for row in _with_progress(results, len(tasks), progress):
@@ -611,7 +758,14 @@ def _with_progress(results: Iterable[dict], total: int, enabled: bool) -> Iterat
     if not enabled:
         yield from results
         return
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
 
     class _Rate(TextColumn):
         def __init__(self):
@@ -622,8 +776,17 @@ def _with_progress(results: Iterable[dict], total: int, enabled: bool) -> Iterat
             rate = task.completed / elapsed if elapsed > 0 else 0.0
             return f"{rate:5.1f} ep/s"
 
-    columns = [TextColumn("episodes"), BarColumn(), MofNCompleteColumn(), _Rate(), TextColumn("elapsed"),
-               TimeElapsedColumn(), TextColumn("/"), TimeRemainingColumn(), TextColumn("left")]
+    columns = [
+        TextColumn("episodes"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        _Rate(),
+        TextColumn("elapsed"),
+        TimeElapsedColumn(),
+        TextColumn("/"),
+        TimeRemainingColumn(),
+        TextColumn("left"),
+    ]
     from rich.console import Console
 
     with Progress(*columns, console=Console(stderr=True), transient=False) as bar:

@@ -38,9 +38,9 @@ is a suite of its own; ``mixed`` stays the nine built-in ones, so its scenarios 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 import yaml
@@ -106,7 +106,8 @@ def generate_suite(name: str, count: int, seed: int = 0, data: Path | None = Non
 
         chunks = [range(start, min(count, start + 25)) for start in range(0, count, 25)]
         parts = joblib.Parallel(n_jobs=workers, backend="loky")(
-            joblib.delayed(_synthetic_scenarios)(name, seed, chunk) for chunk in chunks)
+            joblib.delayed(_synthetic_scenarios)(name, seed, chunk) for chunk in chunks
+        )
         return [scenario for part in parts for scenario in part]
     return _synthetic_scenarios(name, seed, range(count))
 
@@ -147,6 +148,7 @@ def write_suite(scenarios: list[dict], out_dir: Path) -> list[Path]:
 
 
 # -- common pieces --------------------------------------------------------------------------------
+
 
 def _base(rng: np.random.Generator, family: str, description: str) -> dict:
     length = float(rng.uniform(6.0, 8.0))
@@ -191,8 +193,11 @@ def _head_on_person(rng, scenario) -> dict:
 
 def _overtaking_person(rng, scenario) -> dict:
     speed = _robot_speed(scenario)
-    return {"start": [-rng.uniform(1.0, 2.0), rng.uniform(-0.2, 0.2)],
-            "velocity": [speed + rng.uniform(0.15, 0.35), 0.0], "radius": 0.25}
+    return {
+        "start": [-rng.uniform(1.0, 2.0), rng.uniform(-0.2, 0.2)],
+        "velocity": [speed + rng.uniform(0.15, 0.35), 0.0],
+        "radius": 0.25,
+    }
 
 
 @FAMILIES.register("crossing")
@@ -220,8 +225,13 @@ def overtaken(rng, index) -> dict:
 def overtaking(rng, index) -> dict:
     scenario = _base(rng, "overtaking", "A slower walker ahead on the path: the robot must pass it.")
     speed = _robot_speed(scenario)
-    scenario["obstacles"].append({"start": [rng.uniform(1.2, 2.5), rng.uniform(-0.2, 0.2)],
-                                  "velocity": [speed * rng.uniform(0.05, 0.5), 0.0], "radius": 0.25})
+    scenario["obstacles"].append(
+        {
+            "start": [rng.uniform(1.2, 2.5), rng.uniform(-0.2, 0.2)],
+            "velocity": [speed * rng.uniform(0.05, 0.5), 0.0],
+            "radius": 0.25,
+        }
+    )
     return scenario
 
 
@@ -260,15 +270,25 @@ def _timed_people(trajectory, keep_every: int, starts_at, radius=0.25) -> list[d
         first = int(np.searchsorted(times, starts_at[j] - 1e-9))
         last = min(int(moving[-1]) + 1, len(times) - 1) if len(moving) else len(times) - 1
         picks = [k for k in range(first, last, keep_every) if k > 0] + [last]
-        people.append({"start": positions[0].tolist(), "waypoints": [positions[k].tolist() for k in picks],
-                       "times_s": [0.0] + [float(times[k]) for k in picks], "radius": radius})
+        people.append(
+            {
+                "start": positions[0].tolist(),
+                "waypoints": [positions[k].tolist() for k in picks],
+                "times_s": [0.0] + [float(times[k]) for k in picks],
+                "radius": radius,
+            }
+        )
     return people
 
 
 @FAMILIES.register("crowd")
 def crowd(rng, index) -> dict:
-    scenario = _base(rng, "crowd", "A crowd moved by the social-force model (Helbing & Molnar 1995), "
-                                   "crossing and walking along the corridor; precomputed, does not react to the robot.")
+    scenario = _base(
+        rng,
+        "crowd",
+        "A crowd moved by the social-force model (Helbing & Molnar 1995), "
+        "crossing and walking along the corridor; precomputed, does not react to the robot.",
+    )
     length = _length(scenario)
     n = int(rng.integers(6, 13))
     starts, routes = [], []
@@ -283,8 +303,9 @@ def crowd(rng, index) -> dict:
             routes.append([[-3.0, rng.uniform(-2.0, 2.0)], [-6.0, rng.uniform(-4.0, 4.0)]])
     start_times = rng.uniform(0.0, 15.0, n)
     speeds = rng.uniform(0.5, 1.1, n)
-    trajectory = simulate_crowd(starts, routes, speeds, scenario["duration_s"], sample_dt_s=0.1,
-                                start_times_s=start_times)
+    trajectory = simulate_crowd(
+        starts, routes, speeds, scenario["duration_s"], sample_dt_s=0.1, start_times_s=start_times
+    )
     scenario["obstacles"] = _timed_people(trajectory, 5, start_times)
     return scenario
 
@@ -299,8 +320,15 @@ def hallway(rng, index) -> dict:
     starts = [[rng.uniform(length + 1.0, length + 8.0), rng.uniform(-wall_y + 0.4, wall_y - 0.4)] for _ in range(n)]
     routes = [[[-2.5, rng.uniform(-wall_y + 0.4, wall_y - 0.4)]] for _ in range(n)]
     start_times = rng.uniform(0.0, 10.0, n)
-    trajectory = simulate_crowd(starts, routes, rng.uniform(0.5, 1.1, n), scenario["duration_s"], sample_dt_s=0.1,
-                                walls=walls, start_times_s=start_times)
+    trajectory = simulate_crowd(
+        starts,
+        routes,
+        rng.uniform(0.5, 1.1, n),
+        scenario["duration_s"],
+        sample_dt_s=0.1,
+        walls=walls,
+        start_times_s=start_times,
+    )
     scenario["obstacles"] = _timed_people(trajectory, 5, start_times)
     scenario["walls"] = walls
     return scenario
@@ -314,9 +342,12 @@ def paper(rng, index) -> dict:
     jitter = (lambda low, high: 0.0) if exact else (lambda low, high: float(rng.uniform(low, high)))
     scenario = {
         "name": "paper",
-        "description": ["Paper Fig. 8 left: obstacle from behind.", "Paper Fig. 8 centre: obstacle head-on.",
-                        "Paper Fig. 8 right: obstacle crossing from the right side."][variant]
-                       + ("" if exact else " Speeds and offsets jittered."),
+        "description": [
+            "Paper Fig. 8 left: obstacle from behind.",
+            "Paper Fig. 8 centre: obstacle head-on.",
+            "Paper Fig. 8 right: obstacle crossing from the right side.",
+        ][variant]
+        + ("" if exact else " Speeds and offsets jittered."),
         "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": 0.2, "radius": 0.25},
         "path": {"waypoints": [[0.0, 0.0], [5.0, 0.0]], "half_width": 1.0},
         "duration_s": 60.0,
@@ -358,16 +389,28 @@ def static(rng, index) -> dict:
     length, half_width = _length(scenario), scenario["path"]["half_width"]
     if kind == "box":
         size = float(rng.uniform(0.3, 0.6))
-        scenario["boxes"] = [{"center": [float(rng.uniform(2.5, length - 2.0)), float(rng.uniform(-0.2, 0.2))],
-                              "size": [size, float(rng.uniform(0.3, 0.6))], "yaw": float(rng.uniform(-0.5, 0.5))}]
+        scenario["boxes"] = [
+            {
+                "center": [float(rng.uniform(2.5, length - 2.0)), float(rng.uniform(-0.2, 0.2))],
+                "size": [size, float(rng.uniform(0.3, 0.6))],
+                "yaw": float(rng.uniform(-0.5, 0.5)),
+            }
+        ]
         if rng.random() < 0.5:
             scenario["obstacles"].append(_crossing_person(rng, scenario))
     elif kind == "cart":
         on_path = rng.random() < 0.5
-        centre = [float(rng.uniform(2.5, length - 2.0)),
-                  float(rng.uniform(-0.15, 0.15)) if on_path else float(rng.choice([-1, 1]) * (half_width - 0.1))]
-        scenario["boxes"] = [{"center": centre, "size": [float(rng.uniform(0.8, 1.2)), float(rng.uniform(0.4, 0.6))],
-                              "yaw": float(rng.uniform(-np.pi, np.pi)) if on_path else 0.0}]
+        centre = [
+            float(rng.uniform(2.5, length - 2.0)),
+            float(rng.uniform(-0.15, 0.15)) if on_path else float(rng.choice([-1, 1]) * (half_width - 0.1)),
+        ]
+        scenario["boxes"] = [
+            {
+                "center": centre,
+                "size": [float(rng.uniform(0.8, 1.2)), float(rng.uniform(0.4, 0.6))],
+                "yaw": float(rng.uniform(-np.pi, np.pi)) if on_path else 0.0,
+            }
+        ]
         scenario["obstacles"].append(_head_on_person(rng, scenario))
     elif kind == "pillars":
         angles = np.linspace(0.0, 2 * np.pi, 9)[:-1]
@@ -401,6 +444,7 @@ def static(rng, index) -> dict:
 
 # -- ETH/UCY ---------------------------------------------------------------------------------------
 
+
 @lru_cache(maxsize=8)
 def _scene_samples(file: str, dt_s: float):
     """All (time, x, y) samples of a trajectory file, as one array."""
@@ -408,8 +452,15 @@ def _scene_samples(file: str, dt_s: float):
     return np.column_stack([table[:, 0] / 10.0 * dt_s, table[:, 2], table[:, 3]])
 
 
-def eth_ucy(count: int, seed: int = 0, data: Path | None = None, path_length_m: float = 6.0,
-            robot_speed_mps: float = 0.3, duration_s: float = 40.0, react: bool = False) -> list[dict]:
+def eth_ucy(
+    count: int,
+    seed: int = 0,
+    data: Path | None = None,
+    path_length_m: float = 6.0,
+    robot_speed_mps: float = 0.3,
+    duration_s: float = 40.0,
+    react: bool = False,
+) -> list[dict]:
     """Designated paths across the five ETH/UCY scenes at many start times (scene ``i mod 5``; univ
     alternates between students001 and students003).
 
@@ -423,8 +474,10 @@ def eth_ucy(count: int, seed: int = 0, data: Path | None = None, path_length_m: 
     root = Path(data) if data is not None else data_root()
     folder = root / ETH_UCY_FOLDER
     if not folder.is_dir():
-        raise SuiteError(f"ETH/UCY data not found at {folder}; set VIAPATH_DATA to the folder holding "
-                         f"{ETH_UCY_FOLDER}/ (see the data README)")
+        raise SuiteError(
+            f"ETH/UCY data not found at {folder}; set VIAPATH_DATA to the folder holding "
+            f"{ETH_UCY_FOLDER}/ (see the data README)"
+        )
     scenarios = []
     for index in range(count):
         scene_slot = index % 5
@@ -444,18 +497,27 @@ def eth_ucy(count: int, seed: int = 0, data: Path | None = None, path_length_m: 
         replay = {"file": str(file_path), "dt_s": dt, "start_s": start_s, "offset": [0.0, 0.0], "radius": 0.25}
         if react:
             replay["react"] = True
-        scenarios.append(_rounded({
-            "name": f"eth-ucy-{'react-' if react else ''}{scene}-{index:04d}",
-            "description": f"ETH/UCY scene {scene} ({file}, {dt:.3f} s per row) replayed from {start_s:.1f} s; "
-                           + ("the people give way to the robot." if react else "the people do not react to the robot."),
-            "robot": {"start": waypoints[0], "heading": float(np.arctan2(waypoints[1][1] - waypoints[0][1],
-                                                                           waypoints[1][0] - waypoints[0][0])),
-                      "speed": robot_speed_mps, "radius": 0.25},
-            "path": {"waypoints": waypoints, "half_width": 1.0},
-            "obstacles": [{"replay": replay}],
-            "duration_s": duration_s,
-            "seed": int(seed),
-        }))
+        scenarios.append(
+            _rounded(
+                {
+                    "name": f"eth-ucy-{'react-' if react else ''}{scene}-{index:04d}",
+                    "description": f"ETH/UCY scene {scene} ({file}, {dt:.3f} s per row) replayed from {start_s:.1f} s; "
+                    + ("the people give way to the robot." if react else "the people do not react to the robot."),
+                    "robot": {
+                        "start": waypoints[0],
+                        "heading": float(
+                            np.arctan2(waypoints[1][1] - waypoints[0][1], waypoints[1][0] - waypoints[0][0])
+                        ),
+                        "speed": robot_speed_mps,
+                        "radius": 0.25,
+                    },
+                    "path": {"waypoints": waypoints, "half_width": 1.0},
+                    "obstacles": [{"replay": replay}],
+                    "duration_s": duration_s,
+                    "seed": int(seed),
+                }
+            )
+        )
     return scenarios
 
 

@@ -45,15 +45,20 @@ import math
 import statistics
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from viapath.bench.runner import BenchError, family_of, run_bench
 
 PAPER_WEIGHTS = {"k1": 0.1, "k2": 0.001, "k3": 0.08, "k4": 0.3}
-DEFAULT_SPACE: dict[str, tuple[float, float]] = {"k1": (0.01, 1.0), "k2": (1e-4, 0.1), "k3": (0.008, 0.8),
-                                                 "k4": (0.03, 3.0)}
+DEFAULT_SPACE: dict[str, tuple[float, float]] = {
+    "k1": (0.01, 1.0),
+    "k2": (1e-4, 0.1),
+    "k3": (0.008, 0.8),
+    "k4": (0.03, 3.0),
+}
 MISS_TIME_RATIO = 10.0
 PLANNER = "viapath"
 
@@ -79,8 +84,11 @@ class Constraints:
 
     def values(self, m: dict[str, Any]) -> list[float]:
         """Optuna's convention: each value ≤ 0 means satisfied."""
-        return [m["at_fault"] - self.max_at_fault, m["outside_s_per_episode"] - self.max_outside_s,
-                m["misses_without_contact"] - self.max_misses]
+        return [
+            m["at_fault"] - self.max_at_fault,
+            m["outside_s_per_episode"] - self.max_outside_s,
+            m["misses_without_contact"] - self.max_misses,
+        ]
 
 
 CONSTRAINT_NAMES = ("at_fault", "outside_s_per_episode", "misses_without_contact")
@@ -115,8 +123,10 @@ def parse_space(assignments: list[str]) -> list[Param]:
         if not sep or not colon:
             raise TuneError(f"--param {text}: expected NAME=LOW:HIGH, e.g. k2=0.001:0.1")
         if name not in schema:
-            raise TuneError(f"--param {text}: unknown option {name!r}; the viapath planner's numeric options: "
-                            + ", ".join(o.path for o in schema if o.kind in (int, float)))
+            raise TuneError(
+                f"--param {text}: unknown option {name!r}; the viapath planner's numeric options: "
+                + ", ".join(o.path for o in schema if o.kind in (int, float))
+            )
         option = schema[name]
         if option.kind not in (int, float):
             raise TuneError(f"--param {text}: option {option.path} is not a number (it is {option.kind.__name__})")
@@ -129,7 +139,7 @@ def parse_space(assignments: list[str]) -> list[Param]:
         for value in (low, high):
             try:
                 schema.validate({name: int(value) if option.kind is int else value})
-            except Exception as error:  # noqa: BLE001 - the schema's message says which bound
+            except Exception as error:
                 raise TuneError(f"--param {text}: {error}") from None
         log = option.group == "weights" and low > 0
         space[name] = Param(name, low, high, log=log, integer=option.kind is int)
@@ -142,8 +152,9 @@ def suite_metrics(rows: list[dict[str, Any]]) -> dict[str, Any]:
         raise TuneError("the suite ran no episodes")
     ok = [r for r in rows if not r.get("error")]
     deviations = [r["mean_lateral_deviation_m"] for r in ok if r.get("mean_lateral_deviation_m") is not None]
-    ratios = [r["time_ratio"] if r.get("reached_goal") and r.get("time_ratio") is not None else MISS_TIME_RATIO
-              for r in rows]
+    ratios = [
+        r["time_ratio"] if r.get("reached_goal") and r.get("time_ratio") is not None else MISS_TIME_RATIO for r in rows
+    ]
     misses = [r for r in rows if r.get("error") or not r.get("reached_goal")]
     by_family: dict[str, int] = {}
     for r in misses:
@@ -155,7 +166,9 @@ def suite_metrics(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "median_time_ratio": statistics.median(ratios),
         "at_fault": sum(1 for r in ok if r.get("at_fault_collision")),
         "contacts": sum(1 for r in ok if r.get("collision")),
-        "outside_s_per_episode": statistics.fmean([r.get("time_outside_corridor_s") or 0.0 for r in ok]) if ok else math.inf,
+        "outside_s_per_episode": statistics.fmean([r.get("time_outside_corridor_s") or 0.0 for r in ok])
+        if ok
+        else math.inf,
         "misses": len(misses),
         "misses_without_contact": sum(1 for r in misses if r.get("error") or not r.get("collision")),
         "misses_by_family": dict(sorted(by_family.items())),
@@ -163,12 +176,26 @@ def suite_metrics(rows: list[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
-def evaluate(scenarios: list[dict], values: dict[str, Any], workers: int, seed: int, backend: str = "loky",
-             progress: bool = False) -> dict[str, Any]:
+def evaluate(
+    scenarios: list[dict],
+    values: dict[str, Any],
+    workers: int,
+    seed: int,
+    backend: str = "loky",
+    progress: bool = False,
+) -> dict[str, Any]:
     """Run the suite with the viapath planner and these option values; its :func:`suite_metrics`."""
     with tempfile.TemporaryDirectory(prefix="viapath-tune-") as folder:
-        result = run_bench(scenarios, [PLANNER], Path(folder), workers=workers, backend=backend, seed=seed,
-                           progress=progress, planner_options={PLANNER: dict(values)})
+        result = run_bench(
+            scenarios,
+            [PLANNER],
+            Path(folder),
+            workers=workers,
+            backend=backend,
+            seed=seed,
+            progress=progress,
+            planner_options={PLANNER: dict(values)},
+        )
     return suite_metrics(result["rows"])
 
 
@@ -181,19 +208,23 @@ def dominates(a: dict[str, Any], b: dict[str, Any]) -> bool:
 
 def dominates_paper(candidate: dict[str, Any], paper: dict[str, Any]) -> bool:
     """The issue's target: no more contacts or at-fault contacts, and strictly lower deviation AND time ratio."""
-    return (candidate["contacts"] <= paper["contacts"] and candidate["at_fault"] <= paper["at_fault"]
-            and candidate["mean_lateral_deviation_m"] < paper["mean_lateral_deviation_m"]
-            and candidate["median_time_ratio"] < paper["median_time_ratio"])
+    return (
+        candidate["contacts"] <= paper["contacts"]
+        and candidate["at_fault"] <= paper["at_fault"]
+        and candidate["mean_lateral_deviation_m"] < paper["mean_lateral_deviation_m"]
+        and candidate["median_time_ratio"] < paper["median_time_ratio"]
+    )
 
 
 # -- the study ----------------------------------------------------------------------------------------
+
 
 def check_storage(url: str) -> None:
     """Refuse a storage that cannot be opened, before anything is created."""
     if "://" not in url:
         raise TuneError(f"--storage {url}: expected a database URL such as sqlite:///tune.db")
     if url.startswith("sqlite:///"):
-        path = Path(url[len("sqlite:///"):])
+        path = Path(url[len("sqlite:///") :])
         if not path.parent.exists() or not path.parent.is_dir():
             raise TuneError(f"--storage {url}: folder {path.parent} does not exist")
         if path.is_dir():
@@ -211,7 +242,7 @@ def open_study(url: str, name: str, seed: int, sampler: str, constraints: Constr
     check_storage(url)
     if sampler not in ("tpe", "nsga2"):
         raise TuneError(f"--sampler {sampler}: expected tpe or nsga2")
-    sqlite_file = Path(url[len("sqlite:///"):]) if url.startswith("sqlite:///") else None
+    sqlite_file = Path(url[len("sqlite:///") :]) if url.startswith("sqlite:///") else None
     existed = sqlite_file is not None and sqlite_file.exists()
 
     def constraints_func(trial):
@@ -228,12 +259,17 @@ def open_study(url: str, name: str, seed: int, sampler: str, constraints: Constr
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     try:
         storage = optuna.storages.RDBStorage(url, heartbeat_interval=60, grace_period=180)
-        study = optuna.create_study(study_name=name, storage=storage, sampler=make_sampler(seed), load_if_exists=True,
-                                    directions=["minimize", "minimize"])
+        study = optuna.create_study(
+            study_name=name,
+            storage=storage,
+            sampler=make_sampler(seed),
+            load_if_exists=True,
+            directions=["minimize", "minimize"],
+        )
         # A resumed study must not replay the first run's random draws: the seed moves on with the trials
         # already stored (still deterministic for the same history).
         study.sampler = make_sampler(seed + len(study.trials))
-    except Exception as error:  # noqa: BLE001 - SQLAlchemy/Optuna errors: one message
+    except Exception as error:
         if sqlite_file is not None and not existed and sqlite_file.exists():
             sqlite_file.unlink()
         message = str(error).splitlines()[0] if str(error) else type(error).__name__
@@ -243,8 +279,10 @@ def open_study(url: str, name: str, seed: int, sampler: str, constraints: Constr
         study.set_user_attr("identity", identity)
     elif recorded != identity:
         differs = [key for key in identity if recorded.get(key) != identity[key]]
-        raise TuneError(f"study {name!r} in {url} was run with another {', '.join(differs)}; use another --study "
-                        "name (or the same settings to continue it)")
+        raise TuneError(
+            f"study {name!r} in {url} was run with another {', '.join(differs)}; use another --study "
+            "name (or the same settings to continue it)"
+        )
     return study
 
 
@@ -273,10 +311,19 @@ def paper_trial(study):
     return next((t for t in complete_trials(study) if t.user_attrs.get("reference") == "paper"), None)
 
 
-def run_study(study, scenarios: list[dict], space: list[Param], trials: int, workers: int, seed: int,
-              constraints: Constraints, timeout_s: float | None = None, backend: str = "loky",
-              on_trial: Callable[[Any, Any], None] | None = None,
-              start_from: list[tuple[str, dict[str, Any]]] = ()) -> tuple[int, float]:
+def run_study(
+    study,
+    scenarios: list[dict],
+    space: list[Param],
+    trials: int,
+    workers: int,
+    seed: int,
+    constraints: Constraints,
+    timeout_s: float | None = None,
+    backend: str = "loky",
+    on_trial: Callable[[Any, Any], None] | None = None,
+    start_from: list[tuple[str, dict[str, Any]]] = (),
+) -> tuple[int, float]:
     """Run trials until the study has ``trials`` complete ones (or ``timeout_s`` passes); returns
     (trials run now, wall seconds). ``start_from``: (label, option values) tried first (once per study),
     e.g. presets a user already trusts; values outside the searched ranges are left to the sampler."""
@@ -329,8 +376,15 @@ def run_study(study, scenarios: list[dict], space: list[Param], trials: int, wor
         complete_then = len(complete_trials(study))
         # Optuna's own progress bar is off: the command draws a rich one. A trial whose suite cannot run
         # is marked failed and does not count; if every trial of a round fails, stop rather than loop.
-        study.optimize(objective, n_trials=need, timeout=left, callbacks=callbacks, catch=(BenchError,),
-                       gc_after_trial=False, show_progress_bar=False)
+        study.optimize(
+            objective,
+            n_trials=need,
+            timeout=left,
+            callbacks=callbacks,
+            catch=(BenchError,),
+            gc_after_trial=False,
+            show_progress_bar=False,
+        )
         if len(complete_trials(study)) == complete_then:
             break
     return len(complete_trials(study)) - done_before, time.perf_counter() - started
@@ -341,8 +395,16 @@ def pareto_front(study) -> list[Any]:
     return [t for t in study.best_trials if is_feasible(t)]
 
 
-def evaluate_on_test(study, trials: list[Any], scenarios: list[dict], key: str, workers: int, seed: int,
-                     backend: str = "loky", on_done: Callable[[Any, dict], None] | None = None) -> dict[int, dict]:
+def evaluate_on_test(
+    study,
+    trials: list[Any],
+    scenarios: list[dict],
+    key: str,
+    workers: int,
+    seed: int,
+    backend: str = "loky",
+    on_done: Callable[[Any, dict], None] | None = None,
+) -> dict[int, dict]:
     """Each trial's metrics on the test suite (cached in the study under ``key``)."""
     cache = dict(study.user_attrs.get(f"test:{key}", {}))
     results: dict[int, dict] = {}
@@ -372,8 +434,12 @@ def rank(results: dict[int, dict], constraints: Constraints, reference: int | No
         dominated_by = sum(1 for other, o in results.items() if other != number and dominates(o, m))
         scale_d = ref["mean_lateral_deviation_m"] if ref and ref["mean_lateral_deviation_m"] > 0 else 1.0
         scale_t = ref["median_time_ratio"] if ref and ref["median_time_ratio"] > 0 else 1.0
-        return (not feasible, dominated_by,
-                m["mean_lateral_deviation_m"] / scale_d + m["median_time_ratio"] / scale_t, number)
+        return (
+            not feasible,
+            dominated_by,
+            m["mean_lateral_deviation_m"] / scale_d + m["median_time_ratio"] / scale_t,
+            number,
+        )
 
     return sorted(results, key=key)
 
@@ -386,22 +452,42 @@ def knee(trials: list[Any], reference) -> Any | None:
     return min(trials, key=lambda t: (t.values[0] / (d0 or 1.0) + t.values[1] / (t0 or 1.0), t.number))
 
 
-def export_preset(trial, path: Path, identity: dict[str, Any], test: dict[str, Any] | None,
-                  paper_train: dict[str, Any] | None, paper_test: dict[str, Any] | None) -> None:
+def export_preset(
+    trial,
+    path: Path,
+    identity: dict[str, Any],
+    test: dict[str, Any] | None,
+    paper_train: dict[str, Any] | None,
+    paper_test: dict[str, Any] | None,
+) -> None:
     from viapath.presets import preset_from_dict
 
     def short(m):
         return None if m is None else {k: (round(v, 4) if isinstance(v, float) else v) for k, v in m.items()}
 
-    evidence = {"study": identity.get("study"), "trial": trial.number, "train_suite": identity.get("suite"),
-                "train": short(trial.user_attrs.get("metrics")), "paper_on_train": short(paper_train)}
+    evidence = {
+        "study": identity.get("study"),
+        "trial": trial.number,
+        "train_suite": identity.get("suite"),
+        "train": short(trial.user_attrs.get("metrics")),
+        "paper_on_train": short(paper_train),
+    }
     if test is not None:
-        evidence.update(test_suite=identity.get("test_suite"), test=short(test), paper_on_test=short(paper_test),
-                        dominates_paper_on_test=bool(paper_test and dominates_paper(test, paper_test)))
+        evidence.update(
+            test_suite=identity.get("test_suite"),
+            test=short(test),
+            paper_on_test=short(paper_test),
+            dominates_paper_on_test=bool(paper_test and dominates_paper(test, paper_test)),
+        )
     from viapath.planning.viapath.options import VIAPATH_OPTIONS
 
-    data = {"name": path.stem, "description": f"trial {trial.number} of study {identity.get('study')!r}",
-            "planner": PLANNER, "options": VIAPATH_OPTIONS.nest(trial_values(trial)), "evidence": evidence}
+    data = {
+        "name": path.stem,
+        "description": f"trial {trial.number} of study {identity.get('study')!r}",
+        "planner": PLANNER,
+        "options": VIAPATH_OPTIONS.nest(trial_values(trial)),
+        "evidence": evidence,
+    }
     preset = preset_from_dict(data, str(path))  # validated before it is written
     path.write_text(preset.to_yaml())
 
@@ -418,18 +504,35 @@ def plot_front(path: Path, study, front: list[Any], paper, test: dict[int, dict]
     panels = 2 if test else 1
     fig, axes = plt.subplots(1, panels, figsize=(6.4 * panels, 4.8), squeeze=False)
     ax = axes[0][0]
-    ax.scatter([t.values[1] for t in infeasible], [t.values[0] for t in infeasible], marker="x", color="0.6",
-               label=f"infeasible ({len(infeasible)})")
-    ax.scatter([t.values[1] for t in feasible], [t.values[0] for t in feasible], color="tab:blue", s=18,
-               label=f"feasible ({len(feasible)})")
+    ax.scatter(
+        [t.values[1] for t in infeasible],
+        [t.values[0] for t in infeasible],
+        marker="x",
+        color="0.6",
+        label=f"infeasible ({len(infeasible)})",
+    )
+    ax.scatter(
+        [t.values[1] for t in feasible],
+        [t.values[0] for t in feasible],
+        color="tab:blue",
+        s=18,
+        label=f"feasible ({len(feasible)})",
+    )
     ordered = sorted(front, key=lambda t: t.values[1])
-    ax.plot([t.values[1] for t in ordered], [t.values[0] for t in ordered], "-o", color="tab:orange", ms=6,
-            label=f"Pareto front ({len(front)})")
+    ax.plot(
+        [t.values[1] for t in ordered],
+        [t.values[0] for t in ordered],
+        "-o",
+        color="tab:orange",
+        ms=6,
+        label=f"Pareto front ({len(front)})",
+    )
     for t in ordered:
         ax.annotate(str(t.number), (t.values[1], t.values[0]), textcoords="offset points", xytext=(4, 4), fontsize=7)
     if paper is not None:
-        ax.scatter([paper.values[1]], [paper.values[0]], marker="*", s=220, color="tab:red", zorder=5,
-                   label="paper's weights")
+        ax.scatter(
+            [paper.values[1]], [paper.values[0]], marker="*", s=220, color="tab:red", zorder=5, label="paper's weights"
+        )
     ax.set_xlabel("median time ratio (time to goal / obstacle-free time)")
     ax.set_ylabel("mean lateral deviation [m]")
     ax.set_title(f"train suite: {len(trials)} trials")
@@ -440,11 +543,21 @@ def plot_front(path: Path, study, front: list[Any], paper, test: dict[int, dict]
         paper_number = paper.number if paper is not None else None
         for number, m in test.items():
             is_paper = number == paper_number
-            ax.scatter([m["median_time_ratio"]], [m["mean_lateral_deviation_m"]],
-                       marker="*" if is_paper else "o", s=220 if is_paper else 30,
-                       color="tab:red" if is_paper else "tab:orange", zorder=5 if is_paper else 3)
-            ax.annotate("paper" if is_paper else str(number), (m["median_time_ratio"], m["mean_lateral_deviation_m"]),
-                        textcoords="offset points", xytext=(4, 4), fontsize=7)
+            ax.scatter(
+                [m["median_time_ratio"]],
+                [m["mean_lateral_deviation_m"]],
+                marker="*" if is_paper else "o",
+                s=220 if is_paper else 30,
+                color="tab:red" if is_paper else "tab:orange",
+                zorder=5 if is_paper else 3,
+            )
+            ax.annotate(
+                "paper" if is_paper else str(number),
+                (m["median_time_ratio"], m["mean_lateral_deviation_m"]),
+                textcoords="offset points",
+                xytext=(4, 4),
+                fontsize=7,
+            )
         ax.set_xlabel("median time ratio")
         ax.set_ylabel("mean lateral deviation [m]")
         ax.set_title("test suite: the front's trials and the paper's")

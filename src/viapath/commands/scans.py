@@ -10,7 +10,6 @@ import csv
 import json
 import math
 from pathlib import Path
-from typing import Optional
 
 import numpy as np
 import typer
@@ -27,7 +26,7 @@ def _fail(message: str, code: int = 2) -> None:
     raise typer.Exit(code)
 
 
-def _check_output(file: Optional[Path], suffixes: tuple[str, ...], option: str) -> None:
+def _check_output(file: Path | None, suffixes: tuple[str, ...], option: str) -> None:
     if file is None:
         return
     if file.suffix.lower() not in suffixes:
@@ -43,12 +42,16 @@ def _finite(value):
 
 
 def scans(
-    bag: Path = typer.Argument(..., help="ROS 1 .bag, ROS 2 bag folder, .db3 or .mcap file with sensor_msgs/LaserScan."),
-    topic: Optional[str] = typer.Option(None, "--topic", help="LaserScan topic (default: the only one)."),
-    plot: Optional[Path] = typer.Option(None, "--plot", help="Write a figure (PNG/PDF/SVG): tracks and walking speeds."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Write every confirmed track state per scan as CSV."),
+    bag: Path = typer.Argument(
+        ..., help="ROS 1 .bag, ROS 2 bag folder, .db3 or .mcap file with sensor_msgs/LaserScan."
+    ),
+    topic: str | None = typer.Option(None, "--topic", help="LaserScan topic (default: the only one)."),
+    plot: Path | None = typer.Option(None, "--plot", help="Write a figure (PNG/PDF/SVG): tracks and walking speeds."),
+    out: Path | None = typer.Option(None, "--out", help="Write every confirmed track state per scan as CSV."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object (summary, tracks, evaluation)."),
-    labels: Optional[str] = typer.Option(None, "--labels", help="PoseArray topic of labelled legs: report recall/precision."),
+    labels: str | None = typer.Option(
+        None, "--labels", help="PoseArray topic of labelled legs: report recall/precision."
+    ),
     max_rows: int = typer.Option(25, "--max-rows", min=1, help="Tracks shown in the table (longest first)."),
 ) -> None:
     """Detect and track people in a laser recording; report the tracks (id, time, position, velocity)."""
@@ -112,35 +115,84 @@ def _json_default(value):
 def _write_csv(path: Path, result) -> None:
     with path.open("w", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow(["scan", "time_s", "stamp_s", "track_id", "x_m", "y_m", "vx_mps", "vy_mps", "speed_mps", "radius_m",
-                         "position_sigma_m", "velocity_sigma_mps"])
+        writer.writerow(
+            [
+                "scan",
+                "time_s",
+                "stamp_s",
+                "track_id",
+                "x_m",
+                "y_m",
+                "vx_mps",
+                "vy_mps",
+                "speed_mps",
+                "radius_m",
+                "position_sigma_m",
+                "velocity_sigma_mps",
+            ]
+        )
         for row, vel_sigma in zip(result.track_rows, result.velocity_sigma_mps, strict=True):
             scan, t, tid, x, y, vx, vy, radius, pos_sigma = row
-            writer.writerow([int(scan), f"{t:.4f}", f"{t + result.start_stamp_s:.4f}", int(tid), f"{x:.4f}", f"{y:.4f}",
-                             f"{vx:.4f}", f"{vy:.4f}", f"{math.hypot(vx, vy):.4f}", f"{radius:.4f}", f"{pos_sigma:.4f}",
-                             f"{vel_sigma:.4f}"])
+            writer.writerow(
+                [
+                    int(scan),
+                    f"{t:.4f}",
+                    f"{t + result.start_stamp_s:.4f}",
+                    int(tid),
+                    f"{x:.4f}",
+                    f"{y:.4f}",
+                    f"{vx:.4f}",
+                    f"{vy:.4f}",
+                    f"{math.hypot(vx, vy):.4f}",
+                    f"{radius:.4f}",
+                    f"{pos_sigma:.4f}",
+                    f"{vel_sigma:.4f}",
+                ]
+            )
 
 
 def _print_report(report: dict, summary: list[dict], max_rows: int, out, plot) -> None:
-    table = Table(title=f"{report['bag']}: {report['scans']} scans over {report['duration_s']:.1f} s, "
-                        f"{report['confirmed_tracks']} confirmed tracks ({report['walking_tracks']} walking)")
-    for column in ("id", "first [s]", "duration [s]", "start (x, y) [m]", "end (x, y) [m]", "moved [m]", "median speed [m/s]", "walking"):
+    table = Table(
+        title=f"{report['bag']}: {report['scans']} scans over {report['duration_s']:.1f} s, "
+        f"{report['confirmed_tracks']} confirmed tracks ({report['walking_tracks']} walking)"
+    )
+    for column in (
+        "id",
+        "first [s]",
+        "duration [s]",
+        "start (x, y) [m]",
+        "end (x, y) [m]",
+        "moved [m]",
+        "median speed [m/s]",
+        "walking",
+    ):
         table.add_column(column, justify="right")
     for s in sorted(summary, key=lambda s: -s["duration_s"])[:max_rows]:
-        table.add_row(str(s["track_id"]), f"{s['first_s']:.1f}", f"{s['duration_s']:.1f}",
-                      f"({s['start_x_m']:.2f}, {s['start_y_m']:.2f})", f"({s['end_x_m']:.2f}, {s['end_y_m']:.2f})",
-                      f"{s['travel_m']:.2f}", f"{s['median_speed_mps']:.2f}", "yes" if s["walking"] else "")
+        table.add_row(
+            str(s["track_id"]),
+            f"{s['first_s']:.1f}",
+            f"{s['duration_s']:.1f}",
+            f"({s['start_x_m']:.2f}, {s['start_y_m']:.2f})",
+            f"({s['end_x_m']:.2f}, {s['end_y_m']:.2f})",
+            f"{s['travel_m']:.2f}",
+            f"{s['median_speed_mps']:.2f}",
+            "yes" if s["walking"] else "",
+        )
     _console.print(table)
     if len(summary) > max_rows:
         _console.print(f"({len(summary) - max_rows} shorter tracks not shown; --max-rows, --out or --json for all)")
     if report["walking_speed_median_mps"] is not None:
-        _console.print(f"walking speed: median {report['walking_speed_median_mps']:.2f} m/s "
-                       f"(p25 {report['walking_speed_p25_mps']:.2f}, p75 {report['walking_speed_p75_mps']:.2f})")
+        _console.print(
+            f"walking speed: median {report['walking_speed_median_mps']:.2f} m/s "
+            f"(p25 {report['walking_speed_p25_mps']:.2f}, p75 {report['walking_speed_p75_mps']:.2f})"
+        )
     if "evaluation" in report:
         e = report["evaluation"]
-        _console.print(f"labels: person recall {e['person_recall']:.3f} ({e['labelled_people']} labelled), precision in the "
-                       f"±15°/5 m wedge {e['person_precision_in_wedge']:.3f} ({e['false_positives_in_wedge']} false), "
-                       f"leg recall {e['leg_recall']:.3f}, median person error {e['person_position_error_median_m']:.3f} m")
+        _console.print(
+            f"labels: person recall {e['person_recall']:.3f} ({e['labelled_people']} labelled), precision in the "
+            f"±15°/5 m wedge {e['person_precision_in_wedge']:.3f} ({e['false_positives_in_wedge']} false), "
+            f"leg recall {e['leg_recall']:.3f}, median person error {e['person_position_error_median_m']:.3f} m"
+        )
     if out is not None:
         _console.print(f"tracks written to {out}")
     if plot is not None:

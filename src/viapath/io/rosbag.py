@@ -73,10 +73,14 @@ class LaserScanMessage:
 
         n = self.beam_count
         return ScannerModel(
-            name=name or self.frame_id or "laser", mount_x_m=0.0, mount_y_m=0.0,
+            name=name or self.frame_id or "laser",
+            mount_x_m=0.0,
+            mount_y_m=0.0,
             mount_yaw_rad=self.angle_min_rad + 0.5 * (n - 1) * self.angle_increment_rad,
-            beam_count=n, angle_increment_rad=abs(self.angle_increment_rad),
-            range_min_m=max(self.range_min_m, 0.0), range_max_m=self.range_max_m,
+            beam_count=n,
+            angle_increment_rad=abs(self.angle_increment_rad),
+            range_min_m=max(self.range_min_m, 0.0),
+            range_max_m=self.range_max_m,
             scan_period_s=self.scan_time_s if self.scan_time_s > 0 else 0.1,
         )
 
@@ -108,7 +112,9 @@ def bag_topics(path) -> dict[str, str]:
     except (FileNotFoundError, RosbagsMissingError):
         raise
     except Exception as error:
-        raise BagError(f"{path}: not a readable ROS 1/ROS 2 bag or MCAP file ({type(error).__name__}: {error})") from None
+        raise BagError(
+            f"{path}: not a readable ROS 1/ROS 2 bag or MCAP file ({type(error).__name__}: {error})"
+        ) from None
 
 
 def _pick_topic(path: Path, topics: dict[str, str], topic: str | None, types, what: str) -> str:
@@ -142,10 +148,14 @@ def read_laser_scans(path, topic: str | None = None) -> Iterator[LaserScanMessag
                 ranges = ranges[::-1].copy()
                 angle_min, increment = angle_min + (len(ranges) - 1) * increment, -increment
             yield LaserScanMessage(
-                stamp_s=_stamp(m, record_time_ns), frame_id=str(m.header.frame_id),
-                angle_min_rad=angle_min, angle_increment_rad=increment,
-                range_min_m=float(m.range_min), range_max_m=float(m.range_max),
-                ranges_m=ranges, scan_time_s=float(m.scan_time),
+                stamp_s=_stamp(m, record_time_ns),
+                frame_id=str(m.header.frame_id),
+                angle_min_rad=angle_min,
+                angle_increment_rad=increment,
+                range_min_m=float(m.range_min),
+                range_max_m=float(m.range_max),
+                ranges_m=ranges,
+                scan_time_s=float(m.scan_time),
             )
 
 

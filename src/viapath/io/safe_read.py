@@ -50,7 +50,7 @@ def short_repr(value: Any) -> str:
     whose input may be huge (a list of a million items, or an alias bomb's shared lists)."""
     try:
         return _SHORT.repr(value)
-    except Exception:  # noqa: BLE001 - a repr that fails is still reported, not raised
+    except Exception:
         return f"<{type(value).__name__}>"
 
 
@@ -100,7 +100,7 @@ def load_yaml(text: str, origin: str = "<yaml>", loader: type | None = None) -> 
         raise InputError(f"{origin}: {len(text):,} characters; a YAML input may have at most {MAX_YAML_BYTES:,}")
     try:
         _check_events(text, origin)
-        return yaml.load(text, Loader=loader or _SAFE_LOADER)  # noqa: S506 - a SafeLoader or subclass
+        return yaml.load(text, Loader=loader or _SAFE_LOADER)
     except yaml.YAMLError as error:
         if not type(error).__module__.startswith("yaml"):
             raise  # a loader's own check (e.g. duplicate keys): the caller reports it
@@ -113,7 +113,7 @@ def load_yaml(text: str, origin: str = "<yaml>", loader: type | None = None) -> 
 
 
 class _Frame:
-    __slots__ = ("anchor", "size", "is_map", "expect_key", "key", "index")
+    __slots__ = ("anchor", "expect_key", "index", "is_map", "key", "size")
 
     def __init__(self, anchor, is_map):
         self.anchor, self.size, self.is_map = anchor, 1, is_map
@@ -124,7 +124,9 @@ class _Frame:
 
 
 def _field(stack: list[_Frame]) -> str:
-    return ".".join(short_repr(f.label()).strip("'") for f in stack if not f.is_map or not f.expect_key) or "(top level)"
+    return (
+        ".".join(short_repr(f.label()).strip("'") for f in stack if not f.is_map or not f.expect_key) or "(top level)"
+    )
 
 
 def _check_events(text: str, origin: str) -> None:
@@ -140,8 +142,10 @@ def _check_events(text: str, origin: str) -> None:
             if kind in (yaml.MappingStartEvent, yaml.SequenceStartEvent):
                 stack.append(_Frame(event.anchor, kind is yaml.MappingStartEvent))
                 if len(stack) > MAX_YAML_DEPTH:
-                    raise InputError(f"{origin}: {_field(stack[:-1])}: nested more than {MAX_YAML_DEPTH} levels deep "
-                                     f"(line {event.start_mark.line + 1})")
+                    raise InputError(
+                        f"{origin}: {_field(stack[:-1])}: nested more than {MAX_YAML_DEPTH} levels deep "
+                        f"(line {event.start_mark.line + 1})"
+                    )
                 total += 1
                 continue
             elif kind in (yaml.MappingEndEvent, yaml.SequenceEndEvent):
@@ -164,9 +168,11 @@ def _check_events(text: str, origin: str) -> None:
             else:
                 continue
             if total > MAX_YAML_NODES:
-                raise InputError(f"{origin}: more than {MAX_YAML_NODES:,} values once aliases (*name) are expanded "
-                                 f"(at {_field(stack)}, line {event.start_mark.line + 1}); refused as too large "
-                                 "(an alias bomb or a file too big to be a viapath input)")
+                raise InputError(
+                    f"{origin}: more than {MAX_YAML_NODES:,} values once aliases (*name) are expanded "
+                    f"(at {_field(stack)}, line {event.start_mark.line + 1}); refused as too large "
+                    "(an alias bomb or a file too big to be a viapath input)"
+                )
             if stack:
                 _advance(stack[-1], size, event.value if kind is yaml.ScalarEvent else None)
     finally:
@@ -194,5 +200,7 @@ def _check_scalar(event, stack: list[_Frame], origin: str) -> None:
         is_int = False
     digits = sum(ch.isalnum() for ch in value) if is_int else 0
     if digits > MAX_INT_DIGITS:
-        raise InputError(f"{origin}: {_field(stack)}: an integer of {digits:,} digits (line {event.start_mark.line + 1}); "
-                         f"expected a number of at most {MAX_INT_DIGITS} digits")
+        raise InputError(
+            f"{origin}: {_field(stack)}: an integer of {digits:,} digits (line {event.start_mark.line + 1}); "
+            f"expected a number of at most {MAX_INT_DIGITS} digits"
+        )

@@ -86,13 +86,20 @@ def solve_sym3_scalar(a00, a01, a02, a11, a12, a22, b0, b1, b2):  # pragma: no c
     det = a00 * c00 + a01 * c01 + a02 * c02
     if not abs(det) > 1e-300:
         det = np.inf
-    return ((c00 * b0 + c01 * b1 + c02 * b2) / det, (c01 * b0 + c11 * b1 + c12 * b2) / det,
-            (c02 * b0 + c12 * b1 + c22 * b2) / det, c00 / det, c01 / det, c11 / det)
+    return (
+        (c00 * b0 + c01 * b1 + c02 * b2) / det,
+        (c01 * b0 + c11 * b1 + c12 * b2) / det,
+        (c02 * b0 + c12 * b1 + c22 * b2) / det,
+        c00 / det,
+        c01 / det,
+        c11 / det,
+    )
 
 
 @numba.njit(cache=True, nogil=True)
-def fit_circles_kernel(points, starts, counts, origins, has_prior, prior, weight, range_sigma, iterations,
-                       out):  # pragma: no cover - compiled
+def fit_circles_kernel(
+    points, starts, counts, origins, has_prior, prior, weight, range_sigma, iterations, out
+):  # pragma: no cover - compiled
     """The batched geometric circle fit of :func:`~viapath.perception.circle_fit.fit_circles`, one loop per cluster.
 
     ``out[k]`` = (centre x, centre y, radius, rms, centre sigma).
@@ -184,8 +191,22 @@ def fit_circles_kernel(points, starts, counts, origins, has_prior, prior, weight
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def segment_shape_kernel(points, starts, counts, width, first, chord, extent, origins, distance,
-                         noise_switch_range, noise_sigma_near, noise_fraction_far, sagitta, t_convex):  # pragma: no cover
+def segment_shape_kernel(
+    points,
+    starts,
+    counts,
+    width,
+    first,
+    chord,
+    extent,
+    origins,
+    distance,
+    noise_switch_range,
+    noise_sigma_near,
+    noise_fraction_far,
+    sagitta,
+    t_convex,
+):  # pragma: no cover
     """Per segment: the sagitta (largest distance from the chord) and the convexity t-statistic of
     :func:`~viapath.perception.detection._chord_coordinates` / ``_convexity_t``, same values.
 
@@ -245,9 +266,25 @@ def segment_shape_kernel(points, starts, counts, width, first, chord, extent, or
 
 
 @numba.njit(cache=True, nogil=True)
-def split_clusters_kernel(points, r, valid, scans, sin_gap, sin_rest, max_gap_beams, noise_switch_range,
-                          noise_sigma_near, noise_fraction_far, min_jump, min_points, starts, counts, occluded,
-                          cluster_scan, kept_points):  # pragma: no cover - compiled
+def split_clusters_kernel(
+    points,
+    r,
+    valid,
+    scans,
+    sin_gap,
+    sin_rest,
+    max_gap_beams,
+    noise_switch_range,
+    noise_sigma_near,
+    noise_fraction_far,
+    min_jump,
+    min_points,
+    starts,
+    counts,
+    occluded,
+    cluster_scan,
+    kept_points,
+):  # pragma: no cover - compiled
     """The clustering of :func:`~viapath.perception.segmentation.segment_beams` after the points, with
     its breakpoint thresholds from :class:`~viapath.perception.segmentation.BeamTables`: the same
     expressions, one pair of neighbouring valid beams at a time (elementwise: the same values).

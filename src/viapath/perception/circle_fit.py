@@ -77,7 +77,11 @@ def fit_circles(
             raise RuntimeError("numba back end unavailable; pip install 'viapath[fast]'")
         if sensor_origins is None:
             origins = np.zeros((k_count, 2))
-        elif type(sensor_origins) is np.ndarray and sensor_origins.dtype == np.float64 and sensor_origins.shape == (k_count, 2):
+        elif (
+            type(sensor_origins) is np.ndarray
+            and sensor_origins.dtype == np.float64
+            and sensor_origins.shape == (k_count, 2)
+        ):
             origins = sensor_origins  # one per cluster already (detection): no broadcast view needed
         else:
             origins = np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
@@ -89,16 +93,29 @@ def fit_circles(
         else:
             weight = 0.0
         out = np.empty((k_count, 5))
-        kernel(np.ascontiguousarray(points, dtype=float), starts, counts, np.ascontiguousarray(origins, dtype=float),
-               prior is not None, 0.0 if prior is None else float(prior), float(weight), float(range_sigma_m),
-               int(iterations), out)
+        kernel(
+            np.ascontiguousarray(points, dtype=float),
+            starts,
+            counts,
+            np.ascontiguousarray(origins, dtype=float),
+            prior is not None,
+            0.0 if prior is None else float(prior),
+            float(weight),
+            float(range_sigma_m),
+            int(iterations),
+            out,
+        )
         return CircleFits(out[:, :2].copy(), out[:, 2].copy(), out[:, 3].copy(), out[:, 4].copy())
     if backend != "numpy":
         raise ValueError(f"backend must be 'numpy', 'numba' or 'auto', got {backend!r}")
     p, mask = _padded(np.asarray(points, dtype=float), starts, counts)
     n = counts.astype(float)
     mean = (p * mask[..., None]).sum(axis=1) / n[:, None]
-    origins = np.zeros((k_count, 2)) if sensor_origins is None else np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
+    origins = (
+        np.zeros((k_count, 2))
+        if sensor_origins is None
+        else np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
+    )
     q = (p - mean[:, None, :]) * mask[..., None]  # centred, padded rows are 0
 
     prior = fixed_radius_m if fixed_radius_m is not None else radius_prior_m
@@ -182,8 +199,10 @@ def solve_sym3(a, b):
     ok = np.abs(det) > 1e-300
     det = np.where(ok, det, np.inf)
     b0, b1, b2 = b
-    x = np.stack([(c00 * b0 + c01 * b1 + c02 * b2), (c01 * b0 + c11 * b1 + c12 * b2),
-                  (c02 * b0 + c12 * b1 + c22 * b2)]) / det
+    x = (
+        np.stack([(c00 * b0 + c01 * b1 + c02 * b2), (c01 * b0 + c11 * b1 + c12 * b2), (c02 * b0 + c12 * b1 + c22 * b2)])
+        / det
+    )
     return x, (c00, c01, c02, c11, c12, c22), det
 
 
@@ -201,7 +220,9 @@ def _kasa(q: np.ndarray, mask: np.ndarray, n: np.ndarray):
 def fit_circle(points: np.ndarray, sensor_origin=(0.0, 0.0), **options):
     """Convenience for one cluster: returns ``(centre (2,), radius_m, rms_m)``."""
     points = np.asarray(points, dtype=float).reshape(-1, 2)
-    fits = fit_circles(points, np.array([0]), np.array([len(points)]), np.asarray(sensor_origin, float)[None, :], **options)
+    fits = fit_circles(
+        points, np.array([0]), np.array([len(points)]), np.asarray(sensor_origin, float)[None, :], **options
+    )
     return fits.centres[0], float(fits.radii_m[0]), float(fits.rms_m[0])
 
 

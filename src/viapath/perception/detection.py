@@ -72,12 +72,18 @@ class DetectorParams:
     keep_segments: bool = True  # per-segment points and fits, for plots and evaluation
 
     @classmethod
-    def for_legs(cls, **overrides) -> "DetectorParams":
+    def for_legs(cls, **overrides) -> DetectorParams:
         """Real scans of walking people: legs (r ≈ 0.06 m) are the round things the laser sees."""
         # A leg (≤ 0.15 m wide, often half hidden by the other leg, 5–10 points at 3–5 m) is too short
         # a curve for the flatness tests; two legs in one segment (0.2–0.35 m) are not convex.
-        values = dict(radius_prior_m=0.07, radius_prior_sigma_m=0.04, radius_max_m=0.3, max_extent_m=0.6,
-                      flat_test_min_extent_m=0.35, occluded_min_extent_m=0.15)
+        values = dict(
+            radius_prior_m=0.07,
+            radius_prior_sigma_m=0.04,
+            radius_max_m=0.3,
+            max_extent_m=0.6,
+            flat_test_min_extent_m=0.35,
+            occluded_min_extent_m=0.15,
+        )
         values.update(overrides)
         return cls(**values)
 
@@ -98,10 +104,10 @@ class Detections:
         return len(self.radii_m)
 
     @classmethod
-    def empty(cls) -> "Detections":
+    def empty(cls) -> Detections:
         return cls(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0, dtype=int))
 
-    def transformed(self, pose) -> "Detections":
+    def transformed(self, pose) -> Detections:
         """The same detections in the frame where the robot (or sensor) has ``pose`` (x, y, heading)."""
         x, y, heading = (float(v) for v in pose)
         c, s = np.cos(heading), np.sin(heading)
@@ -122,11 +128,14 @@ def checked_scans(scanners, scans) -> list[np.ndarray]:
     try:
         scans = list(scans)
     except TypeError:
-        raise ObservationError(f"scans: expected a list of {len(scanners)} scans ({names}), "
-                               f"found {type(scans).__name__}") from None
+        raise ObservationError(
+            f"scans: expected a list of {len(scanners)} scans ({names}), found {type(scans).__name__}"
+        ) from None
     if len(scans) != len(scanners):
-        raise ObservationError(f"scans: expected {len(scanners)} scans, one per scanner ({names}) in that order, "
-                               f"found {len(scans)}; pass None for a scanner without a reading this cycle")
+        raise ObservationError(
+            f"scans: expected {len(scanners)} scans, one per scanner ({names}) in that order, "
+            f"found {len(scans)}; pass None for a scanner without a reading this cycle"
+        )
     parts = []
     for i, (scanner, ranges) in enumerate(zip(scanners, scans, strict=True)):
         if ranges is None:
@@ -135,10 +144,14 @@ def checked_scans(scanners, scans) -> list[np.ndarray]:
         try:
             ranges = np.asarray(ranges, dtype=float)
         except (TypeError, ValueError):
-            raise ObservationError(f"scans[{i}] (scanner {scanner.name!r}): expected {scanner.beam_count} numbers") from None
+            raise ObservationError(
+                f"scans[{i}] (scanner {scanner.name!r}): expected {scanner.beam_count} numbers"
+            ) from None
         if ranges.ndim != 1 or len(ranges) != scanner.beam_count:
-            raise ObservationError(f"scans[{i}] (scanner {scanner.name!r}): expected {scanner.beam_count} ranges "
-                                   f"(its beam count), found shape {ranges.shape}")
+            raise ObservationError(
+                f"scans[{i}] (scanner {scanner.name!r}): expected {scanner.beam_count} ranges "
+                f"(its beam count), found shape {ranges.shape}"
+            )
         parts.append(ranges)
     return parts
 
@@ -150,11 +163,20 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     ranges = np.concatenate(checked_scans(scanners, scans))
     # sanitize_ranges and each scanner's own range limits, in one pass: NaN for every invalid reading
     # (comparisons with NaN are quiet: no errstate needed).
-    ranges[~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = np.nan
+    ranges[~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = (
+        np.nan
+    )
     compiled = params.fit_backend in ("numba", "auto") and _numba_fit() is not None
-    segments = segment_beams(ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index,
-                             params.segmentation, _beam_tables(scanners, params.segmentation),
-                             "numba" if compiled else "numpy")
+    segments = segment_beams(
+        ranges,
+        layout.angles_rad,
+        layout.origin_x_m,
+        layout.origin_y_m,
+        layout.scan_index,
+        params.segmentation,
+        _beam_tables(scanners, params.segmentation),
+        "numba" if compiled else "numpy",
+    )
     point_scan = layout.scan_index[segments.all_beam_index]
     fused = FusedScan(segments.all_points, point_scan, segments.all_beam_index - layout.first_beam[point_scan])
     if len(segments) == 0:
@@ -177,15 +199,34 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     radii_all = np.full(len(starts), np.nan)
     sigma_all = np.full(len(starts), np.nan)
     if len(candidates):
-        c_starts, c_counts, c_first, c_chord = starts[candidates], counts[candidates], first[candidates], chord[candidates]
+        c_starts, c_counts, c_first, c_chord = (
+            starts[candidates],
+            counts[candidates],
+            first[candidates],
+            chord[candidates],
+        )
         c_extent, c_origins = extent[candidates], origins[candidates]
         kernel = _numba_shape_kernel() if compiled else None
         if kernel is not None:  # the same sagittas and t-statistics, bit for bit, in one compiled pass
             seg = params.segmentation
             sagitta, t_convex = np.empty(len(candidates)), np.empty(len(candidates))
             distance = np.hypot(*(c_first + 0.5 * c_chord - c_origins).T)  # as in _convexity_t
-            kernel(points, c_starts, c_counts, int(c_counts.max()), c_first, c_chord, c_extent, c_origins, distance,
-                   seg.noise_switch_range_m, seg.noise_sigma_near_m, seg.noise_fraction_far, sagitta, t_convex)
+            kernel(
+                points,
+                c_starts,
+                c_counts,
+                int(c_counts.max()),
+                c_first,
+                c_chord,
+                c_extent,
+                c_origins,
+                distance,
+                seg.noise_switch_range_m,
+                seg.noise_sigma_near_m,
+                seg.noise_fraction_far,
+                sagitta,
+                t_convex,
+            )
             straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
             if params.flat_test_min_extent_m is not None:
                 straight |= (c_extent >= params.flat_test_min_extent_m) & (t_convex < params.min_convexity_t)
@@ -197,29 +238,63 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
             if params.flat_test_min_extent_m is not None:
                 long_enough = c_extent >= params.flat_test_min_extent_m
                 if long_enough.any():
-                    t_convex = _convexity_t(x[long_enough], y[long_enough], mask[long_enough], mid[long_enough],
-                                            c_origins[long_enough], params.segmentation)
+                    t_convex = _convexity_t(
+                        x[long_enough],
+                        y[long_enough],
+                        mask[long_enough],
+                        mid[long_enough],
+                        c_origins[long_enough],
+                        params.segmentation,
+                    )
                     straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
         # A flat piece with something nearer beside it: background seen between foreground objects.
-        straight |= (occluded[candidates] & (c_extent >= params.occluded_min_extent_m)
-                     & (sagitta < params.occluded_max_sagitta_ratio * c_extent))
+        straight |= (
+            occluded[candidates]
+            & (c_extent >= params.occluded_min_extent_m)
+            & (sagitta < params.occluded_max_sagitta_ratio * c_extent)
+        )
         keep[candidates[straight]] = False
         candidates = candidates[~straight]
     if len(candidates):
-        fits = fit_circles(points, starts[candidates], counts[candidates], origins[candidates],
-                           radius_prior_m=params.radius_prior_m, radius_prior_sigma_m=params.radius_prior_sigma_m,
-                           fixed_radius_m=params.fixed_radius_m, range_sigma_m=params.segmentation.noise_sigma_near_m,
-                           iterations=params.iterations, backend=params.fit_backend)
-        good = ((fits.radii_m >= params.radius_min_m) & (fits.radii_m <= params.radius_max_m)
-                & (fits.rms_m <= params.max_rms_m) & np.isfinite(fits.centres).all(1))
-        centres_all[candidates], radii_all[candidates], sigma_all[candidates] = fits.centres, fits.radii_m, fits.centre_sigma_m
+        fits = fit_circles(
+            points,
+            starts[candidates],
+            counts[candidates],
+            origins[candidates],
+            radius_prior_m=params.radius_prior_m,
+            radius_prior_sigma_m=params.radius_prior_sigma_m,
+            fixed_radius_m=params.fixed_radius_m,
+            range_sigma_m=params.segmentation.noise_sigma_near_m,
+            iterations=params.iterations,
+            backend=params.fit_backend,
+        )
+        good = (
+            (fits.radii_m >= params.radius_min_m)
+            & (fits.radii_m <= params.radius_max_m)
+            & (fits.rms_m <= params.max_rms_m)
+            & np.isfinite(fits.centres).all(1)
+        )
+        centres_all[candidates], radii_all[candidates], sigma_all[candidates] = (
+            fits.centres,
+            fits.radii_m,
+            fits.centre_sigma_m,
+        )
         keep[candidates[~good]] = False
     keep[:] = keep & np.isfinite(radii_all)
-    segment_info = [
-        dict(scanner=int(source[k]), points=points[starts[k]:starts[k] + counts[k]], centre=centres_all[k],
-             radius_m=float(radii_all[k]), accepted=bool(keep[k]))
-        for k in range(len(starts))
-    ] if params.keep_segments else []
+    segment_info = (
+        [
+            dict(
+                scanner=int(source[k]),
+                points=points[starts[k] : starts[k] + counts[k]],
+                centre=centres_all[k],
+                radius_m=float(radii_all[k]),
+                accepted=bool(keep[k]),
+            )
+            for k in range(len(starts))
+        ]
+        if params.keep_segments
+        else []
+    )
 
     centres = centres_all[keep]
     radii = radii_all[keep]
@@ -340,7 +415,7 @@ def _beam_tables(scanners: tuple[ScannerModel, ...], segmentation: SegmentationP
 @lru_cache(maxsize=16)
 def _beam_layout(scanners: tuple[ScannerModel, ...]) -> _BeamLayout:
     counts = [s.beam_count for s in scanners]
-    rep = lambda values: np.repeat(np.asarray(values, dtype=float), counts)  # noqa: E731
+    rep = lambda values: np.repeat(np.asarray(values, dtype=float), counts)
     return _BeamLayout(
         angles_rad=np.concatenate([s.beam_angles_rad() + s.mount_yaw_rad for s in scanners]),
         origin_x_m=rep([s.mount_x_m for s in scanners]),

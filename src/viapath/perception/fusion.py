@@ -124,8 +124,12 @@ def _in_sector(angles, start, end):
 
 
 @lru_cache(maxsize=32)
-def blind_region(scanners: tuple[ScannerModel, ...], robot_radius_m: float = 0.25,
-                 angle_step_rad: float = np.deg2rad(0.5), radial_step_m: float = 0.001) -> BlindRegion:
+def blind_region(
+    scanners: tuple[ScannerModel, ...],
+    robot_radius_m: float = 0.25,
+    angle_step_rad: float = np.deg2rad(0.5),
+    radial_step_m: float = 0.001,
+) -> BlindRegion:
     """Sample the field-of-view geometry of ``scanners`` around the robot centre (see module notes).
 
     Depth resolution: ``radial_step_m`` out to 1 m, 1 cm beyond. Cached: scanners are immutable.
@@ -134,7 +138,9 @@ def blind_region(scanners: tuple[ScannerModel, ...], robot_radius_m: float = 0.2
     max_range = max(s.range_max_m + np.hypot(s.mount_x_m, s.mount_y_m) for s in scanners)
     angles = np.arange(-np.pi, np.pi, angle_step_rad)
     radii = np.concatenate([np.arange(0.0, 1.0, radial_step_m), np.arange(1.0, max_range + 0.01, 0.01)])
-    grid = np.stack(np.broadcast_arrays(radii[None, :] * np.cos(angles)[:, None], radii[None, :] * np.sin(angles)[:, None]), -1)
+    grid = np.stack(
+        np.broadcast_arrays(radii[None, :] * np.cos(angles)[:, None], radii[None, :] * np.sin(angles)[:, None]), -1
+    )
     seen = covered(scanners, grid.reshape(-1, 2)).reshape(len(angles), len(radii))
     first_seen = np.where(seen.any(axis=1), np.argmax(seen, axis=1), -1)
     depth = np.where(first_seen >= 0, radii[np.maximum(first_seen, 0)], np.inf)

@@ -20,22 +20,21 @@ What we chose:
 
 from __future__ import annotations
 
-from dataclasses import fields, replace
-
 import time
+from dataclasses import fields, replace
 
 import numpy as np
 
 from viapath.observation import Obstacles
-from viapath.static import StaticLayer
-from viapath.perception.detection import DetectorParams, Detections, detect
+from viapath.perception.base import Perception, WorldSnapshot
+from viapath.perception.detection import Detections, DetectorParams, detect
 from viapath.perception.fusion import BlindRegion, blind_region
 from viapath.perception.raycast import simulate_scans
 from viapath.perception.scanner import ScannerModel, paper_scanners
 from viapath.perception.segmentation import SegmentationParams
 from viapath.perception.static_layer import StaticLayerParams, StaticObstacleLayer
 from viapath.perception.tracking import MultiTargetTracker, Track, TrackerParams
-from viapath.perception.base import Perception, WorldSnapshot
+from viapath.static import StaticLayer
 
 
 def _dataclass_from(cls, value, what: str):
@@ -85,7 +84,10 @@ class LaserPerception(Perception):
         if not self.scanners:
             raise ValueError("at least one scanner is needed")
         if isinstance(detector, dict) and isinstance(detector.get("segmentation"), dict):
-            detector = {**detector, "segmentation": _dataclass_from(SegmentationParams, detector["segmentation"], "segmentation")}
+            detector = {
+                **detector,
+                "segmentation": _dataclass_from(SegmentationParams, detector["segmentation"], "segmentation"),
+            }
         if detector is None:
             detector = DetectorParams(keep_segments=False)  # per-segment details cost time; ask for them explicitly
         self.detector_params: DetectorParams = _dataclass_from(DetectorParams, detector, "detector")
@@ -100,7 +102,9 @@ class LaserPerception(Perception):
         self.blind_region: BlindRegion = blind_region(self.scanners, self.robot_radius_m)
         self.rng = np.random.default_rng(0)
         self._tracker = MultiTargetTracker(self.tracker_params)
-        self._static = StaticObstacleLayer(self.scanners, _dataclass_from(StaticLayerParams, static_layer, "static_layer"))
+        self._static = StaticObstacleLayer(
+            self.scanners, _dataclass_from(StaticLayerParams, static_layer, "static_layer")
+        )
         self._clear()
 
     def _clear(self) -> None:
@@ -144,8 +148,9 @@ class LaserPerception(Perception):
         """The readings of every scanner at the snapshot, as the drivers would report them."""
         pose = np.asarray(world.robot_pose, dtype=float)
         rng = self.rng if self.range_noise else None
-        return simulate_scans(self.scanners, pose, world.obstacle_positions, world.obstacle_radii_m, world.walls, rng,
-                              self.ray_backend)
+        return simulate_scans(
+            self.scanners, pose, world.obstacle_positions, world.obstacle_radii_m, world.walls, rng, self.ray_backend
+        )
 
     def process(self, time_s: float, robot_pose, scans) -> Obstacles:
         """Detection and tracking on given scans (no ray casting): the part a real robot runs."""

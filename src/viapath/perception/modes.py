@@ -28,8 +28,9 @@ def _laser(options: dict[str, Any], position_noise_m: float, velocity_noise_mps:
     return options_as_arguments(LaserPerception, options)
 
 
-def make_perception(mode: str, options: dict[str, Any] | None = None, position_noise_m: float = 0.0,
-                    velocity_noise_mps: float = 0.0) -> Perception:
+def make_perception(
+    mode: str, options: dict[str, Any] | None = None, position_noise_m: float = 0.0, velocity_noise_mps: float = 0.0
+) -> Perception:
     return PERCEPTION_MODES.get(mode)(dict(options or {}), position_noise_m, velocity_noise_mps)
 
 

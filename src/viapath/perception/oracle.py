@@ -39,8 +39,9 @@ class OraclePerception(Perception):
             velocities = velocities + self.rng.normal(0.0, self.velocity_noise_mps, velocities.shape)
         n = len(positions)
         # Every array here is new (copies, or indexing with a mask), so the estimates are handed over as they are.
-        return Obstacles.of_fresh_arrays(positions, velocities, radii, _sigmas(n, self.position_noise_m),
-                                         _sigmas(n, self.velocity_noise_mps), ids)
+        return Obstacles.of_fresh_arrays(
+            positions, velocities, radii, _sigmas(n, self.position_noise_m), _sigmas(n, self.velocity_noise_mps), ids
+        )
 
 
 def _sigmas(n: int, sigma: float) -> np.ndarray:
@@ -49,5 +50,6 @@ def _sigmas(n: int, sigma: float) -> np.ndarray:
 
 # No obstacles: one instance handed out for every empty scene (its arrays hold nothing to change; they stay
 # writeable, as the compiled kernels are compiled for writeable arrays).
-_NOBODY = Obstacles.of_fresh_arrays(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0),
-                                    np.arange(0))
+_NOBODY = Obstacles.of_fresh_arrays(
+    np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0), np.arange(0)
+)

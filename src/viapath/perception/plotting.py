@@ -19,8 +19,15 @@ def _pyplot():
     return plt
 
 
-def draw_laser(ax, perception, *, scan_color="tab:red", track_color="tab:blue", blind_far_m: float = 1.0,
-               velocity_horizon_s: float = 1.0) -> None:
+def draw_laser(
+    ax,
+    perception,
+    *,
+    scan_color="tab:red",
+    track_color="tab:blue",
+    blind_far_m: float = 1.0,
+    velocity_horizon_s: float = 1.0,
+) -> None:
     """Overlay on a world-frame axis: the last fused scan, the unseen region and the live tracks.
 
     ``perception`` is a :class:`~viapath.perception.laser.LaserPerception` after ``observe``.
@@ -39,15 +46,37 @@ def draw_laser(ax, perception, *, scan_color="tab:red", track_color="tab:blue", 
         ax.add_patch(Circle(track.position, track.radius_m, fill=False, linestyle=style, color=track_color, zorder=4))
         sigma = float(np.sqrt(max(np.linalg.eigvalsh(track.covariance[:2, :2])[-1], 0.0)))
         if track.confirmed:
-            ax.add_patch(Circle(track.position, track.radius_m + 2 * sigma, fill=False, linestyle="--", linewidth=0.6,
-                                color=track_color, zorder=4))
-            ax.annotate("", track.position + track.velocity * velocity_horizon_s, track.position,
-                        arrowprops=dict(arrowstyle="->", color=track_color), zorder=5)
-            ax.text(track.position[0], track.position[1] + track.radius_m + 0.05, f"#{track.track_id}",
-                    fontsize=7, color=track_color, ha="center")
+            ax.add_patch(
+                Circle(
+                    track.position,
+                    track.radius_m + 2 * sigma,
+                    fill=False,
+                    linestyle="--",
+                    linewidth=0.6,
+                    color=track_color,
+                    zorder=4,
+                )
+            )
+            ax.annotate(
+                "",
+                track.position + track.velocity * velocity_horizon_s,
+                track.position,
+                arrowprops=dict(arrowstyle="->", color=track_color),
+                zorder=5,
+            )
+            ax.text(
+                track.position[0],
+                track.position[1] + track.radius_m + 0.05,
+                f"#{track.track_id}",
+                fontsize=7,
+                color=track_color,
+                ha="center",
+            )
 
 
-def plot_recording(result, path, title: str = "", min_travel_m: float = 1.0, point_scans: int = 40, dpi: int = 110) -> Path:
+def plot_recording(
+    result, path, title: str = "", min_travel_m: float = 1.0, point_scans: int = 40, dpi: int = 110
+) -> Path:
     """Three panels: tracks in the sensor frame over the scan points, speed over time, speed histogram."""
     plt = _pyplot()
     path = Path(path)
@@ -90,7 +119,9 @@ def plot_recording(result, path, title: str = "", min_travel_m: float = 1.0, poi
         ax.hist(speeds, bins=np.arange(0, max(2.0, speeds.max()) + 0.05, 0.05), color="tab:blue", alpha=0.8)
         q25, q50, q75 = np.percentile(speeds, [25, 50, 75])
         ax.axvline(q50, color="k", lw=1)
-        ax.set_title(f"walking speed: median {q50:.2f} m/s\n(p25 {q25:.2f}, p75 {q75:.2f}; {len(speeds)} samples)", fontsize=9)
+        ax.set_title(
+            f"walking speed: median {q50:.2f} m/s\n(p25 {q25:.2f}, p75 {q75:.2f}; {len(speeds)} samples)", fontsize=9
+        )
     ax.set_xlabel("speed [m/s]")
     ax.set_ylabel("track-scans")
     fig.suptitle(title or "laser tracks")

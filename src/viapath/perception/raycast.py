@@ -103,8 +103,9 @@ def cast_rays_numba(origin, directions, centres, radii, segments) -> np.ndarray:
     if not numba_available():
         raise RuntimeError(f"numba back end unavailable ({_NUMBA_FAILED}); pip install 'viapath[fast]'")
     out = np.empty(len(directions))
-    _NUMBA_KERNEL(float(origin[0]), float(origin[1]), np.ascontiguousarray(directions, dtype=float), centres, radii,
-                  segments, out)
+    _NUMBA_KERNEL(
+        float(origin[0]), float(origin[1]), np.ascontiguousarray(directions, dtype=float), centres, radii, segments, out
+    )
     return out
 
 
@@ -152,11 +153,17 @@ class _ScanLayout:
 @lru_cache(maxsize=16)
 def _scan_layout(scanners) -> _ScanLayout:
     counts = [s.beam_count for s in scanners]
-    rep = lambda name: np.repeat(np.array([getattr(s, name) for s in scanners], dtype=float), counts)  # noqa: E731
-    return _ScanLayout(tuple(s.beam_angles_rad() for s in scanners), np.concatenate([[0], np.cumsum(counts)]),
-                       rep("range_min_m"), rep("range_max_m"), rep("noise_sigma_near_m"), rep("noise_fraction_far"),
-                       rep("noise_switch_range_m"),
-                       tuple({"inf": np.inf, "nan": np.nan, "zero": 0.0}[s.invalid_encoding] for s in scanners))
+    rep = lambda name: np.repeat(np.array([getattr(s, name) for s in scanners], dtype=float), counts)
+    return _ScanLayout(
+        tuple(s.beam_angles_rad() for s in scanners),
+        np.concatenate([[0], np.cumsum(counts)]),
+        rep("range_min_m"),
+        rep("range_max_m"),
+        rep("noise_sigma_near_m"),
+        rep("noise_fraction_far"),
+        rep("noise_switch_range_m"),
+        tuple({"inf": np.inf, "nan": np.nan, "zero": 0.0}[s.invalid_encoding] for s in scanners),
+    )
 
 
 def cast_rays_from_numpy(origins_x, origins_y, directions, centres, radii, segments, groups=None) -> np.ndarray:
@@ -221,7 +228,7 @@ def _candidate_pairs(origins_x, origins_y, centres, radii, groups, best):
         k = fx * fx + fy * fy - radii * radii  # the expression of the per-pair test: same sign
         inside = k <= 0.0
         if inside.any():
-            best[first:first + count] = 0.0  # t = 0 on every beam, whatever else it meets
+            best[first : first + count] = 0.0  # t = 0 on every beam, whatever else it meets
             continue
         distance = np.sqrt(fx * fx + fy * fy)
         half = np.arcsin(np.minimum(radii / distance, 1.0)) + 2.0 * increment
@@ -248,7 +255,9 @@ def _candidate_pairs(origins_x, origins_y, centres, radii, groups, best):
     return np.concatenate(beams), np.concatenate(discs)
 
 
-def simulate_scans(scanners, robot_pose, centres, radii, segments=None, rng=None, backend: str = "numpy") -> list[np.ndarray]:
+def simulate_scans(
+    scanners, robot_pose, centres, radii, segments=None, rng=None, backend: str = "numpy"
+) -> list[np.ndarray]:
     """``[simulate_scan(s, ...) for s in scanners]`` in one pass: the same readings, bit for bit, and the
     same draws from ``rng`` (one normal per hit beam, scanner after scanner)."""
     scanners = tuple(scanners)
@@ -292,8 +301,9 @@ def simulate_scans(scanners, robot_pose, centres, radii, segments=None, rng=None
     if rng is not None:
         hit = np.isfinite(true_range)
         # σ of every beam (inf where nothing was hit), then the hit ones: the same values as on the hits alone.
-        sigma = np.where(true_range < layout.noise_switch_range_m, layout.noise_sigma_near_m,
-                         layout.noise_fraction_far * true_range)[hit]
+        sigma = np.where(
+            true_range < layout.noise_switch_range_m, layout.noise_sigma_near_m, layout.noise_fraction_far * true_range
+        )[hit]
         reading[hit] += rng.standard_normal(int(hit.sum())) * sigma
     invalid = ~np.isfinite(reading) | (reading < layout.range_min_m) | (reading > layout.range_max_m)
     out = []

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from viapath.perception.detection import DetectorParams, Detections, detect
+from viapath.perception.detection import Detections, DetectorParams, detect
 from viapath.perception.tracking import MultiTargetTracker, TrackerParams
 
 REAL_SCAN_TRACKER = TrackerParams(acceleration_sigma_mps2=0.5)
@@ -61,13 +61,23 @@ class RecordingResult:
             xy = rows[:, 3:5]
             speed = np.hypot(rows[:, 5], rows[:, 6])
             travel = float(np.hypot(*(xy[-1] - xy[0])))
-            out.append(dict(
-                track_id=int(tid), first_s=float(rows[0, 1]), last_s=float(rows[-1, 1]),
-                duration_s=float(rows[-1, 1] - rows[0, 1]), scans=len(rows),
-                start_x_m=float(xy[0, 0]), start_y_m=float(xy[0, 1]), end_x_m=float(xy[-1, 0]), end_y_m=float(xy[-1, 1]),
-                travel_m=travel, median_speed_mps=float(np.median(speed)), mean_speed_mps=float(np.mean(speed)),
-                walking=bool(travel >= min_travel_m and np.median(speed) >= min_median_speed_mps),
-            ))
+            out.append(
+                dict(
+                    track_id=int(tid),
+                    first_s=float(rows[0, 1]),
+                    last_s=float(rows[-1, 1]),
+                    duration_s=float(rows[-1, 1] - rows[0, 1]),
+                    scans=len(rows),
+                    start_x_m=float(xy[0, 0]),
+                    start_y_m=float(xy[0, 1]),
+                    end_x_m=float(xy[-1, 0]),
+                    end_y_m=float(xy[-1, 1]),
+                    travel_m=travel,
+                    median_speed_mps=float(np.median(speed)),
+                    mean_speed_mps=float(np.mean(speed)),
+                    walking=bool(travel >= min_travel_m and np.median(speed) >= min_median_speed_mps),
+                )
+            )
         return out
 
     def walking_speeds(self, min_travel_m: float = 1.0) -> np.ndarray:
@@ -77,8 +87,13 @@ class RecordingResult:
         return np.hypot(rows[:, 5], rows[:, 6])
 
 
-def track_recording(messages, detector: DetectorParams | None = None, tracker: TrackerParams | None = None,
-                    poses=None, keep_points: bool = True) -> RecordingResult:
+def track_recording(
+    messages,
+    detector: DetectorParams | None = None,
+    tracker: TrackerParams | None = None,
+    poses=None,
+    keep_points: bool = True,
+) -> RecordingResult:
     """Detect and track over ``messages`` (:class:`~viapath.io.rosbag.LaserScanMessage`, in order).
 
     ``poses``: optional (S, 3) sensor pose per scan in a fixed world frame (default: a fixed sensor).
@@ -100,8 +115,17 @@ def track_recording(messages, detector: DetectorParams | None = None, tracker: T
         tracking.step(t, found.centres, found.position_sigma_m, found.radii_m)
         obstacles = tracking.obstacles()
         for i in range(len(obstacles)):
-            rows.append((k, t, obstacles.ids[i], *obstacles.positions[i], *obstacles.velocities[i], obstacles.radii_m[i],
-                         obstacles.position_sigma_m[i]))
+            rows.append(
+                (
+                    k,
+                    t,
+                    obstacles.ids[i],
+                    *obstacles.positions[i],
+                    *obstacles.velocities[i],
+                    obstacles.radii_m[i],
+                    obstacles.position_sigma_m[i],
+                )
+            )
             vel_sigma.append(obstacles.velocity_sigma_mps[i])
         times.append(t)
         detections.append(found)
@@ -113,11 +137,17 @@ def track_recording(messages, detector: DetectorParams | None = None, tracker: T
 
 def in_wedge(points: np.ndarray, half_angle_rad: float = np.deg2rad(15.0), max_range_m: float = 5.0) -> np.ndarray:
     points = np.asarray(points, dtype=float).reshape(-1, 2)
-    return (np.abs(np.arctan2(points[:, 1], points[:, 0])) <= half_angle_rad) & (np.hypot(points[:, 0], points[:, 1]) <= max_range_m)
+    return (np.abs(np.arctan2(points[:, 1], points[:, 0])) <= half_angle_rad) & (
+        np.hypot(points[:, 0], points[:, 1]) <= max_range_m
+    )
 
 
-def evaluate_labels(detections: list[Detections], labels: list[np.ndarray], match_distance_m: float = 0.35,
-                    leg_match_distance_m: float = 0.15) -> dict:
+def evaluate_labels(
+    detections: list[Detections],
+    labels: list[np.ndarray],
+    match_distance_m: float = 0.35,
+    leg_match_distance_m: float = 0.15,
+) -> dict:
     """Recall and precision of person detections against labelled legs (see module notes), paired by order."""
     if len(detections) != len(labels):
         raise ValueError(f"{len(detections)} scans but {len(labels)} label messages: cannot pair by order")
@@ -146,7 +176,10 @@ def evaluate_labels(detections: list[Detections], labels: list[np.ndarray], matc
                 if len(det.legs) and np.hypot(*(det.legs - leg).T).min() <= leg_match_distance_m:
                     legs_found += 1
             if len(det.legs):
-                near = np.hypot(*(det.legs[:, None, :] - legs_xy[None]).transpose(2, 0, 1)).min(axis=1) <= leg_match_distance_m
+                near = (
+                    np.hypot(*(det.legs[:, None, :] - legs_xy[None]).transpose(2, 0, 1)).min(axis=1)
+                    <= leg_match_distance_m
+                )
                 leg_false_pos += int((in_wedge(det.legs) & ~near).sum())
         else:
             false_pos += int(wedge.sum())

@@ -49,9 +49,18 @@ class ScannerModel:
     invalid_encoding: str = "inf"
 
     def __post_init__(self) -> None:
-        for field_name in ("mount_x_m", "mount_y_m", "mount_yaw_rad", "angle_increment_rad", "range_min_m",
-                           "range_max_m", "scan_period_s", "noise_sigma_near_m", "noise_fraction_far",
-                           "noise_switch_range_m"):
+        for field_name in (
+            "mount_x_m",
+            "mount_y_m",
+            "mount_yaw_rad",
+            "angle_increment_rad",
+            "range_min_m",
+            "range_max_m",
+            "scan_period_s",
+            "noise_sigma_near_m",
+            "noise_fraction_far",
+            "noise_switch_range_m",
+        ):
             if not np.isfinite(getattr(self, field_name)):
                 raise ValueError(f"scanner {self.name!r}: {field_name} must be finite")
         if self.beam_count < 2:
@@ -68,7 +77,7 @@ class ScannerModel:
             raise ValueError(f"scanner {self.name!r}: invalid_encoding must be one of {INVALID_ENCODINGS}")
 
     @classmethod
-    def urg04lx(cls, name: str = "front", facing: str = "forward", **overrides) -> "ScannerModel":
+    def urg04lx(cls, name: str = "front", facing: str = "forward", **overrides) -> ScannerModel:
         """A URG-04LX at ±0.145 m on the robot axis facing ``forward`` or ``backward`` (paper §4.1)."""
         if facing == "forward":
             pose = dict(mount_x_m=URG04LX_MOUNT_OFFSET_M, mount_y_m=0.0, mount_yaw_rad=0.0)
@@ -78,7 +87,7 @@ class ScannerModel:
             raise ValueError(f"facing must be 'forward' or 'backward', got {facing!r}")
         return cls(name=name, **{**pose, **overrides})
 
-    def with_(self, **changes) -> "ScannerModel":
+    def with_(self, **changes) -> ScannerModel:
         return replace(self, **changes)
 
     @property
@@ -104,8 +113,13 @@ class ScannerModel:
         """Scanner pose (x, y, yaw) in the world for a robot at ``robot_pose`` (x, y, heading)."""
         x, y, heading = (float(v) for v in robot_pose)
         c, s = np.cos(heading), np.sin(heading)
-        return np.array([x + c * self.mount_x_m - s * self.mount_y_m, y + s * self.mount_x_m + c * self.mount_y_m,
-                         heading + self.mount_yaw_rad])
+        return np.array(
+            [
+                x + c * self.mount_x_m - s * self.mount_y_m,
+                y + s * self.mount_x_m + c * self.mount_y_m,
+                heading + self.mount_yaw_rad,
+            ]
+        )
 
     def noise_sigma_m(self, range_m: np.ndarray) -> np.ndarray:
         range_m = np.asarray(range_m, dtype=float)
@@ -125,7 +139,10 @@ class ScannerModel:
 
 def paper_scanners(**overrides) -> tuple[ScannerModel, ScannerModel]:
     """The paper's pair: URG-04LX at +0.145 m facing forward and at -0.145 m facing backward."""
-    return (ScannerModel.urg04lx("front", "forward", **overrides), ScannerModel.urg04lx("rear", "backward", **overrides))
+    return (
+        ScannerModel.urg04lx("front", "forward", **overrides),
+        ScannerModel.urg04lx("rear", "backward", **overrides),
+    )
 
 
 def sanitize_ranges(ranges_m, range_min_m: float = 0.0, range_max_m: float = np.inf) -> np.ndarray:

@@ -56,10 +56,10 @@ class Segments:
         return len(self.starts)
 
     def cluster_points(self, k: int) -> np.ndarray:
-        return self.points[self.starts[k]:self.starts[k] + self.counts[k]]
+        return self.points[self.starts[k] : self.starts[k] + self.counts[k]]
 
     @classmethod
-    def empty(cls) -> "Segments":
+    def empty(cls) -> Segments:
         i, b = np.zeros(0, dtype=int), np.zeros(0, dtype=bool)
         return cls(i, np.zeros((0, 2)), i, i, b, i, np.zeros((0, 2)), i)
 
@@ -70,11 +70,14 @@ def breakpoint_threshold_m(range_m: np.ndarray, beam_gap_rad: np.ndarray, params
     return _threshold_from_sines(range_m, np.sin(angle), np.sin(params.grazing_angle_rad - angle), params)
 
 
-def _threshold_from_sines(range_m: np.ndarray, sin_gap: np.ndarray, sin_rest: np.ndarray,
-                          params: SegmentationParams) -> np.ndarray:
+def _threshold_from_sines(
+    range_m: np.ndarray, sin_gap: np.ndarray, sin_rest: np.ndarray, params: SegmentationParams
+) -> np.ndarray:
     """:func:`breakpoint_threshold_m` from ``sin(Δφ)`` and ``sin(λ - Δφ)`` (computed there, or read from
     :class:`BeamTables`)."""
-    sigma = np.where(range_m < params.noise_switch_range_m, params.noise_sigma_near_m, params.noise_fraction_far * range_m)
+    sigma = np.where(
+        range_m < params.noise_switch_range_m, params.noise_sigma_near_m, params.noise_fraction_far * range_m
+    )
     jump = range_m * sin_gap / sin_rest + 3.0 * sigma
     return np.maximum(jump, params.min_jump_m)
 
@@ -108,14 +111,24 @@ class BeamTables:
         return cls(np.cos(angles_rad), np.sin(angles_rad), sin_gap, sin_rest)
 
 
-def segment_scan(ranges_m: np.ndarray, angles_rad: np.ndarray, params: SegmentationParams = SegmentationParams()) -> Segments:
+def segment_scan(
+    ranges_m: np.ndarray, angles_rad: np.ndarray, params: SegmentationParams = SegmentationParams()
+) -> Segments:
     """Cluster one sanitised scan (NaN = invalid) in its own frame."""
     ranges_m = np.asarray(ranges_m, dtype=float)
     return segment_beams(ranges_m, angles_rad, 0.0, 0.0, np.zeros(len(ranges_m), dtype=int), params)
 
 
-def segment_beams(ranges_m, angles_rad, origin_x_m, origin_y_m, scan_index, params: SegmentationParams = SegmentationParams(),
-                  tables: BeamTables | None = None, backend: str = "numpy") -> Segments:
+def segment_beams(
+    ranges_m,
+    angles_rad,
+    origin_x_m,
+    origin_y_m,
+    scan_index,
+    params: SegmentationParams = SegmentationParams(),
+    tables: BeamTables | None = None,
+    backend: str = "numpy",
+) -> Segments:
     """Cluster the beams of several scans at once (concatenated, each in beam order).
 
     ``angles_rad`` and the beam origins (``origin_x_m``, ``origin_y_m``: scalars or per beam) are in
@@ -148,8 +161,9 @@ def segment_beams(ranges_m, angles_rad, origin_x_m, origin_y_m, scan_index, para
         threshold = breakpoint_threshold_m(near, np.abs(np.diff(a)), params)
     else:  # its sines from the tables (wrong only where not adjacent, and those split anyway)
         row = np.minimum(beam_step, params.max_gap_beams + 1) - 1
-        threshold = _threshold_from_sines(near, tables.sin_gap[row, valid[:-1]], tables.sin_rest[row, valid[:-1]],
-                                          params)
+        threshold = _threshold_from_sines(
+            near, tables.sin_gap[row, valid[:-1]], tables.sin_rest[row, valid[:-1]], params
+        )
     split = (gap > threshold) | ~adjacent
     starts = np.concatenate([[0], np.flatnonzero(split) + 1])
     counts = np.diff(np.append(starts, len(valid)))
@@ -177,17 +191,38 @@ def _split_compiled(points, r, valid, scans, tables: BeamTables, params: Segment
     from viapath.perception._numba_kernels import split_clusters_kernel
 
     n = len(valid)
-    starts, counts, cluster_scan = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n, dtype=scans.dtype)
+    starts, counts, cluster_scan = (
+        np.empty(n, dtype=np.int64),
+        np.empty(n, dtype=np.int64),
+        np.empty(n, dtype=scans.dtype),
+    )
     occluded, kept_points = np.empty(n, dtype=bool), np.empty(n, dtype=np.int64)
-    kept, kept_total = split_clusters_kernel(points, r, valid, scans, tables.sin_gap, tables.sin_rest,
-                                             params.max_gap_beams, params.noise_switch_range_m,
-                                             params.noise_sigma_near_m, params.noise_fraction_far, params.min_jump_m,
-                                             params.min_points, starts, counts, occluded, cluster_scan, kept_points)
+    kept, kept_total = split_clusters_kernel(
+        points,
+        r,
+        valid,
+        scans,
+        tables.sin_gap,
+        tables.sin_rest,
+        params.max_gap_beams,
+        params.noise_switch_range_m,
+        params.noise_sigma_near_m,
+        params.noise_fraction_far,
+        params.min_jump_m,
+        params.min_points,
+        starts,
+        counts,
+        occluded,
+        cluster_scan,
+        kept_points,
+    )
     starts, counts, occluded, cluster_scan = starts[:kept], counts[:kept], occluded[:kept], cluster_scan[:kept]
     if kept_total == n:  # every cluster kept: the points as they are
         return Segments(valid, points, starts, counts, occluded, cluster_scan, points, valid)
     index = kept_points[:kept_total]
-    return Segments(valid[index], points[index], np.cumsum(counts) - counts, counts, occluded, cluster_scan, points, valid)
+    return Segments(
+        valid[index], points[index], np.cumsum(counts) - counts, counts, occluded, cluster_scan, points, valid
+    )
 
 
 def _ranges_index(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:

@@ -105,8 +105,9 @@ class StaticObstacleLayer:
         self.layer = StaticLayer.empty()
         self._seen_s = np.zeros(0)  # when each remembered segment was last part of a scan
 
-    def update(self, time_s: float, robot_pose, scans, track_positions: np.ndarray,
-               track_radii_m: np.ndarray, scanners=None) -> StaticLayer:
+    def update(
+        self, time_s: float, robot_pose, scans, track_positions: np.ndarray, track_radii_m: np.ndarray, scanners=None
+    ) -> StaticLayer:
         """This cycle's layer; ``scanners``: the models of ``scans`` when not all of this layer's (a silent
         scanner's scan missing)."""
         if not self.params.enabled:
@@ -130,7 +131,9 @@ class StaticObstacleLayer:
             if len(ranges) != scanner.beam_count:
                 continue
             with np.errstate(invalid="ignore"):
-                valid = np.isfinite(ranges) & (ranges >= max(scanner.range_min_m, 1e-9)) & (ranges <= scanner.range_max_m)
+                valid = (
+                    np.isfinite(ranges) & (ranges >= max(scanner.range_min_m, 1e-9)) & (ranges <= scanner.range_max_m)
+                )
             beams = np.flatnonzero(valid)
             if len(beams) == 0:
                 continue
@@ -191,7 +194,9 @@ class StaticObstacleLayer:
         inside = (beam >= 0) & (beam < scanner.beam_count) & (distance <= scanner.range_max_m)
         return inside, distance, ranges[np.clip(beam, 0, scanner.beam_count - 1)]
 
-    def _returned_by(self, scanner: ScannerModel, pose: np.ndarray, ranges: np.ndarray, points: np.ndarray) -> np.ndarray:
+    def _returned_by(
+        self, scanner: ScannerModel, pose: np.ndarray, ranges: np.ndarray, points: np.ndarray
+    ) -> np.ndarray:
         """Whether the scan's beam towards each point returned from there (within ``see_through_m``)."""
         if len(ranges) != scanner.beam_count or len(points) == 0:
             return np.zeros(len(points), dtype=bool)
@@ -207,6 +212,10 @@ class StaticObstacleLayer:
         inside, distance, reading = self._beams_to(scanner, pose, ranges, points)
         with np.errstate(invalid="ignore"):
             free = (reading == np.inf) | (reading > scanner.range_max_m)
-            reaches = np.isfinite(reading) & (reading >= scanner.range_min_m) & (reading > 0) & (
-                reading >= distance - self.params.see_through_m)
+            reaches = (
+                np.isfinite(reading)
+                & (reading >= scanner.range_min_m)
+                & (reading > 0)
+                & (reading >= distance - self.params.see_through_m)
+            )
         return inside & (free | reaches)

@@ -62,8 +62,14 @@ class TrackerParams:
     def __post_init__(self) -> None:
         if not 1 <= self.confirm_hits <= self.confirm_window <= 62:
             raise ValueError("need 1 <= confirm_hits <= confirm_window <= 62")
-        for name in ("acceleration_sigma_mps2", "initial_velocity_sigma_mps", "gate_chi2", "gate_distance_m",
-                     "max_unseen_s", "tentative_max_unseen_s"):
+        for name in (
+            "acceleration_sigma_mps2",
+            "initial_velocity_sigma_mps",
+            "gate_chi2",
+            "gate_distance_m",
+            "max_unseen_s",
+            "tentative_max_unseen_s",
+        ):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {value}")
@@ -125,7 +131,9 @@ class MultiTargetTracker:
         self.state = self.state @ f.T
         self.covariance = f @ self.covariance @ f.T + qm
 
-    def step(self, time_s: float, positions: np.ndarray, sigmas_m: np.ndarray, radii_m: np.ndarray) -> list[tuple[int, int]]:
+    def step(
+        self, time_s: float, positions: np.ndarray, sigmas_m: np.ndarray, radii_m: np.ndarray
+    ) -> list[tuple[int, int]]:
         """Predict to ``time_s``, associate world-frame detections, update, create and delete tracks.
 
         Returns the (track row before deletion, detection) pairs that were associated.
@@ -162,8 +170,9 @@ class MultiTargetTracker:
         # within their first confirm_window cycles any more, or are unseen too long.
         unseen = self.time_s - self.last_seen_s
         cycles_left = np.maximum(p.confirm_window - self.age, 0)
-        hopeless = ~self.confirmed & ((unseen > p.tentative_max_unseen_s + 1e-9)
-                                      | (recent_hits + cycles_left < p.confirm_hits))
+        hopeless = ~self.confirmed & (
+            (unseen > p.tentative_max_unseen_s + 1e-9) | (recent_hits + cycles_left < p.confirm_hits)
+        )
         keep = np.where(self.confirmed, unseen <= p.max_unseen_s + 1e-9, ~hopeless)
         keep &= ~self._duplicates()
         self._keep(keep)
@@ -260,15 +269,29 @@ class MultiTargetTracker:
         # array is fresh (boolean indexing copies), so Obstacles may keep them without copying again. The
         # positions and velocities are two column views of one such copy (not C-contiguous: the planner's
         # kernels get contiguous copies, LegChecks.kernel_obstacles).
-        return Obstacles.of_fresh_arrays(state[:, :2], state[:, 2:], self.radii_m[rows],
-                                         _largest_sigma(c[:, 0, 0], c[:, 0, 1], c[:, 1, 1]),
-                                         _largest_sigma(c[:, 2, 2], c[:, 2, 3], c[:, 3, 3]), self.ids[rows])
+        return Obstacles.of_fresh_arrays(
+            state[:, :2],
+            state[:, 2:],
+            self.radii_m[rows],
+            _largest_sigma(c[:, 0, 0], c[:, 0, 1], c[:, 1, 1]),
+            _largest_sigma(c[:, 2, 2], c[:, 2, 3], c[:, 3, 3]),
+            self.ids[rows],
+        )
 
     def tracks(self, confirmed_only: bool = False) -> list[Track]:
         return [
-            Track(int(self.ids[i]), self.state[i, :2].copy(), self.state[i, 2:].copy(), self.covariance[i].copy(),
-                  float(self.radii_m[i]), bool(self.confirmed[i]), int(self.hits[i]), float(self.last_seen_s[i]))
-            for i in range(len(self.ids)) if self.confirmed[i] or not confirmed_only
+            Track(
+                int(self.ids[i]),
+                self.state[i, :2].copy(),
+                self.state[i, 2:].copy(),
+                self.covariance[i].copy(),
+                float(self.radii_m[i]),
+                bool(self.confirmed[i]),
+                int(self.hits[i]),
+                float(self.last_seen_s[i]),
+            )
+            for i in range(len(self.ids))
+            if self.confirmed[i] or not confirmed_only
         ]
 
 

@@ -54,5 +54,13 @@ def make_planner(name: str, path, **kwargs) -> Planner:
     return planner_class(name)(path, **kwargs)
 
 
-__all__ = ["Decision", "Plan", "Planner", "Situation", "available_planners", "make_planner", "planner_class",
-           "planner_options"]
+__all__ = [
+    "Decision",
+    "Plan",
+    "Planner",
+    "Situation",
+    "available_planners",
+    "make_planner",
+    "planner_class",
+    "planner_options",
+]

@@ -31,16 +31,32 @@ from viapath.options import Option, OptionSet, Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.registry import Registry
 
-PLANNERS: Registry[type["Planner"]] = Registry("planner")
+PLANNERS: Registry[type[Planner]] = Registry("planner")
 
-COMMON_OPTIONS = OptionSet([
-    Option("safety_margin_m", 0.05, "clearance added to every combined robot + obstacle radius", "m", minimum=0.0,
-           maximum=2.0),
-    Option("uncertainty_sigmas", 2.0, "how many σ of position/velocity uncertainty inflate an obstacle", "",
-           minimum=0.0, maximum=10.0),
-    Option("max_inflation_m", 0.15, "cap on the growth of the velocity-uncertainty cone", "m", minimum=0.0,
-           maximum=5.0),
-], owner="planner")
+COMMON_OPTIONS = OptionSet(
+    [
+        Option(
+            "safety_margin_m",
+            0.05,
+            "clearance added to every combined robot + obstacle radius",
+            "m",
+            minimum=0.0,
+            maximum=2.0,
+        ),
+        Option(
+            "uncertainty_sigmas",
+            2.0,
+            "how many σ of position/velocity uncertainty inflate an obstacle",
+            "",
+            minimum=0.0,
+            maximum=10.0,
+        ),
+        Option(
+            "max_inflation_m", 0.15, "cap on the growth of the velocity-uncertainty cone", "m", minimum=0.0, maximum=5.0
+        ),
+    ],
+    owner="planner",
+)
 
 
 @dataclass(frozen=True)
@@ -56,7 +72,7 @@ class Inflation:
     growth_until_s: np.ndarray  # when the cone stops growing
 
     @classmethod
-    def of(cls, obstacles: Obstacles, robot_radius_m: float, settings: Mapping[str, Any]) -> "Inflation":
+    def of(cls, obstacles: Obstacles, robot_radius_m: float, settings: Mapping[str, Any]) -> Inflation:
         if len(obstacles) == 0:
             return _NO_INFLATION
         margin, k = settings["safety_margin_m"], settings["uncertainty_sigmas"]
@@ -64,9 +80,16 @@ class Inflation:
         if kernels is not None:  # the same numbers in one compiled call (viapath._harness_kernels.inflation)
             rows = np.empty((4, len(obstacles)))
             try:
-                kernels.inflation(obstacles.radii_m, obstacles.position_sigma_m, obstacles.velocity_sigma_mps,
-                                  float(robot_radius_m), float(margin), float(k), float(settings["max_inflation_m"]),
-                                  rows)
+                kernels.inflation(
+                    obstacles.radii_m,
+                    obstacles.position_sigma_m,
+                    obstacles.velocity_sigma_mps,
+                    float(robot_radius_m),
+                    float(margin),
+                    float(k),
+                    float(settings["max_inflation_m"]),
+                    rows,
+                )
                 return cls(rows[0], rows[1], rows[2], rows[3])
             except TypeError:  # arrays of another dtype: the numpy code below
                 pass
@@ -78,8 +101,12 @@ class Inflation:
         else:
             with np.errstate(divide="ignore", over="ignore"):
                 until = np.where(growing, settings["max_inflation_m"] / growth, np.inf)
-        return cls(obstacles.radii_m + margin + position_term,
-                   obstacles.radii_m + robot_radius_m + margin + position_term, growth, until)
+        return cls(
+            obstacles.radii_m + margin + position_term,
+            obstacles.radii_m + robot_radius_m + margin + position_term,
+            growth,
+            until,
+        )
 
 
 # The inflation of no obstacles: one instance serves every empty scene (its arrays hold nothing to change;
@@ -146,8 +173,9 @@ class Planner:
         self.subgoal_policy = subgoal_policy or SubgoalPolicy()
         self.subgoals = SubgoalTracker(path, self.subgoal_policy)
         # Every option's value (defaults filled in), validated against the class's schema.
-        self.settings: Settings = type(self).options.validate({**dict(options or {}), **option_values},
-                                                                    where=f"planner {self.name or type(self).__name__}")
+        self.settings: Settings = type(self).options.validate(
+            {**dict(options or {}), **option_values}, where=f"planner {self.name or type(self).__name__}"
+        )
 
     def reset(self) -> None:
         self.subgoals = SubgoalTracker(self.path, self.subgoal_policy)
@@ -168,8 +196,13 @@ class Planner:
         self.subgoals.update(position, self.robot_radius_m, obstacles.positions, obstacles.radii_m)
         inflation, excess_m = self._inflation_and_excess(obstacles, position)
         return Situation(
-            observation=observation, position=position, obstacles=obstacles, inflation=inflation,
-            subgoal=self.subgoals.subgoal, subgoal_index=self.subgoals.index, corridor_excess_m=max(0.0, excess_m),
+            observation=observation,
+            position=position,
+            obstacles=obstacles,
+            inflation=inflation,
+            subgoal=self.subgoals.subgoal,
+            subgoal_index=self.subgoals.index,
+            corridor_excess_m=max(0.0, excess_m),
         )
 
     def _inflation_and_excess(self, obstacles: Obstacles, position: np.ndarray) -> tuple[Inflation, float]:
@@ -183,16 +216,33 @@ class Planner:
                 settings, path = self.settings, self.path
                 cached = self.__dict__.get("_inflation_settings")  # (settings, its three numbers): read every cycle
                 if cached is None or cached[0] is not settings:
-                    cached = self.__dict__["_inflation_settings"] = (settings, (
-                        float(settings["safety_margin_m"]), float(settings["uncertainty_sigmas"]),
-                        float(settings["max_inflation_m"])))
+                    cached = self.__dict__["_inflation_settings"] = (
+                        settings,
+                        (
+                            float(settings["safety_margin_m"]),
+                            float(settings["uncertainty_sigmas"]),
+                            float(settings["max_inflation_m"]),
+                        ),
+                    )
                 margin_m, sigmas, max_inflation_m = cached[1]
                 rows = np.empty((4, n))
                 try:
                     excess_m = kernels.situation_numbers(
-                        obstacles.radii_m, obstacles.position_sigma_m, obstacles.velocity_sigma_mps,
-                        self.robot_radius_m, margin_m, sigmas, max_inflation_m, rows, x, y, path.segment_starts,
-                        path.segment_directions, path.segment_lengths_m, path.half_widths_m)
+                        obstacles.radii_m,
+                        obstacles.position_sigma_m,
+                        obstacles.velocity_sigma_mps,
+                        self.robot_radius_m,
+                        margin_m,
+                        sigmas,
+                        max_inflation_m,
+                        rows,
+                        x,
+                        y,
+                        path.segment_starts,
+                        path.segment_directions,
+                        path.segment_lengths_m,
+                        path.half_widths_m,
+                    )
                     return Inflation(rows[0], rows[1], rows[2], rows[3]), excess_m
                 except TypeError:  # arrays of another dtype: the numpy code below
                     pass
@@ -207,11 +257,23 @@ class Planner:
 
     # -- helpers for planners ----------------------------------------------------------------------
 
-    def steer(self, observation: Observation, target: np.ndarray, speed_mps: float, heading_gain: float = 2.5) -> Command:
+    def steer(
+        self, observation: Observation, target: np.ndarray, speed_mps: float, heading_gain: float = 2.5
+    ) -> Command:
         """Turn towards ``target`` and drive at ``speed_mps``, slowing for large heading errors."""
         robot, position = observation.robot, observation.robot.position
-        return Command(*steer_towards(float(position[0]), float(position[1]), float(robot.heading_rad),
-                                      float(target[0]), float(target[1]), speed_mps, self.limits, heading_gain))
+        return Command(
+            *steer_towards(
+                float(position[0]),
+                float(position[1]),
+                float(robot.heading_rad),
+                float(target[0]),
+                float(target[1]),
+                speed_mps,
+                self.limits,
+                heading_gain,
+            )
+        )
 
 
 def _check_description(planner: Planner, nominal_speed_mps, limits: MotionLimits, robot_radius_m) -> None:

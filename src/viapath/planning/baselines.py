@@ -56,8 +56,13 @@ class _SubgoalFollower(Planner):
 
     def _straight(self, situation: Situation, status="straight") -> Decision:
         speed, position, subgoal = self.nominal_speed_mps, situation.position, situation.subgoal
-        plan = Plan(status, speed, subgoal.copy(), waypoints=np.array([position, subgoal]),
-                    subgoal_index=situation.subgoal_index)
+        plan = Plan(
+            status,
+            speed,
+            subgoal.copy(),
+            waypoints=np.array([position, subgoal]),
+            subgoal_index=situation.subgoal_index,
+        )
         return Decision(self.steer(situation.observation, subgoal, speed), plan)
 
 
@@ -71,10 +76,20 @@ class FollowPlanner(_SubgoalFollower, name="follow"):
 class StopPlanner(_SubgoalFollower, name="stop"):
     """Follows the path; stops while the straight leg ahead is predicted to touch an obstacle."""
 
-    options = COMMON_OPTIONS + OptionSet([
-        Option("horizon_s", 4.0, "stop while the straight leg touches an obstacle this far ahead", "s",
-               minimum=0.0, exclusive_minimum=True, maximum=60.0),
-    ], owner="stop")
+    options = COMMON_OPTIONS + OptionSet(
+        [
+            Option(
+                "horizon_s",
+                4.0,
+                "stop while the straight leg touches an obstacle this far ahead",
+                "s",
+                minimum=0.0,
+                exclusive_minimum=True,
+                maximum=60.0,
+            ),
+        ],
+        owner="stop",
+    )
 
     def decide(self, situation: Situation) -> Decision:
         obstacles, position, subgoal = situation.obstacles, situation.position, situation.subgoal
@@ -85,33 +100,74 @@ class StopPlanner(_SubgoalFollower, name="stop"):
             velocity = offset / max(distance, 1e-9) * speed
             duration = min(self.config.horizon_s, distance / speed)
             inflation = situation.inflation
-            contact = legs_first_contact(position[None], np.zeros(1), velocity[None], np.array([duration]),
-                                         obstacles.positions, obstacles.velocities, inflation.check_radii,
-                                         inflation.growth, inflation.growth_until_s)
+            contact = legs_first_contact(
+                position[None],
+                np.zeros(1),
+                velocity[None],
+                np.array([duration]),
+                obstacles.positions,
+                obstacles.velocities,
+                inflation.check_radii,
+                inflation.growth,
+                inflation.growth_until_s,
+            )
             if np.isfinite(contact).any():
-                return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), subgoal_index=situation.subgoal_index))
+                return Decision(
+                    Command.stop(), Plan("stop", 0.0, position.copy(), subgoal_index=situation.subgoal_index)
+                )
         return self._straight(situation)
 
 
 class DWAPlanner(_SubgoalFollower, name="dwa"):
     """Dynamic window approach (Fox, Burgard, Thrun 1997) with predicted obstacle motion and the corridor."""
 
-    options = COMMON_OPTIONS + OptionSet([
-        Option("horizon_s", 3.0, "an arc touching an obstacle this far ahead is inadmissible", "s",
-               minimum=0.25, maximum=10.0),  # at least a quarter of the longest sample_dt_s: arcs of 2 samples
-        Option("sample_dt_s", 0.1, "time step of the sampled arcs", "s", minimum=0.05, maximum=1.0),
-        Option("window_s", 0.1, "the control period: velocities reachable within it form the window", "s",
-               minimum=0.0, exclusive_minimum=True, maximum=10.0),
-        Option("n_speeds", 7, "speeds sampled in the window", minimum=1, maximum=21),
-        Option("n_turn_rates", 15, "turn rates sampled in the window", minimum=1, maximum=41),
-        Option("corridor_horizon_s", 1.5, "an arc must stay in the corridor this long", "s", minimum=0.0, maximum=30.0),
-        Option("heading_lookahead_s", 1.0, "where along the arc heading and path terms are evaluated", "s",
-               minimum=0.0, maximum=30.0),
-        Option("heading_weight", 1.0, "α, weight of the heading to the subgoal", minimum=0.0, maximum=1000.0),
-        Option("clearance_weight", 0.3, "β, weight of the time to the first contact", minimum=0.0, maximum=1000.0),
-        Option("velocity_weight", 0.3, "γ, weight of closeness to the nominal speed", minimum=0.0, maximum=1000.0),
-        Option("path_weight", 0.5, "weight of staying near the designated path (our addition)", minimum=0.0, maximum=1000.0),
-    ], owner="dwa", steps=[("horizon_s", "sample_dt_s")])
+    options = COMMON_OPTIONS + OptionSet(
+        [
+            Option(
+                "horizon_s",
+                3.0,
+                "an arc touching an obstacle this far ahead is inadmissible",
+                "s",
+                minimum=0.25,
+                maximum=10.0,
+            ),  # at least a quarter of the longest sample_dt_s: arcs of 2 samples
+            Option("sample_dt_s", 0.1, "time step of the sampled arcs", "s", minimum=0.05, maximum=1.0),
+            Option(
+                "window_s",
+                0.1,
+                "the control period: velocities reachable within it form the window",
+                "s",
+                minimum=0.0,
+                exclusive_minimum=True,
+                maximum=10.0,
+            ),
+            Option("n_speeds", 7, "speeds sampled in the window", minimum=1, maximum=21),
+            Option("n_turn_rates", 15, "turn rates sampled in the window", minimum=1, maximum=41),
+            Option(
+                "corridor_horizon_s", 1.5, "an arc must stay in the corridor this long", "s", minimum=0.0, maximum=30.0
+            ),
+            Option(
+                "heading_lookahead_s",
+                1.0,
+                "where along the arc heading and path terms are evaluated",
+                "s",
+                minimum=0.0,
+                maximum=30.0,
+            ),
+            Option("heading_weight", 1.0, "α, weight of the heading to the subgoal", minimum=0.0, maximum=1000.0),
+            Option("clearance_weight", 0.3, "β, weight of the time to the first contact", minimum=0.0, maximum=1000.0),
+            Option("velocity_weight", 0.3, "γ, weight of closeness to the nominal speed", minimum=0.0, maximum=1000.0),
+            Option(
+                "path_weight",
+                0.5,
+                "weight of staying near the designated path (our addition)",
+                minimum=0.0,
+                maximum=1000.0,
+            ),
+        ],
+        owner="dwa",
+        steps=[("horizon_s", "sample_dt_s")],
+    )
 
     def decide(self, situation: Situation) -> Decision:
         config, limits = self.config, self.limits
@@ -119,9 +175,14 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
         robot = situation.robot
         # The dynamic window: velocities reachable within one control period.
         dv, dw = limits.max_accel_mps2 * config.window_s, limits.max_turn_accel_radps2 * config.window_s
-        speeds = np.linspace(max(0.0, robot.speed_mps - dv), min(limits.max_speed_mps, robot.speed_mps + dv), config.n_speeds)
-        turns = np.linspace(max(-limits.max_turn_rate_radps, robot.turn_rate_radps - dw),
-                            min(limits.max_turn_rate_radps, robot.turn_rate_radps + dw), config.n_turn_rates)
+        speeds = np.linspace(
+            max(0.0, robot.speed_mps - dv), min(limits.max_speed_mps, robot.speed_mps + dv), config.n_speeds
+        )
+        turns = np.linspace(
+            max(-limits.max_turn_rate_radps, robot.turn_rate_radps - dw),
+            min(limits.max_turn_rate_radps, robot.turn_rate_radps + dw),
+            config.n_turn_rates,
+        )
         v, w = (a.ravel() for a in np.meshgrid(speeds, turns))
         # Arcs are followed to twice the horizon: contact within the horizon makes an arc inadmissible;
         # the time to the first contact up to twice the horizon is the "dist" term (Fox et al.: distance
@@ -131,14 +192,19 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
         xy = poses[..., :2]
         first_contact = np.full(len(v), np.inf)
         if len(obstacles):
-            radii, growth, until = (situation.inflation.check_radii, situation.inflation.growth,
-                                    situation.inflation.growth_until_s)
+            radii, growth, until = (
+                situation.inflation.check_radii,
+                situation.inflation.growth,
+                situation.inflation.growth_until_s,
+            )
             reach = np.hypot(*(obstacles.positions - position).T) - radii
             reach_limit = (limits.max_speed_mps + np.hypot(*obstacles.velocities.T) + growth) * times[-1]
             near = reach <= reach_limit
             if near.any():
                 # Exact closest approach for straight motion of both between samples.
-                centres = obstacles.positions[near][None, :, :] + times[:, None, None] * obstacles.velocities[near][None]
+                centres = (
+                    obstacles.positions[near][None, :, :] + times[:, None, None] * obstacles.velocities[near][None]
+                )
                 rel = xy[:, :, None, :] - centres[None]  # (K, S, N, 2)
                 distance, _ = closest_approach(rel[:, :-1], rel[:, 1:] - rel[:, :-1], 1.0)
                 gaps = distance - (radii[near] + growth[near] * np.minimum(times[1:, None], until[near]))[None]
@@ -156,8 +222,14 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
         if not admissible.any():
             # Braking fallback: stop, turning along the arc whose contact (or exit) comes latest.
             best = int(np.argmax(np.where(inside, 1e3, 0.0) + np.minimum(first_contact, 1e3)))
-            plan = Plan("brake", 0.0, xy[best, -1].copy(), waypoints=xy[best].copy(), subgoal_index=situation.subgoal_index,
-                        candidate_count=0)
+            plan = Plan(
+                "brake",
+                0.0,
+                xy[best, -1].copy(),
+                waypoints=xy[best].copy(),
+                subgoal_index=situation.subgoal_index,
+                candidate_count=0,
+            )
             return Decision(Command(0.0, float(w[best])), plan)
 
         look = min(int(round(config.heading_lookahead_s / config.sample_dt_s)), len(times) - 1)
@@ -170,13 +242,24 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
         velocity_term = 1.0 - np.abs(v - self.nominal_speed_mps) / limits.max_speed_mps
         half_width = self.path.half_widths_m[min(situation.subgoal_index - 1, len(self.path.half_widths_m) - 1)]
         path_term = 1.0 - np.clip(np.abs(self.path.lateral_deviation(ahead[:, :2])) / half_width, 0.0, 1.0)
-        score = (config.heading_weight * heading_term + config.clearance_weight * clearance_term
-                 + config.velocity_weight * velocity_term + config.path_weight * path_term)
+        score = (
+            config.heading_weight * heading_term
+            + config.clearance_weight * clearance_term
+            + config.velocity_weight * velocity_term
+            + config.path_weight * path_term
+        )
         score = np.where(admissible, score, -np.inf)
         best = int(np.argmax(score))
-        plan = Plan("dwa", float(v[best]), xy[best, look].copy(), waypoints=xy[best].copy(),
-                    subgoal_index=situation.subgoal_index, candidate_count=int(admissible.sum()),
-                    candidate_costs=-score[admissible], extras={"turn_rate_radps": float(w[best])})
+        plan = Plan(
+            "dwa",
+            float(v[best]),
+            xy[best, look].copy(),
+            waypoints=xy[best].copy(),
+            subgoal_index=situation.subgoal_index,
+            candidate_count=int(admissible.sum()),
+            candidate_costs=-score[admissible],
+            extras={"turn_rate_radps": float(w[best])},
+        )
         return Decision(Command(float(v[best]), float(w[best])), plan)
 
 
@@ -195,19 +278,47 @@ def _arcs(position, heading_rad, speeds, turn_rates, times):
 class VOPlanner(_SubgoalFollower, name="vo"):
     """Sampling-based velocity obstacles (Fiorini & Shiller 1998) with the corridor."""
 
-    options = COMMON_OPTIONS + OptionSet([
-        Option("horizon_s", 5.0, "truncation of the velocity obstacles", "s", minimum=0.0, exclusive_minimum=True,
-               maximum=60.0),
-        Option("n_speeds", 7, "speeds sampled up to the top speed", minimum=1, maximum=51),
-        Option("n_headings", 37, "headings sampled around the direction to the subgoal", minimum=1, maximum=181),
-        Option("heading_span_rad", float(np.pi / 2), "headings within ± this of the direction to the subgoal",
-               "rad", minimum=0.0, maximum=float(np.pi)),
-        Option("corridor_horizon_s", 2.0, "a velocity must keep the robot in the corridor this long", "s",
-               minimum=0.0, maximum=30.0),
-        Option("preferred_side", "left", "exact ties (head-on) go round this side", choices=("left", "right")),
-        Option("penalty_weight", 0.5, "with no free velocity: weight of 1/time-to-contact", "s", minimum=0.0,
-               maximum=1000.0),
-    ], owner="vo")
+    options = COMMON_OPTIONS + OptionSet(
+        [
+            Option(
+                "horizon_s",
+                5.0,
+                "truncation of the velocity obstacles",
+                "s",
+                minimum=0.0,
+                exclusive_minimum=True,
+                maximum=60.0,
+            ),
+            Option("n_speeds", 7, "speeds sampled up to the top speed", minimum=1, maximum=51),
+            Option("n_headings", 37, "headings sampled around the direction to the subgoal", minimum=1, maximum=181),
+            Option(
+                "heading_span_rad",
+                float(np.pi / 2),
+                "headings within ± this of the direction to the subgoal",
+                "rad",
+                minimum=0.0,
+                maximum=float(np.pi),
+            ),
+            Option(
+                "corridor_horizon_s",
+                2.0,
+                "a velocity must keep the robot in the corridor this long",
+                "s",
+                minimum=0.0,
+                maximum=30.0,
+            ),
+            Option("preferred_side", "left", "exact ties (head-on) go round this side", choices=("left", "right")),
+            Option(
+                "penalty_weight",
+                0.5,
+                "with no free velocity: weight of 1/time-to-contact",
+                "s",
+                minimum=0.0,
+                maximum=1000.0,
+            ),
+        ],
+        owner="vo",
+    )
 
     def decide(self, situation: Situation) -> Decision:
         config = self.config
@@ -216,8 +327,11 @@ class VOPlanner(_SubgoalFollower, name="vo"):
         bearing = float(np.arctan2(offset[1], offset[0]))
         preferred = self.nominal_speed_mps * np.array([np.cos(bearing), np.sin(bearing)])
         top = min(self.limits.max_speed_mps, max(self.nominal_speed_mps * 2.0, self.nominal_speed_mps + 0.1))
-        speeds = np.unique(np.concatenate([np.linspace(top / config.n_speeds, top, config.n_speeds),
-                                           [min(self.nominal_speed_mps, top)]]))
+        speeds = np.unique(
+            np.concatenate(
+                [np.linspace(top / config.n_speeds, top, config.n_speeds), [min(self.nominal_speed_mps, top)]]
+            )
+        )
         deflection = np.linspace(-config.heading_span_rad, config.heading_span_rad, config.n_headings)
         s, d = (a.ravel() for a in np.meshgrid(speeds, deflection))
         s, d = np.append(s, 0.0), np.append(d, 0.0)  # standing still is a candidate too
@@ -226,9 +340,17 @@ class VOPlanner(_SubgoalFollower, name="vo"):
 
         if len(obstacles):
             inflation = situation.inflation
-            contact = legs_first_contact(np.repeat(position[None], k, 0), np.zeros(k), candidates,
-                                         np.full(k, config.horizon_s), obstacles.positions, obstacles.velocities,
-                                         inflation.check_radii, inflation.growth, inflation.growth_until_s).min(axis=1)
+            contact = legs_first_contact(
+                np.repeat(position[None], k, 0),
+                np.zeros(k),
+                candidates,
+                np.full(k, config.horizon_s),
+                obstacles.positions,
+                obstacles.velocities,
+                inflation.check_radii,
+                inflation.growth,
+                inflation.growth_until_s,
+            ).min(axis=1)
         else:
             contact = np.full(k, np.inf)
         tolerance = situation.corridor_excess_m + 1e-6
@@ -250,8 +372,13 @@ class VOPlanner(_SubgoalFollower, name="vo"):
         velocity = candidates[best]
         speed = float(s[best])
         target = position + velocity / max(speed, 1e-9) if speed > 0 else position.copy()
-        plan = Plan(status, speed, target, waypoints=np.array([position, position + velocity * config.horizon_s]),
-                    subgoal_index=situation.subgoal_index, candidate_count=int(free.sum()))
+        plan = Plan(
+            status,
+            speed,
+            target,
+            waypoints=np.array([position, position + velocity * config.horizon_s]),
+            subgoal_index=situation.subgoal_index,
+            candidate_count=int(free.sum()),
+        )
         command = self.steer(situation.observation, target, speed) if speed > 0 else Command.stop()
         return Decision(command, plan)
-

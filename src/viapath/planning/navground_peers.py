@@ -65,10 +65,21 @@ def corridor_borders(waypoints: np.ndarray, half_widths: np.ndarray) -> list[tup
 
 class _NavgroundPeer(Planner):
     behavior_type = ""
-    options = COMMON_OPTIONS + OptionSet([
-        Option("horizon_s", 5.0, "navground behaviour's horizon", "s", minimum=0.0, exclusive_minimum=True, maximum=60.0),
-        Option("corridor_walls", True, "give navground the corridor borders as line obstacles"),
-    ], owner="navground")
+    options = COMMON_OPTIONS + OptionSet(
+        [
+            Option(
+                "horizon_s",
+                5.0,
+                "navground behaviour's horizon",
+                "s",
+                minimum=0.0,
+                exclusive_minimum=True,
+                maximum=60.0,
+            ),
+            Option("corridor_walls", True, "give navground the corridor borders as line obstacles"),
+        ],
+        owner="navground",
+    )
 
     def __init__(self, path, **kwargs):
         super().__init__(path, **kwargs)
@@ -79,7 +90,9 @@ class _NavgroundPeer(Planner):
         behavior = core.Behavior.make_type(self.behavior_type)
         if behavior is None:  # pragma: no cover - depends on the navground build
             raise RuntimeError(f"navground has no behaviour {self.behavior_type!r}")
-        behavior.kinematics = core.kinematics.AheadKinematics(self.limits.max_speed_mps, self.limits.max_turn_rate_radps)
+        behavior.kinematics = core.kinematics.AheadKinematics(
+            self.limits.max_speed_mps, self.limits.max_turn_rate_radps
+        )
         behavior.radius = self.robot_radius_m
         behavior.max_speed = self.limits.max_speed_mps
         behavior.optimal_speed = self.nominal_speed_mps
@@ -109,14 +122,18 @@ class _NavgroundPeer(Planner):
         radii = situation.inflation.obstacle_radii_m
         state = behavior.environment_state
         people = ~obstacles.is_static
-        state.neighbors = [core.Neighbor(p, float(r), v, int(i) % 2**31) for p, r, v, i in  # navground's ids: int32
-                           zip(obstacles.positions[people], radii[people], obstacles.velocities[people],
-                               obstacles.ids[people])]
+        state.neighbors = [
+            core.Neighbor(p, float(r), v, int(i) % 2**31)
+            for p, r, v, i in zip(  # navground's ids: int32
+                obstacles.positions[people], radii[people], obstacles.velocities[people], obstacles.ids[people]
+            )
+        ]
         # Static geometry (walls, boxes, scan returns) as navground's static discs: they do not reciprocate.
-        state.static_obstacles = [core.Disc(p, float(r)) for p, r in
-                                  zip(obstacles.positions[~people], radii[~people])]
+        state.static_obstacles = [core.Disc(p, float(r)) for p, r in zip(obstacles.positions[~people], radii[~people])]
         state.line_obstacles = self._walls
-        tolerance = self.subgoal_policy.goal_tolerance_m if self.subgoals.is_final else self.subgoal_policy.reach_threshold_m
+        tolerance = (
+            self.subgoal_policy.goal_tolerance_m if self.subgoals.is_final else self.subgoal_policy.reach_threshold_m
+        )
         behavior.target = core.Target.Point(subgoal, tolerance=0.5 * tolerance)
         twist = behavior.compute_cmd(self._dt_s, core.Frame.relative)
         speed = float(twist.velocity[0])

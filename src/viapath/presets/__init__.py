@@ -60,8 +60,13 @@ class Preset:
         return {schema[name].path: value for name, value in self.options.items()}
 
     def to_yaml(self) -> str:
-        data = {"name": self.name, "description": self.description, "planner": self.planner,
-                "options": _plain(self.nested()), "evidence": _plain(self.evidence)}
+        data = {
+            "name": self.name,
+            "description": self.description,
+            "planner": self.planner,
+            "options": _plain(self.nested()),
+            "evidence": _plain(self.evidence),
+        }
         return yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
 
 
@@ -123,11 +128,14 @@ def preset_from_dict(data: Any, origin: str = "<preset>") -> Preset:
         raise PresetError(f"{origin}: name: expected a non-empty string, found {name!r}")
     planner = data.get("planner", "viapath")
     if planner not in available_planners():
-        raise PresetError(f"{origin}: planner: unknown planner {planner!r}; available: {', '.join(available_planners())}")
+        raise PresetError(
+            f"{origin}: planner: unknown planner {planner!r}; available: {', '.join(available_planners())}"
+        )
     options = data.get("options")
     if not isinstance(options, dict) or not options:
-        raise PresetError(f"{origin}: options: expected a mapping of option values (e.g. weights: {{k1: 0.1}}), "
-                          f"found {options!r}")
+        raise PresetError(
+            f"{origin}: options: expected a mapping of option values (e.g. weights: {{k1: 0.1}}), found {options!r}"
+        )
     evidence = data.get("evidence") or {}
     if not isinstance(evidence, dict):
         raise PresetError(f"{origin}: evidence: expected a mapping, found {evidence!r}")
@@ -137,8 +145,14 @@ def preset_from_dict(data: Any, origin: str = "<preset>") -> Preset:
     except OptionError as error:
         raise PresetError("\n".join(f"{origin}: {where}: {message}" for where, message in error.errors)) from None
     given = set(_flat_names(schema.nest(options)))
-    return Preset(name=name, description=str(data.get("description") or ""), planner=planner,
-                  options={n: settings[n] for n in schema.names if n in given}, evidence=evidence, source=origin)
+    return Preset(
+        name=name,
+        description=str(data.get("description") or ""),
+        planner=planner,
+        options={n: settings[n] for n in schema.names if n in given},
+        evidence=evidence,
+        source=origin,
+    )
 
 
 def _flat_names(nested: dict[str, Any]) -> list[str]:

@@ -10,13 +10,13 @@ Modules that need rclpy import it inside their functions: ``settings``, ``core``
 def rclpy_available() -> tuple[bool, str]:
     """Whether rclpy and the message packages import, and if not, why (one line)."""
     try:
-        import rclpy  # noqa: F401
         import diagnostic_msgs.msg  # noqa: F401
         import nav_msgs.msg  # noqa: F401
+        import rclpy
+        import rclpy.lifecycle  # noqa: F401
         import rosgraph_msgs.msg  # noqa: F401
         import sensor_msgs.msg  # noqa: F401
         import visualization_msgs.msg  # noqa: F401
-        import rclpy.lifecycle  # noqa: F401
     except ImportError as error:
         return False, f"ROS 2 (rclpy) is not available: {error}; install with: pip install 'viapath[ros2]'"
     return True, ""

@@ -9,14 +9,16 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import List, Optional
 
 import typer
 from rich.console import Console
 from rich.markup import escape
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="viapath on a robot: the ROS 2 planner node, a simulator node, a bag player.")
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    help="viapath on a robot: the ROS 2 planner node, a simulator node, a bag player.",
+)
 _errors = Console(stderr=True)
 
 _CONTEXT = {"allow_extra_args": True, "ignore_unknown_options": True}
@@ -48,7 +50,9 @@ def _ros_args(extra: list[str]) -> list[str]:
 @app.command(context_settings=_CONTEXT)
 def node(
     ctx: typer.Context,
-    params_file: Optional[Path] = typer.Option(None, "--params-file", help="ROS 2 parameters file (viapath: ros__parameters: ...)."),
+    params_file: Path | None = typer.Option(
+        None, "--params-file", help="ROS 2 parameters file (viapath: ros__parameters: ...)."
+    ),
     use_sim_time: bool = typer.Option(False, "--use-sim-time", help="Run on /clock (as with the simulator node)."),
 ) -> None:
     """The planner node: scans + odometry + designated path in, cmd_vel out (see docs/ros2.md)."""
@@ -74,9 +78,13 @@ def node(
 @app.command(context_settings=_CONTEXT)
 def nav2(
     ctx: typer.Context,
-    params_file: Optional[Path] = typer.Option(None, "--params-file", help="ROS 2 parameters file (controller_server: ros__parameters: ...)."),
+    params_file: Path | None = typer.Option(
+        None, "--params-file", help="ROS 2 parameters file (controller_server: ros__parameters: ...)."
+    ),
     use_sim_time: bool = typer.Option(False, "--use-sim-time", help="Run on /clock."),
-    name: str = typer.Option("controller_server", "--name", help="Node name (Nav2's lifecycle manager manages nodes by name)."),
+    name: str = typer.Option(
+        "controller_server", "--name", help="Node name (Nav2's lifecycle manager manages nodes by name)."
+    ),
 ) -> None:
     """The planner as Nav2's controller server: serves follow_path, honours speed_limit, reads TF (see docs/nav2.md)."""
     from viapath.ros2.settings import ParameterError, read_params_file, validate
@@ -107,17 +115,33 @@ def sim(
     rate: float = typer.Option(1.0, "--rate", help="Run R times faster than real time (through /clock)."),
     lockstep: bool = typer.Option(False, "--lockstep", help="Wait for the node's command of each step before driving."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object of metrics (as viapath run --json)."),
-    seed: Optional[int] = typer.Option(None, "--seed", help="Random seed of the range noise (default: the scenario's)."),
-    fault: List[str] = typer.Option([], "--fault", help="Inject a fault from T (to END) s: silence:NAME@T[-END], nan:NAME@T[-END], short:NAME@T[-END], odom@T[-END], clock-back:D@T."),
-    trace: Optional[Path] = typer.Option(None, "--trace", help="Write the per-step trace as CSV."),
-    commands: Optional[Path] = typer.Option(None, "--commands", help="Write every step's received command as CSV."),
-    status_log: Optional[Path] = typer.Option(None, "--status-log", help="Write every planner status received (JSON lines)."),
+    seed: int | None = typer.Option(None, "--seed", help="Random seed of the range noise (default: the scenario's)."),
+    fault: list[str] = typer.Option(
+        [],
+        "--fault",
+        help="Inject a fault from T (to END) s: silence:NAME@T[-END], nan:NAME@T[-END], short:NAME@T[-END], odom@T[-END], clock-back:D@T.",
+    ),
+    trace: Path | None = typer.Option(None, "--trace", help="Write the per-step trace as CSV."),
+    commands: Path | None = typer.Option(None, "--commands", help="Write every step's received command as CSV."),
+    status_log: Path | None = typer.Option(
+        None, "--status-log", help="Write every planner status received (JSON lines)."
+    ),
     wait_s: float = typer.Option(60.0, "--wait-s", help="How long to wait for a planner node to appear."),
-    duration: Optional[float] = typer.Option(None, "--duration", help="End the episode after this many seconds (default: the scenario's)."),
-    tf: bool = typer.Option(True, "--tf/--no-tf", help="Publish TF: /tf odom->base_link, /tf_static map->odom and base_link->laser_NAME."),
-    map_offset: str = typer.Option("0,0,0", "--map-offset", help="map->odom as X,Y,YAW (m, m, rad): the pose of odom in map."),
-    max_wait: float = typer.Option(10.0, "--max-wait", help="With --lockstep: wait at most this long (wall s) for the node each step."),
-    linger: float = typer.Option(0.0, "--linger", help="After the goal, keep simulating this long (s; not in the metrics)."),
+    duration: float | None = typer.Option(
+        None, "--duration", help="End the episode after this many seconds (default: the scenario's)."
+    ),
+    tf: bool = typer.Option(
+        True, "--tf/--no-tf", help="Publish TF: /tf odom->base_link, /tf_static map->odom and base_link->laser_NAME."
+    ),
+    map_offset: str = typer.Option(
+        "0,0,0", "--map-offset", help="map->odom as X,Y,YAW (m, m, rad): the pose of odom in map."
+    ),
+    max_wait: float = typer.Option(
+        10.0, "--max-wait", help="With --lockstep: wait at most this long (wall s) for the node each step."
+    ),
+    linger: float = typer.Option(
+        0.0, "--linger", help="After the goal, keep simulating this long (s; not in the metrics)."
+    ),
 ) -> None:
     """Simulated scans, odometry and /clock from a scenario; drives the robot with cmd_vel; prints the metrics."""
     import math
@@ -143,16 +167,33 @@ def sim(
         faults = [Fault.parse(f) for f in fault]
     except (ScenarioError, ValueError) as error:
         _fail(str(error))
-    for file, option, suffix in ((trace, "--trace", ".csv"), (commands, "--commands", ".csv"), (status_log, "--status-log", ".jsonl")):
+    for file, option, suffix in (
+        (trace, "--trace", ".csv"),
+        (commands, "--commands", ".csv"),
+        (status_log, "--status-log", ".jsonl"),
+    ):
         if file is not None and (file.suffix.lower() != suffix or not file.parent.exists()):
             _fail(f"{option} {file}: expected a {suffix} file in an existing folder")
     _need_rclpy()
     try:
-        code = run_sim(scenario, rate=rate, lockstep=lockstep, max_wait_s=max(max_wait, 0.0), as_json=as_json, seed=seed, faults=faults,
-                       trace_file=str(trace) if trace else None, wait_for_node_s=wait_s,
-                       commands_file=str(commands) if commands else None, ros_args=ros_args,
-                       duration_s=duration, status_file=str(status_log) if status_log else None, tf=tf, map_offset=offset,
-                       linger_s=max(linger, 0.0))
+        code = run_sim(
+            scenario,
+            rate=rate,
+            lockstep=lockstep,
+            max_wait_s=max(max_wait, 0.0),
+            as_json=as_json,
+            seed=seed,
+            faults=faults,
+            trace_file=str(trace) if trace else None,
+            wait_for_node_s=wait_s,
+            commands_file=str(commands) if commands else None,
+            ros_args=ros_args,
+            duration_s=duration,
+            status_file=str(status_log) if status_log else None,
+            tf=tf,
+            map_offset=offset,
+            linger_s=max(linger, 0.0),
+        )
     except ValueError as error:
         _fail(str(error))
     raise typer.Exit(code)
@@ -162,14 +203,16 @@ def sim(
 def play(
     ctx: typer.Context,
     bag: Path = typer.Argument(..., help="ROS 1 .bag, ROS 2 bag folder or .mcap with sensor_msgs/LaserScan."),
-    topic: Optional[str] = typer.Option(None, "--topic", help="LaserScan topic in the bag (default: the only one)."),
+    topic: str | None = typer.Option(None, "--topic", help="LaserScan topic in the bag (default: the only one)."),
     out_topic: str = typer.Option("scan_front", "--out-topic", help="Topic to publish the scans on."),
-    frame_id: Optional[str] = typer.Option(None, "--frame-id", help="frame_id to stamp (default: the bag's)."),
+    frame_id: str | None = typer.Option(None, "--frame-id", help="frame_id to stamp (default: the bag's)."),
     rate: float = typer.Option(1.0, "--rate", help="Play R times faster, through /clock."),
     odom: bool = typer.Option(True, "--odom/--no-odom", help="Also publish a standing robot's odometry at the origin."),
     wait_s: float = typer.Option(30.0, "--wait-s", help="How long to wait for a subscriber before playing."),
     lockstep: bool = typer.Option(False, "--lockstep", help="Wait for the node's cycle on each scan before the next."),
-    status_log: Optional[Path] = typer.Option(None, "--status-log", help="Write the node's planner statuses (JSON lines)."),
+    status_log: Path | None = typer.Option(
+        None, "--status-log", help="Write the node's planner statuses (JSON lines)."
+    ),
 ) -> None:
     """Publish a recording's scans with their timing (and /clock), so the node tracks real people.
 
@@ -185,8 +228,18 @@ def play(
         _fail(f"{bag}: no such file or directory")
     _need_rclpy()
     try:
-        code = run_play(bag, topic, out_topic, frame_id, rate, odom, wait_s, ros_args, lockstep=lockstep,
-                        status_file=str(status_log) if status_log else None)
+        code = run_play(
+            bag,
+            topic,
+            out_topic,
+            frame_id,
+            rate,
+            odom,
+            wait_s,
+            ros_args,
+            lockstep=lockstep,
+            status_file=str(status_log) if status_log else None,
+        )
     except (ValueError, ImportError, FileNotFoundError) as error:
         _fail(str(error))
     raise typer.Exit(code)
@@ -212,18 +265,34 @@ def params(
 @app.command(context_settings=_CONTEXT)
 def follow(
     ctx: typer.Context,
-    source: str = typer.Argument(..., help="Path: a built-in scenario, a scenario YAML, or a path file (YAML/CSV of x y)."),
+    source: str = typer.Argument(
+        ..., help="Path: a built-in scenario, a scenario YAML, or a path file (YAML/CSV of x y)."
+    ),
     action: str = typer.Option("follow_path", "--action", help="FollowPath action name."),
     frame: str = typer.Option("map", "--frame", help="Frame the path is sent in."),
-    map_offset: str = typer.Option("0,0,0", "--map-offset", help="Pose of the path's odometry frame in --frame: X,Y,YAW."),
-    spacing: float = typer.Option(0.05, "--spacing", help="Densify the path to poses this far apart (m), as a planner's path."),
-    resend: float = typer.Option(1.0, "--resend", help="Re-send the path every S seconds (0: once), as Nav2's behaviour tree."),
-    lifecycle: Optional[str] = typer.Option(None, "--lifecycle", help="Configure and activate this lifecycle node first."),
-    at: List[str] = typer.Option([], "--at", help="Event TIME:KIND[:ARG]: empty, nan, preempt:PATH, cancel, deactivate, activate, speed-limit:PERCENT, clear, stop."),
-    log: Optional[Path] = typer.Option(None, "--log", help="Append every goal, result and feedback as JSON lines here."),
+    map_offset: str = typer.Option(
+        "0,0,0", "--map-offset", help="Pose of the path's odometry frame in --frame: X,Y,YAW."
+    ),
+    spacing: float = typer.Option(
+        0.05, "--spacing", help="Densify the path to poses this far apart (m), as a planner's path."
+    ),
+    resend: float = typer.Option(
+        1.0, "--resend", help="Re-send the path every S seconds (0: once), as Nav2's behaviour tree."
+    ),
+    lifecycle: str | None = typer.Option(None, "--lifecycle", help="Configure and activate this lifecycle node first."),
+    at: list[str] = typer.Option(
+        [],
+        "--at",
+        help="Event TIME:KIND[:ARG]: empty, nan, preempt:PATH, cancel, deactivate, activate, speed-limit:PERCENT, clear, stop.",
+    ),
+    log: Path | None = typer.Option(None, "--log", help="Append every goal, result and feedback as JSON lines here."),
     until: float = typer.Option(float("inf"), "--until", help="End at this episode time (s)."),
-    use_sim_time: bool = typer.Option(True, "--use-sim-time/--wall-time", help="Episode time from /clock (the simulator's)."),
-    wait_s: float = typer.Option(120.0, "--wait-s", help="How long to wait for the node's lifecycle service and action server."),
+    use_sim_time: bool = typer.Option(
+        True, "--use-sim-time/--wall-time", help="Episode time from /clock (the simulator's)."
+    ),
+    wait_s: float = typer.Option(
+        120.0, "--wait-s", help="How long to wait for the node's lifecycle service and action server."
+    ),
 ) -> None:
     """Play Nav2's part against a controller (viapath ros2 nav2): lifecycle, FollowPath goals re-sent every second."""
     import math
@@ -242,8 +311,22 @@ def follow(
     if use_sim_time:
         ros_args = [*ros_args, "-p", "use_sim_time:=true"] if ros_args else ["-p", "use_sim_time:=true"]
     _need_rclpy()
-    raise typer.Exit(run_follow(source, action, frame, offset, spacing, resend, lifecycle, list(at),
-                                str(log) if log else None, until, ros_args, wait_s=wait_s))
+    raise typer.Exit(
+        run_follow(
+            source,
+            action,
+            frame,
+            offset,
+            spacing,
+            resend,
+            lifecycle,
+            list(at),
+            str(log) if log else None,
+            until,
+            ros_args,
+            wait_s=wait_s,
+        )
+    )
 
 
 @app.command()

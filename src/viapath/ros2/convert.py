@@ -22,7 +22,6 @@ import numpy as np
 
 from viapath.static import StaticLayer
 
-
 QUATERNION_TOLERANCE = 0.01  # |norm - 1| above this is not a rotation (ROS producers normalise to ~1e-9)
 
 
@@ -109,7 +108,9 @@ def load_path_file(source: str) -> tuple[np.ndarray, list[float] | None]:
         except ValueError as error:
             raise PathFileError(f"{source}: expected rows of x y numbers ({error})") from None
     if points.ndim != 2 or points.shape[1] != 2 or len(points) < 2 or not np.isfinite(points).all():
-        raise PathFileError(f"{source}: waypoints: expected at least two finite [x, y] points, found shape {points.shape}")
+        raise PathFileError(
+            f"{source}: waypoints: expected at least two finite [x, y] points, found shape {points.shape}"
+        )
     if widths is not None and (len(widths) != len(points) - 1 or not all(math.isfinite(w) and w > 0 for w in widths)):
         raise PathFileError(f"{source}: half_widths: expected {len(points) - 1} positive numbers")
     return points, widths
@@ -139,12 +140,22 @@ def waypoints_from_path(msg) -> np.ndarray:
 
 def orientations_from_path(msg) -> np.ndarray:
     """(N, 4) quaternions (x, y, z, w) of a ``nav_msgs/Path``'s poses."""
-    return np.array([[p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z, p.pose.orientation.w]
-                     for p in msg.poses], dtype=float).reshape(-1, 4)
+    return np.array(
+        [[p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z, p.pose.orientation.w] for p in msg.poses],
+        dtype=float,
+    ).reshape(-1, 4)
 
 
-def laser_scan(frame_id: str, stamp, angle_min: float, angle_increment: float, ranges, range_min: float,
-               range_max: float, scan_time: float = 0.1):
+def laser_scan(
+    frame_id: str,
+    stamp,
+    angle_min: float,
+    angle_increment: float,
+    ranges,
+    range_min: float,
+    range_max: float,
+    scan_time: float = 0.1,
+):
     from sensor_msgs.msg import LaserScan
 
     msg = LaserScan()
@@ -179,19 +190,28 @@ def odometry_values(msg) -> tuple[float, float, tuple[float, float, float, float
     """(x, y, quaternion (x, y, z, w), forward speed, turn rate) of a ``nav_msgs/Odometry`` (twist in the
     child frame); the quaternion is checked by the core (:func:`checked_yaw`)."""
     p, q, t = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist
-    return float(p.x), float(p.y), (float(q.x), float(q.y), float(q.z), float(q.w)), float(t.linear.x), float(t.angular.z)
+    return (
+        float(p.x),
+        float(p.y),
+        (float(q.x), float(q.y), float(q.z), float(q.w)),
+        float(t.linear.x),
+        float(t.angular.z),
+    )
 
 
-def occupancy_layer(cells: np.ndarray, resolution_m: float, origin_x: float, origin_y: float, origin_yaw: float,
-                    threshold: int = 65) -> StaticLayer:
+def occupancy_layer(
+    cells: np.ndarray, resolution_m: float, origin_x: float, origin_y: float, origin_yaw: float, threshold: int = 65
+) -> StaticLayer:
     """The occupied cells of an occupancy grid (``cells``: (height, width) of -1 unknown / 0-100) as static
     geometry in the grid's frame: each row's runs of occupied cells as one segment through their centres,
     a single cell as a point, each with the half-diagonal of a cell as its radius (so the segments with
     their radii cover every occupied cell)."""
     cells = np.asarray(cells)
     if cells.ndim != 2 or not (math.isfinite(resolution_m) and resolution_m > 0):
-        raise ValueError(f"occupancy grid: expected (height, width) cells and a resolution > 0, found shape "
-                         f"{cells.shape}, resolution {resolution_m}")
+        raise ValueError(
+            f"occupancy grid: expected (height, width) cells and a resolution > 0, found shape "
+            f"{cells.shape}, resolution {resolution_m}"
+        )
     occupied = cells >= threshold
     padded = np.zeros((occupied.shape[0], occupied.shape[1] + 2), dtype=bool)
     padded[:, 1:-1] = occupied
@@ -200,8 +220,10 @@ def occupancy_layer(cells: np.ndarray, resolution_m: float, origin_x: float, ori
     _, ends = np.nonzero(change == -1)  # row-major order pairs each start with its end
     if len(rows) == 0:
         return StaticLayer.empty()
-    local = np.stack([np.stack([starts + 0.5, rows + 0.5], axis=1), np.stack([ends - 0.5, rows + 0.5], axis=1)],
-                     axis=1) * resolution_m  # (S, 2, 2) cell centres, grid frame
+    local = (
+        np.stack([np.stack([starts + 0.5, rows + 0.5], axis=1), np.stack([ends - 0.5, rows + 0.5], axis=1)], axis=1)
+        * resolution_m
+    )  # (S, 2, 2) cell centres, grid frame
     c, s = math.cos(origin_yaw), math.sin(origin_yaw)
     world = local @ np.array([[c, s], [-s, c]]) + np.array([origin_x, origin_y])
     return StaticLayer(world, np.arange(len(world)), np.full(len(world), resolution_m * math.sqrt(0.5)))
@@ -212,5 +234,11 @@ def occupancy_layer_from_message(msg, threshold: int = 65) -> StaticLayer:
     origin = info.origin
     q = origin.orientation
     cells = np.asarray(msg.data, dtype=np.int16).reshape(int(info.height), int(info.width))
-    return occupancy_layer(cells, float(info.resolution), float(origin.position.x), float(origin.position.y),
-                           checked_yaw(q.x, q.y, q.z, q.w), threshold)
+    return occupancy_layer(
+        cells,
+        float(info.resolution),
+        float(origin.position.x),
+        float(origin.position.y),
+        checked_yaw(q.x, q.y, q.z, q.w),
+        threshold,
+    )

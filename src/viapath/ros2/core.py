@@ -135,8 +135,10 @@ class CycleResult:
 
 
 def urg04lx_models(settings: NodeSettings) -> list[ScannerModel]:
-    return [ScannerModel(name=s.name, mount_x_m=s.mount_x_m, mount_y_m=s.mount_y_m, mount_yaw_rad=s.mount_yaw_rad)
-            for s in settings.scanners]
+    return [
+        ScannerModel(name=s.name, mount_x_m=s.mount_x_m, mount_y_m=s.mount_y_m, mount_yaw_rad=s.mount_yaw_rad)
+        for s in settings.scanners
+    ]
 
 
 def _wrap(angle: float) -> float:
@@ -151,8 +153,10 @@ def scan_layout_problem(beams: int, angle_increment_rad: float, range_min_m: flo
     if not (math.isfinite(angle_increment_rad) and angle_increment_rad > 0.0):
         return f"angle_increment {angle_increment_rad} rad (must be > 0)"
     if (beams - 1) * angle_increment_rad > 2.0 * math.pi + 1e-6:
-        return (f"{beams} beams x {angle_increment_rad:.6g} rad = {math.degrees((beams - 1) * angle_increment_rad):.1f} deg, "
-                f"more than a full turn")
+        return (
+            f"{beams} beams x {angle_increment_rad:.6g} rad = {math.degrees((beams - 1) * angle_increment_rad):.1f} deg, "
+            f"more than a full turn"
+        )
     if not (math.isfinite(range_min_m) and math.isfinite(range_max_m)):
         return f"range_min {range_min_m} / range_max {range_max_m} m (must be finite)"
     if not max(range_min_m, 0.0) < range_max_m:
@@ -211,9 +215,15 @@ class PlannerCore:
         from viapath.safety import shielded
 
         s = self.settings
-        planner = make_planner(s.planner_name, path, nominal_speed_mps=s.nominal_speed_mps, limits=self.limits,
-                               robot_radius_m=s.robot_radius_m, subgoal_policy=subgoal_policy,
-                               **planner_kwargs(s.planner_name, dict(s.planner_values)))
+        planner = make_planner(
+            s.planner_name,
+            path,
+            nominal_speed_mps=s.nominal_speed_mps,
+            limits=self.limits,
+            robot_radius_m=s.robot_radius_m,
+            subgoal_policy=subgoal_policy,
+            **planner_kwargs(s.planner_name, dict(s.planner_values)),
+        )
         return shielded(planner, s.shield_flag, s.cycle_period_s, dict(s.shield_values), s.planner_name)
 
     def warm_up(self) -> None:
@@ -222,7 +232,10 @@ class PlannerCore:
 
         models = [h.model for h in self.health if h.model is not None]
         if models:  # a person beside the robot, so that every step of detection runs (and compiles) once
-            scans = [simulate_scan(m, np.zeros(3), np.array([[1.0, 0.4], [-1.0, -0.4]]), np.array([0.25, 0.25])) for m in models]
+            scans = [
+                simulate_scan(m, np.zeros(3), np.array([[1.0, 0.4], [-1.0, -0.4]]), np.array([0.25, 0.25]))
+                for m in models
+            ]
             found = detect(models, scans, self.detector_params)
             tracker = MultiTargetTracker(self.tracker.params)
             for k in range(4):
@@ -234,7 +247,9 @@ class PlannerCore:
         compile_kernels()  # the compiled shield: once per machine, before the node's own shield is made
         compile_planner_kernels()  # the planner's whole-step kernels too, before the node's planner is made
         planner = self._make_planner(path, SubgoalPolicy())
-        planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles([[2.0, 0.0]], [[-0.3, 0.0]], [0.25])))
+        planner.plan(
+            Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles([[2.0, 0.0]], [[-0.3, 0.0]], [0.25]))
+        )
 
     # -- inputs --------------------------------------------------------------------------------
     def set_path(self, waypoints, half_widths_m=None) -> None:
@@ -246,12 +261,18 @@ class PlannerCore:
             raise ValueError(f"path waypoints: expected finite coordinates within ±{bound:g} m, found {worst.tolist()}")
         s = self.settings
         if half_widths_m is None:
-            widths = [w if w > 0 else s.half_width_m for w in s.half_widths_m] if any(w > 0 for w in s.half_widths_m) else None
+            widths = (
+                [w if w > 0 else s.half_width_m for w in s.half_widths_m]
+                if any(w > 0 for w in s.half_widths_m)
+                else None
+            )
         else:
             widths = list(half_widths_m)
         if widths is not None and len(widths) != len(waypoints) - 1:
             widths = None  # one width per segment or the single half_width_m
-            self.events.append(f"half_widths_m has {len(s.half_widths_m)} values for {len(waypoints) - 1} segments: using half_width_m")
+            self.events.append(
+                f"half_widths_m has {len(s.half_widths_m)} values for {len(waypoints) - 1} segments: using half_width_m"
+            )
         if widths is None:
             path = DesignatedPath(waypoints, half_width_m=s.half_width_m)
         else:
@@ -305,8 +326,17 @@ class PlannerCore:
         self.events.append(f"path refused: {why}" + (" (the previous path stays)" if self.path is not None else ""))
         return False, self.events[-1]
 
-    def on_odometry_quaternion(self, now_s: float, stamp_s: float, frame_id: str, x: float, y: float, quaternion,
-                               speed_mps: float, turn_rate_radps: float) -> bool:
+    def on_odometry_quaternion(
+        self,
+        now_s: float,
+        stamp_s: float,
+        frame_id: str,
+        x: float,
+        y: float,
+        quaternion,
+        speed_mps: float,
+        turn_rate_radps: float,
+    ) -> bool:
         """:meth:`on_odometry` with the orientation as a quaternion (x, y, z, w): one that is not a rotation
         (not finite, not of unit length) is refused as a fault, never read as some heading."""
         from viapath.ros2.convert import checked_yaw
@@ -355,8 +385,17 @@ class PlannerCore:
             h.model = replace(h.model, mount_x_m=mount[0], mount_y_m=mount[1], mount_yaw_rad=_wrap(yaw))
         return True
 
-    def on_odometry(self, now_s: float, stamp_s: float, frame_id: str, x: float, y: float, heading_rad: float,
-                    speed_mps: float, turn_rate_radps: float) -> bool:
+    def on_odometry(
+        self,
+        now_s: float,
+        stamp_s: float,
+        frame_id: str,
+        x: float,
+        y: float,
+        heading_rad: float,
+        speed_mps: float,
+        turn_rate_radps: float,
+    ) -> bool:
         """Store one odometry message; False (counted, and a fault that brakes the robot) when refused.
 
         A message is refused when its twist is beyond the limits (plus ``odom_speed_tolerance_mps`` /
@@ -395,8 +434,9 @@ class PlannerCore:
         self.odometry = sample
         return True
 
-    def refuse_odometry(self, now_s: float, reason: str, detail: str, fault: bool = True,
-                        counted_as_refused: bool = True) -> None:
+    def refuse_odometry(
+        self, now_s: float, reason: str, detail: str, fault: bool = True, counted_as_refused: bool = True
+    ) -> None:
         """Count a bad odometry message; a fault (all but a wrong frame) brakes the robot for ``reset_hold_s``."""
         key = reason if counted_as_refused else f"{reason} (kept, tracks reset)"
         self.odom_refused[key] = self.odom_refused.get(key, 0) + 1
@@ -411,17 +451,24 @@ class PlannerCore:
         if abs(o.speed_mps) > lim.max_speed_mps + v_tol:
             return "limits", f"speed {o.speed_mps:.4g} m/s beyond the limit {lim.max_speed_mps:g} m/s"
         if abs(o.turn_rate_radps) > lim.max_turn_rate_radps + w_tol:
-            return "limits", f"turn rate {o.turn_rate_radps:.4g} rad/s beyond the limit {lim.max_turn_rate_radps:g} rad/s"
+            return (
+                "limits",
+                f"turn rate {o.turn_rate_radps:.4g} rad/s beyond the limit {lim.max_turn_rate_radps:g} rad/s",
+            )
         commanded = self._recent_commands(now_s)
         if commanded:
             v_high = max(c[1] for c in commanded)
             w_low, w_high = min(c[2] for c in commanded), max(c[2] for c in commanded)
             if o.speed_mps > v_high + v_tol:
-                return "command", (f"speed {o.speed_mps:.4g} m/s, but at most {v_high:.3f} m/s was commanded in the "
-                                   f"last {s.odom_timeout_s:g} s")
+                return "command", (
+                    f"speed {o.speed_mps:.4g} m/s, but at most {v_high:.3f} m/s was commanded in the "
+                    f"last {s.odom_timeout_s:g} s"
+                )
             if not w_low - w_tol <= o.turn_rate_radps <= w_high + w_tol:
-                return "command", (f"turn rate {o.turn_rate_radps:.4g} rad/s, but {w_low:.3f} to {w_high:.3f} rad/s "
-                                   f"was commanded in the last {s.odom_timeout_s:g} s")
+                return "command", (
+                    f"turn rate {o.turn_rate_radps:.4g} rad/s, but {w_low:.3f} to {w_high:.3f} rad/s "
+                    f"was commanded in the last {s.odom_timeout_s:g} s"
+                )
         return None
 
     def _pose_problem(self, o: Odometry) -> tuple[tuple[str, str] | None, bool]:
@@ -444,7 +491,9 @@ class PlannerCore:
                 dx += (b.x - a.x) - v * dt * math.cos(mid)
                 dy += (b.y - a.y) - v * dt * math.sin(mid)
                 dh += _wrap(b.heading_rad - a.heading_rad - w * dt)
-                slack_m += 0.5 * lim.max_accel_mps2 * dt * dt + 0.5 * abs(v) * dt * abs(_wrap(b.heading_rad - a.heading_rad))
+                slack_m += 0.5 * lim.max_accel_mps2 * dt * dt + 0.5 * abs(v) * dt * abs(
+                    _wrap(b.heading_rad - a.heading_rad)
+                )
                 slack_rad += 0.5 * lim.max_turn_accel_radps2 * dt * dt
                 travelled += math.hypot(b.x - a.x, b.y - a.y)
                 twist_m += abs(v) * dt
@@ -452,8 +501,10 @@ class PlannerCore:
             error = math.hypot(dx, dy)
             if error > slack_m:
                 if travelled > twist_m:
-                    return ("jump", f"pose moved {travelled:.3f} m in {span:.3f} s, its twist explains "
-                                    f"{twist_m:.3f} m"), True
+                    return (
+                        "jump",
+                        f"pose moved {travelled:.3f} m in {span:.3f} s, its twist explains {twist_m:.3f} m",
+                    ), True
                 return ("pose", f"twist says {twist_m:.3f} m in {span:.3f} s, the pose moved {travelled:.3f} m"), False
             if abs(dh) > slack_rad:
                 return ("jump", f"heading changed {dh:+.3f} rad more than its turn rate explains in {span:.3f} s"), True
@@ -477,21 +528,44 @@ class PlannerCore:
         self._commands_armed |= planned
         if self._commands_armed:
             start = now_s - 2.0 * self.settings.odom_timeout_s
-            self._commands = [c for c in self._commands if c[0] >= start] + [(now_s, command.speed_mps, command.turn_rate_radps)]
+            self._commands = [c for c in self._commands if c[0] >= start] + [
+                (now_s, command.speed_mps, command.turn_rate_radps)
+            ]
 
-    def on_scan(self, index: int, now_s: float, stamp_s: float, frame_id: str, angle_min_rad: float,
-                angle_increment_rad: float, ranges, range_min_m: float = 0.02, range_max_m: float = 5.6) -> bool:
+    def on_scan(
+        self,
+        index: int,
+        now_s: float,
+        stamp_s: float,
+        frame_id: str,
+        angle_min_rad: float,
+        angle_increment_rad: float,
+        ranges,
+        range_min_m: float = 0.02,
+        range_max_m: float = 5.6,
+    ) -> bool:
         """Store one scan of scanner ``index``; returns whether a cycle is due now. A scan that cannot be
         read at all is refused (reason ``error``, with the exception's text) like any other bad scan."""
         try:
-            return self._on_scan(index, now_s, stamp_s, frame_id, angle_min_rad, angle_increment_rad, ranges,
-                                 range_min_m, range_max_m)
-        except Exception as error:  # noqa: BLE001 - one bad message must not end the node
+            return self._on_scan(
+                index, now_s, stamp_s, frame_id, angle_min_rad, angle_increment_rad, ranges, range_min_m, range_max_m
+            )
+        except Exception as error:
             self.health[index].refuse("error", f"{type(error).__name__}: {error}")
             return False
 
-    def _on_scan(self, index: int, now_s: float, stamp_s: float, frame_id: str, angle_min_rad: float,
-                 angle_increment_rad: float, ranges, range_min_m: float, range_max_m: float) -> bool:
+    def _on_scan(
+        self,
+        index: int,
+        now_s: float,
+        stamp_s: float,
+        frame_id: str,
+        angle_min_rad: float,
+        angle_increment_rad: float,
+        ranges,
+        range_min_m: float,
+        range_max_m: float,
+    ) -> bool:
         h = self.health[index]
         setting = self.settings.scanners[index]
         ranges = np.asarray(ranges, dtype=float).reshape(-1)
@@ -505,7 +579,10 @@ class PlannerCore:
             return False
         if angle_increment_rad < 0:  # clockwise scanner: store it counter-clockwise
             ranges = ranges[::-1]
-            angle_min_rad, angle_increment_rad = angle_min_rad + (len(ranges) - 1) * angle_increment_rad, -angle_increment_rad
+            angle_min_rad, angle_increment_rad = (
+                angle_min_rad + (len(ranges) - 1) * angle_increment_rad,
+                -angle_increment_rad,
+            )
         if h.model is None:
             problem = scan_layout_problem(len(ranges), angle_increment_rad, range_min_m, range_max_m)
             if problem:
@@ -514,10 +591,16 @@ class PlannerCore:
             n = len(ranges)
             mx, my, myaw = getattr(h, "mount", None) or (setting.mount_x_m, setting.mount_y_m, setting.mount_yaw_rad)
             try:
-                h.model = ScannerModel(name=setting.name, mount_x_m=mx, mount_y_m=my,
-                                       mount_yaw_rad=_wrap(myaw + angle_min_rad + 0.5 * (n - 1) * angle_increment_rad),
-                                       beam_count=n, angle_increment_rad=float(angle_increment_rad),
-                                       range_min_m=max(float(range_min_m), 0.0), range_max_m=float(range_max_m))
+                h.model = ScannerModel(
+                    name=setting.name,
+                    mount_x_m=mx,
+                    mount_y_m=my,
+                    mount_yaw_rad=_wrap(myaw + angle_min_rad + 0.5 * (n - 1) * angle_increment_rad),
+                    beam_count=n,
+                    angle_increment_rad=float(angle_increment_rad),
+                    range_min_m=max(float(range_min_m), 0.0),
+                    range_max_m=float(range_max_m),
+                )
             except ValueError as error:  # anything the scanner model refuses that the check above let through
                 h.refuse("layout", str(error))
                 return False
@@ -527,9 +610,15 @@ class PlannerCore:
         if len(ranges) != model.beam_count:
             h.refuse("length", f"{len(ranges)} beams, expected {model.beam_count}")
             return False
-        if abs(angle_increment_rad - model.angle_increment_rad) > 1e-4 or abs(_wrap(angle_min_rad - expected_min)) > 1e-3:
-            h.refuse("angles", f"angle_min {angle_min_rad:.4f} / increment {angle_increment_rad:.6f} rad, expected "
-                               f"{expected_min:.4f} / {model.angle_increment_rad:.6f}")
+        if (
+            abs(angle_increment_rad - model.angle_increment_rad) > 1e-4
+            or abs(_wrap(angle_min_rad - expected_min)) > 1e-3
+        ):
+            h.refuse(
+                "angles",
+                f"angle_min {angle_min_rad:.4f} / increment {angle_increment_rad:.6f} rad, expected "
+                f"{expected_min:.4f} / {model.angle_increment_rad:.6f}",
+            )
             return False
         with np.errstate(invalid="ignore"):
             erroneous = np.isnan(ranges) | (ranges <= 0.0)
@@ -575,8 +664,9 @@ class PlannerCore:
         self.last_command_s = None
         self.hold_until_stamp_s = -math.inf  # set from the next cycle's stamp
         self.hold_reason = "a time jump backwards"
-        self.events.append(f"time jump backwards ({why}): tracks and odometry reset, robot held for "
-                           f"{self.settings.reset_hold_s:g} s")
+        self.events.append(
+            f"time jump backwards ({why}): tracks and odometry reset, robot held for {self.settings.reset_hold_s:g} s"
+        )
 
     def _reset_tracks(self, why: str) -> None:
         """The world frame moved under the tracks: forget them and hold the robot while they confirm again."""
@@ -594,7 +684,11 @@ class PlannerCore:
     # -- state ---------------------------------------------------------------------------------
     def live_scanners(self, now_s: float) -> list[int]:
         timeout = self.settings.scan_timeout_s
-        return [i for i, h in enumerate(self.health) if h.last_good_s is not None and now_s - h.last_good_s <= timeout + 1e-9]
+        return [
+            i
+            for i, h in enumerate(self.health)
+            if h.last_good_s is not None and now_s - h.last_good_s <= timeout + 1e-9
+        ]
 
     def odometry_fresh(self, now_s: float) -> bool:
         return self.odometry is not None and now_s - self.odometry.received_s <= self.settings.odom_timeout_s + 1e-9
@@ -613,13 +707,17 @@ class PlannerCore:
         if self.path is None:
             reasons.append(PATH_CLEARED if self.path_cleared else NO_PATH)
         if not self.odometry_fresh(now_s):
-            reasons.append("no odometry for %.2f s" % self.settings.odom_timeout_s if self.odometry is not None or any(
-                h.good for h in self.health) else "no odometry yet")
+            reasons.append(
+                "no odometry for %.2f s" % self.settings.odom_timeout_s
+                if self.odometry is not None or any(h.good for h in self.health)
+                else "no odometry yet"
+            )
         if self.odometry_fault_active(now_s):
             reasons.append(f"odometry fault: {self.odom_fault[1]}")
         if not self.live_scanners(now_s):
-            reasons.append(f"no scan for {self.settings.scan_timeout_s:g} s" if any(h.good for h in self.health)
-                           else "no scan yet")
+            reasons.append(
+                f"no scan for {self.settings.scan_timeout_s:g} s" if any(h.good for h in self.health) else "no scan yet"
+            )
         return reasons
 
     def _measured(self) -> tuple[float, float, float]:
@@ -709,13 +807,17 @@ class PlannerCore:
         last = self.last_command
         dw = lim.max_turn_accel_radps2 * dt
         w = last.turn_rate_radps
-        command = Command(max(0.0, min(last.speed_mps, lim.max_speed_mps) - lim.max_accel_mps2 * dt),
-                          0.0 if abs(w) <= dw else min(max(w - math.copysign(dw, w), -lim.max_turn_rate_radps),
-                                                       lim.max_turn_rate_radps))
+        command = Command(
+            max(0.0, min(last.speed_mps, lim.max_speed_mps) - lim.max_accel_mps2 * dt),
+            0.0
+            if abs(w) <= dw
+            else min(max(w - math.copysign(dw, w), -lim.max_turn_rate_radps), lim.max_turn_rate_radps),
+        )
         self._record_command(command, self._now_s)
         mode = "stopped" if command.speed_mps == 0.0 and command.turn_rate_radps == 0.0 else "braking"
-        reasons = self._stop_reasons(self._now_s) + [f"no input and no clock for {wall_s - self._alive_wall_s:.2f} s "
-                                                     "of wall time"]
+        reasons = self._stop_reasons(self._now_s) + [
+            f"no input and no clock for {wall_s - self._alive_wall_s:.2f} s of wall time"
+        ]
         result = CycleResult(command, mode, reasons, self._now_s, robot_pose=self._pose_at(self._now_s))
         result.status = self._status(result, self._now_s)
         result.status["planner"]["source"] = "wall watchdog"
@@ -729,7 +831,9 @@ class PlannerCore:
         dt = min(max(stamp_s - o.stamp_s, -0.5), 0.5)  # extrapolate at most half a second
         heading = o.heading_rad + o.turn_rate_radps * dt
         mid = o.heading_rad + 0.5 * o.turn_rate_radps * dt
-        return np.array([o.x + o.speed_mps * dt * math.cos(mid), o.y + o.speed_mps * dt * math.sin(mid), _wrap(heading)])
+        return np.array(
+            [o.x + o.speed_mps * dt * math.cos(mid), o.y + o.speed_mps * dt * math.sin(mid), _wrap(heading)]
+        )
 
     def blind_speed_cap(self, live: list[int]) -> tuple[float | None, list[tuple[float, float]]]:
         """Speed cap and blind sectors (robot frame) with only the ``live`` scanners (module notes)."""
@@ -774,8 +878,14 @@ class PlannerCore:
                 self.hold_until_stamp_s = stamp + self.settings.reset_hold_s
             self.tracker.step(stamp, detections.centres, detections.position_sigma_m, detections.radii_m)
             obstacles = self.tracker.obstacles().finite()
-            self.static_now = self.static_layer.update(stamp, pose, [r for _, r in scans], self.tracker.state[:, :2],
-                                                       self.tracker.radii_m, scanners=[m for m, _ in scans])
+            self.static_now = self.static_layer.update(
+                stamp,
+                pose,
+                [r for _, r in scans],
+                self.tracker.state[:, :2],
+                self.tracker.radii_m,
+                scanners=[m for m, _ in scans],
+            )
             perception_ms = (time.perf_counter() - perceiving) * 1e3
             self.last_cycle_stamp_s = stamp
         cap, sectors = self.blind_speed_cap(live)
@@ -785,25 +895,37 @@ class PlannerCore:
             mode = "braking"
         else:
             o = self.odometry
-            robot = RobotState(pose[:2].copy(), float(pose[2]), min(max(o.speed_mps, 0.0), self.limits.max_speed_mps),
-                               o.turn_rate_radps, self.settings.robot_radius_m)
+            robot = RobotState(
+                pose[:2].copy(),
+                float(pose[2]),
+                min(max(o.speed_mps, 0.0), self.limits.max_speed_mps),
+                o.turn_rate_radps,
+                self.settings.robot_radius_m,
+            )
             static = self.map_layer.concatenate(self.static_now)
             try:
                 planning = time.perf_counter()
                 decision = self.planner.plan(Observation(stamp, robot, obstacles, static))
                 plan_ms = (time.perf_counter() - planning) * 1e3
-            except Exception as error:  # noqa: BLE001 - the robot brakes and the status says why
+            except Exception as error:
                 reasons.append(f"planner error: {type(error).__name__}: {error}")
                 self.events.append(reasons[-1])
                 command = self.brake_command()
                 mode = "braking"
         if decision is not None:
-            limit = cap if self.speed_limit_mps is None else (self.speed_limit_mps if cap is None else min(cap, self.speed_limit_mps))
+            limit = (
+                cap
+                if self.speed_limit_mps is None
+                else (self.speed_limit_mps if cap is None else min(cap, self.speed_limit_mps))
+            )
             command = self._limit(decision.command, limit)
             mode = "driving" if cap is None else "degraded"
             if cap is not None:
-                reasons.append("scanner(s) silent: " + ", ".join(self.settings.scanners[i].name for i in range(len(self.health))
-                                                                if i not in live) + f"; speed capped at {cap:.2f} m/s")
+                reasons.append(
+                    "scanner(s) silent: "
+                    + ", ".join(self.settings.scanners[i].name for i in range(len(self.health)) if i not in live)
+                    + f"; speed capped at {cap:.2f} m/s"
+                )
             if decision.plan.status == "goal":
                 self.goal_reached = True
                 mode = "goal"
@@ -820,9 +942,21 @@ class PlannerCore:
         self.cycle_times_ms.append(elapsed)
         if len(self.cycle_times_ms) > 1000:
             del self.cycle_times_ms[:-100]
-        result = CycleResult(command, mode, reasons, stamp, decision, obstacles, pose, sectors, cap, elapsed,
-                             perception_time_ms=perception_ms, plan_time_ms=plan_ms,
-                             static=self.map_layer.concatenate(self.static_now))
+        result = CycleResult(
+            command,
+            mode,
+            reasons,
+            stamp,
+            decision,
+            obstacles,
+            pose,
+            sectors,
+            cap,
+            elapsed,
+            perception_time_ms=perception_ms,
+            plan_time_ms=plan_ms,
+            static=self.map_layer.concatenate(self.static_now),
+        )
         result.status = self._status(result, now_s)
         self.last_result = result
         return result
@@ -852,16 +986,21 @@ class PlannerCore:
         if plan is not None:
             from viapath.sim.metrics import plan_side
 
-            planner.update(plan_status=plan.status, plan_speed_mps=f"{plan.speed_mps:.4f}",
-                           plan_side=str(plan_side(plan.waypoints)), via_points=str(len(plan.via_points)),
-                           subgoal_index=str(plan.subgoal_index))
+            planner.update(
+                plan_status=plan.status,
+                plan_speed_mps=f"{plan.speed_mps:.4f}",
+                plan_side=str(plan_side(plan.waypoints)),
+                via_points=str(len(plan.via_points)),
+                subgoal_index=str(plan.subgoal_index),
+            )
         if plan is not None and len(plan.via_points):
             planner["via_xy"] = ";".join(f"{x:.4f},{y:.4f}" for x, y in np.asarray(plan.via_points).reshape(-1, 2))
         o = result.obstacles
         if len(o):  # id,x,y,vx,vy,radius per confirmed track (tests and the simulator read them back)
             planner["tracks_xyv"] = ";".join(
                 f"{i},{p[0]:.4f},{p[1]:.4f},{v[0]:.4f},{v[1]:.4f},{r:.3f}"
-                for i, p, v, r in zip(o.ids.tolist(), o.positions, o.velocities, o.radii_m.tolist(), strict=True))
+                for i, p, v, r in zip(o.ids.tolist(), o.positions, o.velocities, o.radii_m.tolist(), strict=True)
+            )
         if result.speed_cap_mps is not None:
             planner["speed_cap_mps"] = f"{result.speed_cap_mps:.4f}"
         if self.paths_refused:
@@ -871,18 +1010,23 @@ class PlannerCore:
         out["planner"] = planner
         if plan is not None and "shield" in plan.extras:
             shield = plan.extras["shield"]
-            out["shield"] = {k: str(v) for k, v in shield.items()} if isinstance(shield, dict) else {"shield": str(shield)}
+            out["shield"] = (
+                {k: str(v) for k, v in shield.items()} if isinstance(shield, dict) else {"shield": str(shield)}
+            )
             intervened = bool(shield.get("intervened")) if isinstance(shield, dict) else False
             planner["shield_intervened"] = str(int(intervened))
-            planner["shield_mode"] = str(getattr(getattr(self.planner, "shield", None), "config", None) and
-                                         self.planner.shield.config.mode)
+            planner["shield_mode"] = str(
+                getattr(getattr(self.planner, "shield", None), "config", None) and self.planner.shield.config.mode
+            )
         live = set(self.live_scanners(now_s))
         for i, (h, s) in enumerate(zip(self.health, self.settings.scanners, strict=True)):
             out[f"scanner {s.name}"] = {
                 "state": "ok" if i in live else ("silent" if h.good else "no scan yet"),
-                "topic": s.topic, "good_scans": str(h.good),
+                "topic": s.topic,
+                "good_scans": str(h.good),
                 "refused": ", ".join(f"{k}: {v}" for k, v in sorted(h.refused.items())) or "none",
-                "last_problem": h.last_problem, "invalid_fraction": f"{h.invalid_fraction:.3f}",
+                "last_problem": h.last_problem,
+                "invalid_fraction": f"{h.invalid_fraction:.3f}",
                 "mount_source": "tf" if h.mount is not None else "parameters",
             }
         out["odometry"] = {
@@ -914,7 +1058,7 @@ def simplify_polyline(points, tolerance_m: float) -> np.ndarray:
         a, b = points[i], points[j]
         d = b - a
         length = float(np.hypot(*d))
-        rel = points[i + 1:j] - a
+        rel = points[i + 1 : j] - a
         if length < 1e-12:
             dist = np.hypot(rel[:, 0], rel[:, 1])
         else:
@@ -942,7 +1086,9 @@ def parse_tracks(text: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndar
 
 
 def parse_points(text: str) -> np.ndarray:
-    return np.array([[float(v) for v in item.split(",")] for item in text.split(";") if item], dtype=float).reshape(-1, 2)
+    return np.array([[float(v) for v in item.split(",")] for item in text.split(";") if item], dtype=float).reshape(
+        -1, 2
+    )
 
 
 def severity(result: CycleResult) -> int:

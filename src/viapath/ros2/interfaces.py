@@ -43,8 +43,10 @@ RECIPE_VERSION = "1"
 # package -> (interface files, dependencies)
 PACKAGES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "tf2_msgs": (("msg/TFMessage.msg",), ("geometry_msgs",)),
-    "nav2_msgs": (("action/FollowPath.action", "msg/SpeedLimit.msg", "srv/ClearEntireCostmap.srv"),
-                  ("builtin_interfaces", "std_msgs", "geometry_msgs", "nav_msgs", "action_msgs", "unique_identifier_msgs")),
+    "nav2_msgs": (
+        ("action/FollowPath.action", "msg/SpeedLimit.msg", "srv/ClearEntireCostmap.srv"),
+        ("builtin_interfaces", "std_msgs", "geometry_msgs", "nav_msgs", "action_msgs", "unique_identifier_msgs"),
+    ),
 }
 
 CMAKE_TEMPLATE = """cmake_minimum_required(VERSION 3.16)
@@ -150,15 +152,20 @@ def _check_tools() -> None:
     if missing:
         raise InterfaceBuildError(
             f"generating the Nav2/tf2 interfaces needs {', '.join(missing)}: install them (Debian: "
-            "apt-get install -y cmake build-essential)")
+            "apt-get install -y cmake build-essential)"
+        )
     include = Path(sysconfig.get_paths()["include"])
     if not (include / "Python.h").is_file():
-        raise InterfaceBuildError(f"generating the Nav2/tf2 interfaces needs the Python headers ({include}/Python.h): "
-                                  "install them (Debian: apt-get install -y python3-dev)")
+        raise InterfaceBuildError(
+            f"generating the Nav2/tf2 interfaces needs the Python headers ({include}/Python.h): "
+            "install them (Debian: apt-get install -y python3-dev)"
+        )
     prefixes = _ament_prefixes()
     if not any((Path(p) / "share" / "rosidl_default_generators").is_dir() for p in prefixes):
-        raise InterfaceBuildError("generating the Nav2/tf2 interfaces needs the rosidl generators and ament CMake: "
-                                  "pip install 'viapath[ros2]' (or source a ROS 2 Kilted installation)")
+        raise InterfaceBuildError(
+            "generating the Nav2/tf2 interfaces needs the rosidl generators and ament CMake: "
+            "pip install 'viapath[ros2]' (or source a ROS 2 Kilted installation)"
+        )
 
 
 def _run(args: list[str], cwd: Path, env: dict[str, str], log: Path) -> None:
@@ -213,16 +220,31 @@ def build(prefix: Path | None = None, jobs: int = 2, progress=None) -> Path:
                 (source / name).parent.mkdir(parents=True, exist_ok=True)
                 shutil.copyfile(IDL / package / name, source / name)
             finds = "\n".join(f"find_package({d} REQUIRED)" for d in deps)
-            (source / "CMakeLists.txt").write_text(CMAKE_TEMPLATE.format(
-                package=package, finds=finds, files=" ".join(f'"{f}"' for f in files), deps=" ".join(deps)))
+            (source / "CMakeLists.txt").write_text(
+                CMAKE_TEMPLATE.format(
+                    package=package, finds=finds, files=" ".join(f'"{f}"' for f in files), deps=" ".join(deps)
+                )
+            )
             (source / "package.xml").write_text(PACKAGE_XML.format(package=package))
             out = work / "build" / package
             out.mkdir(parents=True)
-            _run(["cmake", str(source), f"-DCMAKE_INSTALL_PREFIX={prefix}",
-                  "-DCMAKE_PREFIX_PATH=" + ";".join([str(prefix), *prefixes]),
-                  f"-DPython3_EXECUTABLE={sys.executable}", "-DBUILD_TESTING=OFF", "-DCMAKE_BUILD_TYPE=Release",
-                  "-DCMAKE_INSTALL_RPATH=$ORIGIN;$ORIGIN/../../..", f"-DVIAPATH_NUMPY_INCLUDE={_numpy_include()}",
-                  f"-DVIAPATH_PYTHON_INCLUDE={sysconfig.get_paths()['include']}"], out, env, log)
+            _run(
+                [
+                    "cmake",
+                    str(source),
+                    f"-DCMAKE_INSTALL_PREFIX={prefix}",
+                    "-DCMAKE_PREFIX_PATH=" + ";".join([str(prefix), *prefixes]),
+                    f"-DPython3_EXECUTABLE={sys.executable}",
+                    "-DBUILD_TESTING=OFF",
+                    "-DCMAKE_BUILD_TYPE=Release",
+                    "-DCMAKE_INSTALL_RPATH=$ORIGIN;$ORIGIN/../../..",
+                    f"-DVIAPATH_NUMPY_INCLUDE={_numpy_include()}",
+                    f"-DVIAPATH_PYTHON_INCLUDE={sysconfig.get_paths()['include']}",
+                ],
+                out,
+                env,
+                log,
+            )
             _run(["make", f"-j{max(1, jobs)}", "install"], out, env, log)
         shutil.rmtree(work, ignore_errors=True)
         marker.write_text(definitions_hash() + "\n")

@@ -59,10 +59,16 @@ class MarkerScenes:
         robot = RobotState(pose[:2].copy(), float(pose[2]), 0.0, 0.0, self.robot_radius_m)
         plan_time_ms = result.cycle_time_ms if result.cycle_time_ms is not None else float("nan")
         self.step += 1
-        return self.builder(path, planner).build(self.step - 1, result.stamp_s, pose, 0.0, 0.0,
-                                                 Observation(result.stamp_s, robot, result.obstacles, result.static),
-                                                 decision,
-                                                 plan_time_ms)
+        return self.builder(path, planner).build(
+            self.step - 1,
+            result.stamp_s,
+            pose,
+            0.0,
+            0.0,
+            Observation(result.stamp_s, robot, result.obstacles, result.static),
+            decision,
+            plan_time_ms,
+        )
 
 
 def _points(msg_cls, xyz) -> list:
@@ -109,31 +115,40 @@ def marker_array(scene: CycleScene, path: PathView | None, frame_id: str, stamp)
         for k, outline in enumerate(path.corridor_outlines):
             marker("corridor", k, Marker.LINE_STRIP, (0.2, 0.4, 1.0, 0.8)).points = _points(Point, outline)
         marker("path", 0, Marker.LINE_STRIP, (0.2, 0.4, 1.0, 0.4), (0.02, 0.02, 0.02)).points = _points(
-            Point, path.waypoints)
+            Point, path.waypoints
+        )
     if len(scene.static_segments):
         marker("static", 0, Marker.LINE_LIST, (0.1, 0.1, 0.1, 0.9), (0.03, 0.03, 0.03)).points = _points(
-            Point, scene.static_segments.reshape(-1, 2))
+            Point, scene.static_segments.reshape(-1, 2)
+        )
     tracks = scene.tracks
     scale = scene.xyt.settings.time_scale_m_per_s
     rings = scene.xyt.all_rings(RING_SEGMENTS)  # (P, 3, C, 3), in the order of scene.xyt.persons = tracks
-    for i, (tid, p, v, r) in enumerate(zip(tracks.ids.tolist(), tracks.positions, tracks.velocities,
-                                           tracks.radii_m.tolist(), strict=True)):
+    for i, (tid, p, v, r) in enumerate(
+        zip(tracks.ids.tolist(), tracks.positions, tracks.velocities, tracks.radii_m.tolist(), strict=True)
+    ):
         m = marker("tracks", tid, Marker.CYLINDER, (1.0, 0.5, 0.0, 0.8), (2 * r, 2 * r, 0.1))
         m.pose.position = Point(x=float(p[0]), y=float(p[1]), z=0.05)
-        marker("velocities", tid, Marker.ARROW, (1.0, 0.2, 0.0, 1.0), (0.03, 0.06, 0.06)).points = _points(Point, [p, p + v])
+        marker("velocities", tid, Marker.ARROW, (1.0, 0.2, 0.0, 1.0), (0.03, 0.06, 0.06)).points = _points(
+            Point, [p, p + v]
+        )
         marker("forecasts", tid, Marker.LINE_LIST, (1.0, 0.5, 0.0, 0.4), (0.01, 0.01, 0.01)).points = _points(
-            Point, forecast_segments(rings[i], scale))
+            Point, forecast_segments(rings[i], scale)
+        )
     plan = scene.plan
     if len(plan.via_points):
         marker("via_points", 0, Marker.SPHERE_LIST, (0.9, 0.0, 0.9, 1.0), (0.1, 0.1, 0.1)).points = _points(
-            Point, plan.via_points)
+            Point, plan.via_points
+        )
     if len(plan.waypoints) >= 2:
         marker("plan", 0, Marker.LINE_STRIP, (0.0, 0.8, 0.2, 1.0), (0.04, 0.04, 0.04)).points = _points(
-            Point, plan.waypoints)
+            Point, plan.waypoints
+        )
     segments = [np.stack([c[:-1], c[1:]], axis=1).reshape(-1, 2) for c in plan.candidate_polylines if len(c) >= 2]
     if segments:
         marker("candidates", 0, Marker.LINE_LIST, (0.5, 0.5, 0.5, 0.3), (0.01, 0.01, 0.01)).points = _points(
-            Point, np.concatenate(segments))
+            Point, np.concatenate(segments)
+        )
     return out
 
 
@@ -147,4 +162,8 @@ def tracks_from_markers(markers) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             positions.append((m.pose.position.x, m.pose.position.y))
             a = arrows.get(m.id)
             velocities.append((a.points[1].x - a.points[0].x, a.points[1].y - a.points[0].y) if a else (np.nan, np.nan))
-    return np.array(ids, dtype=int), np.array(positions, dtype=float).reshape(-1, 2), np.array(velocities, dtype=float).reshape(-1, 2)
+    return (
+        np.array(ids, dtype=int),
+        np.array(positions, dtype=float).reshape(-1, 2),
+        np.array(velocities, dtype=float).reshape(-1, 2),
+    )

@@ -81,16 +81,28 @@ def make_nav2_interface_class():
             self._subs = []
             self._GoalResponse, self._CancelResponse = GoalResponse, CancelResponse
             self._outcomes: dict[bytes, tuple[str, object]] = {}
-            self.server = ActionServer(node, FollowPath, self.s.follow_path_action, self._execute,
-                                       goal_callback=self._on_goal, handle_accepted_callback=self._on_accepted,
-                                       cancel_callback=lambda handle: CancelResponse.ACCEPT)
+            self.server = ActionServer(
+                node,
+                FollowPath,
+                self.s.follow_path_action,
+                self._execute,
+                goal_callback=self._on_goal,
+                handle_accepted_callback=self._on_accepted,
+                cancel_callback=lambda handle: CancelResponse.ACCEPT,
+            )
             self._subs.append(node.create_subscription(SpeedLimit, self.s.speed_limit_topic, self._on_speed_limit, 10))
             self.service = node.create_service(ClearEntireCostmap, self.s.clear_costmap_service, self._on_clear)
             if self.s.use_tf:
-                dynamic = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE)
-                static = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+                dynamic = QoSProfile(
+                    depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.VOLATILE
+                )
+                static = QoSProfile(
+                    depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+                )
                 self._subs.append(node.create_subscription(TFMessage, "/tf", lambda m: self._on_tf(m, False), dynamic))
-                self._subs.append(node.create_subscription(TFMessage, "/tf_static", lambda m: self._on_tf(m, True), static))
+                self._subs.append(
+                    node.create_subscription(TFMessage, "/tf_static", lambda m: self._on_tf(m, True), static)
+                )
 
         def destroy(self) -> None:
             self._finish_goal("abort", self.Result.UNKNOWN, "controller cleaned up")
@@ -106,8 +118,15 @@ def make_nav2_interface_class():
 
             for t in msg.transforms:
                 q, p = t.transform.rotation, t.transform.translation
-                self.buffer.set(t.header.frame_id, t.child_frame_id, convert.stamp_seconds(t.header.stamp), float(p.x),
-                                float(p.y), convert.yaw_from_quaternion(q.x, q.y, q.z, q.w), static=static)
+                self.buffer.set(
+                    t.header.frame_id,
+                    t.child_frame_id,
+                    convert.stamp_seconds(t.header.stamp),
+                    float(p.x),
+                    float(p.y),
+                    convert.yaw_from_quaternion(q.x, q.y, q.z, q.w),
+                    static=static,
+                )
             if not self.mounts_done:
                 self.resolve_mounts()
 
@@ -122,8 +141,9 @@ def make_nav2_interface_class():
                     done = False
                     continue
                 if self.core.set_mount(index, *pose):
-                    self.node.get_logger().info(f"scanner {scanner.name}: mount from TF ({pose[0]:.3f}, {pose[1]:.3f} m, "
-                                                f"{pose[2]:.3f} rad)")
+                    self.node.get_logger().info(
+                        f"scanner {scanner.name}: mount from TF ({pose[0]:.3f}, {pose[1]:.3f} m, {pose[2]:.3f} rad)"
+                    )
             self.mounts_done = done
 
         def _on_speed_limit(self, msg) -> None:
@@ -194,7 +214,9 @@ def make_nav2_interface_class():
 
         def _execute(self, handle):
             """Runs once a goal has ended: its final state and result."""
-            outcome, result = self._outcomes.pop(bytes(handle.goal_id.uuid), ("abort", self._result(self.Result.UNKNOWN, "")))
+            outcome, result = self._outcomes.pop(
+                bytes(handle.goal_id.uuid), ("abort", self._result(self.Result.UNKNOWN, ""))
+            )
             if handle.is_active:
                 {"succeed": handle.succeed, "canceled": handle.canceled}.get(outcome, handle.abort)()
             return result
@@ -252,14 +274,23 @@ def make_nav2_interface_class():
                 return
             o = self.core.odometry
             if o is not None:
-                if goal.checkpoint is None or math.hypot(o.x - goal.checkpoint[0], o.y - goal.checkpoint[1]) >= self.s.progress_radius_m:
+                if (
+                    goal.checkpoint is None
+                    or math.hypot(o.x - goal.checkpoint[0], o.y - goal.checkpoint[1]) >= self.s.progress_radius_m
+                ):
                     goal.checkpoint = (o.x, o.y, now_s)
                 elif now_s - goal.checkpoint[2] > self.s.progress_patience_s:
-                    self._finish_goal("abort", R.FAILED_TO_MAKE_PROGRESS,
-                                      f"moved less than {self.s.progress_radius_m:g} m in {self.s.progress_patience_s:g} s")
+                    self._finish_goal(
+                        "abort",
+                        R.FAILED_TO_MAKE_PROGRESS,
+                        f"moved less than {self.s.progress_radius_m:g} m in {self.s.progress_patience_s:g} s",
+                    )
                     return
-            stale = result is not None and result.decision is None and any(
-                r.startswith(("no odometry", "no scan")) for r in result.reasons)
+            stale = (
+                result is not None
+                and result.decision is None
+                and any(r.startswith(("no odometry", "no scan")) for r in result.reasons)
+            )
             if stale:
                 goal.stale_since_s = now_s if goal.stale_since_s is None else goal.stale_since_s
                 if now_s - goal.stale_since_s > self.s.failure_tolerance_s:

@@ -60,10 +60,20 @@ def parse_event(text: str) -> tuple[float, str, str]:
     return t, kind, arg
 
 
-def run_follow(source: str, action: str = "follow_path", frame: str = "map", offset=(0.0, 0.0, 0.0),
-               spacing_m: float = 0.05, resend_s: float = 1.0, lifecycle_node: str | None = None,
-               events: list[str] | None = None, log_file: str | None = None, until_s: float = math.inf,
-               ros_args: list[str] | None = None, wait_s: float = 120.0) -> int:
+def run_follow(
+    source: str,
+    action: str = "follow_path",
+    frame: str = "map",
+    offset=(0.0, 0.0, 0.0),
+    spacing_m: float = 0.05,
+    resend_s: float = 1.0,
+    lifecycle_node: str | None = None,
+    events: list[str] | None = None,
+    log_file: str | None = None,
+    until_s: float = math.inf,
+    ros_args: list[str] | None = None,
+    wait_s: float = 120.0,
+) -> int:
     from geometry_msgs.msg import PoseStamped
     from lifecycle_msgs.srv import ChangeState
     from nav_msgs.msg import Path as PathMsg
@@ -73,10 +83,10 @@ def run_follow(source: str, action: str = "follow_path", frame: str = "map", off
     from viapath.ros2.process import finish_ros_process, start_ros_process
 
     interfaces.load()
+    import rclpy
     from nav2_msgs.action import FollowPath
     from nav2_msgs.msg import SpeedLimit
     from nav2_msgs.srv import ClearEntireCostmap
-    import rclpy
 
     schedule = sorted(parse_event(e) for e in (events or []))
     log = open(log_file, "a") if log_file else sys.stdout
@@ -139,8 +149,15 @@ def run_follow(source: str, action: str = "follow_path", frame: str = "map", off
                 print(f"error: no action server {action}", file=sys.stderr)
                 return 3
 
-        state = {"points": load_points(source), "goal": None, "sent": -math.inf, "resend": True, "count": 0, "due": True,
-                 "cancel": False}
+        state = {
+            "points": load_points(source),
+            "goal": None,
+            "sent": -math.inf,
+            "resend": True,
+            "count": 0,
+            "due": True,
+            "cancel": False,
+        }
 
         def send(points, label: str):
             index = state["count"]
@@ -150,8 +167,16 @@ def run_follow(source: str, action: str = "follow_path", frame: str = "map", off
             goal.controller_id = "FollowPath"
             goal.goal_checker_id = "general_goal_checker"
             goal.progress_checker_id = "progress_checker"
-            future = client.send_goal_async(goal, feedback_callback=lambda fb, i=index: write(
-                kind="feedback", goal=index, t=now(), distance_to_goal=fb.feedback.distance_to_goal, speed=fb.feedback.speed))
+            future = client.send_goal_async(
+                goal,
+                feedback_callback=lambda fb, i=index: write(
+                    kind="feedback",
+                    goal=index,
+                    t=now(),
+                    distance_to_goal=fb.feedback.distance_to_goal,
+                    speed=fb.feedback.speed,
+                ),
+            )
             write(kind="sent", goal=index, label=label, t=now(), poses=len(goal.path.poses))
 
             def accepted(f, i=index):
@@ -163,13 +188,21 @@ def run_follow(source: str, action: str = "follow_path", frame: str = "map", off
                         if state["cancel"]:  # sent before the cancel, accepted after it: cancel it too
                             handle.cancel_goal_async()
                     handle.get_result_async().add_done_callback(lambda r, i=i: finished(i, label, r.result()))
+
             future.add_done_callback(accepted)
             return future
 
         def finished(index: int, label: str, response) -> None:
             message = response.result.error_msg
-            write(kind="result", goal=index, label=label, t=now(), status=int(response.status),
-                  error_code=int(response.result.error_code), error_msg=message)
+            write(
+                kind="result",
+                goal=index,
+                label=label,
+                t=now(),
+                status=int(response.status),
+                error_code=int(response.result.error_code),
+                error_msg=message,
+            )
             if label == "path" and message != "preempted by a new path":
                 state["resend"] = False  # as the behaviour tree: the goal is over (succeeded, failed, canceled)
 

@@ -52,7 +52,12 @@ def _declare_all(node, planner_name: str, scanner_names) -> dict[str, Any]:
         default = option.default
         if isinstance(default, tuple):
             default = list(default)
-        if isinstance(default, list) and default and isinstance(default[0], (int, float)) and not isinstance(default[0], bool):
+        if (
+            isinstance(default, list)
+            and default
+            and isinstance(default[0], (int, float))
+            and not isinstance(default[0], bool)
+        ):
             default = [float(v) for v in default]
         try:
             node.declare_parameter(option.name, default, _parameter_descriptor(option), ignore_override=False)
@@ -75,7 +80,8 @@ def make_node_class():
     from geometry_msgs.msg import Twist, TwistStamped
     from nav_msgs.msg import Odometry
     from nav_msgs.msg import Path as PathMsg
-    from rclpy.clock import Clock as RosClock, ClockType
+    from rclpy.clock import Clock as RosClock
+    from rclpy.clock import ClockType
     from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
     from rosgraph_msgs.msg import Clock
@@ -106,8 +112,10 @@ def make_node_class():
                 from viapath.planning import available_planners
 
                 if planner_name not in available_planners():
-                    raise ParameterError(f"parameter planner_name: unknown planner {planner_name!r}; available: "
-                                         f"{', '.join(available_planners())}")
+                    raise ParameterError(
+                        f"parameter planner_name: unknown planner {planner_name!r}; available: "
+                        f"{', '.join(available_planners())}"
+                    )
                 self.given = _declare_all(self, planner_name, scanner_names)
             except ParameterError as error:
                 self.error = str(error)
@@ -128,9 +136,10 @@ def make_node_class():
                             raise ParameterError(f"parameter path_file: {error}") from None
                 except ParameterError as error:
                     self.error = str(error)
-                except Exception as error:  # noqa: BLE001 - e.g. MemoryError building the planner: say what
+                except Exception as error:
                     self.error = f"could not build the planner with these parameters: {type(error).__name__}" + (
-                        f": {error}" if str(error) else "")
+                        f": {error}" if str(error) else ""
+                    )
             if self.error is not None:
                 self.get_logger().error(f"refusing to start: {self.error}")
                 return TransitionCallbackReturn.FAILURE
@@ -143,13 +152,23 @@ def make_node_class():
             # Odometry first: when odometry and scans are both waiting, the executor takes odometry first.
             self._subs.append(self.create_subscription(Odometry, s.odom_topic, self._on_odom, 10))
             for index, scanner in enumerate(s.scanners):
-                self._subs.append(self.create_subscription(
-                    LaserScan, scanner.topic, lambda msg, i=index: self._on_scan(i, msg), qos_profile_sensor_data))
+                self._subs.append(
+                    self.create_subscription(
+                        LaserScan, scanner.topic, lambda msg, i=index: self._on_scan(i, msg), qos_profile_sensor_data
+                    )
+                )
             if self.get_parameter("use_sim_time").value:  # a /clock message is a sign of life, moving or not
-                self._subs.append(self.create_subscription(
-                    Clock, "/clock", lambda msg: self.core.note_alive(time.monotonic()),
-                    QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)))
-            latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+                self._subs.append(
+                    self.create_subscription(
+                        Clock,
+                        "/clock",
+                        lambda msg: self.core.note_alive(time.monotonic()),
+                        QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT),
+                    )
+                )
+            latched = QoSProfile(
+                depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+            )
             if s.interface == "nav2":
                 try:
                     self._nav2 = Nav2Interface(self)
@@ -167,10 +186,13 @@ def make_node_class():
             self.core.active = False
             self._timer = self.create_timer(s.cycle_period_s, self._on_watchdog)
             # The same period on the wall clock: with use_sim_time the timer above stops with /clock.
-            self._wall_timer = self.create_timer(s.cycle_period_s, self._on_wall_watchdog,
-                                                 clock=RosClock(clock_type=ClockType.STEADY_TIME))
-            self.get_logger().info(f"configured: planner {s.planner_name}, scanners "
-                                   f"{', '.join(sc.topic for sc in s.scanners)}, odometry {s.odom_topic}")
+            self._wall_timer = self.create_timer(
+                s.cycle_period_s, self._on_wall_watchdog, clock=RosClock(clock_type=ClockType.STEADY_TIME)
+            )
+            self.get_logger().info(
+                f"configured: planner {s.planner_name}, scanners "
+                f"{', '.join(sc.topic for sc in s.scanners)}, odometry {s.odom_topic}"
+            )
             return TransitionCallbackReturn.SUCCESS
 
         def on_activate(self, state) -> TransitionCallbackReturn:
@@ -230,9 +252,10 @@ def make_node_class():
         def _on_odom(self, msg) -> None:
             try:
                 x, y, q, v, w = convert.odometry_values(msg)
-                self.core.on_odometry_quaternion(self._now_s(), convert.stamp_seconds(msg.header.stamp),
-                                                 msg.header.frame_id, x, y, q, v, w)
-            except Exception as error:  # noqa: BLE001 - refused, with the reason; the node lives on
+                self.core.on_odometry_quaternion(
+                    self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id, x, y, q, v, w
+                )
+            except Exception as error:
                 self.core.refuse_odometry(self._now_s(), "error", self._failed("reading odometry", error))
 
         def _on_map(self, msg) -> None:
@@ -243,30 +266,40 @@ def make_node_class():
                 return
             try:
                 self.core.set_map(convert.occupancy_layer_from_message(msg, self.core.settings.map_occupied_threshold))
-            except Exception as error:  # noqa: BLE001 - refused, with the reason; the node lives on
+            except Exception as error:
                 self.core.events.append(f"map refused: {error}")
                 self.get_logger().error(self.core.events[-1])
 
         def _on_path(self, msg) -> None:
             try:
-                accepted, what = self.core.on_path(msg.header.frame_id, convert.waypoints_from_path(msg),
-                                                   convert.orientations_from_path(msg))
-            except Exception as error:  # noqa: BLE001 - refused, with the reason; the node lives on
+                accepted, what = self.core.on_path(
+                    msg.header.frame_id, convert.waypoints_from_path(msg), convert.orientations_from_path(msg)
+                )
+            except Exception as error:
                 self.core.paths_refused += 1
                 accepted, what = False, self._failed("path refused: reading it", error)
                 self.core.events.append(what)
             (self.get_logger().info if accepted else self.get_logger().error)(what)
 
         def _on_scan(self, index: int, msg) -> None:
-            due = self.core.on_scan(index, self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id,
-                                    msg.angle_min, msg.angle_increment, msg.ranges, msg.range_min, msg.range_max)
+            due = self.core.on_scan(
+                index,
+                self._now_s(),
+                convert.stamp_seconds(msg.header.stamp),
+                msg.header.frame_id,
+                msg.angle_min,
+                msg.angle_increment,
+                msg.ranges,
+                msg.range_min,
+                msg.range_max,
+            )
             if self._nav2 is not None and not self._nav2.mounts_done:
                 self._nav2.resolve_mounts()
             if due:
                 now = self._now_s()
                 try:
                     result = self.core.cycle(now)
-                except Exception as error:  # noqa: BLE001 - the robot brakes and the status says why
+                except Exception as error:
                     result = self.core.fault_result(now, self._failed("cycle", error))
                 self._publish(result)
                 if self._nav2 is not None:
@@ -316,7 +349,9 @@ def make_node_class():
                 # built only for someone watching, after cmd_vel is out
                 scene = self._scenes.scene(path, self.core.planner, result)
                 corridor = self._scenes.builder(path, self.core.planner).path_view
-                self._pubs["markers"].publish(marker_array(scene, corridor, self.core.settings.odom_frame or "odom", stamp))
+                self._pubs["markers"].publish(
+                    marker_array(scene, corridor, self.core.settings.odom_frame or "odom", stamp)
+                )
             self._pubs["status"].publish(self._diagnostics(result, stamp))
 
         def _inputs_matched(self) -> bool:

@@ -26,20 +26,32 @@ import sys
 import time
 
 
-def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait_s: float, ros_args=None,
-             lockstep: bool = False, max_wait_s: float = 10.0, status_file=None, status_topic: str = "viapath/status") -> int:
+def run_play(
+    bag,
+    topic,
+    out_topic: str,
+    frame_id,
+    rate: float,
+    odom: bool,
+    wait_s: float,
+    ros_args=None,
+    lockstep: bool = False,
+    max_wait_s: float = 10.0,
+    status_file=None,
+    status_topic: str = "viapath/status",
+) -> int:
     import json
 
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
     from nav_msgs.msg import Odometry
     from rclpy.qos import QoSProfile, ReliabilityPolicy
-    from viapath.ros2.process import finish_ros_process, start_ros_process
     from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import LaserScan
 
     from viapath.io.rosbag import read_laser_scans
     from viapath.ros2 import convert
+    from viapath.ros2.process import finish_ros_process, start_ros_process
 
     messages = list(read_laser_scans(bag, topic))
     if not messages:
@@ -60,7 +72,8 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
                     values = {kv.key: kv.value for kv in st.values}
                     if values.get("refused", "none") != "none":
                         scanner_problems[st.name.split(": scanner ", 1)[1]] = (
-                            f"topic {values.get('topic', '?')}: refused {values['refused']} ({values.get('last_problem', '')})")
+                            f"topic {values.get('topic', '?')}: refused {values['refused']} ({values.get('last_problem', '')})"
+                        )
                 if st.name.endswith(": planner"):
                     values = {kv.key: kv.value for kv in st.values}
                     statuses.append(values)
@@ -72,8 +85,9 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
 
         node.create_subscription(DiagnosticArray, status_topic, on_status, 100)
         started = time.monotonic()
-        while (node.count_subscribers(out_topic) == 0 or (lockstep and node.count_publishers(status_topic) == 0)) \
-                and not stop["flag"]:
+        while (
+            node.count_subscribers(out_topic) == 0 or (lockstep and node.count_publishers(status_topic) == 0)
+        ) and not stop["flag"]:
             if time.monotonic() - started > wait_s:
                 print(f"error: nobody subscribed to {out_topic} within {wait_s:g} s", file=sys.stderr)
                 return 3
@@ -96,9 +110,18 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
             clock_pub.publish(clock)
             if odom_pub is not None:
                 odom_pub.publish(convert.odometry("odom", "base_link", stamp, 0.0, 0.0, 0.0, 0.0, 0.0))
-            scan_pub.publish(convert.laser_scan(frame_id if frame_id is not None else m.frame_id, stamp, m.angle_min_rad,
-                                                m.angle_increment_rad, m.ranges_m, m.range_min_m, m.range_max_m,
-                                                m.scan_time_s or 0.1))
+            scan_pub.publish(
+                convert.laser_scan(
+                    frame_id if frame_id is not None else m.frame_id,
+                    stamp,
+                    m.angle_min_rad,
+                    m.angle_increment_rad,
+                    m.ranges_m,
+                    m.range_min_m,
+                    m.range_max_m,
+                    m.scan_time_s or 0.1,
+                )
+            )
             sent += 1
             if lockstep:  # wait for the node's cycle on this scan (a slow machine then changes nothing)
                 key = round(m.stamp_s, 6)
@@ -119,12 +142,21 @@ def run_play(bag, topic, out_topic: str, frame_id, rate: float, odom: bool, wait
             with open(status_file, "w") as handle:
                 for values in statuses:
                     handle.write(json.dumps(values) + "\n")
-        print(f"viapath ros2 play: {sent} scans from {bag} on {out_topic}, {len(cycles)} node cycles seen", file=sys.stderr)
+        print(
+            f"viapath ros2 play: {sent} scans from {bag} on {out_topic}, {len(cycles)} node cycles seen",
+            file=sys.stderr,
+        )
         if sent and not cycles:
             why = "; ".join(f"scanner {name}: {problem}" for name, problem in sorted(scanner_problems.items()))
-            print(f"error: the node ran no cycle on the {sent} scans published on {out_topic}: "
-                  + (f"it refused them ({why})" if why else f"no status on {status_topic} (is a viapath node listening "
-                     f"on {out_topic}, with use_sim_time?)"), file=sys.stderr)
+            print(
+                f"error: the node ran no cycle on the {sent} scans published on {out_topic}: "
+                + (
+                    f"it refused them ({why})"
+                    if why
+                    else f"no status on {status_topic} (is a viapath node listening on {out_topic}, with use_sim_time?)"
+                ),
+                file=sys.stderr,
+            )
             return 4
         return 0
     finally:

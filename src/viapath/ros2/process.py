@@ -13,8 +13,10 @@ def start_ros_process(node_name: str, ros_args: list[str] | None):
     import rclpy
     from rclpy.signals import SignalHandlerOptions
 
-    rclpy.init(args=[sys.argv[0]] + (["--ros-args", *ros_args] if ros_args else []),
-               signal_handler_options=SignalHandlerOptions.NO)
+    rclpy.init(
+        args=[sys.argv[0]] + (["--ros-args", *ros_args] if ros_args else []),
+        signal_handler_options=SignalHandlerOptions.NO,
+    )
     stop = {"flag": False}
     previous = {s: signal.signal(s, lambda *_: stop.__setitem__("flag", True)) for s in (signal.SIGINT, signal.SIGTERM)}
     return rclpy.create_node(node_name), stop, previous

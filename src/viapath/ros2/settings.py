@@ -37,6 +37,7 @@ def _opt(name: str, default, unit: str = "", minimum=None, maximum=None, help: s
     """A node option (keywords: :class:`viapath.options.Option` takes ``help`` third)."""
     return Option(name=name, default=default, help=help, unit=unit, minimum=minimum, maximum=maximum, choices=choices)
 
+
 NODE_NAME = "viapath"
 PLANNER_PREFIX = "planner."
 SHIELD_PREFIX = "shield."
@@ -67,75 +68,200 @@ def _scanner_options(name: str, topic: str, frame: str, x: float, yaw: float) ->
 
 
 NODE_OPTIONS: tuple[Option, ...] = (
-    _opt("scanner_names", ["front", "rear"], "", help="names of the scanners (each has scanners.<name>.*)"),
-    _opt("scan_geometry", "urg04lx", "", help="beam layout the scans must have", choices=("urg04lx", "from_message")),
-    _opt("odom_topic", "odom", "", help="nav_msgs/Odometry topic"),
-    _opt("path_topic", "designated_path", "", help="nav_msgs/Path topic of the designated path (transient local)"),
-    _opt("path_file", "", "", help="designated path from a file instead (scenario YAML, or YAML/CSV of x y waypoints)"),
-    _opt("map_topic", "", "", help="nav_msgs/OccupancyGrid topic (transient local) of a known map in the odometry "
-         "frame, turned into static geometry ('' : none)"),
-    _opt("map_occupied_threshold", 65, "", 1, 100, "occupancy (0-100) from which a map cell is an obstacle"),
-    _opt("static_layer", True, "", help="every scan return no person track explains is static geometry "
-         "(planner, guard and shield keep clear of it)"),
-    _opt("cmd_vel_topic", "cmd_vel", "", help="command topic"),
-    _opt("cmd_vel_stamped", False, "", help="publish geometry_msgs/TwistStamped instead of Twist"),
-    _opt("markers_topic", "viapath/markers", "", help="visualization_msgs/MarkerArray topic"),
-    _opt("status_topic", "viapath/status", "", help="diagnostic_msgs/DiagnosticArray topic"),
-    _opt("odom_frame", "odom", "", help="world frame of odometry and path ('' accepts any)"),
-    _opt("base_frame", "base_link", "", help="robot frame (markers of the robot)"),
-    _opt("half_width_m", 1.0, "m", 0.01, 100.0, "corridor half-width around the designated path"),
-    _opt("half_widths_m", [0.0], "m", 0.0, 100.0, "one half-width per path segment (0 or empty: half_width_m)"),
-    _opt("nominal_speed_mps", 0.2, "m/s", 0.01, 5.0, "speed the robot keeps when nothing is in the way"),
-    _opt("robot_radius_m", 0.25, "m", 0.01, 5.0, "radius of the robot's footprint"),
-    _opt("max_speed_mps", 0.6, "m/s", 0.01, 5.0, "speed limit of the base"),
-    _opt("max_accel_mps2", 0.8, "m/s^2", 0.01, 20.0, "acceleration (and braking) limit of the base"),
-    _opt("max_turn_rate_radps", 2.0, "rad/s", 0.01, 20.0, "turn-rate limit of the base"),
-    _opt("max_turn_accel_radps2", 6.0, "rad/s^2", 0.01, 100.0, "turn acceleration limit of the base"),
-    _opt("reach_threshold_m", 0.2, "m", 0.01, 10.0, "an intermediate subgoal is reached within this"),
-    _opt("goal_tolerance_m", 0.1, "m", 0.01, 10.0, "the goal is reached within this"),
-    _opt("bypass_distance_m", 1.0, "m", 0.0, 100.0, "a blocked subgoal is given up within this"),
-    _opt("scan_timeout_s", 0.3, "s", 0.05, 10.0, "a scanner silent this long is blind; all silent: brake to a stop"),
-    _opt("odom_timeout_s", 0.5, "s", 0.05, 10.0, "no odometry this long: brake to a stop"),
-    _opt("odom_speed_tolerance_mps", 0.1, "m/s", 0.0, 1.0, "odometry speed beyond max_speed_mps, or above every "
-         "speed commanded in the last odom_timeout_s, by more than this is a fault: brake"),
-    _opt("odom_turn_tolerance_radps", 0.3, "rad/s", 0.0, 5.0, "odometry turn rate beyond max_turn_rate_radps, or "
-         "outside the turn rates commanded in the last odom_timeout_s, by more than this is a fault: brake"),
-    _opt("odom_pose_tolerance_m", 0.05, "m", 0.001, 1.0, "odometry pose change off what its twist explains by more "
-         "than this (plus the acceleration limits' share) is a fault: brake"),
-    _opt("odom_heading_tolerance_rad", 0.1, "rad", 0.001, 1.0, "odometry heading change off what its turn rate "
-         "explains by more than this (plus the acceleration limits' share) is a fault: brake"),
-    _opt("wall_timeout_s", 0.5, "s", 0.05, 10.0, "no input and no move of the node's clock (/clock with "
-         "use_sim_time) for this long on the wall clock: brake to a stop"),
-    _opt("cycle_period_s", 0.1, "s", 0.01, 1.0, "scan period; also the watchdog period"),
-    _opt("max_invalid_fraction", 0.5, "", 0.0, 1.0, "a scan with more NaN/zero readings than this counts as failed"),
-    _opt("detector", "people", "", help="detector preset", choices=("people", "legs")),
-    _opt("fit_backend", "numpy", "", help="circle fit back end (numba: compiled once per machine, then loaded from "
-         "its cache; equal to round-off, barely faster here)",
-           choices=("numpy", "auto", "numba")),
-    _opt("tracker_acceleration_sigma_mps2", 0.2, "m/s^2", 0.01, 10.0, "process noise of the tracker (real walkers: 0.5)"),
-    _opt("blind_person_speed_mps", 1.0, "m/s", 0.0, 5.0, "walking speed assumed for someone in a blind sector"),
-    _opt("blind_clearance_m", 0.3, "m", 0.0, 10.0, "distance from the body an unseen person is assumed to start from"),
-    _opt("reset_hold_s", 0.5, "s", 0.0, 10.0, "after a time jump backwards the robot stands this long (tracks re-confirm)"),
-    _opt("autostart", True, "", help="configure and activate the lifecycle node at start"),
-    _opt("executor", "events", "", help="rclpy executor: events (rclpy's EventsExecutor, callbacks dispatched "
-         "from C++: lower latency) or single-threaded (rclpy's pure-Python SingleThreadedExecutor)",
-         choices=("events", "single-threaded")),
-    _opt("interface", "topics", "", help="topics: the designated path comes on path_topic; nav2: as Nav2's controller "
-         "server, paths come as FollowPath goals (docs/nav2.md)", choices=("topics", "nav2")),
-    _opt("use_tf", True, "", help="nav2: take the path frame's transform to odom_frame and the scanner mounts from /tf and "
-         "/tf_static (the scanners.* mounts stay the fallback)"),
-    _opt("follow_path_action", "follow_path", "", help="nav2: name of the nav2_msgs/FollowPath action served"),
-    _opt("speed_limit_topic", "speed_limit", "", help="nav2: nav2_msgs/SpeedLimit topic honoured"),
-    _opt("clear_costmap_service", "local_costmap/clear_entirely_local_costmap", "", help="nav2: the costmap-clearing "
-         "service Nav2's behaviour tree calls on the controller's costmap (answered; there is no costmap)"),
-    _opt("progress_radius_m", 0.5, "m", 0.01, 100.0, "nav2: the robot must move this far within progress_patience_s"),
-    _opt("progress_patience_s", 10.0, "s", 0.1, 3600.0, "nav2: no progress this long ends the goal (FAILED_TO_MAKE_PROGRESS)"),
-    _opt("failure_tolerance_s", 2.0, "s", 0.0, 3600.0, "nav2: no command can be computed this long (inputs stale, path "
-         "frame unknown) ends the goal (NO_VALID_CONTROL)"),
-    _opt("path_simplify_m", 0.05, "m", 0.0, 10.0, "nav2: a goal's dense path is simplified to subgoals within this"),
-    _opt("use_shield", "default", "", help="passive-safety shield around the planner (DESIGN §7); default: as "
-         "viapath run (on for viapath)", choices=("default", "on", "off")),
-) + _scanner_options("front", "scan_front", "laser_front", 0.145, 0.0) + _scanner_options("rear", "scan_rear", "laser_rear", -0.145, math.pi)
+    (
+        _opt("scanner_names", ["front", "rear"], "", help="names of the scanners (each has scanners.<name>.*)"),
+        _opt(
+            "scan_geometry", "urg04lx", "", help="beam layout the scans must have", choices=("urg04lx", "from_message")
+        ),
+        _opt("odom_topic", "odom", "", help="nav_msgs/Odometry topic"),
+        _opt("path_topic", "designated_path", "", help="nav_msgs/Path topic of the designated path (transient local)"),
+        _opt(
+            "path_file",
+            "",
+            "",
+            help="designated path from a file instead (scenario YAML, or YAML/CSV of x y waypoints)",
+        ),
+        _opt(
+            "map_topic",
+            "",
+            "",
+            help="nav_msgs/OccupancyGrid topic (transient local) of a known map in the odometry "
+            "frame, turned into static geometry ('' : none)",
+        ),
+        _opt("map_occupied_threshold", 65, "", 1, 100, "occupancy (0-100) from which a map cell is an obstacle"),
+        _opt(
+            "static_layer",
+            True,
+            "",
+            help="every scan return no person track explains is static geometry "
+            "(planner, guard and shield keep clear of it)",
+        ),
+        _opt("cmd_vel_topic", "cmd_vel", "", help="command topic"),
+        _opt("cmd_vel_stamped", False, "", help="publish geometry_msgs/TwistStamped instead of Twist"),
+        _opt("markers_topic", "viapath/markers", "", help="visualization_msgs/MarkerArray topic"),
+        _opt("status_topic", "viapath/status", "", help="diagnostic_msgs/DiagnosticArray topic"),
+        _opt("odom_frame", "odom", "", help="world frame of odometry and path ('' accepts any)"),
+        _opt("base_frame", "base_link", "", help="robot frame (markers of the robot)"),
+        _opt("half_width_m", 1.0, "m", 0.01, 100.0, "corridor half-width around the designated path"),
+        _opt("half_widths_m", [0.0], "m", 0.0, 100.0, "one half-width per path segment (0 or empty: half_width_m)"),
+        _opt("nominal_speed_mps", 0.2, "m/s", 0.01, 5.0, "speed the robot keeps when nothing is in the way"),
+        _opt("robot_radius_m", 0.25, "m", 0.01, 5.0, "radius of the robot's footprint"),
+        _opt("max_speed_mps", 0.6, "m/s", 0.01, 5.0, "speed limit of the base"),
+        _opt("max_accel_mps2", 0.8, "m/s^2", 0.01, 20.0, "acceleration (and braking) limit of the base"),
+        _opt("max_turn_rate_radps", 2.0, "rad/s", 0.01, 20.0, "turn-rate limit of the base"),
+        _opt("max_turn_accel_radps2", 6.0, "rad/s^2", 0.01, 100.0, "turn acceleration limit of the base"),
+        _opt("reach_threshold_m", 0.2, "m", 0.01, 10.0, "an intermediate subgoal is reached within this"),
+        _opt("goal_tolerance_m", 0.1, "m", 0.01, 10.0, "the goal is reached within this"),
+        _opt("bypass_distance_m", 1.0, "m", 0.0, 100.0, "a blocked subgoal is given up within this"),
+        _opt(
+            "scan_timeout_s", 0.3, "s", 0.05, 10.0, "a scanner silent this long is blind; all silent: brake to a stop"
+        ),
+        _opt("odom_timeout_s", 0.5, "s", 0.05, 10.0, "no odometry this long: brake to a stop"),
+        _opt(
+            "odom_speed_tolerance_mps",
+            0.1,
+            "m/s",
+            0.0,
+            1.0,
+            "odometry speed beyond max_speed_mps, or above every "
+            "speed commanded in the last odom_timeout_s, by more than this is a fault: brake",
+        ),
+        _opt(
+            "odom_turn_tolerance_radps",
+            0.3,
+            "rad/s",
+            0.0,
+            5.0,
+            "odometry turn rate beyond max_turn_rate_radps, or "
+            "outside the turn rates commanded in the last odom_timeout_s, by more than this is a fault: brake",
+        ),
+        _opt(
+            "odom_pose_tolerance_m",
+            0.05,
+            "m",
+            0.001,
+            1.0,
+            "odometry pose change off what its twist explains by more "
+            "than this (plus the acceleration limits' share) is a fault: brake",
+        ),
+        _opt(
+            "odom_heading_tolerance_rad",
+            0.1,
+            "rad",
+            0.001,
+            1.0,
+            "odometry heading change off what its turn rate "
+            "explains by more than this (plus the acceleration limits' share) is a fault: brake",
+        ),
+        _opt(
+            "wall_timeout_s",
+            0.5,
+            "s",
+            0.05,
+            10.0,
+            "no input and no move of the node's clock (/clock with "
+            "use_sim_time) for this long on the wall clock: brake to a stop",
+        ),
+        _opt("cycle_period_s", 0.1, "s", 0.01, 1.0, "scan period; also the watchdog period"),
+        _opt(
+            "max_invalid_fraction", 0.5, "", 0.0, 1.0, "a scan with more NaN/zero readings than this counts as failed"
+        ),
+        _opt("detector", "people", "", help="detector preset", choices=("people", "legs")),
+        _opt(
+            "fit_backend",
+            "numpy",
+            "",
+            help="circle fit back end (numba: compiled once per machine, then loaded from "
+            "its cache; equal to round-off, barely faster here)",
+            choices=("numpy", "auto", "numba"),
+        ),
+        _opt(
+            "tracker_acceleration_sigma_mps2",
+            0.2,
+            "m/s^2",
+            0.01,
+            10.0,
+            "process noise of the tracker (real walkers: 0.5)",
+        ),
+        _opt("blind_person_speed_mps", 1.0, "m/s", 0.0, 5.0, "walking speed assumed for someone in a blind sector"),
+        _opt(
+            "blind_clearance_m", 0.3, "m", 0.0, 10.0, "distance from the body an unseen person is assumed to start from"
+        ),
+        _opt(
+            "reset_hold_s",
+            0.5,
+            "s",
+            0.0,
+            10.0,
+            "after a time jump backwards the robot stands this long (tracks re-confirm)",
+        ),
+        _opt("autostart", True, "", help="configure and activate the lifecycle node at start"),
+        _opt(
+            "executor",
+            "events",
+            "",
+            help="rclpy executor: events (rclpy's EventsExecutor, callbacks dispatched "
+            "from C++: lower latency) or single-threaded (rclpy's pure-Python SingleThreadedExecutor)",
+            choices=("events", "single-threaded"),
+        ),
+        _opt(
+            "interface",
+            "topics",
+            "",
+            help="topics: the designated path comes on path_topic; nav2: as Nav2's controller "
+            "server, paths come as FollowPath goals (docs/nav2.md)",
+            choices=("topics", "nav2"),
+        ),
+        _opt(
+            "use_tf",
+            True,
+            "",
+            help="nav2: take the path frame's transform to odom_frame and the scanner mounts from /tf and "
+            "/tf_static (the scanners.* mounts stay the fallback)",
+        ),
+        _opt("follow_path_action", "follow_path", "", help="nav2: name of the nav2_msgs/FollowPath action served"),
+        _opt("speed_limit_topic", "speed_limit", "", help="nav2: nav2_msgs/SpeedLimit topic honoured"),
+        _opt(
+            "clear_costmap_service",
+            "local_costmap/clear_entirely_local_costmap",
+            "",
+            help="nav2: the costmap-clearing "
+            "service Nav2's behaviour tree calls on the controller's costmap (answered; there is no costmap)",
+        ),
+        _opt(
+            "progress_radius_m", 0.5, "m", 0.01, 100.0, "nav2: the robot must move this far within progress_patience_s"
+        ),
+        _opt(
+            "progress_patience_s",
+            10.0,
+            "s",
+            0.1,
+            3600.0,
+            "nav2: no progress this long ends the goal (FAILED_TO_MAKE_PROGRESS)",
+        ),
+        _opt(
+            "failure_tolerance_s",
+            2.0,
+            "s",
+            0.0,
+            3600.0,
+            "nav2: no command can be computed this long (inputs stale, path "
+            "frame unknown) ends the goal (NO_VALID_CONTROL)",
+        ),
+        _opt(
+            "path_simplify_m", 0.05, "m", 0.0, 10.0, "nav2: a goal's dense path is simplified to subgoals within this"
+        ),
+        _opt(
+            "use_shield",
+            "default",
+            "",
+            help="passive-safety shield around the planner (DESIGN §7); default: as viapath run (on for viapath)",
+            choices=("default", "on", "off"),
+        ),
+    )
+    + _scanner_options("front", "scan_front", "laser_front", 0.145, 0.0)
+    + _scanner_options("rear", "scan_rear", "laser_rear", -0.145, math.pi)
+)
 
 
 def all_options(planner_name: str = "viapath", scanner_names=("front", "rear")) -> tuple[Option, ...]:
@@ -146,18 +272,55 @@ def all_options(planner_name: str = "viapath", scanner_names=("front", "rear")) 
     for name in scanner_names:
         for o in _scanner_options(name, f"scan_{name}", f"laser_{name}", 0.0, 0.0):
             scanners.append(by_name.get(o.name, o))
-    planner = [Option(name=PLANNER_PREFIX + o.path, default=o.default, help=o.help, unit=o.unit, minimum=o.minimum,
-                      maximum=o.maximum, exclusive_minimum=o.exclusive_minimum, choices=o.choices)
-               for o in planner_options(planner_name)]
+    planner = [
+        Option(
+            name=PLANNER_PREFIX + o.path,
+            default=o.default,
+            help=o.help,
+            unit=o.unit,
+            minimum=o.minimum,
+            maximum=o.maximum,
+            exclusive_minimum=o.exclusive_minimum,
+            choices=o.choices,
+        )
+        for o in planner_options(planner_name)
+    ]
     from viapath.safety import SHIELD_OPTIONS
 
-    shield = [Option(name=SHIELD_PREFIX + o.path, default=o.default, help=o.help, unit=o.unit, minimum=o.minimum,
-                     maximum=o.maximum, exclusive_minimum=o.exclusive_minimum, choices=o.choices)
-              for o in SHIELD_OPTIONS if o.name != "enabled"]  # on / off is use_shield
-    preset = [_opt(WEIGHTS_PRESET, "", help="weights preset name or preset YAML file (viapath presets); "
-                   "a planner.weights.* parameter set to other than its default wins over it")] if planner_name == "viapath" else []
-    return tuple(own + [_opt("planner_name", planner_name, help="registered planner (viapath planners)")]
-                 + scanners + preset + planner + shield)
+    shield = [
+        Option(
+            name=SHIELD_PREFIX + o.path,
+            default=o.default,
+            help=o.help,
+            unit=o.unit,
+            minimum=o.minimum,
+            maximum=o.maximum,
+            exclusive_minimum=o.exclusive_minimum,
+            choices=o.choices,
+        )
+        for o in SHIELD_OPTIONS
+        if o.name != "enabled"
+    ]  # on / off is use_shield
+    preset = (
+        [
+            _opt(
+                WEIGHTS_PRESET,
+                "",
+                help="weights preset name or preset YAML file (viapath presets); "
+                "a planner.weights.* parameter set to other than its default wins over it",
+            )
+        ]
+        if planner_name == "viapath"
+        else []
+    )
+    return tuple(
+        own
+        + [_opt("planner_name", planner_name, help="registered planner (viapath planners)")]
+        + scanners
+        + preset
+        + planner
+        + shield
+    )
 
 
 def describe(option: Option) -> str:
@@ -259,8 +422,9 @@ def validate(values: dict[str, Any]) -> NodeSettings:
     from viapath.planning import available_planners
 
     if planner_name not in available_planners():
-        raise ParameterError(f"parameter planner_name: unknown planner {planner_name!r}; available: "
-                             f"{', '.join(available_planners())}")
+        raise ParameterError(
+            f"parameter planner_name: unknown planner {planner_name!r}; available: {', '.join(available_planners())}"
+        )
     names_option = next(o for o in NODE_OPTIONS if o.name == "scanner_names")
     scanner_names = check_value(names_option, values.get("scanner_names", names_option.default))
     if len(set(scanner_names)) != len(scanner_names):
@@ -274,16 +438,26 @@ def validate(values: dict[str, Any]) -> NodeSettings:
         except ParameterError as error:  # go on with the default, to report every mistake at once
             errors.append(str(error))
             checked[name], bad = o.default, bad | {name}
-    scanners = tuple(ScannerSetting(n, checked[f"scanners.{n}.topic"], checked[f"scanners.{n}.frame_id"],
-                                    checked[f"scanners.{n}.mount_x_m"], checked[f"scanners.{n}.mount_y_m"],
-                                    checked[f"scanners.{n}.mount_yaw_rad"]) for n in scanner_names)
+    scanners = tuple(
+        ScannerSetting(
+            n,
+            checked[f"scanners.{n}.topic"],
+            checked[f"scanners.{n}.frame_id"],
+            checked[f"scanners.{n}.mount_x_m"],
+            checked[f"scanners.{n}.mount_y_m"],
+            checked[f"scanners.{n}.mount_yaw_rad"],
+        )
+        for n in scanner_names
+    )
     for s in scanners:
         if not s.topic:
             errors.append(f"parameter scanners.{s.name}.topic: expected a topic name, found ''")
     if checked["nominal_speed_mps"] > checked["max_speed_mps"] and not {"nominal_speed_mps", "max_speed_mps"} & bad:
-        errors.append(f"parameter nominal_speed_mps: expected <= max_speed_mps ({checked['max_speed_mps']:g} m/s), "
-                      f"found {checked['nominal_speed_mps']}")
-    planner_values = {k[len(PLANNER_PREFIX):]: v for k, v in checked.items() if k.startswith(PLANNER_PREFIX)}
+        errors.append(
+            f"parameter nominal_speed_mps: expected <= max_speed_mps ({checked['max_speed_mps']:g} m/s), "
+            f"found {checked['nominal_speed_mps']}"
+        )
+    planner_values = {k[len(PLANNER_PREFIX) :]: v for k, v in checked.items() if k.startswith(PLANNER_PREFIX)}
     if checked.get(WEIGHTS_PRESET):
         from viapath.presets import PresetError, load_preset
 
@@ -293,8 +467,10 @@ def validate(values: dict[str, Any]) -> NodeSettings:
             preset = None
             errors.append(f"parameter {WEIGHTS_PRESET}: {error}")
         if preset is not None and preset.planner != planner_name:
-            errors.append(f"parameter {WEIGHTS_PRESET}: preset {preset.name!r} is for planner "
-                          f"{preset.planner!r}, not {planner_name!r}")
+            errors.append(
+                f"parameter {WEIGHTS_PRESET}: preset {preset.name!r} is for planner "
+                f"{preset.planner!r}, not {planner_name!r}"
+            )
         elif preset is not None:
             # A parameter set to other than its default wins over the preset. (The node declares every
             # parameter and hands all values over, so "given" can only be told apart from "default" by value.)
@@ -304,12 +480,18 @@ def validate(values: dict[str, Any]) -> NodeSettings:
                     planner_values[path] = value
                     checked[name] = value
     for length, step in (("rollout_s", "rollout_dt_s"), ("escape_s", "escape_dt_s")):
-        if length in planner_values and step in planner_values and not {PLANNER_PREFIX + length, PLANNER_PREFIX + step} & bad:
+        if (
+            length in planner_values
+            and step in planner_values
+            and not {PLANNER_PREFIX + length, PLANNER_PREFIX + step} & bad
+        ):
             steps = planner_values[length] / planner_values[step]
             if steps > MAX_ROLLOUT_STEPS:  # both named: either may be the one to change
                 for name in (length, step):
-                    errors.append(f"parameter {PLANNER_PREFIX}{name}: {length} {planner_values[length]:g} s / {step} "
-                                  f"{planner_values[step]:g} s is {steps:.4g} steps of a roll-out, at most {MAX_ROLLOUT_STEPS}")
+                    errors.append(
+                        f"parameter {PLANNER_PREFIX}{name}: {length} {planner_values[length]:g} s / {step} "
+                        f"{planner_values[step]:g} s is {steps:.4g} steps of a roll-out, at most {MAX_ROLLOUT_STEPS}"
+                    )
     from viapath.options import OptionError
     from viapath.planning import planner_class
 
@@ -322,7 +504,7 @@ def validate(values: dict[str, Any]) -> NodeSettings:
                 errors.append(line)
     if errors:
         raise ParameterError(errors)
-    shield_values = {k[len(SHIELD_PREFIX):]: v for k, v in checked.items() if k.startswith(SHIELD_PREFIX)}
+    shield_values = {k[len(SHIELD_PREFIX) :]: v for k, v in checked.items() if k.startswith(SHIELD_PREFIX)}
     return NodeSettings(checked, scanners, planner_name, planner_values, shield_values)
 
 
@@ -368,13 +550,26 @@ def read_params_file(path, node_name: str = NODE_NAME) -> dict[str, Any]:
 
 def write_example_params(path, planner_name: str = "viapath") -> None:
     """A parameters file holding every parameter at its default, with units and bounds as comments."""
-    lines = [f"# viapath ROS 2 node parameters (defaults). Run: viapath ros2 node --params-file {Path(path).name}",
-             f"{NODE_NAME}:", "  ros__parameters:"]
+    lines = [
+        f"# viapath ROS 2 node parameters (defaults). Run: viapath ros2 node --params-file {Path(path).name}",
+        f"{NODE_NAME}:",
+        "  ros__parameters:",
+    ]
     for o in all_options(planner_name):
         value = o.default
-        text = ("true" if value else "false") if isinstance(value, bool) else repr(value) if isinstance(value, str) else (
-            "[" + ", ".join(repr(v) if isinstance(v, str) else repr(float(v)) for v in value) + "]" if isinstance(value, (list, tuple))
-            else repr(float(value)) if isinstance(value, float) else str(value))
+        text = (
+            ("true" if value else "false")
+            if isinstance(value, bool)
+            else repr(value)
+            if isinstance(value, str)
+            else (
+                "[" + ", ".join(repr(v) if isinstance(v, str) else repr(float(v)) for v in value) + "]"
+                if isinstance(value, (list, tuple))
+                else repr(float(value))
+                if isinstance(value, float)
+                else str(value)
+            )
+        )
         text = text.replace("'", '"')
         lines.append(f"    {o.name}: {text}  # {describe(o)}")
     Path(path).write_text("\n".join(lines) + "\n")

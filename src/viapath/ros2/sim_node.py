@@ -49,7 +49,7 @@ class Fault:
         return self.at_s <= t < self.until_s
 
     @classmethod
-    def parse(cls, text: str) -> "Fault":
+    def parse(cls, text: str) -> Fault:
         """``silence:front@2``, ``nan:rear@1.5-3``, ``short:front@2``, ``odom@3-4``, ``clock-back:2@3``."""
         try:
             what, at = text.rsplit("@", 1)
@@ -109,13 +109,17 @@ def _tf_publishers(node, scanners, map_offset):
         t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z, t.transform.rotation.w = q
         return t
 
-    static = node.create_publisher(TFMessage, "/tf_static", QoSProfile(
-        depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    static = node.create_publisher(
+        TFMessage,
+        "/tf_static",
+        QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL),
+    )
     dynamic = node.create_publisher(TFMessage, "/tf", 100)
     zero = convert.time_msg(0.0)
     message = TFMessage()
     message.transforms = [transform("map", "odom", zero, *map_offset)] + [
-        transform("base_link", f"laser_{s.name}", zero, s.mount_x_m, s.mount_y_m, s.mount_yaw_rad) for s in scanners]
+        transform("base_link", f"laser_{s.name}", zero, s.mount_x_m, s.mount_y_m, s.mount_yaw_rad) for s in scanners
+    ]
     static.publish(message)
 
     def publish(stamp, x, y, yaw):
@@ -138,11 +142,24 @@ class StepRecord:
     late: bool = False
 
 
-def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max_wait_s: float = 10.0,
-            as_json: bool = False, seed: int | None = None, faults: list[Fault] | None = None,
-            trace_file: str | None = None, wait_for_node_s: float = 60.0, commands_file: str | None = None,
-            ros_args: list[str] | None = None, duration_s: float | None = None, status_file: str | None = None,
-            tf: bool = True, map_offset: tuple[float, float, float] = (0.0, 0.0, 0.0), linger_s: float = 0.0) -> int:
+def run_sim(
+    scenario_source: str,
+    rate: float = 1.0,
+    lockstep: bool = False,
+    max_wait_s: float = 10.0,
+    as_json: bool = False,
+    seed: int | None = None,
+    faults: list[Fault] | None = None,
+    trace_file: str | None = None,
+    wait_for_node_s: float = 60.0,
+    commands_file: str | None = None,
+    ros_args: list[str] | None = None,
+    duration_s: float | None = None,
+    status_file: str | None = None,
+    tf: bool = True,
+    map_offset: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    linger_s: float = 0.0,
+) -> int:
     """Run one episode against whatever node listens; prints metrics; returns the exit code."""
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
@@ -150,24 +167,23 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
     from nav_msgs.msg import Odometry
     from nav_msgs.msg import Path as PathMsg
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
-    from viapath.ros2.process import finish_ros_process, start_ros_process
     from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import LaserScan
 
-    from viapath.observation import Command, MotionLimits
+    from viapath.io.jsonable import dumps as json_dumps
+    from viapath.observation import Command, MotionLimits, Obstacles
     from viapath.path import DesignatedPath, SubgoalPolicy
     from viapath.perception.laser import LaserPerception, tracking_errors
     from viapath.ros2 import convert
     from viapath.ros2.core import parse_points, parse_tracks
+    from viapath.ros2.process import finish_ros_process, start_ros_process
     from viapath.scenarios import load_scenario
     from viapath.sim import robot as kinematics
     from viapath.sim.loop import Trace
     from viapath.sim.metrics import compute_metrics
-    from viapath.io.jsonable import dumps as json_dumps
     from viapath.sim.obstacles import scenario_obstacle_states
-    from viapath.sim.static_world import StaticWorld
     from viapath.sim.perception import WorldSnapshot
-    from viapath.observation import Obstacles
+    from viapath.sim.static_world import StaticWorld
 
     faults = list(faults or [])
     spec = load_scenario(scenario_source)
@@ -190,7 +206,9 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
 
     node, stop, previous = start_ros_process("viapath_sim", ros_args)
     try:
-        latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        latched = QoSProfile(
+            depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+        )
         clock_pub = node.create_publisher(Clock, "/clock", 10)
         odom_pub = node.create_publisher(Odometry, "odom", 10)
         path_pub = node.create_publisher(PathMsg, "designated_path", latched)
@@ -240,18 +258,26 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
         path_pub.publish(convert.path_message(spec.path.waypoints, "odom", convert.time_msg(0.0)))
         # Wait for a planner node: someone listening to the scans and publishing commands.
         started = time.monotonic()
-        while not stop["flag"] and (node.count_subscribers(f"scan_{names[0]}") == 0 or node.count_publishers(_resolved(node, "cmd_vel")) == 0):
+        while not stop["flag"] and (
+            node.count_subscribers(f"scan_{names[0]}") == 0 or node.count_publishers(_resolved(node, "cmd_vel")) == 0
+        ):
             if time.monotonic() - started > wait_for_node_s:
-                print(f"error: no planner node (subscriber of scan_{names[0]}, publisher of cmd_vel) within "
-                      f"{wait_for_node_s:g} s", file=sys.stderr)
+                print(
+                    f"error: no planner node (subscriber of scan_{names[0]}, publisher of cmd_vel) within "
+                    f"{wait_for_node_s:g} s",
+                    file=sys.stderr,
+                )
                 return 3
             rclpy.spin_once(node, timeout_sec=0.05)
         # Warm-up: tick the clock below the episode's start (1 s) until the node's watchdog reports
         # ("no scan yet"): then clock, status and commands are matched both ways.
         tick = 0.0
+
         def node_ready():
             last = got["status"][-1] if got["status"] else {}
-            return bool(last) and "no designated path" not in last.get("reasons", "") and last.get("inputs_matched") == "1"
+            return (
+                bool(last) and "no designated path" not in last.get("reasons", "") and last.get("inputs_matched") == "1"
+            )
 
         while not stop["flag"] and not node_ready() and time.monotonic() - started < wait_for_node_s:
             tick = min(tick + 0.01, 0.99)
@@ -262,7 +288,9 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
             print("warning: the planner node did not report a designated path during warm-up", file=sys.stderr)
         spin_until(time.monotonic() + 0.2)
 
-        state = kinematics.UnicycleState(spec.robot.start[0], spec.robot.start[1], spec.robot.heading, spec.robot.speed, 0.0)
+        state = kinematics.UnicycleState(
+            spec.robot.start[0], spec.robot.start[1], spec.robot.heading, spec.robot.speed, 0.0
+        )
         rows = {k: [] for k in ("pose", "speed", "turn")}
         records: list[StepRecord] = []
         reported, truth, stamps = [], [], []
@@ -296,12 +324,23 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
             if tf_pub is not None:
                 tf_pub(stamp, state.x, state.y, state.heading_rad)
             if not any(f.kind == "odom" and f.active(t) for f in faults):
-                odom_pub.publish(convert.odometry("odom", "base_link", stamp, state.x, state.y, state.heading_rad,
-                                                  state.speed_mps, state.turn_rate_radps))
+                odom_pub.publish(
+                    convert.odometry(
+                        "odom",
+                        "base_link",
+                        stamp,
+                        state.x,
+                        state.y,
+                        state.heading_rad,
+                        state.speed_mps,
+                        state.turn_rate_radps,
+                    )
+                )
             pose = np.array([state.x, state.y, state.heading_rad])
             standing = static_world.at(t)
-            world = WorldSnapshot(t, pose, spec.robot.radius, positions[k], velocities[k], radii, standing.segments,
-                                  standing)
+            world = WorldSnapshot(
+                t, pose, spec.robot.radius, positions[k], velocities[k], radii, standing.segments, standing
+            )
             scans = laser.scan(world)
             for scanner, ranges in zip(laser.scanners, scans, strict=True):
                 active = [f for f in faults if f.scanner == scanner.name and f.active(t)]
@@ -311,15 +350,26 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
                     ranges = np.full_like(ranges, np.nan)
                 if any(f.kind == "short" for f in active):
                     ranges = ranges[:-10]
-                scan_pubs[scanner.name].publish(convert.laser_scan(
-                    f"laser_{scanner.name}", stamp, scanner.angle_min_rad, scanner.angle_increment_rad, ranges,
-                    scanner.range_min_m, scanner.range_max_m, scanner.scan_period_s))
+                scan_pubs[scanner.name].publish(
+                    convert.laser_scan(
+                        f"laser_{scanner.name}",
+                        stamp,
+                        scanner.angle_min_rad,
+                        scanner.angle_increment_rad,
+                        ranges,
+                        scanner.range_min_m,
+                        scanner.range_max_m,
+                        scanner.scan_period_s,
+                    )
+                )
             stamps.append(stamp_s)
             count_before = got["cmd_count"]
 
             key = round(stamp_s, 6)
 
-            published = sum(1 for n in names if not any(f.scanner == n and f.kind == "silence" and f.active(t) for f in faults))
+            published = sum(
+                1 for n in names if not any(f.scanner == n and f.kind == "silence" and f.active(t) for f in faults)
+            )
 
             def cycle_reported():
                 if key in got["by_stamp"]:
@@ -354,14 +404,33 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
                 clock_pub.publish(clock)
                 if tf_pub is not None:
                     tf_pub(stamp, state.x, state.y, state.heading_rad)
-                odom_pub.publish(convert.odometry("odom", "base_link", stamp, state.x, state.y, state.heading_rad,
-                                                  state.speed_mps, state.turn_rate_radps))
+                odom_pub.publish(
+                    convert.odometry(
+                        "odom",
+                        "base_link",
+                        stamp,
+                        state.x,
+                        state.y,
+                        state.heading_rad,
+                        state.speed_mps,
+                        state.turn_rate_radps,
+                    )
+                )
                 pose = np.array([state.x, state.y, state.heading_rad])
                 world = WorldSnapshot(t, pose, spec.robot.radius, positions[last], velocities[last] * 0.0, radii, walls)
                 for scanner, ranges in zip(laser.scanners, laser.scan(world), strict=True):
-                    scan_pubs[scanner.name].publish(convert.laser_scan(
-                        f"laser_{scanner.name}", stamp, scanner.angle_min_rad, scanner.angle_increment_rad, ranges,
-                        scanner.range_min_m, scanner.range_max_m, scanner.scan_period_s))
+                    scan_pubs[scanner.name].publish(
+                        convert.laser_scan(
+                            f"laser_{scanner.name}",
+                            stamp,
+                            scanner.angle_min_rad,
+                            scanner.angle_increment_rad,
+                            ranges,
+                            scanner.range_min_m,
+                            scanner.range_max_m,
+                            scanner.scan_period_s,
+                        )
+                    )
                 spin_until(time.monotonic() + period)
                 v, w = got["cmd"] if got["cmd"] is not None else (0.0, 0.0)
                 state = kinematics.step(state, Command(v, w), limits, dt)
@@ -380,21 +449,41 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
                 truth.append(world)
         n = len(rows["pose"])
         trace = Trace(
-            scenario_name=spec.name, planner_name=(got["status"][-1].get("planner", "viapath") if got["status"] else "viapath"),
-            perception_mode="laser", dt_s=dt, path=path, robot_radius_m=spec.robot.radius, times_s=times[:n],
-            robot_poses=np.array(rows["pose"]), robot_speeds_mps=np.array(rows["speed"]),
-            robot_turn_rates_radps=np.array(rows["turn"]), commands=np.array([r.command for r in records]),
-            obstacle_positions=positions[:n], obstacle_velocities=velocities[:n], obstacle_radii_m=radii,
+            scenario_name=spec.name,
+            planner_name=(got["status"][-1].get("planner", "viapath") if got["status"] else "viapath"),
+            perception_mode="laser",
+            dt_s=dt,
+            path=path,
+            robot_radius_m=spec.robot.radius,
+            times_s=times[:n],
+            robot_poses=np.array(rows["pose"]),
+            robot_speeds_mps=np.array(rows["speed"]),
+            robot_turn_rates_radps=np.array(rows["turn"]),
+            commands=np.array([r.command for r in records]),
+            obstacle_positions=positions[:n],
+            obstacle_velocities=velocities[:n],
+            obstacle_radii_m=radii,
             plan_speeds_mps=np.array([r.plan_speed for r in records]),
-            plan_targets=np.tile(path.goal, (len(records), 1)), plan_status=[r.status for r in records],
-            via_points=[r.via for r in records], plan_times_ms=np.array([r.cycle_ms for r in records[:-1]] + [np.nan]),
-            reached_goal=reached, walls=walls, wall_until_s=static_world.until_s, extras={"nominal_speed_mps": spec.robot.speed, "seed": spec.seed if seed is None else seed},
+            plan_targets=np.tile(path.goal, (len(records), 1)),
+            plan_status=[r.status for r in records],
+            via_points=[r.via for r in records],
+            plan_times_ms=np.array([r.cycle_ms for r in records[:-1]] + [np.nan]),
+            reached_goal=reached,
+            walls=walls,
+            wall_until_s=static_world.until_s,
+            extras={"nominal_speed_mps": spec.robot.speed, "seed": spec.seed if seed is None else seed},
             plan_sides=np.array([r.side for r in records], dtype=int),
         )
         metrics = compute_metrics(trace)
         shielded_cycles = [v for v in got["by_stamp"].values() if "shield_intervened" in v]
-        metrics.update({"shield": bool(shielded_cycles), "shield_interventions": (
-            sum(int(v["shield_intervened"]) for v in shielded_cycles) if shielded_cycles else None)})
+        metrics.update(
+            {
+                "shield": bool(shielded_cycles),
+                "shield_interventions": (
+                    sum(int(v["shield_intervened"]) for v in shielded_cycles) if shielded_cycles else None
+                ),
+            }
+        )
         if shielded_cycles:
             metrics["shield_mode"] = shielded_cycles[-1].get("shield_mode")
         metrics.update(tracking_errors(reported, truth))
@@ -412,11 +501,19 @@ def run_sim(scenario_source: str, rate: float = 1.0, lockstep: bool = False, max
                 for values in got["status"]:
                     handle.write(json.dumps(values) + "\n")
         if commands_file:
-            np.savetxt(commands_file, np.array(received).reshape(-1, 4), delimiter=",", header="time_s,v_mps,w_radps,measured_speed_mps",
-                       comments="")
-        print(f"viapath ros2 sim: {len(records) - 1} steps, {late} without the node's command in time, "
-              f"rate {rate:g}{' lockstep' if lockstep else ''}, {time.monotonic() - wall_start:.1f} s"
-              + (f" (late steps: {late_steps[:10]})" if late_steps else ""), file=sys.stderr)
+            np.savetxt(
+                commands_file,
+                np.array(received).reshape(-1, 4),
+                delimiter=",",
+                header="time_s,v_mps,w_radps,measured_speed_mps",
+                comments="",
+            )
+        print(
+            f"viapath ros2 sim: {len(records) - 1} steps, {late} without the node's command in time, "
+            f"rate {rate:g}{' lockstep' if lockstep else ''}, {time.monotonic() - wall_start:.1f} s"
+            + (f" (late steps: {late_steps[:10]})" if late_steps else ""),
+            file=sys.stderr,
+        )
         if as_json:
             print(json_dumps(metrics))
         else:

@@ -58,7 +58,9 @@ class TransformBuffer:
     def _frame(name: str) -> str:
         return name.lstrip("/")
 
-    def set(self, parent: str, child: str, stamp_s: float, x: float, y: float, yaw: float, static: bool = False) -> bool:
+    def set(
+        self, parent: str, child: str, stamp_s: float, x: float, y: float, yaw: float, static: bool = False
+    ) -> bool:
         """Store one transform (child's pose in parent); False when refused (not finite, a loop)."""
         parent, child = self._frame(parent), self._frame(child)
         if not parent or not child or parent == child or not all(math.isfinite(v) for v in (stamp_s, x, y, yaw)):

@@ -4,5 +4,14 @@ from viapath.safety.options import SHIELD_MODES, SHIELD_OPTIONS
 from viapath.safety.shield import Shield, ShieldConfig, ShieldResult
 from viapath.safety.shielded import SHIELDED_BY_DEFAULT, ShieldedPlanner, shield_default, shielded
 
-__all__ = ["SHIELD_MODES", "SHIELD_OPTIONS", "SHIELDED_BY_DEFAULT", "Shield", "ShieldConfig",
-           "ShieldResult", "ShieldedPlanner", "shield_default", "shielded"]
+__all__ = [
+    "SHIELDED_BY_DEFAULT",
+    "SHIELD_MODES",
+    "SHIELD_OPTIONS",
+    "Shield",
+    "ShieldConfig",
+    "ShieldResult",
+    "ShieldedPlanner",
+    "shield_default",
+    "shielded",
+]

@@ -163,9 +163,29 @@ def _all_clear(k_count):
 
 
 @njit(cache=True, nogil=True)
-def evaluate(px, py, heading, speed_now, robot_radius, achieved, max_accel, dv, dw, dt, substeps,
-             positions_obs, velocities_obs, radii, position_sigma, velocity_sigma, margin, k_sigma, accel,
-             friendly_mode, towards_only):
+def evaluate(
+    px,
+    py,
+    heading,
+    speed_now,
+    robot_radius,
+    achieved,
+    max_accel,
+    dv,
+    dw,
+    dt,
+    substeps,
+    positions_obs,
+    velocities_obs,
+    radii,
+    position_sigma,
+    velocity_sigma,
+    margin,
+    k_sigma,
+    accel,
+    friendly_mode,
+    towards_only,
+):
     """The verdicts of :meth:`viapath.safety.shield.Shield.evaluate` for K achieved (v, ω) (K, 2) and
     N >= 1 finite people: admissible (K,), friendly (K,), meet time (K,) (inf: never), person row (K,)
     (-1: none) and whether a person touches the robot now."""
@@ -196,8 +216,13 @@ def evaluate(px, py, heading, speed_now, robot_radius, achieved, max_accel, dv, 
     braking_den = 2.0 * max(accel, 1e-3)
     everyone_far = True
     for n in range(n_count):
-        grow = (touching[n] + margin + k_sigma * (position_sigma[n] + velocity_sigma[n] * t_bound)
-                + 0.5 * accel * t_bound ** 2.0 + speed_people[n] * t_bound)
+        grow = (
+            touching[n]
+            + margin
+            + k_sigma * (position_sigma[n] + velocity_sigma[n] * t_bound)
+            + 0.5 * accel * t_bound**2.0
+            + speed_people[n] * t_bound
+        )
         if friendly_mode:
             grow = grow + speed_people[n] * speed_people[n] / braking_den
         if not (gap[n] > 0.0 and distance[n] - grow > r_bound + 1e-6):
@@ -236,7 +261,7 @@ def evaluate(px, py, heading, speed_now, robot_radius, achieved, max_accel, dv, 
     for n in range(n_count):
         base[n] = touching[n] + min(margin + k_sigma * position_sigma[n], gap[n])
         growth[n] = k_sigma * velocity_sigma[n]
-        reach_person = base[n] + growth[n] * horizon + 0.5 * accel * horizon ** 2.0 + speed_people[n] * horizon
+        reach_person = base[n] + growth[n] * horizon + 0.5 * accel * horizon**2.0 + speed_people[n] * horizon
         if friendly_mode:
             reach_person = reach_person + speed_people[n] * speed_people[n] / braking_den
         path_x = velocities_obs[n, 0] * horizon
@@ -372,10 +397,16 @@ def _finite_people(positions_obs, velocities_obs, radii, position_sigma, velocit
     keep = np.empty(n_all, dtype=np.bool_)
     kept = 0
     for n in range(n_all):
-        keep[n] = (math.isfinite(positions_obs[n, 0]) and math.isfinite(positions_obs[n, 1])
-                   and math.isfinite(velocities_obs[n, 0]) and math.isfinite(velocities_obs[n, 1])
-                   and math.isfinite(radii[n]) and radii[n] >= 0 and math.isfinite(position_sigma[n])
-                   and math.isfinite(velocity_sigma[n]))
+        keep[n] = (
+            math.isfinite(positions_obs[n, 0])
+            and math.isfinite(positions_obs[n, 1])
+            and math.isfinite(velocities_obs[n, 0])
+            and math.isfinite(velocities_obs[n, 1])
+            and math.isfinite(radii[n])
+            and radii[n] >= 0
+            and math.isfinite(position_sigma[n])
+            and math.isfinite(velocity_sigma[n])
+        )
         kept += keep[n]
     if kept == n_all:
         return positions_obs, velocities_obs, radii, position_sigma, velocity_sigma
@@ -450,8 +481,22 @@ def candidates(robot, limits, command, samples, dt):
 
 
 @njit(cache=True, nogil=True)
-def shield(robot, limits, commands, search_window, samples, chunk, positions_obs, velocities_obs, radii,
-           position_sigma, velocity_sigma, settings, friendly_mode, towards_only):
+def shield(
+    robot,
+    limits,
+    commands,
+    search_window,
+    samples,
+    chunk,
+    positions_obs,
+    velocities_obs,
+    radii,
+    position_sigma,
+    velocity_sigma,
+    settings,
+    friendly_mode,
+    towards_only,
+):
     """The one compiled entry of the shield (one entry links :func:`evaluate` once: two entries cost
     seconds more of compilation). ``robot``: x, y, heading, speed, turn rate, radius; ``limits``:
     max speed, max accel, max turn rate, max turn accel; ``settings``: dt, substeps, margin, k sigma,
@@ -473,7 +518,8 @@ def shield(robot, limits, commands, search_window, samples, chunk, positions_obs
     dv = limits[1] * dt
     dw = limits[3] * dt
     positions_obs, velocities_obs, radii, position_sigma, velocity_sigma = _finite_people(
-        positions_obs, velocities_obs, radii, position_sigma, velocity_sigma)
+        positions_obs, velocities_obs, radii, position_sigma, velocity_sigma
+    )
     if search_window:
         command = np.empty(2)
         command[0] = commands[0, 0]
@@ -519,7 +565,7 @@ def shield(robot, limits, commands, search_window, samples, chunk, positions_obs
     contact = False
     for section in range(sections):
         length = size + 1 if section < extra else size
-        rows = order[start:start + length]
+        rows = order[start : start + length]
         start += length
         achieved = np.empty((length, 2))
         for i in range(length):
@@ -530,9 +576,28 @@ def shield(robot, limits, commands, search_window, samples, chunk, positions_obs
             contact = False
         else:
             admissible, friendly, meet, person, contact = evaluate(
-                robot[0], robot[1], robot[2], robot[3], robot[5], achieved, limits[1], dv, dw, dt, int(settings[1]),
-                positions_obs, velocities_obs, radii, position_sigma, velocity_sigma, settings[2], settings[3],
-                settings[4], friendly_mode, towards_only)
+                robot[0],
+                robot[1],
+                robot[2],
+                robot[3],
+                robot[5],
+                achieved,
+                limits[1],
+                dv,
+                dw,
+                dt,
+                int(settings[1]),
+                positions_obs,
+                velocities_obs,
+                radii,
+                position_sigma,
+                velocity_sigma,
+                settings[2],
+                settings[3],
+                settings[4],
+                friendly_mode,
+                towards_only,
+            )
         if not search_window:
             return reached, admissible, friendly, meet, person, contact, -1, -1, 0, 0
         tested += length

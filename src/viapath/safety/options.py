@@ -13,28 +13,73 @@ from viapath.planning.viapath.backend import BACKENDS
 
 SHIELD_MODES = ("passive", "passive-friendly")
 
-SHIELD_OPTIONS = OptionSet([
-    Option("enabled", True, "filter the planner's command through the passive-safety shield (DESIGN §7)"),
-    Option("mode", "passive", "passive: the robot is at rest before any person's forecast disc can reach it; "
-           "passive-friendly (Mitsch & Platzer 2017): also early enough that the person, braking at "
-           "person_accel_mps2 from its forecast velocity, stops before contact", choices=SHIELD_MODES),
-    Option("margin_m", 0.05, "clearance added to robot radius + person radius (at most the person's present gap)",
-           "m", minimum=0.0, maximum=2.0),
-    Option("person_accel_mps2", 1.0, "bound on how sharply people change velocity: the forecast disc grows by "
-           "a_p t^2 / 2", "m/s²", minimum=0.0, maximum=20.0),
-    Option("sigma_multiplier", 2.0, "forecast disc grows by k sigma_v t (and k sigma_p) with the tracker's "
-           "uncertainty", minimum=0.0, maximum=10.0),
-    Option("towards_only", True, "count a meeting only while the robot moves towards the person's forecast "
-           "centre (the robot is never the one moving into a person; a person catching up from behind meets it "
-           "moving away); false: any meeting before rest counts (DESIGN §7 to the letter)"),
-    Option("samples", 11, "commands sampled per axis (speed, turn rate) of the dynamic window when replacing one",
-           minimum=2, maximum=101),
-    Option("substep_s", 0.025, "longest sub-interval of the swept-disc test (a control period is split into "
-           "equal ones)", "s", minimum=0.001, maximum=1.0),
-    Option("backend", "auto", "arithmetic of the shield's test: auto = compiled (numba, extra 'fast') once it is "
-           "compiled (viapath bench and the ROS 2 node compile it, ~12 s once per machine), else numpy (env "
-           "VIAPATH_PLANNER_BACKEND overrides auto, as for the planner); the verdicts are the same", choices=BACKENDS),
-], owner="shield")
+SHIELD_OPTIONS = OptionSet(
+    [
+        Option("enabled", True, "filter the planner's command through the passive-safety shield (DESIGN §7)"),
+        Option(
+            "mode",
+            "passive",
+            "passive: the robot is at rest before any person's forecast disc can reach it; "
+            "passive-friendly (Mitsch & Platzer 2017): also early enough that the person, braking at "
+            "person_accel_mps2 from its forecast velocity, stops before contact",
+            choices=SHIELD_MODES,
+        ),
+        Option(
+            "margin_m",
+            0.05,
+            "clearance added to robot radius + person radius (at most the person's present gap)",
+            "m",
+            minimum=0.0,
+            maximum=2.0,
+        ),
+        Option(
+            "person_accel_mps2",
+            1.0,
+            "bound on how sharply people change velocity: the forecast disc grows by a_p t^2 / 2",
+            "m/s²",
+            minimum=0.0,
+            maximum=20.0,
+        ),
+        Option(
+            "sigma_multiplier",
+            2.0,
+            "forecast disc grows by k sigma_v t (and k sigma_p) with the tracker's uncertainty",
+            minimum=0.0,
+            maximum=10.0,
+        ),
+        Option(
+            "towards_only",
+            True,
+            "count a meeting only while the robot moves towards the person's forecast "
+            "centre (the robot is never the one moving into a person; a person catching up from behind meets it "
+            "moving away); false: any meeting before rest counts (DESIGN §7 to the letter)",
+        ),
+        Option(
+            "samples",
+            11,
+            "commands sampled per axis (speed, turn rate) of the dynamic window when replacing one",
+            minimum=2,
+            maximum=101,
+        ),
+        Option(
+            "substep_s",
+            0.025,
+            "longest sub-interval of the swept-disc test (a control period is split into equal ones)",
+            "s",
+            minimum=0.001,
+            maximum=1.0,
+        ),
+        Option(
+            "backend",
+            "auto",
+            "arithmetic of the shield's test: auto = compiled (numba, extra 'fast') once it is "
+            "compiled (viapath bench and the ROS 2 node compile it, ~12 s once per machine), else numpy (env "
+            "VIAPATH_PLANNER_BACKEND overrides auto, as for the planner); the verdicts are the same",
+            choices=BACKENDS,
+        ),
+    ],
+    owner="shield",
+)
 
 
 def option_defaults() -> dict[str, Any]:

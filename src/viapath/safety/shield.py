@@ -106,7 +106,7 @@ class ShieldConfig:
         check_options({name: getattr(self, name) for name in self.__dataclass_fields__})
 
     @classmethod
-    def from_options(cls, values: dict[str, Any] | None = None, where: str = "shield") -> "ShieldConfig":
+    def from_options(cls, values: dict[str, Any] | None = None, where: str = "shield") -> ShieldConfig:
         return cls(**check_options(dict(values or {}), where))
 
 
@@ -159,22 +159,35 @@ class Sweep:
     turns: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (K, T-1)
 
 
-def achieved_first_period(commands: np.ndarray, speed_mps: float, turn_rate_radps: float, limits: MotionLimits,
-                          dt_s: float) -> np.ndarray:
+def achieved_first_period(
+    commands: np.ndarray, speed_mps: float, turn_rate_radps: float, limits: MotionLimits, dt_s: float
+) -> np.ndarray:
     """(v, ω) the drive reaches in one period for each command (K, 2): as :func:`viapath.kinematics.limit_command`."""
     commands = np.asarray(commands, dtype=float).reshape(-1, 2)
     v_cmd = np.clip(np.where(np.isfinite(commands[:, 0]), commands[:, 0], 0.0), 0.0, limits.max_speed_mps)
-    w_cmd = np.clip(np.where(np.isfinite(commands[:, 1]), commands[:, 1], 0.0), -limits.max_turn_rate_radps,
-                    limits.max_turn_rate_radps)
+    w_cmd = np.clip(
+        np.where(np.isfinite(commands[:, 1]), commands[:, 1], 0.0),
+        -limits.max_turn_rate_radps,
+        limits.max_turn_rate_radps,
+    )
     bad = ~(np.isfinite(commands).all(axis=1))
     v_cmd[bad], w_cmd[bad] = 0.0, 0.0
     dv, dw = limits.max_accel_mps2 * dt_s, limits.max_turn_accel_radps2 * dt_s
-    return np.stack([speed_mps + np.clip(v_cmd - speed_mps, -dv, dv),
-                     turn_rate_radps + np.clip(w_cmd - turn_rate_radps, -dw, dw)], axis=1)
+    return np.stack(
+        [speed_mps + np.clip(v_cmd - speed_mps, -dv, dv), turn_rate_radps + np.clip(w_cmd - turn_rate_radps, -dw, dw)],
+        axis=1,
+    )
 
 
-def braking_sweep(position: np.ndarray, heading_rad: float, achieved: np.ndarray, limits: MotionLimits,
-                  dt_s: float, substeps: int, speed_now_mps: float = 0.0) -> Sweep:
+def braking_sweep(
+    position: np.ndarray,
+    heading_rad: float,
+    achieved: np.ndarray,
+    limits: MotionLimits,
+    dt_s: float,
+    substeps: int,
+    speed_now_mps: float = 0.0,
+) -> Sweep:
     """One period at each achieved (v, ω), then the hardest braking, until the robot is at rest: its
     speed is 0 at the start of a period and during it (a drive ramps down within the period, and the
     at-fault metric reads the speed at the start of the step), so the period in which the discrete
@@ -197,7 +210,9 @@ def braking_sweep(position: np.ndarray, heading_rad: float, achieved: np.ndarray
     j = speed.shape[1]
     h = dt_s / substeps
     tau = h * np.arange(1, substeps + 1)  # (M,) sub-times inside a step
-    heading_start = float(heading_rad) + np.concatenate([np.zeros((k, 1)), np.cumsum(turn * dt_s, axis=1)], axis=1)[:, :j]
+    heading_start = (
+        float(heading_rad) + np.concatenate([np.zeros((k, 1)), np.cumsum(turn * dt_s, axis=1)], axis=1)[:, :j]
+    )
     straight = np.abs(turn) < _STRAIGHT
     safe_turn = np.where(straight, 1.0, turn)
     h0 = heading_start[..., None]  # (K, J, 1)
@@ -309,8 +324,9 @@ class Shield:
             return
         centres, reach, distance = statics.positions[near], reach[near], distance[near]
         substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
-        sweep = braking_sweep(position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps,
-                              float(robot.speed_mps))
+        sweep = braking_sweep(
+            position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps, float(robot.speed_mps)
+        )
         low = sweep.positions.min(axis=(0, 1)) - reach.max() - float(sweep.sagitta_m.max(initial=0.0))
         high = sweep.positions.max(axis=(0, 1)) + reach.max() + float(sweep.sagitta_m.max(initial=0.0))
         inside = ((centres >= low) & (centres <= high)).all(axis=1)  # only discs the sweeps' box can reach
@@ -335,8 +351,9 @@ class Shield:
     def _evaluate_people(self, observation: Observation, commands: np.ndarray) -> dict[str, np.ndarray]:
         config, robot = self.config, observation.robot
         people = observation.obstacles.people().finite()
-        achieved = achieved_first_period(commands, float(robot.speed_mps), float(robot.turn_rate_radps),
-                                         self.limits, self.dt_s)
+        achieved = achieved_first_period(
+            commands, float(robot.speed_mps), float(robot.turn_rate_radps), self.limits, self.dt_s
+        )
         k = len(achieved)
         position = np.asarray(robot.position, dtype=float)
         out = {
@@ -360,16 +377,21 @@ class Shield:
         t_bound = fastest / a_robot + 2.0 * self.dt_s
         r_bound = fastest * t_bound
         speed_people = np.hypot(people.velocities[:, 0], people.velocities[:, 1])
-        grow_bound = (touching + config.margin_m + config.sigma_multiplier * (people.position_sigma_m
-                      + people.velocity_sigma_mps * t_bound) + 0.5 * config.person_accel_mps2 * t_bound ** 2
-                      + speed_people * t_bound)
+        grow_bound = (
+            touching
+            + config.margin_m
+            + config.sigma_multiplier * (people.position_sigma_m + people.velocity_sigma_mps * t_bound)
+            + 0.5 * config.person_accel_mps2 * t_bound**2
+            + speed_people * t_bound
+        )
         if config.mode == "passive-friendly":
-            grow_bound = grow_bound + speed_people ** 2 / (2.0 * max(config.person_accel_mps2, 1e-3))
+            grow_bound = grow_bound + speed_people**2 / (2.0 * max(config.person_accel_mps2, 1e-3))
         if np.all(gap > 0.0) and np.all(distance - grow_bound > r_bound + 1e-6):
             return out
         substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
-        sweep = braking_sweep(position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps,
-                              float(robot.speed_mps))
+        sweep = braking_sweep(
+            position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps, float(robot.speed_mps)
+        )
         if np.any(gap <= 0.0):
             out["admissible"][:] = False
             out["friendly"][:] = False
@@ -383,10 +405,10 @@ class Shield:
         growth = k_sigma * people.velocity_sigma_mps  # (N,) m/s
         accel = config.person_accel_mps2
         horizon = float(sweep.times_s[-1])
-        reach_people = base + growth * horizon + 0.5 * accel * horizon ** 2 + speed_people * horizon
+        reach_people = base + growth * horizon + 0.5 * accel * horizon**2 + speed_people * horizon
         friendly_mode = config.mode == "passive-friendly"
         if friendly_mode:
-            braking = speed_people ** 2 / (2.0 * max(accel, 1e-3))
+            braking = speed_people**2 / (2.0 * max(accel, 1e-3))
             reach_people = reach_people + braking
         # Only people whose forecast path (centre over [0, horizon], grown to its largest radius) comes
         # within the robot's longest sweep of its start can matter.
@@ -394,8 +416,10 @@ class Shield:
         pp = np.sum(path * path, axis=1)
         along = np.clip(np.sum(-offset * path, axis=1) / np.where(pp > 0, pp, 1.0), 0.0, 1.0)
         closest = offset + path * along[:, None]
-        near = (np.hypot(closest[:, 0], closest[:, 1]) - (reach_people - speed_people * horizon)
-                <= float(np.max(sweep.reach_m, initial=0.0)) + 1e-6)
+        near = (
+            np.hypot(closest[:, 0], closest[:, 1]) - (reach_people - speed_people * horizon)
+            <= float(np.max(sweep.reach_m, initial=0.0)) + 1e-6
+        )
         if friendly_mode:
             self._friendly(out, sweep, people, base, growth, accel, np.ones(len(people), dtype=bool) & near)
         if sweep.moving.shape[1] == 0 or not np.any(near):
@@ -403,8 +427,10 @@ class Shield:
         times = sweep.times_s
         idx = np.flatnonzero(near)
         for chunk in np.array_split(idx, max(1, math.ceil(len(idx) / 16))):
-            centres = people.positions[chunk, None, :] + people.velocities[chunk, None, :] * times[None, :, None]  # (n, T, 2)
-            radii = base[chunk, None] + growth[chunk, None] * times + 0.5 * accel * times ** 2  # (n, T)
+            centres = (
+                people.positions[chunk, None, :] + people.velocities[chunk, None, :] * times[None, :, None]
+            )  # (n, T, 2)
+            radii = base[chunk, None] + growth[chunk, None] * times + 0.5 * accel * times**2  # (n, T)
             rel = sweep.positions[:, None, :, :] - centres[None]  # (K, n, T, 2)
             r_a, w = rel[:, :, :-1], np.diff(rel, axis=2)
             # Radius over a sub-interval: the chord of a convex function lies above it, so the linear
@@ -432,8 +458,9 @@ class Shield:
                 r_b = r_a + w
                 t_b = -s_int * (ux[:, None, 1:] * r_b[..., 0] + uy[:, None, 1:] * r_b[..., 1])
                 r_max = np.maximum(np.hypot(r_a[..., 0], r_a[..., 1]), np.hypot(r_b[..., 0], r_b[..., 1])) + 0.01
-                lipschitz = np.abs(s_int) * (np.abs(sweep.turns[:, None, :]) * r_max + speed_people[chunk][None, :, None]
-                                             + np.abs(s_int))
+                lipschitz = np.abs(s_int) * (
+                    np.abs(sweep.turns[:, None, :]) * r_max + speed_people[chunk][None, :, None] + np.abs(s_int)
+                )
                 h_int = float(times[1] - times[0])
                 hit &= (t_a + t_b + lipschitz * h_int) > 0.0
             any_hit = hit.any(axis=2)  # (K, n)
@@ -459,11 +486,29 @@ class Shield:
         limits_array, settings = self._settings_arrays()
         state = _robot_array(robot)
         achieved, admissible, friendly, meet, person, contact = kernels.shield(
-            state, limits_array, _c(np.reshape(commands, (-1, 2))), False, 0, 0, _c(people.positions),
-            _c(people.velocities), _c(people.radii_m), _c(people.position_sigma_m), _c(people.velocity_sigma_mps),
-            settings, config.mode == "passive-friendly", bool(config.towards_only))[:6]
-        return {"achieved": achieved, "admissible": admissible, "friendly": friendly, "meet_time_s": meet,
-                "person": person, "contact": np.full(1, contact)}
+            state,
+            limits_array,
+            _c(np.reshape(commands, (-1, 2))),
+            False,
+            0,
+            0,
+            _c(people.positions),
+            _c(people.velocities),
+            _c(people.radii_m),
+            _c(people.position_sigma_m),
+            _c(people.velocity_sigma_mps),
+            settings,
+            config.mode == "passive-friendly",
+            bool(config.towards_only),
+        )[:6]
+        return {
+            "achieved": achieved,
+            "admissible": admissible,
+            "friendly": friendly,
+            "meet_time_s": meet,
+            "person": person,
+            "contact": np.full(1, contact),
+        }
 
     def _settings_arrays(self) -> tuple[np.ndarray, np.ndarray]:
         """The compiled test's constants: limits (max speed, accel, turn rate, turn accel) and settings
@@ -475,10 +520,21 @@ class Shield:
             limits = self.limits
             substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
             cached = self._kernel_settings = (
-                np.array([limits.max_speed_mps, limits.max_accel_mps2, limits.max_turn_rate_radps,
-                          limits.max_turn_accel_radps2], dtype=np.float64),
-                np.array([self.dt_s, substeps, config.margin_m, config.sigma_multiplier, config.person_accel_mps2],
-                         dtype=np.float64), key)
+                np.array(
+                    [
+                        limits.max_speed_mps,
+                        limits.max_accel_mps2,
+                        limits.max_turn_rate_radps,
+                        limits.max_turn_accel_radps2,
+                    ],
+                    dtype=np.float64,
+                ),
+                np.array(
+                    [self.dt_s, substeps, config.margin_m, config.sigma_multiplier, config.person_accel_mps2],
+                    dtype=np.float64,
+                ),
+                key,
+            )
         return cached[0], cached[1]
 
     def _friendly(self, out, sweep: Sweep, people, base, growth, accel, near) -> None:
@@ -491,7 +547,7 @@ class Shield:
         speed = np.hypot(velocity[:, 0], velocity[:, 1])
         start = people.positions[idx][None] + velocity[None] * t_rest[..., None]  # (K, n, 2)
         travel = velocity * (speed / (2.0 * max(accel, 1e-3)))[:, None]  # (n, 2)
-        radius = base[idx][None] + growth[idx][None] * t_rest + 0.5 * accel * t_rest ** 2  # (K, n)
+        radius = base[idx][None] + growth[idx][None] * t_rest + 0.5 * accel * t_rest**2  # (K, n)
         rel = sweep.rest_position[:, None, :] - start  # (K, n, 2)
         tt = np.sum(travel * travel, axis=-1)
         f = np.clip(np.sum(rel * travel[None], axis=-1) / np.where(tt > 0, tt, 1.0), 0.0, 1.0)
@@ -504,15 +560,20 @@ class Shield:
     def candidates(self, observation: Observation, command: Command) -> np.ndarray:
         """The planner's command, the hardest braking, and a grid over the dynamic window (K, 2)."""
         robot, limits, n = observation.robot, self.limits, int(self.config.samples)
-        corners = achieved_first_period(np.array([[0.0, -limits.max_turn_rate_radps],
-                                                  [limits.max_speed_mps, limits.max_turn_rate_radps]]),
-                                        float(robot.speed_mps), float(robot.turn_rate_radps), limits, self.dt_s)
+        corners = achieved_first_period(
+            np.array([[0.0, -limits.max_turn_rate_radps], [limits.max_speed_mps, limits.max_turn_rate_radps]]),
+            float(robot.speed_mps),
+            float(robot.turn_rate_radps),
+            limits,
+            self.dt_s,
+        )
         v = np.linspace(corners[0, 0], corners[1, 0], n)
         w = np.linspace(corners[0, 1], corners[1, 1], n)
         grid = np.stack(np.meshgrid(v, w, indexing="ij"), axis=-1).reshape(-1, 2)
         planner = np.array([[command.speed_mps, command.turn_rate_radps]], dtype=float)
-        planner_reached = achieved_first_period(planner, float(robot.speed_mps), float(robot.turn_rate_radps),
-                                                limits, self.dt_s)
+        planner_reached = achieved_first_period(
+            planner, float(robot.speed_mps), float(robot.turn_rate_radps), limits, self.dt_s
+        )
         # The planner's turn rate at slower speeds, and its speed at other turn rates: the likeliest picks.
         slower = np.stack([v, np.full(n, planner_reached[0, 1])], axis=1)
         turned = np.stack([np.full(n, planner_reached[0, 0]), w], axis=1)
@@ -536,15 +597,24 @@ class Shield:
         limits = self.limits
         friendly_mode = config.mode == "passive-friendly"
         # Within the limits (the drive would clip it the same way): the output never exceeds them.
-        command = Command(min(max(float(command.speed_mps), 0.0), limits.max_speed_mps),
-                          min(max(float(command.turn_rate_radps), -limits.max_turn_rate_radps),
-                              limits.max_turn_rate_radps))
+        command = Command(
+            min(max(float(command.speed_mps), 0.0), limits.max_speed_mps),
+            min(max(float(command.turn_rate_radps), -limits.max_turn_rate_radps), limits.max_turn_rate_radps),
+        )
         # Most cycles the planner's command passes: test it alone first, the window only when it fails.
         own = self.evaluate(observation, np.array([[command.speed_mps, command.turn_rate_radps]]))
         own_ok, own_friendly = bool(own["admissible"][0]), bool(own["friendly"][0])
         if own_friendly if friendly_mode else own_ok:
-            return ShieldResult(command, original, False, "admissible", True, True if friendly_mode else None,
-                                candidates=1, admissible_candidates=1)
+            return ShieldResult(
+                command,
+                original,
+                False,
+                "admissible",
+                True,
+                True if friendly_mode else None,
+                candidates=1,
+                admissible_candidates=1,
+            )
         ids = observation.obstacles.people().finite().ids
         first = int(own["person"][0])
         person_id = int(ids[first]) if first >= 0 else None
@@ -554,30 +624,73 @@ class Shield:
             person_id, meet = None, static_meet
         stop = Command.stop()
         if bool(own["contact"][0]):
-            return ShieldResult(stop, original, not _same(original, stop),
-                                f"contact already happening with person {person_id}: at rest", False,
-                                False if friendly_mode else None, person_id=person_id, meet_time_s=0.0, candidates=1)
-        why = (f"would meet person {person_id} {meet:.2f} s ahead before at rest" if person_id is not None
-               else f"would touch static geometry {meet:.2f} s ahead before at rest" if meet is not None
-               else "the person would have no room to stop")
+            return ShieldResult(
+                stop,
+                original,
+                not _same(original, stop),
+                f"contact already happening with person {person_id}: at rest",
+                False,
+                False if friendly_mode else None,
+                person_id=person_id,
+                meet_time_s=0.0,
+                candidates=1,
+            )
+        why = (
+            f"would meet person {person_id} {meet:.2f} s ahead before at rest"
+            if person_id is not None
+            else f"would touch static geometry {meet:.2f} s ahead before at rest"
+            if meet is not None
+            else "the person would have no room to stop"
+        )
         pick, passive_pick, tested, passing, reached = self._search(observation, command)
         if pick is not None:
-            text = f"not friendly ({why}): closest friendly command" if friendly_mode else \
-                f"{why}: closest admissible command"
-            return ShieldResult(self._as_command(reached, pick), original, True, text, True,
-                                True if friendly_mode else None, person_id, meet, tested + 1, passing)
-        common = dict(person_id=person_id, meet_time_s=meet, candidates=tested + 1,
-                      admissible_candidates=passing + int(own_ok))
+            text = (
+                f"not friendly ({why}): closest friendly command"
+                if friendly_mode
+                else f"{why}: closest admissible command"
+            )
+            return ShieldResult(
+                self._as_command(reached, pick),
+                original,
+                True,
+                text,
+                True,
+                True if friendly_mode else None,
+                person_id,
+                meet,
+                tested + 1,
+                passing,
+            )
+        common = dict(
+            person_id=person_id, meet_time_s=meet, candidates=tested + 1, admissible_candidates=passing + int(own_ok)
+        )
         if friendly_mode and own_ok:
-            return ShieldResult(command, original, False, "admissible (no friendly command exists)", True, False,
-                                **common)
+            return ShieldResult(
+                command, original, False, "admissible (no friendly command exists)", True, False, **common
+            )
         if passive_pick is not None:
-            return ShieldResult(self._as_command(reached, passive_pick), original, True,
-                                f"{why}: closest admissible command (no friendly one)", True, False, **common)
-        return ShieldResult(stop, original, not _same(original, stop), f"{why}: none admissible, hardest braking",
-                            False, False if friendly_mode else None, **common)
+            return ShieldResult(
+                self._as_command(reached, passive_pick),
+                original,
+                True,
+                f"{why}: closest admissible command (no friendly one)",
+                True,
+                False,
+                **common,
+            )
+        return ShieldResult(
+            stop,
+            original,
+            not _same(original, stop),
+            f"{why}: none admissible, hardest braking",
+            False,
+            False if friendly_mode else None,
+            **common,
+        )
 
-    def _search(self, observation: Observation, command: Command) -> tuple[int | None, int | None, int, int, np.ndarray]:
+    def _search(
+        self, observation: Observation, command: Command
+    ) -> tuple[int | None, int | None, int, int, np.ndarray]:
         """The window search when the planner's command fails: the wanted (friendly in passive-friendly
         mode, else admissible) candidate closest to it, the closest admissible one, how many were tested
         and passed, and the candidates' achieved (v, ω)."""
@@ -588,8 +701,9 @@ class Shield:
         # Candidates closest first (each axis over its limit, ties to the slower), tested in chunks:
         # the first chunk holding an admissible one holds the closest admissible one.
         commands = self.candidates(observation, command)
-        reached = achieved_first_period(commands, float(observation.robot.speed_mps),
-                                        float(observation.robot.turn_rate_radps), limits, self.dt_s)
+        reached = achieved_first_period(
+            commands, float(observation.robot.speed_mps), float(observation.robot.turn_rate_radps), limits, self.dt_s
+        )
         scale = np.array([max(limits.max_speed_mps, 1e-9), max(limits.max_turn_rate_radps, 1e-9)])
         distance = np.sum(((reached - reached[0]) / scale) ** 2, axis=1)
         order = np.lexsort((reached[:, 0], distance))
@@ -614,12 +728,28 @@ class Shield:
         limits_array, settings = self._settings_arrays()
         state = _robot_array(robot)
         reached, _, _, _, _, _, pick, passive_pick, tested, passing = kernels.shield(
-            state, limits_array, np.array([[command.speed_mps, command.turn_rate_radps]], dtype=np.float64), True,
-            int(config.samples), _CHUNK, _c(people.positions), _c(people.velocities), _c(people.radii_m),
-            _c(people.position_sigma_m), _c(people.velocity_sigma_mps), settings, config.mode == "passive-friendly",
-            bool(config.towards_only))
-        return (int(pick) if pick >= 0 else None, int(passive_pick) if passive_pick >= 0 else None, int(tested),
-                int(passing), reached)
+            state,
+            limits_array,
+            np.array([[command.speed_mps, command.turn_rate_radps]], dtype=np.float64),
+            True,
+            int(config.samples),
+            _CHUNK,
+            _c(people.positions),
+            _c(people.velocities),
+            _c(people.radii_m),
+            _c(people.position_sigma_m),
+            _c(people.velocity_sigma_mps),
+            settings,
+            config.mode == "passive-friendly",
+            bool(config.towards_only),
+        )
+        return (
+            int(pick) if pick >= 0 else None,
+            int(passive_pick) if passive_pick >= 0 else None,
+            int(tested),
+            int(passing),
+            reached,
+        )
 
     @staticmethod
     def _as_command(reached: np.ndarray, index: int) -> Command:
@@ -631,8 +761,10 @@ class Shield:
 def _robot_array(robot) -> np.ndarray:
     """x, y, heading, speed, turn rate, radius: the compiled kernels' robot state."""
     position = robot.position
-    return np.array([position[0], position[1], robot.heading_rad, robot.speed_mps, robot.turn_rate_radps,
-                     robot.radius_m], dtype=np.float64)
+    return np.array(
+        [position[0], position[1], robot.heading_rad, robot.speed_mps, robot.turn_rate_radps, robot.radius_m],
+        dtype=np.float64,
+    )
 
 
 def _c(array) -> np.ndarray:

@@ -66,12 +66,20 @@ class ShieldedPlanner(Planner):
         return Decision(result.command, plan)
 
     def episode_metrics(self) -> dict[str, Any]:
-        return {"shield": self.shield.config.enabled, "shield_mode": self.shield.config.mode,
-                "shield_interventions": self.interventions}
+        return {
+            "shield": self.shield.config.enabled,
+            "shield_mode": self.shield.config.mode,
+            "shield_interventions": self.interventions,
+        }
 
 
-def shielded(planner: Planner, shield: bool | None, dt_s: float, options: dict[str, Any] | None = None,
-             planner_name: str | None = None) -> Planner:
+def shielded(
+    planner: Planner,
+    shield: bool | None,
+    dt_s: float,
+    options: dict[str, Any] | None = None,
+    planner_name: str | None = None,
+) -> Planner:
     """``planner`` behind the shield when ``shield`` says so (None: the planner's default, see
     :func:`shield_default`); ``options`` are shield options (``SHIELD_OPTIONS`` names)."""
     name = planner_name or planner.name

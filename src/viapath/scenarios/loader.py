@@ -65,7 +65,8 @@ def load_scenario(source: str | Path) -> Scenario:
     if not path.exists():
         raise ScenarioError(
             f"{source_str}: no such file and no built-in scenario of that name "
-            f"(built-ins: {', '.join(builtin_names())})")
+            f"(built-ins: {', '.join(builtin_names())})"
+        )
     if path.is_dir():
         raise ScenarioError(f"{source_str}: is a folder, expected a scenario YAML file")
     try:
@@ -143,35 +144,45 @@ def _with_preset(given: dict[str, Any], planner_name: str) -> dict[str, Any]:
     except PresetError as error:
         raise OptionError([("planner.weights", str(error).replace("\n", "; "))]) from None
     if preset.planner != planner_name:
-        raise OptionError([("planner.weights", f"preset {preset.name!r} is for planner {preset.planner!r}, "
-                                               f"not {planner_name!r}")])
+        raise OptionError(
+            [("planner.weights", f"preset {preset.name!r} is for planner {preset.planner!r}, not {planner_name!r}")]
+        )
     rest = {key: value for key, value in given.items() if key != "weights"}
     merged = preset.nested()
     for key, value in rest.items():
-        merged[key] = {**merged[key], **value} if isinstance(value, dict) and isinstance(merged.get(key), dict) else value
+        merged[key] = (
+            {**merged[key], **value} if isinstance(value, dict) and isinstance(merged.get(key), dict) else value
+        )
     return merged
 
 
 def _planner_error(error: Exception, origin: str) -> str:
     if isinstance(error, OptionError):
         return "\n".join(f"{origin}: {field}: {message}" for field, message in error.errors)
-    return f"{origin}: planner.name: {short_repr(error.args[0]) if not isinstance(error.args[0], str) else error.args[0]}"
+    return (
+        f"{origin}: planner.name: {short_repr(error.args[0]) if not isinstance(error.args[0], str) else error.args[0]}"
+    )
 
 
 def _parse(text: str, origin: str, base_dir: Path | None) -> Scenario:
     try:
         data = load_yaml(text, origin, _UniqueKeyLoader)
     except _DuplicateKey as error:
-        raise ScenarioError(f"{origin}: line {error.line}: duplicate key {short_repr(error.key)} (first given on line "
-                            f"{error.first_line}); each field may appear once") from None
+        raise ScenarioError(
+            f"{origin}: line {error.line}: duplicate key {short_repr(error.key)} (first given on line "
+            f"{error.first_line}); each field may appear once"
+        ) from None
     except InputError as error:
         raise ScenarioError(str(error)) from None
     if data is None and not any(line.strip() and not line.lstrip().startswith("#") for line in text.splitlines()):
-        raise ScenarioError(f"{origin}: the file is empty; expected a mapping of scenario fields "
-                            "(name, robot, path, ...)")
+        raise ScenarioError(
+            f"{origin}: the file is empty; expected a mapping of scenario fields (name, robot, path, ...)"
+        )
     if not isinstance(data, dict):
-        raise ScenarioError(f"{origin}: expected a mapping of scenario fields (name, robot, path, ...), "
-                            f"found {'null' if data is None else type(data).__name__}")
+        raise ScenarioError(
+            f"{origin}: expected a mapping of scenario fields (name, robot, path, ...), "
+            f"found {'null' if data is None else type(data).__name__}"
+        )
     scenario = scenario_from_dict(data, origin)
     if base_dir is not None:
         # Replay files are relative to the scenario file, so a suite folder can move as a whole.
@@ -213,5 +224,4 @@ def _without_union_tags(loc: tuple) -> list:
     Only a tag right after an index is dropped: ``replay`` is also a real field name
     (``obstacles.1.replay.file``), which must stay in the path.
     """
-    return [part for i, part in enumerate(loc)
-            if not (part in _UNION_TAGS and i > 0 and isinstance(loc[i - 1], int))]
+    return [part for i, part in enumerate(loc) if not (part in _UNION_TAGS and i > 0 and isinstance(loc[i - 1], int))]

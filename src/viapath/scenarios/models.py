@@ -7,7 +7,7 @@ into one message naming the file, the field path, what was expected and what was
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Union
+from typing import Annotated, Any
 
 from pydantic import (
     BaseModel,
@@ -30,8 +30,10 @@ MAX_SPEED_MPS = 100.0  # m/s; robots and people move at a few m/s
 MAX_RADIUS_M = 10.0  # m; the guard stops for a larger obstacle (GuardConfig.max_radius_m)
 Coordinate = Annotated[float, Field(ge=-MAX_COORDINATE_M, le=MAX_COORDINATE_M)]
 Point = tuple[Coordinate, Coordinate]
-Velocity = tuple[Annotated[float, Field(ge=-MAX_SPEED_MPS, le=MAX_SPEED_MPS)],
-                 Annotated[float, Field(ge=-MAX_SPEED_MPS, le=MAX_SPEED_MPS)]]
+Velocity = tuple[
+    Annotated[float, Field(ge=-MAX_SPEED_MPS, le=MAX_SPEED_MPS)],
+    Annotated[float, Field(ge=-MAX_SPEED_MPS, le=MAX_SPEED_MPS)],
+]
 Speed = Annotated[float, Field(gt=0.0, le=MAX_SPEED_MPS)]
 Radius = Annotated[float, Field(gt=0.0, le=MAX_RADIUS_M)]
 MAX_STEPS = 1_000_000  # a day at 10 Hz is 864 000; more is a typo in dt_s that would hang a run
@@ -62,7 +64,7 @@ class RobotSpec(_Strict):
     limits: LimitsSpec = Field(default_factory=LimitsSpec)
 
     @model_validator(mode="after")
-    def _speed_within_limits(self) -> "RobotSpec":
+    def _speed_within_limits(self) -> RobotSpec:
         if self.speed > self.limits.max_speed_mps:
             raise ValueError(f"speed {self.speed} m/s exceeds limits.max_speed_mps {self.limits.max_speed_mps}")
         return self
@@ -74,12 +76,13 @@ class PathSpec(_Strict):
     half_widths: list[PositiveFloat] | None = None
 
     @model_validator(mode="after")
-    def _one_width_per_segment(self) -> "PathSpec":
+    def _one_width_per_segment(self) -> PathSpec:
         if self.half_width is None and self.half_widths is None:
             raise ValueError("give half_width (one for every segment) or half_widths (one per segment)")
         if self.half_widths is not None and len(self.half_widths) != len(self.waypoints) - 1:
             raise ValueError(
-                f"half_widths needs one value per segment ({len(self.waypoints) - 1}), found {len(self.half_widths)}")
+                f"half_widths needs one value per segment ({len(self.waypoints) - 1}), found {len(self.half_widths)}"
+            )
         for a, b in zip(self.waypoints, self.waypoints[1:]):
             if a == b:
                 raise ValueError(f"consecutive waypoints must differ, found {list(a)} twice")
@@ -104,7 +107,7 @@ class ObstacleSpec(_Strict):
     times_s: list[NonNegativeFloat] | None = None  # timed waypoints: when it is at start, then each waypoint
 
     @model_validator(mode="after")
-    def _one_motion(self) -> "ObstacleSpec":
+    def _one_motion(self) -> ObstacleSpec:
         if self.waypoints is not None:
             if self.velocity is not None:
                 raise ValueError("give velocity or waypoints, not both")
@@ -112,8 +115,10 @@ class ObstacleSpec(_Strict):
                 if self.speed is not None or self.loop:
                     raise ValueError("times_s sets the speeds: give no speed and no loop with it")
                 if len(self.times_s) != len(self.waypoints) + 1:
-                    raise ValueError(f"times_s needs one time for start and one per waypoint "
-                                     f"({len(self.waypoints) + 1}), found {len(self.times_s)}")
+                    raise ValueError(
+                        f"times_s needs one time for start and one per waypoint "
+                        f"({len(self.waypoints) + 1}), found {len(self.times_s)}"
+                    )
                 if any(b <= a for a, b in zip(self.times_s, self.times_s[1:])):
                     raise ValueError("times_s must increase strictly")
             elif self.speed is None:
@@ -145,7 +150,7 @@ def _obstacle_kind(value: Any) -> str:
 
 
 ObstacleItem = Annotated[
-    Union[Annotated[ObstacleSpec, Tag("moving")], Annotated[ReplayItem, Tag("replay")]],
+    Annotated[ObstacleSpec, Tag("moving")] | Annotated[ReplayItem, Tag("replay")],
     Discriminator(_obstacle_kind),
 ]
 
@@ -223,7 +228,7 @@ def _wall_kind(value: Any) -> str:
 
 
 WallItem = Annotated[
-    Union[Annotated[Segment, Tag("segment")], Annotated[WallSpec, Tag("spec")]],
+    Annotated[Segment, Tag("segment")] | Annotated[WallSpec, Tag("spec")],
     Discriminator(_wall_kind),
 ]
 
@@ -277,6 +282,8 @@ class Scenario(_Strict):
         if duration is not None and value > duration:
             raise ValueError(f"dt_s must not exceed duration_s ({duration} s): the episode would have no step")
         if duration is not None and duration / value > MAX_STEPS:
-            raise ValueError(f"duration_s / dt_s = {duration / value:,.0f} steps; at most {MAX_STEPS:,} "
-                             f"(raise dt_s or shorten duration_s; the scan period is 0.1 s)")
+            raise ValueError(
+                f"duration_s / dt_s = {duration / value:,.0f} steps; at most {MAX_STEPS:,} "
+                f"(raise dt_s or shorten duration_s; the scan period is 0.1 s)"
+            )
         return value

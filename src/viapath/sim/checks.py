@@ -31,17 +31,20 @@ def scenario_warnings(scenario) -> list[str]:
         warnings.append(
             f"{field}{where} = {widths[i]:g} m is less than the robot radius {radius:g} m: the corridor is narrower "
             "than the robot, so no planner can pass anyone inside it and an escape ends outside it "
-            f"({len(narrow)} of {len(widths)} segment(s))")
+            f"({len(narrow)} of {len(widths)} segment(s))"
+        )
     try:
         from viapath.sim.obstacles import scenario_obstacle_states
 
         positions, _, radii = scenario_obstacle_states(scenario, np.array([0.0]))
-    except Exception:  # noqa: BLE001 - the run itself reports unreadable obstacles
+    except Exception:
         return warnings
     start = np.asarray(scenario.robot.start, dtype=float)
     present = np.isfinite(positions[0]).all(axis=1)
     gap = np.hypot(*(positions[0] - start).T) - radii - radius
     for j in np.flatnonzero(present & (gap < 0)):
-        warnings.append(f"obstacle {j} starts overlapping the robot ({-gap[j]:.2f} m deep): the contact is counted "
-                        "in overlapping_at_appearance, not as an at-fault collision")
+        warnings.append(
+            f"obstacle {j} starts overlapping the robot ({-gap[j]:.2f} m deep): the contact is counted "
+            "in overlapping_at_appearance, not as an at-fault collision"
+        )
     return warnings

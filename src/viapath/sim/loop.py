@@ -7,21 +7,22 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
 from viapath.observation import Command, MotionLimits, Observation, RobotState
 from viapath.path import DesignatedPath, SubgoalPolicy
+from viapath.perception.base import WorldSnapshot
+from viapath.perception.modes import make_perception
 from viapath.planning import Decision, make_planner
 from viapath.safety import shielded
 from viapath.scenarios.loader import planner_settings
 from viapath.sim import robot as kinematics
 from viapath.sim.metrics import compute_metrics, plan_side
 from viapath.sim.obstacles import scenario_obstacle_states
-from viapath.perception.base import WorldSnapshot
-from viapath.perception.modes import make_perception
 from viapath.sim.reactive import obstacle_motion
 from viapath.sim.static_world import StaticWorld
 from viapath.sim.step_record import StepRecord
@@ -88,8 +89,11 @@ def run_episode(
     n_steps = int(round(scenario.duration_s / dt))
     times = np.arange(n_steps + 1) * dt
     motion = obstacle_motion(scenario, times)  # None unless some replayed person reacts to the robot
-    positions, velocities, radii = (scenario_obstacle_states(scenario, times) if motion is None
-                                    else (motion.positions, motion.velocities, motion.radii))
+    positions, velocities, radii = (
+        scenario_obstacle_states(scenario, times)
+        if motion is None
+        else (motion.positions, motion.velocities, motion.radii)
+    )
     static_world = StaticWorld.of_scenario(scenario)
 
     path = DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths())
@@ -98,12 +102,20 @@ def run_episode(
     subgoal_policy = SubgoalPolicy(**scenario.subgoals.model_dump())
     planner_name = planner or scenario.planner.name
     options = {**planner_settings(scenario, planner_name), **(planner_overrides or {})}
-    the_planner = make_planner(planner_name, path, nominal_speed_mps=spec.speed, limits=limits,
-                               robot_radius_m=spec.radius, subgoal_policy=subgoal_policy, **options)
+    the_planner = make_planner(
+        planner_name,
+        path,
+        nominal_speed_mps=spec.speed,
+        limits=limits,
+        robot_radius_m=spec.radius,
+        subgoal_policy=subgoal_policy,
+        **options,
+    )
     the_planner = shielded(the_planner, shield, dt, shield_options, planner_name)
     mode = perception or scenario.perception.mode
     sensing = make_perception(
-        mode, scenario.perception.options,
+        mode,
+        scenario.perception.options,
         scenario.perception.position_noise_m if position_noise_m is None else position_noise_m,
         scenario.perception.velocity_noise_mps if velocity_noise_mps is None else velocity_noise_mps,
     )
@@ -111,7 +123,9 @@ def run_episode(
     sensing.reset(rng)
 
     state = kinematics.UnicycleState(spec.start[0], spec.start[1], spec.heading, spec.speed, 0.0)
-    rows: dict[str, list] = {k: [] for k in ("pose", "speed", "turn", "command", "plan_speed", "target", "status", "via", "plan_ms", "side")}
+    rows: dict[str, list] = {
+        k: [] for k in ("pose", "speed", "turn", "command", "plan_speed", "target", "status", "via", "plan_ms", "side")
+    }
     perceived, scan_points = [], []
     reached = False
     goal_tolerance = subgoal_policy.goal_tolerance_m
@@ -126,16 +140,27 @@ def run_episode(
             _append_idle(rows, state)
             break
         standing = static_world.at(float(times[k]))
-        world = WorldSnapshot(float(times[k]), np.array([state.x, state.y, state.heading_rad]), spec.radius,
-                              positions[k], velocities[k], radii, standing.segments, standing)
+        world = WorldSnapshot(
+            float(times[k]),
+            np.array([state.x, state.y, state.heading_rad]),
+            spec.radius,
+            positions[k],
+            velocities[k],
+            radii,
+            standing.segments,
+            standing,
+        )
         observed = sensing.observe(world)
         if record_perceived:
             perceived.append(observed)
         if mode == "laser":
             scan_points.append(np.asarray(sensing.last_points_world))
-        observation = Observation(float(times[k]), RobotState(state.position, state.heading_rad, state.speed_mps,
-                                                              state.turn_rate_radps, spec.radius), observed,
-                                  sensing.static_layer(world))
+        observation = Observation(
+            float(times[k]),
+            RobotState(state.position, state.heading_rad, state.speed_mps, state.turn_rate_radps, spec.radius),
+            observed,
+            sensing.static_layer(world),
+        )
         started = time.perf_counter()
         decision: Decision = the_planner.plan(observation)
         rows["plan_ms"].append((time.perf_counter() - started) * 1e3)
@@ -149,21 +174,51 @@ def run_episode(
         rows["via"].append(np.asarray(decision.plan.via_points, dtype=float).reshape(-1, 2))
         rows["side"].append(plan_side(decision.plan.waypoints))
         if on_step is not None:
-            on_step(StepRecord(k, float(times[k]), state, observation, decision, rows["plan_ms"][-1], world,
-                               sensing.last_scans or None, sensing, the_planner))
+            on_step(
+                StepRecord(
+                    k,
+                    float(times[k]),
+                    state,
+                    observation,
+                    decision,
+                    rows["plan_ms"][-1],
+                    world,
+                    sensing.last_scans or None,
+                    sensing,
+                    the_planner,
+                )
+            )
         if motion is not None:  # people move to step k + 1 seeing the robot at step k (rows filled in place)
-            motion.step(state.position, state.speed_mps * np.array([np.cos(state.heading_rad), np.sin(state.heading_rad)]))
+            motion.step(
+                state.position, state.speed_mps * np.array([np.cos(state.heading_rad), np.sin(state.heading_rad)])
+            )
         state = kinematics.step(state, command, limits, dt)
 
     n = len(rows["pose"])
     trace = Trace(
-        scenario_name=scenario.name, planner_name=planner_name, perception_mode=mode, dt_s=dt, path=path,
-        robot_radius_m=spec.radius, times_s=times[:n], robot_poses=np.array(rows["pose"]),
-        robot_speeds_mps=np.array(rows["speed"]), robot_turn_rates_radps=np.array(rows["turn"]),
-        commands=np.array(rows["command"]), obstacle_positions=positions[:n], obstacle_velocities=velocities[:n],
-        obstacle_radii_m=radii, plan_speeds_mps=np.array(rows["plan_speed"]), plan_targets=np.array(rows["target"]),
-        plan_status=rows["status"], via_points=rows["via"], plan_times_ms=np.array(rows["plan_ms"]),
-        reached_goal=reached, walls=static_world.segments, wall_until_s=static_world.until_s, perceived=perceived,
+        scenario_name=scenario.name,
+        planner_name=planner_name,
+        perception_mode=mode,
+        dt_s=dt,
+        path=path,
+        robot_radius_m=spec.radius,
+        times_s=times[:n],
+        robot_poses=np.array(rows["pose"]),
+        robot_speeds_mps=np.array(rows["speed"]),
+        robot_turn_rates_radps=np.array(rows["turn"]),
+        commands=np.array(rows["command"]),
+        obstacle_positions=positions[:n],
+        obstacle_velocities=velocities[:n],
+        obstacle_radii_m=radii,
+        plan_speeds_mps=np.array(rows["plan_speed"]),
+        plan_targets=np.array(rows["target"]),
+        plan_status=rows["status"],
+        via_points=rows["via"],
+        plan_times_ms=np.array(rows["plan_ms"]),
+        reached_goal=reached,
+        walls=static_world.segments,
+        wall_until_s=static_world.until_s,
+        perceived=perceived,
         scan_points=scan_points,
         extras={"nominal_speed_mps": spec.speed, "seed": scenario.seed if seed is None else seed},
         plan_sides=np.array(rows["side"], dtype=int),

@@ -77,7 +77,9 @@ def overlap_on_appearance(trace) -> np.ndarray:
     present = np.isfinite(rel_start).all(-1) & np.isfinite(obstacles[1:]).all(-1)
     appeared = present & ~np.vstack([np.zeros((1, present.shape[1]), dtype=bool), present[:-1]])
     with np.errstate(invalid="ignore"):
-        overlapping = np.hypot(rel_start[..., 0], rel_start[..., 1]) < trace.obstacle_radii_m[None] + trace.robot_radius_m
+        overlapping = (
+            np.hypot(rel_start[..., 0], rel_start[..., 1]) < trace.obstacle_radii_m[None] + trace.robot_radius_m
+        )
     return appeared & overlapping
 
 

@@ -123,8 +123,17 @@ class ReactiveReplay:
     (NaN where a person is absent), the recording beyond.
     """
 
-    def __init__(self, tracks: list[PedestrianTrack], times, start_s: float, dt_s: float, offset=(0.0, 0.0),
-                 radius_m: float = 0.25, robot_radius_m: float = 0.25, params: ReactiveParams | None = None):
+    def __init__(
+        self,
+        tracks: list[PedestrianTrack],
+        times,
+        start_s: float,
+        dt_s: float,
+        offset=(0.0, 0.0),
+        radius_m: float = 0.25,
+        robot_radius_m: float = 0.25,
+        params: ReactiveParams | None = None,
+    ):
         self.params = params or ReactiveParams()
         self.tracks = tracks
         self.times = np.asarray(times, float)
@@ -154,7 +163,9 @@ class ReactiveReplay:
         self.recorded_velocity = np.zeros((len(fine_t), m, 2))
         for c, j in enumerate(self.active):
             track = tracks[j]
-            self.recorded[:, c] = np.stack([np.interp(scene_t, track.times_s, track.positions[:, a]) for a in (0, 1)], 1)
+            self.recorded[:, c] = np.stack(
+                [np.interp(scene_t, track.times_s, track.positions[:, a]) for a in (0, 1)], 1
+            )
             if len(track.times_s) > 1:
                 piece = np.clip(np.searchsorted(track.times_s, scene_t, side="right") - 1, 0, len(track.times_s) - 2)
                 pieces = np.diff(track.positions, axis=0) / np.diff(track.times_s)[:, None]
@@ -261,24 +272,25 @@ class ObstacleMotion:
                 continue
             tracks = load_tracks(replay.file, replay.dt_s)
             if getattr(replay, "react", False):
-                reactive = ReactiveReplay(tracks, times, replay.start_s, replay.dt_s, replay.offset, replay.radius,
-                                          scenario.robot.radius)
+                reactive = ReactiveReplay(
+                    tracks, times, replay.start_s, replay.dt_s, replay.offset, replay.radius, scenario.robot.radius
+                )
                 self.replays.append((column, reactive))
                 self._copy(column, reactive)
             column += len(tracks)
 
     def _copy(self, column: int, reactive: ReactiveReplay) -> None:
         n = reactive.positions.shape[1]
-        self.positions[:, column:column + n] = reactive.positions
-        self.velocities[:, column:column + n] = reactive.velocities
+        self.positions[:, column : column + n] = reactive.positions
+        self.velocities[:, column : column + n] = reactive.velocities
 
     def step(self, robot_position, robot_velocity) -> None:
         """Advance the reactive people one cycle, seeing the robot at ``robot_position`` / ``robot_velocity``."""
         for column, reactive in self.replays:
             reactive.step(robot_position, robot_velocity)
             n = reactive.positions.shape[1]
-            self.positions[reactive.k, column:column + n] = reactive.positions[reactive.k]
-            self.velocities[reactive.k, column:column + n] = reactive.velocities[reactive.k]
+            self.positions[reactive.k, column : column + n] = reactive.positions[reactive.k]
+            self.velocities[reactive.k, column : column + n] = reactive.velocities[reactive.k]
 
 
 def obstacle_motion(scenario, times) -> ObstacleMotion | None:

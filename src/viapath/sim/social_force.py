@@ -77,7 +77,7 @@ def _agent_forces(positions, velocities, radii, params: SocialForceParams) -> np
     r = positions[:, None, :] - positions[None, :, :]  # r_ab = r_a - r_b, (N, N, 2)
     # Surface distance, expressed as a centre distance for the point-pedestrian formula.
     centre = np.hypot(r[..., 0], r[..., 1])
-    shrink = (radii[:, None] + radii[None, :])
+    shrink = radii[:, None] + radii[None, :]
     scale = np.where(centre > 1e-9, np.maximum(centre - shrink, 1e-3) / np.maximum(centre, 1e-9), 1.0)
     r = r * scale[..., None]
     s = velocities[None, :, :] * params.step_time_s  # v_b dt e_b, (1, N, 2)

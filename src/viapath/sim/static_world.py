@@ -21,7 +21,7 @@ class StaticWorld:
     until_s: np.ndarray  # (W,) the edge stands while t < until_s (inf: always)
 
     @classmethod
-    def of_scenario(cls, scenario) -> "StaticWorld":
+    def of_scenario(cls, scenario) -> StaticWorld:
         shapes = scenario.static_shapes()
         if not shapes:
             return cls(np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64), np.zeros(0))

@@ -31,8 +31,15 @@ def frame_indices(steps: int, max_frames: int = MAX_FRAMES, stride: int | None =
     return frames
 
 
-def animate_episode(episode, file: str | Path, fps: int = 10, max_frames: int = MAX_FRAMES, progress=None,
-                    stride: int | None = None, dpi: int = 100) -> Path:
+def animate_episode(
+    episode,
+    file: str | Path,
+    fps: int = 10,
+    max_frames: int = MAX_FRAMES,
+    progress=None,
+    stride: int | None = None,
+    dpi: int = 100,
+) -> Path:
     """Write the animation; ``progress(frame, total)`` is called as each frame is written."""
     file = Path(file)
     suffix = file.suffix.lower()
@@ -69,16 +76,16 @@ def _scene(plt, trace, dpi: int):
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    trail, = ax.plot([], [], color="0.4", lw=0.8)
-    scan, = ax.plot([], [], ".", color="0.2", ms=2, zorder=2)
-    plan_line, = ax.plot([], [], color="#8e44ad", lw=1.0, ls="--", zorder=4)
+    (trail,) = ax.plot([], [], color="0.4", lw=0.8)
+    (scan,) = ax.plot([], [], ".", color="0.2", ms=2, zorder=2)
+    (plan_line,) = ax.plot([], [], color="#8e44ad", lw=1.0, ls="--", zorder=4)
     obstacles = [Circle((np.nan, np.nan), r, fc="#e6a19a", ec="#c0392b", zorder=4) for r in trace.obstacle_radii_m]
     for patch in obstacles:
         ax.add_patch(patch)
     robot = Circle((0, 0), trace.robot_radius_m, fc="#1f9e89", ec="k", zorder=5)
     ax.add_patch(robot)
-    heading, = ax.plot([], [], color="k", lw=1.5, zorder=6)
-    via_marker, = ax.plot([], [], "x", color="#8e44ad", ms=9, mew=2, zorder=6)
+    (heading,) = ax.plot([], [], color="k", lw=1.5, zorder=6)
+    (via_marker,) = ax.plot([], [], "x", color="#8e44ad", ms=9, mew=2, zorder=6)
     label = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", fontsize=9, family="monospace")
     moving = [trail, scan, plan_line, *obstacles, robot, heading, via_marker, label]  # in drawing order
     for artist in moving:
@@ -102,7 +109,9 @@ def _scene(plt, trace, dpi: int):
             patch.center = tuple(trace.obstacle_positions[k, j])
         if trace.scan_points and k < len(trace.scan_points) and len(trace.scan_points[k]):
             scan.set_data(*np.asarray(trace.scan_points[k]).T)
-        label.set_text(f"t = {trace.times_s[k]:5.1f} s  v = {trace.robot_speeds_mps[k]:.2f} m/s  {trace.plan_status[k]}")
+        label.set_text(
+            f"t = {trace.times_s[k]:5.1f} s  v = {trace.robot_speeds_mps[k]:.2f} m/s  {trace.plan_status[k]}"
+        )
         canvas.restore_region(background)
         for artist in moving:
             ax.draw_artist(artist)
@@ -126,15 +135,42 @@ def _write_gif(images, file: Path, fps: int, total: int, progress) -> None:
         if progress is not None:
             progress(i, total)
     if frames:
-        frames[0].save(file, save_all=True, append_images=frames[1:], duration=round(1000 / fps), loop=0,
-                       optimize=False, disposal=1)
+        frames[0].save(
+            file,
+            save_all=True,
+            append_images=frames[1:],
+            duration=round(1000 / fps),
+            loop=0,
+            optimize=False,
+            disposal=1,
+        )
 
 
 def _write_mp4(images, file: Path, fps: int, total: int, progress, fig) -> None:
     width, height = fig.canvas.get_width_height()
-    command = ["ffmpeg", "-y", "-loglevel", "error", "-f", "rawvideo", "-pix_fmt", "rgba", "-s", f"{width}x{height}",
-               "-r", str(fps), "-i", "-", "-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2",
-               "-vcodec", "libx264", str(file)]
+    command = [
+        "ffmpeg",
+        "-y",
+        "-loglevel",
+        "error",
+        "-f",
+        "rawvideo",
+        "-pix_fmt",
+        "rgba",
+        "-s",
+        f"{width}x{height}",
+        "-r",
+        str(fps),
+        "-i",
+        "-",
+        "-pix_fmt",
+        "yuv420p",
+        "-vf",
+        "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+        "-vcodec",
+        "libx264",
+        str(file),
+    ]
     with subprocess.Popen(command, stdin=subprocess.PIPE, stderr=subprocess.PIPE) as ffmpeg:
         try:
             for i, rgba in enumerate(images):

@@ -55,15 +55,15 @@ import json
 import math
 import os
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
 from viapath.viz import protobuf_wire as wire
 from viapath.viz.mcap_process import cycle_input, scene_inputs, static_input
-from viapath.viz.scene import _mesh_triangles
-from viapath.viz.scene import CycleScene, ForecastSettings, SceneBuilder, candidate_colour
+from viapath.viz.scene import CycleScene, ForecastSettings, SceneBuilder, _mesh_triangles, candidate_colour
 
 TF = "/tf"
 FOOTPRINT = "/robot/footprint"
@@ -83,18 +83,35 @@ COSTS_SCHEMA = {
     "title": "viapath.PlanCosts",
     "type": "object",
     "properties": {
-        "time_s": {"type": "number"}, "status": {"type": "string"}, "speed_mps": {"type": "number"},
-        "candidate_count": {"type": "integer"}, "terms_available": {"type": "boolean"},
-        "chosen": {"type": ["object", "null"]}, "runner_up": {"type": ["object", "null"]},
+        "time_s": {"type": "number"},
+        "status": {"type": "string"},
+        "speed_mps": {"type": "number"},
+        "candidate_count": {"type": "integer"},
+        "terms_available": {"type": "boolean"},
+        "chosen": {"type": ["object", "null"]},
+        "runner_up": {"type": ["object", "null"]},
         "margin": {"type": ["number", "null"], "description": "E(runner-up) - E(chosen)"},
     },
 }
 METRICS_SCHEMA = {
     "title": "viapath.Metrics",
     "type": "object",
-    "properties": {name: {"type": ["number", "null"]} for name in (
-        "time_s", "speed_mps", "turn_rate_radps", "command_speed_mps", "command_turn_rate_radps", "clearance_m",
-        "lateral_deviation_m", "plan_time_ms", "shield_interventions", "tracks", "candidates")},
+    "properties": {
+        name: {"type": ["number", "null"]}
+        for name in (
+            "time_s",
+            "speed_mps",
+            "turn_rate_radps",
+            "command_speed_mps",
+            "command_turn_rate_radps",
+            "clearance_m",
+            "lateral_deviation_m",
+            "plan_time_ms",
+            "shield_interventions",
+            "tracks",
+            "candidates",
+        )
+    },
 }
 
 
@@ -116,9 +133,18 @@ def scanner_frame(name: str) -> str:
 
 def expected_topics(scanner_names: list[str] | tuple[str, ...] = ()) -> dict[str, str]:
     """Topic → schema name of a run (laser topics only when there are scanners)."""
-    topics = {TF: "foxglove.FrameTransforms", FOOTPRINT: "foxglove.SceneUpdate", TRACKS: "foxglove.SceneUpdate",
-              PATH: "foxglove.SceneUpdate", STATIC: "foxglove.SceneUpdate", CANDIDATES: "foxglove.SceneUpdate", CHOSEN: "foxglove.SceneUpdate",
-              COSTS: "viapath.PlanCosts", XYT: "foxglove.SceneUpdate", METRICS: "viapath.Metrics"}
+    topics = {
+        TF: "foxglove.FrameTransforms",
+        FOOTPRINT: "foxglove.SceneUpdate",
+        TRACKS: "foxglove.SceneUpdate",
+        PATH: "foxglove.SceneUpdate",
+        STATIC: "foxglove.SceneUpdate",
+        CANDIDATES: "foxglove.SceneUpdate",
+        CHOSEN: "foxglove.SceneUpdate",
+        COSTS: "viapath.PlanCosts",
+        XYT: "foxglove.SceneUpdate",
+        METRICS: "viapath.Metrics",
+    }
     if scanner_names:
         topics.update({BLIND: "foxglove.SceneUpdate", DETECTIONS: "foxglove.SceneUpdate"})
         topics.update({scan_topic(name): "foxglove.LaserScan" for name in scanner_names})
@@ -127,7 +153,7 @@ def expected_topics(scanner_names: list[str] | tuple[str, ...] = ()) -> dict[str
 
 def _foxglove():
     try:
-        import foxglove  # noqa: F401
+        import foxglove
     except ImportError:
         raise ViewError("--mcap/--live need foxglove-sdk: pip install 'viapath[viz]'") from None
     return foxglove
@@ -135,11 +161,13 @@ def _foxglove():
 
 # -- messages ------------------------------------------------------------------------------------
 
+
 class FoxglovePublisher:
     """Logs one cycle's scene on a foxglove ``Context`` (whatever sinks it has: MCAP, WebSocket)."""
 
-    def __init__(self, context, path, robot_radius_m: float, settings: ForecastSettings | None = None,
-                 xyt_segments: int = 16):
+    def __init__(
+        self, context, path, robot_radius_m: float, settings: ForecastSettings | None = None, xyt_segments: int = 16
+    ):
         self.fg = _foxglove()
         from foxglove import messages
 
@@ -161,8 +189,9 @@ class FoxglovePublisher:
         ctx = self.context
         # Every FrameTransforms, SceneUpdate and LaserScan is encoded here (viapath.viz.protobuf_wire)
         # against Foxglove's own schema, so these channels take bytes.
-        self.channels[TF] = Channel(TF, message_encoding="protobuf", schema=self.m.FrameTransforms.get_schema(),
-                                    context=ctx)
+        self.channels[TF] = Channel(
+            TF, message_encoding="protobuf", schema=self.m.FrameTransforms.get_schema(), context=ctx
+        )
         topics = [FOOTPRINT, TRACKS, PATH, STATIC, CANDIDATES, CHOSEN, XYT]
         if scene.scanners:
             topics[1:1] = [BLIND, DETECTIONS]
@@ -174,8 +203,12 @@ class FoxglovePublisher:
             topic = scan_topic(scanner.name)
             self.channels[topic] = Channel(topic, message_encoding="protobuf", schema=scan_schema, context=ctx)
         for topic, schema in ((COSTS, COSTS_SCHEMA), (METRICS, METRICS_SCHEMA)):
-            self.channels[topic] = Channel(topic, message_encoding="json", context=ctx, schema=Schema(
-                name=schema["title"], encoding="jsonschema", data=json.dumps(schema).encode()))
+            self.channels[topic] = Channel(
+                topic,
+                message_encoding="json",
+                context=ctx,
+                schema=Schema(name=schema["title"], encoding="jsonschema", data=json.dumps(schema).encode()),
+            )
 
     def __call__(self, record) -> CycleScene:
         """The ``on_step`` callback of :func:`viapath.sim.loop.run_episode`."""
@@ -234,20 +267,37 @@ class FoxglovePublisher:
     # each (every person's entity has the same layout but for its id).
     def _setup_constants(self) -> None:
         m = self.m
-        C = lambda r, g, b, a=1.0: m.Color(r=r, g=g, b=b, a=a)  # noqa: E731
+        C = lambda r, g, b, a=1.0: m.Color(r=r, g=g, b=b, a=a)
         self.colours = {
-            "robot": C(0.1, 0.3, 0.9), "robot_fill": C(0.1, 0.3, 0.9, 0.35), "blind": C(0.3, 0.3, 0.3, 0.8),
-            "grey": C(0.4, 0.4, 0.4), "detection": C(1.0, 0.55, 0.0, 0.7), "track": C(0.85, 0.15, 0.15, 0.6),
-            "track_sigma": C(0.85, 0.15, 0.15, 0.2), "track_text": C(0.5, 0.0, 0.0), "arrow": C(0.6, 0.0, 0.0),
-            "path": C(0.2, 0.2, 0.2), "corridor": C(0.2, 0.6, 0.2, 0.7), "subgoal": C(0.9, 0.7, 0.0),
-            "subgoal_text": C(0.5, 0.4, 0.0), "chosen": C(0.0, 0.45, 1.0), "chosen_text": C(0.0, 0.2, 0.6),
-            "via": C(0.0, 0.0, 0.0), "mesh": C(0.9, 0.2, 0.2, 0.35), "ring": C(0.7, 0.1, 0.1, 0.9),
-            "axis": C(0.5, 0.0, 0.0), "time_axis": C(0.4, 0.4, 0.4, 0.6), "static": C(0.1, 0.1, 0.1, 0.9),
+            "robot": C(0.1, 0.3, 0.9),
+            "robot_fill": C(0.1, 0.3, 0.9, 0.35),
+            "blind": C(0.3, 0.3, 0.3, 0.8),
+            "grey": C(0.4, 0.4, 0.4),
+            "detection": C(1.0, 0.55, 0.0, 0.7),
+            "track": C(0.85, 0.15, 0.15, 0.6),
+            "track_sigma": C(0.85, 0.15, 0.15, 0.2),
+            "track_text": C(0.5, 0.0, 0.0),
+            "arrow": C(0.6, 0.0, 0.0),
+            "path": C(0.2, 0.2, 0.2),
+            "corridor": C(0.2, 0.6, 0.2, 0.7),
+            "subgoal": C(0.9, 0.7, 0.0),
+            "subgoal_text": C(0.5, 0.4, 0.0),
+            "chosen": C(0.0, 0.45, 1.0),
+            "chosen_text": C(0.0, 0.2, 0.6),
+            "via": C(0.0, 0.0, 0.0),
+            "mesh": C(0.9, 0.2, 0.2, 0.35),
+            "ring": C(0.7, 0.1, 0.1, 0.9),
+            "axis": C(0.5, 0.0, 0.0),
+            "time_axis": C(0.4, 0.4, 0.4, 0.6),
+            "static": C(0.1, 0.1, 0.1, 0.9),
         }
         self.identity = self._pose()
         self.delete_all = m.SceneEntityDeletion(type=m.SceneEntityDeletionType.All)
-        self.wire = {"identity": self.identity.encode(), "delete_all": self.delete_all.encode(),
-                     **{name: colour.encode() for name, colour in self.colours.items()}}
+        self.wire = {
+            "identity": self.identity.encode(),
+            "delete_all": self.delete_all.encode(),
+            **{name: colour.encode() for name, colour in self.colours.items()},
+        }
         self.wire["deletions"] = wire.message_field(1, self.wire["delete_all"])  # a SceneUpdate's "delete all"
         self.wire["via_size"] = wire.vector3(0.1, 0.1, 0.1)
         for name in ("track", "track_sigma"):  # a CylinderPrimitive's colour is its field 5
@@ -263,8 +313,10 @@ class FoxglovePublisher:
 
     def _pose(self, x=0.0, y=0.0, z=0.0, yaw=0.0):
         m = self.m
-        return m.Pose(position=m.Vector3(x=float(x), y=float(y), z=float(z)),
-                      orientation=m.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)))
+        return m.Pose(
+            position=m.Vector3(x=float(x), y=float(y), z=float(z)),
+            orientation=m.Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)),
+        )
 
     def _line(self, points: list, colour, thickness=0.03, loop=False):
         m = self.m
@@ -273,12 +325,14 @@ class FoxglovePublisher:
 
     def _disc(self, x, y, radius, colour, z=0.0, height=0.01):
         m = self.m
-        return m.CylinderPrimitive(pose=self._pose(x, y, z + 0.5 * height),
-                                   size=m.Vector3(x=2 * radius, y=2 * radius, z=height), color=colour)
+        return m.CylinderPrimitive(
+            pose=self._pose(x, y, z + 0.5 * height), size=m.Vector3(x=2 * radius, y=2 * radius, z=height), color=colour
+        )
 
     def _text(self, x, y, z, text, colour, size=12.0):
-        return self.m.TextPrimitive(pose=self._pose(x, y, z), billboard=True, font_size=size, scale_invariant=True,
-                                    color=colour, text=text)
+        return self.m.TextPrimitive(
+            pose=self._pose(x, y, z), billboard=True, font_size=size, scale_invariant=True, color=colour, text=text
+        )
 
     def _update(self, stamp, frame, id_, primitives: dict, frame_locked: bool = False) -> bytes:
         """An encoded SceneUpdate built with the SDK's classes (for what is encoded once)."""
@@ -307,29 +361,46 @@ class FoxglovePublisher:
         fixed = self.static.get(key)
         if fixed is None:  # what follows the timestamp of the transforms that never move
             fixed = self.static[key] = [wire.frame_transform_tail(WORLD, XYT_FRAME, 0.0, 0.0, 0.0)] + [
-                wire.frame_transform_tail(BASE, scanner_frame(s.name), *s.mount_pose.tolist()) for s in scene.scanners]
+                wire.frame_transform_tail(BASE, scanner_frame(s.name), *s.mount_pose.tolist()) for s in scene.scanners
+            ]
         x, y, heading = scene.robot_pose.tolist()
-        return wire.frame_transforms([stamp + wire.frame_transform_tail(WORLD, BASE, x, y, heading)]
-                                     + [stamp + tail for tail in fixed])
+        return wire.frame_transforms(
+            [stamp + wire.frame_transform_tail(WORLD, BASE, x, y, heading)] + [stamp + tail for tail in fixed]
+        )
 
     def _footprint(self, scene: CycleScene) -> bytes:
         """The robot's disc and heading in the base frame: the same every cycle (frame-locked)."""
         if "footprint" not in self.static:
             m, c, r = self.m, self.colours, scene.robot_radius_m
-            self.static["footprint"] = self._update(None, BASE, "robot", {
-                "lines": [self._line(self._points(scene.footprint()), c["robot"], 0.03)],
-                "cylinders": [self._disc(0.0, 0.0, r, c["robot_fill"])],
-                "arrows": [m.ArrowPrimitive(pose=self._pose(z=0.02), shaft_length=0.8 * r, shaft_diameter=0.03,
-                                            head_length=0.12, head_diameter=0.08, color=c["robot"])],
-            }, frame_locked=True)
+            self.static["footprint"] = self._update(
+                None,
+                BASE,
+                "robot",
+                {
+                    "lines": [self._line(self._points(scene.footprint()), c["robot"], 0.03)],
+                    "cylinders": [self._disc(0.0, 0.0, r, c["robot_fill"])],
+                    "arrows": [
+                        m.ArrowPrimitive(
+                            pose=self._pose(z=0.02),
+                            shaft_length=0.8 * r,
+                            shaft_diameter=0.03,
+                            head_length=0.12,
+                            head_diameter=0.08,
+                            color=c["robot"],
+                        )
+                    ],
+                },
+                frame_locked=True,
+            )
         return self.static["footprint"]
 
     def _scan(self, scanner, ns: int) -> bytes:
         ranges = np.asarray(scanner.ranges_m, dtype=float)
         valid = np.isfinite(ranges) & (ranges >= max(scanner.range_min_m, 1e-9)) & (ranges <= scanner.range_max_m)
         ranges = np.where(valid, ranges, np.nan)
-        return wire.laser_scan(ns, scanner_frame(scanner.name), self.wire["identity"], scanner.angle_min_rad,
-                               scanner.angle_max_rad, ranges)
+        return wire.laser_scan(
+            ns, scanner_frame(scanner.name), self.wire["identity"], scanner.angle_min_rad, scanner.angle_max_rad, ranges
+        )
 
     def _blind(self, scene: CycleScene) -> bytes:
         """What no scanner sees, in the base frame: fixed by the mounts, so one cached message."""
@@ -343,17 +414,24 @@ class FoxglovePublisher:
                 rel = scene.blind_polygon_world - [x, y]
                 local = np.column_stack([cos * rel[:, 0] - sin * rel[:, 1], sin * rel[:, 0] + cos * rel[:, 1]])
                 primitives["lines"] = [self._line(self._points(local, 0.01), c["blind"], 0.015, loop=True)]
-                primitives["texts"] = [self._text(0.35 * math.cos(0.5 * (a + b)), 0.35 * math.sin(0.5 * (a + b)), 0.05,
-                                                  "blind", c["grey"], 11.0) for a, b in scene.blind_sectors_rad]
+                primitives["texts"] = [
+                    self._text(
+                        0.35 * math.cos(0.5 * (a + b)), 0.35 * math.sin(0.5 * (a + b)), 0.05, "blind", c["grey"], 11.0
+                    )
+                    for a, b in scene.blind_sectors_rad
+                ]
             self.static["blind"] = self._update(None, BASE, "blind", primitives, frame_locked=True)
         return self.static["blind"]
 
     def _detections(self, scene: CycleScene, ns: int) -> bytes:
         colour = self.wire["detection"]
-        discs = [self._wire_disc(cx, cy, r, colour, height=0.02)
-                 for (cx, cy), r in zip(scene.detections_world.tolist(), scene.detection_radii_m.tolist())]
-        return self._scene_update([wire.entity_head(ns, WORLD, "detections")
-                                   + wire.primitives(wire.ENTITY_CYLINDERS, discs)])
+        discs = [
+            self._wire_disc(cx, cy, r, colour, height=0.02)
+            for (cx, cy), r in zip(scene.detections_world.tolist(), scene.detection_radii_m.tolist())
+        ]
+        return self._scene_update(
+            [wire.entity_head(ns, WORLD, "detections") + wire.primitives(wire.ENTITY_CYLINDERS, discs)]
+        )
 
     def _tracks(self, scene: CycleScene, ns: int) -> bytes:
         w = self.wire
@@ -361,25 +439,44 @@ class FoxglovePublisher:
         k = self.builder.settings.uncertainty_sigmas if self.builder else 2.0
         stamp = wire.stamp_field(ns)
         track_colour, sigma_colour = w["track_field"], w["track_sigma_field"]
-        cylinders, texts, arrows = (wire.tag(field, 2) for field in (
-            wire.ENTITY_CYLINDERS, wire.ENTITY_TEXTS, wire.ENTITY_ARROWS))
+        cylinders, texts, arrows = (
+            wire.tag(field, 2) for field in (wire.ENTITY_CYLINDERS, wire.ENTITY_TEXTS, wire.ENTITY_ARROWS)
+        )
         cache, self.track_cache = self.track_cache, {}
         entities = []
-        for key in zip(tracks.positions[:, 0].tolist(), tracks.positions[:, 1].tolist(),
-                       tracks.velocities[:, 0].tolist(), tracks.velocities[:, 1].tolist(), tracks.radii_m.tolist(),
-                       tracks.position_sigma_m.tolist(), tracks.velocity_sigma_mps.tolist(), tracks.ids.tolist()):
+        for key in zip(
+            tracks.positions[:, 0].tolist(),
+            tracks.positions[:, 1].tolist(),
+            tracks.velocities[:, 0].tolist(),
+            tracks.velocities[:, 1].tolist(),
+            tracks.radii_m.tolist(),
+            tracks.position_sigma_m.tolist(),
+            tracks.velocity_sigma_mps.tolist(),
+            tracks.ids.tolist(),
+        ):
             body = cache.get(key)
             if body is None:
                 px, py, vx, vy, r, sp, sv, track = key
                 speed = math.hypot(vx, vy)
                 # The disc and the k·σ ring as _disc draws them (centre at half the height).
                 disc = wire.upright_cylinder(px, py, 0.0 + 0.5 * 0.1, 2 * r, 2 * r, 0.1, track_colour)
-                ring = wire.upright_cylinder(px, py, 0.0 + 0.5 * 0.005, 2 * (r + k * sp), 2 * (r + k * sp), 0.005,
-                                             sigma_colour)
+                ring = wire.upright_cylinder(
+                    px, py, 0.0 + 0.5 * 0.005, 2 * (r + k * sp), 2 * (r + k * sp), 0.005, sigma_colour
+                )
                 label = self._wire_text(px, py, 0.3, f"{track}: {speed:.2f} m/s ±{sv:.2f}", w["track_text"])
-                body = (wire.string_field(2, WORLD) + wire.string_field(3, f"track-{track}")
-                        + cylinders + wire.varint(len(disc)) + disc + cylinders + wire.varint(len(ring)) + ring
-                        + texts + wire.varint(len(label)) + label)
+                body = (
+                    wire.string_field(2, WORLD)
+                    + wire.string_field(3, f"track-{track}")
+                    + cylinders
+                    + wire.varint(len(disc))
+                    + disc
+                    + cylinders
+                    + wire.varint(len(ring))
+                    + ring
+                    + texts
+                    + wire.varint(len(label))
+                    + label
+                )
                 if speed > 1e-6:
                     arrow = wire.arrow(wire.pose(px, py, 0.12, math.atan2(vy, vx)), speed, 0.03, 0.1, 0.08, w["arrow"])
                     body += arrows + wire.varint(len(arrow)) + arrow
@@ -396,12 +493,20 @@ class FoxglovePublisher:
             lines += [self._line(self._points(outline), c["corridor"], 0.015) for outline in view.corridor_outlines]
             sx, sy = scene.subgoal.tolist()
             m = self.m
-            self.static[key] = self._update(None, WORLD, "path", {
-                "lines": lines,
-                "spheres": [m.SpherePrimitive(pose=self._pose(sx, sy, 0.05), size=m.Vector3(x=0.15, y=0.15, z=0.15),
-                                              color=c["subgoal"])],
-                "texts": [self._text(sx, sy, 0.25, f"subgoal {scene.subgoal_index}", c["subgoal_text"])],
-            })
+            self.static[key] = self._update(
+                None,
+                WORLD,
+                "path",
+                {
+                    "lines": lines,
+                    "spheres": [
+                        m.SpherePrimitive(
+                            pose=self._pose(sx, sy, 0.05), size=m.Vector3(x=0.15, y=0.15, z=0.15), color=c["subgoal"]
+                        )
+                    ],
+                    "texts": [self._text(sx, sy, 0.25, f"subgoal {scene.subgoal_index}", c["subgoal_text"])],
+                },
+            )
         return self.static[key]
 
     def _static(self, scene: CycleScene) -> bytes:
@@ -414,8 +519,13 @@ class FoxglovePublisher:
             return cached[1]
         m = self.m
         if len(segments):
-            line = m.LinePrimitive(type=m.LinePrimitiveLineType.LineList, pose=self.identity, thickness=0.03,
-                                   points=self._points(segments.reshape(-1, 2), 0.02), color=self.colours["static"])
+            line = m.LinePrimitive(
+                type=m.LinePrimitiveLineType.LineList,
+                pose=self.identity,
+                thickness=0.03,
+                points=self._points(segments.reshape(-1, 2), 0.02),
+                color=self.colours["static"],
+            )
             message = self._update(None, WORLD, "static", {"lines": [line]})
         else:
             message = self.wire["deletions"]
@@ -432,7 +542,7 @@ class FoxglovePublisher:
             low, high = (float(finite.min()), float(finite.max())) if len(finite) else (0.0, 0.0)
             # Colours in 16 steps of E (-1: no finite cost), each encoded once.
             padded = np.full(len(polylines), np.inf)
-            padded[:min(len(costs), len(polylines))] = costs[:len(polylines)]
+            padded[: min(len(costs), len(polylines))] = costs[: len(polylines)]
             with np.errstate(invalid="ignore"):
                 steps = np.rint(15 * ((padded - low) / (high - low))) if high > low else np.zeros(len(padded))
             steps = np.where(np.isfinite(padded), steps, -1).astype(int).tolist()
@@ -442,17 +552,20 @@ class FoxglovePublisher:
             points = wire.points_field(5, xyz)
             head = self.static.get("candidate_head")
             if head is None:
-                head = self.static["candidate_head"] = (wire.varint_field(1, wire.LINE_STRIP)
-                                                        + wire.message_field(2, self.wire["identity"])
-                                                        + wire.double_field(3, 0.01))
+                head = self.static["candidate_head"] = (
+                    wire.varint_field(1, wire.LINE_STRIP)
+                    + wire.message_field(2, self.wire["identity"])
+                    + wire.double_field(3, 0.01)
+                )
             start = 0
             for u, count in zip(steps, counts):
                 colour = self.candidate_colours.get(u)
                 if colour is None:
                     # Step u of 16 is the colour of E at u/15 of the way from the lowest to the highest.
                     rgba = candidate_colour(u / 15 if u >= 0 else math.inf, 0.0, 1.0)
-                    colour = self.candidate_colours[u] = wire.message_field(6, self.m.Color(
-                        r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3]).encode())
+                    colour = self.candidate_colours[u] = wire.message_field(
+                        6, self.m.Color(r=rgba[0], g=rgba[1], b=rgba[2], a=rgba[3]).encode()
+                    )
                 end = start + 29 * count
                 lines.append(head + points[start:end] + colour)
                 start = end
@@ -467,12 +580,17 @@ class FoxglovePublisher:
         xyz[:, :2], xyz[:, 2] = line, 0.02
         spheres = [wire.sphere(wire.pose(x, y, 0.03), w["via_size"], w["via"]) for x, y in plan.via_points.tolist()]
         tx, ty = plan.target.tolist()
-        return self._scene_update([
-            wire.entity_head(ns, WORLD, "chosen")
-            + wire.message_field(wire.ENTITY_LINES, wire.line_primitive(xyz, w["chosen"], w["identity"], 0.04))
-            + wire.primitives(wire.ENTITY_SPHERES, spheres)
-            + wire.message_field(wire.ENTITY_TEXTS, self._wire_text(
-                tx, ty, 0.3, f"{plan.status} {plan.speed_mps:.2f} m/s", w["chosen_text"]))])
+        return self._scene_update(
+            [
+                wire.entity_head(ns, WORLD, "chosen")
+                + wire.message_field(wire.ENTITY_LINES, wire.line_primitive(xyz, w["chosen"], w["identity"], 0.04))
+                + wire.primitives(wire.ENTITY_SPHERES, spheres)
+                + wire.message_field(
+                    wire.ENTITY_TEXTS,
+                    self._wire_text(tx, ty, 0.3, f"{plan.status} {plan.speed_mps:.2f} m/s", w["chosen_text"]),
+                )
+            ]
+        )
 
     def _xyt_layout(self, segments: int) -> tuple[np.dtype, np.ndarray]:
         """One person's x-y-t entity after its id, as a numpy record: constant bytes (tags, lengths,
@@ -498,6 +616,7 @@ class FoxglovePublisher:
             const(wire.tag(wire.ENTITY_LINES, 2) + wire.varint(len(head) + 29 * count + len(tail)) + head)
             points(name, 5, count)
             const(tail)
+
         for r in range(3):
             line(f"ring{r}", wire.LINE_LOOP, segments, w["ring"])
         line("axis", wire.LINE_STRIP, 2, w["axis"])
@@ -538,8 +657,10 @@ class FoxglovePublisher:
                 # The x, y, z of each point record (tag, length, then a tag before each double: 29
                 # bytes) as one strided view of unaligned doubles, written in one assignment.
                 offset = dtype.fields[field][1] + 29 * first + 3
-                np.ndarray(xyz.shape, dtype="<f8", buffer=records, offset=offset,
-                           strides=(size, *strides, 29, 9))[...] = xyz
+                np.ndarray(xyz.shape, dtype="<f8", buffer=records, offset=offset, strides=(size, *strides, 29, 9))[
+                    ...
+                ] = xyz
+
             # The three rings' lines have the same layout one after the other: one view for all.
             put("ring0", 0, rings, (dtype.fields["ring1"][1] - dtype.fields["ring0"][1],))
             put("axis", 0, axes)
@@ -550,18 +671,31 @@ class FoxglovePublisher:
                 name = names.get(person.id)
                 if name is None:
                     name = names[person.id] = wire.string_field(3, f"person-{person.id}")
-                entities.append(head + name + data[i * size:(i + 1) * size])
+                entities.append(head + name + data[i * size : (i + 1) * size])
         x, y = scene.robot_pose[:2].tolist()
         horizon = xyt.settings.horizon_s
-        ticks = [self._wire_text(x - 0.3, y, t * scale, f"{t:g} s", w["grey"], 11.0)
-                 for t in (0.0, 0.5 * horizon, horizon)]
-        spheres = [wire.sphere(wire.pose(px, py, pt * scale), w["via_size"], w["via"])
-                   for px, py, pt in xyt.via_points_xyt.tolist()]
-        entities.append(wire.entity_head(ns, XYT_FRAME, "robot-plan") + wire.primitives(wire.ENTITY_LINES, [
-            wire.line_primitive(xyt.plan_xyt * stretch, w["chosen"], identity, 0.04),
-            wire.line_primitive(np.array([[x, y, 0.0], [x, y, horizon * scale]]), w["time_axis"], identity, 0.01),
-        ]) + wire.primitives(wire.ENTITY_SPHERES, spheres) + wire.primitives(wire.ENTITY_TEXTS, ticks)
-            + wire.message_field(wire.ENTITY_CYLINDERS, self._wire_disc(x, y, scene.robot_radius_m, w["robot_fill"])))
+        ticks = [
+            self._wire_text(x - 0.3, y, t * scale, f"{t:g} s", w["grey"], 11.0) for t in (0.0, 0.5 * horizon, horizon)
+        ]
+        spheres = [
+            wire.sphere(wire.pose(px, py, pt * scale), w["via_size"], w["via"])
+            for px, py, pt in xyt.via_points_xyt.tolist()
+        ]
+        entities.append(
+            wire.entity_head(ns, XYT_FRAME, "robot-plan")
+            + wire.primitives(
+                wire.ENTITY_LINES,
+                [
+                    wire.line_primitive(xyt.plan_xyt * stretch, w["chosen"], identity, 0.04),
+                    wire.line_primitive(
+                        np.array([[x, y, 0.0], [x, y, horizon * scale]]), w["time_axis"], identity, 0.01
+                    ),
+                ],
+            )
+            + wire.primitives(wire.ENTITY_SPHERES, spheres)
+            + wire.primitives(wire.ENTITY_TEXTS, ticks)
+            + wire.message_field(wire.ENTITY_CYLINDERS, self._wire_disc(x, y, scene.robot_radius_m, w["robot_fill"]))
+        )
         return self._scene_update(entities)
 
 
@@ -593,16 +727,22 @@ def costs_message(scene: CycleScene) -> dict:
         if isinstance(terms.get(key), dict):
             entry["terms"] = {str(k): _finite(v) for k, v in terms[key].items()}
         return entry
+
     chosen, runner = plan.chosen_cost, plan.runner_up_cost
     return {
-        "time_s": scene.time_s, "status": plan.status, "speed_mps": _finite(plan.speed_mps),
-        "candidate_count": int(len(plan.candidate_costs)), "terms_available": plan.cost_terms is not None,
-        "chosen": one(plan.chosen, chosen, "chosen"), "runner_up": one(plan.runner_up, runner, "runner_up"),
+        "time_s": scene.time_s,
+        "status": plan.status,
+        "speed_mps": _finite(plan.speed_mps),
+        "candidate_count": int(len(plan.candidate_costs)),
+        "terms_available": plan.cost_terms is not None,
+        "chosen": one(plan.chosen, chosen, "chosen"),
+        "runner_up": one(plan.runner_up, runner, "runner_up"),
         "margin": None if chosen is None or runner is None else runner - chosen,
     }
 
 
 # -- running with a view ---------------------------------------------------------------------------
+
 
 def display_overrides(scenario, planner_name: str) -> dict[str, Any]:
     """Planner options that make it keep every candidate for display (the viapath planner's
@@ -662,10 +802,20 @@ class Views:
     An MCAP alone is written by a process of its own (:mod:`viapath.viz.mcap_process`) unless
     ``in_process``; with ``live`` everything is logged in the run's process, which the view paces."""
 
-    def __init__(self, scenario, planner_name: str, mcap: Path | str | None = None, force: bool = False,
-                 live: bool = False, rate: float = 1.0, host: str = "127.0.0.1", port: int = 8765,
-                 settings: ForecastSettings | None = None, announce: Callable[[str], None] | None = None,
-                 in_process: bool = False):
+    def __init__(
+        self,
+        scenario,
+        planner_name: str,
+        mcap: Path | str | None = None,
+        force: bool = False,
+        live: bool = False,
+        rate: float = 1.0,
+        host: str = "127.0.0.1",
+        port: int = 8765,
+        settings: ForecastSettings | None = None,
+        announce: Callable[[str], None] | None = None,
+        in_process: bool = False,
+    ):
         if not (math.isfinite(rate) and rate > 0):
             raise ViewError(f"--rate: expected a number > 0, found {rate}")
         self.mcap = check_mcap_path(mcap, force) if mcap is not None else None
@@ -691,7 +841,7 @@ class Views:
     def active(self) -> bool:
         return self.mcap is not None or self.live
 
-    def __enter__(self) -> "Views":
+    def __enter__(self) -> Views:
         if not self.active:
             return self
         import foxglove
@@ -703,8 +853,9 @@ class Views:
         if not self.live and not self.in_process:
             from viapath.viz.mcap_process import MCAPWriterProcess
 
-            self.writer_process = MCAPWriterProcess(self.mcap, self.force, path, self.scenario.robot.radius,
-                                                    FoxglovePublisher, ViewError, self.settings)
+            self.writer_process = MCAPWriterProcess(
+                self.mcap, self.force, path, self.scenario.robot.radius, FoxglovePublisher, ViewError, self.settings
+            )
             self.on_step = self.writer_process
             return self
         context = foxglove.Context()
@@ -713,8 +864,9 @@ class Views:
                 from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
                 options = MCAPWriteOptions(compression=MCAPCompression.Lz4)
-                self.writer = foxglove.open_mcap(self.mcap, allow_overwrite=self.force, context=context,
-                                                 writer_options=options)
+                self.writer = foxglove.open_mcap(
+                    self.mcap, allow_overwrite=self.force, context=context, writer_options=options
+                )
         except BaseException:
             self._close()
             raise
@@ -728,8 +880,13 @@ class Views:
         from foxglove.websocket import Capability
 
         try:
-            self.server = foxglove.start_server(name=f"viapath {self.scenario.name}", host=self.host, port=self.port,
-                                                context=self.context, capabilities=[Capability.Time])
+            self.server = foxglove.start_server(
+                name=f"viapath {self.scenario.name}",
+                host=self.host,
+                port=self.port,
+                context=self.context,
+                capabilities=[Capability.Time],
+            )
         except Exception as error:  # the SDK raises its own error type for a busy port
             raise ViewError(f"--live: cannot serve on {self.host}:{self.port} ({error})") from None
         self.announce(f"live view: ws://{self.host}:{self.server.port} (Foxglove: Open connection, Foxglove WebSocket)")
@@ -773,19 +930,23 @@ def _check_port_free(host: str, port: int) -> None:
         try:
             probe.bind((host, port))
         except OSError as error:
-            raise ViewError(f"--port {port}: {host}:{port} is in use ({error.strerror or error}); "
-                            "give another port, or 0 for any free one") from None
+            raise ViewError(
+                f"--port {port}: {host}:{port} is in use ({error.strerror or error}); "
+                "give another port, or 0 for any free one"
+            ) from None
 
 
-def record_episode(scenario, file: Path | str, planner: str | None = None, force: bool = False,
-                   in_process: bool = False, **run_kwargs):
+def record_episode(
+    scenario, file: Path | str, planner: str | None = None, force: bool = False, in_process: bool = False, **run_kwargs
+):
     """Run one episode and write its MCAP (by a writer process unless ``in_process``); returns the episode."""
     from viapath.sim.loop import run_episode
 
     name = planner or scenario.planner.name
     with Views(scenario, name, mcap=file, force=force, in_process=in_process) as views:
-        return run_episode(scenario, planner=name, planner_overrides=views.planner_overrides,
-                           on_step=views.on_step, **run_kwargs)
+        return run_episode(
+            scenario, planner=name, planner_overrides=views.planner_overrides, on_step=views.on_step, **run_kwargs
+        )
 
 
 # -- benchmark failures ----------------------------------------------------------------------------
@@ -810,12 +971,17 @@ def failure_reasons(row: dict) -> list[str]:
 
 
 def failure_file_name(scenario_name: str, planner: str, perception: str = "oracle", seed: int | None = None) -> str:
-    safe = lambda text: "".join(c if c.isalnum() or c in "-_." else "_" for c in str(text))  # noqa: E731
+    safe = lambda text: "".join(c if c.isalnum() or c in "-_." else "_" for c in str(text))
     return f"{safe(scenario_name)}__{safe(planner)}__{safe(perception)}.mcap"
 
 
-def write_failure_mcaps(rows: list[dict], scenarios: list[dict], folder: Path | str, force: bool = True,
-                        progress: Callable[[str], None] | None = None) -> list[dict]:
+def write_failure_mcaps(
+    rows: list[dict],
+    scenarios: list[dict],
+    folder: Path | str,
+    force: bool = True,
+    progress: Callable[[str], None] | None = None,
+) -> list[dict]:
     """Re-run each failed episode of a benchmark (same scenario, planner, perception and seed: the
     runs are deterministic) and write its MCAP into ``folder``. Returns one entry per file with the
     reasons and whether the re-run failed the same way (it should; a mismatch is reported)."""
@@ -830,17 +996,31 @@ def write_failure_mcaps(rows: list[dict], scenarios: list[dict], folder: Path | 
             continue
         file = folder / failure_file_name(row["scenario"], row["planner"], row["perception"])
         scenario = scenario_from_dict(by_name[row["scenario"]], row["scenario"])
-        episode = record_episode(scenario, file, planner=row["planner"], force=force,
-                                 perception=row["perception"], seed=int(row["seed"]))
-        again = failure_reasons({**row, **{k: episode.metrics.get(k) for k in
-                                           ("collision", "at_fault_collision", "time_outside_corridor_s",
-                                            "reached_goal")}})
-        entry = {"file": str(file), "scenario": row["scenario"], "planner": row["planner"], "reasons": reasons,
-                 "reproduced": again == reasons}
+        episode = record_episode(
+            scenario, file, planner=row["planner"], force=force, perception=row["perception"], seed=int(row["seed"])
+        )
+        again = failure_reasons(
+            {
+                **row,
+                **{
+                    k: episode.metrics.get(k)
+                    for k in ("collision", "at_fault_collision", "time_outside_corridor_s", "reached_goal")
+                },
+            }
+        )
+        entry = {
+            "file": str(file),
+            "scenario": row["scenario"],
+            "planner": row["planner"],
+            "reasons": reasons,
+            "reproduced": again == reasons,
+        }
         written.append(entry)
         if progress is not None:
-            progress(f"{file.name}: {', '.join(reasons)}" + ("" if entry["reproduced"] else
-                                                             f" (re-run gave: {', '.join(again) or 'no failure'})"))
+            progress(
+                f"{file.name}: {', '.join(reasons)}"
+                + ("" if entry["reproduced"] else f" (re-run gave: {', '.join(again) or 'no failure'})")
+            )
     return written
 
 
@@ -851,15 +1031,23 @@ class _NoViews:
     on_step = None
     active = False
 
-    def __enter__(self) -> "_NoViews":
+    def __enter__(self) -> _NoViews:
         return self
 
     def __exit__(self, *exc) -> None:
         return None
 
 
-def open_views(scenario, planner_name: str, mcap: Path | str | None = None, force: bool = False, live: bool = False,
-               rate: float = 1.0, port: int = 8765, announce: Callable[[str], None] | None = None):
+def open_views(
+    scenario,
+    planner_name: str,
+    mcap: Path | str | None = None,
+    force: bool = False,
+    live: bool = False,
+    rate: float = 1.0,
+    port: int = 8765,
+    announce: Callable[[str], None] | None = None,
+):
     """The CLI's entry: checks every option (paths, rate, port, the extra) before the run starts."""
     if not live:
         if rate != 1.0:

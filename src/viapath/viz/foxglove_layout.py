@@ -16,7 +16,18 @@ import sys
 from pathlib import Path
 
 from viapath.viz.foxglove import (
-    BLIND, CANDIDATES, CHOSEN, COSTS, DETECTIONS, FOOTPRINT, METRICS, PATH, TRACKS, XYT, XYT_FRAME, scan_topic,
+    BLIND,
+    CANDIDATES,
+    CHOSEN,
+    COSTS,
+    DETECTIONS,
+    FOOTPRINT,
+    METRICS,
+    PATH,
+    TRACKS,
+    XYT,
+    XYT_FRAME,
+    scan_topic,
 )
 
 LAYOUT_FILE = Path("docs") / "foxglove" / "viapath-layout.json"
@@ -27,44 +38,99 @@ def layout(scanners: tuple[str, ...] = ("front", "rear")):
     import foxglove.layouts as fl
 
     scene = fl.BaseRendererSceneUpdateTopicSettings
-    world_topics = {topic: scene(visible=True) for topic in (FOOTPRINT, BLIND, DETECTIONS, TRACKS, PATH, CANDIDATES,
-                                                             CHOSEN)}
+    world_topics = {
+        topic: scene(visible=True) for topic in (FOOTPRINT, BLIND, DETECTIONS, TRACKS, PATH, CANDIDATES, CHOSEN)
+    }
     world_topics[XYT] = scene(visible=False)
     for name, colour in zip(scanners, ("#1f77b4", "#9467bd", "#8c564b", "#e377c2")):
         world_topics[scan_topic(name)] = fl.BaseRendererLaserScanTopicSettings(
-            visible=True, point_size=3.0, color_mode="flat", flat_color=colour)
-    grid = {"grid": fl.BaseRendererGridLayerSettings(layer_id="foxglove.Grid", frame_id="world", size=20.0,
-                                                     divisions=20.0)}
-    world = fl.ThreeDeePanel(title="world (from above)", config=fl.ThreeDeeConfig(
-        fixed_frame="world", follow_tf="base", follow_mode="follow-position", topics=world_topics, layers=grid,
-        camera_state=fl.ThreeDeeCameraState(perspective=False, distance=12.0, phi=0.0, theta_offset=0.0)))
+            visible=True, point_size=3.0, color_mode="flat", flat_color=colour
+        )
+    grid = {
+        "grid": fl.BaseRendererGridLayerSettings(layer_id="foxglove.Grid", frame_id="world", size=20.0, divisions=20.0)
+    }
+    world = fl.ThreeDeePanel(
+        title="world (from above)",
+        config=fl.ThreeDeeConfig(
+            fixed_frame="world",
+            follow_tf="base",
+            follow_mode="follow-position",
+            topics=world_topics,
+            layers=grid,
+            camera_state=fl.ThreeDeeCameraState(perspective=False, distance=12.0, phi=0.0, theta_offset=0.0),
+        ),
+    )
     xyt_topics = {topic: scene(visible=False) for topic in world_topics if topic != XYT}
     xyt_topics[XYT] = scene(visible=True)
-    xyt = fl.ThreeDeePanel(title="x-y-t (paper Fig. 4): people as cylinders, plan through via points", config=fl.ThreeDeeConfig(
-        fixed_frame=XYT_FRAME, follow_tf=XYT_FRAME, follow_mode="follow-none", topics=xyt_topics,
-        layers={"grid": fl.BaseRendererGridLayerSettings(layer_id="foxglove.Grid", frame_id=XYT_FRAME, size=20.0,
-                                                         divisions=20.0)},
-        camera_state=fl.ThreeDeeCameraState(perspective=True, distance=14.0, phi=60.0, theta_offset=45.0,
-                                            target_offset=(3.0, 0.0, 2.5))))
+    xyt = fl.ThreeDeePanel(
+        title="x-y-t (paper Fig. 4): people as cylinders, plan through via points",
+        config=fl.ThreeDeeConfig(
+            fixed_frame=XYT_FRAME,
+            follow_tf=XYT_FRAME,
+            follow_mode="follow-none",
+            topics=xyt_topics,
+            layers={
+                "grid": fl.BaseRendererGridLayerSettings(
+                    layer_id="foxglove.Grid", frame_id=XYT_FRAME, size=20.0, divisions=20.0
+                )
+            },
+            camera_state=fl.ThreeDeeCameraState(
+                perspective=True, distance=14.0, phi=60.0, theta_offset=45.0, target_offset=(3.0, 0.0, 2.5)
+            ),
+        ),
+    )
 
     def plot(title: str, *series: tuple[str, str]):
-        return fl.PlotPanel(title=title, config=fl.PlotConfig(
-            paths=[fl.PlotSeries(value=f"{METRICS}.{field}", label=label) for field, label in series]))
-    series = fl.SplitContainer(direction="column", items=[
-        fl.SplitItem(content=plot("speed", ("speed_mps", "speed m/s"), ("command_speed_mps", "commanded m/s"),
-                                  ("turn_rate_radps", "turn rate rad/s"))),
-        fl.SplitItem(content=plot("clearance and deviation", ("clearance_m", "clearance m"),
-                                  ("lateral_deviation_m", "lateral deviation m"))),
-        fl.SplitItem(content=plot("planner", ("plan_time_ms", "plan time ms"),
-                                  ("shield_interventions", "shield interventions"), ("candidates", "candidates"))),
-        fl.SplitItem(content=fl.RawMessagesPanel(title="costs: chosen vs runner-up",
-                                                 config=fl.RawMessagesConfig(topic_path=COSTS, expansion="all"))),
-    ])
-    return fl.Layout(content=fl.SplitContainer(direction="row", items=[
-        fl.SplitItem(proportion=2, content=world),
-        fl.SplitItem(proportion=2, content=xyt),
-        fl.SplitItem(proportion=1.3, content=series),
-    ]))
+        return fl.PlotPanel(
+            title=title,
+            config=fl.PlotConfig(
+                paths=[fl.PlotSeries(value=f"{METRICS}.{field}", label=label) for field, label in series]
+            ),
+        )
+
+    series = fl.SplitContainer(
+        direction="column",
+        items=[
+            fl.SplitItem(
+                content=plot(
+                    "speed",
+                    ("speed_mps", "speed m/s"),
+                    ("command_speed_mps", "commanded m/s"),
+                    ("turn_rate_radps", "turn rate rad/s"),
+                )
+            ),
+            fl.SplitItem(
+                content=plot(
+                    "clearance and deviation",
+                    ("clearance_m", "clearance m"),
+                    ("lateral_deviation_m", "lateral deviation m"),
+                )
+            ),
+            fl.SplitItem(
+                content=plot(
+                    "planner",
+                    ("plan_time_ms", "plan time ms"),
+                    ("shield_interventions", "shield interventions"),
+                    ("candidates", "candidates"),
+                )
+            ),
+            fl.SplitItem(
+                content=fl.RawMessagesPanel(
+                    title="costs: chosen vs runner-up", config=fl.RawMessagesConfig(topic_path=COSTS, expansion="all")
+                )
+            ),
+        ],
+    )
+    return fl.Layout(
+        content=fl.SplitContainer(
+            direction="row",
+            items=[
+                fl.SplitItem(proportion=2, content=world),
+                fl.SplitItem(proportion=2, content=xyt),
+                fl.SplitItem(proportion=1.3, content=series),
+            ],
+        )
+    )
 
 
 def layout_json() -> str:

@@ -79,9 +79,17 @@ def static_input(record) -> tuple:
     from viapath.viz.scene import ForecastSettings
 
     perception = record.perception if record.scans is not None else None
-    scanners = tuple((str(m.name), np.asarray(m.mount_pose(), dtype=float), float(m.angle_min_rad),
-                      float(m.angle_increment_rad), float(m.range_min_m), float(m.range_max_m))
-                     for m in (getattr(perception, "scanners", ()) or ()))
+    scanners = tuple(
+        (
+            str(m.name),
+            np.asarray(m.mount_pose(), dtype=float),
+            float(m.angle_min_rad),
+            float(m.angle_increment_rad),
+            float(m.range_min_m),
+            float(m.range_max_m),
+        )
+        for m in (getattr(perception, "scanners", ()) or ())
+    )
     return ForecastSettings.from_planner(record.planner), scanners
 
 
@@ -95,35 +103,78 @@ def cycle_input(record) -> tuple:
     plan, command = decision.plan, decision.command
     tracks = record.observation.obstacles  # all rows: the scene keeps the finite ones, as it does in-process
     detections, radii, points, sectors, blind = perception_arrays_of(
-        record.perception if record.scans is not None else None)
+        record.perception if record.scans is not None else None
+    )
     lines = [np.asarray(line, dtype=float).reshape(-1) for line in plan.candidate_polylines]
     via = np.asarray(plan.via_points, dtype=float).reshape(-1)
     waypoints = np.asarray(plan.waypoints, dtype=float).reshape(-1)
     costs = np.asarray(plan.candidate_costs, dtype=float).reshape(-1)
     scans = [np.asarray(ranges, dtype=float).reshape(-1) for ranges in (record.scans or ())]
-    pieces = [tracks.positions.reshape(-1), tracks.velocities.reshape(-1), tracks.radii_m, tracks.position_sigma_m,
-              tracks.velocity_sigma_mps, tracks.ids, via, waypoints, costs, *lines, *scans, detections.reshape(-1),
-              radii, points.reshape(-1), blind.reshape(-1)]
+    pieces = [
+        tracks.positions.reshape(-1),
+        tracks.velocities.reshape(-1),
+        tracks.radii_m,
+        tracks.position_sigma_m,
+        tracks.velocity_sigma_mps,
+        tracks.ids,
+        via,
+        waypoints,
+        costs,
+        *lines,
+        *scans,
+        detections.reshape(-1),
+        radii,
+        points.reshape(-1),
+        blind.reshape(-1),
+    ]
     truth = 0
     if world is not None:
         truth = len(world.obstacle_radii_m)
-        pieces += [world.obstacle_positions.reshape(-1), world.obstacle_velocities.reshape(-1),
-                   world.obstacle_radii_m]
+        pieces += [world.obstacle_positions.reshape(-1), world.obstacle_velocities.reshape(-1), world.obstacle_radii_m]
     static = np.asarray(record.observation.static.segments, dtype=float)
     pieces.append(static.reshape(-1))
-    counts = (len(tracks), truth if world is not None else -1, len(via) // 2, len(waypoints) // 2, len(costs),
-              tuple(len(line) // 2 for line in lines), tuple(len(ranges) for ranges in scans), len(radii),
-              len(points), len(blind), len(static))
+    counts = (
+        len(tracks),
+        truth if world is not None else -1,
+        len(via) // 2,
+        len(waypoints) // 2,
+        len(costs),
+        tuple(len(line) // 2 for line in lines),
+        tuple(len(ranges) for ranges in scans),
+        len(radii),
+        len(points),
+        len(blind),
+        len(static),
+    )
     extras = plan.extras or {}
     kept = {name: extras[name] for name in _SCENE_EXTRAS if name in extras}
     shield = extras.get("shield")
     if isinstance(shield, dict):
         kept["shield"] = {"intervened": bool(shield.get("intervened"))}
     target = np.asarray(plan.target, dtype=float).reshape(2)
-    return (record.step, record.time_s, state.x, state.y, state.heading_rad, state.speed_mps, state.turn_rate_radps,
-            command.speed_mps, command.turn_rate_radps, record.plan_time_ms, plan.status, plan.speed_mps,
-            float(target[0]), float(target[1]), plan.subgoal_index, plan.candidate_count, plan.chosen, kept,
-            sectors, counts, np.concatenate(pieces))
+    return (
+        record.step,
+        record.time_s,
+        state.x,
+        state.y,
+        state.heading_rad,
+        state.speed_mps,
+        state.turn_rate_radps,
+        command.speed_mps,
+        command.turn_rate_radps,
+        record.plan_time_ms,
+        plan.status,
+        plan.speed_mps,
+        float(target[0]),
+        float(target[1]),
+        plan.subgoal_index,
+        plan.candidate_count,
+        plan.chosen,
+        kept,
+        sectors,
+        counts,
+        np.concatenate(pieces),
+    )
 
 
 def scene_inputs(payload: tuple, static: tuple) -> tuple:
@@ -133,14 +184,46 @@ def scene_inputs(payload: tuple, static: tuple) -> tuple:
     from viapath.observation import Command, Decision, Plan
     from viapath.viz.scene import ScannerView
 
-    (step, time_s, x, y, heading, speed, turn_rate, command_speed, command_turn_rate, plan_time_ms, status,
-     plan_speed, target_x, target_y, subgoal_index, candidate_count, chosen, extras, sectors, counts,
-     numbers) = payload
-    n, truth_count, via_count, waypoint_count, cost_count, line_counts, scan_counts, detection_count, point_count, \
-        blind_count, static_count = counts
+    (
+        step,
+        time_s,
+        x,
+        y,
+        heading,
+        speed,
+        turn_rate,
+        command_speed,
+        command_turn_rate,
+        plan_time_ms,
+        status,
+        plan_speed,
+        target_x,
+        target_y,
+        subgoal_index,
+        candidate_count,
+        chosen,
+        extras,
+        sectors,
+        counts,
+        numbers,
+    ) = payload
+    (
+        n,
+        truth_count,
+        via_count,
+        waypoint_count,
+        cost_count,
+        line_counts,
+        scan_counts,
+        detection_count,
+        point_count,
+        blind_count,
+        static_count,
+    ) = counts
     cursor = _Cursor(numbers)
-    tracks = _obstacles(cursor.rows(n, 2), cursor.rows(n, 2), cursor.rows(n), cursor.rows(n), cursor.rows(n),
-                        cursor.rows(n).astype(int))
+    tracks = _obstacles(
+        cursor.rows(n, 2), cursor.rows(n, 2), cursor.rows(n), cursor.rows(n), cursor.rows(n), cursor.rows(n).astype(int)
+    )
     via, waypoints, costs = cursor.rows(via_count, 2), cursor.rows(waypoint_count, 2), cursor.rows(cost_count)
     lines = [cursor.rows(count, 2) for count in line_counts]
     scans = [cursor.rows(count) for count in scan_counts]
@@ -148,26 +231,52 @@ def scene_inputs(payload: tuple, static: tuple) -> tuple:
     points, blind = cursor.rows(point_count, 2), cursor.rows(blind_count, 2)
     truth = None
     if truth_count >= 0:
-        positions, velocities, truth_radii = (cursor.rows(truth_count, 2), cursor.rows(truth_count, 2),
-                                              cursor.rows(truth_count))
+        positions, velocities, truth_radii = (
+            cursor.rows(truth_count, 2),
+            cursor.rows(truth_count, 2),
+            cursor.rows(truth_count),
+        )
         present = np.isfinite(positions).all(axis=1)
         if present.all():  # everyone in the scene: no copies
             zeros = np.zeros(truth_count)
             truth = _obstacles(positions, velocities, truth_radii, zeros, zeros, np.arange(truth_count))
         else:
             zeros = np.zeros(int(present.sum()))
-            truth = _obstacles(positions[present], velocities[present], truth_radii[present], zeros, zeros,
-                               np.flatnonzero(present))
+            truth = _obstacles(
+                positions[present], velocities[present], truth_radii[present], zeros, zeros, np.flatnonzero(present)
+            )
     static_segments = cursor.rows(static_count, 4).reshape(-1, 2, 2)
-    plan = Plan(status, plan_speed, np.array([target_x, target_y]), via, waypoints, subgoal_index, candidate_count,
-                costs, lines, chosen, extras)
+    plan = Plan(
+        status,
+        plan_speed,
+        np.array([target_x, target_y]),
+        via,
+        waypoints,
+        subgoal_index,
+        candidate_count,
+        costs,
+        lines,
+        chosen,
+        extras,
+    )
     _, scanner_statics = static
-    scanners = [ScannerView(name, mount, angle_min, increment, ranges, range_min, range_max)
-                for (name, mount, angle_min, increment, range_min, range_max), ranges in zip(scanner_statics, scans)]
+    scanners = [
+        ScannerView(name, mount, angle_min, increment, ranges, range_min, range_max)
+        for (name, mount, angle_min, increment, range_min, range_max), ranges in zip(scanner_statics, scans)
+    ]
     decision = Decision(Command(command_speed, command_turn_rate), plan)
-    return (step, time_s, (x, y, heading), speed, turn_rate, _Tracks(tracks, static_segments), decision, plan_time_ms,
-            truth,
-            (scanners, detections, radii, points, sectors, blind))
+    return (
+        step,
+        time_s,
+        (x, y, heading),
+        speed,
+        turn_rate,
+        _Tracks(tracks, static_segments),
+        decision,
+        plan_time_ms,
+        truth,
+        (scanners, detections, radii, points, sectors, blind),
+    )
 
 
 class _Cursor:
@@ -180,7 +289,7 @@ class _Cursor:
 
     def rows(self, count: int, width: int = 0) -> np.ndarray:
         size = count * (width or 1)
-        block = self.numbers[self.start:self.start + size]
+        block = self.numbers[self.start : self.start + size]
         self.start += size
         return block.reshape(count, width) if width else block
 
@@ -201,13 +310,20 @@ def _obstacles(positions, velocities, radii_m, position_sigma_m, velocity_sigma_
     from viapath.observation import Obstacles
 
     obstacles = object.__new__(Obstacles)
-    vars(obstacles).update(positions=positions, velocities=velocities, radii_m=radii_m,
-                           position_sigma_m=position_sigma_m, velocity_sigma_mps=velocity_sigma_mps, ids=ids)
+    vars(obstacles).update(
+        positions=positions,
+        velocities=velocities,
+        radii_m=radii_m,
+        position_sigma_m=position_sigma_m,
+        velocity_sigma_mps=velocity_sigma_mps,
+        ids=ids,
+    )
     return obstacles
 
 
-def _writer_main(connection, publisher_class, file: str, force: bool, waypoints, half_widths_m,
-                 robot_radius_m: float, settings) -> None:
+def _writer_main(
+    connection, publisher_class, file: str, force: bool, waypoints, half_widths_m, robot_radius_m: float, settings
+) -> None:
     """The writer process: open the file, then build and log each cycle until told it is done."""
     # Ctrl-C reaches the whole process group: the run's process decides when the file ends (it sends
     # "done" from its clean-up), so the writer does not stop half-way on its own.
@@ -220,8 +336,12 @@ def _writer_main(connection, publisher_class, file: str, force: bool, waypoints,
         from viapath.path import DesignatedPath
 
         context = foxglove.Context()
-        writer = foxglove.open_mcap(file, allow_overwrite=force, context=context,
-                                    writer_options=MCAPWriteOptions(compression=MCAPCompression.Lz4))
+        writer = foxglove.open_mcap(
+            file,
+            allow_overwrite=force,
+            context=context,
+            writer_options=MCAPWriteOptions(compression=MCAPCompression.Lz4),
+        )
         # Ready once the file is open (what can fail for a reason of the user's); the run starts while
         # the rest is set up, and a failure from here on is reported at the next send or the end.
         connection.send((_READY, None))
@@ -261,8 +381,16 @@ class MCAPWriterProcess:
     passed in so that this module does not import the one that uses it); ``error`` is the
     exception raised when the writer fails."""
 
-    def __init__(self, file: Path | str, force: bool, path, robot_radius_m: float, publisher_class,
-                 error: type[Exception] = RuntimeError, settings=None):
+    def __init__(
+        self,
+        file: Path | str,
+        force: bool,
+        path,
+        robot_radius_m: float,
+        publisher_class,
+        error: type[Exception] = RuntimeError,
+        settings=None,
+    ):
         self._error = error
         self.file = Path(file)
         self.cycles = 0  # handed to the writer (sent or pending)
@@ -272,9 +400,20 @@ class MCAPWriterProcess:
         ctx = multiprocessing.get_context(_start_method())
         self._connection, child = ctx.Pipe(duplex=True)
         self.process = ctx.Process(
-            target=_writer_main, name="viapath-mcap-writer", daemon=True,
-            args=(child, publisher_class, str(self.file), force, np.asarray(path.waypoints, dtype=float),
-                  np.asarray(path.half_widths_m, dtype=float), float(robot_radius_m), settings))
+            target=_writer_main,
+            name="viapath-mcap-writer",
+            daemon=True,
+            args=(
+                child,
+                publisher_class,
+                str(self.file),
+                force,
+                np.asarray(path.waypoints, dtype=float),
+                np.asarray(path.half_widths_m, dtype=float),
+                float(robot_radius_m),
+                settings,
+            ),
+        )
         if self.file.exists() and not force:  # the one refusal foreseen: said before the process starts
             raise error(f"--mcap {self.file}: the writer could not start (file exists; add --force to overwrite it)")
         self.process.start()

@@ -23,17 +23,23 @@ def _matplotlib():
 def corridor_polygons(path, resolution: int = 24):
     """Outline of each segment's capsule, for drawing."""
     outlines = []
-    for a, d, length, hw in zip(path.segment_starts, path.segment_directions, path.segment_lengths_m, path.half_widths_m):
+    for a, d, length, hw in zip(
+        path.segment_starts, path.segment_directions, path.segment_lengths_m, path.half_widths_m
+    ):
         normal = np.array([-d[1], d[0]])
         angle0 = np.arctan2(normal[1], normal[0])
-        arc_end = [a + d * length + hw * np.array([np.cos(t), np.sin(t)]) for t in np.linspace(angle0 - np.pi, angle0, resolution)]
+        arc_end = [
+            a + d * length + hw * np.array([np.cos(t), np.sin(t)])
+            for t in np.linspace(angle0 - np.pi, angle0, resolution)
+        ]
         arc_start = [a + hw * np.array([np.cos(t), np.sin(t)]) for t in np.linspace(angle0, angle0 + np.pi, resolution)]
         outlines.append(np.array(arc_end + arc_start))
     return outlines
 
 
-def draw_scene(ax, trace, upto: int | None = None, obstacle_every_s: float = 1.0, show_via: bool = True,
-               robot_every_s: float = 0.5):
+def draw_scene(
+    ax, trace, upto: int | None = None, obstacle_every_s: float = 1.0, show_via: bool = True, robot_every_s: float = 0.5
+):
     """Path, corridor, walls, robot and obstacle history on ``ax`` (up to step ``upto``).
 
     The robot is drawn every ``robot_every_s`` (its track as a line in between): at every 0.1 s step
@@ -43,10 +49,25 @@ def draw_scene(ax, trace, upto: int | None = None, obstacle_every_s: float = 1.0
     n = len(trace.times_s) if upto is None else upto + 1
     path = trace.path
     for k, outline in enumerate(corridor_polygons(path)):
-        ax.add_patch(Polygon(outline, closed=True, facecolor="#dfe9f5", edgecolor="none", zorder=0,
-                             label="corridor (path boundary)" if k == 0 else None))
+        ax.add_patch(
+            Polygon(
+                outline,
+                closed=True,
+                facecolor="#dfe9f5",
+                edgecolor="none",
+                zorder=0,
+                label="corridor (path boundary)" if k == 0 else None,
+            )
+        )
     ax.plot(*path.waypoints.T, linestyle=(0, (4, 3)), color="#2f6eb5", lw=1.3, zorder=1, label="designated path")
-    ax.plot(*path.waypoints[1:-1].T, "D", color="#2f6eb5", ms=5, zorder=2, label="subgoals" if len(path.waypoints) > 2 else None)
+    ax.plot(
+        *path.waypoints[1:-1].T,
+        "D",
+        color="#2f6eb5",
+        ms=5,
+        zorder=2,
+        label="subgoals" if len(path.waypoints) > 2 else None,
+    )
     ax.plot(*path.goal, marker="*", color="#2f6eb5", ms=14, mec="k", zorder=5, ls="none", label="goal")
     for w, wall in enumerate(trace.walls):
         ax.plot(*wall.T, color="k", lw=2.5, zorder=2, label="wall" if w == 0 else None)
@@ -72,11 +93,27 @@ def draw_scene(ax, trace, upto: int | None = None, obstacle_every_s: float = 1.0
     speeds = trace.robot_speeds_mps[shown]
     sizes = 6 + 140 * speeds / max(float(trace.robot_speeds_mps.max()), 1e-6)
     heading_via = np.array([len(trace.via_points[k]) > 0 for k in shown])
-    ax.scatter(*poses[~heading_via, :2].T, s=sizes[~heading_via], marker="s", facecolor="#1f9e89", edgecolor="k",
-               lw=0.3, zorder=6, label="robot → goal (size ∝ speed)")
+    ax.scatter(
+        *poses[~heading_via, :2].T,
+        s=sizes[~heading_via],
+        marker="s",
+        facecolor="#1f9e89",
+        edgecolor="k",
+        lw=0.3,
+        zorder=6,
+        label="robot → goal (size ∝ speed)",
+    )
     if heading_via.any():
-        ax.scatter(*poses[heading_via, :2].T, s=2 * sizes[heading_via], marker="*", facecolor="#f39c12", edgecolor="k",
-                   lw=0.3, zorder=6, label="robot → via point")
+        ax.scatter(
+            *poses[heading_via, :2].T,
+            s=2 * sizes[heading_via],
+            marker="*",
+            facecolor="#f39c12",
+            edgecolor="k",
+            lw=0.3,
+            zorder=6,
+            label="robot → via point",
+        )
     if show_via:
         vias = [v for v in trace.via_points[:n] if len(v)]
         if vias:
@@ -103,8 +140,12 @@ def plot_episode(episode, file: str | Path, title: str | None = None) -> Path:
     collision = "COLLISION" if metrics["collision"] else "no collision"
     clearance = metrics["min_clearance_m"]
     clearance_text = f"min clearance {clearance:.2f} m" if clearance is not None else "no obstacles"
-    ax.set_title(title or f"{trace.scenario_name} — {trace.planner_name} ({trace.perception_mode}): {status}, "
-                 f"{collision}, {clearance_text}", fontsize=10)
+    ax.set_title(
+        title
+        or f"{trace.scenario_name} — {trace.planner_name} ({trace.perception_mode}): {status}, "
+        f"{collision}, {clearance_text}",
+        fontsize=10,
+    )
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
 
     speed_ax = fig.add_subplot(grid[1])
@@ -140,11 +181,14 @@ def _draw_perception(ax, trace) -> None:
         k = min(k, len(scans) - 1)
         points = np.asarray(scans[k])
         if len(points):
-            ax.scatter(*points.T, s=3, color="0.15", zorder=2, label=f"scan at closest approach ({trace.times_s[k]:.1f} s)")
+            ax.scatter(
+                *points.T, s=3, color="0.15", zorder=2, label=f"scan at closest approach ({trace.times_s[k]:.1f} s)"
+            )
             from matplotlib.patches import Circle
 
-            ax.add_patch(Circle(trace.robot_poses[k, :2], trace.robot_radius_m, fill=False, ec="0.15", ls="--",
-                                lw=0.8, zorder=7))
+            ax.add_patch(
+                Circle(trace.robot_poses[k, :2], trace.robot_radius_m, fill=False, ec="0.15", ls="--", lw=0.8, zorder=7)
+            )
 
 
 def _fit_view(ax, trace, margin_m: float = 0.6) -> None:

@@ -31,8 +31,18 @@ from functools import lru_cache
 
 import numpy as np
 
-_POINT = np.dtype([("tag", "u1"), ("length", "u1"), ("tx", "u1"), ("x", "<f8"), ("ty", "u1"), ("y", "<f8"),
-                   ("tz", "u1"), ("z", "<f8")])  # packed: 29 bytes, one length-delimited Point3
+_POINT = np.dtype(
+    [
+        ("tag", "u1"),
+        ("length", "u1"),
+        ("tx", "u1"),
+        ("x", "<f8"),
+        ("ty", "u1"),
+        ("y", "<f8"),
+        ("tz", "u1"),
+        ("z", "<f8"),
+    ]
+)  # packed: 29 bytes, one length-delimited Point3
 POINT_DTYPE = _POINT
 _POINT_STRUCT = struct.Struct("<BBBdBdBd")  # the same 29 bytes
 
@@ -124,18 +134,33 @@ def stamp_field(ns: int) -> bytes:
 LINE_STRIP, LINE_LOOP, LINE_LIST = 0, 1, 2
 
 
-def line_primitive(points_xyz: np.ndarray, color: bytes, pose: bytes, thickness: float, kind: int = LINE_STRIP,
-                   indices: np.ndarray | None = None) -> bytes:
+def line_primitive(
+    points_xyz: np.ndarray,
+    color: bytes,
+    pose: bytes,
+    thickness: float,
+    kind: int = LINE_STRIP,
+    indices: np.ndarray | None = None,
+) -> bytes:
     """An encoded ``foxglove.LinePrimitive``; ``color`` and ``pose`` are encoded sub-messages."""
-    return (varint_field(1, kind) + message_field(2, pose) + double_field(3, thickness)
-            + points_field(5, points_xyz) + message_field(6, color)
-            + (fixed32_packed_field(8, indices) if indices is not None else b""))
+    return (
+        varint_field(1, kind)
+        + message_field(2, pose)
+        + double_field(3, thickness)
+        + points_field(5, points_xyz)
+        + message_field(6, color)
+        + (fixed32_packed_field(8, indices) if indices is not None else b"")
+    )
 
 
 # foxglove.TriangleListPrimitive: pose 1, points 2, color 3, colors 4, indices 5
 def triangle_list_primitive(vertices_xyz: np.ndarray, triangles: np.ndarray, color: bytes, pose: bytes) -> bytes:
-    return (message_field(1, pose) + points_field(2, vertices_xyz) + message_field(3, color)
-            + fixed32_packed_field(5, np.asarray(triangles).ravel()))
+    return (
+        message_field(1, pose)
+        + points_field(2, vertices_xyz)
+        + message_field(3, color)
+        + fixed32_packed_field(5, np.asarray(triangles).ravel())
+    )
 
 
 # foxglove.SceneEntity: timestamp 1, frame_id 2, id 3, lifetime 4, frame_locked 5, metadata 6, arrows 7,
@@ -143,13 +168,23 @@ def triangle_list_primitive(vertices_xyz: np.ndarray, triangles: np.ndarray, col
 ENTITY_LINES, ENTITY_TRIANGLES = 11, 12  # with ENTITY_ARROWS ... below
 
 
-def scene_entity(stamp_ns: int, frame_id: str, entity_id: str, lines: list[bytes] = (), triangles: list[bytes] = (),
-                 other: bytes = b"") -> bytes:
+def scene_entity(
+    stamp_ns: int,
+    frame_id: str,
+    entity_id: str,
+    lines: list[bytes] = (),
+    triangles: list[bytes] = (),
+    other: bytes = b"",
+) -> bytes:
     """An encoded ``foxglove.SceneEntity``; ``other``: the SDK's encoding of an entity holding the
     remaining primitives (spheres, texts, ...), which protobuf merges into this one."""
     head = stamp_field(stamp_ns) + _names(frame_id, entity_id, False)
-    return (head + b"".join(message_field(ENTITY_LINES, line) for line in lines)
-            + b"".join(message_field(ENTITY_TRIANGLES, tri) for tri in triangles) + other)
+    return (
+        head
+        + b"".join(message_field(ENTITY_LINES, line) for line in lines)
+        + b"".join(message_field(ENTITY_TRIANGLES, tri) for tri in triangles)
+        + other
+    )
 
 
 # foxglove.SceneUpdate: deletions 1, entities 2
@@ -171,8 +206,9 @@ def vector3(x: float, y: float, z: float) -> bytes:
 def pose(x: float, y: float, z: float = 0.0, yaw_rad: float = 0.0) -> bytes:
     """An encoded ``foxglove.Pose`` at (x, y, z) turned by ``yaw_rad`` about z (67 bytes)."""
     half = 0.5 * yaw_rad
-    return _POSE.pack(0x0A, 27, 0x09, x, 0x11, y, 0x19, z, 0x12, 36, 0x09, 0.0, 0x11, 0.0, 0x19, math.sin(half),
-                      0x21, math.cos(half))
+    return _POSE.pack(
+        0x0A, 27, 0x09, x, 0x11, y, 0x19, z, 0x12, 36, 0x09, 0.0, 0x11, 0.0, 0x19, math.sin(half), 0x21, math.cos(half)
+    )
 
 
 _POSE_1, _SIZE_2 = b"\x0a\x43", b"\x12\x1b"  # field 1 of 67 bytes (pose), field 2 of 27 bytes (size)
@@ -188,11 +224,43 @@ def cylinder(pose_bytes: bytes, size_x: float, size_y: float, size_z: float, col
 _UPRIGHT = struct.Struct("<BB" + "BBBdBdBdBBBdBdBdBd" + "BBBdBdBd")
 
 
-def upright_cylinder(x: float, y: float, z: float, size_x: float, size_y: float, size_z: float,
-                     color_field: bytes) -> bytes:
+def upright_cylinder(
+    x: float, y: float, z: float, size_x: float, size_y: float, size_z: float, color_field: bytes
+) -> bytes:
     """:func:`cylinder` with the pose ``pose(x, y, z)``; ``color_field``: ``message_field(5, color)``."""
-    return _UPRIGHT.pack(0x0A, 67, 0x0A, 27, 0x09, x, 0x11, y, 0x19, z, 0x12, 36, 0x09, 0.0, 0x11, 0.0, 0x19, 0.0,
-                         0x21, 1.0, 0x12, 27, 0x09, size_x, 0x11, size_y, 0x19, size_z) + color_field
+    return (
+        _UPRIGHT.pack(
+            0x0A,
+            67,
+            0x0A,
+            27,
+            0x09,
+            x,
+            0x11,
+            y,
+            0x19,
+            z,
+            0x12,
+            36,
+            0x09,
+            0.0,
+            0x11,
+            0.0,
+            0x19,
+            0.0,
+            0x21,
+            1.0,
+            0x12,
+            27,
+            0x09,
+            size_x,
+            0x11,
+            size_y,
+            0x19,
+            size_z,
+        )
+        + color_field
+    )
 
 
 # foxglove.SpherePrimitive: pose 1, size 2, color 3
@@ -205,23 +273,44 @@ def sphere(pose_bytes: bytes, size: bytes, color: bytes) -> bytes:
 _ARROW = struct.Struct("<BdBdBdBd")
 
 
-def arrow(pose_bytes: bytes, shaft_length: float, shaft_diameter: float, head_length: float, head_diameter: float,
-          color: bytes) -> bytes:
-    return (_POSE_1 + pose_bytes + _ARROW.pack(0x11, shaft_length, 0x19, shaft_diameter, 0x21, head_length, 0x29,
-                                               head_diameter) + message_field(6, color))
+def arrow(
+    pose_bytes: bytes,
+    shaft_length: float,
+    shaft_diameter: float,
+    head_length: float,
+    head_diameter: float,
+    color: bytes,
+) -> bytes:
+    return (
+        _POSE_1
+        + pose_bytes
+        + _ARROW.pack(0x11, shaft_length, 0x19, shaft_diameter, 0x21, head_length, 0x29, head_diameter)
+        + message_field(6, color)
+    )
 
 
 # foxglove.TextPrimitive: pose 1, billboard 2, font_size 3, scale_invariant 4, color 5, text 6
-def text(pose_bytes: bytes, content: str, font_size: float, color: bytes, billboard: bool = True,
-         scale_invariant: bool = True) -> bytes:
+def text(
+    pose_bytes: bytes,
+    content: str,
+    font_size: float,
+    color: bytes,
+    billboard: bool = True,
+    scale_invariant: bool = True,
+) -> bytes:
     return _POSE_1 + pose_bytes + _text_tail(content, font_size, color, billboard, scale_invariant)
 
 
 @lru_cache(maxsize=1024)
 def _text_tail(content: str, font_size: float, color: bytes, billboard: bool, scale_invariant: bool) -> bytes:
     """Everything of a TextPrimitive after its pose: the same for a label drawn again elsewhere."""
-    return (varint_field(2, int(billboard)) + double_field(3, font_size) + varint_field(4, int(scale_invariant))
-            + message_field(5, color) + string_field(6, content))
+    return (
+        varint_field(2, int(billboard))
+        + double_field(3, font_size)
+        + varint_field(4, int(scale_invariant))
+        + message_field(5, color)
+        + string_field(6, content)
+    )
 
 
 ENTITY_ARROWS, ENTITY_SPHERES, ENTITY_CYLINDERS, ENTITY_TEXTS = 7, 9, 10, 13
@@ -244,12 +333,19 @@ def primitives(field: int, encoded: list[bytes]) -> bytes:
 
 
 # foxglove.LaserScan: timestamp 1, frame_id 2, pose 3, start_angle 4, end_angle 5, ranges 6, intensities 7
-def laser_scan(stamp_ns: int, frame_id: str, pose_bytes: bytes, start_angle: float, end_angle: float,
-               ranges: np.ndarray) -> bytes:
+def laser_scan(
+    stamp_ns: int, frame_id: str, pose_bytes: bytes, start_angle: float, end_angle: float, ranges: np.ndarray
+) -> bytes:
     """An encoded ``foxglove.LaserScan`` (``pose_bytes``: an encoded Pose; ranges packed as doubles)."""
     data = np.asarray(ranges, dtype="<f8").tobytes()
-    return (stamp_field(stamp_ns) + string_field(2, frame_id) + message_field(3, pose_bytes)
-            + double_field(4, start_angle) + double_field(5, end_angle) + (message_field(6, data) if data else b""))
+    return (
+        stamp_field(stamp_ns)
+        + string_field(2, frame_id)
+        + message_field(3, pose_bytes)
+        + double_field(4, start_angle)
+        + double_field(5, end_angle)
+        + (message_field(6, data) if data else b"")
+    )
 
 
 # foxglove.FrameTransform: timestamp 1, parent_frame_id 2, child_frame_id 3, translation 4, rotation 5
@@ -260,8 +356,14 @@ def frame_transform_tail(parent: str, child: str, x: float, y: float, yaw_rad: f
     """An encoded ``foxglove.FrameTransform`` after its timestamp: ``child`` at (x, y, 0) in
     ``parent``, turned by ``yaw_rad`` about z (prepend :func:`stamp_field`)."""
     half = yaw_rad / 2
-    return (string_field(2, parent) + string_field(3, child) + b"\x22\x1b" + vector3(x, y, 0.0) + b"\x2a\x24"
-            + _QUATERNION.pack(0x09, 0.0, 0x11, 0.0, 0x19, math.sin(half), 0x21, math.cos(half)))
+    return (
+        string_field(2, parent)
+        + string_field(3, child)
+        + b"\x22\x1b"
+        + vector3(x, y, 0.0)
+        + b"\x2a\x24"
+        + _QUATERNION.pack(0x09, 0.0, 0x11, 0.0, 0x19, math.sin(half), 0x21, math.cos(half))
+    )
 
 
 # foxglove.FrameTransforms: transforms 1

@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
@@ -65,7 +64,7 @@ class ForecastSettings:
                 raise ValueError(f"ForecastSettings.{name}: expected a finite number >= 0, found {value}")
 
     @classmethod
-    def from_planner(cls, planner: Any, **overrides) -> "ForecastSettings":
+    def from_planner(cls, planner: Any, **overrides) -> ForecastSettings:
         """The planner's horizon and uncertainty cone where it has them (``planner.config`` or the
         planner itself), the defaults elsewhere."""
         values: dict[str, float] = {}
@@ -101,8 +100,9 @@ class PersonForecast:
         t = np.asarray(t_s, dtype=float)
         radius = np.full(t.shape, self.combined_radius_m)
         if cone:
-            radius = radius + np.minimum(settings.uncertainty_sigmas * self.velocity_sigma_mps * t,
-                                         settings.max_inflation_m)
+            radius = radius + np.minimum(
+                settings.uncertainty_sigmas * self.velocity_sigma_mps * t, settings.max_inflation_m
+            )
         return radius
 
     def ring_times_s(self, settings: ForecastSettings, cone: bool = True) -> np.ndarray:
@@ -172,8 +172,9 @@ class XYTScene:
         # One (P, 6) array of what the rings depend on: fewer, larger numpy calls (this runs every cycle).
         fields = self.person_fields
         if fields is None:
-            fields = np.array([(*p.position, *p.velocity, p.combined_radius_m, p.velocity_sigma_mps)
-                               for p in self.persons])
+            fields = np.array(
+                [(*p.position, *p.velocity, p.combined_radius_m, p.velocity_sigma_mps) for p in self.persons]
+            )
         growth = settings.uncertainty_sigmas * fields[:, 5] if self.cone else np.zeros(count)
         growing = growth > 0
         cap = np.full(count, np.inf)
@@ -288,8 +289,9 @@ class PathView:
 def path_view(path, resolution: int = 24) -> PathView:
     """Path and corridor outlines (one capsule per segment: the corridor is their union)."""
     outlines = []
-    for a, d, length, hw in zip(path.segment_starts, path.segment_directions, path.segment_lengths_m,
-                                path.half_widths_m):
+    for a, d, length, hw in zip(
+        path.segment_starts, path.segment_directions, path.segment_lengths_m, path.half_widths_m
+    ):
         normal = np.array([-d[1], d[0]])
         angle0 = np.arctan2(normal[1], normal[0])
         end = a + d * length + hw * _unit(np.linspace(angle0 - np.pi, angle0, resolution))
@@ -316,17 +318,32 @@ class SceneBuilder:
         self.path = path
         self.path_view = path_view(path)
         # The path's segments as plain numbers, for the lateral deviation of one point per cycle.
-        self._segments = list(zip(np.asarray(path.segment_starts, dtype=float).tolist(),
-                                  np.asarray(path.segment_directions, dtype=float).tolist(),
-                                  np.asarray(path.segment_lengths_m, dtype=float).tolist()))
+        self._segments = list(
+            zip(
+                np.asarray(path.segment_starts, dtype=float).tolist(),
+                np.asarray(path.segment_directions, dtype=float).tolist(),
+                np.asarray(path.segment_lengths_m, dtype=float).tolist(),
+            )
+        )
         self.robot_radius_m = float(robot_radius_m)
         self.settings = settings or ForecastSettings()
         self.cone = cone
         self.shield_interventions = 0
 
-    def build(self, step: int, time_s: float, robot_pose, robot_speed_mps: float, robot_turn_rate_radps: float,
-              observation, decision, plan_time_ms: float = float("nan"), perception: Any = None,
-              true_people: Obstacles | None = None, perception_parts: tuple | None = None) -> CycleScene:
+    def build(
+        self,
+        step: int,
+        time_s: float,
+        robot_pose,
+        robot_speed_mps: float,
+        robot_turn_rate_radps: float,
+        observation,
+        decision,
+        plan_time_ms: float = float("nan"),
+        perception: Any = None,
+        true_people: Obstacles | None = None,
+        perception_parts: tuple | None = None,
+    ) -> CycleScene:
         """The scene of one cycle. ``perception``: the perception object (its last scans, detections
         and blind region are drawn when it has them, as the laser chain does); or, instead of it,
         ``perception_parts`` already taken from it (what a writer in another process receives)."""
@@ -340,10 +357,21 @@ class SceneBuilder:
         parts = perception_parts if perception_parts is not None else perception_parts_of(perception)
         scanners, detections, radii, points, sectors, blind = parts
         horizon = self.settings.horizon_s
-        fields = np.column_stack([tracks.positions, tracks.velocities, tracks.radii_m + self.robot_radius_m,
-                                  tracks.velocity_sigma_mps]) if len(tracks) else None
-        xyt = XYTScene(self.settings, _persons(tracks, self.robot_radius_m), plan_xyt(pose[:2], plan, horizon),
-                       _via_xyt(pose[:2], plan, horizon), self.cone, fields)
+        fields = (
+            np.column_stack(
+                [tracks.positions, tracks.velocities, tracks.radii_m + self.robot_radius_m, tracks.velocity_sigma_mps]
+            )
+            if len(tracks)
+            else None
+        )
+        xyt = XYTScene(
+            self.settings,
+            _persons(tracks, self.robot_radius_m),
+            plan_xyt(pose[:2], plan, horizon),
+            _via_xyt(pose[:2], plan, horizon),
+            self.cone,
+            fields,
+        )
         people = true_people if true_people is not None else tracks
         series = {
             "speed_mps": float(robot_speed_mps),
@@ -358,13 +386,26 @@ class SceneBuilder:
             "candidates": int(len(plan_view.candidate_costs)),
         }
         return CycleScene(
-            step=int(step), time_s=float(time_s), robot_pose=pose, robot_speed_mps=float(robot_speed_mps),
-            robot_turn_rate_radps=float(robot_turn_rate_radps), robot_radius_m=self.robot_radius_m,
+            step=int(step),
+            time_s=float(time_s),
+            robot_pose=pose,
+            robot_speed_mps=float(robot_speed_mps),
+            robot_turn_rate_radps=float(robot_turn_rate_radps),
+            robot_radius_m=self.robot_radius_m,
             command=(float(decision.command.speed_mps), float(decision.command.turn_rate_radps)),
-            tracks=tracks, detections_world=detections, detection_radii_m=radii, scan_points_world=points,
-            scanners=scanners, blind_sectors_rad=sectors, blind_polygon_world=blind, true_people=true_people,
+            tracks=tracks,
+            detections_world=detections,
+            detection_radii_m=radii,
+            scan_points_world=points,
+            scanners=scanners,
+            blind_sectors_rad=sectors,
+            blind_polygon_world=blind,
+            true_people=true_people,
             subgoal=np.asarray(plan.target if plan.status == "goal" else self._subgoal(plan), dtype=float),
-            subgoal_index=int(plan.subgoal_index), plan=plan_view, xyt=xyt, series=series,
+            subgoal_index=int(plan.subgoal_index),
+            plan=plan_view,
+            xyt=xyt,
+            series=series,
             static_segments=static_segments_of(observation),
         )
 
@@ -374,6 +415,7 @@ class SceneBuilder:
 
 
 # -- pieces ----------------------------------------------------------------------------------------
+
 
 def plan_xyt(robot_position, plan, horizon_s: float) -> np.ndarray:
     """The robot's plan as (x, y, t) from the robot at t = 0, up to the horizon (see module notes)."""
@@ -401,8 +443,9 @@ def plan_xyt(robot_position, plan, horizon_s: float) -> np.ndarray:
         before = lengths[(lengths > 0) & (lengths < slow_length)]
         beyond = lengths[lengths > slow_length]
         arc = np.concatenate([[0.0], before, [slow_length], beyond])
-        t = np.concatenate([[0.0], before / speed if speed > 0 else before, [slow_s],
-                            slow_s + (beyond - slow_length) / float(after)])
+        t = np.concatenate(
+            [[0.0], before / speed if speed > 0 else before, [slow_s], slow_s + (beyond - slow_length) / float(after)]
+        )
         points = np.column_stack([np.interp(arc, lengths, line[:, 0]), np.interp(arc, lengths, line[:, 1])])
         return _clip_to_horizon(np.column_stack([points, t]), horizon_s)
     if speed <= 1e-9:
@@ -435,7 +478,7 @@ def _clip_to_horizon(xyt: np.ndarray, horizon_s: float) -> np.ndarray:
     a, b = xyt[last], xyt[last + 1]
     fraction = (horizon_s - a[2]) / max(b[2] - a[2], 1e-12)
     out = np.empty((last + 2, 3))  # the points inside, then the one at the horizon
-    out[:last + 1] = xyt[:last + 1]
+    out[: last + 1] = xyt[: last + 1]
     out[last + 1] = a + fraction * (b - a)
     return out
 
@@ -461,10 +504,18 @@ def _persons(tracks: Obstacles, robot_radius_m: float) -> list[PersonForecast]:
     # Each person's position and velocity are rows of private copies; the scalars read in one go
     # (a crowd's cycle: one numpy call per field, not per person and field).
     positions, velocities = tracks.positions.copy(), tracks.velocities.copy()
-    return [PersonForecast(int(track), positions[i], velocities[i], radius, combined, position_sigma, velocity_sigma)
-            for i, (track, radius, combined, position_sigma, velocity_sigma) in enumerate(zip(
-                tracks.ids.tolist(), tracks.radii_m.tolist(), (tracks.radii_m + robot_radius_m).tolist(),
-                tracks.position_sigma_m.tolist(), tracks.velocity_sigma_mps.tolist()))]
+    return [
+        PersonForecast(int(track), positions[i], velocities[i], radius, combined, position_sigma, velocity_sigma)
+        for i, (track, radius, combined, position_sigma, velocity_sigma) in enumerate(
+            zip(
+                tracks.ids.tolist(),
+                tracks.radii_m.tolist(),
+                (tracks.radii_m + robot_radius_m).tolist(),
+                tracks.position_sigma_m.tolist(),
+                tracks.velocity_sigma_mps.tolist(),
+            )
+        )
+    ]
 
 
 def _plan_view(plan, extras: dict) -> PlanView:
@@ -478,11 +529,17 @@ def _plan_view(plan, extras: dict) -> PlanView:
     if not (isinstance(terms, dict) and isinstance(terms.get("chosen"), dict)):
         terms = None
     return PlanView(
-        status=str(plan.status), speed_mps=float(plan.speed_mps), target=np.asarray(plan.target, dtype=float).reshape(2),
+        status=str(plan.status),
+        speed_mps=float(plan.speed_mps),
+        target=np.asarray(plan.target, dtype=float).reshape(2),
         via_points=np.asarray(plan.via_points, dtype=float).reshape(-1, 2),
         waypoints=np.asarray(plan.waypoints, dtype=float).reshape(-1, 2),
         candidate_polylines=[np.asarray(p, dtype=float).reshape(-1, 2) for p in plan.candidate_polylines],
-        candidate_costs=costs, chosen=chosen, runner_up=runner_up, cost_terms=terms, extras=extras,
+        candidate_costs=costs,
+        chosen=chosen,
+        runner_up=runner_up,
+        cost_terms=terms,
+        extras=extras,
     )
 
 
@@ -495,10 +552,17 @@ def perception_parts_of(perception):
     models = getattr(perception, "scanners", ()) or ()
     scans = getattr(perception, "last_scans", None) or []
     for model, ranges in zip(models, scans):
-        scanners.append(ScannerView(str(model.name), np.asarray(model.mount_pose(), dtype=float),
-                                    float(model.angle_min_rad), float(model.angle_increment_rad),
-                                    np.asarray(ranges, dtype=float).reshape(-1), float(model.range_min_m),
-                                    float(model.range_max_m)))
+        scanners.append(
+            ScannerView(
+                str(model.name),
+                np.asarray(model.mount_pose(), dtype=float),
+                float(model.angle_min_rad),
+                float(model.angle_increment_rad),
+                np.asarray(ranges, dtype=float).reshape(-1),
+                float(model.range_min_m),
+                float(model.range_max_m),
+            )
+        )
     return (scanners, *perception_arrays_of(perception))
 
 
@@ -603,6 +667,17 @@ def _cost(costs: np.ndarray, index: int | None) -> float | None:
 
 
 __all__ = [
-    "CycleScene", "ForecastSettings", "PathView", "PersonForecast", "PlanView", "ScannerView", "SceneBuilder",
-    "XYTScene", "candidate_colour", "circle_polygon", "clearance_m", "path_view", "plan_xyt",
+    "CycleScene",
+    "ForecastSettings",
+    "PathView",
+    "PersonForecast",
+    "PlanView",
+    "ScannerView",
+    "SceneBuilder",
+    "XYTScene",
+    "candidate_colour",
+    "circle_polygon",
+    "clearance_m",
+    "path_view",
+    "plan_xyt",
 ]

@@ -35,16 +35,35 @@ def collect_scenes(scenario, perception: str = "oracle", **run_kwargs) -> list[C
             builder.append(SceneBuilder(path, scenario.robot.radius, ForecastSettings.from_planner(record.planner)))
         world = record.world
         present = np.isfinite(world.obstacle_positions).all(axis=1)
-        truth = Obstacles(world.obstacle_positions[present], world.obstacle_velocities[present],
-                          world.obstacle_radii_m[present], ids=np.flatnonzero(present))
+        truth = Obstacles(
+            world.obstacle_positions[present],
+            world.obstacle_velocities[present],
+            world.obstacle_radii_m[present],
+            ids=np.flatnonzero(present),
+        )
         state = record.state
-        scenes.append(builder[0].build(record.step, record.time_s, (state.x, state.y, state.heading_rad),
-                                       state.speed_mps, state.turn_rate_radps, record.observation, record.decision,
-                                       record.plan_time_ms, record.perception if record.scans is not None else None,
-                                       truth))
+        scenes.append(
+            builder[0].build(
+                record.step,
+                record.time_s,
+                (state.x, state.y, state.heading_rad),
+                state.speed_mps,
+                state.turn_rate_radps,
+                record.observation,
+                record.decision,
+                record.plan_time_ms,
+                record.perception if record.scans is not None else None,
+                truth,
+            )
+        )
 
-    run_episode(scenario, perception=perception, planner_overrides=display_overrides(scenario, scenario.planner.name),
-                on_step=on_step, **run_kwargs)
+    run_episode(
+        scenario,
+        perception=perception,
+        planner_overrides=display_overrides(scenario, scenario.planner.name),
+        on_step=on_step,
+        **run_kwargs,
+    )
     return scenes
 
 
@@ -71,8 +90,14 @@ def plot_cycle(scene: CycleScene, path_view, file: str | Path, title: str | None
     low, high = (finite.min(), finite.max()) if len(finite) else (0.0, 0.0)
     for i, line in enumerate(plan.candidate_polylines):
         colour = candidate_colour(float(costs[i]) if i < len(costs) else np.inf, low, high)
-        top.plot(line[:, 0], line[:, 1], color=colour[:3], alpha=0.5, lw=0.8,
-                 label="candidates (green: low E, red: high E)" if i == 0 else None)
+        top.plot(
+            line[:, 0],
+            line[:, 1],
+            color=colour[:3],
+            alpha=0.5,
+            lw=0.8,
+            label="candidates (green: low E, red: high E)" if i == 0 else None,
+        )
     top.plot(plan.waypoints[:, 0], plan.waypoints[:, 1], color="#0072ff", lw=2.5, label="chosen plan")
     if len(plan.via_points):
         top.plot(plan.via_points[:, 0], plan.via_points[:, 1], "kx", ms=9, mew=2, label="via points")
@@ -82,16 +107,25 @@ def plot_cycle(scene: CycleScene, path_view, file: str | Path, title: str | None
     for person in scene.xyt.persons:
         px, py = person.position
         top.add_patch(plt.Circle((px, py), person.radius_m, color="#d62728", alpha=0.6))
-        top.arrow(px, py, 2.0 * person.velocity[0], 2.0 * person.velocity[1], width=0.025, color="#8b0000",
-                  length_includes_head=True)
+        top.arrow(
+            px,
+            py,
+            2.0 * person.velocity[0],
+            2.0 * person.velocity[1],
+            width=0.025,
+            color="#8b0000",
+            length_includes_head=True,
+        )
     if len(scene.scan_points_world):
         top.plot(*scene.scan_points_world.T, ".", ms=2, color="#1f77b4", label="scan points")
     top.plot(*scene.subgoal, marker="*", ms=14, color="#e6b800", ls="none", label="subgoal")
     top.set_aspect("equal")
     top.set_xlabel("x (m)")
     top.set_ylabel("y (m)")
-    top.set_title(f"t = {scene.time_s:.1f} s: {plan.status} at {plan.speed_mps:.2f} m/s "
-                  f"({len(plan.candidate_polylines)} candidates)")
+    top.set_title(
+        f"t = {scene.time_s:.1f} s: {plan.status} at {plan.speed_mps:.2f} m/s "
+        f"({len(plan.candidate_polylines)} candidates)"
+    )
     top.plot([], [], color="#8b0000", lw=2, label="person: velocity × 2 s")
     top.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, fontsize=7.5, framealpha=0.9)
     top.grid(alpha=0.3)
@@ -109,8 +143,7 @@ def plot_cycle(scene: CycleScene, path_view, file: str | Path, title: str | None
     xyt.plot(line[:, 0], line[:, 1], line[:, 2], color="#0072ff", lw=2.5, label="robot plan (x, y, t)")
     via = scene.xyt.via_points_xyt
     if len(via):
-        xyt.scatter(via[:, 0], via[:, 1], via[:, 2], color="k", marker="x", s=50, depthshade=False,
-                    label="via points")
+        xyt.scatter(via[:, 0], via[:, 1], via[:, 2], color="k", marker="x", s=50, depthshade=False, label="via points")
     horizon = scene.xyt.settings.horizon_s
     xyt.plot([x, x], [y, y], [0, horizon], color="0.5", lw=0.8, ls=":")
     for outline in path_view.corridor_outlines:

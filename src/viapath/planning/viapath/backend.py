@@ -43,14 +43,16 @@ def resolve(choice: str) -> str:
         override = os.environ.get(ENVIRONMENT_VARIABLE, "").strip().lower()
         if override and override != "auto":
             if override not in BACKENDS:
-                raise ValueError(f"environment variable {ENVIRONMENT_VARIABLE}={override!r}: expected one of "
-                                 f"{', '.join(BACKENDS)}")
+                raise ValueError(
+                    f"environment variable {ENVIRONMENT_VARIABLE}={override!r}: expected one of {', '.join(BACKENDS)}"
+                )
             choice = override
         else:
             return "numba" if numba_available() else "numpy"
     if choice == "numba" and not numba_available():
-        raise ValueError("viapath option backend='numba' needs numba: install the extra 'fast' "
-                         "(pip install 'viapath[fast]')")
+        raise ValueError(
+            "viapath option backend='numba' needs numba: install the extra 'fast' (pip install 'viapath[fast]')"
+        )
     if choice not in ("numpy", "numba"):
         raise ValueError(f"viapath option backend={choice!r}: expected one of {', '.join(BACKENDS)}")
     return choice
@@ -66,41 +68,107 @@ class Backend:
     # the smaller kernels do those steps, with the same decisions.
     whole_steps: bool = True
 
-    def legs_first_contact(self, starts, start_times, velocities, durations, positions, velocities_obs, radii,
-                           growth, growth_until_s, leg_radii_m=None) -> np.ndarray:
+    def legs_first_contact(
+        self,
+        starts,
+        start_times,
+        velocities,
+        durations,
+        positions,
+        velocities_obs,
+        radii,
+        growth,
+        growth_until_s,
+        leg_radii_m=None,
+    ) -> np.ndarray:
         if self.name == "numpy":
-            return numpy_legs_first_contact(starts, start_times, velocities, durations, positions, velocities_obs,
-                                            radii, growth, growth_until_s, leg_radii_m)
+            return numpy_legs_first_contact(
+                starts,
+                start_times,
+                velocities,
+                durations,
+                positions,
+                velocities_obs,
+                radii,
+                growth,
+                growth_until_s,
+                leg_radii_m,
+            )
         from viapath.planning.viapath import kernels
 
         n = len(positions)
         legs = np.zeros(len(starts)) if leg_radii_m is None else _c(leg_radii_m)
         return kernels.legs_first_contact(
-            _c(starts), _c(start_times), _c(velocities), _c(durations), _c(positions), _c(velocities_obs),
-            _per_obstacle(radii, n), _per_obstacle(growth, n), _per_obstacle(growth_until_s, n), legs)
+            _c(starts),
+            _c(start_times),
+            _c(velocities),
+            _c(durations),
+            _c(positions),
+            _c(velocities_obs),
+            _per_obstacle(radii, n),
+            _per_obstacle(growth, n),
+            _per_obstacle(growth_until_s, n),
+            legs,
+        )
 
-    def via_options(self, starts, start_times, speeds, positions, velocities, via_radii, growth, growth_until_s,
-                    envelope_m, max_time_s):
+    def via_options(
+        self,
+        starts,
+        start_times,
+        speeds,
+        positions,
+        velocities,
+        via_radii,
+        growth,
+        growth_until_s,
+        envelope_m,
+        max_time_s,
+    ):
         if self.name == "numpy":
-            return numpy_via_options(starts, start_times, speeds, positions, velocities, via_radii, growth,
-                                     growth_until_s, envelope_m, max_time_s)
+            return numpy_via_options(
+                starts,
+                start_times,
+                speeds,
+                positions,
+                velocities,
+                via_radii,
+                growth,
+                growth_until_s,
+                envelope_m,
+                max_time_s,
+            )
         from viapath.planning.viapath import kernels
 
         n = len(starts)
-        return kernels.via_options(_c(starts), _c(start_times), _c(speeds), _c(positions), _c(velocities),
-                                   _per_obstacle(via_radii, n), _per_obstacle(growth, n),
-                                   _per_obstacle(growth_until_s, n), _per_obstacle(envelope_m, n), float(max_time_s))
+        return kernels.via_options(
+            _c(starts),
+            _c(start_times),
+            _c(speeds),
+            _c(positions),
+            _c(velocities),
+            _per_obstacle(via_radii, n),
+            _per_obstacle(growth, n),
+            _per_obstacle(growth_until_s, n),
+            _per_obstacle(envelope_m, n),
+            float(max_time_s),
+        )
 
     def legs_inside(self, path, starts, ends, spacing_m: float, tolerance_m: float) -> np.ndarray:
         if self.name == "numpy":
             return path.legs_inside(starts, ends, spacing_m, tolerance_m)
         from viapath.planning.viapath import kernels
 
-        return kernels.legs_inside(*_corridor(path), _c(np.reshape(starts, (-1, 2))), _c(np.reshape(ends, (-1, 2))),
-                                   float(spacing_m), float(tolerance_m))
+        return kernels.legs_inside(
+            *_corridor(path),
+            _c(np.reshape(starts, (-1, 2))),
+            _c(np.reshape(ends, (-1, 2))),
+            float(spacing_m),
+            float(tolerance_m),
+        )
 
-    def goal_legs_inside(self, path, starts, subgoal, subgoal_index: int, spacing_m: float,
-                         tolerance_m: float) -> np.ndarray | None:
+    def goal_legs_inside(
+        self, path, starts, subgoal, subgoal_index: int, spacing_m: float, tolerance_m: float
+    ) -> np.ndarray | None:
         """None on the numpy path (the caller's own code is the reference)."""
         if self.name == "numpy":
             return None
@@ -109,9 +177,13 @@ class Backend:
         inside = kernels.goal_legs_inside(*_corridor(path), _c(starts), int(subgoal_index), float(tolerance_m))
         if not inside.all():
             rest = np.flatnonzero(~inside)
-            inside[rest] = kernels.legs_inside(*_corridor(path), _c(starts[rest]),
-                                               _c(np.broadcast_to(subgoal, (len(rest), 2))), float(spacing_m),
-                                               float(tolerance_m))
+            inside[rest] = kernels.legs_inside(
+                *_corridor(path),
+                _c(starts[rest]),
+                _c(np.broadcast_to(subgoal, (len(rest), 2))),
+                float(spacing_m),
+                float(tolerance_m),
+            )
         return inside
 
     def goal_legs(self, checks, starts, start_times, speeds, horizon_s: float):
@@ -122,11 +194,21 @@ class Backend:
         from viapath.planning.viapath import kernels
 
         obstacles = checks.kernel_obstacles()
-        return kernels.goal_legs(_c(starts), _c(start_times), _c(speeds), _c(checks.subgoal),
-                                 float(checks.stop_short_m), float(horizon_s), checks.kernel_continuation(),
-                                 *obstacles, checks.kernel_envelope(), *_corridor(checks.path),
-                                 int(checks.subgoal_index), float(checks.corridor_check_spacing_m),
-                                 float(checks.corridor_tolerance_m))
+        return kernels.goal_legs(
+            _c(starts),
+            _c(start_times),
+            _c(speeds),
+            _c(checks.subgoal),
+            float(checks.stop_short_m),
+            float(horizon_s),
+            checks.kernel_continuation(),
+            *obstacles,
+            checks.kernel_envelope(),
+            *_corridor(checks.path),
+            int(checks.subgoal_index),
+            float(checks.corridor_check_spacing_m),
+            float(checks.corridor_tolerance_m),
+        )
 
     def grow(self, checks, slow_checks, roots, config):
         """:func:`.candidates.grow`'s whole candidate tree in one compiled call: the node store (floats
@@ -143,14 +225,39 @@ class Backend:
         segment = int(path.project(checks.position)[0]) if index >= 2 else 0
         slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
         return kernels.grow(
-            _c(checks.position), _c(checks.subgoal), _c(roots.speeds), int(roots.nominal_index), _c(roots.directions),
-            _c(roots.lengths), np.ascontiguousarray(roots.free, dtype=np.bool_), _c(roots.contact), positions,
-            velocities, radii, growth, until, _per_obstacle(checks.via_radii, len(positions)),
-            np.ascontiguousarray(checks.obstacles.ids, dtype=np.int64), slow_radii, slow_growth, slow_until,
-            slow_times, bool(len(slow_times)), float(checks.stop_short_m), float(checks.horizon_s),
-            checks.kernel_continuation(), checks.kernel_envelope(), *_corridor(path), _c(path.waypoints), segment,
-            index, float(checks.corridor_check_spacing_m), float(checks.corridor_tolerance_m), int(config.max_depth),
-            int(config.max_root_obstacles))
+            _c(checks.position),
+            _c(checks.subgoal),
+            _c(roots.speeds),
+            int(roots.nominal_index),
+            _c(roots.directions),
+            _c(roots.lengths),
+            np.ascontiguousarray(roots.free, dtype=np.bool_),
+            _c(roots.contact),
+            positions,
+            velocities,
+            radii,
+            growth,
+            until,
+            _per_obstacle(checks.via_radii, len(positions)),
+            np.ascontiguousarray(checks.obstacles.ids, dtype=np.int64),
+            slow_radii,
+            slow_growth,
+            slow_until,
+            slow_times,
+            bool(len(slow_times)),
+            float(checks.stop_short_m),
+            float(checks.horizon_s),
+            checks.kernel_continuation(),
+            checks.kernel_envelope(),
+            *_corridor(path),
+            _c(path.waypoints),
+            segment,
+            index,
+            float(checks.corridor_check_spacing_m),
+            float(checks.corridor_tolerance_m),
+            int(config.max_depth),
+            int(config.max_root_obstacles),
+        )
 
     def choose(self, checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.ndarray, integers: np.ndarray):
         """The planner's choice up to its shield check in one compiled call (roots, step 1, the candidate tree,
@@ -159,14 +266,51 @@ class Backend:
         are the kernel's, filled in by the planner."""
         if self.name == "numpy" or not self.whole_steps:
             return None
-        (robot, positions, velocities, radii, growth, until, via_radii, ids, continuation, envelope, starts,
-         directions, lengths, half_widths, waypoints) = checks.kernel_choice_inputs()
+        (
+            robot,
+            positions,
+            velocities,
+            radii,
+            growth,
+            until,
+            via_radii,
+            ids,
+            continuation,
+            envelope,
+            starts,
+            directions,
+            lengths,
+            half_widths,
+            waypoints,
+        ) = checks.kernel_choice_inputs()
         _, _, slow_radii, slow_growth, slow_until = (
-            (positions, velocities, radii, growth, until) if slow_checks is checks else slow_checks.kernel_obstacles())
+            (positions, velocities, radii, growth, until) if slow_checks is checks else slow_checks.kernel_obstacles()
+        )
         return _kernels().choose(
-            robot, _c(speeds), _c(checks.subgoal), positions, velocities, radii, growth, until, via_radii, ids,
-            slow_radii, slow_growth, slow_until, slow_times, continuation, envelope, starts, directions, lengths,
-            half_widths, waypoints, settings, integers)
+            robot,
+            _c(speeds),
+            _c(checks.subgoal),
+            positions,
+            velocities,
+            radii,
+            growth,
+            until,
+            via_radii,
+            ids,
+            slow_radii,
+            slow_growth,
+            slow_until,
+            slow_times,
+            continuation,
+            envelope,
+            starts,
+            directions,
+            lengths,
+            half_widths,
+            waypoints,
+            settings,
+            integers,
+        )
 
     def corridor_excess(self, path, points) -> np.ndarray:
         if self.name == "numpy":
@@ -175,17 +319,35 @@ class Backend:
 
         return kernels.corridor_excess(*_corridor(path), _c(points))
 
-    def escape_contacts(self, positions, times, positions_obs, velocities_obs, check_radii, growth, growth_until_s,
-                        overlapping, steps: int):
+    def escape_contacts(
+        self,
+        positions,
+        times,
+        positions_obs,
+        velocities_obs,
+        check_radii,
+        growth,
+        growth_until_s,
+        overlapping,
+        steps: int,
+    ):
         """First contact step (K,) and the gaps to the people overlapped now (smallest, last: (K, M)) of
         K roll-outs; None on the numpy path (:func:`.escape.escape_scores` is the reference)."""
         if self.name == "numpy":
             return None
         from viapath.planning.viapath import kernels
 
-        return kernels.escape_contacts(_c(positions), _c(times), _c(positions_obs), _c(velocities_obs),
-                                       _c(check_radii), _c(growth), _c(growth_until_s),
-                                       np.ascontiguousarray(overlapping, dtype=np.bool_), int(steps))
+        return kernels.escape_contacts(
+            _c(positions),
+            _c(times),
+            _c(positions_obs),
+            _c(velocities_obs),
+            _c(check_radii),
+            _c(growth),
+            _c(growth_until_s),
+            np.ascontiguousarray(overlapping, dtype=np.bool_),
+            int(steps),
+        )
 
     def escape(self, checks, limits: MotionLimits, config, fan, previous=None, score_standing: bool = False):
         """:func:`.escape.stop_or_escape`'s figures in two compiled calls: :func:`.kernels.escape_headings` (the
@@ -202,33 +364,76 @@ class Backend:
         dt = config.escape_dt_s
         steps = max(1, int(round(config.escape_s / dt)))
         calm = bool(config.calm_escape and previous is not None)
-        settings = np.array([
-            dt, config.escape_s, limits.max_accel_mps2 * dt, limits.max_turn_accel_radps2 * dt, limits.max_speed_mps,
-            limits.max_turn_rate_radps, checks.corridor_tolerance_m,
-            max(config.escape_max_excess_m, checks.corridor_tolerance_m),
-            max(top, 1e-9), config.escape_continuity_s if calm else 0.0,
-            previous.speed_mps if calm else 0.0, previous.turn_rate_radps if calm else 0.0, checks.horizon_s,
-            config.horizon_s], dtype=np.float64)
+        settings = np.array(
+            [
+                dt,
+                config.escape_s,
+                limits.max_accel_mps2 * dt,
+                limits.max_turn_accel_radps2 * dt,
+                limits.max_speed_mps,
+                limits.max_turn_rate_radps,
+                checks.corridor_tolerance_m,
+                max(config.escape_max_excess_m, checks.corridor_tolerance_m),
+                max(top, 1e-9),
+                config.escape_continuity_s if calm else 0.0,
+                previous.speed_mps if calm else 0.0,
+                previous.turn_rate_radps if calm else 0.0,
+                checks.horizon_s,
+                config.horizon_s,
+            ],
+            dtype=np.float64,
+        )
         robot = checks.kernel_robot()
         obstacles = checks.kernel_obstacles()
         standing_free, headings = kernels.escape_headings(robot, *obstacles, row_turns, settings, steps)
         if standing_free and not score_standing:
             return True, None, None, None
-        ends, score = kernels.escape_scores(robot, commands, turn_rows, np.sin(headings), np.cos(headings), *obstacles,
-                                            *_corridor(checks.path), _c(checks.subgoal), settings, steps, calm)
+        ends, score = kernels.escape_scores(
+            robot,
+            commands,
+            turn_rows,
+            np.sin(headings),
+            np.cos(headings),
+            *obstacles,
+            *_corridor(checks.path),
+            _c(checks.subgoal),
+            settings,
+            steps,
+            calm,
+        )
         return standing_free, commands, ends, score
 
-    def track(self, state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float, steps: int,
-              heading_gain: float) -> np.ndarray:
+    def track(
+        self,
+        state: UnicycleState,
+        target,
+        speed_mps: float,
+        limits: MotionLimits,
+        dt_s: float,
+        steps: int,
+        heading_gain: float,
+    ) -> np.ndarray:
         if self.name == "numpy":
             return numpy_track(state, target, speed_mps, limits, dt_s, steps, heading_gain)
         from viapath.planning.viapath import kernels
 
-        return kernels.track(float(state.x), float(state.y), float(state.heading_rad), float(state.speed_mps),
-                             float(state.turn_rate_radps), float(target[0]), float(target[1]), float(speed_mps),
-                             float(limits.max_speed_mps), float(limits.max_turn_rate_radps),
-                             float(limits.max_accel_mps2), float(limits.max_turn_accel_radps2), float(dt_s),
-                             int(steps), float(heading_gain))
+        return kernels.track(
+            float(state.x),
+            float(state.y),
+            float(state.heading_rad),
+            float(state.speed_mps),
+            float(state.turn_rate_radps),
+            float(target[0]),
+            float(target[1]),
+            float(speed_mps),
+            float(limits.max_speed_mps),
+            float(limits.max_turn_rate_radps),
+            float(limits.max_accel_mps2),
+            float(limits.max_turn_accel_radps2),
+            float(dt_s),
+            int(steps),
+            float(heading_gain),
+        )
 
 
 def _kernels():
@@ -253,8 +458,12 @@ def _corridor(path):
     """The path's segment arrays, C-contiguous float64 (cached on the path object)."""
     arrays = getattr(path, "_kernel_arrays", None)
     if arrays is None:
-        arrays = (_c(path.segment_starts), _c(path.segment_directions), _c(path.segment_lengths_m),
-                  _c(path.half_widths_m))
+        arrays = (
+            _c(path.segment_starts),
+            _c(path.segment_directions),
+            _c(path.segment_lengths_m),
+            _c(path.half_widths_m),
+        )
         path._kernel_arrays = arrays
     return arrays
 
@@ -280,8 +489,7 @@ def whole_steps_compiled() -> bool:
     compiled in this process or in numba's on-disk cache."""
     from viapath.planning.viapath import kernels
 
-    for kernel in (kernels.goal_legs, kernels.grow, kernels.choose,
-                   kernels.escape_headings, kernels.escape_scores):
+    for kernel in (kernels.goal_legs, kernels.grow, kernels.choose, kernels.escape_headings, kernels.escape_scores):
         if kernel.signatures:
             continue
         cache_file = getattr(getattr(kernel, "_cache", None), "_cache_file", None)
@@ -304,8 +512,12 @@ def compile_kernels() -> bool:
         from viapath.path import DesignatedPath
         from viapath.planning import make_planner
 
-        planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
-                               nominal_speed_mps=0.2, backend="numba")
+        planner = make_planner(
+            "viapath",
+            DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
+            nominal_speed_mps=0.2,
+            backend="numba",
+        )
         for people in warm_up_crowds():
             planner.reset()
             planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people))
@@ -318,8 +530,10 @@ def warm_up_crowds() -> list:
     from viapath.observation import Obstacles
 
     sides = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
-    return [Obstacles(np.array([[2.0, 0.0]]), np.array([[-0.2, 0.0]]), np.array([0.3])),
-            Obstacles(0.9 * sides, -0.3 * sides, np.full(4, 0.3))]
+    return [
+        Obstacles(np.array([[2.0, 0.0]]), np.array([[-0.2, 0.0]]), np.array([0.3])),
+        Obstacles(0.9 * sides, -0.3 * sides, np.full(4, 0.3)),
+    ]
 
 
 #: The compiled backend without its whole-step kernels (the recipe's steps in numpy, their leg checks and via

@@ -98,8 +98,10 @@ class _Tree:
         start = self._size
         end = start + len(columns["position"])
         if end > len(self._columns["position"]):
-            self._columns = {name: np.concatenate([array[:start], np.empty((2 * end, *array.shape[1:]), array.dtype)])
-                             for name, array in self._columns.items()}
+            self._columns = {
+                name: np.concatenate([array[:start], np.empty((2 * end, *array.shape[1:]), array.dtype)])
+                for name, array in self._columns.items()
+            }
         for name, array in self._columns.items():
             array[start:end] = columns.get(name, 0.0)
         self._size = end
@@ -107,7 +109,7 @@ class _Tree:
 
     def stacked(self) -> dict[str, np.ndarray]:
         """The columns of the nodes so far (views: later nodes do not change them)."""
-        return {name: array[:self._size] for name, array in self._columns.items()}
+        return {name: array[: self._size] for name, array in self._columns.items()}
 
 
 @dataclass
@@ -173,7 +175,7 @@ class RootLegs:
     contact: np.ndarray
 
     @classmethod
-    def of(cls, checks: LegChecks, speeds: np.ndarray, nominal_index: int) -> "RootLegs":
+    def of(cls, checks: LegChecks, speeds: np.ndarray, nominal_index: int) -> RootLegs:
         starts = checks.position[None].repeat(len(speeds), axis=0)  # (np.broadcast_to's Python costs more)
         directions, lengths, free, contact = checks.goal_legs(starts, np.zeros(len(speeds)), speeds)
         return cls(speeds, nominal_index, directions, lengths, free, contact)
@@ -193,8 +195,12 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
     n_speeds = len(speeds)
     tree = _Tree()
     frontier = tree.extend(
-        position=checks.position[None].repeat(n_speeds, axis=0), time_s=np.zeros(n_speeds), speed=speeds,
-        parent=np.full(n_speeds, -1), length_m=np.zeros(n_speeds), first_direction=roots.directions,
+        position=checks.position[None].repeat(n_speeds, axis=0),
+        time_s=np.zeros(n_speeds),
+        speed=speeds,
+        parent=np.full(n_speeds, -1),
+        length_m=np.zeros(n_speeds),
+        first_direction=roots.directions,
         way=_ways(n_speeds, STRAIGHT),
     )
     leaves, goal_length = [frontier[roots.free]], [roots.lengths[roots.free]]
@@ -233,9 +239,15 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
     if len(leaves) == 0:
         return None
     return Candidates(
-        nodes=data, leaves=leaves, total_length_m=data["length_m"][leaves] + np.concatenate(goal_length),
-        speed_mps=data["speed"][leaves], slow_s=data["slow_s"][leaves], slow_speed_mps=data["slow_speed"][leaves],
-        first_direction=data["first_direction"][leaves], ways=data["way"][leaves], subgoal=checks.subgoal,
+        nodes=data,
+        leaves=leaves,
+        total_length_m=data["length_m"][leaves] + np.concatenate(goal_length),
+        speed_mps=data["speed"][leaves],
+        slow_s=data["slow_s"][leaves],
+        slow_speed_mps=data["slow_speed"][leaves],
+        first_direction=data["first_direction"][leaves],
+        ways=data["way"][leaves],
+        subgoal=checks.subgoal,
     )
 
 
@@ -243,16 +255,30 @@ def _candidates_of(store, subgoal: np.ndarray) -> Candidates | None:
     """Candidates from the compiled tree's node store (:meth:`.backend.Backend.grow`): the same arrays as
     the numpy :func:`grow` builds, leaves in node order as there."""
     floats, integers = store
-    data = {"position": floats[:, 0:2], "time_s": floats[:, 2], "speed": floats[:, 3], "parent": integers[:, 0],
-            "length_m": floats[:, 4], "first_direction": floats[:, 5:7], "way": integers[:, 1:4],
-            "slow_s": floats[:, 7], "slow_speed": floats[:, 8]}
+    data = {
+        "position": floats[:, 0:2],
+        "time_s": floats[:, 2],
+        "speed": floats[:, 3],
+        "parent": integers[:, 0],
+        "length_m": floats[:, 4],
+        "first_direction": floats[:, 5:7],
+        "way": integers[:, 1:4],
+        "slow_s": floats[:, 7],
+        "slow_speed": floats[:, 8],
+    }
     leaves = np.flatnonzero(integers[:, 4])
     if len(leaves) == 0:
         return None
     return Candidates(
-        nodes=data, leaves=leaves, total_length_m=data["length_m"][leaves] + floats[leaves, 9],
-        speed_mps=data["speed"][leaves], slow_s=data["slow_s"][leaves], slow_speed_mps=data["slow_speed"][leaves],
-        first_direction=data["first_direction"][leaves], ways=data["way"][leaves], subgoal=subgoal,
+        nodes=data,
+        leaves=leaves,
+        total_length_m=data["length_m"][leaves] + floats[leaves, 9],
+        speed_mps=data["speed"][leaves],
+        slow_s=data["slow_s"][leaves],
+        slow_speed_mps=data["slow_speed"][leaves],
+        first_direction=data["first_direction"][leaves],
+        ways=data["way"][leaves],
+        subgoal=subgoal,
     )
 
 
@@ -293,8 +319,9 @@ def _one_per_shape(checks: LegChecks, contact: np.ndarray) -> np.ndarray:
     return kept
 
 
-def _round_static_shapes(checks: LegChecks, positions: np.ndarray, node_index: np.ndarray,
-                         obstacle_index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _round_static_shapes(
+    checks: LegChecks, positions: np.ndarray, node_index: np.ndarray, obstacle_index: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """(node, obstacle) pairs with each static disc replaced by the two extreme discs of its shape as seen
     from the node (:meth:`.checks.LegChecks.static_extremes`): via points go round the whole shape, not
     round the one disc a leg met first. Pairs of people stay as they are; repeated pairs are made once."""
@@ -323,9 +350,17 @@ def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: 
     obstacles = checks.obstacles
     # The radius grows with prediction uncertainty; it is evaluated near the expected passing time.
     pair, option, t_k, leg_velocity, via = checks.backend.via_options(
-        starts, times, speeds, obstacles.positions[obstacle_index], obstacles.velocities[obstacle_index],
-        checks.via_radii[obstacle_index], checks.growth[obstacle_index], checks.growth_until_s[obstacle_index],
-        _envelope_of_pairs(checks, speeds, obstacle_index), 3 * checks.horizon_s)
+        starts,
+        times,
+        speeds,
+        obstacles.positions[obstacle_index],
+        obstacles.velocities[obstacle_index],
+        checks.via_radii[obstacle_index],
+        checks.growth[obstacle_index],
+        checks.growth_until_s[obstacle_index],
+        _envelope_of_pairs(checks, speeds, obstacle_index),
+        3 * checks.horizon_s,
+    )
     if len(pair) == 0:
         return None
     starts_k, times_k, speeds_k = starts[pair], times[pair], speeds[pair]
@@ -342,8 +377,13 @@ def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: 
         first_direction = data["first_direction"][parent]
         way = data["way"][parent]
     return dict(
-        position=via[good], time_s=times_k[good] + t_k, speed=speeds_k, parent=parent,
-        length_m=data["length_m"][parent] + speeds_k * t_k, first_direction=first_direction, way=way,
+        position=via[good],
+        time_s=times_k[good] + t_k,
+        speed=speeds_k,
+        parent=parent,
+        length_m=data["length_m"][parent] + speeds_k * t_k,
+        first_direction=first_direction,
+        way=way,
     )
 
 
@@ -379,15 +419,19 @@ def _corner_nodes(checks: LegChecks, tree: _Tree, speeds: np.ndarray) -> np.ndar
     if count == 0:
         return np.zeros(0, int)
     return tree.extend(
-        position=targets[good], time_s=duration[good], speed=speed[good],
+        position=targets[good],
+        time_s=duration[good],
+        speed=speed[good],
         parent=np.searchsorted(speeds, speed[good]),  # the root node of that speed
-        length_m=length[good], first_direction=direction[good],
+        length_m=length[good],
+        first_direction=direction[good],
         way=_ways(count, CORNER, 0, corner[good]),
     )
 
 
-def _slow_candidates(checks: LegChecks, slow_checks: LegChecks, tree: _Tree, speeds: np.ndarray, nominal_index: int,
-                     config):
+def _slow_candidates(
+    checks: LegChecks, slow_checks: LegChecks, tree: _Tree, speeds: np.ndarray, nominal_index: int, config
+):
     """Stand still or drive slower than nominal towards the subgoal for each of ``slow_times_s``,
     then on at the nominal speed or faster. Returns (leaf node indices, goal leg lengths) or None."""
     if not checks.goal_legs_inside(checks.position[None])[0]:
@@ -419,9 +463,14 @@ def _slow_candidates(checks: LegChecks, slow_checks: LegChecks, tree: _Tree, spe
         return None
     count = int(free.sum())
     index = tree.extend(
-        position=ends[free], time_s=d[free], speed=v_after[free], parent=np.full(count, -1),
-        length_m=(v_slow * d)[free], first_direction=np.broadcast_to(direction, (count, 2)).copy(),
+        position=ends[free],
+        time_s=d[free],
+        speed=v_after[free],
+        parent=np.full(count, -1),
+        length_m=(v_slow * d)[free],
+        first_direction=np.broadcast_to(direction, (count, 2)).copy(),
         way=_ways(count, SLOW),
-        slow_s=d[free], slow_speed=v_slow[free],
+        slow_s=d[free],
+        slow_speed=v_slow[free],
     )
     return index, lengths[free]

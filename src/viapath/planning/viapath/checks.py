@@ -32,7 +32,6 @@ from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.planning.base import Inflation, Situation
 from viapath.planning.viapath.backend import NUMPY, Backend
 
-
 # Closer to the path line than this the robot is on the path: the way back is the leg to the subgoal.
 ON_PATH_M = 0.01
 
@@ -77,42 +76,67 @@ class LegChecks:
         if self.envelope_accel_mps2 <= 0:
             return np.zeros(np.shape(speeds))
         stop_s = self.envelope_period_s + np.asarray(speeds) / self.max_accel_mps2
-        return 0.5 * self.envelope_accel_mps2 * stop_s ** 2
+        return 0.5 * self.envelope_accel_mps2 * stop_s**2
 
     @classmethod
-    def of(cls, situation: Situation, config, tracker: SubgoalTracker, policy: SubgoalPolicy,
-           robot_radius_m: float, backend: Backend = NUMPY) -> "LegChecks":
+    def of(
+        cls,
+        situation: Situation,
+        config,
+        tracker: SubgoalTracker,
+        policy: SubgoalPolicy,
+        robot_radius_m: float,
+        backend: Backend = NUMPY,
+    ) -> LegChecks:
         robot, path, obstacles, inflation = situation.robot, tracker.path, situation.obstacles, situation.inflation
         final = tracker.is_final
         blocked = not final and tracker.is_blocked(obstacles.positions, obstacles.radii_m, robot_radius_m)
         index = situation.subgoal_index
         continuation = None if (final or blocked) else (path.segment_directions[index], path.segment_lengths_m[index])
         return cls(
-            path=path, position=situation.position, heading_rad=robot.heading_rad,
-            speed_mps=float(robot.speed_mps), turn_rate_radps=float(robot.turn_rate_radps),
-            subgoal=situation.subgoal, subgoal_index=index, is_final_subgoal=final,
-            obstacles=obstacles, check_radii=inflation.check_radii, growth=inflation.growth,
-            growth_until_s=inflation.growth_until_s, via_radii=inflation.check_radii + config.planning_margin_m,
-            horizon_s=config.horizon_s, stop_short_m=policy.bypass_distance_m if blocked else 0.0,
-            continuation=continuation, corridor_tolerance_m=situation.corridor_tolerance_m,
-            corridor_check_spacing_m=config.corridor_check_spacing_m, backend=backend,
+            path=path,
+            position=situation.position,
+            heading_rad=robot.heading_rad,
+            speed_mps=float(robot.speed_mps),
+            turn_rate_radps=float(robot.turn_rate_radps),
+            subgoal=situation.subgoal,
+            subgoal_index=index,
+            is_final_subgoal=final,
+            obstacles=obstacles,
+            check_radii=inflation.check_radii,
+            growth=inflation.growth,
+            growth_until_s=inflation.growth_until_s,
+            via_radii=inflation.check_radii + config.planning_margin_m,
+            horizon_s=config.horizon_s,
+            stop_short_m=policy.bypass_distance_m if blocked else 0.0,
+            continuation=continuation,
+            corridor_tolerance_m=situation.corridor_tolerance_m,
+            corridor_check_spacing_m=config.corridor_check_spacing_m,
+            backend=backend,
         )
 
-    def with_less_inflation(self, fraction: float, robot_radius_m: float, settings,
-                            cap_too: bool = False) -> "LegChecks":
+    def with_less_inflation(self, fraction: float, robot_radius_m: float, settings, cap_too: bool = False) -> LegChecks:
         """The same checks with ``fraction`` of the obstacles' uncertainty inflation (σ terms; with
         ``cap_too`` the cap on the cone's growth as well)."""
         obstacles = self.obstacles
-        less = replace(obstacles, position_sigma_m=fraction * obstacles.position_sigma_m,
-                       velocity_sigma_mps=fraction * obstacles.velocity_sigma_mps)
+        less = replace(
+            obstacles,
+            position_sigma_m=fraction * obstacles.position_sigma_m,
+            velocity_sigma_mps=fraction * obstacles.velocity_sigma_mps,
+        )
         if cap_too:
             settings = {**settings, "max_inflation_m": fraction * settings["max_inflation_m"]}
         inflation = Inflation.of(less, robot_radius_m, settings)
-        return replace(self, obstacles=less, check_radii=inflation.check_radii, growth=inflation.growth,
-                       growth_until_s=inflation.growth_until_s,
-                       via_radii=inflation.check_radii + settings["planning_margin_m"])
+        return replace(
+            self,
+            obstacles=less,
+            check_radii=inflation.check_radii,
+            growth=inflation.growth,
+            growth_until_s=inflation.growth_until_s,
+            via_radii=inflation.check_radii + settings["planning_margin_m"],
+        )
 
-    def back_to_path(self, lookahead_m: float) -> "LegChecks | None":
+    def back_to_path(self, lookahead_m: float) -> LegChecks | None:
         """The same checks towards the path point ``lookahead_m`` ahead of the robot on the segment that
         ends at the subgoal, continued along the path to the subgoal (option ``return_lookahead_m``).
         None when the robot is on the path line or that point would lie at or past the subgoal: then
@@ -127,13 +151,15 @@ class LegChecks:
             return None
         # The continuation to the subgoal is checked with the full radii, so a person standing on a
         # blocked subgoal blocks the way back too and the planner plans as the paper does.
-        return replace(self, subgoal=start + ahead_m * direction, continuation=(direction, length - ahead_m),
-                       stop_short_m=0.0)
+        return replace(
+            self, subgoal=start + ahead_m * direction, continuation=(direction, length - ahead_m), stop_short_m=0.0
+        )
 
     # -- against the forecast ----------------------------------------------------------------------
 
-    def contact_times(self, starts, start_times, velocities, durations, horizon_s=None,
-                      keep_envelope: bool = False) -> np.ndarray:
+    def contact_times(
+        self, starts, start_times, velocities, durations, horizon_s=None, keep_envelope: bool = False
+    ) -> np.ndarray:
         """(K, N) first contact of each leg with each obstacle, up to the horizon; inf = free. With
         ``keep_envelope`` (and a shield behind the planner) each leg also keeps its braking envelope."""
         if len(self.obstacles) == 0:
@@ -151,12 +177,30 @@ class LegChecks:
             contact = np.empty((len(starts), len(obstacles)))
             for rows, leg_radii, until in ((~static, envelope, checked), (static, None, durations)):
                 contact[:, rows] = self.backend.legs_first_contact(
-                    starts, start_times, velocities, until, obstacles.positions[rows], obstacles.velocities[rows],
-                    self.check_radii[rows], self.growth[rows], self.growth_until_s[rows], leg_radii)
+                    starts,
+                    start_times,
+                    velocities,
+                    until,
+                    obstacles.positions[rows],
+                    obstacles.velocities[rows],
+                    self.check_radii[rows],
+                    self.growth[rows],
+                    self.growth_until_s[rows],
+                    leg_radii,
+                )
             return contact
-        return self.backend.legs_first_contact(starts, start_times, velocities, checked, obstacles.positions,
-                                               obstacles.velocities, self.check_radii, self.growth,
-                                               self.growth_until_s, envelope)
+        return self.backend.legs_first_contact(
+            starts,
+            start_times,
+            velocities,
+            checked,
+            obstacles.positions,
+            obstacles.velocities,
+            self.check_radii,
+            self.growth,
+            self.growth_until_s,
+            envelope,
+        )
 
     def static_labels(self) -> np.ndarray:
         """(N,) for each obstacle the static shape it belongs to (its id; -1: a person)."""
@@ -190,8 +234,9 @@ class LegChecks:
 
     def goal_legs(self, starts, start_times, speeds, horizon_s=None):
         """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N))."""
-        compiled = self.backend.goal_legs(self, starts, start_times, speeds,
-                                          self.horizon_s if horizon_s is None else horizon_s)
+        compiled = self.backend.goal_legs(
+            self, starts, start_times, speeds, self.horizon_s if horizon_s is None else horizon_s
+        )
         if compiled is not None:
             return compiled
         offset = self.subgoal - starts
@@ -207,7 +252,10 @@ class LegChecks:
                 np.concatenate([starts, np.broadcast_to(self.subgoal, starts.shape)]),
                 np.concatenate([start_times, start_times + durations]),
                 np.concatenate([velocities, direction * speeds[:, None]]),
-                np.concatenate([durations, length / speeds]), horizon_s, keep_envelope=True)
+                np.concatenate([durations, length / speeds]),
+                horizon_s,
+                keep_envelope=True,
+            )
             contact = np.minimum(both[:count], both[count:] + durations[:, None])
         else:
             contact = self.contact_times(starts, start_times, velocities, durations, horizon_s, keep_envelope=True)
@@ -226,9 +274,12 @@ class LegChecks:
             obstacles = self.obstacles
             n = len(obstacles.positions)
             cached = self.__dict__["_kernel_obstacles"] = (
-                _contiguous(obstacles.positions, (n, 2)), _contiguous(obstacles.velocities, (n, 2)),
-                _contiguous(self.check_radii, (n,)), _contiguous(self.growth, (n,)),
-                _contiguous(self.growth_until_s, (n,)))
+                _contiguous(obstacles.positions, (n, 2)),
+                _contiguous(obstacles.velocities, (n, 2)),
+                _contiguous(self.check_radii, (n,)),
+                _contiguous(self.growth, (n,)),
+                _contiguous(self.growth_until_s, (n,)),
+            )
         return cached
 
     def kernel_choice_inputs(self) -> tuple:
@@ -243,10 +294,20 @@ class LegChecks:
         path = self.path
         kept = path.__dict__.get("_kernel_choice_arrays")
         if kept is None:
-            kept = path.__dict__["_kernel_choice_arrays"] = (tuple(
-                _contiguous(a, np.shape(a)) for a in (path.segment_starts, path.segment_directions,
-                                                      path.segment_lengths_m, path.half_widths_m, path.waypoints)),
-                {}, {})
+            kept = path.__dict__["_kernel_choice_arrays"] = (
+                tuple(
+                    _contiguous(a, np.shape(a))
+                    for a in (
+                        path.segment_starts,
+                        path.segment_directions,
+                        path.segment_lengths_m,
+                        path.half_widths_m,
+                        path.waypoints,
+                    )
+                ),
+                {},
+                {},
+            )
         episode, continuations, envelopes = kept
         continuation = self.continuation
         key = None if continuation is None else (*continuation[0].tolist(), float(continuation[1]))
@@ -262,8 +323,14 @@ class LegChecks:
         if not (type(ids) is np.ndarray and ids.dtype == np.int64 and ids.flags.c_contiguous):
             ids = np.ascontiguousarray(ids, dtype=np.int64)
         cached = self.__dict__["_kernel_choice_inputs"] = (
-            self.kernel_robot(), *self.kernel_obstacles(), _contiguous(self.via_radii, (n,)), ids,
-            kernel_continuation, envelope, *episode)
+            self.kernel_robot(),
+            *self.kernel_obstacles(),
+            _contiguous(self.via_radii, (n,)),
+            ids,
+            kernel_continuation,
+            envelope,
+            *episode,
+        )
         return cached
 
     def kernel_robot(self) -> np.ndarray:
@@ -272,7 +339,8 @@ class LegChecks:
         if cached is None:
             cached = self.__dict__["_kernel_robot"] = np.array(
                 [self.position[0], self.position[1], self.heading_rad, self.speed_mps, self.turn_rate_radps],
-                dtype=np.float64)
+                dtype=np.float64,
+            )
         return cached
 
     def kernel_continuation(self) -> np.ndarray:
@@ -291,8 +359,7 @@ class LegChecks:
         """(person accel, period, robot accel) of the braking envelope; accel 0: none (:meth:`envelope_m`)."""
         cached = self.__dict__.get("_kernel_envelope")
         if cached is None:
-            cached = np.array([self.envelope_accel_mps2, self.envelope_period_s, self.max_accel_mps2],
-                              dtype=np.float64)
+            cached = np.array([self.envelope_accel_mps2, self.envelope_period_s, self.max_accel_mps2], dtype=np.float64)
             self.__dict__["_kernel_envelope"] = cached
         return cached
 
@@ -331,12 +398,19 @@ class LegChecks:
         return self.path.corridor_excess(points) <= self.corridor_tolerance_m
 
     def legs_inside(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-        return self.backend.legs_inside(self.path, starts, ends, self.corridor_check_spacing_m,
-                                        self.corridor_tolerance_m)
+        return self.backend.legs_inside(
+            self.path, starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m
+        )
 
     def goal_legs_inside(self, starts: np.ndarray) -> np.ndarray:
-        compiled = self.backend.goal_legs_inside(self.path, starts, self.subgoal, self.subgoal_index,
-                                                 self.corridor_check_spacing_m, self.corridor_tolerance_m)
+        compiled = self.backend.goal_legs_inside(
+            self.path,
+            starts,
+            self.subgoal,
+            self.subgoal_index,
+            self.corridor_check_spacing_m,
+            self.corridor_tolerance_m,
+        )
         if compiled is not None:
             return compiled
         # The subgoal ends both capsules next to it; a leg from a point inside one of them is inside

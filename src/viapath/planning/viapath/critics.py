@@ -74,8 +74,10 @@ class SpeedError(Critic):
     def score(self, candidates, context):
         nominal = context.nominal_speed_mps
         driven_s = candidates.driven_s
-        error = (candidates.slow_s * np.abs(candidates.slow_speed_mps - nominal)
-                 + driven_s * np.abs(candidates.speed_mps - nominal)) / candidates.travel_time_s
+        error = (
+            candidates.slow_s * np.abs(candidates.slow_speed_mps - nominal)
+            + driven_s * np.abs(candidates.speed_mps - nominal)
+        ) / candidates.travel_time_s
         return self.weight * error
 
 

@@ -65,8 +65,13 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     top, commands, row_turns, turn_rows = escape_fan(limits, config)
     dt = config.escape_dt_s
     steps = max(1, int(round(config.escape_s / dt)))
-    state = UnicycleState(float(position[0]), float(position[1]), float(checks.heading_rad),
-                          float(checks.speed_mps), float(checks.turn_rate_radps))
+    state = UnicycleState(
+        float(position[0]),
+        float(position[1]),
+        float(checks.heading_rad),
+        float(checks.speed_mps),
+        float(checks.turn_rate_radps),
+    )
     positions = rollout(state, commands, limits, dt, steps, (row_turns, turn_rows))  # (K, S, 2)
     times = dt * np.arange(1, steps + 1)
     excess = checks.backend.corridor_excess(checks.path, positions.reshape(-1, 2)).reshape(len(commands), steps)
@@ -83,8 +88,17 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     gap_now = gap_all[near]
     overlapping = gap_now <= 0
     any_overlapping = bool(overlapping.any())
-    compiled = checks.backend.escape_contacts(positions, times, positions_obs, velocities_obs, checks.check_radii[near],
-                                              checks.growth[near], checks.growth_until_s[near], overlapping, steps)
+    compiled = checks.backend.escape_contacts(
+        positions,
+        times,
+        positions_obs,
+        velocities_obs,
+        checks.check_radii[near],
+        checks.growth[near],
+        checks.growth_until_s[near],
+        overlapping,
+        steps,
+    )
     if compiled is not None:  # the same figures, without the (K, S, N) arrays
         first_step, gap_min, gap_last = compiled
         time_to_contact = first_step * dt
@@ -121,11 +135,19 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     ends = positions[:, -1]
     progress = ((ends[:, 0] - position[0]) * toward[0] + (ends[:, 1] - position[1]) * toward[1]) / config.escape_s
     free = time_to_contact >= steps * dt
-    score = (1e2 * separation + 20.0 * free + 2.0 * inside + time_to_contact
-             - np.where(free, 0.005, 0.5) * commands[:, 0] + 0.01 * progress)
+    score = (
+        1e2 * separation
+        + 20.0 * free
+        + 2.0 * inside
+        + time_to_contact
+        - np.where(free, 0.005, 0.5) * commands[:, 0]
+        + 0.01 * progress
+    )
     if config.calm_escape and previous is not None:
-        change = (np.abs(commands[:, 0] - previous.speed_mps) / max(top, 1e-9)
-                  + np.abs(commands[:, 1] - previous.turn_rate_radps) / limits.max_turn_rate_radps)
+        change = (
+            np.abs(commands[:, 0] - previous.speed_mps) / max(top, 1e-9)
+            + np.abs(commands[:, 1] - previous.turn_rate_radps) / limits.max_turn_rate_radps
+        )
         score = score - config.escape_continuity_s * np.minimum(change, 1.0)
     score = np.where(within_bound | (commands[:, 0] == 0.0), score, -np.inf)
     return commands, ends, score
@@ -151,7 +173,7 @@ def touching(dx: np.ndarray, dy: np.ndarray, reach_m: np.ndarray) -> np.ndarray:
     unsure = ~(result | (squared > above))
     if unsure.any():
         shape = np.broadcast_shapes(np.shape(dx), np.shape(dy), reach_m.shape)
-        pick = lambda values: np.broadcast_to(values, shape)[unsure]  # noqa: E731
+        pick = lambda values: np.broadcast_to(values, shape)[unsure]
         result[unsure] = np.hypot(pick(dx), pick(dy)) - pick(reach_m) < 0
     return result
 

@@ -34,16 +34,16 @@ def can_follow(plan: Plan, checks: LegChecks, limits: MotionLimits, config) -> b
     return followed
 
 
-def follows(target: np.ndarray, speed_mps: float, checks: LegChecks, limits: MotionLimits,
-            config) -> tuple[bool, bool]:
+def follows(target: np.ndarray, speed_mps: float, checks: LegChecks, limits: MotionLimits, config) -> tuple[bool, bool]:
     """:func:`can_follow` of a plan that steers for ``target`` at ``speed_mps``, before the plan is made (in a
     cycle without a free candidate every plan would be made for nothing): (followed, turn in place first)."""
     offset = target - checks.position
     dx, dy = offset.tolist()
     heading_error = abs(float(wrap_angle(math.atan2(dy, dx) - checks.heading_rad)))  # libm's (geometry.angles_of)
     speed_change = abs(speed_mps - checks.speed_mps)
-    if np.hypot(*offset) < 1e-6 or (heading_error <= config.rollout_heading_rad
-                                      and speed_change <= limits.max_accel_mps2 * config.rollout_dt_s * 2):
+    if np.hypot(*offset) < 1e-6 or (
+        heading_error <= config.rollout_heading_rad and speed_change <= limits.max_accel_mps2 * config.rollout_dt_s * 2
+    ):
         return True, False
     # Candidates of a cycle often share the first leg's target and speed (slow/wait candidates, chains
     # through the same first via point): the roll-out and its verdict are then the same. Remembered for
@@ -55,13 +55,19 @@ def follows(target: np.ndarray, speed_mps: float, checks: LegChecks, limits: Mot
     return known[key]
 
 
-def _roll_out(target: np.ndarray, speed_mps: float, checks: LegChecks, limits: MotionLimits, config,
-              heading_error: float) -> tuple[bool, bool]:
+def _roll_out(
+    target: np.ndarray, speed_mps: float, checks: LegChecks, limits: MotionLimits, config, heading_error: float
+) -> tuple[bool, bool]:
     """(followed, turn in place first) of :func:`follows`' roll-out."""
     dt = config.rollout_dt_s
     steps = max(1, int(round(config.rollout_s / dt)))
-    state = UnicycleState(float(checks.position[0]), float(checks.position[1]), float(checks.heading_rad),
-                          checks.speed_mps, checks.turn_rate_radps)
+    state = UnicycleState(
+        float(checks.position[0]),
+        float(checks.position[1]),
+        float(checks.heading_rad),
+        checks.speed_mps,
+        checks.turn_rate_radps,
+    )
     if checks.backend.name == "numpy":
         # A failing candidate mostly meets someone early in its roll-out (in the slowest cycles, up to 8
         # candidates fail within the first second): its first half is checked before the rest is rolled

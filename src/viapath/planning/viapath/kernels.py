@@ -33,10 +33,45 @@ from numba import njit
 
 from viapath.compiled_sum import pairwise_sum
 from viapath.planning.viapath.kernel_slots import (
-    C_DEGREES, C_DEPTH, C_NOMINAL, C_ONLY, C_ONLY_WAY, C_PREFERRED, C_PREV_MMPS, C_PREV_WAY, C_PREVIOUS, C_ROLLOUTS,
-    C_ROOT_LIMIT, C_SEGMENT, C_SLOW, C_STEPS, C_SUBGOAL, C_TRY_STRAIGHT, CANDIDATES, F_ACCEL, F_DT, F_GAIN,
-    F_HORIZON, F_HYSTERESIS, F_K1, F_K2, F_K3, F_K4, F_NOMINAL, F_ROLLOUT_HEADING, F_SIDE, F_SPACING, F_SPEED,
-    F_STOP_SHORT, F_TOLERANCE, F_TURN_ACCEL, F_TURN_IN_PLACE, F_TURN_RATE, NO_CANDIDATE, STEP_ONE)
+    C_DEGREES,
+    C_DEPTH,
+    C_NOMINAL,
+    C_ONLY,
+    C_ONLY_WAY,
+    C_PREFERRED,
+    C_PREV_MMPS,
+    C_PREV_WAY,
+    C_PREVIOUS,
+    C_ROLLOUTS,
+    C_ROOT_LIMIT,
+    C_SEGMENT,
+    C_SLOW,
+    C_STEPS,
+    C_SUBGOAL,
+    C_TRY_STRAIGHT,
+    CANDIDATES,
+    F_ACCEL,
+    F_DT,
+    F_GAIN,
+    F_HORIZON,
+    F_HYSTERESIS,
+    F_K1,
+    F_K2,
+    F_K3,
+    F_K4,
+    F_NOMINAL,
+    F_ROLLOUT_HEADING,
+    F_SIDE,
+    F_SPACING,
+    F_SPEED,
+    F_STOP_SHORT,
+    F_TOLERANCE,
+    F_TURN_ACCEL,
+    F_TURN_IN_PLACE,
+    F_TURN_RATE,
+    NO_CANDIDATE,
+    STEP_ONE,
+)
 
 
 @njit(cache=True, nogil=True, inline="always")  # inlined: called per leg and obstacle, a few hundred a cycle
@@ -60,8 +95,21 @@ def _contact(px, py, vx, vy, radius, growth, duration):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _leg_contact(starts, start_times, velocities, durations, obstacle_positions, obstacle_velocities, radii, growth,
-                 growth_until_s, leg_radius, cylinder_only, k, j):
+def _leg_contact(
+    starts,
+    start_times,
+    velocities,
+    durations,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+    leg_radius,
+    cylinder_only,
+    k,
+    j,
+):
     """The first contact of leg ``k`` with obstacle ``j``: one entry of :func:`legs_first_contact` (inlined:
     :func:`_legs_free` asks it leg by leg and stops at the first contact)."""
     t0 = start_times[k]
@@ -81,14 +129,28 @@ def _leg_contact(starts, start_times, velocities, durations, obstacle_positions,
         cone_duration = 0.0
     if cone_duration > duration:
         cone_duration = duration
-    early = _contact(px, py, vx, vy, (radii[j] + leg_radius) + g * (t0 if t0 < until else until),
-                     g if until > t0 else 0.0, cone_duration)
+    early = _contact(
+        px,
+        py,
+        vx,
+        vy,
+        (radii[j] + leg_radius) + g * (t0 if t0 < until else until),
+        g if until > t0 else 0.0,
+        cone_duration,
+    )
     if math.isfinite(early):
         return early
     if t0 + duration >= until:
         full_growth = g * (until if math.isfinite(until) else 0.0)
-        late = _contact(px + vx * cone_duration, py + vy * cone_duration, vx, vy,
-                        (radii[j] + leg_radius) + full_growth, 0.0, duration - cone_duration)
+        late = _contact(
+            px + vx * cone_duration,
+            py + vy * cone_duration,
+            vx,
+            vy,
+            (radii[j] + leg_radius) + full_growth,
+            0.0,
+            duration - cone_duration,
+        )
         return late + cone_duration
     return math.inf
 
@@ -108,8 +170,18 @@ def _cylinder_only(growth, growth_until_s):
 
 
 @njit(cache=True, nogil=True)
-def legs_first_contact(starts, start_times, velocities, durations, obstacle_positions, obstacle_velocities,
-                       radii, growth, growth_until_s, leg_radii):
+def legs_first_contact(
+    starts,
+    start_times,
+    velocities,
+    durations,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+    leg_radii,
+):
     """(K, N) first contact of K legs with N moving discs whose radius grows as a capped cone: the
     numba twin of :func:`viapath.geometry.legs_first_contact` (all arguments arrays, one value per
     obstacle for ``radii``, ``growth`` and ``growth_until_s``; ``leg_radii`` (K,) is added per leg:
@@ -120,9 +192,21 @@ def legs_first_contact(starts, start_times, velocities, durations, obstacle_posi
     cylinder_only = _cylinder_only(growth, growth_until_s)
     for k in range(k_count):
         for j in range(n_count):
-            out[k, j] = _leg_contact(starts, start_times, velocities, durations, obstacle_positions,
-                                     obstacle_velocities, radii, growth, growth_until_s, leg_radii[k], cylinder_only,
-                                     k, j)
+            out[k, j] = _leg_contact(
+                starts,
+                start_times,
+                velocities,
+                durations,
+                obstacle_positions,
+                obstacle_velocities,
+                radii,
+                growth,
+                growth_until_s,
+                leg_radii[k],
+                cylinder_only,
+                k,
+                j,
+            )
     return out
 
 
@@ -132,8 +216,23 @@ def _clip(value, low, high):
 
 
 @njit(cache=True, nogil=True)
-def track(x, y, heading, speed, turn, target_x, target_y, speed_mps, max_speed_mps, max_turn_rate_radps,
-          max_accel_mps2, max_turn_accel_radps2, dt_s, steps, heading_gain):
+def track(
+    x,
+    y,
+    heading,
+    speed,
+    turn,
+    target_x,
+    target_y,
+    speed_mps,
+    max_speed_mps,
+    max_turn_rate_radps,
+    max_accel_mps2,
+    max_turn_accel_radps2,
+    dt_s,
+    steps,
+    heading_gain,
+):
     """(steps, 2) positions of the robot steering for the target: the numba twin of
     :func:`viapath.kinematics.track` (with :func:`~viapath.kinematics.steer_towards` and the exact arcs)."""
     dv = max_accel_mps2 * dt_s
@@ -216,8 +315,18 @@ def _via_pair(sx, sy, t0, speed, ox, oy, vx, vy, via_radius, growth, until, enve
 
 
 @njit(cache=True, nogil=True)
-def via_options(starts, start_times, speeds, obstacle_positions, obstacle_velocities, via_radii, growth,
-                growth_until_s, envelope_m, max_time_s):
+def via_options(
+    starts,
+    start_times,
+    speeds,
+    obstacle_positions,
+    obstacle_velocities,
+    via_radii,
+    growth,
+    growth_until_s,
+    envelope_m,
+    max_time_s,
+):
     """The numba twin of :func:`viapath.geometry.via_options` (tangent points, via times on both
     sides and both roots, the legs to the via points), same options in the same order."""
     count = starts.shape[0]
@@ -229,9 +338,22 @@ def via_options(starts, start_times, speeds, obstacle_positions, obstacle_veloci
     t_via = np.empty(4)
     w_via = np.empty((2, 2))
     for p in range(count):
-        if not _via_pair(starts[p, 0], starts[p, 1], start_times[p], speeds[p], obstacle_positions[p, 0],
-                         obstacle_positions[p, 1], obstacle_velocities[p, 0], obstacle_velocities[p, 1], via_radii[p],
-                         growth[p], growth_until_s[p], envelope_m[p], t_via, w_via):
+        if not _via_pair(
+            starts[p, 0],
+            starts[p, 1],
+            start_times[p],
+            speeds[p],
+            obstacle_positions[p, 0],
+            obstacle_positions[p, 1],
+            obstacle_velocities[p, 0],
+            obstacle_velocities[p, 1],
+            via_radii[p],
+            growth[p],
+            growth_until_s[p],
+            envelope_m[p],
+            t_via,
+            w_via,
+        ):
             continue
         for o in range(4):
             if t_via[o] <= max_time_s:
@@ -281,8 +403,7 @@ def _capsule_excess(px, py, segment_starts, segment_directions, segment_lengths,
 
 
 @njit(cache=True, nogil=True)
-def legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, starts, ends, spacing_m,
-                tolerance_m):
+def legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, starts, ends, spacing_m, tolerance_m):
     """The numba twin of :meth:`viapath.path.DesignatedPath.legs_inside`: both ends in one capsule, else
     sampled every ``spacing_m`` (the sample count set by the longest unresolved leg, as there)."""
     count = starts.shape[0]
@@ -296,10 +417,18 @@ def legs_inside(segment_starts, segment_directions, segment_lengths, half_widths
         end_any = False
         both = False
         for i in range(segments):
-            a = _capsule_excess(starts[k, 0], starts[k, 1], segment_starts, segment_directions, segment_lengths,
-                                half_widths, i) <= tolerance_m
-            b = _capsule_excess(ends[k, 0], ends[k, 1], segment_starts, segment_directions, segment_lengths,
-                                half_widths, i) <= tolerance_m
+            a = (
+                _capsule_excess(
+                    starts[k, 0], starts[k, 1], segment_starts, segment_directions, segment_lengths, half_widths, i
+                )
+                <= tolerance_m
+            )
+            b = (
+                _capsule_excess(
+                    ends[k, 0], ends[k, 1], segment_starts, segment_directions, segment_lengths, half_widths, i
+                )
+                <= tolerance_m
+            )
             start_any = start_any or a
             end_any = end_any or b
             both = both or (a and b)
@@ -324,8 +453,17 @@ def legs_inside(segment_starts, segment_directions, segment_lengths, half_widths
         ok = True
         for f_index in range(num):
             fraction = 1.0 if f_index == num - 1 else f_index * step
-            if _excess(ax + fraction * bx, ay + fraction * by, segment_starts, segment_directions, segment_lengths,
-                       half_widths) > tolerance_m:
+            if (
+                _excess(
+                    ax + fraction * bx,
+                    ay + fraction * by,
+                    segment_starts,
+                    segment_directions,
+                    segment_lengths,
+                    half_widths,
+                )
+                > tolerance_m
+            ):
                 ok = False
                 break
         inside[k] = ok
@@ -333,8 +471,9 @@ def legs_inside(segment_starts, segment_directions, segment_lengths, half_widths
 
 
 @njit(cache=True, nogil=True)
-def goal_legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, starts, subgoal_index,
-                     tolerance_m):
+def goal_legs_inside(
+    segment_starts, segment_directions, segment_lengths, half_widths, starts, subgoal_index, tolerance_m
+):
     """The first part of :meth:`viapath.planning.viapath.checks.LegChecks.goal_legs_inside`: a leg from a
     point inside a capsule next to the subgoal is inside (the caller checks the others with
     :func:`legs_inside`)."""
@@ -370,8 +509,9 @@ def corridor_excess(segment_starts, segment_directions, segment_lengths, half_wi
 
 
 @njit(cache=True, nogil=True)
-def escape_contacts(positions, times, obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s,
-                    overlapping, steps):
+def escape_contacts(
+    positions, times, obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s, overlapping, steps
+):
     """For K rolled-out commands (K, S, 2) against N people (centre ``p + v t``, radius ``r + g min(t, cap)``):
     the first step at which each command touches someone it does not overlap now (``steps`` if never),
     and, for the people it overlaps now (``overlapping``), the smallest gap over the roll-out and the gap
@@ -526,8 +666,15 @@ def _roll_outs_within(positions, segment_starts, segment_directions, segment_len
         if known[k]:
             continue
         for s in range(positions.shape[1]):
-            if not _excess_at_most(positions[k, s, 0], positions[k, s, 1], segment_starts, segment_directions,
-                                   segment_lengths, half_widths, limit):
+            if not _excess_at_most(
+                positions[k, s, 0],
+                positions[k, s, 1],
+                segment_starts,
+                segment_directions,
+                segment_lengths,
+                half_widths,
+                limit,
+            ):
                 out[k] = False
                 break
     return out
@@ -565,8 +712,9 @@ def _furthest(positions, x0, y0):
 
 
 @njit(cache=True, nogil=True)
-def escape_headings(robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, row_turns,
-                    settings, steps):
+def escape_headings(
+    robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, row_turns, settings, steps
+):
     """The first half of :func:`viapath.planning.viapath.escape.stop_or_escape`: whether standing still is free
     over the horizon (its ``contact_times`` of the robot's position at rest, with :func:`legs_first_contact`,
     as the compiled path checked it before), and the headings (T, steps + 1) of the escape's roll-outs
@@ -582,8 +730,18 @@ def escape_headings(robot, obstacle_positions, obstacle_velocities, radii, growt
         starts[0, 1] = robot[1]
         durations = np.empty(1)
         durations[0] = _minimum(_maximum(settings[_E_HORIZON] - 0.0, 0.0), settings[_E_STANDING_S])
-        contact = legs_first_contact(starts, np.zeros(1), np.zeros((1, 2)), durations, obstacle_positions,
-                                     obstacle_velocities, radii, growth, growth_until_s, np.zeros(1))
+        contact = legs_first_contact(
+            starts,
+            np.zeros(1),
+            np.zeros((1, 2)),
+            durations,
+            obstacle_positions,
+            obstacle_velocities,
+            radii,
+            growth,
+            growth_until_s,
+            np.zeros(1),
+        )
         for j in range(n_count):
             if not math.isinf(contact[0, j]):
                 free = False
@@ -605,9 +763,26 @@ def escape_headings(robot, obstacle_positions, obstacle_velocities, radii, growt
 
 
 @njit(cache=True, nogil=True)
-def escape_scores(robot, commands, turn_rows, sines, cosines, obstacle_positions, obstacle_velocities, radii, growth,
-                  growth_until_s, segment_starts, segment_directions, segment_lengths, half_widths, subgoal, settings,
-                  steps, calm):
+def escape_scores(
+    robot,
+    commands,
+    turn_rows,
+    sines,
+    cosines,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+    segment_starts,
+    segment_directions,
+    segment_lengths,
+    half_widths,
+    subgoal,
+    settings,
+    steps,
+    calm,
+):
     """:func:`viapath.planning.viapath.escape.escape_scores` compiled, operation for operation: the roll-outs of
     the K commands (:func:`viapath.kinematics.rollout`: the ramps of speed and turn rate, the exact arcs, the
     positions as running sums), their corridor excess (:func:`_excess`), the people who could come within
@@ -658,10 +833,24 @@ def escape_scores(robot, commands, turn_rows, sines, cosines, obstacle_positions
             positions[k, s, 1] = py
     # all(excess <= tolerance); np.max(excess) <= bound is all(excess <= bound), NaN included: with the bound
     # at least the tolerance (as the caller sets it), true of every roll-out inside
-    inside = _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths,
-                               tolerance, np.zeros(k_count, np.bool_))
-    within_bound = _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths,
-                                     bound, inside if bound >= tolerance else np.zeros(k_count, np.bool_))
+    inside = _roll_outs_within(
+        positions,
+        segment_starts,
+        segment_directions,
+        segment_lengths,
+        half_widths,
+        tolerance,
+        np.zeros(k_count, np.bool_),
+    )
+    within_bound = _roll_outs_within(
+        positions,
+        segment_starts,
+        segment_directions,
+        segment_lengths,
+        half_widths,
+        bound,
+        inside if bound >= tolerance else np.zeros(k_count, np.bool_),
+    )
     travel = _furthest(positions, x0, y0)
 
     # The people who could come within reach during the roll-out.
@@ -682,8 +871,17 @@ def escape_scores(robot, commands, turn_rows, sines, cosines, obstacle_positions
     times = np.empty(steps)
     for s in range(steps):
         times[s] = dt * float(s + 1)
-    first_step, gap_min, gap_last = escape_contacts(positions, times, near_positions, near_velocities, radii[near],
-                                                    growth[near], growth_until_s[near], overlapping, steps)
+    first_step, gap_min, gap_last = escape_contacts(
+        positions,
+        times,
+        near_positions,
+        near_velocities,
+        radii[near],
+        growth[near],
+        growth_until_s[near],
+        overlapping,
+        steps,
+    )
     gap_overlapped = gap_now[overlapping]
     m_count = gap_overlapped.shape[0]
     terms = np.empty(m_count)
@@ -691,7 +889,7 @@ def escape_scores(robot, commands, turn_rows, sines, cosines, obstacle_positions
     toward_x = subgoal[0] - x0
     toward_y = subgoal[1] - y0
     norm = math.hypot(toward_x, toward_y)
-    norm = 1e-9 if 1e-9 > norm else norm  # Python's max(norm, 1e-9)
+    norm = 1e-9 if norm < 1e-9 else norm  # Python's max(norm, 1e-9)
     toward_x = toward_x / norm
     toward_y = toward_y / norm
     ends = np.empty((k_count, 2))
@@ -711,20 +909,47 @@ def escape_scores(robot, commands, turn_rows, sines, cosines, obstacle_positions
         ends[k, 1] = end_y
         progress = ((end_x - x0) * toward_x + (end_y - y0) * toward_y) / settings[_E_ESCAPE_S]
         speed = commands[k, 0]
-        value = (1e2 * separation + 20.0 * (1.0 if free else 0.0) + 2.0 * (1.0 if inside[k] else 0.0)
-                 + time_to_contact - (0.005 if free else 0.5) * speed + 0.01 * progress)
+        value = (
+            1e2 * separation
+            + 20.0 * (1.0 if free else 0.0)
+            + 2.0 * (1.0 if inside[k] else 0.0)
+            + time_to_contact
+            - (0.005 if free else 0.5) * speed
+            + 0.01 * progress
+        )
         if calm:
-            change = (abs(speed - settings[_E_PREVIOUS_SPEED]) / settings[_E_TOP]
-                      + abs(commands[k, 1] - settings[_E_PREVIOUS_TURN]) / max_turn)
+            change = (
+                abs(speed - settings[_E_PREVIOUS_SPEED]) / settings[_E_TOP]
+                + abs(commands[k, 1] - settings[_E_PREVIOUS_TURN]) / max_turn
+            )
             value = value - settings[_E_CONTINUITY] * _minimum(change, 1.0)
         score[k] = value if (within_bound[k] or speed == 0.0) else -math.inf
     return ends, score
 
 
 @njit(cache=True, nogil=True)
-def goal_legs(starts, start_times, speeds, subgoal, stop_short_m, horizon_s, continuation, obstacle_positions,
-              obstacle_velocities, radii, growth, growth_until_s, envelope, segment_starts, segment_directions,
-              segment_lengths, half_widths, subgoal_index, spacing_m, tolerance_m):
+def goal_legs(
+    starts,
+    start_times,
+    speeds,
+    subgoal,
+    stop_short_m,
+    horizon_s,
+    continuation,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+    envelope,
+    segment_starts,
+    segment_directions,
+    segment_lengths,
+    half_widths,
+    subgoal_index,
+    spacing_m,
+    tolerance_m,
+):
     """The numba twin of :meth:`viapath.planning.viapath.checks.LegChecks.goal_legs`, whole: the straight
     legs from K nodes to the subgoal (with the continuation past an intermediate subgoal as K more legs),
     their first contacts with the braking envelope kept, and the corridor check (:func:`goal_legs_inside`,
@@ -783,8 +1008,18 @@ def goal_legs(starts, start_times, speeds, subgoal, stop_short_m, horizon_s, con
                 leg_radii[m] = half_accel * (stop_s * stop_s)
             else:
                 leg_radii[m] = 0.0
-        both = legs_first_contact(leg_starts, leg_times, leg_velocities, checked, obstacle_positions,
-                                  obstacle_velocities, radii, growth, growth_until_s, leg_radii)
+        both = legs_first_contact(
+            leg_starts,
+            leg_times,
+            leg_velocities,
+            checked,
+            obstacle_positions,
+            obstacle_velocities,
+            radii,
+            growth,
+            growth_until_s,
+            leg_radii,
+        )
         for k in range(k_count):
             for j in range(n_count):
                 value = both[k, j]
@@ -808,21 +1043,40 @@ def goal_legs(starts, start_times, speeds, subgoal, stop_short_m, horizon_s, con
         free[k] = ok
         any_clear = any_clear or ok
     if any_clear:
-        inside = _goal_legs_inside_all(segment_starts, segment_directions, segment_lengths, half_widths, starts,
-                                       subgoal, subgoal_index, spacing_m, tolerance_m)
+        inside = _goal_legs_inside_all(
+            segment_starts,
+            segment_directions,
+            segment_lengths,
+            half_widths,
+            starts,
+            subgoal,
+            subgoal_index,
+            spacing_m,
+            tolerance_m,
+        )
         for k in range(k_count):
             free[k] = free[k] and inside[k]
     return directions, lengths, free, contact
 
 
 @njit(cache=True, nogil=True)
-def _goal_legs_inside_all(segment_starts, segment_directions, segment_lengths, half_widths, starts, subgoal,
-                          subgoal_index, spacing_m, tolerance_m):
+def _goal_legs_inside_all(
+    segment_starts,
+    segment_directions,
+    segment_lengths,
+    half_widths,
+    starts,
+    subgoal,
+    subgoal_index,
+    spacing_m,
+    tolerance_m,
+):
     """What the backend's ``goal_legs_inside`` returns: :func:`goal_legs_inside`, then :func:`legs_inside`
     on the legs it leaves open (all of them in one call: the sample spacing depends on the longest)."""
     k_count = starts.shape[0]
-    inside = goal_legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, starts,
-                              subgoal_index, tolerance_m)
+    inside = goal_legs_inside(
+        segment_starts, segment_directions, segment_lengths, half_widths, starts, subgoal_index, tolerance_m
+    )
     rest = 0
     for k in range(k_count):
         if not inside[k]:
@@ -840,8 +1094,16 @@ def _goal_legs_inside_all(segment_starts, segment_directions, segment_lengths, h
                 rest_ends[r, 1] = subgoal[1]
                 index[r] = k
                 r += 1
-        rest_inside = legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, rest_starts,
-                                  rest_ends, spacing_m, tolerance_m)
+        rest_inside = legs_inside(
+            segment_starts,
+            segment_directions,
+            segment_lengths,
+            half_widths,
+            rest_starts,
+            rest_ends,
+            spacing_m,
+            tolerance_m,
+        )
         for r in range(rest):
             inside[index[r]] = rest_inside[r]
     return inside
@@ -896,8 +1158,18 @@ def _add(nf, ni, m, x, y, t, v, parent, length, fx, fy, way0, way1, way2, slow_s
 
 
 @njit(cache=True, nogil=True)
-def _legs_free(starts, start_times, velocities, durations, horizon_s, obstacle_positions, obstacle_velocities, radii,
-               growth, growth_until_s):
+def _legs_free(
+    starts,
+    start_times,
+    velocities,
+    durations,
+    horizon_s,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+):
     """LegChecks.legs_free: no contact up to the horizon, plain radii (no braking envelope). Leg by leg, up to
     its first contact: whether any contact is finite (or NaN) is all that is asked."""
     k_count = starts.shape[0]
@@ -910,9 +1182,23 @@ def _legs_free(starts, start_times, velocities, durations, horizon_s, obstacle_p
         ok = True
         for j in range(obstacle_positions.shape[0]):
             # leg radius 0.0, as legs_first_contact with np.zeros(k_count)
-            if not math.isinf(_leg_contact(starts, start_times, velocities, checked, obstacle_positions,
-                                           obstacle_velocities, radii, growth, growth_until_s, 0.0, cylinder_only, k,
-                                           j)):
+            if not math.isinf(
+                _leg_contact(
+                    starts,
+                    start_times,
+                    velocities,
+                    checked,
+                    obstacle_positions,
+                    obstacle_velocities,
+                    radii,
+                    growth,
+                    growth_until_s,
+                    0.0,
+                    cylinder_only,
+                    k,
+                    j,
+                )
+            ):
                 ok = False
                 break
         free[k] = ok
@@ -920,11 +1206,43 @@ def _legs_free(starts, start_times, velocities, durations, horizon_s, obstacle_p
 
 
 @njit(cache=True, nogil=True)
-def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths, root_free, root_contact,
-         obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, via_radii, ids, slow_radii, slow_growth,
-         slow_growth_until_s, slow_times, slow_enabled, stop_short_m, horizon_s, continuation, envelope,
-         segment_starts, segment_directions, segment_lengths, half_widths, waypoints, robot_segment, subgoal_index,
-         spacing_m, tolerance_m, max_depth, max_root_obstacles):
+def grow(
+    position,
+    subgoal,
+    speeds,
+    nominal_index,
+    root_directions,
+    root_lengths,
+    root_free,
+    root_contact,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+    via_radii,
+    ids,
+    slow_radii,
+    slow_growth,
+    slow_growth_until_s,
+    slow_times,
+    slow_enabled,
+    stop_short_m,
+    horizon_s,
+    continuation,
+    envelope,
+    segment_starts,
+    segment_directions,
+    segment_lengths,
+    half_widths,
+    waypoints,
+    robot_segment,
+    subgoal_index,
+    spacing_m,
+    tolerance_m,
+    max_depth,
+    max_root_obstacles,
+):
     """The numba twin of :func:`viapath.planning.viapath.candidates.grow`: the same nodes in the same order
     (roots, slow/wait, corners, then the via-point children depth by depth), so the candidates, their
     order and so every tie are the same. Returns the node store, floats (M, 10) and integers (M, 5), in
@@ -935,16 +1253,41 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
     ni = np.empty((4 * s_count + 32, 5), np.int64)
     m = _ZERO
     for i in range(s_count):  # the roots: one per speed, at the robot, now
-        nf, ni, m = _add(nf, ni, m, position[0], position[1], 0.0, speeds[i], _NONE, 0.0, root_directions[i, 0],
-                         root_directions[i, 1], _I_STRAIGHT, _ZERO, _ZERO, 0.0, 0.0)
+        nf, ni, m = _add(
+            nf,
+            ni,
+            m,
+            position[0],
+            position[1],
+            0.0,
+            speeds[i],
+            _NONE,
+            0.0,
+            root_directions[i, 0],
+            root_directions[i, 1],
+            _I_STRAIGHT,
+            _ZERO,
+            _ZERO,
+            0.0,
+            0.0,
+        )
         if root_free[i]:
             ni[m - 1, _LEAF] = 1
             nf[m - 1, _GOAL] = root_lengths[i]
     here = np.empty((1, 2))
     here[0, 0] = position[0]
     here[0, 1] = position[1]
-    straight_inside = _goal_legs_inside_all(segment_starts, segment_directions, segment_lengths, half_widths, here,
-                                            subgoal, subgoal_index, spacing_m, tolerance_m)[0]
+    straight_inside = _goal_legs_inside_all(
+        segment_starts,
+        segment_directions,
+        segment_lengths,
+        half_widths,
+        here,
+        subgoal,
+        subgoal_index,
+        spacing_m,
+        tolerance_m,
+    )[0]
 
     # Slow down or wait along the straight leg, then on at the nominal speed or faster (_slow_candidates).
     if slow_enabled and n_count > 0 and straight_inside:
@@ -983,8 +1326,18 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
             starts[k, 1] = position[1]
             velocities[k, 0] = dx * slows[k]
             velocities[k, 1] = dy * slows[k]
-        free = _legs_free(starts, np.zeros(c), velocities, durations[:c], horizon_s, obstacle_positions,
-                          obstacle_velocities, slow_radii, slow_growth, slow_growth_until_s)
+        free = _legs_free(
+            starts,
+            np.zeros(c),
+            velocities,
+            durations[:c],
+            horizon_s,
+            obstacle_positions,
+            obstacle_velocities,
+            slow_radii,
+            slow_growth,
+            slow_growth_until_s,
+        )
         after_count = 0
         for i in range(s_count):
             if speeds[i] >= nominal - 1e-9:
@@ -1012,13 +1365,47 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                         slow_v[q] = slows[k]
                         q += 1
             _, lengths, goal_free, _ = goal_legs(
-                ends, times, after, subgoal, stop_short_m, math.inf, continuation, obstacle_positions,
-                obstacle_velocities, radii, growth, growth_until_s, envelope, segment_starts, segment_directions,
-                segment_lengths, half_widths, subgoal_index, spacing_m, tolerance_m)
+                ends,
+                times,
+                after,
+                subgoal,
+                stop_short_m,
+                math.inf,
+                continuation,
+                obstacle_positions,
+                obstacle_velocities,
+                radii,
+                growth,
+                growth_until_s,
+                envelope,
+                segment_starts,
+                segment_directions,
+                segment_lengths,
+                half_widths,
+                subgoal_index,
+                spacing_m,
+                tolerance_m,
+            )
             for q in range(legs):
                 if goal_free[q]:
-                    nf, ni, m = _add(nf, ni, m, ends[q, 0], ends[q, 1], times[q], after[q], _NONE, slow_v[q] * times[q],
-                                     dx, dy, _I_SLOW, _ZERO, _ZERO, times[q], slow_v[q])
+                    nf, ni, m = _add(
+                        nf,
+                        ni,
+                        m,
+                        ends[q, 0],
+                        ends[q, 1],
+                        times[q],
+                        after[q],
+                        _NONE,
+                        slow_v[q] * times[q],
+                        dx,
+                        dy,
+                        _I_SLOW,
+                        _ZERO,
+                        _ZERO,
+                        times[q],
+                        slow_v[q],
+                    )
                     ni[m - 1, _LEAF] = 1
                     nf[m - 1, _GOAL] = lengths[q]
 
@@ -1061,18 +1448,51 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                     corner_of[q] = corner
                     speed_of[q] = speeds[i]
                     q += 1
-            good = _legs_free(starts, np.zeros(legs), velocities, durations, horizon_s, obstacle_positions,
-                              obstacle_velocities, radii, growth, growth_until_s)
-            inside = legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, starts, targets,
-                                 spacing_m, tolerance_m)
+            good = _legs_free(
+                starts,
+                np.zeros(legs),
+                velocities,
+                durations,
+                horizon_s,
+                obstacle_positions,
+                obstacle_velocities,
+                radii,
+                growth,
+                growth_until_s,
+            )
+            inside = legs_inside(
+                segment_starts,
+                segment_directions,
+                segment_lengths,
+                half_widths,
+                starts,
+                targets,
+                spacing_m,
+                tolerance_m,
+            )
             for q in range(legs):
                 if good[q] and inside[q]:
                     root = _ZERO  # np.searchsorted(speeds, speed): the root node of that speed
                     while root < s_count and speeds[root] < speed_of[q]:
                         root += 1
-                    nf, ni, m = _add(nf, ni, m, targets[q, 0], targets[q, 1], durations[q], speed_of[q], root,
-                                     lengths[q], directions[q, 0], directions[q, 1], _I_CORNER, _ZERO, corner_of[q],
-                                     0.0, 0.0)
+                    nf, ni, m = _add(
+                        nf,
+                        ni,
+                        m,
+                        targets[q, 0],
+                        targets[q, 1],
+                        durations[q],
+                        speed_of[q],
+                        root,
+                        lengths[q],
+                        directions[q, 0],
+                        directions[q, 1],
+                        _I_CORNER,
+                        _ZERO,
+                        corner_of[q],
+                        0.0,
+                        0.0,
+                    )
 
         # The (node, obstacle) pairs to branch on: at the root every obstacle the leg hits, earliest first
         # (at most max_root_obstacles, when there are more pairs than that; _root_pairs), deeper the first hit.
@@ -1155,8 +1575,22 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                         margin = 0.0
                     ovx = obstacle_velocities[j, 0]
                     ovy = obstacle_velocities[j, 1]
-                    if not _via_pair(sx, sy, t0, speed, obstacle_positions[j, 0], obstacle_positions[j, 1], ovx, ovy,
-                                     via_radii[j], growth[j], growth_until_s[j], margin, t_via, w_via):
+                    if not _via_pair(
+                        sx,
+                        sy,
+                        t0,
+                        speed,
+                        obstacle_positions[j, 0],
+                        obstacle_positions[j, 1],
+                        ovx,
+                        ovy,
+                        via_radii[j],
+                        growth[j],
+                        growth_until_s[j],
+                        margin,
+                        t_via,
+                        w_via,
+                    ):
                         continue
                     for o in range(4):
                         t = t_via[o]
@@ -1173,8 +1607,18 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                             via[count, 1] = sy + leg_velocity[count, 1] * t
                             count += 1
                 if count:
-                    good = _legs_free(starts_k[:count], times_k[:count], leg_velocity[:count], t_k[:count], horizon_s,
-                                      obstacle_positions, obstacle_velocities, radii, growth, growth_until_s)
+                    good = _legs_free(
+                        starts_k[:count],
+                        times_k[:count],
+                        leg_velocity[:count],
+                        t_k[:count],
+                        horizon_s,
+                        obstacle_positions,
+                        obstacle_velocities,
+                        radii,
+                        growth,
+                        growth_until_s,
+                    )
                     kept = 0
                     for q in range(count):
                         if good[q]:
@@ -1190,8 +1634,16 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                                 good_vias[g, 0] = via[q, 0]
                                 good_vias[g, 1] = via[q, 1]
                                 g += 1
-                        inside = legs_inside(segment_starts, segment_directions, segment_lengths, half_widths,
-                                             good_starts, good_vias, spacing_m, tolerance_m)
+                        inside = legs_inside(
+                            segment_starts,
+                            segment_directions,
+                            segment_lengths,
+                            half_widths,
+                            good_starts,
+                            good_vias,
+                            spacing_m,
+                            tolerance_m,
+                        )
                         g = 0
                         for q in range(count):
                             if not good[q]:
@@ -1215,19 +1667,52 @@ def grow(position, subgoal, speeds, nominal_index, root_directions, root_lengths
                                 way0 = ni[parent, _WAY0]
                                 way1 = ni[parent, _WAY1]
                                 way2 = ni[parent, _WAY2]
-                            nf, ni, m = _add(nf, ni, m, via[q, 0], via[q, 1], times_k[q] + t_k[q], speed, parent,
-                                             nf[parent, _LENGTH] + speed * t_k[q], fx, fy, way0, way1, way2, 0.0,
-                                             0.0)
+                            nf, ni, m = _add(
+                                nf,
+                                ni,
+                                m,
+                                via[q, 0],
+                                via[q, 1],
+                                times_k[q] + t_k[q],
+                                speed,
+                                parent,
+                                nf[parent, _LENGTH] + speed * t_k[q],
+                                fx,
+                                fy,
+                                way0,
+                                way1,
+                                way2,
+                                0.0,
+                                0.0,
+                            )
         if m == batch:
             break
         # The goal legs of the new frontier: the free ones complete candidates.
         frontier_start = batch
         frontier_end = m
-        starts = np.ascontiguousarray(nf[batch:m, _X:_Y + 1])
+        starts = np.ascontiguousarray(nf[batch:m, _X : _Y + 1])
         _, lengths, free_now, contact_now = goal_legs(
-            starts, nf[batch:m, _T].copy(), nf[batch:m, _V].copy(), subgoal, stop_short_m, horizon_s, continuation,
-            obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, envelope, segment_starts,
-            segment_directions, segment_lengths, half_widths, subgoal_index, spacing_m, tolerance_m)
+            starts,
+            nf[batch:m, _T].copy(),
+            nf[batch:m, _V].copy(),
+            subgoal,
+            stop_short_m,
+            horizon_s,
+            continuation,
+            obstacle_positions,
+            obstacle_velocities,
+            radii,
+            growth,
+            growth_until_s,
+            envelope,
+            segment_starts,
+            segment_directions,
+            segment_lengths,
+            half_widths,
+            subgoal_index,
+            spacing_m,
+            tolerance_m,
+        )
         for r in range(m - batch):
             if free_now[r]:
                 ni[batch + r, _LEAF] = 1
@@ -1252,8 +1737,9 @@ def _wrap(angle):
 
 
 @njit(cache=True, nogil=True)
-def _clear(positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth,
-           growth_until_s):
+def _clear(
+    positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
+):
     """LegChecks.clear of the first ``count`` positions (one per ``dt`` from now)."""
     for j in range(obstacle_positions.shape[0]):
         now = math.hypot(robot_x - obstacle_positions[j, 0], robot_y - obstacle_positions[j, 1]) - 1e-3
@@ -1285,8 +1771,24 @@ def _clear(positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_
 
 
 @njit(cache=True, nogil=True)
-def _follows(robot, target_x, target_y, angle, speed, settings, steps, obstacle_positions, obstacle_velocities, radii,
-             growth, growth_until_s, segment_starts, segment_directions, segment_lengths, half_widths):
+def _follows(
+    robot,
+    target_x,
+    target_y,
+    angle,
+    speed,
+    settings,
+    steps,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+    segment_starts,
+    segment_directions,
+    segment_lengths,
+    half_widths,
+):
     """follow.can_follow: 0 cannot, 1 can, 2 can after turning on the spot first. ``angle``: atan2 of the
     offset from the robot to the target."""
     ox = target_x - robot[0]
@@ -1294,19 +1796,42 @@ def _follows(robot, target_x, target_y, angle, speed, settings, steps, obstacle_
     heading_error = abs(_wrap(angle - robot[2]))
     speed_change = abs(speed - robot[3])
     dt = settings[F_DT]
-    if math.hypot(ox, oy) < 1e-6 or (heading_error <= settings[F_ROLLOUT_HEADING]
-                                     and speed_change <= settings[F_ACCEL] * dt * 2):
+    if math.hypot(ox, oy) < 1e-6 or (
+        heading_error <= settings[F_ROLLOUT_HEADING] and speed_change <= settings[F_ACCEL] * dt * 2
+    ):
         return 1
-    positions = track(robot[0], robot[1], robot[2], robot[3], robot[4], target_x, target_y, speed, settings[F_SPEED],
-                      settings[F_TURN_RATE], settings[F_ACCEL], settings[F_TURN_ACCEL], dt, steps,
-                      settings[F_GAIN])
-    if not _clear(positions, steps, dt, robot[0], robot[1], obstacle_positions, obstacle_velocities, radii, growth,
-                  growth_until_s):
+    positions = track(
+        robot[0],
+        robot[1],
+        robot[2],
+        robot[3],
+        robot[4],
+        target_x,
+        target_y,
+        speed,
+        settings[F_SPEED],
+        settings[F_TURN_RATE],
+        settings[F_ACCEL],
+        settings[F_TURN_ACCEL],
+        dt,
+        steps,
+        settings[F_GAIN],
+    )
+    if not _clear(
+        positions, steps, dt, robot[0], robot[1], obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
+    ):
         return 0
     inside = True
     for s in range(steps):
-        if not _excess_at_most(positions[s, 0], positions[s, 1], segment_starts, segment_directions, segment_lengths,
-                               half_widths, settings[F_TOLERANCE]):
+        if not _excess_at_most(
+            positions[s, 0],
+            positions[s, 1],
+            segment_starts,
+            segment_directions,
+            segment_lengths,
+            half_widths,
+            settings[F_TOLERANCE],
+        ):
             inside = False
             break
     if inside:
@@ -1318,16 +1843,48 @@ def _follows(robot, target_x, target_y, angle, speed, settings, steps, obstacle_
         for s in range(count):
             standing[s, 0] = robot[0]
             standing[s, 1] = robot[1]
-        if _clear(standing, count, dt, robot[0], robot[1], obstacle_positions, obstacle_velocities, radii, growth,
-                  growth_until_s):
+        if _clear(
+            standing,
+            count,
+            dt,
+            robot[0],
+            robot[1],
+            obstacle_positions,
+            obstacle_velocities,
+            radii,
+            growth,
+            growth_until_s,
+        ):
             return 2
     return 0
 
 
 @njit(cache=True, nogil=True)
-def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s,
-                via_radii, ids, slow_radii, slow_growth, slow_growth_until_s, slow_times, continuation, envelope,
-                segment_starts, segment_directions, segment_lengths, half_widths, waypoints, settings, integers):
+def choose_tree(
+    robot,
+    speeds,
+    subgoal,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+    via_radii,
+    ids,
+    slow_radii,
+    slow_growth,
+    slow_growth_until_s,
+    slow_times,
+    continuation,
+    envelope,
+    segment_starts,
+    segment_directions,
+    segment_lengths,
+    half_widths,
+    waypoints,
+    settings,
+    integers,
+):
     """The first half of the viapath planner's ``_choose`` in one call: the root legs (:func:`goal_legs`), the
     paper's step 1 (the free straight leg at the nominal speed, if the robot can follow it: follow.can_follow),
     else the candidate tree (:func:`grow`). ``robot`` is (x, y, heading, speed, turn rate); ``settings`` and
@@ -1351,24 +1908,88 @@ def choose_tree(robot, speeds, subgoal, obstacle_positions, obstacle_velocities,
         starts[i, 0] = robot[0]
         starts[i, 1] = robot[1]
     directions, lengths, free, contact = goal_legs(
-        starts, np.zeros(s_count), speeds, subgoal, stop_short_m, horizon_s, continuation, obstacle_positions,
-        obstacle_velocities, radii, growth, growth_until_s, envelope, segment_starts, segment_directions,
-        segment_lengths, half_widths, subgoal_index, spacing_m, tolerance_m)
+        starts,
+        np.zeros(s_count),
+        speeds,
+        subgoal,
+        stop_short_m,
+        horizon_s,
+        continuation,
+        obstacle_positions,
+        obstacle_velocities,
+        radii,
+        growth,
+        growth_until_s,
+        envelope,
+        segment_starts,
+        segment_directions,
+        segment_lengths,
+        half_widths,
+        subgoal_index,
+        spacing_m,
+        tolerance_m,
+    )
     if free[nominal_index] and integers[C_TRY_STRAIGHT] and not integers[C_ONLY]:
         straight_angle = math.atan2(subgoal[1] - robot[1], subgoal[0] - robot[0])
-        follows = _follows(robot, subgoal[0], subgoal[1], straight_angle, speeds[nominal_index], settings,
-                           integers[C_STEPS], obstacle_positions, obstacle_velocities, radii, growth, growth_until_s,
-                           segment_starts, segment_directions, segment_lengths, half_widths)
+        follows = _follows(
+            robot,
+            subgoal[0],
+            subgoal[1],
+            straight_angle,
+            speeds[nominal_index],
+            settings,
+            integers[C_STEPS],
+            obstacle_positions,
+            obstacle_velocities,
+            radii,
+            growth,
+            growth_until_s,
+            segment_starts,
+            segment_directions,
+            segment_lengths,
+            half_widths,
+        )
         if follows:
             result[0] = STEP_ONE
             result[1] = follows == 2
             return result, np.empty((0, 10)), np.empty((0, 5), np.int64), np.empty((6, 0))
-    nf, ni = grow(robot[:2].copy(), subgoal, speeds, nominal_index, directions, lengths, free, contact,
-                  obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, via_radii, ids, slow_radii,
-                  slow_growth, slow_growth_until_s, slow_times, integers[C_SLOW] != 0, stop_short_m, horizon_s,
-                  continuation, envelope, segment_starts, segment_directions, segment_lengths, half_widths, waypoints,
-                  integers[C_SEGMENT], subgoal_index, spacing_m, tolerance_m, integers[C_DEPTH],
-                  integers[C_ROOT_LIMIT])
+    nf, ni = grow(
+        robot[:2].copy(),
+        subgoal,
+        speeds,
+        nominal_index,
+        directions,
+        lengths,
+        free,
+        contact,
+        obstacle_positions,
+        obstacle_velocities,
+        radii,
+        growth,
+        growth_until_s,
+        via_radii,
+        ids,
+        slow_radii,
+        slow_growth,
+        slow_growth_until_s,
+        slow_times,
+        integers[C_SLOW] != 0,
+        stop_short_m,
+        horizon_s,
+        continuation,
+        envelope,
+        segment_starts,
+        segment_directions,
+        segment_lengths,
+        half_widths,
+        waypoints,
+        integers[C_SEGMENT],
+        subgoal_index,
+        spacing_m,
+        tolerance_m,
+        integers[C_DEPTH],
+        integers[C_ROOT_LIMIT],
+    )
     k_count = 0
     for m in range(ni.shape[0]):
         if ni[m, _LEAF]:
@@ -1411,9 +2032,25 @@ def _before(a, b):
 
 
 @njit(cache=True, nogil=True)
-def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, obstacle_velocities, radii, growth,
-                     growth_until_s, segment_starts, segment_directions, segment_lengths, half_widths, settings,
-                     integers):
+def choose_candidate(
+    robot,
+    nf,
+    ni,
+    found,
+    facts,
+    angles,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+    segment_starts,
+    segment_directions,
+    segment_lengths,
+    half_widths,
+    settings,
+    integers,
+):
     """The second half of ``_choose`` up to its shield check: Eq. 1's critics (:mod:`.critics`, each term as
     there, summed in :func:`.critics.critics_for`'s order), with ``only_way`` the other ways priced out, the
     cheapest-first order (np.argsort's, stable) of the first ``max_rollouts`` candidates (and at least two,
@@ -1449,8 +2086,11 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, ob
         side = ni[m, _WAY1]
         terms[4, k] = settings[F_SIDE] * (1.0 if (side != 0 and side != integers[C_PREFERRED]) else 0.0)
         if integers[C_PREVIOUS]:
-            same_way = (ni[m, _WAY0] == integers[C_PREV_WAY] and ni[m, _WAY1] == integers[C_PREV_WAY + 1]
-                        and ni[m, _WAY2] == integers[C_PREV_WAY + 2])
+            same_way = (
+                ni[m, _WAY0] == integers[C_PREV_WAY]
+                and ni[m, _WAY1] == integers[C_PREV_WAY + 1]
+                and ni[m, _WAY2] == integers[C_PREV_WAY + 2]
+            )
             same_speed = np.rint(speed * 1000) == integers[C_PREV_MMPS]
             bonus = (1.0 if same_way else 0.0) + 0.5 * (1.0 if (same_way and same_speed) else 0.0)
             terms[5, k] = -(settings[F_HYSTERESIS] * bonus)
@@ -1460,8 +2100,11 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, ob
         for c in range(2, 6):
             value = value + terms[c, k]
         raw_total[k] = value
-        if only and not (ni[m, _WAY0] == integers[C_ONLY_WAY] and ni[m, _WAY1] == integers[C_ONLY_WAY + 1]
-                         and ni[m, _WAY2] == integers[C_ONLY_WAY + 2]):
+        if only and not (
+            ni[m, _WAY0] == integers[C_ONLY_WAY]
+            and ni[m, _WAY1] == integers[C_ONLY_WAY + 1]
+            and ni[m, _WAY2] == integers[C_ONLY_WAY + 2]
+        ):
             value = math.inf
         total[k] = value
         if math.isfinite(value):
@@ -1475,8 +2118,8 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, ob
     ranking = np.empty(2 + 2 * ranks, np.int64)
     ranking[0] = -1
     ranking[1] = ranks
-    order = ranking[2:2 + ranks]
-    follow = ranking[2 + ranks:]
+    order = ranking[2 : 2 + ranks]
+    follow = ranking[2 + ranks :]
     taken = np.zeros(k_count, np.bool_)
     for r in range(ranks):
         best = -1
@@ -1492,9 +2135,24 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, ob
             break
         m = leaves[k]
         speed = nf[m, _SLOW_V] if nf[m, _SLOW_S] > 0 else nf[m, _V]
-        follow[r] = _follows(robot, facts[4, k], facts[5, k], angles[1, k], speed, settings, integers[C_STEPS],
-                             obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, segment_starts,
-                             segment_directions, segment_lengths, half_widths)
+        follow[r] = _follows(
+            robot,
+            facts[4, k],
+            facts[5, k],
+            angles[1, k],
+            speed,
+            settings,
+            integers[C_STEPS],
+            obstacle_positions,
+            obstacle_velocities,
+            radii,
+            growth,
+            growth_until_s,
+            segment_starts,
+            segment_directions,
+            segment_lengths,
+            half_widths,
+        )
         if follow[r]:
             ranking[0] = r
             break
@@ -1502,18 +2160,61 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, ob
 
 
 @njit(cache=True, nogil=True)
-def choose(robot, speeds, subgoal, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, via_radii,
-           ids, slow_radii, slow_growth, slow_growth_until_s, slow_times, continuation, envelope, segment_starts,
-           segment_directions, segment_lengths, half_widths, waypoints, settings, integers):
+def choose(
+    robot,
+    speeds,
+    subgoal,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+    via_radii,
+    ids,
+    slow_radii,
+    slow_growth,
+    slow_growth_until_s,
+    slow_times,
+    continuation,
+    envelope,
+    segment_starts,
+    segment_directions,
+    segment_lengths,
+    half_widths,
+    waypoints,
+    settings,
+    integers,
+):
     """``_choose`` up to its shield check in one call (each array handed back to Python costs about a
     microsecond): :func:`choose_tree`, then, when it found candidates, their angles and :func:`choose_candidate`.
     Takes :func:`choose_tree`'s arguments; returns (found, floats, integers: the node store, costs): ``found``
     is :func:`choose_tree`'s, followed by :func:`choose_candidate`'s ranking when it says CANDIDATES (one array
     fewer to hand back), ``costs`` (8, K) :func:`choose_candidate`'s, empty unless CANDIDATES."""
     found, nf, ni, facts = choose_tree(
-        robot, speeds, subgoal, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, via_radii, ids,
-        slow_radii, slow_growth, slow_growth_until_s, slow_times, continuation, envelope, segment_starts,
-        segment_directions, segment_lengths, half_widths, waypoints, settings, integers)
+        robot,
+        speeds,
+        subgoal,
+        obstacle_positions,
+        obstacle_velocities,
+        radii,
+        growth,
+        growth_until_s,
+        via_radii,
+        ids,
+        slow_radii,
+        slow_growth,
+        slow_growth_until_s,
+        slow_times,
+        continuation,
+        envelope,
+        segment_starts,
+        segment_directions,
+        segment_lengths,
+        half_widths,
+        waypoints,
+        settings,
+        integers,
+    )
     if found[0] != CANDIDATES:
         return found, nf, ni, np.empty((8, 0))
     k_count = facts.shape[1]
@@ -1521,10 +2222,26 @@ def choose(robot, speeds, subgoal, obstacle_positions, obstacle_velocities, radi
     for k in range(k_count):
         angles[0, k] = math.atan2(facts[0, k], facts[1, k])
         angles[1, k] = math.atan2(facts[2, k], facts[3, k])
-    ranking, costs = choose_candidate(robot, nf, ni, found, facts, angles, obstacle_positions, obstacle_velocities,
-                                      radii, growth, growth_until_s, segment_starts, segment_directions,
-                                      segment_lengths, half_widths, settings, integers)
+    ranking, costs = choose_candidate(
+        robot,
+        nf,
+        ni,
+        found,
+        facts,
+        angles,
+        obstacle_positions,
+        obstacle_velocities,
+        radii,
+        growth,
+        growth_until_s,
+        segment_starts,
+        segment_directions,
+        segment_lengths,
+        half_widths,
+        settings,
+        integers,
+    )
     found_and_ranking = np.empty(found.shape[0] + ranking.shape[0], np.int64)
-    found_and_ranking[:found.shape[0]] = found
-    found_and_ranking[found.shape[0]:] = ranking
+    found_and_ranking[: found.shape[0]] = found
+    found_and_ranking[found.shape[0] :] = ranking
     return found_and_ranking, nf, ni, costs

@@ -13,73 +13,199 @@ from viapath.planning.viapath.backend import BACKENDS
 
 _OWN = [
     # The paper (§3, §4.2).
-    Option("speeds", (0.1, 0.2, 0.3, 0.4, 0.5), "the speed set: candidates are built for each, plus the current "
-           "and the nominal speed", "m/s", minimum=0.01, maximum=50.0),
+    Option(
+        "speeds",
+        (0.1, 0.2, 0.3, 0.4, 0.5),
+        "the speed set: candidates are built for each, plus the current and the nominal speed",
+        "m/s",
+        minimum=0.01,
+        maximum=50.0,
+    ),
     Option("k1", 0.1, "Eq. 1 weight of the path length Dist", "1/m", minimum=0.0, maximum=1000.0, group="weights"),
     Option("k2", 0.001, "Eq. 1 weight of the travel time", "1/s", minimum=0.0, maximum=1000.0, group="weights"),
     Option("k3", 0.08, "Eq. 1 weight of |v - v_nominal|", "s/m", minimum=0.0, maximum=1000.0, group="weights"),
-    Option("k4", 0.3, "Eq. 1 weight of the turn θ onto the first leg", "1/rad", minimum=0.0, maximum=1000.0, group="weights"),
-    Option("theta_unit", "rad", "unit of θ in Eq. 1 (degrees make the θ term swamp the others)",
-           choices=("rad", "deg")),
+    Option(
+        "k4",
+        0.3,
+        "Eq. 1 weight of the turn θ onto the first leg",
+        "1/rad",
+        minimum=0.0,
+        maximum=1000.0,
+        group="weights",
+    ),
+    Option(
+        "theta_unit", "rad", "unit of θ in Eq. 1 (degrees make the θ term swamp the others)", choices=("rad", "deg")
+    ),
     # DESIGN §2: how via points and legs are checked.
-    Option("planning_margin_m", 0.1, "via points are placed this much outside the checked disc", "m", minimum=0.0,
-           maximum=2.0),
-    Option("horizon_s", 10.0, "legs are checked against the forecast up to this time", "s", minimum=0.0,
-           exclusive_minimum=True, maximum=60.0),
+    Option(
+        "planning_margin_m",
+        0.1,
+        "via points are placed this much outside the checked disc",
+        "m",
+        minimum=0.0,
+        maximum=2.0,
+    ),
+    Option(
+        "horizon_s",
+        10.0,
+        "legs are checked against the forecast up to this time",
+        "s",
+        minimum=0.0,
+        exclusive_minimum=True,
+        maximum=60.0,
+    ),
     Option("max_depth", 3, "how many via points a candidate may chain (graph search depth)", minimum=1, maximum=6),
-    Option("max_root_obstacles", 12, "obstacles branched on at the root, earliest contact first (0: all)", minimum=0,
-           maximum=1000),
-    Option("corridor_check_spacing_m", 0.05, "spacing of the points that check a leg against the corridor", "m",
-           minimum=0.005, maximum=1.0),
+    Option(
+        "max_root_obstacles",
+        12,
+        "obstacles branched on at the root, earliest contact first (0: all)",
+        minimum=0,
+        maximum=1000,
+    ),
+    Option(
+        "corridor_check_spacing_m",
+        0.05,
+        "spacing of the points that check a leg against the corridor",
+        "m",
+        minimum=0.005,
+        maximum=1.0,
+    ),
     # Beyond the paper: the way back to the path after an avoidance (docs/weights.md §6).
-    Option("return_lookahead_m", 0.0, "off the path line, first try the straight leg at the nominal speed to the "
-           "path point this far ahead of the robot (before the subgoal), so it returns within about this distance "
-           "rather than on the shallow line to a far subgoal (0: off, the paper's way)", "m", minimum=0.0,
-           maximum=100.0),
+    Option(
+        "return_lookahead_m",
+        0.0,
+        "off the path line, first try the straight leg at the nominal speed to the "
+        "path point this far ahead of the robot (before the subgoal), so it returns within about this distance "
+        "rather than on the shallow line to a far subgoal (0: off, the paper's way)",
+        "m",
+        minimum=0.0,
+        maximum=100.0,
+    ),
     # Ties and churn.
     Option("preferred_side", "left", "near-ties (head-on) go round this side", choices=("left", "right")),
     Option("side_tolerance", 0.03, "cost added to passing on the other side", minimum=0.0, maximum=1000.0),
-    Option("hysteresis", 0.05, "cost bonus for last cycle's way round (and half more for its speed)", minimum=0.0,
-           maximum=1000.0),
-    Option("keep_previous_way", True, "a way round that vanished is re-checked with less inflation and kept if "
-           "still cheaper"),
-    Option("keep_previous_inflation", 0.25, "... with this fraction of the uncertainty inflation", minimum=0.0,
-           maximum=1.0),
+    Option(
+        "hysteresis",
+        0.05,
+        "cost bonus for last cycle's way round (and half more for its speed)",
+        minimum=0.0,
+        maximum=1000.0,
+    ),
+    Option(
+        "keep_previous_way",
+        True,
+        "a way round that vanished is re-checked with less inflation and kept if still cheaper",
+    ),
+    Option(
+        "keep_previous_inflation", 0.25, "... with this fraction of the uncertainty inflation", minimum=0.0, maximum=1.0
+    ),
     # Slowing down and waiting.
-    Option("slow_leg_inflation", 0.25, "fraction of the uncertainty inflation the first, slow leg of a slow/wait "
-           "candidate is checked with", minimum=0.0, maximum=1.0),
-    Option("slow_times_s", (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0), "how long a candidate may first stand or drive "
-           "slower than nominal", "s", minimum=0.0, exclusive_minimum=True, maximum=30.0),
+    Option(
+        "slow_leg_inflation",
+        0.25,
+        "fraction of the uncertainty inflation the first, slow leg of a slow/wait candidate is checked with",
+        minimum=0.0,
+        maximum=1.0,
+    ),
+    Option(
+        "slow_times_s",
+        (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0),
+        "how long a candidate may first stand or drive slower than nominal",
+        "s",
+        minimum=0.0,
+        exclusive_minimum=True,
+        maximum=30.0,
+    ),
     # Motion limits: roll-outs of the first leg.
-    Option("rollout_heading_rad", 0.35, "a candidate whose first leg turns more than this is rolled out", "rad",
-           minimum=0.0, maximum=3.15),
-    Option("rollout_s", 2.0, "how long a candidate's first leg is rolled out", "s", minimum=0.0, exclusive_minimum=True,
-           maximum=30.0),
+    Option(
+        "rollout_heading_rad",
+        0.35,
+        "a candidate whose first leg turns more than this is rolled out",
+        "rad",
+        minimum=0.0,
+        maximum=3.15,
+    ),
+    Option(
+        "rollout_s",
+        2.0,
+        "how long a candidate's first leg is rolled out",
+        "s",
+        minimum=0.0,
+        exclusive_minimum=True,
+        maximum=30.0,
+    ),
     Option("rollout_dt_s", 0.1, "step of the roll-outs", "s", minimum=0.01, maximum=1.0),
-    Option("turn_in_place_min_rad", 0.02, "a plan whose roll-out leaves the corridor turns on the spot first when "
-           "its heading error is above this", "rad", minimum=0.0,
-           maximum=3.15),
+    Option(
+        "turn_in_place_min_rad",
+        0.02,
+        "a plan whose roll-out leaves the corridor turns on the spot first when its heading error is above this",
+        "rad",
+        minimum=0.0,
+        maximum=3.15,
+    ),
     Option("max_rollouts", 8, "candidates rolled out, cheapest first, before falling back", minimum=1, maximum=1000),
-    Option("heading_gain", 2.5, "turn rate per radian of heading error when steering for the target", "1/s",
-           minimum=0.0, exclusive_minimum=True, maximum=100.0),
+    Option(
+        "heading_gain",
+        2.5,
+        "turn rate per radian of heading error when steering for the target",
+        "1/s",
+        minimum=0.0,
+        exclusive_minimum=True,
+        maximum=100.0,
+    ),
     # No free candidate.
-    Option("escape_s", 3.0, "how long each escape command is rolled out", "s", minimum=0.0, exclusive_minimum=True,
-           maximum=30.0),
+    Option(
+        "escape_s",
+        3.0,
+        "how long each escape command is rolled out",
+        "s",
+        minimum=0.0,
+        exclusive_minimum=True,
+        maximum=30.0,
+    ),
     Option("escape_dt_s", 0.1, "step of the escape roll-outs", "s", minimum=0.01, maximum=1.0),
-    Option("calm_escape", True, "escape no faster than the top of the speed set, without flipping from one "
-           "cycle to the next"),
-    Option("escape_continuity_s", 0.5, "with calm_escape: time to contact an escape command pays for being "
-           "far from last cycle's", "s", minimum=0.0, maximum=60.0),
-    Option("escape_max_excess_m", 0.5, "an escape may take the robot at most this far outside the corridor "
-           "(standing is always allowed)", "m", minimum=0.0, maximum=100.0),
+    Option(
+        "calm_escape",
+        True,
+        "escape no faster than the top of the speed set, without flipping from one cycle to the next",
+    ),
+    Option(
+        "escape_continuity_s",
+        0.5,
+        "with calm_escape: time to contact an escape command pays for being far from last cycle's",
+        "s",
+        minimum=0.0,
+        maximum=60.0,
+    ),
+    Option(
+        "escape_max_excess_m",
+        0.5,
+        "an escape may take the robot at most this far outside the corridor (standing is always allowed)",
+        "m",
+        minimum=0.0,
+        maximum=100.0,
+    ),
     # Speed (docs/speed.md).
-    Option("blocked_gap_m", 0.3, "when static geometry closes the way (a closed door), the robot stops this far "
-           "short of touching it (its margin included) and waits", "m", minimum=0.0, maximum=5.0),
-    Option("backend", "auto", "arithmetic of the hot path: auto = compiled (numba, extra 'fast') when numba is "
-           "importable, else numpy; the decisions are the same", choices=BACKENDS),
+    Option(
+        "blocked_gap_m",
+        0.3,
+        "when static geometry closes the way (a closed door), the robot stops this far "
+        "short of touching it (its margin included) and waits",
+        "m",
+        minimum=0.0,
+        maximum=5.0,
+    ),
+    Option(
+        "backend",
+        "auto",
+        "arithmetic of the hot path: auto = compiled (numba, extra 'fast') when numba is "
+        "importable, else numpy; the decisions are the same",
+        choices=BACKENDS,
+    ),
     # Display.
     Option("record_candidates", False, "keep every candidate's polyline in the plan (for display)"),
 ]
 
-VIAPATH_OPTIONS = COMMON_OPTIONS + OptionSet(_OWN, owner="viapath",
-                                             steps=[("rollout_s", "rollout_dt_s"), ("escape_s", "escape_dt_s")])
+VIAPATH_OPTIONS = COMMON_OPTIONS + OptionSet(
+    _OWN, owner="viapath", steps=[("rollout_s", "rollout_dt_s"), ("escape_s", "escape_dt_s")]
+)

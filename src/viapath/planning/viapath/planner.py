@@ -65,8 +65,17 @@ from viapath.planning.viapath.backend import STEPWISE, backend_for
 from viapath.planning.viapath.backend import resolve as resolve_backend
 from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, _candidates_of, grow
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.critics import (Context, Distance, Heading, Hysteresis, SidePreference,
-                                              SpeedError, Time, critics_for, score)
+from viapath.planning.viapath.critics import (
+    Context,
+    Distance,
+    Heading,
+    Hysteresis,
+    SidePreference,
+    SpeedError,
+    Time,
+    critics_for,
+    score,
+)
 from viapath.planning.viapath.escape import stop_or_escape
 from viapath.planning.viapath.follow import can_follow, follows
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
@@ -144,8 +153,14 @@ class ViaPathPlanner(Planner, name="viapath"):
         if situation.obstacles.static_mask is not None:
             situation = self._near_corridor(situation)
         self._situation = situation
-        checks = LegChecks.of(situation, self.config, self.subgoals, self.subgoal_policy, self.robot_radius_m,
-                              self._cycle_backend(situation))
+        checks = LegChecks.of(
+            situation,
+            self.config,
+            self.subgoals,
+            self.subgoal_policy,
+            self.robot_radius_m,
+            self._cycle_backend(situation),
+        )
         if self.shield is not None and self.shield.config.enabled:
             # Set on the checks just built (dataclasses.replace would copy every field again, every cycle).
             checks.envelope_accel_mps2 = self.shield.config.person_accel_mps2
@@ -176,8 +191,12 @@ class ViaPathPlanner(Planner, name="viapath"):
         if not far.any():
             return situation
         keep = ~far
-        kept = Inflation(*(getattr(inflation, name)[keep] for name in ("obstacle_radii_m", "check_radii", "growth",
-                                                                         "growth_until_s")))
+        kept = Inflation(
+            *(
+                getattr(inflation, name)[keep]
+                for name in ("obstacle_radii_m", "check_radii", "growth", "growth_until_s")
+            )
+        )
         return dataclasses.replace(situation, obstacles=obstacles.subset(keep), inflation=kept)
 
     def _cycle_backend(self, situation: Situation):
@@ -201,8 +220,9 @@ class ViaPathPlanner(Planner, name="viapath"):
         if length < 1e-6:
             return None
         direction = offset / length
-        contact = checks.contact_times(position[None], np.zeros(1), direction[None] * speed_mps,
-                                       np.array([length / speed_mps]), np.inf)[0]
+        contact = checks.contact_times(
+            position[None], np.zeros(1), direction[None] * speed_mps, np.array([length / speed_mps]), np.inf
+        )[0]
         first = int(np.argmin(contact))
         if not (math.isfinite(contact[first]) and checks.obstacles.is_static[first]):
             return None
@@ -211,12 +231,19 @@ class ViaPathPlanner(Planner, name="viapath"):
         speed = min(speed_mps, math.sqrt(self.limits.max_accel_mps2 * ahead_m))
         if speed < 0.02 or ahead_m < 0.02:
             speed, stop_at = 0.0, position.copy()
-        elif not (checks.legs_free(position[None], np.zeros(1), direction[None] * speed, np.array([ahead_m / speed]))[0]
-                  and checks.legs_inside(position[None], stop_at[None])[0]):
+        elif not (
+            checks.legs_free(position[None], np.zeros(1), direction[None] * speed, np.array([ahead_m / speed]))[0]
+            and checks.legs_inside(position[None], stop_at[None])[0]
+        ):
             return None
-        plan = Plan("blocked", speed, stop_at, waypoints=np.array([position, stop_at]),
-                    subgoal_index=checks.subgoal_index,
-                    extras={"blocked": f"static geometry closes the way {speed_mps * float(contact[first]):.2f} m ahead"})
+        plan = Plan(
+            "blocked",
+            speed,
+            stop_at,
+            waypoints=np.array([position, stop_at]),
+            subgoal_index=checks.subgoal_index,
+            extras={"blocked": f"static geometry closes the way {speed_mps * float(contact[first]):.2f} m ahead"},
+        )
         command = Command.stop() if speed == 0.0 else self._command(situation, plan)
         return Decision(command, plan)
 
@@ -247,8 +274,9 @@ class ViaPathPlanner(Planner, name="viapath"):
     def nominal_in_speed_set_mps(self) -> float:
         return round(min(self.nominal_speed_mps, self.limits.max_speed_mps), 3)
 
-    def _choose(self, checks: LegChecks, speeds, nominal_index: int, previous: Choice | None,
-                only_way: Way | None = None) -> _Chosen | None:
+    def _choose(
+        self, checks: LegChecks, speeds, nominal_index: int, previous: Choice | None, only_way: Way | None = None
+    ) -> _Chosen | None:
         """Candidates → costs → the cheapest the robot can follow; None when none is free.
         With ``only_way``, only candidates going that way round are considered."""
         if only_way is None and self.config.return_lookahead_m > 0:
@@ -262,8 +290,15 @@ class ViaPathPlanner(Planner, name="viapath"):
             # Paper step 1: a free straight path at the normal speed is the plan, if the robot can
             # turn onto it in time.
             speed = float(speeds[nominal_index])
-            plan = Plan("straight", speed, checks.subgoal.copy(), waypoints=np.array([checks.position, checks.subgoal]),
-                        subgoal_index=checks.subgoal_index, candidate_count=1, chosen=0)
+            plan = Plan(
+                "straight",
+                speed,
+                checks.subgoal.copy(),
+                waypoints=np.array([checks.position, checks.subgoal]),
+                subgoal_index=checks.subgoal_index,
+                candidate_count=1,
+                chosen=0,
+            )
             if can_follow(plan, checks, self.limits, self.config) and self._inside_shield(plan):
                 return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
         candidates = grow(checks, roots, self.config, self._slow_checks(checks))
@@ -277,7 +312,7 @@ class ViaPathPlanner(Planner, name="viapath"):
                 return None
         polylines = [candidates.polyline(k) for k in range(len(candidates))] if self.config.record_candidates else []
         order = total.argsort(kind="stable")
-        for rank, best in enumerate(order[:self.config.max_rollouts]):
+        for rank, best in enumerate(order[: self.config.max_rollouts]):
             if not np.isfinite(total[best]):
                 break
             # can_follow's verdict before the plan is made: in a cycle without a free candidate (the slowest
@@ -303,8 +338,12 @@ class ViaPathPlanner(Planner, name="viapath"):
         backend, config, critics = self.backend, self.config, self.critics
         cached = self.__dict__.get("_compiled_choice_of")  # (backend, options, critics, the answer): every cycle asks
         if cached is None or cached[0] is not backend or cached[1] is not config or cached[2] is not critics:
-            answer = (backend.name == "numba" and backend.whole_steps and not config.record_candidates
-                      and tuple(map(type, critics)) == _PAPER_CRITICS)
+            answer = (
+                backend.name == "numba"
+                and backend.whole_steps
+                and not config.record_candidates
+                and tuple(map(type, critics)) == _PAPER_CRITICS
+            )
             cached = self.__dict__["_compiled_choice_of"] = (backend, config, critics, answer)
         return cached[3]
 
@@ -313,13 +352,24 @@ class ViaPathPlanner(Planner, name="viapath"):
         critics object is replaced); their slots: :mod:`.kernel_slots`."""
         config, limits, critics, nominal_speed = self.config, self.limits, self.critics, self.nominal_speed_mps
         cached = self.__dict__.get("_kernel_cache")
-        if (cached is not None and cached[0] is config and cached[1] is limits and cached[2] is critics
-                and cached[3] is nominal_speed):
+        if (
+            cached is not None
+            and cached[0] is config
+            and cached[1] is limits
+            and cached[2] is critics
+            and cached[3] is nominal_speed
+        ):
             return cached[4]
         distance, time, speed, heading, side, hysteresis = self.critics
         settings = np.zeros(slot.F_COUNT, dtype=np.float64)
         settings[[slot.F_K1, slot.F_K2, slot.F_K3, slot.F_K4, slot.F_SIDE, slot.F_HYSTERESIS]] = (
-            distance.weight, time.weight, speed.weight, heading.weight, side.weight, hysteresis.weight)
+            distance.weight,
+            time.weight,
+            speed.weight,
+            heading.weight,
+            side.weight,
+            hysteresis.weight,
+        )
         settings[slot.F_NOMINAL] = self.nominal_speed_mps
         settings[slot.F_ROLLOUT_HEADING] = config.rollout_heading_rad
         settings[slot.F_ACCEL] = limits.max_accel_mps2
@@ -343,8 +393,9 @@ class ViaPathPlanner(Planner, name="viapath"):
         self.__dict__["_kernel_cache"] = (config, limits, critics, nominal_speed, constants)
         return constants
 
-    def _choose_compiled(self, checks: LegChecks, speeds, nominal_index: int, previous: Choice | None,
-                         only_way: Way | None) -> _Chosen | None:
+    def _choose_compiled(
+        self, checks: LegChecks, speeds, nominal_index: int, previous: Choice | None, only_way: Way | None
+    ) -> _Chosen | None:
         """:meth:`_choose` with one kernel doing everything up to the shield check (:func:`.kernels.choose`): it
         rolls out candidates cheapest first until one follows; a candidate the shield refuses sends the search
         on to the next ones here, as the reference does."""
@@ -377,8 +428,15 @@ class ViaPathPlanner(Planner, name="viapath"):
         chosen = backend.choose(checks, slow_checks, speeds, slow_times, settings, integers)
         if chosen[0][0] == slot.STEP_ONE:
             speed = float(speeds[nominal_index])
-            plan = Plan("straight", speed, checks.subgoal.copy(), waypoints=np.array([checks.position, checks.subgoal]),
-                        subgoal_index=checks.subgoal_index, candidate_count=1, chosen=0)
+            plan = Plan(
+                "straight",
+                speed,
+                checks.subgoal.copy(),
+                waypoints=np.array([checks.position, checks.subgoal]),
+                subgoal_index=checks.subgoal_index,
+                candidate_count=1,
+                chosen=0,
+            )
             if chosen[0][1]:
                 plan.extras["turn_in_place"] = True
             if self._inside_shield(plan):
@@ -394,7 +452,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         if first < 0:
             return None
         total, ranks = costs[7], int(ranking[1])
-        order, follow = ranking[2:2 + ranks].tolist(), ranking[2 + ranks:].tolist()
+        order, follow = ranking[2 : 2 + ranks].tolist(), ranking[2 + ranks :].tolist()
         for rank in range(first, min(ranks, self.config.max_rollouts)):
             best = order[rank]
             if not math.isfinite(total[best]):
@@ -411,8 +469,11 @@ class ViaPathPlanner(Planner, name="viapath"):
                 plan.extras["cost_terms"] = _cost_terms(self._cost_breakdown(costs), order, rank, total)
                 node = int(leaves[best])
                 way, speed = nodes[node, 1:4].tolist(), float(floats[node, 3])
-                return _Chosen(Choice(Way(*way), int(round(speed * 1000))), plan,
-                               _CompiledCandidates(floats, nodes, leaves, checks.subgoal))
+                return _Chosen(
+                    Choice(Way(*way), int(round(speed * 1000))),
+                    plan,
+                    _CompiledCandidates(floats, nodes, leaves, checks.subgoal),
+                )
         return None
 
     def _cost_breakdown(self, costs: np.ndarray):
@@ -430,18 +491,35 @@ class ViaPathPlanner(Planner, name="viapath"):
         node = int(leaves[k])
         _, _, _, speed_after, _, _, _, slow_s, slow_speed, _ = floats[node].tolist()  # columns: kernels._X.._GOAL
         if slow_s > 0:
-            return Plan("wait" if slow_speed == 0.0 else "slow", slow_speed, checks.subgoal.copy(),
-                        waypoints=np.array([checks.position, checks.subgoal]), subgoal_index=checks.subgoal_index,
-                        candidate_count=len(leaves), candidate_costs=total, candidate_polylines=[], chosen=k,
-                        extras={"slow_s": slow_s, "speed_after_mps": speed_after})
+            return Plan(
+                "wait" if slow_speed == 0.0 else "slow",
+                slow_speed,
+                checks.subgoal.copy(),
+                waypoints=np.array([checks.position, checks.subgoal]),
+                subgoal_index=checks.subgoal_index,
+                candidate_count=len(leaves),
+                candidate_costs=total,
+                candidate_polylines=[],
+                chosen=k,
+                extras={"slow_s": slow_s, "speed_after_mps": speed_after},
+            )
         points = [checks.subgoal]
         while node >= 0:
             points.append(floats[node, 0:2])
             node = int(nodes[node, 0])
         line = np.array(points[::-1])
-        return Plan("avoid" if len(line) > 2 else "straight", speed_after, line[1].copy(), via_points=line[1:-1].copy(),
-                    waypoints=line, subgoal_index=checks.subgoal_index, candidate_count=len(leaves),
-                    candidate_costs=total, candidate_polylines=[], chosen=k)
+        return Plan(
+            "avoid" if len(line) > 2 else "straight",
+            speed_after,
+            line[1].copy(),
+            via_points=line[1:-1].copy(),
+            waypoints=line,
+            subgoal_index=checks.subgoal_index,
+            candidate_count=len(leaves),
+            candidate_costs=total,
+            candidate_polylines=[],
+            chosen=k,
+        )
 
     def _way_back(self, checks: LegChecks, speed: float) -> _Chosen | None:
         """Beyond the paper (``return_lookahead_m``): off the path line, the paper's step 1 towards the
@@ -456,9 +534,16 @@ class ViaPathPlanner(Planner, name="viapath"):
         _, _, free, _ = back.goal_legs(back.position[None], np.zeros(1), np.array([speed]))
         if not free[0]:
             return None
-        plan = Plan("straight", speed, back.subgoal.copy(), waypoints=np.array([back.position, back.subgoal,
-                                                                                 checks.subgoal]),
-                    subgoal_index=checks.subgoal_index, candidate_count=1, chosen=0, extras={"way_back": True})
+        plan = Plan(
+            "straight",
+            speed,
+            back.subgoal.copy(),
+            waypoints=np.array([back.position, back.subgoal, checks.subgoal]),
+            subgoal_index=checks.subgoal_index,
+            candidate_count=1,
+            chosen=0,
+            extras={"way_back": True},
+        )
         if not (can_follow(plan, back, self.limits, self.config) and self._inside_shield(plan)):
             return None
         return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
@@ -477,24 +562,40 @@ class ViaPathPlanner(Planner, name="viapath"):
         return bool(ok[0])
 
     def _plan_of(self, candidates: Candidates, k: int, total, checks: LegChecks, polylines) -> Plan:
-        common = dict(subgoal_index=checks.subgoal_index, candidate_count=len(candidates), candidate_costs=total,
-                      candidate_polylines=polylines, chosen=k)
+        common = dict(
+            subgoal_index=checks.subgoal_index,
+            candidate_count=len(candidates),
+            candidate_costs=total,
+            candidate_polylines=polylines,
+            chosen=k,
+        )
         target, speed = candidates.first_leg(k)
         if candidates.slow_s[k] > 0:
-            return Plan("wait" if speed == 0.0 else "slow", speed, target.copy(),
-                        waypoints=np.array([checks.position, checks.subgoal]),
-                        extras={"slow_s": float(candidates.slow_s[k]),
-                                "speed_after_mps": float(candidates.speed_mps[k])}, **common)
+            return Plan(
+                "wait" if speed == 0.0 else "slow",
+                speed,
+                target.copy(),
+                waypoints=np.array([checks.position, checks.subgoal]),
+                extras={"slow_s": float(candidates.slow_s[k]), "speed_after_mps": float(candidates.speed_mps[k])},
+                **common,
+            )
         line = candidates.polyline(k)
-        return Plan("avoid" if len(line) > 2 else "straight", speed, target.copy(),
-                    via_points=line[1:-1].copy(), waypoints=line, **common)
+        return Plan(
+            "avoid" if len(line) > 2 else "straight",
+            speed,
+            target.copy(),
+            via_points=line[1:-1].copy(),
+            waypoints=line,
+            **common,
+        )
 
     def _slow_checks(self, checks: LegChecks) -> LegChecks:
         fraction = self.config.slow_leg_inflation
         # (np.logical_or.reduce: what .any() answers, NaN counting as not zero, without .any()'s Python wrapper)
         any_nonzero = np.logical_or.reduce
-        if fraction >= 1.0 or not (any_nonzero(checks.obstacles.position_sigma_m)
-                                   or any_nonzero(checks.obstacles.velocity_sigma_mps)):
+        if fraction >= 1.0 or not (
+            any_nonzero(checks.obstacles.position_sigma_m) or any_nonzero(checks.obstacles.velocity_sigma_mps)
+        ):
             return checks
         return checks.with_less_inflation(fraction, self.robot_radius_m, self.settings, cap_too=True)
 
@@ -536,8 +637,9 @@ class ViaPathPlanner(Planner, name="viapath"):
     def _turn_towards(self, situation: Situation, target) -> float:
         offset = np.asarray(target) - situation.position
         error = float(wrap_angle(math.atan2(offset[1], offset[0]) - situation.robot.heading_rad))
-        return float(np.clip(self.config.heading_gain * error, -self.limits.max_turn_rate_radps,
-                             self.limits.max_turn_rate_radps))
+        return float(
+            np.clip(self.config.heading_gain * error, -self.limits.max_turn_rate_radps, self.limits.max_turn_rate_radps)
+        )
 
 
 def _cost_terms(breakdown: Callable[[int], dict], order: np.ndarray, rank: int, total: np.ndarray) -> dict:
