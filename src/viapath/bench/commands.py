@@ -23,7 +23,7 @@ def register(app: typer.Typer) -> None:
         name: str = typer.Argument(
             ...,
             help="suite name: mixed, crossing, head-on, overtaken, overtaking, multi, "
-            "group, crowd, hallway, paper, static, eth-ucy, eth-ucy-react",
+            "group, crowd, hallway, paper, static, slow-walker, eth-ucy, eth-ucy-react",
         ),
         count: int = typer.Option(200, "--count", "-n", help="number of scenarios"),
         seed: int = typer.Option(0, "--seed", help="same seed, same suite"),

@@ -20,6 +20,8 @@ Families (the scenario name is ``<family>-<index>``):
   by the social-force model with the walls.
 * ``paper``: the paper's three (behind, front, side): the first three exactly as in the paper, the
   rest with jittered speeds and offsets.
+* ``slow-walker``: a 16-22 m corridor with a walker ahead at 0.15-0.25 m/s, a robot at 0.35-0.45 m/s and
+  one to three people coming the other way (:func:`slow_walker`; not part of ``mixed``).
 * ``static``: boxes, carts, pillars and doors on and beside the path, walls along the corridor,
   people among them (:func:`static`; not part of ``mixed``).
 * ``eth-ucy``: real pedestrians (ETH/UCY replays) with a designated path placed across each of the
@@ -439,6 +441,51 @@ def static(rng, index) -> dict:
         wall_y = half_width + float(rng.uniform(0.05, 0.4))
         scenario["walls"] = [[[-3.0, wall_y], [length + 3.0, wall_y]], [[-3.0, -wall_y], [length + 3.0, -wall_y]]]
         scenario["obstacles"].append(_head_on_person(rng, scenario))
+    return scenario
+
+
+# -- passing a slow walker (registered after ``mixed``'s nine, which stay as they were) ----------------
+
+
+@FAMILIES.register("slow-walker")
+def slow_walker(rng, index) -> dict:
+    """A long corridor with a slow walker ahead and people coming the other way, with room to pass:
+
+    corridor 16-22 m long, half-width 1.1-1.4 m; robot 0.35-0.45 m/s nominal; the walker 2-4 m ahead
+    at 0.15-0.25 m/s (within 0.3 m of the path); one to three people walking the other way at
+    0.4-0.9 m/s, met at staggered times, each on either side of the path. Beside the walker there is
+    always 0.75 m or more to the corridor's edge, so a robot of 0.25 m radius can pass inside it.
+    """
+    length = float(rng.uniform(16.0, 22.0))
+    speed = float(rng.uniform(0.35, 0.45))
+    half_width = float(rng.uniform(1.1, 1.4))
+    walker_y = float(rng.uniform(-0.3, 0.3))
+    scenario = {
+        "name": "slow-walker",
+        "description": "A slow walker ahead in a long corridor, people coming the other way: pass, do not trail.",
+        "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": speed, "radius": 0.25},
+        "path": {"waypoints": [[0.0, 0.0], [length, 0.0]], "half_width": half_width},
+        "obstacles": [
+            {
+                "start": [float(rng.uniform(2.0, 4.0)), walker_y],
+                "velocity": [float(rng.uniform(0.15, 0.25)), 0.0],
+                "radius": 0.25,
+            }
+        ],
+        "duration_s": float(np.ceil(2.0 * length / speed)),
+    }
+    for _ in range(int(rng.integers(1, 4))):
+        walk = float(rng.uniform(0.4, 0.9))
+        meet_x = float(rng.uniform(4.0, length - 2.0))
+        meet_t = meet_x / speed + float(rng.uniform(-3.0, 3.0))
+        side = float(rng.choice([-1.0, 1.0]))
+        scenario["obstacles"].append(
+            {
+                "start": [meet_x + walk * meet_t, side * float(rng.uniform(0.3, half_width - 0.3))],
+                "velocity": [-walk, 0.0],
+                "radius": 0.25,
+            }
+        )
     return scenario
 
 

@@ -55,6 +55,13 @@ SHIELD_OPTIONS = OptionSet(
             "moving away); false: any meeting before rest counts (DESIGN §7 to the letter)",
         ),
         Option(
+            "keep_in_corridor",
+            True,
+            "a command is admissible only if its braking sweep keeps the robot's centre inside the designated "
+            "path's corridor (a robot already outside may not go further out): the corridor is a hard "
+            "constraint, the robot stops inside rather than leave it",
+        ),
+        Option(
             "samples",
             11,
             "commands sampled per axis (speed, turn rate) of the dynamic window when replacing one",

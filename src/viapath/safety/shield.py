@@ -79,6 +79,7 @@ from typing import Any
 import numpy as np
 
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
+from viapath.path import DesignatedPath
 from viapath.planning.viapath.backend import ENVIRONMENT_VARIABLE, numba_available
 from viapath.planning.viapath.backend import resolve as resolve_backend
 from viapath.safety.options import check_options
@@ -86,6 +87,8 @@ from viapath.safety.options import check_options
 _STRAIGHT = 1e-9
 _CHUNK = 24  # candidates tested at once when the planner's command fails
 _NEVER = np.full(1, np.inf)
+# Outside the corridor by more than this counts as leaving it (the benchmark's time-outside metric: 1e-6 m).
+_CORRIDOR_TOLERANCE_M = 1e-6
 
 
 @dataclass(frozen=True)
@@ -100,6 +103,7 @@ class ShieldConfig:
     samples: int = 11
     substep_s: float = 0.025
     towards_only: bool = True
+    keep_in_corridor: bool = True
     backend: str = "auto"
 
     def __post_init__(self) -> None:
@@ -263,6 +267,9 @@ class Shield:
         # Within one cycle of a shielded planner (:meth:`remembering`), the verdicts on single commands: the
         # planner tests its chosen command against this observation and the filter then tests the same one.
         self._verdicts: dict | None = None
+        # The designated path whose corridor the robot must stay in (set by its owner each cycle; None: no
+        # corridor, e.g. no path yet). Only read when ``config.keep_in_corridor``.
+        self.corridor: DesignatedPath | None = None
 
     # -- the test --------------------------------------------------------------------------------
 
@@ -299,7 +306,40 @@ class Shield:
             out = self._evaluate_people(observation, commands)
         if observation.obstacles.static_mask is not None:
             self._and_static(observation, out)
+        if self._corridor_active():
+            self._and_corridor(observation, out)
         return out
+
+    def _corridor_active(self) -> bool:
+        return self.corridor is not None and self.config.keep_in_corridor
+
+    def _and_corridor(self, observation: Observation, out: dict[str, np.ndarray]) -> None:
+        """The corridor (DESIGN §11: it is hard) in the verdicts of ``out``: a command is admissible only if
+        its braking sweep keeps the robot's centre inside the corridor, or, for a robot already outside,
+        no further out than it is now. Checked at every sub-interval end, each padded by its chord's sagitta
+        (the arc between two ends bulges from its chord by at most that). Sets ``corridor_exit_time_s``
+        (inf: never) and ANDs ``admissible`` and ``friendly``."""
+        corridor, robot = self.corridor, observation.robot
+        assert corridor is not None
+        achieved = out["achieved"]
+        k = len(achieved)
+        exit_time = np.full(k, np.inf)
+        out["corridor_exit_time_s"] = exit_time
+        if float(robot.speed_mps) == 0.0 and not np.any(achieved[:, 0] != 0.0):
+            return  # at rest and staying at rest: nothing moves
+        position = np.asarray(robot.position, dtype=float)
+        allowed = max(0.0, float(corridor.corridor_excess(position))) + _CORRIDOR_TOLERANCE_M
+        substeps = max(1, math.ceil(self.dt_s / self.config.substep_s - 1e-9))
+        sweep = braking_sweep(
+            position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps, float(robot.speed_mps)
+        )
+        ends = sweep.positions[:, 1:]  # (K, T-1, 2)
+        excess = corridor.corridor_excess(ends.reshape(-1, 2)).reshape(ends.shape[:2]) + sweep.sagitta_m
+        leaves = (excess > allowed) & sweep.moving
+        exit_time[:] = np.where(leaves.any(axis=1), sweep.times_s[1:][np.argmax(leaves, axis=1)], np.inf)
+        ok = ~leaves.any(axis=1)
+        out["admissible"] = out["admissible"] & ok
+        out["friendly"] = out["friendly"] & ok
 
     def _and_static(self, observation: Observation, out: dict[str, np.ndarray]) -> None:
         """Static geometry (DESIGN §10) in the verdicts of ``out``: a command is admissible only if its
@@ -622,6 +662,8 @@ class Shield:
         static_meet = float(own.get("static_meet_time_s", _NEVER)[0])
         if math.isfinite(static_meet) and (meet is None or static_meet < meet):
             person_id, meet = None, static_meet
+        corridor_exit = float(own.get("corridor_exit_time_s", _NEVER)[0])
+        leaves_first = math.isfinite(corridor_exit) and (meet is None or corridor_exit < meet)
         stop = Command.stop()
         if bool(own["contact"][0]):
             return ShieldResult(
@@ -636,7 +678,9 @@ class Shield:
                 candidates=1,
             )
         why = (
-            f"would meet person {person_id} {meet:.2f} s ahead before at rest"
+            f"would leave the corridor {corridor_exit:.2f} s ahead before at rest"
+            if leaves_first
+            else f"would meet person {person_id} {meet:.2f} s ahead before at rest"
             if person_id is not None
             else f"would touch static geometry {meet:.2f} s ahead before at rest"
             if meet is not None
@@ -695,7 +739,11 @@ class Shield:
         mode, else admissible) candidate closest to it, the closest admissible one, how many were tested
         and passed, and the candidates' achieved (v, ω)."""
         if self.backend == "numba" and observation.obstacles.static_mask is None:
-            return self._search_compiled(observation, command)
+            found = self._search_compiled(observation, command)
+            # The compiled search knows people only. Its picks are the first admissible ones in the search's
+            # order; if they keep to the corridor too, they are also the first that are admissible with it.
+            if not self._corridor_active() or self._keep_to_corridor(observation, found):
+                return found
         friendly_mode = self.config.mode == "passive-friendly"
         limits = self.limits
         # Candidates closest first (each axis over its limit, ties to the slower), tested in chunks:
@@ -719,6 +767,19 @@ class Shield:
             if passive_pick is None and np.any(check["admissible"]):
                 passive_pick = int(chunk[np.argmax(check["admissible"])])
         return None, passive_pick, tested, passing, reached
+
+    def _keep_to_corridor(self, observation: Observation, found) -> bool:
+        pick, passive_pick, _, _, reached = found
+        picks = [index for index in (pick, passive_pick) if index is not None]
+        if not picks:
+            return True
+        verdict = {
+            "achieved": reached[picks],
+            "admissible": np.ones(len(picks), bool),
+            "friendly": np.ones(len(picks), bool),
+        }
+        self._and_corridor(observation, verdict)
+        return bool(verdict["admissible"].all())
 
     def _search_compiled(self, observation: Observation, command: Command):
         """:meth:`_search` compiled (:func:`viapath.safety.kernels.shield`: same candidates, order and chunks)."""

@@ -56,6 +56,7 @@ class ShieldedPlanner(Planner):
         self.cycles = 0
 
     def plan(self, observation: Observation) -> Decision:
+        self.shield.corridor = self.inner.path  # the path may change between cycles (a new one from ROS 2)
         with self.shield.remembering():  # the planner's own test of its command is the filter's first
             decision = self.inner.plan(observation)
             result = self.shield.filter(observation, decision.command)
