@@ -119,3 +119,35 @@ def test_the_search_replays_a_simulated_episode_with_contacts():
     assert speeds and all(s >= 0.0 for _, _, s in speeds)
     onset = np.nonzero(at_fault_onsets(trace))[0]
     assert {round(float(trace.times_s[k]), 6) for k in onset} <= {round(t, 6) for t, _, _ in speeds}
+
+
+def test_the_report_sums_the_verdicts_and_lists_the_at_fault_episodes():
+    from viapath.bench.report import at_fault_lines, summarize
+
+    base = {"planner": "viapath", "shield": "on", "error": "", "reached_goal": True, "collision": True}
+    base["at_fault_collision_seen_1s"] = False
+    rows = [
+        {
+            **base,
+            "scenario": "a",
+            "at_fault_collision": True,
+            "at_fault_avoidable": 1,
+            "at_fault_unavoidable": 1,
+            "contact_speeds": "1.0s:person3:0.30 2.0s:person4:0.06",
+            "at_fault_detail": "person 3 ...",
+        },
+        {
+            **base,
+            "scenario": "b",
+            "at_fault_collision": False,
+            "at_fault_avoidable": 0,
+            "at_fault_unavoidable": 0,
+            "contact_speeds": "4.0s:static:0.50",
+            "at_fault_detail": "",
+        },
+    ]
+    (entry,) = summarize(rows)
+    assert entry["at_fault_avoidable"] == 1 and entry["at_fault_unavoidable"] == 1
+    assert entry["contact_speed_max_mps"] == 0.5 and entry["contact_speed_median_mps"] == 0.3
+    (line,) = at_fault_lines(rows)
+    assert " a: 1 avoidable, 1 unavoidable; person 3" in line
