@@ -213,13 +213,10 @@ def search(
     while True:
         # The hardest braking from every live branch.
         k = len(states)
-        zeros = np.zeros((k, world.brake_steps))
-        poses, speeds, _ = drive(states, zeros, zeros, limits, dt)
-        onsets, _ = segment_faults(world, poses, speeds, step, contact)
+        faulty, _, _ = _hold(world, states, np.zeros(k), np.zeros(k), world.brake_steps, step, contact)
         tried += k
         work += k * world.brake_steps * max(len(world.columns), 1)
-        clean = ~onsets.any(axis=(1, 2))
-        if clean.any():
+        if not faulty.all():
             return True, f"braking {(step - first_step) * dt:.1f} s after the appearance avoids it", hold * dt, tried
         if step >= end_step:
             return None, "budget: branches without an onset outlive the search", hold * dt, tried
@@ -231,17 +228,10 @@ def search(
         parents = np.repeat(np.arange(k), 3 * len(TURN_FRACTIONS))
         if len(parents) > max_branches:
             return None, f"budget: more than {max_branches} live branches", hold * dt, tried
-        poses, speeds, ends = drive(
-            states[parents],
-            np.repeat(v_target[:, None], hold, axis=1),
-            np.repeat(w_target[:, None], hold, axis=1),
-            limits,
-            dt,
-        )
-        onsets, last_contact = segment_faults(world, poses, speeds, step, contact[parents])
+        faulty, ends, last_contact = _hold(world, states[parents], v_target, w_target, hold, step, contact[parents])
         work += len(parents) * hold * max(len(world.columns), 1)
         tried += len(parents)
-        alive = ~onsets.any(axis=(1, 2))
+        alive = ~faulty
         if not alive.any():
             return False, "no sequence avoids it", hold * dt, tried
         if work > max_work:
@@ -252,6 +242,28 @@ def search(
         _, unique = np.unique(key, axis=0, return_index=True)
         states, contact = states[np.sort(unique)], contact[np.sort(unique)]
         step += hold
+
+
+def _hold(world: _World, states, speed_targets, turn_targets, steps: int, first_step: int, contact, chunk: int = 4000):
+    """K branches each holding one (speed, turn-rate) target for ``steps``: whether each has an at-fault
+    onset (K,), the end states (K, 5) and the last step's contact flags (K, N); in chunks of branches,
+    so that the (branches, steps, people, 2) arrays stay small."""
+    faulty = np.empty(len(states), dtype=bool)
+    ends = np.empty_like(states)
+    last = np.empty((len(states), len(world.columns)), dtype=bool)
+    for start in range(0, len(states), chunk):
+        part = slice(start, start + chunk)
+        n = len(states[part])
+        poses, speeds, ends[part] = drive(
+            states[part],
+            np.repeat(speed_targets[part, None], steps, axis=1),
+            np.repeat(turn_targets[part, None], steps, axis=1),
+            world.limits,
+            world.dt_s,
+        )
+        onsets, last[part] = segment_faults(world, poses, speeds, first_step, contact[part])
+        faulty[part] = onsets.reshape(n, -1).any(axis=1)
+    return faulty, ends, last
 
 
 def judge(trace, limits: MotionLimits, reactive: bool = False, **budget) -> list[Verdict]:
