@@ -273,18 +273,19 @@ def judge(trace, limits: MotionLimits, reactive: bool = False, **budget) -> list
     for k, person in zip(*np.nonzero(onsets)):
         present = np.flatnonzero(np.isfinite(trace.obstacle_positions[: k + 1, person]).all(-1))
         appeared = int(present[0])
-        base = dict(
+        verdict = Verdict(
             person=int(person),
             onset_step=int(k),
             onset_s=float(trace.times_s[k]),
             appeared_s=float(trace.times_s[appeared]),
             robot_speed_at_appearance_mps=float(trace.robot_speeds_mps[appeared]),
+            avoidable=True,
+            reason="reactive people: no recorded future",
         )
-        if reactive:
-            verdicts.append(Verdict(**base, avoidable=True, reason="reactive people: no recorded future"))
-            continue
-        found, reason, hold_s, tried = search(trace, limits, appeared, int(k), **budget)
-        verdicts.append(Verdict(**base, avoidable=found is not False, reason=reason, hold_s=hold_s, branches=tried))
+        if not reactive:
+            found, verdict.reason, verdict.hold_s, verdict.branches = search(trace, limits, appeared, int(k), **budget)
+            verdict.avoidable = found is not False
+        verdicts.append(verdict)
     return verdicts
 
 
