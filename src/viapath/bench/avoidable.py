@@ -197,19 +197,20 @@ def search(
     """From the real state at ``first_step``: (True if some sequence avoids every at-fault onset, False if
     none does, None if over budget; how; the hold in seconds; branches tried)."""
     world = make_world(trace, limits)
-    horizon = first_step + max(onset_step - first_step, 1) + 4 * world.brake_steps
-    window = world.people[first_step : min(horizon, len(world.people) - 1) + 1]
-    world.columns = np.flatnonzero(np.isfinite(window).all(-1).any(0))
     dt = trace.dt_s
     span = max(onset_step - first_step, 1)
     hold = max(1, min(math.ceil(span / max_levels), int(math.floor(max_hold_s / dt + 1e-9))))
+    end_step = onset_step + 4 * world.brake_steps  # after that, a surviving branch is not chased further
+    # Only people present somewhere in the steps any branch can reach matter.
+    horizon = end_step + hold + world.brake_steps
+    window = world.people[first_step : min(horizon, len(world.people) - 1) + 1]
+    world.columns = np.flatnonzero(np.isfinite(window).all(-1).any(0))
     states = _real_state(trace, first_step)
     contact = _real_contact(trace, world, first_step)
     step = first_step
     tried = 0
     work = 0
     top_turn = limits.max_turn_rate_radps
-    end_step = onset_step + 4 * world.brake_steps  # after that, a surviving branch is not chased further
     while True:
         # The hardest braking from every live branch.
         k = len(states)
