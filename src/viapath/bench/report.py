@@ -6,6 +6,11 @@ Aggregates, per planner, over its episodes (rows with an error are counted apart
   ``collision_rate`` (any contact); ``at_fault_collision_rate`` (contact begun while the robot moved
   towards the person, see :func:`viapath.sim.metrics.at_fault_collision`); ``at_fault_seen_1s_rate``
   (the same, counting only people present for at least 1 s before the contact);
+* ``at_fault_avoidable`` / ``at_fault_unavoidable``: at-fault contacts (onsets, not episodes) that
+  some command sequence from the person's appearance avoids, or that none does
+  (:mod:`viapath.bench.avoidable`; a search over budget and reactive people count as avoidable);
+* ``contact_speed_max_mps``: the robot's highest speed at a contact's onset (person or static), over
+  all episodes; ``contact_speed_median_mps``: the median over every contact;
 * ``time_ratio_median`` / ``time_ratio_mean``: time to goal over the obstacle-free time, episodes
   that reached the goal;
 * ``mean_lateral_deviation_m``: mean of the episodes' mean |lateral deviation|;
@@ -33,7 +38,10 @@ TABLE_COLUMNS = [
     ("collision_rate", "collision", "{:.1%}"),
     ("at_fault_collision_rate", "at-fault", "{:.1%}"),
     ("at_fault_seen_1s_rate", "at-fault, seen ≥ 1 s", "{:.1%}"),
+    ("at_fault_avoidable", "at-fault avoidable", "{}"),
+    ("at_fault_unavoidable", "at-fault unavoidable", "{}"),
     ("static_contact_rate", "static contact", "{:.1%}"),
+    ("contact_speed_max_mps", "contact speed max [m/s]", "{:.2f}"),
     ("time_ratio_median", "time ratio (median)", "{:.2f}"),
     ("mean_lateral_deviation_m", "mean lat. dev. [m]", "{:.3f}"),
     ("max_lateral_deviation_m", "max lat. dev. [m]", "{:.2f}"),
@@ -58,6 +66,29 @@ def _values(rows, column) -> np.ndarray:
 
 def _stat(function, values):
     return float(function(values)) if len(values) else None
+
+
+def _count(rows, column) -> int | None:
+    values = [r.get(column) for r in rows if r.get(column) is not None]
+    return int(sum(values)) if values else None
+
+
+def _contact_speeds(rows) -> np.ndarray:
+    """Every contact's onset speed of the rows (the ``contact_speeds`` column: ``time:who:speed`` items)."""
+    return np.array(
+        [float(item.rsplit(":", 1)[1]) for r in rows for item in (r.get("contact_speeds") or "").split()],
+        dtype=float,
+    )
+
+
+def at_fault_lines(rows: list[dict[str, Any]]) -> list[str]:
+    """One Markdown line per episode with an at-fault contact: the avoidable / unavoidable verdicts."""
+    return [
+        f"* {label(r)} {r['scenario']}: {r.get('at_fault_avoidable') or 0} avoidable, "
+        f"{r.get('at_fault_unavoidable') or 0} unavoidable; {r.get('at_fault_detail') or '(not searched)'}"
+        for r in rows
+        if not r.get("error") and r.get("at_fault_collision")
+    ]
 
 
 def summarize(rows: list[dict[str, Any]], by: str = "planner", order: list[str] | None = None) -> list[dict[str, Any]]:
@@ -88,6 +119,10 @@ def summarize(rows: list[dict[str, Any]], by: str = "planner", order: list[str] 
                 "collision_rate": rate("collision"),
                 "at_fault_collision_rate": rate("at_fault_collision"),
                 "at_fault_seen_1s_rate": rate("at_fault_collision_seen_1s"),
+                "at_fault_avoidable": _count(ok, "at_fault_avoidable"),
+                "at_fault_unavoidable": _count(ok, "at_fault_unavoidable"),
+                "contact_speed_max_mps": _stat(np.max, _contact_speeds(ok)),
+                "contact_speed_median_mps": _stat(np.median, _contact_speeds(ok)),
                 "static_contact_rate": (sum(bool(r.get("static_contact")) for r in ok) / n) if n else None,
                 "time_ratio_median": _stat(np.median, ratios),
                 "time_ratio_mean": _stat(np.mean, ratios),
@@ -162,6 +197,18 @@ def write_report(
         family_table(rows),
         "",
     ]
+    faults = at_fault_lines(rows)
+    if faults:
+        text += [
+            "## At-fault contacts",
+            "",
+            "Each searched from the person's first appearance with the recorded future "
+            "(viapath.bench.avoidable): unavoidable when no command sequence of the drive avoids an "
+            "at-fault onset; a search over budget and reactive people count as avoidable.",
+            "",
+            *faults,
+            "",
+        ]
     from viapath.bench.identity import crash_lines
 
     crashed = crash_lines(rows)

@@ -63,6 +63,14 @@ COLUMNS = [
     "shield_interventions",
     "command_flips",
     "escape_cycles",
+    # viapath.bench.avoidable: the at-fault contacts split by whether any robot could have avoided them
+    # (searched on at-fault episodes only), and the robot's speed at every contact's onset.
+    "at_fault_avoidable",
+    "at_fault_unavoidable",
+    "unavoidable_appeared_before_s",
+    "contact_speed_max_mps",
+    "contact_speeds",
+    "at_fault_detail",
 ]
 _BOOLS = {"reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s"}
 _TEXT = {
@@ -75,8 +83,19 @@ _TEXT = {
     "scenario_hash",
     "options_hash",
     "viapath_version",
+    "unavoidable_appeared_before_s",
+    "contact_speeds",
+    "at_fault_detail",
 }
-_INTS = {"seed", "command_flips", "escape_cycles", "overlapping_at_appearance", "static_contact"}
+_INTS = {
+    "seed",
+    "command_flips",
+    "escape_cycles",
+    "overlapping_at_appearance",
+    "static_contact",
+    "at_fault_avoidable",
+    "at_fault_unavoidable",
+}
 BACKENDS = ("loky", "dask", "ray")
 
 
@@ -279,6 +298,9 @@ def run_task(task: Task) -> dict[str, Any]:
         for column in COLUMNS:
             if column in episode.metrics and column != "shield":
                 row[column] = episode.metrics[column]
+        from viapath.bench.avoidable import episode_columns
+
+        row.update(episode_columns(episode.trace, scenario, bool(row["at_fault_collision"])))
         free = _free_time_s(task.scenario)
         row["free_time_s"] = free
         if row["time_to_goal_s"] is not None and free:
