@@ -1,4 +1,4 @@
-"""Small CLI pieces, kept out of cli.py: ``viapath --version``, boolean flags shown
+"""Small CLI pieces: ``viapath --version``, boolean flags shown
 without a ``<bool>`` type in the help (they take no value: ``--json``, not ``--json true``), scenario
 warnings before a run, and a progress bar while an animation is written."""
 
