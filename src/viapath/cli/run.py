@@ -254,9 +254,27 @@ def parse_options(assignments: list[str], planner_name: str) -> dict:
     values = {}
     try:
         for text in assignments:
-            name, value = schema.parse_assignment(text)
+            name, value = parse_assignment(text)
             values[name] = value
         schema.validate(values, where="--option")
     except OptionError as error:
         fail("\n".join(f"{field.replace('--option.', '--option ')}: {message}" for field, message in error.errors))
     return schema.nest(values)
+
+
+def parse_assignment(text: str) -> tuple[str, Any]:
+    """``NAME=VALUE`` from the command line (VALUE parsed as YAML: numbers, true/false, lists)."""
+    from viapath.io.safe_read import InputError, load_yaml, short_repr
+    from viapath.options import OptionError
+
+    name, sep, raw = text.partition("=")
+    name = name.strip()
+    if not sep or not name:
+        raise OptionError([("", f"expected NAME=VALUE, found {short_repr(text)}")])
+    try:
+        value = load_yaml(raw, name)
+    except InputError as error:
+        if "not valid YAML" not in str(error):
+            raise OptionError([(name, str(error).split(": ", 1)[-1].replace("(top level): ", ""))]) from None
+        value = raw
+    return name, value

@@ -17,11 +17,13 @@ from pydantic import (
     NonNegativeFloat,
     PositiveFloat,
     Tag,
+    create_model,
     field_validator,
     model_validator,
 )
 
-from viapath.limits import LIMIT_BOUNDS, ROBOT_RADIUS_BOUNDS_M
+from viapath.limits import LIMITS_OPTIONS, ROBOT_OPTIONS, SUBGOAL_OPTIONS
+from viapath.options import OptionSet
 from viapath.perception.modes import PERCEPTION_MODES
 from viapath.static import box_edges, polygon_edges, polyline_edges
 
@@ -44,24 +46,24 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
 
 
-def _limit(name: str) -> Any:
-    low, high = LIMIT_BOUNDS[name]
-    return Annotated[float, Field(ge=low, le=high)]
+def _fields(options: OptionSet) -> dict[str, Any]:
+    """Pydantic fields of ``options``: default, bounds and description from the one schema."""
+    return {option.name: option.pydantic_field() for option in options}
 
 
-class LimitsSpec(_Strict):
-    max_speed_mps: _limit("max_speed_mps") = 0.6
-    max_accel_mps2: _limit("max_accel_mps2") = 0.8
-    max_turn_rate_radps: _limit("max_turn_rate_radps") = 2.0
-    max_turn_accel_radps2: _limit("max_turn_accel_radps2") = 6.0
+LimitsSpec = create_model("LimitsSpec", __base__=_Strict, **_fields(LIMITS_OPTIONS))
+
+
+_NOMINAL_SPEED = ROBOT_OPTIONS["nominal_speed_mps"].pydantic_field()[1]
+_ROBOT_RADIUS = ROBOT_OPTIONS["robot_radius_m"].pydantic_field()[1]
 
 
 class RobotSpec(_Strict):
     start: Point
     heading: Annotated[float, Field(ge=-MAX_COORDINATE_M, le=MAX_COORDINATE_M)] = 0.0
-    speed: Speed = Field(0.2, description="nominal speed, m/s")
-    radius: Annotated[float, Field(gt=ROBOT_RADIUS_BOUNDS_M[0], le=ROBOT_RADIUS_BOUNDS_M[1])] = 0.25
-    limits: LimitsSpec = Field(default_factory=LimitsSpec)
+    speed: float = _NOMINAL_SPEED  # nominal_speed_mps of the one schema (viapath.limits.ROBOT_OPTIONS)
+    radius: float = _ROBOT_RADIUS  # robot_radius_m of the one schema
+    limits: LimitsSpec = Field(default_factory=LimitsSpec)  # type: ignore[valid-type]
 
     @model_validator(mode="after")
     def _speed_within_limits(self) -> RobotSpec:
@@ -233,11 +235,7 @@ WallItem = Annotated[
 ]
 
 
-class SubgoalSpec(_Strict):
-    reach_threshold_m: PositiveFloat = 0.2
-    goal_tolerance_m: PositiveFloat = 0.1
-    bypass_distance_m: NonNegativeFloat = 1.0
-    blocked_clearance_m: float = 0.1
+SubgoalSpec = create_model("SubgoalSpec", __base__=_Strict, **_fields(SUBGOAL_OPTIONS))
 
 
 class Scenario(_Strict):
@@ -251,7 +249,7 @@ class Scenario(_Strict):
     polygons: list[PolygonSpec] = Field(default_factory=list)
     planner: PlannerSpec = Field(default_factory=PlannerSpec)
     perception: PerceptionSpec = Field(default_factory=PerceptionSpec)
-    subgoals: SubgoalSpec = Field(default_factory=SubgoalSpec)
+    subgoals: SubgoalSpec = Field(default_factory=SubgoalSpec)  # type: ignore[valid-type]
     duration_s: PositiveFloat = 60.0
     dt_s: PositiveFloat = 0.1
     seed: int = Field(0, ge=0)  # numpy's generator takes no negative seed
