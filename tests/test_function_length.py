@@ -23,7 +23,6 @@ KERNEL_FILES = {
 _ROS = "a ROS 2 entry point: publishers, subscriptions and callbacks share the node's state as closures"
 _NOT_YET = "not split yet"
 KNOWN_EXCEPTIONS = {
-    ("viapath/ros2/node.py", "make_node_class"): _ROS + " (the class is built once rclpy is imported)",
     ("viapath/ros2/nav2.py", "make_nav2_interface_class"): _ROS + " (the class is built once rclpy is imported)",
     ("viapath/ros2/nav2_client.py", "run_follow"): _ROS,
     ("viapath/ros2/play.py", "run_play"): _ROS,
