@@ -98,7 +98,7 @@ class Option:
             # Bounds apply to every element of a list option; an empty list is never meaningful.
             from typing import Annotated
 
-            element = Annotated[float, Field(**limits)] if limits else float
+            element: Any = Annotated[float, Field(**limits)] if limits else float
             return (
                 tuple[element, ...],
                 Field(self.default, min_length=1, max_length=MAX_LIST_ITEMS, description=self.describe()),

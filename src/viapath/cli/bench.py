@@ -47,7 +47,6 @@ Backend = Annotated[str, typer.Option("--backend", help="loky (local processes),
 Scheduler = Annotated[
     str | None, typer.Option("--scheduler", help="address of an existing dask scheduler or ray cluster")
 ]
-Out = Annotated[Path, typer.Option("--out", help="results folder (episodes.csv, summary.md/json, plots)")]
 Count = Annotated[int, typer.Option("--count", "-n", help="scenarios to generate when SUITE is a suite name")]
 Seed = Annotated[int, typer.Option("--seed", help="suite and episode seed")]
 Perception = Annotated[str, typer.Option("--perception", help="oracle or laser")]
@@ -89,7 +88,7 @@ def bench(
     workers: Workers = 2,
     backend: Backend = "loky",
     scheduler: Scheduler = None,
-    out: Out = ...,  # required: typer asks for --out
+    out: Path = typer.Option(..., "--out", help="results folder (episodes.csv, summary.md/json, plots)"),
     count: Count = 200,
     seed: Seed = 0,
     perception: Perception = "oracle",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from typing import Any
 
 import typer
 from rich.markup import escape
@@ -41,7 +42,7 @@ def planners(
         fail(f"unknown planner {name!r}; available: {', '.join(available_planners())}")
     schema = planner_class(name).options
     # What an option's default resolves to on this machine (viapath's backend: numpy or numba).
-    resolved = getattr(planner_class(name), "resolved_defaults", dict)()
+    resolved: dict[str, Any] = getattr(planner_class(name), "resolved_defaults", dict)()
     if as_json:
         print(
             json.dumps(

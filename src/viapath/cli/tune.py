@@ -79,8 +79,6 @@ Trials = Annotated[
     ),
 ]
 Workers = Annotated[int, typer.Option("--workers", "-w", help="parallel workers for each trial's episodes")]
-Storage = Annotated[str, typer.Option("--storage", help="Optuna storage URL, e.g. sqlite:///tune.db")]
-StudyName = Annotated[str, typer.Option("--study", help="study name in the storage (same name: continue it)")]
 Param = Annotated[
     list[str],
     typer.Option(
@@ -144,8 +142,8 @@ def tune(
     suite: Suite,
     trials: Trials = 50,
     workers: Workers = 2,
-    storage: Storage = ...,  # required
-    study_name: StudyName = ...,  # required
+    storage: str = typer.Option(..., "--storage", help="Optuna storage URL, e.g. sqlite:///tune.db"),
+    study_name: str = typer.Option(..., "--study", help="study name in the storage (same name: continue it)"),
     param: Param = [],  # noqa: B006 - typer's default for a repeatable option, never mutated
     test: Test = None,
     export: Export = None,
@@ -172,13 +170,14 @@ def tune(
     trial of a study is the paper's weights. Exit code 2 on bad input (nothing is written)."""
     from viapath.bench import tune as tuning
 
+    refused: tuple[type[Exception], ...] = (tuning.TuneError, *_suite_errors())
     try:
         space = _check_tune_arguments(tuning, param, trials, workers, study_name, export, plot, pick, storage)
         constraints = tuning.Constraints(max_at_fault, max_outside_s, max_misses)
         starts, scenarios, test_scenarios = _load_tune_suites(
             start_from, suite, count, seed, test, test_count, seed + 1000 if test_seed is None else test_seed
         )
-    except (tuning.TuneError, *_suite_errors()) as error:
+    except refused as error:
         fail(str(error))
     train_key = _suite_key(scenarios)
     try:

@@ -166,7 +166,7 @@ def _with_group_defaults(options: dict[str, Any], schema) -> dict[str, Any]:
 
 
 def _flat_names(nested: dict[str, Any]) -> list[str]:
-    names = []
+    names: list[str] = []
     for key, value in nested.items():
         names.extend(value.keys() if isinstance(value, dict) else [key])
     return names

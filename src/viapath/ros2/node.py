@@ -73,7 +73,10 @@ def _declare_all(node, planner_name: str, scanner_names) -> dict[str, Any]:
     return values
 
 
-class _NodeBehaviour:
+_LifecycleNode: Any = object  # rclpy's LifecycleNode, joined in make_node_class (typed as Any here)
+
+
+class _NodeBehaviour(_LifecycleNode):
     """What :class:`ViaPathNode` does (scans + odometry + designated path in; cmd_vel, markers and
     diagnostics out), kept apart from rclpy's ``LifecycleNode`` so that importing this module needs no
     rclpy: :func:`make_node_class` joins the two. The message types are imported where they are used."""
@@ -83,7 +86,7 @@ class _NodeBehaviour:
     def __init__(self, node_name: str = NODE_NAME, **kwargs):
         super().__init__(node_name, **kwargs)
         self.error: str | None = None
-        self.core: PlannerCore | None = None
+        self.core: Any = None  # a PlannerCore once configured
         self._subs: list = []
         self._pubs: dict[str, Any] = {}
         self._timer = None

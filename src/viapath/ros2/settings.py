@@ -422,7 +422,8 @@ def validate(values: dict[str, Any]) -> NodeSettings:
         raise ParameterError(f"parameter scanner_names: names repeat: {scanner_names}")
     options = {o.name: o for o in all_options(planner_name, scanner_names)}
     errors = [f"parameter {name}: unknown parameter" for name in sorted(set(values) - set(options) - {"use_sim_time"})]
-    checked, bad = {}, set()
+    checked: dict[str, Any] = {}
+    bad: set[str] = set()
     for name, o in options.items():
         try:
             checked[name] = check_value(o, values.get(name, o.default))

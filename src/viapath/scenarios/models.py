@@ -17,7 +17,6 @@ from pydantic import (
     NonNegativeFloat,
     PositiveFloat,
     Tag,
-    create_model,
     field_validator,
     model_validator,
 )
@@ -46,24 +45,26 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
 
 
-def _fields(options: OptionSet) -> dict[str, Any]:
-    """Pydantic fields of ``options``: default, bounds and description from the one schema."""
-    return {option.name: option.pydantic_field() for option in options}
+def _field(options: OptionSet, name: str) -> Any:
+    """The pydantic field of option ``name``: default, bounds and description from the one schema."""
+    return options[name].pydantic_field()[1]
 
 
-LimitsSpec = create_model("LimitsSpec", __base__=_Strict, **_fields(LIMITS_OPTIONS))
+class LimitsSpec(_Strict):
+    """The base's limits: :data:`viapath.limits.LIMITS_OPTIONS`."""
 
-
-_NOMINAL_SPEED = ROBOT_OPTIONS["nominal_speed_mps"].pydantic_field()[1]
-_ROBOT_RADIUS = ROBOT_OPTIONS["robot_radius_m"].pydantic_field()[1]
+    max_speed_mps: float = _field(LIMITS_OPTIONS, "max_speed_mps")
+    max_accel_mps2: float = _field(LIMITS_OPTIONS, "max_accel_mps2")
+    max_turn_rate_radps: float = _field(LIMITS_OPTIONS, "max_turn_rate_radps")
+    max_turn_accel_radps2: float = _field(LIMITS_OPTIONS, "max_turn_accel_radps2")
 
 
 class RobotSpec(_Strict):
     start: Point
     heading: Annotated[float, Field(ge=-MAX_COORDINATE_M, le=MAX_COORDINATE_M)] = 0.0
-    speed: float = _NOMINAL_SPEED  # nominal_speed_mps of the one schema (viapath.limits.ROBOT_OPTIONS)
-    radius: float = _ROBOT_RADIUS  # robot_radius_m of the one schema
-    limits: LimitsSpec = Field(default_factory=LimitsSpec)  # type: ignore[valid-type]
+    speed: float = _field(ROBOT_OPTIONS, "nominal_speed_mps")
+    radius: float = _field(ROBOT_OPTIONS, "robot_radius_m")
+    limits: LimitsSpec = Field(default_factory=LimitsSpec)
 
     @model_validator(mode="after")
     def _speed_within_limits(self) -> RobotSpec:
@@ -91,7 +92,10 @@ class PathSpec(_Strict):
         return self
 
     def widths(self) -> list[float]:
-        return list(self.half_widths) if self.half_widths is not None else [self.half_width] * (len(self.waypoints) - 1)
+        if self.half_widths is not None:
+            return list(self.half_widths)
+        assert self.half_width is not None  # the validator asks for one of the two
+        return [self.half_width] * (len(self.waypoints) - 1)
 
 
 class ObstacleSpec(_Strict):
@@ -235,7 +239,13 @@ WallItem = Annotated[
 ]
 
 
-SubgoalSpec = create_model("SubgoalSpec", __base__=_Strict, **_fields(SUBGOAL_OPTIONS))
+class SubgoalSpec(_Strict):
+    """When a subgoal is reached or given up: :data:`viapath.limits.SUBGOAL_OPTIONS`."""
+
+    reach_threshold_m: float = _field(SUBGOAL_OPTIONS, "reach_threshold_m")
+    goal_tolerance_m: float = _field(SUBGOAL_OPTIONS, "goal_tolerance_m")
+    bypass_distance_m: float = _field(SUBGOAL_OPTIONS, "bypass_distance_m")
+    blocked_clearance_m: float = _field(SUBGOAL_OPTIONS, "blocked_clearance_m")
 
 
 class Scenario(_Strict):
@@ -249,7 +259,7 @@ class Scenario(_Strict):
     polygons: list[PolygonSpec] = Field(default_factory=list)
     planner: PlannerSpec = Field(default_factory=PlannerSpec)
     perception: PerceptionSpec = Field(default_factory=PerceptionSpec)
-    subgoals: SubgoalSpec = Field(default_factory=SubgoalSpec)  # type: ignore[valid-type]
+    subgoals: SubgoalSpec = Field(default_factory=SubgoalSpec)
     duration_s: PositiveFloat = 60.0
     dt_s: PositiveFloat = 0.1
     seed: int = Field(0, ge=0)  # numpy's generator takes no negative seed
