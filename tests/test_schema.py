@@ -74,3 +74,21 @@ def test_a_scenario_refuses_what_the_node_refuses():
         scenario_from_dict({**base, "subgoals": {"reach_threshold_m": 20.0}})
     with pytest.raises(ParameterError, match="reach_threshold_m"):
         validate({"reach_threshold_m": 20.0})
+
+
+def test_the_scenario_models_have_every_option_of_their_set_with_its_bounds():
+    from viapath.limits import LIMITS_OPTIONS, ROBOT_OPTIONS, SUBGOAL_OPTIONS
+
+    for model, options in ((LimitsSpec, LIMITS_OPTIONS), (SubgoalSpec, SUBGOAL_OPTIONS)):
+        assert list(model.model_fields) == options.names
+        for option in options:
+            bounds = (option.default, option.minimum, option.exclusive_minimum, option.maximum)
+            assert _scenario_bounds(model, option.name) == bounds, option.name
+    for field, name in (("speed", "nominal_speed_mps"), ("radius", "robot_radius_m")):
+        option = ROBOT_OPTIONS[name]
+        assert _scenario_bounds(RobotSpec, field) == (
+            option.default,
+            option.minimum,
+            option.exclusive_minimum,
+            option.maximum,
+        )
