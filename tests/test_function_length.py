@@ -25,7 +25,6 @@ _NOT_YET = "not split yet"
 KNOWN_EXCEPTIONS = {
     ("viapath/ros2/nav2.py", "make_nav2_interface_class"): _ROS + " (the class is built once rclpy is imported)",
     ("viapath/ros2/nav2_client.py", "run_follow"): _ROS,
-    ("viapath/ros2/play.py", "run_play"): _ROS,
     ("viapath/ros2/core.py", "cycle"): _NOT_YET,
     ("viapath/ros2/core.py", "_on_scan"): _NOT_YET,
     ("viapath/guard.py", "inspect_observation"): _NOT_YET,
