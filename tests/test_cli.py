@@ -180,7 +180,7 @@ def test_bad_options_fail_cleanly(tmp_path, args, needle):
 def test_an_interrupt_wrapped_by_numba_is_recognised_as_one():
     """numba turns a Ctrl-C that lands in its call back into Python into chained SystemErrors; `viapath run`
     must still end with 'interrupted' (130), and only then."""
-    from viapath.cli import _caused_by_interrupt
+    from viapath.cli.common import caused_by_interrupt as _caused_by_interrupt
 
     def wrapped(inner):
         try:

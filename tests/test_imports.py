@@ -106,3 +106,54 @@ def test_no_subpackage_imports_one_that_imports_it_back():
     for own, edges in packages.items():
         edges.discard(own)
     assert _cycles(packages) == []
+
+
+CORE = (
+    "viapath.geometry",
+    "viapath.path",
+    "viapath.observation",
+    "viapath.planning",
+    "viapath.safety",
+    "viapath.guard",
+    "viapath.static",
+    "viapath.kinematics",
+    "viapath.limits",
+    "viapath.forecast",
+)
+OUTSIDE_THE_CORE = ("viapath.sim", "viapath.io", "viapath.viz", "viapath.bench", "viapath.ros2", "viapath.cli")
+
+
+def _in(name: str, packages) -> bool:
+    return any(name == package or name.startswith(package + ".") for package in packages)
+
+
+def _reached_from(graph: dict[str, set[str]], start: str) -> dict[str, str]:
+    """Every module ``start`` imports, directly or through others (lazy imports too): module -> who imports it."""
+    seen, work = {start: ""}, [start]
+    while work:
+        module = work.pop()
+        for imported in sorted(graph.get(module, ())):
+            if imported not in seen:
+                seen[imported] = module
+                work.append(imported)
+    return seen
+
+
+def test_the_core_imports_nothing_outside_it():
+    """geometry, path, observation, planning, safety, guard, static, kinematics, limits, forecast import
+    (lazily or not, directly or through another module) no simulator, I/O, view, benchmark, ROS 2 or CLI module."""
+    graph = _graph()
+    found = []
+    for module in graph:
+        if not _in(module, CORE):
+            continue
+        reached = _reached_from(graph, module)
+        for target, importer in reached.items():
+            if _in(target, OUTSIDE_THE_CORE):
+                found.append(f"{module} reaches {target} (imported by {importer})")
+    assert found == []
+
+
+def test_the_core_check_sees_a_planted_import():
+    graph = {"viapath.path": {"viapath.options"}, "viapath.options": {"viapath.io.safe_read"}}
+    assert "viapath.io.safe_read" in _reached_from(graph, "viapath.path")

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from viapath.limits import LIMITS_OPTIONS
 from viapath.static import StaticLayer
 
 
@@ -277,12 +278,12 @@ class Observation:
 
 @dataclass(frozen=True)
 class MotionLimits:
-    """Differential-drive limits (defaults: a small indoor robot like the paper's)."""
+    """Differential-drive limits; defaults, units and bounds: :data:`viapath.limits.LIMITS_OPTIONS`."""
 
-    max_speed_mps: float = 0.6
-    max_accel_mps2: float = 0.8
-    max_turn_rate_radps: float = 2.0
-    max_turn_accel_radps2: float = 6.0
+    max_speed_mps: float = LIMITS_OPTIONS["max_speed_mps"].default
+    max_accel_mps2: float = LIMITS_OPTIONS["max_accel_mps2"].default
+    max_turn_rate_radps: float = LIMITS_OPTIONS["max_turn_rate_radps"].default
+    max_turn_accel_radps2: float = LIMITS_OPTIONS["max_turn_accel_radps2"].default
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,7 @@ Choices made here:
 
 from __future__ import annotations
 
+import reprlib
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -25,6 +26,21 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, create_model
 
 MAX_LIST_ITEMS = 64  # items of a list option (a speed set): each adds work to every cycle
+MAX_FOUND_CHARS = 80  # characters of a bad value quoted in an error message
+
+_SHORT = reprlib.Repr()
+_SHORT.maxstring = _SHORT.maxother = MAX_FOUND_CHARS
+_SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxdict = _SHORT.maxset = 6
+_SHORT.maxlevel = 3
+
+
+def short_repr(value: Any) -> str:
+    """``repr(value)`` cut to a few dozen characters and a few items per level: for error messages,
+    whose input may be huge (a list of a million items, or an alias bomb's shared lists)."""
+    try:
+        return _SHORT.repr(value)
+    except Exception:
+        return f"<{type(value).__name__}>"
 
 
 @dataclass(frozen=True)
@@ -71,7 +87,8 @@ class Option:
             return tuple[float, ...]
         return self.kind
 
-    def _field(self):
+    def pydantic_field(self) -> tuple[Any, Any]:
+        """(annotation, pydantic Field) of this option: its kind, default, bounds and description."""
         limits: dict[str, Any] = {}
         if self.minimum is not None:
             limits["gt" if self.exclusive_minimum else "ge"] = self.minimum
@@ -81,7 +98,7 @@ class Option:
             # Bounds apply to every element of a list option; an empty list is never meaningful.
             from typing import Annotated
 
-            element = Annotated[float, Field(**limits)] if limits else float
+            element: Any = Annotated[float, Field(**limits)] if limits else float
             return (
                 tuple[element, ...],
                 Field(self.default, min_length=1, max_length=MAX_LIST_ITEMS, description=self.describe()),
@@ -187,7 +204,7 @@ class OptionSet:
         groups: dict[str, dict[str, Any]] = {}
         top: dict[str, Any] = {}
         for option in self:
-            (groups.setdefault(option.group, {}) if option.group else top)[option.name] = option._field()
+            (groups.setdefault(option.group, {}) if option.group else top)[option.name] = option.pydantic_field()
         for group, fields in groups.items():
             sub = create_model(f"{self.owner or 'Options'}_{group}", __base__=_Strict, **fields)
             top[group] = (sub, Field(default_factory=sub))
@@ -247,22 +264,4 @@ class OptionSet:
                 f"unknown option {item['loc'][-1]!r}; {owner} options: "
                 f"{', '.join(option.path for option in self) or 'none'}"
             )
-        from viapath.io.safe_read import short_repr
-
         return field, f"{item['msg']}; found {short_repr(item.get('input'))}"
-
-    def parse_assignment(self, text: str) -> tuple[str, Any]:
-        """``NAME=VALUE`` from the command line (VALUE parsed as YAML: numbers, true/false, lists)."""
-        from viapath.io.safe_read import InputError, load_yaml, short_repr
-
-        name, sep, raw = text.partition("=")
-        name = name.strip()
-        if not sep or not name:
-            raise OptionError([("", f"expected NAME=VALUE, found {short_repr(text)}")])
-        try:
-            value = load_yaml(raw, name)
-        except InputError as error:
-            if "not valid YAML" not in str(error):
-                raise OptionError([(name, str(error).split(": ", 1)[-1].replace("(top level): ", ""))]) from None
-            value = raw
-        return name, value

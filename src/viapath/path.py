@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from viapath.geometry import cross2
+from viapath.limits import SUBGOAL_OPTIONS
 
 
 class DesignatedPath:
@@ -187,10 +188,12 @@ class DesignatedPath:
 
 @dataclass
 class SubgoalPolicy:
-    reach_threshold_m: float = 0.2
-    goal_tolerance_m: float = 0.1
-    bypass_distance_m: float = 1.0
-    blocked_clearance_m: float = 0.1
+    """When a subgoal is reached or given up; defaults, units and bounds: :data:`viapath.limits.SUBGOAL_OPTIONS`."""
+
+    reach_threshold_m: float = SUBGOAL_OPTIONS["reach_threshold_m"].default
+    goal_tolerance_m: float = SUBGOAL_OPTIONS["goal_tolerance_m"].default
+    bypass_distance_m: float = SUBGOAL_OPTIONS["bypass_distance_m"].default
+    blocked_clearance_m: float = SUBGOAL_OPTIONS["blocked_clearance_m"].default
 
 
 class SubgoalTracker:

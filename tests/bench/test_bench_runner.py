@@ -124,7 +124,7 @@ def test_bad_input_is_one_clear_line(tmp_path, small_suite):
     with pytest.raises(BenchError, match="not a folder"):
         load_suite(str(tmp_path / "missing"))
 
-    from viapath.bench.commands import register
+    from viapath.cli.bench import bench, suite
 
     app = typer.Typer()
 
@@ -132,7 +132,8 @@ def test_bad_input_is_one_clear_line(tmp_path, small_suite):
     def main():
         pass
 
-    register(app)
+    app.command("suite")(suite)
+    app.command("bench")(bench)
     result = CliRunner().invoke(app, ["bench", "paper", "--planners", "follow,nope", "--out", str(tmp_path / "x")])
     assert result.exit_code == 2
     assert result.output.strip().count("\n") == 0 and "unknown planner 'nope'" in result.output
@@ -140,7 +141,7 @@ def test_bad_input_is_one_clear_line(tmp_path, small_suite):
 
 
 def test_cli_suite_and_bench_json(tmp_path):
-    from viapath.bench.commands import register
+    from viapath.cli.bench import bench, suite
 
     app = typer.Typer()
 
@@ -148,7 +149,8 @@ def test_cli_suite_and_bench_json(tmp_path):
     def main():
         pass
 
-    register(app)
+    app.command("suite")(suite)
+    app.command("bench")(bench)
     runner = CliRunner()
     result = runner.invoke(app, ["suite", "head-on", "--count", "2", "--seed", "3", "--out", str(tmp_path / "s")])
     assert result.exit_code == 0, result.output

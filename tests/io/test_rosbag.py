@@ -160,7 +160,7 @@ def test_scans_command_end_to_end(tmp_path):
     import typer
     from typer.testing import CliRunner
 
-    from viapath.commands.scans import register
+    from viapath.cli.scans import scans as scans_command
 
     app = typer.Typer()
 
@@ -168,7 +168,7 @@ def test_scans_command_end_to_end(tmp_path):
     def noop() -> None:  # a second command so that `scans` stays a sub-command
         pass
 
-    register(app)
+    app.command("scans")(scans_command)
     runner = CliRunner()
     out = tmp_path / "tracks.csv"
     plot = tmp_path / "tracks.png"

@@ -217,7 +217,7 @@ def test_scans_command_error_keeps_brackets_of_the_install_hint(monkeypatch):
     from typer.testing import CliRunner
 
     import viapath.io.rosbag as rosbag
-    from viapath.commands.scans import register
+    from viapath.cli.scans import scans as scans_command
 
     def missing():
         raise rosbag.RosbagsMissingError(
@@ -231,7 +231,7 @@ def test_scans_command_error_keeps_brackets_of_the_install_hint(monkeypatch):
     def noop() -> None:
         pass
 
-    register(app)
+    app.command("scans")(scans_command)
     result = CliRunner().invoke(app, ["scans", __file__])
     assert result.exit_code == 2
     assert "viapath[ros]" in result.output and "Traceback" not in result.output

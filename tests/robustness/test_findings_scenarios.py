@@ -134,7 +134,7 @@ def test_animation_progress_callback_shows_frames():
 
     from rich.console import Console
 
-    from viapath.cli_extras import animation_progress
+    from viapath.cli.extras import animation_progress
 
     buffer = io.StringIO()
     update, close = animation_progress(Console(file=buffer, force_terminal=True, width=120))

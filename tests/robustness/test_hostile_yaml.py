@@ -131,12 +131,12 @@ def test_ros_path_file_and_parameters_file_use_the_safe_reader(tmp_path):
 
 
 def test_option_values_from_the_command_line_are_bounded():
+    from viapath.cli.run import parse_assignment
     from viapath.options import OptionError
-    from viapath.planning import planner_class
 
     value = "9" * 5000
     with pytest.raises(OptionError, match="digits"):
-        planner_class("viapath").options.parse_assignment(f"max_depth={value}")
+        parse_assignment(f"max_depth={value}")
 
 
 def _limited():

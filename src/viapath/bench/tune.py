@@ -51,8 +51,9 @@ from pathlib import Path
 from typing import Any
 
 from viapath.bench.runner import BenchError, family_of, run_bench
+from viapath.planning.viapath.options import VIAPATH_OPTIONS
 
-PAPER_WEIGHTS = {"k1": 0.1, "k2": 0.001, "k3": 0.08, "k4": 0.3}
+PAPER_WEIGHTS = {option.name: option.default for option in VIAPATH_OPTIONS if option.group == "weights"}  # Eq. 1, §4.2
 DEFAULT_SPACE: dict[str, tuple[float, float]] = {
     "k1": (0.01, 1.0),
     "k2": (1e-4, 0.1),

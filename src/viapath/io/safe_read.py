@@ -18,40 +18,27 @@ alias as the size of the node it repeats, so a bomb is refused after reading its
 from __future__ import annotations
 
 import os
-import reprlib
 import stat
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from viapath.options import short_repr
+
 MAX_YAML_BYTES = 4 * 1024 * 1024  # B; the largest shipped scenario is a few kB
 MAX_YAML_NODES = 50_000  # scalars and collections after alias expansion; a generated crowd scenario has ~5 000
 MAX_YAML_DEPTH = 64  # nested mappings and lists
 MAX_INT_DIGITS = 19  # a 64-bit integer
 MAX_TEXT_BYTES = 64 * 1024 * 1024  # B; the largest ETH/UCY trajectory file is about 1.2 MB
-MAX_FOUND_CHARS = 80  # characters of a bad value quoted in an error message
 
 _SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 _INT_TAG = "tag:yaml.org,2002:int"
 _RESOLVER = yaml.resolver.Resolver()
-_SHORT = reprlib.Repr()
-_SHORT.maxstring = _SHORT.maxother = MAX_FOUND_CHARS
-_SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxdict = _SHORT.maxset = 6
-_SHORT.maxlevel = 3
 
 
 class InputError(ValueError):
     """Input refused before it is used; the message names the file (and the field), and what was expected."""
-
-
-def short_repr(value: Any) -> str:
-    """``repr(value)`` cut to a few dozen characters and a few items per level: for error messages,
-    whose input may be huge (a list of a million items, or an alias bomb's shared lists)."""
-    try:
-        return _SHORT.repr(value)
-    except Exception:
-        return f"<{type(value).__name__}>"
 
 
 def read_bytes(path: str | Path, max_bytes: int, what: str = "file") -> bytes:

@@ -6,7 +6,7 @@ Source: the weights k1..k4 of Eq. 1 (paper §4.2 and §5.2). A preset is a YAML 
     description: one line
     planner: viapath            # optional; the planner whose OptionSet validates the options
     options:                    # option values, nested as in a scenario's planner block
-      weights: {k1: 0.2, k2: 0.01, k3: 0.08, k4: 0.3}
+      weights: {k1: 0.2, k2: 0.01, k3: 0.08, k4: 0.3}   # or `weights: default`: the planner's defaults
     evidence: {...}             # free-form: the numbers that justify it (suite, seed, metrics)
 
 Choices made (the issue is silent):
@@ -140,6 +140,7 @@ def preset_from_dict(data: Any, origin: str = "<preset>") -> Preset:
     if not isinstance(evidence, dict):
         raise PresetError(f"{origin}: evidence: expected a mapping, found {evidence!r}")
     schema = planner_class(planner).options
+    options = _with_group_defaults(options, schema)
     try:
         settings = schema.validate(options, where="options")
     except OptionError as error:
@@ -155,8 +156,17 @@ def preset_from_dict(data: Any, origin: str = "<preset>") -> Preset:
     )
 
 
+def _with_group_defaults(options: dict[str, Any], schema) -> dict[str, Any]:
+    """``GROUP: default`` (e.g. ``weights: default``) → every option of that group at the planner's default."""
+    groups = {option.group for option in schema if option.group}
+    return {
+        key: {o.name: o.default for o in schema if o.group == key} if key in groups and value == "default" else value
+        for key, value in options.items()
+    }
+
+
 def _flat_names(nested: dict[str, Any]) -> list[str]:
-    names = []
+    names: list[str] = []
     for key, value in nested.items():
         names.extend(value.keys() if isinstance(value, dict) else [key])
     return names

@@ -27,6 +27,7 @@ import sys
 import time
 from typing import Any
 
+from viapath.ros2 import convert
 from viapath.ros2.core import CycleResult, PlannerCore, severity
 from viapath.ros2.settings import NODE_NAME, ParameterError, all_options, describe, validate
 
@@ -72,330 +73,369 @@ def _declare_all(node, planner_name: str, scanner_names) -> dict[str, Any]:
     return values
 
 
-def make_node_class():
-    """The node class (built lazily: importing this module must not need rclpy)."""
-    import rclpy
-    from builtin_interfaces.msg import Time
-    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-    from geometry_msgs.msg import Twist, TwistStamped
-    from nav_msgs.msg import Odometry
-    from nav_msgs.msg import Path as PathMsg
-    from rclpy.clock import Clock as RosClock
-    from rclpy.clock import ClockType
-    from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
-    from rosgraph_msgs.msg import Clock
-    from sensor_msgs.msg import LaserScan
-    from visualization_msgs.msg import MarkerArray
+_LifecycleNode: Any = object  # rclpy's LifecycleNode, joined in make_node_class (typed as Any here)
 
-    from viapath.ros2 import convert
-    from viapath.ros2.markers import MarkerScenes, marker_array
 
-    class ViaPathNode(LifecycleNode):
-        """Scans + odometry + designated path in; cmd_vel, markers and diagnostics out."""
+class _NodeBehaviour(_LifecycleNode):
+    """What :class:`ViaPathNode` does (scans + odometry + designated path in; cmd_vel, markers and
+    diagnostics out), kept apart from rclpy's ``LifecycleNode`` so that importing this module needs no
+    rclpy: :func:`make_node_class` joins the two. The message types are imported where they are used."""
 
-        def __init__(self, node_name: str = NODE_NAME, **kwargs):
-            super().__init__(node_name, **kwargs)
-            self.error: str | None = None
-            self.core: PlannerCore | None = None
-            self._subs: list = []
-            self._pubs: dict[str, Any] = {}
-            self._timer = None
-            self._nav2 = None
-            self._wall_timer = None
-            self._last_now_s: float | None = None
+    nav2_interface_class: Any = None  # set by make_node_class
+
+    def __init__(self, node_name: str = NODE_NAME, **kwargs):
+        super().__init__(node_name, **kwargs)
+        self.error: str | None = None
+        self.core: Any = None  # a PlannerCore once configured
+        self._subs: list = []
+        self._pubs: dict[str, Any] = {}
+        self._timer = None
+        self._nav2 = None
+        self._wall_timer = None
+        self._last_now_s: float | None = None
+        try:
+            self.declare_parameter("planner_name", "viapath")
+            self.declare_parameter("scanner_names", ["front", "rear"])
+            planner_name = self.get_parameter("planner_name").value
+            scanner_names = list(self.get_parameter("scanner_names").value)
+            from viapath.planning import available_planners
+
+            if planner_name not in available_planners():
+                raise ParameterError(
+                    f"parameter planner_name: unknown planner {planner_name!r}; available: "
+                    f"{', '.join(available_planners())}"
+                )
+            self.given = _declare_all(self, planner_name, scanner_names)
+        except ParameterError as error:
+            self.error = str(error)
+            self.given = {}
+
+    # -- lifecycle -----------------------------------------------------------------------
+    def on_configure(self, state):
+        from rclpy.lifecycle import TransitionCallbackReturn
+
+        if self.error is None:
+            self._build_core()
+        if self.error is not None:
+            self.get_logger().error(f"refusing to start: {self.error}")
+            return TransitionCallbackReturn.FAILURE
+        from viapath.ros2.markers import MarkerScenes
+
+        s = self.core.settings
+        self._scenes = MarkerScenes(s.robot_radius_m)
+        self._create_publishers(s)
+        self._create_input_subscriptions(s)
+        if s.interface == "nav2":
             try:
-                self.declare_parameter("planner_name", "viapath")
-                self.declare_parameter("scanner_names", ["front", "rear"])
-                planner_name = self.get_parameter("planner_name").value
-                scanner_names = list(self.get_parameter("scanner_names").value)
-                from viapath.planning import available_planners
-
-                if planner_name not in available_planners():
-                    raise ParameterError(
-                        f"parameter planner_name: unknown planner {planner_name!r}; available: "
-                        f"{', '.join(available_planners())}"
-                    )
-                self.given = _declare_all(self, planner_name, scanner_names)
-            except ParameterError as error:
-                self.error = str(error)
-                self.given = {}
-
-        # -- lifecycle -----------------------------------------------------------------------
-        def on_configure(self, state) -> TransitionCallbackReturn:
-            if self.error is None:
-                try:
-                    settings = validate(self.given)
-                    self.core = PlannerCore(settings)
-                    self.core.warm_up()
-                    if settings.path_file:
-                        try:
-                            waypoints, widths = convert.load_path_file(settings.path_file)
-                            self.core.set_path(waypoints, widths)
-                        except ValueError as error:
-                            raise ParameterError(f"parameter path_file: {error}") from None
-                except ParameterError as error:
-                    self.error = str(error)
-                except Exception as error:
-                    self.error = f"could not build the planner with these parameters: {type(error).__name__}" + (
-                        f": {error}" if str(error) else ""
-                    )
-            if self.error is not None:
+                self._nav2 = self.nav2_interface_class(self)
+            except Exception as error:  # interfaces that cannot be generated here: say why, do not drive
+                self.error = f"nav2 interface: {error}"
                 self.get_logger().error(f"refusing to start: {self.error}")
+                self._teardown()
                 return TransitionCallbackReturn.FAILURE
-            s = self.core.settings
-            self._scenes = MarkerScenes(s.robot_radius_m)
-            cmd_type = TwistStamped if s.cmd_vel_stamped else Twist
-            self._pubs["cmd"] = self.create_lifecycle_publisher(cmd_type, s.cmd_vel_topic, 10)
-            self._pubs["markers"] = self.create_lifecycle_publisher(MarkerArray, s.markers_topic, 5)
-            self._pubs["status"] = self.create_lifecycle_publisher(DiagnosticArray, s.status_topic, 10)
-            # Odometry first: when odometry and scans are both waiting, the executor takes odometry first.
-            self._subs.append(self.create_subscription(Odometry, s.odom_topic, self._on_odom, 10))
-            for index, scanner in enumerate(s.scanners):
-                self._subs.append(
-                    self.create_subscription(
-                        LaserScan, scanner.topic, lambda msg, i=index: self._on_scan(i, msg), qos_profile_sensor_data
-                    )
-                )
-            if self.get_parameter("use_sim_time").value:  # a /clock message is a sign of life, moving or not
-                self._subs.append(
-                    self.create_subscription(
-                        Clock,
-                        "/clock",
-                        lambda msg: self.core.note_alive(time.monotonic()),
-                        QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT),
-                    )
-                )
-            latched = QoSProfile(
-                depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
-            )
-            if s.interface == "nav2":
+        self._create_path_and_map_subscriptions(s)
+        self.core.active = False
+        self._create_timers(s)
+        self.get_logger().info(
+            f"configured: planner {s.planner_name}, scanners "
+            f"{', '.join(sc.topic for sc in s.scanners)}, odometry {s.odom_topic}"
+        )
+        return TransitionCallbackReturn.SUCCESS
+
+    def _build_core(self) -> None:
+        """Validate the parameters and build the planner core (and the path of ``path_file``); on a
+        failure ``self.error`` says why."""
+        try:
+            settings = validate(self.given)
+            self.core = PlannerCore(settings)
+            self.core.warm_up()
+            if settings.path_file:
                 try:
-                    self._nav2 = Nav2Interface(self)
-                except Exception as error:  # interfaces that cannot be generated here: say why, do not drive
-                    self.error = f"nav2 interface: {error}"
-                    self.get_logger().error(f"refusing to start: {self.error}")
-                    self._teardown()
-                    return TransitionCallbackReturn.FAILURE
-            elif not s.path_file:
-                self._subs.append(self.create_subscription(PathMsg, s.path_topic, self._on_path, latched))
-            if s.map_topic:
-                from nav_msgs.msg import OccupancyGrid
-
-                self._subs.append(self.create_subscription(OccupancyGrid, s.map_topic, self._on_map, latched))
-            self.core.active = False
-            self._timer = self.create_timer(s.cycle_period_s, self._on_watchdog)
-            # The same period on the wall clock: with use_sim_time the timer above stops with /clock.
-            self._wall_timer = self.create_timer(
-                s.cycle_period_s, self._on_wall_watchdog, clock=RosClock(clock_type=ClockType.STEADY_TIME)
+                    waypoints, widths = convert.load_path_file(settings.path_file)
+                    self.core.set_path(waypoints, widths)
+                except ValueError as error:
+                    raise ParameterError(f"parameter path_file: {error}") from None
+        except ParameterError as error:
+            self.error = str(error)
+        except Exception as error:
+            self.error = f"could not build the planner with these parameters: {type(error).__name__}" + (
+                f": {error}" if str(error) else ""
             )
-            self.get_logger().info(
-                f"configured: planner {s.planner_name}, scanners "
-                f"{', '.join(sc.topic for sc in s.scanners)}, odometry {s.odom_topic}"
-            )
-            return TransitionCallbackReturn.SUCCESS
 
-        def on_activate(self, state) -> TransitionCallbackReturn:
-            result = super().on_activate(state)
-            self.core.active = True
-            self.get_logger().info("active: commanding " + self.core.settings.cmd_vel_topic)
-            return result
+    def _create_publishers(self, s) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray
+        from geometry_msgs.msg import Twist, TwistStamped
+        from visualization_msgs.msg import MarkerArray
 
-        def on_deactivate(self, state) -> TransitionCallbackReturn:
-            self.publish_stop()
-            self.core.active = False
-            if self._nav2 is not None:
-                self._nav2.deactivated()
-            return super().on_deactivate(state)
+        cmd_type = TwistStamped if s.cmd_vel_stamped else Twist
+        self._pubs["cmd"] = self.create_lifecycle_publisher(cmd_type, s.cmd_vel_topic, 10)
+        self._pubs["markers"] = self.create_lifecycle_publisher(MarkerArray, s.markers_topic, 5)
+        self._pubs["status"] = self.create_lifecycle_publisher(DiagnosticArray, s.status_topic, 10)
 
-        def on_cleanup(self, state) -> TransitionCallbackReturn:
-            self._teardown()
-            return TransitionCallbackReturn.SUCCESS
+    def _create_input_subscriptions(self, s) -> None:
+        from nav_msgs.msg import Odometry
+        from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+        from rosgraph_msgs.msg import Clock
+        from sensor_msgs.msg import LaserScan
 
-        def on_shutdown(self, state) -> TransitionCallbackReturn:
-            self.publish_stop()
-            self._teardown()
-            return TransitionCallbackReturn.SUCCESS
-
-        def _teardown(self) -> None:
-            if self._nav2 is not None:
-                self._nav2.destroy()
-                self._nav2 = None
-            for timer in (self._timer, self._wall_timer):
-                if timer is not None:
-                    self.destroy_timer(timer)
-            self._timer = self._wall_timer = None
-            for sub in self._subs:
-                self.destroy_subscription(sub)
-            self._subs = []
-            for pub in self._pubs.values():
-                self.destroy_lifecycle_publisher(pub)
-            self._pubs = {}
-
-        # -- time ----------------------------------------------------------------------------
-        def _now_s(self, alive: bool = True) -> float:
-            """The node's clock; ``alive``: an input arrived now (for the wall-clock watchdog)."""
-            now = self.get_clock().now().nanoseconds * 1e-9
-            if self._last_now_s is not None and now < self._last_now_s - 1e-9 and self.core is not None:
-                self.core.clock_jumped_back(f"the node's clock went back {self._last_now_s - now:.3f} s")
-            if self.core is not None and (alive or self._last_now_s is None or now != self._last_now_s):
-                self.core.note_alive(time.monotonic())
-            self._last_now_s = now
-            return now
-
-        # -- inputs --------------------------------------------------------------------------
-        def _failed(self, what: str, error: Exception) -> str:
-            text = f"{what} failed: {type(error).__name__}: {error}"
-            self.get_logger().error(text)
-            return text
-
-        def _on_odom(self, msg) -> None:
-            try:
-                x, y, q, v, w = convert.odometry_values(msg)
-                self.core.on_odometry_quaternion(
-                    self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id, x, y, q, v, w
+        # Odometry first: when odometry and scans are both waiting, the executor takes odometry first.
+        self._subs.append(self.create_subscription(Odometry, s.odom_topic, self._on_odom, 10))
+        for index, scanner in enumerate(s.scanners):
+            self._subs.append(
+                self.create_subscription(
+                    LaserScan, scanner.topic, lambda msg, i=index: self._on_scan(i, msg), qos_profile_sensor_data
                 )
-            except Exception as error:
-                self.core.refuse_odometry(self._now_s(), "error", self._failed("reading odometry", error))
-
-        def _on_map(self, msg) -> None:
-            expected = self.core.settings.odom_frame
-            if expected and msg.header.frame_id and msg.header.frame_id != expected:
-                self.core.events.append(f"map refused: frame_id {msg.header.frame_id!r}, expected {expected!r}")
-                self.get_logger().error(self.core.events[-1])
-                return
-            try:
-                self.core.set_map(convert.occupancy_layer_from_message(msg, self.core.settings.map_occupied_threshold))
-            except Exception as error:
-                self.core.events.append(f"map refused: {error}")
-                self.get_logger().error(self.core.events[-1])
-
-        def _on_path(self, msg) -> None:
-            try:
-                accepted, what = self.core.on_path(
-                    msg.header.frame_id, convert.waypoints_from_path(msg), convert.orientations_from_path(msg)
-                )
-            except Exception as error:
-                self.core.paths_refused += 1
-                accepted, what = False, self._failed("path refused: reading it", error)
-                self.core.events.append(what)
-            (self.get_logger().info if accepted else self.get_logger().error)(what)
-
-        def _on_scan(self, index: int, msg) -> None:
-            due = self.core.on_scan(
-                index,
-                self._now_s(),
-                convert.stamp_seconds(msg.header.stamp),
-                msg.header.frame_id,
-                msg.angle_min,
-                msg.angle_increment,
-                msg.ranges,
-                msg.range_min,
-                msg.range_max,
             )
-            if self._nav2 is not None and not self._nav2.mounts_done:
-                self._nav2.resolve_mounts()
-            if due:
-                now = self._now_s()
-                try:
-                    result = self.core.cycle(now)
-                except Exception as error:
-                    result = self.core.fault_result(now, self._failed("cycle", error))
-                self._publish(result)
-                if self._nav2 is not None:
-                    self._nav2.supervise(result, self._now_s())
+        if self.get_parameter("use_sim_time").value:  # a /clock message is a sign of life, moving or not
+            self._subs.append(
+                self.create_subscription(
+                    Clock,
+                    "/clock",
+                    lambda msg: self.core.note_alive(time.monotonic()),
+                    QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT),
+                )
+            )
 
-        def _on_watchdog(self) -> None:
-            if self.core is None:
-                return
-            result = self.core.watchdog(self._now_s(alive=False))
-            if result is not None:
-                self._publish(result, markers=False)
+    def _create_path_and_map_subscriptions(self, s) -> None:
+        from nav_msgs.msg import Path as PathMsg
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-        def _on_wall_watchdog(self) -> None:
-            if self.core is None:
-                return
-            self._now_s(alive=False)  # the node's clock moving counts as alive
-            result = self.core.wall_watchdog(time.monotonic())
-            if result is not None:
-                self._publish(result, markers=False)
+        latched = QoSProfile(
+            depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+        )
+        if s.interface != "nav2" and not s.path_file:
+            self._subs.append(self.create_subscription(PathMsg, s.path_topic, self._on_path, latched))
+        if s.map_topic:
+            from nav_msgs.msg import OccupancyGrid
+
+            self._subs.append(self.create_subscription(OccupancyGrid, s.map_topic, self._on_map, latched))
+
+    def _create_timers(self, s) -> None:
+        from rclpy.clock import Clock as RosClock
+        from rclpy.clock import ClockType
+
+        self._timer = self.create_timer(s.cycle_period_s, self._on_watchdog)
+        # The same period on the wall clock: with use_sim_time the timer above stops with /clock.
+        self._wall_timer = self.create_timer(
+            s.cycle_period_s, self._on_wall_watchdog, clock=RosClock(clock_type=ClockType.STEADY_TIME)
+        )
+
+    def on_activate(self, state):
+        result = super().on_activate(state)
+        self.core.active = True
+        self.get_logger().info("active: commanding " + self.core.settings.cmd_vel_topic)
+        return result
+
+    def on_deactivate(self, state):
+        self.publish_stop()
+        self.core.active = False
+        if self._nav2 is not None:
+            self._nav2.deactivated()
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state):
+        from rclpy.lifecycle import TransitionCallbackReturn
+
+        self._teardown()
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_shutdown(self, state):
+        from rclpy.lifecycle import TransitionCallbackReturn
+
+        self.publish_stop()
+        self._teardown()
+        return TransitionCallbackReturn.SUCCESS
+
+    def _teardown(self) -> None:
+        if self._nav2 is not None:
+            self._nav2.destroy()
+            self._nav2 = None
+        for timer in (self._timer, self._wall_timer):
+            if timer is not None:
+                self.destroy_timer(timer)
+        self._timer = self._wall_timer = None
+        for sub in self._subs:
+            self.destroy_subscription(sub)
+        self._subs = []
+        for pub in self._pubs.values():
+            self.destroy_lifecycle_publisher(pub)
+        self._pubs = {}
+
+    # -- time ----------------------------------------------------------------------------
+    def _now_s(self, alive: bool = True) -> float:
+        """The node's clock; ``alive``: an input arrived now (for the wall-clock watchdog)."""
+        now = self.get_clock().now().nanoseconds * 1e-9
+        if self._last_now_s is not None and now < self._last_now_s - 1e-9 and self.core is not None:
+            self.core.clock_jumped_back(f"the node's clock went back {self._last_now_s - now:.3f} s")
+        if self.core is not None and (alive or self._last_now_s is None or now != self._last_now_s):
+            self.core.note_alive(time.monotonic())
+        self._last_now_s = now
+        return now
+
+    # -- inputs --------------------------------------------------------------------------
+    def _failed(self, what: str, error: Exception) -> str:
+        text = f"{what} failed: {type(error).__name__}: {error}"
+        self.get_logger().error(text)
+        return text
+
+    def _on_odom(self, msg) -> None:
+        try:
+            x, y, q, v, w = convert.odometry_values(msg)
+            self.core.on_odometry_quaternion(
+                self._now_s(), convert.stamp_seconds(msg.header.stamp), msg.header.frame_id, x, y, q, v, w
+            )
+        except Exception as error:
+            self.core.refuse_odometry(self._now_s(), "error", self._failed("reading odometry", error))
+
+    def _on_map(self, msg) -> None:
+        expected = self.core.settings.odom_frame
+        if expected and msg.header.frame_id and msg.header.frame_id != expected:
+            self.core.events.append(f"map refused: frame_id {msg.header.frame_id!r}, expected {expected!r}")
+            self.get_logger().error(self.core.events[-1])
+            return
+        try:
+            self.core.set_map(convert.occupancy_layer_from_message(msg, self.core.settings.map_occupied_threshold))
+        except Exception as error:
+            self.core.events.append(f"map refused: {error}")
+            self.get_logger().error(self.core.events[-1])
+
+    def _on_path(self, msg) -> None:
+        try:
+            accepted, what = self.core.on_path(
+                msg.header.frame_id, convert.waypoints_from_path(msg), convert.orientations_from_path(msg)
+            )
+        except Exception as error:
+            self.core.paths_refused += 1
+            accepted, what = False, self._failed("path refused: reading it", error)
+            self.core.events.append(what)
+        (self.get_logger().info if accepted else self.get_logger().error)(what)
+
+    def _on_scan(self, index: int, msg) -> None:
+        due = self.core.on_scan(
+            index,
+            self._now_s(),
+            convert.stamp_seconds(msg.header.stamp),
+            msg.header.frame_id,
+            msg.angle_min,
+            msg.angle_increment,
+            msg.ranges,
+            msg.range_min,
+            msg.range_max,
+        )
+        if self._nav2 is not None and not self._nav2.mounts_done:
+            self._nav2.resolve_mounts()
+        if due:
+            now = self._now_s()
+            try:
+                result = self.core.cycle(now)
+            except Exception as error:
+                result = self.core.fault_result(now, self._failed("cycle", error))
+            self._publish(result)
             if self._nav2 is not None:
                 self._nav2.supervise(result, self._now_s())
 
-        # -- outputs -------------------------------------------------------------------------
-        def _stamp(self, seconds: float) -> Time:
-            return convert.time_msg(seconds)
+    def _on_watchdog(self) -> None:
+        if self.core is None:
+            return
+        result = self.core.watchdog(self._now_s(alive=False))
+        if result is not None:
+            self._publish(result, markers=False)
 
-        def _command_msg(self, v: float, w: float, stamp_s: float):
-            twist = Twist()
-            twist.linear.x, twist.angular.z = float(v), float(w)
-            if not self.core.settings.cmd_vel_stamped:
-                return twist
-            msg = TwistStamped()
-            msg.header.stamp = self._stamp(stamp_s)
-            msg.header.frame_id = self.core.settings.base_frame
-            msg.twist = twist
-            return msg
+    def _on_wall_watchdog(self) -> None:
+        if self.core is None:
+            return
+        self._now_s(alive=False)  # the node's clock moving counts as alive
+        result = self.core.wall_watchdog(time.monotonic())
+        if result is not None:
+            self._publish(result, markers=False)
+        if self._nav2 is not None:
+            self._nav2.supervise(result, self._now_s())
 
-        def _publish(self, result: CycleResult, markers: bool = True) -> None:
-            if not self.core.active:
-                return
-            cmd = result.command
-            assert math.isfinite(cmd.speed_mps) and math.isfinite(cmd.turn_rate_radps)
-            self._pubs["cmd"].publish(self._command_msg(cmd.speed_mps, cmd.turn_rate_radps, result.stamp_s))
-            stamp = self._stamp(result.stamp_s)
-            path = self.core.path
-            if markers and path is not None and self._pubs["markers"].get_subscription_count() > 0:
-                # built only for someone watching, after cmd_vel is out
-                scene = self._scenes.scene(path, self.core.planner, result)
-                corridor = self._scenes.builder(path, self.core.planner).path_view
-                self._pubs["markers"].publish(
-                    marker_array(scene, corridor, self.core.settings.odom_frame or "odom", stamp)
-                )
-            self._pubs["status"].publish(self._diagnostics(result, stamp))
+    # -- outputs -------------------------------------------------------------------------
+    def _stamp(self, seconds: float):
+        return convert.time_msg(seconds)
 
-        def _inputs_matched(self) -> bool:
-            """Whether every input topic has a publisher (the simulator waits for this before its first step)."""
-            s = self.core.settings
-            topics = [sc.topic for sc in s.scanners] + [s.odom_topic]
-            return all(self.count_publishers(t) > 0 for t in topics)
+    def _command_msg(self, v: float, w: float, stamp_s: float):
+        from geometry_msgs.msg import Twist, TwistStamped
 
-        def _diagnostics(self, result: CycleResult, stamp) -> DiagnosticArray:
-            if result.cycle_time_ms is None:  # watchdog ticks only: cheap enough there
-                result.status["planner"]["inputs_matched"] = str(int(self._inputs_matched()))
-            out = DiagnosticArray()
-            out.header.stamp = stamp
-            level_of = {0: DiagnosticStatus.OK, 1: DiagnosticStatus.WARN, 2: DiagnosticStatus.ERROR}
-            for name, values in result.status.items():
-                status = DiagnosticStatus()
-                status.name = f"{self.get_name()}: {name}"
-                status.hardware_id = self.get_name()
-                if name == "planner":
-                    status.level = level_of[severity(result)]
-                    status.message = result.mode + (f" ({'; '.join(result.reasons)})" if result.reasons else "")
-                else:
-                    ok = values.get("state", "ok") == "ok"
-                    status.level = DiagnosticStatus.OK if ok else DiagnosticStatus.WARN
-                    status.message = values.get("state", "")
-                status.values = [KeyValue(key=str(k), value=str(v)) for k, v in values.items()]
-                out.status.append(status)
-            return out
+        twist = Twist()
+        twist.linear.x, twist.angular.z = float(v), float(w)
+        if not self.core.settings.cmd_vel_stamped:
+            return twist
+        msg = TwistStamped()
+        msg.header.stamp = self._stamp(stamp_s)
+        msg.header.frame_id = self.core.settings.base_frame
+        msg.twist = twist
+        return msg
 
-        def publish_stop(self) -> None:
-            if self.core is None or "cmd" not in self._pubs:
-                return
-            self.core.stop_command()
-            now = self._now_s(alive=False)
-            for _ in range(3):  # best effort against a lossy link; the subscriber's depth keeps them
-                try:
-                    self._pubs["cmd"].publish(self._command_msg(0.0, 0.0, now))
-                except Exception:  # the context may already be going down
-                    break
+    def _publish(self, result: CycleResult, markers: bool = True) -> None:
+        if not self.core.active:
+            return
+        cmd = result.command
+        assert math.isfinite(cmd.speed_mps) and math.isfinite(cmd.turn_rate_radps)
+        self._pubs["cmd"].publish(self._command_msg(cmd.speed_mps, cmd.turn_rate_radps, result.stamp_s))
+        stamp = self._stamp(result.stamp_s)
+        path = self.core.path
+        if markers and path is not None and self._pubs["markers"].get_subscription_count() > 0:
+            # built only for someone watching, after cmd_vel is out
+            from viapath.ros2.markers import marker_array
 
-    _ = rclpy
+            scene = self._scenes.scene(path, self.core.planner, result)
+            corridor = self._scenes.builder(path, self.core.planner).path_view
+            self._pubs["markers"].publish(marker_array(scene, corridor, self.core.settings.odom_frame or "odom", stamp))
+        self._pubs["status"].publish(self._diagnostics(result, stamp))
+
+    def _inputs_matched(self) -> bool:
+        """Whether every input topic has a publisher (the simulator waits for this before its first step)."""
+        s = self.core.settings
+        topics = [sc.topic for sc in s.scanners] + [s.odom_topic]
+        return all(self.count_publishers(t) > 0 for t in topics)
+
+    def _diagnostics(self, result: CycleResult, stamp):
+        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+        if result.cycle_time_ms is None:  # watchdog ticks only: cheap enough there
+            result.status["planner"]["inputs_matched"] = str(int(self._inputs_matched()))
+        out = DiagnosticArray()
+        out.header.stamp = stamp
+        level_of = {0: DiagnosticStatus.OK, 1: DiagnosticStatus.WARN, 2: DiagnosticStatus.ERROR}
+        for name, values in result.status.items():
+            status = DiagnosticStatus()
+            status.name = f"{self.get_name()}: {name}"
+            status.hardware_id = self.get_name()
+            if name == "planner":
+                status.level = level_of[severity(result)]
+                status.message = result.mode + (f" ({'; '.join(result.reasons)})" if result.reasons else "")
+            else:
+                ok = values.get("state", "ok") == "ok"
+                status.level = DiagnosticStatus.OK if ok else DiagnosticStatus.WARN
+                status.message = values.get("state", "")
+            status.values = [KeyValue(key=str(k), value=str(v)) for k, v in values.items()]
+            out.status.append(status)
+        return out
+
+    def publish_stop(self) -> None:
+        if self.core is None or "cmd" not in self._pubs:
+            return
+        self.core.stop_command()
+        now = self._now_s(alive=False)
+        for _ in range(3):  # best effort against a lossy link; the subscriber's depth keeps them
+            try:
+                self._pubs["cmd"].publish(self._command_msg(0.0, 0.0, now))
+            except Exception:  # the context may already be going down
+                break
+
+
+def make_node_class():
+    """The node class (built lazily: importing this module must not need rclpy)."""
+    from rclpy.lifecycle import LifecycleNode
+
     from viapath.ros2.nav2 import make_nav2_interface_class
 
-    Nav2Interface = make_nav2_interface_class()
+    class ViaPathNode(_NodeBehaviour, LifecycleNode):
+        """Scans + odometry + designated path in; cmd_vel, markers and diagnostics out."""
+
+    ViaPathNode.nav2_interface_class = make_nav2_interface_class()
     return ViaPathNode
 
 

@@ -22,8 +22,41 @@ What we chose:
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
+
+
+class _StatusListener:
+    """The node's DiagnosticArray: planner statuses, the stamps of its cycles, what it says of each scanner."""
+
+    def __init__(self):
+        self.statuses: list[dict] = []
+        self.cycles: set[float] = set()
+        self.scanner_problems: dict[str, str] = {}  # what the node says about each scanner (refused scans)
+
+    def __call__(self, msg) -> None:
+        for st in msg.status:
+            if ": scanner " in st.name:
+                values = {kv.key: kv.value for kv in st.values}
+                if values.get("refused", "none") != "none":
+                    self.scanner_problems[st.name.split(": scanner ", 1)[1]] = (
+                        f"topic {values.get('topic', '?')}: refused {values['refused']} ({values.get('last_problem', '')})"
+                    )
+            if st.name.endswith(": planner"):
+                values = {kv.key: kv.value for kv in st.values}
+                self.statuses.append(values)
+                if values.get("source") == "cycle":
+                    with contextlib.suppress(ValueError):  # a stamp that is no number: not a cycle we can match
+                        self.cycles.add(round(float(values.get("stamp_s", "nan")), 6))
+
+
+def _spin_for(node, seconds: float) -> None:
+    import rclpy
+
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        rclpy.spin_once(node, timeout_sec=0.05)
 
 
 def run_play(
@@ -44,13 +77,8 @@ def run_play(
 
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
-    from nav_msgs.msg import Odometry
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
-    from rosgraph_msgs.msg import Clock
-    from sensor_msgs.msg import LaserScan
 
     from viapath.io.rosbag import read_laser_scans
-    from viapath.ros2 import convert
     from viapath.ros2.process import finish_ros_process, start_ros_process
 
     messages = list(read_laser_scans(bag, topic))
@@ -58,32 +86,9 @@ def run_play(
         raise ValueError(f"{bag}: the topic holds no scans")
     node, stop, previous = start_ros_process("viapath_play", ros_args)
     try:
-        qos = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
-        scan_pub = node.create_publisher(LaserScan, out_topic, qos)
-        clock_pub = node.create_publisher(Clock, "/clock", 10)
-        odom_pub = node.create_publisher(Odometry, "odom", 10) if odom else None
-        statuses: list[dict] = []
-        cycles: set[float] = set()
-        scanner_problems: dict[str, str] = {}  # what the node says about each scanner (refused scans)
-
-        def on_status(msg):
-            for st in msg.status:
-                if ": scanner " in st.name:
-                    values = {kv.key: kv.value for kv in st.values}
-                    if values.get("refused", "none") != "none":
-                        scanner_problems[st.name.split(": scanner ", 1)[1]] = (
-                            f"topic {values.get('topic', '?')}: refused {values['refused']} ({values.get('last_problem', '')})"
-                        )
-                if st.name.endswith(": planner"):
-                    values = {kv.key: kv.value for kv in st.values}
-                    statuses.append(values)
-                    if values.get("source") == "cycle":
-                        try:
-                            cycles.add(round(float(values.get("stamp_s", "nan")), 6))
-                        except ValueError:
-                            pass
-
-        node.create_subscription(DiagnosticArray, status_topic, on_status, 100)
+        listener = _StatusListener()
+        node.create_subscription(DiagnosticArray, status_topic, listener, 100)
+        publish = _Publisher(node, out_topic, frame_id, odom)
         started = time.monotonic()
         while (
             node.count_subscribers(out_topic) == 0 or (lockstep and node.count_publishers(status_topic) == 0)
@@ -92,62 +97,19 @@ def run_play(
                 print(f"error: nobody subscribed to {out_topic} within {wait_s:g} s", file=sys.stderr)
                 return 3
             rclpy.spin_once(node, timeout_sec=0.05)
-        end = time.monotonic() + 1.0
-        while time.monotonic() < end:  # let both sides finish matching
-            rclpy.spin_once(node, timeout_sec=0.05)
-        first = messages[0].stamp_s
-        wall0 = time.monotonic()
-        clock = Clock()
-        sent = 0
-        for m in messages:
-            if stop["flag"]:
-                break
-            due = wall0 + max(m.stamp_s - first, 0.0) / rate
-            while time.monotonic() < due and not stop["flag"]:
-                rclpy.spin_once(node, timeout_sec=min(0.01, max(due - time.monotonic(), 0.0)))
-            stamp = convert.time_msg(m.stamp_s)
-            clock.clock = stamp
-            clock_pub.publish(clock)
-            if odom_pub is not None:
-                odom_pub.publish(convert.odometry("odom", "base_link", stamp, 0.0, 0.0, 0.0, 0.0, 0.0))
-            scan_pub.publish(
-                convert.laser_scan(
-                    frame_id if frame_id is not None else m.frame_id,
-                    stamp,
-                    m.angle_min_rad,
-                    m.angle_increment_rad,
-                    m.ranges_m,
-                    m.range_min_m,
-                    m.range_max_m,
-                    m.scan_time_s or 0.1,
-                )
-            )
-            sent += 1
-            if lockstep:  # wait for the node's cycle on this scan (a slow machine then changes nothing)
-                key = round(m.stamp_s, 6)
-                end = time.monotonic() + max_wait_s
-                beat = time.monotonic()
-                while key not in cycles and time.monotonic() < end and not stop["flag"]:
-                    if time.monotonic() - beat >= 0.05:  # waiting, not stopped: keep /clock alive
-                        clock_pub.publish(clock)
-                        beat = time.monotonic()
-                    rclpy.spin_once(node, timeout_sec=0.01)
-                wall0 += max(time.monotonic() - due, 0.0)  # the recording's timing resumes from here
-                if sent >= 5 and not cycles:
-                    break  # the node takes none of them: say so now, not after max_wait_s per scan
-        end = time.monotonic() + 1.0
-        while time.monotonic() < end:  # let the last messages go out
-            rclpy.spin_once(node, timeout_sec=0.05)
+        _spin_for(node, 1.0)  # let both sides finish matching
+        sent = _play(node, stop, messages, publish, listener.cycles, rate, lockstep, max_wait_s)
+        _spin_for(node, 1.0)  # let the last messages go out
         if status_file:
             with open(status_file, "w") as handle:
-                for values in statuses:
+                for values in listener.statuses:
                     handle.write(json.dumps(values) + "\n")
         print(
-            f"viapath ros2 play: {sent} scans from {bag} on {out_topic}, {len(cycles)} node cycles seen",
+            f"viapath ros2 play: {sent} scans from {bag} on {out_topic}, {len(listener.cycles)} node cycles seen",
             file=sys.stderr,
         )
-        if sent and not cycles:
-            why = "; ".join(f"scanner {name}: {problem}" for name, problem in sorted(scanner_problems.items()))
+        if sent and not listener.cycles:
+            why = "; ".join(f"scanner {name}: {problem}" for name, problem in sorted(listener.scanner_problems.items()))
             print(
                 f"error: the node ran no cycle on the {sent} scans published on {out_topic}: "
                 + (
@@ -161,3 +123,72 @@ def run_play(
         return 0
     finally:
         finish_ros_process(node, previous)
+
+
+class _Publisher:
+    """/clock, the standing robot's odometry (with ``odom``) and the scan, stamped as recorded."""
+
+    def __init__(self, node, out_topic: str, frame_id, odom: bool):
+        from nav_msgs.msg import Odometry
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from rosgraph_msgs.msg import Clock
+        from sensor_msgs.msg import LaserScan
+
+        qos = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
+        self.scan_pub = node.create_publisher(LaserScan, out_topic, qos)
+        self.clock_pub = node.create_publisher(Clock, "/clock", 10)
+        self.odom_pub = node.create_publisher(Odometry, "odom", 10) if odom else None
+        self.frame_id = frame_id
+        self.clock = Clock()
+
+    def __call__(self, m) -> None:
+        from viapath.ros2 import convert
+
+        stamp = convert.time_msg(m.stamp_s)
+        self.clock.clock = stamp
+        self.clock_pub.publish(self.clock)
+        if self.odom_pub is not None:
+            self.odom_pub.publish(convert.odometry("odom", "base_link", stamp, 0.0, 0.0, 0.0, 0.0, 0.0))
+        self.scan_pub.publish(
+            convert.laser_scan(
+                self.frame_id if self.frame_id is not None else m.frame_id,
+                stamp,
+                m.angle_min_rad,
+                m.angle_increment_rad,
+                m.ranges_m,
+                m.range_min_m,
+                m.range_max_m,
+                m.scan_time_s or 0.1,
+            )
+        )
+
+
+def _play(node, stop, messages, publish: _Publisher, cycles: set, rate: float, lockstep: bool, max_wait_s: float):
+    """Publish every scan at its recorded time (R times faster); with ``lockstep`` wait for the node's
+    cycle on each. The number of scans sent."""
+    import rclpy
+
+    first = messages[0].stamp_s
+    wall0 = time.monotonic()
+    sent = 0
+    for m in messages:
+        if stop["flag"]:
+            break
+        due = wall0 + max(m.stamp_s - first, 0.0) / rate
+        while time.monotonic() < due and not stop["flag"]:
+            rclpy.spin_once(node, timeout_sec=min(0.01, max(due - time.monotonic(), 0.0)))
+        publish(m)
+        sent += 1
+        if lockstep:  # wait for the node's cycle on this scan (a slow machine then changes nothing)
+            key = round(m.stamp_s, 6)
+            end = time.monotonic() + max_wait_s
+            beat = time.monotonic()
+            while key not in cycles and time.monotonic() < end and not stop["flag"]:
+                if time.monotonic() - beat >= 0.05:  # waiting, not stopped: keep /clock alive
+                    publish.clock_pub.publish(publish.clock)
+                    beat = time.monotonic()
+                rclpy.spin_once(node, timeout_sec=0.01)
+            wall0 += max(time.monotonic() - due, 0.0)  # the recording's timing resumes from here
+            if sent >= 5 and not cycles:
+                break  # the node takes none of them: say so now, not after max_wait_s per scan
+    return sent

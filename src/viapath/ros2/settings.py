@@ -30,6 +30,8 @@ from typing import Any
 
 import numpy as np
 
+from viapath.limits import LIMITS_OPTIONS, ROBOT_OPTIONS, SUBGOAL_OPTIONS
+from viapath.perception.scanner import URG04LX_MOUNT_OFFSET_M
 from viapath.ros2.options import Option, planner_options
 
 
@@ -43,6 +45,9 @@ PLANNER_PREFIX = "planner."
 SHIELD_PREFIX = "shield."
 WEIGHTS_PRESET = "weights_preset"  # one parameter selects a preset (viapath.presets); planner.* stays the schema
 
+
+#: The subgoal policy's options the node declares (blocked_clearance_m keeps its default there).
+NODE_SUBGOAL_OPTIONS = ("reach_threshold_m", "goal_tolerance_m", "bypass_distance_m")
 
 MAX_ROLLOUT_STEPS = 2000  # steps of one roll-out (rollout_s / rollout_dt_s, escape_s / escape_dt_s)
 
@@ -104,15 +109,9 @@ NODE_OPTIONS: tuple[Option, ...] = (
         _opt("base_frame", "base_link", "", help="robot frame (markers of the robot)"),
         _opt("half_width_m", 1.0, "m", 0.01, 100.0, "corridor half-width around the designated path"),
         _opt("half_widths_m", [0.0], "m", 0.0, 100.0, "one half-width per path segment (0 or empty: half_width_m)"),
-        _opt("nominal_speed_mps", 0.2, "m/s", 0.01, 5.0, "speed the robot keeps when nothing is in the way"),
-        _opt("robot_radius_m", 0.25, "m", 0.01, 5.0, "radius of the robot's footprint"),
-        _opt("max_speed_mps", 0.6, "m/s", 0.01, 5.0, "speed limit of the base"),
-        _opt("max_accel_mps2", 0.8, "m/s^2", 0.01, 20.0, "acceleration (and braking) limit of the base"),
-        _opt("max_turn_rate_radps", 2.0, "rad/s", 0.01, 20.0, "turn-rate limit of the base"),
-        _opt("max_turn_accel_radps2", 6.0, "rad/s^2", 0.01, 100.0, "turn acceleration limit of the base"),
-        _opt("reach_threshold_m", 0.2, "m", 0.01, 10.0, "an intermediate subgoal is reached within this"),
-        _opt("goal_tolerance_m", 0.1, "m", 0.01, 10.0, "the goal is reached within this"),
-        _opt("bypass_distance_m", 1.0, "m", 0.0, 100.0, "a blocked subgoal is given up within this"),
+        *ROBOT_OPTIONS,
+        *LIMITS_OPTIONS,
+        *(option for option in SUBGOAL_OPTIONS if option.name in NODE_SUBGOAL_OPTIONS),
         _opt(
             "scan_timeout_s", 0.3, "s", 0.05, 10.0, "a scanner silent this long is blind; all silent: brake to a stop"
         ),
@@ -259,8 +258,8 @@ NODE_OPTIONS: tuple[Option, ...] = (
             choices=("default", "on", "off"),
         ),
     )
-    + _scanner_options("front", "scan_front", "laser_front", 0.145, 0.0)
-    + _scanner_options("rear", "scan_rear", "laser_rear", -0.145, math.pi)
+    + _scanner_options("front", "scan_front", "laser_front", URG04LX_MOUNT_OFFSET_M, 0.0)
+    + _scanner_options("rear", "scan_rear", "laser_rear", -URG04LX_MOUNT_OFFSET_M, math.pi)
 )
 
 
@@ -416,22 +415,15 @@ class NodeSettings:
 
 def validate(values: dict[str, Any]) -> NodeSettings:
     """Check every value against its option; unknown names and bad values raise :class:`ParameterError`."""
-    planner_name = values.get("planner_name", "viapath")
-    if not isinstance(planner_name, str):
-        raise ParameterError(f"parameter planner_name: expected a string, found {planner_name!r}")
-    from viapath.planning import available_planners
-
-    if planner_name not in available_planners():
-        raise ParameterError(
-            f"parameter planner_name: unknown planner {planner_name!r}; available: {', '.join(available_planners())}"
-        )
+    planner_name = _planner_name(values)
     names_option = next(o for o in NODE_OPTIONS if o.name == "scanner_names")
     scanner_names = check_value(names_option, values.get("scanner_names", names_option.default))
     if len(set(scanner_names)) != len(scanner_names):
         raise ParameterError(f"parameter scanner_names: names repeat: {scanner_names}")
     options = {o.name: o for o in all_options(planner_name, scanner_names)}
     errors = [f"parameter {name}: unknown parameter" for name in sorted(set(values) - set(options) - {"use_sim_time"})]
-    checked, bad = {}, set()
+    checked: dict[str, Any] = {}
+    bad: set[str] = set()
     for name, o in options.items():
         try:
             checked[name] = check_value(o, values.get(name, o.default))
@@ -458,27 +450,55 @@ def validate(values: dict[str, Any]) -> NodeSettings:
             f"found {checked['nominal_speed_mps']}"
         )
     planner_values = {k[len(PLANNER_PREFIX) :]: v for k, v in checked.items() if k.startswith(PLANNER_PREFIX)}
-    if checked.get(WEIGHTS_PRESET):
-        from viapath.presets import PresetError, load_preset
+    errors += _apply_preset(checked, options, planner_values, planner_name)
+    errors += _planner_errors(planner_name, planner_values, bad, errors)
+    if errors:
+        raise ParameterError(errors)
+    shield_values = {k[len(SHIELD_PREFIX) :]: v for k, v in checked.items() if k.startswith(SHIELD_PREFIX)}
+    return NodeSettings(checked, scanners, planner_name, planner_values, shield_values)
 
-        try:
-            preset = load_preset(checked[WEIGHTS_PRESET])
-        except PresetError as error:
-            preset = None
-            errors.append(f"parameter {WEIGHTS_PRESET}: {error}")
-        if preset is not None and preset.planner != planner_name:
-            errors.append(
-                f"parameter {WEIGHTS_PRESET}: preset {preset.name!r} is for planner "
-                f"{preset.planner!r}, not {planner_name!r}"
-            )
-        elif preset is not None:
-            # A parameter set to other than its default wins over the preset. (The node declares every
-            # parameter and hands all values over, so "given" can only be told apart from "default" by value.)
-            for path, value in preset.dotted().items():
-                name = PLANNER_PREFIX + path
-                if checked[name] == options[name].default:
-                    planner_values[path] = value
-                    checked[name] = value
+
+def _planner_name(values: dict[str, Any]) -> str:
+    planner_name = values.get("planner_name", "viapath")
+    if not isinstance(planner_name, str):
+        raise ParameterError(f"parameter planner_name: expected a string, found {planner_name!r}")
+    from viapath.planning import available_planners
+
+    if planner_name not in available_planners():
+        raise ParameterError(
+            f"parameter planner_name: unknown planner {planner_name!r}; available: {', '.join(available_planners())}"
+        )
+    return planner_name
+
+
+def _apply_preset(checked: dict, options: dict, planner_values: dict, planner_name: str) -> list[str]:
+    """Put the ``weights_preset``'s values into ``checked`` and ``planner_values`` (in place); its errors."""
+    if not checked.get(WEIGHTS_PRESET):
+        return []
+    from viapath.presets import PresetError, load_preset
+
+    try:
+        preset = load_preset(checked[WEIGHTS_PRESET])
+    except PresetError as error:
+        return [f"parameter {WEIGHTS_PRESET}: {error}"]
+    if preset.planner != planner_name:
+        return [
+            f"parameter {WEIGHTS_PRESET}: preset {preset.name!r} is for planner "
+            f"{preset.planner!r}, not {planner_name!r}"
+        ]
+    # A parameter set to other than its default wins over the preset. (The node declares every
+    # parameter and hands all values over, so "given" can only be told apart from "default" by value.)
+    for path, value in preset.dotted().items():
+        name = PLANNER_PREFIX + path
+        if checked[name] == options[name].default:
+            planner_values[path] = value
+            checked[name] = value
+    return []
+
+
+def _planner_errors(planner_name: str, planner_values: dict, bad: set, earlier: list[str]) -> list[str]:
+    """Roll-outs too long for their step, then what the planner's own schema refuses (not said before)."""
+    errors: list[str] = []
     for length, step in (("rollout_s", "rollout_dt_s"), ("escape_s", "escape_dt_s")):
         if (
             length in planner_values
@@ -500,12 +520,9 @@ def validate(values: dict[str, Any]) -> NodeSettings:
     except OptionError as error:
         for where, message in error.errors or [("", str(error))]:
             line = f"parameter {PLANNER_PREFIX}{where}: {message}"
-            if line not in errors and PLANNER_PREFIX + where not in bad:
+            if line not in earlier and line not in errors and PLANNER_PREFIX + where not in bad:
                 errors.append(line)
-    if errors:
-        raise ParameterError(errors)
-    shield_values = {k[len(SHIELD_PREFIX) :]: v for k, v in checked.items() if k.startswith(SHIELD_PREFIX)}
-    return NodeSettings(checked, scanners, planner_name, planner_values, shield_values)
+    return errors
 
 
 def _flatten(data: dict, prefix: str = "") -> dict[str, Any]:

@@ -33,6 +33,7 @@ import math
 import sys
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -142,6 +143,408 @@ class StepRecord:
     late: bool = False
 
 
+@dataclass
+class _World:
+    """The scenario as the simulator node plays it: times, people, static shapes, path, limits, scanners."""
+
+    spec: Any
+    dt: float
+    n_steps: int
+    times: np.ndarray
+    positions: np.ndarray
+    velocities: np.ndarray
+    radii: np.ndarray
+    static_world: Any
+    path: Any
+    limits: Any
+    goal_tolerance: float
+    laser: Any
+
+    @classmethod
+    def of(cls, scenario_source: str, seed: int | None, duration_s: float | None, faults: list[Fault]) -> _World:
+        from viapath.perception.laser import LaserPerception
+        from viapath.scenarios import load_scenario
+        from viapath.scenarios.build import scenario_limits, scenario_path, scenario_subgoal_policy
+        from viapath.sim.obstacles import scenario_obstacle_states
+        from viapath.sim.static_world import StaticWorld
+
+        spec = load_scenario(scenario_source)
+        dt = spec.dt_s
+        n_steps = int(round((spec.duration_s if duration_s is None else min(duration_s, spec.duration_s)) / dt))
+        times = np.arange(n_steps + 1) * dt
+        positions, velocities, radii = scenario_obstacle_states(spec, times)
+        static_world = StaticWorld.of_scenario(spec)
+        path = scenario_path(spec)
+        limits = scenario_limits(spec)
+        goal_tolerance = scenario_subgoal_policy(spec).goal_tolerance_m
+        laser = LaserPerception(robot_radius_m=spec.robot.radius)
+        rng = np.random.default_rng(spec.seed if seed is None else seed)
+        laser.reset(rng)
+        names = [s.name for s in laser.scanners]
+        for f in faults:
+            if f.scanner and f.scanner not in names:
+                raise ValueError(f"--fault: unknown scanner {f.scanner!r}; scanners: {', '.join(names)}")
+        world = (spec, dt, n_steps, times, positions, velocities, radii, static_world, path, limits)
+        return cls(*world, goal_tolerance, laser)
+
+    @property
+    def names(self) -> list[str]:
+        return [s.name for s in self.laser.scanners]
+
+
+@dataclass
+class _Episode:
+    """What the episode recorded: poses, the commands received, the node's reports matched by stamp."""
+
+    rows: dict[str, list] = field(default_factory=lambda: {k: [] for k in ("pose", "speed", "turn")})
+    records: list[StepRecord] = field(default_factory=list)
+    reached: bool = False
+    offset_s: float = 0.0  # the clock's jumps back so far
+    late_steps: list[int] = field(default_factory=list)
+    received: list[tuple[float, float, float, float]] = field(default_factory=list)  # sim time, v, w, speed
+    worlds: list = field(default_factory=list)  # (stamp key, true world) per step
+    last_state: Any = None
+
+
+class _SimNode:
+    """The simulator's side of the ROS graph: /clock, odometry, scans, TF and the designated path out;
+    cmd_vel and the planner's status in."""
+
+    def __init__(self, node, stop, world: _World, tf: bool, map_offset):
+        from diagnostic_msgs.msg import DiagnosticArray
+        from geometry_msgs.msg import Twist
+        from nav_msgs.msg import Odometry
+        from nav_msgs.msg import Path as PathMsg
+        from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+        from rosgraph_msgs.msg import Clock
+        from sensor_msgs.msg import LaserScan
+
+        from viapath.ros2 import convert
+
+        self.node, self.stop, self.world = node, stop, world
+        latched = QoSProfile(
+            depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+        )
+        self.clock_pub = node.create_publisher(Clock, "/clock", 10)
+        self.odom_pub = node.create_publisher(Odometry, "odom", 10)
+        self.path_pub = node.create_publisher(PathMsg, "designated_path", latched)
+        self.scan_pubs = {
+            n: node.create_publisher(LaserScan, f"scan_{n}", qos_profile_sensor_data) for n in world.names
+        }
+        self.got: dict[str, Any] = {"cmd": None, "cmd_count": 0, "status": [], "by_stamp": {}, "watchdog": []}
+        node.create_subscription(Twist, "cmd_vel", self._on_twist, 10)
+        self.tf_pub = _tf_publishers(node, world.laser.scanners, map_offset) if tf else None
+        node.create_subscription(DiagnosticArray, "viapath/status", self._on_status, 50)
+        self.clock = Clock()
+        self.clock.clock = convert.time_msg(0.0)
+
+    def _on_twist(self, msg) -> None:
+        self.got["cmd"] = (msg.linear.x, msg.angular.z)
+        self.got["cmd_count"] += 1
+
+    def _on_status(self, msg) -> None:
+        for s in msg.status:
+            if s.name.endswith(": planner"):
+                values = {kv.key: kv.value for kv in s.values}
+                self.got["status"].append(values)
+                try:
+                    stamp = round(float(values.get("stamp_s", "nan")), 6)
+                except ValueError:
+                    continue
+                if values.get("source") == "cycle":
+                    self.got["by_stamp"][stamp] = values
+                else:
+                    self.got["watchdog"].append(stamp)
+
+    def spin_until(self, deadline: float, done=lambda: False, heartbeat: bool = False) -> None:
+        """Spin until ``deadline`` or ``done()``; with ``heartbeat``, publish the (unchanged) clock every
+        50 ms meanwhile: the simulation waits, it has not stopped (the node's wall-clock watchdog
+        takes a silent /clock for a dead simulator)."""
+        import rclpy
+
+        beat = time.monotonic()
+        while not self.stop["flag"]:
+            now = time.monotonic()
+            remaining = deadline - now
+            if remaining <= 0 or done():
+                return
+            if heartbeat and now - beat >= 0.05:
+                self.clock_pub.publish(self.clock)
+                beat = now
+            rclpy.spin_once(self.node, timeout_sec=min(remaining, 0.01))
+
+    def wait_for_node(self, wait_for_node_s: float) -> bool:
+        """Publish the clock and the path, wait for a planner node, warm it up; False when none came."""
+        import rclpy
+
+        from viapath.ros2 import convert
+
+        self.clock_pub.publish(self.clock)
+        waypoints = self.world.spec.path.waypoints
+        self.path_pub.publish(convert.path_message(waypoints, "odom", convert.time_msg(0.0)))
+        # Wait for a planner node: someone listening to the scans and publishing commands.
+        started, first = time.monotonic(), self.world.names[0]
+        while not self.stop["flag"] and (
+            self.node.count_subscribers(f"scan_{first}") == 0
+            or self.node.count_publishers(_resolved(self.node, "cmd_vel")) == 0
+        ):
+            if time.monotonic() - started > wait_for_node_s:
+                print(
+                    f"error: no planner node (subscriber of scan_{first}, publisher of cmd_vel) within "
+                    f"{wait_for_node_s:g} s",
+                    file=sys.stderr,
+                )
+                return False
+            rclpy.spin_once(self.node, timeout_sec=0.05)
+        self._warm_up(started, wait_for_node_s)
+        return True
+
+    def _warm_up(self, started: float, wait_for_node_s: float) -> None:
+        """Tick the clock below the episode's start (1 s) until the node's watchdog reports ("no scan
+        yet"): then clock, status and commands are matched both ways."""
+        from viapath.ros2 import convert
+
+        def node_ready():
+            last = self.got["status"][-1] if self.got["status"] else {}
+            return (
+                bool(last) and "no designated path" not in last.get("reasons", "") and last.get("inputs_matched") == "1"
+            )
+
+        tick = 0.0
+        while not self.stop["flag"] and not node_ready() and time.monotonic() - started < wait_for_node_s:
+            tick = min(tick + 0.01, 0.99)
+            self.clock.clock = convert.time_msg(tick)
+            self.clock_pub.publish(self.clock)
+            self.spin_until(time.monotonic() + 0.02)
+        if not node_ready():
+            print("warning: the planner node did not report a designated path during warm-up", file=sys.stderr)
+        self.spin_until(time.monotonic() + 0.2)
+
+    def publish_state(self, t: float, offset_s: float, state, odometry: bool = True):
+        """/clock, TF and (unless ``odometry`` is off) odometry of step time ``t``; the stamp and its seconds."""
+        from viapath.ros2 import convert
+
+        stamp_s = max(t + offset_s, 0.0) + 1.0  # +1 s: /clock never shows 0 (rclpy's "time not set")
+        stamp = convert.time_msg(stamp_s)
+        self.clock.clock = stamp
+        self.clock_pub.publish(self.clock)
+        if self.tf_pub is not None:
+            self.tf_pub(stamp, state.x, state.y, state.heading_rad)
+        if odometry:
+            self.odom_pub.publish(
+                convert.odometry(
+                    "odom",
+                    "base_link",
+                    stamp,
+                    state.x,
+                    state.y,
+                    state.heading_rad,
+                    state.speed_mps,
+                    state.turn_rate_radps,
+                )
+            )
+        return stamp, stamp_s
+
+    def publish_scan(self, scanner, stamp, ranges) -> None:
+        from viapath.ros2 import convert
+
+        self.scan_pubs[scanner.name].publish(
+            convert.laser_scan(
+                f"laser_{scanner.name}",
+                stamp,
+                scanner.angle_min_rad,
+                scanner.angle_increment_rad,
+                ranges,
+                scanner.range_min_m,
+                scanner.range_max_m,
+                scanner.scan_period_s,
+            )
+        )
+
+    def command(self) -> tuple[float, float]:
+        """The latest cmd_vel (a stop before the first)."""
+        return self.got["cmd"] if self.got["cmd"] is not None else (0.0, 0.0)
+
+    def play(self, rate: float, lockstep: bool, max_wait_s: float, faults: list[Fault]) -> _Episode:
+        """Every step: publish, wait for the node (with ``lockstep``) and hold the rate, drive."""
+        from viapath.observation import Command
+        from viapath.sim import robot as kinematics
+
+        world, episode, period = self.world, _Episode(), self.world.dt / rate
+        spec = world.spec
+        state = kinematics.UnicycleState(
+            spec.robot.start[0], spec.robot.start[1], spec.robot.heading, spec.robot.speed, 0.0
+        )
+        jumped: set[int] = set()
+        self.wall_start = time.monotonic()
+        for k in range(world.n_steps + 1):
+            episode.rows["pose"].append((state.x, state.y, state.heading_rad))
+            episode.rows["speed"].append(state.speed_mps)
+            episode.rows["turn"].append(state.turn_rate_radps)
+            if np.hypot(*(world.path.goal - state.position)) <= world.goal_tolerance:
+                episode.reached = True
+            if episode.reached or k == world.n_steps or self.stop["flag"]:
+                episode.records.append(StepRecord(status="end"))
+                break
+            t = float(world.times[k])
+            for f in faults:
+                if f.kind == "clock-back" and t >= f.at_s and id(f) not in jumped:
+                    jumped.add(id(f))
+                    episode.offset_s -= f.amount_s
+            on_time, key, true_world = self._step(k, t, state, episode.offset_s, faults, lockstep, max_wait_s, period)
+            if not on_time:
+                episode.late_steps.append(k)
+            v, w = self.command()
+            episode.received.append((t, v, w, state.speed_mps))
+            episode.records.append(StepRecord((v, w), v, late=not on_time))
+            episode.worlds.append((key, true_world))
+            state = kinematics.step(state, Command(v, w), world.limits, world.dt)
+        episode.last_state = state
+        return episode
+
+    def _step(self, k: int, t: float, state, offset_s: float, faults, lockstep: bool, max_wait_s: float, period):
+        """Publish step ``k`` (faults applied) and wait for the node; (command on time, stamp key, true world)."""
+        from viapath.sim.perception import WorldSnapshot
+
+        world = self.world
+        odometry = not any(f.kind == "odom" and f.active(t) for f in faults)
+        stamp, stamp_s = self.publish_state(t, offset_s, state, odometry)
+        pose = np.array([state.x, state.y, state.heading_rad])
+        standing = world.static_world.at(t)
+        snapshot = WorldSnapshot(
+            t, pose, world.spec.robot.radius, world.positions[k], world.velocities[k], world.radii,
+            standing.segments, standing,
+        )  # fmt: skip
+        for scanner, ranges in zip(world.laser.scanners, world.laser.scan(snapshot), strict=True):
+            active = [f for f in faults if f.scanner == scanner.name and f.active(t)]
+            if any(f.kind == "silence" for f in active):
+                continue
+            if any(f.kind == "nan" for f in active):
+                ranges = np.full_like(ranges, np.nan)
+            if any(f.kind == "short" for f in active):
+                ranges = ranges[:-10]
+            self.publish_scan(scanner, stamp, ranges)
+        count_before, key = self.got["cmd_count"], round(stamp_s, 6)
+        published = sum(
+            1 for n in world.names if not any(f.scanner == n and f.kind == "silence" and f.active(t) for f in faults)
+        )
+
+        def cycle_reported():
+            if key in self.got["by_stamp"]:
+                return self.got["cmd_count"] > count_before  # its command too (another topic: may come second)
+            # no scan this step: the node's watchdog answers instead
+            watchdog = self.got["watchdog"]
+            return published == 0 and bool(watchdog) and watchdog[-1] >= key - 1e-6
+
+        if lockstep:
+            self.spin_until(time.monotonic() + max_wait_s, cycle_reported, heartbeat=True)
+        self.spin_until(self.wall_start + (k + 1) * period)  # hold the rate
+        return cycle_reported() and self.got["cmd_count"] > count_before, key, snapshot
+
+    def linger(self, episode: _Episode, linger_s: float, period: float) -> None:
+        """After the goal, keep the world going a little (not recorded): the node may report its goal."""
+        from viapath.observation import Command
+        from viapath.sim import robot as kinematics
+        from viapath.sim.perception import WorldSnapshot
+
+        world, state = self.world, episode.last_state
+        last = min(len(episode.records) - 1, world.n_steps)
+        for j in range(int(round(linger_s / world.dt))):
+            if self.stop["flag"]:
+                break
+            t = float(world.times[last]) + (j + 1) * world.dt
+            stamp, _ = self.publish_state(t, episode.offset_s, state)
+            pose = np.array([state.x, state.y, state.heading_rad])
+            snapshot = WorldSnapshot(
+                t, pose, world.spec.robot.radius, world.positions[last], world.velocities[last] * 0.0, world.radii,
+                world.static_world.segments,
+            )  # fmt: skip
+            for scanner, ranges in zip(world.laser.scanners, world.laser.scan(snapshot), strict=True):
+                self.publish_scan(scanner, stamp, ranges)
+            self.spin_until(time.monotonic() + period)
+            v, w = self.command()
+            state = kinematics.step(state, Command(v, w), world.limits, world.dt)
+
+    def trace_and_metrics(self, episode: _Episode, seed: int | None):
+        """The episode's trace (the node's reports matched by stamp) and its metrics, as ``viapath run``'s."""
+        from viapath.observation import Obstacles
+        from viapath.perception.laser import tracking_errors
+        from viapath.ros2.core import parse_points, parse_tracks
+
+        reported, truth, records, got = [], [], episode.records, self.got
+        for rec, (key, true_world) in zip(records, episode.worlds):
+            status = got["by_stamp"].get(key, {})
+            rec.plan_speed = float(status.get("plan_speed_mps", rec.command[0]))
+            rec.status = status.get("plan_status", status.get("mode", "none"))
+            rec.side = int(status.get("plan_side", 0))
+            rec.cycle_ms = float(status.get("plan_time_ms") or status.get("cycle_time_ms") or "nan")
+            rec.perception_ms = float(status.get("perception_time_ms") or "nan")
+            if status:
+                ids, pos, vel, rad = parse_tracks(status.get("tracks_xyv", ""))
+                rec.via = parse_points(status.get("via_xy", ""))
+                reported.append(Obstacles(pos, vel, rad, ids=ids))
+                truth.append(true_world)
+        trace = self._trace(episode, seed)
+        metrics = _shield_and_perception_metrics(trace, got, records)
+        metrics.update(tracking_errors(reported, truth))
+        perception_ms = np.array([r.perception_ms for r in records], dtype=float)
+        perception_ms = perception_ms[np.isfinite(perception_ms)]
+        metrics["perception_time_p50_ms"] = float(np.percentile(perception_ms, 50)) if len(perception_ms) else None
+        metrics["perception_time_p99_ms"] = float(np.percentile(perception_ms, 99)) if len(perception_ms) else None
+        return trace, {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in metrics.items()}
+
+    def _trace(self, episode: _Episode, seed: int | None):
+        from viapath.sim.loop import Trace
+
+        world, rows, records, got = self.world, episode.rows, episode.records, self.got
+        spec, n = world.spec, len(rows["pose"])
+        return Trace(
+            scenario_name=spec.name,
+            planner_name=(got["status"][-1].get("planner", "viapath") if got["status"] else "viapath"),
+            perception_mode="laser",
+            dt_s=world.dt,
+            path=world.path,
+            robot_radius_m=spec.robot.radius,
+            times_s=world.times[:n],
+            robot_poses=np.array(rows["pose"]),
+            robot_speeds_mps=np.array(rows["speed"]),
+            robot_turn_rates_radps=np.array(rows["turn"]),
+            commands=np.array([r.command for r in records]),
+            obstacle_positions=world.positions[:n],
+            obstacle_velocities=world.velocities[:n],
+            obstacle_radii_m=world.radii,
+            plan_speeds_mps=np.array([r.plan_speed for r in records]),
+            plan_targets=np.tile(world.path.goal, (len(records), 1)),
+            plan_status=[r.status for r in records],
+            via_points=[r.via for r in records],
+            plan_times_ms=np.array([r.cycle_ms for r in records[:-1]] + [np.nan]),
+            reached_goal=episode.reached,
+            walls=world.static_world.segments,
+            wall_until_s=world.static_world.until_s,
+            extras={"nominal_speed_mps": spec.robot.speed, "seed": spec.seed if seed is None else seed},
+            plan_sides=np.array([r.side for r in records], dtype=int),
+        )
+
+
+def _shield_and_perception_metrics(trace, got: dict, records) -> dict:
+    """``compute_metrics`` of the trace, with the shield's interventions the node reported."""
+    from viapath.sim.metrics import compute_metrics
+
+    metrics = compute_metrics(trace)
+    shielded_cycles = [v for v in got["by_stamp"].values() if "shield_intervened" in v]
+    metrics.update(
+        {
+            "shield": bool(shielded_cycles),
+            "shield_interventions": (
+                sum(int(v["shield_intervened"]) for v in shielded_cycles) if shielded_cycles else None
+            ),
+        }
+    )
+    if shielded_cycles:
+        metrics["shield_mode"] = shielded_cycles[-1].get("shield_mode")
+    return metrics
+
+
 def run_sim(
     scenario_source: str,
     rate: float = 1.0,
@@ -161,360 +564,31 @@ def run_sim(
     linger_s: float = 0.0,
 ) -> int:
     """Run one episode against whatever node listens; prints metrics; returns the exit code."""
-    import rclpy
-    from diagnostic_msgs.msg import DiagnosticArray
-    from geometry_msgs.msg import Twist
-    from nav_msgs.msg import Odometry
-    from nav_msgs.msg import Path as PathMsg
-    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
-    from rosgraph_msgs.msg import Clock
-    from sensor_msgs.msg import LaserScan
-
-    from viapath.io.jsonable import dumps as json_dumps
-    from viapath.observation import Command, MotionLimits, Obstacles
-    from viapath.path import DesignatedPath, SubgoalPolicy
-    from viapath.perception.laser import LaserPerception, tracking_errors
-    from viapath.ros2 import convert
-    from viapath.ros2.core import parse_points, parse_tracks
     from viapath.ros2.process import finish_ros_process, start_ros_process
-    from viapath.scenarios import load_scenario
-    from viapath.sim import robot as kinematics
-    from viapath.sim.loop import Trace
-    from viapath.sim.metrics import compute_metrics
-    from viapath.sim.obstacles import scenario_obstacle_states
-    from viapath.sim.perception import WorldSnapshot
-    from viapath.sim.static_world import StaticWorld
 
     faults = list(faults or [])
-    spec = load_scenario(scenario_source)
-    dt = spec.dt_s
-    n_steps = int(round((spec.duration_s if duration_s is None else min(duration_s, spec.duration_s)) / dt))
-    times = np.arange(n_steps + 1) * dt
-    positions, velocities, radii = scenario_obstacle_states(spec, times)
-    static_world = StaticWorld.of_scenario(spec)
-    walls = static_world.segments
-    path = DesignatedPath(spec.path.waypoints, half_widths_m=spec.path.widths())
-    limits = MotionLimits(**spec.robot.limits.model_dump())
-    goal_tolerance = SubgoalPolicy(**spec.subgoals.model_dump()).goal_tolerance_m
-    laser = LaserPerception(robot_radius_m=spec.robot.radius)
-    rng = np.random.default_rng(spec.seed if seed is None else seed)
-    laser.reset(rng)
-    names = [s.name for s in laser.scanners]
-    for f in faults:
-        if f.scanner and f.scanner not in names:
-            raise ValueError(f"--fault: unknown scanner {f.scanner!r}; scanners: {', '.join(names)}")
-
+    world = _World.of(scenario_source, seed, duration_s, faults)
     node, stop, previous = start_ros_process("viapath_sim", ros_args)
     try:
-        latched = QoSProfile(
-            depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
-        )
-        clock_pub = node.create_publisher(Clock, "/clock", 10)
-        odom_pub = node.create_publisher(Odometry, "odom", 10)
-        path_pub = node.create_publisher(PathMsg, "designated_path", latched)
-        scan_pubs = {n: node.create_publisher(LaserScan, f"scan_{n}", qos_profile_sensor_data) for n in names}
-        got = {"cmd": None, "cmd_count": 0, "status": [], "by_stamp": {}, "watchdog": []}
-
-        def on_twist(msg):
-            got["cmd"] = (msg.linear.x, msg.angular.z)
-            got["cmd_count"] += 1
-
-        def on_status(msg):
-            for s in msg.status:
-                if s.name.endswith(": planner"):
-                    values = {kv.key: kv.value for kv in s.values}
-                    got["status"].append(values)
-                    try:
-                        stamp = round(float(values.get("stamp_s", "nan")), 6)
-                    except ValueError:
-                        continue
-                    if values.get("source") == "cycle":
-                        got["by_stamp"][stamp] = values
-                    else:
-                        got["watchdog"].append(stamp)
-
-        node.create_subscription(Twist, "cmd_vel", on_twist, 10)
-        tf_pub = _tf_publishers(node, laser.scanners, map_offset) if tf else None
-        node.create_subscription(DiagnosticArray, "viapath/status", on_status, 50)
-
-        def spin_until(deadline: float, done=lambda: False, heartbeat: bool = False) -> None:
-            """Spin until ``deadline`` or ``done()``; with ``heartbeat``, publish the (unchanged) clock every
-            50 ms meanwhile: the simulation waits, it has not stopped (the node's wall-clock watchdog
-            takes a silent /clock for a dead simulator)."""
-            beat = time.monotonic()
-            while not stop["flag"]:
-                now = time.monotonic()
-                remaining = deadline - now
-                if remaining <= 0 or done():
-                    return
-                if heartbeat and now - beat >= 0.05:
-                    clock_pub.publish(clock)
-                    beat = now
-                rclpy.spin_once(node, timeout_sec=min(remaining, 0.01))
-
-        clock = Clock()
-        clock.clock = convert.time_msg(0.0)
-        clock_pub.publish(clock)
-        path_pub.publish(convert.path_message(spec.path.waypoints, "odom", convert.time_msg(0.0)))
-        # Wait for a planner node: someone listening to the scans and publishing commands.
-        started = time.monotonic()
-        while not stop["flag"] and (
-            node.count_subscribers(f"scan_{names[0]}") == 0 or node.count_publishers(_resolved(node, "cmd_vel")) == 0
-        ):
-            if time.monotonic() - started > wait_for_node_s:
-                print(
-                    f"error: no planner node (subscriber of scan_{names[0]}, publisher of cmd_vel) within "
-                    f"{wait_for_node_s:g} s",
-                    file=sys.stderr,
-                )
-                return 3
-            rclpy.spin_once(node, timeout_sec=0.05)
-        # Warm-up: tick the clock below the episode's start (1 s) until the node's watchdog reports
-        # ("no scan yet"): then clock, status and commands are matched both ways.
-        tick = 0.0
-
-        def node_ready():
-            last = got["status"][-1] if got["status"] else {}
-            return (
-                bool(last) and "no designated path" not in last.get("reasons", "") and last.get("inputs_matched") == "1"
-            )
-
-        while not stop["flag"] and not node_ready() and time.monotonic() - started < wait_for_node_s:
-            tick = min(tick + 0.01, 0.99)
-            clock.clock = convert.time_msg(tick)
-            clock_pub.publish(clock)
-            spin_until(time.monotonic() + 0.02)
-        if not node_ready():
-            print("warning: the planner node did not report a designated path during warm-up", file=sys.stderr)
-        spin_until(time.monotonic() + 0.2)
-
-        state = kinematics.UnicycleState(
-            spec.robot.start[0], spec.robot.start[1], spec.robot.heading, spec.robot.speed, 0.0
-        )
-        rows = {k: [] for k in ("pose", "speed", "turn")}
-        records: list[StepRecord] = []
-        reported, truth, stamps = [], [], []
-        offset_s = 0.0
-        jumped = set()
-        reached = False
-        late = 0
-        late_steps: list[int] = []
-        period = dt / rate
-        wall_start = time.monotonic()
-        received: list[tuple[float, float, float, float]] = []  # sim time, v, w, measured speed
-        worlds = []  # (stamp key, true world) per step
-        for k in range(n_steps + 1):
-            rows["pose"].append((state.x, state.y, state.heading_rad))
-            rows["speed"].append(state.speed_mps)
-            rows["turn"].append(state.turn_rate_radps)
-            if np.hypot(*(path.goal - state.position)) <= goal_tolerance:
-                reached = True
-            if reached or k == n_steps or stop["flag"]:
-                records.append(StepRecord(status="end"))
-                break
-            t = float(times[k])
-            for f in faults:
-                if f.kind == "clock-back" and t >= f.at_s and id(f) not in jumped:
-                    jumped.add(id(f))
-                    offset_s -= f.amount_s
-            stamp_s = max(t + offset_s, 0.0) + 1.0  # +1 s: /clock never shows 0 (rclpy's "time not set")
-            stamp = convert.time_msg(stamp_s)
-            clock.clock = stamp
-            clock_pub.publish(clock)
-            if tf_pub is not None:
-                tf_pub(stamp, state.x, state.y, state.heading_rad)
-            if not any(f.kind == "odom" and f.active(t) for f in faults):
-                odom_pub.publish(
-                    convert.odometry(
-                        "odom",
-                        "base_link",
-                        stamp,
-                        state.x,
-                        state.y,
-                        state.heading_rad,
-                        state.speed_mps,
-                        state.turn_rate_radps,
-                    )
-                )
-            pose = np.array([state.x, state.y, state.heading_rad])
-            standing = static_world.at(t)
-            world = WorldSnapshot(
-                t, pose, spec.robot.radius, positions[k], velocities[k], radii, standing.segments, standing
-            )
-            scans = laser.scan(world)
-            for scanner, ranges in zip(laser.scanners, scans, strict=True):
-                active = [f for f in faults if f.scanner == scanner.name and f.active(t)]
-                if any(f.kind == "silence" for f in active):
-                    continue
-                if any(f.kind == "nan" for f in active):
-                    ranges = np.full_like(ranges, np.nan)
-                if any(f.kind == "short" for f in active):
-                    ranges = ranges[:-10]
-                scan_pubs[scanner.name].publish(
-                    convert.laser_scan(
-                        f"laser_{scanner.name}",
-                        stamp,
-                        scanner.angle_min_rad,
-                        scanner.angle_increment_rad,
-                        ranges,
-                        scanner.range_min_m,
-                        scanner.range_max_m,
-                        scanner.scan_period_s,
-                    )
-                )
-            stamps.append(stamp_s)
-            count_before = got["cmd_count"]
-
-            key = round(stamp_s, 6)
-
-            published = sum(
-                1 for n in names if not any(f.scanner == n and f.kind == "silence" and f.active(t) for f in faults)
-            )
-
-            def cycle_reported():
-                if key in got["by_stamp"]:
-                    return got["cmd_count"] > count_before  # its command too (another topic: may come second)
-                # no scan this step: the node's watchdog answers instead
-                return published == 0 and bool(got["watchdog"]) and got["watchdog"][-1] >= key - 1e-6
-
-            deadline = wall_start + (k + 1) * period
-            if lockstep:
-                spin_until(time.monotonic() + max_wait_s, cycle_reported, heartbeat=True)
-            spin_until(deadline)  # hold the rate
-            on_time = cycle_reported() and got["cmd_count"] > count_before
-            late += not on_time
-            if not on_time:
-                late_steps.append(k)
-            v, w = got["cmd"] if got["cmd"] is not None else (0.0, 0.0)
-            received.append((t, v, w, state.speed_mps))
-            records.append(StepRecord((v, w), v, late=not on_time))
-            worlds.append((key, world))
-            state = kinematics.step(state, Command(v, w), limits, dt)
-
-        if reached and linger_s > 0:  # keep the world going a little (not recorded): the node may report its goal
-            last = min(len(records) - 1, n_steps)
-            v, w = 0.0, 0.0
-            for j in range(int(round(linger_s / dt))):
-                if stop["flag"]:
-                    break
-                t = float(times[last]) + (j + 1) * dt
-                stamp_s = max(t + offset_s, 0.0) + 1.0
-                stamp = convert.time_msg(stamp_s)
-                clock.clock = stamp
-                clock_pub.publish(clock)
-                if tf_pub is not None:
-                    tf_pub(stamp, state.x, state.y, state.heading_rad)
-                odom_pub.publish(
-                    convert.odometry(
-                        "odom",
-                        "base_link",
-                        stamp,
-                        state.x,
-                        state.y,
-                        state.heading_rad,
-                        state.speed_mps,
-                        state.turn_rate_radps,
-                    )
-                )
-                pose = np.array([state.x, state.y, state.heading_rad])
-                world = WorldSnapshot(t, pose, spec.robot.radius, positions[last], velocities[last] * 0.0, radii, walls)
-                for scanner, ranges in zip(laser.scanners, laser.scan(world), strict=True):
-                    scan_pubs[scanner.name].publish(
-                        convert.laser_scan(
-                            f"laser_{scanner.name}",
-                            stamp,
-                            scanner.angle_min_rad,
-                            scanner.angle_increment_rad,
-                            ranges,
-                            scanner.range_min_m,
-                            scanner.range_max_m,
-                            scanner.scan_period_s,
-                        )
-                    )
-                spin_until(time.monotonic() + period)
-                v, w = got["cmd"] if got["cmd"] is not None else (0.0, 0.0)
-                state = kinematics.step(state, Command(v, w), limits, dt)
-        spin_until(time.monotonic() + 0.5)  # the last reports
-        for rec, (key, world) in zip(records, worlds):
-            status = got["by_stamp"].get(key, {})
-            rec.plan_speed = float(status.get("plan_speed_mps", rec.command[0]))
-            rec.status = status.get("plan_status", status.get("mode", "none"))
-            rec.side = int(status.get("plan_side", 0))
-            rec.cycle_ms = float(status.get("plan_time_ms") or status.get("cycle_time_ms") or "nan")
-            rec.perception_ms = float(status.get("perception_time_ms") or "nan")
-            if status:
-                ids, pos, vel, rad = parse_tracks(status.get("tracks_xyv", ""))
-                rec.via = parse_points(status.get("via_xy", ""))
-                reported.append(Obstacles(pos, vel, rad, ids=ids))
-                truth.append(world)
-        n = len(rows["pose"])
-        trace = Trace(
-            scenario_name=spec.name,
-            planner_name=(got["status"][-1].get("planner", "viapath") if got["status"] else "viapath"),
-            perception_mode="laser",
-            dt_s=dt,
-            path=path,
-            robot_radius_m=spec.robot.radius,
-            times_s=times[:n],
-            robot_poses=np.array(rows["pose"]),
-            robot_speeds_mps=np.array(rows["speed"]),
-            robot_turn_rates_radps=np.array(rows["turn"]),
-            commands=np.array([r.command for r in records]),
-            obstacle_positions=positions[:n],
-            obstacle_velocities=velocities[:n],
-            obstacle_radii_m=radii,
-            plan_speeds_mps=np.array([r.plan_speed for r in records]),
-            plan_targets=np.tile(path.goal, (len(records), 1)),
-            plan_status=[r.status for r in records],
-            via_points=[r.via for r in records],
-            plan_times_ms=np.array([r.cycle_ms for r in records[:-1]] + [np.nan]),
-            reached_goal=reached,
-            walls=walls,
-            wall_until_s=static_world.until_s,
-            extras={"nominal_speed_mps": spec.robot.speed, "seed": spec.seed if seed is None else seed},
-            plan_sides=np.array([r.side for r in records], dtype=int),
-        )
-        metrics = compute_metrics(trace)
-        shielded_cycles = [v for v in got["by_stamp"].values() if "shield_intervened" in v]
-        metrics.update(
-            {
-                "shield": bool(shielded_cycles),
-                "shield_interventions": (
-                    sum(int(v["shield_intervened"]) for v in shielded_cycles) if shielded_cycles else None
-                ),
-            }
-        )
-        if shielded_cycles:
-            metrics["shield_mode"] = shielded_cycles[-1].get("shield_mode")
-        metrics.update(tracking_errors(reported, truth))
-        perception_ms = np.array([r.perception_ms for r in records], dtype=float)
-        perception_ms = perception_ms[np.isfinite(perception_ms)]
-        metrics["perception_time_p50_ms"] = float(np.percentile(perception_ms, 50)) if len(perception_ms) else None
-        metrics["perception_time_p99_ms"] = float(np.percentile(perception_ms, 99)) if len(perception_ms) else None
-        metrics = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in metrics.items()}
-        if trace_file:
-            from viapath.io.trace import write_trace_csv
-
-            write_trace_csv(trace, trace_file)
-        if status_file:
-            with open(status_file, "w") as handle:
-                for values in got["status"]:
-                    handle.write(json.dumps(values) + "\n")
-        if commands_file:
-            np.savetxt(
-                commands_file,
-                np.array(received).reshape(-1, 4),
-                delimiter=",",
-                header="time_s,v_mps,w_radps,measured_speed_mps",
-                comments="",
-            )
+        sim = _SimNode(node, stop, world, tf, map_offset)
+        if not sim.wait_for_node(wait_for_node_s):
+            return 3
+        episode = sim.play(rate, lockstep, max_wait_s, faults)
+        if episode.reached and linger_s > 0:
+            sim.linger(episode, linger_s, world.dt / rate)
+        sim.spin_until(time.monotonic() + 0.5)  # the last reports
+        trace, metrics = sim.trace_and_metrics(episode, seed)
+        _write_files(trace, sim.got["status"], episode.received, trace_file, status_file, commands_file)
+        late_steps = episode.late_steps
         print(
-            f"viapath ros2 sim: {len(records) - 1} steps, {late} without the node's command in time, "
-            f"rate {rate:g}{' lockstep' if lockstep else ''}, {time.monotonic() - wall_start:.1f} s"
+            f"viapath ros2 sim: {len(episode.records) - 1} steps, {len(late_steps)} without the node's command in "
+            f"time, rate {rate:g}{' lockstep' if lockstep else ''}, {time.monotonic() - sim.wall_start:.1f} s"
             + (f" (late steps: {late_steps[:10]})" if late_steps else ""),
             file=sys.stderr,
         )
         if as_json:
+            from viapath.io.jsonable import dumps as json_dumps
+
             print(json_dumps(metrics))
         else:
             for key, value in metrics.items():
@@ -522,3 +596,22 @@ def run_sim(
         return 0
     finally:
         finish_ros_process(node, previous)
+
+
+def _write_files(trace, statuses, received, trace_file, status_file, commands_file) -> None:
+    if trace_file:
+        from viapath.io.trace import write_trace_csv
+
+        write_trace_csv(trace, trace_file)
+    if status_file:
+        with open(status_file, "w") as handle:
+            for values in statuses:
+                handle.write(json.dumps(values) + "\n")
+    if commands_file:
+        np.savetxt(
+            commands_file,
+            np.array(received).reshape(-1, 4),
+            delimiter=",",
+            header="time_s,v_mps,w_radps,measured_speed_mps",
+            comments="",
+        )

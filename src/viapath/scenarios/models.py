@@ -21,7 +21,8 @@ from pydantic import (
     model_validator,
 )
 
-from viapath.limits import LIMIT_BOUNDS, ROBOT_RADIUS_BOUNDS_M
+from viapath.limits import LIMITS_OPTIONS, ROBOT_OPTIONS, SUBGOAL_OPTIONS
+from viapath.options import OptionSet
 from viapath.perception.modes import PERCEPTION_MODES
 from viapath.static import box_edges, polygon_edges, polyline_edges
 
@@ -44,23 +45,25 @@ class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
 
 
-def _limit(name: str) -> Any:
-    low, high = LIMIT_BOUNDS[name]
-    return Annotated[float, Field(ge=low, le=high)]
+def _field(options: OptionSet, name: str) -> Any:
+    """The pydantic field of option ``name``: default, bounds and description from the one schema."""
+    return options[name].pydantic_field()[1]
 
 
 class LimitsSpec(_Strict):
-    max_speed_mps: _limit("max_speed_mps") = 0.6
-    max_accel_mps2: _limit("max_accel_mps2") = 0.8
-    max_turn_rate_radps: _limit("max_turn_rate_radps") = 2.0
-    max_turn_accel_radps2: _limit("max_turn_accel_radps2") = 6.0
+    """The base's limits: :data:`viapath.limits.LIMITS_OPTIONS`."""
+
+    max_speed_mps: float = _field(LIMITS_OPTIONS, "max_speed_mps")
+    max_accel_mps2: float = _field(LIMITS_OPTIONS, "max_accel_mps2")
+    max_turn_rate_radps: float = _field(LIMITS_OPTIONS, "max_turn_rate_radps")
+    max_turn_accel_radps2: float = _field(LIMITS_OPTIONS, "max_turn_accel_radps2")
 
 
 class RobotSpec(_Strict):
     start: Point
     heading: Annotated[float, Field(ge=-MAX_COORDINATE_M, le=MAX_COORDINATE_M)] = 0.0
-    speed: Speed = Field(0.2, description="nominal speed, m/s")
-    radius: Annotated[float, Field(gt=ROBOT_RADIUS_BOUNDS_M[0], le=ROBOT_RADIUS_BOUNDS_M[1])] = 0.25
+    speed: float = _field(ROBOT_OPTIONS, "nominal_speed_mps")
+    radius: float = _field(ROBOT_OPTIONS, "robot_radius_m")
     limits: LimitsSpec = Field(default_factory=LimitsSpec)
 
     @model_validator(mode="after")
@@ -89,7 +92,10 @@ class PathSpec(_Strict):
         return self
 
     def widths(self) -> list[float]:
-        return list(self.half_widths) if self.half_widths is not None else [self.half_width] * (len(self.waypoints) - 1)
+        if self.half_widths is not None:
+            return list(self.half_widths)
+        assert self.half_width is not None  # the validator asks for one of the two
+        return [self.half_width] * (len(self.waypoints) - 1)
 
 
 class ObstacleSpec(_Strict):
@@ -234,10 +240,12 @@ WallItem = Annotated[
 
 
 class SubgoalSpec(_Strict):
-    reach_threshold_m: PositiveFloat = 0.2
-    goal_tolerance_m: PositiveFloat = 0.1
-    bypass_distance_m: NonNegativeFloat = 1.0
-    blocked_clearance_m: float = 0.1
+    """When a subgoal is reached or given up: :data:`viapath.limits.SUBGOAL_OPTIONS`."""
+
+    reach_threshold_m: float = _field(SUBGOAL_OPTIONS, "reach_threshold_m")
+    goal_tolerance_m: float = _field(SUBGOAL_OPTIONS, "goal_tolerance_m")
+    bypass_distance_m: float = _field(SUBGOAL_OPTIONS, "bypass_distance_m")
+    blocked_clearance_m: float = _field(SUBGOAL_OPTIONS, "blocked_clearance_m")
 
 
 class Scenario(_Strict):

@@ -13,13 +13,11 @@ from typing import Any
 
 import numpy as np
 
-from viapath.observation import Command, MotionLimits, Observation, RobotState
-from viapath.path import DesignatedPath, SubgoalPolicy
+from viapath.observation import Command, Observation, RobotState
+from viapath.path import DesignatedPath
 from viapath.perception.base import WorldSnapshot
-from viapath.perception.modes import make_perception
-from viapath.planning import Decision, make_planner
-from viapath.safety import shielded
-from viapath.scenarios.loader import planner_settings
+from viapath.planning import Decision
+from viapath.scenarios.build import Setup, build
 from viapath.sim import robot as kinematics
 from viapath.sim.metrics import compute_metrics, plan_side
 from viapath.sim.obstacles import scenario_obstacle_states
@@ -95,74 +93,95 @@ def run_episode(
         else (motion.positions, motion.velocities, motion.radii)
     )
     static_world = StaticWorld.of_scenario(scenario)
-
-    path = DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths())
-    spec = scenario.robot
-    limits = MotionLimits(**spec.limits.model_dump())
-    subgoal_policy = SubgoalPolicy(**scenario.subgoals.model_dump())
-    planner_name = planner or scenario.planner.name
-    options = {**planner_settings(scenario, planner_name), **(planner_overrides or {})}
-    the_planner = make_planner(
-        planner_name,
-        path,
-        nominal_speed_mps=spec.speed,
-        limits=limits,
-        robot_radius_m=spec.radius,
-        subgoal_policy=subgoal_policy,
-        **options,
-    )
-    the_planner = shielded(the_planner, shield, dt, shield_options, planner_name)
-    mode = perception or scenario.perception.mode
-    sensing = make_perception(
-        mode,
-        scenario.perception.options,
-        scenario.perception.position_noise_m if position_noise_m is None else position_noise_m,
-        scenario.perception.velocity_noise_mps if velocity_noise_mps is None else velocity_noise_mps,
+    setup = build(
+        scenario,
+        planner,
+        planner_overrides,
+        shield,
+        shield_options,
+        perception,
+        position_noise_m,
+        velocity_noise_mps,
     )
     rng = np.random.default_rng(scenario.seed if seed is None else seed)
-    sensing.reset(rng)
-
+    setup.perception.reset(rng)
+    loop = _Loop(scenario, setup, static_world, times, positions, velocities, radii)
+    spec = scenario.robot
     state = kinematics.UnicycleState(spec.start[0], spec.start[1], spec.heading, spec.speed, 0.0)
-    rows: dict[str, list] = {
-        k: [] for k in ("pose", "speed", "turn", "command", "plan_speed", "target", "status", "via", "plan_ms", "side")
-    }
-    perceived, scan_points = [], []
     reached = False
-    goal_tolerance = subgoal_policy.goal_tolerance_m
-    goal_x, goal_y = (float(value) for value in path.goal)  # the goal test in scalars: every step of every episode
+    goal_tolerance = setup.subgoal_policy.goal_tolerance_m
+    goal_x, goal_y = (
+        float(value) for value in setup.path.goal
+    )  # the goal test in scalars: every step of every episode
     for k in range(n_steps + 1):
-        rows["pose"].append((state.x, state.y, state.heading_rad))
-        rows["speed"].append(state.speed_mps)
-        rows["turn"].append(state.turn_rate_radps)
+        loop.rows["pose"].append((state.x, state.y, state.heading_rad))
+        loop.rows["speed"].append(state.speed_mps)
+        loop.rows["turn"].append(state.turn_rate_radps)
         if np.hypot(goal_x - state.x, goal_y - state.y) <= goal_tolerance:
             reached = True
         if reached or k == n_steps:
-            _append_idle(rows, state)
+            _append_idle(loop.rows, state)
             break
-        standing = static_world.at(float(times[k]))
+        command = loop.cycle(k, state, record_perceived, on_step)
+        if motion is not None:  # people move to step k + 1 seeing the robot at step k (rows filled in place)
+            motion.step(
+                state.position, state.speed_mps * np.array([np.cos(state.heading_rad), np.sin(state.heading_rad)])
+            )
+        state = kinematics.step(state, command, setup.limits, dt)
+    trace = loop.trace(reached, scenario.seed if seed is None else seed)
+    metrics = compute_metrics(trace)
+    metrics.update(setup.perception.episode_metrics())
+    metrics.update({"shield": False, "shield_interventions": None, **setup.planner.episode_metrics()})
+    return Episode(trace, metrics)
+
+
+@dataclass
+class _Loop:
+    """One episode's fixed inputs and what it records, one row per step."""
+
+    scenario: Any
+    setup: Setup
+    static_world: StaticWorld
+    times: np.ndarray
+    positions: np.ndarray
+    velocities: np.ndarray
+    radii: np.ndarray
+    rows: dict[str, list] = field(
+        default_factory=lambda: {
+            k: []
+            for k in ("pose", "speed", "turn", "command", "plan_speed", "target", "status", "via", "plan_ms", "side")
+        }
+    )
+    perceived: list = field(default_factory=list)
+    scan_points: list = field(default_factory=list)
+
+    def cycle(self, k: int, state, record_perceived: bool, on_step) -> Command:
+        """Perceive, plan and record step ``k``; the command to drive (a stop for a non-finite one)."""
+        rows, spec, sensing, time_s = self.rows, self.scenario.robot, self.setup.perception, float(self.times[k])
+        standing = self.static_world.at(time_s)
         world = WorldSnapshot(
-            float(times[k]),
+            time_s,
             np.array([state.x, state.y, state.heading_rad]),
             spec.radius,
-            positions[k],
-            velocities[k],
-            radii,
+            self.positions[k],
+            self.velocities[k],
+            self.radii,
             standing.segments,
             standing,
         )
         observed = sensing.observe(world)
         if record_perceived:
-            perceived.append(observed)
-        if mode == "laser":
-            scan_points.append(np.asarray(sensing.last_points_world))
+            self.perceived.append(observed)
+        if self.setup.perception_mode == "laser":
+            self.scan_points.append(np.asarray(sensing.last_points_world))
         observation = Observation(
-            float(times[k]),
+            time_s,
             RobotState(state.position, state.heading_rad, state.speed_mps, state.turn_rate_radps, spec.radius),
             observed,
             sensing.static_layer(world),
         )
         started = time.perf_counter()
-        decision: Decision = the_planner.plan(observation)
+        decision: Decision = self.setup.planner.plan(observation)
         rows["plan_ms"].append((time.perf_counter() - started) * 1e3)
         command = decision.command
         if not (math.isfinite(command.speed_mps) and math.isfinite(command.turn_rate_radps)):
@@ -177,7 +196,7 @@ def run_episode(
             on_step(
                 StepRecord(
                     k,
-                    float(times[k]),
+                    time_s,
                     state,
                     observation,
                     decision,
@@ -185,48 +204,41 @@ def run_episode(
                     world,
                     sensing.last_scans or None,
                     sensing,
-                    the_planner,
+                    self.setup.planner,
                 )
             )
-        if motion is not None:  # people move to step k + 1 seeing the robot at step k (rows filled in place)
-            motion.step(
-                state.position, state.speed_mps * np.array([np.cos(state.heading_rad), np.sin(state.heading_rad)])
-            )
-        state = kinematics.step(state, command, limits, dt)
+        return command
 
-    n = len(rows["pose"])
-    trace = Trace(
-        scenario_name=scenario.name,
-        planner_name=planner_name,
-        perception_mode=mode,
-        dt_s=dt,
-        path=path,
-        robot_radius_m=spec.radius,
-        times_s=times[:n],
-        robot_poses=np.array(rows["pose"]),
-        robot_speeds_mps=np.array(rows["speed"]),
-        robot_turn_rates_radps=np.array(rows["turn"]),
-        commands=np.array(rows["command"]),
-        obstacle_positions=positions[:n],
-        obstacle_velocities=velocities[:n],
-        obstacle_radii_m=radii,
-        plan_speeds_mps=np.array(rows["plan_speed"]),
-        plan_targets=np.array(rows["target"]),
-        plan_status=rows["status"],
-        via_points=rows["via"],
-        plan_times_ms=np.array(rows["plan_ms"]),
-        reached_goal=reached,
-        walls=static_world.segments,
-        wall_until_s=static_world.until_s,
-        perceived=perceived,
-        scan_points=scan_points,
-        extras={"nominal_speed_mps": spec.speed, "seed": scenario.seed if seed is None else seed},
-        plan_sides=np.array(rows["side"], dtype=int),
-    )
-    metrics = compute_metrics(trace)
-    metrics.update(sensing.episode_metrics())
-    metrics.update({"shield": False, "shield_interventions": None, **the_planner.episode_metrics()})
-    return Episode(trace, metrics)
+    def trace(self, reached: bool, seed: int) -> Trace:
+        rows, n = self.rows, len(self.rows["pose"])
+        return Trace(
+            scenario_name=self.scenario.name,
+            planner_name=self.setup.planner_name,
+            perception_mode=self.setup.perception_mode,
+            dt_s=self.scenario.dt_s,
+            path=self.setup.path,
+            robot_radius_m=self.scenario.robot.radius,
+            times_s=self.times[:n],
+            robot_poses=np.array(rows["pose"]),
+            robot_speeds_mps=np.array(rows["speed"]),
+            robot_turn_rates_radps=np.array(rows["turn"]),
+            commands=np.array(rows["command"]),
+            obstacle_positions=self.positions[:n],
+            obstacle_velocities=self.velocities[:n],
+            obstacle_radii_m=self.radii,
+            plan_speeds_mps=np.array(rows["plan_speed"]),
+            plan_targets=np.array(rows["target"]),
+            plan_status=rows["status"],
+            via_points=rows["via"],
+            plan_times_ms=np.array(rows["plan_ms"]),
+            reached_goal=reached,
+            walls=self.static_world.segments,
+            wall_until_s=self.static_world.until_s,
+            perceived=self.perceived,
+            scan_points=self.scan_points,
+            extras={"nominal_speed_mps": self.scenario.robot.speed, "seed": seed},
+            plan_sides=np.array(rows["side"], dtype=int),
+        )
 
 
 def _append_idle(rows: dict[str, list], state: kinematics.UnicycleState) -> None:

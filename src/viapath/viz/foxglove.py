@@ -846,9 +846,9 @@ class Views:
             return self
         import foxglove
 
-        from viapath.path import DesignatedPath
+        from viapath.scenarios.build import scenario_path
 
-        path = DesignatedPath(self.scenario.path.waypoints, half_widths_m=self.scenario.path.widths())
+        path = scenario_path(self.scenario)
         self.planner_overrides = display_overrides(self.scenario, self.planner_name)
         if not self.live and not self.in_process:
             from viapath.viz.mcap_process import MCAPWriterProcess

@@ -22,11 +22,11 @@ from viapath.viz.scene import CycleScene, ForecastSettings, SceneBuilder, candid
 def collect_scenes(scenario, perception: str = "oracle", **run_kwargs) -> list[CycleScene]:
     """Run ``scenario`` and keep every cycle's scene (candidates recorded for display)."""
     from viapath.observation import Obstacles
-    from viapath.path import DesignatedPath
+    from viapath.scenarios.build import scenario_path
     from viapath.sim.loop import run_episode
     from viapath.viz.foxglove import display_overrides
 
-    path = DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths())
+    path = scenario_path(scenario)
     scenes: list[CycleScene] = []
     builder: list[SceneBuilder] = []
 
@@ -187,9 +187,9 @@ def main(argv: list[str] | None = None) -> None:
         scene = next((s for s in scenes if len(s.plan.via_points)), scenes[0])
     else:
         scene = min(scenes, key=lambda s: abs(s.time_s - args.time))
-    from viapath.path import DesignatedPath
+    from viapath.scenarios.build import scenario_path
 
-    view = path_view(DesignatedPath(scenario.path.waypoints, half_widths_m=scenario.path.widths()))
+    view = path_view(scenario_path(scenario))
     out = plot_cycle(scene, view, args.out, title=f"{scenario.name}, {args.perception} perception, one planning cycle")
     print(f"wrote {out} (t = {scene.time_s:.1f} s)")
 

@@ -1,6 +1,6 @@
 """``viapath ros2 node | sim | play | params``: the ROS 2 commands as a typer sub-app.
 
-Registered into the main app by ``register(app)``; rclpy is imported only when a command runs, so
+Mounted as ``viapath ros2``; rclpy is imported only when a command runs, so
 ``viapath --help`` works without the ``ros2`` extra. Arguments after ``--ros-args`` go to rclpy
 unchanged (``-p name:=value``, ``--params-file``, remappings ``-r from:=to``).
 """
@@ -11,22 +11,15 @@ import sys
 from pathlib import Path
 
 import typer
-from rich.console import Console
-from rich.markup import escape
+
+from viapath.cli.common import errors, fail
 
 app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
     help="viapath on a robot: the ROS 2 planner node, a simulator node, a bag player.",
 )
-_errors = Console(stderr=True)
-
 _CONTEXT = {"allow_extra_args": True, "ignore_unknown_options": True}
-
-
-def _fail(message: str, code: int = 2) -> None:
-    _errors.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
-    raise typer.Exit(code)
 
 
 def _need_rclpy() -> None:
@@ -34,7 +27,7 @@ def _need_rclpy() -> None:
 
     ok, why = rclpy_available()
     if not ok:
-        _fail(why)
+        fail(why)
 
 
 def _ros_args(extra: list[str]) -> list[str]:
@@ -43,7 +36,7 @@ def _ros_args(extra: list[str]) -> list[str]:
         return []
     if extra[0] == "--ros-args":
         return extra[1:]
-    _fail(f"unexpected argument {extra[0]!r}; ROS arguments go after --ros-args")
+    fail(f"unexpected argument {extra[0]!r}; ROS arguments go after --ros-args")
     return []
 
 
@@ -65,7 +58,7 @@ def node(
             values.pop("use_sim_time", None)
             validate(values)
         except ParameterError as error:
-            _fail(f"{params_file}: {error}")
+            fail(f"{params_file}: {error}")
         ros_args = ["--params-file", str(params_file), *ros_args]
     if use_sim_time:
         ros_args = [*ros_args, "-p", "use_sim_time:=true"]
@@ -97,7 +90,7 @@ def nav2(
             values.setdefault("interface", "nav2")
             validate(values)
         except ParameterError as error:
-            _fail(f"{params_file}: {error}")
+            fail(f"{params_file}: {error}")
         ros_args = ["--params-file", str(params_file), *ros_args]
     ros_args = ["-r", f"__node:={name}", "-p", "interface:=nav2", "-p", "autostart:=false", *ros_args]
     if use_sim_time:
@@ -144,36 +137,23 @@ def sim(
     ),
 ) -> None:
     """Simulated scans, odometry and /clock from a scenario; drives the robot with cmd_vel; prints the metrics."""
-    import math
-
     from viapath.ros2.sim_node import Fault, run_sim
     from viapath.scenarios import ScenarioError, load_scenario
 
     ros_args = _ros_args(ctx.args)
-    if not (math.isfinite(rate) and rate > 0):
-        _fail(f"--rate: expected a number > 0, found {rate}")
-    if seed is not None and seed < 0:
-        _fail(f"--seed: expected an integer >= 0, found {seed}")
-    if duration is not None and not (math.isfinite(duration) and duration > 0):
-        _fail(f"--duration: expected a number > 0, found {duration}")
-    try:
-        offset = tuple(float(v) for v in map_offset.split(","))
-    except ValueError:
-        offset = ()
-    if len(offset) != 3 or not all(math.isfinite(v) for v in offset):
-        _fail(f"--map-offset: expected X,Y,YAW (three finite numbers), found {map_offset!r}")
+    offset = _check_sim_arguments(rate, seed, duration, map_offset)
     try:
         load_scenario(scenario)
         faults = [Fault.parse(f) for f in fault]
     except (ScenarioError, ValueError) as error:
-        _fail(str(error))
+        fail(str(error))
     for file, option, suffix in (
         (trace, "--trace", ".csv"),
         (commands, "--commands", ".csv"),
         (status_log, "--status-log", ".jsonl"),
     ):
         if file is not None and (file.suffix.lower() != suffix or not file.parent.exists()):
-            _fail(f"{option} {file}: expected a {suffix} file in an existing folder")
+            fail(f"{option} {file}: expected a {suffix} file in an existing folder")
     _need_rclpy()
     try:
         code = run_sim(
@@ -195,8 +175,27 @@ def sim(
             linger_s=max(linger, 0.0),
         )
     except ValueError as error:
-        _fail(str(error))
+        fail(str(error))
     raise typer.Exit(code)
+
+
+def _check_sim_arguments(rate: float, seed: int | None, duration: float | None, map_offset: str) -> tuple:
+    """Refuse a bad --rate, --seed or --duration; the --map-offset pose (x, y, yaw)."""
+    import math
+
+    if not (math.isfinite(rate) and rate > 0):
+        fail(f"--rate: expected a number > 0, found {rate}")
+    if seed is not None and seed < 0:
+        fail(f"--seed: expected an integer >= 0, found {seed}")
+    if duration is not None and not (math.isfinite(duration) and duration > 0):
+        fail(f"--duration: expected a number > 0, found {duration}")
+    try:
+        offset = tuple(float(v) for v in map_offset.split(","))
+    except ValueError:
+        offset = ()
+    if len(offset) != 3 or not all(math.isfinite(v) for v in offset):
+        fail(f"--map-offset: expected X,Y,YAW (three finite numbers), found {map_offset!r}")
+    return offset
 
 
 @app.command(context_settings=_CONTEXT)
@@ -223,9 +222,9 @@ def play(
 
     ros_args = _ros_args(ctx.args)
     if not (math.isfinite(rate) and rate > 0):
-        _fail(f"--rate: expected a number > 0, found {rate}")
+        fail(f"--rate: expected a number > 0, found {rate}")
     if not bag.exists():
-        _fail(f"{bag}: no such file or directory")
+        fail(f"{bag}: no such file or directory")
     _need_rclpy()
     try:
         code = run_play(
@@ -241,7 +240,7 @@ def play(
             status_file=str(status_log) if status_log else None,
         )
     except (ValueError, ImportError, FileNotFoundError) as error:
-        _fail(str(error))
+        fail(str(error))
     raise typer.Exit(code)
 
 
@@ -255,9 +254,9 @@ def params(
     from viapath.ros2.settings import write_example_params
 
     if planner not in available_planners():
-        _fail(f"--planner: unknown planner {planner!r}; available: {', '.join(available_planners())}")
+        fail(f"--planner: unknown planner {planner!r}; available: {', '.join(available_planners())}")
     if not out.parent.exists():
-        _fail(f"{out}: folder {out.parent} does not exist")
+        fail(f"{out}: folder {out.parent} does not exist")
     write_example_params(out, planner)
     print(out)
 
@@ -305,9 +304,9 @@ def follow(
         for item in at:
             parse_event(item)
     except ValueError as error:
-        _fail(str(error))
+        fail(str(error))
     if len(offset) != 3 or not all(math.isfinite(v) for v in offset):
-        _fail(f"--map-offset: expected X,Y,YAW, found {map_offset!r}")
+        fail(f"--map-offset: expected X,Y,YAW, found {map_offset!r}")
     if use_sim_time:
         ros_args = [*ros_args, "-p", "use_sim_time:=true"] if ros_args else ["-p", "use_sim_time:=true"]
     _need_rclpy()
@@ -335,14 +334,10 @@ def interfaces() -> None:
     from viapath.ros2 import interfaces as generated
 
     try:
-        prefix = generated.build(progress=lambda text: _errors.print(text, highlight=False))
+        prefix = generated.build(progress=lambda text: errors.print(text, highlight=False))
     except generated.InterfaceBuildError as error:
-        _fail(str(error))
+        fail(str(error))
     print(prefix)
-
-
-def register(root: typer.Typer) -> None:
-    root.add_typer(app, name="ros2")
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,7 +1,7 @@
 """``viapath scans BAG``: detection and tracking over a recorded laser scan sequence.
 
-Registered into the main typer app by ``register(app)``; everything heavy is imported inside the
-command so that ``viapath --help`` stays fast and works without the optional ``rosbags``.
+Everything heavy is imported inside the command so that ``viapath --help`` stays fast and works
+without the optional ``rosbags``.
 """
 
 from __future__ import annotations
@@ -13,26 +13,9 @@ from pathlib import Path
 
 import numpy as np
 import typer
-from rich.console import Console
-from rich.markup import escape
 from rich.table import Table
 
-_console = Console()
-_errors = Console(stderr=True)
-
-
-def _fail(message: str, code: int = 2) -> None:
-    _errors.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
-    raise typer.Exit(code)
-
-
-def _check_output(file: Path | None, suffixes: tuple[str, ...], option: str) -> None:
-    if file is None:
-        return
-    if file.suffix.lower() not in suffixes:
-        _fail(f"{option} {file}: expected a file ending in {', '.join(suffixes)}")
-    if not file.parent.exists():
-        _fail(f"{option} {file}: folder {file.parent} does not exist")
+from viapath.cli.common import check_output, console, fail
 
 
 def _finite(value):
@@ -58,10 +41,10 @@ def scans(
     from viapath.io.rosbag import BagError, RosbagsMissingError, read_laser_scans, read_pose_arrays
     from viapath.perception.replay import evaluate_labels, track_recording
 
-    _check_output(plot, (".png", ".pdf", ".svg"), "--plot")
-    _check_output(out, (".csv",), "--out")
+    check_output(plot, (".png", ".pdf", ".svg"), "--plot")
+    check_output(out, (".csv",), "--out")
     if not bag.exists():
-        _fail(f"{bag}: no such file or directory")
+        fail(f"{bag}: no such file or directory")
     try:
         result = track_recording(read_laser_scans(bag, topic), keep_points=plot is not None)
         evaluation = None
@@ -69,11 +52,11 @@ def scans(
             label_messages = [xy for _, xy in read_pose_arrays(bag, labels)]
             evaluation = evaluate_labels(result.detections, label_messages)
     except RosbagsMissingError as error:
-        _fail(str(error))
+        fail(str(error))
     except (BagError, FileNotFoundError, ValueError) as error:
-        _fail(str(error))
+        fail(str(error))
     if len(result.times_s) == 0:
-        _fail(f"{bag}: the topic holds no scans")
+        fail(f"{bag}: the topic holds no scans")
 
     summary = result.track_summary()
     walking = [s for s in summary if s["walking"]]
@@ -178,27 +161,22 @@ def _print_report(report: dict, summary: list[dict], max_rows: int, out, plot) -
             f"{s['median_speed_mps']:.2f}",
             "yes" if s["walking"] else "",
         )
-    _console.print(table)
+    console.print(table)
     if len(summary) > max_rows:
-        _console.print(f"({len(summary) - max_rows} shorter tracks not shown; --max-rows, --out or --json for all)")
+        console.print(f"({len(summary) - max_rows} shorter tracks not shown; --max-rows, --out or --json for all)")
     if report["walking_speed_median_mps"] is not None:
-        _console.print(
+        console.print(
             f"walking speed: median {report['walking_speed_median_mps']:.2f} m/s "
             f"(p25 {report['walking_speed_p25_mps']:.2f}, p75 {report['walking_speed_p75_mps']:.2f})"
         )
     if "evaluation" in report:
         e = report["evaluation"]
-        _console.print(
+        console.print(
             f"labels: person recall {e['person_recall']:.3f} ({e['labelled_people']} labelled), precision in the "
             f"±15°/5 m wedge {e['person_precision_in_wedge']:.3f} ({e['false_positives_in_wedge']} false), "
             f"leg recall {e['leg_recall']:.3f}, median person error {e['person_position_error_median_m']:.3f} m"
         )
     if out is not None:
-        _console.print(f"tracks written to {out}")
+        console.print(f"tracks written to {out}")
     if plot is not None:
-        _console.print(f"figure written to {plot}")
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``viapath scans`` to ``app``."""
-    app.command("scans")(scans)
+        console.print(f"figure written to {plot}")

@@ -1,4 +1,4 @@
-"""Small CLI pieces, kept out of cli.py: ``viapath --version``, boolean flags shown
+"""Small CLI pieces: ``viapath --version``, boolean flags shown
 without a ``<bool>`` type in the help (they take no value: ``--json``, not ``--json true``), scenario
 warnings before a run, and a progress bar while an animation is written."""
 
@@ -24,8 +24,8 @@ def _plain_flags() -> None:
             return None
         return original(self, ctx)
 
-    display_type_rich.__viapath_plain__ = True
-    TyperOption.display_type_rich = display_type_rich
+    setattr(display_type_rich, "__viapath_plain__", True)  # noqa: B010 - a mark on a function object
+    setattr(TyperOption, "display_type_rich", display_type_rich)  # noqa: B010 - replacing typer's method
 
 
 def _version(value: bool) -> None:

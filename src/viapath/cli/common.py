@@ -1,0 +1,53 @@
+"""What every command shares: the consoles, the one way to refuse input (a red ``error:`` line on
+stderr, exit 2, no traceback) and the checks of output files and noise levels."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from pathlib import Path
+from typing import NoReturn
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+
+console = Console()
+errors = Console(stderr=True)
+
+PLOT_SUFFIXES = (".pdf", ".png", ".svg")
+ANIMATION_SUFFIXES = (".gif", ".mp4")
+
+
+def fail(message: str, code: int = 2) -> NoReturn:
+    """Print ``error: message`` on stderr (markup in the message shown as typed) and exit with ``code``."""
+    errors.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
+    raise typer.Exit(code)
+
+
+def check_output(file: Path | None, suffixes: Iterable[str], option: str) -> None:
+    """Refuse an output file with another suffix, or in a folder that does not exist."""
+    if file is None:
+        return
+    suffixes = tuple(suffixes)
+    if file.suffix.lower() not in suffixes:
+        fail(f"{option} {file}: expected a file ending in {', '.join(suffixes)}")
+    if not file.parent.exists():
+        fail(f"{option} {file}: folder {file.parent} does not exist")
+
+
+def check_noise(value: float | None, option: str) -> None:
+    if value is not None and (not math.isfinite(value) or value < 0):
+        fail(f"{option}: expected a finite number >= 0, found {value}")
+
+
+def caused_by_interrupt(error: BaseException | None) -> bool:
+    """Whether a KeyboardInterrupt is behind ``error`` (numba turns one raised while a compiled kernel calls
+    back into Python, e.g. to unpickle a constant, into a chain of SystemErrors)."""
+    seen = set()
+    while error is not None and id(error) not in seen:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        seen.add(id(error))
+        error = error.__cause__ or error.__context__
+    return False

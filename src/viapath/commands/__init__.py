@@ -1,1 +1,0 @@
-"""Subcommands of the viapath CLI that live beside the main app (each registers itself with ``register(app)``)."""
