@@ -74,7 +74,7 @@ def summarize(rows: list[dict[str, Any]], by: str = "planner", order: list[str] 
             continue
         ok = [r for r in group if not r.get("error")]
         n = len(ok)
-        rate = (lambda flag: sum(bool(r[flag]) for r in ok) / n) if n else (lambda flag: None)
+        rate = (lambda flag, ok=ok, n=n: sum(bool(r[flag]) for r in ok) / n) if n else (lambda flag: None)
         success = sum(bool(r["reached_goal"]) and not r["collision"] for r in ok) / n if n else None
         ratios = _values(ok, "time_ratio")
         outside = _values(ok, "time_outside_corridor_s")

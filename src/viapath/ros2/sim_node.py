@@ -371,7 +371,7 @@ def run_sim(
                 1 for n in names if not any(f.scanner == n and f.kind == "silence" and f.active(t) for f in faults)
             )
 
-            def cycle_reported():
+            def cycle_reported(key=key, count_before=count_before, published=published):
                 if key in got["by_stamp"]:
                     return got["cmd_count"] > count_before  # its command too (another topic: may come second)
                 # no scan this step: the node's watchdog answers instead
