@@ -95,7 +95,7 @@ class DesignatedPath:
         The lateral deviation is positive to the left of the direction of travel.
         """
         points = np.asarray(points, dtype=float)
-        along, along_clamped, distance = self._segment_geometry(points)
+        _along, along_clamped, distance = self._segment_geometry(points)
         index = distance.argmin(axis=-1)
         take = lambda a: np.take_along_axis(a, index[..., None], axis=-1)[..., 0]
         rel = points - self.segment_starts[index]

@@ -92,7 +92,7 @@ def test_lying_odometry_never_moves_a_standing_robot_towards_a_person(twist):
     assert robot.v == 0.0
     x = robot.x
     for k in range(15):
-        result, before = cycle(core, robot, t, odom=(x, 0.0, 0.0, twist, 0.0))
+        result, _before = cycle(core, robot, t, odom=(x, 0.0, 0.0, twist, 0.0))
         assert result.command.speed_mps == 0.0, (k, result.command, result.reasons)
         t += DT
     assert robot.x == x

@@ -17,6 +17,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 from functools import lru_cache
@@ -51,10 +52,8 @@ def scenario_hash(scenario: dict) -> str:
     for item in data.get("obstacles", []) or []:
         replay = item.get("replay") if isinstance(item, dict) else None
         if isinstance(replay, dict) and replay.get("file"):
-            try:
+            with contextlib.suppress(OSError):  # the run reports the missing file; the name stands in for its content
                 replay["file"] = "sha256:" + _file_hash(str(replay["file"]))
-            except OSError:
-                pass  # the run reports the missing file; the name stands in for its content
     text = json.dumps(data, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 

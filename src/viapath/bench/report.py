@@ -124,7 +124,7 @@ def markdown_table(summary: list[dict[str, Any]], columns=TABLE_COLUMNS, key: st
 def family_table(rows: list[dict[str, Any]]) -> str:
     """Success / collision / at-fault per family (rows) and planner (columns), as Markdown."""
     planners = list(dict.fromkeys(label(r) for r in rows))
-    families = sorted(set(r["family"] for r in rows))
+    families = sorted({r["family"] for r in rows})
     lines = ["| family | " + " | ".join(planners) + " |", "|---|" + "|".join("---" for _ in planners) + "|"]
     for family in families:
         cells = []

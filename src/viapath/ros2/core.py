@@ -708,7 +708,7 @@ class PlannerCore:
             reasons.append(PATH_CLEARED if self.path_cleared else NO_PATH)
         if not self.odometry_fresh(now_s):
             reasons.append(
-                "no odometry for %.2f s" % self.settings.odom_timeout_s
+                f"no odometry for {self.settings.odom_timeout_s:.2f} s"
                 if self.odometry is not None or any(h.good for h in self.health)
                 else "no odometry yet"
             )

@@ -89,7 +89,7 @@ def run_follow(
     from nav2_msgs.srv import ClearEntireCostmap
 
     schedule = sorted(parse_event(e) for e in (events or []))
-    log = open(log_file, "a") if log_file else sys.stdout
+    log = open(log_file, "a") if log_file else sys.stdout  # noqa: SIM115 -- the file or stdout, for the whole run
 
     def write(**item) -> None:
         log.write(json.dumps(item) + "\n")

@@ -22,6 +22,7 @@ What we chose:
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 
@@ -78,10 +79,8 @@ def run_play(
                     values = {kv.key: kv.value for kv in st.values}
                     statuses.append(values)
                     if values.get("source") == "cycle":
-                        try:
+                        with contextlib.suppress(ValueError):
                             cycles.add(round(float(values.get("stamp_s", "nan")), 6))
-                        except ValueError:
-                            pass
 
         node.create_subscription(DiagnosticArray, status_topic, on_status, 100)
         started = time.monotonic()

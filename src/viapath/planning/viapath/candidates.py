@@ -39,6 +39,7 @@ positions.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -77,7 +78,7 @@ class _Tree:
     """Growable columns of search nodes: where and when the robot is, at which speed, how it got there."""
 
     # name: (shape of a row, dtype)
-    COLUMNS = {
+    COLUMNS: ClassVar[dict[str, tuple[tuple[int, ...], type]]] = {
         "position": ((2,), float),
         "time_s": ((), float),
         "speed": ((), float),
