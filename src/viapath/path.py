@@ -111,13 +111,13 @@ class DesignatedPath:
     def lateral_deviation(self, points: ArrayLike) -> np.ndarray:
         return self.project(points)[2]
 
-    def corridor_excess(self, points: ArrayLike) -> np.ndarray | np.float64:
+    def corridor_excess(self, points: ArrayLike) -> np.ndarray:
         """How far each point is outside the corridor (m); <= 0 inside."""
         points = np.asarray(points, dtype=float)
         if points.shape == (2,):
             x, y = float(points[0]), float(points[1])
             if math.isfinite(x) and math.isfinite(y):
-                return self._point_excess(x, y)
+                return self._point_excess(x, y)  # type: ignore[return-value]  # a float64 acts as a 0-d array
         _, _, distance = self._segment_geometry(points)
         if len(self.half_widths_m) == 1:
             return distance[..., 0] - self.half_widths_m[0]  # the one segment's (a minimum of one is that one)
@@ -146,7 +146,7 @@ class DesignatedPath:
                 best = excess
         return np.float64(best)
 
-    def contains(self, points: ArrayLike, tolerance_m: float = 1e-9) -> np.ndarray | np.bool_:
+    def contains(self, points: ArrayLike, tolerance_m: float = 1e-9) -> np.ndarray:
         return self.corridor_excess(points) <= tolerance_m
 
     def legs_inside(
