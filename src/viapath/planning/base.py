@@ -26,7 +26,9 @@ import numpy as np
 from viapath.compiled import harness_kernels
 from viapath.guard import guard_plan, inspected
 from viapath.kinematics import steer_towards
-from viapath.observation import Command, Decision, MotionLimits, Observation, Obstacles, Plan, RobotState
+from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
+from viapath.observation import Decision as Decision  # re-exported: the planners' results
+from viapath.observation import Plan as Plan
 from viapath.options import Option, OptionSet, Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.registry import Registry

@@ -73,10 +73,12 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.planning.viapath.backend import ENVIRONMENT_VARIABLE, numba_available
@@ -259,10 +261,12 @@ class Shield:
         self.config = config or ShieldConfig()
         # numpy (the reference below) or numba (viapath.safety.kernels, the same arithmetic compiled).
         self.backend = shield_backend(self.config.backend)
-        self._kernel_settings: tuple | None = None  # the compiled test's constants (and what they were made of)
+        self._kernel_settings: tuple[Any, ...] | None = (
+            None  # the compiled test's constants (and what they were made of)
+        )
         # Within one cycle of a shielded planner (:meth:`remembering`), the verdicts on single commands: the
         # planner tests its chosen command against this observation and the filter then tests the same one.
-        self._verdicts: dict | None = None
+        self._verdicts: dict[Any, Any] | None = None
 
     # -- the test --------------------------------------------------------------------------------
 
@@ -282,7 +286,7 @@ class Shield:
         return self._evaluate(observation, commands)
 
     @contextlib.contextmanager
-    def remembering(self):
+    def remembering(self) -> Iterator[None]:
         """Within this block (one planning cycle: the observation does not change) a single command is
         tested once against one observation, and its verdict reused (evaluate is a pure function of them).
         The verdicts are read, never changed, by their users."""
@@ -537,7 +541,16 @@ class Shield:
             )
         return cached[0], cached[1]
 
-    def _friendly(self, out, sweep: Sweep, people, base, growth, accel, near) -> None:
+    def _friendly(
+        self,
+        out: dict[str, np.ndarray],
+        sweep: Sweep,
+        people: Obstacles,
+        base: np.ndarray,
+        growth: np.ndarray,
+        accel: float,
+        near: np.ndarray,
+    ) -> None:
         """Passive friendly: the person, braking from its forecast at the robot's rest time, stops short."""
         idx = np.flatnonzero(near)
         if len(idx) == 0:
@@ -661,7 +674,7 @@ class Shield:
                 tested + 1,
                 passing,
             )
-        common = dict(
+        common: dict[str, Any] = dict(
             person_id=person_id, meet_time_s=meet, candidates=tested + 1, admissible_candidates=passing + int(own_ok)
         )
         if friendly_mode and own_ok:
@@ -720,7 +733,9 @@ class Shield:
                 passive_pick = int(chunk[np.argmax(check["admissible"])])
         return None, passive_pick, tested, passing, reached
 
-    def _search_compiled(self, observation: Observation, command: Command):
+    def _search_compiled(
+        self, observation: Observation, command: Command
+    ) -> tuple[int | None, int | None, int, int, np.ndarray]:
         """:meth:`_search` compiled (:func:`viapath.safety.kernels.shield`: same candidates, order and chunks)."""
         from viapath.safety import kernels
 
@@ -758,7 +773,7 @@ class Shield:
         return Command(float(reached[index, 0]), float(reached[index, 1]))
 
 
-def _robot_array(robot) -> np.ndarray:
+def _robot_array(robot: RobotState) -> np.ndarray:
     """x, y, heading, speed, turn rate, radius: the compiled kernels' robot state."""
     position = robot.position
     return np.array(
@@ -767,7 +782,7 @@ def _robot_array(robot) -> np.ndarray:
     )
 
 
-def _c(array) -> np.ndarray:
+def _c(array: ArrayLike) -> np.ndarray:
     return np.ascontiguousarray(array, dtype=np.float64)
 
 
