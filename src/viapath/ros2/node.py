@@ -97,12 +97,13 @@ def make_node_class():
         def __init__(self, node_name: str = NODE_NAME, **kwargs):
             super().__init__(node_name, **kwargs)
             self.error: str | None = None
-            self.core: PlannerCore | None = None
+            # None until configured; every callback that reads it runs after the configuration.
+            self.core: PlannerCore = None  # type: ignore[assignment]
             self._subs: list = []
             self._pubs: dict[str, Any] = {}
-            self._timer = None
-            self._nav2 = None
-            self._wall_timer = None
+            self._timer: Any = None
+            self._nav2: Any = None
+            self._wall_timer: Any = None
             self._last_now_s: float | None = None
             try:
                 self.declare_parameter("planner_name", "viapath")
