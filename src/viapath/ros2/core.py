@@ -424,8 +424,8 @@ class PlannerCore:
         self._odom_history = [o for o in self._odom_history if o.stamp_s >= stamp_s - window] + [sample]
         if jump:  # the pose is the new reference: tracks placed in the old one are wrong
             self._odom_history = [sample]
-            self.refuse_odometry(now_s, "jump", problem, counted_as_refused=False)
-            self._reset_tracks(f"odometry: {problem}")
+            self.refuse_odometry(now_s, "jump", problem[1], counted_as_refused=False)
+            self._reset_tracks(f"odometry: {problem[1]}")
             self.odometry = sample
             return True
         if problem is not None:
