@@ -33,6 +33,7 @@ import math
 import sys
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -213,7 +214,7 @@ def run_sim(
         odom_pub = node.create_publisher(Odometry, "odom", 10)
         path_pub = node.create_publisher(PathMsg, "designated_path", latched)
         scan_pubs = {n: node.create_publisher(LaserScan, f"scan_{n}", qos_profile_sensor_data) for n in names}
-        got = {"cmd": None, "cmd_count": 0, "status": [], "by_stamp": {}, "watchdog": []}
+        got: dict[str, Any] = {"cmd": None, "cmd_count": 0, "status": [], "by_stamp": {}, "watchdog": []}
 
         def on_twist(msg):
             got["cmd"] = (msg.linear.x, msg.angular.z)
@@ -291,7 +292,7 @@ def run_sim(
         state = kinematics.UnicycleState(
             spec.robot.start[0], spec.robot.start[1], spec.robot.heading, spec.robot.speed, 0.0
         )
-        rows = {k: [] for k in ("pose", "speed", "turn")}
+        rows: dict[str, list[Any]] = {k: [] for k in ("pose", "speed", "turn")}
         records: list[StepRecord] = []
         reported, truth, stamps = [], [], []
         offset_s = 0.0
@@ -517,8 +518,8 @@ def run_sim(
         if as_json:
             print(json_dumps(metrics))
         else:
-            for key, value in metrics.items():
-                print(f"{key}: {value}")
+            for name, value in metrics.items():
+                print(f"{name}: {value}")
         return 0
     finally:
         finish_ros_process(node, previous)
