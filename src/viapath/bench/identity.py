@@ -20,6 +20,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+from collections.abc import Set as AbstractSet
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -89,7 +90,7 @@ def manifest(scenario_hashes: dict[str, str], perception: str, seed: int) -> dic
 
 
 def check_folder(
-    out_dir: Path, wanted: dict[str, Any], force: bool, crashed_only: set[str] = frozenset()
+    out_dir: Path, wanted: dict[str, Any], force: bool, crashed_only: AbstractSet[str] = frozenset()
 ) -> str | None:
     """None if the folder may be used (and then records ``wanted`` in it), else why not.
 

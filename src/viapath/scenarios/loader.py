@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -23,7 +24,7 @@ class _DuplicateKey(yaml.YAMLError):
         self.key, self.line, self.first_line = key, line, first_line
 
 
-class _UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+class _UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):  # type: ignore[misc]
     """PyYAML's safe loader, refusing a mapping that gives a key twice (PyYAML keeps the last silently).
 
     On libyaml's parser where PyYAML has it (a 1000-scenario suite spent most of a minute
@@ -119,7 +120,7 @@ def _capped(lines: list[str]) -> str:
     return "\n".join([*lines[:MAX_REPORTED_ERRORS], f"... and {len(lines) - MAX_REPORTED_ERRORS} more errors"])
 
 
-def planner_settings(scenario: Scenario, planner_name: str | None = None) -> dict[str, Any]:
+def planner_settings(scenario: Scenario, planner_name: str | None = None) -> Mapping[str, Any]:
     """The options the scenario's ``planner:`` block sets, validated by the planner it names.
 
     The block configures the planner it names; another planner (``--planner``) runs with its own

@@ -390,12 +390,13 @@ class MCAPWriterProcess:
         self._error = error
         self.file = Path(file)
         self.cycles = 0  # handed to the writer (sent or pending)
-        self._static, self._static_sent = None, False
+        self._static: tuple[Any, ...] | None = None
+        self._static_sent = False
         self._pending: list[tuple] = []
         self._pending_bytes = 0
         ctx = multiprocessing.get_context(_start_method())
         self._connection, child = ctx.Pipe(duplex=True)
-        self.process = ctx.Process(
+        self.process = ctx.Process(  # type: ignore[attr-defined]
             target=_writer_main,
             name="viapath-mcap-writer",
             daemon=True,
