@@ -111,7 +111,7 @@ def measure(name: str, repeats: int, folder: Path) -> dict | None:
         episode = timed("plain", lambda: run_episode(scenario, perception=perception))
         timed("candidates", lambda: run_episode(scenario, perception=perception, planner_overrides=overrides))
         file = folder / f"{base}-{k}.mcap"
-        recorded = timed("mcap", lambda: record_episode(scenario, file, perception=perception, force=True))
+        recorded = timed("mcap", lambda file=file: record_episode(scenario, file, perception=perception, force=True))
         cycles, size = len(recorded.trace.times_s) - 1, file.stat().st_size
         timed(
             "here",

@@ -112,7 +112,7 @@ def closed_loop(steps: int, backends) -> None:
         return
     rng = np.random.default_rng(3)
     obstacles = []
-    for i in range(10):
+    for _i in range(10):
         y = rng.uniform(-3.0, 3.0)
         x = rng.uniform(2.0, 14.0)
         obstacles.append(

@@ -86,8 +86,8 @@ def one_run(cycles: int, seed: int, backend: str = "auto") -> list[dict]:
         cases = {
             "viapath": run_bare,
             "viapath+shield": run_guarded,
-            "shield": lambda scene: shield.filter(scene, commands[id(scene)]),
-            "shield-search": lambda scene: shield.filter(scene, forced[id(scene)]),
+            "shield": lambda scene, commands=commands: shield.filter(scene, commands[id(scene)]),
+            "shield-search": lambda scene, forced=forced: shield.filter(scene, forced[id(scene)]),
         }
         intervened = np.mean([shield.filter(s, commands[id(s)]).intervened for s in scenes])
         searched = np.mean([shield.filter(s, forced[id(s)]).intervened for s in scenes])

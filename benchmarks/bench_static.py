@@ -125,9 +125,9 @@ def main() -> None:
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
     CLOCK[0] = time.perf_counter if args.clock == "wall" else time.thread_time
-    static, returns, layer_ms, (front, rear, ranges) = real_layer()
+    static, returns, _layer_ms, (front, rear, ranges) = real_layer()
     layer_times = []
-    for k in range(30):  # the layer's own time, with its memory of the cycle before
+    for _k in range(30):  # the layer's own time, with its memory of the cycle before
         layer = StaticObstacleLayer((front, rear))
         layer.update(0.0, np.zeros(3), ranges, np.zeros((0, 2)), np.zeros(0))
         started = CLOCK[0]()

@@ -84,7 +84,7 @@ def compare(before_path: str, after_path: str) -> int:
         ok &= same(a["poses"], b["poses"], f"{key} poses") & same(a["commands"], b["commands"], f"{key} commands")
         ok &= a["status"] == b["status"] and len(a["perceived"]) == len(b["perceived"])
         for i, (pa, pb) in enumerate(zip(a["perceived"], b["perceived"])):
-            ok &= all([same(pa[j], pb[j], f"{key} tracks[{i}][{j}]") for j in range(4)])
+            ok &= all([same(pa[j], pb[j], f"{key} tracks[{i}][{j}]") for j in range(4)])  # noqa: C419 -- a list: every difference is reported
         for i, (pa, pb) in enumerate(zip(a["scan_points"], b["scan_points"])):
             ok &= same(pa, pb, f"{key} scan[{i}]")
         identical += bool(ok)

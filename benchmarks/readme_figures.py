@@ -84,7 +84,7 @@ def render(readme: str, blocks: dict[str, str]) -> str:
         pattern = _pattern(name)
         if not pattern.search(readme):
             raise SystemExit(f"README.md: no <!-- generated:{name} --> block")
-        readme = pattern.sub(lambda m: m.group(1) + text + m.group(3), readme)
+        readme = pattern.sub(lambda m, text=text: m.group(1) + text + m.group(3), readme)
     return readme
 
 

@@ -37,7 +37,7 @@ def over_ros2(names, rate: float) -> dict[str, dict]:
     with tempfile.TemporaryDirectory(prefix="viapath_ros2_table_") as folder:
         for k, name in enumerate(names):
             domain = 101 + (os.getpid() * 7 + k) % 100  # 101..200: apart from the tests' 1..100
-            logs = [open(Path(folder) / f"{name}_{part}.err", "w") for part in ("node", "sim")]
+            logs = [open(Path(folder) / f"{name}_{part}.err", "w") for part in ("node", "sim")]  # noqa: SIM115 -- closed in the finally below
             node = subprocess.Popen(
                 [*cli, "ros2", "node", "--use-sim-time"],
                 env=_env(domain),
@@ -56,7 +56,7 @@ def over_ros2(names, rate: float) -> dict[str, dict]:
             runs[name] = (node, sim, logs)
         out = {}
         try:
-            for name, (node, sim, logs) in runs.items():
+            for name, (_node, sim, _logs) in runs.items():
                 stdout, _ = sim.communicate(timeout=900)
                 if sim.returncode != 0:
                     raise SystemExit(

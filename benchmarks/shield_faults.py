@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import csv
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
@@ -24,7 +25,7 @@ from viapath.sim.metrics import at_fault_onsets, present_for
 
 
 class _Recording(ShieldedPlanner):
-    log: list = []
+    log: ClassVar[list] = []
 
     def plan(self, observation):
         decision = super().plan(observation)

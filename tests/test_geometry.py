@@ -240,8 +240,8 @@ def test_via_times_vectorised_matches_scalar():
     speeds = rng.uniform(0.05, 1.0, 50)
     t_early, t_late = via_times(w, v_obs, speeds)
     for k in range(50):
-        e, l = via_times(w[k], v_obs[k], speeds[k])
-        assert float(e) == t_early[k] and float(l) == t_late[k]
+        early, late = via_times(w[k], v_obs[k], speeds[k])
+        assert float(early) == t_early[k] and float(late) == t_late[k]
 
 
 # --------------------------------------------------------------------------- moving-disc contact

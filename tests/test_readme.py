@@ -9,6 +9,7 @@ import yaml
 from viapath.scenarios import scenario_from_dict
 
 README = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+PYPROJECT = (Path(__file__).resolve().parents[1] / "pyproject.toml").read_text()
 
 
 def _blocks(language: str) -> list[str]:
@@ -36,10 +37,27 @@ def test_readme_python_examples_run(index):
         assert namespace["episode"].metrics["reached_goal"] is True
 
 
+def _command(marker: str) -> str:
+    return re.search(rf"<!-- {marker} -->\n```bash\n(.*?)```\n<!-- /{marker} -->", README, flags=re.S).group(1)
+
+
 def test_readme_commands_are_one_line_and_use_a_fresh_venv():
     for marker in ("run-command", "test-command"):
-        body = re.search(rf"<!-- {marker} -->\n```bash\n(.*?)```\n<!-- /{marker} -->", README, flags=re.S).group(1)
+        body = _command(marker)
         assert body.count("\n") == 1 and "python3 -m venv .venv" in body
+
+
+def test_readme_test_command_lints_formats_and_type_checks_before_the_tests():
+    steps = [step.strip() for step in _command("test-command").split("&&")]
+    checks = [
+        ".venv/bin/ruff check src tests benchmarks",
+        ".venv/bin/ruff format --check src tests benchmarks",
+        ".venv/bin/mypy",
+        ".venv/bin/python -m pytest -q",
+    ]
+    assert steps[-len(checks) :] == checks, steps
+    extra = re.search(r"^test = \[(.*)\]$", PYPROJECT, flags=re.M).group(1)
+    assert '"ruff==' in extra and '"mypy==' in extra  # pinned: a new release must not fail the build by itself
 
 
 def test_readme_plugin_planner_example_registers_and_drives(monkeypatch):

@@ -32,6 +32,7 @@ cancels), the social force integrates in real time with ``dt_s = 2/3 s``.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,7 +60,7 @@ def protocol_windows(
     predicted_rows: int = PREDICTED_ROWS,
     min_people: int = 2,
     frames_per_row: int = 10,
-):
+) -> Iterator[Window]:
     """Yield the protocol's :class:`Window` s of a 4-column table ``frame id x y`` (rows sorted or not).
 
     Frames are taken on the file's own grid: the distinct frames, in order (as S-GAN does); a window
@@ -92,7 +93,7 @@ def protocol_windows(
         )
 
 
-def displacement_errors(predicted: np.ndarray, truth: np.ndarray):
+def displacement_errors(predicted: np.ndarray, truth: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """ADE and FDE per person: ``predicted`` and ``truth`` (N, PRED, 2) → two arrays (N,), metres."""
     predicted, truth = np.asarray(predicted, float), np.asarray(truth, float)
     if predicted.shape != truth.shape or predicted.ndim != 3 or predicted.shape[-1] != 2:

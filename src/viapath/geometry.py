@@ -24,6 +24,7 @@ Everything here is vectorised numpy with broadcasting over leading axes.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -51,7 +52,7 @@ def angles_of(vectors: np.ndarray) -> np.ndarray:
     return np.array([math.atan2(y, x) for x, y in np.reshape(vectors, (-1, 2)).tolist()], dtype=float)
 
 
-def wrap_angle(angle_rad):
+def wrap_angle(angle_rad: Any) -> Any:
     """Wrap to (-pi, pi]."""
     if type(angle_rad) in (float, np.float64):
         # One angle (each roll-out's heading error): a float's % is np.mod's (fmod, then the divisor added
@@ -60,7 +61,9 @@ def wrap_angle(angle_rad):
     return np.pi - np.mod(np.pi - np.asarray(angle_rad), 2.0 * np.pi)
 
 
-def tangent_vectors(origin: np.ndarray, centres: np.ndarray, radii: np.ndarray, side: np.ndarray | int):
+def tangent_vectors(
+    origin: np.ndarray, centres: np.ndarray, radii: np.ndarray, side: np.ndarray | int
+) -> tuple[np.ndarray, np.ndarray]:
     """Vector from ``origin`` to the tangent point on disc (centre, radius) on ``side`` (+1 left, -1 right).
 
     Returns ``(w, valid)``; ``valid`` is False where the origin lies inside the disc (no tangent).
@@ -81,7 +84,7 @@ def tangent_vectors(origin: np.ndarray, centres: np.ndarray, radii: np.ndarray, 
     return w, valid
 
 
-def via_times(w: np.ndarray, obstacle_velocity: np.ndarray, speed: np.ndarray | float):
+def via_times(w: np.ndarray, obstacle_velocity: np.ndarray, speed: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """Times at which a robot leaving the cone apex at ``speed`` meets the avoiding line ``w + v_obs t``.
 
     Returns ``(t_early, t_late)``; ``inf`` where that root does not exist. ``t_late`` is finite only
@@ -105,7 +108,13 @@ def via_times(w: np.ndarray, obstacle_velocity: np.ndarray, speed: np.ndarray | 
     return t_early, t_late
 
 
-def first_contact_time(rel_position, rel_velocity, radius, duration, growth=0.0):
+def first_contact_time(
+    rel_position: np.ndarray,
+    rel_velocity: np.ndarray,
+    radius: np.ndarray | float,
+    duration: np.ndarray | float,
+    growth: np.ndarray | float = 0.0,
+) -> np.ndarray:
     """First time in [0, duration] at which ``|rel_position + rel_velocity τ| <= radius + growth τ``.
 
     ``rel_*`` are robot minus obstacle. Returns ``inf`` where there is no contact, 0 where the two
@@ -117,7 +126,15 @@ def first_contact_time(rel_position, rel_velocity, radius, duration, growth=0.0)
     return _first_contact(px, py, vx, vy, np.asarray(radius, dtype=float), np.asarray(growth, dtype=float), duration)
 
 
-def _first_contact(px, py, vx, vy, radius, growth, duration):
+def _first_contact(
+    px: np.ndarray,
+    py: np.ndarray,
+    vx: np.ndarray,
+    vy: np.ndarray,
+    radius: np.ndarray,
+    growth: np.ndarray | float,
+    duration: np.ndarray | float,
+) -> np.ndarray:
     if np.count_nonzero(growth):  # np.any's dispatch costs more than the check (legs_first_contact's hot path)
         a = vx * vx + vy * vy - growth * growth
         b = px * vx + py * vy - radius * growth
@@ -135,7 +152,9 @@ def _first_contact(px, py, vx, vy, radius, growth, duration):
     return np.where(c <= 0, 0.0, tau)
 
 
-def closest_approach(rel_position, rel_velocity, duration):
+def closest_approach(
+    rel_position: np.ndarray, rel_velocity: np.ndarray, duration: np.ndarray | float
+) -> tuple[np.ndarray, np.ndarray]:
     """Minimum distance and its time over τ in [0, duration] for linear relative motion."""
     speed_sq = np.sum(rel_velocity * rel_velocity, axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -198,17 +217,17 @@ VIA_ROOTS = np.array([0, 0, 1, 1])  # ... 0 = pass early (before the obstacle), 
 
 
 def via_options(
-    starts,
-    start_times,
-    speeds,
-    obstacle_positions,
-    obstacle_velocities,
-    via_radii,
-    growth,
-    growth_until_s,
-    envelope_m,
-    max_time_s,
-):
+    starts: np.ndarray,
+    start_times: np.ndarray,
+    speeds: np.ndarray,
+    obstacle_positions: np.ndarray,
+    obstacle_velocities: np.ndarray,
+    via_radii: np.ndarray,
+    growth: np.ndarray,
+    growth_until_s: np.ndarray,
+    envelope_m: np.ndarray | float,
+    max_time_s: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Via points of P (node, obstacle) pairs (one row per pair: the node's position, time and speed,
     that obstacle's position, velocity, via radius, cone growth and cap, the braking envelope), on both
     sides and both roots: ``(pair, option, t, leg_velocity, via)`` for every option whose via time is

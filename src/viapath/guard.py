@@ -48,7 +48,7 @@ import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -113,11 +113,11 @@ class Inspection:
     repairs: list[str] = field(default_factory=list)
 
 
-def _show(values) -> str:
+def _show(values: Any) -> str:
     return "[" + ", ".join(f"{v:g}" for v in np.atleast_1d(np.asarray(values, dtype=float))) + "]"
 
 
-def _array(name: str, value, shape: tuple) -> np.ndarray:
+def _array(name: str, value: Any, shape: tuple[int, ...]) -> np.ndarray:
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
@@ -127,7 +127,7 @@ def _array(name: str, value, shape: tuple) -> np.ndarray:
     return array
 
 
-def _scalar(name: str, value) -> float:
+def _scalar(name: str, value: Any) -> float:
     try:
         return float(value)
     except (TypeError, ValueError):
@@ -358,7 +358,14 @@ def _plainly_sound(observation: Observation, robot: RobotState, obstacles: Obsta
     return _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config)
 
 
-def _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config: GuardConfig) -> bool:
+def _obstacles_sound(
+    positions: np.ndarray,
+    velocities: np.ndarray,
+    radii: np.ndarray,
+    position_sigma: np.ndarray,
+    velocity_sigma: np.ndarray,
+    config: GuardConfig,
+) -> bool:
     """Whether no obstacle field needs a stop or a repair: the per-field checks below, as a few whole-array
     reductions (an episode's every cycle comes here; the per-index loops run only when this is False).
     A NaN fails every comparison (and ``max``/``min`` propagate it) and an infinity every bound, so
@@ -366,7 +373,7 @@ def _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigm
     With numba, one compiled call gives the same answer (:func:`viapath._harness_kernels.obstacles_sound`)."""
     if len(positions) == 0:
         return True
-    kernels = harness_kernels()
+    kernels = harness_kernels()  # type: ignore[no-untyped-call]
     if kernels is not None:
         try:
             return kernels.obstacles_sound(
@@ -507,7 +514,7 @@ def _first_touched(
     """The first obstacle (index) within ``reachable_m`` now that the robot, holding (v, w) for a control period
     and then braking (:func:`braking_path`), would touch while its first sample moves towards it; -1 if none.
     With numba one compiled call (:func:`viapath._harness_kernels.first_touched`, the same answer)."""
-    kernels = harness_kernels()
+    kernels = harness_kernels()  # type: ignore[no-untyped-call]
     if kernels is not None:
         try:
             return kernels.first_touched(
@@ -542,7 +549,11 @@ def _first_touched(
     return int(np.flatnonzero(near)[np.argmax(touches)]) if touches.any() else -1
 
 
-_LIMITS_ROW: tuple = (None, None, None)  # the last (limits, config, row), replaced whole (threads may plan at once)
+_LIMITS_ROW: tuple[Any, ...] = (
+    None,
+    None,
+    None,
+)  # the last (limits, config, row), replaced whole (threads may plan at once)
 
 
 def _limits_row(limits: MotionLimits, config: GuardConfig) -> np.ndarray:
@@ -574,7 +585,9 @@ def _unchanged(command: Any, v: float, w: float) -> Command:
     return Command(v, w)
 
 
-def _stop_decision(planner, observation: Observation, status: str, reasons: list[str], extras: dict | None = None):
+def _stop_decision(
+    planner: Any, observation: Observation, status: str, reasons: list[str], extras: dict[str, Any] | None = None
+) -> Decision:
     try:
         target = np.asarray(observation.robot.position, dtype=float).reshape(2).copy()
     except Exception:
@@ -593,7 +606,7 @@ class _GuardedCycle:
 
     observation: Observation
     config: GuardConfig
-    last_check: tuple | None = None  # (limits, radius, v, ω, what check_command returned)
+    last_check: tuple[Any, ...] | None = None  # (limits, radius, v, ω, what check_command returned)
 
     def check(
         self, command: Any, limits: MotionLimits, robot_radius_m: float
@@ -618,13 +631,15 @@ class _GuardedCycle:
         return result
 
 
-def _same_number(a, b) -> bool:
+def _same_number(a: float, b: float) -> bool:
     """Equal, with the same sign for zeros (a NaN is never the same: it is checked again)."""
     return a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
 
 
 #: The cycle of the innermost running guarded ``plan`` (per thread and task).
-_INSPECTED: contextvars.ContextVar = contextvars.ContextVar("viapath_guard_inspected", default=None)
+_INSPECTED: contextvars.ContextVar[_GuardedCycle | None] = contextvars.ContextVar(
+    "viapath_guard_inspected", default=None
+)
 
 
 def inspected(observation: Observation) -> bool:
@@ -638,14 +653,14 @@ def inspected(observation: Observation) -> bool:
     return cycle.config.all_finite
 
 
-def guard_plan(plan: Callable) -> Callable:
+def guard_plan(plan: Callable[..., Decision]) -> Callable[..., Decision]:
     """Wrap a planner's ``plan(self, observation)`` with the checks of this module (idempotent; a
     ``plan`` that calls ``super().plan`` is guarded once, at the outside)."""
     if getattr(plan, "__viapath_guarded__", False):
         return plan
 
     @functools.wraps(plan)
-    def guarded(self, observation, *args, **kwargs):
+    def guarded(self: Any, observation: Observation, *args: Any, **kwargs: Any) -> Decision:
         if getattr(self, "_guard_active", False):
             return plan(self, observation, *args, **kwargs)
         config = getattr(self, "guard_config", DEFAULT_CONFIG)
@@ -685,7 +700,11 @@ def guard_plan(plan: Callable) -> Callable:
             if status == "guard-stop" or plan_ is None:
                 original = getattr(plan_, "status", None)
                 return _stop_decision(
-                    self, observation, "guard-stop", inspection.repairs + [reason], {"guard_planner_status": original}
+                    self,
+                    observation,
+                    "guard-stop",
+                    [*inspection.repairs, cast(str, reason)],
+                    {"guard_planner_status": original},
                 )
             plan_.extras["guard"] = inspection.repairs + [reason]
             plan_.extras["guard_planner_status"] = plan_.status
@@ -699,5 +718,5 @@ def guard_plan(plan: Callable) -> Callable:
             decision.command = command
         return decision
 
-    guarded.__viapath_guarded__ = True
+    guarded.__viapath_guarded__ = True  # type: ignore[attr-defined]
     return guarded

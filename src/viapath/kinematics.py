@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -140,7 +140,7 @@ def steer_towards(
 
 def track(
     state: UnicycleState,
-    target,
+    target: Sequence[float] | np.ndarray,
     speed_mps: float,
     limits: MotionLimits,
     dt_s: float,
@@ -154,7 +154,12 @@ def track(
 
 
 def tracking(
-    state: UnicycleState, target, speed_mps: float, limits: MotionLimits, dt_s: float, heading_gain: float = 2.5
+    state: UnicycleState,
+    target: Sequence[float] | np.ndarray,
+    speed_mps: float,
+    limits: MotionLimits,
+    dt_s: float,
+    heading_gain: float = 2.5,
 ) -> Iterator[tuple[float, float]]:
     """:func:`track`'s positions (x, y) one step at a time, without end: a caller that checks them as they
     come can stop a roll-out that has failed (the roll-outs of failing candidates, :mod:`.follow`)."""

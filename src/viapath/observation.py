@@ -22,14 +22,14 @@ class ObservationError(ValueError):
     :mod:`viapath.guard` keeps the obstacle conservatively or brakes, and reports it."""
 
 
-def _numbers(field_name: str, value) -> np.ndarray:
+def _numbers(field_name: str, value: Any) -> np.ndarray:
     try:
         return np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         raise ObservationError(f"obstacles.{field_name}: expected numbers, found {value!r}"[:300]) from None
 
 
-def _points(field_name: str, value) -> np.ndarray:
+def _points(field_name: str, value: Any) -> np.ndarray:
     """(N, 2) rows; a flat [x, y] is one row and an empty array none. Nothing else is reshaped."""
     array = _numbers(field_name, value)
     if array.size == 0:
@@ -44,7 +44,7 @@ def _points(field_name: str, value) -> np.ndarray:
     return array.copy()
 
 
-def _per_obstacle(field_name: str, value, n: int) -> np.ndarray:
+def _per_obstacle(field_name: str, value: Any, n: int) -> np.ndarray:
     """One number per obstacle, or one number for all of them."""
     array = _numbers(field_name, value)
     if array.ndim == 0:
@@ -71,7 +71,7 @@ class RobotState:
         return self.speed_mps * np.array([np.cos(self.heading_rad), np.sin(self.heading_rad)])
 
 
-def _is_number(value) -> bool:
+def _is_number(value: object) -> bool:
     """A real number (not text, None or a complex): what an obstacle id may be made of."""
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
 
@@ -87,9 +87,10 @@ class Obstacles:
     positions: np.ndarray  # (N, 2) m
     velocities: np.ndarray  # (N, 2) m/s
     radii_m: np.ndarray  # (N,) m
-    position_sigma_m: np.ndarray | None = None  # (N,)
-    velocity_sigma_mps: np.ndarray | None = None  # (N,)
-    ids: np.ndarray | None = None  # (N,) int
+    # Given as None, these three are filled in by __post_init__ (zeros, zeros, 0..N-1): typed as what they hold.
+    position_sigma_m: np.ndarray = None  # type: ignore[assignment]  # (N,)
+    velocity_sigma_mps: np.ndarray = None  # type: ignore[assignment]  # (N,)
+    ids: np.ndarray = None  # type: ignore[assignment]  # (N,) int
     # (N,) bool: rows that are static geometry (viapath.static), not people; None = none is.
     static_mask: np.ndarray | None = None
 
@@ -159,7 +160,15 @@ class Obstacles:
         return self.subset(self.is_static)
 
     @classmethod
-    def of_fresh_arrays(cls, positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids) -> Obstacles:
+    def of_fresh_arrays(
+        cls,
+        positions: np.ndarray,
+        velocities: np.ndarray,
+        radii_m: np.ndarray,
+        position_sigma_m: np.ndarray,
+        velocity_sigma_mps: np.ndarray,
+        ids: np.ndarray,
+    ) -> Obstacles:
         """Obstacles from arrays made for them and used by no one else (a perception's estimates): when
         they are well formed (float64 (N, 2), (N, 2), (N,), (N,), (N,) and (N,) integer ids) they are
         kept as they are instead of copied; anything else goes through the checks of the constructor."""
@@ -252,7 +261,7 @@ class Obstacles:
             return self
         return self.subset(ok)
 
-    def subset(self, mask_or_index) -> Obstacles:
+    def subset(self, mask_or_index: Any) -> Obstacles:
         return Obstacles(
             self.positions[mask_or_index],
             self.velocities[mask_or_index],

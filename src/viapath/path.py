@@ -18,9 +18,11 @@ What the paper leaves open and we chose:
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from viapath.geometry import cross2
 from viapath.limits import SUBGOAL_OPTIONS
@@ -29,7 +31,9 @@ from viapath.limits import SUBGOAL_OPTIONS
 class DesignatedPath:
     """A polyline of subgoals (the last is the goal) with a corridor half-width per segment."""
 
-    def __init__(self, waypoints, half_width_m: float | None = None, half_widths_m=None):
+    def __init__(
+        self, waypoints: ArrayLike, half_width_m: float | None = None, half_widths_m: ArrayLike | None = None
+    ) -> None:
         waypoints = np.asarray(waypoints, dtype=float)
         if waypoints.ndim != 2 or waypoints.shape[1] != 2 or len(waypoints) < 2:
             raise ValueError("a designated path needs at least two (x, y) waypoints")
@@ -64,7 +68,7 @@ class DesignatedPath:
     def length_m(self) -> float:
         return float(self.cumulative_length_m[-1])
 
-    def _segment_geometry(self, points: np.ndarray):
+    def _segment_geometry(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Per point and segment: clamped arc position along the segment and offset from it."""
         if points.size > 128:  # x and y apart: the same values, faster on many points (the escape's roll-outs)
             return self._segment_geometry_xy(points)
@@ -76,7 +80,7 @@ class DesignatedPath:
         distance = np.hypot(offset[..., 0], offset[..., 1])
         return along, along_clamped, distance
 
-    def _segment_geometry_xy(self, points: np.ndarray):
+    def _segment_geometry_xy(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`_segment_geometry` with x and y apart: each product, sum and difference as there (the
         sum of the two products as np.sum adds them; only the sign of a zero ``along`` may differ, which no
         result shows), without the (..., S, 2) temporaries, whose strided passes cost more on many points."""
@@ -90,31 +94,31 @@ class DesignatedPath:
         )
         return along, along_clamped, distance
 
-    def project(self, points):
+    def project(self, points: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Nearest point on the path: ``(segment_index, arc_length_m, signed_lateral_m)``.
 
         The lateral deviation is positive to the left of the direction of travel.
         """
         points = np.asarray(points, dtype=float)
-        along, along_clamped, distance = self._segment_geometry(points)
+        _along, along_clamped, distance = self._segment_geometry(points)
         index = distance.argmin(axis=-1)
-        take = lambda a: np.take_along_axis(a, index[..., None], axis=-1)[..., 0]
+        take: Callable[[np.ndarray], np.ndarray] = lambda a: np.take_along_axis(a, index[..., None], axis=-1)[..., 0]
         rel = points - self.segment_starts[index]
         side = np.sign(cross2(self.segment_directions[index], rel))
         side = np.where(side == 0, 1.0, side)
         arc = self.cumulative_length_m[index] + take(along_clamped)
         return index, arc, side * take(distance)
 
-    def lateral_deviation(self, points) -> np.ndarray:
+    def lateral_deviation(self, points: ArrayLike) -> np.ndarray:
         return self.project(points)[2]
 
-    def corridor_excess(self, points) -> np.ndarray:
+    def corridor_excess(self, points: ArrayLike) -> np.ndarray:
         """How far each point is outside the corridor (m); <= 0 inside."""
         points = np.asarray(points, dtype=float)
         if points.shape == (2,):
             x, y = float(points[0]), float(points[1])
             if math.isfinite(x) and math.isfinite(y):
-                return self._point_excess(x, y)
+                return self._point_excess(x, y)  # type: ignore[return-value]  # a float64 acts as a 0-d array
         _, _, distance = self._segment_geometry(points)
         if len(self.half_widths_m) == 1:
             return distance[..., 0] - self.half_widths_m[0]  # the one segment's (a minimum of one is that one)
@@ -143,10 +147,12 @@ class DesignatedPath:
                 best = excess
         return np.float64(best)
 
-    def contains(self, points, tolerance_m: float = 1e-9) -> np.ndarray:
+    def contains(self, points: ArrayLike, tolerance_m: float = 1e-9) -> np.ndarray:
         return self.corridor_excess(points) <= tolerance_m
 
-    def legs_inside(self, starts, ends, spacing_m: float = 0.05, tolerance_m: float = 1e-9) -> np.ndarray:
+    def legs_inside(
+        self, starts: ArrayLike, ends: ArrayLike, spacing_m: float = 0.05, tolerance_m: ArrayLike = 1e-9
+    ) -> np.ndarray:
         """Whether each straight leg stays in the corridor.
 
         Each capsule is convex, so a leg whose two ends lie in the same capsule is inside, exactly.
@@ -213,13 +219,15 @@ class SubgoalTracker:
     def subgoal(self) -> np.ndarray:
         return self.path.waypoints[self.index]
 
-    def goal_reached(self, position) -> bool:
+    def goal_reached(self, position: ArrayLike) -> bool:
         if not self.is_final:
             return False
         (gx, gy), (x, y) = self.path.goal.tolist(), np.asarray(position, dtype=float).tolist()
         return float(np.hypot(gx - x, gy - y)) <= self.policy.goal_tolerance_m
 
-    def is_blocked(self, obstacle_positions, obstacle_radii, robot_radius_m: float = 0.0) -> bool:
+    def is_blocked(
+        self, obstacle_positions: np.ndarray | None, obstacle_radii: ArrayLike | None, robot_radius_m: float = 0.0
+    ) -> bool:
         """Whether an obstacle sits on the current intermediate subgoal (the goal is never blocked)."""
         if self.is_final or obstacle_positions is None or len(obstacle_positions) == 0:
             return False
@@ -228,7 +236,13 @@ class SubgoalTracker:
         )
         return bool(np.min(gaps) <= self.policy.blocked_clearance_m)
 
-    def update(self, position, robot_radius_m: float = 0.0, obstacle_positions=None, obstacle_radii=None) -> int:
+    def update(
+        self,
+        position: ArrayLike,
+        robot_radius_m: float = 0.0,
+        obstacle_positions: np.ndarray | None = None,
+        obstacle_radii: ArrayLike | None = None,
+    ) -> int:
         position = np.asarray(position, dtype=float)
         while not self.is_final:
             subgoal = self.subgoal

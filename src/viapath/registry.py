@@ -46,7 +46,7 @@ class Registry(Generic[T]):
     def _load(self) -> None:
         if not self._loaded:
             self._loaded = True
-            self._loader()
+            self._loader()  # type: ignore[misc]  # not loaded: there is a loader
 
     def names(self) -> list[str]:
         self._load()

@@ -24,8 +24,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 # Static obstacles' ids in a merged obstacle set: far above any tracker's ids, so the two never meet.
 STATIC_ID_BASE = 1 << 40
@@ -86,7 +88,7 @@ class StaticLayer:
             return self
         return self.subset(ok)
 
-    def subset(self, mask_or_index) -> StaticLayer:
+    def subset(self, mask_or_index: Any) -> StaticLayer:
         return StaticLayer(
             self.segments[mask_or_index],
             self.shape_ids[mask_or_index],
@@ -133,7 +135,7 @@ _EMPTY = StaticLayer()
 
 def sample_discs(
     segments: np.ndarray, shape_ids: np.ndarray, robot_radius_m: float, spacing_m: float, with_owner: bool = False
-) -> tuple:
+) -> tuple[np.ndarray, ...]:
     """Disc centres (N, 2), radii (N,) and shape ids (N,) covering ``segments`` for any robot radius of at
     least ``robot_radius_m`` (see the module docstring); a segment of length 0 is one disc of radius 0.
     With ``with_owner`` also the segment of each disc (N,)."""
@@ -199,7 +201,7 @@ def segment_distances(starts: np.ndarray, ends: np.ndarray, segments: np.ndarray
     return np.where(crossing, 0.0, distance)
 
 
-def box_edges(center, size, yaw_rad: float = 0.0) -> np.ndarray:
+def box_edges(center: ArrayLike, size: ArrayLike, yaw_rad: float = 0.0) -> np.ndarray:
     """The four edges (4, 2, 2) of a rectangle of ``size`` (length along ``yaw_rad``, width) at ``center``."""
     half = np.asarray(size, dtype=float) / 2
     corners = np.array([[half[0], half[1]], [-half[0], half[1]], [-half[0], -half[1]], [half[0], -half[1]]])
@@ -208,13 +210,13 @@ def box_edges(center, size, yaw_rad: float = 0.0) -> np.ndarray:
     return polygon_edges(corners)
 
 
-def polygon_edges(points) -> np.ndarray:
+def polygon_edges(points: ArrayLike) -> np.ndarray:
     """The closed outline (E, 2, 2) of a polygon given by its vertices (E, 2)."""
     points = np.asarray(points, dtype=float).reshape(-1, 2)
     return np.stack([points, np.roll(points, -1, axis=0)], axis=1)
 
 
-def polyline_edges(points) -> np.ndarray:
+def polyline_edges(points: ArrayLike) -> np.ndarray:
     """The open polyline (E - 1, 2, 2) through ``points`` (E, 2)."""
     points = np.asarray(points, dtype=float).reshape(-1, 2)
     return np.stack([points[:-1], points[1:]], axis=1)

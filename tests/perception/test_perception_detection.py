@@ -26,7 +26,7 @@ def arc(centre, radius, sensor, n, noise, rng, half_angle=np.pi / 2):
 def test_known_radius_geometric_fit_is_centimetre_accurate(x, y, radius, seed):
     rng = np.random.default_rng(seed)
     points = arc((x, y), radius, (0, 0), 25, 0.01, rng)
-    centre, r, rms = fit_circle(points, fixed_radius_m=radius)
+    centre, r, _rms = fit_circle(points, fixed_radius_m=radius)
     assert np.hypot(*(centre - (x, y))) < 0.02
     assert r == pytest.approx(radius, abs=1e-6)
 
@@ -106,7 +106,7 @@ def test_an_empty_room_gives_no_detection():
 
 def test_object_seen_by_both_scanners_is_one_detection():
     # beside the robot both 240° fields overlap: an obstacle at 90° is seen by the front and the rear scanner
-    detections, scanners, scans = scene_detections([[0.0, 1.0]], [0.25])
+    detections, _scanners, _scans = scene_detections([[0.0, 1.0]], [0.25])
     assert sum(d["accepted"] for d in detections.segments) == 2
     assert len(detections) == 1
     assert np.hypot(*(detections.centres[0] - (0.0, 1.0))) < 0.05

@@ -48,7 +48,7 @@ def test_velocity_of_a_synthetic_walker_after_one_second():
     errors = []
     for seed in range(30):
         rng = np.random.default_rng(seed)
-        t, truth, v, z = walker_measurements(rng)
+        t, _truth, v, z = walker_measurements(rng)
         tracker = MultiTargetTracker()
         for k in range(len(t)):
             tracker.step(t[k], z[k : k + 1], 0.03, 0.25)

@@ -293,7 +293,7 @@ def test_escape_scores_match_reference():
         planner.reset()
         situation = planner.situation(observation)
         checks = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
-        commands, ends, expected = escape_scores(checks, planner.limits, planner.config)
+        _commands, ends, expected = escape_scores(checks, planner.limits, planner.config)
         _, got_ends, got = escape_scores(
             replace(checks, backend=Backend("numba", whole_steps=False)), planner.limits, planner.config
         )

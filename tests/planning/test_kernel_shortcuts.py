@@ -14,7 +14,7 @@ import pytest
 
 numba = pytest.importorskip("numba")
 
-from viapath.planning.viapath import kernels
+from viapath.planning.viapath import kernels  # noqa: E402 -- after the importorskip of numba
 
 
 @numba.njit(cache=False)

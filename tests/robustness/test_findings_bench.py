@@ -118,12 +118,12 @@ def test_finding_5_ctrl_c_stops_workers_keeps_rows_and_says_how_to_resume(tmp_pa
         workers: set[int] = set()
         deadline = time.monotonic() + 300
         while time.monotonic() < deadline and process.poll() is None:
-            workers |= set(
+            workers |= {
                 int(p)
                 for p in subprocess.run(
                     ["pgrep", "-P", str(process.pid)], capture_output=True, text=True
                 ).stdout.split()
-            )
+            }
             if csv_path.exists() and len(csv_path.read_text().splitlines()) >= after_rows + 1:  # + header
                 break
             time.sleep(0.2)

@@ -170,7 +170,7 @@ def test_ids_that_are_not_integers_are_the_documented_error(bad, position):
 
     ids = [0, 1, 2]
     ids[position] = bad
-    with pytest.raises(ObservationError, match="obstacles.ids"):
+    with pytest.raises(ObservationError, match=r"obstacles\.ids"):
         Obstacles(np.zeros((3, 2)) + [[1, 0]], np.zeros((3, 2)), np.full(3, 0.3), ids=ids)
 
 

@@ -109,7 +109,7 @@ def test_replay_files_are_bounded(tmp_path):
     huge = tmp_path / "huge.txt"
     with open(huge, "wb") as handle:
         handle.truncate(200 * 1024 * 1024)
-    with pytest.raises(ValueError, match="bytes; .* at most"):
+    with pytest.raises(ValueError, match=r"bytes; .* at most"):
         load_tracks(huge, 0.4)
 
 

@@ -79,7 +79,7 @@ class Processes:
         try:
             return proc.wait(timeout=timeout_s)
         except subprocess.TimeoutExpired:
-            out, err = self.output(proc)
+            _out, err = self.output(proc)
             raise AssertionError(
                 f"process {proc.args} still running after {timeout_s} s; stderr: {err[-2000:]}"
             ) from None
@@ -134,7 +134,7 @@ class Pair:
     def finish(self, timeout_s: float = 150.0) -> dict:
         code = self.procs.wait(self.sim, timeout_s)
         out, err = self.procs.output(self.sim)
-        node_out, node_err = self.procs.output(self.node)
+        _node_out, node_err = self.procs.output(self.node)
         self.procs.stop(self.node)
         assert code == 0, f"{self.name}: sim exited {code}: {err[-3000:]}\nnode: {node_err[-2000:]}"
         self.sim_stderr = err

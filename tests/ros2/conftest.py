@@ -98,7 +98,7 @@ class Launcher:
         scenario = folder / "empty.yaml"
         scenario.write_text(EMPTY)
         node_args = ["--ros-args", "-p", "nominal_speed_mps:=0.3"]
-        faults = lambda items: sum((["--fault", f] for f in items), [])
+        faults = lambda items: [word for f in items for word in ("--fault", f)]
         self.groups["faults"] = {
             "front": Pair(
                 procs, "front", str(scenario), ["--duration", str(FRONT_DURATION_S), *faults(FRONT_FAULTS)], node_args
@@ -184,7 +184,7 @@ class Launcher:
         bend.write_text(NAV2_BEND)
         blocked.write_text(NAV2_BLOCKED)
         mixed, spec = mixed_scenario(folder)
-        at = lambda items: sum((["--at", e] for e in items), [])
+        at = lambda items: [word for e in items for word in ("--at", e)]
         runs = {
             name: Nav2Run(
                 procs, f"nav2_{name}", name, client_args=at(["0:empty", "0:nan"]) if name == "paper-front" else ()

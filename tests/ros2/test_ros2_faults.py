@@ -61,7 +61,7 @@ def test_front_scanner_silent_stops_the_robot_and_it_goes_on_after(fault_runs):
 
 
 def test_nan_ranges_stop_the_robot(fault_runs):
-    _, trace, statuses = fault_runs["front"]
+    _, trace, _statuses = fault_runs["front"]
     assert np.all(trace["speed_mps"][window(trace, 3.0 + 0.3 + 0.2 + 0.375, 4.2)] == 0.0)
     assert trace["speed_mps"][window(trace, 4.2, 5.0)].max() >= 0.25
 

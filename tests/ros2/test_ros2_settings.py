@@ -92,7 +92,7 @@ def test_an_integer_is_accepted_for_a_number_and_converted():
     settings = validate({"half_width_m": 2, "planner.max_depth": 2.0})
     assert settings.half_width_m == 2.0 and isinstance(settings.half_width_m, float)
     assert settings.planner_values["max_depth"] == 2 and isinstance(settings.planner_values["max_depth"], int)
-    with pytest.raises(ParameterError, match="planner.max_depth: expected an integer"):
+    with pytest.raises(ParameterError, match=r"planner\.max_depth: expected an integer"):
         validate({"planner.max_depth": 2.5})
 
 
@@ -103,7 +103,7 @@ def test_params_file_round_trip_and_unknown_names(tmp_path):
     assert validate(values).values == validate({}).values
     bad = tmp_path / "bad.yaml"
     bad.write_text("viapath:\n  ros__parameters:\n    planner:\n      horizon_s: 5.0\n      horizn_s: 3.0\n")
-    with pytest.raises(ParameterError, match="parameter planner.horizn_s: unknown"):
+    with pytest.raises(ParameterError, match=r"parameter planner\.horizn_s: unknown"):
         validate(read_params_file(bad))
     nested = tmp_path / "nested.yaml"
     nested.write_text("/**:\n  ros__parameters:\n    planner:\n      weights: {k1: 0.2}\n")
@@ -161,8 +161,8 @@ def test_roll_outs_that_would_exhaust_memory_are_refused(values, named):
 
 
 from hypothesis import given  # noqa: E402
-from hypothesis import settings as hsettings
-from hypothesis import strategies as st
+from hypothesis import settings as hsettings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
 
 NUMERIC = [
     o for o in all_options() if isinstance(o.default, float) and (o.minimum is not None or o.maximum is not None)

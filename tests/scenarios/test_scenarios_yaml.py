@@ -179,7 +179,7 @@ def test_bad_field_names_file_field_expected_and_found(tmp_path, case):
     message = str(info.value)
     lines = message.splitlines()
     assert len(lines) == n_lines, message
-    line = next((l for l in lines if f": {field}: " in l), None)
+    line = next((text for text in lines if f": {field}: " in text), None)
     assert line is not None, f"field path {field!r} not named in: {message}"
     assert line.startswith(f"{file}: "), message
     assert expected in line, message
@@ -197,7 +197,9 @@ def test_missing_half_width_is_named_at_path(tmp_path):
 def test_every_error_is_reported_each_on_its_own_line(tmp_path):
     file = tmp_path / "two.yaml"
     file.write_text(GOOD.replace("radius: 0.25}", "radius: -0.25}").replace("headin", "headdin"))
-    message = str(pytest.raises(ScenarioError, load_scenario, file).value)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(file)
+    message = str(info.value)
     lines = message.splitlines()
     fields = sorted(line.split(": ")[1] for line in lines)
     assert fields == ["obstacles.0.radius", "robot.headding", "robot.radius"]
@@ -207,7 +209,9 @@ def test_every_error_is_reported_each_on_its_own_line(tmp_path):
 def test_unreadable_yaml_syntax_names_line_and_column(tmp_path):
     file = tmp_path / "syntax.yaml"
     file.write_text(GOOD.replace("speeds: [0.1, 0.2, 0.3, 0.4, 0.5]", "speeds: [0.1, 0.2"))
-    message = str(pytest.raises(ScenarioError, load_scenario, file).value)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(file)
+    message = str(info.value)
     assert message.startswith(f"{file}: line 6, column ")
     assert "not valid YAML" in message
 
@@ -215,14 +219,18 @@ def test_unreadable_yaml_syntax_names_line_and_column(tmp_path):
 def test_tab_indentation_is_a_yaml_error(tmp_path):
     file = tmp_path / "tab.yaml"
     file.write_text("name: t\n\trobot: {}\n")
-    message = str(pytest.raises(ScenarioError, load_scenario, file).value)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(file)
+    message = str(info.value)
     assert message.startswith(f"{file}: line 2, column 1: not valid YAML")
 
 
 def test_empty_file_says_so(tmp_path):
     file = tmp_path / "empty.yaml"
     file.write_text("# only a comment\n")
-    message = str(pytest.raises(ScenarioError, load_scenario, file).value)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(file)
+    message = str(info.value)
     assert message.startswith(f"{file}: the file is empty")
 
 
@@ -230,21 +238,29 @@ def test_empty_file_says_so(tmp_path):
 def test_not_a_mapping(tmp_path, text, found):
     file = tmp_path / "notmap.yaml"
     file.write_text(text)
-    message = str(pytest.raises(ScenarioError, load_scenario, file).value)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(file)
+    message = str(info.value)
     assert message.startswith(f"{file}: expected a mapping")
     assert message.endswith(f"found {found}")
 
 
 def test_nonexistent_file_and_folder_and_binary(tmp_path):
     missing = tmp_path / "nope.yaml"
-    message = str(pytest.raises(ScenarioError, load_scenario, missing).value)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(missing)
+    message = str(info.value)
     assert message.startswith(f"{missing}: no such file")
     assert "paper-front" in message  # lists the built-ins as the alternative
-    message = str(pytest.raises(ScenarioError, load_scenario, tmp_path).value)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(tmp_path)
+    message = str(info.value)
     assert message.startswith(f"{tmp_path}: is a folder")
     binary = tmp_path / "binary.yaml"
     binary.write_bytes(b"name: \xff\xfe\x00\n")
-    message = str(pytest.raises(ScenarioError, load_scenario, binary).value)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(binary)
+    message = str(info.value)
     assert message.startswith(f"{binary}: cannot read")
 
 
@@ -283,7 +299,7 @@ def _assert_clean_failure(exit_code: int, output: str, *needles: str) -> None:
 
 @pytest.mark.parametrize("case", CLI_CASES)
 def test_cli_bad_field(tmp_path, case):
-    file, (field, expected, found, _) = _write_bad(tmp_path, case)
+    file, (field, expected, _found, _) = _write_bad(tmp_path, case)
     result = CliRunner().invoke(app, ["run", str(file), "--json"])
     assert not isinstance(result.exception, Exception) or isinstance(result.exception, SystemExit)
     _assert_clean_failure(result.exit_code, result.output, str(file), f": {field}: ", expected)

@@ -76,7 +76,7 @@ def test_the_side_follows_the_robot_offset(tmp_path):
     sides = []
     for robot_y in (-0.2, 0.2):
         reactive = ReactiveReplay(tracks, times, 0.0, ROW_S)
-        drive(reactive, lambda k: (0.0, robot_y))
+        drive(reactive, lambda k, robot_y=robot_y: (0.0, robot_y))
         y = reactive.positions[:, 0, 1]
         sides.append(y[np.nanargmax(np.abs(y))])
         assert np.nanmin(surface_gap(reactive.positions[:, 0], np.array([0.0, robot_y]))) > 0.15

@@ -140,7 +140,7 @@ def _scan_with_return(scanner, bearing_rad: float, range_m: float, others_m: flo
 
 
 def test_layer_remembers_what_is_hidden_and_clears_what_free_beams_pass():
-    front, rear = paper_scanners()
+    front, _rear = paper_scanners()
     layer = StaticObstacleLayer((front,), StaticLayerParams(memory_s=2.0))
     pose = np.zeros(3)
     seen = layer.update(0.0, pose, [_scan_with_return(front, 0.0, 2.0)], np.zeros((0, 2)), np.zeros(0))

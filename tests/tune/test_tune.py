@@ -20,8 +20,8 @@ from typer.testing import CliRunner
 
 optuna = pytest.importorskip("optuna", reason="viapath tune needs the extra 'tune' (Optuna)")
 
-from tests.tune._tiny import write_tiny_suite
-from viapath.cli import app
+from tests.tune._tiny import write_tiny_suite  # noqa: E402 -- after the importorskip of optuna
+from viapath.cli import app  # noqa: E402
 
 
 def _invoke(*args):
@@ -207,5 +207,6 @@ def test_without_optuna_one_message_exit_2(tmp_path, monkeypatch):
 
 def test_bench_rows_read_back(study_run):
     """The bench folder of the round trip holds one row per scenario, with the preset's options hash."""
-    rows = list(csv.DictReader(open(study_run["folder"] / "bench" / "episodes.csv")))
+    with open(study_run["folder"] / "bench" / "episodes.csv") as file:
+        rows = list(csv.DictReader(file))
     assert len(rows) == 2 and len({r["options_hash"] for r in rows}) == 1

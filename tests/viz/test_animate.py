@@ -57,5 +57,5 @@ def test_a_gif_has_one_frame_per_shown_step_and_reports_progress(episode, tmp_pa
 
 
 def test_other_suffixes_are_refused(episode, tmp_path):
-    with pytest.raises(ValueError, match="gif or .mp4"):
+    with pytest.raises(ValueError, match=r"gif or \.mp4"):
         animate_episode(episode, tmp_path / "a.avi")

@@ -157,7 +157,7 @@ def _check_cylinders(file: Path, expected_centre, expected_radius, min_checked: 
 def test_xyt_cylinders_are_where_the_true_future_puts_the_person(front):
     """paper-front: the person walks at constant velocity and is perceived exactly, so the cylinder's
     centre at height t is where the scenario's motion model puts the person t seconds later."""
-    scenario, episode, kept, file = front
+    scenario, _episode, kept, file = front
     robot_radius = scenario.robot.radius
 
     def centre(step, person, t):
@@ -328,7 +328,7 @@ def test_static_layer_is_drawn_as_the_planner_was_told(tmp_path):
         }
     )
     file = tmp_path / "static.mcap"
-    episode, kept = _record(scenario, file)
+    _episode, kept = _record(scenario, file)
     updates = _decoded(file, "/world/static")
     assert len(updates) == len(kept) > 0
     expected = np.concatenate([scenario.static_shapes()[k][0] for k in range(2)]).reshape(-1, 2)

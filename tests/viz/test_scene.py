@@ -65,7 +65,7 @@ def test_one_scene_per_planning_cycle(front):
 def test_xyt_cylinders_are_where_the_true_future_puts_the_person(front):
     """With exact perception of a constant-velocity person, the cylinder's centre at height t is the
     person's true position t seconds later (from the scenario's motion model, not the planner)."""
-    scenario, episode, scenes = front
+    scenario, _episode, scenes = front
     robot_radius = scenario.robot.radius
     checked = 0
     for scene in scenes[::10]:

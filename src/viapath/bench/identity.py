@@ -17,8 +17,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
+from collections.abc import Set as AbstractSet
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -51,10 +53,8 @@ def scenario_hash(scenario: dict) -> str:
     for item in data.get("obstacles", []) or []:
         replay = item.get("replay") if isinstance(item, dict) else None
         if isinstance(replay, dict) and replay.get("file"):
-            try:
+            with contextlib.suppress(OSError):  # the run reports the missing file; the name stands in for its content
                 replay["file"] = "sha256:" + _file_hash(str(replay["file"]))
-            except OSError:
-                pass  # the run reports the missing file; the name stands in for its content
     text = json.dumps(data, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -90,7 +90,7 @@ def manifest(scenario_hashes: dict[str, str], perception: str, seed: int) -> dic
 
 
 def check_folder(
-    out_dir: Path, wanted: dict[str, Any], force: bool, crashed_only: set[str] = frozenset()
+    out_dir: Path, wanted: dict[str, Any], force: bool, crashed_only: AbstractSet[str] = frozenset()
 ) -> str | None:
     """None if the folder may be used (and then records ``wanted`` in it), else why not.
 

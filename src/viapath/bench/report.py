@@ -105,7 +105,7 @@ def summarize(rows: list[dict[str, Any]], by: str = "planner", order: list[str] 
             continue
         ok = [r for r in group if not r.get("error")]
         n = len(ok)
-        rate = (lambda flag: sum(bool(r[flag]) for r in ok) / n) if n else (lambda flag: None)
+        rate = (lambda flag, ok=ok, n=n: sum(bool(r[flag]) for r in ok) / n) if n else (lambda flag: None)
         success = sum(bool(r["reached_goal"]) and not r["collision"] for r in ok) / n if n else None
         ratios = _values(ok, "time_ratio")
         outside = _values(ok, "time_outside_corridor_s")
@@ -159,7 +159,7 @@ def markdown_table(summary: list[dict[str, Any]], columns=TABLE_COLUMNS, key: st
 def family_table(rows: list[dict[str, Any]]) -> str:
     """Success / collision / at-fault per family (rows) and planner (columns), as Markdown."""
     planners = list(dict.fromkeys(label(r) for r in rows))
-    families = sorted(set(r["family"] for r in rows))
+    families = sorted({r["family"] for r in rows})
     lines = ["| family | " + " | ".join(planners) + " |", "|---|" + "|".join("---" for _ in planners) + "|"]
     for family in families:
         cells = []

@@ -544,7 +544,7 @@ def _parallel(backend: str, workers: int, scheduler: str | None):
     # Ray's joblib backend returns lists only: the tasks go in chunks, each chunk's rows written when it ends.
     parallel = joblib.Parallel(n_jobs=workers if not scheduler else -1, return_as="list")
 
-    def close():
+    def close():  # type: ignore[no-redef]  # the other backends' close, above
         context.__exit__(None, None, None)
         ray.shutdown()
 

@@ -43,6 +43,7 @@ import os
 from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
@@ -431,7 +432,7 @@ def static(rng, index) -> dict:
         wall_y = half_width + 0.05
         door_x = float(rng.uniform(3.0, min(5.0, length - 1.5)))
         opens = rng.random() >= 1 / 3
-        door = {"points": [[door_x, -wall_y], [door_x, wall_y]]}
+        door: dict[str, Any] = {"points": [[door_x, -wall_y], [door_x, wall_y]]}
         if opens:
             door["until_s"] = float(rng.uniform(8.0, 20.0))
         else:

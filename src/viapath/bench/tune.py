@@ -45,7 +45,7 @@ import math
 import statistics
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -323,7 +323,7 @@ def run_study(
     timeout_s: float | None = None,
     backend: str = "loky",
     on_trial: Callable[[Any, Any], None] | None = None,
-    start_from: list[tuple[str, dict[str, Any]]] = (),
+    start_from: Sequence[tuple[str, dict[str, Any]]] = (),
 ) -> tuple[int, float]:
     """Run trials until the study has ``trials`` complete ones (or ``timeout_s`` passes); returns
     (trials run now, wall seconds). ``start_from``: (label, option values) tried first (once per study),

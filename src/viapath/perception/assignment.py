@@ -112,7 +112,7 @@ def brute_force_assignment(cost) -> tuple[np.ndarray, np.ndarray]:
 def gated_assignment(cost, gate: float) -> list[tuple[int, int]]:
     """Pairs (row, col) of minimum total cost, each with ``cost <= gate``; leaving both unmatched costs ``gate``."""
     cost = np.asarray(cost, dtype=float)
-    n_rows, n_cols = cost.shape
+    _n_rows, _n_cols = cost.shape
     allowed = np.isfinite(cost) & (cost <= gate)
     pairs: list[tuple[int, int]] = []
     if not allowed.any():

@@ -45,7 +45,7 @@ class Perception:
     #: Scan points of the last cycle in the world frame (laser models; empty for the others).
     last_points_world: np.ndarray = np.zeros((0, 2))
     #: The last cycle's scans, one per scanner, in their own frames (laser models; empty for the others).
-    last_scans: list = []
+    last_scans: list = []  # noqa: RUF012 -- an empty default each instance replaces, never mutates
 
     def reset(self, rng: np.random.Generator) -> None:
         self.rng = rng

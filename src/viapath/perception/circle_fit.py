@@ -87,7 +87,7 @@ def fit_circles(
             origins = np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
         prior = fixed_radius_m if fixed_radius_m is not None else radius_prior_m
         if fixed_radius_m is not None:
-            weight = 1e12
+            weight: float | np.ndarray = 1e12
         elif radius_prior_m is not None and np.isfinite(radius_prior_sigma_m) and radius_prior_sigma_m > 0:
             weight = (range_sigma_m / radius_prior_sigma_m) ** 2
         else:

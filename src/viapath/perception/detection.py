@@ -35,6 +35,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
@@ -76,7 +77,7 @@ class DetectorParams:
         """Real scans of walking people: legs (r ≈ 0.06 m) are the round things the laser sees."""
         # A leg (≤ 0.15 m wide, often half hidden by the other leg, 5–10 points at 3–5 m) is too short
         # a curve for the flatness tests; two legs in one segment (0.2–0.35 m) are not convex.
-        values = dict(
+        values: dict[str, Any] = dict(
             radius_prior_m=0.07,
             radius_prior_sigma_m=0.04,
             radius_max_m=0.3,

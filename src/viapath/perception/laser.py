@@ -158,8 +158,8 @@ class LaserPerception(Perception):
         self.last_robot_pose = robot_pose
         self.last_scans = scans
         detections = detect(self.scanners, scans, self.detector_params)
-        self.last_points_world = detections.fused.to_world(robot_pose)
-        self.last_points_scanner = detections.fused.scanner_index
+        self.last_points_world = detections.fused.to_world(robot_pose)  # type: ignore[union-attr]  # scans given
+        self.last_points_scanner = detections.fused.scanner_index  # type: ignore[union-attr]
         detections = detections.transformed(robot_pose)
         self.last_detections_world = detections
         tracker = self._tracker

@@ -22,10 +22,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 
-_NUMBA_KERNEL = None
+_NUMBA_KERNEL: Any = None
 _NUMBA_FAILED: str | None = None
 
 

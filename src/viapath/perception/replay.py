@@ -25,6 +25,7 @@ What we chose:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -100,7 +101,8 @@ def track_recording(
     """
     detector = detector or DetectorParams.for_legs()
     tracking = MultiTargetTracker(tracker or REAL_SCAN_TRACKER)
-    times, detections, rows, vel_sigma, points = [], [], [], [], []
+    times: list[Any] = []
+    detections, rows, vel_sigma, points = [], [], [], []
     start = None
     scanner = None
     for k, message in enumerate(messages):

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -125,7 +126,9 @@ class StaticObstacleLayer:
 
     def _from_scans(self, scanners, pose: np.ndarray, scans, track_positions, track_radii_m) -> StaticLayer:
         p = self.params
-        segments, runs, radii = [], [], []
+        segments: list[Any] = []
+        runs: list[Any] = []
+        radii: list[Any] = []
         for index, (scanner, ranges) in enumerate(zip(scanners, scans, strict=True)):
             ranges = np.asarray(ranges, dtype=float).reshape(-1)
             if len(ranges) != scanner.beam_count:

@@ -168,7 +168,7 @@ class MultiTargetTracker:
         self.confirmed |= recent_hits >= p.confirm_hits
         # Deletion: confirmed tracks after max_unseen_s; tentative ones when they cannot be confirmed
         # within their first confirm_window cycles any more, or are unseen too long.
-        unseen = self.time_s - self.last_seen_s
+        unseen = self.time_s - self.last_seen_s  # type: ignore[operator]  # set just above
         cycles_left = np.maximum(p.confirm_window - self.age, 0)
         hopeless = ~self.confirmed & (
             (unseen > p.tentative_max_unseen_s + 1e-9) | (recent_hits + cycles_left < p.confirm_hits)

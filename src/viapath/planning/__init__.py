@@ -11,11 +11,14 @@ from __future__ import annotations
 import importlib.util
 import warnings
 from importlib import metadata
+from typing import Any
 
+from viapath.observation import Decision, Plan
 from viapath.options import OptionSet
+from viapath.path import DesignatedPath
 from viapath.planning import baselines  # noqa: F401  (importing a planner's module registers it)
 from viapath.planning import viapath as _viapath  # noqa: F401
-from viapath.planning.base import PLANNERS, Decision, Plan, Planner, Situation
+from viapath.planning.base import PLANNERS, Planner, Situation
 
 if importlib.util.find_spec("navground") is not None:  # navground's behaviours: only with the extra
     from viapath.planning import navground_peers  # noqa: F401
@@ -50,7 +53,7 @@ def planner_options(name: str) -> OptionSet:
     return planner_class(name).options
 
 
-def make_planner(name: str, path, **kwargs) -> Planner:
+def make_planner(name: str, path: DesignatedPath, **kwargs: Any) -> Planner:
     return planner_class(name)(path, **kwargs)
 
 

@@ -26,7 +26,9 @@ import numpy as np
 from viapath.compiled import harness_kernels
 from viapath.guard import guard_plan, inspected
 from viapath.kinematics import steer_towards
-from viapath.observation import Command, Decision, MotionLimits, Observation, Obstacles, Plan
+from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
+from viapath.observation import Decision as Decision  # re-exported: the planners' results
+from viapath.observation import Plan as Plan
 from viapath.options import Option, OptionSet, Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.registry import Registry
@@ -76,7 +78,7 @@ class Inflation:
         if len(obstacles) == 0:
             return _NO_INFLATION
         margin, k = settings["safety_margin_m"], settings["uncertainty_sigmas"]
-        kernels = harness_kernels()
+        kernels = harness_kernels()  # type: ignore[no-untyped-call]
         if kernels is not None:  # the same numbers in one compiled call (viapath._harness_kernels.inflation)
             rows = np.empty((4, len(obstacles)))
             try:
@@ -128,7 +130,7 @@ class Situation:
     corridor_excess_m: float  # how far outside the corridor the robot already is (0 inside)
 
     @property
-    def robot(self):
+    def robot(self) -> RobotState:
         return self.observation.robot
 
     @property
@@ -144,15 +146,15 @@ class Planner:
     options: ClassVar[OptionSet] = COMMON_OPTIONS
     #: The shield behind the planner, when there is one (set by ``viapath.safety.ShieldedPlanner``); a
     #: planner that plans inside it (DESIGN §7) checks its candidates' commands with it.
-    shield = None
+    shield: Any = None
 
-    def __init_subclass__(cls, name: str | None = None, **kwargs):
+    def __init_subclass__(cls, name: str | None = None, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
         if name:
             cls.name = name
             PLANNERS.add(name, cls)
         if "plan" in cls.__dict__:  # every planner's cycle goes through the guarded entry (viapath.guard)
-            cls.plan = guard_plan(cls.__dict__["plan"])
+            cls.plan = guard_plan(cls.__dict__["plan"])  # type: ignore[method-assign]
 
     def __init__(
         self,
@@ -209,7 +211,7 @@ class Planner:
         """:meth:`Inflation.of` the obstacles and how far the robot is outside the corridor (the path's
         ``corridor_excess``). With numba both in one compiled call (:func:`viapath._harness_kernels.situation_numbers`,
         the same numbers): every cycle, where each call costs more than its arithmetic."""
-        kernels, n = harness_kernels(), len(obstacles)
+        kernels, n = harness_kernels(), len(obstacles)  # type: ignore[no-untyped-call]
         if kernels is not None and n and position.shape == (2,):
             x, y = float(position[0]), float(position[1])
             if math.isfinite(x) and math.isfinite(y):
@@ -276,7 +278,7 @@ class Planner:
         )
 
 
-def _check_description(planner: Planner, nominal_speed_mps, limits: MotionLimits, robot_radius_m) -> None:
+def _check_description(planner: Planner, nominal_speed_mps: float, limits: MotionLimits, robot_radius_m: float) -> None:
     """Refuse a robot description no robot has (:mod:`viapath.limits`), naming each bad field."""
     from viapath.limits import planner_description_errors
     from viapath.options import OptionError
@@ -287,4 +289,4 @@ def _check_description(planner: Planner, nominal_speed_mps, limits: MotionLimits
         raise OptionError([(f"{where}: {field}", message) for field, message in errors])
 
 
-Planner.plan = guard_plan(Planner.plan)  # the template is the entry of every planner: guarded too
+Planner.plan = guard_plan(Planner.plan)  # type: ignore[method-assign]  # the template is the entry of every planner: guarded too

@@ -39,22 +39,25 @@ What the sources leave open and we chose (and why):
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from viapath.geometry import closest_approach, legs_first_contact, wrap_angle
-from viapath.observation import Command
+from viapath.observation import Command, Decision, Plan
 from viapath.options import Option, OptionSet
-from viapath.planning.base import COMMON_OPTIONS, Decision, Plan, Planner, Situation
+from viapath.path import DesignatedPath
+from viapath.planning.base import COMMON_OPTIONS, Planner, Situation
 
 
 class _SubgoalFollower(Planner):
     """Shared by the baselines: the straight leg to the subgoal (paper §2) and the options as attributes."""
 
-    def __init__(self, path, **kwargs):
+    def __init__(self, path: DesignatedPath, **kwargs: Any) -> None:
         super().__init__(path, **kwargs)
         self.config = self.settings
 
-    def _straight(self, situation: Situation, status="straight") -> Decision:
+    def _straight(self, situation: Situation, status: str = "straight") -> Decision:
         speed, position, subgoal = self.nominal_speed_mps, situation.position, situation.subgoal
         plan = Plan(
             status,
@@ -263,7 +266,9 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
         return Decision(Command(float(v[best]), float(w[best])), plan)
 
 
-def _arcs(position, heading_rad, speeds, turn_rates, times):
+def _arcs(
+    position: np.ndarray, heading_rad: float, speeds: np.ndarray, turn_rates: np.ndarray, times: np.ndarray
+) -> np.ndarray:
     """Poses (K, S, 3) along constant-(v, ω) arcs from the robot pose."""
     t = times[None, :]
     v, w = speeds[:, None], turn_rates[:, None]

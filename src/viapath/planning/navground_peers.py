@@ -23,11 +23,14 @@ What we chose to put them behind the planner protocol:
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
-from viapath.observation import Command
+from viapath.observation import Command, Decision, Plan
 from viapath.options import Option, OptionSet
-from viapath.planning.base import COMMON_OPTIONS, Decision, Plan, Planner, Situation
+from viapath.path import DesignatedPath
+from viapath.planning.base import COMMON_OPTIONS, Planner, Situation
 
 
 def corridor_borders(waypoints: np.ndarray, half_widths: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -37,7 +40,8 @@ def corridor_borders(waypoints: np.ndarray, half_widths: np.ndarray) -> list[tup
     directions = np.diff(waypoints, axis=0)
     directions /= np.hypot(*directions.T)[:, None]
     normals = np.stack([-directions[:, 1], directions[:, 0]], axis=1)  # left of travel
-    segments, ends = [], []
+    segments: list[Any] = []
+    ends: list[Any] = []
     for side in (1.0, -1.0):
         points = []
         n = len(directions)
@@ -81,7 +85,7 @@ class _NavgroundPeer(Planner):
         owner="navground",
     )
 
-    def __init__(self, path, **kwargs):
+    def __init__(self, path: DesignatedPath, **kwargs: Any) -> None:
         super().__init__(path, **kwargs)
         import navground.core as core  # imported here: the extra is optional
 
@@ -120,7 +124,7 @@ class _NavgroundPeer(Planner):
         behavior.velocity = robot.velocity
         behavior.angular_speed = float(robot.turn_rate_radps)
         radii = situation.inflation.obstacle_radii_m
-        state = behavior.environment_state
+        state: Any = behavior.environment_state  # a geometric state: neighbours, discs and lines
         people = ~obstacles.is_static
         state.neighbors = [
             core.Neighbor(p, float(r), v, int(i) % 2**31)

@@ -65,6 +65,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
@@ -185,7 +186,7 @@ class PlannerCore:
         self.path: DesignatedPath | None = None
         self.path_cleared = False  # by an empty path message
         self.paths_refused = 0
-        self.planner = None
+        self.planner: Any = None  # made with the path
         self.odometry: Odometry | None = None
         self.odom_refused: dict[str, int] = {}
         self.last_cycle_stamp_s: float | None = None
@@ -248,7 +249,7 @@ class PlannerCore:
         compile_planner_kernels()  # the planner's whole-step kernels too, before the node's planner is made
         planner = self._make_planner(path, SubgoalPolicy())
         planner.plan(
-            Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles([[2.0, 0.0]], [[-0.3, 0.0]], [0.25]))
+            Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles([[2.0, 0.0]], [[-0.3, 0.0]], [0.25]))  # type: ignore[arg-type]  # lists: Obstacles makes arrays of them
         )
 
     # -- inputs --------------------------------------------------------------------------------
@@ -381,7 +382,7 @@ class PlannerCore:
             if self.settings.scan_geometry == "urg04lx":
                 yaw = mount[2]
             else:  # the model's axis is the middle beam of the message's layout
-                yaw = mount[2] + h.angle_min_rad + 0.5 * (h.model.beam_count - 1) * h.model.angle_increment_rad
+                yaw = mount[2] + h.angle_min_rad + 0.5 * (h.model.beam_count - 1) * h.model.angle_increment_rad  # type: ignore[attr-defined]  # set with the model, by on_scan
             h.model = replace(h.model, mount_x_m=mount[0], mount_y_m=mount[1], mount_yaw_rad=_wrap(yaw))
         return True
 
@@ -424,8 +425,8 @@ class PlannerCore:
         self._odom_history = [o for o in self._odom_history if o.stamp_s >= stamp_s - window] + [sample]
         if jump:  # the pose is the new reference: tracks placed in the old one are wrong
             self._odom_history = [sample]
-            self.refuse_odometry(now_s, "jump", problem, counted_as_refused=False)
-            self._reset_tracks(f"odometry: {problem}")
+            self.refuse_odometry(now_s, "jump", problem[1], counted_as_refused=False)  # type: ignore[index]  # a jump has a problem
+            self._reset_tracks(f"odometry: {problem[1]}")  # type: ignore[index]
             self.odometry = sample
             return True
         if problem is not None:
@@ -604,7 +605,7 @@ class PlannerCore:
             except ValueError as error:  # anything the scanner model refuses that the check above let through
                 h.refuse("layout", str(error))
                 return False
-            h.angle_min_rad = angle_min_rad
+            h.angle_min_rad = angle_min_rad  # type: ignore[attr-defined]
         model = h.model
         expected_min = getattr(h, "angle_min_rad", model.angle_min_rad)
         if len(ranges) != model.beam_count:
@@ -708,12 +709,12 @@ class PlannerCore:
             reasons.append(PATH_CLEARED if self.path_cleared else NO_PATH)
         if not self.odometry_fresh(now_s):
             reasons.append(
-                "no odometry for %.2f s" % self.settings.odom_timeout_s
+                f"no odometry for {self.settings.odom_timeout_s:.2f} s"
                 if self.odometry is not None or any(h.good for h in self.health)
                 else "no odometry yet"
             )
         if self.odometry_fault_active(now_s):
-            reasons.append(f"odometry fault: {self.odom_fault[1]}")
+            reasons.append(f"odometry fault: {self.odom_fault[1]}")  # type: ignore[index]  # active: set
         if not self.live_scanners(now_s):
             reasons.append(
                 f"no scan for {self.settings.scan_timeout_s:g} s" if any(h.good for h in self.health) else "no scan yet"
@@ -858,9 +859,9 @@ class PlannerCore:
         self._now_s = now_s
         live = self.live_scanners(now_s)
         used = [i for i in live if self.health[i].pending is not None]
-        stamp = max(self.health[i].pending[0] for i in used) if used else now_s
+        stamp = max(self.health[i].pending[0] for i in used) if used else now_s  # type: ignore[index]  # used: pending
         reasons = self._stop_reasons(now_s)
-        scans = [(self.health[i].model, self.health[i].pending[1]) for i in used]
+        scans = [(self.health[i].model, self.health[i].pending[1]) for i in used]  # type: ignore[index]
         for h in self.health:
             h.pending = None
         if self.hold_until_stamp_s == -math.inf:
@@ -896,10 +897,10 @@ class PlannerCore:
         else:
             o = self.odometry
             robot = RobotState(
-                pose[:2].copy(),
-                float(pose[2]),
-                min(max(o.speed_mps, 0.0), self.limits.max_speed_mps),
-                o.turn_rate_radps,
+                pose[:2].copy(),  # type: ignore[index]  # no stop reason: pose and odometry known
+                float(pose[2]),  # type: ignore[index]
+                min(max(o.speed_mps, 0.0), self.limits.max_speed_mps),  # type: ignore[union-attr]
+                o.turn_rate_radps,  # type: ignore[union-attr]
                 self.settings.robot_radius_m,
             )
             static = self.map_layer.concatenate(self.static_now)

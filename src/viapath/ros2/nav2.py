@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -43,7 +44,7 @@ from viapath.ros2.tf import TransformBuffer, apply
 
 @dataclass
 class _Goal:
-    handle: object
+    handle: Any  # rclpy's ServerGoalHandle
     future: object
     request_path: object
     accepted_s: float
@@ -57,7 +58,7 @@ def make_nav2_interface_class():
     class Nav2Interface:
         """Owned by the node in ``interface: nav2``; everything runs in the node's executor thread."""
 
-        def __init__(self, node):
+        def __init__(self, node: Any) -> None:
             from viapath.ros2 import interfaces
 
             interfaces.load(progress=lambda text: node.get_logger().info(text))

@@ -22,6 +22,7 @@ import json
 import math
 import sys
 import time
+from typing import Any
 
 import numpy as np
 
@@ -89,7 +90,7 @@ def run_follow(
     from nav2_msgs.srv import ClearEntireCostmap
 
     schedule = sorted(parse_event(e) for e in (events or []))
-    log = open(log_file, "a") if log_file else sys.stdout
+    log = open(log_file, "a") if log_file else sys.stdout  # noqa: SIM115 -- the file or stdout, for the whole run
 
     def write(**item) -> None:
         log.write(json.dumps(item) + "\n")
@@ -112,10 +113,10 @@ def run_follow(
 
     node, stop, previous = start_ros_process("viapath_follow", ros_args)
     try:
-        client = ActionClient(node, FollowPath, action)
+        client: Any = ActionClient(node, FollowPath, action)
         speed_pub = node.create_publisher(SpeedLimit, "speed_limit", 10)
         clear = node.create_client(ClearEntireCostmap, "local_costmap/clear_entirely_local_costmap")
-        change = node.create_client(ChangeState, f"{lifecycle_node}/change_state") if lifecycle_node else None
+        change: Any = node.create_client(ChangeState, f"{lifecycle_node}/change_state") if lifecycle_node else None
         started = time.monotonic()
 
         def now() -> float:
@@ -149,7 +150,7 @@ def run_follow(
                 print(f"error: no action server {action}", file=sys.stderr)
                 return 3
 
-        state = {
+        state: dict[str, Any] = {
             "points": load_points(source),
             "goal": None,
             "sent": -math.inf,

@@ -73,10 +73,12 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.path import DesignatedPath
@@ -263,10 +265,12 @@ class Shield:
         self.config = config or ShieldConfig()
         # numpy (the reference below) or numba (viapath.safety.kernels, the same arithmetic compiled).
         self.backend = shield_backend(self.config.backend)
-        self._kernel_settings: tuple | None = None  # the compiled test's constants (and what they were made of)
+        self._kernel_settings: tuple[Any, ...] | None = (
+            None  # the compiled test's constants (and what they were made of)
+        )
         # Within one cycle of a shielded planner (:meth:`remembering`), the verdicts on single commands: the
         # planner tests its chosen command against this observation and the filter then tests the same one.
-        self._verdicts: dict | None = None
+        self._verdicts: dict[Any, Any] | None = None
         # The designated path whose corridor the robot must stay in (set by its owner each cycle; None: no
         # corridor, e.g. no path yet). Only read when ``config.keep_in_corridor``.
         self.corridor: DesignatedPath | None = None
@@ -289,7 +293,7 @@ class Shield:
         return self._evaluate(observation, commands)
 
     @contextlib.contextmanager
-    def remembering(self):
+    def remembering(self) -> Iterator[None]:
         """Within this block (one planning cycle: the observation does not change) a single command is
         tested once against one observation, and its verdict reused (evaluate is a pure function of them).
         The verdicts are read, never changed, by their users."""
@@ -577,7 +581,16 @@ class Shield:
             )
         return cached[0], cached[1]
 
-    def _friendly(self, out, sweep: Sweep, people, base, growth, accel, near) -> None:
+    def _friendly(
+        self,
+        out: dict[str, np.ndarray],
+        sweep: Sweep,
+        people: Obstacles,
+        base: np.ndarray,
+        growth: np.ndarray,
+        accel: float,
+        near: np.ndarray,
+    ) -> None:
         """Passive friendly: the person, braking from its forecast at the robot's rest time, stops short."""
         idx = np.flatnonzero(near)
         if len(idx) == 0:
@@ -705,7 +718,7 @@ class Shield:
                 tested + 1,
                 passing,
             )
-        common = dict(
+        common: dict[str, Any] = dict(
             person_id=person_id, meet_time_s=meet, candidates=tested + 1, admissible_candidates=passing + int(own_ok)
         )
         if friendly_mode and own_ok:
@@ -768,7 +781,9 @@ class Shield:
                 passive_pick = int(chunk[np.argmax(check["admissible"])])
         return None, passive_pick, tested, passing, reached
 
-    def _keep_to_corridor(self, observation: Observation, found) -> bool:
+    def _keep_to_corridor(
+        self, observation: Observation, found: tuple[int | None, int | None, int, int, np.ndarray]
+    ) -> bool:
         pick, passive_pick, _, _, reached = found
         picks = [index for index in (pick, passive_pick) if index is not None]
         if not picks:
@@ -781,7 +796,9 @@ class Shield:
         self._and_corridor(observation, verdict)
         return bool(verdict["admissible"].all())
 
-    def _search_compiled(self, observation: Observation, command: Command):
+    def _search_compiled(
+        self, observation: Observation, command: Command
+    ) -> tuple[int | None, int | None, int, int, np.ndarray]:
         """:meth:`_search` compiled (:func:`viapath.safety.kernels.shield`: same candidates, order and chunks)."""
         from viapath.safety import kernels
 
@@ -819,7 +836,7 @@ class Shield:
         return Command(float(reached[index, 0]), float(reached[index, 1]))
 
 
-def _robot_array(robot) -> np.ndarray:
+def _robot_array(robot: RobotState) -> np.ndarray:
     """x, y, heading, speed, turn rate, radius: the compiled kernels' robot state."""
     position = robot.position
     return np.array(
@@ -828,7 +845,7 @@ def _robot_array(robot) -> np.ndarray:
     )
 
 
-def _c(array) -> np.ndarray:
+def _c(array: ArrayLike) -> np.ndarray:
     return np.ascontiguousarray(array, dtype=np.float64)
 
 

@@ -13,8 +13,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from viapath.observation import Observation
-from viapath.planning.base import Decision, Plan, Planner
+from viapath.observation import Decision, Observation, Plan
+from viapath.path import SubgoalTracker
+from viapath.planning.base import Planner
 from viapath.safety.shield import Shield, ShieldConfig
 
 SHIELDED_BY_DEFAULT = frozenset({"viapath"})
@@ -28,7 +29,9 @@ def shield_default(planner_name: str) -> bool:
 class ShieldedPlanner(Planner):
     """The inner planner's decisions, with every command made passively safe."""
 
-    def __init__(self, inner: Planner, dt_s: float = 0.1, config: ShieldConfig | None = None):
+    shield: Shield
+
+    def __init__(self, inner: Planner, dt_s: float = 0.1, config: ShieldConfig | None = None) -> None:
         # No super().__init__: the inner planner owns the path, limits and subgoal tracking.
         self.inner = inner
         self.path = inner.path
@@ -47,7 +50,7 @@ class ShieldedPlanner(Planner):
         return self.inner.name
 
     @property
-    def subgoals(self):  # type: ignore[override]
+    def subgoals(self) -> SubgoalTracker:  # type: ignore[override]
         return self.inner.subgoals
 
     def reset(self) -> None:

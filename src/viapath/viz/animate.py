@@ -174,11 +174,11 @@ def _write_mp4(images, file: Path, fps: int, total: int, progress, fig) -> None:
     with subprocess.Popen(command, stdin=subprocess.PIPE, stderr=subprocess.PIPE) as ffmpeg:
         try:
             for i, rgba in enumerate(images):
-                ffmpeg.stdin.write(np.ascontiguousarray(rgba).tobytes())
+                ffmpeg.stdin.write(np.ascontiguousarray(rgba).tobytes())  # type: ignore[union-attr]  # stdin=PIPE
                 if progress is not None:
                     progress(i, total)
         finally:
-            ffmpeg.stdin.close()
-            error = ffmpeg.stderr.read().decode(errors="replace")
+            ffmpeg.stdin.close()  # type: ignore[union-attr]
+            error = ffmpeg.stderr.read().decode(errors="replace")  # type: ignore[union-attr]
         if ffmpeg.wait() != 0:
             raise RuntimeError(f"ffmpeg could not write {file}: {error.strip()[-500:]}")

@@ -79,7 +79,7 @@ XYT = "/xyt"
 METRICS = "/metrics"
 WORLD, BASE, XYT_FRAME = "world", "base", "xyt"
 
-COSTS_SCHEMA = {
+COSTS_SCHEMA: dict[str, Any] = {
     "title": "viapath.PlanCosts",
     "type": "object",
     "properties": {
@@ -93,7 +93,7 @@ COSTS_SCHEMA = {
         "margin": {"type": ["number", "null"], "description": "E(runner-up) - E(chosen)"},
     },
 }
-METRICS_SCHEMA = {
+METRICS_SCHEMA: dict[str, Any] = {
     "title": "viapath.Metrics",
     "type": "object",
     "properties": {
@@ -174,7 +174,7 @@ class FoxglovePublisher:
         self.m = messages
         self.context = context
         self.settings = settings
-        self.builder: SceneBuilder | None = None
+        self.builder: SceneBuilder = None  # type: ignore[assignment]  # made by start(), at the first cycle
         self.path = path
         self.robot_radius_m = robot_radius_m
         self.xyt_segments = int(xyt_segments)
@@ -231,7 +231,7 @@ class FoxglovePublisher:
         """The scene of one cycle from :func:`viapath.viz.mcap_process.cycle_input` (the writer process
         receives the same tuple)."""
         *cycle, truth, parts = scene_inputs(inputs, self.run_static)
-        return self.builder.build(*cycle, true_people=truth, perception_parts=parts)
+        return self.builder.build(*cycle, true_people=truth, perception_parts=parts)  # type: ignore[misc]
 
     def open_channels(self, scene: CycleScene) -> None:
         if not self.channels:
@@ -600,7 +600,8 @@ class FoxglovePublisher:
         if key in self.static:
             return self.static[key]
         w = self.wire
-        fields, template = [], []
+        fields: list[tuple[Any, ...]] = []
+        template: list[bytes] = []
 
         def const(data: bytes) -> None:
             fields.append((f"c{len(fields)}", f"V{len(data)}"))
@@ -656,13 +657,13 @@ class FoxglovePublisher:
             def put(field: str, first: int, xyz: np.ndarray, strides: tuple = ()) -> None:
                 # The x, y, z of each point record (tag, length, then a tag before each double: 29
                 # bytes) as one strided view of unaligned doubles, written in one assignment.
-                offset = dtype.fields[field][1] + 29 * first + 3
+                offset = dtype.fields[field][1] + 29 * first + 3  # type: ignore[index]  # a structured dtype
                 np.ndarray(xyz.shape, dtype="<f8", buffer=records, offset=offset, strides=(size, *strides, 29, 9))[
                     ...
                 ] = xyz
 
             # The three rings' lines have the same layout one after the other: one view for all.
-            put("ring0", 0, rings, (dtype.fields["ring1"][1] - dtype.fields["ring0"][1],))
+            put("ring0", 0, rings, (dtype.fields["ring1"][1] - dtype.fields["ring0"][1],))  # type: ignore[index]
             put("axis", 0, axes)
             put("mesh", 0, rings.reshape(count, 3 * segments, 3))
             put("mesh", 3 * segments, caps)
@@ -720,7 +721,7 @@ def costs_message(scene: CycleScene) -> dict:
     plan = scene.plan
     terms = plan.cost_terms or {}
 
-    def one(index, cost, key):
+    def one(index: Any, cost: Any, key: str) -> dict[str, Any] | None:
         if index is None:
             return None
         entry: dict[str, Any] = {"index": int(index), "E": _finite(cost)}
@@ -826,11 +827,11 @@ class Views:
         self.announce = announce or (lambda message: None)
         self.on_step: Callable | None = None
         self.planner_overrides: dict[str, Any] | None = None
-        self.server = None
-        self.writer = None
-        self.writer_process = None  # viapath.viz.mcap_process.MCAPWriterProcess (an MCAP without --live)
+        self.server: Any = None
+        self.writer: Any = None
+        self.writer_process: Any = None  # viapath.viz.mcap_process.MCAPWriterProcess (an MCAP without --live)
         self.in_process = in_process
-        self.publisher: FoxglovePublisher | None = None
+        self.publisher: FoxglovePublisher = None  # type: ignore[assignment]  # made on entering, before any cycle
         self._clock_start: float | None = None
         if self.mcap is not None or live:
             _foxglove()
@@ -854,7 +855,13 @@ class Views:
             from viapath.viz.mcap_process import MCAPWriterProcess
 
             self.writer_process = MCAPWriterProcess(
-                self.mcap, self.force, path, self.scenario.robot.radius, FoxglovePublisher, ViewError, self.settings
+                self.mcap,  # type: ignore[arg-type]  # active and not live: an MCAP file
+                self.force,
+                path,
+                self.scenario.robot.radius,
+                FoxglovePublisher,
+                ViewError,
+                self.settings,
             )
             self.on_step = self.writer_process
             return self

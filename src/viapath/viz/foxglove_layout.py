@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 from viapath.viz.foxglove import (
     BLIND,
@@ -38,7 +39,7 @@ def layout(scanners: tuple[str, ...] = ("front", "rear")):
     import foxglove.layouts as fl
 
     scene = fl.BaseRendererSceneUpdateTopicSettings
-    world_topics = {
+    world_topics: dict[str, Any] = {
         topic: scene(visible=True) for topic in (FOOTPRINT, BLIND, DETECTIONS, TRACKS, PATH, CANDIDATES, CHOSEN)
     }
     world_topics[XYT] = scene(visible=False)
@@ -46,7 +47,7 @@ def layout(scanners: tuple[str, ...] = ("front", "rear")):
         world_topics[scan_topic(name)] = fl.BaseRendererLaserScanTopicSettings(
             visible=True, point_size=3.0, color_mode="flat", flat_color=colour
         )
-    grid = {
+    grid: dict[str, Any] = {
         "grid": fl.BaseRendererGridLayerSettings(layer_id="foxglove.Grid", frame_id="world", size=20.0, divisions=20.0)
     }
     world = fl.ThreeDeePanel(
@@ -60,7 +61,7 @@ def layout(scanners: tuple[str, ...] = ("front", "rear")):
             camera_state=fl.ThreeDeeCameraState(perspective=False, distance=12.0, phi=0.0, theta_offset=0.0),
         ),
     )
-    xyt_topics = {topic: scene(visible=False) for topic in world_topics if topic != XYT}
+    xyt_topics: dict[str, Any] = {topic: scene(visible=False) for topic in world_topics if topic != XYT}
     xyt_topics[XYT] = scene(visible=True)
     xyt = fl.ThreeDeePanel(
         title="x-y-t (paper Fig. 4): people as cylinders, plan through via points",

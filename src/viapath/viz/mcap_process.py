@@ -50,7 +50,7 @@ import pickle
 import signal
 import threading
 import traceback
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import Any
 
@@ -363,14 +363,10 @@ def _writer_main(
         connection.send((_DONE, publisher.cycles))
     except BaseException as error:  # every failure goes back to the run's process as text
         if writer is not None:
-            try:
+            with suppress(Exception):
                 writer.close()
-            except Exception:
-                pass
-        try:
+        with suppress(Exception):
             connection.send((_FAILED, f"{type(error).__name__}: {error}\n{traceback.format_exc(limit=4)}"))
-        except Exception:
-            pass
     finally:
         connection.close()
 
@@ -394,12 +390,13 @@ class MCAPWriterProcess:
         self._error = error
         self.file = Path(file)
         self.cycles = 0  # handed to the writer (sent or pending)
-        self._static, self._static_sent = None, False
+        self._static: tuple[Any, ...] | None = None
+        self._static_sent = False
         self._pending: list[tuple] = []
         self._pending_bytes = 0
         ctx = multiprocessing.get_context(_start_method())
         self._connection, child = ctx.Pipe(duplex=True)
-        self.process = ctx.Process(
+        self.process = ctx.Process(  # type: ignore[attr-defined]
             target=_writer_main,
             name="viapath-mcap-writer",
             daemon=True,
@@ -457,7 +454,7 @@ class MCAPWriterProcess:
                 self._connection.send_bytes(message)
         except (BrokenPipeError, OSError):
             self._check_ready(wait=True)  # a writer that could not open the file says so
-            kind, detail = self._receive()
+            _kind, detail = self._receive()
             self._stop()
             raise self._error(f"--mcap {self.file}: the writer failed ({detail})") from None
 

@@ -85,7 +85,7 @@ def draw_scene(
         track = trace.obstacle_positions[:n, j]
         ax.plot(*track.T, color="#c0392b", lw=0.6, alpha=0.5, zorder=3)
     if len(trace.obstacle_radii_m):
-        ax.plot([], [], "o", mfc="none", mec="#c0392b", ms=9, label="obstacle (every %.0f s)" % obstacle_every_s)
+        ax.plot([], [], "o", mfc="none", mec="#c0392b", ms=9, label=f"obstacle (every {obstacle_every_s:.0f} s)")
 
     ax.plot(*trace.robot_poses[:n, :2].T, color="0.35", lw=0.8, zorder=4)
     shown = np.arange(0, n, max(1, int(round(robot_every_s / trace.dt_s))))

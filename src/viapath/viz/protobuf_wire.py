@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import struct
+from collections.abc import Sequence
 from functools import lru_cache
 
 import numpy as np
@@ -172,8 +173,8 @@ def scene_entity(
     stamp_ns: int,
     frame_id: str,
     entity_id: str,
-    lines: list[bytes] = (),
-    triangles: list[bytes] = (),
+    lines: Sequence[bytes] = (),
+    triangles: Sequence[bytes] = (),
     other: bytes = b"",
 ) -> bytes:
     """An encoded ``foxglove.SceneEntity``; ``other``: the SDK's encoding of an entity holding the

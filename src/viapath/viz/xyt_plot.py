@@ -131,7 +131,7 @@ def plot_cycle(scene: CycleScene, path_view, file: str | Path, title: str | None
     top.grid(alpha=0.3)
 
     # -- x-y-t, time as the height (seconds after this cycle)
-    for i, person in enumerate(scene.xyt.persons):
+    for i, _person in enumerate(scene.xyt.persons):
         triangles = scene.xyt.mesh(i, 32)
         xyt.add_collection3d(Poly3DCollection(triangles, facecolor="#d62728", alpha=0.18, edgecolor="none"))
         axis = scene.xyt.axis_xyt(i)

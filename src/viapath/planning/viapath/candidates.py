@@ -39,11 +39,14 @@ positions.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from viapath.geometry import VIA_ROOTS as _ROOTS
 from viapath.geometry import VIA_SIDES as _SIDES
+from viapath.options import Settings
 from viapath.planning.viapath.checks import LegChecks
 
 # The "obstacle" of a way that is not round an obstacle.
@@ -77,7 +80,7 @@ class _Tree:
     """Growable columns of search nodes: where and when the robot is, at which speed, how it got there."""
 
     # name: (shape of a row, dtype)
-    COLUMNS = {
+    COLUMNS: ClassVar[dict[str, tuple[tuple[int, ...], type]]] = {
         "position": ((2,), float),
         "time_s": ((), float),
         "speed": ((), float),
@@ -91,10 +94,12 @@ class _Tree:
 
     def __init__(self, capacity: int = 128):
         # Filled in place, doubled when full: a cycle extends the tree a few times and reads it after each.
-        self._columns = {name: np.empty((capacity, *shape), dtype) for name, (shape, dtype) in self.COLUMNS.items()}
+        self._columns: dict[str, np.ndarray] = {
+            name: np.empty((capacity, *shape), dtype) for name, (shape, dtype) in self.COLUMNS.items()
+        }
         self._size = 0
 
-    def extend(self, **columns) -> np.ndarray:
+    def extend(self, **columns: np.ndarray) -> np.ndarray:
         start = self._size
         end = start + len(columns["position"])
         if end > len(self._columns["position"]):
@@ -185,10 +190,12 @@ class RootLegs:
         return bool(self.free[self.nominal_index])
 
 
-def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | None = None) -> Candidates | None:
+def grow(
+    checks: LegChecks, roots: RootLegs, config: Settings, slow_checks: LegChecks | None = None
+) -> Candidates | None:
     """Every complete candidate of the cycle (straight, slow/wait, corners, via-point chains).
     ``slow_checks`` (default ``checks``) checks the first, slow leg of the slow/wait candidates."""
-    compiled = checks.backend.grow(checks, slow_checks or checks, roots, config)
+    compiled = checks.backend.grow(checks, slow_checks or checks, roots, config)  # type: ignore[no-untyped-call]
     if compiled is not None:
         return _candidates_of(compiled, checks.subgoal)
     speeds = roots.speeds
@@ -203,7 +210,8 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
         first_direction=roots.directions,
         way=_ways(n_speeds, STRAIGHT),
     )
-    leaves, goal_length = [frontier[roots.free]], [roots.lengths[roots.free]]
+    leaves: Any = [frontier[roots.free]]  # a list of arrays, then their concatenation
+    goal_length = [roots.lengths[roots.free]]
     if config.slow_times_s and len(checks.obstacles):
         slowing = _slow_candidates(checks, slow_checks or checks, tree, speeds, roots.nominal_index, config)
         if slowing is not None:
@@ -251,7 +259,7 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
     )
 
 
-def _candidates_of(store, subgoal: np.ndarray) -> Candidates | None:
+def _candidates_of(store: tuple[np.ndarray, np.ndarray], subgoal: np.ndarray) -> Candidates | None:
     """Candidates from the compiled tree's node store (:meth:`.backend.Backend.grow`): the same arrays as
     the numpy :func:`grow` builds, leaves in node order as there."""
     floats, integers = store
@@ -282,14 +290,14 @@ def _candidates_of(store, subgoal: np.ndarray) -> Candidates | None:
     )
 
 
-def _ways(count: int, obstacle, side=0, root=0) -> np.ndarray:
+def _ways(count: int, obstacle: ArrayLike, side: ArrayLike = 0, root: ArrayLike = 0) -> np.ndarray:
     """(count, 3) ways round: the obstacle, side and root of each row (a number for all, or one per row)."""
     ways = np.empty((count, 3), dtype=int)
     ways[:, 0], ways[:, 1], ways[:, 2] = obstacle, side, root
     return ways
 
 
-def _root_pairs(contact: np.ndarray, limit: int):
+def _root_pairs(contact: np.ndarray, limit: int) -> tuple[np.ndarray, np.ndarray]:
     """(row, obstacle) pairs to branch on at the root: each obstacle the leg hits, earliest first."""
     rows, cols = np.isfinite(contact).nonzero()
     if limit and len(rows) > limit:
@@ -326,7 +334,8 @@ def _round_static_shapes(
     from the node (:meth:`.checks.LegChecks.static_extremes`): via points go round the whole shape, not
     round the one disc a leg met first. Pairs of people stay as they are; repeated pairs are made once."""
     labels = checks.static_labels()
-    pairs, known = {}, {}  # (node, obstacle) in the order made, once each
+    pairs: dict[tuple[int, int], None] = {}  # (node, obstacle) in the order made, once each
+    known: dict[tuple[float, float, int], Any] = {}
     for node, obstacle in zip(node_index.tolist(), obstacle_index.tolist()):
         if labels[obstacle] < 0:
             pairs[node, obstacle] = None
@@ -342,14 +351,16 @@ def _round_static_shapes(
     return made[:, 0], made[:, 1]
 
 
-def _via_children(checks: LegChecks, data, node_index, obstacle_index, is_root: bool):
+def _via_children(
+    checks: LegChecks, data: dict[str, np.ndarray], node_index: np.ndarray, obstacle_index: np.ndarray, is_root: bool
+) -> dict[str, np.ndarray] | None:
     """Via-point children of each (node, obstacle) pair: both sides, both roots, legs checked."""
     starts = data["position"][node_index]
     times = data["time_s"][node_index]
     speeds = data["speed"][node_index]
     obstacles = checks.obstacles
     # The radius grows with prediction uncertainty; it is evaluated near the expected passing time.
-    pair, option, t_k, leg_velocity, via = checks.backend.via_options(
+    pair, option, t_k, leg_velocity, via = checks.backend.via_options(  # type: ignore[no-untyped-call]
         starts,
         times,
         speeds,
@@ -430,8 +441,8 @@ def _corner_nodes(checks: LegChecks, tree: _Tree, speeds: np.ndarray) -> np.ndar
 
 
 def _slow_candidates(
-    checks: LegChecks, slow_checks: LegChecks, tree: _Tree, speeds: np.ndarray, nominal_index: int, config
-):
+    checks: LegChecks, slow_checks: LegChecks, tree: _Tree, speeds: np.ndarray, nominal_index: int, config: Settings
+) -> tuple[np.ndarray, np.ndarray] | None:
     """Stand still or drive slower than nominal towards the subgoal for each of ``slow_times_s``,
     then on at the nominal speed or faster. Returns (leaf node indices, goal leg lengths) or None."""
     if not checks.goal_legs_inside(checks.position[None])[0]:

@@ -22,12 +22,15 @@ What the paper leaves open and we chose:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
 from viapath.geometry import cross2
 from viapath.observation import Obstacles
+from viapath.options import Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.planning.base import Inflation, Situation
 from viapath.planning.viapath.backend import NUMPY, Backend
@@ -82,7 +85,7 @@ class LegChecks:
     def of(
         cls,
         situation: Situation,
-        config,
+        config: Settings,
         tracker: SubgoalTracker,
         policy: SubgoalPolicy,
         robot_radius_m: float,
@@ -115,7 +118,9 @@ class LegChecks:
             backend=backend,
         )
 
-    def with_less_inflation(self, fraction: float, robot_radius_m: float, settings, cap_too: bool = False) -> LegChecks:
+    def with_less_inflation(
+        self, fraction: float, robot_radius_m: float, settings: Mapping[str, Any], cap_too: bool = False
+    ) -> LegChecks:
         """The same checks with ``fraction`` of the obstacles' uncertainty inflation (σ terms; with
         ``cap_too`` the cap on the cone's growth as well)."""
         obstacles = self.obstacles
@@ -158,7 +163,13 @@ class LegChecks:
     # -- against the forecast ----------------------------------------------------------------------
 
     def contact_times(
-        self, starts, start_times, velocities, durations, horizon_s=None, keep_envelope: bool = False
+        self,
+        starts: np.ndarray,
+        start_times: np.ndarray,
+        velocities: np.ndarray,
+        durations: np.ndarray,
+        horizon_s: float | None = None,
+        keep_envelope: bool = False,
     ) -> np.ndarray:
         """(K, N) first contact of each leg with each obstacle, up to the horizon; inf = free. With
         ``keep_envelope`` (and a shield behind the planner) each leg also keeps its braking envelope."""
@@ -229,10 +240,14 @@ class LegChecks:
         half = np.arcsin(radii / distance)
         return int(members[np.argmax(relative + half)]), int(members[np.argmin(relative - half)])
 
-    def legs_free(self, starts, start_times, velocities, durations) -> np.ndarray:
+    def legs_free(
+        self, starts: np.ndarray, start_times: np.ndarray, velocities: np.ndarray, durations: np.ndarray
+    ) -> np.ndarray:
         return np.isinf(self.contact_times(starts, start_times, velocities, durations)).all(axis=1)
 
-    def goal_legs(self, starts, start_times, speeds, horizon_s=None):
+    def goal_legs(
+        self, starts: np.ndarray, start_times: np.ndarray, speeds: np.ndarray, horizon_s: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N))."""
         compiled = self.backend.goal_legs(
             self, starts, start_times, speeds, self.horizon_s if horizon_s is None else horizon_s
@@ -267,7 +282,7 @@ class LegChecks:
     # -- the same facts as the compiled kernels take them (C-contiguous float64, made once per LegChecks: a
     # LegChecks is not changed after it is built; dataclasses.replace makes a new one, without these) --
 
-    def kernel_obstacles(self) -> tuple:
+    def kernel_obstacles(self) -> tuple[np.ndarray, ...]:
         """positions, velocities, check radii, growth, growth_until_s of the obstacles, for the kernels."""
         cached = self.__dict__.get("_kernel_obstacles")
         if cached is None:
@@ -282,7 +297,7 @@ class LegChecks:
             )
         return cached
 
-    def kernel_choice_inputs(self) -> tuple:
+    def kernel_choice_inputs(self) -> tuple[Any, ...]:
         """What the choice kernel takes of this cycle (:func:`.kernels.choose`'s order): the robot
         (:meth:`kernel_robot`), the obstacles (:meth:`kernel_obstacles`), the via radii, the ids, the
         continuation, the envelope, and the path's segment arrays and waypoints. Built in one go, every cycle:
@@ -292,7 +307,7 @@ class LegChecks:
         if cached is not None:
             return cached
         path = self.path
-        kept = path.__dict__.get("_kernel_choice_arrays")
+        kept: Any = path.__dict__.get("_kernel_choice_arrays")
         if kept is None:
             kept = path.__dict__["_kernel_choice_arrays"] = (
                 tuple(
@@ -416,7 +431,7 @@ class LegChecks:
         # The subgoal ends both capsules next to it; a leg from a point inside one of them is inside
         # that capsule (convex). Only other legs need the general check.
         path = self.path
-        inside = None
+        inside: Any = None
         for i in (self.subgoal_index - 1, self.subgoal_index):  # the first is always there
             if i == len(path.segment_lengths_m):
                 break
@@ -434,7 +449,7 @@ class LegChecks:
 _FLOAT64 = np.dtype(np.float64)  # (an identity test: numpy's float64 arrays share this descriptor; another fails it)
 
 
-def _contiguous(values, shape: tuple) -> np.ndarray:
+def _contiguous(values: Any, shape: tuple[int, ...]) -> np.ndarray:
     """``values`` as a C-contiguous float64 array of ``shape`` (a scalar or a row is repeated)."""
     if type(values) is np.ndarray and values.dtype is _FLOAT64 and values.shape == shape and values.flags.c_contiguous:
         return values  # what the conversions below return for it, without them (every cycle, every array)

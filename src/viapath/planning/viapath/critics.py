@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from viapath.geometry import LEFT, RIGHT, angles_of, wrap_angle
+from viapath.options import Settings
 from viapath.planning.viapath.candidates import Candidates, Choice
 
 
@@ -49,7 +50,7 @@ class Distance(Critic):
     weight: float
     name = "distance"
 
-    def score(self, candidates, context):
+    def score(self, candidates: Candidates, context: Context) -> np.ndarray:
         return self.weight * candidates.total_length_m
 
 
@@ -60,7 +61,7 @@ class Time(Critic):
     weight: float
     name = "time"
 
-    def score(self, candidates, context):
+    def score(self, candidates: Candidates, context: Context) -> np.ndarray:
         return self.weight * candidates.travel_time_s
 
 
@@ -71,7 +72,7 @@ class SpeedError(Critic):
     weight: float
     name = "speed"
 
-    def score(self, candidates, context):
+    def score(self, candidates: Candidates, context: Context) -> np.ndarray:
         nominal = context.nominal_speed_mps
         driven_s = candidates.driven_s
         error = (
@@ -89,7 +90,7 @@ class Heading(Critic):
     degrees: bool = False
     name = "heading"
 
-    def score(self, candidates, context):
+    def score(self, candidates: Candidates, context: Context) -> np.ndarray:
         first = candidates.first_direction
         theta = np.abs(wrap_angle(angles_of(first) - context.heading_rad))
         return self.weight * (np.degrees(theta) if self.degrees else theta)
@@ -103,7 +104,7 @@ class SidePreference(Critic):
     preferred: int = LEFT
     name = "side"
 
-    def score(self, candidates, context):
+    def score(self, candidates: Candidates, context: Context) -> np.ndarray:
         side = candidates.ways[:, 1]
         return self.weight * ((side != 0) & (side != self.preferred))
 
@@ -115,7 +116,7 @@ class Hysteresis(Critic):
     weight: float
     name = "hysteresis"
 
-    def score(self, candidates, context):
+    def score(self, candidates: Candidates, context: Context) -> np.ndarray:
         previous = context.previous
         if previous is None:
             return np.zeros(len(candidates))
@@ -124,7 +125,7 @@ class Hysteresis(Critic):
         return -(self.weight * (same_way + 0.5 * (same_way & same_speed)))
 
 
-def critics_for(config) -> tuple[Critic, ...]:
+def critics_for(config: Settings) -> tuple[Critic, ...]:
     """The critics of the viapath planner, from its options, in the order they are summed."""
     return (
         Distance(config.k1),
@@ -149,7 +150,7 @@ class Costs:
 
 def score(candidates: Candidates, critics: tuple[Critic, ...], context: Context) -> Costs:
     terms = {critic.name: critic.score(candidates, context) for critic in critics}
-    total = None
+    total: np.ndarray | None = None
     for values in terms.values():
         total = values if total is None else total + values
-    return Costs(total, terms)
+    return Costs(total, terms)  # type: ignore[arg-type]  # there is always a critic

@@ -31,19 +31,23 @@ Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
 from viapath.kinematics import UnicycleState, rollout
-from viapath.observation import Command, MotionLimits
-from viapath.planning.base import Decision, Plan
+from viapath.observation import Command, Decision, MotionLimits, Plan
+from viapath.options import Settings
 from viapath.planning.viapath.checks import LegChecks
 
 
-def stop_or_escape(checks: LegChecks, limits: MotionLimits, config, previous: Command | None = None) -> Decision:
+def stop_or_escape(
+    checks: LegChecks, limits: MotionLimits, config: Settings, previous: Command | None = None
+) -> Decision:
     """``previous``: last cycle's command if last cycle escaped too (for a calm escape)."""
     position = checks.position
-    base = dict(subgoal_index=checks.subgoal_index)
+    base: dict[str, Any] = dict(subgoal_index=checks.subgoal_index)
     compiled = checks.backend.escape(checks, limits, config, escape_fan(limits, config), previous)  # numpy: None
     if compiled is None:
         standing = checks.contact_times(position[None], np.zeros(1), np.zeros((1, 2)), np.array([config.horizon_s]))
@@ -59,7 +63,9 @@ def stop_or_escape(checks: LegChecks, limits: MotionLimits, config, previous: Co
     return Decision(Command(speed, turn), Plan("escape", speed, ends[best], **base))
 
 
-def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Command | None = None):
+def escape_scores(
+    checks: LegChecks, limits: MotionLimits, config: Settings, previous: Command | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Commands (v, ω), where each leaves the robot, and the score of each (higher is better)."""
     position = checks.position
     top, commands, row_turns, turn_rows = escape_fan(limits, config)
@@ -113,7 +119,7 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
         reach = np.ascontiguousarray(reach.T)[:, None, :]  # (N, 1, S)
         # The first step at which any person not overlapped now is touched (gap < 0): the earliest over
         # the people of each one's first step.
-        touched = touching(dx, dy, reach)
+        touched: Any = touching(dx, dy, reach)
         if any_overlapping:  # (with no one overlapped, as mostly, the mask would change nothing)
             touched &= ~overlapping[:, None, None]
         touched = touched.any(axis=0)  # (K, S)
@@ -153,7 +159,7 @@ def escape_scores(checks: LegChecks, limits: MotionLimits, config, previous: Com
     return commands, ends, score
 
 
-def escape_top_speed(limits: MotionLimits, config) -> float:
+def escape_top_speed(limits: MotionLimits, config: Settings) -> float:
     """The escape's top speed: the top of the speed set for a calm escape, else the limits' (m/s)."""
     return min(max(config.speeds), limits.max_speed_mps) if config.calm_escape else limits.max_speed_mps
 
@@ -173,13 +179,13 @@ def touching(dx: np.ndarray, dy: np.ndarray, reach_m: np.ndarray) -> np.ndarray:
     unsure = ~(result | (squared > above))
     if unsure.any():
         shape = np.broadcast_shapes(np.shape(dx), np.shape(dy), reach_m.shape)
-        pick = lambda values: np.broadcast_to(values, shape)[unsure]
+        pick: Callable[[Any], np.ndarray] = lambda values: np.broadcast_to(values, shape)[unsure]
         result[unsure] = np.hypot(pick(dx), pick(dy)) - pick(reach_m) < 0
     return result
 
 
 @functools.lru_cache(maxsize=64)
-def _fan(speeds: tuple, top: float, max_turn_rate_radps: float) -> np.ndarray:
+def _fan(speeds: tuple[float, ...], top: float, max_turn_rate_radps: float) -> np.ndarray:
     """The escape's commands (v, ω): standing, the speed set up to ``top`` and ``top``, each with 9 turn
     rates across the limits. The same every cycle of a planner, so made once (read-only)."""
     speed_grid = np.unique(np.concatenate([[0.0], np.minimum(speeds, top), [top]]))
@@ -189,7 +195,7 @@ def _fan(speeds: tuple, top: float, max_turn_rate_radps: float) -> np.ndarray:
     return commands
 
 
-def escape_fan(limits: MotionLimits, config) -> tuple:
+def escape_fan(limits: MotionLimits, config: Settings) -> tuple[Any, ...]:
     """The top speed, the fan's commands (K, 2), its distinct turn commands (T,) and each command's index
     among them (K,), for :func:`escape_scores`' roll-out and the compiled escape (:meth:`.backend.Backend.escape`,
     given them by the caller: the backend does not import this module, which imports the checks, which import
@@ -199,7 +205,7 @@ def escape_fan(limits: MotionLimits, config) -> tuple:
 
 
 @functools.lru_cache(maxsize=64)
-def _fan_turns(speeds: tuple, top: float, max_turn_rate_radps: float) -> tuple:
+def _fan_turns(speeds: tuple[float, ...], top: float, max_turn_rate_radps: float) -> tuple[Any, ...]:
     commands = _fan(speeds, top, max_turn_rate_radps)
     row_turns, turn_rows = np.unique(commands[:, 1], return_inverse=True)
     turn_rows = turn_rows.astype(np.int64).reshape(-1)

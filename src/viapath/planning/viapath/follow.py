@@ -20,12 +20,12 @@ import numpy as np
 
 from viapath.geometry import wrap_angle
 from viapath.kinematics import UnicycleState, tracking
-from viapath.observation import MotionLimits
-from viapath.planning.base import Plan
+from viapath.observation import MotionLimits, Plan
+from viapath.options import Settings
 from viapath.planning.viapath.checks import LegChecks
 
 
-def can_follow(plan: Plan, checks: LegChecks, limits: MotionLimits, config) -> bool:
+def can_follow(plan: Plan, checks: LegChecks, limits: MotionLimits, config: Settings) -> bool:
     """Whether the robot, steering for the plan's target within its limits, keeps clear of every
     obstacle and inside the corridor. May mark the plan ``extras["turn_in_place"]``."""
     followed, turn_in_place = follows(plan.target, plan.speed_mps, checks, limits, config)
@@ -34,7 +34,9 @@ def can_follow(plan: Plan, checks: LegChecks, limits: MotionLimits, config) -> b
     return followed
 
 
-def follows(target: np.ndarray, speed_mps: float, checks: LegChecks, limits: MotionLimits, config) -> tuple[bool, bool]:
+def follows(
+    target: np.ndarray, speed_mps: float, checks: LegChecks, limits: MotionLimits, config: Settings
+) -> tuple[bool, bool]:
     """:func:`can_follow` of a plan that steers for ``target`` at ``speed_mps``, before the plan is made (in a
     cycle without a free candidate every plan would be made for nothing): (followed, turn in place first)."""
     offset = target - checks.position
@@ -56,7 +58,12 @@ def follows(target: np.ndarray, speed_mps: float, checks: LegChecks, limits: Mot
 
 
 def _roll_out(
-    target: np.ndarray, speed_mps: float, checks: LegChecks, limits: MotionLimits, config, heading_error: float
+    target: np.ndarray,
+    speed_mps: float,
+    checks: LegChecks,
+    limits: MotionLimits,
+    config: Settings,
+    heading_error: float,
 ) -> tuple[bool, bool]:
     """(followed, turn in place first) of :func:`follows`' roll-out."""
     dt = config.rollout_dt_s

@@ -51,14 +51,17 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from viapath.geometry import wrap_angle
 from viapath.observation import Command
 from viapath.options import Settings
+from viapath.path import DesignatedPath
 from viapath.planning.base import Decision, Inflation, Plan, Planner, Situation
 from viapath.planning.viapath import kernel_slots as slot
 from viapath.planning.viapath.backend import STEPWISE, backend_for
@@ -88,14 +91,16 @@ class _CompiledCandidates:
     """The compiled choice's candidates: their ways round at once (what :meth:`ViaPathPlanner._keep_previous_way`
     reads), everything else of :class:`Candidates` built from the node store when first asked for."""
 
-    def __init__(self, floats: np.ndarray, nodes: np.ndarray, leaves: np.ndarray, subgoal: np.ndarray):
+    _built: Candidates | None
+
+    def __init__(self, floats: np.ndarray, nodes: np.ndarray, leaves: np.ndarray, subgoal: np.ndarray) -> None:
         self._store, self._leaves, self._subgoal, self._built = (floats, nodes), leaves, subgoal, None
 
     @property
     def ways(self) -> np.ndarray:
         return self._store[1][self._leaves, 1:4]
 
-    def __getattr__(self, name: str):
+    def __getattr__(self, name: str) -> Any:
         if name.startswith("_"):
             raise AttributeError(name)
         if self._built is None:
@@ -119,7 +124,7 @@ class ViaPathPlanner(Planner, name="viapath"):
 
     options = VIAPATH_OPTIONS
 
-    def __init__(self, path, *, config=None, **kwargs):
+    def __init__(self, path: DesignatedPath, *, config: Mapping[str, Any] | None = None, **kwargs: Any) -> None:
         if config is not None:  # a mapping of options (e.g. ViaPathConfig(...)), before any keyword
             kwargs["options"] = {**dict(config), **dict(kwargs.get("options") or {})}
         super().__init__(path, **kwargs)
@@ -129,7 +134,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         self._previous: Choice | None = None
         self._previous_escape: Command | None = None  # last cycle's command, if it escaped
         self._situation: Situation | None = None  # this cycle's, for the shield check of candidates
-        self._last_command: tuple | None = None  # (situation, plan, command) of the last command made
+        self._last_command: tuple[Any, ...] | None = None  # (situation, plan, command) of the last command made
 
     @classmethod
     def resolved_defaults(cls) -> dict[str, str]:
@@ -199,7 +204,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         )
         return dataclasses.replace(situation, obstacles=obstacles.subset(keep), inflation=kept)
 
-    def _cycle_backend(self, situation: Situation):
+    def _cycle_backend(self, situation: Situation) -> Any:
         """The backend of this cycle: with static geometry in view the candidate tree runs on the numpy
         recipe (the extremes of static shapes, :func:`.candidates._round_static_shapes`, are not compiled),
         its leg checks and via points still on the compiled kernels when they are there."""
@@ -258,7 +263,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         cached = self.__dict__.get("_speed_sets")
         if cached is None or cached[0] is not config or cached[1] is not limits or cached[2] is not nominal_speed:
             cached = self.__dict__["_speed_sets"] = (config, limits, nominal_speed, {})
-        known = cached[3]
+        known: dict[float | None, tuple[list[float], int]] = cached[3]
         found = known.get(current)
         if found is None:
             nominal = self.nominal_in_speed_set_mps()
@@ -275,7 +280,12 @@ class ViaPathPlanner(Planner, name="viapath"):
         return round(min(self.nominal_speed_mps, self.limits.max_speed_mps), 3)
 
     def _choose(
-        self, checks: LegChecks, speeds, nominal_index: int, previous: Choice | None, only_way: Way | None = None
+        self,
+        checks: LegChecks,
+        speeds: np.ndarray,
+        nominal_index: int,
+        previous: Choice | None,
+        only_way: Way | None = None,
     ) -> _Chosen | None:
         """Candidates → costs → the cheapest the robot can follow; None when none is free.
         With ``only_way``, only candidates going that way round are considered."""
@@ -347,7 +357,7 @@ class ViaPathPlanner(Planner, name="viapath"):
             cached = self.__dict__["_compiled_choice_of"] = (backend, config, critics, answer)
         return cached[3]
 
-    def _kernel_constants(self) -> tuple:
+    def _kernel_constants(self) -> tuple[Any, ...]:
         """The kernels' settings that do not change within an episode (rebuilt when the options, limits or
         critics object is replaced); their slots: :mod:`.kernel_slots`."""
         config, limits, critics, nominal_speed = self.config, self.limits, self.critics, self.nominal_speed_mps
@@ -360,7 +370,9 @@ class ViaPathPlanner(Planner, name="viapath"):
             and cached[3] is nominal_speed
         ):
             return cached[4]
-        distance, time, speed, heading, side, hysteresis = self.critics
+        distance, time, speed, heading, side, hysteresis = cast(
+            "tuple[Distance, Time, SpeedError, Heading, SidePreference, Hysteresis]", self.critics
+        )  # the paper's critics (_PAPER_CRITICS): the only ones the kernels take
         settings = np.zeros(slot.F_COUNT, dtype=np.float64)
         settings[[slot.F_K1, slot.F_K2, slot.F_K3, slot.F_K4, slot.F_SIDE, slot.F_HYSTERESIS]] = (
             distance.weight,
@@ -394,7 +406,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         return constants
 
     def _choose_compiled(
-        self, checks: LegChecks, speeds, nominal_index: int, previous: Choice | None, only_way: Way | None
+        self, checks: LegChecks, speeds: np.ndarray, nominal_index: int, previous: Choice | None, only_way: Way | None
     ) -> _Chosen | None:
         """:meth:`_choose` with one kernel doing everything up to the shield check (:func:`.kernels.choose`): it
         rolls out candidates cheapest first until one follows; a candidate the shield refuses sends the search
@@ -476,7 +488,7 @@ class ViaPathPlanner(Planner, name="viapath"):
                 )
         return None
 
-    def _cost_breakdown(self, costs: np.ndarray):
+    def _cost_breakdown(self, costs: np.ndarray) -> Callable[[int], dict[str, float]]:
         """:meth:`.critics.Costs.breakdown` for :func:`.kernels.choose`'s costs (rows: the critics' terms,
         E): one column as Python floats, the same values as the numpy path's."""
         critics = self.critics
@@ -486,7 +498,9 @@ class ViaPathPlanner(Planner, name="viapath"):
         names, terms = cached[1], costs[:7]
         return lambda k: dict(zip(names, terms[:, k].tolist()))
 
-    def _plan_of_nodes(self, floats, nodes, leaves, k: int, total, checks: LegChecks) -> Plan:
+    def _plan_of_nodes(
+        self, floats: np.ndarray, nodes: np.ndarray, leaves: np.ndarray, k: int, total: np.ndarray, checks: LegChecks
+    ) -> Plan:
         """:meth:`_plan_of` from the compiled tree's node store (columns as in :mod:`.kernels`)."""
         node = int(leaves[k])
         _, _, _, speed_after, _, _, _, slow_s, slow_speed, _ = floats[node].tolist()  # columns: kernels._X.._GOAL
@@ -553,7 +567,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         is passed over for the next one: speeds near a person only where the robot can stop in time."""
         if self.shield is None:
             return True
-        situation = self._situation
+        situation = cast(Situation, self._situation)  # set by this cycle's plan before any candidate is checked
         command = self._command(situation, plan)
         verdict = self.shield.evaluate(situation.observation, np.array([[command.speed_mps, command.turn_rate_radps]]))
         ok = verdict["friendly"] if self.shield.config.mode == "passive-friendly" else verdict["admissible"]
@@ -561,8 +575,10 @@ class ViaPathPlanner(Planner, name="viapath"):
             plan.extras["outside_shield"] = True
         return bool(ok[0])
 
-    def _plan_of(self, candidates: Candidates, k: int, total, checks: LegChecks, polylines) -> Plan:
-        common = dict(
+    def _plan_of(
+        self, candidates: Candidates, k: int, total: np.ndarray, checks: LegChecks, polylines: list[np.ndarray]
+    ) -> Plan:
+        common: dict[str, Any] = dict(
             subgoal_index=checks.subgoal_index,
             candidate_count=len(candidates),
             candidate_costs=total,
@@ -599,8 +615,8 @@ class ViaPathPlanner(Planner, name="viapath"):
             return checks
         return checks.with_less_inflation(fraction, self.robot_radius_m, self.settings, cap_too=True)
 
-    def _keep_previous_way(self, chosen: _Chosen, checks: LegChecks, speeds, nominal_index: int) -> _Chosen:
-        previous = self._previous
+    def _keep_previous_way(self, chosen: _Chosen, checks: LegChecks, speeds: np.ndarray, nominal_index: int) -> _Chosen:
+        previous = cast(Choice, self._previous)  # called only when there is one
         if chosen.candidates is None:
             return chosen  # a free straight leg at nominal speed (the paper's first choice)
         if chosen.choice.way == previous.way:
@@ -634,7 +650,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         self._last_command = (situation, plan, command)
         return command
 
-    def _turn_towards(self, situation: Situation, target) -> float:
+    def _turn_towards(self, situation: Situation, target: ArrayLike) -> float:
         offset = np.asarray(target) - situation.position
         error = float(wrap_angle(math.atan2(offset[1], offset[0]) - situation.robot.heading_rad))
         return float(
@@ -642,7 +658,9 @@ class ViaPathPlanner(Planner, name="viapath"):
         )
 
 
-def _cost_terms(breakdown: Callable[[int], dict], order: np.ndarray, rank: int, total: np.ndarray) -> dict:
+def _cost_terms(
+    breakdown: Callable[[int], dict[str, float]], order: np.ndarray, rank: int, total: np.ndarray
+) -> dict[str, Any]:
     """Each critic's share of E for the chosen candidate and the cheapest other one (for tuning and views);
     ``breakdown(k)``: candidate k's terms by critic name, and "total"."""
     best = int(order[rank])
@@ -651,6 +669,6 @@ def _cost_terms(breakdown: Callable[[int], dict], order: np.ndarray, rank: int, 
     return {"chosen": breakdown(best), "runner_up": runner_up}
 
 
-def ViaPathConfig(**values) -> Settings:
+def ViaPathConfig(**values: Any) -> Settings:
     """The viapath planner's options, validated, defaults filled in (``make_planner(..., config=...)``)."""
     return VIAPATH_OPTIONS.validate(values, where="viapath")
