@@ -14,7 +14,7 @@ import pytest
 
 numba = pytest.importorskip("numba")
 
-from viapath.planning.viapath import kernels
+from viapath.compiled import planning as kernels
 
 
 @numba.njit(cache=False)

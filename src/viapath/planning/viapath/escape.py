@@ -25,7 +25,7 @@ Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 
 
 :func:`escape_scores` is the reference. On the compiled path, once the whole-step kernels are compiled,
 :meth:`.backend.Backend.escape` gives the standing check and the same scores, bit for bit, in two kernel calls
-(docs/speed.md, "The escape compiled"); :func:`stop_or_escape` then decides from them as here.
+(docs/CHANGELOG-speed.md, "The escape compiled"); :func:`stop_or_escape` then decides from them as here.
 """
 
 from __future__ import annotations

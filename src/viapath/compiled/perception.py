@@ -24,7 +24,17 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from viapath.compiled_sum import pairwise_sum
+from viapath.compiled import dependency_digest
+from viapath.compiled.sums import pairwise_sum
+
+# numba's cache keys on this file alone: the digest of the sums it compiles in (see viapath.compiled.planning).
+DEPENDENCIES = ("sums",)
+DEPENDENCY_DIGEST = "bda5224f64c1c850"
+if dependency_digest(DEPENDENCIES) != DEPENDENCY_DIGEST:
+    raise RuntimeError(
+        f"viapath.compiled.perception: {', '.join(DEPENDENCIES)} changed: set DEPENDENCY_DIGEST in "
+        f"{__file__} to {dependency_digest(DEPENDENCIES)!r} (numba then compiles the kernels again)"
+    )
 
 
 @numba.njit(cache=True, fastmath=False, nogil=True)
@@ -187,7 +197,7 @@ def fit_circles_kernel(
 # These must give the numpy path's values bit for bit (the detections decide which tracks exist), so
 # they use only +, -, *, /, abs, max and sqrt (correctly rounded everywhere) and sum the way numpy
 # sums a row: ``row.sum()`` starts from 0.0 and adds numpy's pairwise sum of the row
-# (:func:`viapath.compiled_sum.pairwise_sum`).
+# (:func:`viapath.compiled.sums.pairwise_sum`).
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
