@@ -252,7 +252,7 @@ def grow(checks: LegChecks, roots: RootLegs, config, slow_checks: LegChecks | No
 
 
 def _candidates_of(store, subgoal: np.ndarray) -> Candidates | None:
-    """Candidates from the compiled tree's node store (:meth:`.backend.Backend.grow`): the same arrays as
+    """Candidates from the compiled tree's node store (:meth:`viapath.compiled.backend.Backend.grow`): the same arrays as
     the numpy :func:`grow` builds, leaves in node order as there."""
     data = store.columns()
     leaves = store.leaves()

@@ -24,7 +24,7 @@ Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 
   passively safe (DESIGN §7); fleeing 10 m off the path is not.
 
 :func:`escape_scores` is the reference. On the compiled path, once the whole-step kernels are compiled,
-:meth:`.backend.Backend.escape` gives the standing check and the same scores, bit for bit, in two kernel calls
+:meth:`viapath.compiled.backend.Backend.escape` gives the standing check and the same scores, bit for bit, in two kernel calls
 (docs/CHANGELOG-speed.md, "The escape compiled"); :func:`stop_or_escape` then decides from them as here.
 """
 
@@ -191,7 +191,7 @@ def _fan(speeds: tuple, top: float, max_turn_rate_radps: float) -> np.ndarray:
 
 def escape_fan(limits: MotionLimits, config) -> tuple:
     """The top speed, the fan's commands (K, 2), its distinct turn commands (T,) and each command's index
-    among them (K,), for :func:`escape_scores`' roll-out and the compiled escape (:meth:`.backend.Backend.escape`,
+    among them (K,), for :func:`escape_scores`' roll-out and the compiled escape (:meth:`viapath.compiled.backend.Backend.escape`,
     given them by the caller: the backend does not import this module, which imports the checks, which import
     the backend), which take the headings, sines and cosines once per turn command: the commands of one turn
     rate share them."""
