@@ -9,8 +9,8 @@ Why a module of its own, with plain module-level functions:
   (``_build_numba_fit.<locals>.fit``); the fit kernel closed over the ``solve`` dispatcher, whose
   pickled bytes differ in every process, so numba's cache index never matched: every process start
   compiled again (~10 s) and added another ``.nbc`` file next to the source.
-* Imported only when numba is present (``raycast.numba_available()`` / ``circle_fit._numba_fit()``
-  import it inside a ``try``): the numpy path never needs numba.
+* Imported only through the package's policy (:func:`viapath.compiled.kernels`, inside a ``try``): the
+  numpy path never needs numba.
 * Where the cache goes: numba writes next to the source (``__pycache__``) when that folder is
   writable, else (an installed, read-only site-packages) in the user-wide cache
   (``~/.cache/numba`` or ``$NUMBA_CACHE_DIR``). Either way the first process on a machine compiles

@@ -544,7 +544,7 @@ def shield(
                 else:
                     break
             order[i] = k
-            count += 1
+            count += 1  # noqa: SIM113 (the insertion sort's sorted length, read at the top of each step)
         total = k_count - 1
         sections = max(1, (total + chunk - 1) // chunk)
     else:
