@@ -3,7 +3,7 @@
     python benchmarks/bench_numba_cache.py [--runs 3] [--json]
 
 Each run starts two fresh interpreters on one empty ``NUMBA_CACHE_DIR`` (the first compiles the
-laser kernels of :mod:`viapath.perception._numba_kernels`, the second loads them) and times the
+laser kernels of :mod:`viapath.compiled.perception`, the second loads them) and times the
 first call of each kernel, wall clock and process CPU time (the machine is shared: CPU time is the
 steadier figure). Not a test: numbers depend on the machine.
 """

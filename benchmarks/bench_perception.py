@@ -19,8 +19,9 @@ import time
 
 import numpy as np
 
+from viapath.compiled import numba_available
 from viapath.perception.laser import LaserPerception
-from viapath.perception.raycast import numba_available, simulate_scan
+from viapath.perception.raycast import simulate_scan
 from viapath.sim.perception import WorldSnapshot
 
 

@@ -10,7 +10,7 @@ a third of the people are placed within 2 m, so the shield has work to do. Rows:
 * ``shield-search``: the filter on a command it must replace (full speed straight at the nearest
   person), i.e. the whole dynamic-window search: the worst case per cycle.
 ``--backend`` picks the shield's arithmetic (the numpy reference or the compiled kernels of
-``viapath.safety.kernels``; ``both``: every row twice); the planner runs its default backend.
+``viapath.compiled.shield``; ``both``: every row twice); the planner runs its default backend.
 Single thread; each run redraws nothing (same seed), so the runs differ by machine load only.
 """
 

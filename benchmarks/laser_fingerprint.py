@@ -21,8 +21,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_perception import scene
 
+from viapath.compiled import numba_available
 from viapath.perception.laser import LaserPerception
-from viapath.perception.raycast import numba_available
 
 
 def fingerprint(backend: str, steps: int) -> tuple[str, int]:

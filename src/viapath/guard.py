@@ -370,7 +370,7 @@ def _obstacles_sound(
     reductions (an episode's every cycle comes here; the per-index loops run only when this is False).
     A NaN fails every comparison (and ``max``/``min`` propagate it) and an infinity every bound, so
     ``max ≤ bound`` and ``min ≥ 0`` also say "finite"; a speed is inf or NaN whenever a velocity part is.
-    With numba, one compiled call gives the same answer (:func:`viapath._harness_kernels.obstacles_sound`)."""
+    With numba, one compiled call gives the same answer (:func:`viapath.compiled.harness.obstacles_sound`)."""
     if len(positions) == 0:
         return True
     kernels = harness_kernels()  # type: ignore[no-untyped-call]
@@ -513,8 +513,8 @@ def _first_touched(
 ) -> int:
     """The first obstacle (index) within ``reachable_m`` now that the robot, holding (v, w) for a control period
     and then braking (:func:`braking_path`), would touch while its first sample moves towards it; -1 if none.
-    With numba one compiled call (:func:`viapath._harness_kernels.first_touched`, the same answer)."""
-    kernels = harness_kernels()  # type: ignore[no-untyped-call]
+    With numba one compiled call (:func:`viapath.compiled.harness.first_touched`, the same answer)."""
+    kernels = harness_kernels()
     if kernels is not None:
         try:
             return kernels.first_touched(
@@ -557,7 +557,7 @@ _LIMITS_ROW: tuple[Any, ...] = (
 
 
 def _limits_row(limits: MotionLimits, config: GuardConfig) -> np.ndarray:
-    """:func:`viapath._harness_kernels.first_touched`'s ``limits``: max speed, max turn rate, max accel, max turn
+    """:func:`viapath.compiled.harness.first_touched`'s ``limits``: max speed, max turn rate, max accel, max turn
     accel, control period (both dataclasses are frozen: the row of the same two objects is kept)."""
     global _LIMITS_ROW
     last = _LIMITS_ROW

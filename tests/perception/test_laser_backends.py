@@ -14,10 +14,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from viapath.compiled import numba_available
 from viapath.perception.base import WorldSnapshot
 from viapath.perception.detection import detect
 from viapath.perception.laser import LaserPerception
-from viapath.perception.raycast import numba_available, simulate_scan, simulate_scans
+from viapath.perception.raycast import simulate_scan, simulate_scans
 from viapath.perception.scanner import ScannerModel, paper_scanners
 
 coordinate = st.floats(-6.0, 6.0, allow_nan=False)

@@ -1,11 +1,11 @@
-"""The laser chain's shortcuts of wave 7 (docs/speed.md, "The laser chain (wave 7)") change no value.
+"""The laser chain's shortcuts of wave 7 (docs/CHANGELOG-speed.md, "The laser chain (wave 7)") change no value.
 
 Each rewritten piece is held to its earlier form, kept here verbatim as the reference, bit for bit,
 on seeded random inputs:
 * the cached beam tables of the segmentation and its compiled clustering against the per-scan numpy path;
 * the numba shape tests of the detector (sagitta and convexity t-statistic of each segment) against
   the numpy path (``_padded``, ``_chord_coordinates``, ``_convexity_t``) (the pairwise summation they
-  share with the escape kernel, :mod:`viapath.compiled_sum`, is tested in tests/planning/test_backends.py);
+  share with the escape kernel, :mod:`viapath.compiled.sums`, is tested in tests/planning/test_backends.py);
 * ``_convexity_t``'s single stacked reduction against its eight separate ``.sum(1)``;
 * ``_merge_duplicates`` (its early return when nothing is close);
 * ``gated_assignment``'s direct answer for one-to-one gates against the union-find path;
@@ -98,7 +98,7 @@ def test_stacked_convexity_sums_equal_separate_sums(seed):
 @needs_numba
 @pytest.mark.parametrize("seed", range(6))
 def test_numba_shape_tests_equal_numpy(seed):
-    from viapath.perception._numba_kernels import segment_shape_kernel
+    from viapath.compiled.perception import segment_shape_kernel
 
     rng = np.random.default_rng(seed)
     seg = SegmentationParams() if seed % 2 else SegmentationParams(noise_switch_range_m=3.0, noise_fraction_far=0.02)

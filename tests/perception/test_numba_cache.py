@@ -24,7 +24,7 @@ import json
 import numpy as np
 from viapath.perception.circle_fit import fit_circles
 from viapath.perception.raycast import cast_rays
-from viapath.perception import _numba_kernels as k
+from viapath.compiled import perception as k
 
 angles = np.linspace(-2.0, 2.0, 50)
 ranges = cast_rays((0.0, 0.0), angles, [[2.0, 0.0]], [0.3], [[[-1.0, 3.0], [5.0, 3.0]]], backend="numba")

@@ -153,7 +153,7 @@ def test_blind_region_of_the_paper_set_up_and_of_narrow_scanners():
 
 
 @pytest.mark.skipif(
-    not __import__("viapath.perception.raycast", fromlist=["x"]).numba_available(),
+    not __import__("viapath.compiled", fromlist=["x"]).numba_available(),
     reason="numba not installed (pip install 'viapath[fast]')",
 )
 @pytest.mark.parametrize(

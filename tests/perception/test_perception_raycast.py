@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from viapath.perception import raycast
+from viapath.compiled import numba_available
 from viapath.perception.raycast import cast_rays, simulate_scan
 from viapath.perception.scanner import ScannerModel, paper_scanners, sanitize_ranges
 
@@ -148,7 +148,7 @@ def test_scanner_rejects_bad_configuration():
         ScannerModel(mount_x_m=float("nan"))
 
 
-@pytest.mark.skipif(not raycast.numba_available(), reason="numba not installed (pip install 'viapath[fast]')")
+@pytest.mark.skipif(not numba_available(), reason="numba not installed (pip install 'viapath[fast]')")
 def test_numba_equals_numpy_bit_for_bit():
     rng = np.random.default_rng(7)
     for _ in range(20):

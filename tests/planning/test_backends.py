@@ -17,8 +17,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from viapath import DesignatedPath, Observation, Obstacles, RobotState
+from viapath.compiled import ENVIRONMENT_VARIABLE, numba_available, resolve
 from viapath.planning import make_planner
-from viapath.planning.viapath.backend import ENVIRONMENT_VARIABLE, numba_available, resolve
 from viapath.safety.shielded import ShieldedPlanner
 
 pytestmark = pytest.mark.skipif(not numba_available(), reason="numba (extra 'fast') is not installed")
@@ -101,8 +101,8 @@ def test_numba_decides_as_numpy(case):
 def test_kernels_match_reference_on_edge_cases():
     """The contact kernel against numpy where the cone is capped mid-leg, legs start inside a disc, the
     relative speed is zero and the cone outgrows the relative speed (a < 0)."""
+    from viapath.compiled import planning as kernels
     from viapath.geometry import legs_first_contact
-    from viapath.planning.viapath import kernels
 
     rng = np.random.default_rng(3)
     k, n = 400, 7
@@ -162,9 +162,9 @@ def test_backend_choice(monkeypatch):
 def test_track_kernel_matches_reference():
     """The compiled roll-out against :func:`viapath.kinematics.track`, from random states towards random
     targets (sharp turns, targets behind, at rest and at speed)."""
+    from viapath.compiled.backend import Backend
     from viapath.kinematics import UnicycleState, track
     from viapath.observation import MotionLimits
-    from viapath.planning.viapath.backend import Backend
 
     rng = np.random.default_rng(5)
     limits = MotionLimits()
@@ -201,8 +201,8 @@ def test_planners_command_says_which_path_runs(monkeypatch):
 def test_via_options_kernel_matches_reference():
     """Via points of random (node, obstacle) pairs: nodes inside the disc, obstacles faster and slower
     than the robot (two roots or one), the cone capped before and after the passing time."""
+    from viapath.compiled import planning as kernels
     from viapath.geometry import via_options
-    from viapath.planning.viapath import kernels
 
     rng = np.random.default_rng(11)
     p = 500
@@ -229,7 +229,7 @@ def test_via_options_kernel_matches_reference():
 @pytest.mark.parametrize("path", PATHS, ids=["straight", "corner", "zigzag"])
 def test_corridor_kernels_match_reference(path):
     """Corridor checks of random legs (inside, across a junction, leaving) against the numpy reference."""
-    from viapath.planning.viapath.backend import Backend
+    from viapath.compiled.backend import Backend
     from viapath.planning.viapath.checks import LegChecks
 
     rng = np.random.default_rng(13)
@@ -272,7 +272,7 @@ def test_escape_scores_match_reference():
     separation term) or only threaten it (the time to contact)."""
     from dataclasses import replace
 
-    from viapath.planning.viapath.backend import Backend
+    from viapath.compiled.backend import Backend
     from viapath.planning.viapath.checks import LegChecks
     from viapath.planning.viapath.escape import escape_scores
 
@@ -309,7 +309,7 @@ def test_goal_legs_kernel_matches_reference(path):
     short, a finite and an infinite horizon, people with and without uncertainty, and none."""
     from dataclasses import replace
 
-    from viapath.planning.viapath.backend import NUMPY, Backend
+    from viapath.compiled.backend import NUMPY, Backend
     from viapath.planning.viapath.checks import LegChecks
 
     rng = np.random.default_rng(7)
@@ -369,7 +369,7 @@ def _tree_inputs(case, backend, path=None):
     """The arguments the planner hands candidates.grow in the first cycle of ``case``."""
     from dataclasses import replace
 
-    from viapath.planning.viapath.backend import Backend
+    from viapath.compiled.backend import Backend
     from viapath.planning.viapath.candidates import RootLegs
     from viapath.planning.viapath.checks import LegChecks
 
@@ -426,7 +426,7 @@ def test_tree_kernel_builds_the_same_corner_candidates(path_index):
     at every speed, each chained on from the root of its speed."""
     from dataclasses import replace
 
-    from viapath.planning.viapath.backend import Backend
+    from viapath.compiled.backend import Backend
     from viapath.planning.viapath.candidates import CORNER, RootLegs, grow
 
     path = PATHS[path_index] if path_index < len(PATHS) else U_TURN
@@ -472,7 +472,8 @@ def test_tree_kernel_builds_the_same_corner_candidates(path_index):
 def test_whole_step_kernels_wait_for_their_compilation(monkeypatch):
     """``auto`` takes the whole-step kernels (goal_legs, grow: seconds to compile the first time) only once
     they are compiled; an explicit numba takes them at once. Either way the decisions are the same."""
-    from viapath.planning.viapath import backend
+    from viapath.compiled import backend
+    from viapath.planning.viapath.planner import compile_kernels
 
     monkeypatch.delenv(ENVIRONMENT_VARIABLE, raising=False)
     monkeypatch.setattr(backend, "whole_steps_compiled", lambda: False)
@@ -485,14 +486,14 @@ def test_whole_step_kernels_wait_for_their_compilation(monkeypatch):
     monkeypatch.delenv(ENVIRONMENT_VARIABLE)
     monkeypatch.setattr(backend, "whole_steps_compiled", lambda: True)
     assert backend.backend_for("auto").whole_steps
-    assert backend.compile_kernels()
+    assert compile_kernels()
 
 
 @settings(max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(cases())
 def test_numba_without_whole_steps_decides_as_numpy(case):
     """The compiled path before its whole-step kernels are compiled (small kernels only) decides as well."""
-    from viapath.planning.viapath.backend import Backend
+    from viapath.compiled.backend import Backend
 
     path = PATHS[case[0]]
     reference, compiled = _planner(path, "numpy", case[7]), _planner(path, "numba", case[7])
@@ -572,8 +573,8 @@ def test_compiled_choice_scalars_match_reference():
     (geometry.angles_of, libm's), wrap_angle (np.mod's sign convention), np.degrees, np.round to mm/s."""
     from numba import njit
 
+    from viapath.compiled import planning as kernels
     from viapath.geometry import angles_of, wrap_angle
-    from viapath.planning.viapath import kernels
 
     signed_zeros_and_axes = [[0.0, 0.0], [-0.0, 0.0], [0.0, -0.0], [-1.0, 0.0], [-1.0, -0.0], [0.0, 1.0], [1e-300, 1]]
     vectors = np.concatenate(
@@ -711,7 +712,7 @@ def test_compiled_escape_is_the_reference(case):
     standing check is the numpy path's, in every crowd."""
     from dataclasses import replace
 
-    from viapath.planning.viapath.backend import Backend
+    from viapath.compiled.backend import Backend
     from viapath.planning.viapath.escape import escape_fan, escape_scores
 
     planner, checks, previous = _escape_checks(case)
@@ -739,7 +740,7 @@ def test_compiled_stop_or_escape_decides_as_numpy(case):
     compiled kernels run only with the whole-step kernels."""
     from dataclasses import replace
 
-    from viapath.planning.viapath.backend import Backend
+    from viapath.compiled.backend import Backend
     from viapath.planning.viapath.escape import escape_fan, stop_or_escape
 
     planner, checks, previous = _escape_checks(case)
@@ -813,7 +814,7 @@ def test_escape_contacts_skip_only_free_steps():
     the steps in which a gap cannot close: against the full scan (brute force, numpy) on 400 random fans —
     people who close fast, stand still, grow, have a NaN cap, overlap the robot now; robots that
     stand, creep or run; uneven step times — the same first contacts and gaps, bit for bit."""
-    from viapath.planning.viapath import kernels
+    from viapath.compiled import planning as kernels
 
     rng = np.random.default_rng(31)
     for case in range(400):
@@ -866,9 +867,9 @@ def test_escape_kernel_pieces_match_numpy():
     terms, zeros of both signs)."""
     from numba import njit
 
-    from viapath.compiled_sum import pairwise_sum
-    from viapath.planning.viapath import kernels
-    from viapath.planning.viapath.backend import _corridor
+    from viapath.compiled import planning as kernels
+    from viapath.compiled.backend import _corridor
+    from viapath.compiled.sums import pairwise_sum
 
     within = njit(
         lambda dx, dy, limits: np.array(
@@ -944,8 +945,8 @@ def test_escape_kernel_pieces_match_numpy():
 def test_the_warm_up_reaches_every_whole_step_kernel():
     """compile_kernels' cycles reach the choice and the escape (so `auto` finds every whole-step kernel compiled
     after it), and each whole-step kernel then has a compiled signature."""
-    from viapath.planning.viapath import backend, kernels
-    from viapath.planning.viapath.backend import warm_up_crowds
+    from viapath.compiled import planning as kernels
+    from viapath.planning.viapath.planner import compile_kernels, warm_up_crowds
 
     planner = make_planner(
         "viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2, backend="numpy"
@@ -957,7 +958,7 @@ def test_the_warm_up_reaches_every_whole_step_kernel():
             planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people)).plan.status
         )
     assert statuses[0] in ("avoid", "slow", "wait") and statuses[1] == "escape"
-    assert backend.compile_kernels()
+    assert compile_kernels()
     planner = make_planner(
         "viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2, backend="numba"
     )

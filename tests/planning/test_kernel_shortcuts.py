@@ -1,4 +1,4 @@
-"""The compiled choice's shortcuts (kernels.py: _wrap, _clear, _legs_free) give what the full computation gives.
+"""The compiled choice's shortcuts (viapath/compiled/planning.py: _wrap, _clear, _legs_free) give what the full computation gives.
 
 Each test holds a shortcut to the earlier form, compiled here as the reference, on seeded random cases
 and on values placed right at the boundaries the shortcuts decide by: angles at ±pi and multiples of 2 pi
@@ -14,7 +14,7 @@ import pytest
 
 numba = pytest.importorskip("numba")
 
-from viapath.planning.viapath import kernels  # noqa: E402 -- after the importorskip of numba
+from viapath.compiled import planning as kernels  # noqa: E402 -- after the importorskip of numba
 
 
 @numba.njit(cache=False)

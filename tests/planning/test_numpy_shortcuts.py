@@ -1,4 +1,4 @@
-"""The numpy path's shortcuts for its slowest cycles (docs/speed.md, "numpy p99 (wave 6)") change no value.
+"""The numpy path's shortcuts for its slowest cycles (docs/CHANGELOG-speed.md, "numpy p99 (wave 6)") change no value.
 
 Each test holds a rewritten function to its earlier form, kept here verbatim as the reference, bit for
 bit, on seeded random situations: the robot near the path (three paths), 0-14 people around it, with

@@ -102,7 +102,7 @@ def test_the_way_back_is_off_by_default_and_changes_nothing_on_the_path(overtaki
 
 def test_the_way_back_decides_the_same_with_both_backends():
     """The way back's legs go through the same backend calls as the paper's step 1 (docs/speed.md)."""
-    from viapath.planning.viapath.backend import numba_available
+    from viapath.compiled import numba_available
 
     if not numba_available():
         pytest.skip("numba (extra 'fast') is not installed")

@@ -1,4 +1,4 @@
-"""The per-cycle harness compiled (:mod:`viapath._harness_kernels`, extra ``fast``) answers exactly as its numpy
+"""The per-cycle harness compiled (:mod:`viapath.compiled.harness`, extra ``fast``) answers exactly as its numpy
 code: the guard's soundness test of the obstacles and its braking test, and the safety inflation, bit for
 bit; and the guard's common-case shortcut (``guard._plainly_sound``) lets through only observations the full
 inspection would hand on unchanged. Each is checked against the numpy code it replaces
@@ -272,20 +272,18 @@ def test_check_command_hands_back_the_command_it_leaves_alone():
 def test_a_harness_that_cannot_load_leaves_the_numpy_code_working(monkeypatch):
     """numba installed but failing (no cache directory it may write, a broken install): the guard warns once
     and runs its numpy code; the planner still plans and the guard still brakes."""
-    import builtins
-
     from viapath import DesignatedPath
     from viapath.planning import make_planner
 
-    monkeypatch.setattr(compiled, "_HARNESS", compiled._UNKNOWN)
-    real_import = builtins.__import__
+    monkeypatch.setattr(compiled, "_LOADED", {})
+    real_import = compiled._import
 
-    def failing_import(name, globals=None, locals=None, fromlist=(), level=0):
-        if fromlist and "_harness_kernels" in fromlist:
+    def failing_import(name):
+        if name == "viapath.compiled.harness":
             raise RuntimeError("cannot cache function: no locator available")
-        return real_import(name, globals, locals, fromlist, level)
+        return real_import(name)
 
-    monkeypatch.setattr(builtins, "__import__", failing_import)
+    monkeypatch.setattr(compiled, "_import", failing_import)
     with pytest.warns(RuntimeWarning, match="using the numpy code"):
         assert compiled.harness_kernels() is None
     assert compiled.harness_kernels() is None  # decided once

@@ -17,8 +17,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from viapath.compiled import ENVIRONMENT_VARIABLE, numba_available
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
-from viapath.planning.viapath.backend import ENVIRONMENT_VARIABLE, numba_available
 from viapath.safety import Shield, ShieldConfig
 
 pytestmark = pytest.mark.skipif(not numba_available(), reason="numba (extra 'fast') is not installed")
@@ -169,11 +169,13 @@ def test_auto_waits_for_the_compiled_shield_and_compile_kernels_builds_it(monkey
     """A plain ``auto`` does not make a short run wait ~12 s for numba: before the kernels are compiled
     (in this process or numba's disk cache) it runs the numpy reference; ``compile_kernels`` (what
     ``viapath bench`` and the ROS 2 node call first) builds them, and an explicit choice compiles too."""
-    from viapath.safety import kernels
+    from viapath.compiled import ready
+    from viapath.compiled import shield as kernels
+    from viapath.safety import shield as shield_module
     from viapath.safety.shield import compile_kernels
 
     monkeypatch.delenv(ENVIRONMENT_VARIABLE, raising=False)
-    monkeypatch.setattr(kernels, "compiled", lambda: False)
+    monkeypatch.setattr(shield_module, "ready", lambda *kernels: False)
     assert Shield().backend == "numpy"
     assert Shield(config=ShieldConfig(backend="numba")).backend == "numba"
     monkeypatch.setenv(ENVIRONMENT_VARIABLE, "numba")
@@ -181,5 +183,5 @@ def test_auto_waits_for_the_compiled_shield_and_compile_kernels_builds_it(monkey
     monkeypatch.undo()
     monkeypatch.delenv(ENVIRONMENT_VARIABLE, raising=False)
     assert compile_kernels() is True
-    assert kernels.compiled()  # in this process or in numba's disk cache
+    assert ready(kernels.shield)  # in this process or in numba's disk cache
     assert Shield().backend == "numba"

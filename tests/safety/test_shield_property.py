@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 from tests.safety._brute import brute_admissible, window_grid
+from viapath.compiled import numba_available
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
-from viapath.planning.viapath.backend import numba_available
 from viapath.safety import Shield, ShieldConfig
 
 ROBUST_M = 0.01

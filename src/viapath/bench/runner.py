@@ -630,7 +630,7 @@ def _run_bench(
     todo = [t for t in tasks if t.key not in done]
     started = time.perf_counter()
     if todo:
-        from viapath.planning.viapath.backend import compile_kernels as compile_planner_kernels
+        from viapath.planning.viapath.planner import compile_kernels as compile_planner_kernels
         from viapath.safety.shield import compile_kernels
 
         compile_kernels()  # once per machine (numba caches it), so that the workers' shields are compiled ones

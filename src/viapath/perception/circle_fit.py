@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from viapath.compiled import kernels
+
 
 @dataclass
 class CircleFits:
@@ -226,22 +228,7 @@ def fit_circle(points: np.ndarray, sensor_origin=(0.0, 0.0), **options):
     return fits.centres[0], float(fits.radii_m[0]), float(fits.rms_m[0])
 
 
-_NUMBA_FIT = None
-_NUMBA_FIT_FAILED = False
-
-
 def _numba_fit():
-    """The compiled fit (built on first use), or None without numba."""
-    global _NUMBA_FIT, _NUMBA_FIT_FAILED
-    if _NUMBA_FIT is None and not _NUMBA_FIT_FAILED:
-        try:
-            _NUMBA_FIT = _build_numba_fit()
-        except Exception:  # ImportError, or a numba that does not support this numpy
-            _NUMBA_FIT_FAILED = True
-    return _NUMBA_FIT
-
-
-def _build_numba_fit():
-    from viapath.perception._numba_kernels import fit_circles_kernel  # module-level: cached on disk once per machine
-
-    return fit_circles_kernel
+    """The compiled fit (:func:`viapath.compiled.perception.fit_circles_kernel`), or None without numba."""
+    module = kernels("perception")
+    return None if module is None else module.fit_circles_kernel

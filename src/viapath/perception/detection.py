@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from viapath.compiled import kernels
 from viapath.perception.circle_fit import _numba_fit, _padded, fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
 from viapath.perception.scanner import ScannerModel
@@ -309,12 +310,9 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
 
 
 def _numba_shape_kernel():
-    """The compiled shape tests (``_numba_kernels.segment_shape_kernel``), or None without numba."""
-    if _numba_fit() is None:  # numba missing or unusable
-        return None
-    from viapath.perception._numba_kernels import segment_shape_kernel
-
-    return segment_shape_kernel
+    """The compiled shape tests (``viapath.compiled.perception.segment_shape_kernel``), or None without numba."""
+    module = kernels("perception")  # None: numba missing or unusable
+    return None if module is None else module.segment_shape_kernel
 
 
 def _merge_duplicates(centres, radii, sigma, source, distance_m):

@@ -15,19 +15,17 @@ What we chose:
   (``pip install 'viapath[fast]'``). They evaluate the same expressions in the same order, without
   fast-math, so they agree bit for bit (tested). ``backend="auto"`` takes numba when it is
   installed; the first call on a machine compiles the kernel (~seconds, cached on disk:
-  :mod:`~viapath.perception._numba_kernels`), later processes load it.
+  :mod:`~viapath.compiled.perception`), later processes load it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any
 
 import numpy as np
 
-_NUMBA_KERNEL: Any = None
-_NUMBA_FAILED: str | None = None
+from viapath.compiled import kernels, require
 
 
 def _as_inputs(centres, radii, segments):
@@ -80,31 +78,9 @@ def cast_rays_numpy(origin, directions, centres, radii, segments) -> np.ndarray:
     return best
 
 
-def _load_numba_kernel():
-    from viapath.perception._numba_kernels import cast_rays_kernel  # module-level: cached on disk once per machine
-
-    return cast_rays_kernel
-
-
-def numba_available() -> bool:
-    global _NUMBA_KERNEL, _NUMBA_FAILED
-    if _NUMBA_KERNEL is not None:
-        return True
-    if _NUMBA_FAILED is not None:
-        return False
-    try:
-        _NUMBA_KERNEL = _load_numba_kernel()
-    except Exception as error:  # ImportError, or a numba that does not support this numpy
-        _NUMBA_FAILED = f"{type(error).__name__}: {error}"
-        return False
-    return True
-
-
 def cast_rays_numba(origin, directions, centres, radii, segments) -> np.ndarray:
-    if not numba_available():
-        raise RuntimeError(f"numba back end unavailable ({_NUMBA_FAILED}); pip install 'viapath[fast]'")
     out = np.empty(len(directions))
-    _NUMBA_KERNEL(
+    require("perception").cast_rays_kernel(
         float(origin[0]), float(origin[1]), np.ascontiguousarray(directions, dtype=float), centres, radii, segments, out
     )
     return out
@@ -119,7 +95,7 @@ def cast_rays(origin, angles_rad, centres, radii, segments=None, backend: str = 
     angles_rad = np.asarray(angles_rad, dtype=float).reshape(-1)
     directions = np.stack([np.cos(angles_rad), np.sin(angles_rad)], axis=-1)
     if backend == "auto":
-        backend = "numba" if numba_available() else "numpy"
+        backend = "numba" if kernels("perception") is not None else "numpy"
     if backend == "numpy":
         return cast_rays_numpy(origin, directions, centres, radii, segments)
     if backend == "numba":
@@ -285,16 +261,14 @@ def simulate_scans(
     directions[:, 0] = np.cos(angles)  # on a contiguous array, as before (numpy may take another loop
     directions[:, 1] = np.sin(angles)  # for strided output)
     if backend == "auto":
-        backend = "numba" if numba_available() else "numpy"
+        backend = "numba" if kernels("perception") is not None else "numpy"
     if backend == "numpy":
         true_range = cast_rays_from_numpy(origins_x, origins_y, directions, centres, radii, segments, groups)
     elif backend == "numba":
-        if not numba_available():
-            raise RuntimeError(f"numba back end unavailable ({_NUMBA_FAILED}); pip install 'viapath[fast]'")
-        from viapath.perception._numba_kernels import cast_rays_from_kernel
-
         true_range = np.empty(n_beams)
-        cast_rays_from_kernel(origins_x, origins_y, directions, centres, radii, segments, true_range)
+        require("perception").cast_rays_from_kernel(
+            origins_x, origins_y, directions, centres, radii, segments, true_range
+        )
     else:
         raise ValueError(f"backend must be 'numpy', 'numba' or 'auto', got {backend!r}")
     # ScannerModel.measure on every scanner at once: same expressions, per-beam parameters.

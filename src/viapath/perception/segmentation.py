@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from viapath.compiled import require
+
 
 @dataclass(frozen=True)
 class SegmentationParams:
@@ -136,7 +138,7 @@ def segment_beams(
     Clusters with fewer than ``min_points`` points are dropped; ``all_points`` keeps every valid point.
     ``tables``: :class:`BeamTables` of ``angles_rad`` and ``params`` when the caller keeps them (same result).
     ``backend="numba"`` (with ``tables``): the clustering after the points in one compiled pass
-    (``_numba_kernels.split_clusters_kernel``), the same result bit for bit.
+    (``viapath.compiled.perception.split_clusters_kernel``), the same result bit for bit.
     """
     ranges_m = np.asarray(ranges_m, dtype=float)
     valid = np.flatnonzero(np.isfinite(ranges_m))
@@ -188,8 +190,7 @@ def segment_beams(
 
 
 def _split_compiled(points, r, valid, scans, tables: BeamTables, params: SegmentationParams) -> Segments:
-    from viapath.perception._numba_kernels import split_clusters_kernel
-
+    split_clusters_kernel = require("perception").split_clusters_kernel
     n = len(valid)
     starts, counts, cluster_scan = (
         np.empty(n, dtype=np.int64),

@@ -78,8 +78,8 @@ class Inflation:
         if len(obstacles) == 0:
             return _NO_INFLATION
         margin, k = settings["safety_margin_m"], settings["uncertainty_sigmas"]
-        kernels = harness_kernels()  # type: ignore[no-untyped-call]
-        if kernels is not None:  # the same numbers in one compiled call (viapath._harness_kernels.inflation)
+        kernels = harness_kernels()
+        if kernels is not None:  # the same numbers in one compiled call (viapath.compiled.harness.inflation)
             rows = np.empty((4, len(obstacles)))
             try:
                 kernels.inflation(
@@ -209,7 +209,7 @@ class Planner:
 
     def _inflation_and_excess(self, obstacles: Obstacles, position: np.ndarray) -> tuple[Inflation, float]:
         """:meth:`Inflation.of` the obstacles and how far the robot is outside the corridor (the path's
-        ``corridor_excess``). With numba both in one compiled call (:func:`viapath._harness_kernels.situation_numbers`,
+        ``corridor_excess``). With numba both in one compiled call (:func:`viapath.compiled.harness.situation_numbers`,
         the same numbers): every cycle, where each call costs more than its arithmetic."""
         kernels, n = harness_kernels(), len(obstacles)  # type: ignore[no-untyped-call]
         if kernels is not None and n and position.shape == (2,):

@@ -242,7 +242,7 @@ class PlannerCore:
             for k in range(4):
                 tracker.step(0.1 * k, found.centres, found.position_sigma_m, found.radii_m)
         path = DesignatedPath([[0.0, 0.0], [5.0, 0.0]], half_width_m=1.0)
-        from viapath.planning.viapath.backend import compile_kernels as compile_planner_kernels
+        from viapath.planning.viapath.planner import compile_kernels as compile_planner_kernels
         from viapath.safety.shield import compile_kernels
 
         compile_kernels()  # the compiled shield: once per machine, before the node's own shield is made

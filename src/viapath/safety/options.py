@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from viapath.compiled import BACKENDS
 from viapath.options import Option, OptionError, OptionSet
-from viapath.planning.viapath.backend import BACKENDS
 
 SHIELD_MODES = ("passive", "passive-friendly")
 

@@ -60,7 +60,7 @@ Choices where the sources are silent:
 Speed (docs/speed.md): the numpy code here is the reference; option ``backend`` (``auto``
 | ``numpy`` | ``numba``, as the planner's, env ``VIAPATH_PLANNER_BACKEND`` overriding ``auto``) may
 run :meth:`Shield.evaluate` and the window search of :meth:`Shield.filter` on
-:mod:`viapath.safety.kernels` instead, the same arithmetic compiled (extra ``fast``), with the same
+:mod:`viapath.compiled.shield` instead, the same arithmetic compiled (extra ``fast``), with the same
 verdicts (tests/safety/test_shield_backends.py); ``ShieldResult.backend`` says which ran. The
 compiled shield takes about 12 s to compile, once per machine; ``auto`` uses it only once it is
 compiled (:func:`compile_kernels`, which ``viapath bench`` and the ROS 2 node call before they start),
@@ -72,7 +72,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-import os
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -80,10 +79,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from viapath.compiled import explicit, numba_available, ready, require
+from viapath.compiled import resolve as resolve_backend
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.path import DesignatedPath
-from viapath.planning.viapath.backend import ENVIRONMENT_VARIABLE, numba_available
-from viapath.planning.viapath.backend import resolve as resolve_backend
 from viapath.safety.options import check_options
 
 _STRAIGHT = 1e-9
@@ -263,7 +262,7 @@ class Shield:
         self.limits = limits or MotionLimits()
         self.dt_s = float(dt_s)
         self.config = config or ShieldConfig()
-        # numpy (the reference below) or numba (viapath.safety.kernels, the same arithmetic compiled).
+        # numpy (the reference below) or numba (viapath.compiled.shield, the same arithmetic compiled).
         self.backend = shield_backend(self.config.backend)
         self._kernel_settings: tuple[Any, ...] | None = (
             None  # the compiled test's constants (and what they were made of)
@@ -522,10 +521,9 @@ class Shield:
         return out
 
     def _evaluate_compiled(self, observation: Observation, commands: np.ndarray) -> dict[str, np.ndarray]:
-        """The test above, compiled (:func:`viapath.safety.kernels.shield`: same arithmetic,
+        """The test above, compiled (:func:`viapath.compiled.shield.shield`: same arithmetic,
         same verdicts), with the achieved (v, ω) and the dropping of non-finite people in the same call."""
-        from viapath.safety import kernels
-
+        kernels = require("shield")
         config, robot, people = self.config, observation.robot, observation.obstacles.people()
         limits_array, settings = self._settings_arrays()
         state = _robot_array(robot)
@@ -799,9 +797,8 @@ class Shield:
     def _search_compiled(
         self, observation: Observation, command: Command
     ) -> tuple[int | None, int | None, int, int, np.ndarray]:
-        """:meth:`_search` compiled (:func:`viapath.safety.kernels.shield`: same candidates, order and chunks)."""
-        from viapath.safety import kernels
-
+        """:meth:`_search` compiled (:func:`viapath.compiled.shield.shield`: same candidates, order and chunks)."""
+        kernels = require("shield")
         config, robot, people = self.config, observation.robot, observation.obstacles
         limits_array, settings = self._settings_arrays()
         state = _robot_array(robot)
@@ -853,12 +850,8 @@ def shield_backend(choice: str) -> str:
     """``numpy`` or ``numba`` for the option value: as the planner's (:func:`resolve_backend`), except
     that a plain ``auto`` takes numba only once the compiled shield needs no compilation."""
     backend = resolve_backend(choice)
-    explicit = choice != "auto" or os.environ.get(ENVIRONMENT_VARIABLE, "").strip().lower() not in ("", "auto")
-    if backend == "numba" and not explicit:
-        from viapath.safety import kernels
-
-        if not kernels.compiled():
-            return "numpy"
+    if backend == "numba" and not explicit(choice) and not ready(require("shield").shield):
+        return "numpy"
     return backend
 
 
@@ -867,9 +860,7 @@ def compile_kernels() -> bool:
     once per machine: numba caches them on disk); True when the compiled shield is ready."""
     if not numba_available():
         return False
-    from viapath.safety import kernels
-
-    if not kernels.compiled():
+    if not ready(require("shield").shield):
         shield = Shield(config=ShieldConfig(backend="numba"))
         people = Obstacles(np.array([[1.0, 0.0]]), np.array([[-0.5, 0.0]]), np.array([0.25]))
         observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.3, 0.0, 0.25), people)

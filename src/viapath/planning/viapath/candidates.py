@@ -260,27 +260,16 @@ def grow(
 
 
 def _candidates_of(store: tuple[np.ndarray, np.ndarray], subgoal: np.ndarray) -> Candidates | None:
-    """Candidates from the compiled tree's node store (:meth:`.backend.Backend.grow`): the same arrays as
+    """Candidates from the compiled tree's node store (:meth:`viapath.compiled.backend.Backend.grow`): the same arrays as
     the numpy :func:`grow` builds, leaves in node order as there."""
-    floats, integers = store
-    data = {
-        "position": floats[:, 0:2],
-        "time_s": floats[:, 2],
-        "speed": floats[:, 3],
-        "parent": integers[:, 0],
-        "length_m": floats[:, 4],
-        "first_direction": floats[:, 5:7],
-        "way": integers[:, 1:4],
-        "slow_s": floats[:, 7],
-        "slow_speed": floats[:, 8],
-    }
-    leaves = np.flatnonzero(integers[:, 4])
+    data = store.columns()
+    leaves = store.leaves()
     if len(leaves) == 0:
         return None
     return Candidates(
         nodes=data,
         leaves=leaves,
-        total_length_m=data["length_m"][leaves] + floats[leaves, 9],
+        total_length_m=data["length_m"][leaves] + store.to_goal_m(leaves),
         speed_mps=data["speed"][leaves],
         slow_s=data["slow_s"][leaves],
         slow_speed_mps=data["slow_speed"][leaves],

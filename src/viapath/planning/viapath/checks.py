@@ -28,12 +28,12 @@ from typing import Any
 
 import numpy as np
 
+from viapath.compiled.backend import NUMPY, Backend
 from viapath.geometry import cross2
 from viapath.observation import Obstacles
 from viapath.options import Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.planning.base import Inflation, Situation
-from viapath.planning.viapath.backend import NUMPY, Backend
 
 # Closer to the path line than this the robot is on the path: the way back is the leg to the subgoal.
 ON_PATH_M = 0.01
@@ -298,7 +298,7 @@ class LegChecks:
         return cached
 
     def kernel_choice_inputs(self) -> tuple[Any, ...]:
-        """What the choice kernel takes of this cycle (:func:`.kernels.choose`'s order): the robot
+        """What the choice kernel takes of this cycle (:func:`viapath.compiled.planning.choose`'s order): the robot
         (:meth:`kernel_robot`), the obstacles (:meth:`kernel_obstacles`), the via radii, the ids, the
         continuation, the envelope, and the path's segment arrays and waypoints. Built in one go, every cycle:
         the path's arrays, continuations and envelopes are kept on the path (a path is not changed after it is

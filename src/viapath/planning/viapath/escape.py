@@ -24,8 +24,8 @@ Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 
   passively safe (DESIGN §7); fleeing 10 m off the path is not.
 
 :func:`escape_scores` is the reference. On the compiled path, once the whole-step kernels are compiled,
-:meth:`.backend.Backend.escape` gives the standing check and the same scores, bit for bit, in two kernel calls
-(docs/speed.md, "The escape compiled"); :func:`stop_or_escape` then decides from them as here.
+:meth:`viapath.compiled.backend.Backend.escape` gives the standing check and the same scores, bit for bit, in two kernel calls
+(docs/CHANGELOG-speed.md, "The escape compiled"); :func:`stop_or_escape` then decides from them as here.
 """
 
 from __future__ import annotations
@@ -197,7 +197,7 @@ def _fan(speeds: tuple[float, ...], top: float, max_turn_rate_radps: float) -> n
 
 def escape_fan(limits: MotionLimits, config: Settings) -> tuple[Any, ...]:
     """The top speed, the fan's commands (K, 2), its distinct turn commands (T,) and each command's index
-    among them (K,), for :func:`escape_scores`' roll-out and the compiled escape (:meth:`.backend.Backend.escape`,
+    among them (K,), for :func:`escape_scores`' roll-out and the compiled escape (:meth:`viapath.compiled.backend.Backend.escape`,
     given them by the caller: the backend does not import this module, which imports the checks, which import
     the backend), which take the headings, sines and cosines once per turn command: the commands of one turn
     rate share them."""

@@ -7,9 +7,9 @@ every planner (:data:`viapath.planning.base.COMMON_OPTIONS`).
 
 from __future__ import annotations
 
+from viapath.compiled import BACKENDS
 from viapath.options import Option, OptionSet
 from viapath.planning.base import COMMON_OPTIONS
-from viapath.planning.viapath.backend import BACKENDS
 
 _OWN = [
     # The paper (§3, §4.2).

@@ -58,14 +58,15 @@ from typing import Any, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
+from viapath.compiled import numba_available
+from viapath.compiled import resolve as resolve_backend
+from viapath.compiled import slots as slot
+from viapath.compiled.backend import STEPWISE, NodeStore, backend_for, whole_steps_compiled
 from viapath.geometry import wrap_angle
-from viapath.observation import Command
+from viapath.observation import Command, Observation, Obstacles, RobotState
 from viapath.options import Settings
 from viapath.path import DesignatedPath
 from viapath.planning.base import Decision, Inflation, Plan, Planner, Situation
-from viapath.planning.viapath import kernel_slots as slot
-from viapath.planning.viapath.backend import STEPWISE, backend_for
-from viapath.planning.viapath.backend import resolve as resolve_backend
 from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, _candidates_of, grow
 from viapath.planning.viapath.checks import LegChecks
 from viapath.planning.viapath.critics import (
@@ -91,14 +92,12 @@ class _CompiledCandidates:
     """The compiled choice's candidates: their ways round at once (what :meth:`ViaPathPlanner._keep_previous_way`
     reads), everything else of :class:`Candidates` built from the node store when first asked for."""
 
-    _built: Candidates | None
-
-    def __init__(self, floats: np.ndarray, nodes: np.ndarray, leaves: np.ndarray, subgoal: np.ndarray) -> None:
-        self._store, self._leaves, self._subgoal, self._built = (floats, nodes), leaves, subgoal, None
+    def __init__(self, store: NodeStore, leaves: np.ndarray, subgoal: np.ndarray):
+        self._store, self._leaves, self._subgoal, self._built = store, leaves, subgoal, None
 
     @property
     def ways(self) -> np.ndarray:
-        return self._store[1][self._leaves, 1:4]
+        return self._store.ways(self._leaves)
 
     def __getattr__(self, name: str) -> Any:
         if name.startswith("_"):
@@ -340,7 +339,7 @@ class ViaPathPlanner(Planner, name="viapath"):
                 return _Chosen(choice, plan, candidates)
         return None
 
-    # -- the same choice in two compiled calls (docs/speed.md, "The compiled cycle") -------------------------
+    # -- the same choice in two compiled calls (docs/CHANGELOG-speed.md, "The compiled cycle") -------------------------
 
     def _compiled_choice(self) -> bool:
         """Whether :meth:`_choose` runs as :meth:`_choose_compiled`: the compiled whole-step kernels, the
@@ -359,7 +358,7 @@ class ViaPathPlanner(Planner, name="viapath"):
 
     def _kernel_constants(self) -> tuple[Any, ...]:
         """The kernels' settings that do not change within an episode (rebuilt when the options, limits or
-        critics object is replaced); their slots: :mod:`.kernel_slots`."""
+        critics object is replaced); their slots: :mod:`viapath.compiled.slots`."""
         config, limits, critics, nominal_speed = self.config, self.limits, self.critics, self.nominal_speed_mps
         cached = self.__dict__.get("_kernel_cache")
         if (
@@ -408,7 +407,7 @@ class ViaPathPlanner(Planner, name="viapath"):
     def _choose_compiled(
         self, checks: LegChecks, speeds: np.ndarray, nominal_index: int, previous: Choice | None, only_way: Way | None
     ) -> _Chosen | None:
-        """:meth:`_choose` with one kernel doing everything up to the shield check (:func:`.kernels.choose`): it
+        """:meth:`_choose` with one kernel doing everything up to the shield check (:func:`viapath.compiled.planning.choose`): it
         rolls out candidates cheapest first until one follows; a candidate the shield refuses sends the search
         on to the next ones here, as the reference does."""
         constants, integers_0, slow_times = self._kernel_constants()
@@ -426,19 +425,19 @@ class ViaPathPlanner(Planner, name="viapath"):
         if previous is not None:
             way = previous.way
             integers[slot.C_PREVIOUS] = 1
-            integers[slot.C_PREV_WAY] = way.obstacle
-            integers[slot.C_PREV_WAY + 1] = way.side
-            integers[slot.C_PREV_WAY + 2] = way.root
+            integers[slot.C_PREV_OBSTACLE] = way.obstacle
+            integers[slot.C_PREV_SIDE] = way.side
+            integers[slot.C_PREV_ROOT] = way.root
             integers[slot.C_PREV_MMPS] = previous.speed_mmps
         if only_way is not None:
             integers[slot.C_ONLY] = 1
-            integers[slot.C_ONLY_WAY] = only_way.obstacle
-            integers[slot.C_ONLY_WAY + 1] = only_way.side
-            integers[slot.C_ONLY_WAY + 2] = only_way.root
+            integers[slot.C_ONLY_OBSTACLE] = only_way.obstacle
+            integers[slot.C_ONLY_SIDE] = only_way.side
+            integers[slot.C_ONLY_ROOT] = only_way.root
         slow_checks = self._slow_checks(checks)
         backend = self.backend
         chosen = backend.choose(checks, slow_checks, speeds, slow_times, settings, integers)
-        if chosen[0][0] == slot.STEP_ONE:
+        if chosen.status == slot.STEP_ONE:
             speed = float(speeds[nominal_index])
             plan = Plan(
                 "straight",
@@ -449,61 +448,52 @@ class ViaPathPlanner(Planner, name="viapath"):
                 candidate_count=1,
                 chosen=0,
             )
-            if chosen[0][1]:
+            if chosen.turn_in_place:
                 plan.extras["turn_in_place"] = True
             if self._inside_shield(plan):
                 return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
             integers[slot.C_TRY_STRAIGHT] = 0  # the shield refused it: the candidates decide
             chosen = backend.choose(checks, slow_checks, speeds, slow_times, settings, integers)
-        found, floats, nodes, costs = chosen
-        if found[0] != slot.CANDIDATES:
+        if chosen.status != slot.CANDIDATES or chosen.first < 0:  # first: the ranks before it do not follow
             return None
-        leaves_end = 2 + costs.shape[1]  # found: status, turn on the spot, the K leaves, then the ranking
-        leaves, ranking = found[2:leaves_end], found[leaves_end:]
-        first = int(ranking[0])  # the first rank that follows (the ranks before it do not), -1: none of those tried
-        if first < 0:
-            return None
-        total, ranks = costs[7], int(ranking[1])
-        order, follow = ranking[2 : 2 + ranks].tolist(), ranking[2 + ranks :].tolist()
-        for rank in range(first, min(ranks, self.config.max_rollouts)):
+        leaves, order, follow, total, store = chosen.leaves, chosen.order, chosen.follow, chosen.total, chosen.store
+        for rank in range(chosen.first, min(len(order), self.config.max_rollouts)):
             best = order[rank]
             if not math.isfinite(total[best]):
                 break
             verdict = follow[rank]
             if verdict == 0:
                 continue
-            plan = self._plan_of_nodes(floats, nodes, leaves, best, total, checks)
+            plan = self._plan_of_nodes(store, leaves, best, total, checks)
             if verdict < 0:  # past the first that follows: only after the shield refused that one
                 verdict = can_follow(plan, checks, self.limits, self.config)
             elif verdict == 2:
                 plan.extras["turn_in_place"] = True
             if verdict and self._inside_shield(plan):
-                plan.extras["cost_terms"] = _cost_terms(self._cost_breakdown(costs), order, rank, total)
+                plan.extras["cost_terms"] = _cost_terms(self._cost_breakdown(chosen.terms), order, rank, total)
                 node = int(leaves[best])
-                way, speed = nodes[node, 1:4].tolist(), float(floats[node, 3])
+                way, speed = store.way(node), store.speed(node)
                 return _Chosen(
                     Choice(Way(*way), int(round(speed * 1000))),
                     plan,
-                    _CompiledCandidates(floats, nodes, leaves, checks.subgoal),
+                    _CompiledCandidates(store, leaves, checks.subgoal),
                 )
         return None
 
-    def _cost_breakdown(self, costs: np.ndarray) -> Callable[[int], dict[str, float]]:
-        """:meth:`.critics.Costs.breakdown` for :func:`.kernels.choose`'s costs (rows: the critics' terms,
+    def _cost_breakdown(self, terms: np.ndarray):
+        """:meth:`.critics.Costs.breakdown` for :func:`viapath.compiled.planning.choose`'s costs (rows: the critics' terms,
         E): one column as Python floats, the same values as the numpy path's."""
         critics = self.critics
         cached = self.__dict__.get("_cost_names")
         if cached is None or cached[0] is not critics:
             cached = self.__dict__["_cost_names"] = (critics, tuple(critic.name for critic in critics) + ("total",))
-        names, terms = cached[1], costs[:7]
+        names = cached[1]
         return lambda k: dict(zip(names, terms[:, k].tolist()))
 
-    def _plan_of_nodes(
-        self, floats: np.ndarray, nodes: np.ndarray, leaves: np.ndarray, k: int, total: np.ndarray, checks: LegChecks
-    ) -> Plan:
-        """:meth:`_plan_of` from the compiled tree's node store (columns as in :mod:`.kernels`)."""
+    def _plan_of_nodes(self, store: NodeStore, leaves, k: int, total, checks: LegChecks) -> Plan:
+        """:meth:`_plan_of` from the compiled tree's node store."""
         node = int(leaves[k])
-        _, _, _, speed_after, _, _, _, slow_s, slow_speed, _ = floats[node].tolist()  # columns: kernels._X.._GOAL
+        speed_after, slow_s, slow_speed = store.slowing(node)
         if slow_s > 0:
             return Plan(
                 "wait" if slow_speed == 0.0 else "slow",
@@ -519,8 +509,8 @@ class ViaPathPlanner(Planner, name="viapath"):
             )
         points = [checks.subgoal]
         while node >= 0:
-            points.append(floats[node, 0:2])
-            node = int(nodes[node, 0])
+            points.append(store.position(node))
+            node = store.parent(node)
         line = np.array(points[::-1])
         return Plan(
             "avoid" if len(line) > 2 else "straight",
@@ -672,3 +662,31 @@ def _cost_terms(
 def ViaPathConfig(**values: Any) -> Settings:
     """The viapath planner's options, validated, defaults filled in (``make_planner(..., config=...)``)."""
     return VIAPATH_OPTIONS.validate(values, where="viapath")
+
+
+def compile_kernels() -> bool:
+    """Compile every planner kernel now if numba is there and the whole-step ones are not compiled yet
+    (about 30 s of CPU once per machine, the choice kernel most of it: numba caches them on disk); True
+    when they are ready. Two planning cycles run all of them with the planner's own argument types: one whose
+    straight leg is blocked (goal_legs and grow inside the choice kernels), one closed in from four sides,
+    where no candidate is free and standing is hit too (the escape's kernels)."""
+    if not numba_available():
+        return False
+    if not whole_steps_compiled():
+        planner = ViaPathPlanner(
+            DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2, backend="numba"
+        )
+        for people in warm_up_crowds():
+            planner.reset()
+            planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people))
+    return True
+
+
+def warm_up_crowds() -> list:
+    """:func:`compile_kernels`' people: one walking at the robot along the path (the choice), four closing in
+    on it from all sides (the escape; tests/planning/test_backends.py checks that both cycles get there)."""
+    sides = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+    return [
+        Obstacles(np.array([[2.0, 0.0]]), np.array([[-0.2, 0.0]]), np.array([0.3])),
+        Obstacles(0.9 * sides, -0.3 * sides, np.full(4, 0.3)),
+    ]

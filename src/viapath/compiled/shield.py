@@ -12,8 +12,7 @@ that the verdicts are the same (``tests/safety/test_shield_backends.py`` checks 
 the property test on its 14 000).
 
 Choices:
-* Only imported when numba is importable (:mod:`viapath.safety.shield` asks
-  :mod:`viapath.planning.viapath.backend`, which decides for the planner too); module-level
+* Loaded through :func:`viapath.compiled.kernels` (the package's one policy decides whether it runs); module-level
   ``@njit(cache=True, nogil=True)`` functions with C-contiguous float64 inputs, one signature each.
 * What a scalar loop can do and the array code cannot: per (command, person) the sub-intervals are
   scanned from the start and the scan stops at the first hit, or as soon as no later hit could come
@@ -29,7 +28,6 @@ Choices:
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 from numba import njit
@@ -546,7 +544,7 @@ def shield(
                 else:
                     break
             order[i] = k
-            count += 1
+            count += 1  # noqa: SIM113 (the insertion sort's sorted length, read at the top of each step)
         total = k_count - 1
         sections = max(1, (total + chunk - 1) // chunk)
     else:
@@ -612,13 +610,3 @@ def shield(
                     passive_pick = rows[i]
                     break
     return reached, admissible, friendly, meet, person, contact, -1, passive_pick, tested, passing
-
-
-def compiled() -> bool:
-    """Whether :func:`shield` is compiled in this process or in numba's on-disk cache, i.e. whether
-    using it now costs no compilation (about 12 s the first time on this machine)."""
-    if shield.signatures:
-        return True
-    cache_file = getattr(getattr(shield, "_cache", None), "_cache_file", None)
-    index = getattr(cache_file, "_index_path", None)
-    return index is not None and os.path.exists(index)

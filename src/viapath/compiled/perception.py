@@ -9,8 +9,8 @@ Why a module of its own, with plain module-level functions:
   (``_build_numba_fit.<locals>.fit``); the fit kernel closed over the ``solve`` dispatcher, whose
   pickled bytes differ in every process, so numba's cache index never matched: every process start
   compiled again (~10 s) and added another ``.nbc`` file next to the source.
-* Imported only when numba is present (``raycast.numba_available()`` / ``circle_fit._numba_fit()``
-  import it inside a ``try``): the numpy path never needs numba.
+* Imported only through the package's policy (:func:`viapath.compiled.kernels`, inside a ``try``): the
+  numpy path never needs numba.
 * Where the cache goes: numba writes next to the source (``__pycache__``) when that folder is
   writable, else (an installed, read-only site-packages) in the user-wide cache
   (``~/.cache/numba`` or ``$NUMBA_CACHE_DIR``). Either way the first process on a machine compiles
@@ -24,7 +24,17 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from viapath.compiled_sum import pairwise_sum
+from viapath.compiled import dependency_digest
+from viapath.compiled.sums import pairwise_sum
+
+# numba's cache keys on this file alone: the digest of the sums it compiles in (see viapath.compiled.planning).
+DEPENDENCIES = ("sums",)
+DEPENDENCY_DIGEST = "bda5224f64c1c850"
+if dependency_digest(DEPENDENCIES) != DEPENDENCY_DIGEST:
+    raise RuntimeError(
+        f"viapath.compiled.perception: {', '.join(DEPENDENCIES)} changed: set DEPENDENCY_DIGEST in "
+        f"{__file__} to {dependency_digest(DEPENDENCIES)!r} (numba then compiles the kernels again)"
+    )
 
 
 @numba.njit(cache=True, fastmath=False, nogil=True)
@@ -187,7 +197,7 @@ def fit_circles_kernel(
 # These must give the numpy path's values bit for bit (the detections decide which tracks exist), so
 # they use only +, -, *, /, abs, max and sqrt (correctly rounded everywhere) and sum the way numpy
 # sums a row: ``row.sum()`` starts from 0.0 and adds numpy's pairwise sum of the row
-# (:func:`viapath.compiled_sum.pairwise_sum`).
+# (:func:`viapath.compiled.sums.pairwise_sum`).
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")

@@ -10,7 +10,7 @@ code does them (same order of additions, same roots), so that the decisions are 
 (``tests/planning/test_backends.py`` checks it on random observations).
 
 Choices:
-* Only imported when numba is importable (:mod:`viapath.planning.viapath.backend` decides);
+* Only imported when numba is importable (:mod:`viapath.compiled.backend` decides);
   every kernel is a plain module-level ``@njit(cache=True)`` function, so numba's on-disk cache
   works and a process after the first pays no compilation (docs/speed.md gives the first run's cost).
 * Inputs are C-contiguous float64 arrays (the caller makes them so): one compiled signature each.
@@ -18,7 +18,7 @@ Choices:
   of the escape's headings (between :func:`escape_headings` and :func:`escape_scores`). The choice's angles
   are libm's atan2 on both paths (:func:`viapath.geometry.angles_of`), so :func:`choose` takes them itself.
   Where numpy's order of operations is its own, the kernels copy it: np.sum's pairwise summation
-  (:func:`viapath.compiled_sum.pairwise_sum`).
+  (:func:`viapath.compiled.sums.pairwise_sum`).
 * hypot costs about 20 ns here; where only the sign of ``hypot - limit`` matters, the squared distance
   decides outside a band of ±1e-9 around the limit (:func:`_within`, :func:`_excess_at_most`,
   :func:`_furthest`), as the numpy path's :func:`viapath.planning.viapath.escape.touching` does.
@@ -31,16 +31,20 @@ import math
 import numpy as np
 from numba import njit
 
-from viapath.compiled_sum import pairwise_sum
-from viapath.planning.viapath.kernel_slots import (
+from viapath.compiled import dependency_digest
+from viapath.compiled.slots import (
     C_DEGREES,
     C_DEPTH,
     C_NOMINAL,
     C_ONLY,
-    C_ONLY_WAY,
+    C_ONLY_OBSTACLE,
+    C_ONLY_ROOT,
+    C_ONLY_SIDE,
     C_PREFERRED,
     C_PREV_MMPS,
-    C_PREV_WAY,
+    C_PREV_OBSTACLE,
+    C_PREV_ROOT,
+    C_PREV_SIDE,
     C_PREVIOUS,
     C_ROLLOUTS,
     C_ROOT_LIMIT,
@@ -69,9 +73,37 @@ from viapath.planning.viapath.kernel_slots import (
     F_TURN_ACCEL,
     F_TURN_IN_PLACE,
     F_TURN_RATE,
+    N_FIRST_X,
+    N_FIRST_Y,
+    N_LEAF,
+    N_LENGTH,
+    N_OBSTACLE,
+    N_PARENT,
+    N_ROOT,
+    N_SIDE,
+    N_SLOW_S,
+    N_SLOW_SPEED,
+    N_SPEED,
+    N_TIME,
+    N_TO_GOAL,
+    N_X,
+    N_Y,
     NO_CANDIDATE,
+    NODE_FLOATS,
+    NODE_INTEGERS,
     STEP_ONE,
 )
+from viapath.compiled.sums import pairwise_sum
+
+# numba's cache keys on this file alone; the layouts and the sums it compiles in are in these two files, so their
+# digest is written here: a change there stops this import until the digest here is updated (which recompiles).
+DEPENDENCIES = ("slots", "sums")
+DEPENDENCY_DIGEST = "bca312a41c9fa3ee"
+if dependency_digest(DEPENDENCIES) != DEPENDENCY_DIGEST:
+    raise RuntimeError(
+        f"viapath.compiled.planning: {', '.join(DEPENDENCIES)} changed: set DEPENDENCY_DIGEST in "
+        f"{__file__} to {dependency_digest(DEPENDENCIES)!r} (numba then compiles the kernels again)"
+    )
 
 
 @njit(cache=True, nogil=True, inline="always")  # inlined: called per leg and obstacle, a few hundred a cycle
@@ -787,7 +819,7 @@ def escape_scores(
     the K commands (:func:`viapath.kinematics.rollout`: the ramps of speed and turn rate, the exact arcs, the
     positions as running sums), their corridor excess (:func:`_excess`), the people who could come within
     reach (the triangle-inequality bound), the contacts (:func:`escape_contacts`), the separation from the
-    people overlapped now (summed as np.sum does: :func:`viapath.compiled_sum.pairwise_sum`), the progress towards the subgoal and
+    people overlapped now (summed as np.sum does: :func:`viapath.compiled.sums.pairwise_sum`), the progress towards the subgoal and
     the score. Returns the ends (K, 2) and the scores (K,).
 
     ``sines`` and ``cosines`` are numpy's, of :func:`escape_headings`' rows (command k's row is
@@ -1112,8 +1144,9 @@ def _goal_legs_inside_all(
 # -- the candidate tree (candidates.grow) in one call --------------------------------------------------------
 
 # Columns of the node store: floats, then integers.
-_X, _Y, _T, _V, _LENGTH, _FX, _FY, _SLOW_S, _SLOW_V, _GOAL = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9
-_PARENT, _WAY0, _WAY1, _WAY2, _LEAF = 0, 1, 2, 3, 4
+_X, _Y, _T, _V, _LENGTH, _FX, _FY = N_X, N_Y, N_TIME, N_SPEED, N_LENGTH, N_FIRST_X, N_FIRST_Y
+_SLOW_S, _SLOW_V, _GOAL = N_SLOW_S, N_SLOW_SPEED, N_TO_GOAL
+_PARENT, _WAY0, _WAY1, _WAY2, _LEAF = N_PARENT, N_OBSTACLE, N_SIDE, N_ROOT, N_LEAF
 _STRAIGHT, _SLOW, _CORNER = -1, -2, -3  # candidates.STRAIGHT, SLOW, CORNER
 _SIDES = (1, -1, 1, -1)  # geometry.VIA_SIDES
 _ROOTS = (0, 0, 1, 1)  # geometry.VIA_ROOTS
@@ -1249,8 +1282,8 @@ def grow(
     the columns named above; a node is a leaf (a complete candidate) when its goal leg is free."""
     s_count = speeds.shape[0]
     n_count = obstacle_positions.shape[0]
-    nf = np.empty((4 * s_count + 32, 10))
-    ni = np.empty((4 * s_count + 32, 5), np.int64)
+    nf = np.empty((4 * s_count + 32, NODE_FLOATS))
+    ni = np.empty((4 * s_count + 32, NODE_INTEGERS), np.int64)
     m = _ZERO
     for i in range(s_count):  # the roots: one per speed, at the robot, now
         nf, ni, m = _add(
@@ -1724,7 +1757,7 @@ def grow(
 # (:func:`choose_tree`); then Eq. 1's critics, the order and the motion-limit checks (:func:`choose_candidate`).
 # Between them the candidates' angles, by libm's atan2 as the reference takes them (geometry.angles_of).
 
-# The slots of the settings arrays: .kernel_slots (C_* integers, F_* floats), imported at the top.
+# The slots of the settings arrays: viapath.compiled.slots (C_* integers, F_* floats), imported at the top.
 
 
 @njit(cache=True, nogil=True)
@@ -1888,7 +1921,7 @@ def choose_tree(
     """The first half of the viapath planner's ``_choose`` in one call: the root legs (:func:`goal_legs`), the
     paper's step 1 (the free straight leg at the nominal speed, if the robot can follow it: follow.can_follow),
     else the candidate tree (:func:`grow`). ``robot`` is (x, y, heading, speed, turn rate); ``settings`` and
-    ``integers`` hold the scalars (their slots: :mod:`.kernel_slots`).
+    ``integers`` hold the scalars (their slots: :mod:`viapath.compiled.slots`).
 
     Returns (found, floats, integers: grow's node store, facts). ``found`` is (NO_CANDIDATE / STEP_ONE /
     CANDIDATES, step 1 turns on the spot first, then the K leaves: the candidates' nodes); ``facts`` (6, K)
@@ -1952,7 +1985,7 @@ def choose_tree(
         if follows:
             result[0] = STEP_ONE
             result[1] = follows == 2
-            return result, np.empty((0, 10)), np.empty((0, 5), np.int64), np.empty((6, 0))
+            return result, np.empty((0, NODE_FLOATS)), np.empty((0, NODE_INTEGERS), np.int64), np.empty((6, 0))
     nf, ni = grow(
         robot[:2].copy(),
         subgoal,
@@ -2087,9 +2120,9 @@ def choose_candidate(
         terms[4, k] = settings[F_SIDE] * (1.0 if (side != 0 and side != integers[C_PREFERRED]) else 0.0)
         if integers[C_PREVIOUS]:
             same_way = (
-                ni[m, _WAY0] == integers[C_PREV_WAY]
-                and ni[m, _WAY1] == integers[C_PREV_WAY + 1]
-                and ni[m, _WAY2] == integers[C_PREV_WAY + 2]
+                ni[m, _WAY0] == integers[C_PREV_OBSTACLE]
+                and ni[m, _WAY1] == integers[C_PREV_SIDE]
+                and ni[m, _WAY2] == integers[C_PREV_ROOT]
             )
             same_speed = np.rint(speed * 1000) == integers[C_PREV_MMPS]
             bonus = (1.0 if same_way else 0.0) + 0.5 * (1.0 if (same_way and same_speed) else 0.0)
@@ -2101,9 +2134,9 @@ def choose_candidate(
             value = value + terms[c, k]
         raw_total[k] = value
         if only and not (
-            ni[m, _WAY0] == integers[C_ONLY_WAY]
-            and ni[m, _WAY1] == integers[C_ONLY_WAY + 1]
-            and ni[m, _WAY2] == integers[C_ONLY_WAY + 2]
+            ni[m, _WAY0] == integers[C_ONLY_OBSTACLE]
+            and ni[m, _WAY1] == integers[C_ONLY_SIDE]
+            and ni[m, _WAY2] == integers[C_ONLY_ROOT]
         ):
             value = math.inf
         total[k] = value

@@ -2,10 +2,8 @@
 
 Source: a compiled hot path, the numpy path staying the reference; docs/speed.md.
 
-* Option ``backend`` (:mod:`.options`): ``auto`` (default) uses numba when it is importable, ``numpy``
-  and ``numba`` force one (``numba`` without numba installed is an error naming the extra). The
-  environment variable ``VIAPATH_PLANNER_BACKEND`` (same choices) overrides ``auto`` only, so a
-  whole benchmark can be run on the reference path without touching its scenario files.
+* Option ``backend`` (:mod:`viapath.planning.viapath.options`): chosen by the package's one policy
+  (:func:`viapath.compiled.resolve`; the whole-step kernels under a plain ``auto`` once they are cached).
 * A :class:`Backend` holds the hot functions, :meth:`legs_first_contact` (leg-against-people
   checks), :meth:`via_options` (via points of (node, obstacle) pairs), :meth:`legs_inside` and
   :meth:`goal_legs_inside` (corridor checks), :meth:`goal_legs` (all of a batch of legs to the subgoal:
@@ -17,45 +15,84 @@ Source: a compiled hot path, the numpy path staying the reference; docs/speed.md
 
 from __future__ import annotations
 
-import importlib.util
-import os
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
+from viapath.compiled import explicit, ready, require, resolve
+from viapath.compiled import slots as slot
 from viapath.geometry import legs_first_contact as numpy_legs_first_contact
 from viapath.geometry import via_options as numpy_via_options
 from viapath.kinematics import UnicycleState
 from viapath.kinematics import track as numpy_track
 from viapath.observation import MotionLimits
 
-BACKENDS = ("auto", "numpy", "numba")
-ENVIRONMENT_VARIABLE = "VIAPATH_PLANNER_BACKEND"
+
+class NodeStore(NamedTuple):
+    """The candidate tree's node store of :func:`viapath.compiled.planning.grow` / ``choose``, read by name
+    (columns: :mod:`.slots`)."""
+
+    floats: np.ndarray  # (M, slots.NODE_FLOATS)
+    integers: np.ndarray  # (M, slots.NODE_INTEGERS)
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The columns as :func:`viapath.planning.viapath.candidates.grow` names them (views, no copies)."""
+        floats, integers = self.floats, self.integers
+        return {
+            "position": floats[:, slot.N_X : slot.N_Y + 1],
+            "time_s": floats[:, slot.N_TIME],
+            "speed": floats[:, slot.N_SPEED],
+            "parent": integers[:, slot.N_PARENT],
+            "length_m": floats[:, slot.N_LENGTH],
+            "first_direction": floats[:, slot.N_FIRST_X : slot.N_FIRST_Y + 1],
+            "way": integers[:, slot.N_OBSTACLE : slot.N_ROOT + 1],
+            "slow_s": floats[:, slot.N_SLOW_S],
+            "slow_speed": floats[:, slot.N_SLOW_SPEED],
+        }
+
+    def leaves(self) -> np.ndarray:
+        """The nodes that end a complete candidate, in node order."""
+        return np.flatnonzero(self.integers[:, slot.N_LEAF])
+
+    def to_goal_m(self, nodes) -> np.ndarray:
+        """The length left from these nodes to the subgoal."""
+        return self.floats[nodes, slot.N_TO_GOAL]
+
+    def ways(self, nodes) -> np.ndarray:
+        """(len(nodes), 3) ways round: obstacle, side, root."""
+        return self.integers[nodes, slot.N_OBSTACLE : slot.N_ROOT + 1]
+
+    def way(self, node: int) -> list[int]:
+        return self.integers[node, slot.N_OBSTACLE : slot.N_ROOT + 1].tolist()
+
+    def position(self, node: int) -> np.ndarray:
+        return self.floats[node, slot.N_X : slot.N_Y + 1]
+
+    def parent(self, node: int) -> int:
+        return int(self.integers[node, slot.N_PARENT])
+
+    def speed(self, node: int) -> float:
+        return float(self.floats[node, slot.N_SPEED])
+
+    def slowing(self, node: int) -> tuple[float, float, float]:
+        """The speed after the node's leg, its slow/wait time and the speed during it (0 s: no slowing)."""
+        row = self.floats[node]
+        return float(row[slot.N_SPEED]), float(row[slot.N_SLOW_S]), float(row[slot.N_SLOW_SPEED])
 
 
-def numba_available() -> bool:
-    return importlib.util.find_spec("numba") is not None
+class CompiledChoice(NamedTuple):
+    """What :func:`viapath.compiled.planning.choose` found, by name."""
 
-
-def resolve(choice: str) -> str:
-    """``numpy`` or ``numba`` for an option value (``auto`` looks at the environment, then at numba)."""
-    if choice == "auto":
-        override = os.environ.get(ENVIRONMENT_VARIABLE, "").strip().lower()
-        if override and override != "auto":
-            if override not in BACKENDS:
-                raise ValueError(
-                    f"environment variable {ENVIRONMENT_VARIABLE}={override!r}: expected one of {', '.join(BACKENDS)}"
-                )
-            choice = override
-        else:
-            return "numba" if numba_available() else "numpy"
-    if choice == "numba" and not numba_available():
-        raise ValueError(
-            "viapath option backend='numba' needs numba: install the extra 'fast' (pip install 'viapath[fast]')"
-        )
-    if choice not in ("numpy", "numba"):
-        raise ValueError(f"viapath option backend={choice!r}: expected one of {', '.join(BACKENDS)}")
-    return choice
+    status: int  # slots.NO_CANDIDATE, STEP_ONE or CANDIDATES
+    turn_in_place: bool  # step 1 turns on the spot first
+    leaves: np.ndarray  # (K,) the candidates' last nodes
+    first: int  # the first rank whose candidate follows, -1: none tried follows
+    order: list[int]  # candidates cheapest first (the ranks tried)
+    follow: list[int]  # can_follow of each rank: 0 no, 1 yes, 2 after turning on the spot, -1 not tried
+    total: np.ndarray  # (K,) E with only_way applied
+    terms: np.ndarray  # (COST_TERMS + 1, K) each critic's term (critics_for's order), then their sum E
+    store: NodeStore
 
 
 @dataclass(frozen=True)
@@ -94,7 +131,7 @@ class Backend:
                 growth_until_s,
                 leg_radii_m,
             )
-        from viapath.planning.viapath import kernels
+        kernels = _kernels()
 
         n = len(positions)
         legs = np.zeros(len(starts)) if leg_radii_m is None else _c(leg_radii_m)
@@ -137,7 +174,7 @@ class Backend:
                 envelope_m,
                 max_time_s,
             )
-        from viapath.planning.viapath import kernels
+        kernels = _kernels()
 
         n = len(starts)
         return kernels.via_options(
@@ -156,7 +193,7 @@ class Backend:
     def legs_inside(self, path, starts, ends, spacing_m: float, tolerance_m: float) -> np.ndarray:
         if self.name == "numpy":
             return path.legs_inside(starts, ends, spacing_m, tolerance_m)
-        from viapath.planning.viapath import kernels
+        kernels = _kernels()
 
         return kernels.legs_inside(
             *_corridor(path),
@@ -172,7 +209,7 @@ class Backend:
         """None on the numpy path (the caller's own code is the reference)."""
         if self.name == "numpy":
             return None
-        from viapath.planning.viapath import kernels
+        kernels = _kernels()
 
         inside = kernels.goal_legs_inside(*_corridor(path), _c(starts), int(subgoal_index), float(tolerance_m))
         if not inside.all():
@@ -191,7 +228,7 @@ class Backend:
         code is the reference)."""
         if self.name == "numpy" or not self.whole_steps:
             return None
-        from viapath.planning.viapath import kernels
+        kernels = _kernels()
 
         obstacles = checks.kernel_obstacles()
         return kernels.goal_legs(
@@ -211,11 +248,11 @@ class Backend:
         )
 
     def grow(self, checks, slow_checks, roots, config):
-        """:func:`.candidates.grow`'s whole candidate tree in one compiled call: the node store (floats
-        (M, 10), integers (M, 5), columns as in :mod:`.kernels`); None on the numpy path (the reference)."""
+        """:func:`.candidates.grow`'s whole candidate tree in one compiled call: its :class:`NodeStore`; None on
+        the numpy path (the reference)."""
         if self.name == "numpy" or not self.whole_steps:
             return None
-        from viapath.planning.viapath import kernels
+        kernels = _kernels()
 
         positions, velocities, radii, growth, until = checks.kernel_obstacles()
         _, _, slow_radii, slow_growth, slow_until = slow_checks.kernel_obstacles()
@@ -224,7 +261,7 @@ class Backend:
         # The robot's segment matters only when a corner can lie between it and the subgoal.
         segment = int(path.project(checks.position)[0]) if index >= 2 else 0
         slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
-        return kernels.grow(
+        store = kernels.grow(
             _c(checks.position),
             _c(checks.subgoal),
             _c(roots.speeds),
@@ -258,12 +295,14 @@ class Backend:
             int(config.max_depth),
             int(config.max_root_obstacles),
         )
+        return NodeStore(*store)
 
     def choose(self, checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.ndarray, integers: np.ndarray):
         """The planner's choice up to its shield check in one compiled call (roots, step 1, the candidate tree,
         Eq. 1's critics, the order and the roll-outs up to the first candidate that follows):
-        :func:`.kernels.choose`; None on the numpy path. ``slow_times`` (float64), ``settings`` and ``integers``
-        are the kernel's, filled in by the planner."""
+        :func:`viapath.compiled.planning.choose`, as a :class:`CompiledChoice`; None on the numpy path.
+        ``slow_times`` (float64), ``settings`` and ``integers`` are the kernel's (slots: :mod:`.slots`), filled in
+        by the planner."""
         if self.name == "numpy" or not self.whole_steps:
             return None
         (
@@ -286,7 +325,7 @@ class Backend:
         _, _, slow_radii, slow_growth, slow_until = (
             (positions, velocities, radii, growth, until) if slow_checks is checks else slow_checks.kernel_obstacles()
         )
-        return _kernels().choose(
+        found, floats, integers, costs = _kernels().choose(
             robot,
             _c(speeds),
             _c(checks.subgoal),
@@ -311,11 +350,12 @@ class Backend:
             settings,
             integers,
         )
+        return _choice_of(found, floats, integers, costs)
 
     def corridor_excess(self, path, points) -> np.ndarray:
         if self.name == "numpy":
             return path.corridor_excess(points)
-        from viapath.planning.viapath import kernels
+        kernels = _kernels()
 
         return kernels.corridor_excess(*_corridor(path), _c(points))
 
@@ -335,7 +375,7 @@ class Backend:
         K roll-outs; None on the numpy path (:func:`.escape.escape_scores` is the reference)."""
         if self.name == "numpy":
             return None
-        from viapath.planning.viapath import kernels
+        kernels = _kernels()
 
         return kernels.escape_contacts(
             _c(positions),
@@ -350,9 +390,9 @@ class Backend:
         )
 
     def escape(self, checks, limits: MotionLimits, config, fan, previous=None, score_standing: bool = False):
-        """:func:`.escape.stop_or_escape`'s figures in two compiled calls: :func:`.kernels.escape_headings` (the
+        """:func:`.escape.stop_or_escape`'s figures in two compiled calls: :func:`viapath.compiled.planning.escape_headings` (the
         standing check, the fan's headings), numpy's sines and cosines of those headings (as
-        :func:`viapath.kinematics.rollout` takes them), :func:`.kernels.escape_scores`. Returns (standing is
+        :func:`viapath.kinematics.rollout` takes them), :func:`viapath.compiled.planning.escape_scores`. Returns (standing is
         free, commands (K, 2), ends (K, 2), scores (K,)), the last three None when standing is free (unless
         ``score_standing``); None on the numpy path and before the whole-step kernels are compiled (then
         :func:`.escape.escape_scores`, the reference, runs with the smaller kernels). ``fan``:
@@ -415,7 +455,7 @@ class Backend:
     ) -> np.ndarray:
         if self.name == "numpy":
             return numpy_track(state, target, speed_mps, limits, dt_s, steps, heading_gain)
-        from viapath.planning.viapath import kernels
+        kernels = _kernels()
 
         return kernels.track(
             float(state.x),
@@ -436,14 +476,38 @@ class Backend:
         )
 
 
+def _choice_of(found, floats, integers, costs) -> CompiledChoice:
+    """:class:`CompiledChoice` from choose's arrays: ``found`` (status, turn on the spot, the K leaves, then
+    the ranking when there are candidates) and ``costs`` (slots.COST_ROWS, K)."""
+    store = NodeStore(floats, integers)
+    status, turn = int(found[slot.FOUND_STATUS]), bool(found[slot.FOUND_TURN_IN_PLACE])
+    if status != slot.CANDIDATES:
+        return CompiledChoice(
+            status, turn, found[slot.FOUND_LEAVES :], -1, [], [], costs[slot.COST_TOTAL], costs, store
+        )
+    leaves_end = slot.FOUND_LEAVES + costs.shape[1]
+    leaves, ranking = found[slot.FOUND_LEAVES : leaves_end], found[leaves_end:]
+    ranks = int(ranking[slot.RANKING_COUNT])
+    order_end = slot.RANKING_ORDER + ranks
+    return CompiledChoice(
+        status,
+        turn,
+        leaves,
+        int(ranking[slot.RANKING_FIRST]),
+        ranking[slot.RANKING_ORDER : order_end].tolist(),
+        ranking[order_end:].tolist(),
+        costs[slot.COST_TOTAL],
+        costs[: slot.COST_SUM + 1],
+        store,
+    )
+
+
 def _kernels():
     """The kernels module (imports numba: only on the compiled path; kept after the first import, as the
     per-call import statement costs a microsecond)."""
     global _KERNELS
     if _KERNELS is None:
-        from viapath.planning.viapath import kernels
-
-        _KERNELS = kernels
+        _KERNELS = require("planning")
     return _KERNELS
 
 
@@ -480,60 +544,14 @@ NUMPY = Backend("numpy")
 
 def backend_for(choice: str) -> Backend:
     name = resolve(choice)
-    explicit = choice != "auto" or os.environ.get(ENVIRONMENT_VARIABLE, "").strip().lower() not in ("", "auto")
-    return Backend(name, whole_steps=name == "numba" and (explicit or whole_steps_compiled()))
+    return Backend(name, whole_steps=name == "numba" and (explicit(choice) or whole_steps_compiled()))
 
 
 def whole_steps_compiled() -> bool:
     """Whether the kernels of whole steps (goal_legs, grow, the choice, the escape) cost no compilation now:
     compiled in this process or in numba's on-disk cache."""
-    from viapath.planning.viapath import kernels
-
-    for kernel in (kernels.goal_legs, kernels.grow, kernels.choose, kernels.escape_headings, kernels.escape_scores):
-        if kernel.signatures:
-            continue
-        cache_file = getattr(getattr(kernel, "_cache", None), "_cache_file", None)
-        index = getattr(cache_file, "_index_path", None)
-        if index is None or not os.path.exists(index):
-            return False
-    return True
-
-
-def compile_kernels() -> bool:
-    """Compile every planner kernel now if numba is there and the whole-step ones are not compiled yet
-    (about 30 s of CPU once per machine, the choice kernel most of it: numba caches them on disk); True
-    when they are ready. Two planning cycles run all of them with the planner's own argument types: one whose
-    straight leg is blocked (goal_legs and grow inside the choice kernels), one closed in from four sides,
-    where no candidate is free and standing is hit too (the escape's kernels)."""
-    if not numba_available():
-        return False
-    if not whole_steps_compiled():
-        from viapath.observation import Observation, RobotState
-        from viapath.path import DesignatedPath
-        from viapath.planning import make_planner
-
-        planner = make_planner(
-            "viapath",
-            DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
-            nominal_speed_mps=0.2,
-            backend="numba",
-        )
-        for people in warm_up_crowds():
-            planner.reset()
-            planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people))
-    return True
-
-
-def warm_up_crowds() -> list:
-    """:func:`compile_kernels`' people: one walking at the robot along the path (the choice), four closing in
-    on it from all sides (the escape; tests/planning/test_backends.py checks that both cycles get there)."""
-    from viapath.observation import Obstacles
-
-    sides = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
-    return [
-        Obstacles(np.array([[2.0, 0.0]]), np.array([[-0.2, 0.0]]), np.array([0.3])),
-        Obstacles(0.9 * sides, -0.3 * sides, np.full(4, 0.3)),
-    ]
+    kernels = _kernels()
+    return ready(kernels.goal_legs, kernels.grow, kernels.choose, kernels.escape_headings, kernels.escape_scores)
 
 
 #: The compiled backend without its whole-step kernels (the recipe's steps in numpy, their leg checks and via

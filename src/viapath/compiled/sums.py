@@ -9,8 +9,8 @@ another way differs from numpy in the last bit now and then, and the decisions t
 Choices:
 * The halving walks an explicit stack instead of recursing: numba's on-disk cache loads a self-recursive
   function that then crashes (segfault) in the next process.
-* Imported only by the kernel modules (:mod:`viapath.planning.viapath.kernels`,
-  :mod:`viapath.perception._numba_kernels`), so only where numba is installed. numba's cache of a kernel
+* Imported only by the kernel modules (:mod:`viapath.compiled.planning`,
+  :mod:`viapath.compiled.perception`), so only where numba is installed. numba's cache of a kernel
   does not notice a change to this file: after editing it, delete the callers' cache files
   (``__pycache__/*.nbi``, ``*.nbc``) or point ``NUMBA_CACHE_DIR`` somewhere new. The tests
   (``tests/planning/test_backends.py``, ``tests/perception/test_laser_shortcuts.py``) hold the sums to

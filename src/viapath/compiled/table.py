@@ -1,0 +1,128 @@
+"""Every compiled entry with its numpy reference and the test that holds the two equal.
+
+``tests/test_compiled_table.py`` checks this table: every public kernel of the kernel modules is listed, each
+reference can be imported, each test exists. A kernel that is only called from another one (the pieces of
+``choose``, of the shield's ``shield``) names the test of the entry that calls it. This module imports no numba.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+# The critics of Eq. 1 that the compiled choice (planning.choose_candidate) sums, in critics_for's order: a planner
+# with any other critic takes the numpy choice, and tests/test_compiled_table.py fails for a critic not listed.
+COMPILED_CRITICS = ("distance", "time", "speed", "heading", "side", "hysteresis")
+
+
+class Entry(NamedTuple):
+    kernel: str  # "module.function" in viapath.compiled
+    reference: str  # the numpy code it computes, importable: "viapath.module:qualified.name"
+    test: str  # "tests/file.py::test_name"
+
+
+_BACKENDS = "tests/planning/test_backends.py"
+_SHIELD = "tests/safety/test_shield_backends.py::test_numba_shield_gives_the_numpy_verdicts"
+_HARNESS = "tests/robustness/test_harness_kernels.py"
+_CHOICE = f"{_BACKENDS}::test_compiled_choice_is_the_numpy_choice"
+_ESCAPE = f"{_BACKENDS}::test_compiled_escape_is_the_reference"
+_CORRIDOR = f"{_BACKENDS}::test_corridor_kernels_match_reference"
+_LASER = "tests/perception/test_laser_backends.py::test_numba_laser_path_equals_numpy_segments_and_tracks"
+
+ENTRIES = (
+    # The viapath planner (viapath.compiled.backend dispatches to them).
+    Entry(
+        "planning.legs_first_contact",
+        "viapath.geometry:legs_first_contact",
+        f"{_BACKENDS}::test_kernels_match_reference_on_edge_cases",
+    ),
+    Entry("planning.track", "viapath.kinematics:track", f"{_BACKENDS}::test_track_kernel_matches_reference"),
+    Entry(
+        "planning.via_options",
+        "viapath.geometry:via_options",
+        f"{_BACKENDS}::test_via_options_kernel_matches_reference",
+    ),
+    Entry("planning.legs_inside", "viapath.path:DesignatedPath.legs_inside", _CORRIDOR),
+    Entry("planning.goal_legs_inside", "viapath.path:DesignatedPath.legs_inside", _CORRIDOR),
+    Entry(
+        "planning.corridor_excess",
+        "viapath.path:DesignatedPath.corridor_excess",
+        f"{_BACKENDS}::test_escape_scores_match_reference",
+    ),
+    Entry(
+        "planning.escape_contacts",
+        "viapath.planning.viapath.escape:escape_scores",
+        f"{_BACKENDS}::test_escape_contacts_skip_only_free_steps",
+    ),
+    Entry("planning.escape_headings", "viapath.planning.viapath.escape:stop_or_escape", _ESCAPE),
+    Entry("planning.escape_scores", "viapath.planning.viapath.escape:escape_scores", _ESCAPE),
+    Entry(
+        "planning.goal_legs",
+        "viapath.planning.viapath.checks:LegChecks.goal_legs",
+        f"{_BACKENDS}::test_goal_legs_kernel_matches_reference",
+    ),
+    Entry(
+        "planning.grow",
+        "viapath.planning.viapath.candidates:grow",
+        f"{_BACKENDS}::test_tree_kernel_builds_the_same_candidates",
+    ),
+    Entry("planning.choose_tree", "viapath.planning.viapath.planner:ViaPathPlanner._choose", _CHOICE),
+    Entry("planning.choose_candidate", "viapath.planning.viapath.critics:score", _CHOICE),
+    Entry("planning.choose", "viapath.planning.viapath.planner:ViaPathPlanner._choose", _CHOICE),
+    # The passive-safety shield.
+    Entry("shield.braking_sweep", "viapath.safety.shield:braking_sweep", _SHIELD),
+    Entry("shield.achieved_first_period", "viapath.safety.shield:achieved_first_period", _SHIELD),
+    Entry("shield.evaluate", "viapath.safety.shield:Shield.evaluate", _SHIELD),
+    Entry("shield.candidates", "viapath.safety.shield:Shield.candidates", _SHIELD),
+    Entry("shield.shield", "viapath.safety.shield:Shield.filter", _SHIELD),
+    # The laser chain.
+    Entry(
+        "perception.beam_range",
+        "viapath.perception.raycast:cast_rays_numpy",
+        "tests/perception/test_perception_raycast.py::test_numba_equals_numpy_bit_for_bit",
+    ),
+    Entry(
+        "perception.cast_rays_kernel",
+        "viapath.perception.raycast:cast_rays_numpy",
+        "tests/perception/test_perception_raycast.py::test_numba_equals_numpy_bit_for_bit",
+    ),
+    Entry("perception.cast_rays_from_kernel", "viapath.perception.raycast:cast_rays_from_numpy", _LASER),
+    Entry(
+        "perception.solve_sym3_scalar",
+        "viapath.perception.circle_fit:solve_sym3",
+        "tests/perception/test_perception_detection.py::test_numba_circle_fit_equals_numpy",
+    ),
+    Entry(
+        "perception.fit_circles_kernel",
+        "viapath.perception.circle_fit:fit_circles",
+        "tests/perception/test_perception_detection.py::test_numba_circle_fit_equals_numpy",
+    ),
+    Entry(
+        "perception.segment_shape_kernel",
+        "viapath.perception.detection:detect",
+        "tests/perception/test_laser_shortcuts.py::test_numba_shape_tests_equal_numpy",
+    ),
+    Entry("perception.split_clusters_kernel", "viapath.perception.segmentation:segment_beams", _LASER),
+    # The harness every planner gets (guard, inflation).
+    Entry(
+        "harness.obstacles_sound",
+        "viapath.guard:_obstacles_sound",
+        f"{_HARNESS}::test_obstacles_sound_agrees_with_the_numpy_reductions",
+    ),
+    Entry(
+        "harness.first_touched",
+        "viapath.guard:check_command",
+        f"{_HARNESS}::test_the_braking_test_agrees_with_check_commands_numpy_code",
+    ),
+    Entry(
+        "harness.inflation",
+        "viapath.planning.base:Inflation.of",
+        f"{_HARNESS}::test_inflation_is_the_numpy_inflation_bit_for_bit",
+    ),
+    Entry(
+        "harness.situation_numbers",
+        "viapath.planning.base:Planner.situation",
+        f"{_HARNESS}::test_the_situations_inflation_and_corridor_excess_are_the_numpy_ones_bit_for_bit",
+    ),
+    # numpy's pairwise summation.
+    Entry("sums.pairwise_sum", "numpy:sum", f"{_BACKENDS}::test_escape_kernel_pieces_match_numpy"),
+)
