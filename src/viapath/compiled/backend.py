@@ -282,7 +282,6 @@ class Backend:
             slow_until,
             slow_times,
             bool(len(slow_times)),
-            float(config.creep_speed_mps),
             float(checks.stop_short_m),
             float(checks.horizon_s),
             checks.kernel_continuation(),

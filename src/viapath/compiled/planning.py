@@ -55,7 +55,6 @@ from viapath.compiled.slots import (
     C_TRY_STRAIGHT,
     CANDIDATES,
     F_ACCEL,
-    F_CREEP,
     F_DT,
     F_GAIN,
     F_HORIZON,
@@ -99,7 +98,7 @@ from viapath.compiled.sums import pairwise_sum
 # numba's cache keys on this file alone; the layouts and the sums it compiles in are in these two files, so their
 # digest is written here: a change there stops this import until the digest here is updated (which recompiles).
 DEPENDENCIES = ("slots", "sums")
-DEPENDENCY_DIGEST = "9d6c6f9c41adf3d8"
+DEPENDENCY_DIGEST = "bca312a41c9fa3ee"
 if dependency_digest(DEPENDENCIES) != DEPENDENCY_DIGEST:
     raise RuntimeError(
         f"viapath.compiled.planning: {', '.join(DEPENDENCIES)} changed: set DEPENDENCY_DIGEST in "
@@ -1261,7 +1260,6 @@ def grow(
     slow_growth_until_s,
     slow_times,
     slow_enabled,
-    creep_mps,
     stop_short_m,
     horizon_s,
     continuation,
@@ -1328,18 +1326,12 @@ def grow(
     if slow_enabled and n_count > 0 and straight_inside:
         nominal = speeds[nominal_index]
         slow_count = 1
-        floor = nominal
         for i in range(s_count):
             if speeds[i] < nominal - 1e-9:
                 slow_count += 1
-                floor = min(floor, speeds[i])
-        creeps = 0.0 < creep_mps < floor - 1e-9
-        slow_speeds = np.empty(slow_count + int(creeps))
+        slow_speeds = np.empty(slow_count)
         slow_speeds[0] = 0.0
         c = 1
-        if creeps:
-            slow_speeds[1] = creep_mps
-            c = 2
         for i in range(s_count):
             if speeds[i] < nominal - 1e-9:
                 slow_speeds[c] = speeds[i]
@@ -2015,7 +2007,6 @@ def choose_tree(
         slow_growth_until_s,
         slow_times,
         integers[C_SLOW] != 0,
-        settings[F_CREEP],
         stop_short_m,
         horizon_s,
         continuation,

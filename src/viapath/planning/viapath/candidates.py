@@ -437,11 +437,7 @@ def _slow_candidates(
     if not checks.goal_legs_inside(checks.position[None])[0]:
         return None  # slowing down runs along the straight leg, which would leave the corridor
     nominal = speeds[nominal_index]
-    below = speeds[speeds < nominal - 1e-9]
-    # Creeping: a speed between standing and the slowest of the set, where standing is not needed.
-    floor = float(below.min()) if len(below) else float(nominal)
-    creep = [config.creep_speed_mps] if 0.0 < config.creep_speed_mps < floor - 1e-9 else []
-    slow_speeds = np.concatenate([[0.0], creep, below])
+    slow_speeds = np.concatenate([[0.0], speeds[speeds < nominal - 1e-9]])
     # Every slow time with every slow speed, as np.meshgrid(times, slow_speeds) would pair them (row-major;
     # np.tile and np.repeat as the array methods: their Python costs more than these few copies).
     times = np.asarray(config.slow_times_s, float)

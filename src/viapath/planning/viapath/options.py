@@ -108,15 +108,6 @@ _OWN = [
         maximum=1.0,
     ),
     Option(
-        "creep_speed_mps",
-        0.05,
-        "slow/wait candidates may also creep at this speed (below the slowest of the speed set), so that "
-        "where the slowest speed's leg is not free the robot creeps on rather than stands (0: off)",
-        "m/s",
-        minimum=0.0,
-        maximum=1.0,
-    ),
-    Option(
         "slow_times_s",
         (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0),
         "how long a candidate may first stand or drive slower than nominal",
