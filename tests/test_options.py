@@ -141,7 +141,7 @@ def test_planners_lists_a_planners_options_with_defaults_and_units():
     result = CliRunner().invoke(app, ["planners", "viapath", "--json"])
     assert result.exit_code == 0, result.output
     listed = {item["name"]: item for item in json.loads(result.stdout)}
-    assert listed["weights.k2"]["default"] == 0.001 and listed["horizon_s"]["unit"] == "s"
+    assert listed["weights.k2"]["default"] == 0.01 and listed["horizon_s"]["unit"] == "s"
     assert listed["speeds"]["default"] == [0.1, 0.2, 0.3, 0.4, 0.5]
     text = CliRunner().invoke(app, ["planners", "dwa"]).output
     assert "horizon_s = 3.0 s" in text and ">= 0.25;" in text and "<= 10)" in text

@@ -59,7 +59,9 @@ def _noisy_overtaking_flips() -> dict:
     flips = {}
     for keep in (False, True):
         scenario = load_scenario("overtaking")
-        params = {**scenario.planner.params, "keep_previous_way": keep}
+        # The paper's way back to the path (no lookahead), where keeping the way was measured: with the
+        # default lookahead the noisy overtaking flips as often either way (84.5 and 82.5 on these seeds).
+        params = {**scenario.planner.params, "keep_previous_way": keep, "return_lookahead_m": 0.0}
         scenario = scenario.model_copy(update={"planner": scenario.planner.model_copy(update={"params": params})})
         runs = [
             run_episode(scenario, seed=seed, position_noise_m=0.03, velocity_noise_mps=0.05).metrics

@@ -1,11 +1,12 @@
-"""The paper's three behaviours (Fig. 8; tests/planning/test_paper_behaviours.py) hold with EVERY shipped
-weight preset: the same assertions, run on episodes driven with each preset's values."""
+"""The paper's three behaviours (Fig. 8; tests/planning/test_paper_behaviours.py) hold with the planner's
+defaults and with EVERY shipped weight preset: the same assertions, run on episodes driven with each."""
 
 from __future__ import annotations
 
 import pytest
 
 from tests.planning import test_paper_behaviours as paper
+from viapath.planning.viapath.options import VIAPATH_OPTIONS
 from viapath.presets import preset_names, preset_values
 from viapath.scenarios import load_scenario
 from viapath.sim.loop import run_episode
@@ -13,9 +14,14 @@ from viapath.sim.loop import run_episode
 CASES = ("paper-behind", "paper-front", "paper-side")
 
 
-@pytest.fixture(scope="module", params=preset_names())
+DEFAULTS = "(the defaults)"
+
+
+@pytest.fixture(scope="module", params=[DEFAULTS, *preset_names()])
 def episodes(request):
-    values = preset_values(request.param)
+    # The defaults spelt out: the built-in paper-front pins the paper's weights in its planner block.
+    defaults = {o.name: o.default for o in VIAPATH_OPTIONS if o.group == "weights" or o.name == "return_lookahead_m"}
+    values = defaults if request.param == DEFAULTS else preset_values(request.param)
     return {
         name: run_episode(
             load_scenario(name),

@@ -35,7 +35,7 @@ def test_every_shipped_preset_is_valid_and_justified(name):
 
 
 def test_paper_preset_holds_the_papers_weights():
-    assert load_preset("paper").options == {"k1": 0.1, "k2": 0.001, "k3": 0.08, "k4": 0.3}
+    assert load_preset("paper").options == {"k1": 0.1, "k2": 0.001, "k3": 0.08, "k4": 0.3, "return_lookahead_m": 0.0}
 
 
 def test_a_bad_preset_names_the_field(tmp_path):
@@ -64,7 +64,11 @@ def test_run_weights_file_equals_the_same_options(tmp_path):
     preset = tmp_path / "fast.yaml"
     preset.write_text("name: fast\noptions: {weights: {k2: 0.05}}\n")
     runs = {}
-    for label, args in (("preset", ["--weights", preset]), ("option", ["-o", "weights.k2=0.05"]), ("paper", [])):
+    for label, args in (
+        ("preset", ["--weights", preset]),
+        ("option", ["-o", "weights.k2=0.05"]),
+        ("paper", ["--weights", "paper"]),
+    ):
         result = _invoke("run", scenario, *args, "--json")
         assert result.exit_code == 0, result.output
         runs[label] = json.loads(result.stdout)
@@ -95,11 +99,15 @@ def test_bench_weights_enter_the_row_identity():
 
     scenario = tiny_scenario("s", TINY["tiny-crossing-0"])
     plain = make_tasks([scenario], ["viapath", "follow"])
+    same = make_tasks(
+        [scenario], ["viapath", "follow"], planner_options={"viapath": load_preset("close-to-path").options}
+    )
     paper = make_tasks([scenario], ["viapath", "follow"], planner_options={"viapath": load_preset("paper").options})
     other = make_tasks([scenario], ["viapath", "follow"], planner_options={"viapath": {"k2": 0.05}})
     by = lambda tasks: {t.planner: t for t in tasks}
-    # The paper's weights are the defaults: the same options, the same row.
-    assert by(plain)["viapath"].key == by(paper)["viapath"].key
+    # close-to-path's values are the defaults: the same options, the same row; the paper's are another row.
+    assert by(plain)["viapath"].key == by(same)["viapath"].key
+    assert by(paper)["viapath"].key != by(plain)["viapath"].key
     assert by(other)["viapath"].key != by(plain)["viapath"].key
     assert dict(by(other)["viapath"].options) == {"k2": 0.05}
     assert by(other)["follow"].key == by(plain)["follow"].key  # applied to the viapath planner only

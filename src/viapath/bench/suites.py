@@ -455,7 +455,7 @@ def slow_walker(rng, index) -> dict:
     corridor 16-22 m long, half-width 1.1-1.4 m; robot 0.35-0.45 m/s nominal; the walker 2-4 m ahead
     at 0.15-0.25 m/s (within 0.3 m of the path); one to three people walking the other way at
     0.4-0.9 m/s, met at staggered times, each on either side of the path. Beside the walker there is
-    always 0.75 m or more to the corridor's edge, so a robot of 0.25 m radius can pass inside it.
+    always 0.55 m or more to the corridor's edge, so a robot of 0.25 m radius (0.05 m margin) can pass inside it.
     """
     length = float(rng.uniform(16.0, 22.0))
     speed = float(rng.uniform(0.35, 0.45))

@@ -51,9 +51,10 @@ from pathlib import Path
 from typing import Any
 
 from viapath.bench.runner import BenchError, family_of, run_bench
-from viapath.planning.viapath.options import VIAPATH_OPTIONS
+from viapath.presets import preset_values
 
-PAPER_WEIGHTS = {option.name: option.default for option in VIAPATH_OPTIONS if option.group == "weights"}  # Eq. 1, §4.2
+# The reference point of every study: the paper's weights (Eq. 1, §4.2), as the preset ``paper`` sets them.
+PAPER_WEIGHTS = {name: value for name, value in preset_values("paper").items() if name in ("k1", "k2", "k3", "k4")}
 DEFAULT_SPACE: dict[str, tuple[float, float]] = {
     "k1": (0.01, 1.0),
     "k2": (1e-4, 0.1),
@@ -339,8 +340,9 @@ def run_study(
         reference = {name: value for name, value in PAPER_WEIGHTS.items() if name in {p.name for p in space}}
         from viapath.planning.viapath.options import VIAPATH_OPTIONS
 
-        for p in space:  # the other searched options at their defaults, where the range holds them
-            default = VIAPATH_OPTIONS[p.name].default
+        paper = preset_values("paper")
+        for p in space:  # the other searched options at the paper's values, else their defaults, where in range
+            default = paper.get(p.name, VIAPATH_OPTIONS[p.name].default)
             if p.name not in reference and p.low <= default <= p.high:
                 reference[p.name] = default
         study.enqueue_trial(reference, user_attrs={"reference": "paper"})

@@ -22,7 +22,15 @@ _OWN = [
         maximum=50.0,
     ),
     Option("k1", 0.1, "Eq. 1 weight of the path length Dist", "1/m", minimum=0.0, maximum=1000.0, group="weights"),
-    Option("k2", 0.001, "Eq. 1 weight of the travel time", "1/s", minimum=0.0, maximum=1000.0, group="weights"),
+    Option(
+        "k2",
+        0.01,
+        "Eq. 1 weight of the travel time (the paper's 0.001 is preset 'paper'; docs/weights.md)",
+        "1/s",
+        minimum=0.0,
+        maximum=1000.0,
+        group="weights",
+    ),
     Option("k3", 0.08, "Eq. 1 weight of |v - v_nominal|", "s/m", minimum=0.0, maximum=1000.0, group="weights"),
     Option(
         "k4",
@@ -73,7 +81,7 @@ _OWN = [
     # Beyond the paper: the way back to the path after an avoidance (docs/weights.md §6).
     Option(
         "return_lookahead_m",
-        0.0,
+        0.5,
         "off the path line, first try the straight leg at the nominal speed to the "
         "path point this far ahead of the robot (before the subgoal), so it returns within about this distance "
         "rather than on the shallow line to a far subgoal (0: off, the paper's way)",
