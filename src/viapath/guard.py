@@ -373,7 +373,7 @@ def _obstacles_sound(
     With numba, one compiled call gives the same answer (:func:`viapath.compiled.harness.obstacles_sound`)."""
     if len(positions) == 0:
         return True
-    kernels = harness_kernels()  # type: ignore[no-untyped-call]
+    kernels = harness_kernels()
     if kernels is not None:
         try:
             return kernels.obstacles_sound(

@@ -80,9 +80,9 @@ class Option:
         unit = f" [{self.unit}]" if self.unit else ""
         return f"{self.help}{unit}" + (f" ({'; '.join(bounds)})" if bounds else "")
 
-    def _annotation(self):
+    def _annotation(self) -> Any:
         if self.choices:
-            return Literal[self.choices]  # type: ignore[valid-type]
+            return Literal[self.choices]
         if self.kind is tuple:
             return tuple[float, ...]
         return self.kind

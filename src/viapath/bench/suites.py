@@ -461,7 +461,7 @@ def slow_walker(rng, index) -> dict:
     speed = float(rng.uniform(0.35, 0.45))
     half_width = float(rng.uniform(1.1, 1.4))
     walker_y = float(rng.uniform(-0.3, 0.3))
-    scenario = {
+    scenario: dict[str, Any] = {
         "name": "slow-walker",
         "description": "A slow walker ahead in a long corridor, people coming the other way: pass, do not trail.",
         "robot": {"start": [0.0, 0.0], "heading": 0.0, "speed": speed, "radius": 0.25},

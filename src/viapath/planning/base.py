@@ -211,7 +211,7 @@ class Planner:
         """:meth:`Inflation.of` the obstacles and how far the robot is outside the corridor (the path's
         ``corridor_excess``). With numba both in one compiled call (:func:`viapath.compiled.harness.situation_numbers`,
         the same numbers): every cycle, where each call costs more than its arithmetic."""
-        kernels, n = harness_kernels(), len(obstacles)  # type: ignore[no-untyped-call]
+        kernels, n = harness_kernels(), len(obstacles)
         if kernels is not None and n and position.shape == (2,):
             x, y = float(position[0]), float(position[1])
             if math.isfinite(x) and math.isfinite(y):

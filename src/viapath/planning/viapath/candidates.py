@@ -39,7 +39,7 @@ positions.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -48,6 +48,9 @@ from viapath.geometry import VIA_ROOTS as _ROOTS
 from viapath.geometry import VIA_SIDES as _SIDES
 from viapath.options import Settings
 from viapath.planning.viapath.checks import LegChecks
+
+if TYPE_CHECKING:
+    from viapath.compiled.backend import NodeStore
 
 # The "obstacle" of a way that is not round an obstacle.
 STRAIGHT = -1  # the straight leg to the subgoal (or a chain grown from it)
@@ -259,7 +262,7 @@ def grow(
     )
 
 
-def _candidates_of(store: tuple[np.ndarray, np.ndarray], subgoal: np.ndarray) -> Candidates | None:
+def _candidates_of(store: NodeStore, subgoal: np.ndarray) -> Candidates | None:
     """Candidates from the compiled tree's node store (:meth:`viapath.compiled.backend.Backend.grow`): the same arrays as
     the numpy :func:`grow` builds, leaves in node order as there."""
     data = store.columns()

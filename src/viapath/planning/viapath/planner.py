@@ -92,6 +92,8 @@ class _CompiledCandidates:
     """The compiled choice's candidates: their ways round at once (what :meth:`ViaPathPlanner._keep_previous_way`
     reads), everything else of :class:`Candidates` built from the node store when first asked for."""
 
+    _built: Candidates | None
+
     def __init__(self, store: NodeStore, leaves: np.ndarray, subgoal: np.ndarray):
         self._store, self._leaves, self._subgoal, self._built = store, leaves, subgoal, None
 
@@ -480,7 +482,7 @@ class ViaPathPlanner(Planner, name="viapath"):
                 )
         return None
 
-    def _cost_breakdown(self, terms: np.ndarray):
+    def _cost_breakdown(self, terms: np.ndarray) -> Callable[[int], dict[str, float]]:
         """:meth:`.critics.Costs.breakdown` for :func:`viapath.compiled.planning.choose`'s costs (rows: the critics' terms,
         E): one column as Python floats, the same values as the numpy path's."""
         critics = self.critics
@@ -490,7 +492,9 @@ class ViaPathPlanner(Planner, name="viapath"):
         names = cached[1]
         return lambda k: dict(zip(names, terms[:, k].tolist()))
 
-    def _plan_of_nodes(self, store: NodeStore, leaves, k: int, total, checks: LegChecks) -> Plan:
+    def _plan_of_nodes(
+        self, store: NodeStore, leaves: np.ndarray, k: int, total: np.ndarray, checks: LegChecks
+    ) -> Plan:
         """:meth:`_plan_of` from the compiled tree's node store."""
         node = int(leaves[k])
         speed_after, slow_s, slow_speed = store.slowing(node)
@@ -682,7 +686,7 @@ def compile_kernels() -> bool:
     return True
 
 
-def warm_up_crowds() -> list:
+def warm_up_crowds() -> list[Obstacles]:
     """:func:`compile_kernels`' people: one walking at the robot along the path (the choice), four closing in
     on it from all sides (the escape; tests/planning/test_backends.py checks that both cycles get there)."""
     sides = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
