@@ -272,12 +272,21 @@ def test_empty_scene_goes_straight_to_the_subgoal_at_nominal_speed(nominal):
     assert decision.command.turn_rate_radps == pytest.approx(0.0, abs=1e-12)
 
 
-def test_empty_scene_off_line_heads_for_the_subgoal():
+def test_empty_scene_off_line_heads_for_the_subgoal_the_papers_way():
     robot = RobotState(np.array([1.0, 0.5]), 0.0, 0.2, radius_m=ROBOT_RADIUS)
-    decision = _planner(_PATH, 0.2, MotionLimits()).plan(Observation(0.0, robot, Obstacles.empty()))
+    planner = _planner(_PATH, 0.2, MotionLimits(), ViaPathConfig(return_lookahead_m=0.0))
+    decision = planner.plan(Observation(0.0, robot, Obstacles.empty()))
     assert decision.plan.status == "straight"
     np.testing.assert_allclose(decision.plan.target, _PATH.goal)
     assert decision.command.turn_rate_radps < 0  # the goal is to the right of the heading
+
+
+def test_empty_scene_off_line_heads_back_to_the_path_by_default():
+    # The default way back (return_lookahead_m 0.5 m): the path point 0.5 m ahead of the robot's projection.
+    robot = RobotState(np.array([1.0, 0.5]), 0.0, 0.2, radius_m=ROBOT_RADIUS)
+    decision = _planner(_PATH, 0.2, MotionLimits()).plan(Observation(0.0, robot, Obstacles.empty()))
+    np.testing.assert_allclose(decision.plan.target, [1.5, 0.0])
+    assert decision.command.turn_rate_radps < 0  # the path is to the right of the heading
 
 
 def test_nominal_above_the_speed_limit_is_capped():
