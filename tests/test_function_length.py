@@ -32,7 +32,6 @@ KNOWN_EXCEPTIONS = {
     ("viapath/perception/detection.py", "detect"): _NOT_YET,
     ("viapath/planning/baselines.py", "decide"): _NOT_YET,
     ("viapath/planning/viapath/escape.py", "escape_scores"): _NOT_YET,
-    ("viapath/planning/viapath/planner.py", "_choose_compiled"): _NOT_YET,
     ("viapath/safety/shield.py", "_evaluate_people"): _NOT_YET,
     ("viapath/safety/shield.py", "_filter"): _NOT_YET,
     ("viapath/viz/foxglove_layout.py", "layout"): "one literal: the Foxglove layout's panels",

@@ -177,10 +177,11 @@ def test_trace_without_recorded_sides_counts_speed_changes_only():
 
 
 def test_a_real_episode_records_the_chosen_side():
+    from viapath.presets import preset_values
     from viapath.scenarios.loader import load_scenario
     from viapath.sim.loop import run_episode
 
-    episode = run_episode(load_scenario("paper-front"))
+    episode = run_episode(load_scenario("paper-front"), planner_overrides=preset_values("paper"))
     trace = episode.trace
     assert len(trace.plan_sides) == len(trace.plan_status)
     # Head-on: the paper's robot passes on the left (the preferred side), never on the right.
