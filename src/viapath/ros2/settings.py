@@ -24,6 +24,7 @@ What we chose:
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -263,6 +264,23 @@ NODE_OPTIONS: tuple[Option, ...] = (
 )
 
 
+def _under(prefix: str, options: Iterable[Option]) -> list[Option]:
+    """``options`` as ROS parameters named ``prefix`` + their dotted path, with the same default, bounds and help."""
+    return [
+        Option(
+            name=prefix + o.path,
+            default=o.default,
+            help=o.help,
+            unit=o.unit,
+            minimum=o.minimum,
+            maximum=o.maximum,
+            exclusive_minimum=o.exclusive_minimum,
+            choices=o.choices,
+        )
+        for o in options
+    ]
+
+
 def all_options(planner_name: str = "viapath", scanner_names=("front", "rear")) -> tuple[Option, ...]:
     """Every parameter of the node: its own, one block per scanner, and ``planner.*`` from the schema."""
     own = [o for o in NODE_OPTIONS if not o.name.startswith("scanners.")]
@@ -271,35 +289,10 @@ def all_options(planner_name: str = "viapath", scanner_names=("front", "rear")) 
     for name in scanner_names:
         for o in _scanner_options(name, f"scan_{name}", f"laser_{name}", 0.0, 0.0):
             scanners.append(by_name.get(o.name, o))
-    planner = [
-        Option(
-            name=PLANNER_PREFIX + o.path,
-            default=o.default,
-            help=o.help,
-            unit=o.unit,
-            minimum=o.minimum,
-            maximum=o.maximum,
-            exclusive_minimum=o.exclusive_minimum,
-            choices=o.choices,
-        )
-        for o in planner_options(planner_name)
-    ]
+    planner = _under(PLANNER_PREFIX, planner_options(planner_name))
     from viapath.safety import SHIELD_OPTIONS
 
-    shield = [
-        Option(
-            name=SHIELD_PREFIX + o.path,
-            default=o.default,
-            help=o.help,
-            unit=o.unit,
-            minimum=o.minimum,
-            maximum=o.maximum,
-            exclusive_minimum=o.exclusive_minimum,
-            choices=o.choices,
-        )
-        for o in SHIELD_OPTIONS
-        if o.name != "enabled"
-    ]  # on / off is use_shield
+    shield = _under(SHIELD_PREFIX, [o for o in SHIELD_OPTIONS if o.name != "enabled"])  # on / off is use_shield
     preset = (
         [
             _opt(

@@ -72,7 +72,7 @@ from __future__ import annotations
 
 import contextlib
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -307,16 +307,33 @@ class Shield:
             out = self._evaluate_compiled(observation, commands)
         else:
             out = self._evaluate_people(observation, commands)
+        swept: list[Sweep] = []  # the commands' braking sweep, made once for both checks below
+
+        def sweep() -> Sweep:
+            if not swept:
+                swept.append(self._braking_sweep(observation, out["achieved"]))
+            return swept[0]
+
         if observation.obstacles.static_mask is not None:
-            self._and_static(observation, out)
+            self._and_static(observation, out, sweep)
         if self._corridor_active():
-            self._and_corridor(observation, out)
+            self._and_corridor(observation, out, sweep)
         return out
+
+    def _braking_sweep(self, observation: Observation, achieved: np.ndarray) -> Sweep:
+        robot = observation.robot
+        substeps = max(1, math.ceil(self.dt_s / self.config.substep_s - 1e-9))
+        position = np.asarray(robot.position, dtype=float)
+        return braking_sweep(
+            position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps, float(robot.speed_mps)
+        )
 
     def _corridor_active(self) -> bool:
         return self.corridor is not None and self.config.keep_in_corridor
 
-    def _and_corridor(self, observation: Observation, out: dict[str, np.ndarray]) -> None:
+    def _and_corridor(
+        self, observation: Observation, out: dict[str, np.ndarray], sweep_of: Callable[[], Sweep]
+    ) -> None:
         """The corridor (DESIGN §11: it is hard) in the verdicts of ``out``: a command is admissible only if
         its braking sweep keeps the robot's centre inside the corridor, or, for a robot already outside,
         no further out than it is now. Checked at every sub-interval end, each padded by its chord's sagitta
@@ -332,10 +349,7 @@ class Shield:
             return  # at rest and staying at rest: nothing moves
         position = np.asarray(robot.position, dtype=float)
         allowed = max(0.0, float(corridor.corridor_excess(position))) + _CORRIDOR_TOLERANCE_M
-        substeps = max(1, math.ceil(self.dt_s / self.config.substep_s - 1e-9))
-        sweep = braking_sweep(
-            position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps, float(robot.speed_mps)
-        )
+        sweep = sweep_of()
         ends = sweep.positions[:, 1:]  # (K, T-1, 2)
         excess = corridor.corridor_excess(ends.reshape(-1, 2)).reshape(ends.shape[:2]) + sweep.sagitta_m
         leaves = (excess > allowed) & sweep.moving
@@ -344,7 +358,7 @@ class Shield:
         out["admissible"] = out["admissible"] & ok
         out["friendly"] = out["friendly"] & ok
 
-    def _and_static(self, observation: Observation, out: dict[str, np.ndarray]) -> None:
+    def _and_static(self, observation: Observation, out: dict[str, np.ndarray], sweep_of: Callable[[], Sweep]) -> None:
         """Static geometry (DESIGN §10) in the verdicts of ``out``: a command is admissible only if its
         braking sweep also keeps the robot ``margin_m`` from every static disc, unless the sweep never
         brings it nearer to that disc than it is now (a robot that is too close already may move away).
@@ -366,10 +380,7 @@ class Shield:
         if not near.any() or fastest == 0.0:
             return
         centres, reach, distance = statics.positions[near], reach[near], distance[near]
-        substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
-        sweep = braking_sweep(
-            position, float(robot.heading_rad), achieved, self.limits, self.dt_s, substeps, float(robot.speed_mps)
-        )
+        sweep = sweep_of()
         low = sweep.positions.min(axis=(0, 1)) - reach.max() - float(sweep.sagitta_m.max(initial=0.0))
         high = sweep.positions.max(axis=(0, 1)) + reach.max() + float(sweep.sagitta_m.max(initial=0.0))
         inside = ((centres >= low) & (centres <= high)).all(axis=1)  # only discs the sweeps' box can reach
@@ -791,7 +802,7 @@ class Shield:
             "admissible": np.ones(len(picks), bool),
             "friendly": np.ones(len(picks), bool),
         }
-        self._and_corridor(observation, verdict)
+        self._and_corridor(observation, verdict, lambda: self._braking_sweep(observation, verdict["achieved"]))
         return bool(verdict["admissible"].all())
 
     def _search_compiled(
