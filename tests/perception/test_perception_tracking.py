@@ -235,3 +235,67 @@ def test_scans_command_error_keeps_brackets_of_the_install_hint(monkeypatch):
     result = CliRunner().invoke(app, ["scans", __file__])
     assert result.exit_code == 2
     assert "viapath[ros]" in result.output and "Traceback" not in result.output
+
+
+# -- standing still: static tracks ----------------------------------------------------------------
+
+
+def _run_tracker(tracker, positions_at, times_s, sigma_m=0.02, seed=0):
+    """Feed one noisy detection per cycle at ``positions_at(t)``; returns per cycle (people, all confirmed, explaining)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for t in times_s:
+        z = np.asarray(positions_at(t), dtype=float) + rng.normal(0.0, sigma_m, 2)
+        tracker.step(t, z[None, :], sigma_m, 0.25)
+        out.append((len(tracker.people()), len(tracker.obstacles()), len(tracker.explaining()[0])))
+    return out
+
+
+def test_a_track_standing_still_becomes_static_and_stops_explaining_its_returns():
+    params = TrackerParams()
+    tracker = MultiTargetTracker(params)
+    times = np.arange(0.0, 6.0, 0.1)
+    out = _run_tracker(tracker, lambda t: (2.0, 1.0), times)
+    people = np.array([o[0] for o in out])
+    confirmed = np.array([o[1] for o in out])
+    explaining = np.array([o[2] for o in out])
+    assert (confirmed[5:] == 1).all()  # still reported by obstacles() (what the scans command lists)
+    assert people[-1] == 0 and explaining[-1] == 0, out[-5:]
+    # Static no earlier than static_after_s after it stopped (born at t = 0) and not much later either,
+    # and it stays static while it stands.
+    first_static = times[5:][people[5:] == 0][0]
+    assert params.static_after_s - 1e-9 <= first_static <= params.static_after_s + 1.0, first_static
+    assert (people[times >= first_static] == 0).all() and (explaining[times >= first_static] == 0).all()
+
+
+def test_a_static_track_that_starts_walking_is_a_person_again_within_half_a_second():
+    tracker = MultiTargetTracker(TrackerParams())
+    start_s = 5.0
+    accel = 1.0  # a person starting at 1 m/s² from rest, away along x
+
+    def position(t):
+        dt = max(t - start_s, 0.0)
+        return (2.0 + 0.5 * accel * min(dt, 1.0) ** 2 + max(dt - 1.0, 0.0) * accel, 1.0)
+
+    times = np.arange(0.0, 8.0, 0.1)
+    out = _run_tracker(tracker, position, times, seed=3)
+    people = np.array([o[0] for o in out])
+    assert people[times.searchsorted(start_s - 0.05)] == 0  # static before it moves
+    walking = times[(times > start_s) & (people == 1)]
+    assert len(walking) and walking[0] - start_s <= 0.5 + 1e-9, walking[:3]
+    assert (people[times > start_s + 0.5] == 1).all()  # and stays a person while it walks
+
+
+def test_a_walker_and_a_slow_walker_never_become_static():
+    for speed in (1.0, 0.15):
+        tracker = MultiTargetTracker(TrackerParams())
+        out = _run_tracker(tracker, lambda t, v=speed: (v * t, 0.0), np.arange(0.0, 10.0, 0.1), seed=1)
+        assert all(o[0] == 1 for o in out[5:]), (speed, [o for o in out if o[0] != 1][:3])
+
+
+def test_static_after_inf_keeps_every_track_a_person():
+    tracker = MultiTargetTracker(TrackerParams(static_after_s=float("inf")))
+    out = _run_tracker(tracker, lambda t: (2.0, 1.0), np.arange(0.0, 10.0, 0.1))
+    assert all(o[0] == 1 and o[2] == 1 for o in out[5:])
+    with pytest.raises(ValueError, match="static_after_s"):
+        TrackerParams(static_after_s=0.0)

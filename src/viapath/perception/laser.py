@@ -13,7 +13,9 @@ What we chose:
 * Tentative tracks are never reported; a confirmed track that is occluded keeps being reported
   (coasting, with growing sigmas) until ``max_unseen_s``.
 * Every return no track explains is static geometry (:mod:`~viapath.perception.static_layer`, option
-  ``static_layer``), handed to the planner as the observation's static layer.
+  ``static_layer``), handed to the planner as the observation's static layer. A track that has stood
+  still for the tracker's ``static_after_s`` explains nothing and is not reported: a box the detector
+  took for a person is kept clear of as a box (:mod:`~viapath.perception.tracking`).
 * ``position_noise_m`` / ``velocity_noise_mps`` are oracle options; they are accepted (a scenario's
   ``perception:`` block may carry them) and must be 0 / absent: the laser chain makes its own noise.
 """
@@ -164,8 +166,8 @@ class LaserPerception(Perception):
         self.last_detections_world = detections
         tracker = self._tracker
         tracker.step(time_s, detections.centres, detections.position_sigma_m, detections.radii_m)
-        self.last_static = self._static.update(time_s, robot_pose, scans, tracker.state[:, :2], tracker.radii_m)
-        return tracker.obstacles().finite()
+        self.last_static = self._static.update(time_s, robot_pose, scans, *tracker.explaining())
+        return tracker.people().finite()
 
     def static_layer(self, world: WorldSnapshot) -> StaticLayer:
         """What the last scans show of static geometry (:mod:`.static_layer`), not the world's map."""

@@ -31,6 +31,15 @@ What we chose where the source leaves it open:
 * Radius: an exponential average of the detections' radii (``radius_smoothing``).
 * Reported uncertainty: ``position_sigma_m`` and ``velocity_sigma_mps`` are the square roots of the
   largest eigenvalue of the position / velocity blocks of the covariance (worst direction).
+* Standing still: a confirmed track whose estimate stays within ``static_radius_m`` of where it
+  stopped, slower than ``static_wake_speed_mps``, for ``static_after_s`` is *static* (a box, a cart or
+  a pillar the detector took for a person, or a person standing). :meth:`people` leaves it out and no
+  longer explains its returns, so they reach the static layer and are kept clear of as geometry
+  instead of as a person who may start walking at any moment. It is still tracked, and is a person
+  again the cycle its estimate leaves that circle or its speed passes ``static_wake_speed_mps``
+  (a person starting at 1 m/s² from rest has moved 0.1 m after 0.45 s). ``static_after_s`` = inf turns
+  this off. :meth:`obstacles` reports every confirmed track, static or not (what the ``scans``
+  command lists).
 """
 
 from __future__ import annotations
@@ -58,6 +67,9 @@ class TrackerParams:
     max_unseen_s: float = 1.0
     tentative_max_unseen_s: float = 0.25
     radius_smoothing: float = 0.3
+    static_after_s: float = 3.0
+    static_radius_m: float = 0.1
+    static_wake_speed_mps: float = 0.3
 
     def __post_init__(self) -> None:
         if not 1 <= self.confirm_hits <= self.confirm_window <= 62:
@@ -69,10 +81,14 @@ class TrackerParams:
             "gate_distance_m",
             "max_unseen_s",
             "tentative_max_unseen_s",
+            "static_radius_m",
+            "static_wake_speed_mps",
         ):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {value}")
+        if not self.static_after_s > 0:  # inf allowed: never static
+            raise ValueError(f"static_after_s must be > 0 (inf: never), got {self.static_after_s}")
 
 
 @dataclass(frozen=True)
@@ -110,6 +126,9 @@ class MultiTargetTracker:
         self.age = np.zeros(0, dtype=int)  # cycles since birth (1 at birth)
         self.confirmed = np.zeros(0, dtype=bool)
         self.last_seen_s = np.zeros(0)
+        self.still_at = np.zeros((0, 2))  # where each track's estimate last stopped moving
+        self.still_since_s = np.zeros(0)
+        self.static = np.zeros(0, dtype=bool)
         self.time_s: float | None = None
         self.next_id = 0
 
@@ -183,7 +202,17 @@ class MultiTargetTracker:
             gap = positions[:, None, :] - self.state[None, :, :2]
             matched |= np.hypot(gap[..., 0], gap[..., 1]).min(axis=1) < p.spawn_exclusion_m
         self._create(positions[~matched], sigmas_m[~matched], radii_m[~matched])
+        self._mark_static()
         return pairs
+
+    def _mark_static(self) -> None:
+        """Restart the stillness clock of every track that moved; mark confirmed tracks still long enough."""
+        p = self.params
+        moved = np.hypot(*(self.state[:, :2] - self.still_at).T) > p.static_radius_m
+        moved |= np.hypot(self.state[:, 2], self.state[:, 3]) > p.static_wake_speed_mps
+        self.still_at[moved] = self.state[moved, :2]
+        self.still_since_s[moved] = self.time_s
+        self.static = self.confirmed & ~moved & (self.time_s - self.still_since_s >= p.static_after_s - 1e-9)
 
     def _update(self, rows, z, sigma) -> None:
         """Kalman update of tracks ``rows`` with position measurements ``z`` of isotropic noise ``sigma``.
@@ -230,7 +259,20 @@ class MultiTargetTracker:
     def _keep(self, keep: np.ndarray) -> None:
         if keep.all():
             return
-        for name in ("state", "covariance", "ids", "radii_m", "history", "hits", "age", "confirmed", "last_seen_s"):
+        for name in (
+            "state",
+            "covariance",
+            "ids",
+            "radii_m",
+            "history",
+            "hits",
+            "age",
+            "confirmed",
+            "last_seen_s",
+            "still_at",
+            "still_since_s",
+            "static",
+        ):
             setattr(self, name, getattr(self, name)[keep])
 
     def _create(self, positions, sigmas, radii) -> None:
@@ -253,6 +295,9 @@ class MultiTargetTracker:
         born = np.ones(n, dtype=bool) if self.params.confirm_hits <= 1 else np.zeros(n, dtype=bool)
         self.confirmed = np.concatenate([self.confirmed, born])
         self.last_seen_s = np.concatenate([self.last_seen_s, np.full(n, self.time_s)])
+        self.still_at = np.concatenate([self.still_at, positions])
+        self.still_since_s = np.concatenate([self.still_since_s, np.full(n, self.time_s)])
+        self.static = np.concatenate([self.static, np.zeros(n, dtype=bool)])
 
     # -- output ------------------------------------------------------------------------------
     def sigmas(self) -> tuple[np.ndarray, np.ndarray]:
@@ -261,9 +306,21 @@ class MultiTargetTracker:
         c = self.covariance
         return _largest_sigma(c[:, 0, 0], c[:, 0, 1], c[:, 1, 1]), _largest_sigma(c[:, 2, 2], c[:, 2, 3], c[:, 3, 3])
 
-    def obstacles(self, confirmed_only: bool = True) -> Obstacles:
-        """Tracks as the planner's :class:`~viapath.observation.Obstacles` (world frame, at the last step's time)."""
-        rows = self.confirmed if confirmed_only else np.ones(len(self.ids), dtype=bool)
+    def people(self) -> Obstacles:
+        """The confirmed tracks that are not static: the people the planner and the shield receive."""
+        return self.obstacles(rows=self.confirmed & ~self.static)
+
+    def explaining(self) -> tuple[np.ndarray, np.ndarray]:
+        """Positions and radii of the tracks whose returns are a person's, not static geometry (every
+        track that is not static, tentative ones too)."""
+        rows = ~self.static
+        return self.state[rows, :2], self.radii_m[rows]
+
+    def obstacles(self, confirmed_only: bool = True, rows: np.ndarray | None = None) -> Obstacles:
+        """Tracks as the planner's :class:`~viapath.observation.Obstacles` (world frame, at the last step's
+        time): the confirmed ones (all with ``confirmed_only`` false), or the boolean selection ``rows``."""
+        if rows is None:
+            rows = self.confirmed if confirmed_only else np.ones(len(self.ids), dtype=bool)
         state, c = self.state[rows], self.covariance[rows]
         # The sigmas of the reported rows only (elementwise: the same values as sigmas()[rows]); every
         # array is fresh (boolean indexing copies), so Obstacles may keep them without copying again. The

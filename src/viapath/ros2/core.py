@@ -878,14 +878,9 @@ class PlannerCore:
                 self._time_jump("scan stamp before the tracker's time")
                 self.hold_until_stamp_s = stamp + self.settings.reset_hold_s
             self.tracker.step(stamp, detections.centres, detections.position_sigma_m, detections.radii_m)
-            obstacles = self.tracker.obstacles().finite()
+            obstacles = self.tracker.people().finite()
             self.static_now = self.static_layer.update(
-                stamp,
-                pose,
-                [r for _, r in scans],
-                self.tracker.state[:, :2],
-                self.tracker.radii_m,
-                scanners=[m for m, _ in scans],
+                stamp, pose, [r for _, r in scans], *self.tracker.explaining(), scanners=[m for m, _ in scans]
             )
             perception_ms = (time.perf_counter() - perceiving) * 1e3
             self.last_cycle_stamp_s = stamp
