@@ -46,6 +46,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import cast
 
 import numpy as np
 
@@ -212,7 +213,8 @@ class MultiTargetTracker:
         moved |= np.hypot(self.state[:, 2], self.state[:, 3]) > p.static_wake_speed_mps
         self.still_at[moved] = self.state[moved, :2]
         self.still_since_s[moved] = self.time_s
-        self.static = self.confirmed & ~moved & (self.time_s - self.still_since_s >= p.static_after_s - 1e-9)
+        still_s = cast(float, self.time_s) - self.still_since_s  # set by predict()
+        self.static = self.confirmed & ~moved & (still_s >= p.static_after_s - 1e-9)
 
     def _update(self, rows, z, sigma) -> None:
         """Kalman update of tracks ``rows`` with position measurements ``z`` of isotropic noise ``sigma``.
