@@ -157,6 +157,42 @@ def test_layer_remembers_what_is_hidden_and_clears_what_free_beams_pass():
     assert len(cleared) == 0
 
 
+def test_layer_keeps_what_is_out_of_every_field_of_view_however_old():
+    """A box seen ahead, then behind the robot where its one 240° scanner does not look (a blind sector,
+    or a silent scanner's field): no beam can clear it, so it stays past ``memory_s`` (a robot standing
+    beside a box would otherwise forget the box's side and turn into it); in view again and passed by a
+    free beam, it is cleared."""
+    front, _rear = paper_scanners()
+    layer = StaticObstacleLayer((front,), StaticLayerParams(memory_s=2.0))
+    ahead, behind = np.zeros(3), np.array([0.0, 0.0, np.pi])
+    none = (np.zeros((0, 2)), np.zeros(0))
+    free = [np.full(front.beam_count, np.inf)]
+    seen = layer.update(0.0, ahead, [_scan_with_return(front, 0.0, 1.0)], *none)
+    box_x = 1.0 + front.mount_x_m
+    assert len(seen) >= 1 and np.allclose(seen.segments[:, :, 0], box_x, atol=0.01)
+    for t in (1.0, 5.0, 30.0):
+        kept = layer.update(t, behind, free, *none)
+        assert len(kept) >= 1 and np.allclose(kept.segments[:, :, 0], box_x, atol=0.01), t
+    assert len(layer.update(31.0, ahead, free, *none)) == 0
+
+
+def test_a_tentative_track_on_a_box_does_not_take_the_box_out_of_the_layer():
+    from viapath.perception.tracking import MultiTargetTracker
+
+    front, _ = paper_scanners()
+    layer = StaticObstacleLayer((front,))
+    tracker = MultiTargetTracker()
+    ranges = _scan_with_return(front, 0.0, 2.0)
+    on_the_box = np.array([[2.0 + front.mount_x_m + 0.1, 0.0]])
+    tracker.step(0.0, on_the_box, 0.03, 0.3)  # born this cycle: tentative
+    assert not tracker.confirmed.any()
+    assert len(layer.update(0.0, np.zeros(3), [ranges], *tracker.explaining())) >= 1
+    for k in range(1, 4):  # confirmed after three hits: now it is a person's returns
+        tracker.step(0.1 * k, on_the_box, 0.03, 0.3)
+    assert tracker.confirmed.all()
+    assert len(layer.update(0.3, np.zeros(3), [ranges], *tracker.explaining())) == 0
+
+
 def test_returns_of_a_tracked_person_are_not_static():
     front, _ = paper_scanners()
     layer = StaticObstacleLayer((front,))

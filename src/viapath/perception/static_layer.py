@@ -4,9 +4,10 @@ Source: DESIGN §10; the obstacle layer of a local costmap (ROS navigation: mark
 by the free space along each beam, a memory for what is out of view). What is ours:
 
 * **Marking.** A return is a person's when it lies within the track's radius + ``explained_margin_m``
-  of a track (tentative tracks included: a person seen for the first time is not a wall). Every other
-  valid return is static geometry, whatever the detector made of its segment (walls, boxes, legs it
-  rejected).
+  of a person track (the caller's choice: the tracker's confirmed tracks that are not standing still,
+  :meth:`~viapath.perception.tracking.MultiTargetTracker.explaining`). Every other valid return is static
+  geometry, whatever the detector made of its segment (walls, boxes, legs it rejected, a person in the
+  few cycles before their track is confirmed).
 * **Shape.** The returns of one scanner that are neighbours in the scan (consecutive valid beams) and
   less than ``link_m`` apart form a run; each run becomes a polyline through one return about every
   ``step_m`` of its length (:func:`thin_runs`, linear time, unlike Douglas–Peucker, which splits at every
@@ -19,8 +20,12 @@ by the free space along each beam, a memory for what is out of view). What is ou
   what the scanners do not show now: a remembered segment whose ends and middle are all seen by the new
   scans, i.e. a beam in that direction reaches at least that far (the return is there again, and the
   new run holds it; or the beam passes it: gone), is dropped; one that some point of it is hidden
-  (a nearer return in front of it, an invalid reading, out of the field of view) is kept, up to
-  ``memory_s`` after it was last part of a scan. What lies beyond every scanner's range is forgotten.
+  (a nearer return in front of it, an invalid reading) is kept, up to ``memory_s`` after it was last
+  part of a scan. One that some point of it lies outside every scanner's field of view (the blind
+  sectors beside the body, the field of a silent scanner) is kept, however old, until the scans show
+  it again: no beam can clear it, and it is where a turning robot meets it (a robot that stood beside
+  a box for longer than ``memory_s`` would otherwise forget the box's side in its blind sector). What
+  lies beyond every scanner's range is forgotten.
 """
 
 from __future__ import annotations
@@ -178,11 +183,14 @@ class StaticObstacleLayer:
         for scanner, ranges in zip(scanners, scans, strict=True):
             seen |= self._seen_by(scanner, pose, np.asarray(ranges, dtype=float).reshape(-1), probes)
         beyond = np.ones(len(probes), dtype=bool)  # beyond every scanner's range: not worth remembering
+        in_view = np.zeros(len(probes), dtype=bool)
         for scanner in scanners:
             x, y, _ = scanner.world_pose(pose)
             beyond &= np.hypot(probes[:, 0] - x, probes[:, 1] - y) > scanner.range_max_m
+            in_view |= self._beams_to(scanner, pose, np.zeros(scanner.beam_count), probes)[0]
         hidden = ~(seen | beyond).reshape(-1, 3).all(axis=1)
-        rows = np.flatnonzero(young & hidden)
+        out_of_view = (~(in_view | beyond)).reshape(-1, 3).any(axis=1)
+        rows = np.flatnonzero(hidden & (young | out_of_view))
         self._kept_rows = rows
         return previous.subset(rows)
 

@@ -313,9 +313,11 @@ class MultiTargetTracker:
         return self.obstacles(rows=self.confirmed & ~self.static)
 
     def explaining(self) -> tuple[np.ndarray, np.ndarray]:
-        """Positions and radii of the tracks whose returns are a person's, not static geometry (every
-        track that is not static, tentative ones too)."""
-        rows = ~self.static
+        """Positions and radii of the tracks whose returns are a person's, not static geometry: the
+        people (:meth:`people`). A tentative track explains nothing: the detector starts them on the
+        corners of boxes and carts, and one that explained the box's returns for a cycle would take the
+        box out of the static layer where the robot is nearest to it."""
+        rows = self.confirmed & ~self.static
         return self.state[rows, :2], self.radii_m[rows]
 
     def obstacles(self, confirmed_only: bool = True, rows: np.ndarray | None = None) -> Obstacles:
