@@ -4,10 +4,10 @@ Source: DESIGN §10; the obstacle layer of a local costmap (ROS navigation: mark
 by the free space along each beam, a memory for what is out of view). What is ours:
 
 * **Marking.** A return is a person's when it lies within the track's radius + ``explained_margin_m``
-  of a person track (the caller's choice: the tracker's confirmed tracks that are not standing still,
-  :meth:`~viapath.perception.tracking.MultiTargetTracker.explaining`). Every other valid return is static
-  geometry, whatever the detector made of its segment (walls, boxes, legs it rejected, a person in the
-  few cycles before their track is confirmed).
+  of a track (tentative tracks included: a person seen for the first time is not a wall; tracks standing
+  still are not passed in, :meth:`~viapath.perception.tracking.MultiTargetTracker.explaining`). Every
+  other valid return is static geometry, whatever the detector made of its segment (walls, boxes, legs
+  it rejected).
 * **Shape.** The returns of one scanner that are neighbours in the scan (consecutive valid beams) and
   less than ``link_m`` apart form a run; each run becomes a polyline through one return about every
   ``step_m`` of its length (:func:`thin_runs`, linear time, unlike Douglas–Peucker, which splits at every
@@ -20,7 +20,9 @@ by the free space along each beam, a memory for what is out of view). What is ou
   what the scanners do not show now: a remembered segment whose ends and middle are all seen by the new
   scans, i.e. a beam in that direction reaches at least that far (the return is there again, and the
   new run holds it; or the beam passes it: gone), is dropped; one that some point of it is hidden
-  (a nearer return in front of it, an invalid reading) is kept, up to ``memory_s`` after it was last
+  (a nearer return in front of it, an invalid reading, a return there that only a tentative track
+  explains: the detector starts tentative tracks on the corners of boxes and carts, and one must not take
+  a box the layer knows out of it where the robot is nearest to it) is kept, up to ``memory_s`` after it was last
   part of a scan. One that some point of it lies outside every scanner's field of view (the blind
   sectors beside the body, the field of a silent scanner) is kept, however old, until the scans show
   it again: no beam can clear it, and it is where a turning robot meets it (a robot that stood beside
@@ -112,15 +114,24 @@ class StaticObstacleLayer:
         self._seen_s = np.zeros(0)  # when each remembered segment was last part of a scan
 
     def update(
-        self, time_s: float, robot_pose, scans, track_positions: np.ndarray, track_radii_m: np.ndarray, scanners=None
+        self,
+        time_s: float,
+        robot_pose,
+        scans,
+        track_positions: np.ndarray,
+        track_radii_m: np.ndarray,
+        track_confirmed: np.ndarray | None = None,
+        scanners=None,
     ) -> StaticLayer:
-        """This cycle's layer; ``scanners``: the models of ``scans`` when not all of this layer's (a silent
-        scanner's scan missing)."""
+        """This cycle's layer; ``track_confirmed``: which tracks are confirmed (None: all);
+        ``scanners``: the models of ``scans`` when not all of this layer's (a silent scanner's scan missing)."""
         if not self.params.enabled:
             return StaticLayer.empty()
         pose = np.asarray(robot_pose, dtype=float)
         scanners = self.scanners if scanners is None else tuple(scanners)
-        current = self._from_scans(scanners, pose, scans, track_positions, track_radii_m)
+        confirmed = np.ones(len(track_radii_m), dtype=bool) if track_confirmed is None else np.asarray(track_confirmed)
+        self._tentative_beams: list[np.ndarray] = []  # per scan: beams whose return only a tentative track explains
+        current = self._from_scans(scanners, pose, scans, track_positions, track_radii_m, confirmed)
         kept = self._remembered(scanners, time_s, pose, scans)
         layer = merge_close_shapes(current.concatenate(kept), self.params.merge_gap_m)
         self._seen_s = np.concatenate([np.full(len(current), float(time_s)), self._seen_s[self._kept_rows]])
@@ -129,7 +140,9 @@ class StaticObstacleLayer:
 
     # -- marking ---------------------------------------------------------------------------------
 
-    def _from_scans(self, scanners, pose: np.ndarray, scans, track_positions, track_radii_m) -> StaticLayer:
+    def _from_scans(
+        self, scanners, pose: np.ndarray, scans, track_positions, track_radii_m, confirmed: np.ndarray
+    ) -> StaticLayer:
         p = self.params
         segments: list[Any] = []
         runs: list[Any] = []
@@ -143,6 +156,8 @@ class StaticObstacleLayer:
                     np.isfinite(ranges) & (ranges >= max(scanner.range_min_m, 1e-9)) & (ranges <= scanner.range_max_m)
                 )
             beams = np.flatnonzero(valid)
+            tentative_beams = np.zeros(len(ranges), dtype=bool)
+            self._tentative_beams.append(tentative_beams)
             if len(beams) == 0:
                 continue
             x, y, yaw = scanner.world_pose(pose)
@@ -151,7 +166,9 @@ class StaticObstacleLayer:
             if len(track_positions):
                 offset = points[:, None, :] - np.asarray(track_positions)[None]
                 distance = np.hypot(offset[..., 0], offset[..., 1])
-                explained = (distance <= np.asarray(track_radii_m)[None] + p.explained_margin_m).any(axis=1)
+                near = distance <= np.asarray(track_radii_m)[None] + p.explained_margin_m
+                explained = near.any(axis=1)
+                tentative_beams[beams[explained & ~near[:, confirmed].any(axis=1)]] = True
                 points, beams = points[~explained], beams[~explained]
             for earlier, earlier_ranges in zip(scanners[:index], scans[:index]):
                 # Where an earlier scanner returned the same point, its run has it already.
@@ -180,8 +197,8 @@ class StaticObstacleLayer:
         a, b = previous.segments[:, 0], previous.segments[:, 1]
         probes = np.stack([a, 0.5 * (a + b), b], axis=1).reshape(-1, 2)  # (3M, 2)
         seen = np.zeros(len(probes), dtype=bool)
-        for scanner, ranges in zip(scanners, scans, strict=True):
-            seen |= self._seen_by(scanner, pose, np.asarray(ranges, dtype=float).reshape(-1), probes)
+        for scanner, ranges, tentative in zip(scanners, scans, self._tentative_beams, strict=True):
+            seen |= self._seen_by(scanner, pose, np.asarray(ranges, dtype=float).reshape(-1), probes, tentative)
         beyond = np.ones(len(probes), dtype=bool)  # beyond every scanner's range: not worth remembering
         in_view = np.zeros(len(probes), dtype=bool)
         for scanner in scanners:
@@ -205,6 +222,13 @@ class StaticObstacleLayer:
         inside = (beam >= 0) & (beam < scanner.beam_count) & (distance <= scanner.range_max_m)
         return inside, distance, ranges[np.clip(beam, 0, scanner.beam_count - 1)]
 
+    def _beam_index(self, scanner: ScannerModel, pose: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """The beam towards each point, clipped to the scan (as :meth:`_beams_to` reads it)."""
+        x, y, yaw = scanner.world_pose(pose)
+        bearing = (np.arctan2(points[:, 1] - y, points[:, 0] - x) - yaw + np.pi) % (2 * np.pi) - np.pi
+        beam = np.rint((bearing - scanner.angle_min_rad) / scanner.angle_increment_rad).astype(np.int64)
+        return np.clip(beam, 0, scanner.beam_count - 1)
+
     def _returned_by(
         self, scanner: ScannerModel, pose: np.ndarray, ranges: np.ndarray, points: np.ndarray
     ) -> np.ndarray:
@@ -215,12 +239,18 @@ class StaticObstacleLayer:
         with np.errstate(invalid="ignore"):
             return inside & (np.abs(reading - distance) <= self.params.see_through_m)
 
-    def _seen_by(self, scanner: ScannerModel, pose: np.ndarray, ranges: np.ndarray, points: np.ndarray) -> np.ndarray:
+    def _seen_by(
+        self, scanner: ScannerModel, pose: np.ndarray, ranges: np.ndarray, points: np.ndarray, tentative: np.ndarray
+    ) -> np.ndarray:
         """Whether a beam of this scan reaches each point (its reading at least the point's range, less
-        ``see_through_m``; +inf or a reading past the range limit: the beam is free to the limit)."""
+        ``see_through_m``; +inf or a reading past the range limit: the beam is free to the limit), a return
+        at the point that only a tentative track explains (``tentative``, per beam) excepted."""
         if len(ranges) != scanner.beam_count:
             return np.zeros(len(points), dtype=bool)
         inside, distance, reading = self._beams_to(scanner, pose, ranges, points)
+        beam = self._beam_index(scanner, pose, points)
+        with np.errstate(invalid="ignore"):
+            unconfirmed_return_there = tentative[beam] & (reading <= distance + self.params.see_through_m)
         with np.errstate(invalid="ignore"):
             free = (reading == np.inf) | (reading > scanner.range_max_m)
             reaches = (
@@ -229,4 +259,4 @@ class StaticObstacleLayer:
                 & (reading > 0)
                 & (reading >= distance - self.params.see_through_m)
             )
-        return inside & (free | reaches)
+        return inside & (free | reaches) & ~unconfirmed_return_there

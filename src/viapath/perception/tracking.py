@@ -312,13 +312,12 @@ class MultiTargetTracker:
         """The confirmed tracks that are not static: the people the planner and the shield receive."""
         return self.obstacles(rows=self.confirmed & ~self.static)
 
-    def explaining(self) -> tuple[np.ndarray, np.ndarray]:
-        """Positions and radii of the tracks whose returns are a person's, not static geometry: the
-        people (:meth:`people`). A tentative track explains nothing: the detector starts them on the
-        corners of boxes and carts, and one that explained the box's returns for a cycle would take the
-        box out of the static layer where the robot is nearest to it."""
-        rows = self.confirmed & ~self.static
-        return self.state[rows, :2], self.radii_m[rows]
+    def explaining(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions, radii and confirmation of the tracks whose returns are a person's, not static
+        geometry: every track that is not static (tentative ones too; the static layer does not let a
+        tentative track clear what it remembers)."""
+        rows = ~self.static
+        return self.state[rows, :2], self.radii_m[rows], self.confirmed[rows]
 
     def obstacles(self, confirmed_only: bool = True, rows: np.ndarray | None = None) -> Obstacles:
         """Tracks as the planner's :class:`~viapath.observation.Obstacles` (world frame, at the last step's
