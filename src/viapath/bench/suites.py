@@ -50,6 +50,7 @@ import yaml
 
 from viapath.registry import Registry
 from viapath.sim.social_force import simulate_crowd
+from viapath.static import box_edges, polygon_edges, segment_distances
 
 _SAFE_DUMPER = getattr(yaml, "CSafeDumper", yaml.SafeDumper)  # libyaml's emitter where present
 
@@ -375,6 +376,32 @@ SYNTHETIC_FAMILIES = FAMILIES.ordered()
 STATIC_KINDS = ("box", "cart", "pillars", "door", "walls")
 
 
+def _static_edges(scenario: dict) -> np.ndarray:
+    """Every edge of the scene's boxes and polygons (M, 2, 2)."""
+    edges = [box_edges(b["center"], b["size"], b.get("yaw", 0.0)) for b in scenario.get("boxes", [])]
+    edges += [polygon_edges(p["points"]) for p in scenario.get("polygons", [])]
+    return np.concatenate(edges) if edges else np.zeros((0, 2, 2))
+
+
+def _walks_clear(person: dict, scenario: dict, clearance_m: float) -> bool:
+    """Whether the person's straight walk over the whole run keeps ``clearance_m`` from every box and polygon."""
+    start = np.asarray(person["start"], dtype=float)
+    end = start + np.asarray(person["velocity"], dtype=float) * scenario["duration_s"]
+    return bool(
+        (segment_distances(start[None], end[None], _static_edges(scenario)) >= person["radius"] + clearance_m).all()
+    )
+
+
+def _person_round_static(rng, scenario: dict, draw: Callable, tries: int = 50) -> dict | None:
+    """A person from ``draw(rng, scenario)`` whose walk passes the boxes and polygons (people walk round carts,
+    not through them: replayed people do not avoid anything); None when ``tries`` draws all meet one."""
+    for _ in range(tries):
+        person = draw(rng, scenario)
+        if _walks_clear(person, scenario, 0.1):
+            return person
+    return None
+
+
 @FAMILIES.register("static")
 def static(rng, index) -> dict:
     """Static geometry on and beside the path, people among it (kind ``index mod 5``, :data:`STATIC_KINDS`):
@@ -386,6 +413,8 @@ def static(rng, index) -> dict:
     * ``door``: walls along the corridor and a closed door across it 3-5 m ahead that opens at 8-20 s
       (in a third of them it never opens: the goal is unreachable, ``description`` says so);
     * ``walls``: walls 0.05-0.4 m outside the corridor on both sides, a person head-on.
+
+    Every person walks clear of the boxes and polygons (redrawn until so, left out after 50 tries).
     """
     kind = STATIC_KINDS[index % len(STATIC_KINDS)]
     scenario = _base(rng, "static", f"Static geometry: {kind}.")
@@ -400,7 +429,7 @@ def static(rng, index) -> dict:
             }
         ]
         if rng.random() < 0.5:
-            scenario["obstacles"].append(_crossing_person(rng, scenario))
+            scenario["obstacles"].append(_person_round_static(rng, scenario, _crossing_person))
     elif kind == "cart":
         on_path = rng.random() < 0.5
         centre = [
@@ -414,7 +443,7 @@ def static(rng, index) -> dict:
                 "yaw": float(rng.uniform(-np.pi, np.pi)) if on_path else 0.0,
             }
         ]
-        scenario["obstacles"].append(_head_on_person(rng, scenario))
+        scenario["obstacles"].append(_person_round_static(rng, scenario, _head_on_person))
     elif kind == "pillars":
         angles = np.linspace(0.0, 2 * np.pi, 9)[:-1]
         xs = np.sort(rng.uniform(2.0, length - 1.5, int(rng.integers(2, 4))))
@@ -427,7 +456,7 @@ def static(rng, index) -> dict:
             pillars.append({"points": (np.c_[x + r * np.cos(angles), y + r * np.sin(angles)]).tolist()})
         scenario["polygons"] = pillars
         if rng.random() < 0.5:
-            scenario["obstacles"].append(_crossing_person(rng, scenario))
+            scenario["obstacles"].append(_person_round_static(rng, scenario, _crossing_person))
     elif kind == "door":
         wall_y = half_width + 0.05
         door_x = float(rng.uniform(3.0, min(5.0, length - 1.5)))
@@ -442,6 +471,7 @@ def static(rng, index) -> dict:
         wall_y = half_width + float(rng.uniform(0.05, 0.4))
         scenario["walls"] = [[[-3.0, wall_y], [length + 3.0, wall_y]], [[-3.0, -wall_y], [length + 3.0, -wall_y]]]
         scenario["obstacles"].append(_head_on_person(rng, scenario))
+    scenario["obstacles"] = [person for person in scenario["obstacles"] if person is not None]
     return scenario
 
 
