@@ -186,12 +186,13 @@ def _crossing_person(rng, scenario) -> dict:
     return {"start": start.tolist(), "velocity": velocity.tolist(), "radius": 0.25}
 
 
-def _head_on_person(rng, scenario) -> dict:
+def _head_on_person(rng, scenario, lateral_m: float = 0.3) -> dict:
+    """A person coming the other way within ``lateral_m`` of the path line."""
     length, speed = _length(scenario), _robot_speed(scenario)
     meet_x = rng.uniform(2.5, length - 1.5)
     walk = rng.uniform(0.2, 0.6)
     meet_t = meet_x / speed + rng.uniform(-1.0, 1.0)
-    start = [meet_x + walk * meet_t, rng.uniform(-0.3, 0.3)]
+    start = [meet_x + walk * meet_t, rng.uniform(-lateral_m, lateral_m)]
     return {"start": start, "velocity": [-walk, 0.0], "radius": 0.25}
 
 
@@ -443,7 +444,11 @@ def static(rng, index) -> dict:
                 "yaw": float(rng.uniform(-np.pi, np.pi)) if on_path else 0.0,
             }
         ]
-        scenario["obstacles"].append(_person_round_static(rng, scenario, _head_on_person))
+        # Anywhere across the corridor, so that a lane beside the cart is drawn in a few tries.
+        lane = max(half_width - 0.25, 0.3)
+        scenario["obstacles"].append(
+            _person_round_static(rng, scenario, lambda rng, scenario: _head_on_person(rng, scenario, lane))
+        )
     elif kind == "pillars":
         angles = np.linspace(0.0, 2 * np.pi, 9)[:-1]
         xs = np.sort(rng.uniform(2.0, length - 1.5, int(rng.integers(2, 4))))
