@@ -305,6 +305,6 @@ class Nav2Interface:
 
 
 def make_nav2_interface_class():
-    """The interface's class (the node takes it once rclpy is there; the class imports rclpy and the
-    Nav2 messages only when built)."""
+    """The interface's class, for the node class made once rclpy is there (the interface imports rclpy
+    and the Nav2 messages only when an instance is made)."""
     return Nav2Interface
