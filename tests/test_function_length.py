@@ -23,22 +23,9 @@ KERNEL_FILES = {
 _ROS = "a ROS 2 entry point: publishers, subscriptions and callbacks share the node's state as closures"
 _NOT_YET = "not split yet"
 KNOWN_EXCEPTIONS = {
-    ("viapath/ros2/nav2.py", "make_nav2_interface_class"): _ROS + " (the class is built once rclpy is imported)",
-    ("viapath/ros2/nav2_client.py", "run_follow"): _ROS,
-    ("viapath/ros2/core.py", "cycle"): _NOT_YET,
-    ("viapath/ros2/core.py", "_on_scan"): _NOT_YET,
-    ("viapath/guard.py", "inspect_observation"): _NOT_YET,
     ("viapath/perception/circle_fit.py", "fit_circles"): _NOT_YET,
     ("viapath/perception/detection.py", "detect"): _NOT_YET,
-    ("viapath/planning/baselines.py", "decide"): _NOT_YET,
     ("viapath/planning/viapath/escape.py", "escape_scores"): _NOT_YET,
-    ("viapath/safety/shield.py", "_evaluate_people"): _NOT_YET,
-    ("viapath/safety/shield.py", "_filter"): _NOT_YET,
-    ("viapath/viz/foxglove_layout.py", "layout"): "one literal: the Foxglove layout's panels",
-    ("viapath/viz/mcap_process.py", "cycle_input"): _NOT_YET,
-    ("viapath/viz/mcap_process.py", "scene_inputs"): _NOT_YET,
-    ("viapath/viz/plot.py", "draw_scene"): _NOT_YET,
-    ("viapath/viz/xyt_plot.py", "plot_cycle"): _NOT_YET,
 }
 
 

@@ -148,9 +148,24 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
         raise ObservationError(f"obstacles: expected an Obstacles, found {type(obstacles).__name__}")
     if _plainly_sound(observation, robot, obstacles, config):
         return Inspection(observation, [], [])  # the common case, in few operations
-    stop: list[str] = []
-    repairs: list[str] = []
+    time_s, stop = _robot_stop_reasons(observation, robot, config)
+    positions, velocities, radii, position_sigma, velocity_sigma, ids = _obstacle_arrays(obstacles)
+    if not stop and _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config):
+        return Inspection(observation, [], [])  # the common case: nothing to stop for, nothing to repair
+    velocities, radii = velocities.copy(), radii.copy()
+    position_sigma, velocity_sigma = position_sigma.copy(), velocity_sigma.copy()
+    repairs = _repair_obstacles(positions, velocities, radii, position_sigma, velocity_sigma, config, stop)
+    if stop:
+        return Inspection(None, stop, repairs)
+    if not repairs:
+        return Inspection(observation, [], [])
+    repaired = Obstacles(positions, velocities, radii, position_sigma, velocity_sigma, ids, obstacles.static_mask)
+    return Inspection(Observation(time_s, robot, repaired, observation.static), [], repairs)
 
+
+def _robot_stop_reasons(observation: Observation, robot: RobotState, config: GuardConfig) -> tuple[float, list[str]]:
+    """The observation's time as a float and the reasons to stop found in it and the robot's state."""
+    stop: list[str] = []
     time_s = _scalar("time_s", observation.time_s)
     if not math.isfinite(time_s):
         stop.append(f"time_s: expected a finite number, found {time_s:g}")
@@ -176,7 +191,12 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
     radius = _scalar("robot.radius_m", robot.radius_m)
     if not (math.isfinite(radius) and radius > 0):
         stop.append(f"robot.radius_m: expected a finite number > 0, found {radius:g}")
+    return time_s, stop
 
+
+def _obstacle_arrays(obstacles: Obstacles) -> tuple[np.ndarray, ...]:
+    """positions, velocities, radii, position σ, velocity σ and ids as arrays of their shapes, or
+    :class:`ObservationError`."""
     try:
         positions = np.asarray(obstacles.positions, dtype=float)
     except (TypeError, ValueError):
@@ -193,11 +213,22 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
     ids = np.asarray(obstacles.ids)
     if ids.shape != (n,):
         raise ObservationError(f"obstacles.ids: expected shape ({n},), found shape {ids.shape}")
-    if not stop and _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config):
-        return Inspection(observation, [], [])  # the common case: nothing to stop for, nothing to repair
-    velocities, radii = velocities.copy(), radii.copy()
-    position_sigma, velocity_sigma = position_sigma.copy(), velocity_sigma.copy()
+    return positions, velocities, radii, position_sigma, velocity_sigma, ids
 
+
+def _repair_obstacles(
+    positions: np.ndarray,
+    velocities: np.ndarray,
+    radii: np.ndarray,
+    position_sigma: np.ndarray,
+    velocity_sigma: np.ndarray,
+    config: GuardConfig,
+    stop: list[str],
+) -> list[str]:
+    """Repair the obstacle fields in place (velocities, radii and σ; the caller's copies) and append to
+    ``stop`` what cannot be repaired (an unknown position, an implausible size); returns the repairs."""
+    repairs: list[str] = []
+    n = len(positions)
     bad_position = ~(np.isfinite(positions).all(axis=1) & (np.abs(positions) <= config.max_coordinate_m).all(axis=1))
     for i in np.flatnonzero(bad_position):
         stop.append(
@@ -239,12 +270,7 @@ def inspect_observation(observation: Observation, config: GuardConfig = DEFAULT_
                 f"found {values[i]:g}; kept with the largest σ {largest:g} {unit}"
             )
         values[bad] = largest
-    if stop:
-        return Inspection(None, stop, repairs)
-    if not repairs:
-        return Inspection(observation, [], [])
-    repaired = Obstacles(positions, velocities, radii, position_sigma, velocity_sigma, ids, obstacles.static_mask)
-    return Inspection(Observation(time_s, robot, repaired, observation.static), [], repairs)
+    return repairs
 
 
 _FLOAT64 = np.dtype(np.float64)

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from viapath.geometry import closest_approach, legs_first_contact, wrap_angle
-from viapath.observation import Command, Decision, Plan
+from viapath.observation import Command, Decision, Plan, RobotState
 from viapath.options import Option, OptionSet
 from viapath.path import DesignatedPath
 from viapath.planning.base import COMMON_OPTIONS, Planner, Situation
@@ -173,46 +173,16 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
     )
 
     def decide(self, situation: Situation) -> Decision:
-        config, limits = self.config, self.limits
-        obstacles, position, subgoal = situation.obstacles, situation.position, situation.subgoal
-        robot = situation.robot
-        # The dynamic window: velocities reachable within one control period.
-        dv, dw = limits.max_accel_mps2 * config.window_s, limits.max_turn_accel_radps2 * config.window_s
-        speeds = np.linspace(
-            max(0.0, robot.speed_mps - dv), min(limits.max_speed_mps, robot.speed_mps + dv), config.n_speeds
-        )
-        turns = np.linspace(
-            max(-limits.max_turn_rate_radps, robot.turn_rate_radps - dw),
-            min(limits.max_turn_rate_radps, robot.turn_rate_radps + dw),
-            config.n_turn_rates,
-        )
-        v, w = (a.ravel() for a in np.meshgrid(speeds, turns))
+        config = self.config
+        position, robot = situation.position, situation.robot
+        v, w = self._window(robot)
         # Arcs are followed to twice the horizon: contact within the horizon makes an arc inadmissible;
         # the time to the first contact up to twice the horizon is the "dist" term (Fox et al.: distance
         # to the first obstacle on the curvature, a large constant when none).
         times = np.arange(int(round(2 * config.horizon_s / config.sample_dt_s)) + 1) * config.sample_dt_s
         poses = _arcs(position, robot.heading_rad, v, w, times)  # (K, S, 3)
         xy = poses[..., :2]
-        first_contact = np.full(len(v), np.inf)
-        if len(obstacles):
-            radii, growth, until = (
-                situation.inflation.check_radii,
-                situation.inflation.growth,
-                situation.inflation.growth_until_s,
-            )
-            reach = np.hypot(*(obstacles.positions - position).T) - radii
-            reach_limit = (limits.max_speed_mps + np.hypot(*obstacles.velocities.T) + growth) * times[-1]
-            near = reach <= reach_limit
-            if near.any():
-                # Exact closest approach for straight motion of both between samples.
-                centres = (
-                    obstacles.positions[near][None, :, :] + times[:, None, None] * obstacles.velocities[near][None]
-                )
-                rel = xy[:, :, None, :] - centres[None]  # (K, S, N, 2)
-                distance, _ = closest_approach(rel[:, :-1], rel[:, 1:] - rel[:, :-1], 1.0)
-                gaps = distance - (radii[near] + growth[near] * np.minimum(times[1:, None], until[near]))[None]
-                touching = (gaps <= 0).any(axis=2)
-                first_contact = np.where(touching, times[:-1][None], np.inf).min(axis=1)
+        first_contact = _first_contact(situation, xy, times, self.limits.max_speed_mps)
         admissible = first_contact > config.horizon_s
         clearance_term = np.minimum(first_contact, times[-1]) / times[-1]
 
@@ -236,21 +206,7 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
             return Decision(Command(0.0, float(w[best])), plan)
 
         look = min(int(round(config.heading_lookahead_s / config.sample_dt_s)), len(times) - 1)
-        ahead = poses[:, look]
-        to_goal = subgoal - ahead[:, :2]
-        heading_error = np.abs(wrap_angle(np.arctan2(to_goal[:, 1], to_goal[:, 0]) - ahead[:, 2]))
-        # At the subgoal itself the bearing is undefined: count it as aligned.
-        heading_error = np.where(np.hypot(*to_goal.T) < 0.05, 0.0, heading_error)
-        heading_term = 1.0 - heading_error / np.pi
-        velocity_term = 1.0 - np.abs(v - self.nominal_speed_mps) / limits.max_speed_mps
-        half_width = self.path.half_widths_m[min(situation.subgoal_index - 1, len(self.path.half_widths_m) - 1)]
-        path_term = 1.0 - np.clip(np.abs(self.path.lateral_deviation(ahead[:, :2])) / half_width, 0.0, 1.0)
-        score = (
-            config.heading_weight * heading_term
-            + config.clearance_weight * clearance_term
-            + config.velocity_weight * velocity_term
-            + config.path_weight * path_term
-        )
+        score = self._score(situation, poses[:, look], v, clearance_term)
         score = np.where(admissible, score, -np.inf)
         best = int(np.argmax(score))
         plan = Plan(
@@ -264,6 +220,65 @@ class DWAPlanner(_SubgoalFollower, name="dwa"):
             extras={"turn_rate_radps": float(w[best])},
         )
         return Decision(Command(float(v[best]), float(w[best])), plan)
+
+    def _window(self, robot: RobotState) -> tuple[np.ndarray, np.ndarray]:
+        """The dynamic window: (speeds, turn rates) of the sampled pairs reachable within one control period."""
+        config, limits = self.config, self.limits
+        dv, dw = limits.max_accel_mps2 * config.window_s, limits.max_turn_accel_radps2 * config.window_s
+        speeds = np.linspace(
+            max(0.0, robot.speed_mps - dv), min(limits.max_speed_mps, robot.speed_mps + dv), config.n_speeds
+        )
+        turns = np.linspace(
+            max(-limits.max_turn_rate_radps, robot.turn_rate_radps - dw),
+            min(limits.max_turn_rate_radps, robot.turn_rate_radps + dw),
+            config.n_turn_rates,
+        )
+        v, w = (a.ravel() for a in np.meshgrid(speeds, turns))
+        return v, w
+
+    def _score(self, situation: Situation, ahead: np.ndarray, v: np.ndarray, clearance_term: np.ndarray) -> np.ndarray:
+        """Fox et al.'s weighted sum (heading, clearance, velocity) plus the path term, per arc, from
+        the poses ``ahead`` at the lookahead time."""
+        config, limits = self.config, self.limits
+        to_goal = situation.subgoal - ahead[:, :2]
+        heading_error = np.abs(wrap_angle(np.arctan2(to_goal[:, 1], to_goal[:, 0]) - ahead[:, 2]))
+        # At the subgoal itself the bearing is undefined: count it as aligned.
+        heading_error = np.where(np.hypot(*to_goal.T) < 0.05, 0.0, heading_error)
+        heading_term = 1.0 - heading_error / np.pi
+        velocity_term = 1.0 - np.abs(v - self.nominal_speed_mps) / limits.max_speed_mps
+        half_width = self.path.half_widths_m[min(situation.subgoal_index - 1, len(self.path.half_widths_m) - 1)]
+        path_term = 1.0 - np.clip(np.abs(self.path.lateral_deviation(ahead[:, :2])) / half_width, 0.0, 1.0)
+        return (
+            config.heading_weight * heading_term
+            + config.clearance_weight * clearance_term
+            + config.velocity_weight * velocity_term
+            + config.path_weight * path_term
+        )
+
+
+def _first_contact(situation: Situation, xy: np.ndarray, times: np.ndarray, max_speed_mps: float) -> np.ndarray:
+    """Per arc (sampled at ``times``), the sample time before its first contact with an obstacle's
+    inflated disc (exact closest approach between samples, both moving straight); inf when none."""
+    obstacles, position = situation.obstacles, situation.position
+    first_contact = np.full(len(xy), np.inf)
+    if len(obstacles):
+        radii, growth, until = (
+            situation.inflation.check_radii,
+            situation.inflation.growth,
+            situation.inflation.growth_until_s,
+        )
+        reach = np.hypot(*(obstacles.positions - position).T) - radii
+        reach_limit = (max_speed_mps + np.hypot(*obstacles.velocities.T) + growth) * times[-1]
+        near = reach <= reach_limit
+        if near.any():
+            # Exact closest approach for straight motion of both between samples.
+            centres = obstacles.positions[near][None, :, :] + times[:, None, None] * obstacles.velocities[near][None]
+            rel = xy[:, :, None, :] - centres[None]  # (K, S, N, 2)
+            distance, _ = closest_approach(rel[:, :-1], rel[:, 1:] - rel[:, :-1], 1.0)
+            gaps = distance - (radii[near] + growth[near] * np.minimum(times[1:, None], until[near]))[None]
+            touching = (gaps <= 0).any(axis=2)
+            first_contact = np.where(touching, times[:-1][None], np.inf).min(axis=1)
+    return first_contact
 
 
 def _arcs(

@@ -568,7 +568,6 @@ class PlannerCore:
         range_max_m: float,
     ) -> bool:
         h = self.health[index]
-        setting = self.settings.scanners[index]
         ranges = np.asarray(ranges, dtype=float).reshape(-1)
         stamp_s, angle_min_rad, angle_increment_rad = float(stamp_s), float(angle_min_rad), float(angle_increment_rad)
         range_min_m, range_max_m = float(range_min_m), float(range_max_m)
@@ -584,29 +583,57 @@ class PlannerCore:
                 angle_min_rad + (len(ranges) - 1) * angle_increment_rad,
                 -angle_increment_rad,
             )
-        if h.model is None:
-            problem = scan_layout_problem(len(ranges), angle_increment_rad, range_min_m, range_max_m)
-            if problem:
-                h.refuse("layout", problem)
-                return False
-            n = len(ranges)
-            mx, my, myaw = getattr(h, "mount", None) or (setting.mount_x_m, setting.mount_y_m, setting.mount_yaw_rad)
-            try:
-                h.model = ScannerModel(
-                    name=setting.name,
-                    mount_x_m=mx,
-                    mount_y_m=my,
-                    mount_yaw_rad=_wrap(myaw + angle_min_rad + 0.5 * (n - 1) * angle_increment_rad),
-                    beam_count=n,
-                    angle_increment_rad=float(angle_increment_rad),
-                    range_min_m=max(float(range_min_m), 0.0),
-                    range_max_m=float(range_max_m),
-                )
-            except ValueError as error:  # anything the scanner model refuses that the check above let through
-                h.refuse("layout", str(error))
-                return False
-            h.angle_min_rad = angle_min_rad  # type: ignore[attr-defined]
+        if h.model is None and not self._make_scanner_model(
+            index, len(ranges), angle_min_rad, angle_increment_rad, range_min_m, range_max_m
+        ):
+            return False
+        if not self._scan_fits_model(h, ranges, angle_min_rad, angle_increment_rad):
+            return False
+        return self._store_scan(h, now_s, stamp_s, ranges)
+
+    def _make_scanner_model(
+        self,
+        index: int,
+        beams: int,
+        angle_min_rad: float,
+        angle_increment_rad: float,
+        range_min_m: float,
+        range_max_m: float,
+    ) -> bool:
+        """Scanner ``index``'s model from its first readable scan (counter-clockwise angles); False
+        (and the scan refused) when the layout cannot be one."""
+        h = self.health[index]
+        setting = self.settings.scanners[index]
+        problem = scan_layout_problem(beams, angle_increment_rad, range_min_m, range_max_m)
+        if problem:
+            h.refuse("layout", problem)
+            return False
+        n = beams
+        mx, my, myaw = getattr(h, "mount", None) or (setting.mount_x_m, setting.mount_y_m, setting.mount_yaw_rad)
+        try:
+            h.model = ScannerModel(
+                name=setting.name,
+                mount_x_m=mx,
+                mount_y_m=my,
+                mount_yaw_rad=_wrap(myaw + angle_min_rad + 0.5 * (n - 1) * angle_increment_rad),
+                beam_count=n,
+                angle_increment_rad=float(angle_increment_rad),
+                range_min_m=max(float(range_min_m), 0.0),
+                range_max_m=float(range_max_m),
+            )
+        except ValueError as error:  # anything the scanner model refuses that the check above let through
+            h.refuse("layout", str(error))
+            return False
+        h.angle_min_rad = angle_min_rad  # type: ignore[attr-defined]
+        return True
+
+    def _scan_fits_model(
+        self, h: ScannerHealth, ranges: np.ndarray, angle_min_rad: float, angle_increment_rad: float
+    ) -> bool:
+        """Whether a scan has its scanner's beams and angles and few enough erroneous readings (else
+        it is refused); sets the scanner's invalid fraction."""
         model = h.model
+        assert model is not None
         expected_min = getattr(h, "angle_min_rad", model.angle_min_rad)
         if len(ranges) != model.beam_count:
             h.refuse("length", f"{len(ranges)} beams, expected {model.beam_count}")
@@ -627,6 +654,10 @@ class PlannerCore:
         if h.invalid_fraction > self.settings.max_invalid_fraction:
             h.refuse("invalid", f"{100 * h.invalid_fraction:.0f} % of the readings are NaN or zero")
             return False
+        return True
+
+    def _store_scan(self, h: ScannerHealth, now_s: float, stamp_s: float, ranges: np.ndarray) -> bool:
+        """Keep an accepted scan for the next cycle; returns whether that cycle is due now."""
         if self.last_cycle_stamp_s is not None and stamp_s < self.last_cycle_stamp_s - 1e-9:
             self._time_jump(f"scan stamp went back {self.last_cycle_stamp_s - stamp_s:.3f} s")
         h.last_stamp_s = stamp_s
@@ -870,67 +901,16 @@ class PlannerCore:
             reasons.append("no scan in this cycle")
         pose = self._pose_at(stamp)
         obstacles = Obstacles.empty()
-        perception_ms = plan_ms = None
+        perception_ms = None
         if used and pose is not None:
-            perceiving = time.perf_counter()
-            detections = detect([m for m, _ in scans], [r for _, r in scans], self.detector_params).transformed(pose)
-            if self.tracker.time_s is not None and stamp < self.tracker.time_s:
-                self._time_jump("scan stamp before the tracker's time")
-                self.hold_until_stamp_s = stamp + self.settings.reset_hold_s
-            self.tracker.step(stamp, detections.centres, detections.position_sigma_m, detections.radii_m)
-            obstacles = self.tracker.people().finite()
-            self.static_now = self.static_layer.update(
-                stamp, pose, [r for _, r in scans], *self.tracker.explaining(), scanners=[m for m, _ in scans]
-            )
-            perception_ms = (time.perf_counter() - perceiving) * 1e3
-            self.last_cycle_stamp_s = stamp
+            obstacles, perception_ms = self._perceive(stamp, pose, scans)
         cap, sectors = self.blind_speed_cap(live)
-        decision = None
-        if reasons:
+        decision, plan_ms = (None, None) if reasons else self._plan(stamp, pose, obstacles, reasons)
+        if decision is None:
             command = self.brake_command()
             mode = "braking"
         else:
-            o = self.odometry
-            robot = RobotState(
-                pose[:2].copy(),  # type: ignore[index]  # no stop reason: pose and odometry known
-                float(pose[2]),  # type: ignore[index]
-                min(max(o.speed_mps, 0.0), self.limits.max_speed_mps),  # type: ignore[union-attr]
-                o.turn_rate_radps,  # type: ignore[union-attr]
-                self.settings.robot_radius_m,
-            )
-            static = self.map_layer.concatenate(self.static_now)
-            try:
-                planning = time.perf_counter()
-                decision = self.planner.plan(Observation(stamp, robot, obstacles, static))
-                plan_ms = (time.perf_counter() - planning) * 1e3
-            except Exception as error:
-                reasons.append(f"planner error: {type(error).__name__}: {error}")
-                self.events.append(reasons[-1])
-                command = self.brake_command()
-                mode = "braking"
-        if decision is not None:
-            limit = (
-                cap
-                if self.speed_limit_mps is None
-                else (self.speed_limit_mps if cap is None else min(cap, self.speed_limit_mps))
-            )
-            command = self._limit(decision.command, limit)
-            mode = "driving" if cap is None else "degraded"
-            if cap is not None:
-                reasons.append(
-                    "scanner(s) silent: "
-                    + ", ".join(self.settings.scanners[i].name for i in range(len(self.health)) if i not in live)
-                    + f"; speed capped at {cap:.2f} m/s"
-                )
-            if decision.plan.status == "goal":
-                self.goal_reached = True
-                mode = "goal"
-            if self.hold_until_stamp_s is not None and stamp < self.hold_until_stamp_s:
-                command = self.brake_command()
-                mode = "braking"
-                reasons.append(f"holding after {self.hold_reason}")
-            elif self.hold_until_stamp_s is not None:
-                self.hold_until_stamp_s = None
+            command, mode = self._drive(decision, stamp, cap, live, reasons)
         if command.speed_mps == 0.0 and command.turn_rate_radps == 0.0 and mode == "braking":
             mode = "stopped"
         self._record_command(command, now_s, planned=decision is not None)
@@ -956,6 +936,70 @@ class PlannerCore:
         result.status = self._status(result, now_s)
         self.last_result = result
         return result
+
+    def _perceive(self, stamp: float, pose: np.ndarray, scans: list) -> tuple[Obstacles, float]:
+        """Detect in this cycle's scans, track, update the static layer: (tracked obstacles, time in ms)."""
+        perceiving = time.perf_counter()
+        detections = detect([m for m, _ in scans], [r for _, r in scans], self.detector_params).transformed(pose)
+        if self.tracker.time_s is not None and stamp < self.tracker.time_s:
+            self._time_jump("scan stamp before the tracker's time")
+            self.hold_until_stamp_s = stamp + self.settings.reset_hold_s
+        self.tracker.step(stamp, detections.centres, detections.position_sigma_m, detections.radii_m)
+        obstacles = self.tracker.people().finite()
+        self.static_now = self.static_layer.update(
+            stamp, pose, [r for _, r in scans], *self.tracker.explaining(), scanners=[m for m, _ in scans]
+        )
+        perception_ms = (time.perf_counter() - perceiving) * 1e3
+        self.last_cycle_stamp_s = stamp
+        return obstacles, perception_ms
+
+    def _plan(self, stamp: float, pose, obstacles: Obstacles, reasons: list[str]):
+        """The planner's decision and its time in ms; (None, None) with the error in ``reasons`` when it fails."""
+        o = self.odometry
+        robot = RobotState(
+            pose[:2].copy(),  # no stop reason: pose and odometry known
+            float(pose[2]),
+            min(max(o.speed_mps, 0.0), self.limits.max_speed_mps),  # type: ignore[union-attr]
+            o.turn_rate_radps,  # type: ignore[union-attr]
+            self.settings.robot_radius_m,
+        )
+        static = self.map_layer.concatenate(self.static_now)
+        try:
+            planning = time.perf_counter()
+            decision = self.planner.plan(Observation(stamp, robot, obstacles, static))
+            plan_ms = (time.perf_counter() - planning) * 1e3
+        except Exception as error:
+            reasons.append(f"planner error: {type(error).__name__}: {error}")
+            self.events.append(reasons[-1])
+            return None, None
+        return decision, plan_ms
+
+    def _drive(self, decision, stamp: float, cap: float | None, live: list[int], reasons: list[str]):
+        """(command, mode) from the planner's decision: within the speed limit and the blind-scanner
+        cap, a brake while holding after a reset; the goal noted."""
+        limit = (
+            cap
+            if self.speed_limit_mps is None
+            else (self.speed_limit_mps if cap is None else min(cap, self.speed_limit_mps))
+        )
+        command = self._limit(decision.command, limit)
+        mode = "driving" if cap is None else "degraded"
+        if cap is not None:
+            reasons.append(
+                "scanner(s) silent: "
+                + ", ".join(self.settings.scanners[i].name for i in range(len(self.health)) if i not in live)
+                + f"; speed capped at {cap:.2f} m/s"
+            )
+        if decision.plan.status == "goal":
+            self.goal_reached = True
+            mode = "goal"
+        if self.hold_until_stamp_s is not None and stamp < self.hold_until_stamp_s:
+            command = self.brake_command()
+            mode = "braking"
+            reasons.append(f"holding after {self.hold_reason}")
+        elif self.hold_until_stamp_s is not None:
+            self.hold_until_stamp_s = None
+        return command, mode
 
     def stop_command(self) -> Command:
         self._record_command(Command.stop(), self._now_s)

@@ -61,6 +61,202 @@ def parse_event(text: str) -> tuple[float, str, str]:
     return t, kind, arg
 
 
+class _FollowSession:
+    """Nav2's part in one run: the node's action client, lifecycle and costmap clients, the speed-limit
+    publisher, the path being (re-)sent and the JSON log. Everything runs in this thread's spins."""
+
+    def __init__(
+        self,
+        node: Any,
+        stop: dict,
+        log: Any,
+        action: str,
+        frame: str,
+        offset,
+        spacing_m: float,
+        lifecycle_node: str | None,
+    ) -> None:
+        import rclpy
+        from lifecycle_msgs.srv import ChangeState
+        from nav2_msgs.action import FollowPath
+        from nav2_msgs.msg import SpeedLimit
+        from nav2_msgs.srv import ClearEntireCostmap
+        from rclpy.action import ActionClient
+
+        self.rclpy = rclpy
+        self.node, self.stop, self.log = node, stop, log
+        self.frame, self.offset, self.spacing_m = frame, offset, spacing_m
+        self.FollowPath, self.SpeedLimit, self.ChangeState = FollowPath, SpeedLimit, ChangeState
+        self.ClearEntireCostmap = ClearEntireCostmap
+        self.client: Any = ActionClient(node, FollowPath, action)
+        self.speed_pub = node.create_publisher(SpeedLimit, "speed_limit", 10)
+        self.clear = node.create_client(ClearEntireCostmap, "local_costmap/clear_entirely_local_costmap")
+        self.change: Any = node.create_client(ChangeState, f"{lifecycle_node}/change_state") if lifecycle_node else None
+        self.started = time.monotonic()
+        self.points: np.ndarray = np.zeros((0, 2))  # the path re-sent (set by load_points' caller)
+        self.goal: Any = None  # the handle of the path's goal last accepted
+        self.sent_s = -math.inf
+        self.resend = True
+        self.count = 0
+        self.due = True
+        self.cancel = False
+
+    # -- helpers ---------------------------------------------------------------------------------
+    def write(self, **item) -> None:
+        self.log.write(json.dumps(item) + "\n")
+        self.log.flush()
+
+    def now(self) -> float:
+        return self.node.get_clock().now().nanoseconds * 1e-9 - EPISODE_START_S
+
+    def spin(self, seconds: float = 0.01) -> None:
+        self.rclpy.spin_once(self.node, timeout_sec=seconds)
+
+    def timed_out(self, wait_s: float) -> bool:
+        return bool(self.stop["flag"]) or time.monotonic() - self.started > wait_s
+
+    def path_msg(self, points) -> Any:
+        from geometry_msgs.msg import PoseStamped
+        from nav_msgs.msg import Path as PathMsg
+
+        msg = PathMsg()
+        msg.header.frame_id = self.frame
+        for x, y in np.asarray(points, dtype=float).reshape(-1, 2):
+            pose = PoseStamped()
+            pose.header.frame_id = self.frame
+            pose.pose.position.x, pose.pose.position.y = float(x), float(y)
+            pose.pose.orientation.w = 1.0
+            msg.poses.append(pose)
+        return msg
+
+    def load_points(self, text: str) -> np.ndarray:
+        from viapath.ros2 import convert
+
+        waypoints, _ = convert.load_path_file(text)
+        return to_frame(densify(waypoints, self.spacing_m), self.offset)
+
+    # -- lifecycle and servers -------------------------------------------------------------------
+    def transition(self, transition_id: int, label: str) -> bool:
+        request = self.ChangeState.Request()
+        request.transition.id = transition_id
+        future = self.change.call_async(request)
+        end = time.monotonic() + 60
+        while not future.done() and time.monotonic() < end and not self.stop["flag"]:
+            self.spin(0.05)
+        ok = future.done() and future.result() is not None and future.result().success
+        self.write(kind="lifecycle", transition=label, ok=bool(ok), t=self.now())
+        return bool(ok)
+
+    def bring_up(self, lifecycle_node: str | None, action: str, wait_s: float) -> int:
+        """Configure and activate the controller (with a lifecycle node), then wait for its action
+        server: 0, or the exit code (3: a service or server missing, 4: a transition failed)."""
+        if self.change is not None:
+            while not self.change.wait_for_service(timeout_sec=0.1):
+                self.spin(0.05)
+                if self.timed_out(wait_s):
+                    print(f"error: no lifecycle service {lifecycle_node}/change_state", file=sys.stderr)
+                    return 3
+            if not (self.transition(1, "configure") and self.transition(3, "activate")):
+                return 4
+        while not self.client.wait_for_server(timeout_sec=0.1):
+            self.spin(0.05)
+            if self.timed_out(wait_s):
+                print(f"error: no action server {action}", file=sys.stderr)
+                return 3
+        return 0
+
+    # -- goals -----------------------------------------------------------------------------------
+    def send(self, points, label: str):
+        index = self.count
+        self.count += 1
+        goal = self.FollowPath.Goal()
+        goal.path = self.path_msg(points)
+        goal.controller_id = "FollowPath"
+        goal.goal_checker_id = "general_goal_checker"
+        goal.progress_checker_id = "progress_checker"
+        future = self.client.send_goal_async(
+            goal,
+            feedback_callback=lambda fb, i=index: self.write(
+                kind="feedback",
+                goal=index,
+                t=self.now(),
+                distance_to_goal=fb.feedback.distance_to_goal,
+                speed=fb.feedback.speed,
+            ),
+        )
+        self.write(kind="sent", goal=index, label=label, t=self.now(), poses=len(goal.path.poses))
+        future.add_done_callback(lambda f, i=index: self.accepted(f, i, label))
+        return future
+
+    def accepted(self, future, index: int, label: str) -> None:
+        handle = future.result()
+        self.write(kind="accepted" if handle.accepted else "rejected", goal=index, t=self.now())
+        if handle.accepted:
+            if label == "path":
+                self.goal = handle
+                if self.cancel:  # sent before the cancel, accepted after it: cancel it too
+                    handle.cancel_goal_async()
+            handle.get_result_async().add_done_callback(lambda r, i=index: self.finished(i, label, r.result()))
+
+    def finished(self, index: int, label: str, response) -> None:
+        message = response.result.error_msg
+        self.write(
+            kind="result",
+            goal=index,
+            label=label,
+            t=self.now(),
+            status=int(response.status),
+            error_code=int(response.result.error_code),
+            error_msg=message,
+        )
+        if label == "path" and message != "preempted by a new path":
+            self.resend = False  # as the behaviour tree: the goal is over (succeeded, failed, canceled)
+
+    # -- the run ---------------------------------------------------------------------------------
+    def handle_event(self, at: float, kind: str, arg: str, t: float) -> None:
+        self.write(kind="event", event=kind, arg=arg, at=at, t=t)
+        if kind == "empty":
+            self.send(np.zeros((0, 2)), "empty")
+        elif kind == "nan":
+            self.send(np.array([[0.0, 0.0], [np.nan, 1.0]]), "nan")
+        elif kind == "preempt":
+            self.points = self.load_points(arg)
+            self.resend = self.due = True
+        elif kind == "cancel":
+            self.resend, self.cancel = False, True
+            if self.goal is not None:
+                self.goal.cancel_goal_async()
+        elif kind == "stop":
+            self.resend = False
+        elif kind in ("deactivate", "activate") and self.change is not None:
+            self.resend = self.due = kind == "activate"
+            self.transition(4 if kind == "deactivate" else 3, kind)
+        elif kind == "speed-limit":
+            msg = self.SpeedLimit()
+            msg.percentage = True
+            msg.speed_limit = float(arg)
+            self.speed_pub.publish(msg)
+        elif kind == "clear":
+            future = self.clear.call_async(self.ClearEntireCostmap.Request())
+            future.add_done_callback(lambda f: self.write(kind="cleared", ok=f.result() is not None, t=self.now()))
+
+    def follow(self, schedule: list[tuple[float, str, str]], resend_s: float, until_s: float, wait_s: float) -> None:
+        """Wait for the simulated clock to start the episode (warm-up ticks lie below it), then play
+        the events as their times come and re-send the path every ``resend_s`` until ``until_s``."""
+        while self.now() < -0.999 and not self.stop["flag"] and time.monotonic() - self.started < wait_s:
+            self.spin(0.02)
+        while not self.stop["flag"]:
+            t = self.now()
+            if t > until_s:
+                break
+            while schedule and schedule[0][0] <= t:
+                self.handle_event(*schedule.pop(0), t)
+            if self.resend and (self.due or (resend_s > 0 and t - self.sent_s >= resend_s)):
+                self.send(self.points, "path")
+                self.sent_s, self.due = t, False
+            self.spin(0.01)
+
+
 def run_follow(
     source: str,
     action: str = "follow_path",
@@ -75,176 +271,20 @@ def run_follow(
     ros_args: list[str] | None = None,
     wait_s: float = 120.0,
 ) -> int:
-    from geometry_msgs.msg import PoseStamped
-    from lifecycle_msgs.srv import ChangeState
-    from nav_msgs.msg import Path as PathMsg
-    from rclpy.action import ActionClient
-
-    from viapath.ros2 import convert, interfaces
+    from viapath.ros2 import interfaces
     from viapath.ros2.process import finish_ros_process, start_ros_process
 
     interfaces.load()
-    import rclpy
-    from nav2_msgs.action import FollowPath
-    from nav2_msgs.msg import SpeedLimit
-    from nav2_msgs.srv import ClearEntireCostmap
-
     schedule = sorted(parse_event(e) for e in (events or []))
     log = open(log_file, "a") if log_file else sys.stdout  # noqa: SIM115 -- the file or stdout, for the whole run
-
-    def write(**item) -> None:
-        log.write(json.dumps(item) + "\n")
-        log.flush()
-
-    def path_msg(points) -> PathMsg:
-        msg = PathMsg()
-        msg.header.frame_id = frame
-        for x, y in np.asarray(points, dtype=float).reshape(-1, 2):
-            pose = PoseStamped()
-            pose.header.frame_id = frame
-            pose.pose.position.x, pose.pose.position.y = float(x), float(y)
-            pose.pose.orientation.w = 1.0
-            msg.poses.append(pose)
-        return msg
-
-    def load_points(text: str) -> np.ndarray:
-        waypoints, _ = convert.load_path_file(text)
-        return to_frame(densify(waypoints, spacing_m), offset)
-
     node, stop, previous = start_ros_process("viapath_follow", ros_args)
     try:
-        client: Any = ActionClient(node, FollowPath, action)
-        speed_pub = node.create_publisher(SpeedLimit, "speed_limit", 10)
-        clear = node.create_client(ClearEntireCostmap, "local_costmap/clear_entirely_local_costmap")
-        change: Any = node.create_client(ChangeState, f"{lifecycle_node}/change_state") if lifecycle_node else None
-        started = time.monotonic()
-
-        def now() -> float:
-            return node.get_clock().now().nanoseconds * 1e-9 - EPISODE_START_S
-
-        def spin(seconds: float = 0.01) -> None:
-            rclpy.spin_once(node, timeout_sec=seconds)
-
-        def transition(transition_id: int, label: str) -> bool:
-            request = ChangeState.Request()
-            request.transition.id = transition_id
-            future = change.call_async(request)
-            end = time.monotonic() + 60
-            while not future.done() and time.monotonic() < end and not stop["flag"]:
-                spin(0.05)
-            ok = future.done() and future.result() is not None and future.result().success
-            write(kind="lifecycle", transition=label, ok=bool(ok), t=now())
-            return bool(ok)
-
-        if change is not None:
-            while not change.wait_for_service(timeout_sec=0.1):
-                spin(0.05)
-                if stop["flag"] or time.monotonic() - started > wait_s:
-                    print(f"error: no lifecycle service {lifecycle_node}/change_state", file=sys.stderr)
-                    return 3
-            if not (transition(1, "configure") and transition(3, "activate")):
-                return 4
-        while not client.wait_for_server(timeout_sec=0.1):
-            spin(0.05)
-            if stop["flag"] or time.monotonic() - started > wait_s:
-                print(f"error: no action server {action}", file=sys.stderr)
-                return 3
-
-        state: dict[str, Any] = {
-            "points": load_points(source),
-            "goal": None,
-            "sent": -math.inf,
-            "resend": True,
-            "count": 0,
-            "due": True,
-            "cancel": False,
-        }
-
-        def send(points, label: str):
-            index = state["count"]
-            state["count"] += 1
-            goal = FollowPath.Goal()
-            goal.path = path_msg(points)
-            goal.controller_id = "FollowPath"
-            goal.goal_checker_id = "general_goal_checker"
-            goal.progress_checker_id = "progress_checker"
-            future = client.send_goal_async(
-                goal,
-                feedback_callback=lambda fb, i=index: write(
-                    kind="feedback",
-                    goal=index,
-                    t=now(),
-                    distance_to_goal=fb.feedback.distance_to_goal,
-                    speed=fb.feedback.speed,
-                ),
-            )
-            write(kind="sent", goal=index, label=label, t=now(), poses=len(goal.path.poses))
-
-            def accepted(f, i=index):
-                handle = f.result()
-                write(kind="accepted" if handle.accepted else "rejected", goal=i, t=now())
-                if handle.accepted:
-                    if label == "path":
-                        state["goal"] = handle
-                        if state["cancel"]:  # sent before the cancel, accepted after it: cancel it too
-                            handle.cancel_goal_async()
-                    handle.get_result_async().add_done_callback(lambda r, i=i: finished(i, label, r.result()))
-
-            future.add_done_callback(accepted)
-            return future
-
-        def finished(index: int, label: str, response) -> None:
-            message = response.result.error_msg
-            write(
-                kind="result",
-                goal=index,
-                label=label,
-                t=now(),
-                status=int(response.status),
-                error_code=int(response.result.error_code),
-                error_msg=message,
-            )
-            if label == "path" and message != "preempted by a new path":
-                state["resend"] = False  # as the behaviour tree: the goal is over (succeeded, failed, canceled)
-
-        # wait for the simulated clock to start the episode (warm-up ticks lie below it)
-        while now() < -0.999 and not stop["flag"] and time.monotonic() - started < wait_s:
-            spin(0.02)
-        while not stop["flag"]:
-            t = now()
-            if t > until_s:
-                break
-            while schedule and schedule[0][0] <= t:
-                at, kind, arg = schedule.pop(0)
-                write(kind="event", event=kind, arg=arg, at=at, t=t)
-                if kind == "empty":
-                    send(np.zeros((0, 2)), "empty")
-                elif kind == "nan":
-                    send(np.array([[0.0, 0.0], [np.nan, 1.0]]), "nan")
-                elif kind == "preempt":
-                    state["points"] = load_points(arg)
-                    state["resend"] = state["due"] = True
-                elif kind == "cancel":
-                    state["resend"], state["cancel"] = False, True
-                    if state["goal"] is not None:
-                        state["goal"].cancel_goal_async()
-                elif kind == "stop":
-                    state["resend"] = False
-                elif kind in ("deactivate", "activate") and change is not None:
-                    state["resend"] = state["due"] = kind == "activate"
-                    transition(4 if kind == "deactivate" else 3, kind)
-                elif kind == "speed-limit":
-                    msg = SpeedLimit()
-                    msg.percentage = True
-                    msg.speed_limit = float(arg)
-                    speed_pub.publish(msg)
-                elif kind == "clear":
-                    future = clear.call_async(ClearEntireCostmap.Request())
-                    future.add_done_callback(lambda f: write(kind="cleared", ok=f.result() is not None, t=now()))
-            if state["resend"] and (state["due"] or (resend_s > 0 and t - state["sent"] >= resend_s)):
-                send(state["points"], "path")
-                state["sent"], state["due"] = t, False
-            spin(0.01)
+        session = _FollowSession(node, stop, log, action, frame, offset, spacing_m, lifecycle_node)
+        code = session.bring_up(lifecycle_node, action, wait_s)
+        if code:
+            return code
+        session.points = session.load_points(source)
+        session.follow(schedule, resend_s, until_s, wait_s)
         return 0
     finally:
         if log is not sys.stdout:

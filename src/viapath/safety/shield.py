@@ -424,23 +424,8 @@ class Shield:
         distance = np.hypot(offset[:, 0], offset[:, 1])
         touching = float(robot.radius_m) + people.radii_m
         gap = distance - touching
-        # Cheap bound first: nobody within reach of the longest braking (from the fastest first period,
-        # 2 periods slack for the discrete steps) needs no sweep at all.
-        fastest = float(np.max(np.abs(achieved[:, 0]), initial=0.0))
-        a_robot = max(self.limits.max_accel_mps2, 1e-9)
-        t_bound = fastest / a_robot + 2.0 * self.dt_s
-        r_bound = fastest * t_bound
         speed_people = np.hypot(people.velocities[:, 0], people.velocities[:, 1])
-        grow_bound = (
-            touching
-            + config.margin_m
-            + config.sigma_multiplier * (people.position_sigma_m + people.velocity_sigma_mps * t_bound)
-            + 0.5 * config.person_accel_mps2 * t_bound**2
-            + speed_people * t_bound
-        )
-        if config.mode == "passive-friendly":
-            grow_bound = grow_bound + speed_people**2 / (2.0 * max(config.person_accel_mps2, 1e-3))
-        if np.all(gap > 0.0) and np.all(distance - grow_bound > r_bound + 1e-6):
+        if self._out_of_reach(achieved, people, distance, touching, gap, speed_people):
             return out
         substeps = max(1, math.ceil(self.dt_s / config.substep_s - 1e-9))
         sweep = braking_sweep(
@@ -457,66 +442,17 @@ class Shield:
         k_sigma = config.sigma_multiplier
         base = touching + np.minimum(config.margin_m + k_sigma * people.position_sigma_m, gap)  # (N,)
         growth = k_sigma * people.velocity_sigma_mps  # (N,) m/s
-        accel = config.person_accel_mps2
-        horizon = float(sweep.times_s[-1])
-        reach_people = base + growth * horizon + 0.5 * accel * horizon**2 + speed_people * horizon
-        friendly_mode = config.mode == "passive-friendly"
-        if friendly_mode:
-            braking = speed_people**2 / (2.0 * max(accel, 1e-3))
-            reach_people = reach_people + braking
-        # Only people whose forecast path (centre over [0, horizon], grown to its largest radius) comes
-        # within the robot's longest sweep of its start can matter.
-        path = people.velocities * horizon
-        pp = np.sum(path * path, axis=1)
-        along = np.clip(np.sum(-offset * path, axis=1) / np.where(pp > 0, pp, 1.0), 0.0, 1.0)
-        closest = offset + path * along[:, None]
-        near = (
-            np.hypot(closest[:, 0], closest[:, 1]) - (reach_people - speed_people * horizon)
-            <= float(np.max(sweep.reach_m, initial=0.0)) + 1e-6
-        )
-        if friendly_mode:
-            self._friendly(out, sweep, people, base, growth, accel, np.ones(len(people), dtype=bool) & near)
+        near = self._near_sweep(sweep, people, offset, base, growth, speed_people)
+        if config.mode == "passive-friendly":
+            self._friendly(
+                out, sweep, people, base, growth, config.person_accel_mps2, np.ones(len(people), dtype=bool) & near
+            )
         if sweep.moving.shape[1] == 0 or not np.any(near):
             return out
         times = sweep.times_s
         idx = np.flatnonzero(near)
         for chunk in np.array_split(idx, max(1, math.ceil(len(idx) / 16))):
-            centres = (
-                people.positions[chunk, None, :] + people.velocities[chunk, None, :] * times[None, :, None]
-            )  # (n, T, 2)
-            radii = base[chunk, None] + growth[chunk, None] * times + 0.5 * accel * times**2  # (n, T)
-            rel = sweep.positions[:, None, :, :] - centres[None]  # (K, n, T, 2)
-            r_a, w = rel[:, :, :-1], np.diff(rel, axis=2)
-            # Radius over a sub-interval: the chord of a convex function lies above it, so the linear
-            # interpolation R_a + dR tau (plus the arc's sagitta) bounds it; |r_a + w tau| < R_a + dR tau
-            # is then a quadratic inequality in tau, solved exactly on [0, 1].
-            # The arc strays from its chord by at most 4 sagitta * tau (zero at the start: a person on the
-            # disc's edge now is not met by a robot moving away from it).
-            r_start = np.broadcast_to(radii[None, :, :-1], (k,) + radii[:, :-1].shape)
-            d_r = np.diff(radii, axis=1)[None] + 4.0 * sweep.sagitta_m[:, None, :]
-            qa = np.sum(w * w, axis=-1) - d_r * d_r
-            qb = 2.0 * (np.sum(r_a * w, axis=-1) - r_start * d_r)
-            qc = np.sum(r_a * r_a, axis=-1) - r_start * r_start
-            low = np.minimum(qc, qa + qb + qc)
-            vertex = -qb / np.where(qa > 0, 2.0 * qa, 1.0)
-            inside = (qa > 0) & (vertex > 0.0) & (vertex < 1.0)
-            low = np.where(inside, np.minimum(low, qc - qb * qb / np.where(qa > 0, 4.0 * qa, 1.0)), low)
-            hit = (low < -1e-12) & sweep.moving[:, None, :]  # rounding at the edge is no meeting
-            if config.towards_only:
-                # Only while the robot moves towards the person's centre: T = u . (c - p) = -u . rel. Its
-                # largest value on the sub-interval is at most (T_a + T_b + L h) / 2, L bounding |dT/dt|.
-                heading = sweep.headings
-                ux, uy = np.cos(heading) * 1.0, np.sin(heading) * 1.0
-                s_int = sweep.speeds[:, None, :]
-                t_a = -s_int * (ux[:, None, :-1] * r_a[..., 0] + uy[:, None, :-1] * r_a[..., 1])
-                r_b = r_a + w
-                t_b = -s_int * (ux[:, None, 1:] * r_b[..., 0] + uy[:, None, 1:] * r_b[..., 1])
-                r_max = np.maximum(np.hypot(r_a[..., 0], r_a[..., 1]), np.hypot(r_b[..., 0], r_b[..., 1])) + 0.01
-                lipschitz = np.abs(s_int) * (
-                    np.abs(sweep.turns[:, None, :]) * r_max + speed_people[chunk][None, :, None] + np.abs(s_int)
-                )
-                h_int = float(times[1] - times[0])
-                hit &= (t_a + t_b + lipschitz * h_int) > 0.0
+            hit = self._hits(sweep, people, chunk, base, growth, speed_people, k)  # (K, n, T - 1)
             any_hit = hit.any(axis=2)  # (K, n)
             if not np.any(any_hit):
                 continue
@@ -530,6 +466,111 @@ class Shield:
         out["admissible"] = ~np.isfinite(out["meet_time_s"])
         out["friendly"] &= out["admissible"]
         return out
+
+    def _out_of_reach(
+        self,
+        achieved: np.ndarray,
+        people: Obstacles,
+        distance: np.ndarray,
+        touching: np.ndarray,
+        gap: np.ndarray,
+        speed_people: np.ndarray,
+    ) -> bool:
+        """The cheap bound: nobody touching the robot, and nobody within reach of its longest braking (from
+        the fastest first period, 2 periods slack for the discrete steps): then no sweep is needed at all."""
+        config = self.config
+        fastest = float(np.max(np.abs(achieved[:, 0]), initial=0.0))
+        a_robot = max(self.limits.max_accel_mps2, 1e-9)
+        t_bound = fastest / a_robot + 2.0 * self.dt_s
+        r_bound = fastest * t_bound
+        grow_bound = (
+            touching
+            + config.margin_m
+            + config.sigma_multiplier * (people.position_sigma_m + people.velocity_sigma_mps * t_bound)
+            + 0.5 * config.person_accel_mps2 * t_bound**2
+            + speed_people * t_bound
+        )
+        if config.mode == "passive-friendly":
+            grow_bound = grow_bound + speed_people**2 / (2.0 * max(config.person_accel_mps2, 1e-3))
+        return bool(np.all(gap > 0.0) and np.all(distance - grow_bound > r_bound + 1e-6))
+
+    def _near_sweep(
+        self,
+        sweep: Sweep,
+        people: Obstacles,
+        offset: np.ndarray,
+        base: np.ndarray,
+        growth: np.ndarray,
+        speed_people: np.ndarray,
+    ) -> np.ndarray:
+        """Which people can matter: those whose forecast path (centre over [0, horizon], grown to its
+        largest radius) comes within the robot's longest sweep of its start."""
+        accel = self.config.person_accel_mps2
+        horizon = float(sweep.times_s[-1])
+        reach_people = base + growth * horizon + 0.5 * accel * horizon**2 + speed_people * horizon
+        if self.config.mode == "passive-friendly":
+            braking = speed_people**2 / (2.0 * max(accel, 1e-3))
+            reach_people = reach_people + braking
+        path = people.velocities * horizon
+        pp = np.sum(path * path, axis=1)
+        along = np.clip(np.sum(-offset * path, axis=1) / np.where(pp > 0, pp, 1.0), 0.0, 1.0)
+        closest = offset + path * along[:, None]
+        return (
+            np.hypot(closest[:, 0], closest[:, 1]) - (reach_people - speed_people * horizon)
+            <= float(np.max(sweep.reach_m, initial=0.0)) + 1e-6
+        )
+
+    def _hits(
+        self,
+        sweep: Sweep,
+        people: Obstacles,
+        chunk: np.ndarray,
+        base: np.ndarray,
+        growth: np.ndarray,
+        speed_people: np.ndarray,
+        k: int,
+    ) -> np.ndarray:
+        """(K, n, T - 1): whether the robot, braking along each command's sweep, meets person ``chunk[j]``'s
+        growing disc within each sub-interval (and, with ``towards_only``, moves towards its centre then)."""
+        accel = self.config.person_accel_mps2
+        times = sweep.times_s
+        centres = (
+            people.positions[chunk, None, :] + people.velocities[chunk, None, :] * times[None, :, None]
+        )  # (n, T, 2)
+        radii = base[chunk, None] + growth[chunk, None] * times + 0.5 * accel * times**2  # (n, T)
+        rel = sweep.positions[:, None, :, :] - centres[None]  # (K, n, T, 2)
+        r_a, w = rel[:, :, :-1], np.diff(rel, axis=2)
+        # Radius over a sub-interval: the chord of a convex function lies above it, so the linear
+        # interpolation R_a + dR tau (plus the arc's sagitta) bounds it; |r_a + w tau| < R_a + dR tau
+        # is then a quadratic inequality in tau, solved exactly on [0, 1].
+        # The arc strays from its chord by at most 4 sagitta * tau (zero at the start: a person on the
+        # disc's edge now is not met by a robot moving away from it).
+        r_start = np.broadcast_to(radii[None, :, :-1], (k,) + radii[:, :-1].shape)
+        d_r = np.diff(radii, axis=1)[None] + 4.0 * sweep.sagitta_m[:, None, :]
+        qa = np.sum(w * w, axis=-1) - d_r * d_r
+        qb = 2.0 * (np.sum(r_a * w, axis=-1) - r_start * d_r)
+        qc = np.sum(r_a * r_a, axis=-1) - r_start * r_start
+        low = np.minimum(qc, qa + qb + qc)
+        vertex = -qb / np.where(qa > 0, 2.0 * qa, 1.0)
+        inside = (qa > 0) & (vertex > 0.0) & (vertex < 1.0)
+        low = np.where(inside, np.minimum(low, qc - qb * qb / np.where(qa > 0, 4.0 * qa, 1.0)), low)
+        hit = (low < -1e-12) & sweep.moving[:, None, :]  # rounding at the edge is no meeting
+        if self.config.towards_only:
+            # Only while the robot moves towards the person's centre: T = u . (c - p) = -u . rel. Its
+            # largest value on the sub-interval is at most (T_a + T_b + L h) / 2, L bounding |dT/dt|.
+            heading = sweep.headings
+            ux, uy = np.cos(heading) * 1.0, np.sin(heading) * 1.0
+            s_int = sweep.speeds[:, None, :]
+            t_a = -s_int * (ux[:, None, :-1] * r_a[..., 0] + uy[:, None, :-1] * r_a[..., 1])
+            r_b = r_a + w
+            t_b = -s_int * (ux[:, None, 1:] * r_b[..., 0] + uy[:, None, 1:] * r_b[..., 1])
+            r_max = np.maximum(np.hypot(r_a[..., 0], r_a[..., 1]), np.hypot(r_b[..., 0], r_b[..., 1])) + 0.01
+            lipschitz = np.abs(s_int) * (
+                np.abs(sweep.turns[:, None, :]) * r_max + speed_people[chunk][None, :, None] + np.abs(s_int)
+            )
+            h_int = float(times[1] - times[0])
+            hit &= (t_a + t_b + lipschitz * h_int) > 0.0
+        return hit
 
     def _evaluate_compiled(self, observation: Observation, commands: np.ndarray) -> dict[str, np.ndarray]:
         """The test above, compiled (:func:`viapath.compiled.shield.shield`: same arithmetic,
@@ -677,15 +718,7 @@ class Shield:
                 candidates=1,
                 admissible_candidates=1,
             )
-        ids = observation.obstacles.people().finite().ids
-        first = int(own["person"][0])
-        person_id = int(ids[first]) if first >= 0 else None
-        meet = float(own["meet_time_s"][0]) if math.isfinite(own["meet_time_s"][0]) else None
-        static_meet = float(own.get("static_meet_time_s", _NEVER)[0])
-        if math.isfinite(static_meet) and (meet is None or static_meet < meet):
-            person_id, meet = None, static_meet
-        corridor_exit = float(own.get("corridor_exit_time_s", _NEVER)[0])
-        leaves_first = math.isfinite(corridor_exit) and (meet is None or corridor_exit < meet)
+        person_id, meet, why = self._first_meeting(observation, own)
         stop = Command.stop()
         if bool(own["contact"][0]):
             return ShieldResult(
@@ -699,6 +732,22 @@ class Shield:
                 meet_time_s=0.0,
                 candidates=1,
             )
+        return self._replace(observation, command, original, own_ok, person_id, meet, why)
+
+    def _first_meeting(
+        self, observation: Observation, own: dict[str, np.ndarray]
+    ) -> tuple[int | None, float | None, str]:
+        """From the verdict on the planner's own command: the id of the person it meets first (None: static
+        geometry or nobody), when (s; None: never) and why it fails, in words."""
+        ids = observation.obstacles.people().finite().ids
+        first = int(own["person"][0])
+        person_id = int(ids[first]) if first >= 0 else None
+        meet = float(own["meet_time_s"][0]) if math.isfinite(own["meet_time_s"][0]) else None
+        static_meet = float(own.get("static_meet_time_s", _NEVER)[0])
+        if math.isfinite(static_meet) and (meet is None or static_meet < meet):
+            person_id, meet = None, static_meet
+        corridor_exit = float(own.get("corridor_exit_time_s", _NEVER)[0])
+        leaves_first = math.isfinite(corridor_exit) and (meet is None or corridor_exit < meet)
         why = (
             f"would leave the corridor {corridor_exit:.2f} s ahead before at rest"
             if leaves_first
@@ -708,6 +757,22 @@ class Shield:
             if meet is not None
             else "the person would have no room to stop"
         )
+        return person_id, meet, why
+
+    def _replace(
+        self,
+        observation: Observation,
+        command: Command,
+        original: Command,
+        own_ok: bool,
+        person_id: int | None,
+        meet: float | None,
+        why: str,
+    ) -> ShieldResult:
+        """The planner's (clipped) ``command`` failed: the closest wanted command of the window, else (in
+        passive-friendly mode) the command itself or the closest admissible one, else the hardest braking."""
+        friendly_mode = self.config.mode == "passive-friendly"
+        stop = Command.stop()
         pick, passive_pick, tested, passing, reached = self._search(observation, command)
         if pick is not None:
             text = (

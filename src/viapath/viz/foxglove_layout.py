@@ -35,7 +35,24 @@ LAYOUT_FILE = Path("docs") / "foxglove" / "viapath-layout.json"
 
 
 def layout(scanners: tuple[str, ...] = ("front", "rear")):
-    """The layout as a ``foxglove.layouts.Layout``."""
+    """The layout as a ``foxglove.layouts.Layout``: the world, x-y-t and time-series columns side by side."""
+    import foxglove.layouts as fl
+
+    world_topics = _world_topics(scanners)
+    return fl.Layout(
+        content=fl.SplitContainer(
+            direction="row",
+            items=[
+                fl.SplitItem(proportion=2, content=_world_panel(world_topics)),
+                fl.SplitItem(proportion=2, content=_xyt_panel(world_topics)),
+                fl.SplitItem(proportion=1.3, content=_series_column()),
+            ],
+        )
+    )
+
+
+def _world_topics(scanners: tuple[str, ...]) -> dict[str, Any]:
+    """The world panel's topics: the scene's markers, the x-y-t scene hidden, each scanner's scan in a colour."""
     import foxglove.layouts as fl
 
     scene = fl.BaseRendererSceneUpdateTopicSettings
@@ -47,10 +64,17 @@ def layout(scanners: tuple[str, ...] = ("front", "rear")):
         world_topics[scan_topic(name)] = fl.BaseRendererLaserScanTopicSettings(
             visible=True, point_size=3.0, color_mode="flat", flat_color=colour
         )
+    return world_topics
+
+
+def _world_panel(world_topics: dict[str, Any]):
+    """The world from above, following the robot, with a 20 m grid."""
+    import foxglove.layouts as fl
+
     grid: dict[str, Any] = {
         "grid": fl.BaseRendererGridLayerSettings(layer_id="foxglove.Grid", frame_id="world", size=20.0, divisions=20.0)
     }
-    world = fl.ThreeDeePanel(
+    return fl.ThreeDeePanel(
         title="world (from above)",
         config=fl.ThreeDeeConfig(
             fixed_frame="world",
@@ -61,9 +85,16 @@ def layout(scanners: tuple[str, ...] = ("front", "rear")):
             camera_state=fl.ThreeDeeCameraState(perspective=False, distance=12.0, phi=0.0, theta_offset=0.0),
         ),
     )
+
+
+def _xyt_panel(world_topics: dict[str, Any]):
+    """x-y-t in its own frame (time as the height): only the x-y-t scene shown, seen from an angle."""
+    import foxglove.layouts as fl
+
+    scene = fl.BaseRendererSceneUpdateTopicSettings
     xyt_topics: dict[str, Any] = {topic: scene(visible=False) for topic in world_topics if topic != XYT}
     xyt_topics[XYT] = scene(visible=True)
-    xyt = fl.ThreeDeePanel(
+    return fl.ThreeDeePanel(
         title="x-y-t (paper Fig. 4): people as cylinders, plan through via points",
         config=fl.ThreeDeeConfig(
             fixed_frame=XYT_FRAME,
@@ -81,56 +112,41 @@ def layout(scanners: tuple[str, ...] = ("front", "rear")):
         ),
     )
 
-    def plot(title: str, *series: tuple[str, str]):
-        return fl.PlotPanel(
-            title=title,
-            config=fl.PlotConfig(
-                paths=[fl.PlotSeries(value=f"{METRICS}.{field}", label=label) for field, label in series]
-            ),
-        )
 
-    series = fl.SplitContainer(
-        direction="column",
-        items=[
-            fl.SplitItem(
-                content=plot(
-                    "speed",
-                    ("speed_mps", "speed m/s"),
-                    ("command_speed_mps", "commanded m/s"),
-                    ("turn_rate_radps", "turn rate rad/s"),
-                )
-            ),
-            fl.SplitItem(
-                content=plot(
-                    "clearance and deviation",
-                    ("clearance_m", "clearance m"),
-                    ("lateral_deviation_m", "lateral deviation m"),
-                )
-            ),
-            fl.SplitItem(
-                content=plot(
-                    "planner",
-                    ("plan_time_ms", "plan time ms"),
-                    ("shield_interventions", "shield interventions"),
-                    ("candidates", "candidates"),
-                )
-            ),
-            fl.SplitItem(
-                content=fl.RawMessagesPanel(
-                    title="costs: chosen vs runner-up", config=fl.RawMessagesConfig(topic_path=COSTS, expansion="all")
-                )
-            ),
-        ],
+def _plot(title: str, *series: tuple[str, str]):
+    """A plot panel of fields of the metrics topic: (field, label) per series."""
+    import foxglove.layouts as fl
+
+    return fl.PlotPanel(
+        title=title,
+        config=fl.PlotConfig(paths=[fl.PlotSeries(value=f"{METRICS}.{field}", label=label) for field, label in series]),
     )
-    return fl.Layout(
-        content=fl.SplitContainer(
-            direction="row",
-            items=[
-                fl.SplitItem(proportion=2, content=world),
-                fl.SplitItem(proportion=2, content=xyt),
-                fl.SplitItem(proportion=1.3, content=series),
-            ],
-        )
+
+
+def _series_column():
+    """Time series (speed, clearance and deviation, the planner) above the cost breakdown."""
+    import foxglove.layouts as fl
+
+    speed = _plot(
+        "speed",
+        ("speed_mps", "speed m/s"),
+        ("command_speed_mps", "commanded m/s"),
+        ("turn_rate_radps", "turn rate rad/s"),
+    )
+    clearance = _plot(
+        "clearance and deviation", ("clearance_m", "clearance m"), ("lateral_deviation_m", "lateral deviation m")
+    )
+    planner = _plot(
+        "planner",
+        ("plan_time_ms", "plan time ms"),
+        ("shield_interventions", "shield interventions"),
+        ("candidates", "candidates"),
+    )
+    costs = fl.RawMessagesPanel(
+        title="costs: chosen vs runner-up", config=fl.RawMessagesConfig(topic_path=COSTS, expansion="all")
+    )
+    return fl.SplitContainer(
+        direction="column", items=[fl.SplitItem(content=panel) for panel in (speed, clearance, planner, costs)]
     )
 
 

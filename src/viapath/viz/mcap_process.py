@@ -97,10 +97,40 @@ def cycle_input(record) -> tuple:
     """What one cycle's scene is built from: a few numbers and strings, and every array of the cycle
     (tracks, the true people, the plan's points and costs, scans, detections, blind region) in one
     float array with the row counts (see module notes); :func:`scene_inputs` unpacks it."""
+    state, decision = record.state, record.decision
+    plan, command = decision.plan, decision.command
+    sectors, counts, numbers = _cycle_arrays(record)
+    target = np.asarray(plan.target, dtype=float).reshape(2)
+    return (
+        record.step,
+        record.time_s,
+        state.x,
+        state.y,
+        state.heading_rad,
+        state.speed_mps,
+        state.turn_rate_radps,
+        command.speed_mps,
+        command.turn_rate_radps,
+        record.plan_time_ms,
+        plan.status,
+        plan.speed_mps,
+        float(target[0]),
+        float(target[1]),
+        plan.subgoal_index,
+        plan.candidate_count,
+        plan.chosen,
+        _scene_extras(plan.extras),
+        sectors,
+        counts,
+        numbers,
+    )
+
+
+def _cycle_arrays(record) -> tuple[Any, tuple, np.ndarray]:
+    """The blind sectors, the row counts and the one float array of a cycle (see :func:`cycle_input`)."""
     from viapath.viz.scene import perception_arrays_of
 
-    state, world, decision = record.state, record.world, record.decision
-    plan, command = decision.plan, decision.command
+    world, plan = record.world, record.decision.plan
     tracks = record.observation.obstacles  # all rows: the scene keeps the finite ones, as it does in-process
     detections, radii, points, sectors, blind = perception_arrays_of(
         record.perception if record.scans is not None else None
@@ -146,35 +176,17 @@ def cycle_input(record) -> tuple:
         len(blind),
         len(static),
     )
-    extras = plan.extras or {}
+    return sectors, counts, np.concatenate(pieces)
+
+
+def _scene_extras(extras: dict | None) -> dict:
+    """The plan's extras a scene reads (of the shield's verdict only whether it intervened)."""
+    extras = extras or {}
     kept = {name: extras[name] for name in _SCENE_EXTRAS if name in extras}
     shield = extras.get("shield")
     if isinstance(shield, dict):
         kept["shield"] = {"intervened": bool(shield.get("intervened"))}
-    target = np.asarray(plan.target, dtype=float).reshape(2)
-    return (
-        record.step,
-        record.time_s,
-        state.x,
-        state.y,
-        state.heading_rad,
-        state.speed_mps,
-        state.turn_rate_radps,
-        command.speed_mps,
-        command.turn_rate_radps,
-        record.plan_time_ms,
-        plan.status,
-        plan.speed_mps,
-        float(target[0]),
-        float(target[1]),
-        plan.subgoal_index,
-        plan.candidate_count,
-        plan.chosen,
-        kept,
-        sectors,
-        counts,
-        np.concatenate(pieces),
-    )
+    return kept
 
 
 def scene_inputs(payload: tuple, static: tuple) -> tuple:
@@ -207,45 +219,9 @@ def scene_inputs(payload: tuple, static: tuple) -> tuple:
         counts,
         numbers,
     ) = payload
-    (
-        n,
-        truth_count,
-        via_count,
-        waypoint_count,
-        cost_count,
-        line_counts,
-        scan_counts,
-        detection_count,
-        point_count,
-        blind_count,
-        static_count,
-    ) = counts
-    cursor = _Cursor(numbers)
-    tracks = _obstacles(
-        cursor.rows(n, 2), cursor.rows(n, 2), cursor.rows(n), cursor.rows(n), cursor.rows(n), cursor.rows(n).astype(int)
+    tracks, via, waypoints, costs, lines, scans, detections, radii, points, blind, truth, static_segments = (
+        _unpack_arrays(counts, numbers)
     )
-    via, waypoints, costs = cursor.rows(via_count, 2), cursor.rows(waypoint_count, 2), cursor.rows(cost_count)
-    lines = [cursor.rows(count, 2) for count in line_counts]
-    scans = [cursor.rows(count) for count in scan_counts]
-    detections, radii = cursor.rows(detection_count, 2), cursor.rows(detection_count)
-    points, blind = cursor.rows(point_count, 2), cursor.rows(blind_count, 2)
-    truth = None
-    if truth_count >= 0:
-        positions, velocities, truth_radii = (
-            cursor.rows(truth_count, 2),
-            cursor.rows(truth_count, 2),
-            cursor.rows(truth_count),
-        )
-        present = np.isfinite(positions).all(axis=1)
-        if present.all():  # everyone in the scene: no copies
-            zeros = np.zeros(truth_count)
-            truth = _obstacles(positions, velocities, truth_radii, zeros, zeros, np.arange(truth_count))
-        else:
-            zeros = np.zeros(int(present.sum()))
-            truth = _obstacles(
-                positions[present], velocities[present], truth_radii[present], zeros, zeros, np.flatnonzero(present)
-            )
-    static_segments = cursor.rows(static_count, 4).reshape(-1, 2, 2)
     plan = Plan(
         status,
         plan_speed,
@@ -276,6 +252,54 @@ def scene_inputs(payload: tuple, static: tuple) -> tuple:
         plan_time_ms,
         truth,
         (scanners, detections, radii, points, sectors, blind),
+    )
+
+
+def _unpack_arrays(counts: tuple, numbers: np.ndarray) -> tuple:
+    """The cycle's arrays from its one float array, in the order :func:`_cycle_arrays` packed them:
+    tracks, via points, waypoints, costs, candidate lines, scans, detections and their radii, points,
+    blind region, the true people (None: no simulator truth) and the static segments."""
+    (
+        n,
+        truth_count,
+        via_count,
+        waypoint_count,
+        cost_count,
+        line_counts,
+        scan_counts,
+        detection_count,
+        point_count,
+        blind_count,
+        static_count,
+    ) = counts
+    cursor = _Cursor(numbers)
+    tracks = _obstacles(
+        cursor.rows(n, 2), cursor.rows(n, 2), cursor.rows(n), cursor.rows(n), cursor.rows(n), cursor.rows(n).astype(int)
+    )
+    via, waypoints, costs = cursor.rows(via_count, 2), cursor.rows(waypoint_count, 2), cursor.rows(cost_count)
+    lines = [cursor.rows(count, 2) for count in line_counts]
+    scans = [cursor.rows(count) for count in scan_counts]
+    detections, radii = cursor.rows(detection_count, 2), cursor.rows(detection_count)
+    points, blind = cursor.rows(point_count, 2), cursor.rows(blind_count, 2)
+    truth = _true_people(cursor, truth_count) if truth_count >= 0 else None
+    static_segments = cursor.rows(static_count, 4).reshape(-1, 2, 2)
+    return tracks, via, waypoints, costs, lines, scans, detections, radii, points, blind, truth, static_segments
+
+
+def _true_people(cursor: _Cursor, truth_count: int):
+    """The simulator's people in the scene (those with a finite position; ids their rows)."""
+    positions, velocities, truth_radii = (
+        cursor.rows(truth_count, 2),
+        cursor.rows(truth_count, 2),
+        cursor.rows(truth_count),
+    )
+    present = np.isfinite(positions).all(axis=1)
+    if present.all():  # everyone in the scene: no copies
+        zeros = np.zeros(truth_count)
+        return _obstacles(positions, velocities, truth_radii, zeros, zeros, np.arange(truth_count))
+    zeros = np.zeros(int(present.sum()))
+    return _obstacles(
+        positions[present], velocities[present], truth_radii[present], zeros, zeros, np.flatnonzero(present)
     )
 
 

@@ -44,9 +44,20 @@ def draw_scene(
 
     The robot is drawn every ``robot_every_s`` (its track as a line in between): at every 0.1 s step
     the markers pile up into a band and hide the via points."""
-    from matplotlib.patches import Circle, Polygon
-
     n = len(trace.times_s) if upto is None else upto + 1
+    _draw_path(ax, trace)
+    _draw_obstacles(ax, trace, n, obstacle_every_s)
+    _draw_robot(ax, trace, n, robot_every_s, show_via)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, lw=0.3, alpha=0.6)
+
+
+def _draw_path(ax, trace) -> None:
+    """The corridor, the designated path with its subgoals and goal, and the walls."""
+    from matplotlib.patches import Polygon
+
     path = trace.path
     for k, outline in enumerate(corridor_polygons(path)):
         ax.add_patch(
@@ -72,6 +83,11 @@ def draw_scene(
     for w, wall in enumerate(trace.walls):
         ax.plot(*wall.T, color="k", lw=2.5, zorder=2, label="wall" if w == 0 else None)
 
+
+def _draw_obstacles(ax, trace, n: int, obstacle_every_s: float) -> None:
+    """Each obstacle every ``obstacle_every_s`` (darker later) and its track, up to ``n`` steps."""
+    from matplotlib.patches import Circle
+
     every = max(1, int(round(obstacle_every_s / trace.dt_s)))
     obstacle_steps = list(range(0, n, every))
     cmap = _matplotlib().get_cmap("Reds")
@@ -86,6 +102,12 @@ def draw_scene(
         ax.plot(*track.T, color="#c0392b", lw=0.6, alpha=0.5, zorder=3)
     if len(trace.obstacle_radii_m):
         ax.plot([], [], "o", mfc="none", mec="#c0392b", ms=9, label=f"obstacle (every {obstacle_every_s:.0f} s)")
+
+
+def _draw_robot(ax, trace, n: int, robot_every_s: float, show_via: bool) -> None:
+    """The robot's track, its markers every ``robot_every_s`` (square: heading for the goal, star: for
+    a via point; size by speed), the first via point of each plan, and the robot at step ``n - 1``."""
+    from matplotlib.patches import Circle
 
     ax.plot(*trace.robot_poses[:n, :2].T, color="0.35", lw=0.8, zorder=4)
     shown = np.arange(0, n, max(1, int(round(robot_every_s / trace.dt_s))))
@@ -120,10 +142,6 @@ def draw_scene(
             first_vias = np.array([v[0] for v in vias])
             ax.scatter(*first_vias.T, marker="x", color="#8e44ad", s=24, lw=1.0, zorder=8, label="via points planned")
     ax.add_patch(Circle(trace.robot_poses[n - 1, :2], trace.robot_radius_m, fill=False, ec="k", lw=1.2, zorder=7))
-    ax.set_aspect("equal")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.grid(True, lw=0.3, alpha=0.6)
 
 
 def plot_episode(episode, file: str | Path, title: str | None = None) -> Path:

@@ -68,19 +68,33 @@ def collect_scenes(scenario, perception: str = "oracle", **run_kwargs) -> list[C
 
 
 def plot_cycle(scene: CycleScene, path_view, file: str | Path, title: str | None = None) -> Path:
+    """Write one cycle's figure to ``file``: the world from above (left) and x-y-t (right)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     fig = plt.figure(figsize=(13.0, 5.4))
     grid = fig.add_gridspec(1, 2, width_ratios=[1.25, 1.0])
     top = fig.add_subplot(grid[0, 0])
     xyt = fig.add_subplot(grid[0, 1], projection="3d")
-    plan = scene.plan
+    _draw_from_above(top, scene, path_view)
+    _draw_xyt(xyt, scene, path_view)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    file = Path(file)
+    fig.savefig(file, dpi=110)
+    plt.close(fig)
+    return file
 
-    # -- the world from above
+
+def _draw_from_above(top, scene: CycleScene, path_view) -> None:
+    """The world from above: corridor, path, candidates (coloured by cost), the chosen plan and its via
+    points, the robot, the people with their velocities, scan points and the subgoal."""
+    import matplotlib.pyplot as plt
+
+    plan = scene.plan
     for k, outline in enumerate(path_view.corridor_outlines):
         top.fill(outline[:, 0], outline[:, 1], color="#2ca02c", alpha=0.08, lw=0)
         top.plot(outline[:, 0], outline[:, 1], color="#2ca02c", lw=0.8, label="corridor" if k == 0 else None)
@@ -130,7 +144,13 @@ def plot_cycle(scene: CycleScene, path_view, file: str | Path, title: str | None
     top.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3, fontsize=7.5, framealpha=0.9)
     top.grid(alpha=0.3)
 
-    # -- x-y-t, time as the height (seconds after this cycle)
+
+def _draw_xyt(xyt, scene: CycleScene, path_view) -> None:
+    """x-y-t, time as the height (seconds after this cycle): the people as oblique cylinders, the plan
+    through its via points, the robot's time axis and the corridor at t = 0."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    x, y, _ = scene.robot_pose
     for i, _person in enumerate(scene.xyt.persons):
         triangles = scene.xyt.mesh(i, 32)
         xyt.add_collection3d(Poly3DCollection(triangles, facecolor="#d62728", alpha=0.18, edgecolor="none"))
@@ -162,13 +182,6 @@ def plot_cycle(scene: CycleScene, path_view, file: str | Path, title: str | None
     xyt.view_init(elev=22, azim=-62)
     xyt.set_title("x-y-t (paper Fig. 4): what the planner forecast")
     xyt.legend(loc="upper left", fontsize=7)
-    if title:
-        fig.suptitle(title)
-    fig.tight_layout()
-    file = Path(file)
-    fig.savefig(file, dpi=110)
-    plt.close(fig)
-    return file
 
 
 def main(argv: list[str] | None = None) -> None:
