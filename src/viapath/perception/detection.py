@@ -381,9 +381,9 @@ def _chord_coordinates(padded, mask, first, chord, extent, origins):
 def _convexity_t(x, y, mask, mid, origins, seg: SegmentationParams) -> np.ndarray:
     """t-statistic of the curvature towards the sensor of ``y = a + b x + c x²`` fitted across each chord."""
     x2 = x * x
-    # The eight row sums in one reduction: each row is summed alone, as by .sum(1) (same pairwise order).
-    count, sx, sx2, sx3, sx4, sy, sxy, sx2y = np.stack([mask, x, x2, x2 * x, x2 * x2, y, x * y, x2 * y]).sum(2)
-    coef, cofactors, det = solve_sym3((count, sx, sx2, sx2, sx3, sx4), (sy, sxy, sx2y))
+    sx2 = x2.sum(1)
+    moments = (mask.sum(1), x.sum(1), sx2, sx2, (x2 * x).sum(1), (x2 * x2).sum(1))
+    coef, cofactors, det = solve_sym3(moments, (y.sum(1), (x * y).sum(1), (x2 * y).sum(1)))
     inv22 = cofactors[5] / det
     distance = np.hypot(*(mid - origins).T)
     sigma = np.where(distance < seg.noise_switch_range_m, seg.noise_sigma_near_m, seg.noise_fraction_far * distance)
