@@ -18,12 +18,12 @@ import numpy as np
 import pytest
 
 from viapath.perception.assignment import gated_assignment
-from viapath.perception.circle_fit import _numba_fit, _padded
-from viapath.perception.detection import _chord_coordinates, _convexity_t
+from viapath.perception.circle_fit import _padded
+from viapath.perception.detection import _chord_coordinates, _compiled_perception, _convexity_t, _split_compiled
 from viapath.perception.segmentation import SegmentationParams
 from viapath.perception.tracking import _motion_model
 
-needs_numba = pytest.mark.skipif(_numba_fit() is None, reason="numba not installed")
+needs_numba = pytest.mark.skipif(_compiled_perception() is None, reason="numba not installed")
 
 
 def _random_segments(rng, count):
@@ -192,7 +192,7 @@ def test_segment_beams_with_tables_equals_without(seed):
     from viapath.perception.scanner import ScannerModel, paper_scanners
     from viapath.perception.segmentation import BeamTables, segment_beams
 
-    compiled = _numba_fit() is not None
+    compiled = _compiled_perception() is not None
     rng = np.random.default_rng(seed)
     scanner_sets = [
         paper_scanners(),
@@ -214,7 +214,7 @@ def test_segment_beams_with_tables_equals_without(seed):
                 args = (ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index, params)
                 want = segment_beams(*args)
                 for got in [segment_beams(*args, tables)] + (
-                    [segment_beams(*args, tables, "numba")] if compiled else []
+                    [segment_beams(*args, tables, _split_compiled)] if compiled else []
                 ):
                     for name in (
                         "beam_index",

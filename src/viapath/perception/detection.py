@@ -40,10 +40,10 @@ from typing import Any
 import numpy as np
 
 from viapath.compiled import kernels
-from viapath.perception.circle_fit import _numba_fit, _padded, fit_circles, solve_sym3
+from viapath.perception.circle_fit import CircleFits, _padded, fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
 from viapath.perception.scanner import ScannerModel
-from viapath.perception.segmentation import BeamTables, SegmentationParams, segment_beams
+from viapath.perception.segmentation import BeamTables, SegmentationParams, Segments, segment_beams
 
 
 @dataclass(frozen=True)
@@ -168,7 +168,7 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     ranges[~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = (
         np.nan
     )
-    compiled = params.fit_backend in ("numba", "auto") and _numba_fit() is not None
+    compiled = params.fit_backend in ("numba", "auto") and _compiled_perception() is not None
     segments = segment_beams(
         ranges,
         layout.angles_rad,
@@ -177,7 +177,7 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
         layout.scan_index,
         params.segmentation,
         _beam_tables(scanners, params.segmentation),
-        "numba" if compiled else "numpy",
+        _split_compiled if compiled else None,
     )
     point_scan = layout.scan_index[segments.all_beam_index]
     fused = FusedScan(segments.all_points, point_scan, segments.all_beam_index - layout.first_beam[point_scan])
@@ -208,12 +208,12 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
             chord[candidates],
         )
         c_extent, c_origins = extent[candidates], origins[candidates]
-        kernel = _numba_shape_kernel() if compiled else None
-        if kernel is not None:  # the same sagittas and t-statistics, bit for bit, in one compiled pass
+        module = _compiled_perception() if compiled else None
+        if module is not None:  # the same sagittas and t-statistics, bit for bit, in one compiled pass
             seg = params.segmentation
             sagitta, t_convex = np.empty(len(candidates)), np.empty(len(candidates))
             distance = np.hypot(*(c_first + 0.5 * c_chord - c_origins).T)  # as in _convexity_t
-            kernel(
+            module.segment_shape_kernel(
                 points,
                 c_starts,
                 c_counts,
@@ -258,7 +258,8 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
         keep[candidates[straight]] = False
         candidates = candidates[~straight]
     if len(candidates):
-        fits = fit_circles(
+        fits = fit_circles_as(
+            params.fit_backend,
             points,
             starts[candidates],
             counts[candidates],
@@ -268,7 +269,6 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
             fixed_radius_m=params.fixed_radius_m,
             range_sigma_m=params.segmentation.noise_sigma_near_m,
             iterations=params.iterations,
-            backend=params.fit_backend,
         )
         good = (
             (fits.radii_m >= params.radius_min_m)
@@ -309,10 +309,118 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     return Detections(centres, radii, sigma, leg_count, segment_info, legs, fused)
 
 
-def _numba_shape_kernel():
-    """The compiled shape tests (``viapath.compiled.perception.segment_shape_kernel``), or None without numba."""
-    module = kernels("perception")  # None: numba missing or unusable
-    return None if module is None else module.segment_shape_kernel
+def _compiled_perception():
+    """:mod:`viapath.compiled.perception` (the compiled clustering, shape tests and circle fit), or None: numba
+    missing or unusable."""
+    return kernels("perception")
+
+
+def fit_circles_as(choice: str, points, starts, counts, sensor_origins=None, **options) -> CircleFits:
+    """:func:`viapath.perception.circle_fit.fit_circles` in the arithmetic ``choice``: ``"numpy"`` (the
+    reference), ``"numba"`` (the same algorithm compiled, one loop per cluster; equal to round-off; an error
+    without numba) or ``"auto"`` (numba when installed)."""
+    if choice == "auto":
+        choice = "numba" if _compiled_perception() is not None else "numpy"
+    if choice == "numba":
+        return _fit_circles_compiled(points, starts, counts, sensor_origins, **options)
+    if choice != "numpy":
+        raise ValueError(f"backend must be 'numpy', 'numba' or 'auto', got {choice!r}")
+    return fit_circles(points, starts, counts, sensor_origins, **options)
+
+
+def _fit_circles_compiled(
+    points,
+    starts,
+    counts,
+    sensor_origins=None,
+    *,
+    radius_prior_m: float | None = None,
+    radius_prior_sigma_m: float = 0.05,
+    fixed_radius_m: float | None = None,
+    range_sigma_m: float = 0.01,
+    iterations: int = 4,
+) -> CircleFits:
+    """:func:`viapath.perception.circle_fit.fit_circles` compiled (:func:`viapath.compiled.perception.fit_circles_kernel`)."""
+    starts = np.asarray(starts, dtype=np.int64)
+    counts = np.asarray(counts, dtype=np.int64)
+    k_count = len(starts)
+    if k_count == 0:
+        return CircleFits(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
+    if (counts < 2).any():
+        raise ValueError("every cluster needs at least 2 points")
+    module = _compiled_perception()
+    if module is None:
+        raise RuntimeError("numba back end unavailable; pip install 'viapath[fast]'")
+    if sensor_origins is None:
+        origins = np.zeros((k_count, 2))
+    elif (
+        type(sensor_origins) is np.ndarray
+        and sensor_origins.dtype == np.float64
+        and sensor_origins.shape == (k_count, 2)
+    ):
+        origins = sensor_origins  # one per cluster already (detection): no broadcast view needed
+    else:
+        origins = np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
+    prior = fixed_radius_m if fixed_radius_m is not None else radius_prior_m
+    if fixed_radius_m is not None:
+        weight: float | np.ndarray = 1e12
+    elif radius_prior_m is not None and np.isfinite(radius_prior_sigma_m) and radius_prior_sigma_m > 0:
+        weight = (range_sigma_m / radius_prior_sigma_m) ** 2
+    else:
+        weight = 0.0
+    out = np.empty((k_count, 5))
+    module.fit_circles_kernel(
+        np.ascontiguousarray(points, dtype=float),
+        starts,
+        counts,
+        np.ascontiguousarray(origins, dtype=float),
+        prior is not None,
+        0.0 if prior is None else float(prior),
+        float(weight),
+        float(range_sigma_m),
+        int(iterations),
+        out,
+    )
+    return CircleFits(out[:, :2].copy(), out[:, 2].copy(), out[:, 3].copy(), out[:, 4].copy())
+
+
+def _split_compiled(points, r, valid, scans, tables: BeamTables, params: SegmentationParams) -> Segments:
+    """:func:`viapath.perception.segmentation.segment_beams`' clustering after the points in one compiled pass
+    (:func:`viapath.compiled.perception.split_clusters_kernel`), the same result bit for bit."""
+    split_clusters_kernel = _compiled_perception().split_clusters_kernel
+    n = len(valid)
+    starts, counts, cluster_scan = (
+        np.empty(n, dtype=np.int64),
+        np.empty(n, dtype=np.int64),
+        np.empty(n, dtype=scans.dtype),
+    )
+    occluded, kept_points = np.empty(n, dtype=bool), np.empty(n, dtype=np.int64)
+    kept, kept_total = split_clusters_kernel(
+        points,
+        r,
+        valid,
+        scans,
+        tables.sin_gap,
+        tables.sin_rest,
+        params.max_gap_beams,
+        params.noise_switch_range_m,
+        params.noise_sigma_near_m,
+        params.noise_fraction_far,
+        params.min_jump_m,
+        params.min_points,
+        starts,
+        counts,
+        occluded,
+        cluster_scan,
+        kept_points,
+    )
+    starts, counts, occluded, cluster_scan = starts[:kept], counts[:kept], occluded[:kept], cluster_scan[:kept]
+    if kept_total == n:  # every cluster kept: the points as they are
+        return Segments(valid, points, starts, counts, occluded, cluster_scan, points, valid)
+    index = kept_points[:kept_total]
+    return Segments(
+        valid[index], points[index], np.cumsum(counts) - counts, counts, occluded, cluster_scan, points, valid
+    )
 
 
 def _merge_duplicates(centres, radii, sigma, source, distance_m):

@@ -23,9 +23,9 @@ Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 
   further out than it already is): standing is always among the commands, and at rest the robot is
   passively safe (DESIGN §7); fleeing 10 m off the path is not.
 
-:func:`escape_scores` is the reference. On the compiled path, once the whole-step kernels are compiled,
-:meth:`viapath.compiled.backend.Backend.escape` gives the standing check and the same scores, bit for bit, in two kernel calls
-(docs/CHANGELOG-speed.md, "The escape compiled"); :func:`stop_or_escape` then decides from them as here.
+:func:`escape_scores` is the reference. On the compiled path the planner hands :func:`stop_or_escape` the standing
+check and the same scores, bit for bit, from two compiled calls (docs/CHANGELOG-speed.md, "The escape compiled");
+it then decides from them as here.
 """
 
 from __future__ import annotations
@@ -43,12 +43,16 @@ from viapath.planning.viapath.checks import LegChecks
 
 
 def stop_or_escape(
-    checks: LegChecks, limits: MotionLimits, config: Settings, previous: Command | None = None
+    checks: LegChecks,
+    limits: MotionLimits,
+    config: Settings,
+    previous: Command | None = None,
+    compiled: tuple[Any, ...] | None = None,
 ) -> Decision:
-    """``previous``: last cycle's command if last cycle escaped too (for a calm escape)."""
+    """``previous``: last cycle's command if last cycle escaped too (for a calm escape). ``compiled``: (standing is
+    free, commands, ends, scores) from the planner's compiled path; None: worked out here."""
     position = checks.position
     base: dict[str, Any] = dict(subgoal_index=checks.subgoal_index)
-    compiled = checks.backend.escape(checks, limits, config, escape_fan(limits, config), previous)  # numpy: None
     if compiled is None:
         standing = checks.contact_times(position[None], np.zeros(1), np.zeros((1, 2)), np.array([config.horizon_s]))
         standing_free = np.isinf(standing).all()
@@ -80,7 +84,7 @@ def escape_scores(
     )
     positions = rollout(state, commands, limits, dt, steps, (row_turns, turn_rows))  # (K, S, 2)
     times = dt * np.arange(1, steps + 1)
-    excess = checks.backend.corridor_excess(checks.path, positions.reshape(-1, 2)).reshape(len(commands), steps)
+    excess = checks.corridor_excess(positions.reshape(-1, 2)).reshape(len(commands), steps)
     inside = (excess <= checks.corridor_tolerance_m).all(axis=1)
     within_bound = excess.max(axis=1) <= max(config.escape_max_excess_m, checks.corridor_tolerance_m)
 
@@ -94,7 +98,7 @@ def escape_scores(
     gap_now = gap_all[near]
     overlapping = gap_now <= 0
     any_overlapping = bool(overlapping.any())
-    compiled = checks.backend.escape_contacts(
+    compiled = checks.escape_contacts(
         positions,
         times,
         positions_obs,
@@ -136,7 +140,7 @@ def escape_scores(
         separation = np.zeros(len(commands))
     toward = checks.subgoal - position
     toward = toward / max(float(np.hypot(*toward)), 1e-9)
-    # (end - position) · toward written out, the same sum on every machine (``@`` hands it to BLAS, whose kernels
+    # (end - position) · toward written out, the same sum on every machine (``@`` hands it to BLAS, whose routines
     # differ in whether they fuse the multiply and the add)
     ends = positions[:, -1]
     progress = ((ends[:, 0] - position[0]) * toward[0] + (ends[:, 1] - position[1]) * toward[1]) / config.escape_s
@@ -197,9 +201,8 @@ def _fan(speeds: tuple[float, ...], top: float, max_turn_rate_radps: float) -> n
 
 def escape_fan(limits: MotionLimits, config: Settings) -> tuple[Any, ...]:
     """The top speed, the fan's commands (K, 2), its distinct turn commands (T,) and each command's index
-    among them (K,), for :func:`escape_scores`' roll-out and the compiled escape (:meth:`viapath.compiled.backend.Backend.escape`,
-    given them by the caller: the backend does not import this module, which imports the checks, which import
-    the backend), which take the headings, sines and cosines once per turn command: the commands of one turn
+    among them (K,), for :func:`escape_scores`' roll-out and the compiled escape (given them by the planner: the compiled
+    package does not import this module, which imports the checks, which import the compiled package), which take the headings, sines and cosines once per turn command: the commands of one turn
     rate share them."""
     return _fan_turns(tuple(config.speeds), escape_top_speed(limits, config), limits.max_turn_rate_radps)
 

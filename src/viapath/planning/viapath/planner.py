@@ -63,7 +63,7 @@ from viapath.compiled import resolve as resolve_backend
 from viapath.compiled import slots as slot
 from viapath.compiled.backend import STEPWISE, NodeStore, backend_for, whole_steps_compiled
 from viapath.geometry import wrap_angle
-from viapath.observation import Command, Observation, Obstacles, RobotState
+from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.options import Settings
 from viapath.path import DesignatedPath
 from viapath.planning.base import Decision, Inflation, Plan, Planner, Situation
@@ -80,7 +80,7 @@ from viapath.planning.viapath.critics import (
     critics_for,
     score,
 )
-from viapath.planning.viapath.escape import stop_or_escape
+from viapath.planning.viapath.escape import escape_fan, stop_or_escape
 from viapath.planning.viapath.follow import can_follow, follows
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
 
@@ -176,7 +176,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         chosen = self._choose(checks, speeds, nominal_index, self._previous)
         if chosen is None:
             self._previous = None
-            decision = stop_or_escape(checks, self.limits, self.config, self._previous_escape)
+            decision = escape_step(checks, self.limits, self.config, self._previous_escape)
             self._previous_escape = decision.command if decision.plan.status == "escape" else None
             if decision.plan.status == "stop" and checks.obstacles.static_mask is not None:
                 return self._blocked(situation, checks, float(speeds[nominal_index])) or decision
@@ -312,7 +312,7 @@ class ViaPathPlanner(Planner, name="viapath"):
             )
             if can_follow(plan, checks, self.limits, self.config) and self._inside_shield(plan):
                 return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
-        candidates = grow(checks, roots, self.config, self._slow_checks(checks))
+        candidates = grow_step(checks, roots, self.config, self._slow_checks(checks))
         if candidates is None:
             return None
         costs = score(candidates, self.critics, Context(checks.heading_rad, self.nominal_speed_mps, previous))
@@ -666,6 +666,24 @@ def _cost_terms(
 def ViaPathConfig(**values: Any) -> Settings:
     """The viapath planner's options, validated, defaults filled in (``make_planner(..., config=...)``)."""
     return VIAPATH_OPTIONS.validate(values, where="viapath")
+
+
+def grow_step(
+    checks: LegChecks, roots: RootLegs, config: Settings, slow_checks: LegChecks | None = None
+) -> Candidates | None:
+    """The candidate tree of the cycle: in one compiled call on the compiled path with its whole-step kernels
+    (the same candidates), else :func:`.candidates.grow`, the numpy reference."""
+    store = checks.backend.grow(checks, slow_checks or checks, roots, config)  # type: ignore[no-untyped-call]
+    if store is not None:
+        return _candidates_of(store, checks.subgoal)
+    return grow(checks, roots, config, slow_checks)
+
+
+def escape_step(checks: LegChecks, limits: MotionLimits, config: Settings, previous: Command | None = None) -> Decision:
+    """Stop or escape (:func:`.escape.stop_or_escape`): its standing check and scores in two compiled calls on the
+    compiled path with its whole-step kernels (the same figures, bit for bit), else its numpy reference."""
+    compiled = checks.backend.escape(checks, limits, config, escape_fan(limits, config), previous)
+    return stop_or_escape(checks, limits, config, previous, compiled)
 
 
 def compile_kernels() -> bool:
