@@ -197,66 +197,34 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     extent = np.hypot(chord[:, 0], chord[:, 1])
     keep = extent <= params.max_extent_m
     candidates = np.flatnonzero(keep)
-    centres_all = np.full((len(starts), 2), np.nan)
-    radii_all = np.full(len(starts), np.nan)
-    sigma_all = np.full(len(starts), np.nan)
     if len(candidates):
-        c_starts, c_counts, c_first, c_chord = (
-            starts[candidates],
-            counts[candidates],
-            first[candidates],
-            chord[candidates],
-        )
-        c_extent, c_origins = extent[candidates], origins[candidates]
-        module = _compiled_perception() if compiled else None
-        if module is not None:  # the same sagittas and t-statistics, bit for bit, in one compiled pass
-            seg = params.segmentation
-            sagitta, t_convex = np.empty(len(candidates)), np.empty(len(candidates))
-            distance = np.hypot(*(c_first + 0.5 * c_chord - c_origins).T)  # as in _convexity_t
-            module.segment_shape_kernel(
-                points,
-                c_starts,
-                c_counts,
-                int(c_counts.max()),
-                c_first,
-                c_chord,
-                c_extent,
-                c_origins,
-                distance,
-                seg.noise_switch_range_m,
-                seg.noise_sigma_near_m,
-                seg.noise_fraction_far,
-                sagitta,
-                t_convex,
-            )
-            straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
-            if params.flat_test_min_extent_m is not None:
-                straight |= (c_extent >= params.flat_test_min_extent_m) & (t_convex < params.min_convexity_t)
-        else:
-            padded, mask = _padded(points, c_starts, c_counts)
-            x, y, mid = _chord_coordinates(padded, mask, c_first, c_chord, c_extent, c_origins)
-            sagitta = np.abs(y).max(1)
-            straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
-            if params.flat_test_min_extent_m is not None:
-                long_enough = c_extent >= params.flat_test_min_extent_m
-                if long_enough.any():
-                    t_convex = _convexity_t(
-                        x[long_enough],
-                        y[long_enough],
-                        mask[long_enough],
-                        mid[long_enough],
-                        c_origins[long_enough],
-                        params.segmentation,
-                    )
-                    straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
-        # A flat piece with something nearer beside it: background seen between foreground objects.
-        straight |= (
-            occluded[candidates]
-            & (c_extent >= params.occluded_min_extent_m)
-            & (sagitta < params.occluded_max_sagitta_ratio * c_extent)
+        straight = _straight(
+            points, starts, counts, first, chord, extent, origins, occluded, candidates, params, compiled
         )
         keep[candidates[straight]] = False
         candidates = candidates[~straight]
+    centres_all, radii_all, sigma_all = _fit_candidates(points, starts, counts, origins, candidates, keep, params)
+    keep[:] = keep & np.isfinite(radii_all)
+    segment_info = (
+        _segment_info(points, starts, counts, source, centres_all, radii_all, keep) if params.keep_segments else []
+    )
+    centres = centres_all[keep]
+    radii = radii_all[keep]
+    sigma = np.maximum(sigma_all[keep], params.measurement_sigma_floor_m)
+    source = source[keep]
+    centres, radii, sigma, source = _merge_duplicates(centres, radii, sigma, source, params.duplicate_distance_m)
+    legs_mask = radii <= params.leg_max_radius_m
+    legs = centres[legs_mask]
+    centres, radii, sigma, leg_count = _pair_legs(centres, radii, sigma, legs_mask, params)
+    return Detections(centres, radii, sigma, leg_count, segment_info, legs, fused)
+
+
+def _fit_candidates(points, starts, counts, origins, candidates, keep, params) -> tuple[np.ndarray, ...]:
+    """Circle fits of the ``candidates`` segments: centres, radii and centre sigmas of every segment (NaN where not
+    fitted); a fit with an implausible radius or residual, or not finite, drops its segment from ``keep``."""
+    centres_all = np.full((len(starts), 2), np.nan)
+    radii_all = np.full(len(starts), np.nan)
+    sigma_all = np.full(len(starts), np.nan)
     if len(candidates):
         fits = fit_circles_as(
             params.fit_backend,
@@ -282,31 +250,83 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
             fits.centre_sigma_m,
         )
         keep[candidates[~good]] = False
-    keep[:] = keep & np.isfinite(radii_all)
-    segment_info = (
-        [
-            dict(
-                scanner=int(source[k]),
-                points=points[starts[k] : starts[k] + counts[k]],
-                centre=centres_all[k],
-                radius_m=float(radii_all[k]),
-                accepted=bool(keep[k]),
-            )
-            for k in range(len(starts))
-        ]
-        if params.keep_segments
-        else []
-    )
+    return centres_all, radii_all, sigma_all
 
-    centres = centres_all[keep]
-    radii = radii_all[keep]
-    sigma = np.maximum(sigma_all[keep], params.measurement_sigma_floor_m)
-    source = source[keep]
-    centres, radii, sigma, source = _merge_duplicates(centres, radii, sigma, source, params.duplicate_distance_m)
-    legs_mask = radii <= params.leg_max_radius_m
-    legs = centres[legs_mask]
-    centres, radii, sigma, leg_count = _pair_legs(centres, radii, sigma, legs_mask, params)
-    return Detections(centres, radii, sigma, leg_count, segment_info, legs, fused)
+
+def _straight(
+    points, starts, counts, first, chord, extent, origins, occluded, candidates, params, compiled
+) -> np.ndarray:
+    """Which of the ``candidates`` segments are straight (walls, flat pieces), by the sagitta and the convexity
+    t-statistic of each (compiled in one pass when ``compiled``), or flat with something nearer beside them."""
+    c_starts, c_counts, c_first, c_chord = (
+        starts[candidates],
+        counts[candidates],
+        first[candidates],
+        chord[candidates],
+    )
+    c_extent, c_origins = extent[candidates], origins[candidates]
+    module = _compiled_perception() if compiled else None
+    if module is not None:  # the same sagittas and t-statistics, bit for bit, in one compiled pass
+        seg = params.segmentation
+        sagitta, t_convex = np.empty(len(candidates)), np.empty(len(candidates))
+        distance = np.hypot(*(c_first + 0.5 * c_chord - c_origins).T)  # as in _convexity_t
+        module.segment_shape_kernel(
+            points,
+            c_starts,
+            c_counts,
+            int(c_counts.max()),
+            c_first,
+            c_chord,
+            c_extent,
+            c_origins,
+            distance,
+            seg.noise_switch_range_m,
+            seg.noise_sigma_near_m,
+            seg.noise_fraction_far,
+            sagitta,
+            t_convex,
+        )
+        straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
+        if params.flat_test_min_extent_m is not None:
+            straight |= (c_extent >= params.flat_test_min_extent_m) & (t_convex < params.min_convexity_t)
+    else:
+        padded, mask = _padded(points, c_starts, c_counts)
+        x, y, mid = _chord_coordinates(padded, mask, c_first, c_chord, c_extent, c_origins)
+        sagitta = np.abs(y).max(1)
+        straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
+        if params.flat_test_min_extent_m is not None:
+            long_enough = c_extent >= params.flat_test_min_extent_m
+            if long_enough.any():
+                t_convex = _convexity_t(
+                    x[long_enough],
+                    y[long_enough],
+                    mask[long_enough],
+                    mid[long_enough],
+                    c_origins[long_enough],
+                    params.segmentation,
+                )
+                straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
+    # A flat piece with something nearer beside it: background seen between foreground objects.
+    straight |= (
+        occluded[candidates]
+        & (c_extent >= params.occluded_min_extent_m)
+        & (sagitta < params.occluded_max_sagitta_ratio * c_extent)
+    )
+    return straight
+
+
+def _segment_info(points, starts, counts, source, centres, radii, accepted) -> list[dict]:
+    """Per segment: the scanner, its points, the fitted circle and whether it was accepted (for plots)."""
+    return [
+        dict(
+            scanner=int(source[k]),
+            points=points[starts[k] : starts[k] + counts[k]],
+            centre=centres[k],
+            radius_m=float(radii[k]),
+            accepted=bool(accepted[k]),
+        )
+        for k in range(len(starts))
+    ]
 
 
 def _compiled_perception():

@@ -94,44 +94,18 @@ def escape_scores(
     gap_all = np.hypot(*(position - obstacles.positions).T) - checks.check_radii
     growth_all = checks.growth * np.minimum(horizon, checks.growth_until_s)
     near = gap_all - growth_all - np.hypot(*obstacles.velocities.T) * horizon - travel <= 0
-    positions_obs, velocities_obs = obstacles.positions[near], obstacles.velocities[near]
+    # the people near: positions, velocities, check radii, cone growth and its cap
+    radii, growth, until = checks.check_radii[near], checks.growth[near], checks.growth_until_s[near]
+    people = (obstacles.positions[near], obstacles.velocities[near], radii, growth, until)
     gap_now = gap_all[near]
     overlapping = gap_now <= 0
     any_overlapping = bool(overlapping.any())
-    compiled = checks.escape_contacts(
-        positions,
-        times,
-        positions_obs,
-        velocities_obs,
-        checks.check_radii[near],
-        checks.growth[near],
-        checks.growth_until_s[near],
-        overlapping,
-        steps,
-    )
+    compiled = checks.escape_contacts(positions, times, *people, overlapping, steps)
     if compiled is not None:  # the same figures, without the (K, S, N) arrays
         first_step, gap_min, gap_last = compiled
         time_to_contact = first_step * dt
     else:
-        centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
-        reach = checks.check_radii[near] + checks.growth[near] * np.minimum(times[:, None], checks.growth_until_s[near])
-        # The same differences as of the (K, S, N, 2) offsets, x and y apart and people first, (N, K, S):
-        # every large operation below then runs contiguously along the steps.
-        robot_x, robot_y = (np.ascontiguousarray(positions[..., axis]) for axis in (0, 1))  # (K, S)
-        dx = robot_x[None] - np.ascontiguousarray(centres[..., 0].T)[:, None, :]  # (N, K, S)
-        dy = robot_y[None] - np.ascontiguousarray(centres[..., 1].T)[:, None, :]
-        reach = np.ascontiguousarray(reach.T)[:, None, :]  # (N, 1, S)
-        # The first step at which any person not overlapped now is touched (gap < 0): the earliest over
-        # the people of each one's first step.
-        touched: Any = touching(dx, dy, reach)
-        if any_overlapping:  # (with no one overlapped, as mostly, the mask would change nothing)
-            touched &= ~overlapping[:, None, None]
-        touched = touched.any(axis=0)  # (K, S)
-        time_to_contact = np.where(touched.any(axis=1), touched.argmax(axis=1), steps) * dt
-        if any_overlapping:
-            gap = np.hypot(dx[overlapping], dy[overlapping]) - reach[overlapping]  # (M, K, S)
-            # (K, M) in C order, as the score sums them along M
-            gap_min, gap_last = np.ascontiguousarray(np.min(gap, axis=2).T), np.ascontiguousarray(gap[:, :, -1].T)
+        time_to_contact, gap_min, gap_last = _contacts(positions, times, *people, overlapping, steps, dt)
     if any_overlapping:
         deeper = gap_min - gap_now[overlapping]
         still_inside = gap_last
@@ -161,6 +135,43 @@ def escape_scores(
         score = score - config.escape_continuity_s * np.minimum(change, 1.0)
     score = np.where(within_bound | (commands[:, 0] == 0.0), score, -np.inf)
     return commands, ends, score
+
+
+def _contacts(
+    positions: np.ndarray,
+    times: np.ndarray,
+    positions_obs: np.ndarray,
+    velocities_obs: np.ndarray,
+    check_radii: np.ndarray,
+    growth: np.ndarray,
+    growth_until_s: np.ndarray,
+    overlapping: np.ndarray,
+    steps: int,
+    dt: float,
+) -> tuple[np.ndarray, Any, Any]:
+    """Of K roll-outs (positions (K, S, 2)) against the people near: the time to the first contact with anyone not
+    overlapped now (K,), and the smallest and last gaps to those overlapped now ((K, M) each; None when none is)."""
+    centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
+    reach = check_radii + growth * np.minimum(times[:, None], growth_until_s)
+    # The same differences as of the (K, S, N, 2) offsets, x and y apart and people first, (N, K, S):
+    # every large operation below then runs contiguously along the steps.
+    robot_x, robot_y = (np.ascontiguousarray(positions[..., axis]) for axis in (0, 1))  # (K, S)
+    dx = robot_x[None] - np.ascontiguousarray(centres[..., 0].T)[:, None, :]  # (N, K, S)
+    dy = robot_y[None] - np.ascontiguousarray(centres[..., 1].T)[:, None, :]
+    reach = np.ascontiguousarray(reach.T)[:, None, :]  # (N, 1, S)
+    any_overlapping = bool(overlapping.any())
+    # The first step at which any person not overlapped now is touched (gap < 0): the earliest over
+    # the people of each one's first step.
+    touched: Any = touching(dx, dy, reach)
+    if any_overlapping:  # (with no one overlapped, as mostly, the mask would change nothing)
+        touched &= ~overlapping[:, None, None]
+    touched = touched.any(axis=0)  # (K, S)
+    time_to_contact = np.where(touched.any(axis=1), touched.argmax(axis=1), steps) * dt
+    if not any_overlapping:
+        return time_to_contact, None, None
+    gap = np.hypot(dx[overlapping], dy[overlapping]) - reach[overlapping]  # (M, K, S)
+    # (K, M) in C order, as the score sums them along M
+    return time_to_contact, np.ascontiguousarray(np.min(gap, axis=2).T), np.ascontiguousarray(gap[:, :, -1].T)
 
 
 def escape_top_speed(limits: MotionLimits, config: Settings) -> float:
