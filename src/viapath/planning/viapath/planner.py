@@ -53,7 +53,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -69,23 +69,13 @@ from viapath.path import DesignatedPath
 from viapath.planning.base import Decision, Inflation, Plan, Planner, Situation
 from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, _candidates_of, grow
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.critics import (
-    Context,
-    Distance,
-    Heading,
-    Hysteresis,
-    SidePreference,
-    SpeedError,
-    Time,
-    critics_for,
-    score,
-)
+from viapath.planning.viapath.critics import PAPER_CRITICS, Context, critics_for, score
 from viapath.planning.viapath.escape import escape_fan, stop_or_escape
 from viapath.planning.viapath.follow import can_follow, follows
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
 
-# The critics kernels.choose sums, in this order (critics_for's): others take the numpy choice.
-_PAPER_CRITICS = (Distance, Time, SpeedError, Heading, SidePreference, Hysteresis)
+if TYPE_CHECKING:
+    from viapath.planning.viapath.critics import Distance, Heading, Hysteresis, SidePreference, SpeedError, Time
 
 
 class _CompiledCandidates:
@@ -353,7 +343,7 @@ class ViaPathPlanner(Planner, name="viapath"):
                 backend.name == "numba"
                 and backend.whole_steps
                 and not config.record_candidates
-                and tuple(map(type, critics)) == _PAPER_CRITICS
+                and tuple(map(type, critics)) == PAPER_CRITICS
             )
             cached = self.__dict__["_compiled_choice_of"] = (backend, config, critics, answer)
         return cached[3]
@@ -373,7 +363,7 @@ class ViaPathPlanner(Planner, name="viapath"):
             return cached[4]
         distance, time, speed, heading, side, hysteresis = cast(
             "tuple[Distance, Time, SpeedError, Heading, SidePreference, Hysteresis]", self.critics
-        )  # the paper's critics (_PAPER_CRITICS): the only ones the kernels take
+        )  # the paper's critics (PAPER_CRITICS): the only ones the kernels take
         settings = np.zeros(slot.F_COUNT, dtype=np.float64)
         settings[[slot.F_K1, slot.F_K2, slot.F_K3, slot.F_K4, slot.F_SIDE, slot.F_HYSTERESIS]] = (
             distance.weight,
