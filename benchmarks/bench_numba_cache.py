@@ -24,12 +24,13 @@ SCRIPT = r"""
 import json, time
 import numpy as np
 t0, c0 = time.perf_counter(), time.process_time()
-from viapath.perception.circle_fit import fit_circles
+from viapath.perception.detection import fit_circles_as
+from viapath.perception.laser import ray_casters
 from viapath.perception.raycast import simulate_scans
 from viapath.perception.scanner import paper_scanners
-simulate_scans(paper_scanners(), np.zeros(3), [[2.0, 0.0]], [0.3], [[[-1.0, 3.0], [5.0, 3.0]]], backend="numba")
+simulate_scans(paper_scanners(), np.zeros(3), [[2.0, 0.0]], [0.3], [[[-1.0, 3.0], [5.0, 3.0]]], ray_casters("numba")[1])
 pts = np.stack([2.0 - 0.3 * np.cos(np.linspace(-1, 1, 9)), 0.3 * np.sin(np.linspace(-1, 1, 9))], -1)
-fit_circles(pts, [0], [9], radius_prior_m=0.25, backend="numba")
+fit_circles_as("numba", pts, [0], [9], radius_prior_m=0.25)
 print(json.dumps({"wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}))
 """
 

@@ -20,7 +20,7 @@ import time
 import numpy as np
 
 from viapath.compiled import numba_available
-from viapath.perception.laser import LaserPerception
+from viapath.perception.laser import LaserPerception, ray_casters
 from viapath.perception.raycast import simulate_scan
 from viapath.sim.perception import WorldSnapshot
 
@@ -86,15 +86,16 @@ def main() -> None:
     backends = ["numpy"] + (["numba"] if numba_available() else [])
     for backend in backends:
         rng = np.random.default_rng(2)
+        caster = ray_casters(backend)[0]
         perception = LaserPerception()
         for w in worlds[:5]:
             for s in perception.scanners:
-                simulate_scan(s, w.robot_pose, w.obstacle_positions, w.obstacle_radii_m, w.walls, rng, backend)
+                simulate_scan(s, w.robot_pose, w.obstacle_positions, w.obstacle_radii_m, w.walls, rng, caster)
         cast_s = []
         for w in worlds[: min(len(worlds), 1000)]:
             started = time.perf_counter()
             for s in perception.scanners:
-                simulate_scan(s, w.robot_pose, w.obstacle_positions, w.obstacle_radii_m, w.walls, rng, backend)
+                simulate_scan(s, w.robot_pose, w.obstacle_positions, w.obstacle_radii_m, w.walls, rng, caster)
             cast_s.append(time.perf_counter() - started)
         print(f"  {backend:6s}                     {percentiles(cast_s)}")
     if not numba_available():

@@ -64,7 +64,7 @@ def test_every_critic_of_the_planner_is_compiled():
     )
     default = critics.critics_for(VIAPATH_OPTIONS.validate({}, where="test"))
     assert tuple(critic.name for critic in default) == COMPILED_CRITICS
-    assert tuple(map(type, default)) == planner._PAPER_CRITICS
+    assert tuple(map(type, default)) == planner.PAPER_CRITICS
 
 
 @pytest.mark.parametrize("module", ["planning", "perception"])

@@ -45,10 +45,10 @@ def rotate(vectors: np.ndarray, angle_rad: np.ndarray | float) -> np.ndarray:
 
 
 def angles_of(vectors: np.ndarray) -> np.ndarray:
-    """The angle of each (x, y) row, by libm's atan2: Python's ``math.atan2``, which the compiled kernels and
+    """The angle of each (x, y) row, by libm's atan2: Python's ``math.atan2``, which the compiled code and
     the controller call too. numpy's ``np.arctan2`` is SIMD code chosen by the CPU (Intel's SVML on AVX-512
     machines) and there rounds differently from libm in the last bit for about 7 % of angles, so the planner's
-    angles would depend on the machine and differ from the compiled kernels'."""
+    angles would depend on the machine and differ from the compiled code's."""
     return np.array([math.atan2(y, x) for x, y in np.reshape(vectors, (-1, 2)).tolist()], dtype=float)
 
 

@@ -52,7 +52,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from viapath.compiled import harness_kernels
+from viapath.compiled import compiled_harness
 from viapath.kinematics import _arc, _clip
 from viapath.observation import (
     Command,
@@ -396,13 +396,13 @@ def _obstacles_sound(
     reductions (an episode's every cycle comes here; the per-index loops run only when this is False).
     A NaN fails every comparison (and ``max``/``min`` propagate it) and an infinity every bound, so
     ``max ≤ bound`` and ``min ≥ 0`` also say "finite"; a speed is inf or NaN whenever a velocity part is.
-    With numba, one compiled call gives the same answer (:func:`viapath.compiled.harness.obstacles_sound`)."""
+    Compiled, one call gives the same answer (:func:`viapath.compiled.harness.obstacles_sound`)."""
     if len(positions) == 0:
         return True
-    kernels = harness_kernels()
-    if kernels is not None:
+    harness = compiled_harness()
+    if harness is not None:
         try:
-            return kernels.obstacles_sound(
+            return harness.obstacles_sound(
                 positions,
                 velocities,
                 radii,
@@ -539,11 +539,11 @@ def _first_touched(
 ) -> int:
     """The first obstacle (index) within ``reachable_m`` now that the robot, holding (v, w) for a control period
     and then braking (:func:`braking_path`), would touch while its first sample moves towards it; -1 if none.
-    With numba one compiled call (:func:`viapath.compiled.harness.first_touched`, the same answer)."""
-    kernels = harness_kernels()
-    if kernels is not None:
+    Compiled, one call (:func:`viapath.compiled.harness.first_touched`, the same answer)."""
+    harness = compiled_harness()
+    if harness is not None:
         try:
-            return kernels.first_touched(
+            return harness.first_touched(
                 float(position[0]),
                 float(position[1]),
                 float(robot.heading_rad),

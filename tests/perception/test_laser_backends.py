@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from viapath.compiled import numba_available
 from viapath.perception.base import WorldSnapshot
 from viapath.perception.detection import detect
-from viapath.perception.laser import LaserPerception
+from viapath.perception.laser import LaserPerception, ray_casters
 from viapath.perception.raycast import simulate_scan, simulate_scans
 from viapath.perception.scanner import ScannerModel, paper_scanners
 
@@ -65,9 +65,10 @@ def test_all_scanners_in_one_pass_equal_one_scanner_at_a_time(scene, which):
     backends = ["numpy"] + (["numba"] if numba_available() else [])
     for backend in backends:
         one_rng = np.random.default_rng(seed)
-        single = [simulate_scan(s, pose, centres, radii, walls, one_rng, backend) for s in scanners]
+        one_origin, per_beam = ray_casters(backend)
+        single = [simulate_scan(s, pose, centres, radii, walls, one_rng, one_origin) for s in scanners]
         all_rng = np.random.default_rng(seed)
-        fused = simulate_scans(scanners, pose, centres, radii, walls, all_rng, backend)
+        fused = simulate_scans(scanners, pose, centres, radii, walls, all_rng, per_beam)
         for a, b in zip(single, fused, strict=True):
             np.testing.assert_array_equal(a, b)  # NaN == NaN here; bit for bit otherwise
         assert one_rng.random() == all_rng.random()  # the same draws were taken

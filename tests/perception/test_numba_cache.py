@@ -22,15 +22,16 @@ SRC = str(Path(__file__).resolve().parents[2] / "src")
 SCRIPT = r"""
 import json
 import numpy as np
-from viapath.perception.circle_fit import fit_circles
+from viapath.perception.detection import fit_circles_as
+from viapath.perception.laser import ray_casters
 from viapath.perception.raycast import cast_rays
 from viapath.compiled import perception as k
 
 angles = np.linspace(-2.0, 2.0, 50)
-ranges = cast_rays((0.0, 0.0), angles, [[2.0, 0.0]], [0.3], [[[-1.0, 3.0], [5.0, 3.0]]], backend="numba")
+ranges = cast_rays((0.0, 0.0), angles, [[2.0, 0.0]], [0.3], [[[-1.0, 3.0], [5.0, 3.0]]], ray_casters("numba")[0])
 pts = np.stack([2.0 - 0.3 * np.cos(np.linspace(-1, 1, 9)), 0.3 * np.sin(np.linspace(-1, 1, 9))], -1)
-fit_circles(pts, [0], [9], radius_prior_m=0.25, backend="numba")
-fit_circles(pts, [0], [9], backend="numba")
+fit_circles_as("numba", pts, [0], [9], radius_prior_m=0.25)
+fit_circles_as("numba", pts, [0], [9])
 out = {}
 for name in ("cast_rays_kernel", "fit_circles_kernel", "solve_sym3_scalar"):
     stats = getattr(k, name).stats

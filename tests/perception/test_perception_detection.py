@@ -177,8 +177,10 @@ def test_numba_circle_fit_equals_numpy(options):
     counts = np.array([len(a) for a in arcs])
     starts = np.cumsum(counts) - counts
     origins = rng.uniform(-0.2, 0.2, (25, 2))
-    a = fit_circles(points, starts, counts, origins, backend="numpy", **options)
-    b = fit_circles(points, starts, counts, origins, backend="numba", **options)
+    from viapath.perception.detection import fit_circles_as
+
+    a = fit_circles_as("numpy", points, starts, counts, origins, **options)
+    b = fit_circles_as("numba", points, starts, counts, origins, **options)
     np.testing.assert_allclose(b.centres, a.centres, rtol=0, atol=1e-9)
     np.testing.assert_allclose(b.radii_m, a.radii_m, rtol=0, atol=1e-9)
     np.testing.assert_allclose(b.rms_m, a.rms_m, rtol=0, atol=1e-9)

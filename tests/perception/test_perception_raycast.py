@@ -6,6 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from viapath.compiled import numba_available
+from viapath.perception.laser import ray_casters
 from viapath.perception.raycast import cast_rays, simulate_scan
 from viapath.perception.scanner import ScannerModel, paper_scanners, sanitize_ranges
 
@@ -158,11 +159,11 @@ def test_numba_equals_numpy_bit_for_bit():
         segments = rng.uniform(-5, 5, (w, 2, 2))
         origin = rng.uniform(-1, 1, 2)
         angles = np.linspace(-np.pi, np.pi, 683)
-        a = cast_rays(origin, angles, centres, radii, segments, backend="numpy")
-        b = cast_rays(origin, angles, centres, radii, segments, backend="numba")
+        a = cast_rays(origin, angles, centres, radii, segments)
+        b = cast_rays(origin, angles, centres, radii, segments, ray_casters("numba")[0])
         np.testing.assert_array_equal(a, b)
 
 
 def test_unknown_backend_is_an_error():
     with pytest.raises(ValueError, match="backend"):
-        cast_rays((0, 0), [0.0], [[1, 0]], [0.1], backend="cuda")
+        ray_casters("cuda")

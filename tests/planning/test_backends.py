@@ -398,7 +398,7 @@ def test_tree_kernel_builds_the_same_candidates(case, limits):
     """kernels.grow (the whole candidate tree in one call) builds the numpy grow's candidates exactly:
     the same nodes in the same order (so the same ties), the same leaves and arrays, bit for bit; with
     the default depth and root limit and with others (a root limit of 1-2 takes the sorted branch)."""
-    from viapath.planning.viapath.candidates import grow
+    from viapath.planning.viapath.planner import grow_step as grow
 
     depth, root_limit = limits
     found = []
@@ -427,7 +427,8 @@ def test_tree_kernel_builds_the_same_corner_candidates(path_index):
     from dataclasses import replace
 
     from viapath.compiled.backend import Backend
-    from viapath.planning.viapath.candidates import CORNER, RootLegs, grow
+    from viapath.planning.viapath.candidates import CORNER, RootLegs
+    from viapath.planning.viapath.planner import grow_step as grow
 
     path = PATHS[path_index] if path_index < len(PATHS) else U_TURN
     last = 2  # the subgoal past the first corner (on the U-turn, another segment follows)
@@ -742,11 +743,12 @@ def test_compiled_stop_or_escape_decides_as_numpy(case):
 
     from viapath.compiled.backend import Backend
     from viapath.planning.viapath.escape import escape_fan, stop_or_escape
+    from viapath.planning.viapath.planner import escape_step
 
     planner, checks, previous = _escape_checks(case)
     expected = stop_or_escape(checks, planner.limits, planner.config, previous)
     for backend in (Backend("numba"), Backend("numba", whole_steps=False)):
-        got = stop_or_escape(replace(checks, backend=backend), planner.limits, planner.config, previous)
+        got = escape_step(replace(checks, backend=backend), planner.limits, planner.config, previous)
         assert got.command == expected.command
         assert got.plan.status == expected.plan.status
         assert _same_bits(got.plan.target, expected.plan.target)

@@ -1,9 +1,12 @@
-"""The numpy path's shortcuts for its slowest cycles (docs/CHANGELOG-speed.md, "numpy p99 (wave 6)") change no value.
+"""The numpy path's shortcuts for its slowest cycles (docs/CHANGELOG-speed.md, "numpy p99 (wave 6)") hold what
+the functions mean.
 
-Each test holds a rewritten function to its earlier form, kept here verbatim as the reference, bit for
-bit, on seeded random situations: the robot near the path (three paths), 0-14 people around it, with
-and without uncertainty, some overlapping the robot, so that both the escape's terms (time to contact,
-separation) and roll-outs that pass, fail and turn on the spot come up.
+Each rewritten function is checked against what it computes, worked out independently (one command at a
+time, dense sampling of legs and segments, a fresh copy of the checks with nothing remembered), on seeded
+random situations: the robot near the path (three paths), 0-14 people around it, with and without
+uncertainty, some overlapping the robot, so that both the escape's terms (time to contact, separation) and
+roll-outs that pass, fail and turn on the spot come up. Bit-for-bit sameness of whole runs is the
+equality runs' (episodes.csv before and after).
 """
 
 from __future__ import annotations
@@ -13,10 +16,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from tests.test_kinematics import _rollout_reference
 from viapath import DesignatedPath, Observation, Obstacles, RobotState
 from viapath.geometry import wrap_angle
-from viapath.kinematics import UnicycleState
+from viapath.kinematics import UnicycleState, rollout
 from viapath.observation import Command
 from viapath.planning import make_planner
 from viapath.planning.base import Plan
@@ -67,91 +69,74 @@ def _same_bits(a, b) -> bool:
 # -- the escape ------------------------------------------------------------------------------------
 
 
-def _escape_scores_reference(checks, limits, config, previous=None):
-    """:func:`viapath.planning.viapath.escape.escape_scores`' numpy path as first written."""
+def _escape_scores_command_by_command(checks, limits, config, previous):
+    """What :func:`escape_scores` computes, one command at a time from its definition (the escape's module
+    docstring): each command's roll-out, its corridor excess point by point, each person's gap along it, the
+    first step any person not overlapped now is touched, the overlapped ones' deepest and last gaps, and the
+    weighted sum of the terms. (commands, ends, scores) to compare within round-off."""
     position = checks.position
     top = min(max(config.speeds), limits.max_speed_mps) if config.calm_escape else limits.max_speed_mps
-    speeds = np.unique(np.concatenate([[0.0], np.minimum(config.speeds, top), [top]]))
-    turns = np.linspace(-limits.max_turn_rate_radps, limits.max_turn_rate_radps, 9)
-    commands = np.stack([grid.ravel() for grid in np.meshgrid(speeds, turns)], axis=1)
-    dt = config.escape_dt_s
-    steps = max(1, int(round(config.escape_s / dt)))
-    state = UnicycleState(
-        float(position[0]),
-        float(position[1]),
-        float(checks.heading_rad),
-        float(checks.speed_mps),
-        float(checks.turn_rate_radps),
+    commands = np.array(
+        [
+            (v, w)
+            for w in np.linspace(-limits.max_turn_rate_radps, limits.max_turn_rate_radps, 9)
+            for v in sorted({0.0, top, *(min(v, top) for v in config.speeds)})
+        ]
     )
-    positions = _rollout_reference(state, commands, limits, dt, steps)  # (K, S, 2)
-    times = dt * np.arange(1, steps + 1)
-    excess = checks.path.corridor_excess(positions.reshape(-1, 2)).reshape(len(commands), steps)
-    inside = np.all(excess <= checks.corridor_tolerance_m, axis=1)
-    within_bound = np.max(excess, axis=1) <= max(config.escape_max_excess_m, checks.corridor_tolerance_m)
-
-    horizon = steps * dt
-    travel = float(np.max(np.hypot(*(positions - position).reshape(-1, 2).T)))
+    dt, steps = config.escape_dt_s, max(1, int(round(config.escape_s / config.escape_dt_s)))
+    state = UnicycleState(*map(float, position), checks.heading_rad, checks.speed_mps, checks.turn_rate_radps)
     obstacles = checks.obstacles
-    gap_all = np.hypot(*(position - obstacles.positions).T) - checks.check_radii
-    growth_all = checks.growth * np.minimum(horizon, checks.growth_until_s)
-    near = gap_all - growth_all - np.hypot(*obstacles.velocities.T) * horizon - travel <= 0
-    positions_obs, velocities_obs = obstacles.positions[near], obstacles.velocities[near]
-    gap_now = gap_all[near]
-    overlapping = gap_now <= 0
-    centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
-    reach = checks.check_radii[near] + checks.growth[near] * np.minimum(times[:, None], checks.growth_until_s[near])
-    offset = positions[:, :, None, :] - centres[None]
-    gap = np.hypot(offset[..., 0], offset[..., 1]) - reach[None]  # (K, S, N)
-    touching = (gap < 0) & ~overlapping
-    first = np.where(touching.any(axis=1), np.argmax(touching, axis=1), steps)  # (K, N)
-    time_to_contact = np.min(first, axis=1, initial=steps) * dt
-    if overlapping.any():
-        gap_min, gap_last = np.min(gap[..., overlapping], axis=1), gap[:, -1, overlapping]
-        deeper = gap_min - gap_now[overlapping]
-        still_inside = gap_last
-        separation = np.sum(np.minimum(deeper, 0.0) + np.minimum(still_inside, 0.0), axis=1)
-    else:
-        separation = np.zeros(len(commands))
-    toward = checks.subgoal - position
-    toward = toward / max(float(np.hypot(*toward)), 1e-9)
-    # The one line changed since the first form (wave 7): the product written out, as escape.py now has it;
-    # ``@`` went to BLAS, whose kernels differ in whether they fuse the multiply-add (episodes unchanged).
-    ends = positions[:, -1]
-    progress = ((ends[:, 0] - position[0]) * toward[0] + (ends[:, 1] - position[1]) * toward[1]) / config.escape_s
-    free = time_to_contact >= steps * dt
-    score = (
-        1e2 * separation
-        + 20.0 * free
-        + 2.0 * inside
-        + time_to_contact
-        - np.where(free, 0.005, 0.5) * commands[:, 0]
-        + 0.01 * progress
-    )
-    if config.calm_escape and previous is not None:
-        change = (
-            np.abs(commands[:, 0] - previous.speed_mps) / max(top, 1e-9)
-            + np.abs(commands[:, 1] - previous.turn_rate_radps) / limits.max_turn_rate_radps
-        )
-        score = score - config.escape_continuity_s * np.minimum(change, 1.0)
-    score = np.where(within_bound | (commands[:, 0] == 0.0), score, -np.inf)
-    return commands, positions[:, -1], score
+    radii, growth, until = checks.check_radii, checks.growth, checks.growth_until_s
+    gap_now = [math.hypot(*(position - p)) - r for p, r in zip(obstacles.positions, radii)]
+    toward = (checks.subgoal - position) / max(math.hypot(*(checks.subgoal - position)), 1e-9)
+    scores, ends = [], []
+    for speed, turn in commands:
+        positions = rollout(state, np.array([[speed, turn]]), limits, dt, steps)[0]
+        excess = [float(checks.path.corridor_excess(point)) for point in positions]
+        first_touch, separation = steps, 0.0
+        for j in range(len(obstacles)):
+            gaps = []
+            for s, point in enumerate(positions):
+                time_s = (s + 1) * dt
+                centre = obstacles.positions[j] + obstacles.velocities[j] * time_s
+                gaps.append(math.hypot(*(point - centre)) - (radii[j] + growth[j] * min(time_s, until[j])))
+            if gap_now[j] > 0:
+                first_touch = min([first_touch] + [s for s, gap in enumerate(gaps) if gap < 0])
+            else:
+                separation += min(min(gaps) - gap_now[j], 0.0) + min(gaps[-1], 0.0)
+        time_to_contact = first_touch * dt
+        free = first_touch == steps
+        progress = float(np.dot(positions[-1] - position, toward)) / config.escape_s
+        score = 100 * separation + 20 * free + 2 * (max(excess) <= checks.corridor_tolerance_m) + time_to_contact
+        score += -(0.005 if free else 0.5) * speed + 0.01 * progress
+        if config.calm_escape and previous is not None:
+            change = abs(speed - previous.speed_mps) / max(top, 1e-9)
+            change += abs(turn - previous.turn_rate_radps) / limits.max_turn_rate_radps
+            score -= config.escape_continuity_s * min(change, 1.0)
+        bound = max(config.escape_max_excess_m, checks.corridor_tolerance_m)
+        scores.append(score if max(excess) <= bound or speed == 0.0 else -np.inf)
+        ends.append(positions[-1])
+    return commands, np.array(ends), np.array(scores)
 
 
-def test_escape_scores_are_bit_for_bit_the_first_form():
-    """1 200 situations (with and without last cycle's escape command, with and without a calm escape)."""
+def test_escape_scores_are_those_of_each_command_alone():
+    """300 situations (with and without last cycle's escape command, with and without a calm escape): the same
+    fan of commands, each command's end and score as worked out for that command alone, within round-off."""
     rng = np.random.default_rng(3)
     overlapped = contact = 0
     hasty = ViaPathConfig(calm_escape=False)
-    for case, (planner, checks) in enumerate(_situations(1200, seed=11)):
+    for case, (planner, checks) in enumerate(_situations(300, seed=11)):
         config = planner.config if case % 5 else hasty
         previous = Command(*rng.uniform([0.0, -2.0], [0.5, 2.0])) if case % 3 == 0 else None
-        got = escape_scores(checks, planner.limits, config, previous)
-        expected = _escape_scores_reference(checks, planner.limits, config, previous)
-        assert all(_same_bits(a, b) for a, b in zip(got, expected)), f"case {case}"
+        commands, ends, score = escape_scores(checks, planner.limits, config, previous)
+        expected = _escape_scores_command_by_command(checks, planner.limits, config, previous)
+        assert np.array_equal(commands, expected[0]), f"case {case}"
+        np.testing.assert_allclose(ends, expected[1], rtol=0, atol=1e-12, err_msg=f"case {case}")
+        np.testing.assert_allclose(score, expected[2], rtol=1e-12, atol=1e-9, err_msg=f"case {case}")
         gaps = np.hypot(*(checks.position - checks.obstacles.positions).T) - checks.check_radii
         overlapped += bool(np.any(gaps <= 0))
-        contact += bool(np.any(expected[2][np.isfinite(expected[2])] < 20.0))
-    assert overlapped > 100 and contact > 100  # both terms came up
+        contact += bool(np.any(score[np.isfinite(score)] < 20.0))
+    assert overlapped > 20 and contact > 20  # both terms came up
 
 
 def test_touching_is_hypot_minus_reach_below_zero():
@@ -199,37 +184,6 @@ def _clear_reference(checks, positions, dt):
     return bool(np.all(distance >= np.minimum(reach, now - 1e-3)))
 
 
-def _can_follow_reference(plan, checks, limits, config):
-    """:func:`can_follow` as first written (every roll-out made, none remembered)."""
-    offset = plan.target - checks.position
-    heading_error = abs(float(wrap_angle(math.atan2(offset[1], offset[0]) - checks.heading_rad)))
-    speed_change = abs(plan.speed_mps - checks.speed_mps)
-    if np.hypot(*offset) < 1e-6 or (
-        heading_error <= config.rollout_heading_rad and speed_change <= limits.max_accel_mps2 * config.rollout_dt_s * 2
-    ):
-        return True
-    dt = config.rollout_dt_s
-    steps = max(1, int(round(config.rollout_s / dt)))
-    state = UnicycleState(
-        float(checks.position[0]),
-        float(checks.position[1]),
-        float(checks.heading_rad),
-        checks.speed_mps,
-        checks.turn_rate_radps,
-    )
-    positions = checks.backend.track(state, plan.target, plan.speed_mps, limits, dt, steps, config.heading_gain)
-    if not _clear_reference(checks, positions, dt):
-        return False
-    if np.all(checks.inside(positions)):
-        return True
-    turn_s = heading_error / limits.max_turn_rate_radps + 1.0
-    standing = np.repeat(checks.position[None], max(1, int(np.ceil(turn_s / dt))), axis=0)
-    if heading_error > config.turn_in_place_min_rad and _clear_reference(checks, standing, dt):
-        plan.extras["turn_in_place"] = True
-        return True
-    return False
-
-
 def test_clear_is_bit_for_bit_the_first_form():
     """The obstacles' part of :meth:`LegChecks.clear` is made once per step count and cycle: its arrays
     against the first form's, bit for bit, and the verdicts of random roll-outs against the first form's:
@@ -261,126 +215,104 @@ def test_clear_is_bit_for_bit_the_first_form():
 
 def test_can_follow_remembers_only_what_it_would_compute_again():
     """Plans of a cycle towards random targets, many sharing target and speed (as slow/wait candidates
-    and chains through one via point do): each verdict and turn-in-place mark equal those of the first
-    form, which rolls every one out afresh."""
+    and chains through one via point do): each verdict and turn-in-place mark equal those of the same
+    checks with nothing remembered (a fresh copy for every plan, which rolls it out afresh); and a plan that
+    turns on the spot has a target off its heading by more than the turn-in-place threshold."""
     rng = np.random.default_rng(8)
     kinds = set()
     for case, (planner, checks) in enumerate(_situations(500, seed=13)):
-        fresh = replace(checks)  # the same checks, nothing remembered
         targets = checks.position + rng.uniform(-2.5, 2.5, (3, 2))
         speeds = rng.choice([0.0, 0.1, 0.2, 0.3, 0.5], 3)
         for _ in range(8):
             target, speed = targets[rng.integers(0, 3)], float(speeds[rng.integers(0, 3)])
             plan, reference = (Plan("avoid", speed, target.copy()) for _ in range(2))
             got = can_follow(plan, checks, planner.limits, planner.config)
-            expected = _can_follow_reference(reference, fresh, planner.limits, planner.config)
+            expected = can_follow(reference, replace(checks), planner.limits, planner.config)
             assert got is expected and plan.extras == reference.extras, f"case {case}"
-            kinds.add((expected, bool(reference.extras.get("turn_in_place"))))
+            turned = bool(reference.extras.get("turn_in_place"))
+            if turned:
+                offset = target - checks.position
+                error = abs(float(wrap_angle(math.atan2(offset[1], offset[0]) - checks.heading_rad)))
+                assert error > planner.config.turn_in_place_min_rad, f"case {case}"
+            kinds.add((expected, turned))
     assert kinds == {(True, False), (True, True), (False, False)}  # passed, turned on the spot, failed
 
 
 # -- the leg checks and via points of the candidate tree -------------------------------------------
 
 
-def _via_options_reference(
-    starts,
-    start_times,
-    speeds,
-    obstacle_positions,
-    obstacle_velocities,
-    via_radii,
-    growth,
-    growth_until_s,
-    envelope_m,
-    max_time_s,
-):
-    """:func:`viapath.geometry.via_options` as first written."""
-    from viapath.geometry import VIA_SIDES, tangent_vectors, via_times
+def _check_via_options(arguments, got) -> None:
+    """What each via option is: the robot leaves the node at its speed (|leg velocity| = speed) and reaches
+    the via point at the option's time (at most the longest), which is then on the edge of the obstacle's
+    disc as it has moved by then (radius: the cone at the passing time plus the envelope, below 98 % of the
+    node's distance), on the option's side, without having entered the disc on the way (dense sampling)."""
+    from viapath.geometry import VIA_SIDES
 
-    velocity = obstacle_velocities
-    centre_now = obstacle_positions + velocity * start_times[:, None]
-    reach_time = np.hypot(*(centre_now - starts).T) / speeds
-    passing_time = np.minimum(start_times + reach_time, growth_until_s)
-    radius = via_radii + growth * passing_time + envelope_m
+    starts, start_times, speeds, positions, velocities, via_radii, growth, until, envelope, max_time_s = arguments
+    pair, option, t_k, leg_velocity, via = got
+    assert np.all(np.diff(pair * 4 + option) > 0)  # row-major, each option once
+    centre_now = positions + velocities * start_times[:, None]
     distance = np.hypot(*(centre_now - starts).T)
-    radius = np.maximum(np.minimum(radius, 0.98 * distance), 0.0)
-    w, valid = tangent_vectors(starts[:, None, :], centre_now[:, None, :], radius[:, None], VIA_SIDES[None, :2])
-    t_early, t_late = via_times(w, velocity[:, None, :], speeds[:, None])
-    t_via = np.concatenate([t_early, t_late], axis=1)
-    w = np.concatenate([w, w], axis=1)
-    ok = np.broadcast_to(valid, t_early.shape)
-    ok = np.concatenate([ok, ok], axis=1) & (t_via <= max_time_s)
-    pair, option = np.nonzero(ok)
-    t_k = t_via[pair, option]
-    leg_velocity = (w[pair, option] + velocity[pair] * t_k[:, None]) / t_k[:, None]
-    via = starts[pair] + leg_velocity * t_k[:, None]
-    return pair, option, t_k, leg_velocity, via
-
-
-def _legs_first_contact_reference(
-    starts,
-    start_times,
-    velocities,
-    durations,
-    obstacle_positions,
-    obstacle_velocities,
-    radii,
-    growth=0.0,
-    growth_until_s=np.inf,
-    leg_radii_m=None,
-):
-    """:func:`viapath.geometry.legs_first_contact` as first written (with its ``_first_contact``)."""
-
-    def first_contact(px, py, vx, vy, radius, growth, duration):
-        if np.any(growth):
-            a = vx * vx + vy * vy - growth * growth
-            b = px * vx + py * vy - radius * growth
-        else:
-            a = vx * vx + vy * vy
-            b = px * vx + py * vy
-        c = px * px + py * py - radius * radius
-        discriminant = b * b - a * c
-        denominator = np.sqrt(np.maximum(discriminant, 0.0)) - b
-        ok = (discriminant >= 0) & (denominator > 0)
-        tau = c / np.where(ok, denominator, 1.0)
-        tau = np.where(ok & (tau <= duration), tau, np.inf)
-        return np.where(c <= 0, 0.0, tau)
-
-    if leg_radii_m is not None:
-        radii = np.asarray(radii, dtype=float)[None, :] + np.asarray(leg_radii_m, dtype=float)[:, None]
-    t0 = np.asarray(start_times, dtype=float)[:, None]
-    duration = np.asarray(durations, dtype=float)[:, None]
-    growth = np.asarray(growth, dtype=float)
-    ox, oy = obstacle_positions[:, 0], obstacle_positions[:, 1]
-    ovx, ovy = obstacle_velocities[:, 0], obstacle_velocities[:, 1]
-    px = starts[:, 0:1] - (ox + ovx * t0)
-    py = starts[:, 1:2] - (oy + ovy * t0)
-    vx = velocities[:, 0:1] - ovx
-    vy = velocities[:, 1:2] - ovy
-    until = np.asarray(growth_until_s, dtype=float)
-    if not np.any(growth) or not np.any(np.isfinite(until)):
-        return first_contact(px, py, vx, vy, radii + growth * t0, growth, duration)
-    cone_duration = np.clip(until - t0, 0.0, duration)
-    early = first_contact(
-        px, py, vx, vy, radii + growth * np.minimum(t0, until), np.where(until > t0, growth, 0.0), cone_duration
+    radius = via_radii + growth * np.minimum(start_times + distance / speeds, until) + envelope
+    radius = np.clip(radius, 0.0, 0.98 * distance)[pair]
+    assert np.all((t_k > 0) & (t_k <= max_time_s))
+    np.testing.assert_allclose(np.hypot(*leg_velocity.T), speeds[pair], rtol=1e-9)
+    np.testing.assert_allclose(via, starts[pair] + leg_velocity * t_k[:, None], rtol=1e-12, atol=1e-12)
+    centre_then = centre_now[pair] + velocities[pair] * t_k[:, None]
+    np.testing.assert_allclose(np.hypot(*(via - centre_then).T), radius, rtol=1e-7, atol=1e-9)
+    relative = (leg_velocity - velocities[pair]) * t_k[:, None]  # the leg seen from the obstacle
+    side = np.sign(
+        relative[:, 0] * (centre_now[pair, 1] - starts[pair, 1])
+        - relative[:, 1] * (centre_now[pair, 0] - starts[pair, 0])
     )
-    full_growth = growth * np.where(np.isfinite(until), until, 0.0)
-    late = first_contact(
-        px + vx * cone_duration, py + vy * cone_duration, vx, vy, radii + full_growth, 0.0, duration - cone_duration
+    assert np.all((side == -VIA_SIDES[option]) | (radius < 1e-9))  # left: the obstacle on the right
+    fractions = np.linspace(0.0, 1.0, 201)[:, None, None]
+    sampled = starts[pair] - centre_now[pair] + fractions * relative  # (201, options, 2)
+    assert np.all(np.hypot(sampled[..., 0], sampled[..., 1]) >= radius * (1 - 1e-7) - 1e-9)
+
+
+def _check_first_contacts(leg, people, leg_radii, got) -> None:
+    """What each leg's first contact is, by dense sampling of the leg (2 001 instants): before it the leg is
+    never inside the person's (growing, capped) disc, at it the leg is on the disc's edge (or inside at the
+    start: 0), and a leg with no contact (inf) is never inside."""
+    starts, start_times, velocities, durations = leg
+    positions, person_velocities, radii, growth, until = people
+    until = np.broadcast_to(until, radii.shape)
+    extra = np.zeros(len(starts)) if leg_radii is None else leg_radii
+    fraction = np.linspace(0.0, 1.0, 2001)[:, None, None]
+    tau = fraction * durations[None, :, None]  # (T, legs, 1)
+    absolute = start_times[None, :, None] + tau
+    robot = starts[None, :, None, :] + velocities[None, :, None, :] * tau[..., None]
+    person = positions[None, None] + person_velocities[None, None] * absolute[..., None]
+    gap = np.hypot(*np.moveaxis(robot - person, -1, 0))
+    gap -= radii + extra[:, None] + growth * np.minimum(absolute, until)  # (T, legs, people)
+    last = np.where(np.isfinite(got), got * (1 - 1e-9) - 1e-9, np.inf)  # (legs, people)
+    before = tau < last[None]
+    assert np.all(gap[np.broadcast_to(before, gap.shape)] >= -1e-9)
+    at = np.isfinite(got) & (got > 0)
+    legs, people_at = np.nonzero(at)
+    tau_at, absolute_at = got[at], start_times[legs] + got[at]
+    offset = (
+        starts[legs]
+        + velocities[legs] * tau_at[:, None]
+        - positions[people_at]
+        - person_velocities[people_at] * absolute_at[:, None]
     )
-    late = np.where(t0 + duration >= until, late + cone_duration, np.inf)
-    return np.where(np.isfinite(early), early, late)
+    edge = radii[people_at] + extra[legs] + growth[people_at] * np.minimum(absolute_at, until[people_at])
+    np.testing.assert_allclose(np.hypot(*offset.T), edge, rtol=1e-7, atol=1e-7)
+    assert np.all(gap[0][got == 0] <= 1e-9)  # contact at the start: inside already
 
 
-def test_via_options_and_leg_contacts_are_bit_for_bit_the_first_form():
+def test_via_options_and_leg_contacts_are_what_they_mean():
     """Random nodes (some on or inside an obstacle's disc, some at rest relative to it) against random
-    people, cones growing or not, capped or not, with and without a braking envelope: the via options
-    and each leg's first contact (of the legs to those via points and of random legs) bit for bit."""
+    people, cones growing or not, capped or not, with and without a braking envelope: every via option
+    meets its obstacle's disc tangentially at the option's time, and each leg's first contact (of the legs to
+    those via points and of random legs) is where dense sampling finds it."""
     from viapath.geometry import legs_first_contact, via_options
 
     rng = np.random.default_rng(21)
     options = contacts = 0
-    for case in range(1500):
+    for case in range(600):
         pairs, n = int(rng.integers(1, 30)), int(rng.integers(1, 12))
         starts = rng.uniform(-3, 3, (pairs, 2))
         times = rng.uniform(0, 4, pairs) * (case % 3 > 0)
@@ -394,9 +326,9 @@ def test_via_options_and_leg_contacts_are_bit_for_bit_the_first_form():
         until = rng.choice([np.inf, 1.5, 3.0], pairs)
         envelope = rng.uniform(0, 0.3, pairs) * (case % 5 == 0)
         arguments = (starts, times, speeds, positions, velocities, radii, growth, until, envelope, 30.0)
-        got, expected = via_options(*arguments), _via_options_reference(*arguments)
-        assert all(_same_bits(a, b) for a, b in zip(got, expected)), f"case {case}"
-        options += len(expected[0])
+        found = via_options(*arguments)
+        _check_via_options(arguments, found)
+        options += len(found[0])
 
         people = (
             rng.uniform(-4, 4, (n, 2)),
@@ -405,83 +337,60 @@ def test_via_options_and_leg_contacts_are_bit_for_bit_the_first_form():
             rng.uniform(0, 0.2, n) * (case % 2),
             rng.choice([np.inf, 1.5, 3.0], n) if case % 4 else np.inf,
         )
-        pair = expected[0]
+        pair = found[0]
         legs = [
-            (starts[pair], times[pair], expected[3], expected[2]),
+            (starts[pair], times[pair], found[3], found[2]),
             (starts, times, rng.uniform(-0.5, 0.5, (pairs, 2)), rng.uniform(0, 8, pairs)),
         ]
         for leg in legs:
             leg_radii = rng.uniform(0, 0.3, len(leg[0])) if case % 3 == 0 else None
-            got = legs_first_contact(*leg, *people, leg_radii)
-            expected_contact = _legs_first_contact_reference(*leg, *people, leg_radii)
-            assert _same_bits(got, expected_contact), f"case {case}"
-            contacts += int(np.isfinite(expected_contact).sum())
-    assert options > 5000 and contacts > 5000
+            contact = legs_first_contact(*leg, *people, leg_radii)
+            _check_first_contacts(leg, people, leg_radii, contact)
+            contacts += int(np.isfinite(contact).sum())
+    assert options > 2000 and contacts > 2000
 
 
 # -- the corridor ----------------------------------------------------------------------------------
 
 
-def _segment_geometry_reference(path, points):
-    """:meth:`DesignatedPath._segment_geometry` as first written."""
-    rel = points[..., None, :] - path.segment_starts
-    along = np.sum(rel * path.segment_directions, axis=-1)
-    along_clamped = np.clip(along, 0.0, path.segment_lengths_m)
-    closest = path.segment_starts + along_clamped[..., None] * path.segment_directions
-    offset = points[..., None, :] - closest
-    return along, along_clamped, np.hypot(offset[..., 0], offset[..., 1])
-
-
-def test_segment_geometry_is_the_first_form():
+def test_segment_geometry_is_distance_to_each_segment():
     """Few and many points (the escape's 1 620), in 1-D and 2-D batches, some on the waypoints, some with
-    coordinates of -0.0, on the three paths: the distances bit for bit, the arc positions equal (np.clip
-    and np.sum may give a zero another sign), and so every corridor figure the planner uses."""
+    coordinates of -0.0, on the three paths: each point's arc position along each segment is its projection
+    (the clamped one on the segment), its distance the distance to the nearest of 2 001 points along the segment
+    (to within their spacing), and the corridor excess the least distance less the segment's half width."""
     rng = np.random.default_rng(4)
-    for case in range(600):
+    for case in range(300):
         path = PATHS[case % len(PATHS)]
         shape = [(1,), (20,), (70,), (1620,), (30, 12), (3, 40)][case % 6]
         points = rng.uniform(-3, 9, (*shape, 2))
         flat = points.reshape(-1, 2)
         flat[: len(flat) // 10] = path.waypoints[rng.integers(0, len(path.waypoints), len(flat) // 10)]
         flat[-3:] *= -0.0 if case % 2 else 1.0
-        got, expected = path._segment_geometry(points), _segment_geometry_reference(path, points)
-        assert _same_bits(got[2], expected[2]), f"case {case}"
-        assert np.array_equal(got[0], expected[0]) and np.array_equal(got[1], expected[1]), f"case {case}"
-        excess = np.min(expected[2] - path.half_widths_m, axis=-1)
-        assert _same_bits(path.corridor_excess(points), excess), f"case {case}"
+        along, clamped, distance = path._segment_geometry(points)
+        for k, (start, vector, length) in enumerate(
+            zip(path.segment_starts, path.segment_vectors, path.segment_lengths_m)
+        ):
+            rel = points - start
+            np.testing.assert_allclose(along[..., k], (rel @ vector) / length, atol=1e-12)
+            assert np.all((clamped[..., k] >= 0) & (clamped[..., k] <= length))
+            samples = start + np.linspace(0.0, 1.0, 2001)[:, None] * vector  # (2001, 2)
+            dense = np.hypot(*np.moveaxis(points[..., None, :] - samples, -1, 0)).min(axis=-1)
+            assert np.all(distance[..., k] <= dense + 1e-12), f"case {case}"
+            assert np.all(dense <= distance[..., k] + length / 2000), f"case {case}"
+        np.testing.assert_array_equal(path.corridor_excess(points), (distance - path.half_widths_m).min(axis=-1))
 
 
-def _legs_inside_reference(path, starts, ends, spacing_m, tolerance_m):
-    """:meth:`DesignatedPath.legs_inside` as first written (its ends in two passes)."""
-    starts = np.asarray(starts, dtype=float).reshape(-1, 2)
-    ends = np.asarray(ends, dtype=float).reshape(-1, 2)
-    tolerance = np.broadcast_to(np.asarray(tolerance_m, dtype=float), (len(starts),))
-    if len(starts) == 0:
-        return np.zeros(0, dtype=bool)
-    start_in = _segment_geometry_reference(path, starts)[2] - path.half_widths_m <= tolerance[:, None]
-    end_in = _segment_geometry_reference(path, ends)[2] - path.half_widths_m <= tolerance[:, None]
-    inside = np.any(start_in & end_in, axis=1)
-    unresolved = np.flatnonzero(~inside & start_in.any(axis=1) & end_in.any(axis=1))
-    if len(unresolved):
-        a, b = starts[unresolved], ends[unresolved]
-        longest = float(np.max(np.hypot(*(b - a).T)))
-        fractions = np.linspace(0.0, 1.0, max(2, int(np.ceil(longest / spacing_m)) + 1))
-        samples = a[:, None, :] + fractions[None, :, None] * (b - a)[:, None, :]
-        excess = np.min(_segment_geometry_reference(path, samples)[2] - path.half_widths_m, axis=-1)
-        inside[unresolved] = np.all(excess <= tolerance[unresolved, None], axis=1)
-    return inside
-
-
-def test_legs_inside_is_the_first_form():
-    """Legs within a capsule, across junctions (sampled), leaving the corridor, with ends on its edge (the
-    tolerance decides), 0 to 100 legs, per-leg tolerances or one: the verdicts of the first form."""
+def test_legs_inside_is_dense_sampling():
+    """Legs within a capsule, across junctions, leaving the corridor, with ends on its edge (the tolerance
+    decides), 0 to 100 legs, per-leg tolerances or one: a leg whose points, 1 mm apart, are all inside by
+    1 cm more than the tolerance is inside; one with a point outside by 1 cm more is not."""
     rng = np.random.default_rng(10)
     verdicts = set()
-    for case in range(900):
+    for case in range(600):
         path = PATHS[case % len(PATHS)]
         n = int(rng.integers(0, 100))
         starts, ends = rng.uniform(-2, 9, (n, 2)), rng.uniform(-2, 9, (n, 2))
-        if n and case % 3 == 0:  # ends on the corridor's edge
+        if n and case % 3 == 0:  # ends near the corridor's edge
             segment = rng.integers(0, len(path.segment_lengths_m), n)
             normal = path.segment_directions[segment] @ np.array([[0.0, 1.0], [-1.0, 0.0]])
             ends = (
@@ -489,11 +398,21 @@ def test_legs_inside_is_the_first_form():
                 + rng.uniform(0, 1, (n, 1)) * path.segment_vectors[segment]
                 + path.half_widths_m[segment, None] * normal
             )
+        if n and case % 4 == 1:  # short legs, mostly inside
+            ends = starts + rng.uniform(-0.5, 0.5, (n, 2))
         tolerance = rng.choice([1e-9, 0.0, 0.2]) if case % 2 else rng.uniform(-0.1, 0.3, n)
         got = path.legs_inside(starts, ends, 0.05, tolerance)
-        expected = _legs_inside_reference(path, starts, ends, 0.05, tolerance)
-        assert np.array_equal(got, expected), f"case {case}"
-        verdicts |= set(expected.tolist())
+        assert got.shape == (n,) and got.dtype == bool
+        if n == 0:
+            continue
+        length = float(np.hypot(*(ends - starts).T).max())
+        fractions = np.linspace(0.0, 1.0, max(2, int(np.ceil(length / 1e-3)) + 1))
+        worst = np.array(
+            [path.corridor_excess(a + fractions[:, None] * (b - a)).max() for a, b in zip(starts, ends)]
+        ) - np.broadcast_to(tolerance, (n,))
+        assert np.all(got[worst <= -0.01]), f"case {case}"
+        assert not np.any(got[worst > 0.01]), f"case {case}"
+        verdicts |= set(got[np.abs(worst) > 0.01].tolist())
     assert verdicts == {True, False}
 
 

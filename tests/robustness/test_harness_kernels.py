@@ -69,8 +69,8 @@ def numpy_only(monkeypatch):
     """Within the block, the harness runs its numpy code (as without numba installed)."""
 
     def use_numpy():
-        monkeypatch.setattr(guard, "harness_kernels", lambda: None)
-        monkeypatch.setattr(base, "harness_kernels", lambda: None)
+        monkeypatch.setattr(guard, "compiled_harness", lambda: None)
+        monkeypatch.setattr(base, "compiled_harness", lambda: None)
 
     return use_numpy
 
@@ -109,7 +109,7 @@ def test_the_braking_test_agrees_with_check_commands_numpy_code(monkeypatch):
         reachable = guard.stopping_distance_m(max(limits.max_speed_mps, robot.speed_mps), limits, CONFIG)
         cases.append((robot, np.asarray(robot.position, dtype=float), v, w, limits, obstacles, 0.25, CONFIG, reachable))
     compiled_answers = [guard._first_touched(*case) for case in cases]
-    monkeypatch.setattr(guard, "harness_kernels", lambda: None)
+    monkeypatch.setattr(guard, "compiled_harness", lambda: None)
     numpy_answers = [guard._first_touched(*case) for case in cases]
     assert compiled_answers == numpy_answers
     touched = np.array(numpy_answers) >= 0

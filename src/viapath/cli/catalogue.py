@@ -41,7 +41,7 @@ def planners(
     if name not in available_planners():
         fail(f"unknown planner {name!r}; available: {', '.join(available_planners())}")
     schema = planner_class(name).options
-    # What an option's default resolves to on this machine (viapath's backend: numpy or numba).
+    # What an option's default resolves to on this machine (viapath's arithmetic: numpy or compiled).
     resolved: dict[str, Any] = getattr(planner_class(name), "resolved_defaults", dict)()
     if as_json:
         print(

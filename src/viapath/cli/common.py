@@ -42,8 +42,8 @@ def check_noise(value: float | None, option: str) -> None:
 
 
 def caused_by_interrupt(error: BaseException | None) -> bool:
-    """Whether a KeyboardInterrupt is behind ``error`` (numba turns one raised while a compiled kernel calls
-    back into Python, e.g. to unpickle a constant, into a chain of SystemErrors)."""
+    """Whether a KeyboardInterrupt is behind ``error`` (the compiled code turns one raised while a compiled function
+    calls back into Python, e.g. to unpickle a constant, into a chain of SystemErrors)."""
     seen = set()
     while error is not None and id(error) not in seen:
         if isinstance(error, KeyboardInterrupt):

@@ -195,7 +195,7 @@ def _simulate(spec, scenario: str, planner_name: str, overrides: dict, views_opt
         fail(f"{scenario}: {error}")
     except KeyboardInterrupt:
         fail("interrupted", code=130)
-    except SystemError as error:  # a Ctrl-C that landed in numba's call back into Python arrives wrapped
+    except SystemError as error:  # a Ctrl-C that landed in a compiled call back into Python arrives wrapped
         if not caused_by_interrupt(error):
             raise
         fail("interrupted", code=130)

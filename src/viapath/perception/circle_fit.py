@@ -22,8 +22,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from viapath.compiled import kernels
-
 
 @dataclass
 class CircleFits:
@@ -55,14 +53,13 @@ def fit_circles(
     fixed_radius_m: float | None = None,
     range_sigma_m: float = 0.01,
     iterations: int = 4,
-    backend: str = "numpy",
 ) -> CircleFits:
     """Fit one circle to each cluster ``points[starts[k] : starts[k] + counts[k]]``.
 
     ``sensor_origins`` (K, 2) or (2,): where each cluster was seen from, in the points' frame
     (default: the origin); used for the start and so that the centre lands *behind* the arc.
-    ``backend``: ``"numpy"``, ``"numba"`` (the same algorithm compiled, one loop per cluster; equal
-    to round-off) or ``"auto"`` (numba when installed).
+    The numpy reference; the laser pipeline's dispatch (:func:`viapath.perception.detection.fit_circles_as`)
+    runs the same algorithm compiled when asked (one loop per cluster; equal to round-off).
     """
     starts = np.asarray(starts, dtype=np.int64)
     counts = np.asarray(counts, dtype=np.int64)
@@ -71,45 +68,6 @@ def fit_circles(
         return CircleFits(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
     if (counts < 2).any():
         raise ValueError("every cluster needs at least 2 points")
-    if backend == "auto":
-        backend = "numba" if _numba_fit() is not None else "numpy"
-    if backend == "numba":
-        kernel = _numba_fit()
-        if kernel is None:
-            raise RuntimeError("numba back end unavailable; pip install 'viapath[fast]'")
-        if sensor_origins is None:
-            origins = np.zeros((k_count, 2))
-        elif (
-            type(sensor_origins) is np.ndarray
-            and sensor_origins.dtype == np.float64
-            and sensor_origins.shape == (k_count, 2)
-        ):
-            origins = sensor_origins  # one per cluster already (detection): no broadcast view needed
-        else:
-            origins = np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
-        prior = fixed_radius_m if fixed_radius_m is not None else radius_prior_m
-        if fixed_radius_m is not None:
-            weight: float | np.ndarray = 1e12
-        elif radius_prior_m is not None and np.isfinite(radius_prior_sigma_m) and radius_prior_sigma_m > 0:
-            weight = (range_sigma_m / radius_prior_sigma_m) ** 2
-        else:
-            weight = 0.0
-        out = np.empty((k_count, 5))
-        kernel(
-            np.ascontiguousarray(points, dtype=float),
-            starts,
-            counts,
-            np.ascontiguousarray(origins, dtype=float),
-            prior is not None,
-            0.0 if prior is None else float(prior),
-            float(weight),
-            float(range_sigma_m),
-            int(iterations),
-            out,
-        )
-        return CircleFits(out[:, :2].copy(), out[:, 2].copy(), out[:, 3].copy(), out[:, 4].copy())
-    if backend != "numpy":
-        raise ValueError(f"backend must be 'numpy', 'numba' or 'auto', got {backend!r}")
     p, mask = _padded(np.asarray(points, dtype=float), starts, counts)
     n = counts.astype(float)
     mean = (p * mask[..., None]).sum(axis=1) / n[:, None]
@@ -226,9 +184,3 @@ def fit_circle(points: np.ndarray, sensor_origin=(0.0, 0.0), **options):
         points, np.array([0]), np.array([len(points)]), np.asarray(sensor_origin, float)[None, :], **options
     )
     return fits.centres[0], float(fits.radii_m[0]), float(fits.rms_m[0])
-
-
-def _numba_fit():
-    """The compiled fit (:func:`viapath.compiled.perception.fit_circles_kernel`), or None without numba."""
-    module = kernels("perception")
-    return None if module is None else module.fit_circles_kernel

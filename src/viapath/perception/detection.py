@@ -40,10 +40,10 @@ from typing import Any
 import numpy as np
 
 from viapath.compiled import kernels
-from viapath.perception.circle_fit import _numba_fit, _padded, fit_circles, solve_sym3
+from viapath.perception.circle_fit import CircleFits, _padded, fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
 from viapath.perception.scanner import ScannerModel
-from viapath.perception.segmentation import BeamTables, SegmentationParams, segment_beams
+from viapath.perception.segmentation import BeamTables, SegmentationParams, Segments, segment_beams
 
 
 @dataclass(frozen=True)
@@ -168,7 +168,7 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     ranges[~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = (
         np.nan
     )
-    compiled = params.fit_backend in ("numba", "auto") and _numba_fit() is not None
+    compiled = params.fit_backend in ("numba", "auto") and _compiled_perception() is not None
     segments = segment_beams(
         ranges,
         layout.angles_rad,
@@ -177,7 +177,7 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
         layout.scan_index,
         params.segmentation,
         _beam_tables(scanners, params.segmentation),
-        "numba" if compiled else "numpy",
+        _split_compiled if compiled else None,
     )
     point_scan = layout.scan_index[segments.all_beam_index]
     fused = FusedScan(segments.all_points, point_scan, segments.all_beam_index - layout.first_beam[point_scan])
@@ -197,68 +197,37 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     extent = np.hypot(chord[:, 0], chord[:, 1])
     keep = extent <= params.max_extent_m
     candidates = np.flatnonzero(keep)
+    if len(candidates):
+        straight = _straight(
+            points, starts, counts, first, chord, extent, origins, occluded, candidates, params, compiled
+        )
+        keep[candidates[straight]] = False
+        candidates = candidates[~straight]
+    centres_all, radii_all, sigma_all = _fit_candidates(points, starts, counts, origins, candidates, keep, params)
+    keep[:] = keep & np.isfinite(radii_all)
+    segment_info = (
+        _segment_info(points, starts, counts, source, centres_all, radii_all, keep) if params.keep_segments else []
+    )
+    centres = centres_all[keep]
+    radii = radii_all[keep]
+    sigma = np.maximum(sigma_all[keep], params.measurement_sigma_floor_m)
+    source = source[keep]
+    centres, radii, sigma, source = _merge_duplicates(centres, radii, sigma, source, params.duplicate_distance_m)
+    legs_mask = radii <= params.leg_max_radius_m
+    legs = centres[legs_mask]
+    centres, radii, sigma, leg_count = _pair_legs(centres, radii, sigma, legs_mask, params)
+    return Detections(centres, radii, sigma, leg_count, segment_info, legs, fused)
+
+
+def _fit_candidates(points, starts, counts, origins, candidates, keep, params) -> tuple[np.ndarray, ...]:
+    """Circle fits of the ``candidates`` segments: centres, radii and centre sigmas of every segment (NaN where not
+    fitted); a fit with an implausible radius or residual, or not finite, drops its segment from ``keep``."""
     centres_all = np.full((len(starts), 2), np.nan)
     radii_all = np.full(len(starts), np.nan)
     sigma_all = np.full(len(starts), np.nan)
     if len(candidates):
-        c_starts, c_counts, c_first, c_chord = (
-            starts[candidates],
-            counts[candidates],
-            first[candidates],
-            chord[candidates],
-        )
-        c_extent, c_origins = extent[candidates], origins[candidates]
-        kernel = _numba_shape_kernel() if compiled else None
-        if kernel is not None:  # the same sagittas and t-statistics, bit for bit, in one compiled pass
-            seg = params.segmentation
-            sagitta, t_convex = np.empty(len(candidates)), np.empty(len(candidates))
-            distance = np.hypot(*(c_first + 0.5 * c_chord - c_origins).T)  # as in _convexity_t
-            kernel(
-                points,
-                c_starts,
-                c_counts,
-                int(c_counts.max()),
-                c_first,
-                c_chord,
-                c_extent,
-                c_origins,
-                distance,
-                seg.noise_switch_range_m,
-                seg.noise_sigma_near_m,
-                seg.noise_fraction_far,
-                sagitta,
-                t_convex,
-            )
-            straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
-            if params.flat_test_min_extent_m is not None:
-                straight |= (c_extent >= params.flat_test_min_extent_m) & (t_convex < params.min_convexity_t)
-        else:
-            padded, mask = _padded(points, c_starts, c_counts)
-            x, y, mid = _chord_coordinates(padded, mask, c_first, c_chord, c_extent, c_origins)
-            sagitta = np.abs(y).max(1)
-            straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
-            if params.flat_test_min_extent_m is not None:
-                long_enough = c_extent >= params.flat_test_min_extent_m
-                if long_enough.any():
-                    t_convex = _convexity_t(
-                        x[long_enough],
-                        y[long_enough],
-                        mask[long_enough],
-                        mid[long_enough],
-                        c_origins[long_enough],
-                        params.segmentation,
-                    )
-                    straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
-        # A flat piece with something nearer beside it: background seen between foreground objects.
-        straight |= (
-            occluded[candidates]
-            & (c_extent >= params.occluded_min_extent_m)
-            & (sagitta < params.occluded_max_sagitta_ratio * c_extent)
-        )
-        keep[candidates[straight]] = False
-        candidates = candidates[~straight]
-    if len(candidates):
-        fits = fit_circles(
+        fits = fit_circles_as(
+            params.fit_backend,
             points,
             starts[candidates],
             counts[candidates],
@@ -268,7 +237,6 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
             fixed_radius_m=params.fixed_radius_m,
             range_sigma_m=params.segmentation.noise_sigma_near_m,
             iterations=params.iterations,
-            backend=params.fit_backend,
         )
         good = (
             (fits.radii_m >= params.radius_min_m)
@@ -282,37 +250,197 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
             fits.centre_sigma_m,
         )
         keep[candidates[~good]] = False
-    keep[:] = keep & np.isfinite(radii_all)
-    segment_info = (
-        [
-            dict(
-                scanner=int(source[k]),
-                points=points[starts[k] : starts[k] + counts[k]],
-                centre=centres_all[k],
-                radius_m=float(radii_all[k]),
-                accepted=bool(keep[k]),
-            )
-            for k in range(len(starts))
-        ]
-        if params.keep_segments
-        else []
+    return centres_all, radii_all, sigma_all
+
+
+def _straight(
+    points, starts, counts, first, chord, extent, origins, occluded, candidates, params, compiled
+) -> np.ndarray:
+    """Which of the ``candidates`` segments are straight (walls, flat pieces), by the sagitta and the convexity
+    t-statistic of each (compiled in one pass when ``compiled``), or flat with something nearer beside them."""
+    c_starts, c_counts, c_first, c_chord = (
+        starts[candidates],
+        counts[candidates],
+        first[candidates],
+        chord[candidates],
     )
+    c_extent, c_origins = extent[candidates], origins[candidates]
+    module = _compiled_perception() if compiled else None
+    if module is not None:  # the same sagittas and t-statistics, bit for bit, in one compiled pass
+        seg = params.segmentation
+        sagitta, t_convex = np.empty(len(candidates)), np.empty(len(candidates))
+        distance = np.hypot(*(c_first + 0.5 * c_chord - c_origins).T)  # as in _convexity_t
+        module.segment_shape_kernel(
+            points,
+            c_starts,
+            c_counts,
+            int(c_counts.max()),
+            c_first,
+            c_chord,
+            c_extent,
+            c_origins,
+            distance,
+            seg.noise_switch_range_m,
+            seg.noise_sigma_near_m,
+            seg.noise_fraction_far,
+            sagitta,
+            t_convex,
+        )
+        straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
+        if params.flat_test_min_extent_m is not None:
+            straight |= (c_extent >= params.flat_test_min_extent_m) & (t_convex < params.min_convexity_t)
+    else:
+        padded, mask = _padded(points, c_starts, c_counts)
+        x, y, mid = _chord_coordinates(padded, mask, c_first, c_chord, c_extent, c_origins)
+        sagitta = np.abs(y).max(1)
+        straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
+        if params.flat_test_min_extent_m is not None:
+            long_enough = c_extent >= params.flat_test_min_extent_m
+            if long_enough.any():
+                t_convex = _convexity_t(
+                    x[long_enough],
+                    y[long_enough],
+                    mask[long_enough],
+                    mid[long_enough],
+                    c_origins[long_enough],
+                    params.segmentation,
+                )
+                straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
+    # A flat piece with something nearer beside it: background seen between foreground objects.
+    straight |= (
+        occluded[candidates]
+        & (c_extent >= params.occluded_min_extent_m)
+        & (sagitta < params.occluded_max_sagitta_ratio * c_extent)
+    )
+    return straight
 
-    centres = centres_all[keep]
-    radii = radii_all[keep]
-    sigma = np.maximum(sigma_all[keep], params.measurement_sigma_floor_m)
-    source = source[keep]
-    centres, radii, sigma, source = _merge_duplicates(centres, radii, sigma, source, params.duplicate_distance_m)
-    legs_mask = radii <= params.leg_max_radius_m
-    legs = centres[legs_mask]
-    centres, radii, sigma, leg_count = _pair_legs(centres, radii, sigma, legs_mask, params)
-    return Detections(centres, radii, sigma, leg_count, segment_info, legs, fused)
+
+def _segment_info(points, starts, counts, source, centres, radii, accepted) -> list[dict]:
+    """Per segment: the scanner, its points, the fitted circle and whether it was accepted (for plots)."""
+    return [
+        dict(
+            scanner=int(source[k]),
+            points=points[starts[k] : starts[k] + counts[k]],
+            centre=centres[k],
+            radius_m=float(radii[k]),
+            accepted=bool(accepted[k]),
+        )
+        for k in range(len(starts))
+    ]
 
 
-def _numba_shape_kernel():
-    """The compiled shape tests (``viapath.compiled.perception.segment_shape_kernel``), or None without numba."""
-    module = kernels("perception")  # None: numba missing or unusable
-    return None if module is None else module.segment_shape_kernel
+def _compiled_perception():
+    """:mod:`viapath.compiled.perception` (the compiled clustering, shape tests and circle fit), or None: numba
+    missing or unusable."""
+    return kernels("perception")
+
+
+def fit_circles_as(choice: str, points, starts, counts, sensor_origins=None, **options) -> CircleFits:
+    """:func:`viapath.perception.circle_fit.fit_circles` in the arithmetic ``choice``: ``"numpy"`` (the
+    reference), ``"numba"`` (the same algorithm compiled, one loop per cluster; equal to round-off; an error
+    without numba) or ``"auto"`` (numba when installed)."""
+    if choice == "auto":
+        choice = "numba" if _compiled_perception() is not None else "numpy"
+    if choice == "numba":
+        return _fit_circles_compiled(points, starts, counts, sensor_origins, **options)
+    if choice != "numpy":
+        raise ValueError(f"backend must be 'numpy', 'numba' or 'auto', got {choice!r}")
+    return fit_circles(points, starts, counts, sensor_origins, **options)
+
+
+def _fit_circles_compiled(
+    points,
+    starts,
+    counts,
+    sensor_origins=None,
+    *,
+    radius_prior_m: float | None = None,
+    radius_prior_sigma_m: float = 0.05,
+    fixed_radius_m: float | None = None,
+    range_sigma_m: float = 0.01,
+    iterations: int = 4,
+) -> CircleFits:
+    """:func:`viapath.perception.circle_fit.fit_circles` compiled (:func:`viapath.compiled.perception.fit_circles_kernel`)."""
+    starts = np.asarray(starts, dtype=np.int64)
+    counts = np.asarray(counts, dtype=np.int64)
+    k_count = len(starts)
+    if k_count == 0:
+        return CircleFits(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
+    if (counts < 2).any():
+        raise ValueError("every cluster needs at least 2 points")
+    module = _compiled_perception()
+    if module is None:
+        raise RuntimeError("numba back end unavailable; pip install 'viapath[fast]'")
+    if sensor_origins is None:
+        origins = np.zeros((k_count, 2))
+    elif (
+        type(sensor_origins) is np.ndarray
+        and sensor_origins.dtype == np.float64
+        and sensor_origins.shape == (k_count, 2)
+    ):
+        origins = sensor_origins  # one per cluster already (detection): no broadcast view needed
+    else:
+        origins = np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
+    prior = fixed_radius_m if fixed_radius_m is not None else radius_prior_m
+    if fixed_radius_m is not None:
+        weight: float | np.ndarray = 1e12
+    elif radius_prior_m is not None and np.isfinite(radius_prior_sigma_m) and radius_prior_sigma_m > 0:
+        weight = (range_sigma_m / radius_prior_sigma_m) ** 2
+    else:
+        weight = 0.0
+    out = np.empty((k_count, 5))
+    module.fit_circles_kernel(
+        np.ascontiguousarray(points, dtype=float),
+        starts,
+        counts,
+        np.ascontiguousarray(origins, dtype=float),
+        prior is not None,
+        0.0 if prior is None else float(prior),
+        float(weight),
+        float(range_sigma_m),
+        int(iterations),
+        out,
+    )
+    return CircleFits(out[:, :2].copy(), out[:, 2].copy(), out[:, 3].copy(), out[:, 4].copy())
+
+
+def _split_compiled(points, r, valid, scans, tables: BeamTables, params: SegmentationParams) -> Segments:
+    """:func:`viapath.perception.segmentation.segment_beams`' clustering after the points in one compiled pass
+    (:func:`viapath.compiled.perception.split_clusters_kernel`), the same result bit for bit."""
+    split_clusters_kernel = _compiled_perception().split_clusters_kernel
+    n = len(valid)
+    starts, counts, cluster_scan = (
+        np.empty(n, dtype=np.int64),
+        np.empty(n, dtype=np.int64),
+        np.empty(n, dtype=scans.dtype),
+    )
+    occluded, kept_points = np.empty(n, dtype=bool), np.empty(n, dtype=np.int64)
+    kept, kept_total = split_clusters_kernel(
+        points,
+        r,
+        valid,
+        scans,
+        tables.sin_gap,
+        tables.sin_rest,
+        params.max_gap_beams,
+        params.noise_switch_range_m,
+        params.noise_sigma_near_m,
+        params.noise_fraction_far,
+        params.min_jump_m,
+        params.min_points,
+        starts,
+        counts,
+        occluded,
+        cluster_scan,
+        kept_points,
+    )
+    starts, counts, occluded, cluster_scan = starts[:kept], counts[:kept], occluded[:kept], cluster_scan[:kept]
+    if kept_total == n:  # every cluster kept: the points as they are
+        return Segments(valid, points, starts, counts, occluded, cluster_scan, points, valid)
+    index = kept_points[:kept_total]
+    return Segments(
+        valid[index], points[index], np.cumsum(counts) - counts, counts, occluded, cluster_scan, points, valid
+    )
 
 
 def _merge_duplicates(centres, radii, sigma, source, distance_m):
@@ -381,9 +509,9 @@ def _chord_coordinates(padded, mask, first, chord, extent, origins):
 def _convexity_t(x, y, mask, mid, origins, seg: SegmentationParams) -> np.ndarray:
     """t-statistic of the curvature towards the sensor of ``y = a + b x + c x²`` fitted across each chord."""
     x2 = x * x
-    # The eight row sums in one reduction: each row is summed alone, as by .sum(1) (same pairwise order).
-    count, sx, sx2, sx3, sx4, sy, sxy, sx2y = np.stack([mask, x, x2, x2 * x, x2 * x2, y, x * y, x2 * y]).sum(2)
-    coef, cofactors, det = solve_sym3((count, sx, sx2, sx2, sx3, sx4), (sy, sxy, sx2y))
+    sx2 = x2.sum(1)
+    moments = (mask.sum(1), x.sum(1), sx2, sx2, (x2 * x).sum(1), (x2 * x2).sum(1))
+    coef, cofactors, det = solve_sym3(moments, (y.sum(1), (x * y).sum(1), (x2 * y).sum(1)))
     inv22 = cofactors[5] / det
     distance = np.hypot(*(mid - origins).T)
     sigma = np.where(distance < seg.noise_switch_range_m, seg.noise_sigma_near_m, seg.noise_fraction_far * distance)

@@ -27,11 +27,12 @@ from dataclasses import fields, replace
 
 import numpy as np
 
+from viapath.compiled import kernels, require
 from viapath.observation import Obstacles
 from viapath.perception.base import Perception, WorldSnapshot
 from viapath.perception.detection import Detections, DetectorParams, detect
 from viapath.perception.fusion import BlindRegion, blind_region
-from viapath.perception.raycast import simulate_scans
+from viapath.perception.raycast import Caster, cast_rays_from_numpy, cast_rays_numpy, simulate_scans
 from viapath.perception.scanner import ScannerModel, paper_scanners
 from viapath.perception.segmentation import SegmentationParams
 from viapath.perception.static_layer import StaticLayerParams, StaticObstacleLayer
@@ -51,6 +52,40 @@ def _dataclass_from(cls, value, what: str):
     if unknown:
         raise ValueError(f"{what}: unknown option(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}")
     return cls(**value)
+
+
+def ray_casters(choice: str) -> tuple[Caster, Caster]:
+    """The ray casters (one origin: :func:`~viapath.perception.raycast.cast_rays_numpy`'s arguments; an origin per
+    beam: :func:`~viapath.perception.raycast.cast_rays_from_numpy`'s) of ``choice``: ``"numpy"``, ``"numba"``
+    (the same casting compiled, bit for bit; an error without numba) or ``"auto"`` (numba when installed). The
+    first compiled call on a machine compiles them (~seconds, cached on disk: :mod:`~viapath.compiled.perception`)."""
+    if choice == "auto":
+        choice = "numba" if kernels("perception") is not None else "numpy"
+    if choice == "numpy":
+        return cast_rays_numpy, cast_rays_from_numpy
+    if choice != "numba":
+        raise ValueError(f"backend must be 'numpy', 'numba' or 'auto', got {choice!r}")
+    compiled = require("perception")
+
+    def one_origin(origin, directions, centres, radii, segments) -> np.ndarray:
+        out = np.empty(len(directions))
+        compiled.cast_rays_kernel(
+            float(origin[0]),
+            float(origin[1]),
+            np.ascontiguousarray(directions, dtype=float),
+            centres,
+            radii,
+            segments,
+            out,
+        )
+        return out
+
+    def per_beam(origins_x, origins_y, directions, centres, radii, segments, groups=None) -> np.ndarray:
+        out = np.empty(len(directions))
+        compiled.cast_rays_from_kernel(origins_x, origins_y, directions, centres, radii, segments, out)
+        return out
+
+    return one_origin, per_beam
 
 
 class LaserPerception(Perception):
@@ -151,7 +186,13 @@ class LaserPerception(Perception):
         pose = np.asarray(world.robot_pose, dtype=float)
         rng = self.rng if self.range_noise else None
         return simulate_scans(
-            self.scanners, pose, world.obstacle_positions, world.obstacle_radii_m, world.walls, rng, self.ray_backend
+            self.scanners,
+            pose,
+            world.obstacle_positions,
+            world.obstacle_radii_m,
+            world.walls,
+            rng,
+            ray_casters(self.ray_backend)[1],
         )
 
     def process(self, time_s: float, robot_pose, scans) -> Obstacles:

@@ -49,7 +49,7 @@ def _sigmas(n: int, sigma: float) -> np.ndarray:
 
 
 # No obstacles: one instance handed out for every empty scene (its arrays hold nothing to change; they stay
-# writeable, as the compiled kernels are compiled for writeable arrays).
+# writeable, as the compiled functions are compiled for writeable arrays).
 _NOBODY = Obstacles.of_fresh_arrays(
     np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0), np.arange(0)
 )

@@ -11,21 +11,21 @@ What we chose:
   the scanner model then reports as invalid, as a real URG does below 20 mm.
 * A beam parallel to a wall (``d × e = 0``) does not hit it (it grazes an infinitely thin line).
 * The robot's own body is not in the scene: the scanners sit on top of it and do not see it.
-* Two back ends: vectorised numpy (``(B, N)`` broadcasting) and an optional numba loop
-  (``pip install 'viapath[fast]'``). They evaluate the same expressions in the same order, without
-  fast-math, so they agree bit for bit (tested). ``backend="auto"`` takes numba when it is
-  installed; the first call on a machine compiles the kernel (~seconds, cached on disk:
-  :mod:`~viapath.compiled.perception`), later processes load it.
+* This module is the numpy reference (``(B, N)`` broadcasting). The laser pipeline can hand it the same
+  casting compiled (:func:`viapath.perception.laser.ray_casters`, ``pip install 'viapath[fast]'``): the
+  same expressions in the same order, without fast-math, so they agree bit for bit (tested).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
-from viapath.compiled import kernels, require
+#: A ray caster: (origin or per-beam origins, directions, centres, radii, segments[, beam groups]) -> ranges.
+Caster = Callable[..., np.ndarray]
 
 
 def _as_inputs(centres, radii, segments):
@@ -78,35 +78,23 @@ def cast_rays_numpy(origin, directions, centres, radii, segments) -> np.ndarray:
     return best
 
 
-def cast_rays_numba(origin, directions, centres, radii, segments) -> np.ndarray:
-    out = np.empty(len(directions))
-    require("perception").cast_rays_kernel(
-        float(origin[0]), float(origin[1]), np.ascontiguousarray(directions, dtype=float), centres, radii, segments, out
-    )
-    return out
+def cast_rays(origin, angles_rad, centres, radii, segments=None, caster: Caster | None = None) -> np.ndarray:
+    r"""Distance from ``origin`` along each world-frame angle to the first disc or wall; ``inf`` = no hit.
 
-
-def cast_rays(origin, angles_rad, centres, radii, segments=None, backend: str = "numpy") -> np.ndarray:
-    """Distance from ``origin`` along each world-frame angle to the first disc or wall; ``inf`` = no hit.
-
-    ``backend``: ``"numpy"``, ``"numba"`` (error if numba is missing) or ``"auto"`` (numba if present).
+    ``caster``: what casts the rays, :func:`cast_rays_numpy`\ 's arguments (default: that function).
     """
     centres, radii, segments = _as_inputs(centres, radii, np.zeros((0, 2, 2)) if segments is None else segments)
     angles_rad = np.asarray(angles_rad, dtype=float).reshape(-1)
     directions = np.stack([np.cos(angles_rad), np.sin(angles_rad)], axis=-1)
-    if backend == "auto":
-        backend = "numba" if kernels("perception") is not None else "numpy"
-    if backend == "numpy":
-        return cast_rays_numpy(origin, directions, centres, radii, segments)
-    if backend == "numba":
-        return cast_rays_numba(origin, directions, centres, radii, segments)
-    raise ValueError(f"backend must be 'numpy', 'numba' or 'auto', got {backend!r}")
+    return (caster or cast_rays_numpy)(origin, directions, centres, radii, segments)
 
 
-def simulate_scan(scanner, robot_pose, centres, radii, segments=None, rng=None, backend: str = "numpy") -> np.ndarray:
+def simulate_scan(
+    scanner, robot_pose, centres, radii, segments=None, rng=None, caster: Caster | None = None
+) -> np.ndarray:
     """Readings of ``scanner`` mounted on a robot at ``robot_pose``, as its driver would report them."""
     x, y, yaw = scanner.world_pose(robot_pose)
-    true_range = cast_rays((x, y), scanner.beam_angles_rad() + yaw, centres, radii, segments, backend=backend)
+    true_range = cast_rays((x, y), scanner.beam_angles_rad() + yaw, centres, radii, segments, caster)
     return scanner.measure(true_range, rng)
 
 
@@ -233,10 +221,11 @@ def _candidate_pairs(origins_x, origins_y, centres, radii, groups, best):
 
 
 def simulate_scans(
-    scanners, robot_pose, centres, radii, segments=None, rng=None, backend: str = "numpy"
+    scanners, robot_pose, centres, radii, segments=None, rng=None, caster: Caster | None = None
 ) -> list[np.ndarray]:
-    """``[simulate_scan(s, ...) for s in scanners]`` in one pass: the same readings, bit for bit, and the
-    same draws from ``rng`` (one normal per hit beam, scanner after scanner)."""
+    r"""``[simulate_scan(s, ...) for s in scanners]`` in one pass: the same readings, bit for bit, and the
+    same draws from ``rng`` (one normal per hit beam, scanner after scanner). ``caster``: what casts the rays
+    of every beam, :func:`cast_rays_from_numpy`\ 's arguments (default: that function)."""
     scanners = tuple(scanners)
     layout = _scan_layout(scanners)
     centres, radii, segments = _as_inputs(centres, radii, np.zeros((0, 2, 2)) if segments is None else segments)
@@ -260,17 +249,7 @@ def simulate_scans(
     directions = np.empty((n_beams, 2))  # cosines and sines of every scanner's beams in one call each,
     directions[:, 0] = np.cos(angles)  # on a contiguous array, as before (numpy may take another loop
     directions[:, 1] = np.sin(angles)  # for strided output)
-    if backend == "auto":
-        backend = "numba" if kernels("perception") is not None else "numpy"
-    if backend == "numpy":
-        true_range = cast_rays_from_numpy(origins_x, origins_y, directions, centres, radii, segments, groups)
-    elif backend == "numba":
-        true_range = np.empty(n_beams)
-        require("perception").cast_rays_from_kernel(
-            origins_x, origins_y, directions, centres, radii, segments, true_range
-        )
-    else:
-        raise ValueError(f"backend must be 'numpy', 'numba' or 'auto', got {backend!r}")
+    true_range = (caster or cast_rays_from_numpy)(origins_x, origins_y, directions, centres, radii, segments, groups)
     # ScannerModel.measure on every scanner at once: same expressions, per-beam parameters.
     reading = true_range.copy()
     if rng is not None:

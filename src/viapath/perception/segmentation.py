@@ -23,11 +23,10 @@ What the source leaves open and we chose:
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-
-from viapath.compiled import require
 
 
 @dataclass(frozen=True)
@@ -129,7 +128,7 @@ def segment_beams(
     scan_index,
     params: SegmentationParams = SegmentationParams(),
     tables: BeamTables | None = None,
-    backend: str = "numpy",
+    splitter: Callable[..., Segments] | None = None,
 ) -> Segments:
     """Cluster the beams of several scans at once (concatenated, each in beam order).
 
@@ -137,8 +136,8 @@ def segment_beams(
     a common frame (the robot frame); a cluster never spans two scans (``scan_index`` per beam).
     Clusters with fewer than ``min_points`` points are dropped; ``all_points`` keeps every valid point.
     ``tables``: :class:`BeamTables` of ``angles_rad`` and ``params`` when the caller keeps them (same result).
-    ``backend="numba"`` (with ``tables``): the clustering after the points in one compiled pass
-    (``viapath.compiled.perception.split_clusters_kernel``), the same result bit for bit.
+    ``splitter`` (with ``tables``): the clustering after the points, ``splitter(points, ranges, beams, scans, tables,
+    params)``, in place of this numpy reference (the laser pipeline's compiled pass, the same result bit for bit).
     """
     ranges_m = np.asarray(ranges_m, dtype=float)
     valid = np.flatnonzero(np.isfinite(ranges_m))
@@ -152,8 +151,8 @@ def segment_beams(
     points[:, 0] = ox + r * (np.cos(a) if tables is None else tables.cos_rad[valid])
     points[:, 1] = oy + r * (np.sin(a) if tables is None else tables.sin_rad[valid])
     scans = np.asarray(scan_index)[valid]
-    if backend == "numba" and tables is not None:
-        return _split_compiled(points, r, valid, scans, tables, params)
+    if splitter is not None and tables is not None:
+        return splitter(points, r, valid, scans, tables, params)
     step = np.diff(points, axis=0)
     gap = np.sqrt(step[:, 0] ** 2 + step[:, 1] ** 2)
     beam_step = np.diff(valid)
@@ -187,43 +186,6 @@ def segment_beams(
         valid, points = valid[index], points[index]
         starts = np.cumsum(counts) - counts
     return Segments(valid, points, starts, counts, occluded, cluster_scan, all_points, all_beams)
-
-
-def _split_compiled(points, r, valid, scans, tables: BeamTables, params: SegmentationParams) -> Segments:
-    split_clusters_kernel = require("perception").split_clusters_kernel
-    n = len(valid)
-    starts, counts, cluster_scan = (
-        np.empty(n, dtype=np.int64),
-        np.empty(n, dtype=np.int64),
-        np.empty(n, dtype=scans.dtype),
-    )
-    occluded, kept_points = np.empty(n, dtype=bool), np.empty(n, dtype=np.int64)
-    kept, kept_total = split_clusters_kernel(
-        points,
-        r,
-        valid,
-        scans,
-        tables.sin_gap,
-        tables.sin_rest,
-        params.max_gap_beams,
-        params.noise_switch_range_m,
-        params.noise_sigma_near_m,
-        params.noise_fraction_far,
-        params.min_jump_m,
-        params.min_points,
-        starts,
-        counts,
-        occluded,
-        cluster_scan,
-        kept_points,
-    )
-    starts, counts, occluded, cluster_scan = starts[:kept], counts[:kept], occluded[:kept], cluster_scan[:kept]
-    if kept_total == n:  # every cluster kept: the points as they are
-        return Segments(valid, points, starts, counts, occluded, cluster_scan, points, valid)
-    index = kept_points[:kept_total]
-    return Segments(
-        valid[index], points[index], np.cumsum(counts) - counts, counts, occluded, cluster_scan, points, valid
-    )
 
 
 def _ranges_index(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:

@@ -328,7 +328,7 @@ class MultiTargetTracker:
         # The sigmas of the reported rows only (elementwise: the same values as sigmas()[rows]); every
         # array is fresh (boolean indexing copies), so Obstacles may keep them without copying again. The
         # positions and velocities are two column views of one such copy (not C-contiguous: the planner's
-        # kernels get contiguous copies, LegChecks.kernel_obstacles).
+        # compiled path gets contiguous copies of them).
         return Obstacles.of_fresh_arrays(
             state[:, :2],
             state[:, 2:],

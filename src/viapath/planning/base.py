@@ -23,7 +23,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from viapath.compiled import harness_kernels
+from viapath.compiled import compiled_harness
 from viapath.guard import guard_plan, inspected
 from viapath.kinematics import steer_towards
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
@@ -78,11 +78,11 @@ class Inflation:
         if len(obstacles) == 0:
             return _NO_INFLATION
         margin, k = settings["safety_margin_m"], settings["uncertainty_sigmas"]
-        kernels = harness_kernels()
-        if kernels is not None:  # the same numbers in one compiled call (viapath.compiled.harness.inflation)
+        harness = compiled_harness()
+        if harness is not None:  # the same numbers in one compiled call (viapath.compiled.harness.inflation)
             rows = np.empty((4, len(obstacles)))
             try:
-                kernels.inflation(
+                harness.inflation(
                     obstacles.radii_m,
                     obstacles.position_sigma_m,
                     obstacles.velocity_sigma_mps,
@@ -112,7 +112,7 @@ class Inflation:
 
 
 # The inflation of no obstacles: one instance serves every empty scene (its arrays hold nothing to change;
-# they stay writeable, as the compiled kernels are compiled for writeable arrays).
+# they stay writeable, as the compiled functions are compiled for writeable arrays).
 _NO_INFLATION = Inflation(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0))
 
 
@@ -209,10 +209,10 @@ class Planner:
 
     def _inflation_and_excess(self, obstacles: Obstacles, position: np.ndarray) -> tuple[Inflation, float]:
         """:meth:`Inflation.of` the obstacles and how far the robot is outside the corridor (the path's
-        ``corridor_excess``). With numba both in one compiled call (:func:`viapath.compiled.harness.situation_numbers`,
+        ``corridor_excess``). Compiled, both in one call (:func:`viapath.compiled.harness.situation_numbers`,
         the same numbers): every cycle, where each call costs more than its arithmetic."""
-        kernels, n = harness_kernels(), len(obstacles)
-        if kernels is not None and n and position.shape == (2,):
+        harness, n = compiled_harness(), len(obstacles)
+        if harness is not None and n and position.shape == (2,):
             x, y = float(position[0]), float(position[1])
             if math.isfinite(x) and math.isfinite(y):
                 settings, path = self.settings, self.path
@@ -229,7 +229,7 @@ class Planner:
                 margin_m, sigmas, max_inflation_m = cached[1]
                 rows = np.empty((4, n))
                 try:
-                    excess_m = kernels.situation_numbers(
+                    excess_m = harness.situation_numbers(
                         obstacles.radii_m,
                         obstacles.position_sigma_m,
                         obstacles.velocity_sigma_mps,

@@ -39,7 +39,7 @@ positions.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -48,9 +48,6 @@ from viapath.geometry import VIA_ROOTS as _ROOTS
 from viapath.geometry import VIA_SIDES as _SIDES
 from viapath.options import Settings
 from viapath.planning.viapath.checks import LegChecks
-
-if TYPE_CHECKING:
-    from viapath.compiled.backend import NodeStore
 
 # The "obstacle" of a way that is not round an obstacle.
 STRAIGHT = -1  # the straight leg to the subgoal (or a chain grown from it)
@@ -198,9 +195,6 @@ def grow(
 ) -> Candidates | None:
     """Every complete candidate of the cycle (straight, slow/wait, corners, via-point chains).
     ``slow_checks`` (default ``checks``) checks the first, slow leg of the slow/wait candidates."""
-    compiled = checks.backend.grow(checks, slow_checks or checks, roots, config)  # type: ignore[no-untyped-call]
-    if compiled is not None:
-        return _candidates_of(compiled, checks.subgoal)
     speeds = roots.speeds
     n_speeds = len(speeds)
     tree = _Tree()
@@ -262,9 +256,9 @@ def grow(
     )
 
 
-def _candidates_of(store: NodeStore, subgoal: np.ndarray) -> Candidates | None:
-    """Candidates from the compiled tree's node store (:meth:`viapath.compiled.backend.Backend.grow`): the same arrays as
-    the numpy :func:`grow` builds, leaves in node order as there."""
+def _candidates_of(store: Any, subgoal: np.ndarray) -> Candidates | None:
+    """Candidates from the compiled tree's node store (the planner's compiled step instead of :func:`grow`): the
+    same arrays as the numpy :func:`grow` builds, leaves in node order as there."""
     data = store.columns()
     leaves = store.leaves()
     if len(leaves) == 0:
@@ -352,7 +346,7 @@ def _via_children(
     speeds = data["speed"][node_index]
     obstacles = checks.obstacles
     # The radius grows with prediction uncertainty; it is evaluated near the expected passing time.
-    pair, option, t_k, leg_velocity, via = checks.backend.via_options(  # type: ignore[no-untyped-call]
+    pair, option, t_k, leg_velocity, via = checks.via_options(
         starts,
         times,
         speeds,

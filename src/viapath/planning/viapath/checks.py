@@ -24,13 +24,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from itertools import islice
 from typing import Any
 
 import numpy as np
 
 from viapath.compiled.backend import NUMPY, Backend
 from viapath.geometry import cross2
-from viapath.observation import Obstacles
+from viapath.kinematics import UnicycleState, tracking
+from viapath.observation import MotionLimits, Obstacles
 from viapath.options import Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.planning.base import Inflation, Situation
@@ -405,6 +407,47 @@ class LegChecks:
             now = np.hypot(*(self.position - obstacles.positions).T)
             cached = cache[(steps, dt)] = (centres[..., 0], centres[..., 1], np.minimum(reach, now - 1e-3))
         return cached
+
+    # -- the arithmetic the planner picked for this cycle (``backend``: numpy, or compiled), for the recipe's steps
+
+    def via_options(self, *arguments: Any) -> tuple[np.ndarray, ...]:
+        """:func:`viapath.geometry.via_options` in the cycle's arithmetic."""
+        return self.backend.via_options(*arguments)  # type: ignore[no-untyped-call]
+
+    def corridor_excess(self, points: np.ndarray) -> np.ndarray:
+        """:meth:`DesignatedPath.corridor_excess` of the path in the cycle's arithmetic."""
+        return self.backend.corridor_excess(self.path, points)
+
+    def escape_contacts(self, *arguments: Any) -> tuple[np.ndarray, ...] | None:
+        """The escape's first contacts and gaps compiled; None in numpy (the escape works them out itself)."""
+        return self.backend.escape_contacts(*arguments)
+
+    def clear_track(
+        self,
+        state: UnicycleState,
+        target: np.ndarray,
+        speed_mps: float,
+        limits: MotionLimits,
+        dt: float,
+        steps: int,
+        heading_gain: float,
+    ) -> np.ndarray | None:
+        """The positions (steps, 2) of steering for ``target`` at ``speed_mps`` (:func:`viapath.kinematics.track`) if
+        they keep clear of every obstacle (:meth:`clear`), else None."""
+        if self.backend.name != "numpy":
+            positions = self.backend.track(state, target, speed_mps, limits, dt, steps, heading_gain)
+            return positions if self.clear(positions, dt) else None
+        # A failing candidate mostly meets someone early in its roll-out (in the slowest cycles, up to 8
+        # candidates fail within the first second): its first half is checked before the rest is rolled
+        # out. The same positions and verdict; a roll-out that passes pays one more (small) check.
+        rolling = tracking(state, target, speed_mps, limits, dt, heading_gain)
+        head = np.array(list(islice(rolling, steps // 2))).reshape(-1, 2)
+        if not self.clear(head, dt, of_steps=steps):
+            return None
+        tail = np.array(list(islice(rolling, steps - len(head)))).reshape(-1, 2)
+        if not self.clear(tail, dt, after_steps=len(head), of_steps=steps):
+            return None
+        return np.concatenate([head, tail])
 
     # -- against the corridor (paper step 4) ---------------------------------------------------------
 

@@ -125,6 +125,10 @@ class Hysteresis(Critic):
         return -(self.weight * (same_way + 0.5 * (same_way & same_speed)))
 
 
+#: The critics the compiled choice sums, in this order (critics_for's); with others the numpy choice runs.
+PAPER_CRITICS = (Distance, Time, SpeedError, Heading, SidePreference, Hysteresis)
+
+
 def critics_for(config: Settings) -> tuple[Critic, ...]:
     """The critics of the viapath planner, from its options, in the order they are summed."""
     return (

@@ -23,9 +23,9 @@ Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 
   further out than it already is): standing is always among the commands, and at rest the robot is
   passively safe (DESIGN §7); fleeing 10 m off the path is not.
 
-:func:`escape_scores` is the reference. On the compiled path, once the whole-step kernels are compiled,
-:meth:`viapath.compiled.backend.Backend.escape` gives the standing check and the same scores, bit for bit, in two kernel calls
-(docs/CHANGELOG-speed.md, "The escape compiled"); :func:`stop_or_escape` then decides from them as here.
+:func:`escape_scores` is the reference. On the compiled path the planner hands :func:`stop_or_escape` the standing
+check and the same scores, bit for bit, from two compiled calls (docs/CHANGELOG-speed.md, "The escape compiled");
+it then decides from them as here.
 """
 
 from __future__ import annotations
@@ -43,12 +43,16 @@ from viapath.planning.viapath.checks import LegChecks
 
 
 def stop_or_escape(
-    checks: LegChecks, limits: MotionLimits, config: Settings, previous: Command | None = None
+    checks: LegChecks,
+    limits: MotionLimits,
+    config: Settings,
+    previous: Command | None = None,
+    compiled: tuple[Any, ...] | None = None,
 ) -> Decision:
-    """``previous``: last cycle's command if last cycle escaped too (for a calm escape)."""
+    """``previous``: last cycle's command if last cycle escaped too (for a calm escape). ``compiled``: (standing is
+    free, commands, ends, scores) from the planner's compiled path; None: worked out here."""
     position = checks.position
     base: dict[str, Any] = dict(subgoal_index=checks.subgoal_index)
-    compiled = checks.backend.escape(checks, limits, config, escape_fan(limits, config), previous)  # numpy: None
     if compiled is None:
         standing = checks.contact_times(position[None], np.zeros(1), np.zeros((1, 2)), np.array([config.horizon_s]))
         standing_free = np.isinf(standing).all()
@@ -80,7 +84,7 @@ def escape_scores(
     )
     positions = rollout(state, commands, limits, dt, steps, (row_turns, turn_rows))  # (K, S, 2)
     times = dt * np.arange(1, steps + 1)
-    excess = checks.backend.corridor_excess(checks.path, positions.reshape(-1, 2)).reshape(len(commands), steps)
+    excess = checks.corridor_excess(positions.reshape(-1, 2)).reshape(len(commands), steps)
     inside = (excess <= checks.corridor_tolerance_m).all(axis=1)
     within_bound = excess.max(axis=1) <= max(config.escape_max_excess_m, checks.corridor_tolerance_m)
 
@@ -90,44 +94,18 @@ def escape_scores(
     gap_all = np.hypot(*(position - obstacles.positions).T) - checks.check_radii
     growth_all = checks.growth * np.minimum(horizon, checks.growth_until_s)
     near = gap_all - growth_all - np.hypot(*obstacles.velocities.T) * horizon - travel <= 0
-    positions_obs, velocities_obs = obstacles.positions[near], obstacles.velocities[near]
+    # the people near: positions, velocities, check radii, cone growth and its cap
+    radii, growth, until = checks.check_radii[near], checks.growth[near], checks.growth_until_s[near]
+    people = (obstacles.positions[near], obstacles.velocities[near], radii, growth, until)
     gap_now = gap_all[near]
     overlapping = gap_now <= 0
     any_overlapping = bool(overlapping.any())
-    compiled = checks.backend.escape_contacts(
-        positions,
-        times,
-        positions_obs,
-        velocities_obs,
-        checks.check_radii[near],
-        checks.growth[near],
-        checks.growth_until_s[near],
-        overlapping,
-        steps,
-    )
+    compiled = checks.escape_contacts(positions, times, *people, overlapping, steps)
     if compiled is not None:  # the same figures, without the (K, S, N) arrays
         first_step, gap_min, gap_last = compiled
         time_to_contact = first_step * dt
     else:
-        centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
-        reach = checks.check_radii[near] + checks.growth[near] * np.minimum(times[:, None], checks.growth_until_s[near])
-        # The same differences as of the (K, S, N, 2) offsets, x and y apart and people first, (N, K, S):
-        # every large operation below then runs contiguously along the steps.
-        robot_x, robot_y = (np.ascontiguousarray(positions[..., axis]) for axis in (0, 1))  # (K, S)
-        dx = robot_x[None] - np.ascontiguousarray(centres[..., 0].T)[:, None, :]  # (N, K, S)
-        dy = robot_y[None] - np.ascontiguousarray(centres[..., 1].T)[:, None, :]
-        reach = np.ascontiguousarray(reach.T)[:, None, :]  # (N, 1, S)
-        # The first step at which any person not overlapped now is touched (gap < 0): the earliest over
-        # the people of each one's first step.
-        touched: Any = touching(dx, dy, reach)
-        if any_overlapping:  # (with no one overlapped, as mostly, the mask would change nothing)
-            touched &= ~overlapping[:, None, None]
-        touched = touched.any(axis=0)  # (K, S)
-        time_to_contact = np.where(touched.any(axis=1), touched.argmax(axis=1), steps) * dt
-        if any_overlapping:
-            gap = np.hypot(dx[overlapping], dy[overlapping]) - reach[overlapping]  # (M, K, S)
-            # (K, M) in C order, as the score sums them along M
-            gap_min, gap_last = np.ascontiguousarray(np.min(gap, axis=2).T), np.ascontiguousarray(gap[:, :, -1].T)
+        time_to_contact, gap_min, gap_last = _contacts(positions, times, *people, overlapping, steps, dt)
     if any_overlapping:
         deeper = gap_min - gap_now[overlapping]
         still_inside = gap_last
@@ -136,7 +114,7 @@ def escape_scores(
         separation = np.zeros(len(commands))
     toward = checks.subgoal - position
     toward = toward / max(float(np.hypot(*toward)), 1e-9)
-    # (end - position) · toward written out, the same sum on every machine (``@`` hands it to BLAS, whose kernels
+    # (end - position) · toward written out, the same sum on every machine (``@`` hands it to BLAS, whose routines
     # differ in whether they fuse the multiply and the add)
     ends = positions[:, -1]
     progress = ((ends[:, 0] - position[0]) * toward[0] + (ends[:, 1] - position[1]) * toward[1]) / config.escape_s
@@ -157,6 +135,43 @@ def escape_scores(
         score = score - config.escape_continuity_s * np.minimum(change, 1.0)
     score = np.where(within_bound | (commands[:, 0] == 0.0), score, -np.inf)
     return commands, ends, score
+
+
+def _contacts(
+    positions: np.ndarray,
+    times: np.ndarray,
+    positions_obs: np.ndarray,
+    velocities_obs: np.ndarray,
+    check_radii: np.ndarray,
+    growth: np.ndarray,
+    growth_until_s: np.ndarray,
+    overlapping: np.ndarray,
+    steps: int,
+    dt: float,
+) -> tuple[np.ndarray, Any, Any]:
+    """Of K roll-outs (positions (K, S, 2)) against the people near: the time to the first contact with anyone not
+    overlapped now (K,), and the smallest and last gaps to those overlapped now ((K, M) each; None when none is)."""
+    centres = positions_obs[None] + velocities_obs[None] * times[:, None, None]  # (S, N, 2)
+    reach = check_radii + growth * np.minimum(times[:, None], growth_until_s)
+    # The same differences as of the (K, S, N, 2) offsets, x and y apart and people first, (N, K, S):
+    # every large operation below then runs contiguously along the steps.
+    robot_x, robot_y = (np.ascontiguousarray(positions[..., axis]) for axis in (0, 1))  # (K, S)
+    dx = robot_x[None] - np.ascontiguousarray(centres[..., 0].T)[:, None, :]  # (N, K, S)
+    dy = robot_y[None] - np.ascontiguousarray(centres[..., 1].T)[:, None, :]
+    reach = np.ascontiguousarray(reach.T)[:, None, :]  # (N, 1, S)
+    any_overlapping = bool(overlapping.any())
+    # The first step at which any person not overlapped now is touched (gap < 0): the earliest over
+    # the people of each one's first step.
+    touched: Any = touching(dx, dy, reach)
+    if any_overlapping:  # (with no one overlapped, as mostly, the mask would change nothing)
+        touched &= ~overlapping[:, None, None]
+    touched = touched.any(axis=0)  # (K, S)
+    time_to_contact = np.where(touched.any(axis=1), touched.argmax(axis=1), steps) * dt
+    if not any_overlapping:
+        return time_to_contact, None, None
+    gap = np.hypot(dx[overlapping], dy[overlapping]) - reach[overlapping]  # (M, K, S)
+    # (K, M) in C order, as the score sums them along M
+    return time_to_contact, np.ascontiguousarray(np.min(gap, axis=2).T), np.ascontiguousarray(gap[:, :, -1].T)
 
 
 def escape_top_speed(limits: MotionLimits, config: Settings) -> float:
@@ -197,9 +212,8 @@ def _fan(speeds: tuple[float, ...], top: float, max_turn_rate_radps: float) -> n
 
 def escape_fan(limits: MotionLimits, config: Settings) -> tuple[Any, ...]:
     """The top speed, the fan's commands (K, 2), its distinct turn commands (T,) and each command's index
-    among them (K,), for :func:`escape_scores`' roll-out and the compiled escape (:meth:`viapath.compiled.backend.Backend.escape`,
-    given them by the caller: the backend does not import this module, which imports the checks, which import
-    the backend), which take the headings, sines and cosines once per turn command: the commands of one turn
+    among them (K,), for :func:`escape_scores`' roll-out and the compiled escape (given them by the planner: the compiled
+    package does not import this module, which imports the checks, which import the compiled package), which take the headings, sines and cosines once per turn command: the commands of one turn
     rate share them."""
     return _fan_turns(tuple(config.speeds), escape_top_speed(limits, config), limits.max_turn_rate_radps)
 

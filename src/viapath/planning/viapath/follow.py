@@ -14,12 +14,11 @@ after an escape, a robot facing a little outwards would otherwise never get goin
 from __future__ import annotations
 
 import math
-from itertools import islice
 
 import numpy as np
 
 from viapath.geometry import wrap_angle
-from viapath.kinematics import UnicycleState, tracking
+from viapath.kinematics import UnicycleState
 from viapath.observation import MotionLimits, Plan
 from viapath.options import Settings
 from viapath.planning.viapath.checks import LegChecks
@@ -75,22 +74,9 @@ def _roll_out(
         checks.speed_mps,
         checks.turn_rate_radps,
     )
-    if checks.backend.name == "numpy":
-        # A failing candidate mostly meets someone early in its roll-out (in the slowest cycles, up to 8
-        # candidates fail within the first second): its first half is checked before the rest is rolled
-        # out. The same positions and verdict; a roll-out that passes pays one more (small) check.
-        rolling = tracking(state, target, speed_mps, limits, dt, config.heading_gain)
-        head = np.array(list(islice(rolling, steps // 2))).reshape(-1, 2)
-        if not checks.clear(head, dt, of_steps=steps):
-            return False, False
-        tail = np.array(list(islice(rolling, steps - len(head)))).reshape(-1, 2)
-        if not checks.clear(tail, dt, after_steps=len(head), of_steps=steps):
-            return False, False
-        positions = np.concatenate([head, tail])
-    else:
-        positions = checks.backend.track(state, target, speed_mps, limits, dt, steps, config.heading_gain)
-        if not checks.clear(positions, dt):
-            return False, False
+    positions = checks.clear_track(state, target, speed_mps, limits, dt, steps, config.heading_gain)
+    if positions is None:
+        return False, False
     if checks.inside(positions).all():
         return True, False
     turn_s = heading_error / limits.max_turn_rate_radps + 1.0

@@ -53,7 +53,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -63,29 +63,19 @@ from viapath.compiled import resolve as resolve_backend
 from viapath.compiled import slots as slot
 from viapath.compiled.backend import STEPWISE, NodeStore, backend_for, whole_steps_compiled
 from viapath.geometry import wrap_angle
-from viapath.observation import Command, Observation, Obstacles, RobotState
+from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.options import Settings
 from viapath.path import DesignatedPath
 from viapath.planning.base import Decision, Inflation, Plan, Planner, Situation
 from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, RootLegs, Way, _candidates_of, grow
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.critics import (
-    Context,
-    Distance,
-    Heading,
-    Hysteresis,
-    SidePreference,
-    SpeedError,
-    Time,
-    critics_for,
-    score,
-)
-from viapath.planning.viapath.escape import stop_or_escape
+from viapath.planning.viapath.critics import PAPER_CRITICS, Context, critics_for, score
+from viapath.planning.viapath.escape import escape_fan, stop_or_escape
 from viapath.planning.viapath.follow import can_follow, follows
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
 
-# The critics kernels.choose sums, in this order (critics_for's): others take the numpy choice.
-_PAPER_CRITICS = (Distance, Time, SpeedError, Heading, SidePreference, Hysteresis)
+if TYPE_CHECKING:
+    from viapath.planning.viapath.critics import Distance, Heading, Hysteresis, SidePreference, SpeedError, Time
 
 
 class _CompiledCandidates:
@@ -176,7 +166,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         chosen = self._choose(checks, speeds, nominal_index, self._previous)
         if chosen is None:
             self._previous = None
-            decision = stop_or_escape(checks, self.limits, self.config, self._previous_escape)
+            decision = escape_step(checks, self.limits, self.config, self._previous_escape)
             self._previous_escape = decision.command if decision.plan.status == "escape" else None
             if decision.plan.status == "stop" and checks.obstacles.static_mask is not None:
                 return self._blocked(situation, checks, float(speeds[nominal_index])) or decision
@@ -312,7 +302,7 @@ class ViaPathPlanner(Planner, name="viapath"):
             )
             if can_follow(plan, checks, self.limits, self.config) and self._inside_shield(plan):
                 return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
-        candidates = grow(checks, roots, self.config, self._slow_checks(checks))
+        candidates = grow_step(checks, roots, self.config, self._slow_checks(checks))
         if candidates is None:
             return None
         costs = score(candidates, self.critics, Context(checks.heading_rad, self.nominal_speed_mps, previous))
@@ -353,7 +343,7 @@ class ViaPathPlanner(Planner, name="viapath"):
                 backend.name == "numba"
                 and backend.whole_steps
                 and not config.record_candidates
-                and tuple(map(type, critics)) == _PAPER_CRITICS
+                and tuple(map(type, critics)) == PAPER_CRITICS
             )
             cached = self.__dict__["_compiled_choice_of"] = (backend, config, critics, answer)
         return cached[3]
@@ -373,7 +363,7 @@ class ViaPathPlanner(Planner, name="viapath"):
             return cached[4]
         distance, time, speed, heading, side, hysteresis = cast(
             "tuple[Distance, Time, SpeedError, Heading, SidePreference, Hysteresis]", self.critics
-        )  # the paper's critics (_PAPER_CRITICS): the only ones the kernels take
+        )  # the paper's critics (PAPER_CRITICS): the only ones the kernels take
         settings = np.zeros(slot.F_COUNT, dtype=np.float64)
         settings[[slot.F_K1, slot.F_K2, slot.F_K3, slot.F_K4, slot.F_SIDE, slot.F_HYSTERESIS]] = (
             distance.weight,
@@ -666,6 +656,24 @@ def _cost_terms(
 def ViaPathConfig(**values: Any) -> Settings:
     """The viapath planner's options, validated, defaults filled in (``make_planner(..., config=...)``)."""
     return VIAPATH_OPTIONS.validate(values, where="viapath")
+
+
+def grow_step(
+    checks: LegChecks, roots: RootLegs, config: Settings, slow_checks: LegChecks | None = None
+) -> Candidates | None:
+    """The candidate tree of the cycle: in one compiled call on the compiled path with its whole-step kernels
+    (the same candidates), else :func:`.candidates.grow`, the numpy reference."""
+    store = checks.backend.grow(checks, slow_checks or checks, roots, config)  # type: ignore[no-untyped-call]
+    if store is not None:
+        return _candidates_of(store, checks.subgoal)
+    return grow(checks, roots, config, slow_checks)
+
+
+def escape_step(checks: LegChecks, limits: MotionLimits, config: Settings, previous: Command | None = None) -> Decision:
+    """Stop or escape (:func:`.escape.stop_or_escape`): its standing check and scores in two compiled calls on the
+    compiled path with its whole-step kernels (the same figures, bit for bit), else its numpy reference."""
+    compiled = checks.backend.escape(checks, limits, config, escape_fan(limits, config), previous)
+    return stop_or_escape(checks, limits, config, previous, compiled)
 
 
 def compile_kernels() -> bool:

@@ -1,0 +1,68 @@
+"""Two execution paths (numpy, compiled), chosen in few places: once per recipe step of the planner, of the shield
+and of the laser pipeline, never inside the numpy reference functions. Outside the compiled package
+(src/viapath/compiled/) at most five files may name kernels, numba or backends: the ones in ``DISPATCH``. The
+files in ``NOT_YET`` still name them (with why); a new file that names them fails, and so does an entry of
+``NOT_YET`` once its file no longer does (then delete the entry)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "viapath"
+WORDS = re.compile(r"kernel|numba|backend", re.IGNORECASE)
+
+DISPATCH = {
+    "planning/viapath/planner.py": "the planner's recipe: numpy or compiled per step (backend_for, grow_step, ...)",
+    "planning/viapath/options.py": "the planner's option 'backend' (its name, default, choices and help)",
+    "safety/shield.py": "the shield's recipe: numpy or compiled per evaluation",
+    "safety/options.py": "the shield's option 'backend'",
+    "perception/detection.py": "the laser pipeline's dispatch: compiled clustering, shape tests and circle fit",
+}
+
+_USER_FACING = "a user-facing name that must keep working"
+NOT_YET = {
+    "planning/viapath/checks.py": "LegChecks carries the cycle's arithmetic and the kernel_* inputs the compiled "
+    "package reads by name (viapath.compiled.backend)",
+    "perception/laser.py": _USER_FACING + " (LaserPerception's ray_backend option) and its ray casters",
+    "ros2/settings.py": _USER_FACING + " (the ROS parameter fit_backend)",
+    "ros2/core.py": "hands fit_backend on; compiles the kernels at start-up",
+    "cli/bench.py": _USER_FACING + " (viapath bench --backend: loky, dask or ray)",
+    "bench/runner.py": "joblib's backends (loky, dask, ray): run_bench(backend=...)",
+    "bench/tune.py": "joblib's backends, passed on to run_bench",
+    "bench/suites.py": "joblib's loky backend",
+    "bench/identity.py": "leaves the planner's option 'backend' out of the options hash",
+    "viz/mcap_process.py": "a comment on the backend names a run records",
+}
+
+
+def _mentioning() -> set[str]:
+    files = set()
+    for path in SRC.rglob("*.py"):
+        relative = path.relative_to(SRC).as_posix()
+        if relative.startswith("compiled/"):
+            continue
+        if WORDS.search(path.read_text(encoding="utf-8")):
+            files.add(relative)
+    return files
+
+
+def test_at_most_five_dispatch_files():
+    assert len(DISPATCH) <= 5
+    assert not set(DISPATCH) & set(NOT_YET)
+
+
+def test_no_other_file_names_kernels_or_backends():
+    unexpected = _mentioning() - set(DISPATCH) - set(NOT_YET)
+    assert not unexpected, f"choose numpy or compiled in a dispatch file, not in: {sorted(unexpected)}"
+
+
+def test_not_yet_list_only_shrinks():
+    """An entry of NOT_YET whose file no longer names them must go (so the list only shrinks)."""
+    done = set(NOT_YET) - _mentioning()
+    assert not done, f"delete from NOT_YET: {sorted(done)}"
+
+
+def test_the_words_are_found():
+    """The search itself works: the dispatch files do name them (a broken pattern would pass everything)."""
+    assert set(DISPATCH) <= _mentioning()
