@@ -92,3 +92,10 @@ def test_the_scenario_models_have_every_option_of_their_set_with_its_bounds():
             option.exclusive_minimum,
             option.maximum,
         )
+
+
+def test_the_node_fits_circles_as_the_simulator_does_by_default():
+    from viapath.perception.detection import DetectorParams
+    from viapath.ros2.settings import validate
+
+    assert validate({}).fit_backend == DetectorParams().fit_backend

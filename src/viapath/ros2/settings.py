@@ -32,8 +32,11 @@ from typing import Any
 import numpy as np
 
 from viapath.limits import LIMITS_OPTIONS, ROBOT_OPTIONS, SUBGOAL_OPTIONS
+from viapath.perception.detection import DetectorParams
 from viapath.perception.scanner import URG04LX_MOUNT_OFFSET_M
 from viapath.ros2.options import Option, planner_options
+
+_FIT_DEFAULT = DetectorParams().fit_backend  # one default for the circle fit, the simulator's and the node's
 
 
 def _opt(name: str, default, unit: str = "", minimum=None, maximum=None, help: str = "", choices=None) -> Option:
@@ -169,10 +172,10 @@ NODE_OPTIONS: tuple[Option, ...] = (
         _opt("detector", "people", "", help="detector preset", choices=("people", "legs")),
         _opt(
             "fit_backend",
-            "numpy",
+            _FIT_DEFAULT,
             "",
-            help="circle fit back end (numba: compiled once per machine, then loaded from "
-            "its cache; equal to round-off, barely faster here)",
+            help="circle fit: numpy, numba (compiled once per machine, then loaded from its cache; "
+            "equal to round-off) or auto (numba where installed, as the simulator's laser)",
             choices=("numpy", "auto", "numba"),
         ),
         _opt(
