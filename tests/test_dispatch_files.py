@@ -30,9 +30,8 @@ NOT_YET = {
     "cli/bench.py": _USER_FACING + " (viapath bench --backend: loky, dask or ray)",
     "bench/runner.py": "joblib's backends (loky, dask, ray): run_bench(backend=...)",
     "bench/tune.py": "joblib's backends, passed on to run_bench",
-    "bench/suites.py": "joblib's loky backend",
+    "bench/suites.py": "joblib's loky backend, named so that a dask or ray context does not take suite generation",
     "bench/identity.py": "leaves the planner's option 'backend' out of the options hash",
-    "viz/mcap_process.py": "a comment on the backend names a run records",
 }
 
 

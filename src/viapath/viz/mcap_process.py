@@ -69,7 +69,7 @@ def _start_method() -> str:
 
 
 # The plan's extras a scene reads (viapath.viz.scene: the plan's times, the cost breakdown, the
-# shield's verdict); the rest (backend names, the shield's diagnostics) stays in the run's process.
+# shield's verdict); the rest (which code path ran, the shield's diagnostics) stays in the run's process.
 _SCENE_EXTRAS = ("waypoint_times_s", "slow_s", "speed_after_mps", "cost_terms", "shield_intervened")
 
 
