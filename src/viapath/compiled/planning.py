@@ -1679,7 +1679,7 @@ def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obs
 
     Takes records (tuples): ``roots`` (directions, lengths, free, contact of the root legs: :func:`goal_legs`'),
     ``via`` (via radii, ids), ``slow`` (slow radii, growth, growth until, slow times), ``goal``, ``obstacles``
-    and ``corridor`` (as :func:`_goal_legs_of`), ``tree`` (the waypoints, the robot's segment, whether slow/wait
+    and ``corridor`` (the kernels' records, named above :func:`_goal_legs_of`), ``tree`` (the waypoints, the robot's segment, whether slow/wait
     candidates are grown, the depth, the most obstacles a root branches on)."""
     waypoints, robot_segment, slow_enabled, max_depth, max_root_obstacles = tree
     subgoal_index = goal[4]
