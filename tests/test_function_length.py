@@ -1,7 +1,7 @@
-"""No function over 80 lines in src outside the compiled package (numba kernels are written as one loop
-nest on purpose; they have their own limit). A function that must stay longer is listed in
-KNOWN_EXCEPTIONS with the reason; a new long function fails, and so does an entry once its function is
-short (then delete the entry)."""
+"""No function over 80 lines in src outside the compiled package, and none over 150 lines inside it (numba
+kernels are written as one loop nest on purpose; the last tests). A function outside that must stay longer
+is listed in KNOWN_EXCEPTIONS with the reason; a new long function fails, and so does an entry once its
+function is short (then delete the entry)."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ def long_functions(root: Path = SRC, limit: int = MAX_LINES) -> dict[tuple[str, 
     found = {}
     for file in sorted(root.rglob("*.py")):
         relative = file.relative_to(root).as_posix()
-        if relative.startswith("viapath/compiled/"):
+        if relative.startswith("viapath/compiled/"):  # the compiled package: its own limit (150, below)
             continue
         for node in ast.walk(ast.parse(file.read_text())):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
@@ -48,3 +48,35 @@ def test_the_counter_counts_a_planted_long_function(tmp_path):
     body = "\n".join(f"    x{i} = {i}" for i in range(80))
     (package / "long.py").write_text(f"def long():\n{body}\n\n\ndef short():\n    return 1\n")
     assert long_functions(tmp_path) == {("viapath/long.py", "long"): 81}
+
+
+COMPILED = SRC / "viapath" / "compiled"
+MAX_COMPILED_LINES = 150
+
+
+def compiled_long_functions(root: Path = COMPILED, limit: int = MAX_COMPILED_LINES) -> dict[tuple[str, str], int]:
+    """(file relative to ``root``, function name) -> lines, for every function of the compiled package (nested
+    ones too) over ``limit``: the kernels may be long loop nests, but none over 150 lines."""
+    found = {}
+    for file in sorted(root.rglob("*.py")):
+        for node in ast.walk(ast.parse(file.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                lines = node.end_lineno - node.lineno + 1
+                if lines > limit:
+                    found[(file.relative_to(root).as_posix(), node.name)] = lines
+    return found
+
+
+def test_no_function_of_the_compiled_package_is_over_150_lines():
+    assert any(COMPILED.rglob("*.py")), COMPILED
+    long = compiled_long_functions()
+    assert long == {}, "compiled functions over 150 lines (split them): " + ", ".join(
+        f"{file}:{name} ({lines} lines)" for (file, name), lines in sorted(long.items())
+    )
+
+
+def test_the_compiled_counter_counts_a_planted_long_function(tmp_path):
+    body = "\n".join(f"    x{i} = {i}" for i in range(150))
+    (tmp_path / "kernels.py").write_text(f"def long():\n{body}\n\n\ndef short():\n    return 1\n")
+    (tmp_path / "limit.py").write_text("def at_limit():\n" + "\n".join(f"    y{i} = {i}" for i in range(149)) + "\n")
+    assert compiled_long_functions(tmp_path) == {("kernels.py", "long"): 151}

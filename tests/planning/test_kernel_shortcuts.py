@@ -158,7 +158,6 @@ def test_legs_free_stops_at_the_first_contact_and_agrees():
             starts, start_times, velocities, checked, positions, obstacle_velocities, radii, growth, until, np.zeros(k)
         )
         expected = ~(~np.isinf(contact)).any(axis=1)
-        got = kernels._legs_free(
-            starts, start_times, velocities, durations, horizon, positions, obstacle_velocities, radii, growth, until
-        )
+        obstacles = (positions, obstacle_velocities, radii, growth, until)
+        got = kernels._legs_free(starts, start_times, velocities, durations, horizon, obstacles)
         assert np.array_equal(got, expected)

@@ -261,39 +261,46 @@ class Backend:
         # The robot's segment matters only when a corner can lie between it and the subgoal.
         segment = int(path.project(checks.position)[0]) if index >= 2 else 0
         slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
-        store = kernels.grow(
-            _c(checks.position),
-            _c(checks.subgoal),
-            _c(roots.speeds),
-            int(roots.nominal_index),
+        root_legs = (
             _c(roots.directions),
             _c(roots.lengths),
             np.ascontiguousarray(roots.free, dtype=np.bool_),
             _c(roots.contact),
-            positions,
-            velocities,
-            radii,
-            growth,
-            until,
+        )
+        via = (
             _per_obstacle(checks.via_radii, len(positions)),
             np.ascontiguousarray(checks.obstacles.ids, dtype=np.int64),
-            slow_radii,
-            slow_growth,
-            slow_until,
-            slow_times,
-            bool(len(slow_times)),
+        )
+        slow = (slow_radii, slow_growth, slow_until, slow_times)
+        goal = (
+            _c(checks.subgoal),
             float(checks.stop_short_m),
-            float(checks.horizon_s),
             checks.kernel_continuation(),
             checks.kernel_envelope(),
-            *_corridor(path),
-            _c(path.waypoints),
-            segment,
             index,
             float(checks.corridor_check_spacing_m),
             float(checks.corridor_tolerance_m),
+        )
+        obstacles = (positions, velocities, radii, growth, until)
+        tree = (
+            _c(path.waypoints),
+            segment,
+            bool(len(slow_times)),
             int(config.max_depth),
             int(config.max_root_obstacles),
+        )
+        store = kernels.grow(
+            _c(checks.position),
+            _c(roots.speeds),
+            int(roots.nominal_index),
+            root_legs,
+            via,
+            slow,
+            float(checks.horizon_s),
+            goal,
+            obstacles,
+            _corridor(path),
+            tree,
         )
         return NodeStore(*store)
 

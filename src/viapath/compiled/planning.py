@@ -795,6 +795,92 @@ def escape_headings(
 
 
 @njit(cache=True, nogil=True)
+def _escape_roll_outs(robot, commands, turn_rows, sines, cosines, settings, steps):
+    """The positions (K, steps, 2) of :func:`escape_scores`' roll-outs (:func:`viapath.kinematics.rollout`: the
+    ramps of speed and turn rate, the exact arcs, the positions as running sums)."""
+    k_count = commands.shape[0]
+    dt = settings[_E_DT]
+    max_speed = settings[_E_MAX_SPEED]
+    x0 = robot[0]
+    y0 = robot[1]
+    speed0 = robot[3]
+    turn0 = robot[4]
+    max_turn = settings[_E_MAX_TURN]
+    positions = np.empty((k_count, steps, 2))
+    for k in range(k_count):
+        row = turn_rows[k]
+        v_cmd = _minimum(_maximum(commands[k, 0], 0.0), max_speed)
+        w_cmd = _minimum(_maximum(commands[k, 1], -max_turn), max_turn)
+        x_sum = 0.0
+        y_sum = 0.0
+        for s in range(steps):
+            dv = settings[_E_SPEED_STEP] * float(s + 1)
+            dw = settings[_E_TURN_STEP] * float(s + 1)
+            speed = speed0 + _minimum(_maximum(v_cmd - speed0, -dv), dv)
+            turn = turn0 + _minimum(_maximum(w_cmd - turn0, -dw), dw)
+            sin_before = sines[row, s]
+            sin_after = sines[row, s + 1]
+            cos_before = cosines[row, s]
+            cos_after = cosines[row, s + 1]
+            if abs(turn) < 1e-9:
+                dx = speed * dt * cos_before
+                dy = speed * dt * sin_before
+            else:
+                radius = speed / turn
+                dx = radius * (sin_after - sin_before)
+                dy = -radius * (cos_after - cos_before)
+            x_sum = dx if s == 0 else x_sum + dx
+            y_sum = dy if s == 0 else y_sum + dy
+            px = x0 + x_sum
+            py = y0 + y_sum
+            positions[k, s, 0] = px
+            positions[k, s, 1] = py
+    return positions
+
+
+@njit(cache=True, nogil=True)
+def _escape_contacts_near(
+    positions, robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, dt, steps, travel
+):
+    """:func:`escape_contacts` of the roll-outs with the people who could come within reach of them (the
+    triangle-inequality bound, ``travel`` the furthest the roll-outs get from the robot): the first contact
+    steps (K,), the smallest and last gaps (K, M) to the M people overlapped now, and their gaps now (M,)."""
+    x0 = robot[0]
+    y0 = robot[1]
+    # The people who could come within reach during the roll-out.
+    horizon = steps * dt
+    n_count = obstacle_positions.shape[0]
+    near = np.zeros(n_count, np.bool_)
+    gap_now_all = np.empty(n_count)
+    for j in range(n_count):
+        gap = math.hypot(x0 - obstacle_positions[j, 0], y0 - obstacle_positions[j, 1]) - radii[j]
+        gap_now_all[j] = gap
+        grown = growth[j] * _minimum(horizon, growth_until_s[j])
+        speed_j = math.hypot(obstacle_velocities[j, 0], obstacle_velocities[j, 1])
+        near[j] = gap - grown - speed_j * horizon - travel <= 0
+    near_positions = obstacle_positions[near]
+    near_velocities = obstacle_velocities[near]
+    gap_now = gap_now_all[near]
+    overlapping = gap_now <= 0
+    times = np.empty(steps)
+    for s in range(steps):
+        times[s] = dt * float(s + 1)
+    first_step, gap_min, gap_last = escape_contacts(
+        positions,
+        times,
+        near_positions,
+        near_velocities,
+        radii[near],
+        growth[near],
+        growth_until_s[near],
+        overlapping,
+        steps,
+    )
+    gap_overlapped = gap_now[overlapping]
+    return first_step, gap_min, gap_last, gap_overlapped
+
+
+@njit(cache=True, nogil=True)
 def escape_scores(
     robot,
     commands,
@@ -826,43 +912,12 @@ def escape_scores(
     ``turn_rows[k]``). ``calm``: a calm escape with last cycle's command (the continuity term)."""
     k_count = commands.shape[0]
     dt = settings[_E_DT]
-    max_speed = settings[_E_MAX_SPEED]
     x0 = robot[0]
     y0 = robot[1]
-    speed0 = robot[3]
-    turn0 = robot[4]
     max_turn = settings[_E_MAX_TURN]
     tolerance = settings[_E_TOLERANCE]
     bound = settings[_E_BOUND]
-    positions = np.empty((k_count, steps, 2))
-    for k in range(k_count):
-        row = turn_rows[k]
-        v_cmd = _minimum(_maximum(commands[k, 0], 0.0), max_speed)
-        w_cmd = _minimum(_maximum(commands[k, 1], -max_turn), max_turn)
-        x_sum = 0.0
-        y_sum = 0.0
-        for s in range(steps):
-            dv = settings[_E_SPEED_STEP] * float(s + 1)
-            dw = settings[_E_TURN_STEP] * float(s + 1)
-            speed = speed0 + _minimum(_maximum(v_cmd - speed0, -dv), dv)
-            turn = turn0 + _minimum(_maximum(w_cmd - turn0, -dw), dw)
-            sin_before = sines[row, s]
-            sin_after = sines[row, s + 1]
-            cos_before = cosines[row, s]
-            cos_after = cosines[row, s + 1]
-            if abs(turn) < 1e-9:
-                dx = speed * dt * cos_before
-                dy = speed * dt * sin_before
-            else:
-                radius = speed / turn
-                dx = radius * (sin_after - sin_before)
-                dy = -radius * (cos_after - cos_before)
-            x_sum = dx if s == 0 else x_sum + dx
-            y_sum = dy if s == 0 else y_sum + dy
-            px = x0 + x_sum
-            py = y0 + y_sum
-            positions[k, s, 0] = px
-            positions[k, s, 1] = py
+    positions = _escape_roll_outs(robot, commands, turn_rows, sines, cosines, settings, steps)
     # all(excess <= tolerance); np.max(excess) <= bound is all(excess <= bound), NaN included: with the bound
     # at least the tolerance (as the caller sets it), true of every roll-out inside
     inside = _roll_outs_within(
@@ -885,36 +940,9 @@ def escape_scores(
     )
     travel = _furthest(positions, x0, y0)
 
-    # The people who could come within reach during the roll-out.
-    horizon = steps * dt
-    n_count = obstacle_positions.shape[0]
-    near = np.zeros(n_count, np.bool_)
-    gap_now_all = np.empty(n_count)
-    for j in range(n_count):
-        gap = math.hypot(x0 - obstacle_positions[j, 0], y0 - obstacle_positions[j, 1]) - radii[j]
-        gap_now_all[j] = gap
-        grown = growth[j] * _minimum(horizon, growth_until_s[j])
-        speed_j = math.hypot(obstacle_velocities[j, 0], obstacle_velocities[j, 1])
-        near[j] = gap - grown - speed_j * horizon - travel <= 0
-    near_positions = obstacle_positions[near]
-    near_velocities = obstacle_velocities[near]
-    gap_now = gap_now_all[near]
-    overlapping = gap_now <= 0
-    times = np.empty(steps)
-    for s in range(steps):
-        times[s] = dt * float(s + 1)
-    first_step, gap_min, gap_last = escape_contacts(
-        positions,
-        times,
-        near_positions,
-        near_velocities,
-        radii[near],
-        growth[near],
-        growth_until_s[near],
-        overlapping,
-        steps,
+    first_step, gap_min, gap_last, gap_overlapped = _escape_contacts_near(
+        positions, robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, dt, steps, travel
     )
-    gap_overlapped = gap_now[overlapping]
     m_count = gap_overlapped.shape[0]
     terms = np.empty(m_count)
 
@@ -959,37 +987,17 @@ def escape_scores(
     return ends, score
 
 
-@njit(cache=True, nogil=True)
-def goal_legs(
-    starts,
-    start_times,
-    speeds,
-    subgoal,
-    stop_short_m,
-    horizon_s,
-    continuation,
-    obstacle_positions,
-    obstacle_velocities,
-    radii,
-    growth,
-    growth_until_s,
-    envelope,
-    segment_starts,
-    segment_directions,
-    segment_lengths,
-    half_widths,
-    subgoal_index,
-    spacing_m,
-    tolerance_m,
-):
-    """The numba twin of :meth:`viapath.planning.viapath.checks.LegChecks.goal_legs`, whole: the straight
-    legs from K nodes to the subgoal (with the continuation past an intermediate subgoal as K more legs),
-    their first contacts with the braking envelope kept, and the corridor check (:func:`goal_legs_inside`,
-    then :func:`legs_inside` for the legs it leaves open, as the backend does). One call instead of
-    three kernels and some thirty small array operations; called a few times every cycle.
+# The kernels' records (tuples, so that their pieces take a few names instead of a dozen arguments each):
+# obstacles (positions, velocities, radii, growth, growth until), as legs_first_contact takes them;
+# corridor (segment starts, directions, lengths, half widths); goal (subgoal, how far short of it legs end,
+# continuation, braking envelope, subgoal index, corridor check spacing, corridor tolerance).
 
-    ``continuation`` is (dx, dy, length) or empty (none); ``envelope`` is (person accel, period, robot
-    accel), accel 0 for none. Returns (directions (K, 2), lengths (K,), free (K,), contact (K, N))."""
+
+@njit(cache=True, nogil=True)
+def _goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corridor):
+    """:func:`goal_legs` on its records."""
+    subgoal, stop_short_m, continuation, envelope, _, _, _ = goal
+    obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
     k_count = starts.shape[0]
     n_count = obstacle_positions.shape[0]
     two = continuation.shape[0] == 3 and n_count > 0
@@ -1075,36 +1083,55 @@ def goal_legs(
         free[k] = ok
         any_clear = any_clear or ok
     if any_clear:
-        inside = _goal_legs_inside_all(
-            segment_starts,
-            segment_directions,
-            segment_lengths,
-            half_widths,
-            starts,
-            subgoal,
-            subgoal_index,
-            spacing_m,
-            tolerance_m,
-        )
+        inside = _goal_legs_inside_all(corridor, starts, goal)
         for k in range(k_count):
             free[k] = free[k] and inside[k]
     return directions, lengths, free, contact
 
 
 @njit(cache=True, nogil=True)
-def _goal_legs_inside_all(
+def goal_legs(
+    starts,
+    start_times,
+    speeds,
+    subgoal,
+    stop_short_m,
+    horizon_s,
+    continuation,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+    envelope,
     segment_starts,
     segment_directions,
     segment_lengths,
     half_widths,
-    starts,
-    subgoal,
     subgoal_index,
     spacing_m,
     tolerance_m,
 ):
+    """The numba twin of :meth:`viapath.planning.viapath.checks.LegChecks.goal_legs`, whole: the straight
+    legs from K nodes to the subgoal (with the continuation past an intermediate subgoal as K more legs),
+    their first contacts with the braking envelope kept, and the corridor check (:func:`goal_legs_inside`,
+    then :func:`legs_inside` for the legs it leaves open, as the backend does). One call instead of
+    three kernels and some thirty small array operations; called a few times every cycle.
+
+    ``continuation`` is (dx, dy, length) or empty (none); ``envelope`` is (person accel, period, robot
+    accel), accel 0 for none. Returns (directions (K, 2), lengths (K,), free (K,), contact (K, N))."""
+    goal = (subgoal, stop_short_m, continuation, envelope, subgoal_index, spacing_m, tolerance_m)
+    obstacles = (obstacle_positions, obstacle_velocities, radii, growth, growth_until_s)
+    corridor = (segment_starts, segment_directions, segment_lengths, half_widths)
+    return _goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corridor)
+
+
+@njit(cache=True, nogil=True)
+def _goal_legs_inside_all(corridor, starts, goal):
     """What the backend's ``goal_legs_inside`` returns: :func:`goal_legs_inside`, then :func:`legs_inside`
     on the legs it leaves open (all of them in one call: the sample spacing depends on the longest)."""
+    segment_starts, segment_directions, segment_lengths, half_widths = corridor
+    subgoal, _, _, _, subgoal_index, spacing_m, tolerance_m = goal
     k_count = starts.shape[0]
     inside = goal_legs_inside(
         segment_starts, segment_directions, segment_lengths, half_widths, starts, subgoal_index, tolerance_m
@@ -1191,20 +1218,11 @@ def _add(nf, ni, m, x, y, t, v, parent, length, fx, fy, way0, way1, way2, slow_s
 
 
 @njit(cache=True, nogil=True)
-def _legs_free(
-    starts,
-    start_times,
-    velocities,
-    durations,
-    horizon_s,
-    obstacle_positions,
-    obstacle_velocities,
-    radii,
-    growth,
-    growth_until_s,
-):
+def _legs_free(starts, start_times, velocities, durations, horizon_s, obstacles):
     """LegChecks.legs_free: no contact up to the horizon, plain radii (no braking envelope). Leg by leg, up to
-    its first contact: whether any contact is finite (or NaN) is all that is asked."""
+    its first contact: whether any contact is finite (or NaN) is all that is asked. ``obstacles``: the record
+    (positions, velocities, radii, growth, growth until)."""
+    obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
     k_count = starts.shape[0]
     checked = np.empty(k_count)
     for k in range(k_count):
@@ -1239,53 +1257,23 @@ def _legs_free(
 
 
 @njit(cache=True, nogil=True)
-def grow(
-    position,
-    subgoal,
-    speeds,
-    nominal_index,
-    root_directions,
-    root_lengths,
-    root_free,
-    root_contact,
-    obstacle_positions,
-    obstacle_velocities,
-    radii,
-    growth,
-    growth_until_s,
-    via_radii,
-    ids,
-    slow_radii,
-    slow_growth,
-    slow_growth_until_s,
-    slow_times,
-    slow_enabled,
-    stop_short_m,
-    horizon_s,
-    continuation,
-    envelope,
-    segment_starts,
-    segment_directions,
-    segment_lengths,
-    half_widths,
-    waypoints,
-    robot_segment,
-    subgoal_index,
-    spacing_m,
-    tolerance_m,
-    max_depth,
-    max_root_obstacles,
-):
-    """The numba twin of :func:`viapath.planning.viapath.candidates.grow`: the same nodes in the same order
-    (roots, slow/wait, corners, then the via-point children depth by depth), so the candidates, their
-    order and so every tie are the same. Returns the node store, floats (M, 10) and integers (M, 5), in
-    the columns named above; a node is a leaf (a complete candidate) when its goal leg is free."""
+def _legs_inside_of(corridor, starts, ends, spacing_m, tolerance_m):
+    """:func:`legs_inside` with the corridor's record unpacked."""
+    segment_starts, segment_directions, segment_lengths, half_widths = corridor
+    return legs_inside(
+        segment_starts, segment_directions, segment_lengths, half_widths, starts, ends, spacing_m, tolerance_m
+    )
+
+
+@njit(cache=True, nogil=True)
+def _root_nodes(position, speeds, root_directions, root_lengths, root_free):
+    """The tree's first nodes (a store with room to grow): the roots, one per speed, at the robot, now; a root
+    whose goal leg is free is a leaf."""
     s_count = speeds.shape[0]
-    n_count = obstacle_positions.shape[0]
     nf = np.empty((4 * s_count + 32, NODE_FLOATS))
     ni = np.empty((4 * s_count + 32, NODE_INTEGERS), np.int64)
     m = _ZERO
-    for i in range(s_count):  # the roots: one per speed, at the robot, now
+    for i in range(s_count):
         nf, ni, m = _add(
             nf,
             ni,
@@ -1307,142 +1295,409 @@ def grow(
         if root_free[i]:
             ni[m - 1, _LEAF] = 1
             nf[m - 1, _GOAL] = root_lengths[i]
+    return nf, ni, m
+
+
+@njit(cache=True, nogil=True)
+def _slow_legs(position, subgoal, speeds, nominal, slow_times):
+    """The slow/wait legs along the straight leg (_slow_candidates): each speed below the nominal one (and 0,
+    waiting) for each slow time, never past the subgoal. Returns the unit direction (dx, dy) to the subgoal,
+    the legs' durations and speeds (the first ``count`` of each) and ``count``."""
+    s_count = speeds.shape[0]
+    slow_count = 1
+    for i in range(s_count):
+        if speeds[i] < nominal - 1e-9:
+            slow_count += 1
+    slow_speeds = np.empty(slow_count)
+    slow_speeds[0] = 0.0
+    c = 1
+    for i in range(s_count):
+        if speeds[i] < nominal - 1e-9:
+            slow_speeds[c] = speeds[i]
+            c += 1
+    ox = subgoal[0] - position[0]
+    oy = subgoal[1] - position[1]
+    distance = math.hypot(ox, oy)
+    divisor = distance if distance > 1e-12 else 1e-12
+    dx = ox / divisor
+    dy = oy / divisor
+    t_count = slow_times.shape[0]
+    durations = np.empty(slow_count * t_count)
+    slows = np.empty(slow_count * t_count)
+    c = 0
+    for i in range(slow_count):
+        for j in range(t_count):
+            if slow_speeds[i] * slow_times[j] < distance - 1e-6:  # never past the subgoal while slow
+                durations[c] = slow_times[j]
+                slows[c] = slow_speeds[i]
+                c += 1
+    return dx, dy, durations, slows, c
+
+
+@njit(cache=True, nogil=True)
+def _slow_nodes(
+    nf, ni, m, position, speeds, nominal_index, slow_times, horizon_s, slow_obstacles, obstacles, goal, corridor
+):
+    """Slow down or wait along the straight leg, then on at the nominal speed or faster (_slow_candidates): the
+    slow legs free of the people (at their slow radii: ``slow_obstacles``) whose goal legs are free, added as
+    leaves."""
+    s_count = speeds.shape[0]
+    nominal = speeds[nominal_index]
+    dx, dy, durations, slows, c = _slow_legs(position, goal[0], speeds, nominal, slow_times)
+    starts = np.empty((c, 2))
+    velocities = np.empty((c, 2))
+    for k in range(c):
+        starts[k, 0] = position[0]
+        starts[k, 1] = position[1]
+        velocities[k, 0] = dx * slows[k]
+        velocities[k, 1] = dy * slows[k]
+    free = _legs_free(starts, np.zeros(c), velocities, durations[:c], horizon_s, slow_obstacles)
+    after_count = 0
+    for i in range(s_count):
+        if speeds[i] >= nominal - 1e-9:
+            after_count += 1
+    kept = 0
+    for k in range(c):
+        if free[k]:
+            kept += 1
+    if not kept:
+        return nf, ni, m
+    legs = kept * after_count
+    ends = np.empty((legs, 2))
+    times = np.empty(legs)
+    after = np.empty(legs)
+    slow_v = np.empty(legs)
+    q = 0
+    for k in range(c):
+        if not free[k]:
+            continue
+        for i in range(s_count):
+            if speeds[i] >= nominal - 1e-9:
+                ends[q, 0] = position[0] + dx * (slows[k] * durations[k])
+                ends[q, 1] = position[1] + dy * (slows[k] * durations[k])
+                times[q] = durations[k]
+                after[q] = speeds[i]
+                slow_v[q] = slows[k]
+                q += 1
+    _, lengths, goal_free, _ = _goal_legs_of(ends, times, after, math.inf, goal, obstacles, corridor)
+    for q in range(legs):
+        if goal_free[q]:
+            nf, ni, m = _add(
+                nf,
+                ni,
+                m,
+                ends[q, 0],
+                ends[q, 1],
+                times[q],
+                after[q],
+                _NONE,
+                slow_v[q] * times[q],
+                dx,
+                dy,
+                _I_SLOW,
+                _ZERO,
+                _ZERO,
+                times[q],
+                slow_v[q],
+            )
+            ni[m - 1, _LEAF] = 1
+            nf[m - 1, _GOAL] = lengths[q]
+    return nf, ni, m
+
+
+@njit(cache=True, nogil=True)
+def _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles, corridor):
+    """The path's corners between the robot and the subgoal as via points (_corner_nodes): one leg per speed
+    and corner, added when free of the people and inside the corridor. ``path``: the waypoints and the
+    robot's segment."""
+    waypoints, robot_segment = path
+    _, _, _, _, subgoal_index, spacing_m, tolerance_m = goal
+    s_count = speeds.shape[0]
+    corners = subgoal_index - robot_segment - 1
+    legs = corners * s_count
+    targets = np.empty((legs, 2))
+    starts = np.empty((legs, 2))
+    velocities = np.empty((legs, 2))
+    directions = np.empty((legs, 2))
+    lengths = np.empty(legs)
+    durations = np.empty(legs)
+    corner_of = np.empty(legs, np.int64)
+    speed_of = np.empty(legs)
+    q = 0
+    for i in range(s_count):
+        for corner in range(robot_segment + 1, subgoal_index):
+            targets[q, 0] = waypoints[corner, 0]
+            targets[q, 1] = waypoints[corner, 1]
+            ox = targets[q, 0] - position[0]
+            oy = targets[q, 1] - position[1]
+            length = math.hypot(ox, oy)
+            divisor = length if length > 1e-12 else 1e-12
+            directions[q, 0] = ox / divisor
+            directions[q, 1] = oy / divisor
+            starts[q, 0] = position[0]
+            starts[q, 1] = position[1]
+            velocities[q, 0] = directions[q, 0] * speeds[i]
+            velocities[q, 1] = directions[q, 1] * speeds[i]
+            lengths[q] = length
+            durations[q] = length / speeds[i]
+            corner_of[q] = corner
+            speed_of[q] = speeds[i]
+            q += 1
+    good = _legs_free(starts, np.zeros(legs), velocities, durations, horizon_s, obstacles)
+    inside = _legs_inside_of(corridor, starts, targets, spacing_m, tolerance_m)
+    for q in range(legs):
+        if good[q] and inside[q]:
+            root = _ZERO  # np.searchsorted(speeds, speed): the root node of that speed
+            while root < s_count and speeds[root] < speed_of[q]:
+                root += 1
+            nf, ni, m = _add(
+                nf,
+                ni,
+                m,
+                targets[q, 0],
+                targets[q, 1],
+                durations[q],
+                speed_of[q],
+                root,
+                lengths[q],
+                directions[q, 0],
+                directions[q, 1],
+                _I_CORNER,
+                _ZERO,
+                corner_of[q],
+                0.0,
+                0.0,
+            )
+    return nf, ni, m
+
+
+@njit(cache=True, nogil=True)
+def _branch_pairs(free_now, contact_now, frontier_start, frontier_end, n_count, depth, max_root_obstacles):
+    """The (node, obstacle) pairs to branch on: at the root every obstacle the leg hits, earliest first (at most
+    max_root_obstacles, when there are more pairs than that; _root_pairs), deeper the first hit. Returns the
+    pairs' nodes and obstacles and how many there are."""
+    pair_nodes = np.empty((frontier_end - frontier_start) * n_count, np.int64)
+    pair_obstacles = np.empty((frontier_end - frontier_start) * n_count, np.int64)
+    pairs = 0
+    total = 0
+    for r in range(frontier_end - frontier_start):
+        if free_now[r]:
+            continue
+        for j in range(n_count):
+            if math.isfinite(contact_now[r, j]):
+                total += 1
+    if depth == 0 and max_root_obstacles > 0 and total > max_root_obstacles:
+        order = np.empty(n_count, np.int64)
+        for r in range(frontier_end - frontier_start):
+            if free_now[r]:
+                continue
+            count = 0
+            for j in range(n_count):  # a stable insertion sort by contact time
+                value = contact_now[r, j]
+                if not math.isfinite(value):
+                    continue
+                place = count
+                while place > 0 and contact_now[r, order[place - 1]] > value:
+                    order[place] = order[place - 1]
+                    place -= 1
+                order[place] = j
+                count += 1
+            for q in range(min(count, max_root_obstacles)):
+                pair_nodes[pairs] = frontier_start + r
+                pair_obstacles[pairs] = order[q]
+                pairs += 1
+    else:
+        for r in range(frontier_end - frontier_start):
+            if free_now[r]:
+                continue
+            best = -1
+            for j in range(n_count):
+                value = contact_now[r, j]
+                if not math.isfinite(value):
+                    continue
+                if depth == 0:
+                    pair_nodes[pairs] = frontier_start + r
+                    pair_obstacles[pairs] = j
+                    pairs += 1
+                elif best < 0 or value < contact_now[r, best]:
+                    best = j
+            if depth > 0 and best >= 0:
+                pair_nodes[pairs] = frontier_start + r
+                pair_obstacles[pairs] = best
+                pairs += 1
+    return pair_nodes, pair_obstacles, pairs
+
+
+@njit(cache=True, nogil=True)
+def _via_legs(nf, branch, via_radii, envelope, horizon_s, obstacles):
+    """The via points of each pair (_via_children): both sides, both roots. The pairs' options as via_options
+    gives them, its arithmetic (_via_pair) on the nodes and obstacles themselves: no copies of them per pair.
+    Returns, per leg (the first ``count``): its pair, its option, its duration, its start and start time, its
+    velocity and its via point; and ``count``. ``branch``: :func:`_branch_pairs`' pairs."""
+    pair_nodes, pair_obstacles, pairs = branch
+    obstacle_positions, obstacle_velocities, _, growth, growth_until_s = obstacles
+    half_accel = 0.5 * envelope[0]
+    pair = np.empty(4 * pairs, np.int64)
+    option = np.empty(4 * pairs, np.int64)
+    t_k = np.empty(4 * pairs)
+    starts_k = np.empty((4 * pairs, 2))
+    times_k = np.empty(4 * pairs)
+    leg_velocity = np.empty((4 * pairs, 2))
+    via = np.empty((4 * pairs, 2))
+    t_via = np.empty(4)
+    w_via = np.empty((2, 2))
+    max_time_s = 3 * horizon_s
+    count = 0
+    for p in range(pairs):
+        node = pair_nodes[p]
+        j = pair_obstacles[p]
+        sx = nf[node, _X]
+        sy = nf[node, _Y]
+        t0 = nf[node, _T]
+        speed = nf[node, _V]
+        if envelope[0] > 0:
+            stop_s = envelope[1] + speed / envelope[2]
+            margin = half_accel * (stop_s * stop_s)
+        else:
+            margin = 0.0
+        ovx = obstacle_velocities[j, 0]
+        ovy = obstacle_velocities[j, 1]
+        if not _via_pair(
+            sx,
+            sy,
+            t0,
+            speed,
+            obstacle_positions[j, 0],
+            obstacle_positions[j, 1],
+            ovx,
+            ovy,
+            via_radii[j],
+            growth[j],
+            growth_until_s[j],
+            margin,
+            t_via,
+            w_via,
+        ):
+            continue
+        for o in range(4):
+            t = t_via[o]
+            if t <= max_time_s:
+                pair[count] = p
+                option[count] = o
+                t_k[count] = t
+                starts_k[count, 0] = sx
+                starts_k[count, 1] = sy
+                times_k[count] = t0
+                leg_velocity[count, 0] = (w_via[o % 2, 0] + ovx * t) / t
+                leg_velocity[count, 1] = (w_via[o % 2, 1] + ovy * t) / t
+                via[count, 0] = sx + leg_velocity[count, 0] * t
+                via[count, 1] = sy + leg_velocity[count, 1] * t
+                count += 1
+    return pair, option, t_k, starts_k, times_k, leg_velocity, via, count
+
+
+@njit(cache=True, nogil=True)
+def _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, corridor):
+    """The pairs' children (_via_children): the legs to their via points (:func:`_via_legs`) free of the people
+    and inside the corridor, added below their nodes (a root's child starts the way round: obstacle id, side,
+    root; deeper ones keep their parent's). ``branch``: :func:`_branch_pairs`' pairs."""
+    pair_nodes, pair_obstacles, _ = branch
+    via_radii, ids = via
+    _, _, _, envelope, _, spacing_m, tolerance_m = goal
+    legs = _via_legs(nf, branch, via_radii, envelope, horizon_s, obstacles)
+    pair, option, t_k, starts_k, times_k, leg_velocity, via, count = legs
+    if not count:
+        return nf, ni, m
+    good = _legs_free(starts_k[:count], times_k[:count], leg_velocity[:count], t_k[:count], horizon_s, obstacles)
+    kept = 0
+    for q in range(count):
+        if good[q]:
+            kept += 1
+    if not kept:
+        return nf, ni, m
+    good_starts = np.empty((kept, 2))
+    good_vias = np.empty((kept, 2))
+    g = 0
+    for q in range(count):
+        if good[q]:
+            good_starts[g, 0] = starts_k[q, 0]
+            good_starts[g, 1] = starts_k[q, 1]
+            good_vias[g, 0] = via[q, 0]
+            good_vias[g, 1] = via[q, 1]
+            g += 1
+    inside = _legs_inside_of(corridor, good_starts, good_vias, spacing_m, tolerance_m)
+    g = 0
+    for q in range(count):
+        if not good[q]:
+            continue
+        ok = inside[g]
+        g += 1
+        if not ok:
+            continue
+        p = pair[q]
+        parent = pair_nodes[p]
+        speed = nf[parent, _V]
+        if depth == 0:
+            fx = leg_velocity[q, 0] / speed
+            fy = leg_velocity[q, 1] / speed
+            way0 = ids[pair_obstacles[p]]
+            way1 = _SIDES[option[q]]
+            way2 = _ROOTS[option[q]]
+        else:
+            fx = nf[parent, _FX]
+            fy = nf[parent, _FY]
+            way0 = ni[parent, _WAY0]
+            way1 = ni[parent, _WAY1]
+            way2 = ni[parent, _WAY2]
+        nf, ni, m = _add(
+            nf,
+            ni,
+            m,
+            via[q, 0],
+            via[q, 1],
+            times_k[q] + t_k[q],
+            speed,
+            parent,
+            nf[parent, _LENGTH] + speed * t_k[q],
+            fx,
+            fy,
+            way0,
+            way1,
+            way2,
+            0.0,
+            0.0,
+        )
+    return nf, ni, m
+
+
+@njit(cache=True, nogil=True)
+def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obstacles, corridor, tree):
+    """The numba twin of :func:`viapath.planning.viapath.candidates.grow`: the same nodes in the same order
+    (roots, slow/wait, corners, then the via-point children depth by depth), so the candidates, their
+    order and so every tie are the same. Returns the node store, floats (M, 10) and integers (M, 5), in
+    the columns named above; a node is a leaf (a complete candidate) when its goal leg is free.
+
+    Takes records (tuples): ``roots`` (directions, lengths, free, contact of the root legs: :func:`goal_legs`'),
+    ``via`` (via radii, ids), ``slow`` (slow radii, growth, growth until, slow times), ``goal``, ``obstacles``
+    and ``corridor`` (the kernels' records, named above :func:`_goal_legs_of`), ``tree`` (the waypoints, the robot's segment, whether slow/wait
+    candidates are grown, the depth, the most obstacles a root branches on)."""
+    waypoints, robot_segment, slow_enabled, max_depth, max_root_obstacles = tree
+    subgoal_index = goal[4]
+    root_directions, root_lengths, root_free, root_contact = roots
+    obstacle_positions, obstacle_velocities, _, _, _ = obstacles
+    slow_radii, slow_growth, slow_growth_until_s, slow_times = slow
+    s_count = speeds.shape[0]
+    n_count = obstacle_positions.shape[0]
+    nf, ni, m = _root_nodes(position, speeds, root_directions, root_lengths, root_free)
     here = np.empty((1, 2))
     here[0, 0] = position[0]
     here[0, 1] = position[1]
-    straight_inside = _goal_legs_inside_all(
-        segment_starts,
-        segment_directions,
-        segment_lengths,
-        half_widths,
-        here,
-        subgoal,
-        subgoal_index,
-        spacing_m,
-        tolerance_m,
-    )[0]
-
-    # Slow down or wait along the straight leg, then on at the nominal speed or faster (_slow_candidates).
+    straight_inside = _goal_legs_inside_all(corridor, here, goal)[0]
     if slow_enabled and n_count > 0 and straight_inside:
-        nominal = speeds[nominal_index]
-        slow_count = 1
-        for i in range(s_count):
-            if speeds[i] < nominal - 1e-9:
-                slow_count += 1
-        slow_speeds = np.empty(slow_count)
-        slow_speeds[0] = 0.0
-        c = 1
-        for i in range(s_count):
-            if speeds[i] < nominal - 1e-9:
-                slow_speeds[c] = speeds[i]
-                c += 1
-        ox = subgoal[0] - position[0]
-        oy = subgoal[1] - position[1]
-        distance = math.hypot(ox, oy)
-        divisor = distance if distance > 1e-12 else 1e-12
-        dx = ox / divisor
-        dy = oy / divisor
-        t_count = slow_times.shape[0]
-        durations = np.empty(slow_count * t_count)
-        slows = np.empty(slow_count * t_count)
-        c = 0
-        for i in range(slow_count):
-            for j in range(t_count):
-                if slow_speeds[i] * slow_times[j] < distance - 1e-6:  # never past the subgoal while slow
-                    durations[c] = slow_times[j]
-                    slows[c] = slow_speeds[i]
-                    c += 1
-        starts = np.empty((c, 2))
-        velocities = np.empty((c, 2))
-        for k in range(c):
-            starts[k, 0] = position[0]
-            starts[k, 1] = position[1]
-            velocities[k, 0] = dx * slows[k]
-            velocities[k, 1] = dy * slows[k]
-        free = _legs_free(
-            starts,
-            np.zeros(c),
-            velocities,
-            durations[:c],
-            horizon_s,
-            obstacle_positions,
-            obstacle_velocities,
-            slow_radii,
-            slow_growth,
-            slow_growth_until_s,
+        slow_obstacles = (obstacle_positions, obstacle_velocities, slow_radii, slow_growth, slow_growth_until_s)
+        nf, ni, m = _slow_nodes(
+            nf, ni, m, position, speeds, nominal_index, slow_times, horizon_s, slow_obstacles, obstacles, goal, corridor
         )
-        after_count = 0
-        for i in range(s_count):
-            if speeds[i] >= nominal - 1e-9:
-                after_count += 1
-        kept = 0
-        for k in range(c):
-            if free[k]:
-                kept += 1
-        if kept:
-            legs = kept * after_count
-            ends = np.empty((legs, 2))
-            times = np.empty(legs)
-            after = np.empty(legs)
-            slow_v = np.empty(legs)
-            q = 0
-            for k in range(c):
-                if not free[k]:
-                    continue
-                for i in range(s_count):
-                    if speeds[i] >= nominal - 1e-9:
-                        ends[q, 0] = position[0] + dx * (slows[k] * durations[k])
-                        ends[q, 1] = position[1] + dy * (slows[k] * durations[k])
-                        times[q] = durations[k]
-                        after[q] = speeds[i]
-                        slow_v[q] = slows[k]
-                        q += 1
-            _, lengths, goal_free, _ = goal_legs(
-                ends,
-                times,
-                after,
-                subgoal,
-                stop_short_m,
-                math.inf,
-                continuation,
-                obstacle_positions,
-                obstacle_velocities,
-                radii,
-                growth,
-                growth_until_s,
-                envelope,
-                segment_starts,
-                segment_directions,
-                segment_lengths,
-                half_widths,
-                subgoal_index,
-                spacing_m,
-                tolerance_m,
-            )
-            for q in range(legs):
-                if goal_free[q]:
-                    nf, ni, m = _add(
-                        nf,
-                        ni,
-                        m,
-                        ends[q, 0],
-                        ends[q, 1],
-                        times[q],
-                        after[q],
-                        _NONE,
-                        slow_v[q] * times[q],
-                        dx,
-                        dy,
-                        _I_SLOW,
-                        _ZERO,
-                        _ZERO,
-                        times[q],
-                        slow_v[q],
-                    )
-                    ni[m - 1, _LEAF] = 1
-                    nf[m - 1, _GOAL] = lengths[q]
-
-    half_accel = 0.5 * envelope[0]
     frontier_start = 0
     frontier_end = s_count
     free_now = root_free.copy()
@@ -1450,301 +1705,22 @@ def grow(
     for depth in range(max_depth):
         batch = m
         if depth == 0 and robot_segment + 1 < subgoal_index and not straight_inside:
-            # The path's corners between the robot and the subgoal as via points (_corner_nodes).
-            corners = subgoal_index - robot_segment - 1
-            legs = corners * s_count
-            targets = np.empty((legs, 2))
-            starts = np.empty((legs, 2))
-            velocities = np.empty((legs, 2))
-            directions = np.empty((legs, 2))
-            lengths = np.empty(legs)
-            durations = np.empty(legs)
-            corner_of = np.empty(legs, np.int64)
-            speed_of = np.empty(legs)
-            q = 0
-            for i in range(s_count):
-                for corner in range(robot_segment + 1, subgoal_index):
-                    targets[q, 0] = waypoints[corner, 0]
-                    targets[q, 1] = waypoints[corner, 1]
-                    ox = targets[q, 0] - position[0]
-                    oy = targets[q, 1] - position[1]
-                    length = math.hypot(ox, oy)
-                    divisor = length if length > 1e-12 else 1e-12
-                    directions[q, 0] = ox / divisor
-                    directions[q, 1] = oy / divisor
-                    starts[q, 0] = position[0]
-                    starts[q, 1] = position[1]
-                    velocities[q, 0] = directions[q, 0] * speeds[i]
-                    velocities[q, 1] = directions[q, 1] * speeds[i]
-                    lengths[q] = length
-                    durations[q] = length / speeds[i]
-                    corner_of[q] = corner
-                    speed_of[q] = speeds[i]
-                    q += 1
-            good = _legs_free(
-                starts,
-                np.zeros(legs),
-                velocities,
-                durations,
-                horizon_s,
-                obstacle_positions,
-                obstacle_velocities,
-                radii,
-                growth,
-                growth_until_s,
-            )
-            inside = legs_inside(
-                segment_starts,
-                segment_directions,
-                segment_lengths,
-                half_widths,
-                starts,
-                targets,
-                spacing_m,
-                tolerance_m,
-            )
-            for q in range(legs):
-                if good[q] and inside[q]:
-                    root = _ZERO  # np.searchsorted(speeds, speed): the root node of that speed
-                    while root < s_count and speeds[root] < speed_of[q]:
-                        root += 1
-                    nf, ni, m = _add(
-                        nf,
-                        ni,
-                        m,
-                        targets[q, 0],
-                        targets[q, 1],
-                        durations[q],
-                        speed_of[q],
-                        root,
-                        lengths[q],
-                        directions[q, 0],
-                        directions[q, 1],
-                        _I_CORNER,
-                        _ZERO,
-                        corner_of[q],
-                        0.0,
-                        0.0,
-                    )
-
-        # The (node, obstacle) pairs to branch on: at the root every obstacle the leg hits, earliest first
-        # (at most max_root_obstacles, when there are more pairs than that; _root_pairs), deeper the first hit.
+            path = (waypoints, robot_segment)
+            nf, ni, m = _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles, corridor)
         if n_count > 0:
-            pair_nodes = np.empty((frontier_end - frontier_start) * n_count, np.int64)
-            pair_obstacles = np.empty((frontier_end - frontier_start) * n_count, np.int64)
-            pairs = 0
-            total = 0
-            for r in range(frontier_end - frontier_start):
-                if free_now[r]:
-                    continue
-                for j in range(n_count):
-                    if math.isfinite(contact_now[r, j]):
-                        total += 1
-            if depth == 0 and max_root_obstacles > 0 and total > max_root_obstacles:
-                order = np.empty(n_count, np.int64)
-                for r in range(frontier_end - frontier_start):
-                    if free_now[r]:
-                        continue
-                    count = 0
-                    for j in range(n_count):  # a stable insertion sort by contact time
-                        value = contact_now[r, j]
-                        if not math.isfinite(value):
-                            continue
-                        place = count
-                        while place > 0 and contact_now[r, order[place - 1]] > value:
-                            order[place] = order[place - 1]
-                            place -= 1
-                        order[place] = j
-                        count += 1
-                    for q in range(min(count, max_root_obstacles)):
-                        pair_nodes[pairs] = frontier_start + r
-                        pair_obstacles[pairs] = order[q]
-                        pairs += 1
-            else:
-                for r in range(frontier_end - frontier_start):
-                    if free_now[r]:
-                        continue
-                    best = -1
-                    for j in range(n_count):
-                        value = contact_now[r, j]
-                        if not math.isfinite(value):
-                            continue
-                        if depth == 0:
-                            pair_nodes[pairs] = frontier_start + r
-                            pair_obstacles[pairs] = j
-                            pairs += 1
-                        elif best < 0 or value < contact_now[r, best]:
-                            best = j
-                    if depth > 0 and best >= 0:
-                        pair_nodes[pairs] = frontier_start + r
-                        pair_obstacles[pairs] = best
-                        pairs += 1
-            if pairs:
-                # The via points of each pair (_via_children): both sides, both roots, legs checked. The pairs'
-                # options as via_options gives them, its arithmetic (_via_pair) on the nodes and obstacles
-                # themselves: no copies of them per pair.
-                pair = np.empty(4 * pairs, np.int64)
-                option = np.empty(4 * pairs, np.int64)
-                t_k = np.empty(4 * pairs)
-                starts_k = np.empty((4 * pairs, 2))
-                times_k = np.empty(4 * pairs)
-                leg_velocity = np.empty((4 * pairs, 2))
-                via = np.empty((4 * pairs, 2))
-                t_via = np.empty(4)
-                w_via = np.empty((2, 2))
-                max_time_s = 3 * horizon_s
-                count = 0
-                for p in range(pairs):
-                    node = pair_nodes[p]
-                    j = pair_obstacles[p]
-                    sx = nf[node, _X]
-                    sy = nf[node, _Y]
-                    t0 = nf[node, _T]
-                    speed = nf[node, _V]
-                    if envelope[0] > 0:
-                        stop_s = envelope[1] + speed / envelope[2]
-                        margin = half_accel * (stop_s * stop_s)
-                    else:
-                        margin = 0.0
-                    ovx = obstacle_velocities[j, 0]
-                    ovy = obstacle_velocities[j, 1]
-                    if not _via_pair(
-                        sx,
-                        sy,
-                        t0,
-                        speed,
-                        obstacle_positions[j, 0],
-                        obstacle_positions[j, 1],
-                        ovx,
-                        ovy,
-                        via_radii[j],
-                        growth[j],
-                        growth_until_s[j],
-                        margin,
-                        t_via,
-                        w_via,
-                    ):
-                        continue
-                    for o in range(4):
-                        t = t_via[o]
-                        if t <= max_time_s:
-                            pair[count] = p
-                            option[count] = o
-                            t_k[count] = t
-                            starts_k[count, 0] = sx
-                            starts_k[count, 1] = sy
-                            times_k[count] = t0
-                            leg_velocity[count, 0] = (w_via[o % 2, 0] + ovx * t) / t
-                            leg_velocity[count, 1] = (w_via[o % 2, 1] + ovy * t) / t
-                            via[count, 0] = sx + leg_velocity[count, 0] * t
-                            via[count, 1] = sy + leg_velocity[count, 1] * t
-                            count += 1
-                if count:
-                    good = _legs_free(
-                        starts_k[:count],
-                        times_k[:count],
-                        leg_velocity[:count],
-                        t_k[:count],
-                        horizon_s,
-                        obstacle_positions,
-                        obstacle_velocities,
-                        radii,
-                        growth,
-                        growth_until_s,
-                    )
-                    kept = 0
-                    for q in range(count):
-                        if good[q]:
-                            kept += 1
-                    if kept:
-                        good_starts = np.empty((kept, 2))
-                        good_vias = np.empty((kept, 2))
-                        g = 0
-                        for q in range(count):
-                            if good[q]:
-                                good_starts[g, 0] = starts_k[q, 0]
-                                good_starts[g, 1] = starts_k[q, 1]
-                                good_vias[g, 0] = via[q, 0]
-                                good_vias[g, 1] = via[q, 1]
-                                g += 1
-                        inside = legs_inside(
-                            segment_starts,
-                            segment_directions,
-                            segment_lengths,
-                            half_widths,
-                            good_starts,
-                            good_vias,
-                            spacing_m,
-                            tolerance_m,
-                        )
-                        g = 0
-                        for q in range(count):
-                            if not good[q]:
-                                continue
-                            ok = inside[g]
-                            g += 1
-                            if not ok:
-                                continue
-                            p = pair[q]
-                            parent = pair_nodes[p]
-                            speed = nf[parent, _V]
-                            if depth == 0:
-                                fx = leg_velocity[q, 0] / speed
-                                fy = leg_velocity[q, 1] / speed
-                                way0 = ids[pair_obstacles[p]]
-                                way1 = _SIDES[option[q]]
-                                way2 = _ROOTS[option[q]]
-                            else:
-                                fx = nf[parent, _FX]
-                                fy = nf[parent, _FY]
-                                way0 = ni[parent, _WAY0]
-                                way1 = ni[parent, _WAY1]
-                                way2 = ni[parent, _WAY2]
-                            nf, ni, m = _add(
-                                nf,
-                                ni,
-                                m,
-                                via[q, 0],
-                                via[q, 1],
-                                times_k[q] + t_k[q],
-                                speed,
-                                parent,
-                                nf[parent, _LENGTH] + speed * t_k[q],
-                                fx,
-                                fy,
-                                way0,
-                                way1,
-                                way2,
-                                0.0,
-                                0.0,
-                            )
+            branch = _branch_pairs(
+                free_now, contact_now, frontier_start, frontier_end, n_count, depth, max_root_obstacles
+            )
+            if branch[2]:
+                nf, ni, m = _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, corridor)
         if m == batch:
             break
         # The goal legs of the new frontier: the free ones complete candidates.
         frontier_start = batch
         frontier_end = m
         starts = np.ascontiguousarray(nf[batch:m, _X : _Y + 1])
-        _, lengths, free_now, contact_now = goal_legs(
-            starts,
-            nf[batch:m, _T].copy(),
-            nf[batch:m, _V].copy(),
-            subgoal,
-            stop_short_m,
-            horizon_s,
-            continuation,
-            obstacle_positions,
-            obstacle_velocities,
-            radii,
-            growth,
-            growth_until_s,
-            envelope,
-            segment_starts,
-            segment_directions,
-            segment_lengths,
-            half_widths,
-            subgoal_index,
-            spacing_m,
-            tolerance_m,
+        _, lengths, free_now, contact_now = _goal_legs_of(
+            starts, nf[batch:m, _T].copy(), nf[batch:m, _V].copy(), horizon_s, goal, obstacles, corridor
         )
         for r in range(m - batch):
             if free_now[r]:
@@ -1804,26 +1780,11 @@ def _clear(
 
 
 @njit(cache=True, nogil=True)
-def _follows(
-    robot,
-    target_x,
-    target_y,
-    angle,
-    speed,
-    settings,
-    steps,
-    obstacle_positions,
-    obstacle_velocities,
-    radii,
-    growth,
-    growth_until_s,
-    segment_starts,
-    segment_directions,
-    segment_lengths,
-    half_widths,
-):
+def _follows(robot, target_x, target_y, angle, speed, settings, steps, obstacles, corridor):
     """follow.can_follow: 0 cannot, 1 can, 2 can after turning on the spot first. ``angle``: atan2 of the
-    offset from the robot to the target."""
+    offset from the robot to the target; ``obstacles`` and ``corridor``: :func:`grow`'s records."""
+    obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
+    segment_starts, segment_directions, segment_lengths, half_widths = corridor
     ox = target_x - robot[0]
     oy = target_y - robot[1]
     heading_error = abs(_wrap(angle - robot[2]))
@@ -1893,136 +1854,9 @@ def _follows(
 
 
 @njit(cache=True, nogil=True)
-def choose_tree(
-    robot,
-    speeds,
-    subgoal,
-    obstacle_positions,
-    obstacle_velocities,
-    radii,
-    growth,
-    growth_until_s,
-    via_radii,
-    ids,
-    slow_radii,
-    slow_growth,
-    slow_growth_until_s,
-    slow_times,
-    continuation,
-    envelope,
-    segment_starts,
-    segment_directions,
-    segment_lengths,
-    half_widths,
-    waypoints,
-    settings,
-    integers,
-):
-    """The first half of the viapath planner's ``_choose`` in one call: the root legs (:func:`goal_legs`), the
-    paper's step 1 (the free straight leg at the nominal speed, if the robot can follow it: follow.can_follow),
-    else the candidate tree (:func:`grow`). ``robot`` is (x, y, heading, speed, turn rate); ``settings`` and
-    ``integers`` hold the scalars (their slots: :mod:`viapath.compiled.slots`).
-
-    Returns (found, floats, integers: grow's node store, facts). ``found`` is (NO_CANDIDATE / STEP_ONE /
-    CANDIDATES, step 1 turns on the spot first, then the K leaves: the candidates' nodes); ``facts`` (6, K)
-    is each candidate's first direction (y, x) and its target's offset from the robot (y, x), for atan2,
-    and the target (x, y): the point it steers for first. (Few arrays: each one returned costs about a
-    microsecond.)"""
-    result = np.zeros(2, np.int64)
-    s_count = speeds.shape[0]
-    nominal_index = integers[C_NOMINAL]
-    subgoal_index = integers[C_SUBGOAL]
-    stop_short_m = settings[F_STOP_SHORT]
-    horizon_s = settings[F_HORIZON]
-    spacing_m = settings[F_SPACING]
-    tolerance_m = settings[F_TOLERANCE]
-    starts = np.empty((s_count, 2))
-    for i in range(s_count):
-        starts[i, 0] = robot[0]
-        starts[i, 1] = robot[1]
-    directions, lengths, free, contact = goal_legs(
-        starts,
-        np.zeros(s_count),
-        speeds,
-        subgoal,
-        stop_short_m,
-        horizon_s,
-        continuation,
-        obstacle_positions,
-        obstacle_velocities,
-        radii,
-        growth,
-        growth_until_s,
-        envelope,
-        segment_starts,
-        segment_directions,
-        segment_lengths,
-        half_widths,
-        subgoal_index,
-        spacing_m,
-        tolerance_m,
-    )
-    if free[nominal_index] and integers[C_TRY_STRAIGHT] and not integers[C_ONLY]:
-        straight_angle = math.atan2(subgoal[1] - robot[1], subgoal[0] - robot[0])
-        follows = _follows(
-            robot,
-            subgoal[0],
-            subgoal[1],
-            straight_angle,
-            speeds[nominal_index],
-            settings,
-            integers[C_STEPS],
-            obstacle_positions,
-            obstacle_velocities,
-            radii,
-            growth,
-            growth_until_s,
-            segment_starts,
-            segment_directions,
-            segment_lengths,
-            half_widths,
-        )
-        if follows:
-            result[0] = STEP_ONE
-            result[1] = follows == 2
-            return result, np.empty((0, NODE_FLOATS)), np.empty((0, NODE_INTEGERS), np.int64), np.empty((6, 0))
-    nf, ni = grow(
-        robot[:2].copy(),
-        subgoal,
-        speeds,
-        nominal_index,
-        directions,
-        lengths,
-        free,
-        contact,
-        obstacle_positions,
-        obstacle_velocities,
-        radii,
-        growth,
-        growth_until_s,
-        via_radii,
-        ids,
-        slow_radii,
-        slow_growth,
-        slow_growth_until_s,
-        slow_times,
-        integers[C_SLOW] != 0,
-        stop_short_m,
-        horizon_s,
-        continuation,
-        envelope,
-        segment_starts,
-        segment_directions,
-        segment_lengths,
-        half_widths,
-        waypoints,
-        integers[C_SEGMENT],
-        subgoal_index,
-        spacing_m,
-        tolerance_m,
-        integers[C_DEPTH],
-        integers[C_ROOT_LIMIT],
-    )
+def _leaf_facts(robot, subgoal, nf, ni):
+    """What :func:`choose_tree` hands back of the tree's leaves: ``found`` (status, 0, then the K leaves' nodes)
+    and ``facts`` (6, K), as it says."""
     k_count = 0
     for m in range(ni.shape[0]):
         if ni[m, _LEAF]:
@@ -2053,6 +1887,62 @@ def choose_tree(
         k += 1
     found[0] = CANDIDATES if k_count else NO_CANDIDATE
     found[1] = 0
+    return found, facts
+
+
+@njit(cache=True, nogil=True)
+def choose_tree(
+    robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints, settings, integers
+):
+    """The first half of the viapath planner's ``_choose`` in one call: the root legs (:func:`goal_legs`), the
+    paper's step 1 (the free straight leg at the nominal speed, if the robot can follow it: follow.can_follow),
+    else the candidate tree (:func:`grow`). ``robot`` is (x, y, heading, speed, turn rate); ``obstacles``,
+    ``via``, ``slow`` and ``corridor`` are :func:`grow`'s records (:func:`choose` makes them of its
+    arguments); ``settings`` and ``integers`` hold the scalars (their slots: :mod:`viapath.compiled.slots`).
+
+    Returns (found, floats, integers: grow's node store, facts). ``found`` is (NO_CANDIDATE / STEP_ONE /
+    CANDIDATES, step 1 turns on the spot first, then the K leaves: the candidates' nodes); ``facts`` (6, K)
+    is each candidate's first direction (y, x) and its target's offset from the robot (y, x), for atan2,
+    and the target (x, y): the point it steers for first. (Few arrays: each one returned costs about a
+    microsecond.)"""
+    result = np.zeros(2, np.int64)
+    s_count = speeds.shape[0]
+    nominal_index = integers[C_NOMINAL]
+    horizon_s = settings[F_HORIZON]
+    goal = (
+        subgoal,
+        settings[F_STOP_SHORT],
+        continuation,
+        envelope,
+        integers[C_SUBGOAL],
+        settings[F_SPACING],
+        settings[F_TOLERANCE],
+    )
+    starts = np.empty((s_count, 2))
+    for i in range(s_count):
+        starts[i, 0] = robot[0]
+        starts[i, 1] = robot[1]
+    roots = _goal_legs_of(starts, np.zeros(s_count), speeds, horizon_s, goal, obstacles, corridor)
+    if roots[2][nominal_index] and integers[C_TRY_STRAIGHT] and not integers[C_ONLY]:
+        straight_angle = math.atan2(subgoal[1] - robot[1], subgoal[0] - robot[0])
+        follows = _follows(
+            robot,
+            subgoal[0],
+            subgoal[1],
+            straight_angle,
+            speeds[nominal_index],
+            settings,
+            integers[C_STEPS],
+            obstacles,
+            corridor,
+        )
+        if follows:
+            result[0] = STEP_ONE
+            result[1] = follows == 2
+            return result, np.empty((0, NODE_FLOATS)), np.empty((0, NODE_INTEGERS), np.int64), np.empty((6, 0))
+    tree = (waypoints, integers[C_SEGMENT], integers[C_SLOW] != 0, integers[C_DEPTH], integers[C_ROOT_LIMIT])
+    nf, ni = grow(robot[:2].copy(), speeds, nominal_index, roots, via, slow, horizon_s, goal, obstacles, corridor, tree)
+    found, facts = _leaf_facts(robot, subgoal, nf, ni)
     return found, nf, ni, facts
 
 
@@ -2065,30 +1955,13 @@ def _before(a, b):
 
 
 @njit(cache=True, nogil=True)
-def choose_candidate(
-    robot,
-    nf,
-    ni,
-    found,
-    facts,
-    angles,
-    obstacle_positions,
-    obstacle_velocities,
-    radii,
-    growth,
-    growth_until_s,
-    segment_starts,
-    segment_directions,
-    segment_lengths,
-    half_widths,
-    settings,
-    integers,
-):
+def choose_candidate(robot, nf, ni, found, facts, angles, obstacles, corridor, settings, integers):
     """The second half of ``_choose`` up to its shield check: Eq. 1's critics (:mod:`.critics`, each term as
     there, summed in :func:`.critics.critics_for`'s order), with ``only_way`` the other ways priced out, the
     cheapest-first order (np.argsort's, stable) of the first ``max_rollouts`` candidates (and at least two,
     for the runner-up), and follow.can_follow of each in that order until one passes. ``found`` and ``facts``
-    are :func:`choose_tree`'s, ``angles`` (2, K) atan2 of its facts.
+    are :func:`choose_tree`'s, ``angles`` (2, K) atan2 of its facts; ``obstacles`` and ``corridor``
+    :func:`grow`'s records.
 
     Returns (ranking, costs). ``ranking`` is (the rank that follows or -1, R: the ranks in order (0: with
     only_way, no candidate goes that way), the order (R), can_follow of each rank tried (R): 0/1/2, -1 not
@@ -2176,15 +2049,8 @@ def choose_candidate(
             speed,
             settings,
             integers[C_STEPS],
-            obstacle_positions,
-            obstacle_velocities,
-            radii,
-            growth,
-            growth_until_s,
-            segment_starts,
-            segment_directions,
-            segment_lengths,
-            half_widths,
+            obstacles,
+            corridor,
         )
         if follow[r]:
             ranking[0] = r
@@ -2223,27 +2089,18 @@ def choose(
     Takes :func:`choose_tree`'s arguments; returns (found, floats, integers: the node store, costs): ``found``
     is :func:`choose_tree`'s, followed by :func:`choose_candidate`'s ranking when it says CANDIDATES (one array
     fewer to hand back), ``costs`` (8, K) :func:`choose_candidate`'s, empty unless CANDIDATES."""
+    obstacles = (obstacle_positions, obstacle_velocities, radii, growth, growth_until_s)
+    corridor = (segment_starts, segment_directions, segment_lengths, half_widths)
     found, nf, ni, facts = choose_tree(
         robot,
         speeds,
         subgoal,
-        obstacle_positions,
-        obstacle_velocities,
-        radii,
-        growth,
-        growth_until_s,
-        via_radii,
-        ids,
-        slow_radii,
-        slow_growth,
-        slow_growth_until_s,
-        slow_times,
+        obstacles,
+        (via_radii, ids),
+        (slow_radii, slow_growth, slow_growth_until_s, slow_times),
         continuation,
         envelope,
-        segment_starts,
-        segment_directions,
-        segment_lengths,
-        half_widths,
+        corridor,
         waypoints,
         settings,
         integers,
@@ -2255,25 +2112,7 @@ def choose(
     for k in range(k_count):
         angles[0, k] = math.atan2(facts[0, k], facts[1, k])
         angles[1, k] = math.atan2(facts[2, k], facts[3, k])
-    ranking, costs = choose_candidate(
-        robot,
-        nf,
-        ni,
-        found,
-        facts,
-        angles,
-        obstacle_positions,
-        obstacle_velocities,
-        radii,
-        growth,
-        growth_until_s,
-        segment_starts,
-        segment_directions,
-        segment_lengths,
-        half_widths,
-        settings,
-        integers,
-    )
+    ranking, costs = choose_candidate(robot, nf, ni, found, facts, angles, obstacles, corridor, settings, integers)
     found_and_ranking = np.empty(found.shape[0] + ranking.shape[0], np.int64)
     found_and_ranking[: found.shape[0]] = found
     found_and_ranking[found.shape[0] :] = ranking

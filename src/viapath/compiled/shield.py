@@ -161,36 +161,10 @@ def _all_clear(k_count):
 
 
 @njit(cache=True, nogil=True)
-def evaluate(
-    px,
-    py,
-    heading,
-    speed_now,
-    robot_radius,
-    achieved,
-    max_accel,
-    dv,
-    dw,
-    dt,
-    substeps,
-    positions_obs,
-    velocities_obs,
-    radii,
-    position_sigma,
-    velocity_sigma,
-    margin,
-    k_sigma,
-    accel,
-    friendly_mode,
-    towards_only,
-):
-    """The verdicts of :meth:`viapath.safety.shield.Shield.evaluate` for K achieved (v, ω) (K, 2) and
-    N >= 1 finite people: admissible (K,), friendly (K,), meet time (K,) (inf: never), person row (K,)
-    (-1: none) and whether a person touches the robot now."""
-    k_count = achieved.shape[0]
+def _people_now(px, py, robot_radius, positions_obs, velocities_obs, radii):
+    """Per person now: offset from the robot (x, y), distance, touching distance (robot radius + theirs), gap
+    and speed."""
     n_count = positions_obs.shape[0]
-    admissible, friendly, meet, person = _all_clear(k_count)
-    contact = False
     offset_x = np.empty(n_count)
     offset_y = np.empty(n_count)
     distance = np.empty(n_count)
@@ -204,16 +178,21 @@ def evaluate(
         touching[n] = robot_radius + radii[n]
         gap[n] = distance[n] - touching[n]
         speed_people[n] = math.hypot(velocities_obs[n, 0], velocities_obs[n, 1])
-    # The cheap bound: nobody within reach of the longest braking.
+    return offset_x, offset_y, distance, touching, gap, speed_people
+
+
+@njit(cache=True, nogil=True)
+def _everyone_far(achieved, max_accel, dt, now, position_sigma, velocity_sigma, margin, k_sigma, accel, friendly_mode):
+    """The cheap bound: nobody within reach of the longest braking. ``now``: :func:`_people_now`'s."""
+    _, _, distance, touching, gap, speed_people = now
     fastest = 0.0
-    for k in range(k_count):
+    for k in range(achieved.shape[0]):
         fastest = max(fastest, abs(achieved[k, 0]))
     a_robot = max(max_accel, 1e-9)
     t_bound = fastest / a_robot + 2.0 * dt
     r_bound = fastest * t_bound
     braking_den = 2.0 * max(accel, 1e-3)
-    everyone_far = True
-    for n in range(n_count):
+    for n in range(gap.shape[0]):
         grow = (
             touching[n]
             + margin
@@ -224,38 +203,25 @@ def evaluate(
         if friendly_mode:
             grow = grow + speed_people[n] * speed_people[n] / braking_den
         if not (gap[n] > 0.0 and distance[n] - grow > r_bound + 1e-6):
-            everyone_far = False
-            break
-    if everyone_far:
-        return admissible, friendly, meet, person, contact
-    touched = False
-    for n in range(n_count):
-        if not gap[n] > 0.0:
-            touched = True
-    if touched:  # a person touches the robot now: nothing is admissible
-        first = 0
-        for n in range(n_count):  # argmin: the first smallest gap
-            if gap[n] < gap[first]:
-                first = n
-        for k in range(k_count):
-            admissible[k] = False
-            friendly[k] = False
-            person[k] = first
-            meet[k] = 0.0
-        return admissible, friendly, meet, person, True
-    sweep = braking_sweep(px, py, heading, speed_now, achieved, dv, dw, dt, substeps)
-    positions, headings, effective, turn, moving, sagitta, rest_time, rest_index, reach = sweep
-    t_count = positions.shape[1]
-    m = substeps
-    h = dt / m
-    horizon = h * (t_count - 1)
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _near_people(
+    reach, horizon, velocities_obs, now, position_sigma, velocity_sigma, margin, k_sigma, accel, friendly_mode
+):
+    """Per person: the base radius and its growth rate of the forecast disc, and whether the person could come
+    near any braking path (``reach``: each command's path length until rest) within the horizon."""
+    offset_x, offset_y, _, touching, gap, speed_people = now
+    n_count = gap.shape[0]
+    braking_den = 2.0 * max(accel, 1e-3)
     base = np.empty(n_count)
     growth = np.empty(n_count)
     near = np.empty(n_count, dtype=np.bool_)
     max_reach = 0.0
-    for k in range(k_count):
+    for k in range(reach.shape[0]):
         max_reach = max(max_reach, reach[k])
-    any_near = False
     for n in range(n_count):
         base[n] = touching[n] + min(margin + k_sigma * position_sigma[n], gap[n])
         growth[n] = k_sigma * velocity_sigma[n]
@@ -269,33 +235,51 @@ def evaluate(
         closest_x = offset_x[n] + path_x * along
         closest_y = offset_y[n] + path_y * along
         near[n] = math.hypot(closest_x, closest_y) - (reach_person - speed_people[n] * horizon) <= max_reach + 1e-6
-        any_near = any_near or near[n]
-    if friendly_mode:
-        for k in range(k_count):
-            t_rest = rest_time[k]
-            rest_x = positions[k, rest_index[k], 0]
-            rest_y = positions[k, rest_index[k], 1]
-            for n in range(n_count):
-                if not near[n]:
-                    continue
-                vx = velocities_obs[n, 0]
-                vy = velocities_obs[n, 1]
-                speed = math.hypot(vx, vy)
-                start_x = positions_obs[n, 0] + vx * t_rest
-                start_y = positions_obs[n, 1] + vy * t_rest
-                stretch = speed / braking_den
-                travel_x = vx * stretch
-                travel_y = vy * stretch
-                radius = base[n] + growth[n] * t_rest + 0.5 * accel * (t_rest * t_rest)
-                rel_x = rest_x - start_x
-                rel_y = rest_y - start_y
-                tt = travel_x * travel_x + travel_y * travel_y
-                f = _clip((rel_x * travel_x + rel_y * travel_y) / (tt if tt > 0 else 1.0), 0.0, 1.0)
-                if math.hypot(rel_x - travel_x * f, rel_y - travel_y * f) < radius:
-                    friendly[k] = False
-                    break
-    if not any_near:
-        return admissible, friendly, meet, person, contact
+    return base, growth, near
+
+
+@njit(cache=True, nogil=True)
+def _unfriendly_at_rest(friendly, sweep, positions_obs, velocities_obs, base, growth, near, accel):
+    """Clears ``friendly`` of each command whose rest point lies in a near person's way while that person
+    brakes (the disc at the rest time swept along their braking path)."""
+    positions, _, _, _, _, _, rest_time, rest_index, _ = sweep
+    braking_den = 2.0 * max(accel, 1e-3)
+    for k in range(friendly.shape[0]):
+        t_rest = rest_time[k]
+        rest_x = positions[k, rest_index[k], 0]
+        rest_y = positions[k, rest_index[k], 1]
+        for n in range(near.shape[0]):
+            if not near[n]:
+                continue
+            vx = velocities_obs[n, 0]
+            vy = velocities_obs[n, 1]
+            speed = math.hypot(vx, vy)
+            start_x = positions_obs[n, 0] + vx * t_rest
+            start_y = positions_obs[n, 1] + vy * t_rest
+            stretch = speed / braking_den
+            travel_x = vx * stretch
+            travel_y = vy * stretch
+            radius = base[n] + growth[n] * t_rest + 0.5 * accel * (t_rest * t_rest)
+            rel_x = rest_x - start_x
+            rel_y = rest_y - start_y
+            tt = travel_x * travel_x + travel_y * travel_y
+            f = _clip((rel_x * travel_x + rel_y * travel_y) / (tt if tt > 0 else 1.0), 0.0, 1.0)
+            if math.hypot(rel_x - travel_x * f, rel_y - travel_y * f) < radius:
+                friendly[k] = False
+                break
+
+
+@njit(cache=True, nogil=True)
+def _first_meetings(meet, person, sweep, substeps, h, positions_obs, velocities_obs, people, near, accel, towards_only):
+    """The swept-disc (and "towards") tests per (command, near person, sub-interval), scanned from the start:
+    sets each command's first meeting time in ``meet`` and the person in ``person`` (the earliest meeting, ties
+    to the lower person row). ``people``: per person the speed, the forecast disc's base radius and growth."""
+    positions, headings, effective, turn, moving, sagitta, _, _, _ = sweep
+    speed_people, base, growth = people
+    k_count = meet.shape[0]
+    n_count = near.shape[0]
+    t_count = positions.shape[1]
+    m = substeps
     times = np.empty(t_count)
     for t in range(t_count):
         times[t] = h * t
@@ -364,6 +348,76 @@ def evaluate(
                 meet[k] = when
                 person[k] = n
                 break
+
+
+@njit(cache=True, nogil=True)
+def evaluate(
+    px,
+    py,
+    heading,
+    speed_now,
+    robot_radius,
+    achieved,
+    max_accel,
+    dv,
+    dw,
+    dt,
+    substeps,
+    positions_obs,
+    velocities_obs,
+    radii,
+    position_sigma,
+    velocity_sigma,
+    margin,
+    k_sigma,
+    accel,
+    friendly_mode,
+    towards_only,
+):
+    """The verdicts of :meth:`viapath.safety.shield.Shield.evaluate` for K achieved (v, ω) (K, 2) and
+    N >= 1 finite people: admissible (K,), friendly (K,), meet time (K,) (inf: never), person row (K,)
+    (-1: none) and whether a person touches the robot now."""
+    k_count = achieved.shape[0]
+    n_count = positions_obs.shape[0]
+    admissible, friendly, meet, person = _all_clear(k_count)
+    contact = False
+    now = _people_now(px, py, robot_radius, positions_obs, velocities_obs, radii)
+    gap = now[4]
+    if _everyone_far(
+        achieved, max_accel, dt, now, position_sigma, velocity_sigma, margin, k_sigma, accel, friendly_mode
+    ):
+        return admissible, friendly, meet, person, contact
+    touched = False
+    for n in range(n_count):
+        if not gap[n] > 0.0:
+            touched = True
+    if touched:  # a person touches the robot now: nothing is admissible
+        first = 0
+        for n in range(n_count):  # argmin: the first smallest gap
+            if gap[n] < gap[first]:
+                first = n
+        for k in range(k_count):
+            admissible[k] = False
+            friendly[k] = False
+            person[k] = first
+            meet[k] = 0.0
+        return admissible, friendly, meet, person, True
+    sweep = braking_sweep(px, py, heading, speed_now, achieved, dv, dw, dt, substeps)
+    t_count = sweep[0].shape[1]
+    h = dt / substeps
+    horizon = h * (t_count - 1)
+    base, growth, near = _near_people(
+        sweep[8], horizon, velocities_obs, now, position_sigma, velocity_sigma, margin, k_sigma, accel, friendly_mode
+    )
+    any_near = False
+    for n in range(n_count):
+        any_near = any_near or near[n]
+    if friendly_mode:
+        _unfriendly_at_rest(friendly, sweep, positions_obs, velocities_obs, base, growth, near, accel)
+    if not any_near:
+        return admissible, friendly, meet, person, contact
+    people = (now[5], base, growth)
+    _first_meetings(meet, person, sweep, substeps, h, positions_obs, velocities_obs, people, near, accel, towards_only)
     for k in range(k_count):
         admissible[k] = not math.isfinite(meet[k])
         friendly[k] = friendly[k] and admissible[k]
