@@ -41,10 +41,11 @@ What the paper leaves open and we chose, beyond what those modules say:
   ``blocked``; every cycle looks again, so it goes on when the door opens. The candidate tree of a
   cycle with static geometry runs the numpy recipe with the compiled leg checks and via points
   (:data:`.backend.STEPWISE`): the shapes' extremes are not compiled.
-* The way back (``return_lookahead_m``, off by default): off the path line, the paper's step 1 is
-  tried first towards the path point that far ahead instead of the subgoal. The paper heads for the
-  subgoal; when that is metres away the robot drifts back to the path on a shallow line after a pass,
-  and that drift was most of the extra deviation of a passing robot (docs/weights.md §6).
+* The way back (``return_lookahead_m``, 0.5 m by default; 0 in the preset ``paper``): off the path
+  line, the paper's step 1 is tried first towards the path point that far ahead instead of the
+  subgoal. The paper heads for the subgoal; when that is metres away the robot drifts back to the path
+  on a shallow line after a pass, and that drift was most of the extra deviation of a passing robot
+  (docs/weights.md §6).
 """
 
 from __future__ import annotations
