@@ -234,3 +234,14 @@ def test_navground_peers_get_every_shape_as_static_discs():
             for f in np.linspace(0, 1, 7):
                 point = a + f * (b - a)
                 assert np.hypot(*(discs - point).T).min() <= 0.15
+
+
+def test_a_scan_of_the_wrong_length_is_skipped_and_the_memory_kept():
+    front, rear = paper_scanners()
+    layer = StaticObstacleLayer((front, rear))
+    none = (np.zeros((0, 2)), np.zeros(0))
+    free_rear = np.full(rear.beam_count, np.inf)
+    seen = layer.update(0.0, np.zeros(3), [_scan_with_return(front, 0.0, 2.0), free_rear], *none)
+    assert len(seen) >= 1
+    kept = layer.update(0.1, np.zeros(3), [np.full(10, 2.0), free_rear], *none)  # a torn front scan
+    assert len(kept) >= 1 and np.allclose(kept.segments[:, :, 0], 2.0 + front.mount_x_m, atol=0.01)

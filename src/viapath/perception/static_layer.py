@@ -130,9 +130,8 @@ class StaticObstacleLayer:
         pose = np.asarray(robot_pose, dtype=float)
         scanners = self.scanners if scanners is None else tuple(scanners)
         confirmed = np.ones(len(track_radii_m), dtype=bool) if track_confirmed is None else np.asarray(track_confirmed)
-        self._tentative_beams: list[np.ndarray] = []  # per scan: beams whose return only a tentative track explains
-        current = self._from_scans(scanners, pose, scans, track_positions, track_radii_m, confirmed)
-        kept = self._remembered(scanners, time_s, pose, scans)
+        current, tentative_beams = self._from_scans(scanners, pose, scans, track_positions, track_radii_m, confirmed)
+        kept = self._remembered(scanners, time_s, pose, scans, tentative_beams)
         layer = merge_close_shapes(current.concatenate(kept), self.params.merge_gap_m)
         self._seen_s = np.concatenate([np.full(len(current), float(time_s)), self._seen_s[self._kept_rows]])
         self.layer = layer
@@ -142,13 +141,18 @@ class StaticObstacleLayer:
 
     def _from_scans(
         self, scanners, pose: np.ndarray, scans, track_positions, track_radii_m, confirmed: np.ndarray
-    ) -> StaticLayer:
+    ) -> tuple[StaticLayer, list[np.ndarray]]:
+        """The static geometry of this cycle's scans, and per scan the beams whose return only a tentative
+        track explains."""
         p = self.params
+        tentative: list[np.ndarray] = []
         segments: list[Any] = []
         runs: list[Any] = []
         radii: list[Any] = []
         for index, (scanner, ranges) in enumerate(zip(scanners, scans, strict=True)):
             ranges = np.asarray(ranges, dtype=float).reshape(-1)
+            tentative_beams = np.zeros(scanner.beam_count, dtype=bool)
+            tentative.append(tentative_beams)
             if len(ranges) != scanner.beam_count:
                 continue
             with np.errstate(invalid="ignore"):
@@ -156,8 +160,6 @@ class StaticObstacleLayer:
                     np.isfinite(ranges) & (ranges >= max(scanner.range_min_m, 1e-9)) & (ranges <= scanner.range_max_m)
                 )
             beams = np.flatnonzero(valid)
-            tentative_beams = np.zeros(len(ranges), dtype=bool)
-            self._tentative_beams.append(tentative_beams)
             if len(beams) == 0:
                 continue
             x, y, yaw = scanner.world_pose(pose)
@@ -183,12 +185,12 @@ class StaticObstacleLayer:
             runs.append(piece_runs + (runs[-1].max() + 1 if runs else 0))
             radii.append(piece_radii)
         if not segments:
-            return StaticLayer.empty()
-        return StaticLayer(np.concatenate(segments), np.concatenate(runs), np.concatenate(radii))
+            return StaticLayer.empty(), tentative
+        return StaticLayer(np.concatenate(segments), np.concatenate(runs), np.concatenate(radii)), tentative
 
     # -- memory ----------------------------------------------------------------------------------
 
-    def _remembered(self, scanners, time_s: float, pose: np.ndarray, scans) -> StaticLayer:
+    def _remembered(self, scanners, time_s: float, pose: np.ndarray, scans, tentative_beams) -> StaticLayer:
         previous = self.layer
         self._kept_rows = np.zeros(0, dtype=int)
         if len(previous) == 0:
@@ -197,37 +199,31 @@ class StaticObstacleLayer:
         a, b = previous.segments[:, 0], previous.segments[:, 1]
         probes = np.stack([a, 0.5 * (a + b), b], axis=1).reshape(-1, 2)  # (3M, 2)
         seen = np.zeros(len(probes), dtype=bool)
-        for scanner, ranges, tentative in zip(scanners, scans, self._tentative_beams, strict=True):
+        for scanner, ranges, tentative in zip(scanners, scans, tentative_beams, strict=True):
             seen |= self._seen_by(scanner, pose, np.asarray(ranges, dtype=float).reshape(-1), probes, tentative)
         beyond = np.ones(len(probes), dtype=bool)  # beyond every scanner's range: not worth remembering
         in_view = np.zeros(len(probes), dtype=bool)
         for scanner in scanners:
             x, y, _ = scanner.world_pose(pose)
             beyond &= np.hypot(probes[:, 0] - x, probes[:, 1] - y) > scanner.range_max_m
-            in_view |= self._beams_to(scanner, pose, np.zeros(scanner.beam_count), probes)[0]
+            in_view |= self._beams_to(scanner, pose, probes)[0]
         hidden = ~(seen | beyond).reshape(-1, 3).all(axis=1)
         out_of_view = (~(in_view | beyond)).reshape(-1, 3).any(axis=1)
         rows = np.flatnonzero(hidden & (young | out_of_view))
         self._kept_rows = rows
         return previous.subset(rows)
 
-    def _beams_to(self, scanner: ScannerModel, pose: np.ndarray, ranges: np.ndarray, points: np.ndarray):
+    @staticmethod
+    def _beams_to(scanner: ScannerModel, pose: np.ndarray, points: np.ndarray):
         """For each point: whether it is in the scanner's field of view and range, its distance, and the
-        reading of the beam towards it."""
+        beam towards it (clipped to the scan)."""
         x, y, yaw = scanner.world_pose(pose)
         offset = points - (x, y)
         distance = np.hypot(offset[:, 0], offset[:, 1])
         bearing = (np.arctan2(offset[:, 1], offset[:, 0]) - yaw + np.pi) % (2 * np.pi) - np.pi
         beam = np.rint((bearing - scanner.angle_min_rad) / scanner.angle_increment_rad).astype(np.int64)
         inside = (beam >= 0) & (beam < scanner.beam_count) & (distance <= scanner.range_max_m)
-        return inside, distance, ranges[np.clip(beam, 0, scanner.beam_count - 1)]
-
-    def _beam_index(self, scanner: ScannerModel, pose: np.ndarray, points: np.ndarray) -> np.ndarray:
-        """The beam towards each point, clipped to the scan (as :meth:`_beams_to` reads it)."""
-        x, y, yaw = scanner.world_pose(pose)
-        bearing = (np.arctan2(points[:, 1] - y, points[:, 0] - x) - yaw + np.pi) % (2 * np.pi) - np.pi
-        beam = np.rint((bearing - scanner.angle_min_rad) / scanner.angle_increment_rad).astype(np.int64)
-        return np.clip(beam, 0, scanner.beam_count - 1)
+        return inside, distance, np.clip(beam, 0, scanner.beam_count - 1)
 
     def _returned_by(
         self, scanner: ScannerModel, pose: np.ndarray, ranges: np.ndarray, points: np.ndarray
@@ -235,9 +231,9 @@ class StaticObstacleLayer:
         """Whether the scan's beam towards each point returned from there (within ``see_through_m``)."""
         if len(ranges) != scanner.beam_count or len(points) == 0:
             return np.zeros(len(points), dtype=bool)
-        inside, distance, reading = self._beams_to(scanner, pose, ranges, points)
+        inside, distance, beam = self._beams_to(scanner, pose, points)
         with np.errstate(invalid="ignore"):
-            return inside & (np.abs(reading - distance) <= self.params.see_through_m)
+            return inside & (np.abs(ranges[beam] - distance) <= self.params.see_through_m)
 
     def _seen_by(
         self, scanner: ScannerModel, pose: np.ndarray, ranges: np.ndarray, points: np.ndarray, tentative: np.ndarray
@@ -247,11 +243,10 @@ class StaticObstacleLayer:
         at the point that only a tentative track explains (``tentative``, per beam) excepted."""
         if len(ranges) != scanner.beam_count:
             return np.zeros(len(points), dtype=bool)
-        inside, distance, reading = self._beams_to(scanner, pose, ranges, points)
-        beam = self._beam_index(scanner, pose, points)
+        inside, distance, beam = self._beams_to(scanner, pose, points)
+        reading = ranges[beam]
         with np.errstate(invalid="ignore"):
             unconfirmed_return_there = tentative[beam] & (reading <= distance + self.params.see_through_m)
-        with np.errstate(invalid="ignore"):
             free = (reading == np.inf) | (reading > scanner.range_max_m)
             reaches = (
                 np.isfinite(reading)
