@@ -38,7 +38,7 @@ def reference():
     from viapath.perception.replay import track_recording
 
     messages = list(read_laser_scans(BAG, "right_scan"))
-    result = track_recording(messages, keep_points=False)
+    result = track_recording(messages, keep_points=False, people_only=True)  # what the node's planner receives
     by_stamp = {}
     for k, m in enumerate(messages):
         rows = result.track_rows[result.track_rows[:, 0] == k]

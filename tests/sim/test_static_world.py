@@ -245,3 +245,27 @@ def test_a_scan_of_the_wrong_length_is_skipped_and_the_memory_kept():
     assert len(seen) >= 1
     kept = layer.update(0.1, np.zeros(3), [np.full(10, 2.0), free_rear], *none)  # a torn front scan
     assert len(kept) >= 1 and np.allclose(kept.segments[:, :, 0], 2.0 + front.mount_x_m, atol=0.01)
+
+
+def test_a_robot_within_the_planning_margin_of_a_box_goes_on_round_it():
+    """Standing nearer to a box than the via points' radius (but clear of the check radius), the robot finds a
+    way round it that never comes nearer than the safety margin."""
+    from viapath import DesignatedPath, Observation, Obstacles, RobotState
+    from viapath.planning import make_planner
+    from viapath.static import StaticLayer, box_edges
+
+    path = DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.5)
+    planner = make_planner("viapath", path, nominal_speed_mps=0.3)
+    box = box_edges([2.5, 0.0], [1.0, 0.6])
+    margin = planner.config.planning_margin_m
+    # The robot's surface within the planning margin of the box's top face, short of its safety margin.
+    gap_m = 0.05 + 0.6 * margin
+    robot = RobotState(np.array([2.2, 0.3 + 0.25 + gap_m]), 0.0, 0.3)
+    static = StaticLayer.of_shapes([box])
+    decision = planner.plan(Observation(0.0, robot, Obstacles.empty(), static))
+    assert decision.plan.status not in ("blocked", "stop", "wait"), decision.plan.status
+    assert decision.command.speed_mps > 0.0
+    line = np.asarray(decision.plan.waypoints)
+    samples = np.concatenate([np.linspace(a, b, 50) for a, b in zip(line[:-1], line[1:], strict=True)])
+    clearance = point_segment_distances(samples, box).min() - 0.25
+    assert clearance >= 0.05 - 1e-6, clearance  # never nearer than the safety margin

@@ -94,10 +94,13 @@ def track_recording(
     tracker: TrackerParams | None = None,
     poses=None,
     keep_points: bool = True,
+    people_only: bool = False,
 ) -> RecordingResult:
     """Detect and track over ``messages`` (:class:`~viapath.io.rosbag.LaserScanMessage`, in order).
 
     ``poses``: optional (S, 3) sensor pose per scan in a fixed world frame (default: a fixed sensor).
+    ``people_only``: report the tracks a planner receives (not those standing still,
+    :meth:`~viapath.perception.tracking.MultiTargetTracker.people`) instead of every confirmed track.
     """
     detector = detector or DetectorParams.for_legs()
     tracking = MultiTargetTracker(tracker or REAL_SCAN_TRACKER)
@@ -115,7 +118,7 @@ def track_recording(
         pose = (0.0, 0.0, 0.0) if poses is None else poses[k]
         found = detect([scanner], [message.ranges_m], detector).transformed(pose)
         tracking.step(t, found.centres, found.position_sigma_m, found.radii_m)
-        obstacles = tracking.obstacles()
+        obstacles = tracking.people() if people_only else tracking.obstacles()
         for i in range(len(obstacles)):
             rows.append(
                 (
