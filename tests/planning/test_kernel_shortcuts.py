@@ -22,27 +22,22 @@ def _wrap_reference(angle):
     return math.pi - ((math.pi - angle) % (2.0 * math.pi))
 
 
-# The reference as the kernel had it (x != x: NaN, the kernels' idiom).
-@numba.njit(cache=False)
-def _clear_reference(
+def _clear_by_definition(
     positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
-):
-    for j in range(obstacle_positions.shape[0]):
-        now = math.hypot(robot_x - obstacle_positions[j, 0], robot_y - obstacle_positions[j, 1]) - 1e-3
-        for s in range(count):
-            t = dt * (s + 1)
-            cx = obstacle_positions[j, 0] + obstacle_velocities[j, 0] * t
-            cy = obstacle_positions[j, 1] + obstacle_velocities[j, 1] * t
-            until = growth_until_s[j]
-            capped = until if until != until else (t if t < until else until)
-            reach = radii[j] + growth[j] * capped
-            limit = reach if (reach != reach or reach < now) else now
-            if now != now:
-                limit = now
-            distance = math.hypot(positions[s, 0] - cx, positions[s, 1] - cy)
-            if not distance >= limit:
-                return False
-    return True
+) -> bool:
+    """What ``_clear`` answers, stated over every step and obstacle at once: each roll-out position keeps at
+    least ``min(reach at t, distance now - 1 mm)`` from each moved obstacle (a NaN limit or distance fails)."""
+    t = dt * (np.arange(count) + 1.0)  # (S,)
+    centres = obstacle_positions[:, None, :] + obstacle_velocities[:, None, :] * t[None, :, None]  # (N, S, 2)
+    until = growth_until_s[:, None]
+    capped = np.where(np.isnan(until), until, np.minimum(t[None, :], until))
+    reach = radii[:, None] + growth[:, None] * capped
+    now = (np.hypot(robot_x - obstacle_positions[:, 0], robot_y - obstacle_positions[:, 1]) - 1e-3)[:, None]
+    with np.errstate(invalid="ignore"):
+        limit = np.where(np.isnan(reach) | (reach < now), reach, now)
+        limit = np.where(np.isnan(now), now, limit)
+        distance = np.hypot(positions[None, :count, 0] - centres[..., 0], positions[None, :count, 1] - centres[..., 1])
+        return bool(np.all(distance >= limit))
 
 
 def _bits(value: float) -> int:
@@ -131,7 +126,7 @@ def test_clear_by_squared_distance_matches_hypot():
     rng = np.random.default_rng(5)
     answers = []
     for arguments in _clear_cases(rng, 600):
-        expected = _clear_reference(*arguments)
+        expected = _clear_by_definition(*arguments)
         assert kernels._clear(*arguments) == expected
         answers.append(expected)
     assert any(answers) and not all(answers)  # both answers came up
