@@ -18,6 +18,7 @@ from viapath.perception.raycast import simulate_scan
 from viapath.perception.scanner import ScannerModel
 from viapath.ros2.core import PlannerCore
 from viapath.ros2.settings import validate
+from viapath.static import point_segment_distances
 
 SCANNERS = (ScannerModel.urg04lx("front", "forward"), ScannerModel.urg04lx("rear", "backward"))
 FRAMES = ("laser_front", "laser_rear")
@@ -271,3 +272,22 @@ def test_the_shield_wraps_the_planner_and_its_verdict_is_reported(use_shield, ex
         assert core.planner.shield.config.mode == "passive-friendly"
         assert result.status["shield"]["intervened"] in ("True", "False")
         assert result.status["planner"]["shield_mode"] == "passive-friendly"
+
+
+@pytest.mark.parametrize("static_after_s, people_left", [(3.0, 0), (0.0, 1)])
+def test_a_track_standing_still_is_static_unless_the_node_is_told_never(static_after_s, people_left):
+    """The node's tracker turns a track that stands still for tracker_static_after_s into static geometry (its
+    returns reach the static layer); 0 keeps it a person."""
+    core = make_core(tracker_static_after_s=static_after_s)
+    pose = (0.0, 0.0, 0.0)
+    for k in range(45):  # 4.5 s, the robot at rest, someone standing 2 m ahead
+        t = 1.0 + 0.1 * k
+        feed(core, t, pose=pose, speed=0.0)
+        result = core.cycle(t)
+    assert len(result.obstacles) == people_left
+    near = (
+        point_segment_distances(np.array([[2.0, 0.0]]), core.static_now.segments).min()
+        if len(core.static_now)
+        else np.inf
+    )
+    assert (near < 0.4) == (people_left == 0)

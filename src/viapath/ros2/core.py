@@ -180,7 +180,12 @@ class PlannerCore:
             self.detector_params = replace(DetectorParams.for_legs(), fit_backend=s.fit_backend)
         else:
             self.detector_params = DetectorParams(keep_segments=False, fit_backend=s.fit_backend)
-        self.tracker = MultiTargetTracker(TrackerParams(acceleration_sigma_mps2=s.tracker_acceleration_sigma_mps2))
+        self.tracker = MultiTargetTracker(
+            TrackerParams(
+                acceleration_sigma_mps2=s.tracker_acceleration_sigma_mps2,
+                static_after_s=s.tracker_static_after_s or math.inf,  # 0: never static
+            )
+        )
         self.static_layer = StaticObstacleLayer((), StaticLayerParams(enabled=bool(s.static_layer)))
         self.map_layer = StaticLayer.empty()  # a known map (set_map), in the odometry frame
         self.path: DesignatedPath | None = None

@@ -34,9 +34,11 @@ import numpy as np
 from viapath.limits import LIMITS_OPTIONS, ROBOT_OPTIONS, SUBGOAL_OPTIONS
 from viapath.perception.detection import DetectorParams
 from viapath.perception.scanner import URG04LX_MOUNT_OFFSET_M
+from viapath.perception.tracking import TrackerParams
 from viapath.ros2.options import Option, planner_options
 
 _FIT_DEFAULT = DetectorParams().fit_backend  # one default for the circle fit, the simulator's and the node's
+_TRACKER = TrackerParams()  # the tracker's defaults, the simulator's and the node's
 
 
 def _opt(name: str, default, unit: str = "", minimum=None, maximum=None, help: str = "", choices=None) -> Option:
@@ -180,11 +182,19 @@ NODE_OPTIONS: tuple[Option, ...] = (
         ),
         _opt(
             "tracker_acceleration_sigma_mps2",
-            0.2,
+            _TRACKER.acceleration_sigma_mps2,
             "m/s^2",
             0.01,
             10.0,
             "process noise of the tracker (real walkers: 0.5)",
+        ),
+        _opt(
+            "tracker_static_after_s",
+            _TRACKER.static_after_s,
+            "s",
+            0.0,
+            3600.0,
+            "a track standing still this long is static geometry, not a person (0: never)",
         ),
         _opt("blind_person_speed_mps", 1.0, "m/s", 0.0, 5.0, "walking speed assumed for someone in a blind sector"),
         _opt(
