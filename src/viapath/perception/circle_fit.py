@@ -42,6 +42,15 @@ def _padded(points: np.ndarray, starts: np.ndarray, counts: np.ndarray):
     return points[index], mask.astype(float)
 
 
+def clusters_of(starts, counts) -> tuple[np.ndarray, np.ndarray]:
+    """``starts`` and ``counts`` of the clusters as int64 arrays; a cluster of fewer than 2 points is refused."""
+    starts = np.asarray(starts, dtype=np.int64)
+    counts = np.asarray(counts, dtype=np.int64)
+    if (counts < 2).any():
+        raise ValueError("every cluster needs at least 2 points")
+    return starts, counts
+
+
 def fit_circles(
     points: np.ndarray,
     starts: np.ndarray,
@@ -61,13 +70,10 @@ def fit_circles(
     The numpy reference; the laser pipeline's dispatch (:func:`viapath.perception.detection.fit_circles_as`)
     runs the same algorithm compiled when asked (one loop per cluster; equal to round-off).
     """
-    starts = np.asarray(starts, dtype=np.int64)
-    counts = np.asarray(counts, dtype=np.int64)
+    starts, counts = clusters_of(starts, counts)
     k_count = len(starts)
     if k_count == 0:
         return CircleFits(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
-    if (counts < 2).any():
-        raise ValueError("every cluster needs at least 2 points")
     p, mask = _padded(np.asarray(points, dtype=float), starts, counts)
     n = counts.astype(float)
     mean = (p * mask[..., None]).sum(axis=1) / n[:, None]

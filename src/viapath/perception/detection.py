@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from viapath.compiled import kernels
-from viapath.perception.circle_fit import CircleFits, _padded, fit_circles, solve_sym3
+from viapath.perception.circle_fit import CircleFits, _padded, clusters_of, fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
 from viapath.perception.scanner import ScannerModel
 from viapath.perception.segmentation import BeamTables, SegmentationParams, Segments, segment_beams
@@ -361,13 +361,10 @@ def _fit_circles_compiled(
     iterations: int = 4,
 ) -> CircleFits:
     """:func:`viapath.perception.circle_fit.fit_circles` compiled (:func:`viapath.compiled.perception.fit_circles_kernel`)."""
-    starts = np.asarray(starts, dtype=np.int64)
-    counts = np.asarray(counts, dtype=np.int64)
+    starts, counts = clusters_of(starts, counts)
     k_count = len(starts)
     if k_count == 0:
         return CircleFits(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
-    if (counts < 2).any():
-        raise ValueError("every cluster needs at least 2 points")
     module = _compiled_perception()
     if module is None:
         raise RuntimeError("numba back end unavailable; pip install 'viapath[fast]'")
