@@ -186,21 +186,23 @@ class LegChecks:
         if obstacles.static_mask is not None:
             # Static geometry stays put: its forecast holds past the horizon (a leg into a wall is not made free
             # by driving it slowly) and the braking envelope, for where a person may walk, does not apply.
-            static = obstacles.static_mask
             contact = np.empty((len(starts), len(obstacles)))
-            for rows, leg_radii, until in ((~static, envelope, checked), (static, None, durations)):
-                contact[:, rows] = self.backend.legs_first_contact(
-                    starts,
-                    start_times,
-                    velocities,
-                    until,
-                    obstacles.positions[rows],
-                    obstacles.velocities[rows],
-                    self.check_radii[rows],
-                    self.growth[rows],
-                    self.growth_until_s[rows],
-                    leg_radii,
-                )
+            people, static = self._moving_and_static_rows()
+            for group, leg_radii, until in ((people, envelope, checked), (static, None, durations)):
+                rows, positions, obstacle_velocities, radii, growth, growth_until_s = group
+                if len(rows):
+                    contact[:, rows] = self.backend.legs_first_contact(
+                        starts,
+                        start_times,
+                        velocities,
+                        until,
+                        positions,
+                        obstacle_velocities,
+                        radii,
+                        growth,
+                        growth_until_s,
+                        leg_radii,
+                    )
             return contact
         return self.backend.legs_first_contact(
             starts,
@@ -214,6 +216,27 @@ class LegChecks:
             self.growth_until_s,
             envelope,
         )
+
+    def _moving_and_static_rows(self) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
+        """The obstacles' rows split into people and static geometry, each as (row indices, positions,
+        velocities, check radii, growth, growth_until_s), made once per LegChecks (every leg check of the
+        cycle takes them)."""
+        cached = self.__dict__.get("_moving_and_static")
+        if cached is None:
+            obstacles, static = self.obstacles, self.obstacles.is_static
+            cached = self.__dict__["_moving_and_static"] = tuple(
+                (
+                    rows,
+                    np.ascontiguousarray(obstacles.positions[rows], dtype=np.float64),
+                    np.ascontiguousarray(obstacles.velocities[rows], dtype=np.float64),
+                    *(
+                        np.ascontiguousarray(np.broadcast_to(values, static.shape)[rows], dtype=np.float64)
+                        for values in (self.check_radii, self.growth, self.growth_until_s)
+                    ),
+                )
+                for rows in (np.flatnonzero(~static), np.flatnonzero(static))
+            )
+        return cached
 
     def static_labels(self) -> np.ndarray:
         """(N,) for each obstacle the static shape it belongs to (its id; -1: a person)."""
