@@ -969,3 +969,33 @@ def test_the_warm_up_reaches_every_whole_step_kernel():
         planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people))
     for kernel in (kernels.escape_headings, kernels.escape_scores, kernels.choose):
         assert len(kernel.signatures) == 1  # one signature each: the planner's argument types do not vary
+
+
+@settings(max_examples=600, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(escape_cases(), st.integers(0, 2**31 - 1))
+def test_compiled_escape_with_static_rows_decides_as_numpy(case, seed):
+    """A cycle with static geometry runs its candidate tree stepwise, but its escape on the planner's whole-step
+    kernels: with some of the crowd turned into static discs (velocity 0, σ 0) the escape decides as the numpy
+    reference, and the compiled figures are there to decide with (the stepwise backend has none)."""
+    from dataclasses import replace
+
+    from viapath.compiled.backend import STEPWISE, Backend
+    from viapath.planning.viapath.escape import escape_fan, stop_or_escape
+    from viapath.planning.viapath.planner import escape_step
+    from viapath.static import STATIC_ID_BASE
+
+    path_index, robot, positions, velocities, radii, _sigma, options, previous = case
+    static = np.random.default_rng(seed).random(len(positions)) < 0.6
+    velocities = np.where(static[:, None], 0.0, velocities)
+    case = (path_index, robot, positions, velocities, radii, None, options, previous)
+    planner, checks, previous = _escape_checks(case)
+    ids = np.where(static, STATIC_ID_BASE + np.arange(len(static)) // 3, np.arange(len(static)))
+    obstacles = replace(checks.obstacles, ids=ids, static_mask=static)
+    checks = replace(checks, obstacles=obstacles, backend=STEPWISE["numba"])
+    expected = stop_or_escape(replace(checks, backend=Backend("numpy")), planner.limits, planner.config, previous)
+    got = escape_step(checks, planner.limits, planner.config, previous, Backend("numba"))
+    assert got.command == expected.command
+    assert got.plan.status == expected.plan.status
+    assert _same_bits(got.plan.target, expected.plan.target)
+    fan = escape_fan(planner.limits, planner.config)
+    assert Backend("numba").escape(checks, planner.limits, planner.config, fan, previous) is not None

@@ -40,7 +40,8 @@ What the paper leaves open and we chose, beyond what those modules say:
   ``blocked_gap_m`` short of touching it, at a speed from which it stops there, and waits with status
   ``blocked``; every cycle looks again, so it goes on when the door opens. The candidate tree of a
   cycle with static geometry runs the numpy recipe with the compiled leg checks and via points
-  (:data:`.backend.STEPWISE`): the shapes' extremes are not compiled.
+  (:data:`.backend.STEPWISE`): the shapes' extremes are not compiled. Its escape, which treats static
+  discs as any obstacle, keeps the whole-step kernels (:func:`escape_step`).
 * The way back (``return_lookahead_m``, 0.5 m by default; 0 in the preset ``paper``): off the path
   line, the paper's step 1 is tried first towards the path point that far ahead instead of the
   subgoal. The paper heads for the subgoal; when that is metres away the robot drifts back to the path
@@ -62,7 +63,7 @@ from numpy.typing import ArrayLike
 from viapath.compiled import numba_available
 from viapath.compiled import resolve as resolve_backend
 from viapath.compiled import slots as slot
-from viapath.compiled.backend import STEPWISE, NodeStore, backend_for, whole_steps_compiled
+from viapath.compiled.backend import STEPWISE, Backend, NodeStore, backend_for, whole_steps_compiled
 from viapath.geometry import wrap_angle
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.options import Settings
@@ -167,7 +168,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         chosen = self._choose(checks, speeds, nominal_index, self._previous)
         if chosen is None:
             self._previous = None
-            decision = escape_step(checks, self.limits, self.config, self._previous_escape)
+            decision = escape_step(checks, self.limits, self.config, self._previous_escape, self.backend)
             self._previous_escape = decision.command if decision.plan.status == "escape" else None
             if decision.plan.status == "stop" and checks.obstacles.static_mask is not None:
                 return self._blocked(situation, checks, float(speeds[nominal_index])) or decision
@@ -670,10 +671,19 @@ def grow_step(
     return grow(checks, roots, config, slow_checks)
 
 
-def escape_step(checks: LegChecks, limits: MotionLimits, config: Settings, previous: Command | None = None) -> Decision:
+def escape_step(
+    checks: LegChecks,
+    limits: MotionLimits,
+    config: Settings,
+    previous: Command | None = None,
+    backend: Backend | None = None,
+) -> Decision:
     """Stop or escape (:func:`.escape.stop_or_escape`): its standing check and scores in two compiled calls on the
-    compiled path with its whole-step kernels (the same figures, bit for bit), else its numpy reference."""
-    compiled = checks.backend.escape(checks, limits, config, escape_fan(limits, config), previous)
+    compiled path with its whole-step kernels (the same figures, bit for bit), else its numpy reference.
+    ``backend``: the planner's own, when the cycle's (``checks.backend``) leaves the whole steps out for
+    static geometry: the escape treats static rows as every other obstacle (the standing check spans the
+    horizon for both, and keeps no braking envelope), so its compiled kernels serve those cycles too."""
+    compiled = (backend or checks.backend).escape(checks, limits, config, escape_fan(limits, config), previous)
     return stop_or_escape(checks, limits, config, previous, compiled)
 
 
