@@ -30,6 +30,9 @@ Beyond the paper (DESIGN §2 and §5.2 future work):
 **Static geometry** (DESIGN §10): a static disc met by a leg stands for its whole shape. The root branches
 once per shape a leg meets, and the via points are those of the shape's two extreme discs as seen from the
 node (the tangents to its inflated outline); via points round static geometry keep no braking envelope.
+A node that hugs a static disc (closer than ``HUG_FACTOR`` via radii) also **slides**: a leg of one via
+radius at right angles to the way to the disc, on each side (:func:`_with_slides`), since from so close
+the tangents lie a few centimetres away and the nearest disc is both extremes of its shape.
 
 Each candidate records its **way round** — the first obstacle it avoids, the side and the root
 (:class:`Way`) — so that the next cycle can prefer the same way (hysteresis) without comparing
@@ -188,6 +191,10 @@ class RootLegs:
     @property
     def nominal_is_free(self) -> bool:
         return bool(self.free[self.nominal_index])
+
+
+# A node closer to a static disc than this many times its via radius hugs it (:func:`_with_slides`).
+HUG_FACTOR = 1.25
 
 
 def grow(
@@ -358,6 +365,10 @@ def _via_children(
         _envelope_of_pairs(checks, speeds, obstacle_index),
         3 * checks.horizon_s,
     )
+    if obstacles.static_mask is not None:
+        pair, option, t_k, leg_velocity, via = _with_slides(
+            checks, starts, speeds, obstacle_index, (pair, option, t_k, leg_velocity, via)
+        )
     if len(pair) == 0:
         return None
     starts_k, times_k, speeds_k = starts[pair], times[pair], speeds[pair]
@@ -381,6 +392,43 @@ def _via_children(
         length_m=data["length_m"][parent] + speeds_k * t_k,
         first_direction=first_direction,
         way=way,
+    )
+
+
+def _with_slides(
+    checks: LegChecks,
+    starts: np.ndarray,
+    speeds: np.ndarray,
+    obstacle_index: np.ndarray,
+    options: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The via options of :func:`viapath.geometry.via_options` and, for each pair whose node hugs a static disc
+    (closer than ``HUG_FACTOR`` times its via radius), a slide on each side: a leg of one via radius at right
+    angles to the way to the disc. From so close the tangents to the via circle lie a few centimetres away, and
+    a chain of them creeps round the shape's nearest disc, which from there is both its extremes; the slide
+    moves the node along the surface to where the shape's extremes and their tangents mean something again."""
+    pair, option, t_k, leg_velocity, via = options
+    static = checks.obstacles.static_mask
+    assert static is not None
+    centres = checks.obstacles.positions[obstacle_index]
+    radii = checks.via_radii[obstacle_index]
+    offset = centres - starts
+    distance = np.hypot(offset[:, 0], offset[:, 1])
+    hugging = np.flatnonzero(static[obstacle_index] & (distance < HUG_FACTOR * radii) & (distance > 0))
+    if len(hugging) == 0:
+        return options
+    toward = offset[hugging] / distance[hugging, None]
+    left = np.stack([-toward[:, 1], toward[:, 0]], axis=1)  # the way to the disc turned left
+    slide_pair = np.repeat(hugging, 2)
+    slide_option = np.tile(np.array([0, 1]), len(hugging))  # (left, early), (right, early) of VIA_SIDES
+    step = np.repeat(left, 2, axis=0) * _SIDES[slide_option][:, None] * radii[slide_pair][:, None]
+    slide_t = radii[slide_pair] / speeds[slide_pair]
+    return (
+        np.concatenate([pair, slide_pair]),
+        np.concatenate([option, slide_option]),
+        np.concatenate([t_k, slide_t]),
+        np.concatenate([leg_velocity, step / slide_t[:, None]]),
+        np.concatenate([via, starts[slide_pair] + step]),
     )
 
 

@@ -31,7 +31,8 @@ What the paper leaves open and we chose, beyond what those modules say:
   (v_i = 0: t* = |w|/v). What is ours: (1) via points go round a whole **shape**, not the one disc a leg
   met first: a pair (node, static disc) becomes the two discs of that disc's shape that reach furthest
   left and right as seen from the node (the tangents to the shape's inflated outline,
-  :func:`.candidates._round_static_shapes`), and the root branches once per shape; (2) static legs are
+  :func:`.candidates._round_static_shapes`), and the root branches once per shape; a node hugging a
+  shape slides along it instead of creeping round its nearest disc (:func:`.candidates._with_slides`); (2) static legs are
   checked to their end, past the horizon (a leg into a wall is not made free by driving it slowly), and
   without the shield's braking envelope, which is for where people may walk; (3) static discs farther
   outside the corridor than their reach are left out of the cycle (no candidate can meet them); (4) a
