@@ -37,7 +37,7 @@ from viapath.perception.laser import LaserPerception
 
 def laser_chain(backend: str, steps: int) -> float:
     worlds = [scene(10, k) for k in range(steps)]
-    perception = LaserPerception(ray_backend=backend, detector={"keep_segments": False, "fit_backend": backend})
+    perception = LaserPerception(ray_compute=backend, detector={"keep_segments": False, "fit_compute": backend})
     perception.reset(np.random.default_rng(1))
     for world in worlds[:20]:  # warm-up (and numba's cache load)
         perception.observe(world)
@@ -73,7 +73,7 @@ def closed_loop_scenario(backend: str, steps: int):
             "duration_s": steps * 0.1,
             "perception": {
                 "mode": "laser",
-                "options": {"ray_backend": backend, "detector": {"fit_backend": backend, "keep_segments": False}},
+                "options": {"ray_compute": backend, "detector": {"fit_compute": backend, "keep_segments": False}},
             },
         }
     )

@@ -65,7 +65,7 @@ def main() -> None:
         f"\nprocessing (fusion, segmentation, circle fits, association, Kalman), 2 x 683 beams, {args.obstacles} obstacles:"
     )
     for fit in fits:
-        perception = LaserPerception(detector={"keep_segments": False, "fit_backend": fit})
+        perception = LaserPerception(detector={"keep_segments": False, "fit_compute": fit})
         perception.reset(np.random.default_rng(1))
         scans = [perception.scan(w) for w in worlds]
         for k in range(20):  # warm-up (and numba compilation)
@@ -134,7 +134,7 @@ def closed_loop(steps: int, backends) -> None:
     }
     print(f"\nclosed loop, 10 obstacles, both scanners + tracking + planning, {steps} steps:")
     for mode, options in [("oracle", {})] + [
-        ("laser", {"ray_backend": b, "detector": {"fit_backend": b, "keep_segments": False}}) for b in backends
+        ("laser", {"ray_compute": b, "detector": {"fit_compute": b, "keep_segments": False}}) for b in backends
     ]:
         scenario = scenario_from_dict({**base, "perception": {"mode": mode, "options": options}})
         run_episode(scenario, seed=0)  # warm-up (numba compile, caches)
@@ -142,7 +142,7 @@ def closed_loop(steps: int, backends) -> None:
         episode = run_episode(scenario, seed=0)
         elapsed = time.perf_counter() - started
         n = len(episode.trace.times_s)
-        label = mode if mode == "oracle" else f"laser/{options['ray_backend']}"
+        label = mode if mode == "oracle" else f"laser/{options['ray_compute']}"
         extra = ""
         if mode == "laser":
             m = episode.metrics

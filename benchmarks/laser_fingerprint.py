@@ -2,7 +2,7 @@
 
     PYTHONPATH=src python benchmarks/laser_fingerprint.py [--steps 600]
 
-Runs ``LaserPerception(ray_backend=B, detector={"keep_segments": False, "fit_backend": B})`` over the
+Runs ``LaserPerception(ray_compute=B, detector={"keep_segments": False, "fit_compute": B})`` over the
 scene of ``bench_perception.py`` (``scene(10, k)`` for k < steps, generator ``default_rng(1)``) for
 B = numpy and numba, and prints per back end a SHA-256 of every step's Obstacles (positions,
 velocities, radii, position and velocity sigmas, ids: exact bytes). Run it on two versions of the code
@@ -26,7 +26,7 @@ from viapath.perception.laser import LaserPerception
 
 
 def fingerprint(backend: str, steps: int) -> tuple[str, int]:
-    perception = LaserPerception(ray_backend=backend, detector={"keep_segments": False, "fit_backend": backend})
+    perception = LaserPerception(ray_compute=backend, detector={"keep_segments": False, "fit_compute": backend})
     perception.reset(np.random.default_rng(1))
     digest, reported = hashlib.sha256(), 0
     for k in range(steps):

@@ -24,8 +24,6 @@ _USER_FACING = "a user-facing name that must keep working"
 NOT_YET = {
     "planning/viapath/checks.py": "LegChecks carries the cycle's arithmetic and the kernel_* inputs the compiled "
     "package reads by name (viapath.compiled.backend)",
-    "perception/laser.py": _USER_FACING + " (LaserPerception's ray_backend option) and its ray casters",
-    "ros2/settings.py": _USER_FACING + " (the ROS parameter fit_backend)",
     "ros2/core.py": "hands fit_backend on; compiles the kernels at start-up",
     "cli/bench.py": _USER_FACING + " (viapath bench --backend: loky, dask or ray)",
     "bench/runner.py": "joblib's backends (loky, dask, ray): run_bench(backend=...)",

@@ -98,4 +98,39 @@ def test_the_node_fits_circles_as_the_simulator_does_by_default():
     from viapath.perception.detection import DetectorParams
     from viapath.ros2.settings import validate
 
-    assert validate({}).fit_backend == DetectorParams().fit_backend
+    assert validate({}).fit_compute == DetectorParams().fit_compute
+
+
+def test_the_scenario_json_schema_types_the_laser_options():
+    """The laser chain's options appear in the scenario's JSON schema with their types, defaults and bounds."""
+    from viapath.perception.segmentation import SegmentationParams
+    from viapath.perception.tracking import TrackerParams
+    from viapath.scenarios.models import Scenario
+
+    schema = Scenario.model_json_schema()
+    definitions = schema["$defs"]
+    options = definitions[definitions["PerceptionSpec"]["properties"]["options"]["$ref"].split("/")[-1]]
+    assert options["additionalProperties"] is False
+    assert set(options["properties"]) >= {"scanners", "detector", "tracker", "ray_compute", "static_layer"}
+    assert options["properties"]["ray_compute"]["enum"] == ["auto", "numpy", "numba"]
+    min_points = definitions["SegmentationOptions"]["properties"]["min_points"]
+    assert (min_points["type"], min_points["minimum"], min_points["default"]) == (
+        "integer",
+        2,
+        SegmentationParams().min_points,
+    )
+    confirm_hits = definitions["TrackerOptions"]["properties"]["confirm_hits"]
+    assert (confirm_hits["minimum"], confirm_hits["maximum"], confirm_hits["default"]) == (
+        1,
+        62,
+        TrackerParams().confirm_hits,
+    )
+    assert definitions["DetectorOptions"]["properties"]["fit_compute"]["enum"] == ["auto", "numpy", "numba"]
+
+
+def test_the_node_names_the_new_spelling_of_a_renamed_parameter():
+    from viapath.ros2.settings import ParameterError, validate
+
+    with pytest.raises(ParameterError, match="parameter fit_backend: unknown parameter \\(now called fit_compute\\)"):
+        validate({"fit_backend": "numpy"})
+    assert validate({"fit_compute": "numpy"}).fit_compute == "numpy"

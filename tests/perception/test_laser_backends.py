@@ -111,7 +111,7 @@ def test_numba_laser_path_equals_numpy_segments_and_tracks(n_people, seed):
     walls = np.array([[[-10.0, -4.0], [20.0, -4.0]], [[-10.0, 4.0], [20.0, 4.0]]])
     runs = {}
     for backend in ("numpy", "numba"):
-        perception = LaserPerception(ray_backend=backend, detector={"keep_segments": True, "fit_backend": backend})
+        perception = LaserPerception(ray_compute=backend, detector={"keep_segments": True, "fit_compute": backend})
         perception.reset(np.random.default_rng(seed))
         ranges, segments, reported = [], [], []
         for k in range(25):

@@ -165,5 +165,5 @@ def test_numba_equals_numpy_bit_for_bit():
 
 
 def test_unknown_backend_is_an_error():
-    with pytest.raises(ValueError, match="backend"):
+    with pytest.raises(ValueError, match="ray_compute"):
         ray_casters("cuda")

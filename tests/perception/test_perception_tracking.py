@@ -158,7 +158,7 @@ def test_laser_perception_tracks_obstacles_around_a_moving_robot():
 
 def test_same_seed_same_tracks_and_numpy_vs_auto_backend():
     frames = [snapshot(k * 0.1, (0, 0, 0), [[2.0 - 0.2 * k * 0.1, 0.5]], [[-0.2, 0.0]]) for k in range(20)]
-    a, b = LaserPerception(), LaserPerception(ray_backend="auto")
+    a, b = LaserPerception(), LaserPerception(ray_compute="auto")
     a.reset(np.random.default_rng(3))
     b.reset(np.random.default_rng(3))
     ra, _ = run(a, frames)

@@ -135,18 +135,8 @@ def test_viapath_options_that_made_a_cycle_unbounded_are_refused(values):
 def test_the_largest_accepted_roll_outs_plan_a_cycle():
     from viapath.safety.shielded import shielded
 
-    inner = make_planner(
-        "viapath",
-        corridor(),
-        nominal_speed_mps=0.2,
-        limits=LIMITS,
-        robot_radius_m=0.25,
-        rollout_s=20.0,
-        rollout_dt_s=0.01,
-        escape_s=20.0,
-        escape_dt_s=0.01,
-        max_rollouts=1000,
-    )
+    largest = dict(rollout_s=20.0, rollout_dt_s=0.01, escape_s=20.0, escape_dt_s=0.01, max_rollouts=1000)
+    inner = make_planner("viapath", corridor(), nominal_speed_mps=0.2, limits=LIMITS, robot_radius_m=0.25, **largest)
     planner = shielded(inner, True, 0.1)
     decision = planner.plan(Observation(0.0, robot(speed=0.2), one_obstacle((0.9, 0.0), velocity=(-0.5, 0.0))))
     assert np.isfinite([decision.command.speed_mps, decision.command.turn_rate_radps]).all()

@@ -36,7 +36,7 @@ def reference_metrics(name: str) -> dict:
     spec = spec.model_copy(
         update={
             "perception": spec.perception.model_copy(
-                update={"options": {"detector": {"keep_segments": False, "fit_backend": "numpy"}}}
+                update={"options": {"detector": {"keep_segments": False, "fit_compute": "numpy"}}}
             )
         }
     )

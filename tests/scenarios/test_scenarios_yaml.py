@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 import pytest
+import yaml
 from typer.testing import CliRunner
 
 from viapath.cli import app
@@ -149,6 +150,86 @@ BAD = {
         1,
     ),
     "negative_weight": ("k1: 0.1", "k1: -0.1", "planner.weights.k1", "greater than or equal to 0", "found -0.1", 1),
+    "laser_min_points": (
+        "duration_s: 60",
+        "duration_s: 60\nperception: {mode: laser, options: {detector: {segmentation: {min_points: -1}}}}",
+        "perception.options.detector.segmentation.min_points",
+        "greater than or equal to 2",
+        "found -1",
+        1,
+    ),
+    "laser_unknown_option": (
+        "duration_s: 60",
+        "duration_s: 60\nperception: {mode: laser, options: {bogus: 1}}",
+        "perception.options.bogus",
+        "unknown field",
+        "found 1",
+        1,
+    ),
+    "laser_unknown_tracker_option": (
+        "duration_s: 60",
+        "duration_s: 60\nperception: {mode: laser, options: {tracker: {gate: 3}}}",
+        "perception.options.tracker.gate",
+        "unknown field",
+        "found 3",
+        1,
+    ),
+    "laser_unknown_choice": (
+        "duration_s: 60",
+        "duration_s: 60\nperception: {mode: laser, options: {ray_compute: cuda}}",
+        "perception.options.ray_compute",
+        "'auto', 'numpy' or 'numba'",
+        "found 'cuda'",
+        1,
+    ),
+    "laser_former_ray_spelling": (
+        "duration_s: 60",
+        "duration_s: 60\nperception: {mode: laser, options: {ray_backend: numpy}}",
+        "perception.options",
+        "ray_backend is now called ray_compute",
+        None,
+        1,
+    ),
+    "laser_former_fit_spelling": (
+        "duration_s: 60",
+        "duration_s: 60\nperception: {mode: laser, options: {detector: {fit_backend: numpy}}}",
+        "perception.options.detector",
+        "fit_backend is now called fit_compute",
+        None,
+        1,
+    ),
+    "laser_scanner_ranges_crossed": (
+        "duration_s: 60",
+        "duration_s: 60\nperception: {mode: laser, options: {scanners: [{range_min_m: 5.0, range_max_m: 4.0}]}}",
+        "perception.options.scanners.0",
+        "range_min_m < range_max_m",
+        None,
+        1,
+    ),
+    "laser_tracker_window_too_short": (
+        "duration_s: 60",
+        "duration_s: 60\nperception: {mode: laser, options: {tracker: {confirm_hits: 5, confirm_window: 3}}}",
+        "perception.options.tracker",
+        "confirm_hits <= confirm_window",
+        None,
+        1,
+    ),
+    "laser_oracle_noise": (
+        "duration_s: 60",
+        "duration_s: 60\nperception: {mode: laser, options: {position_noise_m: 0.1}}",
+        "perception.options.position_noise_m",
+        "oracle option",
+        "found 0.1",
+        1,
+    ),
+    "oracle_with_laser_options": (
+        "duration_s: 60",
+        "duration_s: 60\nperception: {mode: oracle, options: {tracker: {max_unseen_s: 2.0}}}",
+        "perception",
+        "options (tracker) configure the laser chain; mode 'oracle' takes none",
+        None,
+        1,
+    ),
 }
 
 
@@ -287,6 +368,9 @@ CLI_CASES = [
     "wrong_type",
     "missing_required",
     "replay_typo",
+    "laser_min_points",
+    "laser_former_ray_spelling",
+    "oracle_with_laser_options",
 ]
 
 
@@ -350,12 +434,12 @@ def test_cli_bad_input_via_subprocess(tmp_path):
         (
             "duration_s: 60",
             "duration_s: 60\nperception: {mode: laser, options: {bogus: 1}}",
-            ": perception.options: unknown option(s) bogus",
+            ": perception.options.bogus: unknown field",
         ),
         (
             "duration_s: 60",
             "duration_s: 60\nperception: {mode: laser, options: {tracker: {gate: 3}}}",
-            ": perception.options: tracker: unknown option(s) gate",
+            ": perception.options.tracker.gate: unknown field",
         ),
     ],
 )
@@ -369,9 +453,70 @@ def test_cli_names_the_field_of_errors_found_after_loading(tmp_path, old, new, n
 
 def test_laser_options_are_passed_through_including_the_mode():
     from viapath.perception.laser import LaserPerception
-    from viapath.perception.modes import options_as_arguments as _laser_perception
+    from viapath.perception.modes import laser_perception
 
-    perception = _laser_perception(LaserPerception, {"mode": "laser", "ray_backend": "numpy"})
+    perception = laser_perception({"mode": "laser", "ray_compute": "auto"})
     assert isinstance(perception, LaserPerception)
-    with pytest.raises(ValueError, match=r"^perception.options: unknown option\(s\) bogus"):
-        _laser_perception(LaserPerception, {"bogus": 1})
+    assert perception.ray_compute == "auto"
+    with pytest.raises(ValueError, match=r"^perception.options.bogus: "):
+        laser_perception({"bogus": 1})
+    with pytest.raises(ValueError, match=r"^perception.options.detector.iterations: .*greater than or equal to 1"):
+        laser_perception({"detector": {"iterations": 0}})
+
+
+LASER_OPTION_SETS = [
+    {},
+    {"detector": {"fixed_radius_m": 0.25, "segmentation": {"min_points": 4}}},
+    {"fixed_radius_m": 0.3, "range_noise": False, "ray_compute": "numpy"},
+    {"tracker": {"max_unseen_s": 1.5, "static_after_s": float("inf")}, "static_layer": {"enabled": False}},
+    {"scanners": [{"name": "only", "beam_count": 361, "angle_increment_rad": 0.0087}], "detector": None},
+]
+
+
+@pytest.mark.parametrize("options", LASER_OPTION_SETS)
+def test_a_scenario_builds_the_laser_chain_the_mapping_builds(options):
+    """The typed options hand LaserPerception the mapping it was given: the same scanners, detector, tracker and
+    static layer as ``LaserPerception(**options)``."""
+    from viapath.perception.laser import LaserPerception
+    from viapath.scenarios.build import build
+
+    data = yaml.safe_load(GOOD)
+    data["perception"] = {"mode": "laser", "options": options}
+    built = build(scenario_from_dict(data)).perception
+    direct = LaserPerception(**options)
+    assert built.scanners == direct.scanners
+    assert built.detector_params == direct.detector_params
+    assert built.tracker_params == direct.tracker_params
+    assert built._static.params == direct._static.params
+    assert (built.ray_compute, built.range_noise, built.robot_radius_m) == (
+        direct.ray_compute,
+        direct.range_noise,
+        direct.robot_radius_m,
+    )
+
+
+def test_the_laser_option_models_default_to_the_dataclasses():
+    from viapath.perception.detection import DetectorParams
+    from viapath.perception.laser_options import (
+        DetectorOptions,
+        ScannerOptions,
+        StaticLayerOptions,
+        TrackerOptions,
+    )
+    from viapath.perception.scanner import ScannerModel
+    from viapath.perception.static_layer import StaticLayerParams
+    from viapath.perception.tracking import TrackerParams
+
+    for model, cls in (
+        (ScannerOptions, ScannerModel),
+        (DetectorOptions, DetectorParams),
+        (TrackerOptions, TrackerParams),
+        (StaticLayerOptions, StaticLayerParams),
+    ):
+        assert model().build() == cls()
+        defaults = {name: field.get_default(call_default_factory=True) for name, field in model.model_fields.items()}
+        built = {name: getattr(cls(), name) for name in defaults}
+        assert {name: value for name, value in defaults.items() if name != "segmentation"} == {
+            name: value for name, value in built.items() if name != "segmentation"
+        }
+    assert DetectorOptions().segmentation.build() == DetectorParams().segmentation

@@ -9,41 +9,15 @@ import pytest
 from viapath.observation import Command, Obstacles
 from viapath.planning.base import Decision, Plan
 from viapath.scenarios import load_scenario
-from viapath.sim.loop import run_episode
 from viapath.sim.obstacles import scenario_obstacle_states
 from viapath.viz.scene import ForecastSettings, PersonForecast, SceneBuilder, XYTScene, plan_xyt
+from viapath.viz.xyt_plot import episode_and_scenes
 
 
 def _scenes(name: str, **kwargs):
     scenario = load_scenario(name)
-    scenes, builder = [], []
-
-    def on_step(record):
-        if not builder:
-            builder.append(
-                SceneBuilder(
-                    record.planner.path,
-                    record.observation.robot.radius_m,
-                    ForecastSettings.from_planner(record.planner),
-                )
-            )
-        state = record.state
-        scenes.append(
-            builder[0].build(
-                record.step,
-                record.time_s,
-                (state.x, state.y, state.heading_rad),
-                state.speed_mps,
-                state.turn_rate_radps,
-                record.observation,
-                record.decision,
-                record.plan_time_ms,
-                record.perception,
-            )
-        )
-
-    episode = run_episode(
-        scenario, perception="oracle", seed=0, position_noise_m=0.0, velocity_noise_mps=0.0, on_step=on_step, **kwargs
+    episode, scenes = episode_and_scenes(
+        scenario, "oracle", seed=0, position_noise_m=0.0, velocity_noise_mps=0.0, **kwargs
     )
     return scenario, episode, scenes
 

@@ -39,11 +39,20 @@ from typing import Any
 
 import numpy as np
 
-from viapath.compiled import kernels
+from viapath.compiled import BACKENDS, kernels, require
 from viapath.perception.circle_fit import CircleFits, _padded, clusters_of, fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
+from viapath.perception.raycast import Caster, cast_rays_from_numpy, cast_rays_numpy
 from viapath.perception.scanner import ScannerModel
 from viapath.perception.segmentation import BeamTables, SegmentationParams, Segments, segment_beams
+
+#: The choices of the laser chain's arithmetic (``LaserPerception(ray_compute=...)``, ``DetectorParams.fit_compute``,
+#: the ROS 2 parameter ``fit_compute``): the compiled package's (:data:`viapath.compiled.BACKENDS`).
+COMPUTE_CHOICES: tuple[str, ...] = BACKENDS
+COMPILED_COMPUTE = "numba"  # the choice that runs the compiled code (an error without numba)
+#: Former spellings of the laser chain's options -> their names now (a scenario or a ROS parameter file that
+#: still says the former one is told the new name).
+RENAMED_OPTIONS = {"ray_backend": "ray_compute", "fit_backend": "fit_compute"}
 
 
 @dataclass(frozen=True)
@@ -70,7 +79,7 @@ class DetectorParams:
     iterations: int = 4
     # numba when installed (extra 'fast'), else numpy: the circle fit (equal to round-off) and
     # the segmentation's clustering and the shape tests (equal bit for bit)
-    fit_backend: str = "auto"
+    fit_compute: str = "auto"
     keep_segments: bool = True  # per-segment points and fits, for plots and evaluation
 
     @classmethod
@@ -168,7 +177,7 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     ranges[~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = (
         np.nan
     )
-    compiled = params.fit_backend in ("numba", "auto") and _compiled_perception() is not None
+    compiled = params.fit_compute in ("numba", "auto") and _compiled_perception() is not None
     segments = segment_beams(
         ranges,
         layout.angles_rad,
@@ -227,7 +236,7 @@ def _fit_candidates(points, starts, counts, origins, candidates, keep, params) -
     sigma_all = np.full(len(starts), np.nan)
     if len(candidates):
         fits = fit_circles_as(
-            params.fit_backend,
+            params.fit_compute,
             points,
             starts[candidates],
             counts[candidates],
@@ -333,6 +342,40 @@ def _compiled_perception():
     """:mod:`viapath.compiled.perception` (the compiled clustering, shape tests and circle fit), or None: numba
     missing or unusable."""
     return kernels("perception")
+
+
+def ray_casters(choice: str) -> tuple[Caster, Caster]:
+    """The ray casters (one origin: :func:`~viapath.perception.raycast.cast_rays_numpy`'s arguments; an origin per
+    beam: :func:`~viapath.perception.raycast.cast_rays_from_numpy`'s) of ``choice``: ``"numpy"``, ``"numba"``
+    (the same casting compiled, bit for bit; an error without numba) or ``"auto"`` (numba when installed). The
+    first compiled call on a machine compiles them (~seconds, cached on disk: :mod:`~viapath.compiled.perception`)."""
+    if choice == "auto":
+        choice = "numba" if kernels("perception") is not None else "numpy"
+    if choice == "numpy":
+        return cast_rays_numpy, cast_rays_from_numpy
+    if choice != "numba":
+        raise ValueError(f"ray_compute must be 'numpy', 'numba' or 'auto', got {choice!r}")
+    compiled = require("perception")
+
+    def one_origin(origin, directions, centres, radii, segments) -> np.ndarray:
+        out = np.empty(len(directions))
+        compiled.cast_rays_kernel(
+            float(origin[0]),
+            float(origin[1]),
+            np.ascontiguousarray(directions, dtype=float),
+            centres,
+            radii,
+            segments,
+            out,
+        )
+        return out
+
+    def per_beam(origins_x, origins_y, directions, centres, radii, segments, groups=None) -> np.ndarray:
+        out = np.empty(len(directions))
+        compiled.cast_rays_from_kernel(origins_x, origins_y, directions, centres, radii, segments, out)
+        return out
+
+    return one_origin, per_beam
 
 
 def fit_circles_as(choice: str, points, starts, counts, sensor_origins=None, **options) -> CircleFits:

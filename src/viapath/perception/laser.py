@@ -27,12 +27,11 @@ from dataclasses import fields, replace
 
 import numpy as np
 
-from viapath.compiled import kernels, require
 from viapath.observation import Obstacles
 from viapath.perception.base import Perception, WorldSnapshot
-from viapath.perception.detection import Detections, DetectorParams, detect
+from viapath.perception.detection import COMPUTE_CHOICES, Detections, DetectorParams, detect, ray_casters
 from viapath.perception.fusion import BlindRegion, blind_region
-from viapath.perception.raycast import Caster, cast_rays_from_numpy, cast_rays_numpy, simulate_scans
+from viapath.perception.raycast import simulate_scans
 from viapath.perception.scanner import ScannerModel, paper_scanners
 from viapath.perception.segmentation import SegmentationParams
 from viapath.perception.static_layer import StaticLayerParams, StaticObstacleLayer
@@ -54,40 +53,6 @@ def _dataclass_from(cls, value, what: str):
     return cls(**value)
 
 
-def ray_casters(choice: str) -> tuple[Caster, Caster]:
-    """The ray casters (one origin: :func:`~viapath.perception.raycast.cast_rays_numpy`'s arguments; an origin per
-    beam: :func:`~viapath.perception.raycast.cast_rays_from_numpy`'s) of ``choice``: ``"numpy"``, ``"numba"``
-    (the same casting compiled, bit for bit; an error without numba) or ``"auto"`` (numba when installed). The
-    first compiled call on a machine compiles them (~seconds, cached on disk: :mod:`~viapath.compiled.perception`)."""
-    if choice == "auto":
-        choice = "numba" if kernels("perception") is not None else "numpy"
-    if choice == "numpy":
-        return cast_rays_numpy, cast_rays_from_numpy
-    if choice != "numba":
-        raise ValueError(f"backend must be 'numpy', 'numba' or 'auto', got {choice!r}")
-    compiled = require("perception")
-
-    def one_origin(origin, directions, centres, radii, segments) -> np.ndarray:
-        out = np.empty(len(directions))
-        compiled.cast_rays_kernel(
-            float(origin[0]),
-            float(origin[1]),
-            np.ascontiguousarray(directions, dtype=float),
-            centres,
-            radii,
-            segments,
-            out,
-        )
-        return out
-
-    def per_beam(origins_x, origins_y, directions, centres, radii, segments, groups=None) -> np.ndarray:
-        out = np.empty(len(directions))
-        compiled.cast_rays_from_kernel(origins_x, origins_y, directions, centres, radii, segments, out)
-        return out
-
-    return one_origin, per_beam
-
-
 class LaserPerception(Perception):
     """Simulated 360° laser perception (two scanners) with detection and Kalman tracking."""
 
@@ -99,7 +64,7 @@ class LaserPerception(Perception):
         detector=None,
         tracker=None,
         *,
-        ray_backend: str = "numpy",
+        ray_compute: str = "numpy",
         range_noise: bool = True,
         fixed_radius_m: float | None = None,
         robot_radius_m: float = 0.25,
@@ -131,9 +96,9 @@ class LaserPerception(Perception):
         if fixed_radius_m is not None:
             self.detector_params = replace(self.detector_params, fixed_radius_m=float(fixed_radius_m))
         self.tracker_params: TrackerParams = _dataclass_from(TrackerParams, tracker, "tracker")
-        if ray_backend not in ("numpy", "numba", "auto"):
-            raise ValueError(f"ray_backend must be numpy, numba or auto, got {ray_backend!r}")
-        self.ray_backend = ray_backend
+        if ray_compute not in COMPUTE_CHOICES:
+            raise ValueError(f"ray_compute must be one of {', '.join(COMPUTE_CHOICES)}, got {ray_compute!r}")
+        self.ray_compute = ray_compute
         self.range_noise = bool(range_noise)
         self.robot_radius_m = float(robot_radius_m)
         self.blind_region: BlindRegion = blind_region(self.scanners, self.robot_radius_m)
@@ -192,7 +157,7 @@ class LaserPerception(Perception):
             world.obstacle_radii_m,
             world.walls,
             rng,
-            ray_casters(self.ray_backend)[1],
+            ray_casters(self.ray_compute)[1],
         )
 
     def process(self, time_s: float, robot_pose, scans) -> Obstacles:

@@ -32,12 +32,12 @@ from typing import Any
 import numpy as np
 
 from viapath.limits import LIMITS_OPTIONS, ROBOT_OPTIONS, SUBGOAL_OPTIONS
-from viapath.perception.detection import DetectorParams
+from viapath.perception.detection import COMPILED_COMPUTE, COMPUTE_CHOICES, RENAMED_OPTIONS, DetectorParams
 from viapath.perception.scanner import URG04LX_MOUNT_OFFSET_M
 from viapath.perception.tracking import TrackerParams
 from viapath.ros2.options import Option, planner_options
 
-_FIT_DEFAULT = DetectorParams().fit_backend  # one default for the circle fit, the simulator's and the node's
+_FIT_DEFAULT = DetectorParams().fit_compute  # one default for the circle fit, the simulator's and the node's
 _TRACKER = TrackerParams()  # the tracker's defaults, the simulator's and the node's
 
 
@@ -173,12 +173,12 @@ NODE_OPTIONS: tuple[Option, ...] = (
         ),
         _opt("detector", "people", "", help="detector preset", choices=("people", "legs")),
         _opt(
-            "fit_backend",
+            "fit_compute",
             _FIT_DEFAULT,
             "",
-            help="circle fit: numpy, numba (compiled once per machine, then loaded from its cache; "
-            "equal to round-off) or auto (numba where installed, as the simulator's laser)",
-            choices=("numpy", "auto", "numba"),
+            help=f"circle fit: numpy, {COMPILED_COMPUTE} (compiled once per machine, then loaded from its cache; "
+            f"equal to round-off) or auto ({COMPILED_COMPUTE} where installed, as the simulator's laser)",
+            choices=COMPUTE_CHOICES,
         ),
         _opt(
             "tracker_acceleration_sigma_mps2",
@@ -427,7 +427,11 @@ def validate(values: dict[str, Any]) -> NodeSettings:
     if len(set(scanner_names)) != len(scanner_names):
         raise ParameterError(f"parameter scanner_names: names repeat: {scanner_names}")
     options = {o.name: o for o in all_options(planner_name, scanner_names)}
-    errors = [f"parameter {name}: unknown parameter" for name in sorted(set(values) - set(options) - {"use_sim_time"})]
+    errors = [
+        f"parameter {name}: unknown parameter"
+        + (f" (now called {RENAMED_OPTIONS[name]})" if name in RENAMED_OPTIONS else "")
+        for name in sorted(set(values) - set(options) - {"use_sim_time"})
+    ]
     checked: dict[str, Any] = {}
     bad: set[str] = set()
     for name, o in options.items():

@@ -207,7 +207,9 @@ def format_validation_error(error: ValidationError, origin: str) -> str:
         message = item["msg"]
         found = item.get("input")
         found_text = "" if item["type"] in ("missing",) or isinstance(found, dict) else f"; found {short_repr(found)}"
-        if item["type"] == "extra_forbidden":
+        if item["type"] == "value_error":
+            message = message.removeprefix("Value error, ")  # a validator's own sentence
+        elif item["type"] == "extra_forbidden":
             message = "unknown field (check the spelling; extra fields are not allowed)"
         elif item["type"] == "missing" and item["loc"] and isinstance(item["loc"][-1], int):
             # A list too short for a fixed-size tuple such as a point [x, y]: name the whole list.

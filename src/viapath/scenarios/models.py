@@ -23,6 +23,7 @@ from pydantic import (
 
 from viapath.limits import LIMITS_OPTIONS, ROBOT_OPTIONS, SUBGOAL_OPTIONS
 from viapath.options import OptionSet
+from viapath.perception.laser_options import LaserOptions
 from viapath.perception.modes import PERCEPTION_MODES
 from viapath.static import box_edges, polygon_edges, polyline_edges
 
@@ -42,7 +43,9 @@ Segment = tuple[Point, Point]
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_assignment=True)
+    model_config = ConfigDict(
+        extra="forbid", allow_inf_nan=False, validate_assignment=True, ser_json_inf_nan="constants"
+    )
 
 
 def _field(options: OptionSet, name: str) -> Any:
@@ -178,10 +181,15 @@ class PlannerSpec(BaseModel):
 
 
 class PerceptionSpec(_Strict):
+    """``mode`` and its options: the oracle's noise (``position_noise_m``, ``velocity_noise_mps``) or the laser
+    chain's ``options`` (:class:`~viapath.perception.laser_options.LaserOptions`)."""
+
     mode: str = "oracle"
     position_noise_m: NonNegativeFloat = 0.0
     velocity_noise_mps: NonNegativeFloat = 0.0
-    options: dict[str, Any] = Field(default_factory=dict, description="options for the laser chain")
+    options: LaserOptions = Field(  # type: ignore[valid-type]
+        default_factory=LaserOptions, description="options for the laser chain (mode laser)"
+    )
 
     @field_validator("mode")
     @classmethod
@@ -189,6 +197,16 @@ class PerceptionSpec(_Strict):
         if value not in PERCEPTION_MODES:
             raise ValueError("expected " + " or ".join(repr(name) for name in PERCEPTION_MODES.ordered()))
         return value
+
+    @model_validator(mode="after")
+    def _options_for_the_laser(self) -> PerceptionSpec:
+        given = sorted(self.options.model_fields_set)  # type: ignore[attr-defined]
+        if self.mode == "oracle" and given:
+            raise ValueError(
+                f"options ({', '.join(given)}) configure the laser chain; mode 'oracle' takes none "
+                "(its noise is position_noise_m and velocity_noise_mps): give mode: laser, or drop options"
+            )
+        return self
 
 
 class _StaticShape(_Strict):

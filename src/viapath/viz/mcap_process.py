@@ -328,20 +328,17 @@ class _Tracks:
         self.static_segments = static_segments
 
 
-def _obstacles(positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps, ids):
+_OBSTACLE_ROWS = ("positions", "velocities", "radii_m", "position_sigma_m", "velocity_sigma_mps", "ids")
+
+
+def _obstacles(*rows):
     """An :class:`~viapath.observation.Obstacles` from fields taken from one (they were checked when it
-    was made): its shape checks are the writer's largest cost per cycle otherwise."""
+    was made): its shape checks are the writer's largest cost per cycle otherwise. ``rows``: the arrays
+    of :data:`_OBSTACLE_ROWS`, in that order."""
     from viapath.observation import Obstacles
 
     obstacles = object.__new__(Obstacles)
-    vars(obstacles).update(
-        positions=positions,
-        velocities=velocities,
-        radii_m=radii_m,
-        position_sigma_m=position_sigma_m,
-        velocity_sigma_mps=velocity_sigma_mps,
-        ids=ids,
-    )
+    vars(obstacles).update(zip(_OBSTACLE_ROWS, rows, strict=True))
     return obstacles
 
 

@@ -355,7 +355,6 @@ class SceneBuilder:
         if _shield_intervened(extras):
             self.shield_interventions += 1
         parts = perception_parts if perception_parts is not None else perception_parts_of(perception)
-        scanners, detections, radii, points, sectors, blind = parts
         horizon = self.settings.horizon_s
         fields = (
             np.column_stack(
@@ -394,12 +393,7 @@ class SceneBuilder:
             robot_radius_m=self.robot_radius_m,
             command=(float(decision.command.speed_mps), float(decision.command.turn_rate_radps)),
             tracks=tracks,
-            detections_world=detections,
-            detection_radii_m=radii,
-            scan_points_world=points,
-            scanners=scanners,
-            blind_sectors_rad=sectors,
-            blind_polygon_world=blind,
+            **dict(zip(PERCEPTION_PART_FIELDS, parts, strict=True)),
             true_people=true_people,
             subgoal=np.asarray(plan.target if plan.status == "goal" else self._subgoal(plan), dtype=float),
             subgoal_index=int(plan.subgoal_index),
@@ -541,6 +535,17 @@ def _plan_view(plan, extras: dict) -> PlanView:
         cost_terms=terms,
         extras=extras,
     )
+
+
+#: The :class:`CycleScene` fields that :func:`perception_parts_of` returns, in its order.
+PERCEPTION_PART_FIELDS = (
+    "scanners",
+    "detections_world",
+    "detection_radii_m",
+    "scan_points_world",
+    "blind_sectors_rad",
+    "blind_polygon_world",
+)
 
 
 def perception_parts_of(perception):

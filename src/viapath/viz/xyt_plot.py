@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -21,6 +22,12 @@ from viapath.viz.scene import CycleScene, ForecastSettings, SceneBuilder, candid
 
 def collect_scenes(scenario, perception: str = "oracle", **run_kwargs) -> list[CycleScene]:
     """Run ``scenario`` and keep every cycle's scene (candidates recorded for display)."""
+    return episode_and_scenes(scenario, perception, **run_kwargs)[1]
+
+
+def episode_and_scenes(scenario, perception: str = "oracle", **run_kwargs) -> tuple[Any, list[CycleScene]]:
+    """Run ``scenario`` (``run_kwargs``: :func:`viapath.sim.loop.run_episode`'s) and keep every cycle's scene
+    (candidates recorded for display): the :class:`~viapath.sim.loop.Episode` and the scenes."""
     from viapath.observation import Obstacles
     from viapath.scenarios.build import scenario_path
     from viapath.sim.loop import run_episode
@@ -57,14 +64,14 @@ def collect_scenes(scenario, perception: str = "oracle", **run_kwargs) -> list[C
             )
         )
 
-    run_episode(
+    episode = run_episode(
         scenario,
         perception=perception,
         planner_overrides=display_overrides(scenario, scenario.planner.name),
         on_step=on_step,
         **run_kwargs,
     )
-    return scenes
+    return episode, scenes
 
 
 def plot_cycle(scene: CycleScene, path_view, file: str | Path, title: str | None = None) -> Path:
