@@ -490,6 +490,17 @@ def test_whole_step_kernels_wait_for_their_compilation(monkeypatch):
     assert precompile()
 
 
+def test_one_entry_compiles_the_shield_and_the_planner():
+    """viapath.precompile.precompile (what viapath bench and the ROS 2 node call) leaves both ready, so that a
+    plain ``auto`` takes the compiled shield and the planner's whole-step code from the first cycle."""
+    from viapath.compiled import ready, require
+    from viapath.compiled.arithmetic import whole_steps_compiled
+    from viapath.precompile import precompile
+
+    assert precompile() is True
+    assert whole_steps_compiled() and ready(require("shield").shield)
+
+
 @settings(max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(cases())
 def test_numba_without_whole_steps_decides_as_numpy(case):
@@ -950,7 +961,7 @@ def test_escape_kernel_pieces_match_numpy():
 
 
 def test_the_warm_up_reaches_every_whole_step_kernel():
-    """precompile' cycles reach the choice and the escape (so `auto` finds every whole-step kernel compiled
+    """precompile's cycles reach the choice and the escape (so `auto` finds every whole-step kernel compiled
     after it), and each whole-step kernel then has a compiled signature."""
     from viapath.compiled import planning as kernels
     from viapath.planning.viapath.planner import precompile, warm_up_crowds
