@@ -12,7 +12,7 @@ timed on the same scenes (40 per obstacle count, cycled), one cycle = ``planner.
 after ``reset()`` (the guard, subgoal tracking and inflation included), single thread, wall clock
 (``--clock cpu``: the thread's CPU time, which leaves out the waits for a core on a loaded machine).
 
-* ``viapath-numpy`` / ``viapath-fast``: the viapath planner with option ``backend`` numpy / numba
+* ``viapath-numpy`` / ``viapath-fast``: the viapath planner with option ``compute`` numpy / numba
   (extra ``fast``; docs/speed.md). Same decisions, different arithmetic.
 * ``dwa``, ``vo``: the baselines of :mod:`viapath.planning.baselines` (numpy).
 * ``nav-hl``, ``nav-orca``, ``nav-hrvo``: navground's C++ behaviours (extra ``navground``) behind our
@@ -72,7 +72,7 @@ def build(name: str, path):
     """The planner timed under ``name`` (viapath-numpy / viapath-fast are the viapath planner's backends)."""
     if name.startswith("viapath-"):
         backend = {"numpy": "numpy", "fast": "numba"}[name.split("-", 1)[1]]
-        planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend)
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2, compute=backend)
         planner.decide = _TimedDecide(planner.decide)  # the instance's, ahead of the class's
         return planner
     if name == "nav-dummy":

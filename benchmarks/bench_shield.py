@@ -61,7 +61,7 @@ def one_run(cycles: int, seed: int, backend: str = "auto") -> list[dict]:
     guarded = ShieldedPlanner(
         make_planner("viapath", path, nominal_speed_mps=0.2, limits=limits),
         dt_s=0.1,
-        config=ShieldConfig(backend=backend),
+        config=ShieldConfig(compute=backend),
     )
     shield = guarded.shield
     rows = []

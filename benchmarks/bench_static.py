@@ -93,7 +93,7 @@ CLOCK = [time.perf_counter]
 
 def time_planner(backend: str, observations, cycles: int) -> dict:
     path = DesignatedPath([[0.0, 0.0], [10.0, 0.0]], half_widths_m=[1.5])
-    planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend)
+    planner = make_planner("viapath", path, nominal_speed_mps=0.2, compute=backend)
     for observation in observations[:5]:  # warm up (a first compiled call loads from numba's cache)
         planner.reset()
         planner.plan(observation)

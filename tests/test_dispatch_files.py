@@ -13,24 +13,13 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "viapath"
 WORDS = re.compile(r"kernel|numba|backend", re.IGNORECASE)
 
 DISPATCH = {
-    "planning/viapath/planner.py": "the planner's recipe: numpy or compiled per step (backend_for, grow_step, ...)",
-    "planning/viapath/options.py": "the planner's option 'backend' (its name, default, choices and help)",
+    "planning/viapath/planner.py": "the planner's recipe: numpy or compiled per step (arithmetic_for, precompile, ...)",
     "safety/shield.py": "the shield's recipe: numpy or compiled per evaluation",
-    "safety/options.py": "the shield's option 'backend'",
     "perception/detection.py": "the laser pipeline's dispatch: compiled clustering, shape tests and circle fit",
+    "bench/executors.py": "joblib's executors (loky, dask, ray): joblib's own keyword for them is backend=",
 }
 
-_USER_FACING = "a user-facing name that must keep working"
-NOT_YET = {
-    "planning/viapath/checks.py": "LegChecks carries the cycle's arithmetic and the kernel_* inputs the compiled "
-    "package reads by name (viapath.compiled.backend)",
-    "ros2/core.py": "hands fit_backend on; compiles the kernels at start-up",
-    "cli/bench.py": _USER_FACING + " (viapath bench --backend: loky, dask or ray)",
-    "bench/runner.py": "joblib's backends (loky, dask, ray): run_bench(backend=...)",
-    "bench/tune.py": "joblib's backends, passed on to run_bench",
-    "bench/suites.py": "joblib's loky backend, named so that a dask or ray context does not take suite generation",
-    "bench/identity.py": "leaves the planner's option 'backend' out of the options hash",
-}
+NOT_YET: dict[str, str] = {}
 
 
 def _mentioning() -> set[str]:

@@ -146,3 +146,70 @@ def test_planners_lists_a_planners_options_with_defaults_and_units():
     text = CliRunner().invoke(app, ["planners", "dwa"]).output
     assert "horizon_s = 3.0 s" in text and ">= 0.25;" in text and "<= 10)" in text
     _clean_failure(CliRunner().invoke(app, ["planners", "nobody"]), "unknown planner 'nobody'")
+
+
+def test_a_renamed_option_reads_its_former_name_with_a_warning():
+    schema = OptionSet(
+        [Option("new", 1.0, "a", former_names=("old",)), Option("k", 0.0, "b", group="g", former_names=("j",))]
+    )
+    with pytest.warns(FutureWarning, match="'old' is now called 'new'"):
+        assert schema.validate({"old": 2.0})["new"] == 2.0
+    with pytest.warns(FutureWarning, match="g.j: option 'j' is now called 'k'"):
+        assert schema.validate({"g": {"j": 3.0}})["k"] == 3.0
+    with pytest.warns(FutureWarning):
+        assert schema.validate({"g.j": 4.0})["k"] == 4.0
+    with pytest.raises(OptionError, match="give only 'new'"):
+        schema.validate({"old": 2.0, "new": 3.0})
+    with pytest.raises(OptionError, match="unknown option 'older'"):
+        schema.validate({"older": 2.0})
+    with pytest.raises(ValueError, match="former name 'new' of option 'other' is taken"):
+        OptionSet([Option("new", 1.0, "a"), Option("other", 1.0, "b", former_names=("new",))])
+
+
+def test_compute_is_defined_once_and_backend_is_its_former_name(tmp_path):
+    """The planner's and the shield's ``compute`` come from viapath.compiled.choice; an old file's or command
+    line's ``backend`` still works, with a FutureWarning; both at once is an error (exit 2)."""
+    from viapath.compiled import COMPUTE_CHOICES
+    from viapath.safety.options import SHIELD_OPTIONS
+    from viapath.safety.shield import ShieldConfig
+
+    for schema in (planner_options("viapath"), SHIELD_OPTIONS):
+        option = schema["compute"]
+        assert (option.default, option.choices, option.former_names) == ("auto", COMPUTE_CHOICES, ("backend",))
+        assert not option.decides and "backend" not in schema
+    with pytest.warns(FutureWarning, match="'backend' is now called 'compute'"):
+        planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [3.0, 0.0]], half_width_m=1.0), backend="numpy")
+    assert getattr(planner, "inner", planner).config.compute == "numpy"
+    with pytest.warns(FutureWarning, match="'backend' is now called 'compute'"):
+        assert ShieldConfig.from_options({"backend": "numpy"}).compute == "numpy"
+    with pytest.warns(FutureWarning, match="planner.backend: option 'backend' is now called 'compute'"):
+        _, result = _run(tmp_path, "{name: viapath, backend: numpy}")
+    assert result.exit_code == 0, result.output
+    with pytest.warns(FutureWarning, match="now called 'compute'"):
+        _, result = _run(tmp_path, "{name: viapath}", "--option", "backend=numpy")
+    assert result.exit_code == 0, result.output
+    _, result = _run(tmp_path, "{name: viapath}", "-o", "backend=numpy", "-o", "compute=numba")
+    _clean_failure(result, "--option backend: option 'backend' is now called 'compute'; give only 'compute'")
+
+
+def test_an_old_preset_file_with_backend_sets_compute(tmp_path):
+    from viapath.presets import load_preset
+
+    file = tmp_path / "old.yaml"
+    file.write_text("name: old\ndescription: numpy arithmetic\noptions:\n  backend: numpy\n  weights: {k1: 0.2}\n")
+    with pytest.warns(FutureWarning, match="options.backend: option 'backend' is now called 'compute'"):
+        preset = load_preset(str(file))
+    assert preset.options == {"compute": "numpy", "k1": 0.2}
+
+
+def test_the_options_hash_leaves_out_options_that_decide_nothing():
+    """``compute`` (decides=False), under its name or its former one, does not change a run's identity; an
+    option that decides does."""
+    from viapath.bench.identity import options_hash
+    from viapath.bench.suites import generate_suite
+
+    scenario = generate_suite("paper", 1, seed=0)[0]
+    plain = options_hash(scenario, "viapath")
+    assert options_hash(scenario, "viapath", {"compute": "numpy"}) == plain
+    assert options_hash(scenario, "viapath", {"backend": "numba"}) == plain
+    assert options_hash(scenario, "viapath", {"k1": 0.3}) != plain

@@ -14,11 +14,16 @@ Choices made here:
 * Validation goes through a pydantic model built from the set (``extra="forbid"``, no NaN or
   infinity), so errors read like every other scenario error: the field path, what was expected
   and what was found. A set refuses two options of the same name.
+* ``former_names``: an option that was renamed still reads its old name (a YAML file, ``--option``),
+  with a FutureWarning saying the new one; giving both is an error.
+* ``decides``: False for an option that only chooses how the arithmetic runs (numpy or compiled), never
+  what is decided; results are the same either way, so a run's identity leaves it out.
 """
 
 from __future__ import annotations
 
 import reprlib
+import warnings
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -56,6 +61,8 @@ class Option:
     exclusive_minimum: bool = False  # the value must be > minimum rather than >= minimum
     choices: tuple[str, ...] | None = None
     group: str | None = None  # YAML/ROS nesting, e.g. "weights"
+    former_names: tuple[str, ...] = ()  # names it had before: still read, with a FutureWarning
+    decides: bool = True  # False: it chooses how the same arithmetic runs, not what is decided
 
     @property
     def kind(self) -> type:
@@ -172,10 +179,15 @@ class OptionSet:
         self.owner = owner  # e.g. the planner's name, for messages
         self.steps = tuple(steps)
         self._options: dict[str, Option] = {}
+        self._former: dict[str, str] = {}  # a former name -> the option's name now
         for option in options:
-            if option.name in self._options:
+            if option.name in self._options or option.name in self._former:
                 raise ValueError(f"option {option.name!r} is defined twice{f' in {owner}' if owner else ''}")
             self._options[option.name] = option
+            for former in option.former_names:
+                if former in self._options or former in self._former:
+                    raise ValueError(f"former name {former!r} of option {option.name!r} is taken")
+                self._former[former] = option.name
         self._model = self._build_model()
 
     def __iter__(self) -> Iterator[Option]:
@@ -225,7 +237,7 @@ class OptionSet:
     def validate(self, values: Mapping[str, Any] | None, where: str = "") -> Settings:
         """Check ``values`` (nested as in YAML, flat, or dotted) against the set; return every option's
         value, flat. Raises :class:`OptionError` naming each bad field, prefixed by ``where``."""
-        nested = self.nest(dict(values or {}))
+        nested = self.nest(self.current_names(values or {}, where))
         try:
             model = self._model.model_validate(nested)
         except ValidationError as error:
@@ -238,6 +250,32 @@ class OptionSet:
         if errors:
             raise OptionError(errors)
         return Settings(flat)
+
+    def current_names(self, values: Mapping[str, Any], where: str = "") -> dict[str, Any]:
+        """``values`` (nested, flat or dotted) with each option's former name (``former_names``) replaced by
+        its name now, with a FutureWarning for each; an :class:`OptionError` when both names are given."""
+        if not self._former:
+            return dict(values)
+        groups = {option.group for option in self if option.group}
+        current: dict[str, Any] = {}
+        for key, value in values.items():
+            if key in groups and isinstance(value, Mapping):
+                value = self.current_names(value, f"{where}.{key}" if where else key)
+            prefix, _, name = str(key).rpartition(".")
+            if name in self._former:
+                now = self._former[name]
+                renamed = f"{prefix}.{now}" if prefix else now
+                field = f"{where}.{key}" if where else str(key)
+                if renamed in values:
+                    raise OptionError([(field, f"option {name!r} is now called {now!r}; give only {now!r}")])
+                warnings.warn(
+                    f"{field}: option {name!r} is now called {now!r}; read as {now!r} (write {now!r} instead)",
+                    FutureWarning,
+                    stacklevel=2,
+                )
+                key = renamed
+            current[key] = value
+        return current
 
     def _step_errors(self, flat: Mapping[str, Any], where: str) -> list[tuple[str, str]]:
         errors = []

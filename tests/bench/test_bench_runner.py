@@ -119,10 +119,22 @@ def test_free_run_is_shared_by_scenarios_that_differ_only_in_their_people(monkey
 def test_bad_input_is_one_clear_line(tmp_path, small_suite):
     with pytest.raises(BenchError, match="unknown planner 'nope'"):
         run_bench(small_suite, ["nope"], tmp_path, progress=False)
-    with pytest.raises(BenchError, match="unknown backend"):
-        run_bench(small_suite, ["follow"], tmp_path, backend="spark", progress=False)
+    with pytest.raises(BenchError, match="unknown executor"):
+        run_bench(small_suite, ["follow"], tmp_path, executor="spark", progress=False)
     with pytest.raises(BenchError, match="not a folder"):
         load_suite(str(tmp_path / "missing"))
+
+
+def test_the_command_line_names_the_executor(tmp_path):
+    """``viapath bench --executor`` picks loky, dask or ray (joblib's choice): a wrong one and a scheduler
+    without dask or ray are one clear line each (exit 2)."""
+    from viapath.cli import app
+
+    base = ["bench", "paper", "-n", "1", "-p", "follow", "-w", "1", "--no-plots"]
+    result = CliRunner().invoke(app, [*base, "--executor", "spark", "--out", str(tmp_path / "a")])
+    assert result.exit_code == 2 and "unknown executor 'spark'; use loky, dask, ray" in result.output
+    result = CliRunner().invoke(app, [*base, "--scheduler", "tcp://host:8786", "--out", str(tmp_path / "b")])
+    assert result.exit_code == 2 and "--scheduler needs --executor dask or ray" in result.output
 
     from viapath.cli.bench import bench, suite
 

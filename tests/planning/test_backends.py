@@ -60,7 +60,7 @@ def cases(draw):
 
 
 def _planner(path, backend: str, shield: bool):
-    planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend)
+    planner = make_planner("viapath", path, nominal_speed_mps=0.2, compute=backend)
     return ShieldedPlanner(planner) if shield else planner
 
 
@@ -162,13 +162,13 @@ def test_backend_choice(monkeypatch):
 def test_track_kernel_matches_reference():
     """The compiled roll-out against :func:`viapath.kinematics.track`, from random states towards random
     targets (sharp turns, targets behind, at rest and at speed)."""
-    from viapath.compiled.backend import Backend
+    from viapath.compiled.arithmetic import Arithmetic
     from viapath.kinematics import UnicycleState, track
     from viapath.observation import MotionLimits
 
     rng = np.random.default_rng(5)
     limits = MotionLimits()
-    compiled = Backend("numba")
+    compiled = Arithmetic("numba")
     worst = 0.0
     for _ in range(200):
         state = UnicycleState(
@@ -192,8 +192,8 @@ def test_planners_command_says_which_path_runs(monkeypatch):
         monkeypatch.setenv(ENVIRONMENT_VARIABLE, environment)
         result = CliRunner().invoke(app, ["planners", "viapath", "--json"])
         assert result.exit_code == 0, result.output
-        backend = [option for option in json.loads(result.output) if option["name"] == "backend"]
-        assert backend and backend[0]["resolved"] == expected and backend[0]["default"] == "auto"
+        compute = [option for option in json.loads(result.output) if option["name"] == "compute"]
+        assert compute and compute[0]["resolved"] == expected and compute[0]["default"] == "auto"
         text = CliRunner().invoke(app, ["planners", "viapath"]).output
         assert f"(here: {expected})" in text
 
@@ -229,13 +229,13 @@ def test_via_options_kernel_matches_reference():
 @pytest.mark.parametrize("path", PATHS, ids=["straight", "corner", "zigzag"])
 def test_corridor_kernels_match_reference(path):
     """Corridor checks of random legs (inside, across a junction, leaving) against the numpy reference."""
-    from viapath.compiled.backend import Backend
+    from viapath.compiled.arithmetic import Arithmetic
     from viapath.planning.viapath.checks import LegChecks
 
     rng = np.random.default_rng(13)
     low, high = path.waypoints.min(axis=0) - 1.5, path.waypoints.max(axis=0) + 1.5
     starts, ends = rng.uniform(low, high, (600, 2)), rng.uniform(low, high, (600, 2))
-    compiled = Backend("numba")
+    compiled = Arithmetic("numba")
     for tolerance in (1e-9, 0.3):
         expected = path.legs_inside(starts, ends, 0.05, tolerance)
         assert np.array_equal(compiled.legs_inside(path, starts, ends, 0.05, tolerance), expected)
@@ -272,13 +272,13 @@ def test_escape_scores_match_reference():
     separation term) or only threaten it (the time to contact)."""
     from dataclasses import replace
 
-    from viapath.compiled.backend import Backend
+    from viapath.compiled.arithmetic import Arithmetic
     from viapath.planning.viapath.checks import LegChecks
     from viapath.planning.viapath.escape import escape_scores
 
     rng = np.random.default_rng(17)
     path = PATHS[1]
-    planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend="numpy")
+    planner = make_planner("viapath", path, nominal_speed_mps=0.2, compute="numpy")
     overlapped = 0
     for _ in range(60):
         n = int(rng.integers(1, 15))
@@ -295,7 +295,7 @@ def test_escape_scores_match_reference():
         checks = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
         _commands, ends, expected = escape_scores(checks, planner.limits, planner.config)
         _, got_ends, got = escape_scores(
-            replace(checks, backend=Backend("numba", whole_steps=False)), planner.limits, planner.config
+            replace(checks, arithmetic=Arithmetic("numba", whole_steps=False)), planner.limits, planner.config
         )
         assert _same_bits(got, expected) and _same_bits(got_ends, ends)  # the small kernels: the same values
         overlapped += bool(np.any(np.hypot(*(positions - [1.0, 0.2]).T) < checks.check_radii))
@@ -309,7 +309,7 @@ def test_goal_legs_kernel_matches_reference(path):
     short, a finite and an infinite horizon, people with and without uncertainty, and none."""
     from dataclasses import replace
 
-    from viapath.compiled.backend import NUMPY, Backend
+    from viapath.compiled.arithmetic import NUMPY, Arithmetic
     from viapath.planning.viapath.checks import LegChecks
 
     rng = np.random.default_rng(7)
@@ -332,7 +332,7 @@ def test_goal_legs_kernel_matches_reference(path):
             position_sigma_m=rng.uniform(0.0, 0.05, n) if uncertain else None,
             velocity_sigma_mps=rng.uniform(0.0, 0.1, n) if uncertain else None,
         )
-        planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend="numpy")
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2, compute="numpy")
         situation = planner.situation(Observation(0.0, robot, obstacles))
         base = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25, NUMPY)
         k = int(rng.integers(1, 12))
@@ -354,7 +354,7 @@ def test_goal_legs_kernel_matches_reference(path):
                         max_accel_mps2=0.8,
                         stop_short_m=stop_short,
                     )
-                    compiled = replace(checks, backend=Backend("numba"))
+                    compiled = replace(checks, arithmetic=Arithmetic("numba"))
                     for horizon in (None, np.inf, 3.0):
                         expected = checks.goal_legs(starts, times, speeds, horizon)
                         found = compiled.goal_legs(starts, times, speeds, horizon)
@@ -369,7 +369,7 @@ def _tree_inputs(case, backend, path=None):
     """The arguments the planner hands candidates.grow in the first cycle of ``case``."""
     from dataclasses import replace
 
-    from viapath.compiled.backend import Backend
+    from viapath.compiled.arithmetic import Arithmetic
     from viapath.planning.viapath.candidates import RootLegs
     from viapath.planning.viapath.checks import LegChecks
 
@@ -379,7 +379,7 @@ def _tree_inputs(case, backend, path=None):
     observation = next(_observations(case))
     situation = inner.situation(observation)
     checks = LegChecks.of(
-        situation, inner.config, inner.subgoals, inner.subgoal_policy, inner.robot_radius_m, Backend(backend)
+        situation, inner.config, inner.subgoals, inner.subgoal_policy, inner.robot_radius_m, Arithmetic(backend)
     )
     if shield:
         checks = replace(
@@ -426,7 +426,7 @@ def test_tree_kernel_builds_the_same_corner_candidates(path_index):
     at every speed, each chained on from the root of its speed."""
     from dataclasses import replace
 
-    from viapath.compiled.backend import Backend
+    from viapath.compiled.arithmetic import Arithmetic
     from viapath.planning.viapath.candidates import CORNER, RootLegs
     from viapath.planning.viapath.planner import grow_step as grow
 
@@ -454,7 +454,7 @@ def test_tree_kernel_builds_the_same_corner_candidates(path_index):
             checks, _, slow, config = _tree_inputs(case, backend, path)
             checks = replace(checks, subgoal=path.waypoints[last].copy(), subgoal_index=last, continuation=None)
             slow = replace(
-                slow, subgoal=checks.subgoal, subgoal_index=last, continuation=None, backend=Backend(backend)
+                slow, subgoal=checks.subgoal, subgoal_index=last, continuation=None, arithmetic=Arithmetic(backend)
             )
             roots = RootLegs.of(checks, np.array([0.1, 0.2, 0.3, 0.5]), 1)
             found.append(grow(checks, roots, config, slow))
@@ -473,33 +473,44 @@ def test_tree_kernel_builds_the_same_corner_candidates(path_index):
 def test_whole_step_kernels_wait_for_their_compilation(monkeypatch):
     """``auto`` takes the whole-step kernels (goal_legs, grow: seconds to compile the first time) only once
     they are compiled; an explicit numba takes them at once. Either way the decisions are the same."""
-    from viapath.compiled import backend
-    from viapath.planning.viapath.planner import compile_kernels
+    from viapath.compiled import arithmetic
+    from viapath.planning.viapath.planner import precompile
 
     monkeypatch.delenv(ENVIRONMENT_VARIABLE, raising=False)
-    monkeypatch.setattr(backend, "whole_steps_compiled", lambda: False)
-    assert backend.backend_for("auto") == backend.Backend("numba", whole_steps=False)
-    assert backend.backend_for("numba").whole_steps
+    monkeypatch.setattr(arithmetic, "whole_steps_compiled", lambda: False)
+    assert arithmetic.arithmetic_for("auto") == arithmetic.Arithmetic("numba", whole_steps=False)
+    assert arithmetic.arithmetic_for("numba").whole_steps
     monkeypatch.setenv(ENVIRONMENT_VARIABLE, "numba")
-    assert backend.backend_for("auto").whole_steps
+    assert arithmetic.arithmetic_for("auto").whole_steps
     monkeypatch.setenv(ENVIRONMENT_VARIABLE, "numpy")
-    assert not backend.backend_for("auto").whole_steps
+    assert not arithmetic.arithmetic_for("auto").whole_steps
     monkeypatch.delenv(ENVIRONMENT_VARIABLE)
-    monkeypatch.setattr(backend, "whole_steps_compiled", lambda: True)
-    assert backend.backend_for("auto").whole_steps
-    assert compile_kernels()
+    monkeypatch.setattr(arithmetic, "whole_steps_compiled", lambda: True)
+    assert arithmetic.arithmetic_for("auto").whole_steps
+    assert precompile()
+
+
+def test_one_entry_compiles_the_shield_and_the_planner():
+    """viapath.precompile.precompile (what viapath bench and the ROS 2 node call) leaves both ready, so that a
+    plain ``auto`` takes the compiled shield and the planner's whole-step code from the first cycle."""
+    from viapath.compiled import ready, require
+    from viapath.compiled.arithmetic import whole_steps_compiled
+    from viapath.precompile import precompile
+
+    assert precompile() is True
+    assert whole_steps_compiled() and ready(require("shield").shield)
 
 
 @settings(max_examples=200, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(cases())
 def test_numba_without_whole_steps_decides_as_numpy(case):
     """The compiled path before its whole-step kernels are compiled (small kernels only) decides as well."""
-    from viapath.compiled.backend import Backend
+    from viapath.compiled.arithmetic import Arithmetic
 
     path = PATHS[case[0]]
     reference, compiled = _planner(path, "numpy", case[7]), _planner(path, "numba", case[7])
     inner = getattr(compiled, "inner", compiled)
-    inner.backend = Backend("numba", whole_steps=False)
+    inner.arithmetic = Arithmetic("numba", whole_steps=False)
     for observation in _observations(case):
         a, b = reference.plan(observation), compiled.plan(observation)
         assert a.plan.status == b.plan.status
@@ -516,7 +527,7 @@ def test_numba_decides_as_numpy_with_the_way_back(case):
     path = PATHS[case[0]]
     planners = []
     for backend in ("numpy", "numba"):
-        planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend, return_lookahead_m=0.5, k2=0.01)
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2, compute=backend, return_lookahead_m=0.5, k2=0.01)
         planners.append(ShieldedPlanner(planner) if case[7] else planner)
     reference, compiled = planners
     for observation in _observations(case):
@@ -557,7 +568,7 @@ def test_compiled_choice_is_the_numpy_choice(case, options):
     path = PATHS[case[0]]
     planners = []
     for backend in ("numpy", "numba"):
-        planner = make_planner("viapath", path, nominal_speed_mps=0.2, backend=backend, **options)
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2, compute=backend, **options)
         planners.append(ShieldedPlanner(planner) if case[7] else planner)
     reference, compiled = planners
     assert getattr(compiled, "inner", compiled)._compiled_choice()
@@ -622,7 +633,7 @@ def test_compiled_choice_after_refusals_and_a_vanished_way(case, way, speed_mmps
 
     path_index, _, positions, _, _, sigma_p, _, _, _ = case
     planners = [
-        make_planner("viapath", PATHS[path_index], nominal_speed_mps=0.2, backend=backend)
+        make_planner("viapath", PATHS[path_index], nominal_speed_mps=0.2, compute=backend)
         for backend in ("numpy", "numba")
     ]
     offered = [[], []]
@@ -694,7 +705,7 @@ def _escape_checks(case):
     from viapath.planning.viapath.checks import LegChecks
 
     path_index, robot, positions, velocities, radii, sigma, options, previous = case
-    planner = make_planner("viapath", PATHS[path_index], nominal_speed_mps=0.2, backend="numpy", options=options)
+    planner = make_planner("viapath", PATHS[path_index], nominal_speed_mps=0.2, compute="numpy", options=options)
     x, y, heading, speed, turn = robot
     observation = Observation(
         0.0,
@@ -713,7 +724,7 @@ def test_compiled_escape_is_the_reference(case):
     standing check is the numpy path's, in every crowd."""
     from dataclasses import replace
 
-    from viapath.compiled.backend import Backend
+    from viapath.compiled.arithmetic import Arithmetic
     from viapath.planning.viapath.escape import escape_fan, escape_scores
 
     planner, checks, previous = _escape_checks(case)
@@ -722,15 +733,20 @@ def test_compiled_escape_is_the_reference(case):
         checks.position[None], np.zeros(1), np.zeros((1, 2)), np.array([planner.config.horizon_s])
     )
     fan = escape_fan(planner.limits, planner.config)
-    compiled = Backend("numba").escape(
-        replace(checks, backend=Backend("numba")), planner.limits, planner.config, fan, previous, score_standing=True
+    compiled = Arithmetic("numba").escape(
+        replace(checks, arithmetic=Arithmetic("numba")),
+        planner.limits,
+        planner.config,
+        fan,
+        previous,
+        score_standing=True,
     )
     assert compiled[0] == bool(np.isinf(standing).all())
     assert _same_bits(compiled[1], commands)
     assert _same_bits(compiled[2], ends)
     assert _same_bits(compiled[3], scores)
     # without score_standing, a free standing skips the scores
-    skipped = Backend("numba").escape(checks, planner.limits, planner.config, fan, previous)
+    skipped = Arithmetic("numba").escape(checks, planner.limits, planner.config, fan, previous)
     assert skipped[0] == compiled[0] and (skipped[1] is None) == compiled[0]
 
 
@@ -741,21 +757,21 @@ def test_compiled_stop_or_escape_decides_as_numpy(case):
     compiled kernels run only with the whole-step kernels."""
     from dataclasses import replace
 
-    from viapath.compiled.backend import Backend
+    from viapath.compiled.arithmetic import Arithmetic
     from viapath.planning.viapath.escape import escape_fan, stop_or_escape
     from viapath.planning.viapath.planner import escape_step
 
     planner, checks, previous = _escape_checks(case)
     expected = stop_or_escape(checks, planner.limits, planner.config, previous)
-    for backend in (Backend("numba"), Backend("numba", whole_steps=False)):
-        got = escape_step(replace(checks, backend=backend), planner.limits, planner.config, previous)
+    for backend in (Arithmetic("numba"), Arithmetic("numba", whole_steps=False)):
+        got = escape_step(replace(checks, arithmetic=backend), planner.limits, planner.config, previous)
         assert got.command == expected.command
         assert got.plan.status == expected.plan.status
         assert _same_bits(got.plan.target, expected.plan.target)
         assert got.plan.speed_mps == expected.plan.speed_mps
     fan = escape_fan(planner.limits, planner.config)
-    assert Backend("numba", whole_steps=False).escape(checks, planner.limits, planner.config, fan, previous) is None
-    assert Backend("numpy").escape(checks, planner.limits, planner.config, fan, previous) is None
+    assert Arithmetic("numba", whole_steps=False).escape(checks, planner.limits, planner.config, fan, previous) is None
+    assert Arithmetic("numpy").escape(checks, planner.limits, planner.config, fan, previous) is None
 
 
 def test_escape_cases_reach_every_branch():
@@ -870,7 +886,7 @@ def test_escape_kernel_pieces_match_numpy():
     from numba import njit
 
     from viapath.compiled import planning as kernels
-    from viapath.compiled.backend import _corridor
+    from viapath.compiled.arithmetic import _corridor
     from viapath.compiled.sums import pairwise_sum
 
     within = njit(
@@ -945,13 +961,13 @@ def test_escape_kernel_pieces_match_numpy():
 
 
 def test_the_warm_up_reaches_every_whole_step_kernel():
-    """compile_kernels' cycles reach the choice and the escape (so `auto` finds every whole-step kernel compiled
+    """precompile's cycles reach the choice and the escape (so `auto` finds every whole-step kernel compiled
     after it), and each whole-step kernel then has a compiled signature."""
     from viapath.compiled import planning as kernels
-    from viapath.planning.viapath.planner import compile_kernels, warm_up_crowds
+    from viapath.planning.viapath.planner import precompile, warm_up_crowds
 
     planner = make_planner(
-        "viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2, backend="numpy"
+        "viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2, compute="numpy"
     )
     statuses = []
     for people in warm_up_crowds():
@@ -960,9 +976,9 @@ def test_the_warm_up_reaches_every_whole_step_kernel():
             planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people)).plan.status
         )
     assert statuses[0] in ("avoid", "slow", "wait") and statuses[1] == "escape"
-    assert compile_kernels()
+    assert precompile()
     planner = make_planner(
-        "viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2, backend="numba"
+        "viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2, compute="numba"
     )
     for people in warm_up_crowds():  # in this process: compiled now (or loaded from the cache)
         planner.reset()
@@ -979,7 +995,7 @@ def test_compiled_escape_with_static_rows_decides_as_numpy(case, seed):
     reference, and the compiled figures are there to decide with (the stepwise backend has none)."""
     from dataclasses import replace
 
-    from viapath.compiled.backend import STEPWISE, Backend
+    from viapath.compiled.arithmetic import STEPWISE, Arithmetic
     from viapath.planning.viapath.escape import escape_fan, stop_or_escape
     from viapath.planning.viapath.planner import escape_step
     from viapath.static import STATIC_ID_BASE
@@ -991,11 +1007,11 @@ def test_compiled_escape_with_static_rows_decides_as_numpy(case, seed):
     planner, checks, previous = _escape_checks(case)
     ids = np.where(static, STATIC_ID_BASE + np.arange(len(static)) // 3, np.arange(len(static)))
     obstacles = replace(checks.obstacles, ids=ids, static_mask=static)
-    checks = replace(checks, obstacles=obstacles, backend=STEPWISE["numba"])
-    expected = stop_or_escape(replace(checks, backend=Backend("numpy")), planner.limits, planner.config, previous)
-    got = escape_step(checks, planner.limits, planner.config, previous, Backend("numba"))
+    checks = replace(checks, obstacles=obstacles, arithmetic=STEPWISE["numba"])
+    expected = stop_or_escape(replace(checks, arithmetic=Arithmetic("numpy")), planner.limits, planner.config, previous)
+    got = escape_step(checks, planner.limits, planner.config, previous, Arithmetic("numba"))
     assert got.command == expected.command
     assert got.plan.status == expected.plan.status
     assert _same_bits(got.plan.target, expected.plan.target)
     fan = escape_fan(planner.limits, planner.config)
-    assert Backend("numba").escape(checks, planner.limits, planner.config, fan, previous) is not None
+    assert Arithmetic("numba").escape(checks, planner.limits, planner.config, fan, previous) is not None

@@ -37,7 +37,7 @@ PATHS = [
 def _situations(count: int, seed: int):
     """(planner, checks) of ``count`` random situations (a new planner per path, reset each time)."""
     rng = np.random.default_rng(seed)
-    planners = [make_planner("viapath", path, nominal_speed_mps=0.2, backend="numpy") for path in PATHS]
+    planners = [make_planner("viapath", path, nominal_speed_mps=0.2, compute="numpy") for path in PATHS]
     for case in range(count):
         planner = planners[case % len(PATHS)]
         n = int(rng.integers(0, 15))

@@ -117,7 +117,7 @@ def test_the_way_back_decides_the_same_with_both_backends():
             seed=0,
             position_noise_m=0.0,
             velocity_noise_mps=0.0,
-            planner_overrides={"return_lookahead_m": 0.5, "backend": backend},
+            planner_overrides={"return_lookahead_m": 0.5, "compute": backend},
         )
         for backend in ("numpy", "numba")
     ]

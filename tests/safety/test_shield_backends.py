@@ -90,8 +90,8 @@ def cases(draw):
 
 
 def _shields(limits, dt, config):
-    numpy_shield = Shield(limits, dt, ShieldConfig(**{**config.__dict__, "backend": "numpy"}))
-    numba_shield = Shield(limits, dt, ShieldConfig(**{**config.__dict__, "backend": "numba"}))
+    numpy_shield = Shield(limits, dt, ShieldConfig(**{**config.__dict__, "compute": "numpy"}))
+    numba_shield = Shield(limits, dt, ShieldConfig(**{**config.__dict__, "compute": "numba"}))
     assert (numpy_shield.backend, numba_shield.backend) == ("numpy", "numba")
     return numpy_shield, numba_shield
 
@@ -142,7 +142,7 @@ def test_the_cases_reach_every_branch():
             bool(i % 5),
             int(rng.integers(1, 31)),
         )
-        shield = Shield(limits, dt, ShieldConfig(**{**config.__dict__, "backend": "numba"}))
+        shield = Shield(limits, dt, ShieldConfig(**{**config.__dict__, "compute": "numba"}))
         verdict = shield.evaluate(observation, commands)
         contact = bool(verdict["contact"][0])
         seen["contact"] += contact
@@ -158,30 +158,30 @@ def test_the_cases_reach_every_branch():
 def test_backend_option_and_environment(monkeypatch):
     monkeypatch.setenv(ENVIRONMENT_VARIABLE, "numpy")
     assert Shield(config=ShieldConfig()).backend == "numpy"  # the environment overrides auto
-    assert Shield(config=ShieldConfig(backend="numba")).backend == "numba"  # not an explicit choice
+    assert Shield(config=ShieldConfig(compute="numba")).backend == "numba"  # not an explicit choice
     monkeypatch.setenv(ENVIRONMENT_VARIABLE, "numba")
     assert Shield(config=ShieldConfig()).backend == "numba"
-    with pytest.raises(ValueError, match="backend"):
-        ShieldConfig(backend="fortran")
+    with pytest.raises(ValueError, match="compute"):
+        ShieldConfig(compute="fortran")
 
 
-def test_auto_waits_for_the_compiled_shield_and_compile_kernels_builds_it(monkeypatch):
+def test_auto_waits_for_the_compiled_shield_and_precompile_builds_it(monkeypatch):
     """A plain ``auto`` does not make a short run wait ~12 s for numba: before the kernels are compiled
-    (in this process or numba's disk cache) it runs the numpy reference; ``compile_kernels`` (what
+    (in this process or numba's disk cache) it runs the numpy reference; ``precompile`` (what
     ``viapath bench`` and the ROS 2 node call first) builds them, and an explicit choice compiles too."""
     from viapath.compiled import ready
     from viapath.compiled import shield as kernels
     from viapath.safety import shield as shield_module
-    from viapath.safety.shield import compile_kernels
+    from viapath.safety.shield import precompile
 
     monkeypatch.delenv(ENVIRONMENT_VARIABLE, raising=False)
     monkeypatch.setattr(shield_module, "ready", lambda *kernels: False)
     assert Shield().backend == "numpy"
-    assert Shield(config=ShieldConfig(backend="numba")).backend == "numba"
+    assert Shield(config=ShieldConfig(compute="numba")).backend == "numba"
     monkeypatch.setenv(ENVIRONMENT_VARIABLE, "numba")
     assert Shield().backend == "numba"
     monkeypatch.undo()
     monkeypatch.delenv(ENVIRONMENT_VARIABLE, raising=False)
-    assert compile_kernels() is True
+    assert precompile() is True
     assert ready(kernels.shield)  # in this process or in numba's disk cache
     assert Shield().backend == "numba"

@@ -90,7 +90,7 @@ def run_shield(case: dict, commands: np.ndarray, mode: str, towards_only: bool =
             sigma_multiplier=case["k_sigma"][b],
             mode=mode,
             towards_only=towards_only,
-            backend=backend,
+            compute=backend,
         )
         shield = Shield(limits, float(case["dt"][b]), config)
         people = Obstacles(

@@ -71,12 +71,26 @@ def options_hash(scenario: dict, planner: str, overrides: dict | None = None) ->
             **planner_settings(scenario_from_dict(scenario, scenario.get("name", "?")), planner),
             **(overrides or {}),
         }
-        # viapath's backend chooses the arithmetic, not the decisions (docs/speed.md): same rows.
-        options = {key: value for key, value in options.items() if key != "backend"}
+        # An option that only chooses how the arithmetic runs (decides=False) gives the same rows: left out,
+        # under its former names too (an old weights file's).
+        left_out = _not_deciding(planner)
+        options = {key: value for key, value in options.items() if key not in left_out}
         text = repr(sorted(options.items()))
     except Exception as error:
         text = f"error: {error}"
     return hashlib.sha256(f"{planner}:{text}".encode()).hexdigest()[:16]
+
+
+def _not_deciding(planner: str) -> set[str]:
+    """The names, now and former, of the planner's options that decide nothing (:attr:`Option.decides`)."""
+    from viapath.planning import planner_class
+
+    return {
+        name
+        for option in planner_class(planner).options
+        if not option.decides
+        for name in (option.name, *option.former_names)
+    }
 
 
 def manifest(scenario_hashes: dict[str, str], perception: str, seed: int) -> dict[str, Any]:

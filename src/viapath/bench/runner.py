@@ -1,7 +1,7 @@
 """Run many (scenario, planner) episodes in parallel with joblib, writing each result as it finishes.
 
-* Backends: ``loky`` (local processes, the default), ``dask`` (joins ``scheduler`` when given, else
-  starts a local cluster of ``workers`` processes; extra ``dask``) and ``ray`` (joins ``scheduler``
+* Executors (:mod:`.executors`): ``loky`` (local processes, the default), ``dask`` (joins ``scheduler`` when
+  given, else starts a local cluster of ``workers`` processes; extra ``dask``) and ``ray`` (joins ``scheduler``
   when given, else starts a local one; extra ``ray``). The same task function runs everywhere; a task
   carries its scenario as a plain dict, so remote workers need only viapath and the data files.
 * Results: one CSV row per episode appended to ``episodes.csv`` as soon as the episode returns, so a
@@ -9,7 +9,7 @@
   seed) already in the file. ``episodes.parquet`` is rewritten from all rows at the end where
   pyarrow is installed.
 * Determinism: the episode seed is derived from the bench seed and the scenario name, so the same
-  seed gives the same numbers (except the wall-clock plan times) on any backend and worker count.
+  seed gives the same numbers (except the wall-clock plan times) on any executor and worker count.
 * Time to goal is reported relative to the obstacle-free time: the same scenario with its
   obstacles removed, driven by ``follow`` (one common reference for every planner).
 """
@@ -28,6 +28,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+from viapath.bench.executors import ExecutorError, executor_parallel, local_processes, stop_workers
 from viapath.bench.suites import ETH_UCY_FOLDER, data_root, generate_suite, suite_names, write_suite
 
 COLUMNS = [
@@ -96,11 +97,10 @@ _INTS = {
     "at_fault_avoidable",
     "at_fault_unavoidable",
 }
-BACKENDS = ("loky", "dask", "ray")
 
 
 class BenchError(ValueError):
-    """Bad benchmark input (unknown planner or backend, empty suite, missing extra)."""
+    """Bad benchmark input (unknown planner or executor, empty suite, missing extra)."""
 
 
 class FolderBusy(BenchError):
@@ -178,9 +178,7 @@ def load_suite(
             import joblib
 
             chunks = [scenarios[start : start + 50] for start in range(0, len(scenarios), 50)]
-            parts = joblib.Parallel(n_jobs=workers, backend="loky")(
-                joblib.delayed(_write_and_read)(chunk, folder) for chunk in chunks
-            )
+            parts = local_processes(workers)(joblib.delayed(_write_and_read)(chunk, folder) for chunk in chunks)
             loaded = [scenario for part in parts for scenario in part]
         else:
             loaded = _write_and_read(scenarios, folder)
@@ -331,7 +329,7 @@ _HELD_LOCKS: dict[str, int] = {}  # resolved folder -> the descriptor holding it
 @contextlib.contextmanager
 def results_lock(out_dir: Path) -> Iterator[None]:
     """Hold the results folder for this run: one writer at a time. Another run into the same folder is
-    refused (:class:`BenchError`) while this one holds it. The lock is the kernel's (``flock`` on a file in
+    refused (:class:`BenchError`) while this one holds it. The lock is the operating system's (``flock`` on a file in
     the folder), so a run that crashes or is killed leaves no lock behind. Re-entrant in one process."""
     import fcntl
 
@@ -496,67 +494,12 @@ def make_tasks(
     ]
 
 
-def _parallel(backend: str, workers: int, scheduler: str | None):
-    """A joblib Parallel (and a cleanup callable) for the chosen backend."""
-    import joblib
-
-    if backend not in BACKENDS:
-        raise BenchError(f"unknown backend {backend!r}; use {', '.join(BACKENDS)}")
-    if workers < 1:
-        raise BenchError(f"workers must be at least 1, got {workers}")
-    if backend == "loky":
-        return joblib.Parallel(n_jobs=workers, backend="loky", return_as="generator_unordered"), lambda: None
-    if backend == "dask":
-        try:
-            from dask.distributed import Client, LocalCluster
-        except ImportError:
-            raise BenchError("backend dask needs the extra: pip install 'viapath[dask]'") from None
-        if scheduler:
-            client = Client(scheduler)
-            n_jobs = -1
-        else:
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
-            client = Client(cluster)
-            n_jobs = workers
-        context = joblib.parallel_config(backend="dask")
-        context.__enter__()
-        parallel = joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered")
-
-        def close():
-            context.__exit__(None, None, None)
-            client.close()
-            if not scheduler:
-                cluster.close()
-
-        return parallel, close
-    try:
-        import ray
-        from ray.util.joblib import register_ray
-    except ImportError:
-        raise BenchError("backend ray needs the extra: pip install 'viapath[ray]'") from None
-    register_ray()
-    if scheduler:
-        ray.init(address=scheduler, ignore_reinit_error=True, log_to_driver=False)
-    else:
-        ray.init(num_cpus=workers, include_dashboard=False, ignore_reinit_error=True, log_to_driver=False)
-    context = joblib.parallel_config(backend="ray")
-    context.__enter__()
-    # Ray's joblib backend returns lists only: the tasks go in chunks, each chunk's rows written when it ends.
-    parallel = joblib.Parallel(n_jobs=workers if not scheduler else -1, return_as="list")
-
-    def close():  # type: ignore[no-redef]  # the other backends' close, above
-        context.__exit__(None, None, None)
-        ray.shutdown()
-
-    return parallel, close
-
-
 def run_bench(
     scenarios: list[dict],
     planners: list[str],
     out_dir: Path,
     workers: int = 1,
-    backend: str = "loky",
+    executor: str = "loky",
     scheduler: str | None = None,
     perception: str = "oracle",
     seed: int = 0,
@@ -584,7 +527,7 @@ def run_bench(
             planners,
             Path(out_dir),
             workers,
-            backend,
+            executor,
             scheduler,
             perception,
             seed,
@@ -601,7 +544,7 @@ def _run_bench(
     planners,
     out_dir: Path,
     workers,
-    backend,
+    executor,
     scheduler,
     perception,
     seed,
@@ -630,23 +573,24 @@ def _run_bench(
     todo = [t for t in tasks if t.key not in done]
     started = time.perf_counter()
     if todo:
-        from viapath.planning.viapath.planner import compile_kernels as compile_planner_kernels
-        from viapath.safety.shield import compile_kernels
+        from viapath.precompile import precompile
 
-        compile_kernels()  # once per machine (numba caches it), so that the workers' shields are compiled ones
-        compile_planner_kernels()  # and the planner's whole-step kernels (candidate tree, goal legs)
+        precompile()  # once per machine (then cached), so that the workers' shields and planners run compiled
         os.environ["VIAPATH_BENCH_PARENT_PID"] = str(os.getpid())
-        parallel, close = _parallel(backend, workers, scheduler)
+        try:
+            parallel, close = executor_parallel(executor, workers, scheduler)
+        except ExecutorError as error:
+            raise BenchError(str(error)) from None
         try:
             _run_and_write(parallel, todo, csv_path, progress)
         except KeyboardInterrupt as interrupt:
-            _stop_workers(parallel)
+            stop_workers(parallel)
             finished = _finished(tasks, csv_path)
             raise BenchInterrupted(finished, len(tasks), csv_path, getattr(interrupt, "reason", "")) from None
         except Exception as error:
             if not _worker_lost(error):
                 raise
-            _stop_workers(parallel)
+            stop_workers(parallel)
             raise BenchWorkerLost(_finished(tasks, csv_path), len(tasks), csv_path, error) from None
         finally:
             close()
@@ -737,20 +681,6 @@ def terminate_as_interrupt() -> Iterator[None]:
 def _latest(rows: list[dict]) -> dict[tuple, dict]:
     """The last row of each identity (a crashed episode rerun later appends its new row)."""
     return {row_key(row): row for row in rows}
-
-
-def _stop_workers(parallel) -> None:
-    """Kill the worker processes now (loky: terminate the executor with kill_workers), rather than
-    letting joblib wait for the episodes they are running."""
-    backend = getattr(parallel, "_backend", None)
-    workers = getattr(backend, "_workers", None)
-    try:
-        if workers is not None and hasattr(workers, "terminate"):
-            workers.terminate(kill_workers=True)
-        elif backend is not None and hasattr(backend, "abort_everything"):
-            backend.abort_everything(ensure_ready=False)
-    except Exception:
-        pass
 
 
 def _run_and_write(parallel, tasks: list[Task], csv_path: Path, progress: bool) -> None:

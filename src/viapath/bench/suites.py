@@ -108,10 +108,10 @@ def generate_suite(name: str, count: int, seed: int = 0, data: Path | None = Non
     if workers > 1 and count > 1 and all(FAMILIES.get(f).__module__ == __name__ for f in families):
         import joblib
 
+        from viapath.bench.executors import local_processes
+
         chunks = [range(start, min(count, start + 25)) for start in range(0, count, 25)]
-        parts = joblib.Parallel(n_jobs=workers, backend="loky")(
-            joblib.delayed(_synthetic_scenarios)(name, seed, chunk) for chunk in chunks
-        )
+        parts = local_processes(workers)(joblib.delayed(_synthetic_scenarios)(name, seed, chunk) for chunk in chunks)
         return [scenario for part in parts for scenario in part]
     return _synthetic_scenarios(name, seed, range(count))
 

@@ -183,7 +183,7 @@ def evaluate(
     values: dict[str, Any],
     workers: int,
     seed: int,
-    backend: str = "loky",
+    executor: str = "loky",
     progress: bool = False,
 ) -> dict[str, Any]:
     """Run the suite with the viapath planner and these option values; its :func:`suite_metrics`."""
@@ -193,7 +193,7 @@ def evaluate(
             [PLANNER],
             Path(folder),
             workers=workers,
-            backend=backend,
+            executor=executor,
             seed=seed,
             progress=progress,
             planner_options={PLANNER: dict(values)},
@@ -322,7 +322,7 @@ def run_study(
     seed: int,
     constraints: Constraints,
     timeout_s: float | None = None,
-    backend: str = "loky",
+    executor: str = "loky",
     on_trial: Callable[[Any, Any], None] | None = None,
     start_from: Sequence[tuple[str, dict[str, Any]]] = (),
 ) -> tuple[int, float]:
@@ -360,7 +360,7 @@ def run_study(
                 values[p.name] = trial.suggest_int(p.name, int(p.low), int(p.high), log=p.log)
             else:
                 values[p.name] = trial.suggest_float(p.name, p.low, p.high, log=p.log)
-        metrics = evaluate(scenarios, values, workers, seed, backend)
+        metrics = evaluate(scenarios, values, workers, seed, executor)
         trial.set_user_attr("metrics", metrics)
         trial.set_user_attr("constraints", constraints.values(metrics))
         if _has_set_constraint():
@@ -405,7 +405,7 @@ def evaluate_on_test(
     key: str,
     workers: int,
     seed: int,
-    backend: str = "loky",
+    executor: str = "loky",
     on_done: Callable[[Any, dict], None] | None = None,
 ) -> dict[int, dict]:
     """Each trial's metrics on the test suite (cached in the study under ``key``)."""
@@ -414,7 +414,7 @@ def evaluate_on_test(
     for trial in trials:
         stored = cache.get(str(trial.number))
         if stored is None:
-            stored = evaluate(scenarios, trial_values(trial), workers, seed, backend)
+            stored = evaluate(scenarios, trial_values(trial), workers, seed, executor)
             cache[str(trial.number)] = stored
             study.set_user_attr(f"test:{key}", cache)
         results[trial.number] = stored

@@ -43,7 +43,7 @@ def suite(
 Suite = Annotated[str, typer.Argument(help="a folder of scenario YAML files, or a suite name (see 'viapath suite')")]
 Planners = Annotated[str, typer.Option("--planners", "-p", help="comma-separated planner names")]
 Workers = Annotated[int, typer.Option("--workers", "-w", help="parallel workers")]
-Backend = Annotated[str, typer.Option("--backend", help="loky (local processes), dask or ray")]
+Executor = Annotated[str, typer.Option("--executor", help="where episodes run: loky (local processes), dask or ray")]
 Scheduler = Annotated[
     str | None, typer.Option("--scheduler", help="address of an existing dask scheduler or ray cluster")
 ]
@@ -86,7 +86,7 @@ def bench(
     suite: Suite,
     planners: Planners = "viapath,follow,stop,dwa,vo",
     workers: Workers = 2,
-    backend: Backend = "loky",
+    executor: Executor = "loky",
     scheduler: Scheduler = None,
     out: Path = typer.Option(..., "--out", help="results folder (episodes.csv, summary.md/json, plots)"),
     count: Count = 200,
@@ -107,13 +107,13 @@ def bench(
     names = [p.strip() for p in planners.split(",") if p.strip()]
     if not names:
         _fail("--planners is empty; give e.g. viapath,dwa,vo")
-    if scheduler and backend == "loky":
-        _fail("--scheduler needs --backend dask or ray")
+    if scheduler and executor == "loky":
+        _fail("--scheduler needs --executor dask or ray")
     _check_failures_folder(mcap_failures)
     planner_options = _weights_options(weights, names)
     run_options = {
         "workers": workers,
-        "backend": backend,
+        "executor": executor,
         "scheduler": scheduler,
         "perception": perception,
         "seed": seed,
@@ -166,11 +166,11 @@ def _run_and_report(suite, names, out: Path, count, plots, mcap_failures, run_op
     from viapath.bench.suites import SuiteError
 
     created = not out.exists()  # a run refused before any episode must leave no folder behind
-    workers, backend = run_options["workers"], run_options["backend"]
+    workers, executor = run_options["workers"], run_options["executor"]
     try:
         with terminate_as_interrupt(), results_lock(out):
             scenarios = load_suite(
-                suite, out, count=count, seed=run_options["seed"], workers=workers if backend == "loky" else 1
+                suite, out, count=count, seed=run_options["seed"], workers=workers if executor == "loky" else 1
             )
             result = run_bench(
                 scenarios, names, out, note=lambda text: typer.echo(f"note: {text}", err=True), **run_options

@@ -256,6 +256,7 @@ def parse_options(assignments: list[str], planner_name: str) -> dict:
         for text in assignments:
             name, value = parse_assignment(text)
             values[name] = value
+        values = schema.current_names(values, where="--option")  # an option's former name read as its name now
         schema.validate(values, where="--option")
     except OptionError as error:
         fail("\n".join(f"{field.replace('--option.', '--option ')}: {message}" for field, message in error.errors))

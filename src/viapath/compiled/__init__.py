@@ -5,20 +5,22 @@ Modules (the kernel modules import numba; this one does not, so the core runs wi
 
 * :mod:`.planning`: the viapath planner's kernels (leg checks, via points, corridor, the candidate tree, the
   choice, the escape, the roll-outs); :mod:`.slots` the layouts of their settings arrays and node store;
-  :mod:`.backend` the planner's dispatch between its numpy reference and these kernels.
+  :mod:`.arithmetic` the planner's dispatch between its numpy reference and these kernels.
 * :mod:`.shield`: the passive-safety shield's test and search; :mod:`.perception`: ray casting, the circle fit,
   the detector's shape tests and splits; :mod:`.harness`: the guard and the inflation every planner gets.
 * :mod:`.sums`: numpy's pairwise summation, for the kernels that must give numpy's sums bit for bit.
 * :mod:`.table`: every compiled entry with its numpy reference and the test that holds them equal.
+* :mod:`.choice`: the option ``compute`` that picks the arithmetic (formerly ``backend``), defined once.
 
 The policy (one for the planner, the shield, the perception chain and the harness):
 
-* Option ``backend`` (planner and shield): ``auto`` (default), ``numpy`` or ``numba``; the environment variable
+* Option ``compute`` (planner and shield): ``auto`` (default), ``numpy`` or ``numba``; the environment variable
   ``VIAPATH_PLANNER_BACKEND`` (same choices) overrides ``auto`` only (:func:`resolve`). ``numba`` without numba
   installed is an error naming the extra.
 * A plain ``auto`` (no environment variable: :func:`explicit` is False) takes the kernels that cost seconds
   to compile only once they are in numba's on-disk cache (:func:`ready`), so that a first short run does not
-  wait for them; ``viapath bench`` and the ROS 2 node compile them before they start.
+  wait for them; ``viapath bench`` and the ROS 2 node compile them before they start
+  (:func:`viapath.precompile.precompile`).
 * A kernel module that fails to load for another reason than a missing numba (a broken install, a read-only
   tree without a cache directory) is reported once as a warning and the numpy code runs (:func:`kernels`).
 """
@@ -33,7 +35,7 @@ import warnings
 from pathlib import Path
 from types import ModuleType
 
-BACKENDS = ("auto", "numpy", "numba")
+COMPUTE_CHOICES = ("auto", "numpy", "numba")  # the values of the option compute
 ENVIRONMENT_VARIABLE = "VIAPATH_PLANNER_BACKEND"
 KERNEL_MODULES = ("planning", "shield", "perception", "harness")
 
@@ -52,7 +54,7 @@ def _environment() -> str:
 
 
 def explicit(choice: str) -> bool:
-    """Whether the backend was asked for by name (the option, or the environment variable over ``auto``)."""
+    """Whether the arithmetic was asked for by name (the option, or the environment variable over ``auto``)."""
     return choice != "auto" or _environment() not in ("", "auto")
 
 
@@ -61,19 +63,20 @@ def resolve(choice: str) -> str:
     if choice == "auto":
         override = _environment()
         if override and override != "auto":
-            if override not in BACKENDS:
+            if override not in COMPUTE_CHOICES:
+                expected = ", ".join(COMPUTE_CHOICES)
                 raise ValueError(
-                    f"environment variable {ENVIRONMENT_VARIABLE}={override!r}: expected one of {', '.join(BACKENDS)}"
+                    f"environment variable {ENVIRONMENT_VARIABLE}={override!r}: expected one of {expected}"
                 )
             choice = override
         else:
             return "numba" if numba_available() else "numpy"
     if choice == "numba" and not numba_available():
         raise ValueError(
-            "viapath option backend='numba' needs numba: install the extra 'fast' (pip install 'viapath[fast]')"
+            "viapath option compute='numba' needs numba: install the extra 'fast' (pip install 'viapath[fast]')"
         )
     if choice not in ("numpy", "numba"):
-        raise ValueError(f"viapath option backend={choice!r}: expected one of {', '.join(BACKENDS)}")
+        raise ValueError(f"viapath option compute={choice!r}: expected one of {', '.join(COMPUTE_CHOICES)}")
     return choice
 
 
@@ -100,7 +103,7 @@ def kernels(name: str) -> ModuleType | None:
 
 
 def require(name: str) -> ModuleType:
-    """:func:`kernels`, or a RuntimeError saying why they cannot run (for a backend asked for by name)."""
+    """:func:`kernels`, or a RuntimeError saying why they cannot run (for compiled arithmetic asked for by name)."""
     module = kernels(name)
     if module is None:
         raise RuntimeError(f"numba back end unavailable ({_FAILED.get(name)}); pip install 'viapath[fast]'")

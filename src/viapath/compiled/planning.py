@@ -10,7 +10,7 @@ code does them (same order of additions, same roots), so that the decisions are 
 (``tests/planning/test_backends.py`` checks it on random observations).
 
 Choices:
-* Only imported when numba is importable (:mod:`viapath.compiled.backend` decides);
+* Only imported when numba is importable (:mod:`viapath.compiled.arithmetic` decides);
   every kernel is a plain module-level ``@njit(cache=True)`` function, so numba's on-disk cache
   works and a process after the first pays no compilation (docs/speed.md gives the first run's cost).
 * Inputs are C-contiguous float64 arrays (the caller makes them so): one compiled signature each.

@@ -29,7 +29,7 @@ _CORRIDOR = f"{_BACKENDS}::test_corridor_kernels_match_reference"
 _LASER = "tests/perception/test_laser_backends.py::test_numba_laser_path_equals_numpy_segments_and_tracks"
 
 ENTRIES = (
-    # The viapath planner (viapath.compiled.backend dispatches to them).
+    # The viapath planner (viapath.compiled.arithmetic dispatches to them).
     Entry(
         "planning.legs_first_contact",
         "viapath.geometry:legs_first_contact",

@@ -39,7 +39,8 @@ from typing import Any
 
 import numpy as np
 
-from viapath.compiled import BACKENDS, kernels, require
+from viapath.compiled import COMPUTE_CHOICES as COMPUTE_CHOICES  # re-exported: the laser chain's choices
+from viapath.compiled import kernels, require
 from viapath.perception.circle_fit import CircleFits, _padded, clusters_of, fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
 from viapath.perception.raycast import Caster, cast_rays_from_numpy, cast_rays_numpy
@@ -47,8 +48,7 @@ from viapath.perception.scanner import ScannerModel
 from viapath.perception.segmentation import BeamTables, SegmentationParams, Segments, segment_beams
 
 #: The choices of the laser chain's arithmetic (``LaserPerception(ray_compute=...)``, ``DetectorParams.fit_compute``,
-#: the ROS 2 parameter ``fit_compute``): the compiled package's (:data:`viapath.compiled.BACKENDS`).
-COMPUTE_CHOICES: tuple[str, ...] = BACKENDS
+#: the ROS 2 parameter ``fit_compute``): the compiled package's (:data:`viapath.compiled.COMPUTE_CHOICES`).
 COMPILED_COMPUTE = "numba"  # the choice that runs the compiled code (an error without numba)
 #: Former spellings of the laser chain's options -> their names now (a scenario or a ROS parameter file that
 #: still says the former one is told the new name).

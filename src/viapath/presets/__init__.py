@@ -140,8 +140,8 @@ def preset_from_dict(data: Any, origin: str = "<preset>") -> Preset:
     if not isinstance(evidence, dict):
         raise PresetError(f"{origin}: evidence: expected a mapping, found {evidence!r}")
     schema = planner_class(planner).options
-    options = _with_group_defaults(options, schema)
     try:
+        options = _with_group_defaults(schema.current_names(options, where="options"), schema)
         settings = schema.validate(options, where="options")
     except OptionError as error:
         raise PresetError("\n".join(f"{origin}: {where}: {message}" for where, message in error.errors)) from None

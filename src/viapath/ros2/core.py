@@ -247,11 +247,9 @@ class PlannerCore:
             for k in range(4):
                 tracker.step(0.1 * k, found.centres, found.position_sigma_m, found.radii_m)
         path = DesignatedPath([[0.0, 0.0], [5.0, 0.0]], half_width_m=1.0)
-        from viapath.planning.viapath.planner import compile_kernels as compile_planner_kernels
-        from viapath.safety.shield import compile_kernels
+        from viapath.precompile import precompile
 
-        compile_kernels()  # the compiled shield: once per machine, before the node's own shield is made
-        compile_planner_kernels()  # the planner's whole-step kernels too, before the node's planner is made
+        precompile()  # the compiled shield and planner: once per machine, before the node makes its own
         planner = self._make_planner(path, SubgoalPolicy())
         planner.plan(
             Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2), Obstacles([[2.0, 0.0]], [[-0.3, 0.0]], [0.25]))  # type: ignore[arg-type]  # lists: Obstacles makes arrays of them

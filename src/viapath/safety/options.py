@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from viapath.compiled import BACKENDS
+from viapath.compiled.choice import SHIELD_COMPUTE
 from viapath.options import Option, OptionError, OptionSet
 
 SHIELD_MODES = ("passive", "passive-friendly")
@@ -76,14 +76,7 @@ SHIELD_OPTIONS = OptionSet(
             minimum=0.001,
             maximum=1.0,
         ),
-        Option(
-            "backend",
-            "auto",
-            "arithmetic of the shield's test: auto = compiled (numba, extra 'fast') once it is "
-            "compiled (viapath bench and the ROS 2 node compile it, ~12 s once per machine), else numpy (env "
-            "VIAPATH_PLANNER_BACKEND overrides auto, as for the planner); the verdicts are the same",
-            choices=BACKENDS,
-        ),
+        SHIELD_COMPUTE,  # numpy or compiled arithmetic, the same verdicts (viapath.compiled.choice)
     ],
     owner="shield",
 )

@@ -57,13 +57,13 @@ Choices where the sources are silent:
 * A person is skipped when it cannot come within reach of the robot before the longest braking
   ends (a bound: its distance minus its forecast reach exceeds the robot's longest sweep).
 
-Speed (docs/speed.md): the numpy code here is the reference; option ``backend`` (``auto``
+Speed (docs/speed.md): the numpy code here is the reference; option ``compute`` (``auto``
 | ``numpy`` | ``numba``, as the planner's, env ``VIAPATH_PLANNER_BACKEND`` overriding ``auto``) may
 run :meth:`Shield.evaluate` and the window search of :meth:`Shield.filter` on
 :mod:`viapath.compiled.shield` instead, the same arithmetic compiled (extra ``fast``), with the same
 verdicts (tests/safety/test_shield_backends.py); ``ShieldResult.backend`` says which ran. The
 compiled shield takes about 12 s to compile, once per machine; ``auto`` uses it only once it is
-compiled (:func:`compile_kernels`, which ``viapath bench`` and the ROS 2 node call before they start),
+compiled (:func:`precompile`, which ``viapath bench`` and the ROS 2 node call before they start),
 so that a first short ``viapath run`` does not wait for it (docs/speed.md). ``numba``, or the
 environment variable set to ``numba``, compiles it on first use.
 """
@@ -105,7 +105,7 @@ class ShieldConfig:
     substep_s: float = 0.025
     towards_only: bool = True
     keep_in_corridor: bool = True
-    backend: str = "auto"
+    compute: str = "auto"
 
     def __post_init__(self) -> None:
         check_options({name: getattr(self, name) for name in self.__dataclass_fields__})
@@ -263,7 +263,7 @@ class Shield:
         self.dt_s = float(dt_s)
         self.config = config or ShieldConfig()
         # numpy (the reference below) or numba (viapath.compiled.shield, the same arithmetic compiled).
-        self.backend = shield_backend(self.config.backend)
+        self.backend = shield_backend(self.config.compute)
         self._kernel_settings: tuple[Any, ...] | None = (
             None  # the compiled test's constants (and what they were made of)
         )
@@ -931,13 +931,13 @@ def shield_backend(choice: str) -> str:
     return backend
 
 
-def compile_kernels() -> bool:
+def precompile() -> bool:
     """Compile the shield's kernels now if numba is there and they are not compiled yet (about 12 s,
     once per machine: numba caches them on disk); True when the compiled shield is ready."""
     if not numba_available():
         return False
     if not ready(require("shield").shield):
-        shield = Shield(config=ShieldConfig(backend="numba"))
+        shield = Shield(config=ShieldConfig(compute="numba"))
         people = Obstacles(np.array([[1.0, 0.0]]), np.array([[-0.5, 0.0]]), np.array([0.25]))
         observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.3, 0.0, 0.25), people)
         shield.filter(observation, Command(0.5, 0.0))  # the planner's command fails: the search compiles too

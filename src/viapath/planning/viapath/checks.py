@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from viapath.compiled.backend import NUMPY, Backend
+from viapath.compiled.arithmetic import NUMPY, Arithmetic
 from viapath.geometry import cross2
 from viapath.kinematics import UnicycleState, tracking
 from viapath.observation import MotionLimits, Obstacles
@@ -74,7 +74,7 @@ class LegChecks:
     envelope_accel_mps2: float = 0.0
     envelope_period_s: float = 0.0
     max_accel_mps2: float = 1.0
-    backend: Backend = NUMPY  # numpy reference or compiled kernels (.backend)
+    arithmetic: Arithmetic = NUMPY  # numpy reference or compiled code (viapath.compiled.arithmetic)
 
     def envelope_m(self, speeds: np.ndarray) -> np.ndarray:
         """How much further out a via point at ``speeds`` must lie for the robot to stop in time."""
@@ -91,7 +91,7 @@ class LegChecks:
         tracker: SubgoalTracker,
         policy: SubgoalPolicy,
         robot_radius_m: float,
-        backend: Backend = NUMPY,
+        arithmetic: Arithmetic = NUMPY,
     ) -> LegChecks:
         robot, path, obstacles, inflation = situation.robot, tracker.path, situation.obstacles, situation.inflation
         final = tracker.is_final
@@ -117,7 +117,7 @@ class LegChecks:
             continuation=continuation,
             corridor_tolerance_m=situation.corridor_tolerance_m,
             corridor_check_spacing_m=config.corridor_check_spacing_m,
-            backend=backend,
+            arithmetic=arithmetic,
         )
 
     def with_less_inflation(
@@ -191,7 +191,7 @@ class LegChecks:
             for group, leg_radii, until in ((people, envelope, checked), (static, None, durations)):
                 rows, positions, obstacle_velocities, radii, growth, growth_until_s = group
                 if len(rows):
-                    contact[:, rows] = self.backend.legs_first_contact(
+                    contact[:, rows] = self.arithmetic.legs_first_contact(
                         starts,
                         start_times,
                         velocities,
@@ -204,7 +204,7 @@ class LegChecks:
                         leg_radii,
                     )
             return contact
-        return self.backend.legs_first_contact(
+        return self.arithmetic.legs_first_contact(
             starts,
             start_times,
             velocities,
@@ -274,7 +274,7 @@ class LegChecks:
         self, starts: np.ndarray, start_times: np.ndarray, speeds: np.ndarray, horizon_s: float | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N))."""
-        compiled = self.backend.goal_legs(
+        compiled = self.arithmetic.goal_legs(
             self, starts, start_times, speeds, self.horizon_s if horizon_s is None else horizon_s
         )
         if compiled is not None:
@@ -304,16 +304,16 @@ class LegChecks:
             free &= self.goal_legs_inside(starts)
         return directions, lengths, free, contact
 
-    # -- the same facts as the compiled kernels take them (C-contiguous float64, made once per LegChecks: a
+    # -- the same facts packed as the compiled code takes them (C-contiguous float64, made once per LegChecks: a
     # LegChecks is not changed after it is built; dataclasses.replace makes a new one, without these) --
 
-    def kernel_obstacles(self) -> tuple[np.ndarray, ...]:
-        """positions, velocities, check radii, growth, growth_until_s of the obstacles, for the kernels."""
-        cached = self.__dict__.get("_kernel_obstacles")
+    def packed_obstacles(self) -> tuple[np.ndarray, ...]:
+        """positions, velocities, check radii, growth, growth_until_s of the obstacles, for the compiled code."""
+        cached = self.__dict__.get("_packed_obstacles")
         if cached is None:
             obstacles = self.obstacles
             n = len(obstacles.positions)
-            cached = self.__dict__["_kernel_obstacles"] = (
+            cached = self.__dict__["_packed_obstacles"] = (
                 _contiguous(obstacles.positions, (n, 2)),
                 _contiguous(obstacles.velocities, (n, 2)),
                 _contiguous(self.check_radii, (n,)),
@@ -322,19 +322,19 @@ class LegChecks:
             )
         return cached
 
-    def kernel_choice_inputs(self) -> tuple[Any, ...]:
-        """What the choice kernel takes of this cycle (:func:`viapath.compiled.planning.choose`'s order): the robot
-        (:meth:`kernel_robot`), the obstacles (:meth:`kernel_obstacles`), the via radii, the ids, the
+    def packed_choice_inputs(self) -> tuple[Any, ...]:
+        """What the compiled choice takes of this cycle (:func:`viapath.compiled.planning.choose`'s order): the robot
+        (:meth:`packed_robot`), the obstacles (:meth:`packed_obstacles`), the via radii, the ids, the
         continuation, the envelope, and the path's segment arrays and waypoints. Built in one go, every cycle:
         the path's arrays, continuations and envelopes are kept on the path (a path is not changed after it is
         built)."""
-        cached = self.__dict__.get("_kernel_choice_inputs")
+        cached = self.__dict__.get("_packed_choice_inputs")
         if cached is not None:
             return cached
         path = self.path
-        kept: Any = path.__dict__.get("_kernel_choice_arrays")
+        kept: Any = path.__dict__.get("_packed_choice_arrays")
         if kept is None:
-            kept = path.__dict__["_kernel_choice_arrays"] = (
+            kept = path.__dict__["_packed_choice_arrays"] = (
                 tuple(
                     _contiguous(a, np.shape(a))
                     for a in (
@@ -351,56 +351,56 @@ class LegChecks:
         episode, continuations, envelopes = kept
         continuation = self.continuation
         key = None if continuation is None else (*continuation[0].tolist(), float(continuation[1]))
-        kernel_continuation = continuations.get(key)
-        if kernel_continuation is None:
-            kernel_continuation = continuations[key] = self.kernel_continuation()
+        packed_continuation = continuations.get(key)
+        if packed_continuation is None:
+            packed_continuation = continuations[key] = self.packed_continuation()
         key = (self.envelope_accel_mps2, self.envelope_period_s, self.max_accel_mps2)
         envelope = envelopes.get(key)
         if envelope is None:
-            envelope = envelopes[key] = self.kernel_envelope()
+            envelope = envelopes[key] = self.packed_envelope()
         n = len(self.obstacles)
         ids = self.obstacles.ids
         if not (type(ids) is np.ndarray and ids.dtype == np.int64 and ids.flags.c_contiguous):
             ids = np.ascontiguousarray(ids, dtype=np.int64)
-        cached = self.__dict__["_kernel_choice_inputs"] = (
-            self.kernel_robot(),
-            *self.kernel_obstacles(),
+        cached = self.__dict__["_packed_choice_inputs"] = (
+            self.packed_robot(),
+            *self.packed_obstacles(),
             _contiguous(self.via_radii, (n,)),
             ids,
-            kernel_continuation,
+            packed_continuation,
             envelope,
             *episode,
         )
         return cached
 
-    def kernel_robot(self) -> np.ndarray:
+    def packed_robot(self) -> np.ndarray:
         """(x, y, heading, speed, turn rate) of the robot."""
-        cached = self.__dict__.get("_kernel_robot")
+        cached = self.__dict__.get("_packed_robot")
         if cached is None:
-            cached = self.__dict__["_kernel_robot"] = np.array(
+            cached = self.__dict__["_packed_robot"] = np.array(
                 [self.position[0], self.position[1], self.heading_rad, self.speed_mps, self.turn_rate_radps],
                 dtype=np.float64,
             )
         return cached
 
-    def kernel_continuation(self) -> np.ndarray:
+    def packed_continuation(self) -> np.ndarray:
         """(dx, dy, length) of the segment after the subgoal, or an empty array (none)."""
-        cached = self.__dict__.get("_kernel_continuation")
+        cached = self.__dict__.get("_packed_continuation")
         if cached is None:
             if self.continuation is None:
                 cached = np.zeros(0)
             else:
                 direction, length = self.continuation
                 cached = np.array([direction[0], direction[1], length], dtype=np.float64)
-            self.__dict__["_kernel_continuation"] = cached
+            self.__dict__["_packed_continuation"] = cached
         return cached
 
-    def kernel_envelope(self) -> np.ndarray:
+    def packed_envelope(self) -> np.ndarray:
         """(person accel, period, robot accel) of the braking envelope; accel 0: none (:meth:`envelope_m`)."""
-        cached = self.__dict__.get("_kernel_envelope")
+        cached = self.__dict__.get("_packed_envelope")
         if cached is None:
             cached = np.array([self.envelope_accel_mps2, self.envelope_period_s, self.max_accel_mps2], dtype=np.float64)
-            self.__dict__["_kernel_envelope"] = cached
+            self.__dict__["_packed_envelope"] = cached
         return cached
 
     def clear(self, positions: np.ndarray, dt: float, after_steps: int = 0, of_steps: int | None = None) -> bool:
@@ -431,19 +431,19 @@ class LegChecks:
             cached = cache[(steps, dt)] = (centres[..., 0], centres[..., 1], np.minimum(reach, now - 1e-3))
         return cached
 
-    # -- the arithmetic the planner picked for this cycle (``backend``: numpy, or compiled), for the recipe's steps
+    # -- the arithmetic the planner picked for this cycle (``arithmetic``: numpy, or compiled), for the recipe's steps
 
     def via_options(self, *arguments: Any) -> tuple[np.ndarray, ...]:
         """:func:`viapath.geometry.via_options` in the cycle's arithmetic."""
-        return self.backend.via_options(*arguments)  # type: ignore[no-untyped-call]
+        return self.arithmetic.via_options(*arguments)  # type: ignore[no-untyped-call]
 
     def corridor_excess(self, points: np.ndarray) -> np.ndarray:
         """:meth:`DesignatedPath.corridor_excess` of the path in the cycle's arithmetic."""
-        return self.backend.corridor_excess(self.path, points)
+        return self.arithmetic.corridor_excess(self.path, points)
 
     def escape_contacts(self, *arguments: Any) -> tuple[np.ndarray, ...] | None:
         """The escape's first contacts and gaps compiled; None in numpy (the escape works them out itself)."""
-        return self.backend.escape_contacts(*arguments)
+        return self.arithmetic.escape_contacts(*arguments)
 
     def clear_track(
         self,
@@ -457,8 +457,8 @@ class LegChecks:
     ) -> np.ndarray | None:
         """The positions (steps, 2) of steering for ``target`` at ``speed_mps`` (:func:`viapath.kinematics.track`) if
         they keep clear of every obstacle (:meth:`clear`), else None."""
-        if self.backend.name != "numpy":
-            positions = self.backend.track(state, target, speed_mps, limits, dt, steps, heading_gain)
+        if self.arithmetic.name != "numpy":
+            positions = self.arithmetic.track(state, target, speed_mps, limits, dt, steps, heading_gain)
             return positions if self.clear(positions, dt) else None
         # A failing candidate mostly meets someone early in its roll-out (in the slowest cycles, up to 8
         # candidates fail within the first second): its first half is checked before the rest is rolled
@@ -479,12 +479,12 @@ class LegChecks:
         return self.path.corridor_excess(points) <= self.corridor_tolerance_m
 
     def legs_inside(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-        return self.backend.legs_inside(
+        return self.arithmetic.legs_inside(
             self.path, starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m
         )
 
     def goal_legs_inside(self, starts: np.ndarray) -> np.ndarray:
-        compiled = self.backend.goal_legs_inside(
+        compiled = self.arithmetic.goal_legs_inside(
             self.path,
             starts,
             self.subgoal,

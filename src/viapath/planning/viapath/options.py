@@ -7,7 +7,7 @@ every planner (:data:`viapath.planning.base.COMMON_OPTIONS`).
 
 from __future__ import annotations
 
-from viapath.compiled import BACKENDS
+from viapath.compiled.choice import PLANNER_COMPUTE
 from viapath.options import Option, OptionSet
 from viapath.planning.base import COMMON_OPTIONS
 
@@ -203,13 +203,7 @@ _OWN = [
         minimum=0.0,
         maximum=5.0,
     ),
-    Option(
-        "backend",
-        "auto",
-        "arithmetic of the hot path: auto = compiled (numba, extra 'fast') when numba is "
-        "importable, else numpy; the decisions are the same",
-        choices=BACKENDS,
-    ),
+    PLANNER_COMPUTE,  # numpy or compiled arithmetic, the same decisions (viapath.compiled.choice)
     # Display.
     Option("record_candidates", False, "keep every candidate's polyline in the plan (for display)"),
 ]

@@ -41,8 +41,8 @@ What the paper leaves open and we chose, beyond what those modules say:
   ``blocked_gap_m`` short of touching it, at a speed from which it stops there, and waits with status
   ``blocked``; every cycle looks again, so it goes on when the door opens. The candidate tree of a
   cycle with static geometry runs the numpy recipe with the compiled leg checks and via points
-  (:data:`.backend.STEPWISE`): the shapes' extremes are not compiled. Its escape, which treats static
-  discs as any obstacle, keeps the whole-step kernels (:func:`escape_step`).
+  (:data:`viapath.compiled.arithmetic.STEPWISE`): the shapes' extremes are not compiled. Its escape, which
+  treats static discs as any obstacle, keeps the whole-step kernels (:func:`escape_step`).
 * The way back (``return_lookahead_m``, 0.5 m by default; 0 in the preset ``paper``): off the path
   line, the paper's step 1 is tried first towards the path point that far ahead instead of the
   subgoal. The paper heads for the subgoal; when that is metres away the robot drifts back to the path
@@ -62,9 +62,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from viapath.compiled import numba_available
-from viapath.compiled import resolve as resolve_backend
+from viapath.compiled import resolve as resolve_compute
 from viapath.compiled import slots as slot
-from viapath.compiled.backend import STEPWISE, Backend, NodeStore, backend_for, whole_steps_compiled
+from viapath.compiled.arithmetic import STEPWISE, Arithmetic, NodeStore, arithmetic_for, whole_steps_compiled
 from viapath.geometry import wrap_angle
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.options import Settings
@@ -124,7 +124,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         super().__init__(path, **kwargs)
         self.config = self.settings
         self.critics = critics_for(self.config)
-        self.backend = backend_for(self.config.backend)  # numpy reference or compiled kernels (docs/speed.md)
+        self.arithmetic = arithmetic_for(self.config.compute)  # numpy reference or compiled kernels (docs/speed.md)
         self._previous: Choice | None = None
         self._previous_escape: Command | None = None  # last cycle's command, if it escaped
         self._situation: Situation | None = None  # this cycle's, for the shield check of candidates
@@ -133,7 +133,7 @@ class ViaPathPlanner(Planner, name="viapath"):
     @classmethod
     def resolved_defaults(cls) -> dict[str, str]:
         """What the default of an option resolves to here (``viapath planners viapath`` shows it)."""
-        return {"backend": resolve_backend(cls.options.defaults()["backend"])}
+        return {"compute": resolve_compute(cls.options.defaults()["compute"])}
 
     def reset(self) -> None:
         super().reset()
@@ -145,7 +145,7 @@ class ViaPathPlanner(Planner, name="viapath"):
 
     def decide(self, situation: Situation) -> Decision:
         decision = self._decide(situation)
-        decision.plan.extras["backend"] = self.backend.name
+        decision.plan.extras["backend"] = self.arithmetic.name
         return decision
 
     def _decide(self, situation: Situation) -> Decision:
@@ -158,7 +158,7 @@ class ViaPathPlanner(Planner, name="viapath"):
             self.subgoals,
             self.subgoal_policy,
             self.robot_radius_m,
-            self._cycle_backend(situation),
+            self._cycle_arithmetic(situation),
         )
         if self.shield is not None and self.shield.config.enabled:
             # Set on the checks just built (dataclasses.replace would copy every field again, every cycle).
@@ -169,7 +169,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         chosen = self._choose(checks, speeds, nominal_index, self._previous)
         if chosen is None:
             self._previous = None
-            decision = escape_step(checks, self.limits, self.config, self._previous_escape, self.backend)
+            decision = escape_step(checks, self.limits, self.config, self._previous_escape, self.arithmetic)
             self._previous_escape = decision.command if decision.plan.status == "escape" else None
             if decision.plan.status == "stop" and checks.obstacles.static_mask is not None:
                 return self._blocked(situation, checks, float(speeds[nominal_index])) or decision
@@ -198,14 +198,14 @@ class ViaPathPlanner(Planner, name="viapath"):
         )
         return dataclasses.replace(situation, obstacles=obstacles.subset(keep), inflation=kept)
 
-    def _cycle_backend(self, situation: Situation) -> Any:
-        """The backend of this cycle: with static geometry in view the candidate tree runs on the numpy
+    def _cycle_arithmetic(self, situation: Situation) -> Any:
+        """The arithmetic of this cycle: with static geometry in view the candidate tree runs on the numpy
         recipe (the extremes of static shapes, :func:`.candidates._round_static_shapes`, are not compiled),
         its leg checks and via points still on the compiled kernels when they are there."""
-        backend = self.backend
-        if situation.obstacles.static_mask is None or not backend.whole_steps or backend.name == "numpy":
-            return backend
-        return STEPWISE.get(backend.name, backend)
+        arithmetic = self.arithmetic
+        if situation.obstacles.static_mask is None or not arithmetic.whole_steps or arithmetic.name == "numpy":
+            return arithmetic
+        return STEPWISE.get(arithmetic.name, arithmetic)
 
     def _blocked(self, situation: Situation, checks: LegChecks, speed_mps: float) -> Decision | None:
         """No candidate is free and standing is safe: if static geometry closes the way to the subgoal (a
@@ -287,7 +287,7 @@ class ViaPathPlanner(Planner, name="viapath"):
             back = self._way_back(checks, float(speeds[nominal_index]))
             if back is not None:
                 return back
-        if checks.backend is self.backend and self._compiled_choice():
+        if checks.arithmetic is self.arithmetic and self._compiled_choice():
             return self._choose_compiled(checks, speeds, nominal_index, previous, only_way)
         roots = RootLegs.of(checks, speeds, nominal_index)
         if roots.nominal_is_free and only_way is None:
@@ -339,16 +339,18 @@ class ViaPathPlanner(Planner, name="viapath"):
     def _compiled_choice(self) -> bool:
         """Whether :meth:`_choose` runs as :meth:`_choose_compiled`: the compiled whole-step kernels, the
         paper's critics (the kernel sums exactly those) and no candidate polylines to record."""
-        backend, config, critics = self.backend, self.config, self.critics
-        cached = self.__dict__.get("_compiled_choice_of")  # (backend, options, critics, the answer): every cycle asks
-        if cached is None or cached[0] is not backend or cached[1] is not config or cached[2] is not critics:
+        arithmetic, config, critics = self.arithmetic, self.config, self.critics
+        cached = self.__dict__.get(
+            "_compiled_choice_of"
+        )  # (arithmetic, options, critics, the answer): every cycle asks
+        if cached is None or cached[0] is not arithmetic or cached[1] is not config or cached[2] is not critics:
             answer = (
-                backend.name == "numba"
-                and backend.whole_steps
+                arithmetic.name == "numba"
+                and arithmetic.whole_steps
                 and not config.record_candidates
                 and tuple(map(type, critics)) == PAPER_CRITICS
             )
-            cached = self.__dict__["_compiled_choice_of"] = (backend, config, critics, answer)
+            cached = self.__dict__["_compiled_choice_of"] = (arithmetic, config, critics, answer)
         return cached[3]
 
     def _kernel_constants(self) -> tuple[Any, ...]:
@@ -430,8 +432,8 @@ class ViaPathPlanner(Planner, name="viapath"):
             integers[slot.C_ONLY_SIDE] = only_way.side
             integers[slot.C_ONLY_ROOT] = only_way.root
         slow_checks = self._slow_checks(checks)
-        backend = self.backend
-        chosen = backend.choose(checks, slow_checks, speeds, slow_times, settings, integers)
+        arithmetic = self.arithmetic
+        chosen = arithmetic.choose(checks, slow_checks, speeds, slow_times, settings, integers)
         if chosen.status == slot.STEP_ONE:
             speed = float(speeds[nominal_index])
             plan = Plan(
@@ -448,7 +450,7 @@ class ViaPathPlanner(Planner, name="viapath"):
             if self._inside_shield(plan):
                 return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
             integers[slot.C_TRY_STRAIGHT] = 0  # the shield refused it: the candidates decide
-            chosen = backend.choose(checks, slow_checks, speeds, slow_times, settings, integers)
+            chosen = arithmetic.choose(checks, slow_checks, speeds, slow_times, settings, integers)
         if chosen.status != slot.CANDIDATES or chosen.first < 0:  # first: the ranks before it do not follow
             return None
         leaves, order, follow, total, store = chosen.leaves, chosen.order, chosen.follow, chosen.total, chosen.store
@@ -666,7 +668,7 @@ def grow_step(
 ) -> Candidates | None:
     """The candidate tree of the cycle: in one compiled call on the compiled path with its whole-step kernels
     (the same candidates), else :func:`.candidates.grow`, the numpy reference."""
-    store = checks.backend.grow(checks, slow_checks or checks, roots, config)  # type: ignore[no-untyped-call]
+    store = checks.arithmetic.grow(checks, slow_checks or checks, roots, config)  # type: ignore[no-untyped-call]
     if store is not None:
         return _candidates_of(store, checks.subgoal)
     return grow(checks, roots, config, slow_checks)
@@ -677,18 +679,18 @@ def escape_step(
     limits: MotionLimits,
     config: Settings,
     previous: Command | None = None,
-    backend: Backend | None = None,
+    arithmetic: Arithmetic | None = None,
 ) -> Decision:
     """Stop or escape (:func:`.escape.stop_or_escape`): its standing check and scores in two compiled calls on the
     compiled path with its whole-step kernels (the same figures, bit for bit), else its numpy reference.
-    ``backend``: the planner's own, when the cycle's (``checks.backend``) leaves the whole steps out for
+    ``arithmetic``: the planner's own, when the cycle's (``checks.arithmetic``) leaves the whole steps out for
     static geometry: the escape treats static rows as every other obstacle (the standing check spans the
     horizon for both, and keeps no braking envelope), so its compiled kernels serve those cycles too."""
-    compiled = (backend or checks.backend).escape(checks, limits, config, escape_fan(limits, config), previous)
+    compiled = (arithmetic or checks.arithmetic).escape(checks, limits, config, escape_fan(limits, config), previous)
     return stop_or_escape(checks, limits, config, previous, compiled)
 
 
-def compile_kernels() -> bool:
+def precompile() -> bool:
     """Compile every planner kernel now if numba is there and the whole-step ones are not compiled yet
     (about 30 s of CPU once per machine, the choice kernel most of it: numba caches them on disk); True
     when they are ready. Two planning cycles run all of them with the planner's own argument types: one whose
@@ -698,7 +700,7 @@ def compile_kernels() -> bool:
         return False
     if not whole_steps_compiled():
         planner = ViaPathPlanner(
-            DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2, backend="numba"
+            DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2, compute="numba"
         )
         for people in warm_up_crowds():
             planner.reset()
@@ -707,7 +709,7 @@ def compile_kernels() -> bool:
 
 
 def warm_up_crowds() -> list[Obstacles]:
-    """:func:`compile_kernels`' people: one walking at the robot along the path (the choice), four closing in
+    """:func:`precompile`'s people: one walking at the robot along the path (the choice), four closing in
     on it from all sides (the escape; tests/planning/test_backends.py checks that both cycles get there)."""
     sides = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
     return [

@@ -2,9 +2,10 @@
 
 Source: a compiled hot path, the numpy path staying the reference; docs/speed.md.
 
-* Option ``backend`` (:mod:`viapath.planning.viapath.options`): chosen by the package's one policy
-  (:func:`viapath.compiled.resolve`; the whole-step kernels under a plain ``auto`` once they are cached).
-* A :class:`Backend` holds the hot functions, :meth:`legs_first_contact` (leg-against-people
+* Option ``compute`` (:mod:`viapath.planning.viapath.options`, defined in :mod:`.choice`): chosen by the
+  package's one policy (:func:`viapath.compiled.resolve`; the whole-step kernels under a plain ``auto`` once
+  they are cached).
+* An :class:`Arithmetic` holds the hot functions, :meth:`legs_first_contact` (leg-against-people
   checks), :meth:`via_options` (via points of (node, obstacle) pairs), :meth:`legs_inside` and
   :meth:`goal_legs_inside` (corridor checks), :meth:`goal_legs` (all of a batch of legs to the subgoal:
   contacts and corridor in one call), :meth:`grow` (the whole candidate tree), :meth:`track` (motion-limit roll-outs) and, for the
@@ -96,13 +97,13 @@ class CompiledChoice(NamedTuple):
 
 
 @dataclass(frozen=True)
-class Backend:
+class Arithmetic:
     name: str  # numpy | numba
     # numba: also the kernels that take over whole steps of the cycle (goal_legs, the candidate tree grow, the
     # choice, the escape).
     # They take seconds to compile the first time, so ``auto`` uses them only once they are in numba's cache
-    # (:func:`compile_kernels`, which ``viapath bench`` and the ROS 2 node call before they start); until then
-    # the smaller kernels do those steps, with the same decisions.
+    # (:func:`viapath.precompile.precompile`, which ``viapath bench`` and the ROS 2 node call before they start);
+    # until then the smaller kernels do those steps, with the same decisions.
     whole_steps: bool = True
 
     def legs_first_contact(
@@ -230,7 +231,7 @@ class Backend:
             return None
         kernels = _kernels()
 
-        obstacles = checks.kernel_obstacles()
+        obstacles = checks.packed_obstacles()
         return kernels.goal_legs(
             _c(starts),
             _c(start_times),
@@ -238,9 +239,9 @@ class Backend:
             _c(checks.subgoal),
             float(checks.stop_short_m),
             float(horizon_s),
-            checks.kernel_continuation(),
+            checks.packed_continuation(),
             *obstacles,
-            checks.kernel_envelope(),
+            checks.packed_envelope(),
             *_corridor(checks.path),
             int(checks.subgoal_index),
             float(checks.corridor_check_spacing_m),
@@ -254,8 +255,8 @@ class Backend:
             return None
         kernels = _kernels()
 
-        positions, velocities, radii, growth, until = checks.kernel_obstacles()
-        _, _, slow_radii, slow_growth, slow_until = slow_checks.kernel_obstacles()
+        positions, velocities, radii, growth, until = checks.packed_obstacles()
+        _, _, slow_radii, slow_growth, slow_until = slow_checks.packed_obstacles()
         path = checks.path
         index = int(checks.subgoal_index)
         # The robot's segment matters only when a corner can lie between it and the subgoal.
@@ -275,8 +276,8 @@ class Backend:
         goal = (
             _c(checks.subgoal),
             float(checks.stop_short_m),
-            checks.kernel_continuation(),
-            checks.kernel_envelope(),
+            checks.packed_continuation(),
+            checks.packed_envelope(),
             index,
             float(checks.corridor_check_spacing_m),
             float(checks.corridor_tolerance_m),
@@ -328,9 +329,9 @@ class Backend:
             lengths,
             half_widths,
             waypoints,
-        ) = checks.kernel_choice_inputs()
+        ) = checks.packed_choice_inputs()
         _, _, slow_radii, slow_growth, slow_until = (
-            (positions, velocities, radii, growth, until) if slow_checks is checks else slow_checks.kernel_obstacles()
+            (positions, velocities, radii, growth, until) if slow_checks is checks else slow_checks.packed_obstacles()
         )
         found, floats, integers, costs = _kernels().choose(
             robot,
@@ -430,8 +431,8 @@ class Backend:
             ],
             dtype=np.float64,
         )
-        robot = checks.kernel_robot()
-        obstacles = checks.kernel_obstacles()
+        robot = checks.packed_robot()
+        obstacles = checks.packed_obstacles()
         standing_free, headings = kernels.escape_headings(robot, *obstacles, row_turns, settings, steps)
         if standing_free and not score_standing:
             return True, None, None, None
@@ -546,12 +547,12 @@ def _per_obstacle(values, n: int) -> np.ndarray:
     return np.full(n, values, dtype=np.float64) if np.ndim(values) == 0 else _c(np.broadcast_to(values, (n,)))
 
 
-NUMPY = Backend("numpy")
+NUMPY = Arithmetic("numpy")
 
 
-def backend_for(choice: str) -> Backend:
+def arithmetic_for(choice: str) -> Arithmetic:
     name = resolve(choice)
-    return Backend(name, whole_steps=name == "numba" and (explicit(choice) or whole_steps_compiled()))
+    return Arithmetic(name, whole_steps=name == "numba" and (explicit(choice) or whole_steps_compiled()))
 
 
 def whole_steps_compiled() -> bool:
@@ -561,6 +562,6 @@ def whole_steps_compiled() -> bool:
     return ready(kernels.goal_legs, kernels.grow, kernels.choose, kernels.escape_headings, kernels.escape_scores)
 
 
-#: The compiled backend without its whole-step kernels (the recipe's steps in numpy, their leg checks and via
-#: points compiled): what a cycle with static geometry runs on (planner._cycle_backend).
-STEPWISE = {"numba": Backend("numba", whole_steps=False)}
+#: The compiled arithmetic without its whole-step kernels (the recipe's steps in numpy, their leg checks and via
+#: points compiled): what a cycle with static geometry runs on (planner._cycle_arithmetic).
+STEPWISE = {"numba": Arithmetic("numba", whole_steps=False)}
