@@ -577,7 +577,8 @@ def eth_ucy(
         if not file_path.exists():
             raise SuiteError(f"{file_path}: ETH/UCY file missing")
         samples = _scene_samples(str(file_path), dt)
-        scenario = _place_path(rng, samples, path_length_m, robot_speed_mps, duration_s)
+        ends_clear = _ends_clear_of_map(root, file) if maps else None
+        scenario = _place_path(rng, samples, path_length_m, robot_speed_mps, duration_s, ends_clear=ends_clear)
         if scenario is None:  # pragma: no cover - every standard scene has room
             raise SuiteError(f"could not place a path in {file} after many tries")
         start_s, waypoints = scenario
@@ -611,6 +612,27 @@ def eth_ucy(
 
 
 ETH_UCY_MAP_MARGIN_M = 1.0  # m; map geometry kept this far beyond the corridor's bounding box
+# m; with a map, the path's ends keep this far from it (robot radius 0.25 m + 0.1 m): a robot does not start
+# in a wall, a goal is not inside a pillar. A path may still pass closer between its ends (go round, as
+# in the static family).
+ETH_UCY_MAP_END_CLEARANCE_M = 0.35
+
+
+def _ends_clear_of_map(data: Path, file: str) -> Callable | None:
+    """With a map for ``file``: whether points (K, 2) all lie outside its obstacles and at least
+    :data:`ETH_UCY_MAP_END_CLEARANCE_M` from their outlines; None without one."""
+    from viapath.io.ewap_map import sequence_folder
+    from viapath.static import point_segment_distances
+
+    folder = sequence_folder(data, file)
+    if folder is None or not folder.is_dir():
+        return None
+    obstacles = _ewap_map(str(folder))
+    segments = obstacles.segments()
+    return lambda points: bool(
+        not obstacles.contains(points).any()
+        and (point_segment_distances(points, segments).min(axis=1) >= ETH_UCY_MAP_END_CLEARANCE_M).all()
+    )
 
 
 @lru_cache(maxsize=4)
@@ -642,7 +664,7 @@ def with_ewap_map(scenario: dict, data: Path, margin_m: float = ETH_UCY_MAP_MARG
     return scenario
 
 
-def _place_path(rng, samples, length, speed, duration, tries: int = 500):
+def _place_path(rng, samples, length, speed, duration, tries: int = 500, ends_clear: Callable | None = None):
     times, xy = samples[:, 0], samples[:, 1:]
     low, high = np.percentile(xy, 5, axis=0), np.percentile(xy, 95, axis=0)
     t_first, t_last = times.min(), times.max()
@@ -666,6 +688,8 @@ def _place_path(rng, samples, length, speed, duration, tries: int = 500):
         along = np.clip(rel @ direction, 0.0, length)
         gap = np.hypot(*(rel - along[:, None] * direction).T)
         if not np.any(gap < 2.0):
+            continue
+        if ends_clear is not None and not ends_clear(np.array([a, b])):
             continue
         return start_s, [a.tolist(), b.tolist()]
     return None
