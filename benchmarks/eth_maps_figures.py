@@ -147,10 +147,33 @@ def alignment() -> dict:
             out[f"{sequence} {order}"] = {
                 "outlines": len(obstacles.outlines),
                 "walkers_inside": f"{int(inside.sum())}/{len(walkers)}",
+                "outline_centres_m": [np.round(ring[:-1].mean(axis=0), 1).tolist() for ring in obstacles.outlines],
+                "inside_per_outline": [
+                    int(ObstacleMap((ring,)).contains(walkers).sum()) for ring in obstacles.outlines
+                ],
                 "fewest_within_1m_of_an_outline": min(around),
                 "map_xml_off_m_median_max": [round(float(np.median(off)), 3), round(float(off.max()), 3)],
             }
     return out
+
+
+def differing(root: Path) -> list[str]:
+    """One line per window whose (reached, collision) changed with the map."""
+    plain, mapped = _rows(root / "bench-eth-ucy"), _rows(root / "bench-eth-ucy-maps")
+    lines = []
+    for name, a in sorted(plain.items()):
+        b = mapped.get(name.replace("eth-ucy-", "eth-ucy-maps-", 1))
+        if b is None or (a["reached_goal"], a["collision"]) == (b["reached_goal"], b["collision"]):
+            continue
+        again = _path(root / "suite-eth-ucy" / f"{name}.yaml") != _path(
+            root / "suite-eth-ucy-maps" / f"{b['scenario']}.yaml"
+        )
+        lines.append(
+            f"{b['scenario']}: collision {a['collision']} -> {b['collision']}, min clearance "
+            f"{float(a['min_clearance_m']):.2f} -> {float(b['min_clearance_m']):.2f} m, "
+            f"path placed again: {again}; {b['at_fault_detail'] or 'no at-fault contact'}"
+        )
+    return lines
 
 
 def main() -> None:
@@ -187,6 +210,9 @@ def main() -> None:
             f"{'–' if f['path_placed_again'] is None else f['path_placed_again']} | "
             f"{'–' if f['outcome_differs'] is None else f['outcome_differs']} |"
         )
+    print()
+    for line in differing(args.root):
+        print(line)
 
 
 if __name__ == "__main__":
