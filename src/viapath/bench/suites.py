@@ -28,6 +28,8 @@ Families (the scenario name is ``<family>-<index>``):
   five standard scenes (eth, hotel, univ, zara1, zara2) at many start times; see :func:`eth_ucy`.
 * ``eth-ucy-react``: the same scenarios (same paths and start times for the same seed), with people who
   give way to the robot (``replay: {react: true}``, :mod:`viapath.sim.reactive`).
+* ``eth-ucy-maps``: the same scenarios, and the ETH and hotel ones bring the authors' obstacle map
+  (building walls, tram-stop shelter and pillars) as ``walls`` near the path (:func:`with_ewap_map`).
 
 The suite ``mixed`` cycles through every synthetic family (index ``i`` → family ``i mod 9``).
 
@@ -73,7 +75,7 @@ class SuiteError(ValueError):
 
 
 def suite_names() -> list[str]:
-    return ["mixed", *FAMILIES.ordered(), "eth-ucy", "eth-ucy-react"]
+    return ["mixed", *FAMILIES.ordered(), "eth-ucy", "eth-ucy-react", "eth-ucy-maps"]
 
 
 def data_root() -> Path:
@@ -101,8 +103,8 @@ def generate_suite(name: str, count: int, seed: int = 0, data: Path | None = Non
         raise SuiteError(f"unknown suite {name!r}; available: {', '.join(suite_names())}")
     if count < 1:
         raise SuiteError(f"count must be at least 1, got {count}")
-    if name in ("eth-ucy", "eth-ucy-react"):
-        return eth_ucy(count, seed, data, react=name == "eth-ucy-react")
+    if name in ("eth-ucy", "eth-ucy-react", "eth-ucy-maps"):
+        return eth_ucy(count, seed, data, react=name == "eth-ucy-react", maps=name == "eth-ucy-maps")
     families = SYNTHETIC_FAMILIES if name == "mixed" else (name,)
     # Worker processes know only the families this module registers (not ones registered from outside).
     if workers > 1 and count > 1 and all(FAMILIES.get(f).__module__ == __name__ for f in families):
@@ -543,6 +545,7 @@ def eth_ucy(
     robot_speed_mps: float = 0.3,
     duration_s: float = 40.0,
     react: bool = False,
+    maps: bool = False,
 ) -> list[dict]:
     """Designated paths across the five ETH/UCY scenes at many start times (scene ``i mod 5``; univ
     alternates between students001 and students003).
@@ -553,6 +556,7 @@ def eth_ucy(
     and at least one person comes within 2 m of the path during the episode. Every pedestrian of the
     file is replayed (``replay`` item, DESIGN §4); they do not react to the robot, unless ``react``
     (then the names read ``eth-ucy-react-<scene>-<index>`` and the scenarios are otherwise the same).
+    With ``maps``, the ETH and hotel scenarios also bring their obstacle map (:func:`with_ewap_map`).
     """
     root = Path(data) if data is not None else data_root()
     folder = root / ETH_UCY_FOLDER
@@ -573,7 +577,8 @@ def eth_ucy(
         if not file_path.exists():
             raise SuiteError(f"{file_path}: ETH/UCY file missing")
         samples = _scene_samples(str(file_path), dt)
-        scenario = _place_path(rng, samples, path_length_m, robot_speed_mps, duration_s)
+        ends_clear = _ends_clear_of_map(root, file) if maps else None
+        scenario = _place_path(rng, samples, path_length_m, robot_speed_mps, duration_s, ends_clear=ends_clear)
         if scenario is None:  # pragma: no cover - every standard scene has room
             raise SuiteError(f"could not place a path in {file} after many tries")
         start_s, waypoints = scenario
@@ -601,10 +606,65 @@ def eth_ucy(
                 }
             )
         )
+        if maps:
+            scenarios[-1] = with_ewap_map(scenarios[-1], root)
     return scenarios
 
 
-def _place_path(rng, samples, length, speed, duration, tries: int = 500):
+ETH_UCY_MAP_MARGIN_M = 1.0  # m; map geometry kept this far beyond the corridor's bounding box
+# m; with a map, the path's ends keep this far from it (robot radius 0.25 m + 0.1 m): a robot does not start
+# in a wall, a goal is not inside a pillar. A path may still pass closer between its ends (go round, as
+# in the static family).
+ETH_UCY_MAP_END_CLEARANCE_M = 0.35
+
+
+def _ends_clear_of_map(data: Path, file: str) -> Callable | None:
+    """With a map for ``file``: whether points (K, 2) all lie outside its obstacles and at least
+    :data:`ETH_UCY_MAP_END_CLEARANCE_M` from their outlines; None without one."""
+    from viapath.io.ewap_map import sequence_folder
+    from viapath.static import point_segment_distances
+
+    folder = sequence_folder(data, file)
+    if folder is None or not folder.is_dir():
+        return None
+    obstacles = _ewap_map(str(folder))
+    segments = obstacles.segments()
+    return lambda points: bool(
+        not obstacles.contains(points).any()
+        and (point_segment_distances(points, segments).min(axis=1) >= ETH_UCY_MAP_END_CLEARANCE_M).all()
+    )
+
+
+@lru_cache(maxsize=4)
+def _ewap_map(folder: str):
+    from viapath.io.ewap_map import read_obstacle_map
+
+    return read_obstacle_map(folder)
+
+
+def with_ewap_map(scenario: dict, data: Path, margin_m: float = ETH_UCY_MAP_MARGIN_M) -> dict:
+    """An ``eth-ucy`` scenario with its scene's obstacle map (``eth_ewap_original/<sequence>/map.png`` +
+    ``H.txt``, :mod:`viapath.io.ewap_map`) as ``walls``: the outlines' parts inside the path's bounding
+    box widened by the corridor's half-width and ``margin_m``; named ``eth-ucy-maps-...``. A scene without
+    a map (the UCY ones) only gets the name."""
+    from viapath.io.ewap_map import sequence_folder
+
+    (replay,) = (item["replay"] for item in scenario["obstacles"])
+    scenario = {**scenario, "name": scenario["name"].replace("eth-ucy-", "eth-ucy-maps-", 1)}
+    folder = sequence_folder(data, replay["file"])
+    if folder is None:
+        return scenario
+    if not folder.is_dir():
+        raise SuiteError(f"{folder}: ETH obstacle map missing (map.png and H.txt; see the data README)")
+    waypoints = np.asarray(scenario["path"]["waypoints"], dtype=float)
+    reach = scenario["path"]["half_width"] + margin_m
+    walls = _ewap_map(str(folder)).walls_in_box(waypoints.min(axis=0) - reach, waypoints.max(axis=0) + reach)
+    scenario["walls"] = _rounded([{"points": wall.tolist()} for wall in walls])
+    scenario["description"] += f" Obstacle map of {folder.name} near the path (wall polylines: {len(walls)})."
+    return scenario
+
+
+def _place_path(rng, samples, length, speed, duration, tries: int = 500, ends_clear: Callable | None = None):
     times, xy = samples[:, 0], samples[:, 1:]
     low, high = np.percentile(xy, 5, axis=0), np.percentile(xy, 95, axis=0)
     t_first, t_last = times.min(), times.max()
@@ -628,6 +688,8 @@ def _place_path(rng, samples, length, speed, duration, tries: int = 500):
         along = np.clip(rel @ direction, 0.0, length)
         gap = np.hypot(*(rel - along[:, None] * direction).T)
         if not np.any(gap < 2.0):
+            continue
+        if ends_clear is not None and not ends_clear(np.array([a, b])):
             continue
         return start_s, [a.tolist(), b.tolist()]
     return None

@@ -23,7 +23,7 @@ def suite(
     name: str = typer.Argument(
         ...,
         help="suite name: mixed, crossing, head-on, overtaken, overtaking, multi, "
-        "group, crowd, hallway, paper, static, slow-walker, eth-ucy, eth-ucy-react",
+        "group, crowd, hallway, paper, static, slow-walker, eth-ucy, eth-ucy-react, eth-ucy-maps",
     ),
     count: int = typer.Option(200, "--count", "-n", help="number of scenarios"),
     seed: int = typer.Option(0, "--seed", help="same seed, same suite"),
