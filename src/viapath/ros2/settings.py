@@ -289,6 +289,9 @@ def _under(prefix: str, options: Iterable[Option]) -> list[Option]:
             maximum=o.maximum,
             exclusive_minimum=o.exclusive_minimum,
             choices=o.choices,
+            former_names=tuple(
+                prefix + o.path.rpartition(".")[0] + ("." if "." in o.path else "") + f for f in o.former_names
+            ),
         )
         for o in options
     ]
@@ -427,9 +430,9 @@ def validate(values: dict[str, Any]) -> NodeSettings:
     if len(set(scanner_names)) != len(scanner_names):
         raise ParameterError(f"parameter scanner_names: names repeat: {scanner_names}")
     options = {o.name: o for o in all_options(planner_name, scanner_names)}
+    renamed = {**RENAMED_OPTIONS, **{f: o.name for o in options.values() for f in o.former_names}}
     errors = [
-        f"parameter {name}: unknown parameter"
-        + (f" (now called {RENAMED_OPTIONS[name]})" if name in RENAMED_OPTIONS else "")
+        f"parameter {name}: unknown parameter" + (f" (now called {renamed[name]})" if name in renamed else "")
         for name in sorted(set(values) - set(options) - {"use_sim_time"})
     ]
     checked: dict[str, Any] = {}
