@@ -1015,3 +1015,33 @@ def test_compiled_escape_with_static_rows_decides_as_numpy(case, seed):
     assert _same_bits(got.plan.target, expected.plan.target)
     fan = escape_fan(planner.limits, planner.config)
     assert Arithmetic("numba").escape(checks, planner.limits, planner.config, fan, previous) is not None
+
+
+def test_clear_kernel_gives_the_reference_verdicts():
+    """The compiled roll-out check answers as LegChecks.clear (numpy) on random situations and roll-outs, with
+    one step placed exactly on an obstacle's limit (where the last bit of a distance decides), and both verdicts
+    come up."""
+    from tests.planning.test_numpy_shortcuts import _situations
+    from viapath.compiled.arithmetic import Arithmetic
+
+    compiled = Arithmetic("numba")
+    rng = np.random.default_rng(21)
+    verdicts = set()
+    for case, (_, checks) in enumerate(_situations(400, seed=31)):
+        if len(checks.obstacles) == 0:
+            continue
+        for kind in range(3):
+            steps, dt = int(rng.choice([20, 5, 12])), float(rng.choice([0.1, 0.05]))
+            positions = checks.position + np.cumsum(rng.normal(0.0, 0.06, (steps, 2)), axis=0)
+            if kind == 2:
+                centres_x, centres_y, limit = checks._clear_limits(steps, dt)
+                s, j, angle = int(rng.integers(steps)), int(rng.integers(len(checks.obstacles))), rng.uniform(0, 6.3)
+                positions[s] = [centres_x[s, j], centres_y[s, j]] + abs(limit[s, j]) * np.array(
+                    [np.cos(angle), np.sin(angle)]
+                )
+            expected = checks.clear(positions, dt)
+            got = compiled.clear(positions, dt, checks.position, checks.packed_obstacles())
+            assert got is expected, f"case {case}, kind {kind}"
+            verdicts.add(expected)
+    assert verdicts == {True, False}
+    assert Arithmetic("numpy").clear(positions, dt, checks.position, checks.packed_obstacles()) is None

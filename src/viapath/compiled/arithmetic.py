@@ -451,6 +451,17 @@ class Arithmetic:
         )
         return standing_free, commands, ends, score
 
+    def clear(self, positions, dt_s: float, robot_position, packed_obstacles) -> bool | None:
+        """:meth:`LegChecks.clear` of a roll-out from now in one compiled call; None on the numpy path.
+        ``packed_obstacles``: :meth:`LegChecks.packed_obstacles`."""
+        if self.name == "numpy":
+            return None
+        return bool(
+            _kernels().clear_positions(
+                _c(positions), float(dt_s), float(robot_position[0]), float(robot_position[1]), *packed_obstacles
+            )
+        )
+
     def track(
         self,
         state: UnicycleState,

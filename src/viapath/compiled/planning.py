@@ -1780,6 +1780,26 @@ def _clear(
 
 
 @njit(cache=True, nogil=True)
+def clear_positions(
+    positions, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
+):
+    """LegChecks.clear of a whole roll-out (one position per ``dt`` from now): the choice's own :func:`_clear`,
+    for the planner's stepwise cycles (static geometry in view)."""
+    return _clear(
+        positions,
+        positions.shape[0],
+        dt,
+        robot_x,
+        robot_y,
+        obstacle_positions,
+        obstacle_velocities,
+        radii,
+        growth,
+        growth_until_s,
+    )
+
+
+@njit(cache=True, nogil=True)
 def _follows(robot, target_x, target_y, angle, speed, settings, steps, obstacles, corridor):
     """follow.can_follow: 0 cannot, 1 can, 2 can after turning on the spot first. ``angle``: atan2 of the
     offset from the robot to the target; ``obstacles`` and ``corridor``: :func:`grow`'s records."""

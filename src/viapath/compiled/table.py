@@ -37,6 +37,11 @@ ENTRIES = (
     ),
     Entry("planning.track", "viapath.kinematics:track", f"{_BACKENDS}::test_track_kernel_matches_reference"),
     Entry(
+        "planning.clear_positions",
+        "viapath.planning.viapath.checks:LegChecks.clear",
+        f"{_BACKENDS}::test_clear_kernel_gives_the_reference_verdicts",
+    ),
+    Entry(
         "planning.via_options",
         "viapath.geometry:via_options",
         f"{_BACKENDS}::test_via_options_kernel_matches_reference",

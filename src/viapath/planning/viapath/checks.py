@@ -406,14 +406,37 @@ class LegChecks:
     def clear(self, positions: np.ndarray, dt: float, after_steps: int = 0, of_steps: int | None = None) -> bool:
         """Whether robot positions (one per ``dt`` from now, or from ``after_steps`` steps from now on; part of
         a roll-out of ``of_steps`` steps, if given) keep clear of every obstacle."""
-        if len(self.obstacles) == 0:
+        if len(self.obstacles) == 0 or len(positions) == 0:
             return True
         end = after_steps + len(positions)
-        centres_x, centres_y, limit = self._clear_limits(end if of_steps is None else of_steps, dt)
-        if after_steps or end < len(limit):  # the rows of these steps (the same values as made for them alone)
-            centres_x, centres_y, limit = centres_x[after_steps:end], centres_y[after_steps:end], limit[after_steps:end]
+        steps = end if of_steps is None else of_steps
+        centres_x, centres_y, limit = self._clear_limits(steps, dt)
+        # Only the obstacles a roll-out this long can reach: one whose centre stays farther from the robot than
+        # its limit plus the roll-out's greatest distance from the robot is passed clear at every step
+        # (triangle inequality), so leaving it out changes no verdict.
+        offset = positions - self.position
+        travel = float(np.sqrt((offset * offset).sum(axis=1).max()))
+        near = self._clear_slack(steps, dt) <= travel + 1e-6
+        if not near.any():
+            return True
+        rows = slice(after_steps, end)
+        if near.all():
+            centres_x, centres_y, limit = centres_x[rows], centres_y[rows], limit[rows]
+        else:
+            centres_x, centres_y, limit = centres_x[rows, near], centres_y[rows, near], limit[rows, near]
         distance = np.hypot(positions[:, 0:1] - centres_x, positions[:, 1:2] - centres_y)
         return bool((distance >= limit).all())
+
+    def _clear_slack(self, steps: int, dt: float) -> np.ndarray:
+        """(N,) for each obstacle the least of (its centre's distance from the robot − its limit) over the steps
+        of :meth:`_clear_limits`: a roll-out that stays closer to the robot than this is clear of it."""
+        cache = self.__dict__.setdefault("_clear_slack_cache", {})
+        cached = cache.get((steps, dt))
+        if cached is None:
+            centres_x, centres_y, limit = self._clear_limits(steps, dt)
+            gap = np.hypot(centres_x - self.position[0], centres_y - self.position[1]) - limit
+            cached = cache[(steps, dt)] = gap.min(axis=0)
+        return cached
 
     def _clear_limits(self, steps: int, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The obstacles' centres (x and y, (steps, N) each) after each ``dt`` and how close the robot may come
@@ -459,7 +482,10 @@ class LegChecks:
         they keep clear of every obstacle (:meth:`clear`), else None."""
         if self.arithmetic.name != "numpy":
             positions = self.arithmetic.track(state, target, speed_mps, limits, dt, steps, heading_gain)
-            return positions if self.clear(positions, dt) else None
+            clear = len(self.obstacles) == 0 or self.arithmetic.clear(
+                positions, dt, self.position, self.packed_obstacles()
+            )
+            return positions if clear else None
         # A failing candidate mostly meets someone early in its roll-out (in the slowest cycles, up to 8
         # candidates fail within the first second): its first half is checked before the rest is rolled
         # out. The same positions and verdict; a roll-out that passes pays one more (small) check.
