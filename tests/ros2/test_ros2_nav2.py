@@ -104,7 +104,9 @@ def test_a_changed_path_is_followed_without_a_stop_and_cancel_brakes(nav2_runs):
     assert v[limited].max() <= 0.6 * 0.25 + 1e-6  # speed_limit 25 % of max_speed_mps 0.6
     assert final(records)["status"] == CANCELED
     assert any(r["kind"] == "cleared" and r["ok"] for r in records)
-    _assert_rests_within_braking_distance(trace, cancel_at)
+    # The cancel crosses the action server's cancel service (as deactivate crosses the lifecycle service): on a
+    # machine running the whole suite it reached the node up to ~0.25 s after it was sent.
+    _assert_rests_within_braking_distance(trace, cancel_at, latency_s=0.5)
 
 
 def test_deactivate_stops_the_robot_and_ends_the_goal(nav2_runs):
