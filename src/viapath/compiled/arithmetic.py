@@ -149,6 +149,30 @@ class Arithmetic:
             legs,
         )
 
+    def legs_first_contact_packed(
+        self, starts, start_times, velocities, durations, packed_obstacles, leg_radii_m=None
+    ) -> np.ndarray:
+        """:meth:`legs_first_contact` with the obstacles already packed (positions, velocities, radii, growth,
+        growth_until_s: C-contiguous float64, one row or value per obstacle), as a cycle's checks keep them."""
+        if self.name == "numpy":
+            positions, velocities_obs, radii, growth, growth_until_s = packed_obstacles
+            return numpy_legs_first_contact(
+                starts,
+                start_times,
+                velocities,
+                durations,
+                positions,
+                velocities_obs,
+                radii,
+                growth,
+                growth_until_s,
+                leg_radii_m,
+            )
+        legs = np.zeros(len(starts)) if leg_radii_m is None else _c(leg_radii_m)
+        return _kernels().legs_first_contact(
+            _c(starts), _c(start_times), _c(velocities), _c(durations), *packed_obstacles, legs
+        )
+
     def via_options(
         self,
         starts,

@@ -188,20 +188,10 @@ class LegChecks:
             # by driving it slowly) and the braking envelope, for where a person may walk, does not apply.
             contact = np.empty((len(starts), len(obstacles)))
             people, static = self._moving_and_static_rows()
-            for group, leg_radii, until in ((people, envelope, checked), (static, None, durations)):
-                rows, positions, obstacle_velocities, radii, growth, growth_until_s = group
+            for (rows, *packed), leg_radii, until in ((people, envelope, checked), (static, None, durations)):
                 if len(rows):
-                    contact[:, rows] = self.arithmetic.legs_first_contact(
-                        starts,
-                        start_times,
-                        velocities,
-                        until,
-                        positions,
-                        obstacle_velocities,
-                        radii,
-                        growth,
-                        growth_until_s,
-                        leg_radii,
+                    contact[:, rows] = self.arithmetic.legs_first_contact_packed(
+                        starts, start_times, velocities, until, packed, leg_radii
                     )
             return contact
         return self.arithmetic.legs_first_contact(
