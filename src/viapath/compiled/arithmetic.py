@@ -119,41 +119,24 @@ class Arithmetic:
         growth_until_s,
         leg_radii_m=None,
     ) -> np.ndarray:
-        if self.name == "numpy":
-            return numpy_legs_first_contact(
-                starts,
-                start_times,
-                velocities,
-                durations,
-                positions,
-                velocities_obs,
-                radii,
-                growth,
-                growth_until_s,
-                leg_radii_m,
+        obstacles = (positions, velocities_obs, radii, growth, growth_until_s)
+        if self.name != "numpy":
+            n = len(positions)
+            obstacles = (
+                _c(positions),
+                _c(velocities_obs),
+                _per_obstacle(radii, n),
+                _per_obstacle(growth, n),
+                _per_obstacle(growth_until_s, n),
             )
-        kernels = _kernels()
-
-        n = len(positions)
-        legs = np.zeros(len(starts)) if leg_radii_m is None else _c(leg_radii_m)
-        return kernels.legs_first_contact(
-            _c(starts),
-            _c(start_times),
-            _c(velocities),
-            _c(durations),
-            _c(positions),
-            _c(velocities_obs),
-            _per_obstacle(radii, n),
-            _per_obstacle(growth, n),
-            _per_obstacle(growth_until_s, n),
-            legs,
-        )
+        return self.legs_first_contact_packed(starts, start_times, velocities, durations, obstacles, leg_radii_m)
 
     def legs_first_contact_packed(
         self, starts, start_times, velocities, durations, packed_obstacles, leg_radii_m=None
     ) -> np.ndarray:
         """:meth:`legs_first_contact` with the obstacles already packed (positions, velocities, radii, growth,
-        growth_until_s: C-contiguous float64, one row or value per obstacle), as a cycle's checks keep them."""
+        growth_until_s; on the compiled path C-contiguous float64, one row or value per obstacle), as a cycle's
+        checks keep them."""
         if self.name == "numpy":
             positions, velocities_obs, radii, growth, growth_until_s = packed_obstacles
             return numpy_legs_first_contact(

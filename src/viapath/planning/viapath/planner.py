@@ -32,12 +32,12 @@ What the paper leaves open and we chose, beyond what those modules say:
   met first: a pair (node, static disc) becomes the two discs of that disc's shape that reach furthest
   left and right as seen from the node (the tangents to the shape's inflated outline,
   :func:`.candidates._round_static_shapes`), and the root branches once per shape; a node hugging a
-  shape slides along it instead of creeping round its nearest disc (:func:`.candidates._with_slides`); (2) static legs are
-  checked to their end, past the horizon (a leg into a wall is not made free by driving it slowly), and
-  without the shield's braking envelope, which is for where people may walk; (3) static discs farther
-  outside the corridor than their reach are left out of the cycle (no candidate can meet them); (4) a
-  **closed way** (no free candidate, standing is safe, and the straight leg to the subgoal meets static
-  geometry before any person) is not a plain stop: the robot drives on along that leg to
+  shape slides along it instead of creeping round its nearest disc (:func:`.candidates._with_slides`);
+  (2) static legs are checked to their end, past the horizon (a leg into a wall is not made free by
+  driving it slowly), and without the shield's braking envelope, which is for where people may walk;
+  (3) static discs farther outside the corridor than their reach are left out of the cycle (no
+  candidate can meet them); (4) a **closed way** (no free candidate, standing is safe, and the straight
+  leg to the subgoal meets static geometry before any person) is not a plain stop: the robot drives on along that leg to
   ``blocked_gap_m`` short of touching it, at a speed from which it stops there, and waits with status
   ``blocked``; every cycle looks again, so it goes on when the door opens. The candidate tree of a
   cycle with static geometry runs the numpy recipe with the compiled leg checks and via points
