@@ -14,6 +14,15 @@ from __future__ import annotations
 import numpy as np
 
 
+def _towards(x, y, heading, t, people, speed, slack):
+    """(L, K, N): robot velocity . (person centre - robot) > -slack |v| |r| at time t."""
+    px, py, vx, vy = people
+    dx = x[..., None] - (px + vx * t)[:, None, :]
+    dy = y[..., None] - (py + vy * t)[:, None, :]
+    along = -(speed * np.cos(heading))[..., None] * dx - (speed * np.sin(heading))[..., None] * dy
+    return along > -slack * speed[..., None] * np.sqrt(dx * dx + dy * dy)
+
+
 def brute_admissible(
     case: dict,
     commands: np.ndarray,
@@ -22,12 +31,16 @@ def brute_admissible(
     friendly: bool = False,
     towards_only: bool = True,
     towards_slack: float = 0.0,
+    towards_in_period: bool = True,
 ) -> np.ndarray:
     """(B, K) bool: command k of case b is admissible (and friendly, if asked) with radii grown by ``extra_m``.
 
-    ``towards_only``: a meeting counts only at instants when the robot's velocity has a positive
-    component towards the person's forecast centre (more than ``-towards_slack`` |v| |r|: a robust
-    check counts near-perpendicular motion too). ``case`` holds arrays: x, y, heading, speed, turn (B,), radius (B,), vmax, amax, wmax, alphamax,
+    ``towards_only``: a meeting counts only when the robot's velocity has a positive component towards
+    the person's forecast centre (more than ``-towards_slack`` |v| |r|: a robust check counts
+    near-perpendicular motion too) at that instant or at any earlier one of the same control period,
+    its start included: the at-fault metric reads the heading at the start of the period in which a
+    contact begins. ``towards_in_period=False`` reads it at the instant of the meeting only (a weaker rule,
+    for the test that shows the difference). ``case`` holds arrays: x, y, heading, speed, turn (B,), radius (B,), vmax, amax, wmax, alphamax,
     dt (B,), margin, accel_p, k_sigma (B,), people positions P (B,N,2), velocities V (B,N,2),
     radii r (B,N), sigma_v (B,N), sigma_p (B,N). ``commands`` (B, K, 2).
     """
@@ -68,6 +81,12 @@ def brute_admissible(
         px, py, vx, vy = c["P"][live, :, 0], c["P"][live, :, 1], c["V"][live, :, 0], c["V"][live, :, 1]
         b_l, g_l, a_l, h_l = base[live], grow[live], c["accel_p"][live, None], h[live]
         xl, yl, hl, tl, okl = x[live], y[live], heading[live], t[live], ok[live]
+        people = (px, py, vx, vy)
+
+        def towards_now(xl, yl, hl, tl, people=people, s_eff=s_eff):
+            return _towards(xl, yl, hl, tl, people, s_eff, towards_slack)
+
+        towards_in_period_so_far = towards_now(xl, yl, hl, tl)  # (L, K, N), from the period's start
         for _ in range(fine):
             mid = hl + 0.5 * tr * h_l
             xl = xl + np.where(mv, sp * h_l * np.cos(mid), 0.0)
@@ -79,8 +98,11 @@ def brute_admissible(
             dy = yl[..., None] - (py + vy * tl)[:, None, :]
             inside = dx * dx + dy * dy < (radius * radius)[:, None, :]
             if towards_only:  # robot velocity . (person centre - robot) > 0 (robust: > -slack |v| |r|)
-                along = -(s_eff * np.cos(hl))[..., None] * dx - (s_eff * np.sin(hl))[..., None] * dy
-                inside &= along > -towards_slack * s_eff[..., None] * np.sqrt(dx * dx + dy * dy)
+                if towards_in_period:
+                    towards_in_period_so_far |= towards_now(xl, yl, hl, tl)
+                    inside &= towards_in_period_so_far
+                else:
+                    inside &= towards_now(xl, yl, hl, tl)
             okl &= ~(mv & np.any(inside, axis=2))
         x[live], y[live], heading[live], t[live], ok[live] = xl, yl, hl, tl, okl
         rest_x, rest_y = np.where(moving, x, rest_x), np.where(moving, y, rest_y)

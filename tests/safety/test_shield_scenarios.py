@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from viapath.compiled import numba_available
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.safety import SHIELD_OPTIONS, Shield, ShieldConfig
 from viapath.scenarios import scenario_from_dict
@@ -138,3 +139,34 @@ def test_passing_a_slow_walker_keeps_the_braking_envelope_and_gets_past():
     assert metrics["time_to_goal_s"] < 45.0, metrics
     # Closest approach: the plain margin (0.05 m) plus most of the envelope at the passing speed.
     assert metrics["min_clearance_m"] > 0.1, metrics
+
+
+def test_a_period_that_begins_towards_the_person_counts_though_the_robot_turns_away_before_the_meeting():
+    # A recorded cycle (ETH/UCY zara2): the robot at 0.08 m/s faces a person coming at 1.36 m/s; the escape
+    # asks for (0.5, 2.0). Turning at up to 2 rad/s, the robot no longer moves towards the person by the
+    # instant the discs first meet, but it does at the start of that period, which is where the at-fault
+    # metric reads its heading (sim.metrics.at_fault_onsets). The shield counts the meeting.
+    from tests.safety._brute import brute_admissible
+
+    robot = RobotState(np.array([8.3469, 5.0705]), -2.9744, 0.08, 1.1, 0.25)
+    person_at, person_velocity = np.array([7.9275, 5.6502]), np.array([1.3146, -0.3490])
+    people = Obstacles(person_at[None], person_velocity[None], np.array([0.25]))
+    observation = Observation(0.0, robot, people)
+    command = np.array([[0.5, 2.0]])
+    config = ShieldConfig()
+    case = {
+        "x": [8.3469], "y": [5.0705], "heading": [-2.9744], "speed": [0.08], "turn": [1.1], "radius": [0.25],
+        "vmax": [LIMITS.max_speed_mps], "amax": [LIMITS.max_accel_mps2], "wmax": [LIMITS.max_turn_rate_radps],
+        "alphamax": [LIMITS.max_turn_accel_radps2], "dt": [0.1], "margin": [config.margin_m],
+        "accel_p": [config.person_accel_mps2], "k_sigma": [config.sigma_multiplier],
+        "P": person_at[None, None], "V": person_velocity[None, None], "r": [[0.25]], "sigma_v": [[0.0]],
+        "sigma_p": [[0.0]],
+    }  # fmt: skip
+    commands = command[None]
+    assert not brute_admissible(case, commands, fine=64)[0, 0]  # the rule: towards at the period's start
+    assert brute_admissible(case, commands, fine=64, towards_in_period=False)[0, 0]  # the instant-only rule
+    for compute in ("numpy", "numba") if numba_available() else ("numpy",):
+        shield = Shield(LIMITS, 0.1, ShieldConfig(compute=compute))
+        assert not shield.evaluate(observation, command)["admissible"][0], compute
+        result = shield.filter(observation, Command(0.5, 2.0))
+        assert result.intervened and result.command != Command(0.5, 2.0), compute

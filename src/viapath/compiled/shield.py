@@ -336,14 +336,22 @@ def _first_meetings(meet, person, sweep, substeps, h, positions_obs, velocities_
                             ux[k, u] = math.cos(headings[k, u]) * 1.0
                             uy[k, u] = math.sin(headings[k, u]) * 1.0
                         have_u[k] = True
+                    # Towards in this sub-interval or earlier in the same period (the reference's accumulate).
                     s_int = effective[k, j]
-                    t_a = -s_int * (ux[k, t] * r_ax + uy[k, t] * r_ay)
-                    r_bx = r_ax + w_x
-                    r_by = r_ay + w_y
-                    t_b = -s_int * (ux[k, t + 1] * r_bx + uy[k, t + 1] * r_by)
-                    r_max = max(math.hypot(r_ax, r_ay), math.hypot(r_bx, r_by)) + 0.01
-                    lipschitz = abs(s_int) * (abs(turn[k, j]) * r_max + sp + abs(s_int))
-                    if not (t_a + t_b + lipschitz * h_int) > 0.0:
+                    towards = False
+                    for u in range(j * m, t + 1):
+                        q_ax = positions[k, u, 0] - centre_x[u]
+                        q_ay = positions[k, u, 1] - centre_y[u]
+                        q_bx = q_ax + ((positions[k, u + 1, 0] - centre_x[u + 1]) - q_ax)
+                        q_by = q_ay + ((positions[k, u + 1, 1] - centre_y[u + 1]) - q_ay)
+                        t_a = -s_int * (ux[k, u] * q_ax + uy[k, u] * q_ay)
+                        t_b = -s_int * (ux[k, u + 1] * q_bx + uy[k, u + 1] * q_by)
+                        r_max = max(math.hypot(q_ax, q_ay), math.hypot(q_bx, q_by)) + 0.01
+                        lipschitz = abs(s_int) * (abs(turn[k, j]) * r_max + sp + abs(s_int))
+                        if (t_a + t_b + lipschitz * h_int) > 0.0:
+                            towards = True
+                            break
+                    if not towards:
                         continue
                 meet[k] = when
                 person[k] = n

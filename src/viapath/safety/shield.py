@@ -452,7 +452,7 @@ class Shield:
         times = sweep.times_s
         idx = np.flatnonzero(near)
         for chunk in np.array_split(idx, max(1, math.ceil(len(idx) / 16))):
-            hit = self._hits(sweep, people, chunk, base, growth, speed_people, k)  # (K, n, T - 1)
+            hit = self._hits(sweep, people, chunk, base, growth, speed_people, k, substeps)  # (K, n, T - 1)
             any_hit = hit.any(axis=2)  # (K, n)
             if not np.any(any_hit):
                 continue
@@ -529,9 +529,12 @@ class Shield:
         growth: np.ndarray,
         speed_people: np.ndarray,
         k: int,
+        substeps: int,
     ) -> np.ndarray:
         """(K, n, T - 1): whether the robot, braking along each command's sweep, meets person ``chunk[j]``'s
-        growing disc within each sub-interval (and, with ``towards_only``, moves towards its centre then)."""
+        growing disc within each sub-interval (and, with ``towards_only``, moves towards its centre then, or
+        earlier in the same control period: the at-fault metric reads the heading at the start of the period
+        in which a contact begins, and a robot that turns away during the period is still at fault)."""
         accel = self.config.person_accel_mps2
         times = sweep.times_s
         centres = (
@@ -569,7 +572,9 @@ class Shield:
                 np.abs(sweep.turns[:, None, :]) * r_max + speed_people[chunk][None, :, None] + np.abs(s_int)
             )
             h_int = float(times[1] - times[0])
-            hit &= (t_a + t_b + lipschitz * h_int) > 0.0
+            towards = (t_a + t_b + lipschitz * h_int) > 0.0  # (K, n, T - 1)
+            periods = towards.reshape(towards.shape[:2] + (-1, substeps))
+            hit &= np.logical_or.accumulate(periods, axis=3).reshape(towards.shape)
         return hit
 
     def _evaluate_compiled(self, observation: Observation, commands: np.ndarray) -> dict[str, np.ndarray]:
