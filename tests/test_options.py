@@ -232,3 +232,15 @@ def test_ros_parameters_name_the_option_a_former_name_became():
     assert (
         validate({"planner.compute": "numpy", "shield.compute": "numpy", "fit_compute": "numpy"}).fit_compute == "numpy"
     )
+
+
+def test_settings_survive_copy_and_pickle():
+    # copy and pickle build the instance before __init__ runs: an attribute lookup then must not recurse.
+    import copy
+    import pickle
+
+    settings = planner_options("viapath").validate({"k2": 0.02})
+    for clone in (copy.deepcopy(settings), copy.copy(settings), pickle.loads(pickle.dumps(settings))):
+        assert dict(clone) == dict(settings) and clone.k2 == 0.02 and clone["k2"] == 0.02
+    planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [4.0, 0.0]], half_width_m=1.0))
+    assert copy.deepcopy(planner).config.k2 == planner.config.k2

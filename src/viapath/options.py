@@ -129,6 +129,8 @@ class Settings(Mapping):
         )
 
     def __getattr__(self, name: str) -> Any:
+        if name == "_values":  # asked before __init__ ran (copy and pickle make instances without it)
+            raise AttributeError(name)
         try:
             return self._values[name]
         except KeyError:
