@@ -66,6 +66,26 @@ def test_speed_error_is_time_weighted_over_a_wait(candidates):
     np.testing.assert_allclose(SpeedError(0.08).score(candidates, _context()), expected)
 
 
+def test_standing_costs_per_second_and_breaks_the_tie_with_creeping_at_half_speed():
+    # Eq. 1 cannot tell standing 2 s then 0.2 m/s from creeping 4 s at 0.1 m/s then 0.2 m/s: both reach the
+    # subgoal 5 m away in 25 + 2 s with 0.4 m·s/s of speed error. The standing second costs.
+    tie = Candidates(
+        nodes={"parent": np.full(2, -1), "position": np.zeros((2, 2))},
+        leaves=np.arange(2),
+        total_length_m=np.array([5.0, 5.0]),
+        speed_mps=np.array([0.2, 0.2]),
+        slow_s=np.array([2.0, 4.0]),
+        slow_speed_mps=np.array([0.0, 0.1]),
+        first_direction=np.array([[1.0, 0.0], [1.0, 0.0]]),
+        ways=np.array([[STRAIGHT, 0, -1], [STRAIGHT, 0, -1]]),
+        subgoal=np.array([5.0, 0.0]),
+    )
+    np.testing.assert_allclose(Time(0.01).score(tie, _context()), [0.27, 0.27])
+    plain = SpeedError(0.08).score(tie, _context())
+    np.testing.assert_allclose(plain, [0.08 * 0.4 / 27.0] * 2)
+    np.testing.assert_allclose(SpeedError(0.08, standing_per_s=0.002).score(tie, _context()), plain + [0.004, 0.0])
+
+
 def test_heading_is_k4_times_the_turn_onto_the_first_leg(candidates):
     np.testing.assert_allclose(Heading(0.3).score(candidates, _context()), [0.0, 0.3 * math.pi / 4, 0.3 * math.pi / 2])
     np.testing.assert_allclose(Heading(0.3, degrees=True).score(candidates, _context()), [0.0, 0.3 * 45, 0.3 * 90])

@@ -123,6 +123,19 @@ def test_the_shipped_example_params_file_is_valid():
     assert settings.scan_timeout_s == 0.3 and settings.odom_timeout_s == 0.5
 
 
+def test_the_shipped_example_params_file_is_what_the_params_command_writes(tmp_path):
+    # "Defaults" in the docs must be the defaults: a new or changed option regenerates the file
+    # (cd docs && viapath ros2 params ros2_params.yaml).
+    from pathlib import Path
+
+    from viapath.ros2.settings import write_example_params
+
+    shipped = Path(__file__).resolve().parents[2] / "docs" / "ros2_params.yaml"
+    written = tmp_path / "ros2_params.yaml"
+    write_example_params(written, "viapath")
+    assert written.read_text() == shipped.read_text()
+
+
 def test_every_mistake_is_reported_not_only_the_first(tmp_path):
     path = tmp_path / "two.yaml"
     path.write_text(

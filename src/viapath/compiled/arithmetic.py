@@ -279,7 +279,7 @@ class Arithmetic:
             _per_obstacle(checks.via_radii, len(positions)),
             np.ascontiguousarray(checks.obstacles.ids, dtype=np.int64),
         )
-        slow = (slow_radii, slow_growth, slow_until, slow_times)
+        slow = (slow_radii, slow_growth, slow_until, slow_times, float(config.creep_speed_mps))
         goal = (
             _c(checks.subgoal),
             float(checks.stop_short_m),

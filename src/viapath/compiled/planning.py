@@ -55,6 +55,7 @@ from viapath.compiled.slots import (
     C_TRY_STRAIGHT,
     CANDIDATES,
     F_ACCEL,
+    F_CREEP,
     F_DT,
     F_GAIN,
     F_HORIZON,
@@ -68,6 +69,7 @@ from viapath.compiled.slots import (
     F_SIDE,
     F_SPACING,
     F_SPEED,
+    F_STANDING,
     F_STOP_SHORT,
     F_TOLERANCE,
     F_TURN_ACCEL,
@@ -98,7 +100,7 @@ from viapath.compiled.sums import pairwise_sum
 # numba's cache keys on this file alone; the layouts and the sums it compiles in are in these two files, so their
 # digest is written here: a change there stops this import until the digest here is updated (which recompiles).
 DEPENDENCIES = ("slots", "sums")
-DEPENDENCY_DIGEST = "bca312a41c9fa3ee"
+DEPENDENCY_DIGEST = "4c68e579030776c4"
 if dependency_digest(DEPENDENCIES) != DEPENDENCY_DIGEST:
     raise RuntimeError(
         f"viapath.compiled.planning: {', '.join(DEPENDENCIES)} changed: set DEPENDENCY_DIGEST in "
@@ -1299,18 +1301,26 @@ def _root_nodes(position, speeds, root_directions, root_lengths, root_free):
 
 
 @njit(cache=True, nogil=True)
-def _slow_legs(position, subgoal, speeds, nominal, slow_times):
-    """The slow/wait legs along the straight leg (_slow_candidates): each speed below the nominal one (and 0,
-    waiting) for each slow time, never past the subgoal. Returns the unit direction (dx, dy) to the subgoal,
-    the legs' durations and speeds (the first ``count`` of each) and ``count``."""
+def _slow_legs(position, subgoal, speeds, nominal, slow_times, creep):
+    """The slow/wait legs along the straight leg (_slow_candidates): 0 (waiting), the creep speed (when it is
+    above 0, below the nominal speed and not in the set: creep_speeds) and each speed below the nominal one, for
+    each slow time, never past the subgoal. Returns the unit direction (dx, dy) to the subgoal, the legs'
+    durations and speeds (the first ``count`` of each) and ``count``."""
     s_count = speeds.shape[0]
-    slow_count = 1
+    creeps = creep > 0.0 and creep < nominal - 1e-9
+    for i in range(s_count):
+        if abs(speeds[i] - creep) < 1e-9:
+            creeps = False
+    slow_count = 2 if creeps else 1
     for i in range(s_count):
         if speeds[i] < nominal - 1e-9:
             slow_count += 1
     slow_speeds = np.empty(slow_count)
     slow_speeds[0] = 0.0
     c = 1
+    if creeps:
+        slow_speeds[1] = creep
+        c = 2
     for i in range(s_count):
         if speeds[i] < nominal - 1e-9:
             slow_speeds[c] = speeds[i]
@@ -1336,14 +1346,14 @@ def _slow_legs(position, subgoal, speeds, nominal, slow_times):
 
 @njit(cache=True, nogil=True)
 def _slow_nodes(
-    nf, ni, m, position, speeds, nominal_index, slow_times, horizon_s, slow_obstacles, obstacles, goal, corridor
+    nf, ni, m, position, speeds, nominal_index, slow_times, creep, horizon_s, slow_obstacles, obstacles, goal, corridor
 ):
-    """Slow down or wait along the straight leg, then on at the nominal speed or faster (_slow_candidates): the
-    slow legs free of the people (at their slow radii: ``slow_obstacles``) whose goal legs are free, added as
-    leaves."""
+    """Slow down, creep or wait along the straight leg, then on at the nominal speed or the slowest faster speed
+    whose goal leg is free (_slow_candidates): the slow legs free of the people (at their slow radii:
+    ``slow_obstacles``) with a free goal leg, added as leaves."""
     s_count = speeds.shape[0]
     nominal = speeds[nominal_index]
-    dx, dy, durations, slows, c = _slow_legs(position, goal[0], speeds, nominal, slow_times)
+    dx, dy, durations, slows, c = _slow_legs(position, goal[0], speeds, nominal, slow_times, creep)
     starts = np.empty((c, 2))
     velocities = np.empty((c, 2))
     for k in range(c):
@@ -1380,8 +1390,12 @@ def _slow_nodes(
                 slow_v[q] = slows[k]
                 q += 1
     _, lengths, goal_free, _ = _goal_legs_of(ends, times, after, math.inf, goal, obstacles, corridor)
+    taken = False
     for q in range(legs):
-        if goal_free[q]:
+        if q % after_count == 0:
+            taken = False  # a new slow leg: its first free continuation only
+        if goal_free[q] and not taken:
+            taken = True
             nf, ni, m = _add(
                 nf,
                 ni,
@@ -1678,14 +1692,14 @@ def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obs
     the columns named above; a node is a leaf (a complete candidate) when its goal leg is free.
 
     Takes records (tuples): ``roots`` (directions, lengths, free, contact of the root legs: :func:`goal_legs`'),
-    ``via`` (via radii, ids), ``slow`` (slow radii, growth, growth until, slow times), ``goal``, ``obstacles``
+    ``via`` (via radii, ids), ``slow`` (slow radii, growth, growth until, slow times, creep speed), ``goal``, ``obstacles``
     and ``corridor`` (the kernels' records, named above :func:`_goal_legs_of`), ``tree`` (the waypoints, the robot's segment, whether slow/wait
     candidates are grown, the depth, the most obstacles a root branches on)."""
     waypoints, robot_segment, slow_enabled, max_depth, max_root_obstacles = tree
     subgoal_index = goal[4]
     root_directions, root_lengths, root_free, root_contact = roots
     obstacle_positions, obstacle_velocities, _, _, _ = obstacles
-    slow_radii, slow_growth, slow_growth_until_s, slow_times = slow
+    slow_radii, slow_growth, slow_growth_until_s, slow_times, creep = slow
     s_count = speeds.shape[0]
     n_count = obstacle_positions.shape[0]
     nf, ni, m = _root_nodes(position, speeds, root_directions, root_lengths, root_free)
@@ -1696,7 +1710,19 @@ def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obs
     if slow_enabled and n_count > 0 and straight_inside:
         slow_obstacles = (obstacle_positions, obstacle_velocities, slow_radii, slow_growth, slow_growth_until_s)
         nf, ni, m = _slow_nodes(
-            nf, ni, m, position, speeds, nominal_index, slow_times, horizon_s, slow_obstacles, obstacles, goal, corridor
+            nf,
+            ni,
+            m,
+            position,
+            speeds,
+            nominal_index,
+            slow_times,
+            creep,
+            horizon_s,
+            slow_obstacles,
+            obstacles,
+            goal,
+            corridor,
         )
     frontier_start = 0
     frontier_end = s_count
@@ -2006,7 +2032,7 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacles, corridor, s
         terms[0, k] = settings[F_K1] * length
         terms[1, k] = settings[F_K2] * travel_s
         error = (slow_s * abs(slow_v - nominal) + driven_s * abs(speed - nominal)) / travel_s
-        terms[2, k] = settings[F_K3] * error
+        terms[2, k] = settings[F_K3] * error + settings[F_STANDING] * (slow_s if slow_v <= 0.0 else 0.0)
         theta = abs(_wrap(angles[0, k] - robot[2]))
         terms[3, k] = settings[F_K4] * (theta * (180.0 / math.pi) if integers[C_DEGREES] else theta)
         side = ni[m, _WAY1]
@@ -2117,7 +2143,7 @@ def choose(
         subgoal,
         obstacles,
         (via_radii, ids),
-        (slow_radii, slow_growth, slow_growth_until_s, slow_times),
+        (slow_radii, slow_growth, slow_growth_until_s, slow_times, settings[F_CREEP]),
         continuation,
         envelope,
         corridor,

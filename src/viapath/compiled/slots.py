@@ -26,7 +26,9 @@ F_K1, F_K2, F_K3, F_K4, F_SIDE, F_HYSTERESIS, F_NOMINAL, F_ROLLOUT_HEADING, F_AC
 # short of a blocked subgoal legs end, the horizon, the corridor tolerance.
 F_TURN_RATE, F_TURN_ACCEL, F_SPEED, F_GAIN, F_TURN_IN_PLACE = range(10, 15)
 F_STOP_SHORT, F_HORIZON, F_SPACING, F_TOLERANCE = range(15, 19)
-F_COUNT = 19
+# ... the cost of standing still per second, and the creep speed of slow/wait candidates (0: none).
+F_STANDING, F_CREEP = 19, 20
+F_COUNT = 21
 
 # The node store of the candidate tree (grow, choose_tree): floats (M, NODE_FLOATS): position, time, speed,
 # path length, first direction (unit x, y), slow/wait time and speed, length left to the subgoal; ...

@@ -15,9 +15,12 @@ nominal speed), all at the robot, at t = 0. From each node the straight leg to t
   bounded by ``max_depth``; a via leg that meets an obstacle or leaves the corridor drops its branch.
 
 Beyond the paper (DESIGN §2 and §5.2 future work):
-* **Slow / wait**: stand still or drive slower than nominal along the straight leg for each of
-  ``slow_times_s``, then on at the nominal speed or faster. Letting a crossing person pass is then a
-  straight candidate, not a sharp turn behind them. The leg after waiting is checked to its end, not
+* **Slow / wait**: stand still, creep (``creep_speed_mps``, below the speed set) or drive at a speed of
+  the set slower than nominal along the straight leg for each of ``slow_times_s``, then on at the
+  nominal speed, or at the slowest faster speed whose leg is free when the nominal one's is not. Once
+  the way is clear the robot drives the straight leg at the nominal speed (step 1), so a faster
+  continuation would be a plan it never drives, and would make waiting look quicker than slowing
+  down. Letting a crossing person pass is then a straight candidate, not a sharp turn behind them. The leg after waiting is checked to its end, not
   to the horizon: waiting is for letting someone pass, not for pushing a collision past the horizon.
   The slow leg itself is checked with ``slow_leg_inflation`` of the uncertainty inflation: at a tenth
   of a metre per second the robot stops within millimetres, the next cycles correct the forecast, and
@@ -474,6 +477,20 @@ def _corner_nodes(checks: LegChecks, tree: _Tree, speeds: np.ndarray) -> np.ndar
     )
 
 
+def creep_speeds(creep_speed_mps: float, speeds: np.ndarray, nominal_mps: float) -> np.ndarray:
+    """The creep speed as a slow speed: none when it is off, not below the nominal speed, or in the set."""
+    creep = float(creep_speed_mps)
+    if creep <= 0.0 or creep >= nominal_mps - 1e-9 or bool(np.any(np.abs(speeds - creep) < 1e-9)):
+        return np.zeros(0)
+    return np.array([creep])
+
+
+def _first_in_rows(free: np.ndarray, row_length: int) -> np.ndarray:
+    """``free`` with only the first True of each row of ``row_length`` kept."""
+    rows = free.reshape(-1, row_length)
+    return (rows & (np.cumsum(rows, axis=1) == 1)).ravel()
+
+
 def _slow_candidates(
     checks: LegChecks, slow_checks: LegChecks, tree: _Tree, speeds: np.ndarray, nominal_index: int, config: Settings
 ) -> tuple[np.ndarray, np.ndarray] | None:
@@ -482,7 +499,9 @@ def _slow_candidates(
     if not checks.goal_legs_inside(checks.position[None])[0]:
         return None  # slowing down runs along the straight leg, which would leave the corridor
     nominal = speeds[nominal_index]
-    slow_speeds = np.concatenate([[0.0], speeds[speeds < nominal - 1e-9]])
+    slow_speeds = np.concatenate(
+        [[0.0], creep_speeds(config.creep_speed_mps, speeds, nominal), speeds[speeds < nominal - 1e-9]]
+    )
     # Every slow time with every slow speed, as np.meshgrid(times, slow_speeds) would pair them (row-major;
     # np.tile and np.repeat as the array methods: their Python costs more than these few copies).
     times = np.asarray(config.slow_times_s, float)
@@ -497,8 +516,8 @@ def _slow_candidates(
     if not free.any():
         return None
     duration, slow_speed = duration[free], slow_speed[free]
-    # Then at least the nominal speed: waiting only makes sense when the way is clear afterwards
-    # (slowing down for good is the straight candidates' job).
+    # Then the nominal speed, or the slowest faster one whose leg is free: waiting only makes sense when the
+    # way is clear afterwards (slowing down for good is the straight candidates' job).
     after = speeds[speeds >= nominal - 1e-9]
     d, v_slow = duration.repeat(len(after)), slow_speed.repeat(len(after))
     v_after = after[None].repeat(len(duration), axis=0).ravel()
@@ -506,6 +525,7 @@ def _slow_candidates(
     _, lengths, free, _ = checks.goal_legs(ends, d, v_after, np.inf)
     if not free.any():
         return None
+    free = _first_in_rows(free, len(after))
     count = int(free.sum())
     index = tree.extend(
         position=ends[free],

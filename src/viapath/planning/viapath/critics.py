@@ -6,7 +6,10 @@ leg); the lowest E wins. The shape follows Nav2 MPPI's critics: each term is a s
 weight, so new terms slot in without touching the search, and the plan can keep the breakdown.
 
 Beyond the paper (DESIGN §2 pitfalls):
-* The speed term is time-weighted over a candidate that first slows down or waits.
+* The speed term is time-weighted over a candidate that first slows down or waits, and each second it
+  first stands still costs ``standing_cost`` more: Eq. 1 cannot tell standing for T from creeping at half
+  the nominal speed for 2T (the same arrival, the same time-weighted speed error), and the paper slows
+  down where both are free (its side-crossing case).
 * :class:`SidePreference`: the head-on case ties left/right exactly and noise breaks it at random;
   the side other than ``preferred_side`` pays ``side_tolerance``.
 * :class:`Hysteresis`: last cycle's way round (same obstacle, side, early/late) gets a bonus of
@@ -67,9 +70,11 @@ class Time(Critic):
 
 @dataclass(frozen=True)
 class SpeedError(Critic):
-    """k3·|v − v_nominal|, time-weighted over a first slow or waiting part."""
+    """k3·|v − v_nominal|, time-weighted over a first slow or waiting part, plus ``standing_per_s`` for
+    each second the candidate first stands still."""
 
     weight: float
+    standing_per_s: float = 0.0
     name = "speed"
 
     def score(self, candidates: Candidates, context: Context) -> np.ndarray:
@@ -79,7 +84,8 @@ class SpeedError(Critic):
             candidates.slow_s * np.abs(candidates.slow_speed_mps - nominal)
             + driven_s * np.abs(candidates.speed_mps - nominal)
         ) / candidates.travel_time_s
-        return self.weight * error
+        standing_s = np.where(candidates.slow_speed_mps <= 0.0, candidates.slow_s, 0.0)
+        return self.weight * error + self.standing_per_s * standing_s
 
 
 @dataclass(frozen=True)
@@ -134,7 +140,7 @@ def critics_for(config: Settings) -> tuple[Critic, ...]:
     return (
         Distance(config.k1),
         Time(config.k2),
-        SpeedError(config.k3),
+        SpeedError(config.k3, config.standing_cost),
         Heading(config.k4, degrees=config.theta_unit == "deg"),
         SidePreference(config.side_tolerance, LEFT if config.preferred_side == "left" else RIGHT),
         Hysteresis(config.hysteresis),

@@ -116,6 +116,23 @@ _OWN = [
         maximum=1.0,
     ),
     Option(
+        "creep_speed_mps",
+        0.05,
+        "slow/wait candidates may also creep at this speed, below the speed set (0: not)",
+        "m/s",
+        minimum=0.0,
+        maximum=50.0,
+    ),
+    Option(
+        "standing_cost",
+        0.002,
+        "cost of each second a slow/wait candidate first stands still (Eq. 1 ties standing T with "
+        "creeping at half the nominal speed for 2T)",
+        "1/s",
+        minimum=0.0,
+        maximum=1000.0,
+    ),
+    Option(
         "slow_times_s",
         (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0),
         "how long a candidate may first stand or drive slower than nominal",

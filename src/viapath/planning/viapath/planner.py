@@ -388,6 +388,8 @@ class ViaPathPlanner(Planner, name="viapath"):
         settings[slot.F_GAIN] = config.heading_gain
         settings[slot.F_TURN_IN_PLACE] = config.turn_in_place_min_rad
         settings[slot.F_SPACING] = config.corridor_check_spacing_m
+        settings[slot.F_STANDING] = speed.standing_per_s
+        settings[slot.F_CREEP] = config.creep_speed_mps
         integers = np.zeros(slot.C_COUNT, dtype=np.int64)
         integers[slot.C_DEPTH] = config.max_depth
         integers[slot.C_ROOT_LIMIT] = config.max_root_obstacles
