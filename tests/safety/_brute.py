@@ -15,11 +15,14 @@ import numpy as np
 
 
 def _towards(x, y, heading, t, people, speed, slack):
-    """(L, K, N): robot velocity . (person centre - robot) > -slack |v| |r| at time t."""
-    px, py, vx, vy = people
+    """(L, K, N): robot velocity . (q - robot) > -slack |v| |r| at time t for some point q the person's centre
+    may be at: within spread(t) = k σ_p + k σ_v t + a_p t²/2 of the forecast centre."""
+    px, py, vx, vy, spread_sigma, spread_growth, accel = people
     dx = x[..., None] - (px + vx * t)[:, None, :]
     dy = y[..., None] - (py + vy * t)[:, None, :]
     along = -(speed * np.cos(heading))[..., None] * dx - (speed * np.sin(heading))[..., None] * dy
+    spread = spread_sigma + spread_growth * t + 0.5 * accel * t * t  # (L, N)
+    along = along + np.abs(speed)[..., None] * spread[:, None, :]
     return along > -slack * speed[..., None] * np.sqrt(dx * dx + dy * dy)
 
 
@@ -36,7 +39,7 @@ def brute_admissible(
     """(B, K) bool: command k of case b is admissible (and friendly, if asked) with radii grown by ``extra_m``.
 
     ``towards_only``: a meeting counts only when the robot's velocity has a positive component towards
-    the person's forecast centre (more than ``-towards_slack`` |v| |r|: a robust check counts
+    some point the person's centre may be at (within k σ_p + k σ_v t + a_p t²/2 of the forecast centre) (more than ``-towards_slack`` |v| |r|: a robust check counts
     near-perpendicular motion too) at that instant or at any earlier one of the same control period,
     its start included: the at-fault metric reads the heading at the start of the period in which a
     contact begins. ``towards_in_period=False`` reads it at the instant of the meeting only (a weaker rule,
@@ -81,7 +84,8 @@ def brute_admissible(
         px, py, vx, vy = c["P"][live, :, 0], c["P"][live, :, 1], c["V"][live, :, 0], c["V"][live, :, 1]
         b_l, g_l, a_l, h_l = base[live], grow[live], c["accel_p"][live, None], h[live]
         xl, yl, hl, tl, okl = x[live], y[live], heading[live], t[live], ok[live]
-        people = (px, py, vx, vy)
+        spread_sigma = (c["k_sigma"][:, None] * c["sigma_p"])[live]
+        people = (px, py, vx, vy, spread_sigma, g_l, a_l)
 
         def towards_now(xl, yl, hl, tl, people=people, s_eff=s_eff):
             return _towards(xl, yl, hl, tl, people, s_eff, towards_slack)

@@ -273,9 +273,10 @@ def _unfriendly_at_rest(friendly, sweep, positions_obs, velocities_obs, base, gr
 def _first_meetings(meet, person, sweep, substeps, h, positions_obs, velocities_obs, people, near, accel, towards_only):
     """The swept-disc (and "towards") tests per (command, near person, sub-interval), scanned from the start:
     sets each command's first meeting time in ``meet`` and the person in ``person`` (the earliest meeting, ties
-    to the lower person row). ``people``: per person the speed, the forecast disc's base radius and growth."""
+    to the lower person row). ``people``: per person the speed, the forecast disc's base radius and growth, the
+    position σ, and k."""
     positions, headings, effective, turn, moving, sagitta, _, _, _ = sweep
-    speed_people, base, growth = people
+    speed_people, base, growth, position_sigma, k_sigma = people
     k_count = meet.shape[0]
     n_count = near.shape[0]
     t_count = positions.shape[1]
@@ -339,7 +340,10 @@ def _first_meetings(meet, person, sweep, substeps, h, positions_obs, velocities_
                     # Towards in this sub-interval or earlier in the same period (the reference's accumulate).
                     s_int = effective[k, j]
                     towards = False
+                    spread_sigma = k_sigma * position_sigma[n]
                     for u in range(j * m, t + 1):
+                        tb = times[u + 1]
+                        spread = spread_sigma + growth[n] * tb + 0.5 * accel * (tb * tb)
                         q_ax = positions[k, u, 0] - centre_x[u]
                         q_ay = positions[k, u, 1] - centre_y[u]
                         q_bx = q_ax + ((positions[k, u + 1, 0] - centre_x[u + 1]) - q_ax)
@@ -348,7 +352,7 @@ def _first_meetings(meet, person, sweep, substeps, h, positions_obs, velocities_
                         t_b = -s_int * (ux[k, u + 1] * q_bx + uy[k, u + 1] * q_by)
                         r_max = max(math.hypot(q_ax, q_ay), math.hypot(q_bx, q_by)) + 0.01
                         lipschitz = abs(s_int) * (abs(turn[k, j]) * r_max + sp + abs(s_int))
-                        if (t_a + t_b + lipschitz * h_int) > 0.0:
+                        if (t_a + t_b + lipschitz * h_int + 2.0 * abs(s_int) * spread) > 0.0:
                             towards = True
                             break
                     if not towards:
@@ -424,7 +428,7 @@ def evaluate(
         _unfriendly_at_rest(friendly, sweep, positions_obs, velocities_obs, base, growth, near, accel)
     if not any_near:
         return admissible, friendly, meet, person, contact
-    people = (now[5], base, growth)
+    people = (now[5], base, growth, position_sigma, k_sigma)
     _first_meetings(meet, person, sweep, substeps, h, positions_obs, velocities_obs, people, near, accel, towards_only)
     for k in range(k_count):
         admissible[k] = not math.isfinite(meet[k])

@@ -532,7 +532,7 @@ class Shield:
         substeps: int,
     ) -> np.ndarray:
         """(K, n, T - 1): whether the robot, braking along each command's sweep, meets person ``chunk[j]``'s
-        growing disc within each sub-interval (and, with ``towards_only``, moves towards its centre then, or
+        growing disc within each sub-interval (and, with ``towards_only``, may move towards its centre then, or
         earlier in the same control period: the at-fault metric reads the heading at the start of the period
         in which a contact begins, and a robot that turns away during the period is still at fault)."""
         accel = self.config.person_accel_mps2
@@ -559,6 +559,15 @@ class Shield:
         low = np.where(inside, np.minimum(low, qc - qb * qb / np.where(qa > 0, 4.0 * qa, 1.0)), low)
         hit = (low < -1e-12) & sweep.moving[:, None, :]  # rounding at the edge is no meeting
         if self.config.towards_only:
+            # Towards the person's centre, which may lie anywhere within the forecast's own uncertainty of the
+            # forecast centre (k σ_p + k σ_v t + a_p t²/2, largest at the sub-interval's end), since the metric
+            # reads the real centre.
+            k_sigma = self.config.sigma_multiplier
+            spread = (
+                k_sigma * people.position_sigma_m[chunk, None]
+                + growth[chunk, None] * times[None, 1:]
+                + 0.5 * accel * times[None, 1:] ** 2
+            )  # (n, T - 1)
             # Only while the robot moves towards the person's centre: T = u . (c - p) = -u . rel. Its
             # largest value on the sub-interval is at most (T_a + T_b + L h) / 2, L bounding |dT/dt|.
             heading = sweep.headings
@@ -572,7 +581,7 @@ class Shield:
                 np.abs(sweep.turns[:, None, :]) * r_max + speed_people[chunk][None, :, None] + np.abs(s_int)
             )
             h_int = float(times[1] - times[0])
-            towards = (t_a + t_b + lipschitz * h_int) > 0.0  # (K, n, T - 1)
+            towards = (t_a + t_b + lipschitz * h_int + 2.0 * np.abs(s_int) * spread[None]) > 0.0  # (K, n, T - 1)
             periods = towards.reshape(towards.shape[:2] + (-1, substeps))
             hit &= np.logical_or.accumulate(periods, axis=3).reshape(towards.shape)
         return hit
