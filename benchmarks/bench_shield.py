@@ -1,6 +1,6 @@
 """Plan time with the passive-safety shield: p50/p99 for 1, 10, 50 and 100 people (DESIGN §7).
 
-Usage: python benchmarks/bench_shield.py [--cycles 300] [--seed 0] [--runs 3] [--backend numpy|numba|both] [--json]
+Usage: python benchmarks/bench_shield.py [--cycles 300] [--seed 0] [--runs 3] [--compute numpy|numba|both] [--json]
 
 Scenes as in bench_planner.py (robot at the start of a 10 m path, people within 8 m walking at
 0.3-1.5 m/s in random directions, none overlapping the robot), but the robot moves at 0.4 m/s and
@@ -9,8 +9,9 @@ a third of the people are placed within 2 m, so the shield has work to do. Rows:
 * ``shield``: the filter alone on viapath's command (mostly the one-command fast path);
 * ``shield-search``: the filter on a command it must replace (full speed straight at the nearest
   person), i.e. the whole dynamic-window search: the worst case per cycle.
-``--backend`` picks the shield's arithmetic (the numpy reference or the compiled kernels of
-``viapath.compiled.shield``; ``both``: every row twice); the planner runs its default backend.
+``--compute`` (formerly ``--backend``, still read) picks the shield's arithmetic (the numpy reference or
+the compiled kernels of ``viapath.compiled.shield``; ``both``: every row twice); the planner runs its
+default arithmetic.
 Single thread; each run redraws nothing (same seed), so the runs differ by machine load only.
 """
 
@@ -53,7 +54,7 @@ def _time(function, scenes, cycles) -> list[float]:
     return samples
 
 
-def one_run(cycles: int, seed: int, backend: str = "auto") -> list[dict]:
+def one_run(cycles: int, seed: int, compute: str = "auto") -> list[dict]:
     rng = np.random.default_rng(seed)
     path = DesignatedPath([[0.0, 0.0], [10.0, 0.0]], half_width_m=1.5)
     limits = MotionLimits()
@@ -61,7 +62,7 @@ def one_run(cycles: int, seed: int, backend: str = "auto") -> list[dict]:
     guarded = ShieldedPlanner(
         make_planner("viapath", path, nominal_speed_mps=0.2, limits=limits),
         dt_s=0.1,
-        config=ShieldConfig(compute=backend),
+        config=ShieldConfig(compute=compute),
     )
     shield = guarded.shield
     rows = []
@@ -120,19 +121,21 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument(
+        "--compute",
         "--backend",
+        dest="compute",
         choices=("auto", "numpy", "numba", "both"),
         default="auto",
         help="the shield's arithmetic (both: each row on numpy, then on numba)",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object (all runs)")
     args = parser.parse_args()
-    backends = ("numpy", "numba") if args.backend == "both" else (args.backend,)
-    runs = [[row for backend in backends for row in one_run(args.cycles, args.seed, backend)] for _ in range(args.runs)]
+    computes = ("numpy", "numba") if args.compute == "both" else (args.compute,)
+    runs = [[row for compute in computes for row in one_run(args.cycles, args.seed, compute)] for _ in range(args.runs)]
     if args.json:
         print(
             json.dumps(
-                {"cycles": args.cycles, "seed": args.seed, "backend": args.backend, "pid": os.getpid(), "runs": runs},
+                {"cycles": args.cycles, "seed": args.seed, "compute": args.compute, "pid": os.getpid(), "runs": runs},
                 indent=1,
             )
         )
