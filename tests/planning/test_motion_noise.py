@@ -89,10 +89,11 @@ def test_keeping_the_previous_way_cuts_side_flips_and_stays_safe(noisy_overtakin
 @pytest.mark.xfail(
     strict=True,
     reason=(
-        "known regression (issue 11): since the legs back to the path keep the shield's braking envelope, "
-        "the noisy built-in overtaking (1.0 m half-width, walker in the middle) leaves too little room to "
-        "pass on either side: ~75 flips and ~73 s to the goal instead of ~8 and ~31 s (clean: 0 flips, "
-        "31 s, was 71 and 70 s); mixed goes from 91.5 % to 95 % success, see docs/safety.md"
+        "known: under white noise every cycle the noisy built-in overtaking trails the walker, "
+        "56-84 side flips and ~73 s to the goal against 1 flip and 31 s clean; most way changes find the "
+        "previous way gone even with a quarter of the inflation, as the forecast itself moved with the "
+        "velocity noise (python benchmarks/way_changes.py), so the constraint hysteresis cannot hold it; "
+        "see docs/safety.md"
     ),
 )
 def test_noisy_overtaking_flips_sides_rarely(noisy_overtaking_flips):
@@ -146,3 +147,48 @@ def test_a_previous_way_that_only_lost_on_cost_is_not_searched_again_with_less_i
     assert planner._previous.way != worst  # it switched ...
     assert [relaxed for relaxed, _ in searches] == [False]  # ... after one search, no relaxed re-run
     assert "kept_previous_way" not in second.plan.extras
+    assert second.plan.extras["way_change"] == "cost"
+
+
+@pytest.mark.parametrize("noisy", [True, False])
+def test_a_previous_way_no_search_finds_is_marked_gone(noisy):
+    # Last cycle went round an obstacle that is not there now: with uncertainty the relaxed search
+    # runs and finds nothing ("gone_relaxed_too"); without, there is nothing to relax ("gone").
+    import numpy as np
+
+    from viapath import DesignatedPath, Observation, Obstacles, RobotState
+    from viapath.planning import make_planner
+    from viapath.planning.viapath.candidates import Choice, Way
+
+    path = DesignatedPath([[0.0, 0.0], [8.0, 0.0]], half_width_m=1.5)
+    planner = make_planner("viapath", path, nominal_speed_mps=0.25)
+    sigma = 1.0 if noisy else 0.0
+    head_on = Obstacles(
+        positions=[[3.0, 0.05]],
+        velocities=[[-0.3, 0.0]],
+        radii_m=[0.25],
+        position_sigma_m=[0.03 * sigma],
+        velocity_sigma_mps=[0.05 * sigma],
+    )
+    observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.25), head_on)
+    first = planner.plan(observation)
+    assert first.plan.status == "avoid"
+    planner._previous = Choice(Way(7, 1, 7), 250)  # round obstacle 7, which left the scene
+    second = planner.plan(observation)
+    assert second.plan.status == "avoid"
+    assert second.plan.extras["way_change"] == ("gone_relaxed_too" if noisy else "gone")
+    assert "kept_previous_way" not in second.plan.extras
+
+
+def test_way_changes_benchmark_counts_relaxed_searches_only_under_noise():
+    spec = importlib.util.spec_from_file_location(
+        "way_changes", Path(__file__).resolve().parents[2] / "benchmarks" / "way_changes.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    clean = module.count_changes("overtaking", 0, 0.0, 0.0)
+    noisy = module.count_changes("overtaking", 0, 0.03, 0.05)
+    relaxed = ("gone_relaxed_too", "relaxed_costs_more", "kept_previous_way")
+    assert all(clean[key] == 0 for key in relaxed), clean
+    assert sum(noisy[key] for key in relaxed) > 0, noisy
+    assert noisy["cycles"] > clean["cycles"] and noisy["plan_side_flips"] > clean["plan_side_flips"]

@@ -612,18 +612,25 @@ class ViaPathPlanner(Planner, name="viapath"):
             return chosen  # a free straight leg at nominal speed (the paper's first choice)
         if chosen.choice.way == previous.way:
             return chosen  # the previous way chosen again (the test below would find it among the candidates)
+        # Why the way changed, for analysis (benchmarks/way_changes.py): the relaxed search helps only
+        # where the previous way vanished with the inflation, not where the forecast itself moved.
+        why = chosen.plan.extras
         if previous.way.same(chosen.candidates.ways).any():
-            return chosen  # the previous way is still there: chosen again, or a fair switch on cost
+            why["way_change"] = "cost"  # the previous way is still there: a fair switch on cost
+            return chosen
         obstacles = checks.obstacles
         if not (np.any(obstacles.position_sigma_m) or np.any(obstacles.velocity_sigma_mps)):
-            return chosen  # no inflation to relax: the search would be the same
+            why["way_change"] = "gone"  # no inflation to relax: the search would be the same
+            return chosen
         relaxed = checks.with_less_inflation(self.config.keep_previous_inflation, self.robot_radius_m, self.settings)
         kept = self._choose(relaxed, speeds, nominal_index, previous, only_way=previous.way)
         if kept is None:
+            why["way_change"] = "gone_relaxed_too"
             return chosen
         if kept.plan.candidate_costs[kept.plan.chosen] < chosen.plan.candidate_costs[chosen.plan.chosen]:
             kept.plan.extras["kept_previous_way"] = True
             return kept
+        why["way_change"] = "relaxed_costs_more"
         return chosen
 
     # -- step 5: the command -------------------------------------------------------------------------
