@@ -35,7 +35,14 @@ def test_every_shipped_preset_is_valid_and_justified(name):
 
 
 def test_paper_preset_holds_the_papers_weights():
-    assert load_preset("paper").options == {"k1": 0.1, "k2": 0.001, "k3": 0.08, "k4": 0.3, "return_lookahead_m": 0.0}
+    assert load_preset("paper").options == {
+        "k1": 0.1,
+        "k2": 0.001,
+        "k3": 0.08,
+        "k4": 0.3,
+        "return_lookahead_m": 0.0,
+        "outrun_hold_s": 0.0,
+    }
 
 
 def test_a_bad_preset_names_the_field(tmp_path):

@@ -107,6 +107,16 @@ _OWN = [
     Option(
         "keep_previous_inflation", 0.25, "... with this fraction of the uncertainty inflation", minimum=0.0, maximum=1.0
     ),
+    Option(
+        "outrun_hold_s",
+        1.0,
+        "staying ahead of someone catching up from behind: the straight leg at the slowest faster speed "
+        "whose leg stays free this long past the horizon, and back to a slower one only when it does too "
+        "(0: the cheapest straight speed, back to nominal as soon as that leg is free)",
+        "s",
+        minimum=0.0,
+        maximum=30.0,
+    ),
     # Slowing down and waiting.
     Option(
         "slow_leg_inflation",

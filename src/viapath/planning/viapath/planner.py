@@ -23,6 +23,14 @@ What the paper leaves open and we chose, beyond what those modules say:
   then flips and flips back. If last cycle's way is gone, it is searched for once more with
   ``keep_previous_inflation`` of the uncertainty inflation (the safety margin stays) and kept if,
   with the usual hysteresis, it still costs less than the new choice.
+* Staying ahead of someone catching up from behind (``outrun_hold_s``, 1 s; 0 in the preset ``paper``):
+  Eq. 1's time term makes the fastest free straight leg the cheapest, and step 1 takes the nominal leg
+  back as soon as it is free over the horizon, so the robot flipped between the top speed and nominal
+  every few cycles at the horizon's edge. When the straight leg at nominal is blocked by someone from
+  behind whom the top speed outruns, the straight leg faster than nominal is at the slowest speed
+  whose leg stays free ``outrun_hold_s`` past the horizon, and the robot goes back to a slower one only
+  when that leg stays free that long too. Someone faster than the top speed can only be raced to the
+  subgoal, and there the cheapest (fastest) leg keeps the most margin: unchanged.
 * **Static obstacles** (DESIGN §10; the paper draws its path boundary round static things and plans for
   moving ones only). A static obstacle is a vertical prism in x-y-t: the guarded entry hands the planner
   the observation's static layer as discs of velocity 0 sampled along its segments (within a few mm of
@@ -129,6 +137,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         self._previous_escape: Command | None = None  # last cycle's command, if it escaped
         self._situation: Situation | None = None  # this cycle's, for the shield check of candidates
         self._last_command: tuple[Any, ...] | None = None  # (situation, plan, command) of the last command made
+        self._straight_speed: float | None = None  # last cycle's speed if its plan was the straight leg
 
     @classmethod
     def resolved_defaults(cls) -> dict[str, str]:
@@ -140,12 +149,15 @@ class ViaPathPlanner(Planner, name="viapath"):
         self._previous = None
         self._previous_escape = None
         self._last_command = None
+        self._straight_speed = None
 
     # -- the recipe ----------------------------------------------------------------------------------
 
     def decide(self, situation: Situation) -> Decision:
         decision = self._decide(situation)
         decision.plan.extras["backend"] = self.arithmetic.name
+        plan = decision.plan
+        self._straight_speed = plan.speed_mps if plan.status == "straight" else None
         return decision
 
     def _decide(self, situation: Situation) -> Decision:
@@ -282,7 +294,27 @@ class ViaPathPlanner(Planner, name="viapath"):
         only_way: Way | None = None,
     ) -> _Chosen | None:
         """Candidates → costs → the cheapest the robot can follow; None when none is free.
-        With ``only_way``, only candidates going that way round are considered."""
+        With ``only_way``, only candidates going that way round are considered. Staying ahead of someone
+        catching up from behind, the straight leg's speed is the slowest that holds (:meth:`_outrun`)."""
+        outrun = only_way is None and self.config.outrun_hold_s > 0 and self._straight_speed is not None
+        if outrun:
+            held = self._outrun_held(checks, speeds, nominal_index)
+            if held is not None:
+                return held
+        chosen = self._cheapest(checks, speeds, nominal_index, previous, only_way)
+        if outrun and chosen is not None:
+            return self._outrun(checks, speeds, nominal_index, chosen) or chosen
+        return chosen
+
+    def _cheapest(
+        self,
+        checks: LegChecks,
+        speeds: np.ndarray,
+        nominal_index: int,
+        previous: Choice | None,
+        only_way: Way | None = None,
+    ) -> _Chosen | None:
+        """Paper steps 1-4 (:meth:`_choose` without the speed of outrunning)."""
         if only_way is None and self.config.return_lookahead_m > 0:
             back = self._way_back(checks, float(speeds[nominal_index]))
             if back is not None:
@@ -293,18 +325,9 @@ class ViaPathPlanner(Planner, name="viapath"):
         if roots.nominal_is_free and only_way is None:
             # Paper step 1: a free straight path at the normal speed is the plan, if the robot can
             # turn onto it in time.
-            speed = float(speeds[nominal_index])
-            plan = Plan(
-                "straight",
-                speed,
-                checks.subgoal.copy(),
-                waypoints=np.array([checks.position, checks.subgoal]),
-                subgoal_index=checks.subgoal_index,
-                candidate_count=1,
-                chosen=0,
-            )
-            if can_follow(plan, checks, self.limits, self.config) and self._inside_shield(plan):
-                return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
+            straight = self._straight(checks, float(speeds[nominal_index]))
+            if straight is not None:
+                return straight
         candidates = grow_step(checks, roots, self.config, self._slow_checks(checks))
         if candidates is None:
             return None
@@ -525,6 +548,81 @@ class ViaPathPlanner(Planner, name="viapath"):
             candidate_polylines=[],
             chosen=k,
         )
+
+    def _straight(self, checks: LegChecks, speed: float) -> _Chosen | None:
+        """The straight leg to the subgoal at ``speed`` as the plan, if the robot can turn onto it in time
+        (and the shield admits its command); its freedom is the caller's to check."""
+        plan = Plan(
+            "straight",
+            speed,
+            checks.subgoal.copy(),
+            waypoints=np.array([checks.position, checks.subgoal]),
+            subgoal_index=checks.subgoal_index,
+            candidate_count=1,
+            chosen=0,
+        )
+        if can_follow(plan, checks, self.limits, self.config) and self._inside_shield(plan):
+            return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
+        return None
+
+    # -- staying ahead of someone from behind (``outrun_hold_s``) ---------------------------------------
+
+    def _outrun_held(self, checks: LegChecks, speeds: np.ndarray, nominal_index: int) -> _Chosen | None:
+        """Last cycle drove the straight leg faster than nominal and the nominal leg is free again, but
+        only just: someone from behind would catch it within ``outrun_hold_s`` past the horizon. Then
+        the slowest straight speed from nominal up whose leg is free that long (None: the usual choice).
+        Without this the robot drops to nominal, is caught up with within a few cycles, speeds up again:
+        a speed flip every half second at the horizon's edge."""
+        nominal = float(speeds[nominal_index])
+        if cast(float, self._straight_speed) <= nominal + 1e-9:
+            return None
+        at_nominal = np.array([nominal])
+        if not checks.goal_legs(checks.position[None], np.zeros(1), at_nominal)[2][0]:
+            return None
+        hold = checks.horizon_s + self.config.outrun_hold_s
+        direction, _, free, contact = checks.goal_legs(checks.position[None], np.zeros(1), at_nominal, hold)
+        if free[0] or not self._catching_up(checks, direction[0], contact[0], nominal, float(speeds[-1])):
+            return None
+        return self._slowest_holding(checks, speeds[nominal_index:])
+
+    def _outrun(self, checks: LegChecks, speeds: np.ndarray, nominal_index: int, chosen: _Chosen) -> _Chosen | None:
+        """The cheapest plan is the straight leg faster than nominal, after a straight leg last cycle, and
+        the nominal leg is blocked by someone catching up from behind whom the top speed outruns: the
+        slowest faster straight speed whose leg stays free ``outrun_hold_s`` past the horizon instead
+        (None: keep ``chosen``). Eq. 1's time term prefers the fastest, from which the robot would drop
+        back to nominal as soon as that leg is free, and so on."""
+        plan, nominal = chosen.plan, float(speeds[nominal_index])
+        if plan.status != "straight" or len(plan.waypoints) != 2 or plan.speed_mps <= nominal + 1e-6:
+            return None
+        direction, _, _, contact = checks.goal_legs(checks.position[None], np.zeros(1), np.array([nominal]))
+        if not self._catching_up(checks, direction[0], contact[0], nominal, float(speeds[-1])):
+            return None
+        slower = speeds[(speeds > nominal + 1e-9) & (speeds < plan.speed_mps - 1e-9)]
+        return self._slowest_holding(checks, slower) if len(slower) else None
+
+    @staticmethod
+    def _catching_up(checks: LegChecks, direction: np.ndarray, contact: np.ndarray, nominal: float, top: float) -> bool:
+        """Whether the first obstacle the straight leg meets (``contact``: its contact times) is behind the
+        robot, coming along the leg faster than ``nominal`` and slower than ``top`` (one to outrun)."""
+        if not np.isfinite(contact).any():
+            return False
+        first = int(np.argmin(contact))
+        obstacles = checks.obstacles
+        behind = float((obstacles.positions[first] - checks.position) @ direction) < 0
+        along = float(obstacles.velocities[first] @ direction)
+        return behind and nominal < along < top
+
+    def _slowest_holding(self, checks: LegChecks, speeds: np.ndarray) -> _Chosen | None:
+        """The straight leg at the slowest of ``speeds`` (ascending) whose leg is free ``outrun_hold_s``
+        past the horizon, if the robot can follow it (None: the first such cannot, or none is free)."""
+        hold = checks.horizon_s + self.config.outrun_hold_s
+        speeds = np.asarray(speeds, dtype=float)
+        free = checks.goal_legs(checks.position[None].repeat(len(speeds), axis=0), np.zeros(len(speeds)), speeds, hold)[
+            2
+        ]
+        if not free.any():
+            return None
+        return self._straight(checks, float(speeds[int(np.argmax(free))]))
 
     def _way_back(self, checks: LegChecks, speed: float) -> _Chosen | None:
         """Beyond the paper (``return_lookahead_m``): off the path line, the paper's step 1 towards the
