@@ -35,17 +35,29 @@ def behind():
     return load_scenario("paper-behind")
 
 
-def test_behind_holds_a_speed_instead_of_flipping(behind):
-    held, flipping = _run(behind), _run(behind, overrides=NO_HOLD)
+def _with_person_velocity(scenario, velocity_x_mps: float):
+    person = scenario.obstacles[0].model_copy(update={"velocity": (velocity_x_mps, 0.0)})
+    return scenario.model_copy(update={"obstacles": [person]})
+
+
+@pytest.mark.parametrize("compute", ["numba", "numpy"])
+@pytest.mark.parametrize("person_mps", [0.25, 0.3])
+def test_behind_holds_a_speed_instead_of_flipping(behind, person_mps, compute):
+    scenario = _with_person_velocity(behind, person_mps)
+    held = _run(scenario, overrides={"compute": compute})
+    flipping = _run(scenario, overrides={**NO_HOLD, "compute": compute})
     for episode in (held, flipping):
         assert episode.metrics["reached_goal"] and not episode.metrics["collision"]
     # Without the hold the speed command flips between the top speed and nominal at the horizon's edge.
     assert len(_speed_jumps(flipping.trace.commands)) >= 10
     assert flipping.trace.commands[:, 0].max() >= 0.5 - 1e-9
-    # With it: no such jump after the first speed-up, and the robot keeps ahead at the person's speed
-    # (the paper: "about 0.3 m/s") rather than the top speed.
-    assert len(_speed_jumps(held.trace.commands)) <= 1
-    assert 0.3 - 1e-9 <= held.trace.robot_speeds_mps.max() < 0.4
+    # With it: no such jump at all, hardly any change of speed command (the robot matches the person,
+    # then slows for the goal), and the robot keeps ahead at about the person's speed (the paper: "about
+    # 0.3 m/s" for a person at 0.3 m/s) rather than the top speed.
+    speeds = held.trace.commands[:-1, 0]
+    assert len(_speed_jumps(held.trace.commands)) == 0
+    assert np.count_nonzero(np.abs(np.diff(speeds)) >= 0.04) <= 4
+    assert person_mps - 0.05 <= held.trace.robot_speeds_mps.max() <= person_mps + 0.05
     gap = held.trace.robot_poses[:, 0] - held.trace.obstacle_positions[:, 0, 0]
     assert gap.min() > 0.5  # the person never comes closer than where it started (1 m) by more than half
 
@@ -58,11 +70,9 @@ def test_behind_under_noise_flips_rarely(behind, seed):
     assert len(_speed_jumps(flipping.trace.commands)) >= 15
     assert len(_speed_jumps(held.trace.commands)) <= 3
     assert held.metrics["command_flips"] <= 3
-
-
-def _with_person_velocity(scenario, velocity_x_mps: float):
-    person = scenario.obstacles[0].model_copy(update={"velocity": (velocity_x_mps, 0.0)})
-    return scenario.model_copy(update={"obstacles": [person]})
+    # Not only below the flip threshold: the robot's speed changes about half as much in all.
+    variation = [np.abs(np.diff(run.trace.robot_speeds_mps)).sum() for run in (held, flipping)]
+    assert variation[0] <= 0.75 * variation[1], variation
 
 
 @pytest.mark.parametrize("case", ["too-fast-to-outrun", "paper-front", "paper-side"])

@@ -110,9 +110,8 @@ _OWN = [
     Option(
         "outrun_hold_s",
         1.0,
-        "staying ahead of someone catching up from behind: the straight leg at the slowest faster speed "
-        "whose leg stays free this long past the horizon, and back to a slower one only when it does too "
-        "(0: the cheapest straight speed, back to nominal as soon as that leg is free)",
+        "outrunning someone from behind: the slowest faster straight speed whose leg stays free this "
+        "long past the horizon (0: the cheapest, back to nominal as soon as free)",
         "s",
         minimum=0.0,
         maximum=30.0,

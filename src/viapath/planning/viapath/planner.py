@@ -29,7 +29,8 @@ What the paper leaves open and we chose, beyond what those modules say:
   every few cycles at the horizon's edge. When the straight leg at nominal is blocked by someone from
   behind whom the top speed outruns, the straight leg faster than nominal is at the slowest speed
   whose leg stays free ``outrun_hold_s`` past the horizon, and the robot goes back to a slower one only
-  when that leg stays free that long too. Someone faster than the top speed can only be raced to the
+  when that leg stays free that long too, and not to nominal within ``outrun_hold_s`` of last seeing
+  someone to outrun (under noise the nominal leg looks free in single cycles). Someone faster than the top speed can only be raced to the
   subgoal, and there the cheapest (fastest) leg keeps the most margin: unchanged.
 * **Static obstacles** (DESIGN §10; the paper draws its path boundary round static things and plans for
   moving ones only). A static obstacle is a vertical prism in x-y-t: the guarded entry hands the planner
@@ -138,6 +139,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         self._situation: Situation | None = None  # this cycle's, for the shield check of candidates
         self._last_command: tuple[Any, ...] | None = None  # (situation, plan, command) of the last command made
         self._straight_speed: float | None = None  # last cycle's speed if its plan was the straight leg
+        self._outrun_seen_s = -math.inf  # when someone from behind last blocked the nominal leg (outrun)
 
     @classmethod
     def resolved_defaults(cls) -> dict[str, str]:
@@ -150,6 +152,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         self._previous_escape = None
         self._last_command = None
         self._straight_speed = None
+        self._outrun_seen_s = -math.inf
 
     # -- the recipe ----------------------------------------------------------------------------------
 
@@ -296,8 +299,8 @@ class ViaPathPlanner(Planner, name="viapath"):
         """Candidates → costs → the cheapest the robot can follow; None when none is free.
         With ``only_way``, only candidates going that way round are considered. Staying ahead of someone
         catching up from behind, the straight leg's speed is the slowest that holds (:meth:`_outrun`)."""
-        outrun = only_way is None and self.config.outrun_hold_s > 0 and self._straight_speed is not None
-        if outrun:
+        outrun = only_way is None and self.config.outrun_hold_s > 0
+        if outrun and self._straight_speed is not None:
             held = self._outrun_held(checks, speeds, nominal_index)
             if held is not None:
                 return held
@@ -571,34 +574,47 @@ class ViaPathPlanner(Planner, name="viapath"):
         """Last cycle drove the straight leg faster than nominal and the nominal leg is free again, but
         only just: someone from behind would catch it within ``outrun_hold_s`` past the horizon. Then
         the slowest straight speed from nominal up whose leg is free that long (None: the usual choice).
-        Without this the robot drops to nominal, is caught up with within a few cycles, speeds up again:
-        a speed flip every half second at the horizon's edge."""
+        Free that long too, the robot still keeps above nominal for ``outrun_hold_s`` after it last saw
+        someone to outrun. Without this the robot drops to nominal, is caught up with within a few
+        cycles, speeds up again: a speed flip every half second at the horizon's edge."""
         nominal = float(speeds[nominal_index])
         if cast(float, self._straight_speed) <= nominal + 1e-9:
             return None
+        lookahead = self.config.return_lookahead_m
+        if lookahead > 0 and checks.back_to_path(lookahead) is not None:
+            return None  # off the path line: the way back (:meth:`_way_back`) comes first
         at_nominal = np.array([nominal])
         if not checks.goal_legs(checks.position[None], np.zeros(1), at_nominal)[2][0]:
             return None
         hold = checks.horizon_s + self.config.outrun_hold_s
         direction, _, free, contact = checks.goal_legs(checks.position[None], np.zeros(1), at_nominal, hold)
-        if free[0] or not self._catching_up(checks, direction[0], contact[0], nominal, float(speeds[-1])):
+        if free[0]:
+            # Free that long too: back to nominal, unless someone was being outrun within the hold (under
+            # noise the nominal leg looks free in single cycles while the person still comes on).
+            recently = self._now() - self._outrun_seen_s < self.config.outrun_hold_s
+            return self._slowest_holding(checks, speeds[nominal_index + 1 :]) if recently else None
+        if not self._catching_up(checks, direction[0], contact[0], nominal, float(speeds[-1])):
             return None
+        self._outrun_seen_s = self._now()
         return self._slowest_holding(checks, speeds[nominal_index:])
 
     def _outrun(self, checks: LegChecks, speeds: np.ndarray, nominal_index: int, chosen: _Chosen) -> _Chosen | None:
-        """The cheapest plan is the straight leg faster than nominal, after a straight leg last cycle, and
-        the nominal leg is blocked by someone catching up from behind whom the top speed outruns: the
+        """The cheapest plan is the straight leg faster than nominal, and the nominal leg is blocked by someone catching up from behind whom the top speed outruns: the
         slowest faster straight speed whose leg stays free ``outrun_hold_s`` past the horizon instead
         (None: keep ``chosen``). Eq. 1's time term prefers the fastest, from which the robot would drop
         back to nominal as soon as that leg is free, and so on."""
         plan, nominal = chosen.plan, float(speeds[nominal_index])
-        if plan.status != "straight" or len(plan.waypoints) != 2 or plan.speed_mps <= nominal + 1e-6:
+        if plan.status != "straight" or len(plan.waypoints) != 2 or plan.speed_mps <= nominal + 1e-9:
             return None
         direction, _, _, contact = checks.goal_legs(checks.position[None], np.zeros(1), np.array([nominal]))
         if not self._catching_up(checks, direction[0], contact[0], nominal, float(speeds[-1])):
             return None
+        self._outrun_seen_s = self._now()
         slower = speeds[(speeds > nominal + 1e-9) & (speeds < plan.speed_mps - 1e-9)]
         return self._slowest_holding(checks, slower) if len(slower) else None
+
+    def _now(self) -> float:
+        return float(cast(Situation, self._situation).observation.time_s)
 
     @staticmethod
     def _catching_up(checks: LegChecks, direction: np.ndarray, contact: np.ndarray, nominal: float, top: float) -> bool:
@@ -617,9 +633,8 @@ class ViaPathPlanner(Planner, name="viapath"):
         past the horizon, if the robot can follow it (None: the first such cannot, or none is free)."""
         hold = checks.horizon_s + self.config.outrun_hold_s
         speeds = np.asarray(speeds, dtype=float)
-        free = checks.goal_legs(checks.position[None].repeat(len(speeds), axis=0), np.zeros(len(speeds)), speeds, hold)[
-            2
-        ]
+        starts = checks.position[None].repeat(len(speeds), axis=0)
+        _, _, free, _ = checks.goal_legs(starts, np.zeros(len(speeds)), speeds, hold)
         if not free.any():
             return None
         return self._straight(checks, float(speeds[int(np.argmax(free))]))
