@@ -30,8 +30,9 @@ What the paper leaves open and we chose, beyond what those modules say:
   behind whom the top speed outruns, the straight leg faster than nominal is at the slowest speed
   whose leg stays free ``outrun_hold_s`` past the horizon, and the robot goes back to a slower one only
   when that leg stays free that long too, and not to nominal within ``outrun_hold_s`` of last seeing
-  someone to outrun (under noise the nominal leg looks free in single cycles). Someone faster than the top speed can only be raced to the
-  subgoal, and there the cheapest (fastest) leg keeps the most margin: unchanged.
+  someone to outrun (under noise the nominal leg looks free in single cycles). Someone faster than the
+  top speed can only be raced to the subgoal, and there the cheapest (fastest) leg keeps the most
+  margin: unchanged.
 * **Static obstacles** (DESIGN §10; the paper draws its path boundary round static things and plans for
   moving ones only). A static obstacle is a vertical prism in x-y-t: the guarded entry hands the planner
   the observation's static layer as discs of velocity 0 sampled along its segments (within a few mm of
@@ -599,9 +600,9 @@ class ViaPathPlanner(Planner, name="viapath"):
         return self._slowest_holding(checks, speeds[nominal_index:])
 
     def _outrun(self, checks: LegChecks, speeds: np.ndarray, nominal_index: int, chosen: _Chosen) -> _Chosen | None:
-        """The cheapest plan is the straight leg faster than nominal, and the nominal leg is blocked by someone catching up from behind whom the top speed outruns: the
-        slowest faster straight speed whose leg stays free ``outrun_hold_s`` past the horizon instead
-        (None: keep ``chosen``). Eq. 1's time term prefers the fastest, from which the robot would drop
+        """The cheapest plan is the straight leg faster than nominal, and the nominal leg is blocked by
+        someone catching up from behind whom the top speed outruns: the slowest faster straight speed
+        whose leg stays free ``outrun_hold_s`` past the horizon instead (None: keep ``chosen``). Eq. 1's time term prefers the fastest, from which the robot would drop
         back to nominal as soon as that leg is free, and so on."""
         plan, nominal = chosen.plan, float(speeds[nominal_index])
         if plan.status != "straight" or len(plan.waypoints) != 2 or plan.speed_mps <= nominal + 1e-9:
