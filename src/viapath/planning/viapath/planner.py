@@ -602,8 +602,9 @@ class ViaPathPlanner(Planner, name="viapath"):
     def _outrun(self, checks: LegChecks, speeds: np.ndarray, nominal_index: int, chosen: _Chosen) -> _Chosen | None:
         """The cheapest plan is the straight leg faster than nominal, and the nominal leg is blocked by
         someone catching up from behind whom the top speed outruns: the slowest faster straight speed
-        whose leg stays free ``outrun_hold_s`` past the horizon instead (None: keep ``chosen``). Eq. 1's time term prefers the fastest, from which the robot would drop
-        back to nominal as soon as that leg is free, and so on."""
+        whose leg stays free ``outrun_hold_s`` past the horizon instead (None: keep ``chosen``). Eq. 1's
+        time term prefers the fastest, from which the robot would drop back to nominal as soon as that
+        leg is free, and so on."""
         plan, nominal = chosen.plan, float(speeds[nominal_index])
         if plan.status != "straight" or len(plan.waypoints) != 2 or plan.speed_mps <= nominal + 1e-9:
             return None
