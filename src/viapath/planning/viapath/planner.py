@@ -464,20 +464,11 @@ class ViaPathPlanner(Planner, name="viapath"):
         arithmetic = self.arithmetic
         chosen = arithmetic.choose(checks, slow_checks, speeds, slow_times, settings, integers)
         if chosen.status == slot.STEP_ONE:
-            speed = float(speeds[nominal_index])
-            plan = Plan(
-                "straight",
-                speed,
-                checks.subgoal.copy(),
-                waypoints=np.array([checks.position, checks.subgoal]),
-                subgoal_index=checks.subgoal_index,
-                candidate_count=1,
-                chosen=0,
-            )
+            plan = _straight_plan(checks, float(speeds[nominal_index]))
             if chosen.turn_in_place:
                 plan.extras["turn_in_place"] = True
             if self._inside_shield(plan):
-                return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
+                return _straight_chosen(plan)
             integers[slot.C_TRY_STRAIGHT] = 0  # the shield refused it: the candidates decide
             chosen = arithmetic.choose(checks, slow_checks, speeds, slow_times, settings, integers)
         if chosen.status != slot.CANDIDATES or chosen.first < 0:  # first: the ranks before it do not follow
@@ -556,17 +547,9 @@ class ViaPathPlanner(Planner, name="viapath"):
     def _straight(self, checks: LegChecks, speed: float) -> _Chosen | None:
         """The straight leg to the subgoal at ``speed`` as the plan, if the robot can turn onto it in time
         (and the shield admits its command); its freedom is the caller's to check."""
-        plan = Plan(
-            "straight",
-            speed,
-            checks.subgoal.copy(),
-            waypoints=np.array([checks.position, checks.subgoal]),
-            subgoal_index=checks.subgoal_index,
-            candidate_count=1,
-            chosen=0,
-        )
+        plan = _straight_plan(checks, speed)
         if can_follow(plan, checks, self.limits, self.config) and self._inside_shield(plan):
-            return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(speed * 1000))), plan, None)
+            return _straight_chosen(plan)
         return None
 
     # -- staying ahead of someone from behind (``outrun_hold_s``) ---------------------------------------
@@ -769,6 +752,23 @@ class ViaPathPlanner(Planner, name="viapath"):
         return float(
             np.clip(self.config.heading_gain * error, -self.limits.max_turn_rate_radps, self.limits.max_turn_rate_radps)
         )
+
+
+def _straight_plan(checks: LegChecks, speed: float) -> Plan:
+    """The straight leg from the robot to the subgoal at ``speed`` (paper step 1's plan)."""
+    return Plan(
+        "straight",
+        speed,
+        checks.subgoal.copy(),
+        waypoints=np.array([checks.position, checks.subgoal]),
+        subgoal_index=checks.subgoal_index,
+        candidate_count=1,
+        chosen=0,
+    )
+
+
+def _straight_chosen(plan: Plan) -> _Chosen:
+    return _Chosen(Choice(Way(STRAIGHT, 0, 0), int(round(plan.speed_mps * 1000))), plan, None)
 
 
 def _cost_terms(
