@@ -1,19 +1,19 @@
-"""Laser loop speed (issue 16): two simulated URG-04LX scans (683 beams each), 10 people, tracking.
+"""Laser loop speed: two simulated URG-04LX scans (683 beams each), 10 people, tracking.
 
-    python benchmarks/bench_laser_loop.py [--steps 600] [--runs 3] [--json]
+    python benchmarks/bench_laser_loop.py [--steps 600] [--loop-steps 300] [--runs 3] [--options JSON] [--json]
 
-Two figures, each for the numpy and (when installed) the numba back end, ``--runs`` times:
+Two figures, ``--runs`` times:
 * ``laser_steps_per_s``: the laser chain alone, one step = ray casting of both scanners (with
-  range noise), fusion, segmentation, circle fits, association and tracking
+  range noise), fusion, segmentation, circle fits, association, tracking and the static layer
   (``LaserPerception.observe``) on the scene of ``bench_perception.py`` (10 people circling a robot
-  driving between two walls; all stay in view). This is the part issue 16's laser targets are about
-  (>= 300 steps/s numpy, >= 1000 numba; IR-SIM runs its lidar world at ~86 steps/s).
+  driving between two walls; all stay in view).
 * ``closed_loop_steps_per_s``: ``viapath.sim.loop.run_episode`` with laser perception on the
   closed-loop scene of ``bench_perception.py`` (10 people, viapath planner + shield): laser chain
-  plus planning plus simulation; the planner's share is the planner's (the ``fast`` branch).
-The load average is printed with each run, and each figure is given per wall-clock second and per
-second of this process's CPU time (steadier on a shared machine; equal on an idle one).
-Not a test: numbers depend on the machine.
+  plus planning plus simulation.
+``--options``: the laser perception's options as JSON (default ``{"detector": {"keep_segments": false}}``),
+e.g. to run an older checkout with the arithmetic it was fastest with. The load average is printed with
+each run, and each figure is given per wall-clock second and per second of this process's CPU time
+(steadier on a shared machine; equal on an idle one). Not a test: numbers depend on the machine.
 """
 
 from __future__ import annotations
@@ -31,13 +31,15 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_perception import scene
 
-from viapath.compiled import numba_available
+from viapath.jit import enabled
 from viapath.perception.laser import LaserPerception
 
+DEFAULT_OPTIONS = {"detector": {"keep_segments": False}}
 
-def laser_chain(backend: str, steps: int) -> float:
+
+def laser_chain(options: dict, steps: int) -> tuple[float, float]:
     worlds = [scene(10, k) for k in range(steps)]
-    perception = LaserPerception(ray_compute=backend, detector={"keep_segments": False, "fit_compute": backend})
+    perception = LaserPerception(**options)
     perception.reset(np.random.default_rng(1))
     for world in worlds[:20]:  # warm-up (and numba's cache load)
         perception.observe(world)
@@ -48,7 +50,7 @@ def laser_chain(backend: str, steps: int) -> float:
     return steps / (time.perf_counter() - started), steps / (time.process_time() - cpu)
 
 
-def closed_loop_scenario(backend: str, steps: int):
+def closed_loop_scenario(options: dict, steps: int):
     from viapath.scenarios import scenario_from_dict
 
     rng = np.random.default_rng(3)
@@ -71,18 +73,15 @@ def closed_loop_scenario(backend: str, steps: int):
             "obstacles": obstacles,
             "walls": [[[-2.0, -4.0], [20.0, -4.0]], [[-2.0, 4.0], [20.0, 4.0]]],
             "duration_s": steps * 0.1,
-            "perception": {
-                "mode": "laser",
-                "options": {"ray_compute": backend, "detector": {"fit_compute": backend, "keep_segments": False}},
-            },
+            "perception": {"mode": "laser", "options": options},
         }
     )
 
 
-def closed_loop(backend: str, steps: int) -> float:
+def closed_loop(options: dict, steps: int) -> tuple[float, float]:
     from viapath.sim.loop import run_episode
 
-    scenario = closed_loop_scenario(backend, steps)
+    scenario = closed_loop_scenario(options, steps)
     run_episode(scenario, seed=0)
     started, cpu = time.perf_counter(), time.process_time()
     episode = run_episode(scenario, seed=0)
@@ -95,31 +94,30 @@ def main(argv=None) -> int:
     parser.add_argument("--steps", type=int, default=600, help="laser-chain steps per run")
     parser.add_argument("--loop-steps", type=int, default=300, help="closed-loop steps per run (0: skip)")
     parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--options", type=json.loads, default=DEFAULT_OPTIONS, help="laser options, JSON")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
-    backends = ["numpy"] + (["numba"] if numba_available() else [])
-    results = {"python": platform.python_version(), "numpy": np.__version__, "numba": numba_available(), "runs": []}
+    results = {
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "compiled": enabled(),
+        "options": args.options,
+        "runs": [],
+    }
     for run in range(args.runs):
         row = {"run": run + 1, "load_average": os.getloadavg()}
-        for backend in backends:
-            row[f"laser_steps_per_s_{backend}"], row[f"laser_steps_per_cpu_s_{backend}"] = laser_chain(
-                backend, args.steps
+        row["laser_steps_per_s"], row["laser_steps_per_cpu_s"] = laser_chain(args.options, args.steps)
+        if args.loop_steps > 0:
+            row["closed_loop_steps_per_s"], row["closed_loop_steps_per_cpu_s"] = closed_loop(
+                args.options, args.loop_steps
             )
-            if args.loop_steps > 0:
-                (row[f"closed_loop_steps_per_s_{backend}"], row[f"closed_loop_steps_per_cpu_s_{backend}"]) = (
-                    closed_loop(backend, args.loop_steps)
-                )
         results["runs"].append(row)
         if not args.json:
             load = " ".join(f"{v:.2f}" for v in row["load_average"])
-            figures = "  ".join(
-                f"{k.replace('_steps_per', '')} {v:6.0f}" for k, v in row.items() if k.endswith(tuple(backends))
-            )
+            figures = "  ".join(f"{k.replace('_steps_per', '')} {v:6.0f}" for k, v in row.items() if "steps" in k)
             print(f"run {run + 1} (load {load}): steps per wall s / per CPU s:  {figures}")
     if args.json:
         print(json.dumps(results, indent=2))
-    else:
-        print("targets: laser >= 300 steps/s (numpy), >= 1000 (numba); IR-SIM lidar world ~86 steps/s")
     return 0
 
 

@@ -3,8 +3,8 @@
     python benchmarks/bench_numba_cache.py [--runs 3] [--json]
 
 Each run starts two fresh interpreters on one empty ``NUMBA_CACHE_DIR`` (the first compiles the
-laser kernels of :mod:`viapath.compiled.perception`, the second loads them) and times the
-first call of each kernel, wall clock and process CPU time (the machine is shared: CPU time is the
+laser chain's compiled ray casting and circle fit, the second loads them) and times the
+first call of each, wall clock and process CPU time (the machine is shared: CPU time is the
 steadier figure). Not a test: numbers depend on the machine.
 """
 
@@ -24,13 +24,12 @@ SCRIPT = r"""
 import json, time
 import numpy as np
 t0, c0 = time.perf_counter(), time.process_time()
-from viapath.perception.detection import fit_circles_as
-from viapath.perception.laser import ray_casters
+from viapath.perception.circle_fit import fit_circles
 from viapath.perception.raycast import simulate_scans
 from viapath.perception.scanner import paper_scanners
-simulate_scans(paper_scanners(), np.zeros(3), [[2.0, 0.0]], [0.3], [[[-1.0, 3.0], [5.0, 3.0]]], ray_casters("numba")[1])
+simulate_scans(paper_scanners(), np.zeros(3), [[2.0, 0.0]], [0.3], [[[-1.0, 3.0], [5.0, 3.0]]])
 pts = np.stack([2.0 - 0.3 * np.cos(np.linspace(-1, 1, 9)), 0.3 * np.sin(np.linspace(-1, 1, 9))], -1)
-fit_circles_as("numba", pts, [0], [9], radius_prior_m=0.25)
+fit_circles(pts, [0], [9], radius_prior_m=0.25)
 print(json.dumps({"wall_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}))
 """
 

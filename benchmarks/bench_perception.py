@@ -1,26 +1,29 @@
 """Perception speed: detection + tracking of two 683-beam scans with 10 obstacles in view, and ray casting.
 
-    python benchmarks/bench_perception.py [--cycles 2000] [--obstacles 10] [--steps 300]
+    python benchmarks/bench_perception.py [--cycles 2000] [--obstacles 10] [--steps 300] [--json]
 
 Prints p50 / p99 per cycle of
-* processing (fusion, segmentation, circle fits, leg pairing, association, Kalman update) —
-  ray casting excluded; target ≤ 2 ms p99 (issue 3);
-* ray casting of both scanners, numpy and (when installed) numba;
+* processing (fusion, segmentation, circle fits, leg pairing, association, Kalman update, static layer) —
+  ray casting excluded; target ≤ 2 ms p99;
+* ray casting of both scanners;
 * the closed loop (``viapath.sim.loop.run_episode`` with laser perception: both scanners, tracking
   and planning) in simulated steps per second, when the simulator is present.
-Not a test: numbers depend on the machine. Run it on an idle machine.
+The laser chain is compiled where numba is installed (``viapath.jit.enabled()``, printed), plain Python
+with ``NUMBA_DISABLE_JIT=1``. Not a test: numbers depend on the machine. Run it on an idle machine.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import platform
 import time
 
 import numpy as np
 
-from viapath.compiled import numba_available
-from viapath.perception.laser import LaserPerception, ray_casters
+from viapath.jit import enabled
+from viapath.perception.laser import LaserPerception
 from viapath.perception.raycast import simulate_scan
 from viapath.sim.perception import WorldSnapshot
 
@@ -44,74 +47,95 @@ def scene(n_obstacles: int, k: int, dt: float = 0.1):
     return WorldSnapshot(t, pose, 0.25, positions, velocities, np.full(n_obstacles, 0.25), walls)
 
 
-def percentiles(samples_s) -> str:
+def percentiles(samples_s) -> dict:
     ms = np.asarray(samples_s) * 1e3
-    return f"p50 {np.percentile(ms, 50):7.3f} ms   p99 {np.percentile(ms, 99):7.3f} ms   (n={len(ms)})"
+    return {"p50_ms": float(np.percentile(ms, 50)), "p99_ms": float(np.percentile(ms, 99)), "n": len(ms)}
 
 
-def main() -> None:
+def shown(figures: dict) -> str:
+    return f"p50 {figures['p50_ms']:7.3f} ms   p99 {figures['p99_ms']:7.3f} ms   (n={figures['n']})"
+
+
+def processing(worlds) -> tuple[dict, float]:
+    """Per-cycle time of ``LaserPerception.process`` on pre-cast scans, and the median of confirmed tracks."""
+    perception = LaserPerception(detector={"keep_segments": False})
+    perception.reset(np.random.default_rng(1))
+    scans = [perception.scan(w) for w in worlds]
+    for k in range(20):  # warm-up (and numba's cache load)
+        perception.process(worlds[k].time_s, worlds[k].robot_pose, scans[k])
+    perception.reset(np.random.default_rng(1))
+    process_s, counts = [], []
+    for world, scan in zip(worlds, scans, strict=True):
+        started = time.perf_counter()
+        obstacles = perception.process(world.time_s, world.robot_pose, scan)
+        process_s.append(time.perf_counter() - started)
+        counts.append(len(obstacles))
+    return percentiles(process_s), float(np.median(counts[50:]))
+
+
+def ray_casting(worlds) -> dict:
+    """Per-cycle time of casting both scanners (``simulate_scan`` each, with range noise)."""
+    rng = np.random.default_rng(2)
+    perception = LaserPerception()
+    for w in worlds[:5]:
+        for s in perception.scanners:
+            simulate_scan(s, w.robot_pose, w.obstacle_positions, w.obstacle_radii_m, w.walls, rng)
+    cast_s = []
+    for w in worlds[: min(len(worlds), 1000)]:
+        started = time.perf_counter()
+        for s in perception.scanners:
+            simulate_scan(s, w.robot_pose, w.obstacle_positions, w.obstacle_radii_m, w.walls, rng)
+        cast_s.append(time.perf_counter() - started)
+    return percentiles(cast_s)
+
+
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cycles", type=int, default=2000)
     parser.add_argument("--obstacles", type=int, default=10)
     parser.add_argument("--steps", type=int, default=300, help="closed-loop steps per scenario (0: skip)")
-    args = parser.parse_args()
-    print(
-        f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}, numba: {numba_available()}"
-    )
-
+    parser.add_argument("--json", action="store_true")
+    args = parser.parse_args(argv)
     worlds = [scene(args.obstacles, k) for k in range(args.cycles)]
-    fits = ["numpy"] + (["numba"] if numba_available() else [])
-    print(
-        f"\nprocessing (fusion, segmentation, circle fits, association, Kalman), 2 x 683 beams, {args.obstacles} obstacles:"
-    )
-    for fit in fits:
-        perception = LaserPerception(detector={"keep_segments": False, "fit_compute": fit})
-        perception.reset(np.random.default_rng(1))
-        scans = [perception.scan(w) for w in worlds]
-        for k in range(20):  # warm-up (and numba compilation)
-            perception.process(worlds[k].time_s, worlds[k].robot_pose, scans[k])
-        perception.reset(np.random.default_rng(1))
-        process_s, counts = [], []
-        for world, scan in zip(worlds, scans, strict=True):
-            started = time.perf_counter()
-            obstacles = perception.process(world.time_s, world.robot_pose, scan)
-            process_s.append(time.perf_counter() - started)
-            counts.append(len(obstacles))
-        print(
-            f"  circle fit {fit:6s}          {percentiles(process_s)}   "
-            f"(median {np.median(counts[50:]):.0f} confirmed tracks)   target p99 <= 2 ms"
-        )
-
-    print(f"\nray casting, both scanners, {args.obstacles} discs + 2 walls:")
-    backends = ["numpy"] + (["numba"] if numba_available() else [])
-    for backend in backends:
-        rng = np.random.default_rng(2)
-        caster = ray_casters(backend)[0]
-        perception = LaserPerception()
-        for w in worlds[:5]:
-            for s in perception.scanners:
-                simulate_scan(s, w.robot_pose, w.obstacle_positions, w.obstacle_radii_m, w.walls, rng, caster)
-        cast_s = []
-        for w in worlds[: min(len(worlds), 1000)]:
-            started = time.perf_counter()
-            for s in perception.scanners:
-                simulate_scan(s, w.robot_pose, w.obstacle_positions, w.obstacle_radii_m, w.walls, rng, caster)
-            cast_s.append(time.perf_counter() - started)
-        print(f"  {backend:6s}                     {percentiles(cast_s)}")
-    if not numba_available():
-        print("  numba: not installed (pip install 'viapath[fast]')")
-
+    results: dict = {
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "machine": platform.machine(),
+        "compiled": enabled(),
+        "load_average": os.getloadavg(),
+        "obstacles": args.obstacles,
+    }
+    results["processing"], tracks = processing(worlds)
+    results["confirmed_tracks_median"] = tracks
+    results["ray_casting"] = ray_casting(worlds)
     if args.steps > 0:
-        closed_loop(args.steps, backends)
-
-
-def closed_loop(steps: int, backends) -> None:
-    try:
-        from viapath.scenarios import scenario_from_dict
-        from viapath.sim.loop import run_episode
-    except ImportError:
-        print("\nclosed loop: simulator not available")
+        results["closed_loop"] = closed_loop(args.steps)
+    if args.json:
+        print(json.dumps(results, indent=2))
         return
+    print(f"python {results['python']}, numpy {results['numpy']}, {results['machine']}, compiled: {enabled()}")
+    print(f"load average {' '.join(f'{v:.2f}' for v in results['load_average'])}")
+    print("\nprocessing (fusion, segmentation, circle fits, association, Kalman, static layer), 2 x 683 beams:")
+    print(f"  {shown(results['processing'])}   (median {tracks:.0f} confirmed tracks)   target p99 <= 2 ms")
+    print(f"\nray casting, both scanners, {args.obstacles} discs + 2 walls:\n  {shown(results['ray_casting'])}")
+    if args.steps > 0:
+        print(f"\nclosed loop, 10 obstacles, both scanners + tracking + planning, {args.steps} steps:")
+        for label, row in results["closed_loop"].items():
+            extra = ""
+            if label == "laser":
+                extra = (
+                    f"   track RMSE {row['track_position_rmse_m']:.3f} m, {row['track_velocity_rmse_mps']:.3f} m/s;"
+                    f" perception p99 {row['perception_time_p99_ms']:.2f} ms"
+                )
+            steps, collision = row["steps"], row["collision"]
+            print(f"  {label:8s} {row['steps_per_s']:8.0f} steps/s  ({steps} steps, collision {collision}){extra}")
+
+
+def closed_loop(steps: int) -> dict:
+    """Simulated steps per second of ``run_episode`` with oracle and with laser perception (10 obstacles)."""
+    from viapath.scenarios import scenario_from_dict
+    from viapath.sim.loop import run_episode
+
     rng = np.random.default_rng(3)
     obstacles = []
     for _i in range(10):
@@ -132,26 +156,20 @@ def closed_loop(steps: int, backends) -> None:
         "walls": [[[-2.0, -4.0], [20.0, -4.0]], [[-2.0, 4.0], [20.0, 4.0]]],
         "duration_s": steps * 0.1,
     }
-    print(f"\nclosed loop, 10 obstacles, both scanners + tracking + planning, {steps} steps:")
-    for mode, options in [("oracle", {})] + [
-        ("laser", {"ray_compute": b, "detector": {"fit_compute": b, "keep_segments": False}}) for b in backends
-    ]:
+    out = {}
+    for mode, options in (("oracle", {}), ("laser", {"detector": {"keep_segments": False}})):
         scenario = scenario_from_dict({**base, "perception": {"mode": mode, "options": options}})
-        run_episode(scenario, seed=0)  # warm-up (numba compile, caches)
+        run_episode(scenario, seed=0)  # warm-up (numba's cache load, caches)
         started = time.perf_counter()
         episode = run_episode(scenario, seed=0)
         elapsed = time.perf_counter() - started
         n = len(episode.trace.times_s)
-        label = mode if mode == "oracle" else f"laser/{options['ray_compute']}"
-        extra = ""
+        m = episode.metrics
+        out[mode] = {"steps_per_s": n / elapsed, "steps": n, "collision": m["collision"]}
         if mode == "laser":
-            m = episode.metrics
-            extra = (
-                f"   track RMSE {m['track_position_rmse_m']:.3f} m, {m['track_velocity_rmse_mps']:.3f} m/s;"
-                f" perception p99 {m['perception_time_p99_ms']:.2f} ms"
-            )
-        print(f"  {label:12s} {n / elapsed:8.0f} steps/s  ({n} steps, collision {episode.metrics['collision']}){extra}")
-    print("  target: >= 300 steps/s with numpy alone")
+            for key in ("track_position_rmse_m", "track_velocity_rmse_mps", "perception_time_p99_ms"):
+                out[mode][key] = m[key]
+    return out
 
 
 if __name__ == "__main__":

@@ -2,11 +2,11 @@
 
     PYTHONPATH=src python benchmarks/laser_fingerprint.py [--steps 600]
 
-Runs ``LaserPerception(ray_compute=B, detector={"keep_segments": False, "fit_compute": B})`` over the
-scene of ``bench_perception.py`` (``scene(10, k)`` for k < steps, generator ``default_rng(1)``) for
-B = numpy and numba, and prints per back end a SHA-256 of every step's Obstacles (positions,
-velocities, radii, position and velocity sigmas, ids: exact bytes). Run it on two versions of the code
-(another checkout on ``PYTHONPATH``): equal digests mean the planner was handed the same obstacles.
+Runs ``LaserPerception(detector={"keep_segments": False})`` (the default chain) over the scene of
+``bench_perception.py`` (``scene(10, k)`` for k < steps, generator ``default_rng(1)``) and prints a SHA-256 of
+every step's Obstacles (positions, velocities, radii, position and velocity sigmas, ids: exact bytes) and one
+of every step's static layer (segments, radii). Run it on two versions of the code (another checkout on
+``PYTHONPATH``): equal digests mean the planner was handed the same obstacles and the same static geometry.
 """
 
 from __future__ import annotations
@@ -21,16 +21,18 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_perception import scene
 
-from viapath.compiled import numba_available
 from viapath.perception.laser import LaserPerception
 
 
-def fingerprint(backend: str, steps: int) -> tuple[str, int]:
-    perception = LaserPerception(ray_compute=backend, detector={"keep_segments": False, "fit_compute": backend})
+def fingerprint(steps: int) -> tuple[str, str, int]:
+    """The digests of the reported obstacles and of the static layers of ``steps`` steps, and the obstacles
+    reported."""
+    perception = LaserPerception(detector={"keep_segments": False})
     perception.reset(np.random.default_rng(1))
-    digest, reported = hashlib.sha256(), 0
+    tracks, static, reported = hashlib.sha256(), hashlib.sha256(), 0
     for k in range(steps):
-        obstacles = perception.observe(scene(10, k))
+        world = scene(10, k)
+        obstacles = perception.observe(world)
         reported += len(obstacles)
         for array in (
             obstacles.positions,
@@ -40,17 +42,20 @@ def fingerprint(backend: str, steps: int) -> tuple[str, int]:
             obstacles.velocity_sigma_mps,
             obstacles.ids,
         ):
-            digest.update(np.ascontiguousarray(array).tobytes())
-    return digest.hexdigest(), reported
+            tracks.update(np.ascontiguousarray(array).tobytes())
+        layer = perception.static_layer(world)
+        for array in (layer.segments, layer.radii_m):
+            static.update(np.ascontiguousarray(array).tobytes())
+    return tracks.hexdigest(), static.hexdigest(), reported
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=600)
     args = parser.parse_args(argv)
-    for backend in ["numpy"] + (["numba"] if numba_available() else []):
-        digest, reported = fingerprint(backend, args.steps)
-        print(backend, digest, f"({reported} obstacles reported)")
+    tracks, static, reported = fingerprint(args.steps)
+    print(f"obstacles {tracks} ({reported} reported)")
+    print(f"static layer {static}")
     return 0
 
 

@@ -5,7 +5,7 @@ Usage: python benchmarks/ros2_paper_table.py [--rate 20] [--scenarios paper-behi
 For each scenario it starts ``viapath ros2 node --use-sim-time`` and ``viapath ros2 sim SCENARIO --rate R
 --lockstep --json`` as two processes in a ROS domain of their own with
 ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` (nothing leaves the machine), ends the node by its pid,
-and runs ``viapath run SCENARIO --perception laser`` in this process with the node's circle fit (numpy).
+and runs ``viapath run SCENARIO --perception laser`` in this process (the node's laser chain).
 It prints the markdown table that docs/ros2.md shows (paste it there; never type the numbers).
 """
 
@@ -80,17 +80,13 @@ def over_ros2(names, rate: float) -> dict[str, dict]:
 
 
 def with_run(name: str) -> dict:
-    """``viapath run NAME --perception laser --json`` with the node's circle fit (numpy)."""
+    """``viapath run NAME --perception laser --json``."""
     from viapath.scenarios import load_scenario
     from viapath.sim.loop import run_episode
 
     spec = load_scenario(name)
     spec = spec.model_copy(
-        update={
-            "perception": spec.perception.model_copy(
-                update={"options": {"detector": {"keep_segments": False, "fit_compute": "numpy"}}}
-            )
-        }
+        update={"perception": spec.perception.model_copy(update={"options": {"detector": {"keep_segments": False}}})}
     )
     return run_episode(spec, perception="laser").metrics
 

@@ -15,7 +15,7 @@ WORDS = re.compile(r"kernel|numba|backend", re.IGNORECASE)
 DISPATCH = {
     "planning/viapath/planner.py": "the planner's recipe: numpy or compiled per step (arithmetic_for, precompile, ...)",
     "safety/shield.py": "the shield's recipe: numpy or compiled per evaluation",
-    "perception/detection.py": "the laser pipeline's dispatch: compiled clustering, shape tests and circle fit",
+    "perception/detection.py": "the laser chain's retired options (ray_backend, fit_backend...), read with a warning",
     "bench/executors.py": "joblib's executors (loky, dask, ray): joblib's own keyword for them is backend=",
 }
 

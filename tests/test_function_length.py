@@ -80,3 +80,49 @@ def test_the_compiled_counter_counts_a_planted_long_function(tmp_path):
     (tmp_path / "kernels.py").write_text(f"def long():\n{body}\n\n\ndef short():\n    return 1\n")
     (tmp_path / "limit.py").write_text("def at_limit():\n" + "\n".join(f"    y{i} = {i}" for i in range(149)) + "\n")
     assert compiled_long_functions(tmp_path) == {("kernels.py", "long"): 151}
+
+
+# The laser chain (viapath.perception: ray casting, detection, tracking, static layer): functions of at most
+# 60 lines, classes of at most 300, compiled steps included.
+PERCEPTION = SRC / "viapath" / "perception"
+MAX_PERCEPTION_FUNCTION_LINES = 60
+MAX_PERCEPTION_CLASS_LINES = 300
+
+
+def long_definitions(root: Path, kinds: tuple[type, ...], limit: int) -> dict[tuple[str, str], int]:
+    """(file relative to ``root``, name) -> lines, for every definition of one of ``kinds`` (nested ones too)
+    over ``limit`` lines."""
+    found = {}
+    for file in sorted(root.rglob("*.py")):
+        for node in ast.walk(ast.parse(file.read_text())):
+            if isinstance(node, kinds):
+                lines = node.end_lineno - node.lineno + 1
+                if lines > limit:
+                    found[(file.relative_to(root).as_posix(), node.name)] = lines
+    return found
+
+
+def test_no_function_of_the_laser_chain_is_over_60_lines():
+    assert any(PERCEPTION.rglob("*.py")), PERCEPTION
+    long = long_definitions(PERCEPTION, (ast.FunctionDef, ast.AsyncFunctionDef), MAX_PERCEPTION_FUNCTION_LINES)
+    assert long == {}, "laser chain functions over 60 lines (split them): " + ", ".join(
+        f"{file}:{name} ({lines} lines)" for (file, name), lines in sorted(long.items())
+    )
+
+
+def test_no_class_of_the_laser_chain_is_over_300_lines():
+    long = long_definitions(PERCEPTION, (ast.ClassDef,), MAX_PERCEPTION_CLASS_LINES)
+    assert long == {}, "laser chain classes over 300 lines (split them): " + ", ".join(
+        f"{file}:{name} ({lines} lines)" for (file, name), lines in sorted(long.items())
+    )
+
+
+def test_the_definition_counter_counts_planted_long_ones(tmp_path):
+    body = "\n".join(f"        x{i} = {i}" for i in range(60))
+    (tmp_path / "chain.py").write_text(
+        f"class Chain:\n    def long(self):\n{body}\n\n    def short(self):\n        return 1\n"
+    )
+    functions = long_definitions(tmp_path, (ast.FunctionDef,), 60)
+    assert functions == {("chain.py", "long"): 61}
+    assert long_definitions(tmp_path, (ast.ClassDef,), 64) == {("chain.py", "Chain"): 65}
+    assert long_definitions(tmp_path, (ast.ClassDef,), 65) == {}

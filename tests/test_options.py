@@ -216,22 +216,19 @@ def test_the_options_hash_leaves_out_options_that_decide_nothing():
 
 
 def test_ros_parameters_name_the_option_a_former_name_became():
-    """A ROS parameter file written before a rename fails on the old name and names the new one (planner,
-    shield and laser chain alike), and the new names are accepted."""
+    """A ROS parameter file written before a rename fails on the old name and names the new one (planner and
+    shield alike), and the new names are accepted."""
     from viapath.ros2.settings import ParameterError, validate
 
     with pytest.raises(ParameterError) as raised:
-        validate({"planner.backend": "numpy", "shield.backend": "numpy", "fit_backend": "numpy"})
+        validate({"planner.backend": "numpy", "shield.backend": "numpy"})
     text = str(raised.value)
     for old, new in (
         ("planner.backend", "planner.compute"),
         ("shield.backend", "shield.compute"),
-        ("fit_backend", "fit_compute"),
     ):
         assert f"parameter {old}: unknown parameter (now called {new})" in text
-    assert (
-        validate({"planner.compute": "numpy", "shield.compute": "numpy", "fit_compute": "numpy"}).fit_compute == "numpy"
-    )
+    assert validate({"planner.compute": "numpy", "shield.compute": "numpy"}).values["planner.compute"] == "numpy"
 
 
 def test_settings_survive_copy_and_pickle():

@@ -94,13 +94,6 @@ def test_the_scenario_models_have_every_option_of_their_set_with_its_bounds():
         )
 
 
-def test_the_node_fits_circles_as_the_simulator_does_by_default():
-    from viapath.perception.detection import DetectorParams
-    from viapath.ros2.settings import validate
-
-    assert validate({}).fit_compute == DetectorParams().fit_compute
-
-
 def test_the_scenario_json_schema_types_the_laser_options():
     """The laser chain's options appear in the scenario's JSON schema with their types, defaults and bounds."""
     from viapath.perception.segmentation import SegmentationParams
@@ -111,8 +104,7 @@ def test_the_scenario_json_schema_types_the_laser_options():
     definitions = schema["$defs"]
     options = definitions[definitions["PerceptionSpec"]["properties"]["options"]["$ref"].split("/")[-1]]
     assert options["additionalProperties"] is False
-    assert set(options["properties"]) >= {"scanners", "detector", "tracker", "ray_compute", "static_layer"}
-    assert options["properties"]["ray_compute"]["enum"] == ["auto", "numpy", "numba"]
+    assert set(options["properties"]) >= {"scanners", "detector", "tracker", "static_layer"}
     min_points = definitions["SegmentationOptions"]["properties"]["min_points"]
     assert (min_points["type"], min_points["minimum"], min_points["default"]) == (
         "integer",
@@ -125,12 +117,15 @@ def test_the_scenario_json_schema_types_the_laser_options():
         62,
         TrackerParams().confirm_hits,
     )
-    assert definitions["DetectorOptions"]["properties"]["fit_compute"]["enum"] == ["auto", "numpy", "numba"]
+    assert "fit_compute" not in definitions["DetectorOptions"]["properties"]
 
 
-def test_the_node_names_the_new_spelling_of_a_renamed_parameter():
-    from viapath.ros2.settings import ParameterError, validate
+@pytest.mark.parametrize("name", ["fit_compute", "fit_backend"])
+def test_the_node_reads_the_retired_fit_parameter_with_a_warning(name):
+    """The circle fit's former choice of arithmetic is read, whatever its value, with a FutureWarning, and the
+    node's settings are those without it."""
+    from viapath.ros2.settings import validate
 
-    with pytest.raises(ParameterError, match="parameter fit_backend: unknown parameter \\(now called fit_compute\\)"):
-        validate({"fit_backend": "numpy"})
-    assert validate({"fit_compute": "numpy"}).fit_compute == "numpy"
+    with pytest.warns(FutureWarning, match=f"option {name!r} no longer does anything"):
+        settings = validate({name: "numpy", "detector": "legs"})
+    assert settings.detector == "legs" and not hasattr(settings, name)

@@ -1,12 +1,13 @@
-"""The laser chain's shortcuts of wave 7 (docs/CHANGELOG-speed.md, "The laser chain (wave 7)") change no value.
+"""The laser chain's compiled steps and shortcuts against their specifications.
 
-Each rewritten piece is checked on seeded random inputs against what it computes (worked out
-independently) or against the numpy path, bit for bit:
-* the cached beam tables of the segmentation and its compiled clustering against the per-scan numpy path;
-* the numba shape tests of the detector (sagitta and convexity t-statistic of each segment) against
-  the numpy path (``_padded``, ``_chord_coordinates``, ``_convexity_t``) (the pairwise summation they
-  share with the escape kernel, :mod:`viapath.compiled.sums`, is tested in tests/planning/test_backends.py);
-* ``_convexity_t`` against a least-squares fit of each segment (np.linalg.lstsq);
+Each piece is checked on seeded random inputs against what it computes, worked out independently, or
+against a plain numpy statement of it kept here as its specification, bit for bit:
+* the segmentation's clustering (compiled, with its cached beam tables) against the per-scan numpy
+  statement of the breakpoint rule (:func:`_segments_spec`);
+* the detector's shape tests (:func:`~viapath.perception.detection.segment_shapes`: sagitta and convexity
+  t-statistic of each segment) against their numpy statement (``_padded``, ``_chord_coordinates``,
+  ``_convexity_t`` here; the pairwise summation, :mod:`viapath.compiled.sums`, is tested with the planner),
+  and the t-statistic against a least-squares fit of each segment (np.linalg.lstsq);
 * ``_merge_duplicates`` (its early return when nothing is close, the information it keeps when merging);
 * ``gated_assignment`` against the cheapest pairing, every pairing tried;
 * the tracker's cached motion model against the matrices it used to build every cycle.
@@ -18,12 +19,91 @@ import numpy as np
 import pytest
 
 from viapath.perception.assignment import gated_assignment
-from viapath.perception.circle_fit import _padded
-from viapath.perception.detection import _chord_coordinates, _compiled_perception, _convexity_t, _split_compiled
-from viapath.perception.segmentation import SegmentationParams
+from viapath.perception.detection import segment_shapes
+from viapath.perception.segmentation import SegmentationParams, Segments
 from viapath.perception.tracking import _motion_model
 
-needs_numba = pytest.mark.skipif(_compiled_perception() is None, reason="numba not installed")
+# -- the numpy statements of the detector's shape tests and of the segmentation (specifications) ---------------
+
+
+def _padded(points, starts, counts):
+    """Each segment as a row of the longest one's width (padding: its first point) and the mask of real points."""
+    width = int(counts.max())
+    column = np.arange(width)
+    mask = column[None, :] < counts[:, None]
+    index = np.where(mask, starts[:, None] + column[None, :], starts[:, None])
+    return points[index], mask.astype(float)
+
+
+def _chord_coordinates(padded, mask, first, chord, extent, origins):
+    """Each point's coordinates along its segment's chord (``x``, from the chord's middle) and across it
+    (``y``, positive towards the sensor); padded entries are 0."""
+    u = chord / np.maximum(extent, 1e-12)[:, None]
+    mid = first + 0.5 * chord
+    n = np.stack([-u[:, 1], u[:, 0]], -1)
+    n[((origins - mid) * n).sum(1) < 0] *= -1.0  # n points towards the sensor
+    rel = padded - mid[:, None, :]
+    x = (rel[..., 0] * u[:, None, 0] + rel[..., 1] * u[:, None, 1]) * mask
+    y = (rel[..., 0] * n[:, None, 0] + rel[..., 1] * n[:, None, 1]) * mask
+    return x, y, mid
+
+
+def _convexity_t(x, y, mask, mid, origins, seg: SegmentationParams) -> np.ndarray:
+    """t-statistic of the curvature towards the sensor of ``y = a + b x + c x²`` fitted across each chord
+    (normal equations by Cramer's rule)."""
+    x2 = x * x
+    sx2 = x2.sum(1)
+    a00, a01, a02, a11, a12, a22 = mask.sum(1), x.sum(1), sx2, sx2, (x2 * x).sum(1), (x2 * x2).sum(1)
+    b0, b1, b2 = y.sum(1), (x * y).sum(1), (x2 * y).sum(1)
+    c00, c01, c02 = a11 * a22 - a12 * a12, a02 * a12 - a01 * a22, a01 * a12 - a02 * a11
+    c12, c22 = a01 * a02 - a00 * a12, a00 * a11 - a01 * a01
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    det = np.where(np.abs(det) > 1e-300, det, np.inf)
+    curvature = (c02 * b0 + c12 * b1 + c22 * b2) / det
+    inv22 = c22 / det
+    distance = np.hypot(*(mid - origins).T)
+    sigma = np.where(distance < seg.noise_switch_range_m, seg.noise_sigma_near_m, seg.noise_fraction_far * distance)
+    return -curvature / (sigma * np.sqrt(np.maximum(inv22, 1e-30)))
+
+
+def _segments_spec(ranges_m, angles_rad, origin_x_m, origin_y_m, scan_index, params) -> Segments:
+    """Borges & Aldon's breakpoint rule on every pair of neighbouring valid beams, in numpy: split where the gap
+    exceeds ``max(r sin Δφ / sin(λ - Δφ) + 3σ, min_jump)`` or more than ``max_gap_beams`` beams are invalid."""
+    valid = np.flatnonzero(np.isfinite(ranges_m))
+    r, a = ranges_m[valid], angles_rad[valid]
+    points = np.stack([origin_x_m[valid] + r * np.cos(a), origin_y_m[valid] + r * np.sin(a)], -1)
+    scans = scan_index[valid]
+    gap = np.hypot(*np.diff(points, axis=0).T)
+    adjacent = (np.diff(valid) <= params.max_gap_beams + 1) & (scans[1:] == scans[:-1])
+    near = np.minimum(r[:-1], r[1:])
+    angle = np.minimum(np.abs(np.diff(a)), 0.5 * params.grazing_angle_rad)
+    sigma = np.where(near < params.noise_switch_range_m, params.noise_sigma_near_m, params.noise_fraction_far * near)
+    jump = near * np.sin(angle) / np.sin(params.grazing_angle_rad - angle) + 3.0 * sigma
+    split = (gap > np.maximum(jump, params.min_jump_m)) | ~adjacent
+    starts = np.concatenate([[0], np.flatnonzero(split) + 1])
+    counts = np.diff(np.append(starts, len(valid)))
+    ends = starts + counts - 1
+    occluded = np.array(
+        [
+            (s > 0 and adjacent[s - 1] and r[s - 1] < r[s]) or (e < len(r) - 1 and adjacent[e] and r[e + 1] < r[e])
+            for s, e in zip(starts, ends, strict=True)
+        ],
+        dtype=bool,
+    )
+    keep = counts >= params.min_points
+    index = np.concatenate([np.arange(s, s + c) for s, c in zip(starts[keep], counts[keep], strict=True)] + [[]])
+    index = index.astype(np.int64)
+    kept_counts = counts[keep]
+    return Segments(
+        valid[index],
+        points[index],
+        np.cumsum(kept_counts) - kept_counts,
+        kept_counts,
+        occluded[keep],
+        scans[starts[keep]],
+        points,
+        valid,
+    )
 
 
 def _random_segments(rng, count):
@@ -77,9 +157,8 @@ def test_convexity_t_is_the_least_squares_curvature(seed):
     rng = np.random.default_rng(seed)
     seg = SegmentationParams()
     points, starts, counts, origins = _random_segments(rng, 30)
-    *_, x, y, mask, mid = _numpy_shape_tests(points, starts, counts, origins, seg)
-    with np.errstate(all="ignore"):
-        got = _convexity_t(x, y, mask, mid, origins, seg)
+    first, chord, extent, _, x, y, mask, mid = _numpy_shape_tests(points, starts, counts, origins, seg)
+    _, got = _shapes(points, starts, counts, first, chord, extent, origins, seg)
     checked = 0
     for row in range(len(x)):
         xs, ys = x[row][mask[row] > 0], y[row][mask[row] > 0]
@@ -96,20 +175,11 @@ def test_convexity_t_is_the_least_squares_curvature(seed):
     assert checked > 10
 
 
-@needs_numba
-@pytest.mark.parametrize("seed", range(6))
-def test_numba_shape_tests_equal_numpy(seed):
-    from viapath.compiled.perception import segment_shape_kernel
-
-    rng = np.random.default_rng(seed)
-    seg = SegmentationParams() if seed % 2 else SegmentationParams(noise_switch_range_m=3.0, noise_fraction_far=0.02)
-    points, starts, counts, origins = _random_segments(rng, 40)
-    first, chord, extent, sagitta, x, y, mask, mid = _numpy_shape_tests(points, starts, counts, origins, seg)
-    with np.errstate(all="ignore"):
-        t_numpy = _convexity_t(x, y, mask, mid, origins, seg)
+def _shapes(points, starts, counts, first, chord, extent, origins, seg):
+    """:func:`segment_shapes` of every segment: (sagitta, t-statistic)."""
     got_sagitta, got_t = np.empty(len(starts)), np.empty(len(starts))
     distance = np.hypot(*(first + 0.5 * chord - origins).T)
-    segment_shape_kernel(
+    segment_shapes(
         points,
         starts,
         counts,
@@ -125,12 +195,20 @@ def test_numba_shape_tests_equal_numpy(seed):
         got_sagitta,
         got_t,
     )
+    return got_sagitta, got_t
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_shape_tests_are_their_numpy_statement_bit_for_bit(seed):
+    rng = np.random.default_rng(seed)
+    seg = SegmentationParams() if seed % 2 else SegmentationParams(noise_switch_range_m=3.0, noise_fraction_far=0.02)
+    points, starts, counts, origins = _random_segments(rng, 40)
+    first, chord, extent, sagitta, x, y, mask, mid = _numpy_shape_tests(points, starts, counts, origins, seg)
+    with np.errstate(all="ignore"):
+        t_numpy = _convexity_t(x, y, mask, mid, origins, seg)
+    got_sagitta, got_t = _shapes(points, starts, counts, first, chord, extent, origins, seg)
     assert _same(got_sagitta, sagitta)
     assert _same(got_t, t_numpy)
-    # and on a subset of the rows padded to the full width, as detect() hands the long segments to _convexity_t
-    rows = rng.random(len(starts)) < 0.5
-    with np.errstate(all="ignore"):
-        assert _same(got_t[rows], _convexity_t(x[rows], y[rows], mask[rows], mid[rows], origins[rows], seg))
 
 
 def _best_total_cost(cost, gate):
@@ -185,20 +263,20 @@ def test_motion_model_equals_reference(dt, sigma_a):
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_segment_beams_with_tables_equals_without(seed):
-    """The cached cosines, sines and breakpoint sines (BeamTables), and the compiled clustering, give the
-    segments of the per-scan numpy computation."""
+def test_segment_beams_is_the_breakpoint_rule_bit_for_bit(seed):
+    """The compiled clustering with the cached cosines, sines and breakpoint sines (BeamTables), and without
+    tables given, gives the segments of the rule's numpy statement, bit for bit."""
     from viapath.perception.detection import _beam_layout
     from viapath.perception.scanner import ScannerModel, paper_scanners
     from viapath.perception.segmentation import BeamTables, segment_beams
 
-    compiled = _compiled_perception() is not None
     rng = np.random.default_rng(seed)
     scanner_sets = [
         paper_scanners(),
         (ScannerModel(name="wide", beam_count=1024, angle_increment_rad=2 * np.pi / 1024),),
         (ScannerModel(name="odd", beam_count=181, angle_increment_rad=np.deg2rad(1.0), mount_yaw_rad=0.3),),
     ]
+    split = 0
     for scanners in scanner_sets:
         layout = _beam_layout(scanners)
         for params in (
@@ -212,10 +290,9 @@ def test_segment_beams_with_tables_equals_without(seed):
                 ranges = np.repeat(rng.uniform(0.05, 5.5, n // 10 + 1), 10)[:n] + rng.normal(0, 0.01, n)
                 ranges[rng.random(n) < rng.choice([0.0, 0.05, 0.5])] = np.nan
                 args = (ranges, layout.angles_rad, layout.origin_x_m, layout.origin_y_m, layout.scan_index, params)
-                want = segment_beams(*args)
-                for got in [segment_beams(*args, tables)] + (
-                    [segment_beams(*args, tables, _split_compiled)] if compiled else []
-                ):
+                want = _segments_spec(*args)
+                split += len(want) > 1
+                for got in (segment_beams(*args, tables), segment_beams(*args)):
                     for name in (
                         "beam_index",
                         "points",
@@ -228,6 +305,7 @@ def test_segment_beams_with_tables_equals_without(seed):
                     ):
                         assert getattr(got, name).dtype == getattr(want, name).dtype, name
                         assert _same(getattr(got, name), getattr(want, name)), name
+    assert split > 50
 
 
 @pytest.mark.parametrize("seed", range(4))

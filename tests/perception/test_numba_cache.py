@@ -1,8 +1,8 @@
-"""numba's compiled laser kernels are compiled once per machine: a second process loads them from the cache.
+"""The laser chain's compiled steps are compiled once per machine: a second process loads them from the cache.
 
-Issue 16: the kernels used to be closures, whose cache entries never matched, so every process
-compiled again (~10 s). Two fresh interpreters share one empty ``NUMBA_CACHE_DIR``; the first must
-compile (cache misses), the second must load every kernel from disk (hits, no misses).
+Compiled functions that were closures had cache entries that never matched, so every process compiled
+again (~10 s). Two fresh interpreters share one empty ``NUMBA_CACHE_DIR``; the first must compile (cache
+misses), the second must load every step from disk (hits, no misses).
 """
 
 from __future__ import annotations
@@ -22,19 +22,18 @@ SRC = str(Path(__file__).resolve().parents[2] / "src")
 SCRIPT = r"""
 import json
 import numpy as np
-from viapath.perception.detection import fit_circles_as
-from viapath.perception.laser import ray_casters
+from viapath.perception import circle_fit, raycast
+from viapath.perception.circle_fit import fit_circles
 from viapath.perception.raycast import cast_rays
-from viapath.compiled import perception as k
 
 angles = np.linspace(-2.0, 2.0, 50)
-ranges = cast_rays((0.0, 0.0), angles, [[2.0, 0.0]], [0.3], [[[-1.0, 3.0], [5.0, 3.0]]], ray_casters("numba")[0])
+ranges = cast_rays((0.0, 0.0), angles, [[2.0, 0.0]], [0.3], [[[-1.0, 3.0], [5.0, 3.0]]])
 pts = np.stack([2.0 - 0.3 * np.cos(np.linspace(-1, 1, 9)), 0.3 * np.sin(np.linspace(-1, 1, 9))], -1)
-fit_circles_as("numba", pts, [0], [9], radius_prior_m=0.25)
-fit_circles_as("numba", pts, [0], [9])
+fit_circles(pts, [0], [9], radius_prior_m=0.25)
+fit_circles(pts, [0], [9])
 out = {}
-for name in ("cast_rays_kernel", "fit_circles_kernel", "solve_sym3_scalar"):
-    stats = getattr(k, name).stats
+for name, function in (("cast_beams", raycast.cast_beams), ("fit_clusters", circle_fit.fit_clusters)):
+    stats = function.stats
     out[name] = {"hits": sum(stats.cache_hits.values()), "misses": sum(stats.cache_misses.values())}
 out["finite_ranges"] = int(np.isfinite(ranges).sum())
 print(json.dumps(out))
@@ -58,11 +57,11 @@ def test_second_process_loads_every_kernel_from_the_cache(tmp_path):
     files_after_first = sorted(p.name for p in tmp_path.rglob("*.nb[ci]"))
     second = _run(tmp_path)
     assert first["finite_ranges"] == second["finite_ranges"] > 0
-    # The cast and fit kernels are called directly; solve_sym3_scalar is compiled into the fit.
-    for name in ("cast_rays_kernel", "fit_circles_kernel"):
+    # The cast and the fit are called from Python; what they call is compiled into them.
+    for name in ("cast_beams", "fit_clusters"):
         assert first[name]["misses"] >= 1, (name, first)  # the empty cache had to be filled
         assert second[name]["misses"] == 0, (name, second)  # nothing compiled the second time
         assert second[name]["hits"] >= 1, (name, second)
     assert any(name.endswith(".nbi") for name in files_after_first), "no cache index written"
-    # The second process added no cache entry (the closures added one per process start).
+    # The second process added no cache entry (closures would add one per process start).
     assert sorted(p.name for p in tmp_path.rglob("*.nb[ci]")) == files_after_first

@@ -10,7 +10,7 @@ from viapath.perception.detection import DetectorParams, detect
 from viapath.perception.fusion import blind_region, covered, fuse_scans
 from viapath.perception.raycast import simulate_scan
 from viapath.perception.scanner import paper_scanners
-from viapath.perception.segmentation import SegmentationParams, breakpoint_threshold_m, segment_scan
+from viapath.perception.segmentation import SegmentationParams, segment_beams, segment_scan
 
 
 def arc(centre, radius, sensor, n, noise, rng, half_angle=np.pi / 2):
@@ -61,10 +61,21 @@ def test_batched_fit_equals_one_by_one():
 
 
 def test_breakpoint_threshold_grows_with_range():
+    """Two neighbouring beams 0.352° apart, the second one ``jump`` farther: split exactly when the jump exceeds
+    ``r sin Δφ / sin(λ - Δφ) + 3σ`` (Borges & Aldon), which grows with the range ``r``."""
     params = SegmentationParams()
-    t = breakpoint_threshold_m(np.array([0.5, 2.0, 4.0]), np.full(3, 0.00614), params)
-    assert t[0] < t[1] < t[2]
-    assert t[2] > 0.2  # at 4 m neighbouring beams are 2.5 cm apart; a grazing wall needs > 14 cm
+    step = np.deg2rad(0.352)
+    angles = np.array([0.0, step])
+    for near in (0.5, 2.0, 4.0):
+        sigma = params.noise_sigma_near_m if near < params.noise_switch_range_m else params.noise_fraction_far * near
+        threshold = max(near * np.sin(step) / np.sin(params.grazing_angle_rad - step) + 3 * sigma, params.min_jump_m)
+        for jump, splits in ((0.9 * threshold, False), (1.1 * threshold, True)):
+            # the gap between the two points (the second beam is longer by ``jump``): close to ``jump`` itself
+            ranges = np.array([near, near + jump])
+            gap = np.hypot(*(ranges[1] * np.array([np.cos(step), np.sin(step)]) - [ranges[0], 0.0]))
+            got = segment_beams(ranges, angles, 0.0, 0.0, np.zeros(2, dtype=int), SegmentationParams(min_points=1))
+            assert (len(got) == 2) == (gap > threshold) == splits, (near, jump)
+    assert threshold > 0.2  # at 4 m neighbouring beams are 2.5 cm apart; a grazing wall needs > 14 cm
 
 
 def test_segmentation_splits_on_jumps_and_skips_invalid_beams():
@@ -156,32 +167,35 @@ def test_blind_region_of_the_paper_set_up_and_of_narrow_scanners():
     not __import__("viapath.compiled", fromlist=["x"]).numba_available(),
     reason="numba not installed (pip install 'viapath[fast]')",
 )
-@pytest.mark.parametrize(
-    "options", [dict(), dict(radius_prior_m=0.2, radius_prior_sigma_m=0.05), dict(fixed_radius_m=0.25)]
-)
-def test_numba_circle_fit_equals_numpy(options):
+def test_free_fit_recovers_exact_circles():
+    """Points exactly on a circle (any arc of 3 to 60 points, seen from anywhere): the free fit returns that
+    circle, with residual 0."""
     rng = np.random.default_rng(11)
-    arcs = [
-        arc(
-            (rng.uniform(0.5, 4), rng.uniform(-2, 2)),
-            rng.uniform(0.04, 0.3),
-            (0, 0),
-            int(rng.integers(3, 60)),
-            0.01,
-            rng,
-            half_angle=rng.uniform(0.3, 1.5),
-        )
-        for _ in range(25)
-    ]
-    points = np.concatenate(arcs)
-    counts = np.array([len(a) for a in arcs])
-    starts = np.cumsum(counts) - counts
-    origins = rng.uniform(-0.2, 0.2, (25, 2))
-    from viapath.perception.detection import fit_circles_as
+    for _ in range(50):
+        centre, radius = rng.uniform(-4, 4, 2), rng.uniform(0.04, 0.5)
+        points = arc(centre, radius, rng.uniform(-1, 1, 2) + centre * 3, int(rng.integers(3, 60)), 0.0, rng)
+        got, r, rms = fit_circle(points, sensor_origin=(centre * 3).tolist())
+        np.testing.assert_allclose(got, centre, atol=1e-7)
+        assert r == pytest.approx(radius, abs=1e-7) and rms < 1e-7
 
-    a = fit_circles_as("numpy", points, starts, counts, origins, **options)
-    b = fit_circles_as("numba", points, starts, counts, origins, **options)
-    np.testing.assert_allclose(b.centres, a.centres, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(b.radii_m, a.radii_m, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(b.rms_m, a.rms_m, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(b.centre_sigma_m, a.centre_sigma_m, rtol=1e-6, atol=1e-12)
+
+@pytest.mark.parametrize("options", [dict(), dict(radius_prior_m=0.2, radius_prior_sigma_m=0.05)])
+def test_fit_minimises_its_cost(options):
+    """On noisy arcs the fit is a minimum of its cost ``Σ (|p - c| - r)² + weight (r - prior)²``: no centre or
+    radius 1 mm away in any of 26 directions costs less, and the reported RMS is the residuals'."""
+    rng = np.random.default_rng(4)
+    weight = (0.01 / options["radius_prior_sigma_m"]) ** 2 if options else 0.0
+    prior = options.get("radius_prior_m", 0.0)
+
+    def cost(points, c, r):
+        return np.sum((np.hypot(*(points - c[:2]).T) - r) ** 2) + weight * (r - prior) ** 2
+
+    steps = np.array([(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1) if (i, j, k) != (0, 0, 0)])
+    for _ in range(40):
+        centre = np.array([rng.uniform(0.5, 4), rng.uniform(-2, 2)])
+        points = arc(centre, rng.uniform(0.05, 0.3), (0, 0), int(rng.integers(8, 40)), 0.01, rng)
+        c, r, rms = fit_circle(points, **options)
+        assert rms == pytest.approx(np.sqrt(np.mean((np.hypot(*(points - c).T) - r) ** 2)), rel=1e-9)
+        best = cost(points, c, r)
+        for step in steps * 1e-3:
+            assert cost(points, c + step[:2], r + step[2]) >= best - 1e-12

@@ -1,12 +1,10 @@
-"""Ray casting against an independent reference, scanner readings, numba == numpy."""
+"""Ray casting against independent references (marching, closed-form distances) and scanner readings."""
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from viapath.compiled import numba_available
-from viapath.perception.laser import ray_casters
 from viapath.perception.raycast import cast_rays, simulate_scan
 from viapath.perception.scanner import ScannerModel, paper_scanners, sanitize_ranges
 
@@ -149,21 +147,25 @@ def test_scanner_rejects_bad_configuration():
         ScannerModel(mount_x_m=float("nan"))
 
 
-@pytest.mark.skipif(not numba_available(), reason="numba not installed (pip install 'viapath[fast]')")
-def test_numba_equals_numpy_bit_for_bit():
-    rng = np.random.default_rng(7)
-    for _ in range(20):
-        n, w = rng.integers(0, 12), rng.integers(0, 5)
-        centres = rng.uniform(-4, 4, (n, 2))
-        radii = rng.uniform(0.05, 0.5, n)
-        segments = rng.uniform(-5, 5, (w, 2, 2))
-        origin = rng.uniform(-1, 1, 2)
-        angles = np.linspace(-np.pi, np.pi, 683)
-        a = cast_rays(origin, angles, centres, radii, segments)
-        b = cast_rays(origin, angles, centres, radii, segments, ray_casters("numba")[0])
-        np.testing.assert_array_equal(a, b)
-
-
-def test_unknown_backend_is_an_error():
-    with pytest.raises(ValueError, match="ray_compute"):
-        ray_casters("cuda")
+def test_rays_aimed_at_disc_centres_and_across_walls_stop_at_the_closed_form_distance():
+    """A ray aimed at a disc's centre stops at |c - o| - r; one crossing a wall at right angles at the wall's
+    distance; with both, at the nearer; a ray aimed away meets neither."""
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        origin = rng.uniform(-2, 2, 2)
+        centre = rng.uniform(-6, 6, 2)
+        radius = rng.uniform(0.05, 0.5)
+        if np.hypot(*(centre - origin)) <= radius + 1e-3:
+            continue
+        bearing = np.arctan2(*(centre - origin)[::-1])
+        to_disc = np.hypot(*(centre - origin)) - radius
+        wall_distance = rng.uniform(0.1, 8.0)
+        along = np.array([np.cos(bearing), np.sin(bearing)])
+        across = np.array([-along[1], along[0]])
+        foot = origin + wall_distance * along
+        wall = np.array([[foot - across, foot + across]])
+        assert cast_rays(origin, [bearing], [centre], [radius])[0] == pytest.approx(to_disc, abs=1e-9)
+        assert cast_rays(origin, [bearing], np.zeros((0, 2)), [], wall)[0] == pytest.approx(wall_distance, abs=1e-9)
+        both = cast_rays(origin, [bearing], [centre], [radius], wall)[0]
+        assert both == pytest.approx(min(to_disc, wall_distance), abs=1e-9)
+        assert np.isinf(cast_rays(origin, [bearing + np.pi], [centre], [radius])[0])

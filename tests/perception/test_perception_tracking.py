@@ -156,9 +156,13 @@ def test_laser_perception_tracks_obstacles_around_a_moving_robot():
     assert (on_wall | on_obstacle).all()
 
 
-def test_same_seed_same_tracks_and_numpy_vs_auto_backend():
+def test_same_seed_same_tracks_and_the_retired_ray_option_changes_nothing():
     frames = [snapshot(k * 0.1, (0, 0, 0), [[2.0 - 0.2 * k * 0.1, 0.5]], [[-0.2, 0.0]]) for k in range(20)]
-    a, b = LaserPerception(), LaserPerception(ray_compute="auto")
+    a = LaserPerception()
+    with pytest.warns(FutureWarning, match="'ray_compute' no longer does anything"):
+        b = LaserPerception(ray_compute="auto")
+    with pytest.raises(TypeError, match="ray_colour"):
+        LaserPerception(ray_colour="red")
     a.reset(np.random.default_rng(3))
     b.reset(np.random.default_rng(3))
     ra, _ = run(a, frames)

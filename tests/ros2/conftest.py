@@ -27,18 +27,13 @@ FRONT_DURATION_S, REAR_DURATION_S = 9.5, 6.0
 
 
 def reference_metrics(name: str) -> dict:
-    """``viapath run NAME --perception laser --json``, in this process (the circle fit in numpy: equal to
-    round-off, and no numba compile, which its cache does not keep here, in every process)."""
+    """``viapath run NAME --perception laser --json``, in this process."""
     from viapath.scenarios import load_scenario
     from viapath.sim.loop import run_episode
 
     spec = load_scenario(name)
     spec = spec.model_copy(
-        update={
-            "perception": spec.perception.model_copy(
-                update={"options": {"detector": {"keep_segments": False, "fit_compute": "numpy"}}}
-            )
-        }
+        update={"perception": spec.perception.model_copy(update={"options": {"detector": {"keep_segments": False}}})}
     )
     return run_episode(spec, perception="laser").metrics
 

@@ -174,30 +174,6 @@ BAD = {
         "found 3",
         1,
     ),
-    "laser_unknown_choice": (
-        "duration_s: 60",
-        "duration_s: 60\nperception: {mode: laser, options: {ray_compute: cuda}}",
-        "perception.options.ray_compute",
-        "'auto', 'numpy' or 'numba'",
-        "found 'cuda'",
-        1,
-    ),
-    "laser_former_ray_spelling": (
-        "duration_s: 60",
-        "duration_s: 60\nperception: {mode: laser, options: {ray_backend: numpy}}",
-        "perception.options",
-        "ray_backend is now called ray_compute",
-        None,
-        1,
-    ),
-    "laser_former_fit_spelling": (
-        "duration_s: 60",
-        "duration_s: 60\nperception: {mode: laser, options: {detector: {fit_backend: numpy}}}",
-        "perception.options.detector",
-        "fit_backend is now called fit_compute",
-        None,
-        1,
-    ),
     "laser_scanner_ranges_crossed": (
         "duration_s: 60",
         "duration_s: 60\nperception: {mode: laser, options: {scanners: [{range_min_m: 5.0, range_max_m: 4.0}]}}",
@@ -369,7 +345,6 @@ CLI_CASES = [
     "missing_required",
     "replay_typo",
     "laser_min_points",
-    "laser_former_ray_spelling",
     "oracle_with_laser_options",
 ]
 
@@ -455,9 +430,9 @@ def test_laser_options_are_passed_through_including_the_mode():
     from viapath.perception.laser import LaserPerception
     from viapath.perception.modes import laser_perception
 
-    perception = laser_perception({"mode": "laser", "ray_compute": "auto"})
+    perception = laser_perception({"mode": "laser", "range_noise": False})
     assert isinstance(perception, LaserPerception)
-    assert perception.ray_compute == "auto"
+    assert perception.range_noise is False
     with pytest.raises(ValueError, match=r"^perception.options.bogus: "):
         laser_perception({"bogus": 1})
     with pytest.raises(ValueError, match=r"^perception.options.detector.iterations: .*greater than or equal to 1"):
@@ -467,7 +442,7 @@ def test_laser_options_are_passed_through_including_the_mode():
 LASER_OPTION_SETS = [
     {},
     {"detector": {"fixed_radius_m": 0.25, "segmentation": {"min_points": 4}}},
-    {"fixed_radius_m": 0.3, "range_noise": False, "ray_compute": "numpy"},
+    {"fixed_radius_m": 0.3, "range_noise": False},
     {"tracker": {"max_unseen_s": 1.5, "static_after_s": float("inf")}, "static_layer": {"enabled": False}},
     {"scanners": [{"name": "only", "beam_count": 361, "angle_increment_rad": 0.0087}], "detector": None},
 ]
@@ -488,11 +463,35 @@ def test_a_scenario_builds_the_laser_chain_the_mapping_builds(options):
     assert built.detector_params == direct.detector_params
     assert built.tracker_params == direct.tracker_params
     assert built._static.params == direct._static.params
-    assert (built.ray_compute, built.range_noise, built.robot_radius_m) == (
-        direct.ray_compute,
-        direct.range_noise,
-        direct.robot_radius_m,
-    )
+    assert (built.range_noise, built.robot_radius_m) == (direct.range_noise, direct.robot_radius_m)
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        {"ray_compute": "numba"},
+        {"ray_backend": "numpy"},
+        {"detector": {"fit_compute": "numpy", "iterations": 3}},
+        {"detector": {"fit_backend": "auto"}, "ray_compute": "cuda"},
+    ],
+)
+def test_the_retired_laser_options_are_read_with_a_warning_and_do_nothing(options):
+    """The options that chose between the laser chain's numpy and compiled code (and their earlier names) are
+    read, whatever their value, with a FutureWarning naming each, and build the chain built without them."""
+    from viapath.perception.laser import LaserPerception
+    from viapath.scenarios.build import build
+
+    data = yaml.safe_load(GOOD)
+    data["perception"] = {"mode": "laser", "options": options}
+    given = [name for part in (options, options.get("detector", {})) for name in part if name != "detector"]
+    with pytest.warns(FutureWarning) as caught:
+        built = build(scenario_from_dict(data)).perception
+    retired = [name for name in given if name != "iterations"]
+    for name in retired:
+        assert any(f"option {name!r} no longer does anything" in str(w.message) for w in caught), name
+    detector = options.get("detector")
+    plain = LaserPerception(detector=None if detector is None else {"iterations": 3} if "iterations" in given else {})
+    assert built.detector_params == plain.detector_params and built.scanners == plain.scanners
 
 
 def test_the_laser_option_models_default_to_the_dataclasses():

@@ -26,7 +26,6 @@ _HARNESS = "tests/robustness/test_harness_kernels.py"
 _CHOICE = f"{_BACKENDS}::test_compiled_choice_is_the_numpy_choice"
 _ESCAPE = f"{_BACKENDS}::test_compiled_escape_is_the_reference"
 _CORRIDOR = f"{_BACKENDS}::test_corridor_kernels_match_reference"
-_LASER = "tests/perception/test_laser_backends.py::test_numba_laser_path_equals_numpy_segments_and_tracks"
 
 ENTRIES = (
     # The viapath planner (viapath.compiled.arithmetic dispatches to them).
@@ -79,34 +78,6 @@ ENTRIES = (
     Entry("shield.evaluate", "viapath.safety.shield:Shield.evaluate", _SHIELD),
     Entry("shield.candidates", "viapath.safety.shield:Shield.candidates", _SHIELD),
     Entry("shield.shield", "viapath.safety.shield:Shield.filter", _SHIELD),
-    # The laser chain.
-    Entry(
-        "perception.beam_range",
-        "viapath.perception.raycast:cast_rays_numpy",
-        "tests/perception/test_perception_raycast.py::test_numba_equals_numpy_bit_for_bit",
-    ),
-    Entry(
-        "perception.cast_rays_kernel",
-        "viapath.perception.raycast:cast_rays_numpy",
-        "tests/perception/test_perception_raycast.py::test_numba_equals_numpy_bit_for_bit",
-    ),
-    Entry("perception.cast_rays_from_kernel", "viapath.perception.raycast:cast_rays_from_numpy", _LASER),
-    Entry(
-        "perception.solve_sym3_scalar",
-        "viapath.perception.circle_fit:solve_sym3",
-        "tests/perception/test_perception_detection.py::test_numba_circle_fit_equals_numpy",
-    ),
-    Entry(
-        "perception.fit_circles_kernel",
-        "viapath.perception.circle_fit:fit_circles",
-        "tests/perception/test_perception_detection.py::test_numba_circle_fit_equals_numpy",
-    ),
-    Entry(
-        "perception.segment_shape_kernel",
-        "viapath.perception.detection:detect",
-        "tests/perception/test_laser_shortcuts.py::test_numba_shape_tests_equal_numpy",
-    ),
-    Entry("perception.split_clusters_kernel", "viapath.perception.segmentation:segment_beams", _LASER),
     # The harness every planner gets (guard, inflation).
     Entry(
         "harness.obstacles_sound",

@@ -44,32 +44,7 @@ def linear_sum_assignment(cost) -> tuple[np.ndarray, np.ndarray]:
     col4row = np.full(n_rows, -1)
     row4col = np.full(n_cols, -1)
     for current in range(n_rows):
-        shortest = np.full(n_cols, np.inf)
-        path = np.full(n_cols, -1)
-        seen_rows = np.zeros(n_rows, dtype=bool)
-        seen_cols = np.zeros(n_cols, dtype=bool)
-        row, min_value, sink = current, 0.0, -1
-        while sink < 0:
-            seen_rows[row] = True
-            remaining = ~seen_cols
-            reduced = min_value + cost[row] - u[row] - v
-            better = remaining & (reduced < shortest)
-            path[better] = row
-            shortest[better] = reduced[better]
-            candidates = np.flatnonzero(remaining)
-            values = shortest[candidates]
-            lowest = values.min()
-            if not np.isfinite(lowest):
-                raise ValueError("cost matrix is infeasible")
-            ties = candidates[values == lowest]
-            free = ties[row4col[ties] < 0]
-            col = int(free[0] if len(free) else ties[0])
-            min_value = lowest
-            seen_cols[col] = True
-            if row4col[col] < 0:
-                sink = col
-            else:
-                row = int(row4col[col])
+        sink, min_value, path, shortest, seen_rows, seen_cols = _shortest_augmenting_path(cost, u, v, row4col, current)
         u[current] += min_value
         others = seen_rows.copy()
         others[current] = False
@@ -87,6 +62,40 @@ def linear_sum_assignment(cost) -> tuple[np.ndarray, np.ndarray]:
         order = np.argsort(col4row)
         return col4row[order], rows[order]
     return rows, col4row
+
+
+def _shortest_augmenting_path(cost, u, v, row4col, current: int):
+    """Dijkstra on the reduced costs from the free row ``current`` to the nearest free column (Crouse's shortest
+    augmenting path): the column reached (``sink``), the path's length, the predecessor row of each column, the
+    shortest distances and the rows and columns seen."""
+    n_rows, n_cols = cost.shape
+    shortest = np.full(n_cols, np.inf)
+    path = np.full(n_cols, -1)
+    seen_rows = np.zeros(n_rows, dtype=bool)
+    seen_cols = np.zeros(n_cols, dtype=bool)
+    row, min_value, sink = current, 0.0, -1
+    while sink < 0:
+        seen_rows[row] = True
+        remaining = ~seen_cols
+        reduced = min_value + cost[row] - u[row] - v
+        better = remaining & (reduced < shortest)
+        path[better] = row
+        shortest[better] = reduced[better]
+        candidates = np.flatnonzero(remaining)
+        values = shortest[candidates]
+        lowest = values.min()
+        if not np.isfinite(lowest):
+            raise ValueError("cost matrix is infeasible")
+        ties = candidates[values == lowest]
+        free = ties[row4col[ties] < 0]
+        col = int(free[0] if len(free) else ties[0])
+        min_value = lowest
+        seen_cols[col] = True
+        if row4col[col] < 0:
+            sink = col
+        else:
+            row = int(row4col[col])
+    return sink, min_value, path, shortest, seen_rows, seen_cols
 
 
 def brute_force_assignment(cost) -> tuple[np.ndarray, np.ndarray]:

@@ -10,8 +10,11 @@ What we chose where the sources are silent:
   (a leg, ~10 points, ±1 cm) does not pin its own radius; the prior keeps it plausible. A *known*
   radius is the limit ``σ_prior -> 0`` (``fixed_radius_m``), a free fit is ``σ_prior = inf``.
 * Start: the prior radius behind the arc's centroid, seen from the sensor (``centroid + 2r/π · û``,
-  the centroid of a half circle); without a prior, the Kåsa fit. Then ``iterations`` damped
-  Gauss–Newton steps, all clusters at once on a padded ``(K, P)`` array (no Python loop per cluster).
+  the centroid of a half circle); without a prior, the Kåsa fit. Then ``iterations`` Gauss–Newton
+  steps, in coordinates centred on the arc's centroid (round-off stays at the scale of the arc).
+* Compiled (:func:`viapath.jit.compiled`; plain Python when compilation is off), one loop per cluster:
+  a scan has a few dozen clusters of 3–100 points, too small for numpy's per-call cost. The 3x3 systems
+  are solved by Cramer's rule (:func:`solve_sym3`; a singular system gives a zero step).
 * ``centre_sigma_m``: the Gauss–Newton covariance ``σ̂² (JᵀJ)⁻¹`` of the centre, with σ̂ the larger
   of the fit's residual RMS and the range noise — what the tracker takes as measurement noise.
 """
@@ -21,6 +24,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from viapath.jit import compiled
 
 
 @dataclass
@@ -32,14 +37,6 @@ class CircleFits:
 
     def __len__(self) -> int:
         return len(self.radii_m)
-
-
-def _padded(points: np.ndarray, starts: np.ndarray, counts: np.ndarray):
-    width = int(counts.max())
-    column = np.arange(width)
-    mask = column[None, :] < counts[:, None]
-    index = np.where(mask, starts[:, None] + column[None, :], starts[:, None])
-    return points[index], mask.astype(float)
 
 
 def clusters_of(starts, counts) -> tuple[np.ndarray, np.ndarray]:
@@ -67,94 +64,44 @@ def fit_circles(
 
     ``sensor_origins`` (K, 2) or (2,): where each cluster was seen from, in the points' frame
     (default: the origin); used for the start and so that the centre lands *behind* the arc.
-    The numpy reference; the laser pipeline's dispatch (:func:`viapath.perception.detection.fit_circles_as`)
-    runs the same algorithm compiled when asked (one loop per cluster; equal to round-off).
     """
     starts, counts = clusters_of(starts, counts)
     k_count = len(starts)
     if k_count == 0:
         return CircleFits(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
-    p, mask = _padded(np.asarray(points, dtype=float), starts, counts)
-    n = counts.astype(float)
-    mean = (p * mask[..., None]).sum(axis=1) / n[:, None]
-    origins = (
-        np.zeros((k_count, 2))
-        if sensor_origins is None
-        else np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
-    )
-    q = (p - mean[:, None, :]) * mask[..., None]  # centred, padded rows are 0
-
+    if sensor_origins is None:
+        origins = np.zeros((k_count, 2))
+    else:
+        origins = np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
     prior = fixed_radius_m if fixed_radius_m is not None else radius_prior_m
-    if prior is not None:
-        view = mean - origins
-        view /= np.maximum(np.hypot(view[:, 0], view[:, 1]), 1e-12)[:, None]
-        centre = view * (2.0 / np.pi * prior)  # relative to the mean
-        radius = np.full(k_count, float(prior))
-    else:
-        centre, radius = _kasa(q, mask, n)
-    if fixed_radius_m is not None:
-        weight = np.full(k_count, 1e12)
+    if fixed_radius_m is not None:  # a known radius: the limit of a prior with sigma -> 0
+        weight = 1e12
     elif radius_prior_m is not None and np.isfinite(radius_prior_sigma_m) and radius_prior_sigma_m > 0:
-        weight = np.full(k_count, (range_sigma_m / radius_prior_sigma_m) ** 2)
+        weight = (range_sigma_m / radius_prior_sigma_m) ** 2
     else:
-        weight = np.zeros(k_count)
-    target = radius.copy() if prior is not None else np.zeros(k_count)
-
-    qz = q[..., 0] + 1j * q[..., 1]  # points as complex numbers: fewer numpy calls per iteration
-    cz = centre[:, 0] + 1j * centre[:, 1]
-    for _ in range(iterations):
-        normal, _, jtr = _normal_equations(qz, mask, cz, radius, n, weight, target)
-        step, _, _ = solve_sym3(normal, jtr)
-        cz = cz - (step[0] + 1j * step[1])
-        radius = np.abs(radius - step[2])
-
-    normal, rms, jtr = _normal_equations(qz, mask, cz, radius, n, weight, target)
-    # Centre covariance: σ̂² (JᵀJ)⁻¹ at the solution; its 2x2 centre block from the cofactors.
-    _, cofactors, det = solve_sym3(normal, jtr)
-    sigma2 = np.maximum(rms, range_sigma_m) ** 2
-    c00, c01, _, c11, _, _ = (c / det for c in cofactors)
-    half_trace, half_diff = 0.5 * (c00 + c11), 0.5 * (c00 - c11)
-    largest = half_trace + np.sqrt(half_diff**2 + c01**2)
-    centre_sigma = np.sqrt(np.maximum(largest * sigma2, 0.0))
-    centre = np.stack([cz.real, cz.imag], axis=-1)
-    # The centre must lie behind the arc, away from the sensor; a fit that flips to the near side
-    # (possible on a nearly straight, noisy arc) is mirrored through the arc's centroid.
-    view = mean - origins
-    behind = (centre * view).sum(1) >= 0
-    centre = np.where(behind[:, None], centre, -centre)
-    return CircleFits(centre + mean, radius, rms, centre_sigma)
+        weight = 0.0
+    out = np.empty((k_count, 5))
+    fit_clusters(
+        np.ascontiguousarray(points, dtype=float),
+        starts,
+        counts,
+        np.ascontiguousarray(origins, dtype=float),
+        prior is not None,
+        0.0 if prior is None else float(prior),
+        float(weight),
+        float(range_sigma_m),
+        int(iterations),
+        out,
+    )
+    return CircleFits(out[:, :2].copy(), out[:, 2].copy(), out[:, 3].copy(), out[:, 4].copy())
 
 
-def _normal_equations(qz, mask, cz, radius, n, weight, target):
-    """Gauss–Newton normal equations for (cx, cy, r): the six entries of ``JᵀJ``, the residual RMS and ``Jᵀr``.
+@compiled
+def solve_sym3(a00, a01, a02, a11, a12, a22, b0, b1, b2):
+    """One symmetric 3x3 system ``A x = b`` by Cramer's rule: ``x`` and the entries 00, 01, 11 and 22 of ``A⁻¹``.
 
-    Residual ``|p - c| - r``; Jacobian rows ``(-u_x, -u_y, -1)`` with ``u`` the unit vector from the
-    centre to the point (complex ``u``; ``Σu² = Σ(u_x² - u_y²) + 2iΣu_x u_y`` and ``u_x² + u_y² = 1``
-    give the 2x2 block in one sum); the prior adds ``weight (r - target)²``. The step is
-    ``δ = -(JᵀJ)⁻¹ Jᵀr``.
+    A singular system (``|det| <= 1e-300``) gives ``x = 0`` and ``A⁻¹ = 0``.
     """
-    d = qz - cz[:, None]
-    dist = np.abs(d)
-    np.maximum(dist, 1e-12, out=dist)
-    u = d / dist * mask
-    res = (dist - radius[:, None]) * mask
-    u2 = (u * u).sum(1)
-    u1 = u.sum(1)
-    ur = (u * res).sum(1)
-    normal = (0.5 * (n + u2.real), 0.5 * u2.imag, u1.real, 0.5 * (n - u2.real), u1.imag, n + weight)
-    rms = np.sqrt((res * res).sum(1) / n)
-    jtr = (-ur.real, -ur.imag, -res.sum(1) + weight * (radius - target))
-    return normal, rms, jtr
-
-
-def solve_sym3(a, b):
-    """Solve K symmetric 3x3 systems given as entries ``a = (a00, a01, a02, a11, a12, a22)`` (each (K,)).
-
-    Cramer's rule on (K,) arrays: for a handful of clusters this is far faster than
-    ``np.linalg.solve``. Returns ``(x (3, K), cofactors (6 arrays), det)``; a singular system gives
-    a zero step.
-    """
-    a00, a01, a02, a11, a12, a22 = a
     c00 = a11 * a22 - a12 * a12
     c01 = a02 * a12 - a01 * a22
     c02 = a01 * a12 - a02 * a11
@@ -162,25 +109,126 @@ def solve_sym3(a, b):
     c12 = a01 * a02 - a00 * a12
     c22 = a00 * a11 - a01 * a01
     det = a00 * c00 + a01 * c01 + a02 * c02
-    ok = np.abs(det) > 1e-300
-    det = np.where(ok, det, np.inf)
-    b0, b1, b2 = b
-    x = (
-        np.stack([(c00 * b0 + c01 * b1 + c02 * b2), (c01 * b0 + c11 * b1 + c12 * b2), (c02 * b0 + c12 * b1 + c22 * b2)])
-        / det
+    if not abs(det) > 1e-300:
+        det = np.inf
+    return (
+        (c00 * b0 + c01 * b1 + c02 * b2) / det,
+        (c01 * b0 + c11 * b1 + c12 * b2) / det,
+        (c02 * b0 + c12 * b1 + c22 * b2) / det,
+        c00 / det,
+        c01 / det,
+        c11 / det,
+        c22 / det,
     )
-    return x, (c00, c01, c02, c11, c12, c22), det
 
 
-def _kasa(q: np.ndarray, mask: np.ndarray, n: np.ndarray):
-    """Algebraic fit ``x² + y² + a x + b y + c = 0`` (Kåsa), batched; ``q`` centred and masked."""
-    x, y = q[..., 0], q[..., 1]
-    z = x * x + y * y
-    a = ((x * x).sum(1), (x * y).sum(1), x.sum(1), (y * y).sum(1), y.sum(1), n)
-    sol, _, _ = solve_sym3(a, (-(x * z).sum(1), -(y * z).sum(1), -z.sum(1)))
-    centre = -0.5 * sol[:2].T
-    radius = np.sqrt(np.maximum((centre**2).sum(1) - sol[2], 1e-12))
-    return centre, radius
+@compiled
+def fit_clusters(points, starts, counts, origins, has_prior, prior, weight, range_sigma, iterations, out):
+    """The circle fit of every cluster: ``out[k]`` = (centre x, centre y, radius, rms, centre sigma).
+
+    ``has_prior``: start from ``prior`` (the radius) behind the centroid and pull the radius towards it with
+    ``weight`` = (σ_range / σ_prior)²; else start from the Kåsa fit, with ``weight`` 0.
+    """
+    for k in range(starts.shape[0]):
+        s, m = starts[k], counts[k]
+        mx = 0.0
+        my = 0.0
+        for i in range(s, s + m):
+            mx += points[i, 0]
+            my += points[i, 1]
+        mx /= m
+        my /= m
+        vx = mx - origins[k, 0]
+        vy = my - origins[k, 1]
+        if has_prior:
+            norm = max(np.sqrt(vx * vx + vy * vy), 1e-12)
+            cx = vx / norm * (2.0 / np.pi * prior)
+            cy = vy / norm * (2.0 / np.pi * prior)
+            r = prior
+            target = prior
+        else:
+            cx, cy, r = _kasa(points, s, m, mx, my)
+            target = 0.0
+        cx, cy, r, rms, i00, i01, i11 = _gauss_newton(points, s, m, mx, my, cx, cy, r, weight, target, iterations)
+        sigma2 = max(rms, range_sigma) ** 2
+        # Centre covariance σ̂² (JᵀJ)⁻¹ at the solution: the larger eigenvalue of its 2x2 centre block.
+        half_trace = 0.5 * (i00 + i11)
+        half_diff = 0.5 * (i00 - i11)
+        largest = half_trace + np.sqrt(half_diff * half_diff + i01 * i01)
+        # The centre must lie behind the arc, away from the sensor; a fit that flips to the near side
+        # (possible on a nearly straight, noisy arc) is mirrored through the arc's centroid.
+        if cx * vx + cy * vy < 0:
+            cx = -cx
+            cy = -cy
+        out[k, 0] = cx + mx
+        out[k, 1] = cy + my
+        out[k, 2] = r
+        out[k, 3] = rms
+        out[k, 4] = np.sqrt(max(largest * sigma2, 0.0))
+
+
+@compiled
+def _kasa(points, s, m, mx, my):
+    """Algebraic fit ``x² + y² + a x + b y + c = 0`` (Kåsa) of ``points[s : s + m]`` about their centroid
+    ``(mx, my)``: the centre (relative to the centroid) and the radius."""
+    sxx = sxy = sx = syy = sy = sxz = syz = sz = 0.0
+    for i in range(s, s + m):
+        x = points[i, 0] - mx
+        y = points[i, 1] - my
+        z = x * x + y * y
+        sxx += x * x
+        sxy += x * y
+        sx += x
+        syy += y * y
+        sy += y
+        sxz += x * z
+        syz += y * z
+        sz += z
+    a, b, c, _, _, _, _ = solve_sym3(sxx, sxy, sx, syy, sy, float(m), -sxz, -syz, -sz)
+    cx = -0.5 * a
+    cy = -0.5 * b
+    return cx, cy, np.sqrt(max(cx * cx + cy * cy - c, 1e-12))
+
+
+@compiled
+def _gauss_newton(points, s, m, mx, my, cx, cy, r, weight, target, iterations):
+    """``iterations`` Gauss–Newton steps on ``Σ (|p_i - c| - r)² + weight (r - target)²`` from ``(cx, cy, r)``
+    (centre relative to the centroid ``(mx, my)``), then the normal equations once more at the solution.
+
+    Residual ``|p - c| - r``; Jacobian rows ``(-u_x, -u_y, -1)`` with ``u`` the unit vector from the centre to
+    the point; the step is ``δ = -(JᵀJ)⁻¹ Jᵀr``. Returns the centre, the radius, the residual RMS and the
+    entries 00, 01, 11 of ``(JᵀJ)⁻¹`` at the solution.
+    """
+    rms = 0.0
+    i00 = i01 = i11 = 0.0
+    for it in range(iterations + 1):
+        a00 = a01 = a02 = a11 = a12 = 0.0
+        g0 = g1 = g2 = 0.0
+        ss = 0.0
+        for i in range(s, s + m):
+            dx = points[i, 0] - mx - cx
+            dy = points[i, 1] - my - cy
+            dist = max(np.sqrt(dx * dx + dy * dy), 1e-12)
+            ux = dx / dist
+            uy = dy / dist
+            res = dist - r
+            a00 += ux * ux
+            a01 += ux * uy
+            a02 += ux
+            a11 += uy * uy
+            a12 += uy
+            g0 -= ux * res
+            g1 -= uy * res
+            g2 -= res
+            ss += res * res
+        g2 += weight * (r - target)
+        d0, d1, d2, i00, i01, i11, _ = solve_sym3(a00, a01, a02, a11, a12, m + weight, g0, g1, g2)
+        rms = np.sqrt(ss / m)
+        if it < iterations:
+            cx -= d0
+            cy -= d1
+            r = abs(r - d2)
+    return cx, cy, r, rms, i00, i01, i11
 
 
 def fit_circle(points: np.ndarray, sensor_origin=(0.0, 0.0), **options):

@@ -33,26 +33,39 @@ What we chose where the sources leave it open:
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
-from viapath.compiled import COMPUTE_CHOICES as COMPUTE_CHOICES  # re-exported: the laser chain's choices
-from viapath.compiled import kernels, require
-from viapath.perception.circle_fit import CircleFits, _padded, clusters_of, fit_circles, solve_sym3
+from viapath.compiled.sums import pairwise_sum
+from viapath.jit import compiled
+from viapath.perception.circle_fit import fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
-from viapath.perception.raycast import Caster, cast_rays_from_numpy, cast_rays_numpy
 from viapath.perception.scanner import ScannerModel
-from viapath.perception.segmentation import BeamTables, SegmentationParams, Segments, segment_beams
+from viapath.perception.segmentation import BeamTables, SegmentationParams, segment_beams
 
-#: The choices of the laser chain's arithmetic (``LaserPerception(ray_compute=...)``, ``DetectorParams.fit_compute``,
-#: the ROS 2 parameter ``fit_compute``): the compiled package's (:data:`viapath.compiled.COMPUTE_CHOICES`).
-COMPILED_COMPUTE = "numba"  # the choice that runs the compiled code (an error without numba)
-#: Former spellings of the laser chain's options -> their names now (a scenario or a ROS parameter file that
-#: still says the former one is told the new name).
-RENAMED_OPTIONS = {"ray_backend": "ray_compute", "fit_backend": "fit_compute"}
+#: Options the laser chain had to choose between its numpy and its compiled code (``ray_compute`` of the laser
+#: perception, ``fit_compute`` of the detector and the ROS 2 node, and their earlier names): there is one
+#: implementation now; a scenario or parameter file that still gives one is read with a FutureWarning
+#: (:func:`retired_options`).
+RETIRED_OPTIONS = ("ray_compute", "fit_compute", "ray_backend", "fit_backend")
+
+
+def retired_options(values: dict[str, Any], where: str) -> dict[str, Any]:
+    """``values`` without the :data:`RETIRED_OPTIONS`, with a FutureWarning naming each one given (``where``: the
+    place it was given, for the message)."""
+    given = [name for name in RETIRED_OPTIONS if name in values]
+    for name in given:
+        warnings.warn(
+            f"{where}: option {name!r} no longer does anything (the laser chain has one implementation, compiled "
+            "when compilation is on); remove it",
+            FutureWarning,
+            stacklevel=3,
+        )
+    return {key: value for key, value in values.items() if key not in given}
 
 
 @dataclass(frozen=True)
@@ -77,9 +90,6 @@ class DetectorParams:
     leg_position_sigma_m: float = 0.1
     measurement_sigma_floor_m: float = 0.02
     iterations: int = 4
-    # numba when installed (extra 'fast'), else numpy: the circle fit (equal to round-off) and
-    # the segmentation's clustering and the shape tests (equal bit for bit)
-    fit_compute: str = "auto"
     keep_segments: bool = True  # per-segment points and fits, for plots and evaluation
 
     @classmethod
@@ -177,7 +187,6 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     ranges[~np.isfinite(ranges) | (ranges <= 0.0) | (ranges < layout.range_min_m) | (ranges > layout.range_max_m)] = (
         np.nan
     )
-    compiled = params.fit_compute in ("numba", "auto") and _compiled_perception() is not None
     segments = segment_beams(
         ranges,
         layout.angles_rad,
@@ -186,7 +195,6 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
         layout.scan_index,
         params.segmentation,
         _beam_tables(scanners, params.segmentation),
-        _split_compiled if compiled else None,
     )
     point_scan = layout.scan_index[segments.all_beam_index]
     fused = FusedScan(segments.all_points, point_scan, segments.all_beam_index - layout.first_beam[point_scan])
@@ -207,9 +215,7 @@ def detect(scanners, scans, params: DetectorParams = DetectorParams()) -> Detect
     keep = extent <= params.max_extent_m
     candidates = np.flatnonzero(keep)
     if len(candidates):
-        straight = _straight(
-            points, starts, counts, first, chord, extent, origins, occluded, candidates, params, compiled
-        )
+        straight = _straight(points, starts, counts, first, chord, extent, origins, occluded, candidates, params)
         keep[candidates[straight]] = False
         candidates = candidates[~straight]
     centres_all, radii_all, sigma_all = _fit_candidates(points, starts, counts, origins, candidates, keep, params)
@@ -235,8 +241,7 @@ def _fit_candidates(points, starts, counts, origins, candidates, keep, params) -
     radii_all = np.full(len(starts), np.nan)
     sigma_all = np.full(len(starts), np.nan)
     if len(candidates):
-        fits = fit_circles_as(
-            params.fit_compute,
+        fits = fit_circles(
             points,
             starts[candidates],
             counts[candidates],
@@ -262,59 +267,37 @@ def _fit_candidates(points, starts, counts, origins, candidates, keep, params) -
     return centres_all, radii_all, sigma_all
 
 
-def _straight(
-    points, starts, counts, first, chord, extent, origins, occluded, candidates, params, compiled
-) -> np.ndarray:
+def _straight(points, starts, counts, first, chord, extent, origins, occluded, candidates, params) -> np.ndarray:
     """Which of the ``candidates`` segments are straight (walls, flat pieces), by the sagitta and the convexity
-    t-statistic of each (compiled in one pass when ``compiled``), or flat with something nearer beside them."""
-    c_starts, c_counts, c_first, c_chord = (
-        starts[candidates],
-        counts[candidates],
+    t-statistic of each (:func:`segment_shapes`), or flat with something nearer beside them."""
+    c_first, c_chord, c_extent, c_origins = (
         first[candidates],
         chord[candidates],
+        extent[candidates],
+        origins[candidates],
     )
-    c_extent, c_origins = extent[candidates], origins[candidates]
-    module = _compiled_perception() if compiled else None
-    if module is not None:  # the same sagittas and t-statistics, bit for bit, in one compiled pass
-        seg = params.segmentation
-        sagitta, t_convex = np.empty(len(candidates)), np.empty(len(candidates))
-        distance = np.hypot(*(c_first + 0.5 * c_chord - c_origins).T)  # as in _convexity_t
-        module.segment_shape_kernel(
-            points,
-            c_starts,
-            c_counts,
-            int(c_counts.max()),
-            c_first,
-            c_chord,
-            c_extent,
-            c_origins,
-            distance,
-            seg.noise_switch_range_m,
-            seg.noise_sigma_near_m,
-            seg.noise_fraction_far,
-            sagitta,
-            t_convex,
-        )
-        straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
-        if params.flat_test_min_extent_m is not None:
-            straight |= (c_extent >= params.flat_test_min_extent_m) & (t_convex < params.min_convexity_t)
-    else:
-        padded, mask = _padded(points, c_starts, c_counts)
-        x, y, mid = _chord_coordinates(padded, mask, c_first, c_chord, c_extent, c_origins)
-        sagitta = np.abs(y).max(1)
-        straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
-        if params.flat_test_min_extent_m is not None:
-            long_enough = c_extent >= params.flat_test_min_extent_m
-            if long_enough.any():
-                t_convex = _convexity_t(
-                    x[long_enough],
-                    y[long_enough],
-                    mask[long_enough],
-                    mid[long_enough],
-                    c_origins[long_enough],
-                    params.segmentation,
-                )
-                straight[np.flatnonzero(long_enough)[t_convex < params.min_convexity_t]] = True
+    seg = params.segmentation
+    sagitta, t_convex = np.empty(len(candidates)), np.empty(len(candidates))
+    distance = np.hypot(*(c_first + 0.5 * c_chord - c_origins).T)  # from the sensor to the chord's middle
+    segment_shapes(
+        points,
+        starts[candidates],
+        counts[candidates],
+        int(counts[candidates].max()),
+        c_first,
+        c_chord,
+        c_extent,
+        c_origins,
+        distance,
+        seg.noise_switch_range_m,
+        seg.noise_sigma_near_m,
+        seg.noise_fraction_far,
+        sagitta,
+        t_convex,
+    )
+    straight = (c_extent > params.line_min_extent_m) & (sagitta < params.line_max_sagitta_ratio * c_extent)
+    if params.flat_test_min_extent_m is not None:
+        straight |= (c_extent >= params.flat_test_min_extent_m) & (t_convex < params.min_convexity_t)
     # A flat piece with something nearer beside it: background seen between foreground objects.
     straight |= (
         occluded[candidates]
@@ -336,151 +319,6 @@ def _segment_info(points, starts, counts, source, centres, radii, accepted) -> l
         )
         for k in range(len(starts))
     ]
-
-
-def _compiled_perception():
-    """:mod:`viapath.compiled.perception` (the compiled clustering, shape tests and circle fit), or None: numba
-    missing or unusable."""
-    return kernels("perception")
-
-
-def ray_casters(choice: str) -> tuple[Caster, Caster]:
-    """The ray casters (one origin: :func:`~viapath.perception.raycast.cast_rays_numpy`'s arguments; an origin per
-    beam: :func:`~viapath.perception.raycast.cast_rays_from_numpy`'s) of ``choice``: ``"numpy"``, ``"numba"``
-    (the same casting compiled, bit for bit; an error without numba) or ``"auto"`` (numba when installed). The
-    first compiled call on a machine compiles them (~seconds, cached on disk: :mod:`~viapath.compiled.perception`)."""
-    if choice == "auto":
-        choice = "numba" if kernels("perception") is not None else "numpy"
-    if choice == "numpy":
-        return cast_rays_numpy, cast_rays_from_numpy
-    if choice != "numba":
-        raise ValueError(f"ray_compute must be 'numpy', 'numba' or 'auto', got {choice!r}")
-    compiled = require("perception")
-
-    def one_origin(origin, directions, centres, radii, segments) -> np.ndarray:
-        out = np.empty(len(directions))
-        compiled.cast_rays_kernel(
-            float(origin[0]),
-            float(origin[1]),
-            np.ascontiguousarray(directions, dtype=float),
-            centres,
-            radii,
-            segments,
-            out,
-        )
-        return out
-
-    def per_beam(origins_x, origins_y, directions, centres, radii, segments, groups=None) -> np.ndarray:
-        out = np.empty(len(directions))
-        compiled.cast_rays_from_kernel(origins_x, origins_y, directions, centres, radii, segments, out)
-        return out
-
-    return one_origin, per_beam
-
-
-def fit_circles_as(choice: str, points, starts, counts, sensor_origins=None, **options) -> CircleFits:
-    """:func:`viapath.perception.circle_fit.fit_circles` in the arithmetic ``choice``: ``"numpy"`` (the
-    reference), ``"numba"`` (the same algorithm compiled, one loop per cluster; equal to round-off; an error
-    without numba) or ``"auto"`` (numba when installed)."""
-    if choice == "auto":
-        choice = "numba" if _compiled_perception() is not None else "numpy"
-    if choice == "numba":
-        return _fit_circles_compiled(points, starts, counts, sensor_origins, **options)
-    if choice != "numpy":
-        raise ValueError(f"backend must be 'numpy', 'numba' or 'auto', got {choice!r}")
-    return fit_circles(points, starts, counts, sensor_origins, **options)
-
-
-def _fit_circles_compiled(
-    points,
-    starts,
-    counts,
-    sensor_origins=None,
-    *,
-    radius_prior_m: float | None = None,
-    radius_prior_sigma_m: float = 0.05,
-    fixed_radius_m: float | None = None,
-    range_sigma_m: float = 0.01,
-    iterations: int = 4,
-) -> CircleFits:
-    """:func:`viapath.perception.circle_fit.fit_circles` compiled (:func:`viapath.compiled.perception.fit_circles_kernel`)."""
-    starts, counts = clusters_of(starts, counts)
-    k_count = len(starts)
-    if k_count == 0:
-        return CircleFits(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0))
-    module = _compiled_perception()
-    if module is None:
-        raise RuntimeError("numba back end unavailable; pip install 'viapath[fast]'")
-    if sensor_origins is None:
-        origins = np.zeros((k_count, 2))
-    elif (
-        type(sensor_origins) is np.ndarray
-        and sensor_origins.dtype == np.float64
-        and sensor_origins.shape == (k_count, 2)
-    ):
-        origins = sensor_origins  # one per cluster already (detection): no broadcast view needed
-    else:
-        origins = np.broadcast_to(np.asarray(sensor_origins, float), (k_count, 2))
-    prior = fixed_radius_m if fixed_radius_m is not None else radius_prior_m
-    if fixed_radius_m is not None:
-        weight: float | np.ndarray = 1e12
-    elif radius_prior_m is not None and np.isfinite(radius_prior_sigma_m) and radius_prior_sigma_m > 0:
-        weight = (range_sigma_m / radius_prior_sigma_m) ** 2
-    else:
-        weight = 0.0
-    out = np.empty((k_count, 5))
-    module.fit_circles_kernel(
-        np.ascontiguousarray(points, dtype=float),
-        starts,
-        counts,
-        np.ascontiguousarray(origins, dtype=float),
-        prior is not None,
-        0.0 if prior is None else float(prior),
-        float(weight),
-        float(range_sigma_m),
-        int(iterations),
-        out,
-    )
-    return CircleFits(out[:, :2].copy(), out[:, 2].copy(), out[:, 3].copy(), out[:, 4].copy())
-
-
-def _split_compiled(points, r, valid, scans, tables: BeamTables, params: SegmentationParams) -> Segments:
-    """:func:`viapath.perception.segmentation.segment_beams`' clustering after the points in one compiled pass
-    (:func:`viapath.compiled.perception.split_clusters_kernel`), the same result bit for bit."""
-    split_clusters_kernel = _compiled_perception().split_clusters_kernel
-    n = len(valid)
-    starts, counts, cluster_scan = (
-        np.empty(n, dtype=np.int64),
-        np.empty(n, dtype=np.int64),
-        np.empty(n, dtype=scans.dtype),
-    )
-    occluded, kept_points = np.empty(n, dtype=bool), np.empty(n, dtype=np.int64)
-    kept, kept_total = split_clusters_kernel(
-        points,
-        r,
-        valid,
-        scans,
-        tables.sin_gap,
-        tables.sin_rest,
-        params.max_gap_beams,
-        params.noise_switch_range_m,
-        params.noise_sigma_near_m,
-        params.noise_fraction_far,
-        params.min_jump_m,
-        params.min_points,
-        starts,
-        counts,
-        occluded,
-        cluster_scan,
-        kept_points,
-    )
-    starts, counts, occluded, cluster_scan = starts[:kept], counts[:kept], occluded[:kept], cluster_scan[:kept]
-    if kept_total == n:  # every cluster kept: the points as they are
-        return Segments(valid, points, starts, counts, occluded, cluster_scan, points, valid)
-    index = kept_points[:kept_total]
-    return Segments(
-        valid[index], points[index], np.cumsum(counts) - counts, counts, occluded, cluster_scan, points, valid
-    )
 
 
 def _merge_duplicates(centres, radii, sigma, source, distance_m):
@@ -533,29 +371,82 @@ def _pair_legs(centres, radii, sigma, legs_mask, params: DetectorParams):
     return centres[alive], radii[alive], sigma[alive], leg_count[alive]
 
 
-def _chord_coordinates(padded, mask, first, chord, extent, origins):
-    """Each point's coordinates along its segment's chord (``x``, from the chord's middle) and across it
-    (``y``, positive towards the sensor); padded entries are 0."""
-    u = chord / np.maximum(extent, 1e-12)[:, None]
-    mid = first + 0.5 * chord
-    n = np.stack([-u[:, 1], u[:, 0]], -1)
-    n[((origins - mid) * n).sum(1) < 0] *= -1.0  # n points towards the sensor
-    rel = padded - mid[:, None, :]
-    x = (rel[..., 0] * u[:, None, 0] + rel[..., 1] * u[:, None, 1]) * mask
-    y = (rel[..., 0] * n[:, None, 0] + rel[..., 1] * n[:, None, 1]) * mask
-    return x, y, mid
+# -- the detector's shape tests ----------------------------------------------------------------
+# Both come from the points' coordinates along each segment's chord and across it. The sums are numpy's
+# pairwise sums of a row of ``width`` terms (the segment padded with zero terms), as the detector's numpy
+# formulation summed them: the convexity test sits on a threshold, and its verdicts stay those of that
+# formulation to the last bit.
 
 
-def _convexity_t(x, y, mask, mid, origins, seg: SegmentationParams) -> np.ndarray:
-    """t-statistic of the curvature towards the sensor of ``y = a + b x + c x²`` fitted across each chord."""
-    x2 = x * x
-    sx2 = x2.sum(1)
-    moments = (mask.sum(1), x.sum(1), sx2, sx2, (x2 * x).sum(1), (x2 * x2).sum(1))
-    coef, cofactors, det = solve_sym3(moments, (y.sum(1), (x * y).sum(1), (x2 * y).sum(1)))
-    inv22 = cofactors[5] / det
-    distance = np.hypot(*(mid - origins).T)
-    sigma = np.where(distance < seg.noise_switch_range_m, seg.noise_sigma_near_m, seg.noise_fraction_far * distance)
-    return -coef[2] / (sigma * np.sqrt(np.maximum(inv22, 1e-30)))
+@compiled(error_model="numpy")
+def segment_shapes(
+    points,
+    starts,
+    counts,
+    width,
+    first,
+    chord,
+    extent,
+    origins,
+    distance,
+    noise_switch_range,
+    noise_sigma_near,
+    noise_fraction_far,
+    sagitta,
+    t_convex,
+):
+    """Per segment ``k`` (``points[starts[k] : starts[k] + counts[k]]``, chord ``chord[k]`` from ``first[k]``,
+    of length ``extent[k]``, seen from ``origins[k]`` at ``distance[k]``): ``sagitta[k]``, the largest distance
+    of a point from the chord, and ``t_convex[k]``, the t-statistic of the curvature towards the sensor of
+    ``y = a + b x + c x²`` fitted across the chord (``x`` along it from its middle, ``y`` across it towards the
+    sensor), given the range noise at ``distance[k]``. ``width``: at least the largest count."""
+    terms = np.empty((8, width))
+    sums = np.empty(8)
+    for k in range(starts.shape[0]):
+        sagitta[k] = _chord_terms(points, starts[k], counts[k], first[k], chord[k], extent[k], origins[k], terms)
+        for q in range(8):
+            sums[q] = 0.0 + pairwise_sum(terms[q], 0, width)
+        # Least squares: (count, Σx, Σx², Σx², Σx³, Σx⁴) (a, b, c) = (Σy, Σxy, Σx²y); c and (A⁻¹)₂₂.
+        _, _, curvature, _, _, _, inv22 = solve_sym3(
+            sums[0], sums[1], sums[2], sums[2], sums[3], sums[4], sums[5], sums[6], sums[7]
+        )
+        sigma = noise_sigma_near if distance[k] < noise_switch_range else noise_fraction_far * distance[k]
+        t_convex[k] = -curvature / (sigma * np.sqrt(max(inv22, 1e-30)))
+
+
+@compiled(error_model="numpy")
+def _chord_terms(points, start, count, first, chord, extent, origin, terms):
+    """The eight terms of :func:`segment_shapes`' sums for each point of one segment (columns past ``count``:
+    0), ``(1, x, x², x³, x⁴, y, xy, x²y)``; returns the sagitta, the largest ``|y|``."""
+    ux = chord[0] / max(extent, 1e-12)
+    uy = chord[1] / max(extent, 1e-12)
+    mx = first[0] + 0.5 * chord[0]
+    my = first[1] + 0.5 * chord[1]
+    nx = -uy
+    ny = ux
+    if (0.0 + (origin[0] - mx) * nx) + (origin[1] - my) * ny < 0:  # n points towards the sensor
+        nx = nx * -1.0
+        ny = ny * -1.0
+    largest = 0.0
+    for p in range(terms.shape[1]):
+        on = p < count
+        mask = 1.0 if on else 0.0
+        i = start + p if on else start
+        rx = points[i, 0] - mx
+        ry = points[i, 1] - my
+        x = (rx * ux + ry * uy) * mask
+        y = (rx * nx + ry * ny) * mask
+        largest = max(largest, abs(y))
+        x2 = x * x
+        terms[0, p] = mask
+        terms[1, p] = x
+        terms[2, p] = x2
+        terms[3, p] = x2 * x
+        terms[4, p] = x2 * x2
+        terms[5, p] = y
+        terms[6, p] = x * y
+        terms[7, p] = x2 * y
+    return largest
 
 
 @dataclass(frozen=True)

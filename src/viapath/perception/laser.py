@@ -24,12 +24,13 @@ from __future__ import annotations
 
 import time
 from dataclasses import fields, replace
+from typing import Any
 
 import numpy as np
 
 from viapath.observation import Obstacles
 from viapath.perception.base import Perception, WorldSnapshot
-from viapath.perception.detection import COMPUTE_CHOICES, Detections, DetectorParams, detect, ray_casters
+from viapath.perception.detection import Detections, DetectorParams, detect, retired_options
 from viapath.perception.fusion import BlindRegion, blind_region
 from viapath.perception.raycast import simulate_scans
 from viapath.perception.scanner import ScannerModel, paper_scanners
@@ -46,6 +47,7 @@ def _dataclass_from(cls, value, what: str):
         return value
     if not isinstance(value, dict):
         raise TypeError(f"{what} must be a mapping or {cls.__name__}, got {type(value).__name__}")
+    value = retired_options(value, what)
     names = {f.name for f in fields(cls)}
     unknown = sorted(set(value) - names)
     if unknown:
@@ -64,7 +66,6 @@ class LaserPerception(Perception):
         detector=None,
         tracker=None,
         *,
-        ray_compute: str = "numpy",
         range_noise: bool = True,
         fixed_radius_m: float | None = None,
         robot_radius_m: float = 0.25,
@@ -72,7 +73,11 @@ class LaserPerception(Perception):
         position_noise_m: float | None = None,
         velocity_noise_mps: float | None = None,
         static_layer=None,
+        **retired: Any,
     ):
+        unknown = set(retired_options(retired, "LaserPerception"))
+        if unknown:
+            raise TypeError(f"LaserPerception got unexpected keyword argument(s) {', '.join(sorted(unknown))}")
         if mode not in (None, "laser"):
             raise ValueError(f"LaserPerception got mode={mode!r}")
         for name, value in (("position_noise_m", position_noise_m), ("velocity_noise_mps", velocity_noise_mps)):
@@ -96,9 +101,6 @@ class LaserPerception(Perception):
         if fixed_radius_m is not None:
             self.detector_params = replace(self.detector_params, fixed_radius_m=float(fixed_radius_m))
         self.tracker_params: TrackerParams = _dataclass_from(TrackerParams, tracker, "tracker")
-        if ray_compute not in COMPUTE_CHOICES:
-            raise ValueError(f"ray_compute must be one of {', '.join(COMPUTE_CHOICES)}, got {ray_compute!r}")
-        self.ray_compute = ray_compute
         self.range_noise = bool(range_noise)
         self.robot_radius_m = float(robot_radius_m)
         self.blind_region: BlindRegion = blind_region(self.scanners, self.robot_radius_m)
@@ -150,15 +152,7 @@ class LaserPerception(Perception):
         """The readings of every scanner at the snapshot, as the drivers would report them."""
         pose = np.asarray(world.robot_pose, dtype=float)
         rng = self.rng if self.range_noise else None
-        return simulate_scans(
-            self.scanners,
-            pose,
-            world.obstacle_positions,
-            world.obstacle_radii_m,
-            world.walls,
-            rng,
-            ray_casters(self.ray_compute)[1],
-        )
+        return simulate_scans(self.scanners, pose, world.obstacle_positions, world.obstacle_radii_m, world.walls, rng)
 
     def process(self, time_s: float, robot_pose, scans) -> Obstacles:
         """Detection and tracking on given scans (no ray casting): the part a real robot runs."""

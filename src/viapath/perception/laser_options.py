@@ -13,8 +13,8 @@ Choices made here:
   (nested as in YAML), so the objects built are the ones built from the same mapping before the schema existed.
 * A model also builds its dataclass once, so a rule that spans fields (``range_min_m < range_max_m``,
   ``confirm_hits <= confirm_window``) is reported at load time with the field path, like a bound.
-* A former spelling (:data:`~viapath.perception.detection.RENAMED_OPTIONS`)
-  is an error that names the new one.
+* An option that no longer does anything (:data:`~viapath.perception.detection.RETIRED_OPTIONS`: the choice
+  between the numpy and the compiled code) is read with a FutureWarning and dropped.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ from pydantic import (
     model_validator,
 )
 
-from viapath.perception.detection import COMPUTE_CHOICES, RENAMED_OPTIONS, DetectorParams
+from viapath.perception.detection import DetectorParams, retired_options
 from viapath.perception.laser import LaserPerception
 from viapath.perception.scanner import INVALID_ENCODINGS, ScannerModel
 from viapath.perception.segmentation import SegmentationParams
@@ -124,8 +124,6 @@ _STATIC_LAYER: dict[str, dict[str, Any]] = {
 }
 _CHOICES: dict[str, Any] = {
     "invalid_encoding": Literal[INVALID_ENCODINGS],
-    "fit_compute": Literal[COMPUTE_CHOICES],
-    "ray_compute": Literal[COMPUTE_CHOICES],
 }
 
 
@@ -143,11 +141,9 @@ class _Options(BaseModel):
 
     @model_validator(mode="before")
     @classmethod
-    def _former_spellings(cls, value: Any) -> Any:
-        if isinstance(value, dict):
-            for old, new in RENAMED_OPTIONS.items():
-                if old in value and new in cls.model_fields:
-                    raise ValueError(f"option {old} is now called {new} (same values: {', '.join(COMPUTE_CHOICES)})")
+    def _retired(cls, value: Any) -> Any:
+        if isinstance(value, dict) and getattr(cls, "built_from", None) in (DetectorParams, LaserPerception):
+            return retired_options(value, f"perception.options ({cls.__name__})")
         return value
 
     def given(self) -> dict[str, Any]:
@@ -201,7 +197,6 @@ _ARGUMENTS: dict[str, tuple[Any, dict[str, Any]]] = {
     "scanners": (list[ScannerOptions] | None, {"min_length": 1, "max_length": MAX_SCANNERS}),  # type: ignore[valid-type]
     "detector": (DetectorOptions | None, {}),
     "tracker": (TrackerOptions | None, {}),
-    "ray_compute": (_CHOICES["ray_compute"], {}),
     "range_noise": (bool, {}),
     "fixed_radius_m": (float | None, _Positive),
     "robot_radius_m": (float, _Positive),
@@ -234,6 +229,8 @@ class _LaserBase(_Options):
 def _laser_model() -> type[_Options]:
     fields: dict[str, Any] = {}
     for name, parameter in inspect.signature(LaserPerception).parameters.items():
+        if parameter.kind is inspect.Parameter.VAR_KEYWORD:  # the retired options, dropped by _retired
+            continue
         annotation, bounds = _ARGUMENTS[name]  # a new argument must be typed here
         fields[name] = (annotation, Field(parameter.default, **bounds))
     model = create_model("LaserOptions", __base__=_LaserBase, __doc__=_LaserBase.__doc__, **fields)

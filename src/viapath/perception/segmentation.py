@@ -19,14 +19,18 @@ What the source leaves open and we chose:
 * Each cluster records whether a neighbouring beam just outside it is *nearer* (``occluded``):
   then part of it is hidden behind something, which is how a piece of wall between two people
   looks; detection uses this to reject straight occluded pieces.
+* The sines of the threshold depend on the beam angles only: :class:`BeamTables` holds them for a
+  fixed beam layout. The clustering is one compiled pass over neighbouring valid beams
+  (:func:`viapath.jit.compiled`; plain Python when compilation is off).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+
+from viapath.jit import compiled
 
 
 @dataclass(frozen=True)
@@ -65,31 +69,13 @@ class Segments:
         return cls(i, np.zeros((0, 2)), i, i, b, i, np.zeros((0, 2)), i)
 
 
-def breakpoint_threshold_m(range_m: np.ndarray, beam_gap_rad: np.ndarray, params: SegmentationParams) -> np.ndarray:
-    """Adaptive breakpoint distance ``D_max`` (Borges & Aldon) at ``range_m`` for beams ``beam_gap_rad`` apart."""
-    angle = np.minimum(beam_gap_rad, 0.5 * params.grazing_angle_rad)  # keep sin(λ - Δφ) > 0
-    return _threshold_from_sines(range_m, np.sin(angle), np.sin(params.grazing_angle_rad - angle), params)
-
-
-def _threshold_from_sines(
-    range_m: np.ndarray, sin_gap: np.ndarray, sin_rest: np.ndarray, params: SegmentationParams
-) -> np.ndarray:
-    """:func:`breakpoint_threshold_m` from ``sin(Δφ)`` and ``sin(λ - Δφ)`` (computed there, or read from
-    :class:`BeamTables`)."""
-    sigma = np.where(
-        range_m < params.noise_switch_range_m, params.noise_sigma_near_m, params.noise_fraction_far * range_m
-    )
-    jump = range_m * sin_gap / sin_rest + 3.0 * sigma
-    return np.maximum(jump, params.min_jump_m)
-
-
 @dataclass(frozen=True)
 class BeamTables:
     """What :func:`segment_beams` computes from the beam angles alone, computed once for a fixed beam
     layout (detection caches one per scanner set and parameters).
 
     ``cos_rad``/``sin_rad``: of each beam's angle. ``sin_gap[d - 1, i]`` and ``sin_rest[d - 1, i]``:
-    ``sin(Δφ)`` and ``sin(λ - Δφ)`` of :func:`breakpoint_threshold_m` for beams ``i`` and ``i + d``
+    ``sin(Δφ)`` and ``sin(λ - Δφ)`` of the threshold ``D_max`` for beams ``i`` and ``i + d``
     (``Δφ = min(|φ[i + d] - φ[i]|, λ/2)``), for ``d`` up to ``max_gap_beams + 1``: the only beam pairs
     whose threshold matters (farther ones always split). The same numpy expressions on the same
     numbers, elementwise: the same values as computing them per scan.
@@ -128,7 +114,6 @@ def segment_beams(
     scan_index,
     params: SegmentationParams = SegmentationParams(),
     tables: BeamTables | None = None,
-    splitter: Callable[..., Segments] | None = None,
 ) -> Segments:
     """Cluster the beams of several scans at once (concatenated, each in beam order).
 
@@ -136,62 +121,100 @@ def segment_beams(
     a common frame (the robot frame); a cluster never spans two scans (``scan_index`` per beam).
     Clusters with fewer than ``min_points`` points are dropped; ``all_points`` keeps every valid point.
     ``tables``: :class:`BeamTables` of ``angles_rad`` and ``params`` when the caller keeps them (same result).
-    ``splitter`` (with ``tables``): the clustering after the points, ``splitter(points, ranges, beams, scans, tables,
-    params)``, in place of this numpy reference (the laser pipeline's compiled pass, the same result bit for bit).
     """
     ranges_m = np.asarray(ranges_m, dtype=float)
     valid = np.flatnonzero(np.isfinite(ranges_m))
     if len(valid) == 0:
         return Segments.empty()
+    if tables is None:
+        tables = BeamTables.of(angles_rad, params)
     r = ranges_m[valid]
-    a = np.asarray(angles_rad, dtype=float)[valid]
     ox = origin_x_m[valid] if np.ndim(origin_x_m) else origin_x_m
     oy = origin_y_m[valid] if np.ndim(origin_y_m) else origin_y_m
     points = np.empty((len(valid), 2))
-    points[:, 0] = ox + r * (np.cos(a) if tables is None else tables.cos_rad[valid])
-    points[:, 1] = oy + r * (np.sin(a) if tables is None else tables.sin_rad[valid])
+    points[:, 0] = ox + r * tables.cos_rad[valid]
+    points[:, 1] = oy + r * tables.sin_rad[valid]
     scans = np.asarray(scan_index)[valid]
-    if splitter is not None and tables is not None:
-        return splitter(points, r, valid, scans, tables, params)
-    step = np.diff(points, axis=0)
-    gap = np.sqrt(step[:, 0] ** 2 + step[:, 1] ** 2)
-    beam_step = np.diff(valid)
-    adjacent = (beam_step <= params.max_gap_beams + 1) & (scans[1:] == scans[:-1])
-    near = np.minimum(r[:-1], r[1:])
-    if tables is None:
-        threshold = breakpoint_threshold_m(near, np.abs(np.diff(a)), params)
-    else:  # its sines from the tables (wrong only where not adjacent, and those split anyway)
-        row = np.minimum(beam_step, params.max_gap_beams + 1) - 1
-        threshold = _threshold_from_sines(
-            near, tables.sin_gap[row, valid[:-1]], tables.sin_rest[row, valid[:-1]], params
-        )
-    split = (gap > threshold) | ~adjacent
-    starts = np.concatenate([[0], np.flatnonzero(split) + 1])
-    counts = np.diff(np.append(starts, len(valid)))
-    # Occlusion: the valid beam just before (after) a cluster, if adjacent, is nearer than its first (last) point.
-    ends = starts + counts - 1
-    occluded = np.zeros(len(starts), dtype=bool)
-    inner = starts > 0
-    s_in = starts[inner]
-    occluded[inner] = adjacent[s_in - 1] & (r[s_in - 1] < r[s_in])
-    inner = ends < len(valid) - 1
-    e_in = ends[inner]
-    occluded[inner] |= adjacent[e_in] & (r[e_in + 1] < r[e_in])
-    all_points, all_beams = points, valid
-    cluster_scan = scans[starts]
-    keep = counts >= params.min_points
-    if not keep.all():
-        starts, counts, occluded, cluster_scan = starts[keep], counts[keep], occluded[keep], cluster_scan[keep]
-        index = _ranges_index(starts, counts)
-        valid, points = valid[index], points[index]
-        starts = np.cumsum(counts) - counts
-    return Segments(valid, points, starts, counts, occluded, cluster_scan, all_points, all_beams)
+    n = len(valid)
+    starts, counts, cluster_scan = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, scans.dtype)
+    occluded, kept_points = np.empty(n, dtype=bool), np.empty(n, np.int64)
+    kept, kept_total = split_clusters(
+        points,
+        r,
+        valid,
+        scans,
+        tables.sin_gap,
+        tables.sin_rest,
+        (params.max_gap_beams, params.min_points),
+        (params.noise_switch_range_m, params.noise_sigma_near_m, params.noise_fraction_far, params.min_jump_m),
+        (starts, counts, occluded, cluster_scan, kept_points),
+    )
+    starts, counts, occluded, cluster_scan = starts[:kept], counts[:kept], occluded[:kept], cluster_scan[:kept]
+    if kept_total == n:  # every cluster kept: the points as they are
+        return Segments(valid, points, starts, counts, occluded, cluster_scan, points, valid)
+    index = kept_points[:kept_total]
+    return Segments(
+        valid[index], points[index], np.cumsum(counts) - counts, counts, occluded, cluster_scan, points, valid
+    )
 
 
-def _ranges_index(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """Concatenation of ``arange(s, s + c)`` for each (start, count), without a Python loop."""
-    if len(counts) == 0:
-        return np.zeros(0, dtype=int)
-    total = int(counts.sum())
-    offsets = np.repeat(starts - (np.cumsum(counts) - counts), counts)
-    return np.arange(total) + offsets
+@compiled
+def split_clusters(points, r, valid, scans, sin_gap, sin_rest, beams, noise, out):
+    """The clusters of :func:`segment_beams`: the valid beams ``valid`` (their ranges ``r`` and ``points``,
+    their scans ``scans``) split where the threshold ``D_max`` says (its sines from :class:`BeamTables`),
+    where more than ``max_gap_beams`` beams are invalid, and between scans.
+
+    ``beams`` = (max_gap_beams, min_points); ``noise`` = (switch range, σ near, fraction far, min jump).
+    Fills ``out`` = (starts (into the valid points), counts, occluded, scan, kept points' indices) for the
+    clusters of at least ``min_points`` points; returns (clusters kept, points kept).
+    """
+    max_gap_beams, min_points = beams
+    starts, counts, occluded, cluster_scan, kept_points = out
+    n = r.shape[0]
+    adjacent, split = _breaks(points, r, valid, scans, sin_gap, sin_rest, max_gap_beams, noise)
+    kept = 0
+    kept_total = 0
+    first = 0
+    for k in range(n):
+        if k < n - 1 and not split[k]:
+            continue
+        last = k  # the cluster is first..last
+        count = last - first + 1
+        if count >= min_points:
+            # Occluded: the valid beam just before (after) it, if adjacent, is nearer than its first (last) point.
+            hidden = first > 0 and adjacent[first - 1] and r[first - 1] < r[first]
+            hidden = hidden or (last < n - 1 and adjacent[last] and r[last + 1] < r[last])
+            starts[kept] = first
+            counts[kept] = count
+            occluded[kept] = hidden
+            cluster_scan[kept] = scans[first]
+            for i in range(first, last + 1):
+                kept_points[kept_total] = i
+                kept_total += 1
+            kept += 1
+        first = k + 1
+    return kept, kept_total
+
+
+@compiled
+def _breaks(points, r, valid, scans, sin_gap, sin_rest, max_gap_beams, noise):
+    """Per pair of neighbouring valid beams: whether they are adjacent (at most ``max_gap_beams`` invalid beams
+    between them, one scan) and whether the clusters split there (not adjacent, or a gap over the threshold)."""
+    noise_switch_range, noise_sigma_near, noise_fraction_far, min_jump = noise
+    n = r.shape[0]
+    reach = max_gap_beams + 1
+    adjacent = np.empty(max(n - 1, 0), dtype=np.bool_)
+    split = np.empty(max(n - 1, 0), dtype=np.bool_)
+    for k in range(n - 1):
+        beam_step = valid[k + 1] - valid[k]
+        adjacent[k] = beam_step <= reach and scans[k + 1] == scans[k]
+        dx = points[k + 1, 0] - points[k, 0]
+        dy = points[k + 1, 1] - points[k, 1]
+        gap = np.sqrt(dx * dx + dy * dy)
+        near = min(r[k], r[k + 1])
+        row = min(beam_step, reach) - 1  # the sines of a wider gap are wrong, but it splits anyway
+        sigma = noise_sigma_near if near < noise_switch_range else noise_fraction_far * near
+        jump = near * sin_gap[row, valid[k]] / sin_rest[row, valid[k]] + 3.0 * sigma
+        threshold = max(jump, min_jump)
+        split[k] = gap > threshold or not adjacent[k]
+    return adjacent, split

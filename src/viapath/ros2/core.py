@@ -177,9 +177,9 @@ class PlannerCore:
         models = urg04lx_models(s) if fixed else [None] * len(s.scanners)
         self.health = [ScannerHealth(m, sc.frame_id) for m, sc in zip(models, s.scanners, strict=True)]
         if s.detector == "legs":
-            self.detector_params = replace(DetectorParams.for_legs(), fit_compute=s.fit_compute)
+            self.detector_params = DetectorParams.for_legs()
         else:
-            self.detector_params = DetectorParams(keep_segments=False, fit_compute=s.fit_compute)
+            self.detector_params = DetectorParams(keep_segments=False)
         self.tracker = MultiTargetTracker(
             TrackerParams(
                 acceleration_sigma_mps2=s.tracker_acceleration_sigma_mps2,

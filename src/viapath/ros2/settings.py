@@ -32,12 +32,11 @@ from typing import Any
 import numpy as np
 
 from viapath.limits import LIMITS_OPTIONS, ROBOT_OPTIONS, SUBGOAL_OPTIONS
-from viapath.perception.detection import COMPILED_COMPUTE, COMPUTE_CHOICES, RENAMED_OPTIONS, DetectorParams
+from viapath.perception.detection import retired_options
 from viapath.perception.scanner import URG04LX_MOUNT_OFFSET_M
 from viapath.perception.tracking import TrackerParams
 from viapath.ros2.options import Option, planner_options
 
-_FIT_DEFAULT = DetectorParams().fit_compute  # one default for the circle fit, the simulator's and the node's
 _TRACKER = TrackerParams()  # the tracker's defaults, the simulator's and the node's
 
 
@@ -172,14 +171,6 @@ NODE_OPTIONS: tuple[Option, ...] = (
             "max_invalid_fraction", 0.5, "", 0.0, 1.0, "a scan with more NaN/zero readings than this counts as failed"
         ),
         _opt("detector", "people", "", help="detector preset", choices=("people", "legs")),
-        _opt(
-            "fit_compute",
-            _FIT_DEFAULT,
-            "",
-            help=f"circle fit: numpy, {COMPILED_COMPUTE} (compiled once per machine, then loaded from its cache; "
-            f"equal to round-off) or auto ({COMPILED_COMPUTE} where installed, as the simulator's laser)",
-            choices=COMPUTE_CHOICES,
-        ),
         _opt(
             "tracker_acceleration_sigma_mps2",
             _TRACKER.acceleration_sigma_mps2,
@@ -430,7 +421,8 @@ def validate(values: dict[str, Any]) -> NodeSettings:
     if len(set(scanner_names)) != len(scanner_names):
         raise ParameterError(f"parameter scanner_names: names repeat: {scanner_names}")
     options = {o.name: o for o in all_options(planner_name, scanner_names)}
-    renamed = {**RENAMED_OPTIONS, **{f: o.name for o in options.values() for f in o.former_names}}
+    values = retired_options(values, "ROS 2 parameters")
+    renamed = {f: o.name for o in options.values() for f in o.former_names}
     errors = [
         f"parameter {name}: unknown parameter" + (f" (now called {renamed[name]})" if name in renamed else "")
         for name in sorted(set(values) - set(options) - {"use_sim_time"})
