@@ -29,6 +29,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from viapath.jit import compiled
+
 # Static obstacles' ids in a merged obstacle set: far above any tracker's ids, so the two never meet.
 STATIC_ID_BASE = 1 << 40
 
@@ -201,6 +203,51 @@ def segment_distances(starts: np.ndarray, ends: np.ndarray, segments: np.ndarray
     return np.where(crossing, 0.0, distance)
 
 
+@compiled
+def _merged_shapes(
+    segments: np.ndarray, shape: np.ndarray, padding: np.ndarray, gap_m: float, parent: np.ndarray
+) -> None:
+    """:func:`merge_close_shapes`' grouping: ``parent[k]`` = the smallest shape whose bounding box (grown by its
+    largest padding and half the gap) is linked to shape ``k``'s through overlapping boxes (``shape``: each
+    segment's shape, 0 to K - 1)."""
+    count = parent.shape[0]
+    low = np.full((count, 2), np.inf)
+    high = np.full((count, 2), -np.inf)
+    grow = np.zeros(count)
+    for m in range(segments.shape[0]):
+        k = shape[m]
+        for end in range(2):
+            for axis in range(2):
+                low[k, axis] = min(low[k, axis], segments[m, end, axis])
+                high[k, axis] = max(high[k, axis], segments[m, end, axis])
+        grow[k] = max(grow[k], padding[m])
+    for k in range(count):
+        parent[k] = k
+        for axis in range(2):
+            low[k, axis] = low[k, axis] - grow[k] - gap_m / 2
+            high[k, axis] = high[k, axis] + grow[k] + gap_m / 2
+    for i in range(count):  # union-find over the overlapping pairs, the larger root under the smaller
+        for j in range(i + 1, count):
+            if (
+                low[i, 0] <= high[j, 0]
+                and low[j, 0] <= high[i, 0]
+                and low[i, 1] <= high[j, 1]
+                and low[j, 1] <= high[i, 1]
+            ):
+                a, b = i, j
+                while parent[a] != a:
+                    a = parent[a]
+                while parent[b] != b:
+                    b = parent[b]
+                if a != b:
+                    parent[max(a, b)] = min(a, b)
+    for k in range(count):
+        root = k
+        while parent[root] != root:
+            root = parent[root]
+        parent[k] = root
+
+
 def box_edges(center: ArrayLike, size: ArrayLike, yaw_rad: float = 0.0) -> np.ndarray:
     """The four edges (4, 2, 2) of a rectangle of ``size`` (length along ``yaw_rad``, width) at ``center``."""
     half = np.asarray(size, dtype=float) / 2
@@ -232,29 +279,6 @@ def merge_close_shapes(layer: StaticLayer, gap_m: float) -> StaticLayer:
     ids, inverse = np.unique(layer.shape_ids, return_inverse=True)
     if len(ids) == 1:
         return layer
-    points = layer.segments.reshape(-1, 2)
-    owner = np.repeat(inverse, 2)
-    low = np.full((len(ids), 2), np.inf)
-    high = np.full((len(ids), 2), -np.inf)
-    np.minimum.at(low, owner, points)
-    np.maximum.at(high, owner, points)
-    pad = layer.padding_m
-    grow = np.zeros(len(ids))
-    np.maximum.at(grow, inverse, pad)
-    low, high = low - grow[:, None] - gap_m / 2, high + grow[:, None] + gap_m / 2
-    overlap = ((low[:, None, :] <= high[None]) & (low[None] <= high[:, None, :])).all(axis=2)
-    first, second = np.nonzero(np.triu(overlap, 1))
-    parent = np.arange(len(ids))
-    for i, j in zip(first.tolist(), second.tolist()):
-        while parent[i] != i:
-            i = parent[i]
-        while parent[j] != j:
-            j = parent[j]
-        if i != j:
-            parent[max(i, j)] = min(i, j)
-    for k in range(len(parent)):
-        root = k
-        while parent[root] != root:
-            root = parent[root]
-        parent[k] = root
+    parent = np.empty(len(ids), dtype=np.int64)
+    _merged_shapes(layer.segments, inverse.reshape(-1), layer.padding_m, float(gap_m), parent)
     return StaticLayer(layer.segments, ids[parent][inverse], layer.radii_m)

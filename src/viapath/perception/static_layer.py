@@ -13,7 +13,9 @@ by the free space along each beam, a memory for what is out of view). What is ou
   ``step_m`` of its length (:func:`thin_runs`, linear time, unlike Douglas–Peucker, which splits at every
   return once range noise exceeds its tolerance), each segment with the largest distance of the returns
   it skips as its radius (:class:`viapath.static.StaticLayer.radii_m`): the polyline never brings the
-  robot nearer to a return than its margins allow. A run of one return is a point. Runs (and remembered
+  robot nearer to a return than its margins allow. A run of one return is a point. The marking and the
+  thinning are compiled loops over the returns (:func:`viapath.jit.compiled`; plain Python when compilation
+  is off); the returns' positions and bearings are numpy's (``np.cos``, ``np.arctan2``). Runs (and remembered
   pieces) within ``merge_gap_m`` of each other are one shape (:func:`viapath.static.merge_close_shapes`):
   the planner goes round shapes, and two scanners' views of one box are one box.
 * **Memory.** Last cycle's layer is kept, in the world frame (moved with odometry like the tracks), for
@@ -38,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from viapath.jit import compiled
 from viapath.perception.scanner import ScannerModel
 from viapath.static import StaticLayer, merge_close_shapes
 
@@ -64,41 +67,123 @@ def thin_runs(points: np.ndarray, run: np.ndarray, step_m: float) -> tuple[np.nd
     returns where its length passes a multiple of ``step_m``, and its last one. Returns the segments (S, 2, 2),
     the run of each, and each segment's radius: the largest distance of the returns it stands for from it,
     so that the polylines with their radii cover every return. A run of one return is a segment of length 0."""
-    count = len(points)
-    first = np.flatnonzero(np.diff(run, prepend=-1) != 0)  # where each run starts
-    last = np.append(first[1:], count) - 1
-    step = np.zeros(count)
-    step[1:] = np.hypot(*np.diff(points, axis=0).T)
-    step[first] = 0.0
-    along = np.cumsum(step)
-    along -= np.repeat(along[first], np.diff(np.append(first, count)))
-    bucket = np.floor(along / step_m).astype(np.int64)
-    keep = np.zeros(count, dtype=bool)
-    keep[first] = keep[last] = True
-    keep[1:] |= (bucket[1:] != bucket[:-1]) & (run[1:] == run[:-1])
-    kept = np.flatnonzero(keep)
-    # Segments join consecutive kept returns of one run; a run of one return is a point.
-    joined = run[kept[1:]] == run[kept[:-1]]
-    starts, ends = kept[:-1][joined], kept[1:][joined]
-    single = first[first == last]
-    segment_starts = np.concatenate([starts, single])
-    segment_ends = np.concatenate([ends, single])
-    order = np.argsort(segment_starts, kind="stable")
-    segment_starts, segment_ends = segment_starts[order], segment_ends[order]
-    segments = np.stack([points[segment_starts], points[segment_ends]], axis=1)
-    # Each return belongs to the segment that starts at the last kept return at or before it (a run's last
-    # return to the segment that ends there).
-    owner = np.searchsorted(segment_starts, np.arange(count), side="right") - 1
-    at_end = np.isin(np.arange(count), last) & ~np.isin(np.arange(count), single)
-    owner[at_end] = np.searchsorted(segment_ends, np.arange(count)[at_end], side="left")
-    a, b = segments[owner, 0], segments[owner, 1]
-    d = b - a
-    length2 = np.einsum("ij,ij->i", d, d)
-    t = np.clip(np.einsum("ij,ij->i", points - a, d) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
-    deviation = np.hypot(*(points - a - t[:, None] * d).T)
-    radii = np.zeros(len(segments))
-    np.maximum.at(radii, owner, deviation)
-    return segments, run[segment_starts], radii
+    points = np.ascontiguousarray(points, dtype=float).reshape(-1, 2)
+    run = np.ascontiguousarray(run, dtype=np.int64)
+    starts, ends = np.empty(len(points), np.int64), np.empty(len(points), np.int64)
+    radii = np.empty(len(points))
+    count = _thin(points, run, float(step_m), starts, ends, radii)
+    starts, ends = starts[:count], ends[:count]
+    return np.stack([points[starts], points[ends]], axis=1), run[starts], radii[:count].copy()
+
+
+@compiled
+def _thin(points, run, step_m, starts, ends, radii):
+    """:func:`thin_runs`: fills the first and last return of each segment (in order) and its radius; returns the
+    number of segments. A return belongs to the segment that starts at the last kept return at or before it, a
+    run's last return to the segment that ends there."""
+    count = points.shape[0]
+    segments = 0
+    along = 0.0  # the length of the returns' polyline, every run after the other
+    run_start = 0.0  # ``along`` at the current run's first return
+    bucket = 0.0
+    kept = 0  # the last kept return of the current run
+    for i in range(count):
+        first = i == 0 or run[i] != run[i - 1]
+        last = i == count - 1 or run[i + 1] != run[i]
+        if first:
+            run_start = along  # the step into a run is not part of its length
+            bucket = np.floor((along - run_start) / step_m)
+            kept = i
+            if last:  # a run of one return: a point
+                starts[segments], ends[segments], radii[segments] = i, i, 0.0
+                segments += 1
+            continue
+        along += np.hypot(points[i, 0] - points[i - 1, 0], points[i, 1] - points[i - 1, 1])
+        previous, bucket = bucket, np.floor((along - run_start) / step_m)
+        if last or bucket != previous:
+            starts[segments], ends[segments] = kept, i
+            radii[segments] = _largest_deviation(points, kept, i, i + 1 if last else i)
+            segments += 1
+            kept = i
+    return segments
+
+
+@compiled
+def _largest_deviation(points, a, b, stop):
+    """The largest distance of ``points[a:stop]`` from the segment from ``points[a]`` to ``points[b]``."""
+    dx = points[b, 0] - points[a, 0]
+    dy = points[b, 1] - points[a, 1]
+    length2 = dx * dx + dy * dy
+    if not length2 > 0:
+        length2 = 1.0
+    largest = 0.0
+    for i in range(a, stop):
+        rx = points[i, 0] - points[a, 0]
+        ry = points[i, 1] - points[a, 1]
+        t = min(max((rx * dx + ry * dy) / length2, 0.0), 1.0)
+        largest = max(largest, np.hypot(rx - t * dx, ry - t * dy))
+    return largest
+
+
+@compiled
+def _explained(points, beams, tracks, reach, confirmed, static, tentative_beams):
+    """Which returns (``points``, from ``beams``) are static: those no track explains (within ``reach`` of its
+    centre). Marks in ``tentative_beams`` the beams whose return only tentative tracks explain."""
+    for i in range(points.shape[0]):
+        explained = False
+        by_confirmed = False
+        for j in range(tracks.shape[0]):
+            if np.hypot(points[i, 0] - tracks[j, 0], points[i, 1] - tracks[j, 1]) <= reach[j]:
+                explained = True
+                by_confirmed = by_confirmed or confirmed[j]
+        static[i] = not explained
+        if explained and not by_confirmed:
+            tentative_beams[beams[i]] = True
+
+
+@compiled
+def _runs(points, beams, link_m, run):
+    """The run number of each return of one scan (in beam order): neighbouring beams' returns less than
+    ``link_m`` apart are one run."""
+    label = 0
+    for i in range(points.shape[0]):
+        if i > 0:
+            gap = np.hypot(points[i, 0] - points[i - 1, 0], points[i, 1] - points[i - 1, 1])
+            if beams[i] - beams[i - 1] != 1 or gap > link_m:
+                label += 1
+        run[i] = label
+
+
+@compiled
+def _look(inside, distance, beam, ranges, tentative, readable, limits, seen):
+    """Marks in ``seen`` the points (in the scanner's view: ``inside``, at ``distance`` along ``beam``) that a
+    beam of this scan reaches: its reading at least the point's range, less ``see_through``; +inf or a reading
+    past the range limit: the beam is free to the limit. A return at the point that only a tentative track
+    explains (``tentative``, per beam) does not count. ``limits`` = (range min, range max, see through);
+    ``readable``: the scan has the scanner's beam count (else it shows nothing)."""
+    range_min, range_max, see_through = limits
+    if not readable:
+        return
+    for i in range(inside.shape[0]):
+        if not inside[i]:
+            continue
+        reading = ranges[beam[i]]
+        if tentative[beam[i]] and reading <= distance[i] + see_through:
+            continue
+        free = reading == np.inf or reading > range_max
+        reaches = np.isfinite(reading) and reading >= range_min and reading > 0 and reading >= distance[i] - see_through
+        if free or reaches:
+            seen[i] = True
+
+
+def _returns(scanner: ScannerModel, pose: np.ndarray, ranges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The valid returns of one scan in the world frame (P, 2) and their beams (P,)."""
+    with np.errstate(invalid="ignore"):
+        valid = np.isfinite(ranges) & (ranges >= max(scanner.range_min_m, 1e-9)) & (ranges <= scanner.range_max_m)
+    beams = np.flatnonzero(valid)
+    x, y, yaw = scanner.world_pose(pose)
+    angles = scanner.beam_angles_rad()[beams] + yaw
+    return np.stack([x + ranges[beams] * np.cos(angles), y + ranges[beams] * np.sin(angles)], axis=1), beams
 
 
 class StaticObstacleLayer:
@@ -145,6 +230,9 @@ class StaticObstacleLayer:
         """The static geometry of this cycle's scans, and per scan the beams whose return only a tentative
         track explains."""
         p = self.params
+        tracks = np.ascontiguousarray(track_positions, dtype=float).reshape(-1, 2)
+        reach = np.asarray(track_radii_m, dtype=float).reshape(-1) + p.explained_margin_m
+        confirmed = np.ascontiguousarray(confirmed, dtype=bool).reshape(-1)
         tentative: list[np.ndarray] = []
         segments: list[Any] = []
         runs: list[Any] = []
@@ -155,31 +243,17 @@ class StaticObstacleLayer:
             tentative.append(tentative_beams)
             if len(ranges) != scanner.beam_count:
                 continue
-            with np.errstate(invalid="ignore"):
-                valid = (
-                    np.isfinite(ranges) & (ranges >= max(scanner.range_min_m, 1e-9)) & (ranges <= scanner.range_max_m)
-                )
-            beams = np.flatnonzero(valid)
-            if len(beams) == 0:
-                continue
-            x, y, yaw = scanner.world_pose(pose)
-            angles = scanner.beam_angles_rad()[beams] + yaw
-            points = np.stack([x + ranges[beams] * np.cos(angles), y + ranges[beams] * np.sin(angles)], axis=1)
-            if len(track_positions):
-                offset = points[:, None, :] - np.asarray(track_positions)[None]
-                distance = np.hypot(offset[..., 0], offset[..., 1])
-                near = distance <= np.asarray(track_radii_m)[None] + p.explained_margin_m
-                explained = near.any(axis=1)
-                tentative_beams[beams[explained & ~near[:, confirmed].any(axis=1)]] = True
-                points, beams = points[~explained], beams[~explained]
+            points, beams = _returns(scanner, pose, ranges)
+            static = np.empty(len(beams), dtype=bool)
+            _explained(points, beams, tracks, reach, confirmed, static, tentative_beams)
             for earlier, earlier_ranges in zip(scanners[:index], scans[:index]):
                 # Where an earlier scanner returned the same point, its run has it already.
-                again = self._returned_by(earlier, pose, np.asarray(earlier_ranges, dtype=float).reshape(-1), points)
-                points, beams = points[~again], beams[~again]
+                static &= ~self._returned_by(earlier, pose, np.asarray(earlier_ranges, dtype=float).reshape(-1), points)
+            points, beams = points[static], beams[static]
             if len(points) == 0:
                 continue
-            gap = np.hypot(*np.diff(points, axis=0).T) if len(points) > 1 else np.zeros(0)
-            run = np.concatenate([[0], np.cumsum((np.diff(beams) != 1) | (gap > p.link_m))])
+            run = np.empty(len(points), dtype=np.int64)
+            _runs(points, beams, p.link_m, run)
             pieces, piece_runs, piece_radii = thin_runs(points, run, p.step_m)
             segments.append(pieces)
             runs.append(piece_runs + (runs[-1].max() + 1 if runs else 0))
@@ -195,18 +269,21 @@ class StaticObstacleLayer:
         self._kept_rows = np.zeros(0, dtype=int)
         if len(previous) == 0:
             return StaticLayer.empty()
-        young = time_s - self._seen_s <= self.params.memory_s + 1e-9
+        p = self.params
+        young = time_s - self._seen_s <= p.memory_s + 1e-9
         a, b = previous.segments[:, 0], previous.segments[:, 1]
         probes = np.stack([a, 0.5 * (a + b), b], axis=1).reshape(-1, 2)  # (3M, 2)
-        seen = np.zeros(len(probes), dtype=bool)
-        for scanner, ranges, tentative in zip(scanners, scans, tentative_beams, strict=True):
-            seen |= self._seen_by(scanner, pose, np.asarray(ranges, dtype=float).reshape(-1), probes, tentative)
+        seen = np.zeros(len(probes), dtype=bool)  # a beam reaches it
         beyond = np.ones(len(probes), dtype=bool)  # beyond every scanner's range: not worth remembering
         in_view = np.zeros(len(probes), dtype=bool)
-        for scanner in scanners:
-            x, y, _ = scanner.world_pose(pose)
-            beyond &= np.hypot(probes[:, 0] - x, probes[:, 1] - y) > scanner.range_max_m
-            in_view |= self._beams_to(scanner, pose, probes)[0]
+        for scanner, ranges, tentative in zip(scanners, scans, tentative_beams, strict=True):
+            ranges = np.asarray(ranges, dtype=float).reshape(-1)
+            inside, distance, beam = self._beams_to(scanner, pose, probes)
+            readable = len(ranges) == scanner.beam_count
+            limits = (scanner.range_min_m, scanner.range_max_m, p.see_through_m)
+            _look(inside, distance, beam, ranges, tentative, readable, limits, seen)
+            beyond &= distance > scanner.range_max_m
+            in_view |= inside
         hidden = ~(seen | beyond).reshape(-1, 3).all(axis=1)
         out_of_view = (~(in_view | beyond)).reshape(-1, 3).any(axis=1)
         rows = np.flatnonzero(hidden & (young | out_of_view))
@@ -234,24 +311,3 @@ class StaticObstacleLayer:
         inside, distance, beam = self._beams_to(scanner, pose, points)
         with np.errstate(invalid="ignore"):
             return inside & (np.abs(ranges[beam] - distance) <= self.params.see_through_m)
-
-    def _seen_by(
-        self, scanner: ScannerModel, pose: np.ndarray, ranges: np.ndarray, points: np.ndarray, tentative: np.ndarray
-    ) -> np.ndarray:
-        """Whether a beam of this scan reaches each point (its reading at least the point's range, less
-        ``see_through_m``; +inf or a reading past the range limit: the beam is free to the limit), a return
-        at the point that only a tentative track explains (``tentative``, per beam) excepted."""
-        if len(ranges) != scanner.beam_count:
-            return np.zeros(len(points), dtype=bool)
-        inside, distance, beam = self._beams_to(scanner, pose, points)
-        reading = ranges[beam]
-        with np.errstate(invalid="ignore"):
-            unconfirmed_return_there = tentative[beam] & (reading <= distance + self.params.see_through_m)
-            free = (reading == np.inf) | (reading > scanner.range_max_m)
-            reaches = (
-                np.isfinite(reading)
-                & (reading >= scanner.range_min_m)
-                & (reading > 0)
-                & (reading >= distance - self.params.see_through_m)
-            )
-        return inside & (free | reaches) & ~unconfirmed_return_there
