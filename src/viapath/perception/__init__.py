@@ -1,7 +1,8 @@
 """Laser perception: scanner model, ray casting, fusion, detection, circle fits and tracking.
 
-Pure numpy: it runs on a robot as it is. :mod:`~viapath.perception.base` is the interface the closed
-loop calls, :mod:`~viapath.perception.modes` the modes by name (oracle, laser).
+numpy, with its hot loops compiled (:mod:`viapath.jit`): it runs on a robot as it is.
+:mod:`~viapath.perception.base` is the interface the closed loop calls, :mod:`~viapath.perception.modes`
+the modes by name (oracle, laser).
 """
 
 from viapath.perception.detection import Detections, DetectorParams, detect

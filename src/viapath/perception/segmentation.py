@@ -77,8 +77,7 @@ class BeamTables:
     ``cos_rad``/``sin_rad``: of each beam's angle. ``sin_gap[d - 1, i]`` and ``sin_rest[d - 1, i]``:
     ``sin(Δφ)`` and ``sin(λ - Δφ)`` of the threshold ``D_max`` for beams ``i`` and ``i + d``
     (``Δφ = min(|φ[i + d] - φ[i]|, λ/2)``), for ``d`` up to ``max_gap_beams + 1``: the only beam pairs
-    whose threshold matters (farther ones always split). The same numpy expressions on the same
-    numbers, elementwise: the same values as computing them per scan.
+    whose threshold matters (farther ones always split).
     """
 
     cos_rad: np.ndarray  # (B,)
