@@ -89,7 +89,7 @@ MAX_PERCEPTION_FUNCTION_LINES = 60
 MAX_PERCEPTION_CLASS_LINES = 300
 
 
-def long_definitions(root: Path, kinds: tuple[type, ...], limit: int) -> dict[tuple[str, str], int]:
+def laser_chain_long_definitions(root: Path, kinds: tuple[type, ...], limit: int) -> dict[tuple[str, str], int]:
     """(file relative to ``root``, name) -> lines, for every definition of one of ``kinds`` (nested ones too)
     over ``limit`` lines."""
     found = {}
@@ -104,14 +104,16 @@ def long_definitions(root: Path, kinds: tuple[type, ...], limit: int) -> dict[tu
 
 def test_no_function_of_the_laser_chain_is_over_60_lines():
     assert any(PERCEPTION.rglob("*.py")), PERCEPTION
-    long = long_definitions(PERCEPTION, (ast.FunctionDef, ast.AsyncFunctionDef), MAX_PERCEPTION_FUNCTION_LINES)
+    long = laser_chain_long_definitions(
+        PERCEPTION, (ast.FunctionDef, ast.AsyncFunctionDef), MAX_PERCEPTION_FUNCTION_LINES
+    )
     assert long == {}, "laser chain functions over 60 lines (split them): " + ", ".join(
         f"{file}:{name} ({lines} lines)" for (file, name), lines in sorted(long.items())
     )
 
 
 def test_no_class_of_the_laser_chain_is_over_300_lines():
-    long = long_definitions(PERCEPTION, (ast.ClassDef,), MAX_PERCEPTION_CLASS_LINES)
+    long = laser_chain_long_definitions(PERCEPTION, (ast.ClassDef,), MAX_PERCEPTION_CLASS_LINES)
     assert long == {}, "laser chain classes over 300 lines (split them): " + ", ".join(
         f"{file}:{name} ({lines} lines)" for (file, name), lines in sorted(long.items())
     )
@@ -122,7 +124,7 @@ def test_the_definition_counter_counts_planted_long_ones(tmp_path):
     (tmp_path / "chain.py").write_text(
         f"class Chain:\n    def long(self):\n{body}\n\n    def short(self):\n        return 1\n"
     )
-    functions = long_definitions(tmp_path, (ast.FunctionDef,), 60)
+    functions = laser_chain_long_definitions(tmp_path, (ast.FunctionDef,), 60)
     assert functions == {("chain.py", "long"): 61}
-    assert long_definitions(tmp_path, (ast.ClassDef,), 64) == {("chain.py", "Chain"): 65}
-    assert long_definitions(tmp_path, (ast.ClassDef,), 65) == {}
+    assert laser_chain_long_definitions(tmp_path, (ast.ClassDef,), 64) == {("chain.py", "Chain"): 65}
+    assert laser_chain_long_definitions(tmp_path, (ast.ClassDef,), 65) == {}
