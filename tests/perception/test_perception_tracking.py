@@ -1,5 +1,7 @@
 """Assignment, Kalman tracking, M-of-N confirmation and deletion, LaserPerception end to end."""
 
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -7,10 +9,30 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from viapath.observation import Obstacles
-from viapath.perception.assignment import brute_force_assignment, gated_assignment, linear_sum_assignment
+from viapath.perception.assignment import gated_assignment, linear_sum_assignment
 from viapath.perception.laser import LaserPerception, tracking_errors
 from viapath.perception.tracking import MultiTargetTracker, TrackerParams
 from viapath.sim.perception import WorldSnapshot
+
+
+def brute_force_assignment(cost) -> tuple[np.ndarray, np.ndarray]:
+    """The oracle: every matching of the smaller side tried."""
+    cost = np.asarray(cost, dtype=float)
+    transposed = cost.shape[0] > cost.shape[1]
+    c = cost.T if transposed else cost
+    n, m = c.shape
+    best, best_cols = np.inf, None
+    for cols in itertools.permutations(range(m), n):
+        total = c[np.arange(n), cols].sum()
+        if total < best:
+            best, best_cols = total, cols
+    if best_cols is None or not np.isfinite(best):
+        raise ValueError("cost matrix is infeasible")
+    rows, cols = np.arange(n), np.array(best_cols, dtype=int)
+    if transposed:
+        order = np.argsort(cols)
+        return cols[order], rows[order]
+    return rows, cols
 
 
 @settings(max_examples=60, deadline=None, derandomize=True)

@@ -15,8 +15,6 @@ What we chose for association (the source is about the assignment alone):
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 
 _FORBIDDEN = 1e12
@@ -96,26 +94,6 @@ def _shortest_augmenting_path(cost, u, v, row4col, current: int):
         else:
             row = int(row4col[col])
     return sink, min_value, path, shortest, seen_rows, seen_cols
-
-
-def brute_force_assignment(cost) -> tuple[np.ndarray, np.ndarray]:
-    """Reference for tests and tiny problems: try every matching of the smaller side."""
-    cost = np.asarray(cost, dtype=float)
-    transposed = cost.shape[0] > cost.shape[1]
-    c = cost.T if transposed else cost
-    n, m = c.shape
-    best, best_cols = np.inf, None
-    for cols in itertools.permutations(range(m), n):
-        total = c[np.arange(n), cols].sum()
-        if total < best:
-            best, best_cols = total, cols
-    if best_cols is None or not np.isfinite(best):
-        raise ValueError("cost matrix is infeasible")
-    rows, cols = np.arange(n), np.array(best_cols, dtype=int)
-    if transposed:
-        order = np.argsort(cols)
-        return cols[order], rows[order]
-    return rows, cols
 
 
 def gated_assignment(cost, gate: float) -> list[tuple[int, int]]:
