@@ -51,7 +51,7 @@ from viapath.integrations.host import (
 )
 from viapath.limits import LIMITS_OPTIONS
 from viapath.observation import Observation, Obstacles, RobotState
-from viapath.options import Option, OptionSet
+from viapath.options import Option, OptionError, OptionSet
 
 NAME = "Viapath"
 PATH_SAMPLE_M = 0.25  # spacing of the points a navground Path is sampled at
@@ -90,6 +90,14 @@ def _schema_modifier(option: Option) -> Callable[[dict[str, Any]], None]:
     return modify
 
 
+def check_property(option: Option, value: Any, where: str) -> None:
+    """An :class:`OptionError` naming the property as navground's YAML spells it (``k1``, not ``weights.k1``)."""
+    try:
+        SCHEMA.validate({option.name: value})
+    except OptionError as error:
+        raise OptionError([(f"{where}.{option.name}", message) for _, message in error.errors]) from None
+
+
 def _option_property(option: Option) -> property:
     kind = {bool: "bool", int: "int", float: "float", str: "str", tuple: "float"}[option.kind]
     default = list(option.default) if option.kind is tuple else option.default
@@ -100,7 +108,7 @@ def _option_property(option: Option) -> property:
 
     def setter(self: Any, value: Any) -> None:
         value = _plain(option, value)
-        SCHEMA.validate({option.name: value}, where=WHERE)  # an OptionError naming the field
+        check_property(option, value, WHERE)
         self._values[option.name] = value
         self._driver = None
 
@@ -226,3 +234,72 @@ class _Methods:
 
 
 Viapath = types.new_class(NAME, (core.Behavior,), {"name": NAME}, _body)
+
+
+def _known_keys() -> set[str]:
+    """Every key navground reads from a ``type: Viapath`` block: navground's own and viapath's properties."""
+    import yaml
+
+    return set(yaml.safe_load(core.dump(Viapath())) or {}) | {"type", "modulations"}
+
+
+def check_experiment(text: str, origin: str = "<experiment>") -> list[str]:
+    """What is wrong with the ``Viapath`` behaviour blocks of a navground YAML (experiment, scenario, group),
+    one message per bad field naming it. navground's reader skips keys no property has, for every
+    behaviour, before a behaviour exists: this is where an unknown key is refused."""
+    import yaml
+
+    known, errors = _known_keys(), []
+
+    def visit(node: Any, where: str) -> None:
+        if isinstance(node, dict):
+            if node.get("type") == NAME:
+                errors.extend(f"{origin}: {message}" for message in _block_errors(node, where, known))
+            for key, value in node.items():
+                visit(value, f"{where}.{key}" if where else str(key))
+        elif isinstance(node, list):
+            for k, value in enumerate(node):
+                visit(value, f"{where}.{k}")
+
+    visit(yaml.safe_load(text), "")
+    return errors
+
+
+def _block_errors(block: dict[str, Any], where: str, known: set[str]) -> list[str]:
+    errors = []
+    for key, value in block.items():
+        field = f"{where}.{key}"
+        if key not in known:
+            errors.append(f"{field}: unknown option {key!r}; Viapath has: {', '.join(sorted(known - {'type'}))}")
+        elif isinstance(value, dict) and "sampler" in value:
+            continue  # a navground sampler: its values are checked as each run sets them
+        elif key in SCHEMA:
+            try:
+                check_property(SCHEMA[key], value, where)
+            except OptionError as error:
+                errors.extend(f"{f}: {m}" for f, m in error.errors)
+        elif key == "path":
+            try:
+                read_waypoints(value, field)
+            except OptionError as error:
+                errors.extend(f"{f}: {m}" for f, m in error.errors)
+    return errors
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m viapath.integrations.navground FILE...``: check the Viapath blocks of navground YAML files
+    (exit 0: none is wrong, 2: some are, each named)."""
+    import sys
+    from pathlib import Path
+
+    files = sys.argv[1:] if argv is None else argv
+    errors = []
+    for name in files:
+        errors += check_experiment(Path(name).read_text(), name)
+    for message in errors:
+        print(message, file=sys.stderr)
+    return 2 if errors or not files else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
