@@ -249,7 +249,8 @@ def check_experiment(text: str, origin: str = "<experiment>") -> list[str]:
     behaviour, before a behaviour exists: this is where an unknown key is refused."""
     import yaml
 
-    known, errors = _known_keys(), []
+    known = _known_keys()
+    errors: list[str] = []
 
     def visit(node: Any, where: str) -> None:
         if isinstance(node, dict):
