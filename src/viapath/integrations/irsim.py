@@ -105,37 +105,53 @@ def _radius(obj: Any) -> float:
     return float(obj.radius) if obj.shape == "circle" else float(obj.radius_extend)
 
 
-def objects_observation(external_objects: list[Any]) -> tuple[Obstacles, StaticLayer]:
-    """People (moving objects) and the static layer (static ones) of IR-SIM's objects."""
-    people: list[tuple[np.ndarray, np.ndarray, float, int]] = []
+def _is_static(obj: Any) -> bool:
+    return obj.shape == "map" or bool(obj.static)
+
+
+def _obstructing(external_objects: list[Any]) -> list[Any]:
+    return [obj for obj in external_objects if not getattr(obj, "unobstructed", False)]
+
+
+def people_of(external_objects: list[Any]) -> Obstacles:
+    """The objects that move, as people: discs at their centroid with the velocity IR-SIM gives them."""
+    people = [
+        (_column(obj.centroid)[:2], _column(obj.velocity_xy)[:2], _radius(obj), int(obj.id))
+        for obj in _obstructing(external_objects)
+        if not _is_static(obj)
+    ]
+    if not people:
+        return Obstacles.empty()
+    positions, velocities, radii, ids = (np.array(column) for column in zip(*people))
+    return Obstacles(positions, velocities, radii.astype(float), ids=ids)
+
+
+def _map_segments(obj: Any) -> np.ndarray:
+    """A grid map's outline (IR-SIM keeps it as line strings) as segments (M, 2, 2)."""
+    pieces = [np.asarray(line.coords, dtype=float) for line in obj.linestrings]
+    return np.concatenate([np.stack([p[:-1], p[1:]], axis=1) for p in pieces if len(p) > 1] or [np.zeros((0, 2, 2))])
+
+
+def static_of(external_objects: list[Any]) -> StaticLayer:
+    """The static objects as viapath's static layer: polygons, rectangles, lines, circles and grid maps."""
     polygons, polylines, circles, maps = [], [], [], []
-    for obj in external_objects:
-        if getattr(obj, "unobstructed", False):
-            continue
+    for obj in _obstructing(external_objects):
         if obj.shape == "map":
-            maps.append(
-                np.array(
-                    [
-                        np.asarray(line.coords)[[i, i + 1]]
-                        for line in obj.linestrings
-                        for i in range(len(line.coords) - 1)
-                    ]
-                ).reshape(-1, 2, 2)
-            )
+            maps.append(_map_segments(obj))
         elif not obj.static:
-            people.append((_column(obj.centroid)[:2], _column(obj.velocity_xy)[:2], _radius(obj), int(obj.id)))
+            continue
         elif obj.shape == "circle":
             circles.append((_column(obj.centroid)[:2], float(obj.radius)))
         elif obj.shape == "linestring":
             polylines.append(np.asarray(obj.vertices, dtype=float).T)
         else:  # polygon, rectangle and any other closed outline
             polygons.append(np.asarray(obj.vertices, dtype=float).T)
-    if people:
-        positions, velocities, radii, ids = (np.array(column) for column in zip(*people))
-        obstacles = Obstacles(positions, velocities, radii.astype(float), ids=ids)
-    else:
-        obstacles = Obstacles.empty()
-    return obstacles, static_layer(polygons, polylines, circles, maps)
+    return static_layer(polygons, polylines, circles, maps)
+
+
+def objects_observation(external_objects: list[Any]) -> tuple[Obstacles, StaticLayer]:
+    """People (moving objects) and the static layer (static ones) of IR-SIM's objects."""
+    return people_of(external_objects), static_of(external_objects)
 
 
 def _lidar(ego: Any) -> Any:
@@ -171,6 +187,9 @@ class ViapathBehavior:
         self.driver = Driver(self.settings)
         self.laser: LaserPerception | None = None
         self._last_time_s = -math.inf
+        # IR-SIM never moves a static object: their layer is built once per set of them and kept, so the
+        # guard's sampling of it into discs (cached on the layer) is done once, not every step.
+        self._static: tuple[tuple[int, ...], StaticLayer] | None = None
 
     def _start(self, ego: Any) -> None:
         world = ego._world_param
@@ -186,7 +205,7 @@ class ViapathBehavior:
             dt_s=float(world.step_time),
             goal_tolerance_m=0.8 * float(ego.goal_threshold),
         )
-        self.laser = None
+        self.laser, self._static = None, None
         if self.settings["sensing"] == "lidar":
             lidar = _lidar(ego)
             if lidar is None:
@@ -196,11 +215,16 @@ class ViapathBehavior:
             )
             self.laser.reset(np.random.default_rng(0))
 
+    def _static_layer(self, external_objects: list[Any]) -> StaticLayer:
+        key = tuple(int(obj.id) for obj in _obstructing(external_objects) if _is_static(obj))
+        if self._static is None or self._static[0] != key:
+            self._static = (key, static_of(external_objects))
+        return self._static[1]
+
     def observation(self, ego: Any, external_objects: list[Any], time_s: float) -> Observation:
         robot = robot_state(ego)
         if self.laser is None:
-            obstacles, static = objects_observation(external_objects)
-            return Observation(time_s, robot, obstacles, static)
+            return Observation(time_s, robot, people_of(external_objects), self._static_layer(external_objects))
         lidar = _lidar(ego)
         scan = lidar.get_scan()
         ranges = np.asarray(scan["ranges"], dtype=float).copy()

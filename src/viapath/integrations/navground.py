@@ -151,6 +151,7 @@ class _Methods:
         self._path = []
         self._driver = None
         self._target: np.ndarray | None = None
+        self._static: tuple[bytes, Any] | None = None
         self._state = core.GeometricState()
 
     def get_environment_state(self: Any) -> Any:
@@ -212,10 +213,15 @@ class _Methods:
             )
         else:
             obstacles = Obstacles.empty()
-        static = static_layer(
-            circles=[(np.asarray(d.position, dtype=float), float(d.radius)) for d in state.static_obstacles],
-            segments=[np.array([line.p1, line.p2], dtype=float) for line in state.line_obstacles],
-        )
+        discs = np.array([[*d.position, d.radius] for d in state.static_obstacles], dtype=float).reshape(-1, 3)
+        lines = np.array([[line.p1, line.p2] for line in state.line_obstacles], dtype=float).reshape(-1, 2, 2)
+        key = discs.tobytes() + b"|" + lines.tobytes()
+        # Walls and static discs rarely change: the same layer object is kept while they do not, so the
+        # guard's sampling of it into discs (cached on the layer) is done once, not every cycle.
+        if self._static is None or self._static[0] != key:
+            layer = static_layer(circles=[(d[:2], float(d[2])) for d in discs], segments=[lines])
+            self._static = (key, layer)
+        static = self._static[1]
         return Observation(time_s, robot, obstacles, static)
 
     def compute_cmd_internal(self: Any, time_step: float) -> Any:
