@@ -182,3 +182,40 @@ def test_with_lidar_sensing_the_crossing_world_reaches_the_goal_without_a_collis
     assert run.arrived and not run.collided
     assert run.min_clearance_m > 0.02
     assert max(seen_moving) >= 1 and sum(seen_moving) > 20  # people tracked over many cycles
+
+
+def _empty_world(robot: dict) -> dict:
+    world = _head_on_world({})
+    world["obstacle"] = []
+    world["robot"][0].update(robot)
+    return world
+
+
+def test_the_path_option_and_a_goal_list_are_the_designated_path(tmp_path):
+    """An L-shaped path, given as the path option or as IR-SIM's goal list: the robot goes by the corner
+    [3, 0] inside a 0.3 m corridor, where the straight line to [3, 3] would cut across, and IR-SIM, which
+    takes the goals one by one, raises its arrive flag at the last."""
+    given = {"behavior": {"name": "viapath", "path": [[0, 0], [3, 0], [3, 3]], "half_width_m": 0.3}, "goal": [3, 3, 0]}
+    goals = {"behavior": {"name": "viapath", "half_width_m": 0.3}, "goal": [[[3, 0, 0], [3, 3, 0]]]}  # one robot's
+    for k, robot in enumerate((given, goals)):
+        run = run_world(write_world(tmp_path, _empty_world(robot), f"world{k}.yaml"), max_steps=500)
+        assert run.arrived and np.allclose(run.positions[-1], [3, 3], atol=0.1), k
+        assert np.hypot(*(run.positions - [3, 0]).T).min() < 0.3, k
+        assert (run.positions[:, 1] <= 0.3 + 1e-6)[run.positions[:, 0] < 2.7].all(), k
+
+
+def test_a_reset_world_starts_the_behaviour_anew(tmp_path):
+    import irsim
+
+    world = _empty_world({"goal": [2, 0, 0]})
+    env = irsim.make(str(write_world(tmp_path, world)), display=False, disable_all_plot=True)
+    env.load_behavior("viapath.integrations.irsim")
+    for _ in range(2):
+        for _ in range(200):
+            env.step()
+            if env.robot.arrive:
+                break
+        assert env.robot.arrive and np.hypot(*(env.robot.state[:2, 0] - [2, 0])) < 0.1
+        env.reset()
+        assert np.hypot(*env.robot.state[:2, 0]) < 1e-9  # back at the start, to go again
+    env.end(0)

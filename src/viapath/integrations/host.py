@@ -172,13 +172,23 @@ class Driver:
         robot_radius_m: float,
         dt_s: float,
         goal_tolerance_m: float,
+        reach_threshold_m: float | None = None,
     ) -> None:
-        """Build the planner for ``waypoints`` (the last is the goal) with the robot's description."""
+        """Build the planner for ``waypoints`` (the last is the goal) with the robot's description; within
+        ``goal_tolerance_m`` of the goal it stops (and switches from an intermediate subgoal within
+        ``reach_threshold_m`` when given), never farther than viapath's own defaults."""
         settings = self.settings
         names = planner_options(PLANNER).names
         self.path = DesignatedPath(waypoints, half_width_m=settings["half_width_m"])
-        tolerance = SubgoalPolicy().goal_tolerance_m
-        policy = SubgoalPolicy(goal_tolerance_m=min(tolerance, goal_tolerance_m))
+        default = SubgoalPolicy()
+        reach = (
+            default.reach_threshold_m
+            if reach_threshold_m is None
+            else min(default.reach_threshold_m, reach_threshold_m)
+        )
+        policy = SubgoalPolicy(
+            reach_threshold_m=reach, goal_tolerance_m=min(default.goal_tolerance_m, goal_tolerance_m)
+        )
         planner = make_planner(
             PLANNER,
             self.path,

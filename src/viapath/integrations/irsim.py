@@ -204,6 +204,8 @@ class ViapathBehavior:
             robot_radius_m=_radius(ego),
             dt_s=float(world.step_time),
             goal_tolerance_m=0.8 * float(ego.goal_threshold),
+            # IR-SIM takes its goals one by one, each reached within goal_threshold: so must viapath's subgoals.
+            reach_threshold_m=0.8 * float(ego.goal_threshold) if self.waypoints is None else None,
         )
         self.laser, self._static = None, None
         if self.settings["sensing"] == "lidar":
