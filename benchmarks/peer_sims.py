@@ -22,6 +22,7 @@ depend on the machine's load.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import tempfile
@@ -277,10 +278,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     args = parser.parse_args(argv)
     rows = []
-    if args.only in (None, "navground"):
-        rows += run_navground(args.runs)
-    if args.only in (None, "irsim"):
-        rows += run_irsim(args.seeds)
+    with contextlib.redirect_stdout(sys.stderr):  # IR-SIM prints its plotting backend's fallback on import
+        if args.only in (None, "navground"):
+            rows += run_navground(args.runs)
+        if args.only in (None, "irsim"):
+            rows += run_irsim(args.seeds)
     if args.json:
         print(json.dumps({"runs": args.runs, "seeds": args.seeds, "rows": rows}, indent=1))
     else:
