@@ -204,3 +204,4 @@ def test_an_unknown_option_is_named_by_the_check_navground_itself_skips_it():
     assert any("scenario.groups.0.behavior.k2" in e and "greater than or equal to 0" in e for e in errors)
     assert viapath_navground.check_experiment(CROSSING.read_text(), "crossing.yaml") == []
     assert viapath_navground.main([str(CROSSING)]) == 0
+    assert viapath_navground.main([str(CROSSING.with_name("missing.yaml"))]) == 2

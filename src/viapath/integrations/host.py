@@ -135,14 +135,13 @@ def static_layer(
     """Static geometry as viapath's static layer: closed outlines (K, 2), open polylines (K, 2), circles
     (a point of the circle's radius) and loose segments (M, 2, 2), one shape id each."""
     shapes: list[np.ndarray] = []
-    pads: list[np.ndarray] = []
     for outline in polygons:
         shapes.append(polygon_edges(outline))
     for line in polylines:
         shapes.append(polyline_edges(line))
     for edges in segments:
         shapes.append(np.asarray(edges, dtype=float).reshape(-1, 2, 2))
-    pads = [np.zeros(len(edges)) for edges in shapes]
+    pads = [np.zeros(len(edges)) for edges in shapes]  # exact outlines; a circle is a point padded by its radius
     for centre, radius in circles:
         point = np.asarray(centre, dtype=float).reshape(1, 1, 2)
         shapes.append(np.concatenate([point, point], axis=1))

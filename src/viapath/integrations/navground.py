@@ -299,13 +299,21 @@ def main(argv: list[str] | None = None) -> int:
     import sys
     from pathlib import Path
 
+    import yaml
+
     files = sys.argv[1:] if argv is None else argv
-    errors = []
+    if not files:
+        print("usage: python -m viapath.integrations.navground EXPERIMENT.yaml...", file=sys.stderr)
+        return 2
+    errors: list[str] = []
     for name in files:
-        errors += check_experiment(Path(name).read_text(), name)
+        try:
+            errors += check_experiment(Path(name).read_text(), name)
+        except (OSError, UnicodeDecodeError, yaml.YAMLError) as error:
+            errors.append(f"{name}: cannot read it as YAML: {error}")
     for message in errors:
         print(message, file=sys.stderr)
-    return 2 if errors or not files else 0
+    return 2 if errors else 0
 
 
 if __name__ == "__main__":
