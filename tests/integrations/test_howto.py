@@ -61,10 +61,14 @@ def test_navground_page_experiment_is_the_example_file_and_its_script_runs_as_wr
 
     (experiment,) = _blocks("navground.md", "yaml")
     assert experiment == (ROOT / "examples" / "navground" / "crossing.yaml").read_text()
-    (script,) = _blocks("navground.md", "python")
+    script, python_api = _blocks("navground.md", "python")
     namespace, out = _run_block(script, "docs/howto/navground.md")
     assert "\ncollisions: 0 robot at: " in "\n" + out
     assert np.hypot(*(np.asarray(namespace["final"][:2]) - [9.0, 0.0])) <= 0.1 + 1e-6
+    namespace, out = _run_block(python_api, "docs/howto/navground.md, From Python")
+    assert np.hypot(*(np.asarray(namespace["robot"].position) - [5.0, 0.0])) <= 0.1 + 1e-6
+    assert namespace["lowest"] < -0.3  # passed on the right, as asked
+    assert "\nat [" in "\n" + out and "passed on the right by" in out
 
 
 def test_navground_page_lists_every_property_the_behaviour_adds():
