@@ -476,8 +476,10 @@ def make_tasks(
     unknown = [p for p in planners if p not in known]
     if unknown:
         raise BenchError(f"unknown planner {unknown[0]!r}; available: {', '.join(known)}")
-    if perception not in ("oracle", "laser"):
-        raise BenchError(f"unknown perception {perception!r}; use oracle or laser")
+    from viapath.perception.modes import PERCEPTION_MODES
+
+    if perception not in PERCEPTION_MODES:
+        raise BenchError(f"unknown perception {perception!r}; use {' or '.join(PERCEPTION_MODES.ordered())}")
     from viapath.bench.identity import options_hash, scenario_hash, viapath_version
 
     if shield not in (None, "on", "off", "friendly"):
