@@ -1,33 +1,39 @@
 """What the bench's feasibility sweep (viapath.bench.feasibility) costs per episode, and what it finds.
 
-Usage: python benchmarks/feasibility_cost.py [--suite mixed] [--count 50] [--seed 5] [--cell 0.1] [--json]
+Usage: python benchmarks/feasibility_cost.py [--suite mixed|FOLDER] [--count 50] [--seed 5] [--cell 0.1]
+       [--episodes episodes.csv] [--json]
 
-Generates the suite's scenarios (as ``viapath suite`` does), sweeps each one's reachable set from the
+Generates the suite's scenarios (as ``viapath suite`` does; or reads a folder of scenario files), sweeps each one's reachable set from the
 robot's start over its people's recorded future (people who react to the robot are skipped), and prints
 the wall and CPU time per scenario (median, mean, max; the first sweep, which compiles or loads the compiled
 code, is timed apart), the grid sizes, the share of infeasible scenarios and the set's earliest arrival
-over the obstacle-free straight-line time.
+over the obstacle-free straight-line time. With ``--episodes`` (a bench's episodes.csv over the same
+scenarios, e.g. one written before these columns existed): success and reach among the feasible
+episodes of each planner there.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import time
+from pathlib import Path
 
 import numpy as np
 
 from viapath.bench.feasibility import reacts_to_robot, scenario_reach
-from viapath.bench.suites import generate_suite
+from viapath.bench.runner import load_suite
 from viapath.scenarios import scenario_from_dict
 
 
-def measure(suite: str, count: int, seed: int, cell_m: float) -> dict:
-    scenarios = [scenario_from_dict(data, data["name"]) for data in generate_suite(suite, count, seed)]
+def measure(suite: str, count: int, seed: int, cell_m: float, episodes: str | None = None) -> dict:
+    scenarios = [scenario_from_dict(data, data["name"]) for data in load_suite(suite, None, count, seed)]
     started = time.perf_counter()
     scenario_reach(scenarios[0], cell_m=cell_m)  # compiles, or loads numba's cache
     first_s = time.perf_counter() - started
     walls, cpus, cells, steps, infeasible, emptied, arrivals, skipped = [], [], [], [], [], [], [], 0
+    feasible_names = set()
     for scenario in scenarios:
         if reacts_to_robot(scenario):
             skipped += 1
@@ -39,12 +45,26 @@ def measure(suite: str, count: int, seed: int, cell_m: float) -> dict:
         cells.append(reach.grid.rows * reach.grid.columns)
         steps.append(reach.steps)
         infeasible.append(not reach.feasible)
+        if reach.feasible:
+            feasible_names.add(scenario.name)
         emptied.append(reach.emptied_s is not None)
         if reach.feasible:
             waypoints = np.asarray(scenario.path.waypoints, dtype=float)
             length = float(np.sum(np.hypot(*np.diff(waypoints, axis=0).T)))
             arrivals.append(reach.arrival_s / (length / scenario.robot.limits.max_speed_mps))
     walls_ms = 1e3 * np.asarray(walls)
+    among_feasible = {}
+    if episodes:
+        judged = {s.name for s in scenarios if not reacts_to_robot(s)}
+        with Path(episodes).open(newline="") as handle:  # any version's columns: only these few are read
+            for row in csv.DictReader(handle):
+                if row["error"] or row["scenario"] not in judged or row["scenario"] not in feasible_names:
+                    continue
+                name = row["planner"] + ("" if row.get("shield", "off") in ("off", "") else " +shield")
+                entry = among_feasible.setdefault(name, [0, 0, 0])
+                entry[0] += 1
+                entry[1] += row["reached_goal"] == "True" and row["collision"] != "True"
+                entry[2] += row["reached_goal"] == "True"
     return {
         "suite": suite,
         "count": count,
@@ -64,6 +84,10 @@ def measure(suite: str, count: int, seed: int, cell_m: float) -> dict:
         "infeasible_share": float(np.mean(infeasible)) if infeasible else None,
         "emptied": int(np.sum(emptied)),
         "arrival_over_straight_time_median": float(np.median(arrivals)) if arrivals else None,
+        "among_feasible": {
+            name: {"episodes": n, "success_rate": ok / n, "reach_rate": reached / n}
+            for name, (n, ok, reached) in among_feasible.items()
+        },
     }
 
 
@@ -73,9 +97,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--count", type=int, default=50)
     parser.add_argument("--seed", type=int, default=5)
     parser.add_argument("--cell", type=float, default=0.1, help="cell size, m")
+    parser.add_argument("--episodes", help="a bench's episodes.csv over the same scenarios")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
-    result = measure(args.suite, args.count, args.seed, args.cell)
+    result = measure(args.suite, args.count, args.seed, args.cell, args.episodes)
     if args.json:
         print(json.dumps(result, indent=2))
         return
@@ -89,6 +114,11 @@ def main(argv: list[str] | None = None) -> None:
         f"{result['infeasible']} ({result['infeasible_share']:.1%}), set emptied {result['emptied']}; "
         f"earliest arrival / straight-line time at top speed, median {result['arrival_over_straight_time_median']:.2f}"
     )
+    for name, entry in result["among_feasible"].items():
+        print(
+            f"{name}: {entry['episodes']} feasible episodes, success {entry['success_rate']:.1%}, "
+            f"reach {entry['reach_rate']:.1%}"
+        )
 
 
 if __name__ == "__main__":
