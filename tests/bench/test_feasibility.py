@@ -209,3 +209,15 @@ def test_scenario_columns_and_reactive_people_are_not_applicable():
         }
     )
     assert all(value is None for value in episode_columns(reactive, True, False, 10.0).values())
+
+
+@pytest.mark.parametrize("name", ["paper-front", "paper-side", "corner-person", "doorway"])
+def test_no_episode_without_contact_arrives_before_the_sets_earliest_arrival(name):
+    from viapath.scenarios.loader import load_scenario
+    from viapath.sim.loop import run_episode
+
+    scenario = load_scenario(name)
+    reach = scenario_reach(scenario)
+    metrics = run_episode(scenario).metrics
+    assert reach.feasible and metrics["reached_goal"] and not metrics["collision"]
+    assert reach.arrival_s <= metrics["time_to_goal_s"]
