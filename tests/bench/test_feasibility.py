@@ -221,3 +221,14 @@ def test_no_episode_without_contact_arrives_before_the_sets_earliest_arrival(nam
     metrics = run_episode(scenario).metrics
     assert reach.feasible and metrics["reached_goal"] and not metrics["collision"]
     assert reach.arrival_s <= metrics["time_to_goal_s"]
+
+
+def test_a_person_present_at_a_single_sample_blocks_nothing():
+    # The metrics count a contact in a step with the person present at both ends: a wall of people seen
+    # at isolated samples only (every other step) can never be touched.
+    wall = _wall_of_people()
+    people = np.full((400, len(wall), 2), np.nan)
+    people[::2] = wall
+    assert _sweep(people, np.full(len(wall), 0.25)).feasible
+    people[1::4] = wall  # now present at consecutive samples 0-1, 4-5, ...: touchable there
+    assert not _sweep(people, np.full(len(wall), 0.25)).feasible

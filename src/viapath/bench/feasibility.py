@@ -18,7 +18,9 @@ time any such robot needs (the hindsight optimum of the time ratio):
 * a cell is free when some point of it may be free: it is blocked only when it lies wholly inside one
   inflated disc or one static edge's capsule (both convex: all four corners inside), and it is in the
   corridor when its centre is within half a diagonal of it (the corridor's excess is 1-Lipschitz);
-* constraints are checked at the step times only (the motion in between is free: more runs admitted);
+* constraints are checked at the step times only (the motion in between is free: more runs admitted),
+  and a person blocks a sample only where a contact there would count (present at the step before or
+  after too, as :mod:`viapath.sim.metrics` needs both ends of a step);
 * what the set keeps per cell is a lower bound ``φ`` of the distance from the cell (its nearest point) to
   the true reachable set: at the start the exact distance to the start point, then
   ``φ_k = max(φ_{k-1} − v·dt, gap(cell, reachable cells at k))``, the gap being the exact distance between
@@ -138,7 +140,7 @@ def forward_reachable(
     ``start_time_s + k·dt_s < wall_until_s``."""
     if not (top_speed_mps > 0 and dt_s > 0 and cell_m > 0):
         raise ValueError("top_speed_mps, dt_s and cell_m must be > 0")
-    people = np.ascontiguousarray(np.asarray(people, dtype=float).reshape(len(people), -1, 2))
+    people = _contact_samples(np.asarray(people, dtype=float).reshape(len(people), -1, 2))
     reach = np.ascontiguousarray(np.asarray(people_radii_m, dtype=float).reshape(-1) + robot_radius_m)
     grid = Grid.around(path, cell_m)
     centres = grid.centres()
@@ -177,6 +179,17 @@ def forward_reachable(
     )
 
 
+def _contact_samples(people: np.ndarray) -> np.ndarray:
+    """The samples at which a person can be touched, the others NaN: the metrics count a contact in a step
+    with the person present at both of its ends, so a sample with the person absent just before and just
+    after blocks nothing."""
+    present = np.isfinite(people).all(-1)
+    neighbour = np.zeros_like(present)
+    neighbour[1:] |= present[:-1]
+    neighbour[:-1] |= present[1:]
+    return np.ascontiguousarray(np.where((present & neighbour)[..., None], people, np.nan))
+
+
 def _static_blocked(grid: Grid, centres, walls, until_s, times, robot_radius_m: float):
     """The cells wholly within the robot's radius of a standing static edge, one layer per set of standing
     edges (M, rows, columns), and the layer of each step (K,)."""
@@ -208,7 +221,7 @@ def _sweep(people, reach, static_blocked, static_index, corridor, goal, phi, x0,
     squared = np.empty((rows, columns))
     for k in range(steps):
         _free_cells(people[k], reach, static_blocked[static_index[k]], corridor, x0, y0, h, free)
-        threshold = 1e-9 if k == 0 else d  # at the start: the cells holding the start point (rounding)
+        threshold = (0.0 if k == 0 else d) + 1e-9  # rounding never drops a cell (k = 0: the start's cells)
         alive = False
         arrived = False
         for i in range(rows):
