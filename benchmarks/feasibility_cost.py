@@ -105,7 +105,12 @@ def main(argv: list[str] | None = None) -> None:
         print(json.dumps(result, indent=2))
         return
     print(
-        f"{result['suite']} {result['count']} seed {result['seed']}, cell {result['cell_m']} m: "
+        (
+            result["suite"]
+            if Path(result["suite"]).is_dir()
+            else f"{result['suite']} {result['count']} seed {result['seed']}"
+        )
+        + f", cell {result['cell_m']} m: "
         f"{result['swept']} swept ({result['skipped_reactive']} reactive skipped); per scenario "
         f"median {result['wall_ms_median']:.1f} ms, mean {result['wall_ms_mean']:.1f} ms, max "
         f"{result['wall_ms_max']:.1f} ms; CPU median {result['cpu_ms_median']:.1f} ms, max "
