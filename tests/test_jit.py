@@ -35,3 +35,22 @@ def test_compiled_when_numba_is_enabled():
         assert jit.python_function(_norms) is not _norms  # a dispatcher around the plain function
     else:
         assert jit.python_function(_norms) is _norms
+
+
+def test_the_cache_follows_every_compiling_module(tmp_path):
+    """numba notices changes of a function's own file only: the cache folder's digest covers every module
+    that compiles, so a change to a compiled callee in another file is compiled afresh."""
+    package = tmp_path / "package"
+    package.mkdir()
+    (package / "jit.py").write_text("# the decorator\n")
+    (package / "steps.py").write_text("from viapath.jit import compiled\n")
+    (package / "plain.py").write_text("x = 1\n")
+    before = jit.source_digest(package)
+    (package / "plain.py").write_text("x = 2\n")
+    assert jit.source_digest(package) == before
+    (package / "steps.py").write_text("from viapath.jit import compiled\n# changed\n")
+    assert jit.source_digest(package) != before
+
+
+def test_the_cache_directory_is_named_by_the_digest():
+    assert jit.cache_directory().name == jit.source_digest()

@@ -5,7 +5,9 @@ braking sweep, the guard's checks, the laser chain's ray casting and fits) is wr
 Python that numba compiles, and decorated with :func:`compiled`:
 
 * with numba installed, the function is compiled to machine code on its first call and kept in numba's
-  on-disk cache (``__pycache__`` beside the module), so later processes load it instead of compiling;
+  on-disk cache, so later processes load it instead of compiling. numba checks only the defining file for
+  changes, not the files of the compiled functions it calls; so the cache lives in a directory named by a
+  digest of every module that compiles (:func:`cache_directory`): a change to any of them compiles afresh;
 * with compilation off (``NUMBA_DISABLE_JIT=1``) or without numba, the same function runs as plain Python:
   a debugger or a print statement sees the real step, only slower.
 
@@ -14,8 +16,10 @@ This is the only module that names numba. Everything else imports :func:`compile
 
 from __future__ import annotations
 
+import hashlib
 import os
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, TypeVar, cast, overload
 
 _numba: Any
@@ -25,6 +29,32 @@ except ImportError:  # pragma: no cover - exercised by installs without numba
     _numba = None
 
 F = TypeVar("F", bound=Callable[..., Any])
+PACKAGE = Path(__file__).resolve().parent
+_USES = (b"viapath.jit", b"from viapath import jit")
+
+
+def source_digest(package: Path = PACKAGE) -> str:
+    """A digest of the modules of ``package`` that compile (they import this module), and of this module."""
+    digest = hashlib.sha256()
+    for path in sorted(package.rglob("*.py")):
+        text = path.read_bytes()
+        if path.name == "jit.py" or any(use in text for use in _USES):
+            digest.update(path.relative_to(package).as_posix().encode())
+            digest.update(text.replace(b"\r\n", b"\n"))
+    return digest.hexdigest()[:16]
+
+
+def cache_directory() -> Path:
+    """Where compiled steps are cached: ``$NUMBA_CACHE_DIR`` (else ``$XDG_CACHE_HOME/viapath/numba``, else
+    ``~/.cache/viapath/numba``), in a folder named by :func:`source_digest`."""
+    base = os.environ.get("NUMBA_CACHE_DIR") or Path(
+        os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache", "viapath", "numba"
+    )
+    return Path(base) / source_digest()
+
+
+if _numba is not None:  # before any function is decorated: numba picks a cache folder per function then
+    _numba.config.CACHE_DIR = str(cache_directory())
 
 
 def enabled() -> bool:
