@@ -112,7 +112,7 @@ BAD = {
         "duration_s: 60",
         "perception: {mode: lidar}\nduration_s: 60",
         "perception.mode",
-        "'oracle' or 'laser'",
+        "'oracle' or 'tracked' or 'laser'",
         "found 'lidar'",
         1,
     ),
