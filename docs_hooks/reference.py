@@ -161,6 +161,9 @@ def options_page() -> str:
         "or as a ROS 2 parameter (`planner.horizon_s`, `planner.weights.k2`). A value outside its bounds is an "
         "error naming the option.",
         "",
+        "Planners that come with an extra (navground's `nav-*` with `navground`) or from a plug-in package are "
+        "listed when they are installed where the site is built.",
+        "",
         "## Options every planner has",
         "",
         _option_table(COMMON_OPTIONS),
