@@ -75,6 +75,8 @@ SPEED = (
     ("speed-planner.txt", ["benchmarks/bench_planner.py"]),
     ("speed-laser-loop.txt", ["benchmarks/bench_laser_loop.py"]),
 )
+SCANS = "scans-positive2.json"  # viapath scans --json of the labelled leg_tracker recording
+SCANS_BAG = "leg_tracker_laser/positive_2_extracted.bag"  # under the data folder ($VIAPATH_DATA)
 ROS2_TABLE = "ros2-paper-table.md"
 MACHINE = "machine.txt"  # what the runs ran on, written before the first run
 
@@ -108,6 +110,15 @@ def measure(work: Path, workers: int, extras: set[str]) -> None:
                 print(
                     f"results_page: {bench.name}: viapath bench exited {code}; its section is left out", file=sys.stderr
                 )
+    if not (work / SCANS).exists():
+        from viapath.bench.suites import data_root
+
+        bag = data_root() / SCANS_BAG
+        if (
+            bag.exists()
+            and _cli(["scans", str(bag), "--labels", "/leg_cluster_positions", "--json"], work / "scans.tmp") == 0
+        ):
+            (work / "scans.tmp").replace(work / SCANS)
     if "ros2" in extras and not (work / ROS2_TABLE).exists():
         _script(["benchmarks/ros2_paper_table.py"], work / ROS2_TABLE)
     if "speed" in extras:
@@ -225,6 +236,37 @@ def _rule(head: str) -> str:
     return "|" + "---|" * (head.count("|") - 1)
 
 
+def scans_section(work: Path) -> list[str]:
+    out = [
+        "## Real scans",
+        "",
+        "The perception chain on a real recording with labelled leg positions (the `leg_tracker` data set, "
+        "Leigh et al., ICRA 2015; not in the repository: `$VIAPATH_DATA`). A labelled leg pair is one person at "
+        "the mean of its legs, found when a detection lies within the match distance; precision counts the "
+        "detections inside the labelled wedge.",
+        "",
+        "```bash",
+        f"viapath scans $VIAPATH_DATA/{SCANS_BAG} --labels /leg_cluster_positions --json",
+        "```",
+        "",
+    ]
+    result = _json(work / SCANS)
+    evaluation = (result or {}).get("evaluation")
+    if not evaluation:
+        return [*out, "*Not measured in this run: the recording was not found (extra `ros` and the data needed).*", ""]
+    return [
+        *out,
+        "| scans | labelled people | person recall | person precision (in the wedge) | median position error [m] | "
+        "leg recall | match distance [m] |",
+        "|---|---|---|---|---|---|---|",
+        f"| {evaluation.get('scans')} | {evaluation.get('labelled_people')} | {_num(evaluation.get('person_recall'), '.3f')} | "
+        f"{_num(evaluation.get('person_precision_in_wedge'), '.3f')} | "
+        f"{_num(evaluation.get('person_position_error_median_m'), '.3f')} | {_num(evaluation.get('leg_recall'), '.3f')} | "
+        f"{_num(evaluation.get('match_distance_m'))} |",
+        "",
+    ]
+
+
 def ros2_section(work: Path, previous: str) -> list[str]:
     out = [
         "## ROS 2: the paper's experiments over DDS",
@@ -338,6 +380,7 @@ def render(work: Path, workers: int, previous: str) -> str:
         [("static, seed 11, oracle", by_name["static11"]), ("static, seed 11, laser", by_name["static11laser"])],
         workers,
     )
+    lines += scans_section(work)
     lines += ros2_section(work, previous)
     if any((work / name).exists() for name, _ in SPEED):
         lines += speed_section(work)
