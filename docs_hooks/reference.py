@@ -249,6 +249,19 @@ def _models_in(annotation: Any) -> list[Any]:
     return [model for arg in typing.get_args(annotation) for model in _models_in(arg)]
 
 
+def _field_comments(model: Any) -> dict[str, str]:
+    """The comment at the end of each field's line in the model's source (``start_time_s: ... = 0.0  # ...``):
+    the code's own words for a field without a description."""
+    import inspect
+    import re
+
+    try:
+        source = inspect.getsource(model)
+    except (OSError, TypeError):  # a model made at run time has no source
+        return {}
+    return {m.group(1): m.group(2).strip() for m in re.finditer(r"^\s+(\w+)\s*:[^#\n]*#\s*(.+)$", source, flags=re.M)}
+
+
 def _model_section(model: Any, key: str, seen: set) -> list[str]:
     if model in seen:
         return []
@@ -257,6 +270,7 @@ def _model_section(model: Any, key: str, seen: set) -> list[str]:
     out = [f"## `{key}`: {model.__name__}", "", doc, "", "| field | type | default | bounds | description |"]
     out.append("|---|---|---|---|---|")
     nested: list[tuple[Any, str]] = []
+    comments = _field_comments(model)
     for name, field in model.model_fields.items():
         if field.is_required():
             default = "required"
@@ -271,7 +285,7 @@ def _model_section(model: Any, key: str, seen: set) -> list[str]:
             default = f"`{_cell(_value(field.default))}`"
         out.append(
             f"| `{name}` | {_cell(_type_name(field.annotation))} | {default} | {_cell(_constraints(field))} | "
-            f"{_cell(field.description or '')} |"
+            f"{_cell(field.description or comments.get(name, ''))} |"
         )
         nested += [(inner, f"{key}.{name}") for inner in _models_in(field.annotation)]
     out.append("")
