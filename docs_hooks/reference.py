@@ -168,7 +168,8 @@ def options_page() -> str:
         "",
         _option_table(COMMON_OPTIONS),
     ]
-    for name in available_planners():
+    names = available_planners()
+    for name in sorted(names, key=lambda n: (n != "viapath", n)):  # the paper's planner first
         cls = planner_class(name)
         own = [o for o in cls.options if o.path not in common]
         doc = (cls.__doc__ or "").strip().splitlines()
