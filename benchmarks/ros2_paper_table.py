@@ -1,4 +1,4 @@
-"""The table of docs/ros2.md, "Measured": the paper's three scenarios over ROS 2 against ``viapath run``.
+"""The ROS 2 table of docs/results.md: the paper's three scenarios over ROS 2 against ``viapath run``.
 
 Usage: python benchmarks/ros2_paper_table.py [--rate 20] [--scenarios paper-behind,paper-front,paper-side] [--json]
 
@@ -6,7 +6,7 @@ For each scenario it starts ``viapath ros2 node --use-sim-time`` and ``viapath r
 --lockstep --json`` as two processes in a ROS domain of their own with
 ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` (nothing leaves the machine), ends the node by its pid,
 and runs ``viapath run SCENARIO --perception laser`` in this process (the node's laser chain).
-It prints the markdown table that docs/ros2.md shows (paste it there; never type the numbers).
+It prints the markdown table that docs/results.md shows (benchmarks/results_page.py --with ros2 puts it there).
 """
 
 from __future__ import annotations

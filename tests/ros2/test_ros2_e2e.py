@@ -116,7 +116,7 @@ def test_every_command_was_finite_and_inside_the_limits(paper_runs, tmp_path_fac
 
 
 def test_the_table_in_the_docs_is_what_the_runs_print(paper_runs, in_process):
-    """docs/ros2.md's table is generated (benchmarks/ros2_paper_table.py), never typed: the same runs give it."""
+    """docs/results.md's ROS 2 table is generated (benchmarks/ros2_paper_table.py), never typed: the same runs give it."""
     import sys
     from pathlib import Path
 
@@ -125,6 +125,6 @@ def test_the_table_in_the_docs_is_what_the_runs_print(paper_runs, in_process):
     from ros2_paper_table import table
 
     text = table({name: paper_runs[name][0] for name in PAPER}, {name: in_process[name] for name in PAPER})
-    assert text in (root / "docs" / "ros2.md").read_text(), (
-        "regenerate it: python benchmarks/ros2_paper_table.py\n" + text
+    assert text in (root / "docs" / "results.md").read_text(), (
+        "regenerate it: python benchmarks/results_page.py --with ros2\n" + text
     )
