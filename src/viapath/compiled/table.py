@@ -21,7 +21,6 @@ class Entry(NamedTuple):
 
 
 _BACKENDS = "tests/planning/test_backends.py"
-_SHIELD = "tests/safety/test_shield_backends.py::test_numba_shield_gives_the_numpy_verdicts"
 _HARNESS = "tests/robustness/test_harness_kernels.py"
 _CHOICE = f"{_BACKENDS}::test_compiled_choice_is_the_numpy_choice"
 _ESCAPE = f"{_BACKENDS}::test_compiled_escape_is_the_reference"
@@ -73,12 +72,6 @@ ENTRIES = (
     Entry("planning.choose_tree", "viapath.planning.viapath.planner:ViaPathPlanner._choose", _CHOICE),
     Entry("planning.choose_candidate", "viapath.planning.viapath.critics:score", _CHOICE),
     Entry("planning.choose", "viapath.planning.viapath.planner:ViaPathPlanner._choose", _CHOICE),
-    # The passive-safety shield.
-    Entry("shield.braking_sweep", "viapath.safety.shield:braking_sweep", _SHIELD),
-    Entry("shield.achieved_first_period", "viapath.safety.shield:achieved_first_period", _SHIELD),
-    Entry("shield.evaluate", "viapath.safety.shield:Shield.evaluate", _SHIELD),
-    Entry("shield.candidates", "viapath.safety.shield:Shield.candidates", _SHIELD),
-    Entry("shield.shield", "viapath.safety.shield:Shield.filter", _SHIELD),
     # The laser chain.
     Entry(
         "perception.beam_range",
