@@ -21,7 +21,6 @@ class Entry(NamedTuple):
 
 
 _BACKENDS = "tests/planning/test_backends.py"
-_HARNESS = "tests/robustness/test_harness_kernels.py"
 _CHOICE = f"{_BACKENDS}::test_compiled_choice_is_the_numpy_choice"
 _ESCAPE = f"{_BACKENDS}::test_compiled_escape_is_the_reference"
 _CORRIDOR = f"{_BACKENDS}::test_corridor_kernels_match_reference"
@@ -100,27 +99,6 @@ ENTRIES = (
         "tests/perception/test_laser_shortcuts.py::test_numba_shape_tests_equal_numpy",
     ),
     Entry("perception.split_clusters_kernel", "viapath.perception.segmentation:segment_beams", _LASER),
-    # The harness every planner gets (guard, inflation).
-    Entry(
-        "harness.obstacles_sound",
-        "viapath.guard:_obstacles_sound",
-        f"{_HARNESS}::test_obstacles_sound_agrees_with_the_numpy_reductions",
-    ),
-    Entry(
-        "harness.first_touched",
-        "viapath.guard:check_command",
-        f"{_HARNESS}::test_the_braking_test_agrees_with_check_commands_numpy_code",
-    ),
-    Entry(
-        "harness.inflation",
-        "viapath.planning.base:Inflation.of",
-        f"{_HARNESS}::test_inflation_is_the_numpy_inflation_bit_for_bit",
-    ),
-    Entry(
-        "harness.situation_numbers",
-        "viapath.planning.base:Planner.situation",
-        f"{_HARNESS}::test_the_situations_inflation_and_corridor_excess_are_the_numpy_ones_bit_for_bit",
-    ),
     # numpy's pairwise summation.
     Entry("sums.pairwise_sum", "numpy:sum", f"{_BACKENDS}::test_escape_kernel_pieces_match_numpy"),
 )
