@@ -80,3 +80,55 @@ def test_the_compiled_counter_counts_a_planted_long_function(tmp_path):
     (tmp_path / "kernels.py").write_text(f"def long():\n{body}\n\n\ndef short():\n    return 1\n")
     (tmp_path / "limit.py").write_text("def at_limit():\n" + "\n".join(f"    y{i} = {i}" for i in range(149)) + "\n")
     assert compiled_long_functions(tmp_path) == {("kernels.py", "long"): 151}
+
+
+# The shield and the guard, written once: no function over 60 lines and no class over 300 lines in them.
+ONCE_WRITTEN = ("viapath/safety/*.py", "viapath/guard.py", "viapath/guard_checks.py")
+MAX_ONCE_FUNCTION_LINES, MAX_ONCE_CLASS_LINES = 60, 300
+
+
+def long_definitions(
+    root: Path = SRC,
+    patterns: tuple[str, ...] = ONCE_WRITTEN,
+    function_limit: int = MAX_ONCE_FUNCTION_LINES,
+    class_limit: int = MAX_ONCE_CLASS_LINES,
+) -> dict[tuple[str, str], int]:
+    """(file relative to ``root``, name) -> lines, for every function over ``function_limit`` and every class over
+    ``class_limit`` (nested ones too) in the files ``patterns`` match."""
+    found = {}
+    for file in sorted({file for pattern in patterns for file in root.glob(pattern)}):
+        for node in ast.walk(ast.parse(file.read_text())):
+            limit = (
+                function_limit
+                if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
+                else class_limit
+                if isinstance(node, ast.ClassDef)
+                else None
+            )
+            if limit is not None and node.end_lineno - node.lineno + 1 > limit:
+                found[(file.relative_to(root).as_posix(), node.name)] = node.end_lineno - node.lineno + 1
+    return found
+
+
+def test_the_shield_and_the_guard_have_no_function_over_60_lines_nor_class_over_300():
+    assert len({file for pattern in ONCE_WRITTEN for file in SRC.glob(pattern)}) >= 6
+    long = long_definitions()
+    assert long == {}, "split them: " + ", ".join(
+        f"{file}:{name} ({lines} lines)" for (file, name), lines in long.items()
+    )
+
+
+def test_the_once_written_counter_counts_a_planted_long_function_and_class(tmp_path):
+    (tmp_path / "viapath" / "safety").mkdir(parents=True)
+    body = "\n".join(f"    x{i} = {i}" for i in range(60))
+    methods = "\n".join(f"    def m{i}(self):\n        return {i}\n" for i in range(101))
+    (tmp_path / "viapath" / "safety" / "long.py").write_text(
+        f"def long():\n{body}\n\n\ndef short():\n    return 1\n\n\nclass Big:\n{methods}"
+    )
+    (tmp_path / "viapath" / "guard.py").write_text(
+        "def at_limit():\n" + "\n".join(f"    y{i} = {i}" for i in range(59)) + "\n"
+    )
+    assert long_definitions(tmp_path) == {
+        ("viapath/safety/long.py", "long"): 61,
+        ("viapath/safety/long.py", "Big"): 303,
+    }
