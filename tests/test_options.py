@@ -180,9 +180,11 @@ def test_compute_is_defined_once_and_backend_is_its_former_name(tmp_path):
     with pytest.warns(FutureWarning, match="'backend' is now called 'compute'"):
         planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [3.0, 0.0]], half_width_m=1.0), backend="numpy")
     assert getattr(planner, "inner", planner).config.compute == "numpy"
-    with pytest.warns(FutureWarning, match="'backend' is now called 'compute'"):  # and the shield's does nothing
-        with pytest.warns(FutureWarning, match="shield.backend: option 'backend' no longer does anything"):
-            assert ShieldConfig.from_options({"backend": "numpy"}) == ShieldConfig()
+    with (
+        pytest.warns(FutureWarning, match="'backend' is now called 'compute'"),
+        pytest.warns(FutureWarning, match="shield.backend: option 'backend' no longer does anything"),
+    ):
+        assert ShieldConfig.from_options({"backend": "numpy"}) == ShieldConfig()
     with pytest.warns(FutureWarning, match="shield.compute: option 'compute' no longer does anything"):
         assert ShieldConfig.from_options({"compute": "numba", "margin_m": 0.1}) == ShieldConfig(margin_m=0.1)
     with pytest.warns(FutureWarning, match="planner.backend: option 'backend' is now called 'compute'"):

@@ -523,18 +523,15 @@ def _first_touched(
     """The first obstacle (index) within ``reachable_m`` now that the robot, holding (v, w) for a control period
     and then braking (:func:`braking_path`), would touch while its first sample moves towards it; -1 if none:
     :func:`viapath.guard_checks.first_touched`, one compiled call."""
-    state = (
+    return first_touched(
         float(position[0]),
         float(position[1]),
         float(robot.heading_rad),
         float(robot.speed_mps),
         float(robot.turn_rate_radps),
-    )
-    return first_touched(
-        state,
         v,
         w,
-        _braking(limits, config),
+        *_braking(limits, config),
         obstacles.positions,
         obstacles.radii_m,
         float(robot_radius_m),

@@ -106,20 +106,29 @@ def braking_points(
 
 @compiled
 def first_touched(
-    robot: tuple[float, float, float, float, float],
+    x0: float,
+    y0: float,
+    heading: float,
+    speed: float,
+    turn: float,
     v_cmd: float,
     w_cmd: float,
-    braking: Braking,
+    max_speed_mps: float,
+    max_turn_rate_radps: float,
+    max_accel_mps2: float,
+    max_turn_accel_radps2: float,
+    period_s: float,
+    samples_per_period: int,
     positions: np.ndarray,
     radii: np.ndarray,
     robot_radius_m: float,
     margin_m: float,
     reachable_m: float,
 ) -> int:
-    """The first obstacle (row) within ``reachable_m`` now that the robot (x, y, heading, speed, turn rate),
-    holding (``v_cmd``, ``w_cmd``) for one period and then braking (:func:`braking_points`), would touch while
-    its first sample moves towards it; -1 if none."""
-    x0, y0, heading, speed, turn = robot
+    """The first obstacle (row) within ``reachable_m`` now that the robot at (x0, y0) with its heading, speed
+    and turn rate, holding (``v_cmd``, ``w_cmd``) for one period and then braking (:func:`braking_points`,
+    :class:`Braking` given field by field: a record passed from Python costs microseconds per call), would
+    touch while its first sample moves towards it; -1 if none."""
     n = positions.shape[0]
     near, distance, reach = np.empty(n, dtype=np.bool_), np.empty(n), np.empty(n)
     any_near = False
@@ -130,6 +139,9 @@ def first_touched(
         any_near = any_near or near[j]
     if not any_near:
         return -1
+    braking = Braking(
+        max_speed_mps, max_turn_rate_radps, max_accel_mps2, max_turn_accel_radps2, period_s, samples_per_period
+    )
     swept = braking_points(x0, y0, heading, speed, turn, v_cmd, w_cmd, braking)
     for j in range(n):
         if not near[j]:

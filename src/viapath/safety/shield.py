@@ -79,13 +79,12 @@ from viapath.observation import Command, MotionLimits, Observation, Obstacles, R
 from viapath.path import DesignatedPath
 from viapath.safety.options import check_options
 from viapath.safety.sweep import Drive, Robot
-from viapath.safety.verdicts import Corridor, Forecast, People, Statics, Verdicts
-from viapath.safety.verdicts import evaluate as evaluate_commands
-from viapath.safety.window import Found, search
+from viapath.safety.verdicts import Corridor, Forecast, People, Statics, evaluate_fields
+from viapath.safety.window import Found, search_fields
 
 _EMPTY_POINTS, _EMPTY = np.zeros((0, 2)), np.zeros(0)
 _NO_STATICS = Statics(_EMPTY_POINTS, _EMPTY)
-_NO_CORRIDOR = Corridor(False, _EMPTY_POINTS, _EMPTY_POINTS, _EMPTY, _EMPTY)
+_NO_CORRIDOR = Corridor(_EMPTY_POINTS, _EMPTY_POINTS, _EMPTY, _EMPTY)
 
 
 @dataclass(frozen=True)
@@ -151,6 +150,8 @@ class Shield:
         self.config = config or ShieldConfig()
         # The drive and forecast records of the compiled test, and what they were made of.
         self._records: tuple[Any, ...] = (None, None, None, None, None)
+        # The records of the last obstacles tested (the obstacles object, its people and its static discs).
+        self._obstacle_records: tuple[Any, ...] = (None, None, None)
         # The corridor's record and the path it was made of.
         self._corridor_record: tuple[DesignatedPath | None, Corridor] = (None, _NO_CORRIDOR)
         # Within one cycle of a shielded planner (:meth:`remembering`), the verdicts on single commands: the
@@ -188,28 +189,25 @@ class Shield:
             yield
         finally:
             self._verdicts = None
+            self._obstacle_records = (None, None, None)
 
     def _evaluate(self, observation: Observation, commands: np.ndarray) -> dict[str, np.ndarray]:
         drive, forecast = self._drive_and_forecast()
-        people, statics = _people_and_statics(observation.obstacles)
-        verdicts: Verdicts = evaluate_commands(
-            _robot(observation.robot),
-            drive,
-            forecast,
-            _c(np.reshape(commands, (-1, 2))),
-            people,
-            statics,
-            self._corridor(),
+        people, statics = self._people_and_statics(observation.obstacles)
+        commands = _c(np.reshape(commands, (-1, 2)))
+        # The fields of a Verdicts record, in its order.
+        achieved, admissible, friendly, meet, person, contact, static_meet, corridor_exit = evaluate_fields(
+            *_robot(observation.robot), *drive, *forecast, commands, *people, *statics, *self._corridor()
         )
         return {
-            "achieved": verdicts.achieved,
-            "admissible": verdicts.admissible,
-            "friendly": verdicts.friendly,
-            "meet_time_s": verdicts.meet_time_s,
-            "person": verdicts.person,
-            "contact": np.full(1, verdicts.contact),
-            "static_meet_time_s": verdicts.static_meet_time_s,
-            "corridor_exit_time_s": verdicts.corridor_exit_time_s,
+            "achieved": achieved,
+            "admissible": admissible,
+            "friendly": friendly,
+            "meet_time_s": meet,
+            "person": person,
+            "contact": np.full(1, contact),
+            "static_meet_time_s": static_meet,
+            "corridor_exit_time_s": corridor_exit,
         }
 
     def _drive_and_forecast(self) -> tuple[Drive, Forecast]:
@@ -236,6 +234,16 @@ class Shield:
         self._records = (limits, dt_s, config, drive, forecast)
         return drive, forecast
 
+    def _people_and_statics(self, obstacles: Obstacles) -> tuple[People, Statics]:
+        """:func:`_people_and_statics`, made once per obstacles object within one cycle (:meth:`remembering`:
+        a cycle tests its observation more than once, the planner's command, the filter's, the window)."""
+        if self._verdicts is None:
+            return _people_and_statics(obstacles)
+        known = self._obstacle_records
+        if known[0] is not obstacles:
+            known = self._obstacle_records = (obstacles, *_people_and_statics(obstacles))
+        return known[1], known[2]
+
     def _corridor(self) -> Corridor:
         """The corridor the sweeps must keep to (an inactive record when there is none to keep to)."""
         path = self.corridor
@@ -244,7 +252,6 @@ class Shield:
         known, record = self._corridor_record
         if known is not path:
             record = Corridor(
-                True,
                 _c(path.segment_starts),
                 _c(path.segment_directions),
                 _c(path.segment_lengths_m),
@@ -365,19 +372,20 @@ class Shield:
     def _search(self, observation: Observation, command: Command) -> Found:
         """The window search (:func:`viapath.safety.window.search`) for the planner's failed ``command``."""
         drive, forecast = self._drive_and_forecast()
-        people, statics = _people_and_statics(observation.obstacles)
-        found: Found = search(
-            _robot(observation.robot),
-            drive,
-            forecast,
-            (float(command.speed_mps), float(command.turn_rate_radps)),
+        people, statics = self._people_and_statics(observation.obstacles)
+        reached, pick, passive_pick, tested, passing = search_fields(
+            *_robot(observation.robot),
+            *drive,
+            *forecast,
+            float(command.speed_mps),
+            float(command.turn_rate_radps),
             int(self.config.samples),
-            people,
-            statics,
-            self._corridor(),
+            *people,
+            *statics,
+            *self._corridor(),
         )
         # Plain ints (in plain Python the counts and rows are numpy integers).
-        return Found(found.reached, int(found.pick), int(found.passive_pick), int(found.tested), int(found.passing))
+        return Found(reached, int(pick), int(passive_pick), int(tested), int(passing))
 
 
 def _robot(robot: RobotState) -> Robot:
@@ -410,9 +418,9 @@ def _people_and_statics(obstacles: Obstacles) -> tuple[People, Statics]:
 
 
 def _c(array: ArrayLike) -> np.ndarray:
-    """A C-contiguous, writeable float64 array (the one array type the compiled test is compiled for)."""
-    out = np.ascontiguousarray(array, dtype=np.float64)
-    return out if out.flags.writeable else out.copy()
+    """A C-contiguous float64 array (the array type the compiled test is compiled for; a read-only one compiles
+    once more)."""
+    return np.ascontiguousarray(array, dtype=np.float64)
 
 
 def _as_command(reached: np.ndarray, index: int) -> Command:

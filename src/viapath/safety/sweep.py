@@ -70,7 +70,7 @@ class Sweep(NamedTuple):
     substeps: int  # sub-intervals per braking step: sample t lies in step t // substeps
 
 
-@compiled
+@compiled(inline=True)
 def clip(x: float, low: float, high: float) -> float:
     """np.clip of a scalar: the maximum with ``low``, then the minimum with ``high``."""
     if x < low:

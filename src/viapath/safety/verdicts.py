@@ -59,9 +59,8 @@ class Statics(NamedTuple):
 
 
 class Corridor(NamedTuple):
-    """The designated path's corridor the robot must keep to (``active`` False: none)."""
+    """The designated path's corridor the robot must keep to (no segments: none)."""
 
-    active: bool
     starts: np.ndarray  # (P, 2) segment starts
     directions: np.ndarray  # (P, 2) unit vectors
     lengths_m: np.ndarray
@@ -114,7 +113,8 @@ def flags(count: int, value: bool) -> np.ndarray:
 
 @compiled
 def finite_people(people: People) -> People:
-    """The rows :meth:`viapath.observation.Obstacles.finite` keeps (no NaN or infinite field, radius >= 0)."""
+    """The rows :meth:`viapath.observation.Obstacles.finite` keeps (no NaN or infinite field, radius >= 0), as
+    new arrays."""
     n_all = people.positions.shape[0]
     keep = np.empty(n_all, dtype=np.bool_)
     for n in range(n_all):
@@ -128,8 +128,16 @@ def finite_people(people: People) -> People:
             and math.isfinite(people.position_sigma_m[n])
             and math.isfinite(people.velocity_sigma_mps[n])
         )
+    # Copies, even of all rows: the result is then one array type, whether the arrays handed in may be written
+    # to or not (read-only arrays are a type of their own).
     if keep.all():
-        return people
+        return People(
+            people.positions.copy(),
+            people.velocities.copy(),
+            people.radii_m.copy(),
+            people.position_sigma_m.copy(),
+            people.velocity_sigma_mps.copy(),
+        )
     return People(
         people.positions[keep],
         people.velocities[keep],
@@ -235,7 +243,7 @@ def clear_unfriendly(friendly: np.ndarray, sweep: Sweep, crowd: Crowd, people: P
                 break
 
 
-@compiled
+@compiled(inline=True)  # called per (command, person, sub-interval): no call, no record copied
 def swept_disc_meets(sweep: Sweep, k: int, t: int, centres: np.ndarray, radii: np.ndarray) -> bool:
     """Whether the robot, along command k's chord over sub-interval t, comes inside the person's growing disc
     (``centres`` (T, 2) and ``radii`` (T,) at the sample times): relative motion r_a + w τ against the radius
@@ -257,7 +265,7 @@ def swept_disc_meets(sweep: Sweep, k: int, t: int, centres: np.ndarray, radii: n
     return low < -1e-12
 
 
-@compiled
+@compiled(inline=True)
 def moves_towards(
     sweep: Sweep, k: int, t: int, centres: np.ndarray, heading: np.ndarray, person: tuple[float, float, float, float]
 ) -> bool:
@@ -490,7 +498,7 @@ def evaluate(
     moves = robot.speed_mps != 0.0
     for k in range(k_count):
         moves = moves or achieved[k, 0] != 0.0
-    moves = moves and corridor.active
+    moves = moves and corridor.lengths_m.shape[0] > 0
     need = (check_people and contact_row < 0) or near_static.any() or moves
     sweep = braking_sweep(robot, drive, achieved if need else achieved[:0])
     friendly, meet = flags(k_count, True), filled(k_count, math.inf)
@@ -510,3 +518,59 @@ def evaluate(
         admissible[k] = not (math.isfinite(meet[k]) or math.isfinite(static_meet[k]) or math.isfinite(corridor_exit[k]))
         friendly[k] = friendly[k] and admissible[k]
     return Verdicts(achieved, admissible, friendly, meet, person, contact_row >= 0, static_meet, corridor_exit)
+
+
+@compiled
+def evaluate_fields(
+    x_m: float,
+    y_m: float,
+    heading_rad: float,
+    speed_mps: float,
+    turn_rate_radps: float,
+    radius_m: float,
+    max_speed_mps: float,
+    max_accel_mps2: float,
+    max_turn_rate_radps: float,
+    max_turn_accel_radps2: float,
+    dt_s: float,
+    substeps: int,
+    margin_m: float,
+    sigma_multiplier: float,
+    person_accel_mps2: float,
+    friendly: bool,
+    towards_only: bool,
+    commands: np.ndarray,
+    positions: np.ndarray,
+    velocities: np.ndarray,
+    radii_m: np.ndarray,
+    position_sigma_m: np.ndarray,
+    velocity_sigma_mps: np.ndarray,
+    static_positions: np.ndarray,
+    static_radii_m: np.ndarray,
+    starts: np.ndarray,
+    directions: np.ndarray,
+    lengths_m: np.ndarray,
+    half_widths_m: np.ndarray,
+) -> tuple:  # type: ignore[type-arg]
+    """:func:`evaluate` called from Python: the records field by field (``*robot, *drive, *forecast, commands,
+    *people, *statics, *corridor``), the verdicts as a plain tuple in :class:`Verdicts`' order (a record
+    passed into or out of compiled code costs microseconds at the boundary, a plain field almost nothing)."""
+    verdicts = evaluate(
+        Robot(x_m, y_m, heading_rad, speed_mps, turn_rate_radps, radius_m),
+        Drive(max_speed_mps, max_accel_mps2, max_turn_rate_radps, max_turn_accel_radps2, dt_s, substeps),
+        Forecast(margin_m, sigma_multiplier, person_accel_mps2, friendly, towards_only),
+        commands,
+        People(positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps),
+        Statics(static_positions, static_radii_m),
+        Corridor(starts, directions, lengths_m, half_widths_m),
+    )
+    return (
+        verdicts.achieved,
+        verdicts.admissible,
+        verdicts.friendly,
+        verdicts.meet_time_s,
+        verdicts.person,
+        verdicts.contact,
+        verdicts.static_meet_time_s,
+        verdicts.corridor_exit_time_s,
+    )
