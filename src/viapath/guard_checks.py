@@ -10,6 +10,7 @@ Compiled (:func:`viapath.jit.compiled`), and plain Python with ``NUMBA_DISABLE_J
   (its own ``_clip`` and exact ``_arc``, compiled from their source): the command held for one control period
   in ``samples_per_period`` steps, then the stop command until the speed is at most 1e-12 m/s, at most
   ``ceil(top speed / speed step) + 2`` (and 1000) steps.
+* Distances by ``np.hypot``: numpy's bits compiled and in plain Python (``math.hypot`` rounds differently).
 * :func:`first_touched` looks only at obstacles within ``reachable_m`` now; a touch counts when some sample
   comes within robot + obstacle radius + margin of it (the smallest gap, NaN-propagating, at most 0) and the
   first sample is closer to it than the robot is now.
@@ -60,7 +61,7 @@ def obstacles_sound(
     for i in range(positions.shape[0]):
         if not (abs(positions[i, 0]) <= max_coordinate_m and abs(positions[i, 1]) <= max_coordinate_m):
             return False
-        if not math.hypot(velocities[i, 0], velocities[i, 1]) <= max_obstacle_speed_mps:
+        if not np.hypot(velocities[i, 0], velocities[i, 1]) <= max_obstacle_speed_mps:
             return False
         if not (0.0 <= radii[i] <= max_radius_m):
             return False
@@ -133,7 +134,7 @@ def first_touched(
     near, distance, reach = np.empty(n, dtype=np.bool_), np.empty(n), np.empty(n)
     any_near = False
     for j in range(n):
-        distance[j] = math.hypot(positions[j, 0] - x0, positions[j, 1] - y0)
+        distance[j] = np.hypot(positions[j, 0] - x0, positions[j, 1] - y0)
         reach[j] = robot_radius_m + radii[j] + margin_m
         near[j] = distance[j] - reach[j] <= reachable_m
         any_near = any_near or near[j]
@@ -148,12 +149,12 @@ def first_touched(
             continue
         smallest = math.inf
         for s in range(swept.shape[0]):
-            gap = math.hypot(swept[s, 0] - positions[j, 0], swept[s, 1] - positions[j, 1]) - reach[j]
+            gap = np.hypot(swept[s, 0] - positions[j, 0], swept[s, 1] - positions[j, 1]) - reach[j]
             if gap != gap or smallest != smallest:
                 smallest = math.nan
             elif gap < smallest:
                 smallest = gap
-        closer = math.hypot(swept[0, 0] - positions[j, 0], swept[0, 1] - positions[j, 1]) < distance[j] - 1e-12
+        closer = np.hypot(swept[0, 0] - positions[j, 0], swept[0, 1] - positions[j, 1]) < distance[j] - 1e-12
         if smallest <= 0 and closer:
             return j
     return -1

@@ -14,6 +14,7 @@ Compiled (:func:`viapath.jit.compiled`), and plain Python with ``NUMBA_DISABLE_J
 * Static discs and the corridor are tested at the sweep's chords (each padded by its sagitta); only discs
   within reach of the longest braking and inside the sweeps' bounding box (grown by the largest reach and
   sagitta) are looked at.
+* Distances by ``np.hypot``: numpy's bits compiled and in plain Python (``math.hypot`` rounds differently).
 * No np.zeros / np.ones / np.full: each would cost a compilation of its own (np.empty and loops).
 """
 
@@ -157,10 +158,10 @@ def crowd_now(robot: Robot, people: People, forecast: Forecast) -> Crowd:
     for n in range(n_count):
         offset_x[n] = people.positions[n, 0] - robot.x_m
         offset_y[n] = people.positions[n, 1] - robot.y_m
-        distance[n] = math.hypot(offset_x[n], offset_y[n])
+        distance[n] = np.hypot(offset_x[n], offset_y[n])
         touching[n] = robot.radius_m + people.radii_m[n]
         gap[n] = distance[n] - touching[n]
-        speed[n] = math.hypot(people.velocities[n, 0], people.velocities[n, 1])
+        speed[n] = np.hypot(people.velocities[n, 0], people.velocities[n, 1])
         k_sigma = forecast.sigma_multiplier
         base[n] = touching[n] + min(forecast.margin_m + k_sigma * people.position_sigma_m[n], gap[n])
         growth[n] = k_sigma * people.velocity_sigma_mps[n]
@@ -212,7 +213,7 @@ def mark_near(crowd: Crowd, sweep: Sweep, people: People, forecast: Forecast) ->
         pp = path_x * path_x + path_y * path_y
         ox, oy = crowd.offset_x[n], crowd.offset_y[n]
         along = clip((-ox * path_x + -oy * path_y) / (pp if pp > 0 else 1.0), 0.0, 1.0)
-        closest = math.hypot(ox + path_x * along, oy + path_y * along)
+        closest = np.hypot(ox + path_x * along, oy + path_y * along)
         crowd.near[n] = closest - (reach - speed * horizon) <= max_reach + 1e-6
         anyone = anyone or crowd.near[n]
     return anyone
@@ -231,14 +232,14 @@ def clear_unfriendly(friendly: np.ndarray, sweep: Sweep, crowd: Crowd, people: P
             if not crowd.near[n]:
                 continue
             vx, vy = people.velocities[n, 0], people.velocities[n, 1]
-            stretch = math.hypot(vx, vy) / (2.0 * max(accel, 1e-3))
+            stretch = np.hypot(vx, vy) / (2.0 * max(accel, 1e-3))
             travel_x, travel_y = vx * stretch, vy * stretch
             radius = crowd.base_m[n] + crowd.growth_mps[n] * t_rest + 0.5 * accel * (t_rest * t_rest)
             rel_x = rest_x - (people.positions[n, 0] + vx * t_rest)
             rel_y = rest_y - (people.positions[n, 1] + vy * t_rest)
             tt = travel_x * travel_x + travel_y * travel_y
             f = clip((rel_x * travel_x + rel_y * travel_y) / (tt if tt > 0 else 1.0), 0.0, 1.0)
-            if math.hypot(rel_x - travel_x * f, rel_y - travel_y * f) < radius:
+            if np.hypot(rel_x - travel_x * f, rel_y - travel_y * f) < radius:
                 friendly[k] = False
                 break
 
@@ -287,7 +288,7 @@ def moves_towards(
         q_by = q_ay + ((sweep.positions[k, u + 1, 1] - centres[u + 1, 1]) - q_ay)
         t_a = -s_int * (heading[u, 0] * q_ax + heading[u, 1] * q_ay)
         t_b = -s_int * (heading[u + 1, 0] * q_bx + heading[u + 1, 1] * q_by)
-        r_max = max(math.hypot(q_ax, q_ay), math.hypot(q_bx, q_by)) + 0.01
+        r_max = max(np.hypot(q_ax, q_ay), np.hypot(q_bx, q_by)) + 0.01
         lipschitz = abs(s_int) * (abs(sweep.turns_radps[k, j]) * r_max + person_speed + abs(s_int))
         if (t_a + t_b + lipschitz * h + 2.0 * abs(s_int) * spread) > 0.0:
             return True
@@ -371,7 +372,7 @@ def statics_near(robot: Robot, drive: Drive, achieved: np.ndarray, statics: Stat
     t_bound = fastest / max(drive.max_accel_mps2, 1e-9) + 2.0 * drive.dt_s
     near = np.empty(statics.radii_m.shape[0], dtype=np.bool_)
     for n in range(near.shape[0]):
-        distance = math.hypot(statics.positions[n, 0] - robot.x_m, statics.positions[n, 1] - robot.y_m)
+        distance = np.hypot(statics.positions[n, 0] - robot.x_m, statics.positions[n, 1] - robot.y_m)
         reach = robot.radius_m + statics.radii_m[n] + margin_m
         near[n] = fastest != 0.0 and distance - reach <= fastest * t_bound + 1e-6
     return near
@@ -411,7 +412,7 @@ def static_meetings(
     n_count = near.shape[0]
     distance, reach = np.empty(n_count), np.empty(n_count)
     for n in range(n_count):
-        distance[n] = math.hypot(statics.positions[n, 0] - robot.x_m, statics.positions[n, 1] - robot.y_m)
+        distance[n] = np.hypot(statics.positions[n, 0] - robot.x_m, statics.positions[n, 1] - robot.y_m)
         reach[n] = robot.radius_m + statics.radii_m[n] + margin_m
     inside = in_sweep_box(sweep, statics, near, reach)
     if not inside.any():
@@ -430,7 +431,7 @@ def static_meetings(
                     continue
                 rx, ry = statics.positions[n, 0] - ax, statics.positions[n, 1] - ay
                 f = clip((rx * cx + ry * cy) / (length2 if length2 > 0 else 1.0), 0.0, 1.0)
-                gap = math.hypot(rx - f * cx, ry - f * cy) - sweep.sagitta_m[k, j]
+                gap = np.hypot(rx - f * cx, ry - f * cy) - sweep.sagitta_m[k, j]
                 if gap < reach[n] and gap < distance[n] - 1e-9:
                     hit = True
                     break
