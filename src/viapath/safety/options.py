@@ -98,13 +98,15 @@ def option_defaults() -> dict[str, Any]:
 
 def check_options(values: dict[str, Any], where: str = "shield") -> dict[str, Any]:
     """Defaults overlaid with ``values``; one clear ValueError naming the option for bad input. The retired
-    option ``compute`` (``backend``) is read, with a FutureWarning, and left out."""
+    option ``compute`` (``backend``) is read, with a FutureWarning when set to other than its default, and left
+    out."""
     try:
         checked = dict(SHIELD_OPTIONS.validate(values, where=where))
     except OptionError as error:
         raise ValueError(str(error)) from None
     for name in (RETIRED, *SHIELD_OPTIONS[RETIRED].former_names):
-        if name in values:
+        # Its default is what a ROS 2 node declares for every parameter: only a value set by hand is news.
+        if name in values and values[name] != SHIELD_OPTIONS[RETIRED].default:
             warnings.warn(
                 f"{where}.{name}: option {name!r} no longer does anything (the shield has one implementation, "
                 "compiled); remove it",
