@@ -1,8 +1,8 @@
-"""Two execution paths (numpy, compiled), chosen in few places: once per recipe step of the planner, of the shield
-and of the laser pipeline, never inside the numpy reference functions. Outside the compiled package
-(src/viapath/compiled/) at most five files may name kernels, numba or backends: the ones in ``DISPATCH``. The
-files in ``NOT_YET`` still name them (with why); a new file that names them fails, and so does an entry of
-``NOT_YET`` once its file no longer does (then delete the entry)."""
+"""One implementation of each step: numba is named only where the compiled steps' one decorator is defined
+(``viapath/jit.py``); every compiled step imports that decorator. The files in ``NOT_YET`` still name numba
+(their steps still have a second, numpy implementation or a dispatch between the two); a new file that names
+it fails, and so does an entry of ``NOT_YET`` once its file no longer does (then delete the entry), so the
+list only shrinks."""
 
 from __future__ import annotations
 
@@ -10,45 +10,42 @@ import re
 from pathlib import Path
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "viapath"
-WORDS = re.compile(r"kernel|numba|backend", re.IGNORECASE)
+NUMBA = re.compile(r"\bnumba\b", re.IGNORECASE)
+DECORATOR = "jit.py"
 
-DISPATCH = {
-    "planning/viapath/planner.py": "the planner's recipe: numpy or compiled per step (arithmetic_for, precompile, ...)",
-    "safety/shield.py": "the shield's recipe: numpy or compiled per evaluation",
-    "perception/detection.py": "the laser pipeline's dispatch: compiled clustering, shape tests and circle fit",
-    "bench/executors.py": "joblib's executors (loky, dask, ray): joblib's own keyword for them is backend=",
+NOT_YET: dict[str, str] = {
+    "compiled/__init__.py": "the policy choosing numpy or compiled arithmetic",
+    "compiled/arithmetic.py": "the planner's dispatch between its numpy and compiled steps",
+    "compiled/choice.py": "the option compute",
+    "compiled/harness.py": "the guard's compiled twins",
+    "compiled/perception.py": "the laser chain's compiled twins",
+    "compiled/planning.py": "the planner's compiled twins",
+    "compiled/shield.py": "the shield's compiled twins",
+    "compiled/slots.py": "slot numbers of the compiled planner's settings",
+    "compiled/sums.py": "numpy's pairwise sum, compiled",
+    "compiled/table.py": "the table of twins",
+    "perception/detection.py": "the laser chain's dispatch",
+    "planning/viapath/planner.py": "the planner's dispatch",
+    "safety/shield.py": "the shield's dispatch",
 }
 
-NOT_YET: dict[str, str] = {}
+
+def _naming_numba() -> set[str]:
+    return {
+        path.relative_to(SRC).as_posix() for path in SRC.rglob("*.py") if NUMBA.search(path.read_text(encoding="utf-8"))
+    }
 
 
-def _mentioning() -> set[str]:
-    files = set()
-    for path in SRC.rglob("*.py"):
-        relative = path.relative_to(SRC).as_posix()
-        if relative.startswith("compiled/"):
-            continue
-        if WORDS.search(path.read_text(encoding="utf-8")):
-            files.add(relative)
-    return files
-
-
-def test_at_most_five_dispatch_files():
-    assert len(DISPATCH) <= 5
-    assert not set(DISPATCH) & set(NOT_YET)
-
-
-def test_no_other_file_names_kernels_or_backends():
-    unexpected = _mentioning() - set(DISPATCH) - set(NOT_YET)
-    assert not unexpected, f"choose numpy or compiled in a dispatch file, not in: {sorted(unexpected)}"
+def test_only_the_decorator_names_numba():
+    unexpected = _naming_numba() - {DECORATOR} - set(NOT_YET)
+    assert not unexpected, f"compile with viapath.jit.compiled; do not name numba in: {sorted(unexpected)}"
 
 
 def test_not_yet_list_only_shrinks():
-    """An entry of NOT_YET whose file no longer names them must go (so the list only shrinks)."""
-    done = set(NOT_YET) - _mentioning()
+    done = set(NOT_YET) - _naming_numba()
     assert not done, f"delete from NOT_YET: {sorted(done)}"
 
 
-def test_the_words_are_found():
-    """The search itself works: the dispatch files do name them (a broken pattern would pass everything)."""
-    assert set(DISPATCH) <= _mentioning()
+def test_the_search_finds_the_decorator():
+    """The search itself works (a broken pattern would pass everything)."""
+    assert DECORATOR in _naming_numba()

@@ -3,9 +3,10 @@
 An evaluation tool, not part of the core: it reads where every person *will* walk from the episode's
 trace, which no planner can know. For each at-fault onset with a person
 (:func:`viapath.sim.metrics.at_fault_onsets`) it starts from the robot's real state at the step the
-person first appeared and tries command sequences the drive can follow
-(:func:`viapath.kinematics.limit_command`: speed and turn rate ramp towards a target at the
-acceleration limits, exact arcs in between):
+person is first seen (:func:`viapath.sim.metrics.first_seen_steps`: the simulator hands the planner
+the person, with the velocity they walk at, in that very cycle, so a robot could react to them there)
+and tries command sequences the drive can follow (:func:`viapath.kinematics.limit_command`: speed and
+turn rate ramp towards a target at the acceleration limits, exact arcs in between):
 
 * decisions are held for ``hold`` steps: the time from the appearance to the onset is cut into
   ``max_levels`` decisions (finer when the person appeared late: single steps when it appeared within
@@ -37,7 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from viapath.observation import MotionLimits
-from viapath.sim.metrics import at_fault_onsets, static_contact_onsets
+from viapath.sim.metrics import appeared_in_step, at_fault_onsets, first_seen_steps, static_contact_onsets
 
 MIN_SPEED_MPS = 0.05  # the at-fault rule's speed threshold (viapath.sim.metrics.at_fault_onsets)
 TURN_FRACTIONS = (-1.0, -0.5, 0.0, 0.5, 1.0)  # turn-rate targets, × the top turn rate
@@ -157,7 +158,7 @@ def segment_faults(world: _World, poses: np.ndarray, speeds: np.ndarray, first_s
 def make_world(trace, limits: MotionLimits) -> _World:
     people = np.asarray(trace.obstacle_positions, dtype=float)
     present = np.isfinite(people[:-1]).all(-1) & np.isfinite(people[1:]).all(-1)  # as overlap_on_appearance
-    appeared = present & ~np.vstack([np.zeros((1, present.shape[1]), dtype=bool), present[:-1]])
+    appeared = appeared_in_step(people) & present
     dv = limits.max_accel_mps2 * trace.dt_s
     return _World(
         people=people,
@@ -272,8 +273,7 @@ def judge(trace, limits: MotionLimits, reactive: bool = False, **budget) -> list
     onsets = at_fault_onsets(trace)
     verdicts = []
     for k, person in zip(*np.nonzero(onsets)):
-        present = np.flatnonzero(np.isfinite(trace.obstacle_positions[: k + 1, person]).all(-1))
-        appeared = int(present[0])
+        appeared = int(first_seen_steps(trace.obstacle_positions[: k + 1])[person])
         verdict = Verdict(
             person=int(person),
             onset_step=int(k),

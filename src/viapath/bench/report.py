@@ -13,6 +13,11 @@ Aggregates, per planner, over its episodes (rows with an error are counted apart
   all episodes; ``contact_speed_median_mps``: the median over every contact;
 * ``time_ratio_median`` / ``time_ratio_mean``: time to goal over the obstacle-free time, episodes
   that reached the goal;
+* ``infeasible_rate``: episodes whose goal no robot on this drive could reach without a contact
+  (:mod:`viapath.bench.feasibility`), among those it applies to (people who do not react to the robot);
+  ``success_feasible_rate`` / ``reach_feasible_rate``: success and reach among the feasible episodes;
+  ``time_ratio_hindsight_median``: time to goal over the reachable set's earliest arrival (a lower
+  bound for any robot on this drive), episodes that reached the goal;
 * ``mean_lateral_deviation_m``: mean of the episodes' mean |lateral deviation|;
   ``mean_max_lateral_deviation_m`` and ``max_lateral_deviation_m``: mean and max of the episodes' max;
 * ``time_outside_corridor_s``: mean per episode; ``outside_corridor_rate``: episodes with any;
@@ -43,6 +48,10 @@ TABLE_COLUMNS = [
     ("static_contact_rate", "static contact", "{:.1%}"),
     ("contact_speed_max_mps", "contact speed max [m/s]", "{:.2f}"),
     ("time_ratio_median", "time ratio (median)", "{:.2f}"),
+    ("infeasible_rate", "infeasible", "{:.1%}"),
+    ("success_feasible_rate", "success (feasible)", "{:.1%}"),
+    ("reach_feasible_rate", "reach (feasible)", "{:.1%}"),
+    ("time_ratio_hindsight_median", "time ratio hindsight (median)", "{:.2f}"),
     ("mean_lateral_deviation_m", "mean lat. dev. [m]", "{:.3f}"),
     ("max_lateral_deviation_m", "max lat. dev. [m]", "{:.2f}"),
     ("time_outside_corridor_s", "outside corridor [s/ep]", "{:.2f}"),
@@ -66,6 +75,12 @@ def _values(rows, column) -> np.ndarray:
 
 def _stat(function, values):
     return float(function(values)) if len(values) else None
+
+
+def _share(rows, column) -> float | None:
+    """The share of true values among the rows where ``column`` is filled (None where none is)."""
+    values = [bool(r[column]) for r in rows if r.get(column) is not None]
+    return sum(values) / len(values) if values else None
 
 
 def _count(rows, column) -> int | None:
@@ -126,6 +141,11 @@ def summarize(rows: list[dict[str, Any]], by: str = "planner", order: list[str] 
                 "static_contact_rate": (sum(bool(r.get("static_contact")) for r in ok) / n) if n else None,
                 "time_ratio_median": _stat(np.median, ratios),
                 "time_ratio_mean": _stat(np.mean, ratios),
+                "feasibility_judged": sum(r.get("feasible") is not None for r in ok),
+                "infeasible_rate": (lambda share: None if share is None else 1.0 - share)(_share(ok, "feasible")),
+                "success_feasible_rate": _share(ok, "success_feasible"),
+                "reach_feasible_rate": _share(ok, "reach_feasible"),
+                "time_ratio_hindsight_median": _stat(np.median, _values(ok, "time_ratio_hindsight")),
                 "mean_lateral_deviation_m": _stat(np.mean, _values(ok, "mean_lateral_deviation_m")),
                 "mean_max_lateral_deviation_m": _stat(np.mean, _values(ok, "max_lateral_deviation_m")),
                 "max_lateral_deviation_m": _stat(np.max, _values(ok, "max_lateral_deviation_m")),

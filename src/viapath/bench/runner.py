@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from viapath.bench.executors import ExecutorError, executor_parallel, local_processes, stop_workers
+from viapath.bench.feasibility import FEASIBILITY_COLUMNS, FEASIBILITY_FLAGS
 from viapath.bench.suites import ETH_UCY_FOLDER, data_root, generate_suite, suite_names, write_suite
 
 COLUMNS = [
@@ -72,8 +73,11 @@ COLUMNS = [
     "contact_speed_max_mps",
     "contact_speeds",
     "at_fault_detail",
+    # viapath.bench.feasibility: whether any robot on this drive could reach the goal without a contact
+    # (people who do not react to the robot; empty for those who do), and the episode among feasible ones.
+    *FEASIBILITY_COLUMNS,
 ]
-_BOOLS = {"reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s"}
+_BOOLS = {"reached_goal", "collision", "at_fault_collision", "at_fault_collision_seen_1s", *FEASIBILITY_FLAGS}
 _TEXT = {
     "scenario",
     "family",
@@ -299,6 +303,11 @@ def run_task(task: Task) -> dict[str, Any]:
         from viapath.bench.avoidable import episode_columns
 
         row.update(episode_columns(episode.trace, scenario, bool(row["at_fault_collision"])))
+        from viapath.bench.feasibility import episode_columns as feasibility_columns
+
+        row.update(
+            feasibility_columns(scenario, bool(row["reached_goal"]), bool(row["collision"]), row["time_to_goal_s"])
+        )
         free = _free_time_s(task.scenario)
         row["free_time_s"] = free
         if row["time_to_goal_s"] is not None and free:
@@ -467,8 +476,10 @@ def make_tasks(
     unknown = [p for p in planners if p not in known]
     if unknown:
         raise BenchError(f"unknown planner {unknown[0]!r}; available: {', '.join(known)}")
-    if perception not in ("oracle", "laser"):
-        raise BenchError(f"unknown perception {perception!r}; use oracle or laser")
+    from viapath.perception.modes import PERCEPTION_MODES
+
+    if perception not in PERCEPTION_MODES:
+        raise BenchError(f"unknown perception {perception!r}; use {' or '.join(PERCEPTION_MODES.ordered())}")
     from viapath.bench.identity import options_hash, scenario_hash, viapath_version
 
     if shield not in (None, "on", "off", "friendly"):

@@ -49,7 +49,9 @@ Scheduler = Annotated[
 ]
 Count = Annotated[int, typer.Option("--count", "-n", help="scenarios to generate when SUITE is a suite name")]
 Seed = Annotated[int, typer.Option("--seed", help="suite and episode seed")]
-Perception = Annotated[str, typer.Option("--perception", help="oracle or laser")]
+Perception = Annotated[
+    str, typer.Option("--perception", help="oracle, tracked (noisy detections through the tracker) or laser")
+]
 Plots = Annotated[bool, typer.Option("--plots/--no-plots", help="write rates.png and deviation_vs_time.png")]
 AsJson = Annotated[bool, typer.Option("--json", help="print the per-planner table as JSON")]
 McapFailures = Annotated[

@@ -24,9 +24,14 @@ from viapath.io.jsonable import dumps as json_dumps
 
 Scenario = Annotated[str, typer.Argument(help="Built-in scenario name (see `viapath scenarios`) or a YAML file.")]
 Planner = Annotated[str | None, typer.Option("--planner", help="Planner name (default: the scenario's).")]
-Perception = Annotated[str | None, typer.Option("--perception", help="oracle | laser (default: the scenario's).")]
+Perception = Annotated[
+    str | None, typer.Option("--perception", help="oracle | tracked | laser (default: the scenario's).")
+]
 Seed = Annotated[int | None, typer.Option("--seed", help="Random seed (default: the scenario's).")]
-PositionNoise = Annotated[float | None, typer.Option("--position-noise", help="Oracle position noise σ in m.")]
+PositionNoise = Annotated[
+    float | None,
+    typer.Option("--position-noise", help="Oracle position noise σ in m (mode tracked: the detections' σ)."),
+]
 VelocityNoise = Annotated[float | None, typer.Option("--velocity-noise", help="Oracle velocity noise σ in m/s.")]
 AsJson = Annotated[bool, typer.Option("--json", help="Print one JSON object of metrics.")]
 Plot = Annotated[Path | None, typer.Option("--plot", help="Write a figure (PNG/PDF/SVG) of the episode.")]

@@ -5,7 +5,11 @@ Trajectron++/S-GAN split except ``biwi_eth.txt``, where it is 2/3 s: see the dat
 
 For replay in the simulator, positions are interpolated linearly between samples, and the velocity
 given to the planner is estimated from *past* positions only (a backward difference over one row
-step), as a tracker would: a replayed person is never forecast from the future.
+step), as a tracker would: a replayed person is never forecast from the future. A person's first
+sample has no past: they walked into the recorded area, they did not appear standing, so before it
+they are taken to have walked as over their first interval, and the velocity at the first sample is
+that interval's. A person is seen, with position and velocity, from the first sample on (the cycle a
+robot could first react to them; :func:`viapath.sim.metrics.first_seen_steps`).
 """
 
 from __future__ import annotations
@@ -74,11 +78,19 @@ def replay_states(tracks: list[PedestrianTrack], scene_times_s: np.ndarray, dt_s
         before_t = np.maximum(t - dt_s, track.times_s[0])
         before = _interpolate(track, before_t)
         span = t - before_t
+        first = _first_interval_velocity(track)
         with np.errstate(invalid="ignore", divide="ignore"):
-            velocity = np.where(span[:, None] > 1e-9, (now - before) / span[:, None], 0.0)
+            velocity = np.where(span[:, None] > 1e-9, (now - before) / span[:, None], first)
         positions[present, j] = now + offset
         velocities[present, j] = velocity
     return positions, velocities
+
+
+def _first_interval_velocity(track: PedestrianTrack) -> np.ndarray:
+    """The velocity between a track's first two samples (zero for a single sample)."""
+    if len(track.times_s) < 2 or track.times_s[1] <= track.times_s[0]:
+        return np.zeros(2)
+    return (track.positions[1] - track.positions[0]) / (track.times_s[1] - track.times_s[0])
 
 
 def _interpolate(track: PedestrianTrack, times: np.ndarray) -> np.ndarray:

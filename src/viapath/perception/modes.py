@@ -15,7 +15,7 @@ from pydantic import BaseModel, ValidationError
 from viapath.perception.base import Perception
 from viapath.perception.laser import LaserPerception
 from viapath.perception.laser_options import LaserOptions
-from viapath.perception.oracle import OraclePerception
+from viapath.perception.oracle import OraclePerception, TrackedOraclePerception
 from viapath.registry import Registry
 
 PerceptionFactory = Callable[[Any, float, float], Perception]
@@ -25,6 +25,11 @@ PERCEPTION_MODES: Registry[PerceptionFactory] = Registry("perception mode")
 @PERCEPTION_MODES.register("oracle")
 def _oracle(options: Any, position_noise_m: float, velocity_noise_mps: float) -> Perception:
     return OraclePerception(position_noise_m, velocity_noise_mps)
+
+
+@PERCEPTION_MODES.register("tracked")
+def _tracked(options: Any, position_noise_m: float, velocity_noise_mps: float) -> Perception:
+    return TrackedOraclePerception(position_noise_m, velocity_noise_mps)
 
 
 @PERCEPTION_MODES.register("laser")

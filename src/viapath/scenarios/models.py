@@ -181,8 +181,9 @@ class PlannerSpec(BaseModel):
 
 
 class PerceptionSpec(_Strict):
-    """``mode`` and its options: the oracle's noise (``position_noise_m``, ``velocity_noise_mps``) or the laser
-    chain's ``options`` (:class:`~viapath.perception.laser_options.LaserOptions`)."""
+    """``mode`` and its options: the oracle's noise (``position_noise_m``, ``velocity_noise_mps``; mode
+    ``tracked``: ``position_noise_m``, the detections' σ before the tracker) or the laser chain's ``options``
+    (:class:`~viapath.perception.laser_options.LaserOptions`)."""
 
     mode: str = "oracle"
     position_noise_m: NonNegativeFloat = 0.0
@@ -201,10 +202,15 @@ class PerceptionSpec(_Strict):
     @model_validator(mode="after")
     def _options_for_the_laser(self) -> PerceptionSpec:
         given = sorted(self.options.model_fields_set)  # type: ignore[attr-defined]
-        if self.mode == "oracle" and given:
+        if self.mode in ("oracle", "tracked") and given:
             raise ValueError(
-                f"options ({', '.join(given)}) configure the laser chain; mode 'oracle' takes none "
+                f"options ({', '.join(given)}) configure the laser chain; mode {self.mode!r} takes none "
                 "(its noise is position_noise_m and velocity_noise_mps): give mode: laser, or drop options"
+            )
+        if self.mode == "tracked" and self.velocity_noise_mps > 0:
+            raise ValueError(
+                "velocity_noise_mps: mode 'tracked' takes its velocities from the tracker; white velocity noise "
+                "is mode 'oracle' (give 0, or mode: oracle)"
             )
         return self
 

@@ -67,20 +67,41 @@ def at_fault_onsets(trace, min_speed_mps: float = 0.05) -> np.ndarray:
     return onset & towards & (speeds[:, None] > min_speed_mps) & ~overlap_on_appearance(trace)
 
 
+def seen(obstacle_positions) -> np.ndarray:
+    """(K, N): person n is seen at step k: their position sample exists (finite). The one definition of
+    when the robot can see a person, shared by the simulator (the perception receives every person with
+    a finite sample, with the velocity of their motion then), the metrics (appearance) and the avoidable
+    search (:mod:`viapath.bench.avoidable`, which starts at the first step seen)."""
+    return np.isfinite(np.asarray(obstacle_positions, dtype=float)).all(-1)
+
+
+def first_seen_steps(obstacle_positions) -> np.ndarray:
+    """(N,): the first step at which each person is seen (:func:`seen`); -1 for someone never seen."""
+    visible = seen(obstacle_positions)
+    first = np.argmax(visible, axis=0) if len(visible) else np.zeros(visible.shape[1], dtype=int)
+    return np.where(visible.any(axis=0), first, -1)
+
+
+def appeared_in_step(obstacle_positions) -> np.ndarray:
+    """(K-1, N): person n is seen at step k and was not at step k - 1 (or k = 0): they appear in step k."""
+    visible = seen(obstacle_positions)[:-1]
+    return visible & ~np.vstack([np.zeros((1, visible.shape[1]), dtype=bool), visible[:-1]])
+
+
 def overlap_on_appearance(trace) -> np.ndarray:
-    """(K-1, N): obstacle n appears in step k (k = 0, or absent the step before) already overlapping the robot."""
+    """(K-1, N): obstacle n appears in step k (:func:`appeared_in_step`), present at both ends of the step,
+    already overlapping the robot."""
     poses = trace.robot_poses
     obstacles = trace.obstacle_positions
     if obstacles.shape[1] == 0 or len(poses) < 2:
         return np.zeros((max(len(poses) - 1, 0), obstacles.shape[1]), dtype=bool)
     rel_start = poses[:-1, None, :2] - obstacles[:-1]
     present = np.isfinite(rel_start).all(-1) & np.isfinite(obstacles[1:]).all(-1)
-    appeared = present & ~np.vstack([np.zeros((1, present.shape[1]), dtype=bool), present[:-1]])
     with np.errstate(invalid="ignore"):
         overlapping = (
             np.hypot(rel_start[..., 0], rel_start[..., 1]) < trace.obstacle_radii_m[None] + trace.robot_radius_m
         )
-    return appeared & overlapping
+    return appeared_in_step(obstacles) & present & overlapping
 
 
 def static_clearance_per_step(trace) -> np.ndarray:
