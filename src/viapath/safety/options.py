@@ -82,8 +82,8 @@ SHIELD_OPTIONS = OptionSet(
         Option(
             RETIRED,
             "auto",
-            "no longer does anything: the shield has one implementation, compiled (still read, with a warning)",
-            choices=("auto", "numpy", "numba"),
+            "no longer does anything: the shield has one implementation, compiled (any value is read, with a "
+            "warning, and ignored)",
             former_names=("backend",),
             decides=False,
         ),

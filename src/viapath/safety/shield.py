@@ -430,7 +430,7 @@ def _as_command(reached: np.ndarray, index: int) -> Command:
 
 
 def precompile() -> bool:
-    """Compile the shield (or load it from numba's on-disk cache) now: a cycle whose planner's command fails,
+    """Compile the shield (or load it from the on-disk cache) now: a cycle whose planner's command fails,
     with a person, static geometry and a corridor, runs every compiled step once. True when compiled."""
     shield = Shield()
     shield.corridor = DesignatedPath([[-5.0, 0.0], [5.0, 0.0], [5.0, 5.0]], half_width_m=1.0)
