@@ -1,6 +1,6 @@
 """Plan time with the passive-safety shield: p50/p99 for 1, 10, 50 and 100 people (DESIGN §7).
 
-Usage: python benchmarks/bench_shield.py [--cycles 300] [--seed 0] [--runs 3] [--compute numpy|numba|both] [--json]
+Usage: python benchmarks/bench_shield.py [--cycles 300] [--seed 0] [--runs 3] [--json]
 
 Scenes as in bench_planner.py (robot at the start of a 10 m path, people within 8 m walking at
 0.3-1.5 m/s in random directions, none overlapping the robot), but the robot moves at 0.4 m/s and
@@ -9,9 +9,7 @@ a third of the people are placed within 2 m, so the shield has work to do. Rows:
 * ``shield``: the filter alone on viapath's command (mostly the one-command fast path);
 * ``shield-search``: the filter on a command it must replace (full speed straight at the nearest
   person), i.e. the whole dynamic-window search: the worst case per cycle.
-``--compute`` (formerly ``--backend``, still read) picks the shield's arithmetic (the numpy reference or
-the compiled kernels of ``viapath.compiled.shield``; ``both``: every row twice); the planner runs its
-default arithmetic.
+The shield has one implementation, compiled (``--compute`` / ``--backend`` are still read and do nothing).
 Single thread; each run redraws nothing (same seed), so the runs differ by machine load only.
 """
 
@@ -54,7 +52,7 @@ def _time(function, scenes, cycles) -> list[float]:
     return samples
 
 
-def one_run(cycles: int, seed: int, compute: str = "auto") -> list[dict]:
+def one_run(cycles: int, seed: int) -> list[dict]:
     rng = np.random.default_rng(seed)
     path = DesignatedPath([[0.0, 0.0], [10.0, 0.0]], half_width_m=1.5)
     limits = MotionLimits()
@@ -62,7 +60,7 @@ def one_run(cycles: int, seed: int, compute: str = "auto") -> list[dict]:
     guarded = ShieldedPlanner(
         make_planner("viapath", path, nominal_speed_mps=0.2, limits=limits),
         dt_s=0.1,
-        config=ShieldConfig(compute=compute),
+        config=ShieldConfig(),
     )
     shield = guarded.shield
     rows = []
@@ -99,7 +97,6 @@ def one_run(cycles: int, seed: int, compute: str = "auto") -> list[dict]:
                 {
                     "people": n_people,
                     "case": name,
-                    "backend": shield.backend,
                     "p50_ms": float(p50),
                     "p99_ms": float(p99),
                     "max_ms": float(max(samples)),
@@ -126,12 +123,11 @@ def main() -> None:
         dest="compute",
         choices=("auto", "numpy", "numba", "both"),
         default="auto",
-        help="the shield's arithmetic (both: each row on numpy, then on numba)",
+        help="no longer does anything (the shield has one implementation, compiled)",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object (all runs)")
     args = parser.parse_args()
-    computes = ("numpy", "numba") if args.compute == "both" else (args.compute,)
-    runs = [[row for compute in computes for row in one_run(args.cycles, args.seed, compute)] for _ in range(args.runs)]
+    runs = [one_run(args.cycles, args.seed) for _ in range(args.runs)]
     if args.json:
         print(
             json.dumps(
@@ -142,10 +138,10 @@ def main() -> None:
         return
     for number, rows in enumerate(runs, 1):
         print(f"run {number}: {args.cycles} cycles per row, pid {os.getpid()}, single thread")
-        print(f"{'people':>6} {'case':>15} {'shield':>7} {'p50 ms':>8} {'p99 ms':>8} {'max ms':>8} {'replaced':>8}")
+        print(f"{'people':>6} {'case':>15} {'p50 ms':>8} {'p99 ms':>8} {'max ms':>8} {'replaced':>8}")
         for row in rows:
             print(
-                f"{row['people']:>6} {row['case']:>15} {row['backend']:>7} {row['p50_ms']:>8.3f} {row['p99_ms']:>8.3f} "
+                f"{row['people']:>6} {row['case']:>15} {row['p50_ms']:>8.3f} {row['p99_ms']:>8.3f} "
                 f"{row['max_ms']:>8.3f} {row['intervened_fraction']:>8.0%}"
             )
 

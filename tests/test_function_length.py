@@ -82,49 +82,54 @@ def test_the_compiled_counter_counts_a_planted_long_function(tmp_path):
     assert compiled_long_functions(tmp_path) == {("kernels.py", "long"): 151}
 
 
-# The laser chain (viapath.perception: ray casting, detection, tracking, static layer): functions of at most
-# 60 lines, classes of at most 300, compiled steps included.
-PERCEPTION = SRC / "viapath" / "perception"
-MAX_PERCEPTION_FUNCTION_LINES = 60
-MAX_PERCEPTION_CLASS_LINES = 300
+# The steps written once (the shield, the guard, the laser chain): no function over 60 lines and no class over
+# 300 lines in them, compiled steps included.
+ONCE_WRITTEN = ("viapath/safety/*.py", "viapath/guard.py", "viapath/guard_checks.py", "viapath/perception/*.py")
+MAX_ONCE_FUNCTION_LINES, MAX_ONCE_CLASS_LINES = 60, 300
 
 
-def laser_chain_long_definitions(root: Path, kinds: tuple[type, ...], limit: int) -> dict[tuple[str, str], int]:
-    """(file relative to ``root``, name) -> lines, for every definition of one of ``kinds`` (nested ones too)
-    over ``limit`` lines."""
+def long_definitions(
+    root: Path = SRC,
+    patterns: tuple[str, ...] = ONCE_WRITTEN,
+    function_limit: int = MAX_ONCE_FUNCTION_LINES,
+    class_limit: int = MAX_ONCE_CLASS_LINES,
+) -> dict[tuple[str, str], int]:
+    """(file relative to ``root``, name) -> lines, for every function over ``function_limit`` and every class over
+    ``class_limit`` (nested ones too) in the files ``patterns`` match."""
     found = {}
-    for file in sorted(root.rglob("*.py")):
+    for file in sorted({file for pattern in patterns for file in root.glob(pattern)}):
         for node in ast.walk(ast.parse(file.read_text())):
-            if isinstance(node, kinds):
-                lines = node.end_lineno - node.lineno + 1
-                if lines > limit:
-                    found[(file.relative_to(root).as_posix(), node.name)] = lines
+            limit = (
+                function_limit
+                if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))
+                else class_limit
+                if isinstance(node, ast.ClassDef)
+                else None
+            )
+            if limit is not None and node.end_lineno - node.lineno + 1 > limit:
+                found[(file.relative_to(root).as_posix(), node.name)] = node.end_lineno - node.lineno + 1
     return found
 
 
-def test_no_function_of_the_laser_chain_is_over_60_lines():
-    assert any(PERCEPTION.rglob("*.py")), PERCEPTION
-    long = laser_chain_long_definitions(
-        PERCEPTION, (ast.FunctionDef, ast.AsyncFunctionDef), MAX_PERCEPTION_FUNCTION_LINES
-    )
-    assert long == {}, "laser chain functions over 60 lines (split them): " + ", ".join(
-        f"{file}:{name} ({lines} lines)" for (file, name), lines in sorted(long.items())
+def test_the_steps_written_once_have_no_function_over_60_lines_nor_class_over_300():
+    assert len({file for pattern in ONCE_WRITTEN for file in SRC.glob(pattern)}) >= 20
+    long = long_definitions()
+    assert long == {}, "split them: " + ", ".join(
+        f"{file}:{name} ({lines} lines)" for (file, name), lines in long.items()
     )
 
 
-def test_no_class_of_the_laser_chain_is_over_300_lines():
-    long = laser_chain_long_definitions(PERCEPTION, (ast.ClassDef,), MAX_PERCEPTION_CLASS_LINES)
-    assert long == {}, "laser chain classes over 300 lines (split them): " + ", ".join(
-        f"{file}:{name} ({lines} lines)" for (file, name), lines in sorted(long.items())
+def test_the_once_written_counter_counts_a_planted_long_function_and_class(tmp_path):
+    (tmp_path / "viapath" / "safety").mkdir(parents=True)
+    body = "\n".join(f"    x{i} = {i}" for i in range(60))
+    methods = "\n".join(f"    def m{i}(self):\n        return {i}\n" for i in range(101))
+    (tmp_path / "viapath" / "safety" / "long.py").write_text(
+        f"def long():\n{body}\n\n\ndef short():\n    return 1\n\n\nclass Big:\n{methods}"
     )
-
-
-def test_the_definition_counter_counts_planted_long_ones(tmp_path):
-    body = "\n".join(f"        x{i} = {i}" for i in range(60))
-    (tmp_path / "chain.py").write_text(
-        f"class Chain:\n    def long(self):\n{body}\n\n    def short(self):\n        return 1\n"
+    (tmp_path / "viapath" / "guard.py").write_text(
+        "def at_limit():\n" + "\n".join(f"    y{i} = {i}" for i in range(59)) + "\n"
     )
-    functions = laser_chain_long_definitions(tmp_path, (ast.FunctionDef,), 60)
-    assert functions == {("chain.py", "long"): 61}
-    assert laser_chain_long_definitions(tmp_path, (ast.ClassDef,), 64) == {("chain.py", "Chain"): 65}
-    assert laser_chain_long_definitions(tmp_path, (ast.ClassDef,), 65) == {}
+    assert long_definitions(tmp_path) == {
+        ("viapath/safety/long.py", "long"): 61,
+        ("viapath/safety/long.py", "Big"): 303,
+    }

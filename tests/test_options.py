@@ -167,21 +167,29 @@ def test_a_renamed_option_reads_its_former_name_with_a_warning():
 
 
 def test_compute_is_defined_once_and_backend_is_its_former_name(tmp_path):
-    """The planner's and the shield's ``compute`` come from viapath.compiled.choice; an old file's or command
-    line's ``backend`` still works, with a FutureWarning; both at once is an error (exit 2)."""
+    """The planner's ``compute`` comes from viapath.compiled.choice, the shield's is retired (read and ignored);
+    an old file's or command line's ``backend`` still works, with a FutureWarning; both at once is an error
+    (exit 2)."""
     from viapath.compiled import COMPUTE_CHOICES
     from viapath.safety.options import SHIELD_OPTIONS
     from viapath.safety.shield import ShieldConfig
 
+    option = planner_options("viapath")["compute"]
+    assert (option.default, option.choices, option.former_names) == ("auto", COMPUTE_CHOICES, ("backend",))
+    retired = SHIELD_OPTIONS["compute"]
+    assert (retired.default, retired.choices, retired.former_names) == ("auto", None, ("backend",))
     for schema in (planner_options("viapath"), SHIELD_OPTIONS):
-        option = schema["compute"]
-        assert (option.default, option.choices, option.former_names) == ("auto", COMPUTE_CHOICES, ("backend",))
-        assert not option.decides and "backend" not in schema
+        assert not schema["compute"].decides and "backend" not in schema
     with pytest.warns(FutureWarning, match="'backend' is now called 'compute'"):
         planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [3.0, 0.0]], half_width_m=1.0), backend="numpy")
     assert getattr(planner, "inner", planner).config.compute == "numpy"
-    with pytest.warns(FutureWarning, match="'backend' is now called 'compute'"):
-        assert ShieldConfig.from_options({"backend": "numpy"}).compute == "numpy"
+    with (
+        pytest.warns(FutureWarning, match="'backend' is now called 'compute'"),
+        pytest.warns(FutureWarning, match="shield.backend: option 'backend' no longer does anything"),
+    ):
+        assert ShieldConfig.from_options({"backend": "numpy"}) == ShieldConfig()
+    with pytest.warns(FutureWarning, match="shield.compute: option 'compute' no longer does anything"):
+        assert ShieldConfig.from_options({"compute": "numba", "margin_m": 0.1}) == ShieldConfig(margin_m=0.1)
     with pytest.warns(FutureWarning, match="planner.backend: option 'backend' is now called 'compute'"):
         _, result = _run(tmp_path, "{name: viapath, backend: numpy}")
     assert result.exit_code == 0, result.output

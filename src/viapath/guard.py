@@ -52,8 +52,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from viapath.compiled import compiled_harness
-from viapath.kinematics import _arc, _clip
+from viapath.guard_checks import Braking, braking_points, first_touched, obstacles_sound
 from viapath.observation import (
     Command,
     Decision,
@@ -345,7 +344,6 @@ def _plainly_sound(observation: Observation, robot: RobotState, obstacles: Obsta
         and positions.shape[1] == 2
     ):
         return False
-    n = positions.shape[0]
     x, y = position.tolist()
     if not (
         math.isfinite(time_s)
@@ -357,14 +355,29 @@ def _plainly_sound(observation: Observation, robot: RobotState, obstacles: Obsta
         and 0.0 < radius < math.inf
     ):
         return False
-    radii, position_sigma, velocity_sigma, ids = (
+    return _plain_obstacle_arrays(obstacles) and _obstacles_sound(
+        positions,
+        velocities,
+        obstacles.radii_m,
+        obstacles.position_sigma_m,
+        obstacles.velocity_sigma_mps,
+        config,
+    )
+
+
+def _plain_obstacle_arrays(obstacles: Obstacles) -> bool:
+    """Whether every obstacle field but the positions (checked already) is a float64 array of its shape (the
+    ids: an array of one per row)."""
+    n = obstacles.positions.shape[0]
+    velocities, radii, position_sigma, velocity_sigma, ids = (
+        obstacles.velocities,
         obstacles.radii_m,
         obstacles.position_sigma_m,
         obstacles.velocity_sigma_mps,
         obstacles.ids,
     )
     rows, row = (n, 2), (n,)
-    if not (
+    return (
         type(velocities) is np.ndarray
         and velocities.dtype is _FLOAT64
         and velocities.shape == rows
@@ -379,9 +392,7 @@ def _plainly_sound(observation: Observation, robot: RobotState, obstacles: Obsta
         and velocity_sigma.shape == row
         and type(ids) is np.ndarray
         and ids.shape == row
-    ):
-        return False
-    return _obstacles_sound(positions, velocities, radii, position_sigma, velocity_sigma, config)
+    )
 
 
 def _obstacles_sound(
@@ -392,40 +403,21 @@ def _obstacles_sound(
     velocity_sigma: np.ndarray,
     config: GuardConfig,
 ) -> bool:
-    """Whether no obstacle field needs a stop or a repair: the per-field checks below, as a few whole-array
-    reductions (an episode's every cycle comes here; the per-index loops run only when this is False).
-    A NaN fails every comparison (and ``max``/``min`` propagate it) and an infinity every bound, so
-    ``max ≤ bound`` and ``min ≥ 0`` also say "finite"; a speed is inf or NaN whenever a velocity part is.
-    Compiled, one call gives the same answer (:func:`viapath.compiled.harness.obstacles_sound`)."""
+    """Whether no obstacle field needs a stop or a repair (:func:`viapath.guard_checks.obstacles_sound`, one
+    compiled call: an episode's every cycle comes here; the per-field checks run only when this is False)."""
     if len(positions) == 0:
         return True
-    harness = compiled_harness()
-    if harness is not None:
-        try:
-            return harness.obstacles_sound(
-                positions,
-                velocities,
-                radii,
-                position_sigma,
-                velocity_sigma,
-                config.max_coordinate_m,
-                config.max_obstacle_speed_mps,
-                config.max_radius_m,
-                config.max_velocity_sigma_mps,
-                config.max_position_sigma_m,
-            )
-        except TypeError:  # arrays of another dtype (a direct call; the inspection hands float64): numpy below
-            pass
-    largest, smallest = np.maximum.reduce, np.minimum.reduce  # what .max() and .min() call, without their wrappers
-    return bool(
-        largest(np.abs(positions), axis=None) <= config.max_coordinate_m
-        and largest(np.hypot(velocities[:, 0], velocities[:, 1])) <= config.max_obstacle_speed_mps
-        and smallest(radii) >= 0
-        and largest(radii) <= config.max_radius_m
-        and smallest(velocity_sigma) >= 0
-        and largest(velocity_sigma) <= config.max_velocity_sigma_mps
-        and smallest(position_sigma) >= 0
-        and largest(position_sigma) <= config.max_position_sigma_m
+    return obstacles_sound(
+        positions,
+        velocities,
+        radii,
+        position_sigma,
+        velocity_sigma,
+        config.max_coordinate_m,
+        config.max_obstacle_speed_mps,
+        config.max_radius_m,
+        config.max_velocity_sigma_mps,
+        config.max_position_sigma_m,
     )
 
 
@@ -447,35 +439,26 @@ def braking_path(
     samples_per_period: int = BRAKING_SAMPLES_PER_PERIOD,
 ) -> np.ndarray:
     """Positions (S, 2) of the robot holding ``command`` for ``period_s`` and then commanded to stop
-    until at rest, stepped by :func:`viapath.kinematics.step` (the drive's acceleration limits), from
-    the first sample on (the current position excluded)."""
-    # kinematics.step's arithmetic on plain floats (no state objects per step): limit_command's clipped
-    # command and ramps, then the exact arc; the same numbers (tests/robustness/test_guard_fast_path.py).
-    dt = period_s / samples_per_period
-    x, y = float(robot.position[0]), float(robot.position[1])
-    heading, speed, turn = float(robot.heading_rad), float(robot.speed_mps), float(robot.turn_rate_radps)
-    dv = limits.max_accel_mps2 * dt
-    dw = limits.max_turn_accel_radps2 * dt
-    v_cmd, w_cmd = float(command.speed_mps), float(command.turn_rate_radps)
-    if not (math.isfinite(v_cmd) and math.isfinite(w_cmd)):
-        v_cmd, w_cmd = 0.0, 0.0
-    v_cmd = _clip(v_cmd, 0.0, limits.max_speed_mps)
-    w_cmd = _clip(w_cmd, -limits.max_turn_rate_radps, limits.max_turn_rate_radps)
-    points = []
-    for _ in range(samples_per_period):
-        speed = speed + _clip(v_cmd - speed, -dv, dv)
-        turn = turn + _clip(w_cmd - turn, -dw, dw)
-        x, y, heading = _arc(x, y, heading, speed, turn, dt)
-        points.append((x, y))
-    top = max(limits.max_speed_mps, abs(speed))
-    for _ in range(min(1000, int(math.ceil(top / max(limits.max_accel_mps2 * dt, 1e-9))) + 2)):
-        if speed <= 1e-12:
-            break
-        speed = speed + _clip(0.0 - speed, -dv, dv)  # the stop command (0, 0), within every limit
-        turn = turn + _clip(0.0 - turn, -dw, dw)
-        x, y, heading = _arc(x, y, heading, speed, turn, dt)
-        points.append((x, y))
-    return np.array(points)
+    until at rest, stepped as :func:`viapath.kinematics.step` (the drive's acceleration limits), from
+    the first sample on (the current position excluded): :func:`viapath.guard_checks.braking_points`."""
+    braking = Braking(
+        float(limits.max_speed_mps),
+        float(limits.max_turn_rate_radps),
+        float(limits.max_accel_mps2),
+        float(limits.max_turn_accel_radps2),
+        float(period_s),
+        int(samples_per_period),
+    )
+    return braking_points(
+        float(robot.position[0]),
+        float(robot.position[1]),
+        float(robot.heading_rad),
+        float(robot.speed_mps),
+        float(robot.turn_rate_radps),
+        float(command.speed_mps),
+        float(command.turn_rate_radps),
+        braking,
+    )
 
 
 def check_command(
@@ -538,69 +521,45 @@ def _first_touched(
     reachable_m: float,
 ) -> int:
     """The first obstacle (index) within ``reachable_m`` now that the robot, holding (v, w) for a control period
-    and then braking (:func:`braking_path`), would touch while its first sample moves towards it; -1 if none.
-    Compiled, one call (:func:`viapath.compiled.harness.first_touched`, the same answer)."""
-    harness = compiled_harness()
-    if harness is not None:
-        try:
-            return harness.first_touched(
-                float(position[0]),
-                float(position[1]),
-                float(robot.heading_rad),
-                float(robot.speed_mps),
-                float(robot.turn_rate_radps),
-                v,
-                w,
-                _limits_row(limits, config),
-                obstacles.positions,
-                obstacles.radii_m,
-                float(robot_radius_m),
-                float(config.brake_margin_m),
-                float(reachable_m),
-                BRAKING_SAMPLES_PER_PERIOD,
-            )
-        except TypeError:  # arrays of another dtype (a direct call; the inspection hands float64): numpy below
-            pass
-    offsets = obstacles.positions - position
-    distance = np.hypot(offsets[:, 0], offsets[:, 1])
-    reach = robot_radius_m + obstacles.radii_m + config.brake_margin_m
-    near = distance - reach <= reachable_m
-    if not near.any():
-        return -1
-    swept = braking_path(robot, Command(v, w), limits, config.control_period_s)
-    centres = obstacles.positions[near]
-    gaps = np.hypot(*(swept[:, None, :] - centres[None]).transpose(2, 0, 1)) - reach[near][None]
-    closer = np.hypot(*(swept[0] - centres).T) < distance[near] - 1e-12  # the first sample moves towards it
-    touches = (gaps.min(axis=0) <= 0) & closer
-    return int(np.flatnonzero(near)[np.argmax(touches)]) if touches.any() else -1
-
-
-_LIMITS_ROW: tuple[Any, ...] = (
-    None,
-    None,
-    None,
-)  # the last (limits, config, row), replaced whole (threads may plan at once)
-
-
-def _limits_row(limits: MotionLimits, config: GuardConfig) -> np.ndarray:
-    """:func:`viapath.compiled.harness.first_touched`'s ``limits``: max speed, max turn rate, max accel, max turn
-    accel, control period (both dataclasses are frozen: the row of the same two objects is kept)."""
-    global _LIMITS_ROW
-    last = _LIMITS_ROW
-    if last[0] is limits and last[1] is config:
-        return last[2]
-    row = np.array(
-        [
-            limits.max_speed_mps,
-            limits.max_turn_rate_radps,
-            limits.max_accel_mps2,
-            limits.max_turn_accel_radps2,
-            config.control_period_s,
-        ],
-        dtype=float,
+    and then braking (:func:`braking_path`), would touch while its first sample moves towards it; -1 if none:
+    :func:`viapath.guard_checks.first_touched`, one compiled call."""
+    return first_touched(
+        float(position[0]),
+        float(position[1]),
+        float(robot.heading_rad),
+        float(robot.speed_mps),
+        float(robot.turn_rate_radps),
+        v,
+        w,
+        *_braking(limits, config),
+        obstacles.positions,
+        obstacles.radii_m,
+        float(robot_radius_m),
+        float(config.brake_margin_m),
+        float(reachable_m),
     )
-    _LIMITS_ROW = (limits, config, row)
-    return row
+
+
+_BRAKING: tuple[Any, ...] = (None, None, None)  # the last (limits, config, Braking), replaced whole (threads)
+
+
+def _braking(limits: MotionLimits, config: GuardConfig) -> Braking:
+    """How :func:`_first_touched` rolls a command out (both dataclasses are frozen: the record of the same
+    two objects is kept)."""
+    global _BRAKING
+    last = _BRAKING
+    if last[0] is limits and last[1] is config:
+        return cast(Braking, last[2])
+    braking = Braking(
+        float(limits.max_speed_mps),
+        float(limits.max_turn_rate_radps),
+        float(limits.max_accel_mps2),
+        float(limits.max_turn_accel_radps2),
+        float(config.control_period_s),
+        BRAKING_SAMPLES_PER_PERIOD,
+    )
+    _BRAKING = (limits, config, braking)
+    return braking
 
 
 def _unchanged(command: Any, v: float, w: float) -> Command:
@@ -710,39 +669,39 @@ def guard_plan(plan: Callable[..., Decision]) -> Callable[..., Decision]:
         finally:
             _INSPECTED.reset(token)
             self._guard_active = False
-        limits = getattr(self, "limits", None) or MotionLimits()
-        own_radius = float(getattr(self, "robot_radius_m", 0.0) or 0.0)
-        if not math.isfinite(own_radius):  # max(nan, r) is nan, which no check would brake for
-            return _stop_decision(
-                self,
-                observation,
-                "guard-stop",
-                inspection.repairs + [f"robot_radius_m: expected a finite number, found {own_radius:g}"],
-            )
-        radius = max(own_radius, float(observation.robot.radius_m))
-        command, status, reason = cycle.check(getattr(decision, "command", None), limits, radius)
-        if status is not None:
-            plan_ = getattr(decision, "plan", None)
-            if status == "guard-stop" or plan_ is None:
-                original = getattr(plan_, "status", None)
-                return _stop_decision(
-                    self,
-                    observation,
-                    "guard-stop",
-                    [*inspection.repairs, cast(str, reason)],
-                    {"guard_planner_status": original},
-                )
-            plan_.extras["guard"] = inspection.repairs + [reason]
-            plan_.extras["guard_planner_status"] = plan_.status
-            plan_.status = status
-            plan_.speed_mps = 0.0
-            decision.command = command
-            return decision
-        if inspection.repairs:
-            decision.plan.extras["guard"] = list(inspection.repairs)
-        if command is not decision.command and command != decision.command:
-            decision.command = command
-        return decision
+        return _checked(self, observation, decision, cycle, inspection.repairs)
 
     guarded.__viapath_guarded__ = True  # type: ignore[attr-defined]
     return guarded
+
+
+def _checked(
+    planner: Any, observation: Observation, decision: Decision, cycle: _GuardedCycle, repairs: list[str]
+) -> Decision:
+    """The planner's ``decision`` after the command check (:meth:`_GuardedCycle.check`), with the inspection's
+    ``repairs`` listed in its plan."""
+    limits = getattr(planner, "limits", None) or MotionLimits()
+    own_radius = float(getattr(planner, "robot_radius_m", 0.0) or 0.0)
+    if not math.isfinite(own_radius):  # max(nan, r) is nan, which no check would brake for
+        bad_radius = f"robot_radius_m: expected a finite number, found {own_radius:g}"
+        return _stop_decision(planner, observation, "guard-stop", repairs + [bad_radius])
+    radius = max(own_radius, float(observation.robot.radius_m))
+    command, status, reason = cycle.check(getattr(decision, "command", None), limits, radius)
+    if status is not None:
+        plan_ = getattr(decision, "plan", None)
+        if status == "guard-stop" or plan_ is None:
+            original = getattr(plan_, "status", None)
+            return _stop_decision(
+                planner, observation, "guard-stop", [*repairs, cast(str, reason)], {"guard_planner_status": original}
+            )
+        plan_.extras["guard"] = repairs + [reason]
+        plan_.extras["guard_planner_status"] = plan_.status
+        plan_.status = status
+        plan_.speed_mps = 0.0
+        decision.command = command
+        return decision
+    if repairs:
+        decision.plan.extras["guard"] = list(repairs)
+    if command is not decision.command and command != decision.command:
+        decision.command = command
+    return decision

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from viapath.geometry import cross2
+from viapath.jit import compiled
 from viapath.limits import SUBGOAL_OPTIONS
 
 
@@ -261,3 +262,23 @@ class SubgoalTracker:
                 continue
             break
         return self.index
+
+
+@compiled
+def corridor_excess_at(
+    x: float, y: float, starts: np.ndarray, directions: np.ndarray, lengths_m: np.ndarray, half_widths_m: np.ndarray
+) -> float:
+    """How far the point (x, y) is outside the corridor of these segments (m; <= 0 inside): compiled, for
+    the compiled steps that test many points (the shield's braking sweeps, the situation's robot). The
+    operations of :meth:`DesignatedPath.corridor_excess` (the clamp as ``np.clip``'s max-then-min; ``np.hypot``,
+    which compiled and in plain Python gives numpy's bits, where Python's ``math.hypot`` rounds differently)."""
+    best = math.inf
+    for i in range(lengths_m.shape[0]):
+        sx, sy, dx, dy = starts[i, 0], starts[i, 1], directions[i, 0], directions[i, 1]
+        along = (x - sx) * dx + (y - sy) * dy
+        along = along if along > 0.0 else 0.0
+        along = along if along < lengths_m[i] else lengths_m[i]
+        excess = np.hypot(x - (sx + along * dx), y - (sy + along * dy)) - half_widths_m[i]
+        if excess < best:
+            best = excess
+    return float(best)  # a float in plain Python too (np.hypot hands back a numpy float there)

@@ -121,7 +121,7 @@ def test_corridor_rule_is_sound_and_complete_against_brute_force():
     unsound, incomplete, restricted = [], [], 0
     for cycle in range(CYCLES):
         path, waypoints, half_widths, limits, state, command, dt_s = _random_cycle(rng)
-        shield = Shield(limits, dt_s, ShieldConfig(compute="numpy"))
+        shield = Shield(limits, dt_s, ShieldConfig())
         shield.corridor = path
         observation = _observation(state)
         result = shield.filter(observation, Command(*command))
@@ -150,7 +150,7 @@ def test_without_keep_in_corridor_the_corridor_changes_nothing(seed):
     rng = np.random.default_rng(seed)
     for _ in range(200):
         path, _, _, limits, state, command, dt_s = _random_cycle(rng)
-        shield = Shield(limits, dt_s, ShieldConfig(compute="numpy", keep_in_corridor=False))
+        shield = Shield(limits, dt_s, ShieldConfig(keep_in_corridor=False))
         shield.corridor = path
         result = shield.filter(_observation(state), Command(*command))
         assert not result.intervened  # no people, no static geometry: every command is admissible

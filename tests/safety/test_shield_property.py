@@ -11,8 +11,7 @@ period, shield options, 0-6 people with random positions, velocities and uncerta
   meeting counts only while the robot moves towards the person; the robust check also counts motion
   up to ~11 degrees past perpendicular (``TOWARDS_SLACK``).
 The same in passive-friendly mode on 1 000 cycles (friendliness by its own brute force too).
-The shield runs on the numpy reference; with numba installed the compiled backend must give the same
-outputs on every cycle, so the checks hold for both.
+The shield runs as it does in use (compiled; plain Python with NUMBA_DISABLE_JIT=1).
 """
 
 from __future__ import annotations
@@ -21,7 +20,6 @@ import numpy as np
 import pytest
 
 from tests.safety._brute import brute_admissible, window_grid
-from viapath.compiled import numba_available
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.safety import Shield, ShieldConfig
 
@@ -79,7 +77,7 @@ def planner_commands(rng: np.random.Generator, case: dict) -> np.ndarray:
     return np.stack([rng.uniform(-0.2, 1.3, count) * case["vmax"], rng.uniform(-1.3, 1.3, count) * case["wmax"]], 1)
 
 
-def run_shield(case: dict, commands: np.ndarray, mode: str, towards_only: bool = True, backend: str = "numpy"):
+def run_shield(case: dict, commands: np.ndarray, mode: str, towards_only: bool = True):
     outputs, claimed = np.zeros((len(commands), 2)), np.zeros(len(commands), dtype=bool)
     for b in range(len(commands)):
         n = int(case["n_people"][b])
@@ -90,7 +88,6 @@ def run_shield(case: dict, commands: np.ndarray, mode: str, towards_only: bool =
             sigma_multiplier=case["k_sigma"][b],
             mode=mode,
             towards_only=towards_only,
-            compute=backend,
         )
         shield = Shield(limits, float(case["dt"][b]), config)
         people = Obstacles(
@@ -116,10 +113,6 @@ def _subset(case: dict, index: np.ndarray) -> dict:
 def check_batch(case: dict, commands: np.ndarray, mode: str, towards_only: bool = True) -> dict:
     friendly = mode == "passive-friendly"
     outputs, claimed = run_shield(case, commands, mode, towards_only)
-    if numba_available():  # the compiled shield (extra 'fast') gives the same outputs: the checks below hold for it
-        compiled, compiled_claimed = run_shield(case, commands, mode, towards_only, backend="numba")
-        np.testing.assert_allclose(compiled, outputs, rtol=0, atol=1e-9)
-        np.testing.assert_array_equal(compiled_claimed, claimed)
     robust = dict(extra_m=ROBUST_M, towards_only=towards_only, towards_slack=TOWARDS_SLACK)
     # limits, finiteness
     assert np.all(np.isfinite(outputs))

@@ -6,7 +6,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from viapath.compiled import numba_available
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.safety import SHIELD_OPTIONS, Shield, ShieldConfig
 from viapath.scenarios import scenario_from_dict
@@ -165,8 +164,7 @@ def test_a_period_that_begins_towards_the_person_counts_though_the_robot_turns_a
     commands = command[None]
     assert not brute_admissible(case, commands, fine=64)[0, 0]  # the rule: towards at the period's start
     assert brute_admissible(case, commands, fine=64, towards_in_period=False)[0, 0]  # the instant-only rule
-    for compute in ("numpy", "numba") if numba_available() else ("numpy",):
-        shield = Shield(LIMITS, 0.1, ShieldConfig(compute=compute))
-        assert not shield.evaluate(observation, command)["admissible"][0], compute
-        result = shield.filter(observation, Command(0.5, 2.0))
-        assert result.intervened and result.command != Command(0.5, 2.0), compute
+    shield = Shield(LIMITS, 0.1, ShieldConfig())
+    assert not shield.evaluate(observation, command)["admissible"][0]
+    result = shield.filter(observation, Command(0.5, 2.0))
+    assert result.intervened and result.command != Command(0.5, 2.0)

@@ -148,7 +148,6 @@ def run_shield(case: dict, commands: np.ndarray) -> tuple[np.ndarray, np.ndarray
             margin_m=case["margin"][b],
             person_accel_mps2=case["accel_p"][b],
             sigma_multiplier=case["k_sigma"][b],
-            compute="numpy",
         )
         n = int(case["n_people"][b])
         people = Obstacles(case["P"][b, :n], case["V"][b, :n], case["r"][b, :n])

@@ -37,7 +37,7 @@ from types import ModuleType
 
 COMPUTE_CHOICES = ("auto", "numpy", "numba")  # the values of the option compute
 ENVIRONMENT_VARIABLE = "VIAPATH_PLANNER_BACKEND"
-KERNEL_MODULES = ("planning", "shield", "perception", "harness")
+KERNEL_MODULES = ("planning", "perception")
 
 _import = importlib.import_module
 _LOADED: dict[str, ModuleType | None] = {}

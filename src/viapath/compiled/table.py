@@ -21,8 +21,6 @@ class Entry(NamedTuple):
 
 
 _BACKENDS = "tests/planning/test_backends.py"
-_SHIELD = "tests/safety/test_shield_backends.py::test_numba_shield_gives_the_numpy_verdicts"
-_HARNESS = "tests/robustness/test_harness_kernels.py"
 _CHOICE = f"{_BACKENDS}::test_compiled_choice_is_the_numpy_choice"
 _ESCAPE = f"{_BACKENDS}::test_compiled_escape_is_the_reference"
 _CORRIDOR = f"{_BACKENDS}::test_corridor_kernels_match_reference"
@@ -72,33 +70,6 @@ ENTRIES = (
     Entry("planning.choose_tree", "viapath.planning.viapath.planner:ViaPathPlanner._choose", _CHOICE),
     Entry("planning.choose_candidate", "viapath.planning.viapath.critics:score", _CHOICE),
     Entry("planning.choose", "viapath.planning.viapath.planner:ViaPathPlanner._choose", _CHOICE),
-    # The passive-safety shield.
-    Entry("shield.braking_sweep", "viapath.safety.shield:braking_sweep", _SHIELD),
-    Entry("shield.achieved_first_period", "viapath.safety.shield:achieved_first_period", _SHIELD),
-    Entry("shield.evaluate", "viapath.safety.shield:Shield.evaluate", _SHIELD),
-    Entry("shield.candidates", "viapath.safety.shield:Shield.candidates", _SHIELD),
-    Entry("shield.shield", "viapath.safety.shield:Shield.filter", _SHIELD),
-    # The harness every planner gets (guard, inflation).
-    Entry(
-        "harness.obstacles_sound",
-        "viapath.guard:_obstacles_sound",
-        f"{_HARNESS}::test_obstacles_sound_agrees_with_the_numpy_reductions",
-    ),
-    Entry(
-        "harness.first_touched",
-        "viapath.guard:check_command",
-        f"{_HARNESS}::test_the_braking_test_agrees_with_check_commands_numpy_code",
-    ),
-    Entry(
-        "harness.inflation",
-        "viapath.planning.base:Inflation.of",
-        f"{_HARNESS}::test_inflation_is_the_numpy_inflation_bit_for_bit",
-    ),
-    Entry(
-        "harness.situation_numbers",
-        "viapath.planning.base:Planner.situation",
-        f"{_HARNESS}::test_the_situations_inflation_and_corridor_excess_are_the_numpy_ones_bit_for_bit",
-    ),
     # numpy's pairwise summation.
     Entry("sums.pairwise_sum", "numpy:sum", f"{_BACKENDS}::test_escape_kernel_pieces_match_numpy"),
 )

@@ -23,14 +23,14 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from viapath.compiled import compiled_harness
 from viapath.guard import guard_plan, inspected
+from viapath.jit import compiled
 from viapath.kinematics import steer_towards
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.observation import Decision as Decision  # re-exported: the planners' results
 from viapath.observation import Plan as Plan
 from viapath.options import Option, OptionSet, Settings
-from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
+from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker, corridor_excess_at
 from viapath.registry import Registry
 
 PLANNERS: Registry[type[Planner]] = Registry("planner")
@@ -77,38 +77,62 @@ class Inflation:
     def of(cls, obstacles: Obstacles, robot_radius_m: float, settings: Mapping[str, Any]) -> Inflation:
         if len(obstacles) == 0:
             return _NO_INFLATION
-        margin, k = settings["safety_margin_m"], settings["uncertainty_sigmas"]
-        harness = compiled_harness()
-        if harness is not None:  # the same numbers in one compiled call (viapath.compiled.harness.inflation)
-            rows = np.empty((4, len(obstacles)))
-            try:
-                harness.inflation(
-                    obstacles.radii_m,
-                    obstacles.position_sigma_m,
-                    obstacles.velocity_sigma_mps,
-                    float(robot_radius_m),
-                    float(margin),
-                    float(k),
-                    float(settings["max_inflation_m"]),
-                    rows,
-                )
-                return cls(rows[0], rows[1], rows[2], rows[3])
-            except TypeError:  # arrays of another dtype: the numpy code below
-                pass
-        position_term = k * obstacles.position_sigma_m
-        growth = k * obstacles.velocity_sigma_mps
-        growing = growth > 0
-        if not growing.any():  # no velocity uncertainty (e.g. oracle perception): cylinders, no division
-            until = np.full(len(growth), np.inf)
-        else:
-            with np.errstate(divide="ignore", over="ignore"):
-                until = np.where(growing, settings["max_inflation_m"] / growth, np.inf)
-        return cls(
-            obstacles.radii_m + margin + position_term,
-            obstacles.radii_m + robot_radius_m + margin + position_term,
-            growth,
-            until,
+        rows = inflation_rows(
+            obstacles.radii_m,
+            obstacles.position_sigma_m,
+            obstacles.velocity_sigma_mps,
+            float(robot_radius_m),
+            float(settings["safety_margin_m"]),
+            float(settings["uncertainty_sigmas"]),
+            float(settings["max_inflation_m"]),
         )
+        return cls(rows[0], rows[1], rows[2], rows[3])
+
+
+@compiled
+def inflation_rows(
+    radii: np.ndarray,
+    position_sigma: np.ndarray,
+    velocity_sigma: np.ndarray,
+    robot_radius_m: float,
+    margin_m: float,
+    sigmas: float,
+    max_inflation_m: float,
+) -> np.ndarray:
+    """:class:`Inflation`'s rows (4, N): obstacle radius + margin + k·σ_position; the same with the robot's
+    radius added after the obstacle's; the cone's growth k·σ_velocity; when it stops growing (∞ if it does
+    not grow, a NaN growth included)."""
+    out = np.empty((4, radii.shape[0]))
+    for i in range(radii.shape[0]):
+        position_term = sigmas * position_sigma[i]
+        growth = sigmas * velocity_sigma[i]
+        out[0, i] = radii[i] + margin_m + position_term
+        out[1, i] = radii[i] + robot_radius_m + margin_m + position_term
+        out[2, i] = growth
+        out[3, i] = max_inflation_m / growth if growth > 0 else math.inf
+    return out
+
+
+@compiled
+def situation_numbers(
+    radii: np.ndarray,
+    position_sigma: np.ndarray,
+    velocity_sigma: np.ndarray,
+    robot_radius_m: float,
+    margin_m: float,
+    sigmas: float,
+    max_inflation_m: float,
+    x: float,
+    y: float,
+    starts: np.ndarray,
+    directions: np.ndarray,
+    lengths_m: np.ndarray,
+    half_widths_m: np.ndarray,
+) -> tuple[np.ndarray, float]:
+    """:func:`inflation_rows` and how far the finite point (x, y) is outside the corridor of these segments
+    (:func:`viapath.path.corridor_excess_at`), in the one call :meth:`Planner.situation` makes every cycle."""
+    rows = inflation_rows(radii, position_sigma, velocity_sigma, robot_radius_m, margin_m, sigmas, max_inflation_m)
+    return rows, corridor_excess_at(x, y, starts, directions, lengths_m, half_widths_m)
 
 
 # The inflation of no obstacles: one instance serves every empty scene (its arrays hold nothing to change;
@@ -208,47 +232,41 @@ class Planner:
         )
 
     def _inflation_and_excess(self, obstacles: Obstacles, position: np.ndarray) -> tuple[Inflation, float]:
-        """:meth:`Inflation.of` the obstacles and how far the robot is outside the corridor (the path's
-        ``corridor_excess``). Compiled, both in one call (:func:`viapath.compiled.harness.situation_numbers`,
-        the same numbers): every cycle, where each call costs more than its arithmetic."""
-        harness, n = compiled_harness(), len(obstacles)
-        if harness is not None and n and position.shape == (2,):
-            x, y = float(position[0]), float(position[1])
-            if math.isfinite(x) and math.isfinite(y):
-                settings, path = self.settings, self.path
-                cached = self.__dict__.get("_inflation_settings")  # (settings, its three numbers): read every cycle
-                if cached is None or cached[0] is not settings:
-                    cached = self.__dict__["_inflation_settings"] = (
-                        settings,
-                        (
-                            float(settings["safety_margin_m"]),
-                            float(settings["uncertainty_sigmas"]),
-                            float(settings["max_inflation_m"]),
-                        ),
-                    )
-                margin_m, sigmas, max_inflation_m = cached[1]
-                rows = np.empty((4, n))
-                try:
-                    excess_m = harness.situation_numbers(
-                        obstacles.radii_m,
-                        obstacles.position_sigma_m,
-                        obstacles.velocity_sigma_mps,
-                        self.robot_radius_m,
-                        margin_m,
-                        sigmas,
-                        max_inflation_m,
-                        rows,
-                        x,
-                        y,
-                        path.segment_starts,
-                        path.segment_directions,
-                        path.segment_lengths_m,
-                        path.half_widths_m,
-                    )
-                    return Inflation(rows[0], rows[1], rows[2], rows[3]), excess_m
-                except TypeError:  # arrays of another dtype: the numpy code below
-                    pass
-        return Inflation.of(obstacles, self.robot_radius_m, self.settings), float(self.path.corridor_excess(position))
+        """:meth:`Inflation.of` the obstacles and how far the robot is outside the corridor
+        (:func:`viapath.path.corridor_excess_at`): every cycle, in compiled calls."""
+        x, y = (float(position[0]), float(position[1])) if position.shape == (2,) else (math.nan, math.nan)
+        if not (math.isfinite(x) and math.isfinite(y)):  # the path's own answer for any other position
+            return Inflation.of(obstacles, self.robot_radius_m, self.settings), float(
+                self.path.corridor_excess(position)
+            )
+        settings, path = self.settings, self.path
+        cached = self.__dict__.get("_inflation_settings")  # (settings, its three numbers): read every cycle
+        if cached is None or cached[0] is not settings:
+            numbers = (
+                float(settings["safety_margin_m"]),
+                float(settings["uncertainty_sigmas"]),
+                float(settings["max_inflation_m"]),
+            )
+            cached = self.__dict__["_inflation_settings"] = (settings, numbers)
+        margin_m, sigmas, max_inflation_m = cached[1]
+        rows, excess_m = situation_numbers(
+            obstacles.radii_m,
+            obstacles.position_sigma_m,
+            obstacles.velocity_sigma_mps,
+            self.robot_radius_m,
+            margin_m,
+            sigmas,
+            max_inflation_m,
+            x,
+            y,
+            path.segment_starts,
+            path.segment_directions,
+            path.segment_lengths_m,
+            path.half_widths_m,
+        )
+        if len(obstacles) == 0:
+            return _NO_INFLATION, excess_m
+        return Inflation(rows[0], rows[1], rows[2], rows[3]), excess_m
 
     def episode_metrics(self) -> dict[str, Any]:
         """Metrics of the planner over the episode (e.g. the shield's interventions)."""

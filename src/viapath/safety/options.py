@@ -6,12 +6,15 @@ parameters and the listings are generated from it.
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
-from viapath.compiled.choice import SHIELD_COMPUTE
 from viapath.options import Option, OptionError, OptionSet
 
 SHIELD_MODES = ("passive", "passive-friendly")
+# The option that once chose the shield's arithmetic (numpy or compiled; formerly ``backend``): old files and
+# parameters still name it, so it is read and ignored with a warning.
+RETIRED = "compute"
 
 SHIELD_OPTIONS = OptionSet(
     [
@@ -76,7 +79,14 @@ SHIELD_OPTIONS = OptionSet(
             minimum=0.001,
             maximum=1.0,
         ),
-        SHIELD_COMPUTE,  # numpy or compiled arithmetic, the same verdicts (viapath.compiled.choice)
+        Option(
+            RETIRED,
+            "auto",
+            "no longer does anything: the shield has one implementation, compiled (any value is read, with a "
+            "warning, and ignored)",
+            former_names=("backend",),
+            decides=False,
+        ),
     ],
     owner="shield",
 )
@@ -87,8 +97,21 @@ def option_defaults() -> dict[str, Any]:
 
 
 def check_options(values: dict[str, Any], where: str = "shield") -> dict[str, Any]:
-    """Defaults overlaid with ``values``; one clear ValueError naming the option for bad input."""
+    """Defaults overlaid with ``values``; one clear ValueError naming the option for bad input. The retired
+    option ``compute`` (``backend``) is read, with a FutureWarning when set to other than its default, and left
+    out."""
     try:
-        return dict(SHIELD_OPTIONS.validate(values, where=where))
+        checked = dict(SHIELD_OPTIONS.validate(values, where=where))
     except OptionError as error:
         raise ValueError(str(error)) from None
+    for name in (RETIRED, *SHIELD_OPTIONS[RETIRED].former_names):
+        # Its default is what a ROS 2 node declares for every parameter: only a value set by hand is news.
+        if name in values and values[name] != SHIELD_OPTIONS[RETIRED].default:
+            warnings.warn(
+                f"{where}.{name}: option {name!r} no longer does anything (the shield has one implementation, "
+                "compiled); remove it",
+                FutureWarning,
+                stacklevel=2,
+            )
+    del checked[RETIRED]
+    return checked
