@@ -20,8 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from viapath.static import StaticLayer
+from viapath.static import MAX_STATIC_RADIUS_M, StaticLayer
 
+MAX_MAP_COORDINATE_M = 1.0e6  # m: as the guard's bound on the robot's own position
 QUATERNION_TOLERANCE = 0.01  # |norm - 1| above this is not a rotation (ROS producers normalise to ~1e-9)
 
 
@@ -211,6 +212,22 @@ def occupancy_layer(
         raise ValueError(
             f"occupancy grid: expected (height, width) cells and a resolution > 0, found shape "
             f"{cells.shape}, resolution {resolution_m}"
+        )
+    # A map whose origin or far corner lies beyond any coordinate the guard accepts for the robot is no
+    # map of where the robot is (a NaN or 1e300 origin would put every wall nowhere).
+    extent = max(cells.shape) * resolution_m * math.sqrt(2.0)
+    for name, value in (("origin.position.x", origin_x), ("origin.position.y", origin_y)):
+        if not (math.isfinite(value) and abs(value) + extent <= MAX_MAP_COORDINATE_M):
+            raise ValueError(
+                f"occupancy grid: {name} {value:g} m: expected a finite number with the whole map within "
+                f"±{MAX_MAP_COORDINATE_M:g} m"
+            )
+    if not math.isfinite(origin_yaw):
+        raise ValueError(f"occupancy grid: origin yaw {origin_yaw:g} rad is not finite")
+    if resolution_m * math.sqrt(0.5) > MAX_STATIC_RADIUS_M:
+        raise ValueError(
+            f"occupancy grid: resolution {resolution_m:g} m: cells larger than {MAX_STATIC_RADIUS_M * math.sqrt(2):g} m "
+            "are no map"
         )
     occupied = cells >= threshold
     padded = np.zeros((occupied.shape[0], occupied.shape[1] + 2), dtype=bool)

@@ -34,12 +34,13 @@ What we chose:
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from viapath.ros2.tf import TransformBuffer, apply
+from viapath.ros2.tf import TransformBuffer
 
 
 @dataclass
@@ -73,7 +74,9 @@ class Nav2Interface:
         self.s = node.core.settings
         self.FollowPath = FollowPath
         self.Result = FollowPath.Result
-        self.buffer = TransformBuffer()
+        # A dynamic transform older than failure_tolerance_s is stale: a goal waits for a fresh one as long.
+        self.buffer = TransformBuffer(max_age_s=self.s.failure_tolerance_s)
+        self.transforms_refused = 0
         self.goal: _Goal | None = None
         self.mounts_done = not self.s.use_tf
         self.clear_calls = 0
@@ -108,7 +111,21 @@ class Nav2Interface:
             self.node.destroy_subscription(sub)
         self._subs = []
         self.node.destroy_service(self.service)
-        self.server.destroy()
+        if self._outcomes:
+            # A goal ended just now (cleanup, shutdown): its result is sent by the action server when the
+            # executor runs the goal's execution, so the server lives on until then (at most 2 s).
+            until = time.monotonic() + 2.0
+            retiring: list[Any] = []
+
+            def retire() -> None:
+                if self._outcomes and time.monotonic() < until:
+                    return
+                self.node.destroy_timer(retiring[0])
+                self.server.destroy()
+
+            retiring.append(self.node.create_timer(0.1, retire))
+        else:
+            self.server.destroy()
 
     # -- inputs ------------------------------------------------------------------------------
     def _on_tf(self, msg, static: bool) -> None:
@@ -116,17 +133,28 @@ class Nav2Interface:
 
         for t in msg.transforms:
             q, p = t.transform.rotation, t.transform.translation
-            self.buffer.set(
+            try:  # a quaternion that is no rotation is refused, never read as some yaw
+                yaw = convert.checked_yaw(q.x, q.y, q.z, q.w)
+            except ValueError as error:
+                self._refuse_transform(t, str(error))
+                continue
+            if not self.buffer.set(
                 t.header.frame_id,
                 t.child_frame_id,
                 convert.stamp_seconds(t.header.stamp),
                 float(p.x),
                 float(p.y),
-                convert.yaw_from_quaternion(q.x, q.y, q.z, q.w),
+                yaw,
                 static=static,
-            )
+            ):
+                self._refuse_transform(t, "a non-finite value, an empty frame or a loop")
         if not self.mounts_done:
             self.resolve_mounts()
+
+    def _refuse_transform(self, t, why: str) -> None:
+        self.transforms_refused += 1
+        self.core.events.append(f"transform {t.header.frame_id} -> {t.child_frame_id} refused: {why}")
+        self.node.get_logger().error(self.core.events[-1])
 
     def resolve_mounts(self) -> None:
         """Each scanner's mount from TF (``base_frame → frame_id``), once found."""
@@ -138,11 +166,21 @@ class Nav2Interface:
             if pose is None:
                 done = False
                 continue
+            if not self.core.mount_acceptable(*pose):
+                self._refuse_mount(scanner.name, pose)
+                continue
             if self.core.set_mount(index, *pose):
                 self.node.get_logger().info(
                     f"scanner {scanner.name}: mount from TF ({pose[0]:.3f}, {pose[1]:.3f} m, {pose[2]:.3f} rad)"
                 )
         self.mounts_done = done
+
+    def _refuse_mount(self, name: str, pose) -> None:
+        """A mount beyond the parameters' bounds: the parameters' mount stays (once logged per scanner)."""
+        event = f"scanner {name}: mount from TF ({pose[0]:g}, {pose[1]:g} m) refused: {self.core.mount_problem(*pose)}"
+        if event not in self.core.events[-20:]:
+            self.core.events.append(event)
+            self.node.get_logger().error(event)
 
     def _on_speed_limit(self, msg) -> None:
         self.core.set_speed_limit(float(msg.speed_limit), bool(msg.percentage))
@@ -155,45 +193,96 @@ class Nav2Interface:
     def _on_goal(self, request):
         return self._GoalResponse.ACCEPT if self.core.active else self._GoalResponse.REJECT
 
-    def _path_in_odom(self, msg) -> tuple[int, str, np.ndarray | None]:
-        """(error code, message, waypoints in the odometry frame); code NONE with None: wait (TF)."""
+    def _path_frame_pose(self, msg) -> tuple[int, str, Any]:
+        """(error code, message, the ``path frame → odom`` transform or None when the frames agree); code
+        NONE with message: wait for the transform. Cheap: run in the control loop."""
         R = self.Result
-        points = np.array([[p.pose.position.x, p.pose.position.y] for p in msg.poses], dtype=float).reshape(-1, 2)
-        if len(points) == 0:
-            return R.INVALID_PATH, "empty path", None
-        if not np.isfinite(points).all():
-            return R.INVALID_PATH, "path with NaN or infinite coordinates", None
-        frame = msg.header.frame_id or (msg.poses[0].header.frame_id if msg.poses else "")
+        frame = msg.header.frame_id or (msg.poses[0].header.frame_id if len(msg.poses) else "")
         target = self.s.odom_frame
         if frame and target and frame.lstrip("/") != target.lstrip("/"):
             if not self.s.use_tf:
                 return R.TF_ERROR, f"path in frame {frame!r}, odometry in {target!r}, and use_tf is off", None
-            pose = self.buffer.lookup(target, frame)
+            pose = self.buffer.lookup(target, frame, now_s=self.node._now_s(alive=False))
             if pose is None:
-                return R.NONE, f"no transform {frame} -> {target} yet", None
-            points = np.array([apply(pose, x, y) for x, y in points], dtype=float).reshape(-1, 2)
+                return (
+                    R.NONE,
+                    f"no transform {frame} -> {target} yet (or none newer than {self.buffer.max_age_s:g} s)",
+                    None,
+                )
+            return R.NONE, "", pose
+        return R.NONE, "", None
+
+    def _prepare_path(self, msg, pose, robot) -> tuple[str, int, str, Any]:
+        """A goal's path decoded, moved into the odometry frame, simplified and a planner built on it, in
+        the worker thread (it grows with the path): (what, error code, message, value) with what one of
+        "path" (value: a PreparedPath), "same" (the running path), "there" (every pose at the robot),
+        "wait" (for odometry) or "abort"."""
+        R = self.Result
+        points = np.array([[p.pose.position.x, p.pose.position.y] for p in msg.poses], dtype=float).reshape(-1, 2)
+        if len(points) == 0:
+            return "abort", R.INVALID_PATH, "empty path", None
+        if not np.isfinite(points).all():
+            return "abort", R.INVALID_PATH, "path with NaN or infinite coordinates", None
+        if pose is not None:
+            c, s_ = math.cos(pose[2]), math.sin(pose[2])
+            points = points @ np.array([[c, s_], [-s_, c]]) + np.array(pose[:2])
         from viapath.ros2.core import simplify_polyline
 
         points = simplify_polyline(points, self.s.path_simplify_m)
         if len(points) == 1:
-            o = self.core.odometry
-            if o is None:
-                return R.NONE, "a path of one pose: waiting for odometry", None
-            points = np.vstack([[o.x, o.y], points])
-        if np.hypot(*(points[-1] - points[0])) < 1e-6 and len(points) == 2:
-            points = points[1:]
-            o = self.core.odometry
-            if o is None:
-                return R.NONE, "waiting for odometry", None
-            points = np.vstack([[o.x, o.y], points])
-        return R.NONE, "", points
+            if robot is None:
+                return "wait", R.NONE, "a path of one pose: waiting for odometry", None
+            if math.hypot(points[0][0] - robot[0], points[0][1] - robot[1]) <= self.s.goal_tolerance_m:
+                return "there", R.NONE, "", None
+            points = np.vstack([robot, points])
+        if self.core.same_path(points):
+            return "same", R.NONE, "", None
+        try:
+            return "path", R.NONE, "", self.core.build_path(points)
+        except ValueError as error:
+            return "abort", R.INVALID_PATH, f"path refused: {error}", None
+
+    def _start_path(self, goal: _Goal) -> tuple[int, str]:
+        """Hand the goal's path to the worker once its transform is known; (error code, message) when it
+        cannot be (TF), code NONE and a message while waiting."""
+        code, message, pose = self._path_frame_pose(goal.request_path)
+        if code != self.Result.NONE or message:
+            return code, message
+        o = self.core.odometry
+        robot = None if o is None else (o.x, o.y)
+        msg = goal.request_path
+        self.node.background.submit("goal", lambda: self._prepare_path(msg, pose, robot))
+        goal.extra["submitted"] = True
+        return code, ""
+
+    def take_background(self) -> None:
+        """The goal's path, once the worker has it ready (at each cycle and watchdog tick)."""
+        outcome = self.node.background.take("goal")
+        goal = self.goal
+        if outcome is None or goal is None or goal.set:
+            return
+        goal.extra["submitted"] = False
+        if outcome.error is not None:
+            self._finish_goal("abort", self.Result.INVALID_PATH, f"path refused: {outcome.error}")
+            return
+        what, code, message, value = outcome.value
+        if what == "abort":
+            self._finish_goal("abort", code, message)
+        elif what == "there":
+            self._finish_goal("succeed", self.Result.NONE, "")
+        elif what == "same":
+            goal.set = True
+        elif what == "path":
+            self.core.use_prepared(value)
+            goal.set = True
 
     def _on_accepted(self, handle) -> None:
-        """A new goal: checked, then it replaces the running one. Its execution (the action's
-        EXECUTING state and result) is started only when it ends, by :meth:`_end`: a goal
-        waiting in a coroutine would be resumed without pause by rclpy's events executor."""
+        """A new goal: it replaces the running one, whose path is driven on until the new one is ready
+        (decoded and simplified by the worker thread). Its execution (the action's EXECUTING state and
+        result) is started only when it ends, by :meth:`_end`: a goal waiting in a coroutine would be
+        resumed without pause by rclpy's events executor."""
         goal = _Goal(handle, None, handle.request.path, self.node._now_s())
-        code, message, points = self._path_in_odom(goal.request_path)
+        code, message, _pose = self._path_frame_pose(goal.request_path)
         if code != self.Result.NONE:
             self._end(goal, "abort", code, message)
             return
@@ -202,8 +291,7 @@ class Nav2Interface:
             goal.checkpoint = previous.checkpoint  # a preempt is no fresh start for the progress check
             self._finish_goal("abort", self.Result.NONE, "preempted by a new path", keep_path=True)
         self.goal = goal
-        if points is not None:
-            self._use_path(goal, points)
+        self._start_path(goal)
 
     def _end(self, goal: _Goal, outcome: str, code: int, message: str) -> None:
         self.finished.append((outcome, int(code), message))
@@ -219,16 +307,6 @@ class Nav2Interface:
             {"succeed": handle.succeed, "canceled": handle.canceled}.get(outcome, handle.abort)()
         return result
 
-    def _use_path(self, goal: _Goal, points: np.ndarray) -> bool:
-        try:
-            if not self.core.same_path(points):
-                self.core.set_path(points)
-        except ValueError as error:
-            self._finish_goal("abort", self.Result.INVALID_PATH, f"path refused: {error}")
-            return False
-        goal.set = True
-        return True
-
     def _result(self, code: int, message: str):
         result = self.Result()
         result.error_code = int(code)
@@ -239,6 +317,8 @@ class Nav2Interface:
         goal, self.goal = self.goal, None
         if goal is None:
             return
+        if not goal.set:
+            self.node.background.cancel("goal")
         if not keep_path:
             self.core.clear_path()
         self.core.events.append(f"follow_path: {outcome} ({code}{': ' + message if message else ''})")
@@ -257,16 +337,15 @@ class Nav2Interface:
             self._finish_goal("canceled", R.NONE, "canceled")
             return
         if not goal.set:
-            code, message, points = self._path_in_odom(goal.request_path)
-            if code != R.NONE:
-                self._finish_goal("abort", code, message)
-                return
-            if points is None:
-                if now_s - goal.accepted_s > self.s.failure_tolerance_s:
+            if not goal.extra.get("submitted"):
+                code, message = self._start_path(goal)
+                if code != R.NONE:
+                    self._finish_goal("abort", code, message)
+                    return
+                if message and now_s - goal.accepted_s > self.s.failure_tolerance_s:
                     self._finish_goal("abort", R.TF_ERROR, message)
-                return
-            if not self._use_path(goal, points):
-                return
+                    return
+            return  # the previous path (if any) is driven on meanwhile
         if self.core.goal_reached:
             self._finish_goal("succeed", R.NONE, "")
             return

@@ -15,6 +15,10 @@ What we chose:
   path is subscribed transient-local (a latched path published before the node started is received).
 * ``cmd_vel`` is published once per scan cycle and by the watchdog (every ``cycle_period_s``) when
   inputs are stale; markers and the DiagnosticArray once per cycle.
+* Paths and maps are decoded, checked, simplified and rasterised by a worker thread
+  (:mod:`viapath.ros2.background`), never in a callback of the control loop: the cycles go on with
+  the last good path and map and take the new one at the first cycle after it is ready, so ``cmd_vel``
+  keeps its rate whatever the size of what arrives.
 * Signals: SIGINT / SIGTERM end the spin loop; a zero command is published before the node is
   destroyed (rclpy's own handlers would shut the context down before we could publish).
 """
@@ -93,6 +97,9 @@ class _NodeBehaviour(_LifecycleNode):
         self._nav2 = None
         self._wall_timer = None
         self._last_now_s: float | None = None
+        from viapath.ros2.background import Background
+
+        self.background = Background()
         try:
             self.declare_parameter("planner_name", "viapath")
             self.declare_parameter("scanner_names", ["front", "rear"])
@@ -247,6 +254,8 @@ class _NodeBehaviour(_LifecycleNode):
         return TransitionCallbackReturn.SUCCESS
 
     def _teardown(self) -> None:
+        for kind in ("path", "map", "goal"):
+            self.background.cancel(kind)
         if self._nav2 is not None:
             self._nav2.destroy()
             self._nav2 = None
@@ -289,26 +298,45 @@ class _NodeBehaviour(_LifecycleNode):
 
     def _on_map(self, msg) -> None:
         expected = self.core.settings.odom_frame
-        if expected and msg.header.frame_id and msg.header.frame_id != expected:
-            self.core.events.append(f"map refused: frame_id {msg.header.frame_id!r}, expected {expected!r}")
-            self.get_logger().error(self.core.events[-1])
+        if expected and msg.header.frame_id != expected:  # an empty frame_id says nothing of where the map is
+            self._map_refused(f"frame_id {msg.header.frame_id!r}, expected {expected!r}")
             return
-        try:
-            self.core.set_map(convert.occupancy_layer_from_message(msg, self.core.settings.map_occupied_threshold))
-        except Exception as error:
-            self.core.events.append(f"map refused: {error}")
-            self.get_logger().error(self.core.events[-1])
+        core, threshold = self.core, self.core.settings.map_occupied_threshold
+        self.background.submit("map", lambda: core.prepare_map(convert.occupancy_layer_from_message(msg, threshold)))
+
+    def _map_refused(self, why: str) -> None:
+        self.core.events.append(f"map refused: {why} (the last good map stays)")
+        self.get_logger().error(self.core.events[-1])
 
     def _on_path(self, msg) -> None:
-        try:
-            accepted, what = self.core.on_path(
+        core = self.core
+        self.background.submit(
+            "path",
+            lambda: core.prepare_path_message(
                 msg.header.frame_id, convert.waypoints_from_path(msg), convert.orientations_from_path(msg)
-            )
-        except Exception as error:
-            self.core.paths_refused += 1
-            accepted, what = False, self._failed("path refused: reading it", error)
-            self.core.events.append(what)
-        (self.get_logger().info if accepted else self.get_logger().error)(what)
+            ),
+        )
+
+    def take_background(self) -> None:
+        """Use the paths and maps the worker has finished (at the start of each cycle and watchdog tick)."""
+        outcome = self.background.take("map")
+        if outcome is not None:
+            if outcome.error is not None:
+                self._map_refused(str(outcome.error))
+            else:
+                self.core.set_map(outcome.value)
+                self.get_logger().info(self.core.events[-1])
+        outcome = self.background.take("path")
+        if outcome is not None:
+            if outcome.error is not None:
+                self.core.paths_refused += 1
+                accepted, what = False, self._failed("path refused: reading it", outcome.error)
+                self.core.events.append(what)
+            else:
+                accepted, what = self.core.use_path_message(outcome.value)
+            (self.get_logger().info if accepted else self.get_logger().error)(what)
+        if self._nav2 is not None:
+            self._nav2.take_background()
 
     def _on_scan(self, index: int, msg) -> None:
         due = self.core.on_scan(
@@ -325,6 +353,7 @@ class _NodeBehaviour(_LifecycleNode):
         if self._nav2 is not None and not self._nav2.mounts_done:
             self._nav2.resolve_mounts()
         if due:
+            self.take_background()
             now = self._now_s()
             try:
                 result = self.core.cycle(now)
@@ -337,6 +366,7 @@ class _NodeBehaviour(_LifecycleNode):
     def _on_watchdog(self) -> None:
         if self.core is None:
             return
+        self.take_background()
         result = self.core.watchdog(self._now_s(alive=False))
         if result is not None:
             self._publish(result, markers=False)
