@@ -34,7 +34,6 @@ What we chose:
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -84,13 +83,24 @@ class Nav2Interface:
         self._subs = []
         self._GoalResponse, self._CancelResponse = GoalResponse, CancelResponse
         self._outcomes: dict[bytes, tuple[str, object]] = {}
+        # Goals are taken by the node's input thread (a goal of 100 000 poses takes seconds to become
+        # Python objects): its callbacks run under the node's lock, the control loop goes on meanwhile.
+        lock = node.lock
+
+        def locked(callback):
+            def run(*args):
+                with lock:
+                    return callback(*args)
+
+            return run
+
         self.server = ActionServer(
-            node,
+            node.inputs,
             FollowPath,
             self.s.follow_path_action,
-            self._execute,
-            goal_callback=self._on_goal,
-            handle_accepted_callback=self._on_accepted,
+            locked(self._execute),
+            goal_callback=locked(self._on_goal),
+            handle_accepted_callback=locked(self._on_accepted),
             cancel_callback=lambda handle: CancelResponse.ACCEPT,
         )
         self._subs.append(node.create_subscription(SpeedLimit, self.s.speed_limit_topic, self._on_speed_limit, 10))
@@ -105,27 +115,24 @@ class Nav2Interface:
             self._subs.append(node.create_subscription(TFMessage, "/tf", lambda m: self._on_tf(m, False), dynamic))
             self._subs.append(node.create_subscription(TFMessage, "/tf_static", lambda m: self._on_tf(m, True), static))
 
+    def end_goal(self) -> None:
+        """The running goal ends (cleanup, shutdown): its result is sent when the input thread runs its
+        execution, so the caller waits for :attr:`results_pending` to clear before destroying the server."""
+        with self.node.lock:
+            self._finish_goal("abort", self.Result.UNKNOWN, "controller cleaned up")
+
+    @property
+    def results_pending(self) -> bool:
+        return bool(self._outcomes)
+
     def destroy(self) -> None:
-        self._finish_goal("abort", self.Result.UNKNOWN, "controller cleaned up")
+        """Destroy the server and subscriptions (the input thread is stopped by then)."""
+        self.end_goal()
         for sub in self._subs:
             self.node.destroy_subscription(sub)
         self._subs = []
         self.node.destroy_service(self.service)
-        if self._outcomes:
-            # A goal ended just now (cleanup, shutdown): its result is sent by the action server when the
-            # executor runs the goal's execution, so the server lives on until then (at most 2 s).
-            until = time.monotonic() + 2.0
-            retiring: list[Any] = []
-
-            def retire() -> None:
-                if self._outcomes and time.monotonic() < until:
-                    return
-                self.node.destroy_timer(retiring[0])
-                self.server.destroy()
-
-            retiring.append(self.node.create_timer(0.1, retire))
-        else:
-            self.server.destroy()
+        self.server.destroy()
 
     # -- inputs ------------------------------------------------------------------------------
     def _on_tf(self, msg, static: bool) -> None:
@@ -325,7 +332,8 @@ class Nav2Interface:
         self._end(goal, outcome, code, message)
 
     def deactivated(self) -> None:
-        self._finish_goal("abort", self.Result.UNKNOWN, "controller deactivated")
+        with self.node.lock:
+            self._finish_goal("abort", self.Result.UNKNOWN, "controller deactivated")
 
     def supervise(self, result, now_s: float) -> None:
         """After each cycle or watchdog tick: cancel, pending paths, success, progress, failures, feedback."""
