@@ -70,3 +70,67 @@ def test_bench_exits_3_for_an_episode_past_its_time_limit_and_refuses_a_bad_limi
         app, ["bench", str(folder), "-p", "follow", "--out", str(tmp_path / "out2"), "--episode-time-limit", "-1"]
     )
     assert bad.exit_code == 2 and "--episode-time-limit: expected" in bad.output
+
+
+def test_the_gif_is_written_frame_by_frame(tmp_path):
+    """Each frame is on disk before the next is drawn (memory does not grow with the number of frames):
+    the generator of frames looks at the file as it is asked for the next one."""
+    import numpy as np
+    from PIL import Image
+
+    from viapath.viz.animate import _write_gif
+
+    file = tmp_path / "a.gif"
+    sizes = []
+
+    def frames():
+        for k in range(6):
+            sizes.append(file.stat().st_size if file.exists() else 0)
+            image = np.zeros((40, 60, 4), dtype=np.uint8)
+            image[:, : 10 * (k + 1), 0] = 255
+            yield image
+
+    _write_gif(frames(), file, fps=10, total=6, progress=None)
+    assert all(b > a for a, b in zip(sizes[1:], sizes[2:]))  # grew with every frame written
+    with Image.open(file) as gif:
+        assert gif.n_frames == 6 and gif.info.get("loop") == 0
+        gif.seek(5)
+        assert np.asarray(gif.convert("RGB"))[0, 55, 0] > 200  # the last frame is the last one drawn
+
+
+def test_the_metrics_are_printed_when_the_animation_fails(tmp_path, monkeypatch):
+    import json
+
+    import viapath.viz.animate as animate
+
+    def out_of_memory(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(animate, "animate_episode", out_of_memory)
+    result = CliRunner().invoke(app, ["run", "paper-front", "--json", "--animate", str(tmp_path / "a.gif")])
+    assert result.exit_code != 0
+    first = result.stdout.strip().splitlines()[0]
+    assert json.loads(first)["scenario"] == "paper-front"
+    assert "out of memory" in result.output and "Traceback" not in result.output
+
+
+def test_replay_files_are_read_per_person_whatever_their_row_order(tmp_path):
+    """Brute force: each track equals its rows filtered and sorted by frame (the reader sorts once)."""
+    import numpy as np
+
+    from viapath.io.eth_ucy import load_tracks
+
+    rng = np.random.default_rng(5)
+    people, rows = 300, 1500
+    table = np.column_stack(
+        [rng.permutation(rows) * 10.0, rng.integers(0, people, rows).astype(float), rng.normal(size=(rows, 2))]
+    )
+    path = tmp_path / "crowd.txt"
+    np.savetxt(path, table, fmt="%.6f")
+    tracks = load_tracks(path, 0.4)
+    table = np.round(table, 6)
+    assert [t.ped_id for t in tracks] == sorted({int(i) for i in table[:, 1]})
+    for track in tracks:
+        mine = table[table[:, 1] == track.ped_id]
+        mine = mine[np.argsort(mine[:, 0])]
+        assert np.allclose(track.times_s, mine[:, 0] / 10 * 0.4) and np.allclose(track.positions, mine[:, 2:4])

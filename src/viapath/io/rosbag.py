@@ -144,6 +144,12 @@ def read_laser_scans(path, topic: str | None = None) -> Iterator[LaserScanMessag
             m = reader.deserialize(raw, connection.msgtype)
             ranges = np.asarray(m.ranges, dtype=float).copy()
             angle_min, increment = float(m.angle_min), float(m.angle_increment)
+            for field_name, value in (("angle_min", angle_min), ("angle_increment", increment)):
+                if not (np.isfinite(value) and (field_name == "angle_min" or value != 0.0)):
+                    raise BagError(
+                        f"{path}: {topic}: a LaserScan at {_stamp(m, record_time_ns):.3f} s has {field_name} "
+                        f"{value} rad; expected a finite number{' other than 0' if field_name != 'angle_min' else ''}"
+                    )
             if increment < 0:  # clockwise scanner: store it counter-clockwise
                 ranges = ranges[::-1].copy()
                 angle_min, increment = angle_min + (len(ranges) - 1) * increment, -increment
