@@ -2,15 +2,16 @@
 a 100 000-pose FollowPath goal, a 10 000 x 10 000 map and a 30 000-pose zig-zag goal arrive.
 
 Usage: python benchmarks/bench_big_inputs.py [--poses 100000] [--map-cells 10000] [--zigzag 30000]
-                                            [--seconds 24] [--json]
+                                            [--seconds 30] [--json]
 
 Needs the ``ros2`` extra. Starts ``viapath ros2 nav2`` (autostart, ``map_topic: map``) as a separate
 process (its own ROS domain, DDS kept on this machine), and drives it from this process at the scan
 rate in real time: odometry of an honest base that drives the received ``cmd_vel`` and two empty
 URG-04LX scans every 0.1 s. A first goal (a straight path 100 m long) sets the robot going. The big
-inputs are built and sent by a second process (so that building them does not hold up the scans of
-this one): the 100 000-pose goal along the same line at 4 s, the free map at 9 s (``odom`` frame,
-0.05 m cells), the zig-zag goal (±0.1 m, 1 cm apart) at 14 s. cmd_vel arrival times are taken in
+inputs are built by a second process (so that building them does not hold up the scans of this
+one; the robot drives meanwhile); once they are built the measurement starts, and the sender sends
+the 100 000-pose goal along the same line at 4 s, the free map at 9 s (``odom`` frame, 0.05 m
+cells), the zig-zag goal (±0.1 m, 1 cm apart) at 14 s. cmd_vel arrival times are taken in
 this process on one monotonic clock; the gaps are counted from 2 s (warm-up) to the end. Both
 processes are ended by pid.
 """
@@ -58,9 +59,9 @@ def _goal_client(node):
     return client, FollowPath
 
 
-def sender(poses: int, map_cells: int, zigzag: int, start_wall: float) -> int:
-    """The second process: builds the big inputs first, then sends each at its time after ``start_wall``
-    (a time.time() the driver chose)."""
+def sender(poses: int, map_cells: int, zigzag: int) -> int:
+    """The second process: builds the big inputs first, says "ready" on stdout, reads the start time
+    (a time.time()) from stdin, then sends each input at its time after it."""
     import rclpy
     from nav_msgs.msg import OccupancyGrid
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -91,6 +92,8 @@ def sender(poses: int, map_cells: int, zigzag: int, start_wall: float) -> int:
     grid.info.origin.orientation.w = 1.0
     grid.data = array.array("b", bytes(map_cells * map_cells))
     built["map"] = grid
+    print("ready", flush=True)
+    start_wall = float(sys.stdin.readline())
     for name in sorted(EVENTS_S, key=EVENTS_S.get):
         while time.time() < start_wall + EVENTS_S[name]:
             rclpy.spin_once(node, timeout_sec=0.02)
@@ -157,13 +160,11 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
         _wait_for(node, future.done, 30)
         scanners = paper_scanners()
         empty = [np.full(s.beam_count, np.inf) for s in scanners]
-        start_wall = time.time() + 1.0
         sender_proc = subprocess.Popen(
             [
                 sys.executable,
                 __file__,
                 "--sender",
-                str(start_wall),
                 "--poses",
                 str(poses),
                 "--map-cells",
@@ -172,39 +173,55 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
                 str(zigzag),
             ],
             env=dict(os.environ),
-            stdout=subprocess.DEVNULL,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
+            text=True,
         )
-        while time.time() < start_wall:
-            rclpy.spin_once(node, timeout_sec=0.01)
-        started = time.monotonic()
-        x = v = w = heading = y = 0.0
-        k = 0
-        commands.clear()
-        while time.monotonic() - started < seconds:
-            due = started + k * SCAN_PERIOD_S
-            while time.monotonic() < due:
-                rclpy.spin_once(node, timeout_sec=max(0.0, min(0.005, due - time.monotonic())))
-            if commands:
-                v, w = commands[-1][1], commands[-1][2]
-            x += v * SCAN_PERIOD_S * np.cos(heading)
-            y += v * SCAN_PERIOD_S * np.sin(heading)
-            heading += w * SCAN_PERIOD_S
-            stamp = convert.time_msg(node.get_clock().now().nanoseconds * 1e-9)
-            odom_pub.publish(convert.odometry("odom", "base_link", stamp, x, y, heading, v, w))
-            for pub, s, ranges in zip(scan_pubs, scanners, empty):
-                pub.publish(
-                    convert.laser_scan(
-                        f"laser_{s.name}",
-                        stamp,
-                        s.angle_min_rad,
-                        s.angle_increment_rad,
-                        ranges,
-                        s.range_min_m,
-                        s.range_max_m,
+        state = {"x": 0.0, "y": 0.0, "h": 0.0, "k": 0, "t0": time.monotonic()}
+
+        def drive_until(end_s: float) -> None:
+            """The robot at 10 Hz (odometry of the commands received, empty scans) until ``end_s`` (monotonic)."""
+            while time.monotonic() < end_s:
+                due = state["t0"] + state["k"] * SCAN_PERIOD_S
+                while time.monotonic() < due:
+                    rclpy.spin_once(node, timeout_sec=max(0.0, min(0.005, due - time.monotonic())))
+                v, w = (commands[-1][1], commands[-1][2]) if commands else (0.0, 0.0)
+                state["x"] += v * SCAN_PERIOD_S * np.cos(state["h"])
+                state["y"] += v * SCAN_PERIOD_S * np.sin(state["h"])
+                state["h"] += w * SCAN_PERIOD_S
+                stamp = convert.time_msg(node.get_clock().now().nanoseconds * 1e-9)
+                odom_pub.publish(convert.odometry("odom", "base_link", stamp, state["x"], state["y"], state["h"], v, w))
+                for pub, s, ranges in zip(scan_pubs, scanners, empty):
+                    pub.publish(
+                        convert.laser_scan(
+                            f"laser_{s.name}",
+                            stamp,
+                            s.angle_min_rad,
+                            s.angle_increment_rad,
+                            ranges,
+                            s.range_min_m,
+                            s.range_max_m,
+                        )
                     )
-                )
-            k += 1
+                state["k"] += 1
+
+        import selectors
+
+        ready = selectors.DefaultSelector()
+        ready.register(sender_proc.stdout, selectors.EVENT_READ)
+        while not ready.select(timeout=0):  # the sender builds its messages: the robot drives meanwhile
+            drive_until(time.monotonic() + 0.5)
+            if sender_proc.poll() is not None:
+                raise RuntimeError("the sender ended: " + sender_proc.stderr.read()[-2000:])
+        sender_proc.stdout.readline()
+        start_wall = time.time() + 0.5
+        sender_proc.stdin.write(f"{start_wall}\n")
+        sender_proc.stdin.flush()
+        started = time.monotonic() + 0.5
+        commands.clear()
+        drive_until(started + seconds)
+        x = state["x"]
         _, sender_err = sender_proc.communicate(timeout=60)
         times = np.array([t - started for t, _, _ in commands if t - started >= WARMUP_S])
         speeds = np.array([s for t, s, _ in commands if t - started >= WARMUP_S])
@@ -226,7 +243,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
             ],
             "mean_speed_mps": float(speeds.mean()) if len(speeds) else None,
             "distance_driven_m": float(x),
-            "sent": [line for line in sender_err.decode().splitlines() if line.startswith("sent")],
+            "sent": [line for line in sender_err.splitlines() if line.startswith("sent")],
             "load_avg_1min": os.getloadavg()[0],
         }
     finally:
@@ -242,12 +259,12 @@ def main() -> None:
     parser.add_argument("--poses", type=int, default=100_000)
     parser.add_argument("--map-cells", type=int, default=10_000)
     parser.add_argument("--zigzag", type=int, default=30_000)
-    parser.add_argument("--seconds", type=float, default=24.0)
+    parser.add_argument("--seconds", type=float, default=30.0)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
-    parser.add_argument("--sender", type=float, default=None, help=argparse.SUPPRESS)
+    parser.add_argument("--sender", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
-    if args.sender is not None:
-        raise SystemExit(sender(args.poses, args.map_cells, args.zigzag, args.sender))
+    if args.sender:
+        raise SystemExit(sender(args.poses, args.map_cells, args.zigzag))
     result = run(args.poses, args.map_cells, args.zigzag, args.seconds)
     if args.json:
         print(json.dumps(result))

@@ -186,3 +186,78 @@ def test_a_zig_zag_is_simplified_in_linear_work():
     finally:
         math.hypot = original_hypot
     assert visits["count"] <= 3 * n
+
+
+# -- property: hostile maps and paths through the node's core ---------------------------------------
+
+_ORIGINS = st.one_of(
+    st.floats(-3.0, -1.0),
+    st.sampled_from([math.nan, math.inf, -math.inf, 1e300, -1e7, 2e6]),
+)
+_RESOLUTIONS = st.one_of(st.floats(0.02, 0.2), st.sampled_from([0.0, -0.05, math.nan, math.inf, 1e300]))
+
+
+@settings(max_examples=25, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
+@given(ox=_ORIGINS, oy=_ORIGINS, resolution=_RESOLUTIONS, yaw=st.sampled_from([0.0, 0.3, math.nan]), data=st.data())
+def test_hostile_maps_reach_the_planner_or_are_refused_and_no_command_drives_into_the_known_map(
+    ox, oy, resolution, yaw, data
+):
+    """A good map has a wall 1.0 m ahead; then a random map arrives. Refused: the good map stays.
+    Accepted: it is the map. Either way the robot, driven by the node's commands, never overlaps the
+    geometry of the map in use (brute force: exact distances from the body to the map's segments)."""
+    from tests.ros2.test_ros2_hostile import Robot, cycle, make_core
+
+    core = make_core(static_layer=False)
+    good = np.zeros((60, 60), dtype=np.int16)
+    good[:, 40] = 100  # with the origin below: a wall across the way at x = -1 + 40.5 * 0.05 = 1.025 m
+    core.set_map(occupancy_layer(good, 0.05, -1.0, -1.5, 0.0))
+    cells = (np.asarray(data.draw(st.lists(st.booleans(), min_size=400, max_size=400))).reshape(20, 20) * 100).astype(
+        np.int16
+    )
+    cells[:8, :] = cells[12:, :] = 0  # keep the robot's own place free in any accepted map
+    try:
+        layer = occupancy_layer(cells, resolution, ox, oy, yaw)
+    except ValueError as error:
+        assert str(error).startswith("occupancy grid:")
+        expected = core.map_layer
+    else:
+        assert np.isfinite(layer.segments).all() and (np.abs(layer.segments) <= 1e6).all()
+        core.set_map(layer)
+        expected = core.map_layer
+    robot = Robot(people=[])
+    t = 1.0
+    for _ in range(25):
+        cycle(core, robot, t)
+        t += 0.1
+        if len(expected):
+            gap = point_segment_distances(np.array([[robot.x, robot.y]]), expected.segments)[0] - expected.padding_m
+            assert gap.min() >= 0.25 - 0.02, (robot.x, robot.y)
+    assert core.map_layer is expected
+
+
+@settings(max_examples=40, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
+@given(
+    points=st.lists(
+        st.tuples(
+            st.one_of(st.floats(-50.0, 50.0), st.sampled_from([math.nan, math.inf, 1e300, -2e6])),
+            st.floats(-50.0, 50.0),
+        ),
+        max_size=12,
+    ),
+    quaternion=st.sampled_from([None, (0.0, 0.0, 0.0, 1.0), (0.0, 0.0, 1.0, 1.0), (0.0, 0.0, 0.0, 0.0)]),
+)
+def test_hostile_paths_reach_the_planner_or_are_refused(points, quaternion):
+    """Refused: the old path stays, and the reason is counted. Accepted: every waypoint is finite and
+    within the guard's bounds. An empty path clears it (the robot brakes)."""
+    core = PlannerCore(validate({}))
+    core.set_path([[0.0, 0.0], [5.0, 0.0]])
+    old = core.path
+    orientations = None if quaternion is None else [quaternion] * len(points)
+    accepted, what = core.on_path("odom", points, orientations)
+    if not points:
+        assert accepted and core.path is None
+    elif accepted:
+        assert core.path is not old and np.isfinite(core.path.waypoints).all()
+        assert (np.abs(core.path.waypoints) <= 1e6).all()
+    else:
+        assert core.path is old and core.paths_refused == 1 and what.startswith("path refused")

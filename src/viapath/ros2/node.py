@@ -118,6 +118,7 @@ class _NodeBehaviour(_LifecycleNode):
         self.inputs_node: Any = None  # a second node, spun in a thread of its own: big inputs (see below)
         self._inputs_thread: threading.Thread | None = None
         self._inputs_running = False
+        self._input_subs: list = []
         try:
             self.declare_parameter("planner_name", "viapath")
             self.declare_parameter("scanner_names", ["front", "rear"])
@@ -240,7 +241,6 @@ class _NodeBehaviour(_LifecycleNode):
                     Parameter("use_sim_time", Parameter.Type.BOOL, bool(self.get_parameter("use_sim_time").value))
                 ],
             )
-            self._input_subs = []
         return self.inputs_node
 
     def _start_inputs_thread(self) -> None:
@@ -265,6 +265,12 @@ class _NodeBehaviour(_LifecycleNode):
         self._inputs_thread = threading.Thread(target=spin, name="viapath-inputs", daemon=True)
         self._inputs_thread.start()
 
+    def destroy_node(self) -> None:
+        """The input thread stops (and its node goes) before the node itself."""
+        self._stop_inputs_thread_only()
+        self._destroy_inputs_node()
+        super().destroy_node()  # LifecycleNode's, next in the node class's MRO
+
     def _stop_inputs_thread_only(self) -> None:
         thread, self._inputs_thread = self._inputs_thread, None
         self._inputs_running = False
@@ -273,8 +279,9 @@ class _NodeBehaviour(_LifecycleNode):
 
     def _destroy_inputs_node(self) -> None:
         if self.inputs_node is not None:
-            for sub in getattr(self, "_input_subs", []):
+            for sub in self._input_subs:
                 self.inputs_node.destroy_subscription(sub)
+            self._input_subs = []
             self.inputs_node.destroy_node()
             self.inputs_node = None
 
