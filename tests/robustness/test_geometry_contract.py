@@ -18,7 +18,7 @@ from viapath.guard import DEFAULT_CONFIG, with_static_rows
 from viapath.observation import Observation, ObservationError, Obstacles
 from viapath.scenarios.loader import ScenarioError, scenario_from_dict
 from viapath.sim.loop import run_episode
-from viapath.static import StaticLayer, box_edges
+from viapath.static import StaticLayer, box_edges, point_segment_distances
 
 
 def _scene(**extra) -> dict:
@@ -231,3 +231,32 @@ def test_the_box_edges_used_above_are_a_closed_rectangle():
     """Sanity of the fixture: box_edges gives four edges, each corner shared."""
     edges = box_edges([0.0, 0.0], [2.0, 1.0])
     assert np.allclose(edges[:, 1], np.roll(edges[:, 0], -1, axis=0))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_part_of_a_large_layer_near_the_robot_holds_every_segment_within_reach(seed):
+    """A map-sized layer (above the size that is indexed): every segment whose exact distance to the
+    centre (less its padding) is within the reach is in ``near``, whatever the segment's length, padding
+    or place (brute force: exact point-segment distances over the whole layer)."""
+    from viapath.static import NEAR_INDEX_MIN_SEGMENTS
+
+    rng = np.random.default_rng(seed)
+    n = NEAR_INDEX_MIN_SEGMENTS + 5000
+    starts = rng.uniform(-300.0, 300.0, (n, 2))
+    lengths = rng.choice([0.0, 0.05, 3.0, 15.0, 40.0, 500.0], n, p=[0.2, 0.4, 0.2, 0.1, 0.05, 0.05])
+    angles = rng.uniform(-np.pi, np.pi, n)
+    ends = starts + lengths[:, None] * np.column_stack([np.cos(angles), np.sin(angles)])
+    segments = np.stack([starts, ends], axis=1)
+    segments[:5] = [[[1e300, 0.0], [-1e300, 1.0]]] * 5  # far-flung ones cross every window
+    radii = rng.choice([0.0, 0.035, 5.0], n, p=[0.5, 0.45, 0.05])
+    layer = StaticLayer(segments, radii_m=radii)
+    for _ in range(5):
+        centre = rng.uniform(-200.0, 200.0, 2)
+        reach = float(rng.choice([12.0, 30.0]))
+        near = layer.near(centre, reach)
+        with np.errstate(over="ignore", invalid="ignore"):
+            distance = point_segment_distances(centre[None], np.clip(segments, -1e12, 1e12))[0] - radii
+        must = {tuple(s.ravel()) for s in segments[distance <= reach]}
+        got = {tuple(s.ravel()) for s in near.segments}
+        assert must <= got
+        assert len(near) < len(layer)  # it is a part: the index did its work
