@@ -260,3 +260,32 @@ def test_the_part_of_a_large_layer_near_the_robot_holds_every_segment_within_rea
         got = {tuple(s.ravel()) for s in near.segments}
         assert must <= got
         assert len(near) < len(layer)  # it is a part: the index did its work
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=st.data(), segments=st.integers(65, 400), seed=st.integers(0, 10_000))
+def test_a_long_path_gives_the_same_corridor_numbers_from_its_near_segments(data, segments, seed):
+    """A path of many subgoals is checked against the segments near the points only (its cost per cycle
+    does not grow with its length): the numbers equal those of every segment, bit for bit, for points in
+    the corridor, near it and far from it."""
+    import viapath.path as path_module
+    from viapath.path import DesignatedPath
+
+    rng = np.random.default_rng(seed)
+    steps = rng.normal(size=(segments, 2)) * data.draw(st.sampled_from([0.05, 0.5, 3.0])) + [0.3, 0.0]
+    waypoints = np.cumsum(np.vstack([[0.0, 0.0], steps]), axis=0)
+    widths = rng.uniform(0.2, 1.5, segments)
+    path = DesignatedPath(waypoints, half_widths_m=widths)
+    centre = waypoints[rng.integers(0, len(waypoints))]
+    points = centre + rng.normal(size=(data.draw(st.integers(1, 300)), 2)) * data.draw(
+        st.sampled_from([0.3, 2.0, 50.0])
+    )
+    windowed = path.corridor_excess(points)
+    single = [path.corridor_excess(p) for p in points[:5]]
+    many, path_module._MANY_SEGMENTS = path_module._MANY_SEGMENTS, 10**9  # every segment, as before
+    try:
+        full = DesignatedPath(waypoints, half_widths_m=widths)
+        assert np.array_equal(windowed, full.corridor_excess(points))
+        assert all(float(a) == float(full.corridor_excess(p)) for a, p in zip(single, points[:5]))
+    finally:
+        path_module._MANY_SEGMENTS = many
