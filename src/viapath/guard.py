@@ -63,7 +63,7 @@ from viapath.observation import (
     Plan,
     RobotState,
 )
-from viapath.static import STATIC_ID_BASE
+from viapath.static import STATIC_ID_BASE, sample_discs
 
 __all__ = [
     "GuardConfig",
@@ -90,7 +90,11 @@ class GuardConfig:
     max_state_turn_rate_radps: float = 100.0
     control_period_s: float = 0.1  # the scan period (DESIGN §2): how long a command is held
     static_spacing_m: float = 0.15  # static segments become discs this far apart at most (viapath.static)
-    static_range_m: float = 12.0  # static geometry farther from the robot than this is left out of a cycle
+    static_range_m: float = 12.0  # static geometry is considered at least this far from the robot
+    # ... and at least the robot's stopping distance (from its top speed) plus this: what the planner
+    # needs beyond the point where it can stop to plan a way round (a fast robot with gentle brakes sees
+    # a wall early enough to stop for it, whatever its speed).
+    static_reach_m: float = 10.0
     brake_margin_m: float = 0.02
     tolerance: float = 1e-9
 
@@ -275,28 +279,85 @@ def _repair_obstacles(
 _FLOAT64 = np.dtype(np.float64)
 
 
+def static_range_for(robot: RobotState, limits: MotionLimits | None, config: GuardConfig = DEFAULT_CONFIG) -> float:
+    """How far from the robot static geometry is considered this cycle: ``static_range_m``, or the
+    stopping distance from the higher of the top speed and the measured one plus ``static_reach_m``
+    when that is farther."""
+    limits = limits or MotionLimits()
+    speed = float(robot.speed_mps)
+    top = max(float(limits.max_speed_mps), abs(speed) if math.isfinite(speed) else 0.0)
+    return max(config.static_range_m, stopping_distance_m(top, limits, config) + config.static_reach_m)
+
+
+# m: segments up to this long are sampled into discs once per layer; longer ones are clipped to the window
+# round the robot each cycle (a 2000 km wall would otherwise be 13 million discs).
+LONGEST_SAMPLED_M = 100.0
+
+
+def _clip_to_window(segments: np.ndarray, centre: np.ndarray, half_size_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Segments (M, 2, 2) clipped to the squares of half size ``half_size_m`` (M,) round ``centre``
+    (Liang-Barsky): the clipped segments and which ones meet their square at all. Written with each
+    segment's midpoint and half-vector so that coordinates up to the largest float do not overflow."""
+    middle = segments[:, 0] / 2 + segments[:, 1] / 2
+    half = segments[:, 1] / 2 - segments[:, 0] / 2
+    low, high = np.full(len(segments), -1.0), np.full(len(segments), 1.0)
+    inside = np.ones(len(segments), dtype=bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for axis in range(2):
+            d = half[:, axis]
+            lo = centre[axis] - half_size_m - middle[:, axis]
+            hi = centre[axis] + half_size_m - middle[:, axis]
+            flat = d == 0
+            inside &= ~flat | ((lo <= 0) & (hi >= 0))
+            a, b = lo / np.where(flat, 1.0, d), hi / np.where(flat, 1.0, d)
+            low = np.where(flat, low, np.maximum(low, np.minimum(a, b)))
+            high = np.where(flat, high, np.minimum(high, np.maximum(a, b)))
+    inside &= low <= high
+    clipped = np.stack([middle + low[:, None] * half, middle + high[:, None] * half], axis=1)
+    return clipped[inside], inside
+
+
 def with_static_rows(
-    observation: Observation, config: GuardConfig = DEFAULT_CONFIG, repairs: list[str] | None = None
+    observation: Observation,
+    config: GuardConfig = DEFAULT_CONFIG,
+    repairs: list[str] | None = None,
+    limits: MotionLimits | None = None,
 ) -> Observation:
     """The observation with its static layer as static rows of its obstacles (discs of velocity 0 and
-    σ 0 sampled along the segments, :func:`viapath.static.sample_discs`, within ``static_range_m`` of the
-    robot) and no static layer left: what every planner, this guard's command check and the shield see.
-    Segments with a coordinate that is not finite or beyond ``max_coordinate_m`` are left out (and
-    listed in ``repairs``): a static return says where something is, and a bad one says nothing."""
+    σ 0 sampled along the segments, :func:`viapath.static.sample_discs`, within :func:`static_range_for` of
+    the robot) and no static layer left: what every planner, this guard's command check and the shield see.
+    Segments with a coordinate that is not finite are left out (and listed in ``repairs``): a static
+    return says where something is, and a bad one says nothing. A segment longer than the window round
+    the robot or with a coordinate beyond ``max_coordinate_m`` is clipped to that window (never left out
+    whole: its part near the robot is as real as a short wall), so a wall of any length costs discs
+    in proportion to the window only."""
     static = observation.static
-    bound = config.max_coordinate_m
-    good = np.isfinite(static.segments).all(axis=(1, 2)) & (np.abs(static.segments) <= bound).all(axis=(1, 2))
+    good = static.finite_mask()
     if not good.all():
         if repairs is not None:
             for i in np.flatnonzero(~good)[:5]:
                 repairs.append(
-                    f"static.segments[{i}]: expected finite coordinates within ±{bound:g} m, found "
+                    f"static.segments[{i}]: expected finite coordinates, found "
                     f"{_show(static.segments[i].ravel())}; left out"
                 )
         static = static.subset(good)
-    centres, radii, shape_ids = static.discs(float(observation.robot.radius_m), config.static_spacing_m)
     position = np.asarray(observation.robot.position, dtype=float)
-    near = np.hypot(*(centres - position).T) - radii <= config.static_range_m
+    reach = static_range_for(observation.robot, limits, config)
+    static = static.near(position, reach + config.static_spacing_m)
+    plain, wide = static.split_wide(config.max_coordinate_m, LONGEST_SAMPLED_M)
+    centres, radii, shape_ids = plain.discs(float(observation.robot.radius_m), config.static_spacing_m)
+    if len(wide):
+        window = reach + wide.padding_m + config.static_spacing_m
+        clipped, meets = _clip_to_window(wide.segments, position, window)
+        if len(clipped):
+            pad = wide.padding_m[meets]
+            more = sample_discs(
+                clipped, wide.shape_ids[meets], float(observation.robot.radius_m), config.static_spacing_m, True
+            )
+            centres = np.concatenate([centres, more[0]])
+            radii = np.concatenate([radii, more[1] + pad[more[3]]])
+            shape_ids = np.concatenate([shape_ids, more[2]])
+    near = np.hypot(*(centres - position).T) - radii <= reach
     if not near.all():
         centres, radii, shape_ids = centres[near], radii[near], shape_ids[near]
     people, n = observation.obstacles, len(centres)
@@ -660,7 +721,9 @@ def guard_plan(plan: Callable[..., Decision]) -> Callable[..., Decision]:
             if inspection.observation is None:
                 return _stop_decision(self, observation, "guard-stop", inspection.stop_reasons + inspection.repairs)
             if len(inspection.observation.static):
-                inspection.observation = with_static_rows(inspection.observation, config, inspection.repairs)
+                inspection.observation = with_static_rows(
+                    inspection.observation, config, inspection.repairs, getattr(self, "limits", None)
+                )
             cycle = _GuardedCycle(inspection.observation, config)
         self._guard_active = True
         token = _INSPECTED.set(cycle)

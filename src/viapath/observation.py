@@ -284,6 +284,13 @@ class Observation:
     # The guarded entry of every planner (viapath.guard) turns it into static rows of ``obstacles``.
     static: StaticLayer = field(default_factory=StaticLayer.empty)
 
+    def __post_init__(self) -> None:
+        if type(self.static) is not StaticLayer and not isinstance(self.static, StaticLayer):
+            raise ObservationError(
+                "static: expected a viapath.static.StaticLayer (e.g. StaticLayer(segments) with segments an "
+                f"(M, 2, 2) array), found {type(self.static).__name__}"
+            )
+
 
 @dataclass(frozen=True)
 class MotionLimits:

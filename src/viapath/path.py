@@ -28,6 +28,12 @@ from viapath.geometry import cross2
 from viapath.jit import compiled
 from viapath.limits import SUBGOAL_OPTIONS
 
+# A path of more segments than this (a dense path from a planner, a zig-zag) is checked against the
+# segments near the points asked about, which give the same numbers: its cost per cycle does not grow
+# with its length. _NEAR_MARGIN_M: how far outside the corridor a point may be for that to hold.
+_MANY_SEGMENTS = 64
+_NEAR_MARGIN_M = 2.0
+
 
 class DesignatedPath:
     """A polyline of subgoals (the last is the goal) with a corridor half-width per segment."""
@@ -120,15 +126,57 @@ class DesignatedPath:
             x, y = float(points[0]), float(points[1])
             if math.isfinite(x) and math.isfinite(y):
                 return self._point_excess(x, y)  # type: ignore[return-value]  # a float64 acts as a 0-d array
+        if len(self.half_widths_m) > _MANY_SEGMENTS and points.size:
+            near = self._excess_near(points)
+            if near is not None:
+                return near
         _, _, distance = self._segment_geometry(points)
         if len(self.half_widths_m) == 1:
             return distance[..., 0] - self.half_widths_m[0]  # the one segment's (a minimum of one is that one)
         return (distance - self.half_widths_m).min(axis=-1)
 
+    def _segments_near(self, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+        """Indices of the segments whose box, grown by their half-width and ``_NEAR_MARGIN_M``, meets the
+        box [low, high]: any other segment's excess is above ``_NEAR_MARGIN_M`` for every point in it."""
+        boxes = self.__dict__.get("_boxes")
+        if boxes is None:
+            ends = self.segment_starts + self.segment_vectors
+            grow = (self.half_widths_m + _NEAR_MARGIN_M)[:, None]
+            boxes = self._boxes = (
+                np.minimum(self.segment_starts, ends) - grow,
+                np.maximum(self.segment_starts, ends) + grow,
+            )
+        return np.flatnonzero(((boxes[0] <= high) & (boxes[1] >= low)).all(axis=1))
+
+    def _excess_near(self, points: np.ndarray) -> np.ndarray | None:
+        """:meth:`corridor_excess` of many-segment paths computed on the segments near the points only: the
+        same numbers (a minimum over a set that holds the minimiser), or None when some point is farther
+        than ``_NEAR_MARGIN_M`` out and the whole path must be looked at."""
+        flat = points.reshape(-1, 2)
+        if not np.isfinite(flat).all():
+            return None
+        chosen = self._segments_near(flat.min(axis=0), flat.max(axis=0))
+        if len(chosen) == 0 or len(chosen) * 2 > len(self.half_widths_m):
+            return None
+        part = DesignatedPath.__new__(DesignatedPath)
+        part.segment_starts = self.segment_starts[chosen]
+        part.segment_directions = self.segment_directions[chosen]
+        part.segment_lengths_m = self.segment_lengths_m[chosen]
+        _, _, distance = part._segment_geometry(points)
+        excess = (distance - self.half_widths_m[chosen]).min(axis=-1)
+        if not (excess <= _NEAR_MARGIN_M).all():
+            return None
+        return excess
+
     def _point_excess(self, x: float, y: float) -> np.float64:
         """:meth:`corridor_excess` of one finite point (the robot's, every cycle) in scalar arithmetic: the
         same operations as :meth:`_segment_geometry` (the clamp as ``np.clip``'s max-then-min, the
         distance by ``np.hypot``; ``math.hypot`` rounds differently), without its array temporaries."""
+        if len(self.half_widths_m) > _MANY_SEGMENTS:
+            point = np.array([x, y])
+            near = self._excess_near(point[None])
+            if near is not None:
+                return np.float64(near[0])
         segments = self.__dict__.get("_segments")
         if segments is None:
             segments = self._segments = [

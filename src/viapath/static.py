@@ -33,6 +33,17 @@ from viapath.jit import compiled
 
 # Static obstacles' ids in a merged obstacle set: far above any tracker's ids, so the two never meet.
 STATIC_ID_BASE = 1 << 40
+# m: how far geometry may lie from a segment (a map cell's half-diagonal, a scan polyline's error). A
+# larger one is no measurement: a 1e300 m radius would cover the world and pin the robot.
+MAX_STATIC_RADIUS_M = 10.0
+# discs a layer keeps sampled between cycles at most (a map); beyond, the guard samples the window only.
+MAX_CACHED_DISCS = 2_000_000
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array = np.array(array, copy=True)
+    array.setflags(write=False)
+    return array
 
 
 @dataclass(frozen=True)
@@ -45,7 +56,14 @@ class StaticLayer:
     radii_m: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        segments = np.asarray(self.segments, dtype=float)
+        try:
+            segments = np.asarray(self.segments, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"static.segments: expected an (M, 2, 2) array of [[x1, y1], [x2, y2]] rows, found {self.segments!r}"[
+                    :300
+                ]
+            ) from None
         if segments.size == 0:
             segments = np.zeros((0, 2, 2))
         if segments.ndim != 3 or segments.shape[1:] != (2, 2):
@@ -53,18 +71,36 @@ class StaticLayer:
                 f"static.segments: expected an (M, 2, 2) array of [[x1, y1], [x2, y2]] rows, "
                 f"found shape {segments.shape}"
             )
-        ids = np.asarray(self.shape_ids, dtype=np.int64).reshape(-1)
+        try:
+            ids = np.asarray(self.shape_ids).reshape(-1)
+            if ids.size and not (ids.dtype.kind in "iu" or (ids.dtype.kind == "f" and np.all(ids == np.round(ids)))):
+                raise TypeError("not integers")
+            ids = ids.astype(np.int64)
+        except (TypeError, ValueError, OverflowError):
+            raise ValueError(
+                f"static.shape_ids: expected integers, one per segment, found {self.shape_ids!r}"[:300]
+            ) from None
         if ids.size == 0 and len(segments):
             ids = np.arange(len(segments), dtype=np.int64)
         if ids.shape != (len(segments),):
             raise ValueError(f"static.shape_ids: expected {len(segments)} ids (one per segment), found {ids.size}")
-        object.__setattr__(self, "segments", segments)
-        object.__setattr__(self, "shape_ids", ids)
+        # Copies, read-only: a layer's caches (its discs) follow its contents only if they never change.
+        object.__setattr__(self, "segments", _frozen(segments))
+        object.__setattr__(self, "shape_ids", _frozen(ids))
         if self.radii_m is not None:
-            radii = np.broadcast_to(np.asarray(self.radii_m, dtype=float), (len(segments),)).copy()
-            if not (np.isfinite(radii).all() and (radii >= 0).all()):
-                raise ValueError("static.radii_m: expected finite numbers >= 0")
-            object.__setattr__(self, "radii_m", radii)
+            try:
+                radii = np.broadcast_to(np.asarray(self.radii_m, dtype=float), (len(segments),))
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"static.radii_m: expected {len(segments)} numbers (one per segment) or one number, "
+                    f"found {self.radii_m!r}"[:300]
+                ) from None
+            if not (np.isfinite(radii).all() and (radii >= 0).all() and (radii <= MAX_STATIC_RADIUS_M).all()):
+                worst = radii[~(np.isfinite(radii) & (radii >= 0) & (radii <= MAX_STATIC_RADIUS_M))][0]
+                raise ValueError(
+                    f"static.radii_m: expected finite numbers in [0, {MAX_STATIC_RADIUS_M:g}] m, found {worst:g}"
+                )
+            object.__setattr__(self, "radii_m", _frozen(radii))
 
     def __len__(self) -> int:
         return len(self.segments)
@@ -81,6 +117,67 @@ class StaticLayer:
             return _EMPTY
         ids = np.concatenate([np.full(len(s), k, dtype=np.int64) for k, s in enumerate(shapes)])
         return cls(np.concatenate(shapes), ids)
+
+    def near(self, centre: np.ndarray, reach_m: float) -> StaticLayer:
+        """The segments that may come within ``reach_m`` of ``centre`` (a superset): the whole layer when it
+        is small; for a large one (a map) the segments in the cells of a uniform grid that the square round
+        ``centre`` touches, and every segment too long, too far out or too wide for one cell. The index is
+        built once per layer, and the subset is kept while the square covers the same cells, so the discs
+        sampled from it carry over from cycle to cycle."""
+        if len(self) < NEAR_INDEX_MIN_SEGMENTS:
+            return self
+        index = self.__dict__.get("_near_index")
+        if index is None:
+            index = _grid_index(self)
+            object.__setattr__(self, "_near_index", index)
+        keys, order, always = index
+        cx, cy = (float(c) for c in centre)
+        if not (math.isfinite(cx) and math.isfinite(cy)):
+            return self
+        grow = reach_m + _CELL_M
+        x0, x1 = math.floor((cx - grow) / _CELL_M), math.floor((cx + grow) / _CELL_M)
+        y0, y1 = math.floor((cy - grow) / _CELL_M), math.floor((cy + grow) / _CELL_M)
+        key = (x0, x1, y0, y1)
+        cached = self.__dict__.get("_near")
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        rows = np.arange(x0, x1 + 1, dtype=np.int64) * _KEY_SPAN
+        first = np.searchsorted(keys, rows + (y0 + _KEY_OFFSET), side="left")
+        last = np.searchsorted(keys, rows + (y1 + _KEY_OFFSET), side="right")
+        picked = [order[a:b] for a, b in zip(first.tolist(), last.tolist()) if b > a]
+        chosen = np.sort(np.concatenate([always, *picked])) if picked else always
+        subset = self.subset(chosen)
+        object.__setattr__(self, "_near", (key, subset))
+        return subset
+
+    def finite_mask(self) -> np.ndarray:
+        """(M,) bool: segments whose coordinates are all finite."""
+        return np.isfinite(self.segments).all(axis=(1, 2))
+
+    def split_wide(self, bound_m: float, longest_m: float) -> tuple[StaticLayer, StaticLayer]:
+        """(plain, wide): ``wide`` are the segments longer than ``longest_m`` or with a coordinate beyond
+        ``bound_m`` (and every segment when the plain ones would sample into more than
+        ``MAX_CACHED_DISCS`` discs): what the guard clips to a window round the robot each cycle instead
+        of sampling once. Kept for the last arguments asked."""
+        key = (float(bound_m), float(longest_m))
+        cached = self.__dict__.get("_split")
+        if cached is None or cached[0] != key:
+            with np.errstate(invalid="ignore", over="ignore"):
+                lengths = np.hypot(*(self.segments[:, 1] - self.segments[:, 0]).T)  # inf past the largest float
+                wide = ~((np.abs(self.segments) <= bound_m).all(axis=(1, 2)) & (lengths <= longest_m))
+            parts = self.__dict__.get("_parts")
+            if not wide.any():
+                split = (self, _EMPTY)
+            elif parts is not None:  # the parts' splits, joined: the plain part keeps its parts' discs
+                (plain_a, wide_a), (plain_b, wide_b) = (part.split_wide(bound_m, longest_m) for part in parts[:2])
+                split = (plain_a.concatenate(plain_b), wide_a.concatenate(wide_b))
+            elif wide.all() or float(lengths[~wide].sum()) / 0.05 > MAX_CACHED_DISCS:
+                split = (_EMPTY, self)
+            else:
+                split = (self.subset(~wide), self.subset(wide))
+            cached = (key, split)
+            object.__setattr__(self, "_split", cached)
+        return cached[1]
 
     def finite(self) -> StaticLayer:
         """Without segments that have a NaN or infinite coordinate (a bad row says nothing about where
@@ -112,17 +209,28 @@ class StaticLayer:
             if self.radii_m is None and other.radii_m is None
             else np.concatenate([self.padding_m, other.padding_m])
         )
-        return StaticLayer(
+        joined = StaticLayer(
             np.concatenate([self.segments, other.segments]),
             np.concatenate([self.shape_ids, other.shape_ids + offset]),
             radii,
         )
+        # Its discs are its parts' (each kept by its part: a map joined with each cycle's scan returns
+        # is sampled once, not every cycle).
+        object.__setattr__(joined, "_parts", (self, other, offset))
+        return joined
 
     def discs(self, robot_radius_m: float, spacing_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """:func:`sample_discs` of this layer, kept for the last (radius, spacing) asked: a map is the same
         object cycle after cycle."""
         key = (float(robot_radius_m), float(spacing_m))
         cached = self.__dict__.get("_discs")
+        parts = self.__dict__.get("_parts")
+        if parts is not None and (cached is None or cached[0] != key):
+            first, second, offset = parts
+            a, b = first.discs(*key), second.discs(*key)
+            joined = (np.concatenate([a[0], b[0]]), np.concatenate([a[1], b[1]]), np.concatenate([a[2], b[2] + offset]))
+            cached = (key, joined)
+            object.__setattr__(self, "_discs", cached)
         if cached is None or cached[0] != key:
             centres, radii, ids, owner = sample_discs(self.segments, self.shape_ids, *key, with_owner=True)
             if self.radii_m is not None:
@@ -133,6 +241,33 @@ class StaticLayer:
 
 
 _EMPTY = StaticLayer()
+
+# A layer with this many segments (a map) is indexed on a grid of cells of _CELL_M for StaticLayer.near.
+NEAR_INDEX_MIN_SEGMENTS = 20_000
+_CELL_M = 16.0
+_KEY_OFFSET = 1 << 30  # cell y index offset into the key (cells within ±2^30, i.e. ±1.7e10 m)
+_KEY_SPAN = 1 << 31
+
+
+def _grid_index(layer: StaticLayer) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(sorted cell keys, the segments in that order, segments always included): a segment is filed under
+    the cell of its first end when it is no longer than a cell and its padding is below a cell (so the
+    square grown by one cell finds it); any other is always included."""
+    a, b = layer.segments[:, 0], layer.segments[:, 1]
+    with np.errstate(invalid="ignore", over="ignore"):
+        lengths = np.hypot(*(b - a).T)
+        cells = np.floor(a / _CELL_M)
+        fits = (
+            (lengths <= _CELL_M)
+            & (layer.padding_m <= _CELL_M / 4)
+            & (np.abs(cells) < _KEY_OFFSET - 1).all(axis=1)
+            & np.isfinite(a).all(axis=1)
+        )
+    filed = np.flatnonzero(fits)
+    cells = cells[filed].astype(np.int64)
+    keys = cells[:, 0] * _KEY_SPAN + (cells[:, 1] + _KEY_OFFSET)
+    order = np.argsort(keys, kind="stable")
+    return keys[order], filed[order], np.flatnonzero(~fits)
 
 
 def sample_discs(

@@ -196,3 +196,43 @@ def test_scans_command_end_to_end(tmp_path):
     assert bad.exit_code == 2 and "no topic '/nope'" in bad.output and "Traceback" not in bad.output
     missing = runner.invoke(app, ["scans", str(tmp_path / "missing.bag")])
     assert missing.exit_code == 2 and "no such file" in missing.output
+
+
+def _write_mcap(tmp_path, messages):
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    typestore = get_typestore(Stores.ROS2_HUMBLE)
+    path = tmp_path / "bag"
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        connection = writer.add_connection("/scan", "sensor_msgs/msg/LaserScan", typestore=typestore)
+        for k, message in enumerate(messages(typestore)):
+            writer.write(connection, 1_000 + k, typestore.serialize_cdr(message, "sensor_msgs/msg/LaserScan"))
+    return next(path.glob("*.mcap"))
+
+
+@pytest.mark.parametrize("kept", [0.6, 0.9])
+def test_a_cut_off_mcap_is_read_up_to_the_cut_with_a_warning(tmp_path, kept):
+    from viapath.io.rosbag import BagWarning
+
+    whole = _write_mcap(tmp_path, lambda typestore: laser_messages(typestore, 40))
+    data = whole.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: int(len(data) * kept)])
+    with pytest.warns(BagWarning, match="read the"):
+        scans = list(read_laser_scans(cut))
+    reference = list(read_laser_scans(whole))
+    assert 1 <= len(scans) < 40
+    for got, expected in zip(scans, reference):  # the intact part, exactly as the whole file has it
+        assert got.stamp_s == expected.stamp_s
+        np.testing.assert_array_equal(got.ranges_m, expected.ranges_m)
+
+
+def test_a_scan_with_a_nan_angle_increment_is_named_as_such(tmp_path):
+    def messages(typestore):
+        out = laser_messages(typestore, 3)
+        out[1].angle_increment = float("nan")
+        return out
+
+    with pytest.raises(BagError, match="angle_increment nan rad"):
+        list(read_laser_scans(_write_mcap(tmp_path, messages)))

@@ -122,6 +122,7 @@ class Task:
     viapath_version: str = ""
     shield: str = "off"  # off | on (passive) | friendly (passive-friendly), see viapath.safety
     options: tuple = ()  # (name, value) planner options over the scenario's block (--weights); in options_hash
+    time_limit_s: float | None = None  # wall time an episode may take (None: no limit); not in the row's identity
 
     @property
     def key(self) -> tuple:
@@ -265,8 +266,27 @@ def _free_run_time_s(empty_scenario_json: str) -> float | None:
     return episode.metrics["time_to_goal_s"]
 
 
+EPISODE_TIME_LIMIT_S = 600.0  # wall time; the longest suite episodes take seconds (a hung one is a failure)
+
+
+class EpisodeTimeLimit(RuntimeError):
+    """An episode ran longer than its wall-time limit (checked at each planning cycle)."""
+
+
+def _time_limit(limit_s: float | None, started: float):
+    if limit_s is None or not limit_s > 0:
+        return None
+
+    def check(_record) -> None:
+        if time.perf_counter() - started > limit_s:
+            raise EpisodeTimeLimit(f"the episode took more than {limit_s:g} s of wall time (--episode-time-limit)")
+
+    return check
+
+
 def run_task(task: Task) -> dict[str, Any]:
-    """Run one episode; never raises (an error is recorded in the row so the run goes on)."""
+    """Run one episode; never raises (an error is recorded in the row so the run goes on; an episode
+    over its time limit is such an error: a recorded failure, rerun on resume)."""
     from viapath.scenarios import scenario_from_dict
     from viapath.sim.loop import run_episode
 
@@ -296,6 +316,7 @@ def run_task(task: Task) -> dict[str, Any]:
             shield=task.shield != "off",
             planner_overrides=dict(task.options),
             shield_options={"mode": "passive-friendly" if task.shield == "friendly" else "passive"},
+            on_step=_time_limit(task.time_limit_s, started),
         )
         for column in COLUMNS:
             if column in episode.metrics and column != "shield":
@@ -466,9 +487,11 @@ def make_tasks(
     seed: int = 0,
     shield: str | None = None,
     planner_options: dict[str, dict] | None = None,
+    time_limit_s: float | None = EPISODE_TIME_LIMIT_S,
 ) -> list[Task]:
     """``shield``: on | off | friendly for every planner, None for each planner's default (viapath.safety).
-    ``planner_options``: planner name → option values set over every scenario's block (``--weights``)."""
+    ``planner_options``: planner name → option values set over every scenario's block (``--weights``).
+    ``time_limit_s``: wall time per episode (None or 0: none)."""
     from viapath.planning import available_planners
     from viapath.safety import shield_default
 
@@ -499,6 +522,7 @@ def make_tasks(
             version,
             setting[p],
             extra[p],
+            time_limit_s,
         )
         for s, h in zip(scenarios, hashes)
         for p in planners
@@ -519,6 +543,7 @@ def run_bench(
     force: bool = False,
     planner_options: dict[str, dict] | None = None,
     note: Callable[[str], None] | None = None,
+    episode_time_limit_s: float | None = EPISODE_TIME_LIMIT_S,
 ) -> dict[str, Any]:
     """Run every episode not already done in ``out_dir/episodes.csv`` (a row is identified by the
     scenario's content hash, planner, options, perception, seed and viapath version; an episode that
@@ -547,6 +572,7 @@ def run_bench(
             force,
             planner_options,
             note or (lambda text: None),
+            episode_time_limit_s,
         )
 
 
@@ -564,11 +590,12 @@ def _run_bench(
     force,
     planner_options,
     note,
+    episode_time_limit_s=EPISODE_TIME_LIMIT_S,
 ) -> dict[str, Any]:
     from viapath.bench.identity import check_folder, manifest
 
     csv_path = out_dir / "episodes.csv"
-    tasks = make_tasks(scenarios, planners, perception, seed, shield, planner_options)
+    tasks = make_tasks(scenarios, planners, perception, seed, shield, planner_options, episode_time_limit_s)
     repaired = repair_torn_tail(csv_path)
     if repaired:
         note(repaired)

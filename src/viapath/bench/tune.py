@@ -84,6 +84,13 @@ class Constraints:
     max_outside_s: float = 0.25
     max_misses: int = 0
 
+    def __post_init__(self) -> None:
+        # Counts and a duration: a NaN, a negative or an infinite bound is no constraint a study can keep.
+        for name, unit in (("max_at_fault", ""), ("max_outside_s", " s"), ("max_misses", "")):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise TuneError(f"--{name.replace('_', '-')}: expected a finite number >= 0{unit}, found {value}")
+
     def values(self, m: dict[str, Any]) -> list[float]:
         """Optuna's convention: each value ≤ 0 means satisfied."""
         return [

@@ -5,6 +5,7 @@ the commands."""
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 from typing import Annotated, NoReturn
@@ -83,6 +84,14 @@ Weights = Annotated[
     ),
 ]
 
+EpisodeTimeLimit = Annotated[
+    float,
+    typer.Option(
+        "--episode-time-limit",
+        help="wall seconds an episode may take; one that takes longer is a failed episode (0: no limit)",
+    ),
+]
+
 
 def bench(
     suite: Suite,
@@ -100,6 +109,7 @@ def bench(
     shield: Shield = None,
     force: Force = False,
     weights: Weights = None,
+    episode_time_limit: EpisodeTimeLimit = 600.0,
 ) -> None:
     """Run planners on a suite in parallel; write per-episode results, tables and plots.
 
@@ -112,6 +122,8 @@ def bench(
     if scheduler and executor == "loky":
         _fail("--scheduler needs --executor dask or ray")
     _check_failures_folder(mcap_failures)
+    if not (math.isfinite(episode_time_limit) and episode_time_limit >= 0):
+        _fail(f"--episode-time-limit: expected a number of seconds >= 0, found {episode_time_limit}")
     planner_options = _weights_options(weights, names)
     run_options = {
         "workers": workers,
@@ -123,6 +135,7 @@ def bench(
         "shield": shield,
         "force": force,
         "planner_options": planner_options,
+        "episode_time_limit_s": episode_time_limit or None,
     }
     result, summary = _run_and_report(suite, names, out, count, plots, mcap_failures, run_options)
     _print_result(result, summary, out, as_json)

@@ -119,14 +119,17 @@ def run(
         "shield_options": {"mode": shield_mode},
     }
     episode = _simulate(spec, scenario, planner_name, overrides, views_options, episode_options)
-    _write_outputs(episode, plot, trace, animate, frame_stride)
+    failed = _write_outputs(episode, plot, trace, animate, frame_stride)
+    # The metrics are printed whatever became of the outputs: the episode ran (it may have taken hours).
     if as_json:
         print(json_dumps(episode.metrics))
-        return
-    _print_metrics(episode.metrics)
-    for label, file in (("plot", plot), ("trace", trace), ("animation", animate), ("mcap", mcap)):
-        if file is not None:
-            console.print(f"{label}: {file}")
+    else:
+        _print_metrics(episode.metrics)
+        for label, file in (("plot", plot), ("trace", trace), ("animation", animate), ("mcap", mcap)):
+            if file is not None and (failed is None or file != failed[0]):
+                console.print(f"{label}: {file}")
+    if failed is not None:
+        fail(f"{failed[0]}: {failed[1]}")
 
 
 def _check_arguments(plot, animate, trace, position_noise, velocity_noise, frame_stride, seed, perception) -> None:
@@ -206,7 +209,10 @@ def _simulate(spec, scenario: str, planner_name: str, overrides: dict, views_opt
         fail("interrupted", code=130)
 
 
-def _write_outputs(episode, plot: Path | None, trace: Path | None, animate: Path | None, frame_stride) -> None:
+def _write_outputs(
+    episode, plot: Path | None, trace: Path | None, animate: Path | None, frame_stride
+) -> tuple[Path, str] | None:
+    """Write the outputs asked for; (the animation's file, why) if it could not be written, else None."""
     if plot is not None:
         from viapath.viz.plot import plot_episode
 
@@ -221,10 +227,13 @@ def _write_outputs(episode, plot: Path | None, trace: Path | None, animate: Path
         progress, done = animation_progress(errors)
         try:
             animate_episode(episode, animate, progress=progress, stride=frame_stride)
-        except (RuntimeError, ValueError) as error:
-            fail(str(error))
+        except MemoryError:
+            return animate, "out of memory while drawing the animation (raise --frame-stride)"
+        except (RuntimeError, ValueError, OSError) as error:
+            return animate, str(error)
         finally:
             done()
+    return None
 
 
 def _print_metrics(metrics: dict) -> None:

@@ -173,6 +173,8 @@ def tune(
     refused: tuple[type[Exception], ...] = (tuning.TuneError, *_suite_errors())
     try:
         space = _check_tune_arguments(tuning, param, trials, workers, study_name, export, plot, pick, storage)
+        if timeout is not None and not (math.isfinite(timeout) and timeout > 0):
+            raise tuning.TuneError(f"--timeout: expected a number of seconds > 0, found {timeout}")
         constraints = tuning.Constraints(max_at_fault, max_outside_s, max_misses)
         starts, scenarios, test_scenarios = _load_tune_suites(
             start_from, suite, count, seed, test, test_count, seed + 1000 if test_seed is None else test_seed

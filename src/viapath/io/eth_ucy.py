@@ -50,12 +50,17 @@ def load_tracks(file: str | Path, dt_s: float) -> list[PedestrianTrack]:
         raise ValueError(f"{path}: expected 4 columns 'frame ped_id x y', found {table.shape[1]}")
     if not np.isfinite(table).all():
         raise ValueError(f"{path}: contains NaN or infinite values")
-    tracks = []
-    for ped_id in np.unique(table[:, 1]):
-        rows = table[table[:, 1] == ped_id]
-        rows = rows[np.argsort(rows[:, 0])]
-        tracks.append(PedestrianTrack(int(ped_id), rows[:, 0] / FRAMES_PER_ROW * dt_s, rows[:, 2:4].copy()))
-    return tracks
+    # One sort by (id, frame) and a split: linear after the sort in the number of people (a filter per
+    # person was quadratic: 40 000 people took 19 s).
+    table = table[np.lexsort((table[:, 0], table[:, 1]))]
+    ids, first = np.unique(table[:, 1], return_index=True)
+    bounds = np.append(first, len(table)).tolist()
+    times = table[:, 0] / FRAMES_PER_ROW * dt_s
+    positions = np.ascontiguousarray(table[:, 2:4])
+    return [
+        PedestrianTrack(int(ped_id), times[a:b].copy(), positions[a:b].copy())
+        for ped_id, a, b in zip(ids.tolist(), bounds[:-1], bounds[1:])
+    ]
 
 
 def replay_states(tracks: list[PedestrianTrack], scene_times_s: np.ndarray, dt_s: float, offset=(0.0, 0.0)):

@@ -18,6 +18,8 @@ What we chose:
 
 from __future__ import annotations
 
+import struct
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -133,30 +135,130 @@ def _pick_topic(path: Path, topics: dict[str, str], topic: str | None, types, wh
 
 
 def read_laser_scans(path, topic: str | None = None) -> Iterator[LaserScanMessage]:
-    """Every LaserScan on ``topic`` (default: the only LaserScan topic), in recording order."""
+    """Every LaserScan on ``topic`` (default: the only LaserScan topic), in recording order. An MCAP
+    file cut off (a recording that was killed) or damaged is read up to the damage, with a
+    :class:`BagWarning` saying so."""
     path = _check_path(path)
-    topics = bag_topics(path)
+    try:
+        topics = bag_topics(path)
+    except BagError as error:
+        if path.suffix.lower() != ".mcap":
+            raise
+        yield from _cut_mcap_scans(path, topic, str(error))
+        return
     topic = _pick_topic(path, topics, topic, LASER_SCAN_TYPES, "sensor_msgs/LaserScan")
     AnyReader, typestore = _anyreader()
     with AnyReader([path], default_typestore=typestore) as reader:
         connections = [c for c in reader.connections if c.topic == topic]
         for connection, record_time_ns, raw in reader.messages(connections=connections):
-            m = reader.deserialize(raw, connection.msgtype)
-            ranges = np.asarray(m.ranges, dtype=float).copy()
-            angle_min, increment = float(m.angle_min), float(m.angle_increment)
-            if increment < 0:  # clockwise scanner: store it counter-clockwise
-                ranges = ranges[::-1].copy()
-                angle_min, increment = angle_min + (len(ranges) - 1) * increment, -increment
-            yield LaserScanMessage(
-                stamp_s=_stamp(m, record_time_ns),
-                frame_id=str(m.header.frame_id),
-                angle_min_rad=angle_min,
-                angle_increment_rad=increment,
-                range_min_m=float(m.range_min),
-                range_max_m=float(m.range_max),
-                ranges_m=ranges,
-                scan_time_s=float(m.scan_time),
+            yield _laser_scan(reader.deserialize(raw, connection.msgtype), record_time_ns, path, topic)
+
+
+def _laser_scan(m, record_time_ns: int, path: Path, topic: str) -> LaserScanMessage:
+    ranges = np.asarray(m.ranges, dtype=float).copy()
+    angle_min, increment = float(m.angle_min), float(m.angle_increment)
+    for field_name, value in (("angle_min", angle_min), ("angle_increment", increment)):
+        if not (np.isfinite(value) and (field_name == "angle_min" or value != 0.0)):
+            raise BagError(
+                f"{path}: {topic}: a LaserScan at {_stamp(m, record_time_ns):.3f} s has {field_name} "
+                f"{value} rad; expected a finite number{' other than 0' if field_name != 'angle_min' else ''}"
             )
+    if increment < 0:  # clockwise scanner: store it counter-clockwise
+        ranges = ranges[::-1].copy()
+        angle_min, increment = angle_min + (len(ranges) - 1) * increment, -increment
+    return LaserScanMessage(
+        stamp_s=_stamp(m, record_time_ns),
+        frame_id=str(m.header.frame_id),
+        angle_min_rad=angle_min,
+        angle_increment_rad=increment,
+        range_min_m=float(m.range_min),
+        range_max_m=float(m.range_max),
+        ranges_m=ranges,
+        scan_time_s=float(m.scan_time),
+    )
+
+
+class BagWarning(UserWarning):
+    """A recording read only in part (cut off or damaged); the message says where it stopped."""
+
+
+_MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+def _mcap_records(data: memoryview) -> Iterator[tuple[int, memoryview]]:
+    """(opcode, content) of each whole record of an MCAP record stream, up to the first cut-off one."""
+    pos = 0
+    while pos + 9 <= len(data):
+        opcode = data[pos]
+        (length,) = struct.unpack_from("<Q", data, pos + 1)
+        content = data[pos + 9 : pos + 9 + length]
+        if opcode == 0x06 and len(content) >= 32:  # a chunk: its records, as far as they reach
+            yield opcode, content
+        elif len(content) < length:
+            return
+        else:
+            yield opcode, content
+        pos += 9 + length
+
+
+def _string(content: memoryview, at: int) -> tuple[str, int]:
+    (length,) = struct.unpack_from("<I", content, at)
+    return bytes(content[at + 4 : at + 4 + length]).decode("utf-8", "replace"), at + 4 + length
+
+
+def _cut_mcap_scans(path: Path, topic: str | None, why: str) -> Iterator[LaserScanMessage]:
+    """The LaserScans of an MCAP file that the full reader refuses: its records read one by one (chunks
+    uncompressed; a compressed one ends the reading) up to the first one cut off."""
+    _, typestore = _anyreader()
+    data = memoryview(path.read_bytes())
+    if bytes(data[:8]) != _MCAP_MAGIC:
+        raise BagError(why)
+    schemas: dict[int, str] = {}
+    channels: dict[int, tuple[str, str]] = {}
+    found: list[tuple[int, int, memoryview]] = []  # (channel, log time, data)
+    stopped = "cut off"
+
+    def walk(records: Iterator[tuple[int, memoryview]]) -> bool:
+        nonlocal stopped
+        for opcode, content in records:
+            if opcode == 0x03:  # schema: id, name, ...
+                (ident,) = struct.unpack_from("<H", content, 0)
+                schemas[ident] = _string(content, 2)[0]
+            elif opcode == 0x04:  # channel: id, schema id, topic, ...
+                ident, schema = struct.unpack_from("<HH", content, 0)
+                channels[ident] = (_string(content, 4)[0], schemas.get(schema, ""))
+            elif opcode == 0x05:  # message: channel, sequence, log time, publish time, data
+                channel, _sequence, log_time = struct.unpack_from("<HIQ", content, 0)
+                found.append((channel, log_time, content[22:]))
+            elif opcode == 0x06:
+                compression, at = _string(content, 28)
+                if compression:
+                    stopped = f"a {compression}-compressed chunk"
+                    return False
+                (length,) = struct.unpack_from("<Q", content, at)
+                inner = content[at + 8 : at + 8 + length]
+                if not walk(_mcap_records(inner)) or len(inner) < length:
+                    return False
+        return True
+
+    try:
+        walk(_mcap_records(data[8:]))
+    except (struct.error, UnicodeDecodeError):
+        stopped = "a damaged record"
+    scan_topics = sorted({t for t, msgtype in channels.values() if msgtype in LASER_SCAN_TYPES})
+    if topic is None:
+        if len(scan_topics) != 1:
+            raise BagError(f"{why}; read in part: LaserScan topics {', '.join(scan_topics) or 'none'}")
+        topic = scan_topics[0]
+    warnings.warn(
+        f"{path}: {stopped} ({why.split(': ', 1)[-1]}); read the {len(found)} messages before it",
+        BagWarning,
+        stacklevel=3,
+    )
+    for channel, log_time, raw in found:
+        name, msgtype = channels.get(channel, ("", ""))
+        if name == topic and msgtype in LASER_SCAN_TYPES:
+            yield _laser_scan(typestore.deserialize_cdr(bytes(raw), "sensor_msgs/msg/LaserScan"), log_time, path, topic)
 
 
 def read_pose_arrays(path, topic: str | None = None) -> list[tuple[float, np.ndarray]]:

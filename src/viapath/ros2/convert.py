@@ -20,8 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from viapath.static import StaticLayer
+from viapath.static import MAX_STATIC_RADIUS_M, StaticLayer
 
+MAX_MAP_COORDINATE_M = 1.0e6  # m: as the guard's bound on the robot's own position
+MAX_MAP_SEGMENTS = 2_000_000  # runs of occupied cells a map may give (a large building gives far fewer)
 QUATERNION_TOLERANCE = 0.01  # |norm - 1| above this is not a rotation (ROS producers normalise to ~1e-9)
 
 
@@ -212,14 +214,43 @@ def occupancy_layer(
             f"occupancy grid: expected (height, width) cells and a resolution > 0, found shape "
             f"{cells.shape}, resolution {resolution_m}"
         )
-    occupied = cells >= threshold
-    padded = np.zeros((occupied.shape[0], occupied.shape[1] + 2), dtype=bool)
-    padded[:, 1:-1] = occupied
-    change = np.diff(padded.astype(np.int8), axis=1)
-    rows, starts = np.nonzero(change == 1)
-    _, ends = np.nonzero(change == -1)  # row-major order pairs each start with its end
-    if len(rows) == 0:
+    # A map whose origin or far corner lies beyond any coordinate the guard accepts for the robot is no
+    # map of where the robot is (a NaN or 1e300 origin would put every wall nowhere).
+    extent = max(cells.shape) * resolution_m * math.sqrt(2.0)
+    for name, value in (("origin.position.x", origin_x), ("origin.position.y", origin_y)):
+        if not (math.isfinite(value) and abs(value) + extent <= MAX_MAP_COORDINATE_M):
+            raise ValueError(
+                f"occupancy grid: {name} {value:g} m: expected a finite number with the whole map within "
+                f"±{MAX_MAP_COORDINATE_M:g} m"
+            )
+    if not math.isfinite(origin_yaw):
+        raise ValueError(f"occupancy grid: origin yaw {origin_yaw:g} rad is not finite")
+    if resolution_m * math.sqrt(0.5) > MAX_STATIC_RADIUS_M:
+        raise ValueError(
+            f"occupancy grid: resolution {resolution_m:g} m: cells larger than {MAX_STATIC_RADIUS_M * math.sqrt(2):g} m "
+            "are no map"
+        )
+    rows_list, starts_list, ends_list, count = [], [], [], 0
+    chunk = max(1, 4_000_000 // max(cells.shape[1], 1))  # rows at a time: memory bounded for any map
+    for first in range(0, cells.shape[0], chunk):
+        occupied = cells[first : first + chunk] >= threshold
+        padded = np.zeros((occupied.shape[0], occupied.shape[1] + 2), dtype=np.int8)
+        padded[:, 1:-1] = occupied
+        change = np.diff(padded, axis=1)
+        rows, starts = np.nonzero(change == 1)
+        _, ends = np.nonzero(change == -1)  # row-major order pairs each start with its end
+        count += len(rows)
+        if count > MAX_MAP_SEGMENTS:
+            raise ValueError(
+                f"occupancy grid: more than {MAX_MAP_SEGMENTS:,} runs of occupied cells (a checkerboard, "
+                "not a map of a building)"
+            )
+        rows_list.append(rows + first)
+        starts_list.append(starts)
+        ends_list.append(ends)
+    if count == 0:
         return StaticLayer.empty()
+    rows, starts, ends = np.concatenate(rows_list), np.concatenate(starts_list), np.concatenate(ends_list)
     local = (
         np.stack([np.stack([starts + 0.5, rows + 0.5], axis=1), np.stack([ends - 0.5, rows + 0.5], axis=1)], axis=1)
         * resolution_m
@@ -233,7 +264,15 @@ def occupancy_layer_from_message(msg, threshold: int = 65) -> StaticLayer:
     info = msg.info
     origin = info.origin
     q = origin.orientation
-    cells = np.asarray(msg.data, dtype=np.int16).reshape(int(info.height), int(info.width))
+    height, width = int(info.height), int(info.width)
+    data = msg.data
+    try:  # int8[] arrives as an array.array: read in place (a 10 000 x 10 000 map is 100 MB)
+        cells = np.frombuffer(data, dtype=np.int8)
+    except (TypeError, ValueError):
+        cells = np.asarray(data, dtype=np.int16)
+    if cells.size != height * width:
+        raise ValueError(f"occupancy grid: {cells.size} cells for width {width} x height {height}")
+    cells = cells.reshape(height, width)
     return occupancy_layer(
         cells,
         float(info.resolution),

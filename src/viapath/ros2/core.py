@@ -78,7 +78,8 @@ from viapath.perception.scanner import ScannerModel
 from viapath.perception.static_layer import StaticLayerParams, StaticObstacleLayer
 from viapath.perception.tracking import MultiTargetTracker, TrackerParams
 from viapath.planning import Decision, make_planner
-from viapath.ros2.settings import NodeSettings
+from viapath.ros2.convert import QUATERNION_TOLERANCE
+from viapath.ros2.settings import MAX_MOUNT_OFFSET_M, NodeSettings
 from viapath.static import StaticLayer
 
 FORWARD_CONE_RAD = math.radians(30.0)
@@ -165,6 +166,15 @@ def scan_layout_problem(beams: int, angle_increment_rad: float, range_min_m: flo
     return ""
 
 
+@dataclass
+class PreparedPath:
+    """A designated path and a planner on it, built beside the control loop (:meth:`PlannerCore.build_path`)."""
+
+    path: DesignatedPath
+    planner: Any
+    what: str = ""
+
+
 class PlannerCore:
     """The node's logic; times are seconds of the node's clock (sim time with ``use_sim_time``)."""
 
@@ -214,6 +224,7 @@ class PlannerCore:
         self.hold_reason = ""
         self._alive_wall_s: float | None = None  # wall time of the last input or move of the node's clock
         self.static_now = StaticLayer.empty()  # the last cycle's static layer from the scans
+        self.static_planned = StaticLayer.empty()  # the last cycle's static layer the planner got (map and scans)
 
     def _make_planner(self, path: DesignatedPath, subgoal_policy: SubgoalPolicy):
         """The configured planner on ``path``, behind the shield when ``use_shield`` says so."""
@@ -258,6 +269,11 @@ class PlannerCore:
     # -- inputs --------------------------------------------------------------------------------
     def set_path(self, waypoints, half_widths_m=None) -> None:
         """A new designated path (world frame = odometry frame); the planner starts again on it."""
+        self.use_prepared(self.build_path(waypoints, half_widths_m))
+
+    def build_path(self, waypoints, half_widths_m=None) -> PreparedPath:
+        """The path and a planner on it, changing nothing of the core (so a worker thread may build them
+        while the cycles go on with the current path); ``ValueError`` for waypoints that cannot be one."""
         waypoints = np.asarray(waypoints, dtype=float).reshape(-1, 2)
         bound = GUARD_DEFAULTS.max_coordinate_m
         if not (np.isfinite(waypoints).all() and (np.abs(waypoints) <= bound).all()):
@@ -281,9 +297,11 @@ class PlannerCore:
             path = DesignatedPath(waypoints, half_width_m=s.half_width_m)
         else:
             path = DesignatedPath(waypoints, half_widths_m=widths)
+        return PreparedPath(path, self._make_planner(path, self.subgoal_policy))
 
-        planner = self._make_planner(path, self.subgoal_policy)
-        self.path, self.planner = path, planner
+    def use_prepared(self, prepared: PreparedPath) -> None:
+        """Drive on a path :meth:`build_path` made (an assignment: cheap in the control loop)."""
+        self.path, self.planner = prepared.path, prepared.planner
         self.goal_reached = False
         self.path_cleared = False
 
@@ -299,31 +317,51 @@ class PlannerCore:
     def on_path(self, frame_id: str, waypoints, orientations=None) -> tuple[bool, str]:
         """A ``nav_msgs/Path`` as arrays: (N, 2) positions and (N, 4) quaternions. An empty path clears the
         designated path (the robot stops); a bad one is refused (the old path stays). Returns (accepted, what)."""
+        return self.use_path_message(self.prepare_path_message(frame_id, waypoints, orientations))
+
+    def prepare_path_message(self, frame_id: str, waypoints, orientations=None) -> tuple[str, Any]:
+        """:meth:`on_path` up to the point of driving on it, changing nothing of the core (a worker thread
+        runs it): ("path", PreparedPath), ("clear", why) or ("refused", why)."""
         from viapath.ros2.convert import checked_yaw
 
         expected = self.settings.odom_frame
         if expected and frame_id and frame_id != expected:
-            return self._path_refused(f"frame_id {frame_id!r}, expected {expected!r}")
+            return "refused", f"frame_id {frame_id!r}, expected {expected!r}"
         try:
             points = np.asarray(waypoints, dtype=float).reshape(-1, 2)
             quaternions = None if orientations is None else np.asarray(orientations, dtype=float).reshape(-1, 4)
         except (TypeError, ValueError) as error:
-            return self._path_refused(f"not (x, y) positions: {error}")
+            return "refused", f"not (x, y) positions: {error}"
         if len(points) == 0:
-            self.clear_path("an empty path was received")
-            return True, self.events[-1]
+            return "clear", "an empty path was received"
         if not np.isfinite(points).all():
-            return self._path_refused("a NaN or infinite position")
-        for k, q in enumerate(() if quaternions is None else quaternions):
-            try:
-                checked_yaw(*q)
-            except ValueError as error:
-                return self._path_refused(f"pose {k}: {error}")
+            return "refused", "a NaN or infinite position"
+        if quaternions is not None and len(quaternions):
+            with np.errstate(over="ignore", invalid="ignore"):  # 1e300: an infinite norm, refused below
+                norms = np.sqrt((quaternions**2).sum(axis=1))
+            bad = np.flatnonzero(~(np.isfinite(norms) & (np.abs(norms - 1.0) <= QUATERNION_TOLERANCE)))
+            if len(bad):
+                try:
+                    checked_yaw(*quaternions[bad[0]])
+                except ValueError as error:
+                    return "refused", f"pose {bad[0]}: {error}"
         try:
-            self.set_path(points)
+            prepared = self.build_path(points)
         except ValueError as error:
-            return self._path_refused(str(error))
-        return True, f"designated path: {len(points)} waypoints, goal ({points[-1][0]:.2f}, {points[-1][1]:.2f})"
+            return "refused", str(error)
+        prepared.what = f"designated path: {len(points)} waypoints, goal ({points[-1][0]:.2f}, {points[-1][1]:.2f})"
+        return "path", prepared
+
+    def use_path_message(self, prepared: tuple[str, Any]) -> tuple[bool, str]:
+        """Apply what :meth:`prepare_path_message` made; returns (accepted, what)."""
+        kind, value = prepared
+        if kind == "clear":
+            self.clear_path(value)
+            return True, self.events[-1]
+        if kind == "refused":
+            return self._path_refused(value)
+        self.use_prepared(value)
+        return True, value.what
 
     def _path_refused(self, why: str) -> tuple[bool, str]:
         self.paths_refused += 1
@@ -374,8 +412,25 @@ class PlannerCore:
         else:
             self.speed_limit_mps = (limit / 100.0 * self.limits.max_speed_mps) if percentage else float(limit)
 
+    def mount_problem(self, x_m: float, y_m: float, yaw_rad: float) -> str:
+        """Why a mount cannot be a scanner's on this robot ('' when it can): the bounds of the
+        ``scanners.*.mount_*`` parameters hold for a mount from TF too."""
+        bound = MAX_MOUNT_OFFSET_M
+        if not all(math.isfinite(v) for v in (x_m, y_m, yaw_rad)):
+            return "not finite"
+        if abs(x_m) > bound or abs(y_m) > bound:
+            return f"expected x and y within ±{bound:g} m of the robot centre (as the scanners.* parameters)"
+        return ""
+
+    def mount_acceptable(self, x_m: float, y_m: float, yaw_rad: float) -> bool:
+        return not self.mount_problem(x_m, y_m, yaw_rad)
+
     def set_mount(self, index: int, x_m: float, y_m: float, yaw_rad: float) -> bool:
-        """Scanner ``index``'s mount from TF (the parameters' mount is the fallback); True when it changed."""
+        """Scanner ``index``'s mount from TF (the parameters' mount is the fallback); True when it changed.
+        A mount beyond the parameters' bounds raises ``ValueError`` (the mount in use stays)."""
+        problem = self.mount_problem(float(x_m), float(y_m), float(yaw_rad))
+        if problem:
+            raise ValueError(f"scanner mount ({x_m:g}, {y_m:g} m, {yaw_rad:g} rad): {problem}")
         h = self.health[index]
         mount = (float(x_m), float(y_m), float(yaw_rad))
         if getattr(h, "mount", None) == mount:
@@ -685,6 +740,28 @@ class PlannerCore:
         self.map_layer = layer.finite()
         self.events.append(f"map: {len(self.map_layer)} static segments")
 
+    def static_for(self, robot: RobotState) -> StaticLayer:
+        """The map near the robot (a large map's part within the guard's reach: the same object while the
+        robot stays among the same cells of its index, so its discs are sampled once) and the scans' static
+        layer."""
+        from viapath.guard import static_range_for
+
+        reach = static_range_for(robot, self.limits, GUARD_DEFAULTS) + GUARD_DEFAULTS.static_spacing_m
+        return self.map_layer.near(robot.position, reach).concatenate(self.static_now)
+
+    def prepare_map(self, layer: StaticLayer) -> StaticLayer:
+        """``layer`` with what the guard will ask of it each cycle made once, beside the control loop (its
+        spatial index and its discs for the robot's radius); changes nothing of the core."""
+        from viapath.guard import LONGEST_SAMPLED_M
+
+        layer = layer.finite()
+        o = self.odometry
+        centre = np.zeros(2) if o is None else np.array([o.x, o.y])
+        near = layer.near(centre, GUARD_DEFAULTS.static_range_m + GUARD_DEFAULTS.static_spacing_m)
+        plain, _wide = near.split_wide(GUARD_DEFAULTS.max_coordinate_m, LONGEST_SAMPLED_M)
+        plain.discs(self.settings.robot_radius_m, GUARD_DEFAULTS.static_spacing_m)
+        return layer
+
     def _time_jump(self, why: str) -> None:
         self.tracker.reset()
         self.static_layer.reset()
@@ -934,7 +1011,7 @@ class PlannerCore:
             elapsed,
             perception_time_ms=perception_ms,
             plan_time_ms=plan_ms,
-            static=self.map_layer.concatenate(self.static_now),
+            static=self.static_planned if decision is not None else self.static_now,
         )
         result.status = self._status(result, now_s)
         self.last_result = result
@@ -966,7 +1043,7 @@ class PlannerCore:
             o.turn_rate_radps,  # type: ignore[union-attr]
             self.settings.robot_radius_m,
         )
-        static = self.map_layer.concatenate(self.static_now)
+        static = self.static_planned = self.static_for(robot)
         try:
             planning = time.perf_counter()
             decision = self.planner.plan(Observation(stamp, robot, obstacles, static))
@@ -1087,30 +1164,83 @@ class PlannerCore:
 
 
 def simplify_polyline(points, tolerance_m: float) -> np.ndarray:
-    """Douglas-Peucker: the fewest of ``points`` (first and last kept) within ``tolerance_m`` of all."""
+    """The fewest of ``points`` (first and last kept) within ``tolerance_m`` of all, in time linear in
+    their number whatever their shape: Douglas-Peucker (which keeps the corners where they are) while
+    its work stays within ``DOUGLAS_PEUCKER_WORK`` point distances per point, else (a zig-zag makes it
+    quadratic) :func:`sleeve_simplify`."""
     points = np.asarray(points, dtype=float).reshape(-1, 2)
     if len(points) <= 2 or tolerance_m <= 0:
         return _without_repeats(points)
     keep = np.zeros(len(points), dtype=bool)
     keep[0] = keep[-1] = True
     stack = [(0, len(points) - 1)]
+    budget = DOUGLAS_PEUCKER_WORK * len(points)
     while stack:
         i, j = stack.pop()
         if j <= i + 1:
             continue
+        budget -= j - i
+        if budget < 0:
+            return sleeve_simplify(points, tolerance_m)
         a, b = points[i], points[j]
         d = b - a
         length = float(np.hypot(*d))
         rel = points[i + 1 : j] - a
-        if length < 1e-12:
-            dist = np.hypot(rel[:, 0], rel[:, 1])
-        else:
-            dist = np.abs(d[0] * rel[:, 1] - d[1] * rel[:, 0]) / length
+        # to the segment, not its line: a point beyond its end (the path turns back) is not near it
+        along = np.clip(rel @ d / (length * length), 0.0, 1.0) if length >= 1e-12 else np.zeros(len(rel))
+        dist = np.hypot(rel[:, 0] - along * d[0], rel[:, 1] - along * d[1])
         k = int(np.argmax(dist))
         if dist[k] > tolerance_m:
             keep[i + 1 + k] = True
             stack += [(i, i + 1 + k), (i + 1 + k, j)]
     return _without_repeats(points[keep])
+
+
+DOUGLAS_PEUCKER_WORK = 40  # point distances per point: about log2 of a million-point path's depth, twice
+
+
+def sleeve_simplify(points, tolerance_m: float) -> np.ndarray:
+    """Points of the polyline left out where every left-out point lies within ``tolerance_m`` of the
+    segment that replaces it (first and last kept), in one pass: linear in the number of points.
+
+    A sleeve from the last kept point (Zhao and Saalfeld's sector test): each further point narrows the
+    sector of directions whose ray passes within ``tolerance_m`` of it; a point outside the sector, or
+    nearer to the kept point than one before it (the path turns back), keeps the point before it. A
+    left-out point is then within the tolerance of the ray and not beyond the segment's end, hence of
+    the segment. Points within the tolerance of the kept point leave the sector as it is."""
+    points = _without_repeats(np.asarray(points, dtype=float).reshape(-1, 2))
+    n = len(points)
+    if n <= 2 or tolerance_m <= 0:
+        return points
+    keep = [0]
+    xs, ys = points[:, 0].tolist(), points[:, 1].tolist()
+    anchor, low, high, farthest = 0, -math.inf, math.inf, 0.0
+    k = 1
+    while k < n:
+        dx, dy = xs[k] - xs[anchor], ys[k] - ys[anchor]
+        distance = math.hypot(dx, dy)
+        if distance <= tolerance_m and farthest <= tolerance_m:
+            k += 1
+            continue
+        direction = math.atan2(dy, dx)
+        if low == -math.inf:  # the first point out of the kept point's own disc sets the sector
+            reference = direction
+        inside = True
+        if low != -math.inf:
+            offset = math.atan2(math.sin(direction - reference), math.cos(direction - reference))
+            inside = low <= offset <= high and distance >= farthest - 1e-12
+        if not inside:
+            anchor = k - 1
+            keep.append(anchor)
+            low, high, farthest = -math.inf, math.inf, 0.0
+            continue  # the same point again, from the new kept point
+        offset = math.atan2(math.sin(direction - reference), math.cos(direction - reference))
+        half = math.asin(min(1.0, tolerance_m / distance)) if distance > tolerance_m else math.pi
+        low, high = max(low, offset - half), min(high, offset + half)
+        farthest = max(farthest, distance)
+        k += 1
+    keep.append(n - 1)
+    return points[sorted(set(keep))]
 
 
 def _without_repeats(points: np.ndarray) -> np.ndarray:

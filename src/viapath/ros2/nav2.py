@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from viapath.ros2.tf import TransformBuffer, apply
+from viapath.ros2.tf import TransformBuffer
 
 
 @dataclass
@@ -73,7 +73,9 @@ class Nav2Interface:
         self.s = node.core.settings
         self.FollowPath = FollowPath
         self.Result = FollowPath.Result
-        self.buffer = TransformBuffer()
+        # A dynamic transform older than failure_tolerance_s is stale: a goal waits for a fresh one as long.
+        self.buffer = TransformBuffer(max_age_s=self.s.failure_tolerance_s)
+        self.transforms_refused = 0
         self.goal: _Goal | None = None
         self.mounts_done = not self.s.use_tf
         self.clear_calls = 0
@@ -81,13 +83,24 @@ class Nav2Interface:
         self._subs = []
         self._GoalResponse, self._CancelResponse = GoalResponse, CancelResponse
         self._outcomes: dict[bytes, tuple[str, object]] = {}
+        # Goals are taken by the node's input thread (a goal of 100 000 poses takes seconds to become
+        # Python objects): its callbacks run under the node's lock, the control loop goes on meanwhile.
+        lock = node.lock
+
+        def locked(callback):
+            def run(*args):
+                with lock:
+                    return callback(*args)
+
+            return run
+
         self.server = ActionServer(
-            node,
+            node.inputs,
             FollowPath,
             self.s.follow_path_action,
-            self._execute,
-            goal_callback=self._on_goal,
-            handle_accepted_callback=self._on_accepted,
+            locked(self._execute),
+            goal_callback=locked(self._on_goal),
+            handle_accepted_callback=locked(self._on_accepted),
             cancel_callback=lambda handle: CancelResponse.ACCEPT,
         )
         self._subs.append(node.create_subscription(SpeedLimit, self.s.speed_limit_topic, self._on_speed_limit, 10))
@@ -102,8 +115,19 @@ class Nav2Interface:
             self._subs.append(node.create_subscription(TFMessage, "/tf", lambda m: self._on_tf(m, False), dynamic))
             self._subs.append(node.create_subscription(TFMessage, "/tf_static", lambda m: self._on_tf(m, True), static))
 
+    def end_goal(self) -> None:
+        """The running goal ends (cleanup, shutdown): its result is sent when the input thread runs its
+        execution, so the caller waits for :attr:`results_pending` to clear before destroying the server."""
+        with self.node.lock:
+            self._finish_goal("abort", self.Result.UNKNOWN, "controller cleaned up")
+
+    @property
+    def results_pending(self) -> bool:
+        return bool(self._outcomes)
+
     def destroy(self) -> None:
-        self._finish_goal("abort", self.Result.UNKNOWN, "controller cleaned up")
+        """Destroy the server and subscriptions (the input thread is stopped by then)."""
+        self.end_goal()
         for sub in self._subs:
             self.node.destroy_subscription(sub)
         self._subs = []
@@ -116,17 +140,28 @@ class Nav2Interface:
 
         for t in msg.transforms:
             q, p = t.transform.rotation, t.transform.translation
-            self.buffer.set(
+            try:  # a quaternion that is no rotation is refused, never read as some yaw
+                yaw = convert.checked_yaw(q.x, q.y, q.z, q.w)
+            except ValueError as error:
+                self._refuse_transform(t, str(error))
+                continue
+            if not self.buffer.set(
                 t.header.frame_id,
                 t.child_frame_id,
                 convert.stamp_seconds(t.header.stamp),
                 float(p.x),
                 float(p.y),
-                convert.yaw_from_quaternion(q.x, q.y, q.z, q.w),
+                yaw,
                 static=static,
-            )
+            ):
+                self._refuse_transform(t, "a non-finite value, an empty frame or a loop")
         if not self.mounts_done:
             self.resolve_mounts()
+
+    def _refuse_transform(self, t, why: str) -> None:
+        self.transforms_refused += 1
+        self.core.events.append(f"transform {t.header.frame_id} -> {t.child_frame_id} refused: {why}")
+        self.node.get_logger().error(self.core.events[-1])
 
     def resolve_mounts(self) -> None:
         """Each scanner's mount from TF (``base_frame → frame_id``), once found."""
@@ -138,11 +173,21 @@ class Nav2Interface:
             if pose is None:
                 done = False
                 continue
+            if not self.core.mount_acceptable(*pose):
+                self._refuse_mount(scanner.name, pose)
+                continue
             if self.core.set_mount(index, *pose):
                 self.node.get_logger().info(
                     f"scanner {scanner.name}: mount from TF ({pose[0]:.3f}, {pose[1]:.3f} m, {pose[2]:.3f} rad)"
                 )
         self.mounts_done = done
+
+    def _refuse_mount(self, name: str, pose) -> None:
+        """A mount beyond the parameters' bounds: the parameters' mount stays (once logged per scanner)."""
+        event = f"scanner {name}: mount from TF ({pose[0]:g}, {pose[1]:g} m) refused: {self.core.mount_problem(*pose)}"
+        if event not in self.core.events[-20:]:
+            self.core.events.append(event)
+            self.node.get_logger().error(event)
 
     def _on_speed_limit(self, msg) -> None:
         self.core.set_speed_limit(float(msg.speed_limit), bool(msg.percentage))
@@ -155,45 +200,96 @@ class Nav2Interface:
     def _on_goal(self, request):
         return self._GoalResponse.ACCEPT if self.core.active else self._GoalResponse.REJECT
 
-    def _path_in_odom(self, msg) -> tuple[int, str, np.ndarray | None]:
-        """(error code, message, waypoints in the odometry frame); code NONE with None: wait (TF)."""
+    def _path_frame_pose(self, msg) -> tuple[int, str, Any]:
+        """(error code, message, the ``path frame → odom`` transform or None when the frames agree); code
+        NONE with message: wait for the transform. Cheap: run in the control loop."""
         R = self.Result
-        points = np.array([[p.pose.position.x, p.pose.position.y] for p in msg.poses], dtype=float).reshape(-1, 2)
-        if len(points) == 0:
-            return R.INVALID_PATH, "empty path", None
-        if not np.isfinite(points).all():
-            return R.INVALID_PATH, "path with NaN or infinite coordinates", None
-        frame = msg.header.frame_id or (msg.poses[0].header.frame_id if msg.poses else "")
+        frame = msg.header.frame_id or (msg.poses[0].header.frame_id if len(msg.poses) else "")
         target = self.s.odom_frame
         if frame and target and frame.lstrip("/") != target.lstrip("/"):
             if not self.s.use_tf:
                 return R.TF_ERROR, f"path in frame {frame!r}, odometry in {target!r}, and use_tf is off", None
-            pose = self.buffer.lookup(target, frame)
+            pose = self.buffer.lookup(target, frame, now_s=self.node._now_s(alive=False))
             if pose is None:
-                return R.NONE, f"no transform {frame} -> {target} yet", None
-            points = np.array([apply(pose, x, y) for x, y in points], dtype=float).reshape(-1, 2)
+                return (
+                    R.NONE,
+                    f"no transform {frame} -> {target} yet (or none newer than {self.buffer.max_age_s:g} s)",
+                    None,
+                )
+            return R.NONE, "", pose
+        return R.NONE, "", None
+
+    def _prepare_path(self, msg, pose, robot) -> tuple[str, int, str, Any]:
+        """A goal's path decoded, moved into the odometry frame, simplified and a planner built on it, in
+        the worker thread (it grows with the path): (what, error code, message, value) with what one of
+        "path" (value: a PreparedPath), "same" (the running path), "there" (every pose at the robot),
+        "wait" (for odometry) or "abort"."""
+        R = self.Result
+        points = np.array([[p.pose.position.x, p.pose.position.y] for p in msg.poses], dtype=float).reshape(-1, 2)
+        if len(points) == 0:
+            return "abort", R.INVALID_PATH, "empty path", None
+        if not np.isfinite(points).all():
+            return "abort", R.INVALID_PATH, "path with NaN or infinite coordinates", None
+        if pose is not None:
+            c, s_ = math.cos(pose[2]), math.sin(pose[2])
+            points = points @ np.array([[c, s_], [-s_, c]]) + np.array(pose[:2])
         from viapath.ros2.core import simplify_polyline
 
         points = simplify_polyline(points, self.s.path_simplify_m)
         if len(points) == 1:
-            o = self.core.odometry
-            if o is None:
-                return R.NONE, "a path of one pose: waiting for odometry", None
-            points = np.vstack([[o.x, o.y], points])
-        if np.hypot(*(points[-1] - points[0])) < 1e-6 and len(points) == 2:
-            points = points[1:]
-            o = self.core.odometry
-            if o is None:
-                return R.NONE, "waiting for odometry", None
-            points = np.vstack([[o.x, o.y], points])
-        return R.NONE, "", points
+            if robot is None:
+                return "wait", R.NONE, "a path of one pose: waiting for odometry", None
+            if math.hypot(points[0][0] - robot[0], points[0][1] - robot[1]) <= self.s.goal_tolerance_m:
+                return "there", R.NONE, "", None
+            points = np.vstack([robot, points])
+        if self.core.same_path(points):
+            return "same", R.NONE, "", None
+        try:
+            return "path", R.NONE, "", self.core.build_path(points)
+        except ValueError as error:
+            return "abort", R.INVALID_PATH, f"path refused: {error}", None
+
+    def _start_path(self, goal: _Goal) -> tuple[int, str]:
+        """Hand the goal's path to the worker once its transform is known; (error code, message) when it
+        cannot be (TF), code NONE and a message while waiting."""
+        code, message, pose = self._path_frame_pose(goal.request_path)
+        if code != self.Result.NONE or message:
+            return code, message
+        o = self.core.odometry
+        robot = None if o is None else (o.x, o.y)
+        msg = goal.request_path
+        self.node.background.submit("goal", lambda: self._prepare_path(msg, pose, robot))
+        goal.extra["submitted"] = True
+        return code, ""
+
+    def take_background(self) -> None:
+        """The goal's path, once the worker has it ready (at each cycle and watchdog tick)."""
+        outcome = self.node.background.take("goal")
+        goal = self.goal
+        if outcome is None or goal is None or goal.set:
+            return
+        goal.extra["submitted"] = False
+        if outcome.error is not None:
+            self._finish_goal("abort", self.Result.INVALID_PATH, f"path refused: {outcome.error}")
+            return
+        what, code, message, value = outcome.value
+        if what == "abort":
+            self._finish_goal("abort", code, message)
+        elif what == "there":
+            self._finish_goal("succeed", self.Result.NONE, "")
+        elif what == "same":
+            goal.set = True
+        elif what == "path":
+            self.core.use_prepared(value)
+            goal.set = True
 
     def _on_accepted(self, handle) -> None:
-        """A new goal: checked, then it replaces the running one. Its execution (the action's
-        EXECUTING state and result) is started only when it ends, by :meth:`_end`: a goal
-        waiting in a coroutine would be resumed without pause by rclpy's events executor."""
+        """A new goal: it replaces the running one, whose path is driven on until the new one is ready
+        (decoded and simplified by the worker thread). Its execution (the action's EXECUTING state and
+        result) is started only when it ends, by :meth:`_end`: a goal waiting in a coroutine would be
+        resumed without pause by rclpy's events executor."""
         goal = _Goal(handle, None, handle.request.path, self.node._now_s())
-        code, message, points = self._path_in_odom(goal.request_path)
+        code, message, _pose = self._path_frame_pose(goal.request_path)
         if code != self.Result.NONE:
             self._end(goal, "abort", code, message)
             return
@@ -202,8 +298,7 @@ class Nav2Interface:
             goal.checkpoint = previous.checkpoint  # a preempt is no fresh start for the progress check
             self._finish_goal("abort", self.Result.NONE, "preempted by a new path", keep_path=True)
         self.goal = goal
-        if points is not None:
-            self._use_path(goal, points)
+        self._start_path(goal)
 
     def _end(self, goal: _Goal, outcome: str, code: int, message: str) -> None:
         self.finished.append((outcome, int(code), message))
@@ -219,16 +314,6 @@ class Nav2Interface:
             {"succeed": handle.succeed, "canceled": handle.canceled}.get(outcome, handle.abort)()
         return result
 
-    def _use_path(self, goal: _Goal, points: np.ndarray) -> bool:
-        try:
-            if not self.core.same_path(points):
-                self.core.set_path(points)
-        except ValueError as error:
-            self._finish_goal("abort", self.Result.INVALID_PATH, f"path refused: {error}")
-            return False
-        goal.set = True
-        return True
-
     def _result(self, code: int, message: str):
         result = self.Result()
         result.error_code = int(code)
@@ -239,13 +324,16 @@ class Nav2Interface:
         goal, self.goal = self.goal, None
         if goal is None:
             return
+        if not goal.set:
+            self.node.background.cancel("goal")
         if not keep_path:
             self.core.clear_path()
         self.core.events.append(f"follow_path: {outcome} ({code}{': ' + message if message else ''})")
         self._end(goal, outcome, code, message)
 
     def deactivated(self) -> None:
-        self._finish_goal("abort", self.Result.UNKNOWN, "controller deactivated")
+        with self.node.lock:
+            self._finish_goal("abort", self.Result.UNKNOWN, "controller deactivated")
 
     def supervise(self, result, now_s: float) -> None:
         """After each cycle or watchdog tick: cancel, pending paths, success, progress, failures, feedback."""
@@ -257,16 +345,15 @@ class Nav2Interface:
             self._finish_goal("canceled", R.NONE, "canceled")
             return
         if not goal.set:
-            code, message, points = self._path_in_odom(goal.request_path)
-            if code != R.NONE:
-                self._finish_goal("abort", code, message)
-                return
-            if points is None:
-                if now_s - goal.accepted_s > self.s.failure_tolerance_s:
+            if not goal.extra.get("submitted"):
+                code, message = self._start_path(goal)
+                if code != R.NONE:
+                    self._finish_goal("abort", code, message)
+                    return
+                if message and now_s - goal.accepted_s > self.s.failure_tolerance_s:
                     self._finish_goal("abort", R.TF_ERROR, message)
-                return
-            if not self._use_path(goal, points):
-                return
+                    return
+            return  # the previous path (if any) is driven on meanwhile
         if self.core.goal_reached:
             self._finish_goal("succeed", R.NONE, "")
             return

@@ -15,21 +15,39 @@ What we chose:
   path is subscribed transient-local (a latched path published before the node started is received).
 * ``cmd_vel`` is published once per scan cycle and by the watchdog (every ``cycle_period_s``) when
   inputs are stale; markers and the DiagnosticArray once per cycle.
+* Paths and maps are decoded, checked, simplified and rasterised by a worker thread
+  (:mod:`viapath.ros2.background`), never in a callback of the control loop: the cycles go on with
+  the last good path and map and take the new one at the first cycle after it is ready, so ``cmd_vel``
+  keeps its rate whatever the size of what arrives.
 * Signals: SIGINT / SIGTERM end the spin loop; a zero command is published before the node is
   destroyed (rclpy's own handlers would shut the context down before we could publish).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import signal
 import sys
+import threading
 import time
 from typing import Any
 
 from viapath.ros2 import convert
 from viapath.ros2.core import CycleResult, PlannerCore, severity
 from viapath.ros2.settings import NODE_NAME, ParameterError, all_options, describe, validate
+
+
+def locked(method):
+    """The node's callback under the node's lock: the control loop's callbacks and those of the input
+    thread (goals) change the same state."""
+
+    @functools.wraps(method)
+    def run(self, *args, **kwargs):
+        with self.lock:
+            return method(self, *args, **kwargs)
+
+    return run
 
 
 def _parameter_descriptor(option, read_only: bool = True):
@@ -93,6 +111,14 @@ class _NodeBehaviour(_LifecycleNode):
         self._nav2 = None
         self._wall_timer = None
         self._last_now_s: float | None = None
+        from viapath.ros2.background import Background
+
+        self.background = Background()
+        self.lock = threading.RLock()
+        self.inputs_node: Any = None  # a second node, spun in a thread of its own: big inputs (see below)
+        self._inputs_thread: threading.Thread | None = None
+        self._inputs_running = False
+        self._input_subs: list = []
         try:
             self.declare_parameter("planner_name", "viapath")
             self.declare_parameter("scanner_names", ["front", "rear"])
@@ -134,6 +160,7 @@ class _NodeBehaviour(_LifecycleNode):
                 self._teardown()
                 return TransitionCallbackReturn.FAILURE
         self._create_path_and_map_subscriptions(s)
+        self._start_inputs_thread()
         self.core.active = False
         self._create_timers(s)
         self.get_logger().info(
@@ -196,6 +223,68 @@ class _NodeBehaviour(_LifecycleNode):
                 )
             )
 
+    @property
+    def inputs(self):
+        """The node that takes the inputs whose size has no bound (paths, maps, FollowPath goals): rclpy turns
+        a message into Python objects in the thread that takes it (seconds for 100 000 poses), so they are
+        taken by a second node spun in a thread of its own, never by the control loop's executor."""
+        if self.inputs_node is None:
+            from rclpy.node import Node
+            from rclpy.parameter import Parameter
+
+            self.inputs_node = Node(
+                f"{self.get_name()}_inputs",
+                namespace=self.get_namespace(),
+                context=self.context,
+                start_parameter_services=False,
+                parameter_overrides=[
+                    Parameter("use_sim_time", Parameter.Type.BOOL, bool(self.get_parameter("use_sim_time").value))
+                ],
+            )
+        return self.inputs_node
+
+    def _start_inputs_thread(self) -> None:
+        if self.inputs_node is None or self._inputs_thread is not None:
+            return
+        from rclpy.executors import SingleThreadedExecutor
+
+        executor = SingleThreadedExecutor(context=self.context)
+        executor.add_node(self.inputs_node)
+        self._inputs_running = True
+
+        def spin() -> None:
+            while self._inputs_running and self.context.ok():
+                try:
+                    executor.spin_once(timeout_sec=0.05)
+                except Exception as error:  # an input that cannot be taken: said, and the thread goes on
+                    if self._inputs_running:
+                        self.get_logger().error(f"input thread: {type(error).__name__}: {error}")
+            executor.remove_node(self.inputs_node)
+            executor.shutdown(timeout_sec=0.0)
+
+        self._inputs_thread = threading.Thread(target=spin, name="viapath-inputs", daemon=True)
+        self._inputs_thread.start()
+
+    def destroy_node(self) -> None:
+        """The input thread stops (and its node goes) before the node itself."""
+        self._stop_inputs_thread_only()
+        self._destroy_inputs_node()
+        super().destroy_node()  # LifecycleNode's, next in the node class's MRO
+
+    def _stop_inputs_thread_only(self) -> None:
+        thread, self._inputs_thread = self._inputs_thread, None
+        self._inputs_running = False
+        if thread is not None:
+            thread.join(timeout=5.0)
+
+    def _destroy_inputs_node(self) -> None:
+        if self.inputs_node is not None:
+            for sub in self._input_subs:
+                self.inputs_node.destroy_subscription(sub)
+            self._input_subs = []
+            self.inputs_node.destroy_node()
+            self.inputs_node = None
+
     def _create_path_and_map_subscriptions(self, s) -> None:
         from nav_msgs.msg import Path as PathMsg
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -204,11 +293,11 @@ class _NodeBehaviour(_LifecycleNode):
             depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
         )
         if s.interface != "nav2" and not s.path_file:
-            self._subs.append(self.create_subscription(PathMsg, s.path_topic, self._on_path, latched))
+            self._input_subs.append(self.inputs.create_subscription(PathMsg, s.path_topic, self._on_path, latched))
         if s.map_topic:
             from nav_msgs.msg import OccupancyGrid
 
-            self._subs.append(self.create_subscription(OccupancyGrid, s.map_topic, self._on_map, latched))
+            self._input_subs.append(self.inputs.create_subscription(OccupancyGrid, s.map_topic, self._on_map, latched))
 
     def _create_timers(self, s) -> None:
         from rclpy.clock import Clock as RosClock
@@ -247,9 +336,21 @@ class _NodeBehaviour(_LifecycleNode):
         return TransitionCallbackReturn.SUCCESS
 
     def _teardown(self) -> None:
+        for kind in ("path", "map", "goal"):
+            self.background.cancel(kind)
+        if self._nav2 is not None:
+            self._nav2.end_goal()
+            until = time.monotonic() + 2.0  # the goal's result goes out from the input thread
+            while self._nav2.results_pending and self._inputs_thread is not None and time.monotonic() < until:
+                time.sleep(0.01)
+            until = time.monotonic() + 0.2  # and the result to the client that asked for it
+            while time.monotonic() < until:
+                time.sleep(0.01)
+        self._stop_inputs_thread_only()
         if self._nav2 is not None:
             self._nav2.destroy()
             self._nav2 = None
+        self._destroy_inputs_node()
         for timer in (self._timer, self._wall_timer):
             if timer is not None:
                 self.destroy_timer(timer)
@@ -278,6 +379,7 @@ class _NodeBehaviour(_LifecycleNode):
         self.get_logger().error(text)
         return text
 
+    @locked
     def _on_odom(self, msg) -> None:
         try:
             x, y, q, v, w = convert.odometry_values(msg)
@@ -287,29 +389,51 @@ class _NodeBehaviour(_LifecycleNode):
         except Exception as error:
             self.core.refuse_odometry(self._now_s(), "error", self._failed("reading odometry", error))
 
+    @locked
     def _on_map(self, msg) -> None:
         expected = self.core.settings.odom_frame
-        if expected and msg.header.frame_id and msg.header.frame_id != expected:
-            self.core.events.append(f"map refused: frame_id {msg.header.frame_id!r}, expected {expected!r}")
-            self.get_logger().error(self.core.events[-1])
+        if expected and msg.header.frame_id != expected:  # an empty frame_id says nothing of where the map is
+            self._map_refused(f"frame_id {msg.header.frame_id!r}, expected {expected!r}")
             return
-        try:
-            self.core.set_map(convert.occupancy_layer_from_message(msg, self.core.settings.map_occupied_threshold))
-        except Exception as error:
-            self.core.events.append(f"map refused: {error}")
-            self.get_logger().error(self.core.events[-1])
+        core, threshold = self.core, self.core.settings.map_occupied_threshold
+        self.background.submit("map", lambda: core.prepare_map(convert.occupancy_layer_from_message(msg, threshold)))
 
+    def _map_refused(self, why: str) -> None:
+        self.core.events.append(f"map refused: {why} (the last good map stays)")
+        self.get_logger().error(self.core.events[-1])
+
+    @locked
     def _on_path(self, msg) -> None:
-        try:
-            accepted, what = self.core.on_path(
+        core = self.core
+        self.background.submit(
+            "path",
+            lambda: core.prepare_path_message(
                 msg.header.frame_id, convert.waypoints_from_path(msg), convert.orientations_from_path(msg)
-            )
-        except Exception as error:
-            self.core.paths_refused += 1
-            accepted, what = False, self._failed("path refused: reading it", error)
-            self.core.events.append(what)
-        (self.get_logger().info if accepted else self.get_logger().error)(what)
+            ),
+        )
 
+    def take_background(self) -> None:
+        """Use the paths and maps the worker has finished (at the start of each cycle and watchdog tick)."""
+        outcome = self.background.take("map")
+        if outcome is not None:
+            if outcome.error is not None:
+                self._map_refused(str(outcome.error))
+            else:
+                self.core.set_map(outcome.value)
+                self.get_logger().info(self.core.events[-1])
+        outcome = self.background.take("path")
+        if outcome is not None:
+            if outcome.error is not None:
+                self.core.paths_refused += 1
+                accepted, what = False, self._failed("path refused: reading it", outcome.error)
+                self.core.events.append(what)
+            else:
+                accepted, what = self.core.use_path_message(outcome.value)
+            (self.get_logger().info if accepted else self.get_logger().error)(what)
+        if self._nav2 is not None:
+            self._nav2.take_background()
+
+    @locked
     def _on_scan(self, index: int, msg) -> None:
         due = self.core.on_scan(
             index,
@@ -325,6 +449,7 @@ class _NodeBehaviour(_LifecycleNode):
         if self._nav2 is not None and not self._nav2.mounts_done:
             self._nav2.resolve_mounts()
         if due:
+            self.take_background()
             now = self._now_s()
             try:
                 result = self.core.cycle(now)
@@ -334,13 +459,16 @@ class _NodeBehaviour(_LifecycleNode):
             if self._nav2 is not None:
                 self._nav2.supervise(result, self._now_s())
 
+    @locked
     def _on_watchdog(self) -> None:
         if self.core is None:
             return
+        self.take_background()
         result = self.core.watchdog(self._now_s(alive=False))
         if result is not None:
             self._publish(result, markers=False)
 
+    @locked
     def _on_wall_watchdog(self) -> None:
         if self.core is None:
             return

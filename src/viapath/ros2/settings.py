@@ -57,6 +57,9 @@ NODE_SUBGOAL_OPTIONS = ("reach_threshold_m", "goal_tolerance_m", "bypass_distanc
 MAX_ROLLOUT_STEPS = 2000  # steps of one roll-out (rollout_s / rollout_dt_s, escape_s / escape_dt_s)
 
 
+MAX_MOUNT_OFFSET_M = 10.0  # m: a scanner sits on the robot; a mount farther out (parameter or TF) is refused
+
+
 class ParameterError(ValueError):
     """Parameter values the node refuses; the message names each parameter, one line per mistake
     (``errors`` holds the lines)."""
@@ -71,8 +74,22 @@ def _scanner_options(name: str, topic: str, frame: str, x: float, yaw: float) ->
     return (
         _opt(p + "topic", topic, "", help=f"sensor_msgs/LaserScan topic of the {name} scanner"),
         _opt(p + "frame_id", frame, "", help="frame_id its scans must carry ('' accepts any)"),
-        _opt(p + "mount_x_m", x, "m", -10.0, 10.0, "scanner position ahead of the robot centre"),
-        _opt(p + "mount_y_m", 0.0, "m", -10.0, 10.0, "scanner position left of the robot centre"),
+        _opt(
+            p + "mount_x_m",
+            x,
+            "m",
+            -MAX_MOUNT_OFFSET_M,
+            MAX_MOUNT_OFFSET_M,
+            "scanner position ahead of the robot centre",
+        ),
+        _opt(
+            p + "mount_y_m",
+            0.0,
+            "m",
+            -MAX_MOUNT_OFFSET_M,
+            MAX_MOUNT_OFFSET_M,
+            "scanner position left of the robot centre",
+        ),
         _opt(p + "mount_yaw_rad", yaw, "rad", -math.pi, math.pi, "scanner axis relative to the robot heading"),
     )
 

@@ -521,6 +521,7 @@ class _SimNode:
             reached_goal=episode.reached,
             walls=world.static_world.segments,
             wall_until_s=world.static_world.until_s,
+            wall_closed_ids=world.static_world.closed_ids(),
             extras={"nominal_speed_mps": spec.robot.speed, "seed": spec.seed if seed is None else seed},
             plan_sides=np.array([r.side for r in records], dtype=int),
         )

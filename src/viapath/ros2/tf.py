@@ -9,6 +9,9 @@ What we chose:
   samples around t (yaw along the shorter arc), takes the newest when t lies up to ``tolerance_s``
   after it (the publisher may lag), and fails otherwise. ``stamp_s=None`` takes every edge's newest.
 * A lookup that fails returns None: the caller decides the fallback (parameters, or refusing a path).
+* Staleness: a lookup of the newest transforms (``stamp_s=None``) given the current time ``now_s``
+  fails when a dynamic edge's newest sample is older than ``max_age_s`` (a ``map → odom`` stamped an
+  hour ago says nothing of where the map is now). Static edges hold for all time.
 """
 
 from __future__ import annotations
@@ -49,9 +52,10 @@ class _Edge:
 
 
 class TransformBuffer:
-    def __init__(self, history_s: float = 10.0, tolerance_s: float = 0.5):
+    def __init__(self, history_s: float = 10.0, tolerance_s: float = 0.5, max_age_s: float = math.inf):
         self.history_s = history_s
         self.tolerance_s = tolerance_s
+        self.max_age_s = max_age_s
         self.edges: dict[str, _Edge] = {}
 
     @staticmethod
@@ -86,8 +90,12 @@ class TransformBuffer:
             del edge.stamps[:cut], edge.poses[:cut]
         return True
 
-    def _edge_at(self, edge: _Edge, stamp_s: float | None) -> Pose2 | None:
-        if edge.static or stamp_s is None:
+    def _edge_at(self, edge: _Edge, stamp_s: float | None, now_s: float | None = None) -> Pose2 | None:
+        if edge.static:
+            return edge.poses[-1]
+        if stamp_s is None:
+            if now_s is not None and not now_s - edge.stamps[-1] <= self.max_age_s:
+                return None  # stale
             return edge.poses[-1]
         stamps = edge.stamps
         if stamp_s >= stamps[-1]:
@@ -100,12 +108,14 @@ class TransformBuffer:
         u = 0.0 if t1 <= t0 else (stamp_s - t0) / (t1 - t0)
         return a[0] + u * (b[0] - a[0]), a[1] + u * (b[1] - a[1]), _wrap(a[2] + u * _wrap(b[2] - a[2]))
 
-    def _to_root(self, frame: str, stamp_s: float | None) -> tuple[list[str], list[Pose2]] | None:
+    def _to_root(
+        self, frame: str, stamp_s: float | None, now_s: float | None = None
+    ) -> tuple[list[str], list[Pose2]] | None:
         """Frames from ``frame`` up to its root and each frame's pose in the root... (cumulative)."""
         chain, poses = [frame], [(0.0, 0.0, 0.0)]
         while chain[-1] in self.edges:
             edge = self.edges[chain[-1]]
-            pose = self._edge_at(edge, stamp_s)
+            pose = self._edge_at(edge, stamp_s, now_s)
             if pose is None:
                 return None
             chain.append(edge.parent)
@@ -116,13 +126,16 @@ class TransformBuffer:
             out.append(compose(pose, out[-1]))
         return chain, out
 
-    def lookup(self, target: str, source: str, stamp_s: float | None = None) -> Pose2 | None:
-        """Pose of frame ``source`` in frame ``target`` (maps a point in source to target), or None."""
+    def lookup(
+        self, target: str, source: str, stamp_s: float | None = None, now_s: float | None = None
+    ) -> Pose2 | None:
+        """Pose of frame ``source`` in frame ``target`` (maps a point in source to target), or None
+        (unknown, or with ``now_s`` and no ``stamp_s``: stale)."""
         target, source = self._frame(target), self._frame(source)
         if target == source:
             return 0.0, 0.0, 0.0
-        up_s = self._to_root(source, stamp_s)
-        up_t = self._to_root(target, stamp_s)
+        up_s = self._to_root(source, stamp_s, now_s)
+        up_t = self._to_root(target, stamp_s, now_s)
         if up_s is None or up_t is None:
             return None
         index_t = {f: i for i, f in enumerate(up_t[0])}

@@ -237,8 +237,23 @@ class BoxSpec(_StaticShape):
     """A rectangle (a box, a cart, a pillar): ``size`` = (length along ``yaw``, width), m."""
 
     center: Point
-    size: tuple[PositiveFloat, PositiveFloat]
-    yaw: float = 0.0
+    size: tuple[
+        Annotated[float, Field(gt=0.0, le=2 * MAX_COORDINATE_M)],
+        Annotated[float, Field(gt=0.0, le=2 * MAX_COORDINATE_M)],
+    ]
+    yaw: Annotated[float, Field(ge=-MAX_COORDINATE_M, le=MAX_COORDINATE_M)] = 0.0
+
+    @model_validator(mode="after")
+    def _corners_within_bounds(self) -> BoxSpec:
+        # Every corner within the coordinates a scenario may have, as a wall's or a polygon's points:
+        # geometry past them would be dropped or overflow somewhere downstream.
+        corners = self.edges()[:, 0]
+        if not (abs(corners) <= MAX_COORDINATE_M).all():
+            worst = float(abs(corners).max())
+            raise ValueError(
+                f"size: the box's corners reach {worst:.4g} m; every corner must lie within ±{MAX_COORDINATE_M:g} m"
+            )
+        return self
 
     def edges(self):
         return box_edges(self.center, self.size, self.yaw)

@@ -52,6 +52,8 @@ class Trace:
     reached_goal: bool
     walls: np.ndarray = field(default_factory=lambda: np.zeros((0, 2, 2)))  # (W, 2, 2) every static edge
     wall_until_s: np.ndarray | None = None  # (W,) each edge stands while t < this (None: always)
+    # (W,) the closed shape (box, polygon) each edge bounds, -1 for an open wall (None: every edge open)
+    wall_closed_ids: np.ndarray | None = None
     perceived: list[Any] = field(default_factory=list)  # per step Obstacles, when recorded
     scan_points: list[np.ndarray] = field(default_factory=list)  # per step, world frame, laser only
     extras: dict[str, Any] = field(default_factory=dict)
@@ -234,6 +236,7 @@ class _Loop:
             reached_goal=reached,
             walls=self.static_world.segments,
             wall_until_s=self.static_world.until_s,
+            wall_closed_ids=self.static_world.closed_ids(),
             perceived=self.perceived,
             scan_points=self.scan_points,
             extras={"nominal_speed_mps": self.scenario.robot.speed, "seed": seed},

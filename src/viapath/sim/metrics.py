@@ -115,16 +115,46 @@ def static_clearance_per_step(trace) -> np.ndarray:
         return np.full(steps, np.inf)
     distance = segment_distances(poses[:-1], poses[1:], walls)  # (K-1, W)
     until = getattr(trace, "wall_until_s", None)
+    standing = np.ones(distance.shape, dtype=bool)
     if until is not None:
         standing = np.asarray(until)[None, :] > np.asarray(trace.times_s[:-1])[:, None]
         distance = np.where(standing, distance, np.inf)
-    return distance.min(axis=1) - trace.robot_radius_m
+    clearance = distance.min(axis=1) - trace.robot_radius_m
+    closed = getattr(trace, "wall_closed_ids", None)
+    if closed is not None and (np.asarray(closed) >= 0).any():
+        inside = _inside_closed(poses[:-1], poses[1:], walls, np.asarray(closed), standing)
+        # Inside a box or a polygon is as deep in it as the robot is far from its outline.
+        clearance = np.where(inside, -distance.min(axis=1) - trace.robot_radius_m, clearance)
+    return clearance
+
+
+def _inside_closed(
+    starts: np.ndarray, ends: np.ndarray, walls: np.ndarray, closed_ids: np.ndarray, standing: np.ndarray
+) -> np.ndarray:
+    """(K-1,): the step starts or ends inside a standing closed shape (even-odd rule over its edges, a
+    ray towards +x), where the distance to its edges alone would say "clear"."""
+    edges = np.flatnonzero(closed_ids >= 0)
+    shapes, owner = np.unique(closed_ids[edges], return_inverse=True)
+    a, b = walls[edges, 0], walls[edges, 1]
+    inside = np.zeros(len(starts), dtype=bool)
+    for points in (starts, ends):
+        px, py = points[:, None, 0], points[:, None, 1]
+        straddles = (a[None, :, 1] > py) != (b[None, :, 1] > py)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x_cross = a[None, :, 0] + (py - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (
+                b[None, :, 1] - a[None, :, 1]
+            )
+        crossing = (straddles & (px < x_cross) & standing[:, edges]).astype(np.int64)  # (K-1, E)
+        counts = np.zeros((len(points), len(shapes)), dtype=np.int64)
+        np.add.at(counts.T, owner, crossing.T)
+        inside |= (counts % 2 == 1).any(axis=1)
+    return inside
 
 
 def static_contact_onsets(trace, static_clearance: np.ndarray | None = None) -> np.ndarray:
     """(K-1,): a contact with static geometry begins in step k (overlap in k, none in k - 1)."""
     clearance = static_clearance_per_step(trace) if static_clearance is None else static_clearance
-    contact = clearance < 0.0
+    contact = clearance <= 0.0  # touching is contact: a robot placed against a wall is in contact with it
     return contact & ~np.concatenate([[False], contact[:-1]])
 
 
@@ -144,8 +174,12 @@ def compute_metrics(trace) -> dict[str, Any]:
     faults = at_fault_onsets(trace)
     static_clearance = static_clearance_per_step(trace)
     static_onsets = static_contact_onsets(trace, static_clearance)
-    # Static geometry does not move: touching it is the robot's fault whenever the robot moves.
+    # Static geometry does not move: touching it is the robot's fault whenever the robot moves, except a
+    # contact there from the first step (the robot was placed on it: counted, not at fault).
     static_faults = static_onsets & (trace.robot_speeds_mps[:-1] > 0.05) if len(static_onsets) else static_onsets
+    if len(static_faults):
+        static_faults = static_faults.copy()
+        static_faults[0] = False
     min_static = float(static_clearance.min()) if len(static_clearance) else float("inf")
     min_clearance = min(float(clearance.min()) if len(clearance) else float("inf"), min_static)
     lateral = np.abs(trace.path.lateral_deviation(poses))
@@ -157,7 +191,7 @@ def compute_metrics(trace) -> dict[str, Any]:
         "planner": trace.planner_name,
         "perception": trace.perception_mode,
         "reached_goal": bool(trace.reached_goal),
-        "collision": bool(min_clearance < 0.0),
+        "collision": bool(min_clearance < 0.0 or np.any(static_onsets)),
         "at_fault_collision": bool(np.any(faults) or np.any(static_faults)),
         "at_fault_collision_seen_1s": bool(np.any(faults & present_for(trace, 1.0)) or np.any(static_faults)),
         "static_contact": int(np.count_nonzero(static_onsets)),

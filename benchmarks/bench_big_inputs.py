@@ -1,0 +1,288 @@
+"""The node's control loop against big inputs: gaps between ``cmd_vel`` messages while the robot drives and
+a 100 000-pose FollowPath goal, a 10 000 x 10 000 map and a 30 000-pose zig-zag goal arrive.
+
+Usage: python benchmarks/bench_big_inputs.py [--poses 100000] [--map-cells 10000] [--zigzag 30000]
+                                            [--seconds 30] [--json]
+
+Needs the ``ros2`` extra. Starts ``viapath ros2 nav2`` (autostart, ``map_topic: map``) as a separate
+process (its own ROS domain, DDS kept on this machine), and drives it from this process at the scan
+rate in real time: odometry of an honest base that drives the received ``cmd_vel`` and two empty
+URG-04LX scans every 0.1 s. A first goal (a straight path 100 m long) sets the robot going. The big
+inputs are built by a second process (so that building them does not hold up the scans of this
+one; the robot drives meanwhile); once they are built the measurement starts, and the sender sends
+the 100 000-pose goal along the same line at 4 s, the free map at 9 s (``odom`` frame, 0.05 m
+cells), the zig-zag goal (±0.1 m, 1 cm apart) at 14 s. cmd_vel arrival times are taken in
+this process on one monotonic clock; the gaps are counted from 2 s (warm-up) to the end. Both
+processes are ended by pid.
+"""
+
+from __future__ import annotations
+
+import argparse
+import array
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+SCAN_PERIOD_S = 0.1
+WARMUP_S = 2.0
+EVENTS_S = {"path": 4.0, "map": 9.0, "zigzag": 14.0}
+
+
+def _wait_for(node, predicate, timeout_s: float) -> bool:
+    import rclpy
+
+    end = time.monotonic() + timeout_s
+    while not predicate():
+        if time.monotonic() > end:
+            return False
+        rclpy.spin_once(node, timeout_sec=0.05)
+    return True
+
+
+def _goal_client(node):
+    from rclpy.action import ActionClient
+
+    from viapath.ros2 import interfaces
+
+    interfaces.load()
+    from nav2_msgs.action import FollowPath
+
+    client = ActionClient(node, FollowPath, "follow_path")
+    if not client.wait_for_server(timeout_sec=120):
+        raise RuntimeError("no follow_path action server")
+    return client, FollowPath
+
+
+def sender(poses: int, map_cells: int, zigzag: int) -> int:
+    """The second process: builds the big inputs first, says "ready" on stdout, reads the start time
+    (a time.time()) from stdin, then sends each input at its time after it."""
+    import rclpy
+    from nav_msgs.msg import OccupancyGrid
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    from viapath.ros2 import convert
+
+    rclpy.init()
+    node = rclpy.create_node("big_input_sender")
+    client, FollowPath = _goal_client(node)
+    latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    map_pub = node.create_publisher(OccupancyGrid, "map", latched)
+    built = {}
+    line = np.column_stack([np.linspace(0.0, 100.0, poses), np.zeros(poses)])
+    goal = FollowPath.Goal()
+    goal.path = convert.path_message(line, "odom", convert.time_msg(0.0))
+    built["path"] = goal
+    x = np.arange(zigzag) * 0.01
+    goal = FollowPath.Goal()
+    goal.path = convert.path_message(
+        np.column_stack([x, np.where(np.arange(zigzag) % 2, 0.1, -0.1)]), "odom", convert.time_msg(0.0)
+    )
+    built["zigzag"] = goal
+    grid = OccupancyGrid()
+    grid.header.frame_id = "odom"
+    grid.info.resolution = 0.05
+    grid.info.width = grid.info.height = map_cells
+    grid.info.origin.position.x = grid.info.origin.position.y = -0.5 * map_cells * 0.05
+    grid.info.origin.orientation.w = 1.0
+    grid.data = array.array("b", bytes(map_cells * map_cells))
+    built["map"] = grid
+    print("ready", flush=True)
+    start_wall = float(sys.stdin.readline())
+    for name in sorted(EVENTS_S, key=EVENTS_S.get):
+        while time.time() < start_wall + EVENTS_S[name]:
+            rclpy.spin_once(node, timeout_sec=0.02)
+        if name == "map":
+            map_pub.publish(built[name])
+        else:
+            client.send_goal_async(built[name])
+        print(f"sent {name} at {time.time() - start_wall:.2f} s", file=sys.stderr, flush=True)
+    end = time.monotonic() + 8.0
+    while time.monotonic() < end:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    node.destroy_node()
+    rclpy.shutdown()
+    return 0
+
+
+def _stop(proc) -> None:
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=10)
+
+
+def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
+    domain = 150 + os.getpid() % 50
+    os.environ.update(ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(domain))
+    import rclpy
+    from geometry_msgs.msg import Twist
+    from nav_msgs.msg import Odometry
+    from rclpy.qos import qos_profile_sensor_data
+    from sensor_msgs.msg import LaserScan
+
+    from viapath.perception.scanner import paper_scanners
+    from viapath.ros2 import convert
+
+    node_proc = subprocess.Popen(
+        [sys.executable, "-m", "viapath.cli", "ros2", "nav2", "--ros-args", "-p", "autostart:=true"]
+        + ["-p", "map_topic:=map", "-p", "scan_timeout_s:=5.0", "-p", "odom_timeout_s:=5.0"],
+        env=dict(os.environ),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    sender_proc = None
+    rclpy.init()
+    node = rclpy.create_node("big_input_driver")
+    try:
+        odom_pub = node.create_publisher(Odometry, "odom", 10)
+        scan_pubs = [node.create_publisher(LaserScan, f"scan_{n}", qos_profile_sensor_data) for n in ("front", "rear")]
+        commands: list[tuple[float, float, float]] = []
+        node.create_subscription(
+            Twist, "cmd_vel", lambda m: commands.append((time.monotonic(), m.linear.x, m.angular.z)), 50
+        )
+        if not _wait_for(
+            node, lambda: node.count_publishers("cmd_vel") > 0 and node.count_subscribers("scan_rear") > 0, 120
+        ):
+            raise RuntimeError("the node did not come up: " + node_proc.stderr.read().decode()[-2000:])
+        client, FollowPath = _goal_client(node)
+        goal = FollowPath.Goal()
+        goal.path = convert.path_message([[-1.0, 0.0], [100.0, 0.0]], "odom", convert.time_msg(0.0))
+        future = client.send_goal_async(goal)
+        _wait_for(node, future.done, 30)
+        scanners = paper_scanners()
+        empty = [np.full(s.beam_count, np.inf) for s in scanners]
+        sender_proc = subprocess.Popen(
+            [
+                sys.executable,
+                __file__,
+                "--sender",
+                "--poses",
+                str(poses),
+                "--map-cells",
+                str(map_cells),
+                "--zigzag",
+                str(zigzag),
+            ],
+            env=dict(os.environ),
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        state = {"x": 0.0, "y": 0.0, "h": 0.0, "k": 0, "t0": time.monotonic()}
+
+        def drive_until(end_s: float) -> None:
+            """The robot at 10 Hz (odometry of the commands received, empty scans) until ``end_s`` (monotonic)."""
+            while time.monotonic() < end_s:
+                due = state["t0"] + state["k"] * SCAN_PERIOD_S
+                while time.monotonic() < due:
+                    rclpy.spin_once(node, timeout_sec=max(0.0, min(0.005, due - time.monotonic())))
+                v, w = (commands[-1][1], commands[-1][2]) if commands else (0.0, 0.0)
+                state["x"] += v * SCAN_PERIOD_S * np.cos(state["h"])
+                state["y"] += v * SCAN_PERIOD_S * np.sin(state["h"])
+                state["h"] += w * SCAN_PERIOD_S
+                stamp = convert.time_msg(node.get_clock().now().nanoseconds * 1e-9)
+                odom_pub.publish(convert.odometry("odom", "base_link", stamp, state["x"], state["y"], state["h"], v, w))
+                for pub, s, ranges in zip(scan_pubs, scanners, empty):
+                    pub.publish(
+                        convert.laser_scan(
+                            f"laser_{s.name}",
+                            stamp,
+                            s.angle_min_rad,
+                            s.angle_increment_rad,
+                            ranges,
+                            s.range_min_m,
+                            s.range_max_m,
+                        )
+                    )
+                state["k"] += 1
+
+        import selectors
+
+        ready = selectors.DefaultSelector()
+        ready.register(sender_proc.stdout, selectors.EVENT_READ)
+        while not ready.select(timeout=0):  # the sender builds its messages: the robot drives meanwhile
+            drive_until(time.monotonic() + 0.5)
+            if sender_proc.poll() is not None:
+                raise RuntimeError("the sender ended: " + sender_proc.stderr.read()[-2000:])
+        sender_proc.stdout.readline()
+        start_wall = time.time() + 0.5
+        sender_proc.stdin.write(f"{start_wall}\n")
+        sender_proc.stdin.flush()
+        started = time.monotonic() + 0.5
+        commands.clear()
+        drive_until(started + seconds)
+        x = state["x"]
+        _, sender_err = sender_proc.communicate(timeout=60)
+        times = np.array([t - started for t, _, _ in commands if t - started >= WARMUP_S])
+        speeds = np.array([s for t, s, _ in commands if t - started >= WARMUP_S])
+        gaps = np.diff(times)
+        worst = int(np.argmax(gaps)) if len(gaps) else 0
+        return {
+            "benchmark": "big_inputs",
+            "poses": poses,
+            "map_cells": f"{map_cells} x {map_cells}",
+            "zigzag_poses": zigzag,
+            "seconds_measured": seconds - WARMUP_S,
+            "cmd_vel_messages": int(len(times)),
+            "rate_hz": float(len(times) / (seconds - WARMUP_S)),
+            "longest_gap_s": float(gaps.max()) if len(gaps) else None,
+            "longest_gap_at_s": float(times[worst]) if len(gaps) else None,
+            "gaps_over_0_2_s": int((gaps > 0.2).sum()),
+            "gaps_over_0_2_s_at": [
+                [round(float(times[i]), 2), round(float(gaps[i]), 3)] for i in np.flatnonzero(gaps > 0.2)
+            ],
+            "mean_speed_mps": float(speeds.mean()) if len(speeds) else None,
+            "distance_driven_m": float(x),
+            "sent": [line for line in sender_err.splitlines() if line.startswith("sent")],
+            "load_avg_1min": os.getloadavg()[0],
+        }
+    finally:
+        node.destroy_node()
+        rclpy.shutdown()
+        for proc in (sender_proc, node_proc):
+            if proc is not None:
+                _stop(proc)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--poses", type=int, default=100_000)
+    parser.add_argument("--map-cells", type=int, default=10_000)
+    parser.add_argument("--zigzag", type=int, default=30_000)
+    parser.add_argument("--seconds", type=float, default=30.0)
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--sender", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.sender:
+        raise SystemExit(sender(args.poses, args.map_cells, args.zigzag))
+    result = run(args.poses, args.map_cells, args.zigzag, args.seconds)
+    if args.json:
+        print(json.dumps(result))
+        return
+    print(
+        f"viapath ros2 nav2 driving, with a {result['poses']}-pose goal, a {result['map_cells']} map and a "
+        f"{result['zigzag_poses']}-pose zig-zag goal sent (load avg {result['load_avg_1min']:.1f})"
+    )
+    print(
+        f"cmd_vel: {result['cmd_vel_messages']} messages in {result['seconds_measured']:.0f} s = {result['rate_hz']:.2f} Hz; "
+        f"longest gap {result['longest_gap_s']:.3f} s (at {result['longest_gap_at_s']:.1f} s); "
+        f"{result['gaps_over_0_2_s']} gaps over 0.2 s; mean speed {result['mean_speed_mps']:.2f} m/s"
+    )
+    for line in result["sent"]:
+        print("  " + line)
+    for at, gap in result["gaps_over_0_2_s_at"]:
+        print(f"  gap {gap:.3f} s from {at:.2f} s")
+
+
+if __name__ == "__main__":
+    main()
