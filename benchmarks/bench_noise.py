@@ -8,7 +8,7 @@ get fresh Gaussian noise every cycle (σ per axis, as ``viapath run --position-n
 seeds 0..N-1. Printed per scenario: runs, how many reach the goal, collide (any overlap) and leave
 the corridor, min clearance (smallest and median over runs), plan switches (median; changes of the
 chosen side or speed between cycles) and left/right flips (median), and the seeds that collided.
-DESIGN §2 measured 15 of 20 noisy side-crossing runs colliding for a plain re-derivation.
+docs/design.md §2 measured 15 of 20 noisy side-crossing runs colliding for a plain re-derivation.
 """
 
 from __future__ import annotations

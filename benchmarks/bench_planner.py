@@ -13,7 +13,7 @@ after ``reset()`` (the guard, subgoal tracking and inflation included), single t
 (``--clock cpu``: the thread's CPU time, which leaves out the waits for a core on a loaded machine).
 
 * ``viapath-numpy`` / ``viapath-fast``: the viapath planner with option ``compute`` numpy / numba
-  (extra ``fast``; docs/speed.md). Same decisions, different arithmetic.
+  (extra ``fast``; docs/explanation/speed.md). Same decisions, different arithmetic.
 * ``dwa``, ``vo``: the baselines of :mod:`viapath.planning.baselines` (numpy).
 * ``nav-hl``, ``nav-orca``, ``nav-hrvo``: navground's C++ behaviours (extra ``navground``) behind our
   planner protocol. Our harness around them (guard, Python ``Neighbor`` objects) costs far more than

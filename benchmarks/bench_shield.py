@@ -1,4 +1,4 @@
-"""Plan time with the passive-safety shield: p50/p99 for 1, 10, 50 and 100 people (DESIGN §7).
+"""Plan time with the passive-safety shield: p50/p99 for 1, 10, 50 and 100 people (docs/design.md §7).
 
 Usage: python benchmarks/bench_shield.py [--cycles 300] [--seed 0] [--runs 3] [--json]
 

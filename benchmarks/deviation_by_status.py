@@ -1,7 +1,7 @@
 """Where a planner's lateral deviation accrues: each episode's mean |lateral deviation| split by what
 the viapath planner was doing in each step (plan status: ``avoid`` = heading for a via point,
 ``straight`` = heading for the subgoal or the way back with no via point, ``slow``, ``wait``,
-``escape``, ...). docs/weights.md §6.
+``escape``, ...). docs/howto/tune-weights.md §6.
 
     python benchmarks/deviation_by_status.py SUITE_FOLDER PRESET[,PRESET...] [FAMILY ...] [--seed 0]
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The measurements of docs/benchmark.md. Two workers at most (the machine has two cores).
+# The measurements of docs/explanation/metrics.md. Two workers at most (the machine has two cores).
 set -euo pipefail
 VIAPATH=${VIAPATH:-.venv/bin/viapath}
 OUT=${OUT:-out/bench}

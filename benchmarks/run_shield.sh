@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The measurements of docs/safety.md: every planner with and without the shield, on the same suites.
+# The measurements of docs/explanation/passive-safety.md: every planner with and without the shield, on the same suites.
 # One results folder per suite holds both settings (rows keyed by the `shield` column).
 set -euo pipefail
 VIAPATH=${VIAPATH:-.venv/bin/viapath}

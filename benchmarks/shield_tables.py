@@ -1,4 +1,4 @@
-"""Tables of docs/safety.md from ``viapath bench`` results: each planner with and without the shield.
+"""Tables of docs/explanation/passive-safety.md from ``viapath bench`` results: each planner with and without the shield.
 
 Usage: python benchmarks/shield_tables.py OUT_DIR [OUT_DIR ...] [--merge] [--json]
 

@@ -1,4 +1,4 @@
-"""One-at-a-time sweeps of the weights k1..k4 of Eq. 1 around the paper's values (issue 15, docs/weights.md).
+"""One-at-a-time sweeps of the weights k1..k4 of Eq. 1 around the paper's values (issue 15, docs/howto/tune-weights.md).
 
 Usage: python benchmarks/sweep_weights.py [--factors 0.1,0.3,1,3,10,30] [--suite-count 9] [--suite-seed 303]
        [--suite-factors 0.1,10] [--workers 1] [--img docs/img] [--json] [--no-suite]

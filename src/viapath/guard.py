@@ -1,4 +1,4 @@
-"""The guarded entry of every planner: bad input never becomes motion (DESIGN §4, §7).
+"""The guarded entry of every planner: bad input never becomes motion (docs/design.md §4, §7).
 
 Every planner's ``plan`` is wrapped by :func:`guard_plan` (the planner base does it for each
 subclass, plug-ins and navground peers included), so each cycle goes:
@@ -31,7 +31,7 @@ subclass, plug-ins and navground peers included), so each cycle goes:
    for one control period and then braking at the limits (:func:`braking_path`, stepped with the
    drive model of :mod:`viapath.kinematics`) the robot would touch the obstacle *as it stands now*
    (radius + ``brake_margin_m``), and the first step brings it nearer. A robot passing beside a
-   person is not braked (braking in front of someone walking at you is worse than passing). This is a last line, not the shield of DESIGN §7: it knows nothing of
+   person is not braked (braking in front of someone walking at you is worse than passing). This is a last line, not the shield of docs/design.md §7: it knows nothing of
    where people go, only that the robot must not be the one closing in.
 
 Choices where the issue is silent: the largest σ and the default radius are configuration
@@ -88,7 +88,7 @@ class GuardConfig:
     max_heading_rad: float = 1e6  # beyond, float steps of the angle are too coarse to steer by
     max_state_speed_mps: float = 50.0  # odometry beyond these is a sensor fault, not a robot state
     max_state_turn_rate_radps: float = 100.0
-    control_period_s: float = 0.1  # the scan period (DESIGN §2): how long a command is held
+    control_period_s: float = 0.1  # the scan period (docs/design.md §2): how long a command is held
     static_spacing_m: float = 0.15  # static segments become discs this far apart at most (viapath.static)
     static_range_m: float = 12.0  # static geometry is considered at least this far from the robot
     # ... and at least the robot's stopping distance (from its top speed) plus this: what the planner

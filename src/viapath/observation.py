@@ -1,4 +1,4 @@
-"""What every planner sees and what it returns (DESIGN §4, planner protocol).
+"""What every planner sees and what it returns (docs/design.md §4, planner protocol).
 
 Obstacles are held as arrays, one row per obstacle, so that planners can vectorise over them.
 """

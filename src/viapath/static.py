@@ -1,6 +1,6 @@
-"""The static world: everything the robot can touch that does not move (DESIGN §10).
+"""The static world: everything the robot can touch that does not move (docs/design.md §10).
 
-Source: DESIGN §10 (a static obstacle is a vertical prism in the paper's x-y-t space, velocity 0);
+Source: docs/design.md §10 (a static obstacle is a vertical prism in the paper's x-y-t space, velocity 0);
 the shapes come from a known map (walls, boxes, polygons) or from scan returns no person explains.
 
 Representation, and why: a :class:`StaticLayer` is a set of **segments** (M, 2, 2) in the world

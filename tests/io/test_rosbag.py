@@ -131,7 +131,7 @@ def test_leg_labels_recall_and_precision_on_positive_2():
     labels = [xy for _, xy in read_pose_arrays(POSITIVE, "/leg_cluster_positions")]
     e = evaluate_labels(result.detections, labels)
     assert e["scans"] == 83 and e["labelled_people"] == 83
-    # measured: recall 0.952, precision 0.963, leg recall 0.853 (docs/perception.md)
+    # measured: recall 0.952, precision 0.963, leg recall 0.853 (docs/explanation/perception.md)
     assert e["person_recall"] >= 0.9
     assert e["person_precision_in_wedge"] >= 0.9
     assert e["leg_recall"] >= 0.8

@@ -1,7 +1,7 @@
 """Closed loop with laser perception: the paper's three scenarios keep their behaviour (issue 3).
 
 Each episode simulates both URG-04LX scanners every 0.1 s, detects, tracks and plans on the tracks.
-Seeds change the range noise. Expected behaviours (paper §4, DESIGN §2): from behind the robot
+Seeds change the range noise. Expected behaviours (paper §4, docs/design.md §2): from behind the robot
 speeds up along the path; from the front it passes inside the corridor; from the side it slows
 down and lets the obstacle cross.
 """

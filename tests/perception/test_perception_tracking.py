@@ -79,7 +79,7 @@ def test_velocity_of_a_synthetic_walker_after_one_second():
                 assert len(obstacles) == 1
                 errors.append(np.hypot(*(obstacles.velocities[0] - v)))
     rmse = float(np.sqrt(np.mean(np.square(errors))))
-    assert rmse < 0.12  # DESIGN §3 expects ±0.03–0.1 m/s after ~1 s
+    assert rmse < 0.12  # docs/design.md §3 expects ±0.03–0.1 m/s after ~1 s
     assert rmse > 0.005  # noise really is in the loop
 
 

@@ -1,4 +1,4 @@
-"""Independent brute-force reference for the shield's admissibility (DESIGN §7), for the tests only.
+"""Independent brute-force reference for the shield's admissibility (docs/design.md §7), for the tests only.
 
 Written from the definition, not from the shield's code: the drive is stepped as the simulator steps
 it (the commanded (v, ω) reached through the acceleration limits once per control period, then held),

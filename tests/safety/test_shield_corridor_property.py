@@ -1,4 +1,4 @@
-"""Property test of the shield's corridor rule (DESIGN §11: the corridor is hard) against a brute force.
+"""Property test of the shield's corridor rule (docs/design.md §11: the corridor is hard) against a brute force.
 
 2 000 random single cycles (seeded): a designated path of one to three segments with a half-width per
 segment, a robot near its edge (inside or up to 0.15 m outside), any heading, speed and turn rate, random

@@ -1,4 +1,4 @@
-"""Property test of the shield (DESIGN §7) against an independent brute force (tests/safety/_brute.py).
+"""Property test of the shield (docs/design.md §7) against an independent brute force (tests/safety/_brute.py).
 
 10 000 random single cycles (seeded numpy, reproducible): robot state, motion limits, control
 period, shield options, 0-6 people with random positions, velocities and uncertainties. For each:
@@ -149,7 +149,7 @@ def _batches(case: dict, size: int):
     "mode,towards_only,count,seed",
     [
         ("passive", True, 10_000, 0),  # the default: meetings count while the robot moves towards the person
-        ("passive", False, 3_000, 2),  # DESIGN §7 to the letter: any meeting before rest counts
+        ("passive", False, 3_000, 2),  # docs/design.md §7 to the letter: any meeting before rest counts
         ("passive-friendly", True, 1_000, 1),
     ],
 )

@@ -1,4 +1,4 @@
-"""The shield on scenarios with numbers (DESIGN §7): braking distances worked out by hand, a person
+"""The shield on scenarios with numbers (docs/design.md §7): braking distances worked out by hand, a person
 walking into a resting robot in the closed loop, contact already happening, passive-friendly mode."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Property test of the shield with static geometry (DESIGN §10) against an independent brute force.
+"""Property test of the shield with static geometry (docs/design.md §10) against an independent brute force.
 
 10 000 random single cycles (seeded): robot state, motion limits, control period, margin, 1-8 static
 points and segments (a wall, a box edge, a scan return) around the robot, and 0-3 people. The static

@@ -1,7 +1,7 @@
 """The paper's three behaviours (Fig. 8; tests/planning/test_paper_behaviours.py) hold with the planner's
 defaults and with EVERY shipped weight preset: the same assertions, run on episodes driven with each. One
 exception, by its weights: ``on-time`` (k2 six times the default's) passes ahead of the crossing person in
-the side case rather than letting it cross first (docs/weights.md)."""
+the side case rather than letting it cross first (docs/howto/tune-weights.md)."""
 
 from __future__ import annotations
 

@@ -216,7 +216,7 @@ def test_laser_scans_are_what_the_scanners_read(side_laser):
             with_hits += bool(valid.any())
             np.testing.assert_allclose(sent[valid], raw[valid], rtol=1e-6)  # float32 on the wire
             assert np.all(np.isnan(sent[~valid]))
-            # URG-04LX (DESIGN §3): 683 beams 360°/1024 apart, i.e. 239.8° from first to last beam.
+            # URG-04LX (docs/design.md §3): 683 beams 360°/1024 apart, i.e. 239.8° from first to last beam.
             assert message.end_angle - message.start_angle == pytest.approx(682 * 2 * np.pi / 1024, abs=1e-9)
         assert with_hits >= 5  # the person is in view of each scanner for a while
     tf = _decoded(file, "/tf")[0][1]

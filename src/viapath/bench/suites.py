@@ -1,6 +1,6 @@
 """Scenario suites generated from a seed, written as scenario YAML so they can be inspected and rerun.
 
-Every generated scenario is a plain scenario (DESIGN §4): a straight designated path from the origin
+Every generated scenario is a plain scenario (docs/design.md §4): a straight designated path from the origin
 along +x (length 6-8 m, corridor half-width 1.0-1.5 m), a robot at 0.25-0.3 m/s nominal, and people
 placed so that, if nobody reacted, they would meet the robot on its path (the timing is jittered by
 up to ±1 s). Scenario ``i`` of a suite draws from its own generator seeded by ``(seed, i)``, so a
@@ -554,7 +554,7 @@ def eth_ucy(
     during the episode (so the path goes where people walk), its direction is random; both ends lie
     inside the scene's central 90 % box, nobody is within 1 m of the robot's start at the start time,
     and at least one person comes within 2 m of the path during the episode. Every pedestrian of the
-    file is replayed (``replay`` item, DESIGN §4); they do not react to the robot, unless ``react``
+    file is replayed (``replay`` item, docs/design.md §4); they do not react to the robot, unless ``react``
     (then the names read ``eth-ucy-react-<scene>-<index>`` and the scenarios are otherwise the same).
     With ``maps``, the ETH and hotel scenarios also bring their obstacle map (:func:`with_ewap_map`).
     """

@@ -1,4 +1,4 @@
-"""The ``viapath`` command line (DESIGN §4): one typer app, every command imported here by name.
+"""The ``viapath`` command line (docs/design.md §4): one typer app, every command imported here by name.
 
 Each command lives in a module of this package and imports what is heavy (the simulator, rclpy,
 Optuna, Foxglove, navground, matplotlib) inside its body, so ``viapath --help`` and ``viapath run``

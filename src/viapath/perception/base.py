@@ -54,7 +54,7 @@ class Perception:
         raise NotImplementedError
 
     def static_layer(self, world: WorldSnapshot) -> StaticLayer:
-        """The static geometry the planner is told about this cycle (DESIGN §10), after :meth:`observe`:
+        """The static geometry the planner is told about this cycle (docs/design.md §10), after :meth:`observe`:
         by default the known map (the world's static shapes); laser models tell what their scans show."""
         return world.static_layer()
 

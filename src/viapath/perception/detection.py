@@ -1,7 +1,7 @@
 """From the scans of one cycle to round obstacles (centre, radius, centre uncertainty) in the robot frame.
 
 Source: the usual 2-D laser people-detection chain (e.g. Arras, Martínez Mozos, Burgard, ICRA 2007;
-Leigh et al., ICRA 2015; DESIGN §3): segment each scan on range jumps
+Leigh et al., ICRA 2015; docs/design.md §3): segment each scan on range jumps
 (:mod:`~viapath.perception.segmentation`), fit a circle to each segment
 (:mod:`~viapath.perception.circle_fit`), keep the round, person- or leg-sized ones.
 

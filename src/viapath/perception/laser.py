@@ -1,7 +1,7 @@
 """Laser perception for the simulator: two simulated scanners -> detections -> world-frame tracks.
 
 Source: paper §1.2 and §4.1 (two 240° URG-04LX, forward and backward, 0.145 m from the centre),
-DESIGN §3. Each ``observe`` call is one 10 Hz cycle: cast both scans at the robot pose, detect round
+docs/design.md §3. Each ``observe`` call is one 10 Hz cycle: cast both scans at the robot pose, detect round
 obstacles in the robot frame (:mod:`~viapath.perception.detection`), move the detections into the
 world frame with the robot pose (odometry: the simulator's true pose) and run the tracker
 (:mod:`~viapath.perception.tracking`). The planner receives the confirmed tracks.

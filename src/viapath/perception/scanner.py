@@ -1,7 +1,7 @@
 """2-D laser scanner model: Hokuyo URG-04LX defaults, mounting pose, noise and invalid readings.
 
 Source: Yamada, Sa, Ohya §1.2 and §4.1 (two URG-04LX, 240° each, one facing forward and one
-backward, each 0.145 m from the robot centre) and the URG-04LX datasheet as quoted in DESIGN §3:
+backward, each 0.145 m from the robot centre) and the URG-04LX datasheet as quoted in docs/design.md §3:
 0.352° steps (360°/1024; 683 beams over 240°), 100 ms per scan, 0.02–4.0 m guaranteed range with
 readings reported up to 5.6 m, accuracy ±10 mm below 1 m and ±1 % of the range beyond.
 

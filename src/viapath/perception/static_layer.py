@@ -1,6 +1,6 @@
-"""The static layer of laser perception: every scan return no person track explains (DESIGN §10).
+"""The static layer of laser perception: every scan return no person track explains (docs/design.md §10).
 
-Source: DESIGN §10; the obstacle layer of a local costmap (ROS navigation: marking by returns, clearing
+Source: docs/design.md §10; the obstacle layer of a local costmap (ROS navigation: marking by returns, clearing
 by the free space along each beam, a memory for what is out of view). What is ours:
 
 * **Marking.** A return is a person's when it lies within the track's radius + ``explained_margin_m``

@@ -3,7 +3,7 @@
 Source: the constant-velocity (white-noise acceleration) model and Kalman filter of Bar-Shalom,
 Li, Kirubarajan, "Estimation with Applications to Tracking and Navigation" (2001), §6.3.2:
 ``F = [[I, dt I], [0, I]]``, ``Q = q [[dt³/3 I, dt²/2 I], [dt²/2 I, dt I]]`` with ``q = σ_a²``;
-global-nearest-neighbour association with a chi-square gate on the innovation (§3.2 / DESIGN §3),
+global-nearest-neighbour association with a chi-square gate on the innovation (§3.2 / docs/design.md §3),
 optimal assignment when tracks compete (:mod:`~viapath.perception.assignment`); M-of-N confirmation.
 
 What we chose where the source leaves it open:

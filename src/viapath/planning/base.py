@@ -1,4 +1,4 @@
-"""The planner protocol (DESIGN §4): what every planner is handed and what it returns.
+"""The planner protocol (docs/design.md §4): what every planner is handed and what it returns.
 
 A planner is built once per episode with the designated path, the robot's limits and its options,
 then called every cycle with an :class:`~viapath.observation.Observation`; it returns a
@@ -64,7 +64,7 @@ COMMON_OPTIONS = OptionSet(
 @dataclass(frozen=True)
 class Inflation:
     """The one safety inflation: obstacle i must be kept ``check_radii[i] + growth[i]·min(t,
-    growth_until_s[i])`` from the robot centre at time t from now (DESIGN §2: the cylinder becomes a
+    growth_until_s[i])`` from the robot centre at time t from now (docs/design.md §2: the cylinder becomes a
     capped cone). Replanning every cycle corrects a velocity error before it matters far ahead, so the
     cone stops growing once it has added ``max_inflation_m`` (else head-on passes never fit a corridor)."""
 
@@ -169,7 +169,7 @@ class Planner:
     name: ClassVar[str] = ""
     options: ClassVar[OptionSet] = COMMON_OPTIONS
     #: The shield behind the planner, when there is one (set by ``viapath.safety.ShieldedPlanner``); a
-    #: planner that plans inside it (DESIGN §7) checks its candidates' commands with it.
+    #: planner that plans inside it (docs/design.md §7) checks its candidates' commands with it.
     shield: Any = None
 
     def __init_subclass__(cls, name: str | None = None, **kwargs: Any) -> None:

@@ -22,7 +22,7 @@ What the sources leave open and we chose (and why):
 * Obstacles are forecast at constant velocity; the combined radius is robot + obstacle +
   ``safety_margin_m`` + ``uncertainty_sigmas``·position σ, growing by ``uncertainty_sigmas``·velocity σ
   per second (the same cone as the paper's planner), so every planner gets the same safety inflation.
-* The corridor (DESIGN §4) is a hard constraint in ``dwa`` and ``vo``: a candidate whose motion over
+* The corridor (docs/design.md §4) is a hard constraint in ``dwa`` and ``vo``: a candidate whose motion over
   ``corridor_horizon_s`` leaves it is dropped (a robot already outside may not go further out). Only
   the first seconds are checked: a constant-(v, ω) arc checked to the full horizon leaves any corridor.
 * DWA: Fox et al. reward high speed; a path follower should keep its nominal speed, so the velocity

@@ -1,4 +1,4 @@
-"""viapath on a robot: a ROS 2 planner node, a simulator node and a bag player (DESIGN §8).
+"""viapath on a robot: a ROS 2 planner node, a simulator node and a bag player (docs/design.md §8).
 
 Install with ``pip install -e '.[ros2]'`` (the PyPI wheels of ROS 2 Kilted: rclpy over Fast DDS; no
 system ROS and no environment variables are needed), or run from a sourced ROS 2 installation.

@@ -1,6 +1,6 @@
 """What the ROS 2 node does each scan cycle, without ROS: inputs checked, perception, planning, safe stops.
 
-Source: DESIGN §3 (two URG-04LX, invalid readings 0 / NaN / inf), §8 (topics); the perception chain
+Source: docs/design.md §3 (two URG-04LX, invalid readings 0 / NaN / inf), §8 (topics); the perception chain
 of :mod:`viapath.perception` (fusion, detection, tracking: the same code ``viapath run --perception
 laser`` runs) and any registered planner. The rclpy node (:mod:`viapath.ros2.node`) only converts
 messages and calls this; tests drive it directly too.
@@ -52,7 +52,7 @@ What we chose where the sources are silent:
   tracks confirm again before it moves.
 * **Static geometry**: every scan return no person track explains (:mod:`viapath.perception.static_layer`,
   parameter ``static_layer``) and, with ``map_topic``, a known map's occupied cells are the observation's
-  static layer: the planner, the guard and the shield keep clear of them (DESIGN §10).
+  static layer: the planner, the guard and the shield keep clear of them (docs/design.md §10).
 * **Every command** is finite and inside the limits: speed in [0, max_speed_mps], turn rate in
   ±max_turn_rate_radps, at most one cycle's acceleration above the measured speed, and at most one
   cycle's braking below the *lower* of the measured and the last commanded speed (a turn rate may

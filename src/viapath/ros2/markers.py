@@ -1,6 +1,6 @@
 """What the planner saw, as a ``visualization_msgs/MarkerArray`` built from the shared scene.
 
-Source: DESIGN §8 (markers: corridor, tracks, forecasts, via points, plan) and §9 (the paper's
+Source: docs/design.md §8 (markers: corridor, tracks, forecasts, via points, plan) and §9 (the paper's
 Fig. 4: people as oblique cylinders in x-y-t, time as the height). The messages are built from a
 :class:`viapath.viz.scene.CycleScene`, the neutral description the Foxglove views draw from too, so
 RViz and Foxglove show the same forecast: :class:`MarkerScenes` turns a cycle of

@@ -1,6 +1,6 @@
 """The node as Nav2's controller server: the ``follow_path`` action, ``speed_limit``, TF, costmap clearing.
 
-Source: DESIGN §12; Nav2's controller server (Kilted) as documented: a lifecycle node serving
+Source: docs/design.md §12; Nav2's controller server (Kilted) as documented: a lifecycle node serving
 ``nav2_msgs/action/FollowPath`` (goal a ``nav_msgs/Path``; feedback ``distance_to_goal`` and
 ``speed``; result ``error_code`` / ``error_msg`` with the action's codes), re-sent the path about once
 a second by the behaviour tree (a preempt: the new path replaces the old one without a stop, and the

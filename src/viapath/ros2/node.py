@@ -1,6 +1,6 @@
 """``viapath ros2 node``: the planner as a ROS 2 (lifecycle) node.
 
-Source: DESIGN §8 (topics, QoS, parameters from the option schema, ``use_sim_time``); the ROS 2
+Source: docs/design.md §8 (topics, QoS, parameters from the option schema, ``use_sim_time``); the ROS 2
 managed-node design (configure / activate / deactivate / cleanup, ``rclpy.lifecycle``). All the
 decisions of a cycle are in :class:`viapath.ros2.core.PlannerCore`; this module converts messages
 and owns the timers.

@@ -1,6 +1,6 @@
 """The ROS 2 node's parameters: one schema for the node's own values and the planner's options.
 
-Source: DESIGN §8 (topics, mounts, ``use_sim_time``) and the planner's option schema
+Source: docs/design.md §8 (topics, mounts, ``use_sim_time``) and the planner's option schema
 (:mod:`viapath.ros2.options`). Every parameter is an :class:`~viapath.ros2.options.Option`; the
 node declares them with their unit and bounds in the description, and :func:`validate` refuses a
 bad value with one message naming the parameter (the node then does not drive).
@@ -276,7 +276,7 @@ NODE_OPTIONS: tuple[Option, ...] = (
             "use_shield",
             "default",
             "",
-            help="passive-safety shield around the planner (DESIGN §7); default: as viapath run (on for viapath)",
+            help="passive-safety shield around the planner (docs/design.md §7); default: as viapath run (on for viapath)",
             choices=("default", "on", "off"),
         ),
     )

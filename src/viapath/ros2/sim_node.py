@@ -1,6 +1,6 @@
 """``viapath ros2 sim SCENARIO``: the simulator as a ROS 2 node, so the planner node can be tried without a robot.
 
-Source: DESIGN §8 (topics) and the simulator of :mod:`viapath.sim` (kinematics, obstacle motion,
+Source: docs/design.md §8 (topics) and the simulator of :mod:`viapath.sim` (kinematics, obstacle motion,
 metrics), with the two URG-04LX scans of :mod:`viapath.perception` (ray casting, range noise,
 invalid readings as +inf). The episode's metrics are :func:`viapath.sim.metrics.compute_metrics` of
 the same :class:`~viapath.sim.loop.Trace` that ``viapath run`` builds, so ``--json`` prints the same

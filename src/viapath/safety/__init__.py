@@ -1,4 +1,4 @@
-"""Passive safety (DESIGN §7): a shield between any planner and the base, and a planner wrapper."""
+"""Passive safety (docs/design.md §7): a shield between any planner and the base, and a planner wrapper."""
 
 from viapath.safety.options import SHIELD_MODES, SHIELD_OPTIONS
 from viapath.safety.shield import Shield, ShieldConfig, ShieldResult

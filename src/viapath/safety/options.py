@@ -1,4 +1,4 @@
-"""One definition of each shield option (name, default, unit, bounds, help): DESIGN §7, §8.
+"""One definition of each shield option (name, default, unit, bounds, help): docs/design.md §7, §8.
 
 The same :class:`~viapath.options.OptionSet` as the planners' options, so the CLI, the ROS 2
 parameters and the listings are generated from it.
@@ -18,7 +18,7 @@ RETIRED = "compute"
 
 SHIELD_OPTIONS = OptionSet(
     [
-        Option("enabled", True, "filter the planner's command through the passive-safety shield (DESIGN §7)"),
+        Option("enabled", True, "filter the planner's command through the passive-safety shield (docs/design.md §7)"),
         Option(
             "mode",
             "passive",
@@ -55,7 +55,7 @@ SHIELD_OPTIONS = OptionSet(
             True,
             "count a meeting only while the robot moves towards the person's forecast "
             "centre (the robot is never the one moving into a person; a person catching up from behind meets it "
-            "moving away); false: any meeting before rest counts (DESIGN §7 to the letter)",
+            "moving away); false: any meeting before rest counts (docs/design.md §7 to the letter)",
         ),
         Option(
             "keep_in_corridor",

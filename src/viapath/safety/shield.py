@@ -1,4 +1,4 @@
-"""Passive-safety shield between any planner and the base (DESIGN §7).
+"""Passive-safety shield between any planner and the base (docs/design.md §7).
 
 Sources: passive safety, "if a contact happens, the robot is at rest" (Fraichard & Asama 2004,
 inevitable collision states; Bouraine, Fraichard & Salhi 2012; Mitsch & Platzer, IJRR 2017, who also
@@ -19,7 +19,7 @@ With ``towards_only`` (the default) a meeting counts only while the robot moves 
 forecast centre (u · (c_i − p) > 0): the robot is never the one moving into a person, which is what
 the at-fault metric counts, while a person catching up from behind may meet a robot that drives
 away from them (otherwise every faster person from behind stops the robot, and it is then hit at
-rest: the paper's "speed up to stay ahead" case). ``towards_only: false`` is DESIGN §7 to the
+rest: the paper's "speed up to stay ahead" case). ``towards_only: false`` is docs/design.md §7 to the
 letter: at rest at every contact.
 
 **At rest** means speed 0 at the start of a control period and during it: the period in which the

@@ -1,4 +1,4 @@
-"""Any planner behind the shield, untouched: ``ShieldedPlanner(inner)`` is itself a planner (DESIGN §7).
+"""Any planner behind the shield, untouched: ``ShieldedPlanner(inner)`` is itself a planner (docs/design.md §7).
 
 Each cycle it calls the inner planner, filters the command through :class:`~viapath.safety.Shield`
 and returns the inner decision with the filtered command; the plan keeps what the inner planner

@@ -1,4 +1,4 @@
-"""Scenario files (DESIGN §4): pydantic models with ``extra="forbid"`` so a typo is an error naming the field.
+"""Scenario files (docs/design.md §4): pydantic models with ``extra="forbid"`` so a typo is an error naming the field.
 
 Every number must be finite and inside its physical range; the loader turns a validation failure
 into one message naming the file, the field path, what was expected and what was found.

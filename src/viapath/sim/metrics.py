@@ -1,4 +1,4 @@
-"""Episode metrics (DESIGN §4 names, SI units), computed from the trace alone."""
+"""Episode metrics (docs/design.md §4 names, SI units), computed from the trace alone."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Reactive replays: recorded pedestrians who follow their own tracks but give way to the robot.
 
-Used for ``replay: {..., react: true}`` (DESIGN §4). Benchmarks that make ETH/UCY
+Used for ``replay: {..., react: true}`` (docs/design.md §4). Benchmarks that make ETH/UCY
 people "reactive" (e.g. the pedestrian simulators of crowd-navigation benchmarks: a social force
 from the robot, with the person pulled back towards the recorded trajectory) move each person by a
 social-force model whose goal is the recording itself. We do the same with our own social force

@@ -1,6 +1,6 @@
 """One planning cycle of the closed loop, as handed to ``run_episode(on_step=...)`` (views, recorders).
 
-Source: DESIGN §9 (seeing a run). The loop builds one record per cycle, after the planner decided
+Source: docs/design.md §9 (seeing a run). The loop builds one record per cycle, after the planner decided
 and before the robot moves; a callback must not change what it is given. Fields hold the loop's
 own objects (no copies), so a record costs nothing when nobody keeps it.
 """

@@ -1,6 +1,6 @@
 """Runs as Foxglove sees them: one MCAP per run, or a live WebSocket view, built from the scene.
 
-Source: DESIGN §9 (foxglove-sdk writes MCAP and serves a live WebSocket view with Foxglove's
+Source: docs/design.md §9 (foxglove-sdk writes MCAP and serves a live WebSocket view with Foxglove's
 schemas; the paper's Fig. 4 as a 3-D scene, time as the height). Every message is
 built from a :class:`viapath.viz.scene.CycleScene`, the neutral description the ROS 2 node's
 MarkerArray shares. Needs the ``viz`` extra (``foxglove-sdk``); imported only when asked for.

@@ -1,6 +1,6 @@
 """Write a run's MCAP in a process of its own, so the run is not slowed by building its messages.
 
-Source: writing the MCAP may cost at most 20 % of the run's wall time and DESIGN §9.
+Source: writing the MCAP may cost at most 20 % of the run's wall time and docs/design.md §9.
 Building and encoding one cycle's Foxglove messages takes 0.2-0.5 ms of CPU in Python, about as
 much as a whole cycle of the paper's scenarios (0.3 ms for paper-front), so in the run's own
 process an MCAP doubles a run. A recorder beside the robot is how ROS does it (``ros2 bag

@@ -1,6 +1,6 @@
 """What the planner saw and chose in one cycle, as plain numpy: the content every view draws.
 
-Source: DESIGN §9 (seeing a run) and §2 (the x-y-t picture of the paper, Yamada-Sa-Ohya Fig. 4:
+Source: docs/design.md §9 (seeing a run) and §2 (the x-y-t picture of the paper, Yamada-Sa-Ohya Fig. 4:
 people as oblique cylinders ``|x - c_i - v_i t| <= R_i`` over the horizon, the robot's plan as a
 polyline through its via points, time as the height). The Foxglove writer
 (:mod:`viapath.viz.foxglove`) and the ROS 2 node's MarkerArray both build their messages from a
