@@ -54,7 +54,7 @@ SECTIONS = [  # (module, owner in it or None, function, label): the parts of a c
     ("viapath.planning.viapath.planner", None, "can_follow", "roll-outs of candidates (can_follow)"),
     ("viapath.planning.viapath.planner", None, "follows", "roll-outs of candidates (follows, numpy choice)"),
     ("viapath.planning.viapath.follow", None, "_roll_out", "  roll-out and its checks"),
-    ("viapath.compiled.arithmetic", "Arithmetic", "track", "  track (compiled, or numpy before wave 8)"),
+    ("viapath.compiled.arithmetic", None, "track", "  track (compiled)"),
     ("viapath.planning.viapath.checks", "LegChecks", "clear", "  clear"),
     ("viapath.planning.viapath.planner", None, "stop_or_escape", "stop or escape"),
     ("viapath.planning.viapath.planner", None, "score", "costs"),

@@ -15,15 +15,13 @@ DECORATOR = "jit.py"
 
 NOT_YET: dict[str, str] = {
     "compiled/__init__.py": "the policy choosing numpy or compiled arithmetic",
-    "compiled/arithmetic.py": "the planner's dispatch between its numpy and compiled steps",
     "compiled/choice.py": "the option compute",
     "compiled/harness.py": "the guard's compiled twins",
-    "compiled/planning.py": "the planner's compiled twins",
+    "compiled/planning.py": "the planner's compiled steps: the digest numba's cache needs of what they compile in",
     "compiled/shield.py": "the shield's compiled twins",
     "compiled/slots.py": "slot numbers of the compiled planner's settings",
     "compiled/sums.py": "numpy's pairwise sum, compiled",
     "compiled/table.py": "the table of twins",
-    "planning/viapath/planner.py": "the planner's dispatch",
     "safety/shield.py": "the shield's dispatch",
 }
 

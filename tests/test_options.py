@@ -166,40 +166,47 @@ def test_a_renamed_option_reads_its_former_name_with_a_warning():
         OptionSet([Option("new", 1.0, "a"), Option("other", 1.0, "b", former_names=("new",))])
 
 
-def test_compute_is_defined_once_and_backend_is_its_former_name(tmp_path):
-    """The planner's and the shield's ``compute`` come from viapath.compiled.choice; an old file's or command
-    line's ``backend`` still works, with a FutureWarning; both at once is an error (exit 2)."""
+def test_the_shields_compute_is_defined_once_and_backend_is_its_former_name():
+    """The shield's ``compute`` comes from viapath.compiled.choice; an old ``backend`` still works, with a
+    FutureWarning."""
     from viapath.compiled import COMPUTE_CHOICES
     from viapath.safety.options import SHIELD_OPTIONS
     from viapath.safety.shield import ShieldConfig
 
-    for schema in (planner_options("viapath"), SHIELD_OPTIONS):
-        option = schema["compute"]
-        assert (option.default, option.choices, option.former_names) == ("auto", COMPUTE_CHOICES, ("backend",))
-        assert not option.decides and "backend" not in schema
-    with pytest.warns(FutureWarning, match="'backend' is now called 'compute'"):
-        planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [3.0, 0.0]], half_width_m=1.0), backend="numpy")
-    assert getattr(planner, "inner", planner).config.compute == "numpy"
+    option = SHIELD_OPTIONS["compute"]
+    assert (option.default, option.choices, option.former_names) == ("auto", COMPUTE_CHOICES, ("backend",))
+    assert not option.decides and "backend" not in SHIELD_OPTIONS
     with pytest.warns(FutureWarning, match="'backend' is now called 'compute'"):
         assert ShieldConfig.from_options({"backend": "numpy"}).compute == "numpy"
-    with pytest.warns(FutureWarning, match="planner.backend: option 'backend' is now called 'compute'"):
-        _, result = _run(tmp_path, "{name: viapath, backend: numpy}")
+
+
+def test_the_planners_compute_and_backend_are_read_and_do_nothing(tmp_path):
+    """The planner's steps are compiled, one implementation each: its former options ``compute`` and ``backend``
+    are read (a keyword, a scenario file, --option) with a FutureWarning that they do nothing, and left out."""
+    schema = planner_options("viapath")
+    assert "compute" not in schema and "backend" not in schema
+    path = DesignatedPath([[0.0, 0.0], [3.0, 0.0]], half_width_m=1.0)
+    with pytest.warns(FutureWarning, match="'backend' no longer does anything"):
+        planner = make_planner("viapath", path, backend="numpy")
+    assert "compute" not in dict(getattr(planner, "inner", planner).config)
+    with pytest.warns(FutureWarning, match="planner.compute: option 'compute' no longer does anything"):
+        _, result = _run(tmp_path, "{name: viapath, compute: numpy}")
     assert result.exit_code == 0, result.output
-    with pytest.warns(FutureWarning, match="now called 'compute'"):
+    with pytest.warns(FutureWarning, match="option 'backend' no longer does anything"):
         _, result = _run(tmp_path, "{name: viapath}", "--option", "backend=numpy")
     assert result.exit_code == 0, result.output
-    _, result = _run(tmp_path, "{name: viapath}", "-o", "backend=numpy", "-o", "compute=numba")
-    _clean_failure(result, "--option backend: option 'backend' is now called 'compute'; give only 'compute'")
+    with pytest.raises(ValueError, match="retired name 'k1' is an option's name"):
+        OptionSet([Option("k1", 1.0, "a")], retired={"k1": "why"})
 
 
-def test_an_old_preset_file_with_backend_sets_compute(tmp_path):
+def test_an_old_preset_file_with_backend_leaves_it_out(tmp_path):
     from viapath.presets import load_preset
 
     file = tmp_path / "old.yaml"
     file.write_text("name: old\ndescription: numpy arithmetic\noptions:\n  backend: numpy\n  weights: {k1: 0.2}\n")
-    with pytest.warns(FutureWarning, match="options.backend: option 'backend' is now called 'compute'"):
+    with pytest.warns(FutureWarning, match="options.backend: option 'backend' no longer does anything"):
         preset = load_preset(str(file))
-    assert preset.options == {"compute": "numpy", "k1": 0.2}
+    assert preset.options == {"k1": 0.2}
 
 
 def test_the_options_hash_leaves_out_options_that_decide_nothing():

@@ -1,27 +1,24 @@
-"""The compiled hot path of the viapath planner (extra ``fast``: numba): the same arithmetic as the
-numpy reference, one scalar loop instead of a few dozen array operations.
+"""The viapath planner's compiled steps, each the one implementation of its step: the leg-against-people
+checks, the via points, the corridor checks, the candidate tree, Eq. 1's sum and the choice, the roll-outs
+and the escape. Called through :mod:`viapath.compiled.arithmetic`, which packs the cycle's arrays.
 
-Source: the profile of ``benchmarks/bench_planner.py`` (docs/speed.md): per cycle the planner spends
-most of its time in (1) the leg-against-people checks, :func:`viapath.geometry.legs_first_contact`,
-called a handful of times per cycle on K legs × N people, and (2) the roll-outs of
-:func:`viapath.kinematics.track` (a Python loop of 20 steps, up to ``max_rollouts`` times a cycle).
-Both are pure functions of arrays, so they are compiled here, operation for operation as the numpy
-code does them (same order of additions, same roots), so that the decisions are the same
-(``tests/planning/test_backends.py`` checks it on random observations).
+Source: the paper's procedure (:mod:`viapath.planning.viapath.planner`); each step as one scalar loop instead
+of a few dozen array operations (the profile of ``benchmarks/bench_planner.py``, docs/speed.md). The tests hold
+them to independent oracles: the brute-force x-y-t checks, dense sampling of legs and corridors, the escape's
+scores worked out command by command, the controller stepped as the simulator steps it
+(``tests/planning/test_planner_oracles.py``, ``tests/planning/test_compiled_choice.py``, ``tests/test_kinematics.py``).
 
 Choices:
 * Every kernel is a plain module-level function decorated with :func:`viapath.jit.compiled` (numba, cached on
   disk: a process after the first pays no compilation; docs/speed.md gives the first run's cost). With
   ``NUMBA_DISABLE_JIT=1`` the same functions run as plain Python.
 * Inputs are C-contiguous float64 arrays (the caller makes them so): one compiled signature each.
-* Where numpy's rounding is not libm's, numpy computes and the kernels take its values: the sines and cosines
-  of the escape's headings (between :func:`escape_headings` and :func:`escape_scores`). The choice's angles
-  are libm's atan2 on both paths (:func:`viapath.geometry.angles_of`), so :func:`choose` takes them itself.
-  Where numpy's order of operations is its own, the kernels copy it: np.sum's pairwise summation
-  (:func:`viapath.compiled.sums.pairwise_sum`).
+* The escape's sines and cosines of its headings are numpy's (taken between :func:`escape_headings` and
+  :func:`escape_scores`), its sums numpy's pairwise summation (:func:`viapath.compiled.sums.pairwise_sum`):
+  the figures they were first specified with, kept bit for bit.
 * hypot costs about 20 ns here; where only the sign of ``hypot - limit`` matters, the squared distance
   decides outside a band of ±1e-9 around the limit (:func:`_within`, :func:`_excess_at_most`,
-  :func:`_furthest`), as the numpy path's :func:`viapath.planning.viapath.escape.touching` does.
+  :func:`_furthest`).
 """
 
 from __future__ import annotations
@@ -534,15 +531,6 @@ def goal_legs_inside(
 
 
 @compiled
-def corridor_excess(segment_starts, segment_directions, segment_lengths, half_widths, points):
-    """The numba twin of :meth:`viapath.path.DesignatedPath.corridor_excess` for (M, 2) points."""
-    out = np.empty(points.shape[0])
-    for m in range(points.shape[0]):
-        out[m] = _excess(points[m, 0], points[m, 1], segment_starts, segment_directions, segment_lengths, half_widths)
-    return out
-
-
-@compiled
 def escape_contacts(
     positions, times, obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s, overlapping, steps
 ):
@@ -557,7 +545,7 @@ def escape_contacts(
     at most the robot's longest step plus what the person walks and grows in a step (the triangle
     inequality), so a gap of g leaves g / that steps free. The skip keeps a margin (1e-6 m, and 1e-9
     relative) far above the rounding of the gaps, so the steps it passes over are those the full scan finds
-    free: the same first contacts (tests/planning/test_backends.py checks it on crowds that close fast)."""
+    free: the same first contacts."""
     k_count = positions.shape[0]
     s_count = positions.shape[1]
     n_count = obstacle_positions.shape[0]
@@ -641,7 +629,7 @@ def _within(dx, dy, limit):
     """``math.hypot(dx, dy) < limit``, mostly without hypot (about 20 ns each here, most of the escape's
     time): outside a band of ±1e-9 (relative) around ``limit`` the squared distance (a few 1e-16 from the
     square of hypot's result) decides; inside it, and for limits whose square could underflow or overflow
-    (or NaN), hypot decides. As :func:`viapath.planning.viapath.escape.touching` does for the numpy path."""
+    (or NaN), hypot decides."""
     if 1e-140 < limit < 1e140:
         squared = dx * dx + dy * dy
         below = limit * (1.0 - 1e-9)
@@ -658,7 +646,7 @@ def _excess_at_most(px, py, segment_starts, segment_directions, segment_lengths,
     """``_excess(px, py, ...) <= limit`` (the point within ``limit`` of the corridor, NaN false), mostly without
     hypot: with ``limit`` and every half width >= 0, a capsule's ``hypot(o) - half <= limit`` is ``hypot(o) <
     half + limit`` or, on the boundary, the difference itself: decided by :func:`_within`'s band where it is
-    certain, else by hypot (tests/planning/test_backends.py tries the band)."""
+    certain, else by hypot."""
     if not limit >= 0.0:
         return _excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths) <= limit
     for i in range(segment_starts.shape[0]):

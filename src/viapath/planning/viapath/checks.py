@@ -24,14 +24,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
-from itertools import islice
 from typing import Any
 
 import numpy as np
 
-from viapath.compiled.arithmetic import NUMPY, Arithmetic
+from viapath.compiled import arithmetic as compiled
 from viapath.geometry import cross2
-from viapath.kinematics import UnicycleState, tracking
+from viapath.kinematics import UnicycleState
 from viapath.observation import MotionLimits, Obstacles
 from viapath.options import Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
@@ -74,7 +73,6 @@ class LegChecks:
     envelope_accel_mps2: float = 0.0
     envelope_period_s: float = 0.0
     max_accel_mps2: float = 1.0
-    arithmetic: Arithmetic = NUMPY  # numpy reference or compiled code (viapath.compiled.arithmetic)
 
     def envelope_m(self, speeds: np.ndarray) -> np.ndarray:
         """How much further out a via point at ``speeds`` must lie for the robot to stop in time."""
@@ -91,7 +89,6 @@ class LegChecks:
         tracker: SubgoalTracker,
         policy: SubgoalPolicy,
         robot_radius_m: float,
-        arithmetic: Arithmetic = NUMPY,
     ) -> LegChecks:
         robot, path, obstacles, inflation = situation.robot, tracker.path, situation.obstacles, situation.inflation
         final = tracker.is_final
@@ -117,7 +114,6 @@ class LegChecks:
             continuation=continuation,
             corridor_tolerance_m=situation.corridor_tolerance_m,
             corridor_check_spacing_m=config.corridor_check_spacing_m,
-            arithmetic=arithmetic,
         )
 
     def with_less_inflation(
@@ -190,11 +186,11 @@ class LegChecks:
             people, static = self._moving_and_static_rows()
             for (rows, *packed), leg_radii, until in ((people, envelope, checked), (static, None, durations)):
                 if len(rows):
-                    contact[:, rows] = self.arithmetic.legs_first_contact_packed(
+                    contact[:, rows] = compiled.legs_first_contact_packed(
                         starts, start_times, velocities, until, packed, leg_radii
                     )
             return contact
-        return self.arithmetic.legs_first_contact(
+        return compiled.legs_first_contact(
             starts,
             start_times,
             velocities,
@@ -263,12 +259,13 @@ class LegChecks:
     def goal_legs(
         self, starts: np.ndarray, start_times: np.ndarray, speeds: np.ndarray, horizon_s: float | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N))."""
-        compiled = self.arithmetic.goal_legs(
-            self, starts, start_times, speeds, self.horizon_s if horizon_s is None else horizon_s
-        )
-        if compiled is not None:
-            return compiled
+        """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N)). Without
+        static geometry in one compiled call; with it, static rows are checked past the horizon without the
+        braking envelope (:meth:`contact_times`)."""
+        if self.obstacles.static_mask is None:
+            return compiled.goal_legs(
+                self, starts, start_times, speeds, self.horizon_s if horizon_s is None else horizon_s
+            )
         offset = self.subgoal - starts
         lengths = np.hypot(offset[:, 0], offset[:, 1])
         directions = offset / np.maximum(lengths, 1e-12)[:, None]
@@ -444,19 +441,11 @@ class LegChecks:
             cached = cache[(steps, dt)] = (centres[..., 0], centres[..., 1], np.minimum(reach, now - 1e-3))
         return cached
 
-    # -- the arithmetic the planner picked for this cycle (``arithmetic``: numpy, or compiled), for the recipe's steps
+    # -- the compiled steps the recipe calls -------------------------------------------------------
 
     def via_options(self, *arguments: Any) -> tuple[np.ndarray, ...]:
-        """:func:`viapath.geometry.via_options` in the cycle's arithmetic."""
-        return self.arithmetic.via_options(*arguments)  # type: ignore[no-untyped-call]
-
-    def corridor_excess(self, points: np.ndarray) -> np.ndarray:
-        """:meth:`DesignatedPath.corridor_excess` of the path in the cycle's arithmetic."""
-        return self.arithmetic.corridor_excess(self.path, points)
-
-    def escape_contacts(self, *arguments: Any) -> tuple[np.ndarray, ...] | None:
-        """The escape's first contacts and gaps compiled; None in numpy (the escape works them out itself)."""
-        return self.arithmetic.escape_contacts(*arguments)
+        """:func:`viapath.compiled.arithmetic.via_options`."""
+        return compiled.via_options(*arguments)  # type: ignore[no-untyped-call]
 
     def clear_track(
         self,
@@ -470,23 +459,9 @@ class LegChecks:
     ) -> np.ndarray | None:
         """The positions (steps, 2) of steering for ``target`` at ``speed_mps`` (:func:`viapath.kinematics.track`) if
         they keep clear of every obstacle (:meth:`clear`), else None."""
-        if self.arithmetic.name != "numpy":
-            positions = self.arithmetic.track(state, target, speed_mps, limits, dt, steps, heading_gain)
-            clear = len(self.obstacles) == 0 or self.arithmetic.clear(
-                positions, dt, self.position, self.packed_obstacles()
-            )
-            return positions if clear else None
-        # A failing candidate mostly meets someone early in its roll-out (in the slowest cycles, up to 8
-        # candidates fail within the first second): its first half is checked before the rest is rolled
-        # out. The same positions and verdict; a roll-out that passes pays one more (small) check.
-        rolling = tracking(state, target, speed_mps, limits, dt, heading_gain)
-        head = np.array(list(islice(rolling, steps // 2))).reshape(-1, 2)
-        if not self.clear(head, dt, of_steps=steps):
-            return None
-        tail = np.array(list(islice(rolling, steps - len(head)))).reshape(-1, 2)
-        if not self.clear(tail, dt, after_steps=len(head), of_steps=steps):
-            return None
-        return np.concatenate([head, tail])
+        positions = compiled.track(state, target, speed_mps, limits, dt, steps, heading_gain)
+        clear = len(self.obstacles) == 0 or compiled.clear(positions, dt, self.position, self.packed_obstacles())
+        return positions if clear else None
 
     # -- against the corridor (paper step 4) ---------------------------------------------------------
 
@@ -495,12 +470,10 @@ class LegChecks:
         return self.path.corridor_excess(points) <= self.corridor_tolerance_m
 
     def legs_inside(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-        return self.arithmetic.legs_inside(
-            self.path, starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m
-        )
+        return compiled.legs_inside(self.path, starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m)
 
     def goal_legs_inside(self, starts: np.ndarray) -> np.ndarray:
-        compiled = self.arithmetic.goal_legs_inside(
+        return compiled.goal_legs_inside(
             self.path,
             starts,
             self.subgoal,
@@ -508,24 +481,6 @@ class LegChecks:
             self.corridor_check_spacing_m,
             self.corridor_tolerance_m,
         )
-        if compiled is not None:
-            return compiled
-        # The subgoal ends both capsules next to it; a leg from a point inside one of them is inside
-        # that capsule (convex). Only other legs need the general check.
-        path = self.path
-        inside: Any = None
-        for i in (self.subgoal_index - 1, self.subgoal_index):  # the first is always there
-            if i == len(path.segment_lengths_m):
-                break
-            rel = starts - path.segment_starts[i]
-            along = np.minimum(np.maximum(rel @ path.segment_directions[i], 0.0), path.segment_lengths_m[i])
-            gap = np.hypot(*(rel - along[:, None] * path.segment_directions[i]).T) - path.half_widths_m[i]
-            inside_capsule = gap <= self.corridor_tolerance_m
-            inside = inside_capsule if inside is None else inside | inside_capsule
-        if not inside.all():
-            rest = np.flatnonzero(~inside)
-            inside[rest] = self.legs_inside(starts[rest], np.broadcast_to(self.subgoal, (len(rest), 2)))
-        return inside
 
 
 _FLOAT64 = np.dtype(np.float64)  # (an identity test: numpy's float64 arrays share this descriptor; another fails it)

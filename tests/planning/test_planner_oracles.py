@@ -1,9 +1,8 @@
-"""The numpy path's shortcuts for its slowest cycles (docs/CHANGELOG-speed.md, "numpy p99 (wave 6)") hold what
-the functions mean.
+"""The planner's steps hold what they mean, each against what it computes worked out independently (one
+command at a time, dense sampling of legs and segments, a fresh copy of the checks with nothing remembered):
+the escape's scores, the via points and leg contacts, the corridor checks, the roll-out checks.
 
-Each rewritten function is checked against what it computes, worked out independently (one command at a
-time, dense sampling of legs and segments, a fresh copy of the checks with nothing remembered), on seeded
-random situations: the robot near the path (three paths), 0-14 people around it, with and without
+Seeded random situations: the robot near the path (three paths), 0-14 people around it, with and without
 uncertainty, some overlapping the robot, so that both the escape's terms (time to contact, separation) and
 roll-outs that pass, fail and turn on the spot come up. Bit-for-bit sameness of whole runs is the
 equality runs' (episodes.csv before and after).
@@ -16,14 +15,16 @@ from dataclasses import replace
 
 import numpy as np
 
+from tests._core_helpers import rollout
 from viapath import DesignatedPath, Observation, Obstacles, RobotState
+from viapath.compiled import arithmetic as compiled
 from viapath.geometry import wrap_angle
-from viapath.kinematics import UnicycleState, rollout
+from viapath.kinematics import UnicycleState
 from viapath.observation import Command
 from viapath.planning import make_planner
 from viapath.planning.base import Plan
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.escape import escape_scores
+from viapath.planning.viapath.escape import escape_fan
 from viapath.planning.viapath.follow import can_follow
 from viapath.planning.viapath.planner import ViaPathConfig
 
@@ -37,7 +38,7 @@ PATHS = [
 def _situations(count: int, seed: int):
     """(planner, checks) of ``count`` random situations (a new planner per path, reset each time)."""
     rng = np.random.default_rng(seed)
-    planners = [make_planner("viapath", path, nominal_speed_mps=0.2, compute="numpy") for path in PATHS]
+    planners = [make_planner("viapath", path, nominal_speed_mps=0.2) for path in PATHS]
     for case in range(count):
         planner = planners[case % len(PATHS)]
         n = int(rng.integers(0, 15))
@@ -70,7 +71,7 @@ def _same_bits(a, b) -> bool:
 
 
 def _escape_scores_command_by_command(checks, limits, config, previous):
-    """What :func:`escape_scores` computes, one command at a time from its definition (the escape's module
+    """What the escape's scores are (:func:`viapath.compiled.arithmetic.escape`), one command at a time from its definition (the escape's module
     docstring): each command's roll-out, its corridor excess point by point, each person's gap along it, the
     first step any person not overlapped now is touched, the overlapped ones' deepest and last gaps, and the
     weighted sum of the terms. (commands, ends, scores) to compare within round-off."""
@@ -128,7 +129,8 @@ def test_escape_scores_are_those_of_each_command_alone():
     for case, (planner, checks) in enumerate(_situations(300, seed=11)):
         config = planner.config if case % 5 else hasty
         previous = Command(*rng.uniform([0.0, -2.0], [0.5, 2.0])) if case % 3 == 0 else None
-        commands, ends, score = escape_scores(checks, planner.limits, config, previous)
+        fan = escape_fan(planner.limits, config)
+        _, commands, ends, score = compiled.escape(checks, planner.limits, config, fan, previous, score_standing=True)
         expected = _escape_scores_command_by_command(checks, planner.limits, config, previous)
         assert np.array_equal(commands, expected[0]), f"case {case}"
         np.testing.assert_allclose(ends, expected[1], rtol=0, atol=1e-12, err_msg=f"case {case}")
@@ -137,35 +139,6 @@ def test_escape_scores_are_those_of_each_command_alone():
         overlapped += bool(np.any(gaps <= 0))
         contact += bool(np.any(score[np.isfinite(score)] < 20.0))
     assert overlapped > 20 and contact > 20  # both terms came up
-
-
-def test_touching_is_hypot_minus_reach_below_zero():
-    """The escape's contact test without hypot where the squared distance is certain: against
-    ``np.hypot(dx, dy) - reach < 0`` on 2 000 batches of offsets on the reach's circle to within a few ulps
-    (where only hypot can tell), near it, far inside and outside, with reaches tiny (squares underflow),
-    huge (squares overflow), zero, negative, infinite and NaN, and offsets NaN, infinite and -0.0."""
-    from viapath.planning.viapath.escape import touching
-
-    rng = np.random.default_rng(9)
-    special = np.array([0.0, -0.0, 1e-300, 1e-170, 1e-150, 1e150, 1e170, 1e300, -0.3, np.inf, -np.inf, np.nan])
-    for case in range(2000):
-        reach = rng.uniform(0.2, 1.2, (6, 5)) * 10.0 ** rng.choice([0, 0, 0, -160, -300, 160], (6, 5))
-        if case % 4 == 0:
-            reach.flat[rng.integers(0, reach.size, 3)] = rng.choice(special, 3)
-        angle = rng.uniform(0, 2 * np.pi, (7, 6, 5))
-        scale = reach * (1.0 + rng.integers(-4, 5, (7, 6, 5)) * 2.0**-52 * rng.choice([1, 1, 1e3, 1e7, 1e9, 1e12]))
-        dx, dy = scale * np.cos(angle), scale * np.sin(angle)
-        if case % 3 == 0:
-            dx.flat[rng.integers(0, dx.size, 4)] = rng.choice(special, 4)
-            dy.flat[rng.integers(0, dy.size, 4)] = rng.choice(special, 4)
-        with np.errstate(all="ignore"):
-            expected = np.hypot(dx, dy) - reach < 0
-            got = touching(dx, dy, reach)
-        assert np.array_equal(got, expected), f"case {case}"
-    # and exactly on the circle: hypot decides
-    reach = np.array([0.5])
-    assert not touching(np.array([0.5]), np.array([0.0]), reach)[0]
-    assert touching(np.array([np.nextafter(0.5, 0)]), np.array([0.0]), reach)[0]
 
 
 # -- the roll-outs of candidates -------------------------------------------------------------------
@@ -308,7 +281,7 @@ def test_via_options_and_leg_contacts_are_what_they_mean():
     people, cones growing or not, capped or not, with and without a braking envelope: every via option
     meets its obstacle's disc tangentially at the option's time, and each leg's first contact (of the legs to
     those via points and of random legs) is where dense sampling finds it."""
-    from viapath.geometry import legs_first_contact, via_options
+    from viapath.compiled.arithmetic import legs_first_contact, via_options
 
     rng = np.random.default_rng(21)
     options = contacts = 0
