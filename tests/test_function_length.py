@@ -135,8 +135,6 @@ def test_the_definition_counter_counts_planted_long_ones(tmp_path):
 PLANNER_FILES = ("viapath/planning/viapath", "viapath/compiled/planning.py", "viapath/compiled/arithmetic.py")
 PLANNER_FUNCTION_LINES, PLANNER_CLASS_LINES = 60, 300
 PLANNER_NOT_YET: dict[tuple[str, str], str] = {
-    ("viapath/planning/viapath/checks.py", "LegChecks"): "the packing for the compiled calls is to move out",
-    ("viapath/planning/viapath/candidates.py", "grow"): "the numpy tree of cycles with static geometry",
     **{
         ("viapath/compiled/planning.py", name): "one loop nest, to be split into inlined steps"
         for name in (

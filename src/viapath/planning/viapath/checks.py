@@ -40,8 +40,195 @@ from viapath.planning.base import Inflation, Situation
 ON_PATH_M = 0.01
 
 
+class _CompiledInputs:
+    """The checks' facts packed as the compiled steps take them (C-contiguous float64, made once per checks: a
+    :class:`LegChecks` is not changed after it is built; dataclasses.replace makes a new one, without these)."""
+
+    path: DesignatedPath
+    position: np.ndarray
+    heading_rad: float
+    speed_mps: float
+    turn_rate_radps: float
+    obstacles: Obstacles
+    check_radii: np.ndarray
+    growth: np.ndarray
+    growth_until_s: np.ndarray
+    via_radii: np.ndarray
+    continuation: tuple[np.ndarray, float] | None
+    envelope_accel_mps2: float
+    envelope_period_s: float
+    max_accel_mps2: float
+
+    def packed_obstacles(self) -> tuple[np.ndarray, ...]:
+        """positions, velocities, check radii, growth, growth_until_s of the obstacles, for the compiled code."""
+        cached = self.__dict__.get("_packed_obstacles")
+        if cached is None:
+            obstacles = self.obstacles
+            n = len(obstacles.positions)
+            cached = self.__dict__["_packed_obstacles"] = (
+                _contiguous(obstacles.positions, (n, 2)),
+                _contiguous(obstacles.velocities, (n, 2)),
+                _contiguous(self.check_radii, (n,)),
+                _contiguous(self.growth, (n,)),
+                _contiguous(self.growth_until_s, (n,)),
+            )
+        return cached
+
+    def packed_choice_inputs(self) -> tuple[Any, ...]:
+        """What the compiled choice takes of this cycle (:func:`viapath.compiled.planning.choose`'s order): the robot
+        (:meth:`packed_robot`), the obstacles (:meth:`packed_obstacles`), the via radii, the ids, the
+        continuation, the envelope, and the path's segment arrays and waypoints. Built in one go, every cycle:
+        the path's arrays, continuations and envelopes are kept on the path (a path is not changed after it is
+        built)."""
+        cached = self.__dict__.get("_packed_choice_inputs")
+        if cached is not None:
+            return cached
+        path = self.path
+        kept: Any = path.__dict__.get("_packed_choice_arrays")
+        if kept is None:
+            kept = path.__dict__["_packed_choice_arrays"] = (
+                tuple(
+                    _contiguous(a, np.shape(a))
+                    for a in (
+                        path.segment_starts,
+                        path.segment_directions,
+                        path.segment_lengths_m,
+                        path.half_widths_m,
+                        path.waypoints,
+                    )
+                ),
+                {},
+                {},
+            )
+        episode, continuations, envelopes = kept
+        continuation = self.continuation
+        key = None if continuation is None else (*continuation[0].tolist(), float(continuation[1]))
+        packed_continuation = continuations.get(key)
+        if packed_continuation is None:
+            packed_continuation = continuations[key] = self.packed_continuation()
+        key = (self.envelope_accel_mps2, self.envelope_period_s, self.max_accel_mps2)
+        envelope = envelopes.get(key)
+        if envelope is None:
+            envelope = envelopes[key] = self.packed_envelope()
+        n = len(self.obstacles)
+        ids = self.obstacles.ids
+        if not (type(ids) is np.ndarray and ids.dtype == np.int64 and ids.flags.c_contiguous):
+            ids = np.ascontiguousarray(ids, dtype=np.int64)
+        cached = self.__dict__["_packed_choice_inputs"] = (
+            self.packed_robot(),
+            *self.packed_obstacles(),
+            _contiguous(self.via_radii, (n,)),
+            ids,
+            packed_continuation,
+            envelope,
+            *episode,
+        )
+        return cached
+
+    def packed_robot(self) -> np.ndarray:
+        """(x, y, heading, speed, turn rate) of the robot."""
+        cached = self.__dict__.get("_packed_robot")
+        if cached is None:
+            cached = self.__dict__["_packed_robot"] = np.array(
+                [self.position[0], self.position[1], self.heading_rad, self.speed_mps, self.turn_rate_radps],
+                dtype=np.float64,
+            )
+        return cached
+
+    def packed_continuation(self) -> np.ndarray:
+        """(dx, dy, length) of the segment after the subgoal, or an empty array (none)."""
+        cached = self.__dict__.get("_packed_continuation")
+        if cached is None:
+            if self.continuation is None:
+                cached = np.zeros(0)
+            else:
+                direction, length = self.continuation
+                cached = np.array([direction[0], direction[1], length], dtype=np.float64)
+            self.__dict__["_packed_continuation"] = cached
+        return cached
+
+    def packed_envelope(self) -> np.ndarray:
+        """(person accel, period, robot accel) of the braking envelope; accel 0: none (:meth:`envelope_m`)."""
+        cached = self.__dict__.get("_packed_envelope")
+        if cached is None:
+            cached = np.array([self.envelope_accel_mps2, self.envelope_period_s, self.max_accel_mps2], dtype=np.float64)
+            self.__dict__["_packed_envelope"] = cached
+        return cached
+
+
+class _RollOutClearance:
+    """Whether robot positions rolled out from now keep clear of every obstacle (the follow step's standing
+    check; the candidates' roll-outs use the compiled :func:`viapath.compiled.arithmetic.clear`)."""
+
+    path: DesignatedPath
+    position: np.ndarray
+    heading_rad: float
+    speed_mps: float
+    turn_rate_radps: float
+    obstacles: Obstacles
+    check_radii: np.ndarray
+    growth: np.ndarray
+    growth_until_s: np.ndarray
+    via_radii: np.ndarray
+    continuation: tuple[np.ndarray, float] | None
+    envelope_accel_mps2: float
+    envelope_period_s: float
+    max_accel_mps2: float
+
+    def clear(self, positions: np.ndarray, dt: float, after_steps: int = 0, of_steps: int | None = None) -> bool:
+        """Whether robot positions (one per ``dt`` from now, or from ``after_steps`` steps from now on; part of
+        a roll-out of ``of_steps`` steps, if given) keep clear of every obstacle."""
+        if len(self.obstacles) == 0 or len(positions) == 0:
+            return True
+        end = after_steps + len(positions)
+        steps = end if of_steps is None else of_steps
+        centres_x, centres_y, limit = self._clear_limits(steps, dt)
+        # Only the obstacles a roll-out this long can reach: one whose centre stays farther from the robot than
+        # its limit plus the roll-out's greatest distance from the robot is passed clear at every step
+        # (triangle inequality), so leaving it out changes no verdict.
+        offset = positions - self.position
+        travel = float(np.sqrt((offset * offset).sum(axis=1).max()))
+        near = self._clear_slack(steps, dt) <= travel + 1e-6
+        if not near.any():
+            return True
+        rows = slice(after_steps, end)
+        if near.all():
+            centres_x, centres_y, limit = centres_x[rows], centres_y[rows], limit[rows]
+        else:
+            centres_x, centres_y, limit = centres_x[rows, near], centres_y[rows, near], limit[rows, near]
+        distance = np.hypot(positions[:, 0:1] - centres_x, positions[:, 1:2] - centres_y)
+        return bool((distance >= limit).all())
+
+    def _clear_slack(self, steps: int, dt: float) -> np.ndarray:
+        """(N,) for each obstacle the least of (its centre's distance from the robot − its limit) over the steps
+        of :meth:`_clear_limits`: a roll-out that stays closer to the robot than this is clear of it."""
+        cache = self.__dict__.setdefault("_clear_slack_cache", {})
+        cached = cache.get((steps, dt))
+        if cached is None:
+            centres_x, centres_y, limit = self._clear_limits(steps, dt)
+            gap = np.hypot(centres_x - self.position[0], centres_y - self.position[1]) - limit
+            cached = cache[(steps, dt)] = gap.min(axis=0)
+        return cached
+
+    def _clear_limits(self, steps: int, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The obstacles' centres (x and y, (steps, N) each) after each ``dt`` and how close the robot may come
+        to each then: the part of :meth:`clear` that is the same for every roll-out of the cycle (up to
+        ``max_rollouts`` of them when no candidate is free), made once per step count."""
+        cache = self.__dict__.setdefault("_clear_limits_cache", {})
+        cached = cache.get((steps, dt))
+        if cached is None:
+            times = dt * np.arange(1, steps + 1)[:, None]
+            obstacles = self.obstacles
+            centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
+            reach = self.check_radii + self.growth * np.minimum(times, self.growth_until_s)
+            # Already inside an obstacle's margin (a close pass): only forbid getting closer still.
+            now = np.hypot(*(self.position - obstacles.positions).T)
+            cached = cache[(steps, dt)] = (centres[..., 0], centres[..., 1], np.minimum(reach, now - 1e-3))
+        return cached
+
+
 @dataclass
-class LegChecks:
+class LegChecks(_CompiledInputs, _RollOutClearance):
     """One cycle's checks, vectorised over legs and obstacles."""
 
     path: DesignatedPath
@@ -290,156 +477,6 @@ class LegChecks:
         if free.any():  # (when every leg meets someone, as in the slowest cycles, the corridor cannot free one)
             free &= self.goal_legs_inside(starts)
         return directions, lengths, free, contact
-
-    # -- the same facts packed as the compiled code takes them (C-contiguous float64, made once per LegChecks: a
-    # LegChecks is not changed after it is built; dataclasses.replace makes a new one, without these) --
-
-    def packed_obstacles(self) -> tuple[np.ndarray, ...]:
-        """positions, velocities, check radii, growth, growth_until_s of the obstacles, for the compiled code."""
-        cached = self.__dict__.get("_packed_obstacles")
-        if cached is None:
-            obstacles = self.obstacles
-            n = len(obstacles.positions)
-            cached = self.__dict__["_packed_obstacles"] = (
-                _contiguous(obstacles.positions, (n, 2)),
-                _contiguous(obstacles.velocities, (n, 2)),
-                _contiguous(self.check_radii, (n,)),
-                _contiguous(self.growth, (n,)),
-                _contiguous(self.growth_until_s, (n,)),
-            )
-        return cached
-
-    def packed_choice_inputs(self) -> tuple[Any, ...]:
-        """What the compiled choice takes of this cycle (:func:`viapath.compiled.planning.choose`'s order): the robot
-        (:meth:`packed_robot`), the obstacles (:meth:`packed_obstacles`), the via radii, the ids, the
-        continuation, the envelope, and the path's segment arrays and waypoints. Built in one go, every cycle:
-        the path's arrays, continuations and envelopes are kept on the path (a path is not changed after it is
-        built)."""
-        cached = self.__dict__.get("_packed_choice_inputs")
-        if cached is not None:
-            return cached
-        path = self.path
-        kept: Any = path.__dict__.get("_packed_choice_arrays")
-        if kept is None:
-            kept = path.__dict__["_packed_choice_arrays"] = (
-                tuple(
-                    _contiguous(a, np.shape(a))
-                    for a in (
-                        path.segment_starts,
-                        path.segment_directions,
-                        path.segment_lengths_m,
-                        path.half_widths_m,
-                        path.waypoints,
-                    )
-                ),
-                {},
-                {},
-            )
-        episode, continuations, envelopes = kept
-        continuation = self.continuation
-        key = None if continuation is None else (*continuation[0].tolist(), float(continuation[1]))
-        packed_continuation = continuations.get(key)
-        if packed_continuation is None:
-            packed_continuation = continuations[key] = self.packed_continuation()
-        key = (self.envelope_accel_mps2, self.envelope_period_s, self.max_accel_mps2)
-        envelope = envelopes.get(key)
-        if envelope is None:
-            envelope = envelopes[key] = self.packed_envelope()
-        n = len(self.obstacles)
-        ids = self.obstacles.ids
-        if not (type(ids) is np.ndarray and ids.dtype == np.int64 and ids.flags.c_contiguous):
-            ids = np.ascontiguousarray(ids, dtype=np.int64)
-        cached = self.__dict__["_packed_choice_inputs"] = (
-            self.packed_robot(),
-            *self.packed_obstacles(),
-            _contiguous(self.via_radii, (n,)),
-            ids,
-            packed_continuation,
-            envelope,
-            *episode,
-        )
-        return cached
-
-    def packed_robot(self) -> np.ndarray:
-        """(x, y, heading, speed, turn rate) of the robot."""
-        cached = self.__dict__.get("_packed_robot")
-        if cached is None:
-            cached = self.__dict__["_packed_robot"] = np.array(
-                [self.position[0], self.position[1], self.heading_rad, self.speed_mps, self.turn_rate_radps],
-                dtype=np.float64,
-            )
-        return cached
-
-    def packed_continuation(self) -> np.ndarray:
-        """(dx, dy, length) of the segment after the subgoal, or an empty array (none)."""
-        cached = self.__dict__.get("_packed_continuation")
-        if cached is None:
-            if self.continuation is None:
-                cached = np.zeros(0)
-            else:
-                direction, length = self.continuation
-                cached = np.array([direction[0], direction[1], length], dtype=np.float64)
-            self.__dict__["_packed_continuation"] = cached
-        return cached
-
-    def packed_envelope(self) -> np.ndarray:
-        """(person accel, period, robot accel) of the braking envelope; accel 0: none (:meth:`envelope_m`)."""
-        cached = self.__dict__.get("_packed_envelope")
-        if cached is None:
-            cached = np.array([self.envelope_accel_mps2, self.envelope_period_s, self.max_accel_mps2], dtype=np.float64)
-            self.__dict__["_packed_envelope"] = cached
-        return cached
-
-    def clear(self, positions: np.ndarray, dt: float, after_steps: int = 0, of_steps: int | None = None) -> bool:
-        """Whether robot positions (one per ``dt`` from now, or from ``after_steps`` steps from now on; part of
-        a roll-out of ``of_steps`` steps, if given) keep clear of every obstacle."""
-        if len(self.obstacles) == 0 or len(positions) == 0:
-            return True
-        end = after_steps + len(positions)
-        steps = end if of_steps is None else of_steps
-        centres_x, centres_y, limit = self._clear_limits(steps, dt)
-        # Only the obstacles a roll-out this long can reach: one whose centre stays farther from the robot than
-        # its limit plus the roll-out's greatest distance from the robot is passed clear at every step
-        # (triangle inequality), so leaving it out changes no verdict.
-        offset = positions - self.position
-        travel = float(np.sqrt((offset * offset).sum(axis=1).max()))
-        near = self._clear_slack(steps, dt) <= travel + 1e-6
-        if not near.any():
-            return True
-        rows = slice(after_steps, end)
-        if near.all():
-            centres_x, centres_y, limit = centres_x[rows], centres_y[rows], limit[rows]
-        else:
-            centres_x, centres_y, limit = centres_x[rows, near], centres_y[rows, near], limit[rows, near]
-        distance = np.hypot(positions[:, 0:1] - centres_x, positions[:, 1:2] - centres_y)
-        return bool((distance >= limit).all())
-
-    def _clear_slack(self, steps: int, dt: float) -> np.ndarray:
-        """(N,) for each obstacle the least of (its centre's distance from the robot − its limit) over the steps
-        of :meth:`_clear_limits`: a roll-out that stays closer to the robot than this is clear of it."""
-        cache = self.__dict__.setdefault("_clear_slack_cache", {})
-        cached = cache.get((steps, dt))
-        if cached is None:
-            centres_x, centres_y, limit = self._clear_limits(steps, dt)
-            gap = np.hypot(centres_x - self.position[0], centres_y - self.position[1]) - limit
-            cached = cache[(steps, dt)] = gap.min(axis=0)
-        return cached
-
-    def _clear_limits(self, steps: int, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The obstacles' centres (x and y, (steps, N) each) after each ``dt`` and how close the robot may come
-        to each then: the part of :meth:`clear` that is the same for every roll-out of the cycle (up to
-        ``max_rollouts`` of them when no candidate is free), made once per step count."""
-        cache = self.__dict__.setdefault("_clear_limits_cache", {})
-        cached = cache.get((steps, dt))
-        if cached is None:
-            times = dt * np.arange(1, steps + 1)[:, None]
-            obstacles = self.obstacles
-            centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
-            reach = self.check_radii + self.growth * np.minimum(times, self.growth_until_s)
-            # Already inside an obstacle's margin (a close pass): only forbid getting closer still.
-            now = np.hypot(*(self.position - obstacles.positions).T)
-            cached = cache[(steps, dt)] = (centres[..., 0], centres[..., 1], np.minimum(reach, now - 1e-3))
-        return cached
 
     # -- the compiled steps the recipe calls -------------------------------------------------------
 
