@@ -70,6 +70,11 @@ def random_scene(rng, n_obstacles, path, planner):
 
 def build(name: str, path):
     """The planner timed under ``name``."""
+    if name == "viapath-numpy":
+        raise SystemExit(
+            "viapath-numpy: the planner has no numpy twin any more; time 'viapath' with NUMBA_DISABLE_JIT=1 for its "
+            "steps as plain Python"
+        )
     if name in ("viapath", "viapath-fast"):
         planner = make_planner("viapath", path, nominal_speed_mps=0.2)
         planner.decide = _TimedDecide(planner.decide)  # the instance's, ahead of the class's
