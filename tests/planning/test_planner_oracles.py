@@ -144,8 +144,33 @@ def test_escape_scores_are_those_of_each_command_alone():
 # -- the roll-outs of candidates -------------------------------------------------------------------
 
 
+def test_clear_is_the_definition():
+    """:meth:`LegChecks.clear` (compiled) against its definition (:func:`_clear_reference`) on random roll-outs
+    near the people (so that both verdicts come up), with one step exactly on a person's limit in a quarter of
+    them (where a difference in the last bit of a distance would change the verdict)."""
+    rng = np.random.default_rng(5)
+    verdicts = set()
+    for case, (_, checks) in enumerate(_situations(600, seed=12)):
+        for kind in range(4):
+            steps, dt = int(rng.choice([20, 5, 12])), float(rng.choice([0.1, 0.1, 0.05]))
+            positions = checks.position + np.cumsum(rng.normal(0.0, 0.06, (steps, 2)), axis=0)
+            if len(checks.obstacles) and kind == 3:  # one step on the boundary of one person's limit
+                obstacles = checks.obstacles
+                times = dt * np.arange(1, steps + 1)[:, None]
+                centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
+                reach = checks.check_radii + checks.growth * np.minimum(times, checks.growth_until_s)
+                limit = np.minimum(reach, np.hypot(*(checks.position - obstacles.positions).T) - 1e-3)
+                s, j, angle = int(rng.integers(steps)), int(rng.integers(len(obstacles))), rng.uniform(0, 2 * np.pi)
+                positions[s] = centres[s, j] + abs(limit[s, j]) * np.array([np.cos(angle), np.sin(angle)])
+            expected = _clear_reference(checks, positions, dt)
+            assert checks.clear(positions, dt) is expected, f"case {case}"
+            verdicts.add(expected)
+    assert verdicts == {True, False}
+
+
 def _clear_reference(checks, positions, dt):
-    """:meth:`LegChecks.clear` as first written."""
+    """:meth:`LegChecks.clear` by its definition: every step's distance to every obstacle's centre then, at least
+    the obstacle's reach then, or (a close pass) no closer than the robot is now."""
     if len(checks.obstacles) == 0:
         return True
     times = dt * np.arange(1, len(positions) + 1)[:, None]
@@ -155,35 +180,6 @@ def _clear_reference(checks, positions, dt):
     distance = np.hypot(*(positions[:, None, :] - centres).transpose(2, 0, 1))
     now = np.hypot(*(checks.position - obstacles.positions).T)
     return bool(np.all(distance >= np.minimum(reach, now - 1e-3)))
-
-
-def test_clear_is_bit_for_bit_the_first_form():
-    """The obstacles' part of :meth:`LegChecks.clear` is made once per step count and cycle: its arrays
-    against the first form's, bit for bit, and the verdicts of random roll-outs against the first form's:
-    near the people (so that both verdicts come up) and with one step exactly on a person's limit (where
-    a difference in the last bit of a distance would change the verdict)."""
-    rng = np.random.default_rng(5)
-    verdicts = set()
-    for case, (_, checks) in enumerate(_situations(600, seed=12)):
-        for kind in range(4):
-            steps, dt = int(rng.choice([20, 5, 12])), float(rng.choice([0.1, 0.1, 0.05]))
-            positions = checks.position + np.cumsum(rng.normal(0.0, 0.06, (steps, 2)), axis=0)
-            if len(checks.obstacles):
-                obstacles = checks.obstacles
-                times = dt * np.arange(1, steps + 1)[:, None]
-                centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
-                reach = checks.check_radii + checks.growth * np.minimum(times, checks.growth_until_s)
-                limit = np.minimum(reach, np.hypot(*(checks.position - obstacles.positions).T) - 1e-3)
-                cached = checks._clear_limits(steps, dt)
-                for a, b in zip(cached, (centres[..., 0], centres[..., 1], limit)):
-                    np.testing.assert_array_equal(a, b)
-                if kind == 3:  # one step on the boundary of one person's limit
-                    s, j, angle = int(rng.integers(steps)), int(rng.integers(len(obstacles))), rng.uniform(0, 2 * np.pi)
-                    positions[s] = centres[s, j] + abs(limit[s, j]) * np.array([np.cos(angle), np.sin(angle)])
-            expected = _clear_reference(checks, positions, dt)
-            assert checks.clear(positions, dt) is expected, f"case {case}"
-            verdicts.add(expected)
-    assert verdicts == {True, False}
 
 
 def test_can_follow_remembers_only_what_it_would_compute_again():
@@ -441,32 +437,6 @@ def test_first_leg_is_where_the_plan_first_heads():
             assert _same_bits(target, expected[0]) and _same_bits(speed, expected[1])
             kinds.add("slow" if candidates.slow_s[k] > 0 else len(candidates.polyline(k)))
     assert {"slow", 2, 3, 4} <= kinds  # slow/wait, straight, one and two via points
-
-
-def test_clear_in_parts_is_clear_of_the_whole():
-    """The numpy roll-out checks its first half before rolling out the rest (``after_steps``, ``of_steps``): the
-    two verdicts together must be the whole roll-out's, split anywhere, with one step exactly on a person's limit
-    in a quarter of the cases (600 situations)."""
-    rng = np.random.default_rng(18)
-    verdicts = set()
-    for case, (_, checks) in enumerate(_situations(600, seed=15)):
-        steps, dt = int(rng.choice([20, 7, 12])), float(rng.choice([0.1, 0.05]))
-        positions = checks.position + np.cumsum(rng.normal(0.0, 0.06, (steps, 2)), axis=0)
-        if len(checks.obstacles) and case % 4 == 0:
-            centres_x, centres_y, limit = checks._clear_limits(steps, dt)
-            s, j, angle = int(rng.integers(steps)), int(rng.integers(len(checks.obstacles))), rng.uniform(0, 2 * np.pi)
-            positions[s] = (centres_x[s, j], centres_y[s, j]) + abs(limit[s, j]) * np.array(
-                [np.cos(angle), np.sin(angle)]
-            )
-        whole = _clear_reference(checks, positions, dt)
-        split = int(rng.integers(0, steps + 1))
-        fresh = replace(checks)  # nothing remembered: the parts make their rows from the whole roll-out's
-        parts = fresh.clear(positions[:split], dt, of_steps=steps) and fresh.clear(
-            positions[split:], dt, after_steps=split, of_steps=steps
-        )
-        assert parts is whole, f"case {case}"
-        verdicts.add(whole)
-    assert verdicts == {True, False}
 
 
 def test_tree_columns_are_the_pieces_concatenated():

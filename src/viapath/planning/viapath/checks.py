@@ -156,79 +156,8 @@ class _CompiledInputs:
         return cached
 
 
-class _RollOutClearance:
-    """Whether robot positions rolled out from now keep clear of every obstacle (the follow step's standing
-    check; the candidates' roll-outs use the compiled :func:`viapath.compiled.arithmetic.clear`)."""
-
-    path: DesignatedPath
-    position: np.ndarray
-    heading_rad: float
-    speed_mps: float
-    turn_rate_radps: float
-    obstacles: Obstacles
-    check_radii: np.ndarray
-    growth: np.ndarray
-    growth_until_s: np.ndarray
-    via_radii: np.ndarray
-    continuation: tuple[np.ndarray, float] | None
-    envelope_accel_mps2: float
-    envelope_period_s: float
-    max_accel_mps2: float
-
-    def clear(self, positions: np.ndarray, dt: float, after_steps: int = 0, of_steps: int | None = None) -> bool:
-        """Whether robot positions (one per ``dt`` from now, or from ``after_steps`` steps from now on; part of
-        a roll-out of ``of_steps`` steps, if given) keep clear of every obstacle."""
-        if len(self.obstacles) == 0 or len(positions) == 0:
-            return True
-        end = after_steps + len(positions)
-        steps = end if of_steps is None else of_steps
-        centres_x, centres_y, limit = self._clear_limits(steps, dt)
-        # Only the obstacles a roll-out this long can reach: one whose centre stays farther from the robot than
-        # its limit plus the roll-out's greatest distance from the robot is passed clear at every step
-        # (triangle inequality), so leaving it out changes no verdict.
-        offset = positions - self.position
-        travel = float(np.sqrt((offset * offset).sum(axis=1).max()))
-        near = self._clear_slack(steps, dt) <= travel + 1e-6
-        if not near.any():
-            return True
-        rows = slice(after_steps, end)
-        if near.all():
-            centres_x, centres_y, limit = centres_x[rows], centres_y[rows], limit[rows]
-        else:
-            centres_x, centres_y, limit = centres_x[rows, near], centres_y[rows, near], limit[rows, near]
-        distance = np.hypot(positions[:, 0:1] - centres_x, positions[:, 1:2] - centres_y)
-        return bool((distance >= limit).all())
-
-    def _clear_slack(self, steps: int, dt: float) -> np.ndarray:
-        """(N,) for each obstacle the least of (its centre's distance from the robot − its limit) over the steps
-        of :meth:`_clear_limits`: a roll-out that stays closer to the robot than this is clear of it."""
-        cache = self.__dict__.setdefault("_clear_slack_cache", {})
-        cached = cache.get((steps, dt))
-        if cached is None:
-            centres_x, centres_y, limit = self._clear_limits(steps, dt)
-            gap = np.hypot(centres_x - self.position[0], centres_y - self.position[1]) - limit
-            cached = cache[(steps, dt)] = gap.min(axis=0)
-        return cached
-
-    def _clear_limits(self, steps: int, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The obstacles' centres (x and y, (steps, N) each) after each ``dt`` and how close the robot may come
-        to each then: the part of :meth:`clear` that is the same for every roll-out of the cycle (up to
-        ``max_rollouts`` of them when no candidate is free), made once per step count."""
-        cache = self.__dict__.setdefault("_clear_limits_cache", {})
-        cached = cache.get((steps, dt))
-        if cached is None:
-            times = dt * np.arange(1, steps + 1)[:, None]
-            obstacles = self.obstacles
-            centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
-            reach = self.check_radii + self.growth * np.minimum(times, self.growth_until_s)
-            # Already inside an obstacle's margin (a close pass): only forbid getting closer still.
-            now = np.hypot(*(self.position - obstacles.positions).T)
-            cached = cache[(steps, dt)] = (centres[..., 0], centres[..., 1], np.minimum(reach, now - 1e-3))
-        return cached
-
-
 @dataclass
-class LegChecks(_CompiledInputs, _RollOutClearance):
+class LegChecks(_CompiledInputs):
     """One cycle's checks, vectorised over legs and obstacles."""
 
     path: DesignatedPath
@@ -484,6 +413,13 @@ class LegChecks(_CompiledInputs, _RollOutClearance):
         """:func:`viapath.compiled.arithmetic.via_options`."""
         return compiled.via_options(*arguments)  # type: ignore[no-untyped-call]
 
+    def clear(self, positions: np.ndarray, dt: float) -> bool:
+        """Whether robot positions, one per ``dt`` from now, keep clear of every obstacle (closer than its check
+        radius only where the robot already is and no closer; :func:`viapath.compiled.arithmetic.clear`)."""
+        if len(self.obstacles) == 0 or len(positions) == 0:
+            return True
+        return compiled.clear(positions, dt, self.position, self.packed_obstacles())
+
     def clear_track(
         self,
         state: UnicycleState,
@@ -497,8 +433,7 @@ class LegChecks(_CompiledInputs, _RollOutClearance):
         """The positions (steps, 2) of steering for ``target`` at ``speed_mps`` (:func:`viapath.kinematics.track`) if
         they keep clear of every obstacle (:meth:`clear`), else None."""
         positions = compiled.track(state, target, speed_mps, limits, dt, steps, heading_gain)
-        clear = len(self.obstacles) == 0 or compiled.clear(positions, dt, self.position, self.packed_obstacles())
-        return positions if clear else None
+        return positions if self.clear(positions, dt) else None
 
     # -- against the corridor (paper step 4) ---------------------------------------------------------
 
