@@ -1,7 +1,7 @@
 """Planning time per cycle of viapath (numpy and compiled) and its peers on the same scenes: p50/p99.
 
 Usage: python benchmarks/bench_planner.py [--cycles 300] [--seed 0] [--obstacles 1,10,50,100,200]
-           [--planners viapath-numpy,viapath-fast,dwa,vo,nav-hl,nav-orca,nav-hrvo] [--plot FILE.png] [--json]
+           [--planners viapath,dwa,vo,nav-hl,nav-orca,nav-hrvo] [--plot FILE.png] [--json]
            [--clock wall|cpu]
 
 Scenes: the robot at the start of a 10 m designated path (corridor ±1.5 m), obstacles placed
@@ -12,8 +12,8 @@ timed on the same scenes (40 per obstacle count, cycled), one cycle = ``planner.
 after ``reset()`` (the guard, subgoal tracking and inflation included), single thread, wall clock
 (``--clock cpu``: the thread's CPU time, which leaves out the waits for a core on a loaded machine).
 
-* ``viapath-numpy`` / ``viapath-fast``: the viapath planner with option ``compute`` numpy / numba
-  (extra ``fast``; docs/explanation/speed.md). Same decisions, different arithmetic.
+* ``viapath`` (also read as ``viapath-fast``, its name when it had a numpy twin): the viapath planner, its steps
+  compiled (``NUMBA_DISABLE_JIT=1``: the same steps as plain Python).
 * ``dwa``, ``vo``: the baselines of :mod:`viapath.planning.baselines` (numpy).
 * ``nav-hl``, ``nav-orca``, ``nav-hrvo``: navground's C++ behaviours (extra ``navground``) behind our
   planner protocol. Our harness around them (guard, Python ``Neighbor`` objects) costs far more than
@@ -45,7 +45,7 @@ import numpy as np
 from viapath import DesignatedPath, Observation, Obstacles, RobotState
 from viapath.planning import make_planner
 
-DEFAULT_PLANNERS = "viapath-numpy,viapath-fast,dwa,vo,nav-hl,nav-orca,nav-hrvo"
+DEFAULT_PLANNERS = "viapath,dwa,vo,nav-hl,nav-orca,nav-hrvo"
 NAVGROUND = ("nav-hl", "nav-orca", "nav-hrvo")
 CLOCKS = {"wall": time.perf_counter, "cpu": time.thread_time}
 CLOCK = [time.perf_counter]  # the clock every sample is taken with (--clock)
@@ -69,10 +69,14 @@ def random_scene(rng, n_obstacles, path, planner):
 
 
 def build(name: str, path):
-    """The planner timed under ``name`` (viapath-numpy / viapath-fast are the viapath planner's backends)."""
-    if name.startswith("viapath-"):
-        backend = {"numpy": "numpy", "fast": "numba"}[name.split("-", 1)[1]]
-        planner = make_planner("viapath", path, nominal_speed_mps=0.2, compute=backend)
+    """The planner timed under ``name``."""
+    if name == "viapath-numpy":
+        raise SystemExit(
+            "viapath-numpy: the planner has no numpy twin any more; time 'viapath' with NUMBA_DISABLE_JIT=1 for its "
+            "steps as plain Python"
+        )
+    if name in ("viapath", "viapath-fast"):
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2)
         planner.decide = _TimedDecide(planner.decide)  # the instance's, ahead of the class's
         return planner
     if name == "nav-dummy":
@@ -161,7 +165,7 @@ def time_planner(planner, scenes, cycles: int, whole: bool = False) -> np.ndarra
 
 def run(planners: list[str], counts: list[int], cycles: int, seed: int) -> dict:
     path = DesignatedPath([[0.0, 0.0], [10.0, 0.0]], half_width_m=1.5)
-    chooser = build("viapath-numpy", path)
+    chooser = build("viapath", path)
     wanted = list(planners)
     if any(name in NAVGROUND for name in wanted):
         wanted.append("nav-dummy")

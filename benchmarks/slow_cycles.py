@@ -1,6 +1,6 @@
 """The slowest cycles of ``bench_planner.py``'s scenes, one by one: what its p99 is made of, and where their time goes.
 
-Usage: python benchmarks/slow_cycles.py [--obstacles 10] [--backend numpy] [--repeats 25] [--top 6] [--sections]
+Usage: python benchmarks/slow_cycles.py [--obstacles 10] [--repeats 25] [--top 6] [--sections]
 
 ``bench_planner.py`` times 300 cycles over 40 scenes, so each scene comes up 7-8 times and its p99 is
 about the time of its slowest scene. Here every scene is timed ``--repeats`` times (thread CPU time)
@@ -30,7 +30,7 @@ from viapath import DesignatedPath
 def scenes(n_obstacles: int, seed: int = 0):
     """``bench_planner.py``'s scenes for one obstacle count (the same generator, seed and order)."""
     path = DesignatedPath([[0.0, 0.0], [10.0, 0.0]], half_width_m=1.5)
-    chooser = bench_planner.build("viapath-numpy", path)
+    chooser = bench_planner.build("viapath", path)
     rng = np.random.default_rng(seed)
     return path, [bench_planner.random_scene(rng, n_obstacles, path, chooser) for _ in range(40)]
 
@@ -46,18 +46,15 @@ def fastest_cycles(planner, observations, repeats: int) -> np.ndarray:
     return best * 1e3
 
 
-SECTIONS = [  # (module, owner in it or None, function, label): the parts of a cycle without a free candidate
-    ("viapath.planning.viapath.planner", None, "grow", "candidate tree (grow)"),
-    ("viapath.planning.viapath.candidates", None, "_via_children", "  via-point children"),
-    ("viapath.planning.viapath.checks", "LegChecks", "goal_legs", "  legs to the subgoal (goal_legs)"),
-    ("viapath.planning.viapath.candidates", None, "_slow_candidates", "  slow/wait candidates"),
-    ("viapath.planning.viapath.planner", None, "can_follow", "roll-outs of candidates (can_follow)"),
-    ("viapath.planning.viapath.planner", None, "follows", "roll-outs of candidates (follows, numpy choice)"),
-    ("viapath.planning.viapath.follow", None, "_roll_out", "  roll-out and its checks"),
-    ("viapath.compiled.arithmetic", "Arithmetic", "track", "  track (compiled, or numpy before wave 8)"),
-    ("viapath.planning.viapath.checks", "LegChecks", "clear", "  clear"),
+SECTIONS = [  # (module, owner in it or None, function, label): the parts of a cycle
+    ("viapath.planning.viapath.planner", None, "way_back", "the way back"),
+    ("viapath.planning.viapath.planner", None, "outrun_held", "the outrun hold"),
+    ("viapath.planning.viapath.planner", None, "choose_compiled", "the choice (paper steps 1-4)"),
+    ("viapath.compiled.arithmetic", None, "choose", "  compiled.choose"),
+    ("viapath.planning.viapath.choice", None, "_first_admitted", "  the ranks after the first that follows"),
+    ("viapath.planning.viapath.planner", "ViaPathPlanner", "_inside_shield", "the shield's check of candidates"),
+    ("viapath.planning.viapath.planner", None, "keep_previous_way", "the kept way"),
     ("viapath.planning.viapath.planner", None, "stop_or_escape", "stop or escape"),
-    ("viapath.planning.viapath.planner", None, "score", "costs"),
 ]
 
 
@@ -95,14 +92,12 @@ def section_shares(planner, observations, repeats: int) -> tuple[float, dict[str
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--obstacles", type=int, default=10)
-    parser.add_argument("--backend", default="numpy", choices=("numpy", "numba"))
     parser.add_argument("--repeats", type=int, default=25)
     parser.add_argument("--top", type=int, default=6)
     parser.add_argument("--sections", action="store_true", help="time the parts of the slowest scenes' cycles")
     args = parser.parse_args()
     path, observations = scenes(args.obstacles)
-    name = {"numpy": "viapath-numpy", "numba": "viapath-fast"}[args.backend]
-    planner = bench_planner.build(name, path)
+    planner = bench_planner.build("viapath", path)
     best = fastest_cycles(planner, observations, args.repeats)
     slowest = [int(i) for i in np.argsort(best)[::-1][: args.top]]
     statuses = {}

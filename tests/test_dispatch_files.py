@@ -15,13 +15,11 @@ DECORATOR = "jit.py"
 
 NOT_YET: dict[str, str] = {
     "compiled/__init__.py": "the policy choosing numpy or compiled arithmetic",
-    "compiled/arithmetic.py": "the planner's dispatch between its numpy and compiled steps",
     "compiled/choice.py": "the option compute",
-    "compiled/planning.py": "the planner's compiled twins",
+    "compiled/planning.py": "the planner's compiled steps, not yet beside their features",
     "compiled/slots.py": "slot numbers of the compiled planner's settings",
     "compiled/sums.py": "numpy's pairwise sum, compiled",
     "compiled/table.py": "the table of twins",
-    "planning/viapath/planner.py": "the planner's dispatch",
 }
 
 

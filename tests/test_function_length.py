@@ -85,6 +85,7 @@ def test_the_compiled_counter_counts_a_planted_long_function(tmp_path):
 # The steps written once (the shield, the guard, the laser chain): no function over 60 lines and no class over
 # 300 lines in them, compiled steps included.
 ONCE_WRITTEN = ("viapath/safety/*.py", "viapath/guard.py", "viapath/guard_checks.py", "viapath/perception/*.py")
+PLANNER = ("viapath/planning/viapath/*.py", "viapath/compiled/planning.py", "viapath/compiled/arithmetic.py")
 MAX_ONCE_FUNCTION_LINES, MAX_ONCE_CLASS_LINES = 60, 300
 
 
@@ -133,3 +134,32 @@ def test_the_once_written_counter_counts_a_planted_long_function_and_class(tmp_p
         ("viapath/safety/long.py", "long"): 61,
         ("viapath/safety/long.py", "Big"): 303,
     }
+
+
+# What is still longer than the limits is listed with why; the list only shrinks (a listed entry that is short now
+# fails too).
+NOT_YET: dict[tuple[str, str], str] = {
+    ("viapath/compiled/planning.py", name): "one loop nest, to be split into inlined steps"
+    for name in (
+        "legs_inside",
+        "escape_contacts",
+        "escape_scores",
+        "_goal_legs_of",
+        "_slow_nodes",
+        "_corner_nodes",
+        "_via_legs",
+        "_via_children",
+        "grow",
+        "_follows",
+        "choose_candidate",
+    )
+}
+
+
+def test_the_planner_has_no_new_function_over_60_lines_nor_class_over_300():
+    found = long_definitions(patterns=PLANNER)
+    new = {key: lines for key, lines in found.items() if key not in NOT_YET}
+    assert new == {}, "planner functions over 60 lines or classes over 300 (split them): " + ", ".join(
+        f"{file}:{name} ({lines} lines)" for (file, name), lines in sorted(new.items())
+    )
+    assert sorted(key for key in NOT_YET if key not in found) == [], "delete these from NOT_YET"

@@ -16,6 +16,8 @@ Choices made here:
   and what was found. A set refuses two options of the same name.
 * ``former_names``: an option that was renamed still reads its old name (a YAML file, ``--option``),
   with a FutureWarning saying the new one; giving both is an error.
+* ``retired`` (of a set): a name that is no longer an option, still read (a YAML file, ``--option``) and
+  ignored, with a FutureWarning saying why it does nothing now.
 * ``decides``: False for an option that only chooses how the arithmetic runs (numpy or compiled), never
   what is decided; results are the same either way, so a run's identity leaves it out.
 """
@@ -177,9 +179,16 @@ class OptionSet:
     is inside its own bounds, and together they must not make more than :data:`MAX_STEPS_PER_ROLLOUT`
     steps, else one cycle's roll-out would take unbounded time and memory."""
 
-    def __init__(self, options: Iterable[Option], owner: str = "", steps: Iterable[tuple[str, str]] = ()):
+    def __init__(
+        self,
+        options: Iterable[Option],
+        owner: str = "",
+        steps: Iterable[tuple[str, str]] = (),
+        retired: Mapping[str, str] | None = None,
+    ):
         self.owner = owner  # e.g. the planner's name, for messages
         self.steps = tuple(steps)
+        self.retired = dict(retired or {})  # a name that is no longer an option -> why it does nothing now
         self._options: dict[str, Option] = {}
         self._former: dict[str, str] = {}  # a former name -> the option's name now
         for option in options:
@@ -190,6 +199,9 @@ class OptionSet:
                 if former in self._options or former in self._former:
                     raise ValueError(f"former name {former!r} of option {option.name!r} is taken")
                 self._former[former] = option.name
+        for name in self.retired:
+            if name in self._options or name in self._former:
+                raise ValueError(f"retired name {name!r} is an option's name{f' in {owner}' if owner else ''}")
         self._model = self._build_model()
 
     def __iter__(self) -> Iterator[Option]:
@@ -205,7 +217,12 @@ class OptionSet:
         return self._options[name]
 
     def __add__(self, other: OptionSet) -> OptionSet:
-        return OptionSet([*self, *other], owner=other.owner or self.owner, steps=(*self.steps, *other.steps))
+        return OptionSet(
+            [*self, *other],
+            owner=other.owner or self.owner,
+            steps=(*self.steps, *other.steps),
+            retired={**self.retired, **other.retired},
+        )
 
     @property
     def names(self) -> list[str]:
@@ -255,8 +272,9 @@ class OptionSet:
 
     def current_names(self, values: Mapping[str, Any], where: str = "") -> dict[str, Any]:
         """``values`` (nested, flat or dotted) with each option's former name (``former_names``) replaced by
-        its name now, with a FutureWarning for each; an :class:`OptionError` when both names are given."""
-        if not self._former:
+        its name now, with a FutureWarning for each; an :class:`OptionError` when both names are given. A retired
+        name (``retired``) is left out, with a FutureWarning."""
+        if not self._former and not self.retired:
             return dict(values)
         groups = {option.group for option in self if option.group}
         current: dict[str, Any] = {}
@@ -264,6 +282,14 @@ class OptionSet:
             if key in groups and isinstance(value, Mapping):
                 value = self.current_names(value, f"{where}.{key}" if where else key)
             prefix, _, name = str(key).rpartition(".")
+            if name in self.retired:
+                field = f"{where}.{key}" if where else str(key)
+                warnings.warn(
+                    f"{field}: option {name!r} no longer does anything ({self.retired[name]}); it is ignored",
+                    FutureWarning,
+                    stacklevel=2,
+                )
+                continue
             if name in self._former:
                 now = self._former[name]
                 renamed = f"{prefix}.{now}" if prefix else now

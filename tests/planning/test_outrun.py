@@ -40,12 +40,11 @@ def _with_person_velocity(scenario, velocity_x_mps: float):
     return scenario.model_copy(update={"obstacles": [person]})
 
 
-@pytest.mark.parametrize("compute", ["numba", "numpy"])
 @pytest.mark.parametrize("person_mps", [0.25, 0.3])
-def test_behind_holds_a_speed_instead_of_flipping(behind, person_mps, compute):
+def test_behind_holds_a_speed_instead_of_flipping(behind, person_mps):
     scenario = _with_person_velocity(behind, person_mps)
-    held = _run(scenario, overrides={"compute": compute})
-    flipping = _run(scenario, overrides={**NO_HOLD, "compute": compute})
+    held = _run(scenario, overrides={})
+    flipping = _run(scenario, overrides=NO_HOLD)
     for episode in (held, flipping):
         assert episode.metrics["reached_goal"] and not episode.metrics["collision"]
     # Without the hold the speed command flips between the top speed and nominal at the horizon's edge.
@@ -94,12 +93,12 @@ def test_who_counts_as_catching_up():
     # than the top speed, is outrun; anyone faster can only be raced to the subgoal.
     from types import SimpleNamespace
 
-    from viapath.planning.viapath.planner import ViaPathPlanner
+    from viapath.planning.viapath.outrun import catching_up
 
     def catching(position, velocity, contact=(5.0,)):
         obstacles = SimpleNamespace(positions=np.array([position], float), velocities=np.array([velocity], float))
         checks = SimpleNamespace(position=np.zeros(2), obstacles=obstacles)
-        return ViaPathPlanner._catching_up(checks, np.array([1.0, 0.0]), np.array(contact, float), 0.2, 0.5)
+        return catching_up(checks, np.array([1.0, 0.0]), np.array(contact, float), 0.2, 0.5)
 
     assert catching((-1.0, 0.0), (0.3, 0.0))
     assert catching((-1.0, 0.3), (0.45, 0.1))

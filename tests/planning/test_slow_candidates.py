@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from viapath import DesignatedPath, Observation, Obstacles, RobotState
-from viapath.compiled.arithmetic import Arithmetic
 from viapath.planning import make_planner
 from viapath.planning.viapath.candidates import RootLegs, grow
 from viapath.planning.viapath.checks import LegChecks
@@ -19,13 +18,11 @@ from viapath.sim.loop import run_episode
 
 def _side_case(x_m: float, person_y_m: float):
     path = DesignatedPath([[0.0, 0.0], [5.0, 0.0]], half_width_m=1.0)
-    planner = make_planner("viapath", path, nominal_speed_mps=0.2, compute="numpy")
+    planner = make_planner("viapath", path, nominal_speed_mps=0.2)
     people = Obstacles(np.array([[1.0, person_y_m]]), np.array([[0.0, 0.3]]), np.array([0.25]))
     observation = Observation(0.0, RobotState(np.array([x_m, 0.0]), 0.0, 0.1, 0.0, 0.25), people)
     situation = planner.situation(observation)
-    checks = LegChecks.of(
-        situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25, Arithmetic("numpy")
-    )
+    checks = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
     speeds, nominal_index = planner.speed_set(0.1)
     roots = RootLegs.of(checks, speeds, nominal_index)
     return planner, checks, speeds, nominal_index, grow(checks, roots, planner.config, planner._slow_checks(checks))

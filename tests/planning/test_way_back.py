@@ -101,24 +101,3 @@ def test_the_way_back_is_on_by_default_and_changes_nothing_on_the_path(overtakin
     paper, back = overtaking[0.0].trace, overtaking[1.0].trace
     first_off = int(np.argmax(np.abs(paper.path.lateral_deviation(paper.robot_poses[:, :2])) > 0.01))
     np.testing.assert_array_equal(paper.robot_poses[: first_off + 1], back.robot_poses[: first_off + 1])
-
-
-def test_the_way_back_decides_the_same_with_both_backends():
-    """The way back's legs go through the same backend calls as the paper's step 1 (docs/speed.md)."""
-    from viapath.compiled import numba_available
-
-    if not numba_available():
-        pytest.skip("numba (extra 'fast') is not installed")
-    scenario = load_scenario("overtaking")
-    runs = [
-        run_episode(
-            scenario,
-            perception="oracle",
-            seed=0,
-            position_noise_m=0.0,
-            velocity_noise_mps=0.0,
-            planner_overrides={"return_lookahead_m": 0.5, "compute": backend},
-        )
-        for backend in ("numpy", "numba")
-    ]
-    np.testing.assert_array_equal(runs[0].trace.robot_poses, runs[1].trace.robot_poses)

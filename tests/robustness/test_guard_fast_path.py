@@ -188,7 +188,7 @@ def test_an_inspected_observation_has_only_finite_obstacles(observation, config)
     from viapath.planning import make_planner
 
     seen = []
-    planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), compute="numpy")
+    planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0))
     planner.guard_config = config
     original = planner.situation
 

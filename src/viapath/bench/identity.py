@@ -82,10 +82,11 @@ def options_hash(scenario: dict, planner: str, overrides: dict | None = None) ->
 
 
 def _not_deciding(planner: str) -> set[str]:
-    """The names, now and former, of the planner's options that decide nothing (:attr:`Option.decides`)."""
+    """The names, now and former, of the planner's options that decide nothing (:attr:`Option.decides`), and the
+    names it reads and ignores (:attr:`OptionSet.retired`)."""
     from viapath.planning import planner_class
 
-    return {
+    return set(planner_class(planner).options.retired) | {
         name
         for option in planner_class(planner).options
         if not option.decides

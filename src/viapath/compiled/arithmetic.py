@@ -1,33 +1,26 @@
-"""Which arithmetic the viapath planner runs: the numpy reference or the compiled kernels (extra ``fast``).
+"""The planner's calls of its compiled steps (:mod:`viapath.compiled.planning`): each packs the cycle's arrays as
+the compiled functions take them (C-contiguous float64, one value per obstacle) and reads what they hand back by
+name (:class:`NodeStore`, :class:`CompiledChoice`).
 
-Source: a compiled hot path, the numpy path staying the reference; docs/speed.md.
-
-* Option ``compute`` (:mod:`viapath.planning.viapath.options`, defined in :mod:`.choice`): chosen by the
-  package's one policy (:func:`viapath.compiled.resolve`; the whole-step kernels under a plain ``auto`` once
-  they are cached).
-* An :class:`Arithmetic` holds the hot functions, :meth:`legs_first_contact` (leg-against-people
-  checks), :meth:`via_options` (via points of (node, obstacle) pairs), :meth:`legs_inside` and
-  :meth:`goal_legs_inside` (corridor checks), :meth:`goal_legs` (all of a batch of legs to the subgoal:
-  contacts and corridor in one call), :meth:`grow` (the whole candidate tree), :meth:`track` (motion-limit roll-outs) and, for the
-  escape, :meth:`escape` (the whole step in two calls) or, before the whole-step kernels are compiled,
-  :meth:`corridor_excess` and :meth:`escape_contacts`, with the numpy signatures; the compiled ones get
-  C-contiguous float64 arrays. The planner says in ``plan.extras["backend"]`` which one ran.
+A cycle without static geometry runs its whole choice in one call (:func:`choose`), its escape in two
+(:func:`escape`). A cycle with static geometry in view runs the recipe's steps in
+:mod:`viapath.planning.viapath.candidates` (the extremes of static shapes and the slides are not compiled) with
+these calls for its leg checks, via points, corridor checks and roll-outs.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from viapath.compiled import explicit, ready, require, resolve
+from viapath.compiled import planning as _planning
 from viapath.compiled import slots as slot
-from viapath.geometry import legs_first_contact as numpy_legs_first_contact
-from viapath.geometry import via_options as numpy_via_options
 from viapath.kinematics import UnicycleState
-from viapath.kinematics import track as numpy_track
 from viapath.observation import MotionLimits
+
+# The compiled functions take plain arrays and scalars unannotated (typed when they are compiled).
+kernels: Any = _planning
 
 
 class NodeStore(NamedTuple):
@@ -96,410 +89,300 @@ class CompiledChoice(NamedTuple):
     store: NodeStore
 
 
-@dataclass(frozen=True)
-class Arithmetic:
-    name: str  # numpy | numba
-    # numba: also the kernels that take over whole steps of the cycle (goal_legs, the candidate tree grow, the
-    # choice, the escape).
-    # They take seconds to compile the first time, so ``auto`` uses them only once they are in numba's cache
-    # (:func:`viapath.precompile.precompile`, which ``viapath bench`` and the ROS 2 node call before they start);
-    # until then the smaller kernels do those steps, with the same decisions.
-    whole_steps: bool = True
+def legs_first_contact_packed(
+    starts, start_times, velocities, durations, packed_obstacles, leg_radii_m=None
+) -> np.ndarray:
+    """(K, N) first contact of each leg with each obstacle, inf = free (:func:`viapath.compiled.planning.legs_first_contact`);
+    ``packed_obstacles``: positions, velocities, radii, growth, growth_until_s, C-contiguous float64, one row or
+    value per obstacle, as a cycle's checks keep them."""
+    legs = np.zeros(len(starts)) if leg_radii_m is None else _c(leg_radii_m)
+    return kernels.legs_first_contact(
+        _c(starts), _c(start_times), _c(velocities), _c(durations), *packed_obstacles, legs
+    )
 
-    def legs_first_contact(
-        self,
-        starts,
-        start_times,
-        velocities,
-        durations,
-        positions,
-        velocities_obs,
-        radii,
-        growth,
-        growth_until_s,
-        leg_radii_m=None,
-    ) -> np.ndarray:
-        obstacles = (positions, velocities_obs, radii, growth, growth_until_s)
-        if self.name != "numpy":
-            n = len(positions)
-            obstacles = (
-                _c(positions),
-                _c(velocities_obs),
-                _per_obstacle(radii, n),
-                _per_obstacle(growth, n),
-                _per_obstacle(growth_until_s, n),
-            )
-        return self.legs_first_contact_packed(starts, start_times, velocities, durations, obstacles, leg_radii_m)
 
-    def legs_first_contact_packed(
-        self, starts, start_times, velocities, durations, packed_obstacles, leg_radii_m=None
-    ) -> np.ndarray:
-        """:meth:`legs_first_contact` with the obstacles already packed (positions, velocities, radii, growth,
-        growth_until_s; on the compiled path C-contiguous float64, one row or value per obstacle), as a cycle's
-        checks keep them."""
-        if self.name == "numpy":
-            positions, velocities_obs, radii, growth, growth_until_s = packed_obstacles
-            return numpy_legs_first_contact(
-                starts,
-                start_times,
-                velocities,
-                durations,
-                positions,
-                velocities_obs,
-                radii,
-                growth,
-                growth_until_s,
-                leg_radii_m,
-            )
-        legs = np.zeros(len(starts)) if leg_radii_m is None else _c(leg_radii_m)
-        return _kernels().legs_first_contact(
-            _c(starts), _c(start_times), _c(velocities), _c(durations), *packed_obstacles, legs
-        )
+def legs_first_contact(
+    starts,
+    start_times,
+    velocities,
+    durations,
+    positions,
+    velocities_obs,
+    radii,
+    growth,
+    growth_until_s,
+    leg_radii_m=None,
+) -> np.ndarray:
+    """:func:`legs_first_contact_packed` of obstacles given as arrays (a scalar radius or growth for all)."""
+    n = len(positions)
+    obstacles = (
+        _c(positions),
+        _c(velocities_obs),
+        _per_obstacle(radii, n),
+        _per_obstacle(growth, n),
+        _per_obstacle(growth_until_s, n),
+    )
+    return legs_first_contact_packed(starts, start_times, velocities, durations, obstacles, leg_radii_m)
 
-    def via_options(
-        self,
-        starts,
-        start_times,
-        speeds,
-        positions,
-        velocities,
-        via_radii,
-        growth,
-        growth_until_s,
-        envelope_m,
-        max_time_s,
-    ):
-        if self.name == "numpy":
-            return numpy_via_options(
-                starts,
-                start_times,
-                speeds,
-                positions,
-                velocities,
-                via_radii,
-                growth,
-                growth_until_s,
-                envelope_m,
-                max_time_s,
-            )
-        kernels = _kernels()
 
-        n = len(starts)
-        return kernels.via_options(
-            _c(starts),
-            _c(start_times),
-            _c(speeds),
-            _c(positions),
-            _c(velocities),
-            _per_obstacle(via_radii, n),
-            _per_obstacle(growth, n),
-            _per_obstacle(growth_until_s, n),
-            _per_obstacle(envelope_m, n),
-            float(max_time_s),
-        )
+def via_options(
+    starts, start_times, speeds, positions, velocities, via_radii, growth, growth_until_s, envelope_m, max_time_s
+):
+    """The via points of (node, obstacle) pairs, both sides and both roots (:func:`viapath.compiled.planning.via_options`)."""
+    n = len(starts)
+    return kernels.via_options(
+        _c(starts),
+        _c(start_times),
+        _c(speeds),
+        _c(positions),
+        _c(velocities),
+        _per_obstacle(via_radii, n),
+        _per_obstacle(growth, n),
+        _per_obstacle(growth_until_s, n),
+        _per_obstacle(envelope_m, n),
+        float(max_time_s),
+    )
 
-    def legs_inside(self, path, starts, ends, spacing_m: float, tolerance_m: float) -> np.ndarray:
-        if self.name == "numpy":
-            return path.legs_inside(starts, ends, spacing_m, tolerance_m)
-        kernels = _kernels()
 
-        return kernels.legs_inside(
+def legs_inside(path, starts, ends, spacing_m: float, tolerance_m: float) -> np.ndarray:
+    return kernels.legs_inside(
+        *_corridor(path),
+        _c(np.reshape(starts, (-1, 2))),
+        _c(np.reshape(ends, (-1, 2))),
+        float(spacing_m),
+        float(tolerance_m),
+    )
+
+
+def goal_legs_inside(path, starts, subgoal, subgoal_index: int, spacing_m: float, tolerance_m: float) -> np.ndarray:
+    """Which legs from ``starts`` to the subgoal stay in the corridor."""
+    inside = kernels.goal_legs_inside(*_corridor(path), _c(starts), int(subgoal_index), float(tolerance_m))
+    if not inside.all():
+        rest = np.flatnonzero(~inside)
+        inside[rest] = kernels.legs_inside(
             *_corridor(path),
-            _c(np.reshape(starts, (-1, 2))),
-            _c(np.reshape(ends, (-1, 2))),
+            _c(starts[rest]),
+            _c(np.broadcast_to(subgoal, (len(rest), 2))),
             float(spacing_m),
             float(tolerance_m),
         )
+    return inside
 
-    def goal_legs_inside(
-        self, path, starts, subgoal, subgoal_index: int, spacing_m: float, tolerance_m: float
-    ) -> np.ndarray | None:
-        """None on the numpy path (the caller's own code is the reference)."""
-        if self.name == "numpy":
-            return None
-        kernels = _kernels()
 
-        inside = kernels.goal_legs_inside(*_corridor(path), _c(starts), int(subgoal_index), float(tolerance_m))
-        if not inside.all():
-            rest = np.flatnonzero(~inside)
-            inside[rest] = kernels.legs_inside(
-                *_corridor(path),
-                _c(starts[rest]),
-                _c(np.broadcast_to(subgoal, (len(rest), 2))),
-                float(spacing_m),
-                float(tolerance_m),
-            )
-        return inside
+def goal_legs(checks, starts, start_times, speeds, horizon_s: float):
+    """:meth:`.checks.LegChecks.goal_legs` of a cycle without static geometry in one compiled call."""
+    obstacles = checks.packed_obstacles()
+    return kernels.goal_legs(
+        _c(starts),
+        _c(start_times),
+        _c(speeds),
+        _c(checks.subgoal),
+        float(checks.stop_short_m),
+        float(horizon_s),
+        checks.packed_continuation(),
+        *obstacles,
+        checks.packed_envelope(),
+        *_corridor(checks.path),
+        int(checks.subgoal_index),
+        float(checks.corridor_check_spacing_m),
+        float(checks.corridor_tolerance_m),
+    )
 
-    def goal_legs(self, checks, starts, start_times, speeds, horizon_s: float):
-        """:meth:`.checks.LegChecks.goal_legs` in one compiled call; None on the numpy path (the caller's own
-        code is the reference)."""
-        if self.name == "numpy" or not self.whole_steps:
-            return None
-        kernels = _kernels()
 
-        obstacles = checks.packed_obstacles()
-        return kernels.goal_legs(
-            _c(starts),
-            _c(start_times),
-            _c(speeds),
-            _c(checks.subgoal),
-            float(checks.stop_short_m),
-            float(horizon_s),
-            checks.packed_continuation(),
-            *obstacles,
-            checks.packed_envelope(),
-            *_corridor(checks.path),
-            int(checks.subgoal_index),
-            float(checks.corridor_check_spacing_m),
-            float(checks.corridor_tolerance_m),
-        )
+def grow(checks, slow_checks, roots, config) -> NodeStore:
+    """The whole candidate tree of a cycle without static geometry in one compiled call: its :class:`NodeStore`."""
+    positions, velocities, radii, growth, until = checks.packed_obstacles()
+    _, _, slow_radii, slow_growth, slow_until = slow_checks.packed_obstacles()
+    path = checks.path
+    index = int(checks.subgoal_index)
+    # The robot's segment matters only when a corner can lie between it and the subgoal.
+    segment = int(path.project(checks.position)[0]) if index >= 2 else 0
+    slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
+    root_legs = (
+        _c(roots.directions),
+        _c(roots.lengths),
+        np.ascontiguousarray(roots.free, dtype=np.bool_),
+        _c(roots.contact),
+    )
+    via = (
+        _per_obstacle(checks.via_radii, len(positions)),
+        np.ascontiguousarray(checks.obstacles.ids, dtype=np.int64),
+    )
+    slow = (slow_radii, slow_growth, slow_until, slow_times, float(config.creep_speed_mps))
+    goal = (
+        _c(checks.subgoal),
+        float(checks.stop_short_m),
+        checks.packed_continuation(),
+        checks.packed_envelope(),
+        index,
+        float(checks.corridor_check_spacing_m),
+        float(checks.corridor_tolerance_m),
+    )
+    obstacles = (positions, velocities, radii, growth, until)
+    tree = (
+        _c(path.waypoints),
+        segment,
+        bool(len(slow_times)),
+        int(config.max_depth),
+        int(config.max_root_obstacles),
+    )
+    store = kernels.grow(
+        _c(checks.position),
+        _c(roots.speeds),
+        int(roots.nominal_index),
+        root_legs,
+        via,
+        slow,
+        float(checks.horizon_s),
+        goal,
+        obstacles,
+        _corridor(path),
+        tree,
+    )
+    return NodeStore(*store)
 
-    def grow(self, checks, slow_checks, roots, config):
-        """:func:`.candidates.grow`'s whole candidate tree in one compiled call: its :class:`NodeStore`; None on
-        the numpy path (the reference)."""
-        if self.name == "numpy" or not self.whole_steps:
-            return None
-        kernels = _kernels()
 
-        positions, velocities, radii, growth, until = checks.packed_obstacles()
-        _, _, slow_radii, slow_growth, slow_until = slow_checks.packed_obstacles()
-        path = checks.path
-        index = int(checks.subgoal_index)
-        # The robot's segment matters only when a corner can lie between it and the subgoal.
-        segment = int(path.project(checks.position)[0]) if index >= 2 else 0
-        slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
-        root_legs = (
-            _c(roots.directions),
-            _c(roots.lengths),
-            np.ascontiguousarray(roots.free, dtype=np.bool_),
-            _c(roots.contact),
-        )
-        via = (
-            _per_obstacle(checks.via_radii, len(positions)),
-            np.ascontiguousarray(checks.obstacles.ids, dtype=np.int64),
-        )
-        slow = (slow_radii, slow_growth, slow_until, slow_times, float(config.creep_speed_mps))
-        goal = (
-            _c(checks.subgoal),
-            float(checks.stop_short_m),
-            checks.packed_continuation(),
-            checks.packed_envelope(),
-            index,
-            float(checks.corridor_check_spacing_m),
-            float(checks.corridor_tolerance_m),
-        )
-        obstacles = (positions, velocities, radii, growth, until)
-        tree = (
-            _c(path.waypoints),
-            segment,
-            bool(len(slow_times)),
-            int(config.max_depth),
-            int(config.max_root_obstacles),
-        )
-        store = kernels.grow(
-            _c(checks.position),
-            _c(roots.speeds),
-            int(roots.nominal_index),
-            root_legs,
-            via,
-            slow,
-            float(checks.horizon_s),
-            goal,
-            obstacles,
-            _corridor(path),
-            tree,
-        )
-        return NodeStore(*store)
-
-    def choose(self, checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.ndarray, integers: np.ndarray):
-        """The planner's choice up to its shield check in one compiled call (roots, step 1, the candidate tree,
-        Eq. 1's critics, the order and the roll-outs up to the first candidate that follows):
-        :func:`viapath.compiled.planning.choose`, as a :class:`CompiledChoice`; None on the numpy path.
-        ``slow_times`` (float64), ``settings`` and ``integers`` are the kernel's (slots: :mod:`.slots`), filled in
-        by the planner."""
-        if self.name == "numpy" or not self.whole_steps:
-            return None
-        (
-            robot,
-            positions,
-            velocities,
-            radii,
-            growth,
-            until,
-            via_radii,
-            ids,
-            continuation,
-            envelope,
-            starts,
-            directions,
-            lengths,
-            half_widths,
-            waypoints,
-        ) = checks.packed_choice_inputs()
-        _, _, slow_radii, slow_growth, slow_until = (
-            (positions, velocities, radii, growth, until) if slow_checks is checks else slow_checks.packed_obstacles()
-        )
-        found, floats, integers, costs = _kernels().choose(
-            robot,
-            _c(speeds),
-            _c(checks.subgoal),
-            positions,
-            velocities,
-            radii,
-            growth,
-            until,
-            via_radii,
-            ids,
-            slow_radii,
-            slow_growth,
-            slow_until,
-            slow_times,
-            continuation,
-            envelope,
-            starts,
-            directions,
-            lengths,
-            half_widths,
-            waypoints,
-            settings,
-            integers,
-        )
-        return _choice_of(found, floats, integers, costs)
-
-    def corridor_excess(self, path, points) -> np.ndarray:
-        if self.name == "numpy":
-            return path.corridor_excess(points)
-        kernels = _kernels()
-
-        return kernels.corridor_excess(*_corridor(path), _c(points))
-
-    def escape_contacts(
-        self,
+def choose(checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.ndarray, integers: np.ndarray):
+    """The planner's choice up to its shield check in one compiled call (roots, step 1, the candidate tree,
+    Eq. 1's critics, the order and the roll-outs up to the first candidate that follows):
+    :func:`viapath.compiled.planning.choose`, as a :class:`CompiledChoice`. ``slow_times`` (float64),
+    ``settings`` and ``integers`` are the kernel's (slots: :mod:`.slots`), filled in by the planner."""
+    (
+        robot,
         positions,
-        times,
-        positions_obs,
-        velocities_obs,
-        check_radii,
+        velocities,
+        radii,
         growth,
-        growth_until_s,
-        overlapping,
-        steps: int,
-    ):
-        """First contact step (K,) and the gaps to the people overlapped now (smallest, last: (K, M)) of
-        K roll-outs; None on the numpy path (:func:`.escape.escape_scores` is the reference)."""
-        if self.name == "numpy":
-            return None
-        kernels = _kernels()
+        until,
+        via_radii,
+        ids,
+        continuation,
+        envelope,
+        starts,
+        directions,
+        lengths,
+        half_widths,
+        waypoints,
+    ) = checks.packed_choice_inputs()
+    _, _, slow_radii, slow_growth, slow_until = (
+        (positions, velocities, radii, growth, until) if slow_checks is checks else slow_checks.packed_obstacles()
+    )
+    found, floats, integers, costs = kernels.choose(
+        robot,
+        _c(speeds),
+        _c(checks.subgoal),
+        positions,
+        velocities,
+        radii,
+        growth,
+        until,
+        via_radii,
+        ids,
+        slow_radii,
+        slow_growth,
+        slow_until,
+        slow_times,
+        continuation,
+        envelope,
+        starts,
+        directions,
+        lengths,
+        half_widths,
+        waypoints,
+        settings,
+        integers,
+    )
+    return _choice_of(found, floats, integers, costs)
 
-        return kernels.escape_contacts(
-            _c(positions),
-            _c(times),
-            _c(positions_obs),
-            _c(velocities_obs),
-            _c(check_radii),
-            _c(growth),
-            _c(growth_until_s),
-            np.ascontiguousarray(overlapping, dtype=np.bool_),
-            int(steps),
-        )
 
-    def escape(self, checks, limits: MotionLimits, config, fan, previous=None, score_standing: bool = False):
-        """:func:`.escape.stop_or_escape`'s figures in two compiled calls: :func:`viapath.compiled.planning.escape_headings` (the
-        standing check, the fan's headings), numpy's sines and cosines of those headings (as
-        :func:`viapath.kinematics.rollout` takes them), :func:`viapath.compiled.planning.escape_scores`. Returns (standing is
-        free, commands (K, 2), ends (K, 2), scores (K,)), the last three None when standing is free (unless
-        ``score_standing``); None on the numpy path and before the whole-step kernels are compiled (then
-        :func:`.escape.escape_scores`, the reference, runs with the smaller kernels). ``fan``:
-        :func:`.escape.escape_fan`'s (top speed, commands, distinct turn commands, each command's turn)."""
-        if self.name == "numpy" or not self.whole_steps:
-            return None
-        kernels = _kernels()
-        top, commands, row_turns, turn_rows = fan
-        dt = config.escape_dt_s
-        steps = max(1, int(round(config.escape_s / dt)))
-        calm = bool(config.calm_escape and previous is not None)
-        settings = np.array(
-            [
-                dt,
-                config.escape_s,
-                limits.max_accel_mps2 * dt,
-                limits.max_turn_accel_radps2 * dt,
-                limits.max_speed_mps,
-                limits.max_turn_rate_radps,
-                checks.corridor_tolerance_m,
-                max(config.escape_max_excess_m, checks.corridor_tolerance_m),
-                max(top, 1e-9),
-                config.escape_continuity_s if calm else 0.0,
-                previous.speed_mps if calm else 0.0,
-                previous.turn_rate_radps if calm else 0.0,
-                checks.horizon_s,
-                config.horizon_s,
-            ],
-            dtype=np.float64,
-        )
-        robot = checks.packed_robot()
-        obstacles = checks.packed_obstacles()
-        standing_free, headings = kernels.escape_headings(robot, *obstacles, row_turns, settings, steps)
-        if standing_free and not score_standing:
-            return True, None, None, None
-        ends, score = kernels.escape_scores(
-            robot,
-            commands,
-            turn_rows,
-            np.sin(headings),
-            np.cos(headings),
-            *obstacles,
-            *_corridor(checks.path),
-            _c(checks.subgoal),
-            settings,
-            steps,
-            calm,
-        )
-        return standing_free, commands, ends, score
+def escape(checks, limits: MotionLimits, config, fan, previous=None, score_standing: bool = False):
+    """The escape's figures in two compiled calls: :func:`viapath.compiled.planning.escape_headings` (the standing
+    check, the fan's headings), numpy's sines and cosines of those headings, :func:`viapath.compiled.planning.escape_scores`.
+    Returns (standing is free, commands (K, 2), ends (K, 2), scores (K,)), the last three None when standing is
+    free (unless ``score_standing``). ``fan``: :func:`.escape.escape_fan`'s (top speed, commands, distinct turn
+    commands, each command's turn)."""
+    top, commands, row_turns, turn_rows = fan
+    dt = config.escape_dt_s
+    steps = max(1, int(round(config.escape_s / dt)))
+    calm = bool(config.calm_escape and previous is not None)
+    settings = np.array(
+        [
+            dt,
+            config.escape_s,
+            limits.max_accel_mps2 * dt,
+            limits.max_turn_accel_radps2 * dt,
+            limits.max_speed_mps,
+            limits.max_turn_rate_radps,
+            checks.corridor_tolerance_m,
+            max(config.escape_max_excess_m, checks.corridor_tolerance_m),
+            max(top, 1e-9),
+            config.escape_continuity_s if calm else 0.0,
+            previous.speed_mps if calm else 0.0,
+            previous.turn_rate_radps if calm else 0.0,
+            checks.horizon_s,
+            config.horizon_s,
+        ],
+        dtype=np.float64,
+    )
+    robot = checks.packed_robot()
+    obstacles = checks.packed_obstacles()
+    standing_free, headings = kernels.escape_headings(robot, *obstacles, row_turns, settings, steps)
+    if standing_free and not score_standing:
+        return True, None, None, None
+    ends, score = kernels.escape_scores(
+        robot,
+        commands,
+        turn_rows,
+        np.sin(headings),
+        np.cos(headings),
+        *obstacles,
+        *_corridor(checks.path),
+        _c(checks.subgoal),
+        settings,
+        steps,
+        calm,
+    )
+    return standing_free, commands, ends, score
 
-    def clear(self, positions, dt_s: float, robot_position, packed_obstacles) -> bool | None:
-        """:meth:`LegChecks.clear` of a roll-out from now in one compiled call; None on the numpy path.
-        ``packed_obstacles``: :meth:`LegChecks.packed_obstacles`."""
-        if self.name == "numpy":
-            return None
-        return bool(
-            _kernels().clear_positions(
-                _c(positions), float(dt_s), float(robot_position[0]), float(robot_position[1]), *packed_obstacles
-            )
-        )
 
-    def track(
-        self,
-        state: UnicycleState,
-        target,
-        speed_mps: float,
-        limits: MotionLimits,
-        dt_s: float,
-        steps: int,
-        heading_gain: float,
-    ) -> np.ndarray:
-        if self.name == "numpy":
-            return numpy_track(state, target, speed_mps, limits, dt_s, steps, heading_gain)
-        kernels = _kernels()
-
-        return kernels.track(
-            float(state.x),
-            float(state.y),
-            float(state.heading_rad),
-            float(state.speed_mps),
-            float(state.turn_rate_radps),
-            float(target[0]),
-            float(target[1]),
-            float(speed_mps),
-            float(limits.max_speed_mps),
-            float(limits.max_turn_rate_radps),
-            float(limits.max_accel_mps2),
-            float(limits.max_turn_accel_radps2),
-            float(dt_s),
-            int(steps),
-            float(heading_gain),
+def clear(positions, dt_s: float, robot_position, packed_obstacles) -> bool:
+    """Whether a roll-out from now keeps clear of every obstacle (:func:`viapath.compiled.planning.clear_positions`).
+    ``packed_obstacles``: :meth:`LegChecks.packed_obstacles`."""
+    return bool(
+        kernels.clear_positions(
+            _c(positions), float(dt_s), float(robot_position[0]), float(robot_position[1]), *packed_obstacles
         )
+    )
+
+
+def track(
+    state: UnicycleState,
+    target,
+    speed_mps: float,
+    limits: MotionLimits,
+    dt_s: float,
+    steps: int,
+    heading_gain: float = 2.5,
+) -> np.ndarray:
+    """(steps, 2) positions of the robot steering for ``target`` with :func:`viapath.kinematics.steer_towards`, each
+    step as :func:`viapath.kinematics.step` moves it (:func:`viapath.compiled.planning.track`)."""
+    return kernels.track(
+        float(state.x),
+        float(state.y),
+        float(state.heading_rad),
+        float(state.speed_mps),
+        float(state.turn_rate_radps),
+        float(target[0]),
+        float(target[1]),
+        float(speed_mps),
+        float(limits.max_speed_mps),
+        float(limits.max_turn_rate_radps),
+        float(limits.max_accel_mps2),
+        float(limits.max_turn_accel_radps2),
+        float(dt_s),
+        int(steps),
+        float(heading_gain),
+    )
 
 
 def _choice_of(found, floats, integers, costs) -> CompiledChoice:
@@ -528,18 +411,6 @@ def _choice_of(found, floats, integers, costs) -> CompiledChoice:
     )
 
 
-def _kernels():
-    """The kernels module (imports numba: only on the compiled path; kept after the first import, as the
-    per-call import statement costs a microsecond)."""
-    global _KERNELS
-    if _KERNELS is None:
-        _KERNELS = require("planning")
-    return _KERNELS
-
-
-_KERNELS = None
-
-
 def _c(array) -> np.ndarray:
     return np.ascontiguousarray(array, dtype=np.float64)
 
@@ -563,23 +434,3 @@ def _per_obstacle(values, n: int) -> np.ndarray:
     if isinstance(values, np.ndarray) and values.shape == (n,):
         return _c(values)
     return np.full(n, values, dtype=np.float64) if np.ndim(values) == 0 else _c(np.broadcast_to(values, (n,)))
-
-
-NUMPY = Arithmetic("numpy")
-
-
-def arithmetic_for(choice: str) -> Arithmetic:
-    name = resolve(choice)
-    return Arithmetic(name, whole_steps=name == "numba" and (explicit(choice) or whole_steps_compiled()))
-
-
-def whole_steps_compiled() -> bool:
-    """Whether the kernels of whole steps (goal_legs, grow, the choice, the escape) cost no compilation now:
-    compiled in this process or in numba's on-disk cache."""
-    kernels = _kernels()
-    return ready(kernels.goal_legs, kernels.grow, kernels.choose, kernels.escape_headings, kernels.escape_scores)
-
-
-#: The compiled arithmetic without its whole-step kernels (the recipe's steps in numpy, their leg checks and via
-#: points compiled): what a cycle with static geometry runs on (planner._cycle_arithmetic).
-STEPWISE = {"numba": Arithmetic("numba", whole_steps=False)}

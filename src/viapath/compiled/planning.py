@@ -1,27 +1,24 @@
-"""The compiled hot path of the viapath planner (extra ``fast``: numba): the same arithmetic as the
-numpy reference, one scalar loop instead of a few dozen array operations.
+"""The viapath planner's compiled steps, each the one implementation of its step: the leg-against-people
+checks, the via points, the corridor checks, the candidate tree, Eq. 1's sum and the choice, the roll-outs
+and the escape. Called through :mod:`viapath.compiled.arithmetic`, which packs the cycle's arrays.
 
-Source: the profile of ``benchmarks/bench_planner.py`` (docs/speed.md): per cycle the planner spends
-most of its time in (1) the leg-against-people checks, :func:`viapath.geometry.legs_first_contact`,
-called a handful of times per cycle on K legs × N people, and (2) the roll-outs of
-:func:`viapath.kinematics.track` (a Python loop of 20 steps, up to ``max_rollouts`` times a cycle).
-Both are pure functions of arrays, so they are compiled here, operation for operation as the numpy
-code does them (same order of additions, same roots), so that the decisions are the same
-(``tests/planning/test_backends.py`` checks it on random observations).
+Source: the paper's procedure (:mod:`viapath.planning.viapath.planner`); each step as one scalar loop instead
+of a few dozen array operations (the profile of ``benchmarks/bench_planner.py``, docs/speed.md). The tests hold
+them to independent oracles: the brute-force x-y-t checks, dense sampling of legs and corridors, the escape's
+scores worked out command by command, the controller stepped as the simulator steps it
+(``tests/planning/test_planner_oracles.py``, ``tests/planning/test_compiled_choice.py``, ``tests/test_kinematics.py``).
 
 Choices:
-* Only imported when numba is importable (:mod:`viapath.compiled.arithmetic` decides);
-  every kernel is a plain module-level ``@njit(cache=True)`` function, so numba's on-disk cache
-  works and a process after the first pays no compilation (docs/speed.md gives the first run's cost).
+* Every kernel is a plain module-level function decorated with :func:`viapath.jit.compiled` (numba, cached on
+  disk: a process after the first pays no compilation; docs/speed.md gives the first run's cost). With
+  ``NUMBA_DISABLE_JIT=1`` the same functions run as plain Python.
 * Inputs are C-contiguous float64 arrays (the caller makes them so): one compiled signature each.
-* Where numpy's rounding is not libm's, numpy computes and the kernels take its values: the sines and cosines
-  of the escape's headings (between :func:`escape_headings` and :func:`escape_scores`). The choice's angles
-  are libm's atan2 on both paths (:func:`viapath.geometry.angles_of`), so :func:`choose` takes them itself.
-  Where numpy's order of operations is its own, the kernels copy it: np.sum's pairwise summation
-  (:func:`viapath.compiled.sums.pairwise_sum`).
+* The escape's sines and cosines of its headings are numpy's (taken between :func:`escape_headings` and
+  :func:`escape_scores`), its sums numpy's pairwise summation (:func:`viapath.compiled.sums.pairwise_sum`):
+  the figures they were first specified with, kept bit for bit.
 * hypot costs about 20 ns here; where only the sign of ``hypot - limit`` matters, the squared distance
   decides outside a band of ±1e-9 around the limit (:func:`_within`, :func:`_excess_at_most`,
-  :func:`_furthest`), as the numpy path's :func:`viapath.planning.viapath.escape.touching` does.
+  :func:`_furthest`).
 """
 
 from __future__ import annotations
@@ -29,7 +26,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from viapath.compiled import dependency_digest
 from viapath.compiled.slots import (
@@ -96,6 +92,7 @@ from viapath.compiled.slots import (
     STEP_ONE,
 )
 from viapath.compiled.sums import pairwise_sum
+from viapath.jit import compiled
 
 # numba's cache keys on this file alone; the layouts and the sums it compiles in are in these two files, so their
 # digest is written here: a change there stops this import until the digest here is updated (which recompiles).
@@ -108,7 +105,7 @@ if dependency_digest(DEPENDENCIES) != DEPENDENCY_DIGEST:
     )
 
 
-@njit(cache=True, nogil=True, inline="always")  # inlined: called per leg and obstacle, a few hundred a cycle
+@compiled(inline=True)  # inlined: called per leg and obstacle, a few hundred a cycle
 def _contact(px, py, vx, vy, radius, growth, duration):
     """Scalar :func:`viapath.geometry._first_contact`: first τ in [0, duration] with
     |p + v τ| <= radius + growth τ; inf if none, 0 if already touching. (The reference drops the
@@ -128,7 +125,7 @@ def _contact(px, py, vx, vy, radius, growth, duration):
     return math.inf
 
 
-@njit(cache=True, nogil=True, inline="always")
+@compiled(inline=True)
 def _leg_contact(
     starts,
     start_times,
@@ -189,7 +186,7 @@ def _leg_contact(
     return math.inf
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _cylinder_only(growth, growth_until_s):
     """Whether no obstacle's radius stops growing within the legs' time (no growth, or none capped): then
     one cylinder per obstacle."""
@@ -203,7 +200,7 @@ def _cylinder_only(growth, growth_until_s):
     return (not any_growth) or (not any_finite_until)
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def legs_first_contact(
     starts,
     start_times,
@@ -244,12 +241,12 @@ def legs_first_contact(
     return out
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _clip(value, low, high):
     return low if value < low else high if value > high else value
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def track(
     x,
     y,
@@ -299,7 +296,7 @@ def track(
     return positions
 
 
-@njit(cache=True, nogil=True, inline="always")
+@compiled(inline=True)
 def _via_pair(sx, sy, t0, speed, ox, oy, vx, vy, via_radius, growth, until, envelope_m, t_via, w_via):
     """:func:`via_options` of one pair (a leg from (sx, sy) at t0 at ``speed``, the obstacle at (ox, oy) now
     moving at (vx, vy)): the four options' via times into ``t_via`` (inf: none) and the two sides' offsets
@@ -348,7 +345,7 @@ def _via_pair(sx, sy, t0, speed, ox, oy, vx, vy, via_radius, growth, until, enve
     return valid
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def via_options(
     starts,
     start_times,
@@ -409,7 +406,7 @@ def via_options(
     return pair[:m].copy(), option[:m].copy(), t_out[:m].copy(), leg_velocity, via
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths):
     """Scalar :meth:`viapath.path.DesignatedPath.corridor_excess` of one point."""
     best = math.inf
@@ -420,7 +417,7 @@ def _excess(px, py, segment_starts, segment_directions, segment_lengths, half_wi
     return best
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _capsule_excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths, i):
     dx = segment_directions[i, 0]
     dy = segment_directions[i, 1]
@@ -436,7 +433,7 @@ def _capsule_excess(px, py, segment_starts, segment_directions, segment_lengths,
     return math.hypot(ox, oy) - half_widths[i]
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, starts, ends, spacing_m, tolerance_m):
     """The numba twin of :meth:`viapath.path.DesignatedPath.legs_inside`: both ends in one capsule, else
     sampled every ``spacing_m`` (the sample count set by the longest unresolved leg, as there)."""
@@ -504,7 +501,7 @@ def legs_inside(segment_starts, segment_directions, segment_lengths, half_widths
     return inside
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def goal_legs_inside(
     segment_starts, segment_directions, segment_lengths, half_widths, starts, subgoal_index, tolerance_m
 ):
@@ -533,16 +530,7 @@ def goal_legs_inside(
     return inside
 
 
-@njit(cache=True, nogil=True)
-def corridor_excess(segment_starts, segment_directions, segment_lengths, half_widths, points):
-    """The numba twin of :meth:`viapath.path.DesignatedPath.corridor_excess` for (M, 2) points."""
-    out = np.empty(points.shape[0])
-    for m in range(points.shape[0]):
-        out[m] = _excess(points[m, 0], points[m, 1], segment_starts, segment_directions, segment_lengths, half_widths)
-    return out
-
-
-@njit(cache=True, nogil=True)
+@compiled
 def escape_contacts(
     positions, times, obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s, overlapping, steps
 ):
@@ -557,7 +545,7 @@ def escape_contacts(
     at most the robot's longest step plus what the person walks and grows in a step (the triangle
     inequality), so a gap of g leaves g / that steps free. The skip keeps a margin (1e-6 m, and 1e-9
     relative) far above the rounding of the gaps, so the steps it passes over are those the full scan finds
-    free: the same first contacts (tests/planning/test_backends.py checks it on crowds that close fast)."""
+    free: the same first contacts."""
     k_count = positions.shape[0]
     s_count = positions.shape[1]
     n_count = obstacle_positions.shape[0]
@@ -624,24 +612,24 @@ _E_TOP, _E_CONTINUITY, _E_PREVIOUS_SPEED, _E_PREVIOUS_TURN, _E_HORIZON, _E_STAND
 ESCAPE_SETTINGS = 14
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _minimum(a, b):
     """np.minimum of two scalars: NaN first, and the second of two equal values (-0.0 against 0.0), as numpy."""
     return a if (a < b or a != a) else b
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _maximum(a, b):
     """np.maximum of two scalars (as :func:`_minimum`)."""
     return a if (a > b or a != a) else b
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _within(dx, dy, limit):
     """``math.hypot(dx, dy) < limit``, mostly without hypot (about 20 ns each here, most of the escape's
     time): outside a band of ±1e-9 (relative) around ``limit`` the squared distance (a few 1e-16 from the
     square of hypot's result) decides; inside it, and for limits whose square could underflow or overflow
-    (or NaN), hypot decides. As :func:`viapath.planning.viapath.escape.touching` does for the numpy path."""
+    (or NaN), hypot decides."""
     if 1e-140 < limit < 1e140:
         squared = dx * dx + dy * dy
         below = limit * (1.0 - 1e-9)
@@ -653,12 +641,12 @@ def _within(dx, dy, limit):
     return math.hypot(dx, dy) < limit
 
 
-@njit(cache=True, nogil=True, inline="always")  # inlined: a call of _excess, not inlined, measured 40 ns a point
+@compiled(inline=True)  # inlined: a call of _excess, not inlined, measured 40 ns a point
 def _excess_at_most(px, py, segment_starts, segment_directions, segment_lengths, half_widths, limit):
     """``_excess(px, py, ...) <= limit`` (the point within ``limit`` of the corridor, NaN false), mostly without
     hypot: with ``limit`` and every half width >= 0, a capsule's ``hypot(o) - half <= limit`` is ``hypot(o) <
     half + limit`` or, on the boundary, the difference itself: decided by :func:`_within`'s band where it is
-    certain, else by hypot (tests/planning/test_backends.py tries the band)."""
+    certain, else by hypot."""
     if not limit >= 0.0:
         return _excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths) <= limit
     for i in range(segment_starts.shape[0]):
@@ -690,7 +678,7 @@ def _excess_at_most(px, py, segment_starts, segment_directions, segment_lengths,
     return False
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths, limit, known):
     """Whether each roll-out (K, S, 2) keeps every point within ``limit`` of the corridor (excess <= limit);
     those ``known`` to are not looked at. (A function of its own: the same loop inside :func:`escape_scores`
@@ -714,7 +702,7 @@ def _roll_outs_within(positions, segment_starts, segment_directions, segment_len
     return out
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _furthest(positions, x0, y0):
     """np.max of ``np.hypot`` of the positions' (K, S, 2) offsets from (x0, y0), NaN first: hypot (about 20 ns)
     only of the squared distances within 1e-9 (relative) of the largest, the others' hypots being certainly
@@ -745,7 +733,7 @@ def _furthest(positions, x0, y0):
     return furthest
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def escape_headings(
     robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, row_turns, settings, steps
 ):
@@ -796,7 +784,7 @@ def escape_headings(
     return free, headings
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _escape_roll_outs(robot, commands, turn_rows, sines, cosines, settings, steps):
     """The positions (K, steps, 2) of :func:`escape_scores`' roll-outs (:func:`viapath.kinematics.rollout`: the
     ramps of speed and turn rate, the exact arcs, the positions as running sums)."""
@@ -840,7 +828,7 @@ def _escape_roll_outs(robot, commands, turn_rows, sines, cosines, settings, step
     return positions
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _escape_contacts_near(
     positions, robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, dt, steps, travel
 ):
@@ -882,7 +870,7 @@ def _escape_contacts_near(
     return first_step, gap_min, gap_last, gap_overlapped
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def escape_scores(
     robot,
     commands,
@@ -995,7 +983,7 @@ def escape_scores(
 # continuation, braking envelope, subgoal index, corridor check spacing, corridor tolerance).
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corridor):
     """:func:`goal_legs` on its records."""
     subgoal, stop_short_m, continuation, envelope, _, _, _ = goal
@@ -1091,7 +1079,7 @@ def _goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corri
     return directions, lengths, free, contact
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def goal_legs(
     starts,
     start_times,
@@ -1128,7 +1116,7 @@ def goal_legs(
     return _goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corridor)
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _goal_legs_inside_all(corridor, starts, goal):
     """What the backend's ``goal_legs_inside`` returns: :func:`goal_legs_inside`, then :func:`legs_inside`
     on the legs it leaves open (all of them in one call: the sample spacing depends on the longest)."""
@@ -1185,7 +1173,7 @@ _NONE, _ZERO = np.int64(-1), np.int64(0)
 _I_STRAIGHT, _I_SLOW, _I_CORNER = np.int64(_STRAIGHT), np.int64(_SLOW), np.int64(_CORNER)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@compiled(inline=True)
 def _reserve(nf, ni, m, count):
     """Room for ``count`` more nodes after the first ``m`` (the store doubles when full)."""
     if m + count <= nf.shape[0]:
@@ -1198,7 +1186,7 @@ def _reserve(nf, ni, m, count):
     return bigger_f, bigger_i
 
 
-@njit(cache=True, nogil=True, inline="always")  # inlined: a call passed 16 arguments for each node
+@compiled(inline=True)  # inlined: a call passed 16 arguments for each node
 def _add(nf, ni, m, x, y, t, v, parent, length, fx, fy, way0, way1, way2, slow_s, slow_v):
     nf, ni = _reserve(nf, ni, m, 1)
     nf[m, _X] = x
@@ -1219,7 +1207,7 @@ def _add(nf, ni, m, x, y, t, v, parent, length, fx, fy, way0, way1, way2, slow_s
     return nf, ni, m + 1
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _legs_free(starts, start_times, velocities, durations, horizon_s, obstacles):
     """LegChecks.legs_free: no contact up to the horizon, plain radii (no braking envelope). Leg by leg, up to
     its first contact: whether any contact is finite (or NaN) is all that is asked. ``obstacles``: the record
@@ -1258,7 +1246,7 @@ def _legs_free(starts, start_times, velocities, durations, horizon_s, obstacles)
     return free
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _legs_inside_of(corridor, starts, ends, spacing_m, tolerance_m):
     """:func:`legs_inside` with the corridor's record unpacked."""
     segment_starts, segment_directions, segment_lengths, half_widths = corridor
@@ -1267,7 +1255,7 @@ def _legs_inside_of(corridor, starts, ends, spacing_m, tolerance_m):
     )
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _root_nodes(position, speeds, root_directions, root_lengths, root_free):
     """The tree's first nodes (a store with room to grow): the roots, one per speed, at the robot, now; a root
     whose goal leg is free is a leaf."""
@@ -1300,7 +1288,7 @@ def _root_nodes(position, speeds, root_directions, root_lengths, root_free):
     return nf, ni, m
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _slow_legs(position, subgoal, speeds, nominal, slow_times, creep):
     """The slow/wait legs along the straight leg (_slow_candidates): 0 (waiting), the creep speed (when it is
     above 0, below the nominal speed and not in the set: creep_speeds) and each speed below the nominal one, for
@@ -1344,7 +1332,7 @@ def _slow_legs(position, subgoal, speeds, nominal, slow_times, creep):
     return dx, dy, durations, slows, c
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _slow_nodes(
     nf, ni, m, position, speeds, nominal_index, slow_times, creep, horizon_s, slow_obstacles, obstacles, goal, corridor
 ):
@@ -1419,7 +1407,7 @@ def _slow_nodes(
     return nf, ni, m
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles, corridor):
     """The path's corners between the robot and the subgoal as via points (_corner_nodes): one leg per speed
     and corner, added when free of the people and inside the corridor. ``path``: the waypoints and the
@@ -1485,7 +1473,7 @@ def _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles,
     return nf, ni, m
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _branch_pairs(free_now, contact_now, frontier_start, frontier_end, n_count, depth, max_root_obstacles):
     """The (node, obstacle) pairs to branch on: at the root every obstacle the leg hits, earliest first (at most
     max_root_obstacles, when there are more pairs than that; _root_pairs), deeper the first hit. Returns the
@@ -1542,7 +1530,7 @@ def _branch_pairs(free_now, contact_now, frontier_start, frontier_end, n_count, 
     return pair_nodes, pair_obstacles, pairs
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _via_legs(nf, branch, via_radii, envelope, horizon_s, obstacles):
     """The via points of each pair (_via_children): both sides, both roots. The pairs' options as via_options
     gives them, its arithmetic (_via_pair) on the nodes and obstacles themselves: no copies of them per pair.
@@ -1610,7 +1598,7 @@ def _via_legs(nf, branch, via_radii, envelope, horizon_s, obstacles):
     return pair, option, t_k, starts_k, times_k, leg_velocity, via, count
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, corridor):
     """The pairs' children (_via_children): the legs to their via points (:func:`_via_legs`) free of the people
     and inside the corridor, added below their nodes (a root's child starts the way round: obstacle id, side,
@@ -1684,7 +1672,7 @@ def _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, cor
     return nf, ni, m
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obstacles, corridor, tree):
     """The numba twin of :func:`viapath.planning.viapath.candidates.grow`: the same nodes in the same order
     (roots, slow/wait, corners, then the via-point children depth by depth), so the candidates, their
@@ -1762,7 +1750,7 @@ def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obs
 # The slots of the settings arrays: viapath.compiled.slots (C_* integers, F_* floats), imported at the top.
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _wrap(angle):
     """:func:`viapath.geometry.wrap_angle` of a scalar (np.mod's sign convention is Python's %)."""
     turned = math.pi - angle
@@ -1771,7 +1759,7 @@ def _wrap(angle):
     return math.pi - (turned % (2.0 * math.pi))
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _clear(
     positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
 ):
@@ -1805,7 +1793,7 @@ def _clear(
     return True
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def clear_positions(
     positions, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
 ):
@@ -1825,7 +1813,7 @@ def clear_positions(
     )
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _follows(robot, target_x, target_y, angle, speed, settings, steps, obstacles, corridor):
     """follow.can_follow: 0 cannot, 1 can, 2 can after turning on the spot first. ``angle``: atan2 of the
     offset from the robot to the target; ``obstacles`` and ``corridor``: :func:`grow`'s records."""
@@ -1899,7 +1887,7 @@ def _follows(robot, target_x, target_y, angle, speed, settings, steps, obstacles
     return 0
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _leaf_facts(robot, subgoal, nf, ni):
     """What :func:`choose_tree` hands back of the tree's leaves: ``found`` (status, 0, then the K leaves' nodes)
     and ``facts`` (6, K), as it says."""
@@ -1936,7 +1924,7 @@ def _leaf_facts(robot, subgoal, nf, ni):
     return found, facts
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def choose_tree(
     robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints, settings, integers
 ):
@@ -1992,7 +1980,7 @@ def choose_tree(
     return found, nf, ni, facts
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _before(a, b):
     """np.argsort's order of two costs: NaN after everything (ties are kept in index order by the caller)."""
     if b != b:
@@ -2000,7 +1988,7 @@ def _before(a, b):
     return a < b
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def choose_candidate(robot, nf, ni, found, facts, angles, obstacles, corridor, settings, integers):
     """The second half of ``_choose`` up to its shield check: Eq. 1's critics (:mod:`.critics`, each term as
     there, summed in :func:`.critics.critics_for`'s order), with ``only_way`` the other ways priced out, the
@@ -2104,7 +2092,7 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacles, corridor, s
     return ranking, costs
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def choose(
     robot,
     speeds,

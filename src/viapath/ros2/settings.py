@@ -24,6 +24,7 @@ What we chose:
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -430,6 +431,23 @@ class NodeSettings:
             raise AttributeError(name) from None
 
 
+def _without_retired_planner_options(values: dict[str, Any], planner_name: str) -> dict[str, Any]:
+    """``values`` without the planner's retired options (``planner.<name>``: read and ignored, with a FutureWarning
+    saying why, as in a scenario file)."""
+    from viapath.planning import planner_class
+
+    retired = planner_class(planner_name).options.retired
+    given = [key for key in values if key.startswith(PLANNER_PREFIX) and key[len(PLANNER_PREFIX) :] in retired]
+    for key in given:
+        warnings.warn(
+            f"ROS 2 parameter {key}: option {key[len(PLANNER_PREFIX) :]!r} no longer does anything "
+            f"({retired[key[len(PLANNER_PREFIX) :]]}); it is ignored",
+            FutureWarning,
+            stacklevel=3,
+        )
+    return {key: value for key, value in values.items() if key not in given}
+
+
 def validate(values: dict[str, Any]) -> NodeSettings:
     """Check every value against its option; unknown names and bad values raise :class:`ParameterError`."""
     planner_name = _planner_name(values)
@@ -439,6 +457,7 @@ def validate(values: dict[str, Any]) -> NodeSettings:
         raise ParameterError(f"parameter scanner_names: names repeat: {scanner_names}")
     options = {o.name: o for o in all_options(planner_name, scanner_names)}
     values = retired_options(values, "ROS 2 parameters")
+    values = _without_retired_planner_options(values, planner_name)
     renamed = {f: o.name for o in options.values() for f in o.former_names}
     errors = [
         f"parameter {name}: unknown parameter" + (f" (now called {renamed[name]})" if name in renamed else "")

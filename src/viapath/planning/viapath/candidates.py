@@ -228,17 +228,9 @@ def grow(
     data = tree.stacked()
     for depth in range(config.max_depth):
         next_frontier = [_corner_nodes(checks, tree, speeds)] if depth == 0 else []
-        blocked = (~free & np.isfinite(contact).any(axis=1)).nonzero()[0]
-        if len(blocked) and len(checks.obstacles):
-            if depth == 0:
-                rows, pair_obstacles = _root_pairs(_one_per_shape(checks, contact[blocked]), config.max_root_obstacles)
-                pair_nodes = frontier[blocked][rows]
-            else:
-                pair_nodes = frontier[blocked]
-                pair_obstacles = contact[blocked].argmin(axis=1)
-            if checks.obstacles.static_mask is not None:
-                pair_nodes, pair_obstacles = _round_static_shapes(checks, data["position"], pair_nodes, pair_obstacles)
-            children = _via_children(checks, data, pair_nodes, pair_obstacles, is_root=(depth == 0))
+        pairs = _pairs(checks, data["position"], frontier, free, contact, depth, config.max_root_obstacles)
+        if pairs is not None:
+            children = _via_children(checks, data, *pairs, is_root=(depth == 0))
             if children is not None:
                 next_frontier.append(tree.extend(**children))
         frontier = np.concatenate([np.zeros(0, int)] + next_frontier)
@@ -264,6 +256,32 @@ def grow(
         ways=data["way"][leaves],
         subgoal=checks.subgoal,
     )
+
+
+def _pairs(
+    checks: LegChecks,
+    positions: np.ndarray,
+    frontier: np.ndarray,
+    free: np.ndarray,
+    contact: np.ndarray,
+    depth: int,
+    max_root_obstacles: int,
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The (node, obstacle) pairs to branch on from the frontier's blocked legs to the subgoal: at the root each
+    shape a leg meets (earliest first, at most ``max_root_obstacles``), deeper the first obstacle hit; a static
+    disc replaced by its shape's extremes as seen from the node. None when no leg is blocked by an obstacle."""
+    blocked = (~free & np.isfinite(contact).any(axis=1)).nonzero()[0]
+    if not (len(blocked) and len(checks.obstacles)):
+        return None
+    if depth == 0:
+        rows, pair_obstacles = _root_pairs(_one_per_shape(checks, contact[blocked]), max_root_obstacles)
+        pair_nodes = frontier[blocked][rows]
+    else:
+        pair_nodes = frontier[blocked]
+        pair_obstacles = contact[blocked].argmin(axis=1)
+    if checks.obstacles.static_mask is not None:
+        pair_nodes, pair_obstacles = _round_static_shapes(checks, positions, pair_nodes, pair_obstacles)
+    return pair_nodes, pair_obstacles
 
 
 def _candidates_of(store: Any, subgoal: np.ndarray) -> Candidates | None:

@@ -24,14 +24,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
-from itertools import islice
 from typing import Any
 
 import numpy as np
 
-from viapath.compiled.arithmetic import NUMPY, Arithmetic
+from viapath.compiled import arithmetic as compiled
 from viapath.geometry import cross2
-from viapath.kinematics import UnicycleState, tracking
+from viapath.kinematics import UnicycleState
 from viapath.observation import MotionLimits, Obstacles
 from viapath.options import Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
@@ -41,261 +40,24 @@ from viapath.planning.base import Inflation, Situation
 ON_PATH_M = 0.01
 
 
-@dataclass
-class LegChecks:
-    """One cycle's checks, vectorised over legs and obstacles."""
+class _CompiledInputs:
+    """The checks' facts packed as the compiled steps take them (C-contiguous float64, made once per checks: a
+    :class:`LegChecks` is not changed after it is built; dataclasses.replace makes a new one, without these)."""
 
     path: DesignatedPath
     position: np.ndarray
     heading_rad: float
     speed_mps: float
     turn_rate_radps: float
-    subgoal: np.ndarray
-    subgoal_index: int
-    is_final_subgoal: bool
     obstacles: Obstacles
-    check_radii: np.ndarray  # robot + obstacle + margin + k·σ_position
-    growth: np.ndarray  # k·σ_velocity
+    check_radii: np.ndarray
+    growth: np.ndarray
     growth_until_s: np.ndarray
-    via_radii: np.ndarray  # check_radii + planning margin
-    horizon_s: float
-    stop_short_m: float  # legs to a blocked subgoal need be free only up to the bypass distance
-    continuation: tuple[np.ndarray, float] | None  # direction and length of the segment after the subgoal
-    corridor_tolerance_m: float
-    corridor_check_spacing_m: float
-    # With a shield behind the planner: via points and the legs to the subgoal keep the robot's braking
-    # envelope from a person too, (person_accel / 2)·(period + v / max_accel)² at their speed v, so the
-    # pass they offer is one the shield admits all along. (A leg back to the path that passes a walker
-    # closer than that leaves the robot alongside and a little behind, where every forward command
-    # moves towards the walker closer than it can stop: it creeps at the walker's speed.) Other legs
-    # (side steps, slow legs, the escape) keep the plain radii: stepping aside needs every centimetre.
-    # Keeping it from people walking the leg's way only (the creeping case) was tried: 93.0 % success
-    # on mixed (seed 0) against 95.0 % for everyone, more contacts in crowds.
-    envelope_accel_mps2: float = 0.0
-    envelope_period_s: float = 0.0
-    max_accel_mps2: float = 1.0
-    arithmetic: Arithmetic = NUMPY  # numpy reference or compiled code (viapath.compiled.arithmetic)
-
-    def envelope_m(self, speeds: np.ndarray) -> np.ndarray:
-        """How much further out a via point at ``speeds`` must lie for the robot to stop in time."""
-        if self.envelope_accel_mps2 <= 0:
-            return np.zeros(np.shape(speeds))
-        stop_s = self.envelope_period_s + np.asarray(speeds) / self.max_accel_mps2
-        return 0.5 * self.envelope_accel_mps2 * stop_s**2
-
-    @classmethod
-    def of(
-        cls,
-        situation: Situation,
-        config: Settings,
-        tracker: SubgoalTracker,
-        policy: SubgoalPolicy,
-        robot_radius_m: float,
-        arithmetic: Arithmetic = NUMPY,
-    ) -> LegChecks:
-        robot, path, obstacles, inflation = situation.robot, tracker.path, situation.obstacles, situation.inflation
-        final = tracker.is_final
-        blocked = not final and tracker.is_blocked(obstacles.positions, obstacles.radii_m, robot_radius_m)
-        index = situation.subgoal_index
-        continuation = None if (final or blocked) else (path.segment_directions[index], path.segment_lengths_m[index])
-        return cls(
-            path=path,
-            position=situation.position,
-            heading_rad=robot.heading_rad,
-            speed_mps=float(robot.speed_mps),
-            turn_rate_radps=float(robot.turn_rate_radps),
-            subgoal=situation.subgoal,
-            subgoal_index=index,
-            is_final_subgoal=final,
-            obstacles=obstacles,
-            check_radii=inflation.check_radii,
-            growth=inflation.growth,
-            growth_until_s=inflation.growth_until_s,
-            via_radii=inflation.check_radii + config.planning_margin_m,
-            horizon_s=config.horizon_s,
-            stop_short_m=policy.bypass_distance_m if blocked else 0.0,
-            continuation=continuation,
-            corridor_tolerance_m=situation.corridor_tolerance_m,
-            corridor_check_spacing_m=config.corridor_check_spacing_m,
-            arithmetic=arithmetic,
-        )
-
-    def with_less_inflation(
-        self, fraction: float, robot_radius_m: float, settings: Mapping[str, Any], cap_too: bool = False
-    ) -> LegChecks:
-        """The same checks with ``fraction`` of the obstacles' uncertainty inflation (σ terms; with
-        ``cap_too`` the cap on the cone's growth as well)."""
-        obstacles = self.obstacles
-        less = replace(
-            obstacles,
-            position_sigma_m=fraction * obstacles.position_sigma_m,
-            velocity_sigma_mps=fraction * obstacles.velocity_sigma_mps,
-        )
-        if cap_too:
-            settings = {**settings, "max_inflation_m": fraction * settings["max_inflation_m"]}
-        inflation = Inflation.of(less, robot_radius_m, settings)
-        return replace(
-            self,
-            obstacles=less,
-            check_radii=inflation.check_radii,
-            growth=inflation.growth,
-            growth_until_s=inflation.growth_until_s,
-            via_radii=inflation.check_radii + settings["planning_margin_m"],
-        )
-
-    def back_to_path(self, lookahead_m: float) -> LegChecks | None:
-        """The same checks towards the path point ``lookahead_m`` ahead of the robot on the segment that
-        ends at the subgoal, continued along the path to the subgoal (option ``return_lookahead_m``).
-        None when the robot is on the path line or that point would lie at or past the subgoal: then
-        the leg to the subgoal is the way back already."""
-        segment = self.subgoal_index - 1
-        path = self.path
-        start, direction = path.segment_starts[segment], path.segment_directions[segment]
-        length = float(path.segment_lengths_m[segment])
-        relative = self.position - start
-        ahead_m = max(float(relative @ direction), 0.0) + lookahead_m
-        if abs(float(cross2(direction, relative))) <= ON_PATH_M or ahead_m >= length:
-            return None
-        # The continuation to the subgoal is checked with the full radii, so a person standing on a
-        # blocked subgoal blocks the way back too and the planner plans as the paper does.
-        return replace(
-            self, subgoal=start + ahead_m * direction, continuation=(direction, length - ahead_m), stop_short_m=0.0
-        )
-
-    # -- against the forecast ----------------------------------------------------------------------
-
-    def contact_times(
-        self,
-        starts: np.ndarray,
-        start_times: np.ndarray,
-        velocities: np.ndarray,
-        durations: np.ndarray,
-        horizon_s: float | None = None,
-        keep_envelope: bool = False,
-    ) -> np.ndarray:
-        """(K, N) first contact of each leg with each obstacle, up to the horizon; inf = free. With
-        ``keep_envelope`` (and a shield behind the planner) each leg also keeps its braking envelope."""
-        if len(self.obstacles) == 0:
-            return np.full((len(starts), 0), np.inf)
-        horizon_s = self.horizon_s if horizon_s is None else horizon_s
-        checked = np.minimum(np.maximum(horizon_s - start_times, 0.0), durations)  # np.clip, without its dispatch
-        envelope = None
-        if keep_envelope and self.envelope_accel_mps2 > 0:
-            envelope = self.envelope_m(np.hypot(velocities[:, 0], velocities[:, 1]))
-        obstacles = self.obstacles
-        if obstacles.static_mask is not None:
-            # Static geometry stays put: its forecast holds past the horizon (a leg into a wall is not made free
-            # by driving it slowly) and the braking envelope, for where a person may walk, does not apply.
-            contact = np.empty((len(starts), len(obstacles)))
-            people, static = self._moving_and_static_rows()
-            for (rows, *packed), leg_radii, until in ((people, envelope, checked), (static, None, durations)):
-                if len(rows):
-                    contact[:, rows] = self.arithmetic.legs_first_contact_packed(
-                        starts, start_times, velocities, until, packed, leg_radii
-                    )
-            return contact
-        return self.arithmetic.legs_first_contact(
-            starts,
-            start_times,
-            velocities,
-            checked,
-            obstacles.positions,
-            obstacles.velocities,
-            self.check_radii,
-            self.growth,
-            self.growth_until_s,
-            envelope,
-        )
-
-    def _moving_and_static_rows(self) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
-        """The obstacles' rows split into people and static geometry, each as (row indices, positions,
-        velocities, check radii, growth, growth_until_s), made once per LegChecks (every leg check of the
-        cycle takes them)."""
-        cached = self.__dict__.get("_moving_and_static")
-        if cached is None:
-            obstacles, static = self.obstacles, self.obstacles.is_static
-            cached = self.__dict__["_moving_and_static"] = tuple(
-                (
-                    rows,
-                    np.ascontiguousarray(obstacles.positions[rows], dtype=np.float64),
-                    np.ascontiguousarray(obstacles.velocities[rows], dtype=np.float64),
-                    *(
-                        np.ascontiguousarray(np.broadcast_to(values, static.shape)[rows], dtype=np.float64)
-                        for values in (self.check_radii, self.growth, self.growth_until_s)
-                    ),
-                )
-                for rows in (np.flatnonzero(~static), np.flatnonzero(static))
-            )
-        return cached
-
-    def static_labels(self) -> np.ndarray:
-        """(N,) for each obstacle the static shape it belongs to (its id; -1: a person)."""
-        cached = self.__dict__.get("_static_labels")
-        if cached is None:
-            cached = self.__dict__["_static_labels"] = np.where(self.obstacles.is_static, self.obstacles.ids, -1)
-        return cached
-
-    def static_extremes(self, start: np.ndarray, obstacle: int) -> tuple[int, int]:
-        """The discs of ``obstacle``'s static shape whose via discs reach furthest to the left and to the right as
-        seen from ``start`` (DESIGN §10: the tangents to a shape's inflated outline are the tangents to its
-        extreme discs); the obstacle itself twice for a person or when ``start`` is inside the shape's reach."""
-        labels = self.static_labels()
-        label = labels[obstacle]
-        if label < 0:
-            return obstacle, obstacle
-        members = np.flatnonzero(labels == label)
-        offset = self.obstacles.positions[members] - start
-        distance = np.hypot(offset[:, 0], offset[:, 1])
-        radii = self.via_radii[members]
-        if np.any(distance <= radii):
-            return obstacle, obstacle
-        heading = np.arctan2(offset[:, 1], offset[:, 0])
-        reference = heading[members == obstacle][0]
-        relative = (heading - reference + np.pi) % (2 * np.pi) - np.pi
-        half = np.arcsin(radii / distance)
-        return int(members[np.argmax(relative + half)]), int(members[np.argmin(relative - half)])
-
-    def legs_free(
-        self, starts: np.ndarray, start_times: np.ndarray, velocities: np.ndarray, durations: np.ndarray
-    ) -> np.ndarray:
-        return np.isinf(self.contact_times(starts, start_times, velocities, durations)).all(axis=1)
-
-    def goal_legs(
-        self, starts: np.ndarray, start_times: np.ndarray, speeds: np.ndarray, horizon_s: float | None = None
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N))."""
-        compiled = self.arithmetic.goal_legs(
-            self, starts, start_times, speeds, self.horizon_s if horizon_s is None else horizon_s
-        )
-        if compiled is not None:
-            return compiled
-        offset = self.subgoal - starts
-        lengths = np.hypot(offset[:, 0], offset[:, 1])
-        directions = offset / np.maximum(lengths, 1e-12)[:, None]
-        durations = np.maximum(lengths - self.stop_short_m, 0.0) / speeds
-        velocities = directions * speeds[:, None]
-        if self.continuation is not None and len(self.obstacles):
-            # The leg and its continuation past the subgoal, checked in one call (2K legs).
-            direction, length = self.continuation
-            count = len(starts)
-            both = self.contact_times(
-                np.concatenate([starts, np.broadcast_to(self.subgoal, starts.shape)]),
-                np.concatenate([start_times, start_times + durations]),
-                np.concatenate([velocities, direction * speeds[:, None]]),
-                np.concatenate([durations, length / speeds]),
-                horizon_s,
-                keep_envelope=True,
-            )
-            contact = np.minimum(both[:count], both[count:] + durations[:, None])
-        else:
-            contact = self.contact_times(starts, start_times, velocities, durations, horizon_s, keep_envelope=True)
-        free = np.isinf(contact).all(axis=1)
-        if free.any():  # (when every leg meets someone, as in the slowest cycles, the corridor cannot free one)
-            free &= self.goal_legs_inside(starts)
-        return directions, lengths, free, contact
-
-    # -- the same facts packed as the compiled code takes them (C-contiguous float64, made once per LegChecks: a
-    # LegChecks is not changed after it is built; dataclasses.replace makes a new one, without these) --
+    via_radii: np.ndarray
+    continuation: tuple[np.ndarray, float] | None
+    envelope_accel_mps2: float
+    envelope_period_s: float
+    max_accel_mps2: float
 
     def packed_obstacles(self) -> tuple[np.ndarray, ...]:
         """positions, velocities, check radii, growth, growth_until_s of the obstacles, for the compiled code."""
@@ -393,70 +155,270 @@ class LegChecks:
             self.__dict__["_packed_envelope"] = cached
         return cached
 
-    def clear(self, positions: np.ndarray, dt: float, after_steps: int = 0, of_steps: int | None = None) -> bool:
-        """Whether robot positions (one per ``dt`` from now, or from ``after_steps`` steps from now on; part of
-        a roll-out of ``of_steps`` steps, if given) keep clear of every obstacle."""
-        if len(self.obstacles) == 0 or len(positions) == 0:
-            return True
-        end = after_steps + len(positions)
-        steps = end if of_steps is None else of_steps
-        centres_x, centres_y, limit = self._clear_limits(steps, dt)
-        # Only the obstacles a roll-out this long can reach: one whose centre stays farther from the robot than
-        # its limit plus the roll-out's greatest distance from the robot is passed clear at every step
-        # (triangle inequality), so leaving it out changes no verdict.
-        offset = positions - self.position
-        travel = float(np.sqrt((offset * offset).sum(axis=1).max()))
-        near = self._clear_slack(steps, dt) <= travel + 1e-6
-        if not near.any():
-            return True
-        rows = slice(after_steps, end)
-        if near.all():
-            centres_x, centres_y, limit = centres_x[rows], centres_y[rows], limit[rows]
+
+@dataclass
+class LegChecks(_CompiledInputs):
+    """One cycle's checks, vectorised over legs and obstacles."""
+
+    path: DesignatedPath
+    position: np.ndarray
+    heading_rad: float
+    speed_mps: float
+    turn_rate_radps: float
+    subgoal: np.ndarray
+    subgoal_index: int
+    is_final_subgoal: bool
+    obstacles: Obstacles
+    check_radii: np.ndarray  # robot + obstacle + margin + k·σ_position
+    growth: np.ndarray  # k·σ_velocity
+    growth_until_s: np.ndarray
+    via_radii: np.ndarray  # check_radii + planning margin
+    horizon_s: float
+    stop_short_m: float  # legs to a blocked subgoal need be free only up to the bypass distance
+    continuation: tuple[np.ndarray, float] | None  # direction and length of the segment after the subgoal
+    corridor_tolerance_m: float
+    corridor_check_spacing_m: float
+    # With a shield behind the planner: via points and the legs to the subgoal keep the robot's braking
+    # envelope from a person too, (person_accel / 2)·(period + v / max_accel)² at their speed v, so the
+    # pass they offer is one the shield admits all along. (A leg back to the path that passes a walker
+    # closer than that leaves the robot alongside and a little behind, where every forward command
+    # moves towards the walker closer than it can stop: it creeps at the walker's speed.) Other legs
+    # (side steps, slow legs, the escape) keep the plain radii: stepping aside needs every centimetre.
+    # Keeping it from people walking the leg's way only (the creeping case) was tried: 93.0 % success
+    # on mixed (seed 0) against 95.0 % for everyone, more contacts in crowds.
+    envelope_accel_mps2: float = 0.0
+    envelope_period_s: float = 0.0
+    max_accel_mps2: float = 1.0
+
+    def envelope_m(self, speeds: np.ndarray) -> np.ndarray:
+        """How much further out a via point at ``speeds`` must lie for the robot to stop in time."""
+        if self.envelope_accel_mps2 <= 0:
+            return np.zeros(np.shape(speeds))
+        stop_s = self.envelope_period_s + np.asarray(speeds) / self.max_accel_mps2
+        return 0.5 * self.envelope_accel_mps2 * stop_s**2
+
+    @classmethod
+    def of(
+        cls,
+        situation: Situation,
+        config: Settings,
+        tracker: SubgoalTracker,
+        policy: SubgoalPolicy,
+        robot_radius_m: float,
+    ) -> LegChecks:
+        robot, path, obstacles, inflation = situation.robot, tracker.path, situation.obstacles, situation.inflation
+        final = tracker.is_final
+        blocked = not final and tracker.is_blocked(obstacles.positions, obstacles.radii_m, robot_radius_m)
+        index = situation.subgoal_index
+        continuation = None if (final or blocked) else (path.segment_directions[index], path.segment_lengths_m[index])
+        return cls(
+            path=path,
+            position=situation.position,
+            heading_rad=robot.heading_rad,
+            speed_mps=float(robot.speed_mps),
+            turn_rate_radps=float(robot.turn_rate_radps),
+            subgoal=situation.subgoal,
+            subgoal_index=index,
+            is_final_subgoal=final,
+            obstacles=obstacles,
+            check_radii=inflation.check_radii,
+            growth=inflation.growth,
+            growth_until_s=inflation.growth_until_s,
+            via_radii=inflation.check_radii + config.planning_margin_m,
+            horizon_s=config.horizon_s,
+            stop_short_m=policy.bypass_distance_m if blocked else 0.0,
+            continuation=continuation,
+            corridor_tolerance_m=situation.corridor_tolerance_m,
+            corridor_check_spacing_m=config.corridor_check_spacing_m,
+        )
+
+    def with_less_inflation(
+        self, fraction: float, robot_radius_m: float, settings: Mapping[str, Any], cap_too: bool = False
+    ) -> LegChecks:
+        """The same checks with ``fraction`` of the obstacles' uncertainty inflation (σ terms; with
+        ``cap_too`` the cap on the cone's growth as well)."""
+        obstacles = self.obstacles
+        less = replace(
+            obstacles,
+            position_sigma_m=fraction * obstacles.position_sigma_m,
+            velocity_sigma_mps=fraction * obstacles.velocity_sigma_mps,
+        )
+        if cap_too:
+            settings = {**settings, "max_inflation_m": fraction * settings["max_inflation_m"]}
+        inflation = Inflation.of(less, robot_radius_m, settings)
+        return replace(
+            self,
+            obstacles=less,
+            check_radii=inflation.check_radii,
+            growth=inflation.growth,
+            growth_until_s=inflation.growth_until_s,
+            via_radii=inflation.check_radii + settings["planning_margin_m"],
+        )
+
+    def back_to_path(self, lookahead_m: float) -> LegChecks | None:
+        """The same checks towards the path point ``lookahead_m`` ahead of the robot on the segment that
+        ends at the subgoal, continued along the path to the subgoal (option ``return_lookahead_m``).
+        None when the robot is on the path line or that point would lie at or past the subgoal: then
+        the leg to the subgoal is the way back already."""
+        segment = self.subgoal_index - 1
+        path = self.path
+        start, direction = path.segment_starts[segment], path.segment_directions[segment]
+        length = float(path.segment_lengths_m[segment])
+        relative = self.position - start
+        ahead_m = max(float(relative @ direction), 0.0) + lookahead_m
+        if abs(float(cross2(direction, relative))) <= ON_PATH_M or ahead_m >= length:
+            return None
+        # The continuation to the subgoal is checked with the full radii, so a person standing on a
+        # blocked subgoal blocks the way back too and the planner plans as the paper does.
+        return replace(
+            self, subgoal=start + ahead_m * direction, continuation=(direction, length - ahead_m), stop_short_m=0.0
+        )
+
+    # -- against the forecast ----------------------------------------------------------------------
+
+    def contact_times(
+        self,
+        starts: np.ndarray,
+        start_times: np.ndarray,
+        velocities: np.ndarray,
+        durations: np.ndarray,
+        horizon_s: float | None = None,
+        keep_envelope: bool = False,
+    ) -> np.ndarray:
+        """(K, N) first contact of each leg with each obstacle, up to the horizon; inf = free. With
+        ``keep_envelope`` (and a shield behind the planner) each leg also keeps its braking envelope."""
+        if len(self.obstacles) == 0:
+            return np.full((len(starts), 0), np.inf)
+        horizon_s = self.horizon_s if horizon_s is None else horizon_s
+        checked = np.minimum(np.maximum(horizon_s - start_times, 0.0), durations)  # np.clip, without its dispatch
+        envelope = None
+        if keep_envelope and self.envelope_accel_mps2 > 0:
+            envelope = self.envelope_m(np.hypot(velocities[:, 0], velocities[:, 1]))
+        obstacles = self.obstacles
+        if obstacles.static_mask is not None:
+            # Static geometry stays put: its forecast holds past the horizon (a leg into a wall is not made free
+            # by driving it slowly) and the braking envelope, for where a person may walk, does not apply.
+            contact = np.empty((len(starts), len(obstacles)))
+            people, static = self._moving_and_static_rows()
+            for (rows, *packed), leg_radii, until in ((people, envelope, checked), (static, None, durations)):
+                if len(rows):
+                    contact[:, rows] = compiled.legs_first_contact_packed(
+                        starts, start_times, velocities, until, packed, leg_radii
+                    )
+            return contact
+        return compiled.legs_first_contact(
+            starts,
+            start_times,
+            velocities,
+            checked,
+            obstacles.positions,
+            obstacles.velocities,
+            self.check_radii,
+            self.growth,
+            self.growth_until_s,
+            envelope,
+        )
+
+    def _moving_and_static_rows(self) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
+        """The obstacles' rows split into people and static geometry, each as (row indices, positions,
+        velocities, check radii, growth, growth_until_s), made once per LegChecks (every leg check of the
+        cycle takes them)."""
+        cached = self.__dict__.get("_moving_and_static")
+        if cached is None:
+            obstacles, static = self.obstacles, self.obstacles.is_static
+            cached = self.__dict__["_moving_and_static"] = tuple(
+                (
+                    rows,
+                    np.ascontiguousarray(obstacles.positions[rows], dtype=np.float64),
+                    np.ascontiguousarray(obstacles.velocities[rows], dtype=np.float64),
+                    *(
+                        np.ascontiguousarray(np.broadcast_to(values, static.shape)[rows], dtype=np.float64)
+                        for values in (self.check_radii, self.growth, self.growth_until_s)
+                    ),
+                )
+                for rows in (np.flatnonzero(~static), np.flatnonzero(static))
+            )
+        return cached
+
+    def static_labels(self) -> np.ndarray:
+        """(N,) for each obstacle the static shape it belongs to (its id; -1: a person)."""
+        cached = self.__dict__.get("_static_labels")
+        if cached is None:
+            cached = self.__dict__["_static_labels"] = np.where(self.obstacles.is_static, self.obstacles.ids, -1)
+        return cached
+
+    def static_extremes(self, start: np.ndarray, obstacle: int) -> tuple[int, int]:
+        """The discs of ``obstacle``'s static shape whose via discs reach furthest to the left and to the right as
+        seen from ``start`` (DESIGN §10: the tangents to a shape's inflated outline are the tangents to its
+        extreme discs); the obstacle itself twice for a person or when ``start`` is inside the shape's reach."""
+        labels = self.static_labels()
+        label = labels[obstacle]
+        if label < 0:
+            return obstacle, obstacle
+        members = np.flatnonzero(labels == label)
+        offset = self.obstacles.positions[members] - start
+        distance = np.hypot(offset[:, 0], offset[:, 1])
+        radii = self.via_radii[members]
+        if np.any(distance <= radii):
+            return obstacle, obstacle
+        heading = np.arctan2(offset[:, 1], offset[:, 0])
+        reference = heading[members == obstacle][0]
+        relative = (heading - reference + np.pi) % (2 * np.pi) - np.pi
+        half = np.arcsin(radii / distance)
+        return int(members[np.argmax(relative + half)]), int(members[np.argmin(relative - half)])
+
+    def legs_free(
+        self, starts: np.ndarray, start_times: np.ndarray, velocities: np.ndarray, durations: np.ndarray
+    ) -> np.ndarray:
+        return np.isinf(self.contact_times(starts, start_times, velocities, durations)).all(axis=1)
+
+    def goal_legs(
+        self, starts: np.ndarray, start_times: np.ndarray, speeds: np.ndarray, horizon_s: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N)). Without
+        static geometry in one compiled call; with it, static rows are checked past the horizon without the
+        braking envelope (:meth:`contact_times`)."""
+        if self.obstacles.static_mask is None:
+            return compiled.goal_legs(
+                self, starts, start_times, speeds, self.horizon_s if horizon_s is None else horizon_s
+            )
+        offset = self.subgoal - starts
+        lengths = np.hypot(offset[:, 0], offset[:, 1])
+        directions = offset / np.maximum(lengths, 1e-12)[:, None]
+        durations = np.maximum(lengths - self.stop_short_m, 0.0) / speeds
+        velocities = directions * speeds[:, None]
+        if self.continuation is not None and len(self.obstacles):
+            # The leg and its continuation past the subgoal, checked in one call (2K legs).
+            direction, length = self.continuation
+            count = len(starts)
+            both = self.contact_times(
+                np.concatenate([starts, np.broadcast_to(self.subgoal, starts.shape)]),
+                np.concatenate([start_times, start_times + durations]),
+                np.concatenate([velocities, direction * speeds[:, None]]),
+                np.concatenate([durations, length / speeds]),
+                horizon_s,
+                keep_envelope=True,
+            )
+            contact = np.minimum(both[:count], both[count:] + durations[:, None])
         else:
-            centres_x, centres_y, limit = centres_x[rows, near], centres_y[rows, near], limit[rows, near]
-        distance = np.hypot(positions[:, 0:1] - centres_x, positions[:, 1:2] - centres_y)
-        return bool((distance >= limit).all())
+            contact = self.contact_times(starts, start_times, velocities, durations, horizon_s, keep_envelope=True)
+        free = np.isinf(contact).all(axis=1)
+        if free.any():  # (when every leg meets someone, as in the slowest cycles, the corridor cannot free one)
+            free &= self.goal_legs_inside(starts)
+        return directions, lengths, free, contact
 
-    def _clear_slack(self, steps: int, dt: float) -> np.ndarray:
-        """(N,) for each obstacle the least of (its centre's distance from the robot − its limit) over the steps
-        of :meth:`_clear_limits`: a roll-out that stays closer to the robot than this is clear of it."""
-        cache = self.__dict__.setdefault("_clear_slack_cache", {})
-        cached = cache.get((steps, dt))
-        if cached is None:
-            centres_x, centres_y, limit = self._clear_limits(steps, dt)
-            gap = np.hypot(centres_x - self.position[0], centres_y - self.position[1]) - limit
-            cached = cache[(steps, dt)] = gap.min(axis=0)
-        return cached
-
-    def _clear_limits(self, steps: int, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The obstacles' centres (x and y, (steps, N) each) after each ``dt`` and how close the robot may come
-        to each then: the part of :meth:`clear` that is the same for every roll-out of the cycle (up to
-        ``max_rollouts`` of them when no candidate is free), made once per step count."""
-        cache = self.__dict__.setdefault("_clear_limits_cache", {})
-        cached = cache.get((steps, dt))
-        if cached is None:
-            times = dt * np.arange(1, steps + 1)[:, None]
-            obstacles = self.obstacles
-            centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
-            reach = self.check_radii + self.growth * np.minimum(times, self.growth_until_s)
-            # Already inside an obstacle's margin (a close pass): only forbid getting closer still.
-            now = np.hypot(*(self.position - obstacles.positions).T)
-            cached = cache[(steps, dt)] = (centres[..., 0], centres[..., 1], np.minimum(reach, now - 1e-3))
-        return cached
-
-    # -- the arithmetic the planner picked for this cycle (``arithmetic``: numpy, or compiled), for the recipe's steps
+    # -- the compiled steps the recipe calls -------------------------------------------------------
 
     def via_options(self, *arguments: Any) -> tuple[np.ndarray, ...]:
-        """:func:`viapath.geometry.via_options` in the cycle's arithmetic."""
-        return self.arithmetic.via_options(*arguments)  # type: ignore[no-untyped-call]
+        """:func:`viapath.compiled.arithmetic.via_options`."""
+        return compiled.via_options(*arguments)  # type: ignore[no-untyped-call]
 
-    def corridor_excess(self, points: np.ndarray) -> np.ndarray:
-        """:meth:`DesignatedPath.corridor_excess` of the path in the cycle's arithmetic."""
-        return self.arithmetic.corridor_excess(self.path, points)
-
-    def escape_contacts(self, *arguments: Any) -> tuple[np.ndarray, ...] | None:
-        """The escape's first contacts and gaps compiled; None in numpy (the escape works them out itself)."""
-        return self.arithmetic.escape_contacts(*arguments)
+    def clear(self, positions: np.ndarray, dt: float) -> bool:
+        """Whether robot positions, one per ``dt`` from now, keep clear of every obstacle (closer than its check
+        radius only where the robot already is and no closer; :func:`viapath.compiled.arithmetic.clear`)."""
+        if len(self.obstacles) == 0 or len(positions) == 0:
+            return True
+        return compiled.clear(positions, dt, self.position, self.packed_obstacles())
 
     def clear_track(
         self,
@@ -470,23 +432,8 @@ class LegChecks:
     ) -> np.ndarray | None:
         """The positions (steps, 2) of steering for ``target`` at ``speed_mps`` (:func:`viapath.kinematics.track`) if
         they keep clear of every obstacle (:meth:`clear`), else None."""
-        if self.arithmetic.name != "numpy":
-            positions = self.arithmetic.track(state, target, speed_mps, limits, dt, steps, heading_gain)
-            clear = len(self.obstacles) == 0 or self.arithmetic.clear(
-                positions, dt, self.position, self.packed_obstacles()
-            )
-            return positions if clear else None
-        # A failing candidate mostly meets someone early in its roll-out (in the slowest cycles, up to 8
-        # candidates fail within the first second): its first half is checked before the rest is rolled
-        # out. The same positions and verdict; a roll-out that passes pays one more (small) check.
-        rolling = tracking(state, target, speed_mps, limits, dt, heading_gain)
-        head = np.array(list(islice(rolling, steps // 2))).reshape(-1, 2)
-        if not self.clear(head, dt, of_steps=steps):
-            return None
-        tail = np.array(list(islice(rolling, steps - len(head)))).reshape(-1, 2)
-        if not self.clear(tail, dt, after_steps=len(head), of_steps=steps):
-            return None
-        return np.concatenate([head, tail])
+        positions = compiled.track(state, target, speed_mps, limits, dt, steps, heading_gain)
+        return positions if self.clear(positions, dt) else None
 
     # -- against the corridor (paper step 4) ---------------------------------------------------------
 
@@ -495,12 +442,10 @@ class LegChecks:
         return self.path.corridor_excess(points) <= self.corridor_tolerance_m
 
     def legs_inside(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-        return self.arithmetic.legs_inside(
-            self.path, starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m
-        )
+        return compiled.legs_inside(self.path, starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m)
 
     def goal_legs_inside(self, starts: np.ndarray) -> np.ndarray:
-        compiled = self.arithmetic.goal_legs_inside(
+        return compiled.goal_legs_inside(
             self.path,
             starts,
             self.subgoal,
@@ -508,24 +453,6 @@ class LegChecks:
             self.corridor_check_spacing_m,
             self.corridor_tolerance_m,
         )
-        if compiled is not None:
-            return compiled
-        # The subgoal ends both capsules next to it; a leg from a point inside one of them is inside
-        # that capsule (convex). Only other legs need the general check.
-        path = self.path
-        inside: Any = None
-        for i in (self.subgoal_index - 1, self.subgoal_index):  # the first is always there
-            if i == len(path.segment_lengths_m):
-                break
-            rel = starts - path.segment_starts[i]
-            along = np.minimum(np.maximum(rel @ path.segment_directions[i], 0.0), path.segment_lengths_m[i])
-            gap = np.hypot(*(rel - along[:, None] * path.segment_directions[i]).T) - path.half_widths_m[i]
-            inside_capsule = gap <= self.corridor_tolerance_m
-            inside = inside_capsule if inside is None else inside | inside_capsule
-        if not inside.all():
-            rest = np.flatnonzero(~inside)
-            inside[rest] = self.legs_inside(starts[rest], np.broadcast_to(self.subgoal, (len(rest), 2)))
-        return inside
 
 
 _FLOAT64 = np.dtype(np.float64)  # (an identity test: numpy's float64 arrays share this descriptor; another fails it)

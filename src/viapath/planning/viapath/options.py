@@ -7,7 +7,6 @@ every planner (:data:`viapath.planning.base.COMMON_OPTIONS`).
 
 from __future__ import annotations
 
-from viapath.compiled.choice import PLANNER_COMPUTE
 from viapath.options import Option, OptionSet
 from viapath.planning.base import COMMON_OPTIONS
 
@@ -229,11 +228,19 @@ _OWN = [
         minimum=0.0,
         maximum=5.0,
     ),
-    PLANNER_COMPUTE,  # numpy or compiled arithmetic, the same decisions (viapath.compiled.choice)
     # Display.
     Option("record_candidates", False, "keep every candidate's polyline in the plan (for display)"),
 ]
 
+# The planner's steps are compiled, one implementation each (viapath.jit): the option that chose between them and
+# a numpy twin, and its former name, are read and ignored.
+_ONE_ARITHMETIC = (
+    "the planner's steps are compiled, one implementation each; viapath.jit runs them as plain Python when "
+    "compilation is off"
+)
 VIAPATH_OPTIONS = COMMON_OPTIONS + OptionSet(
-    _OWN, owner="viapath", steps=[("rollout_s", "rollout_dt_s"), ("escape_s", "escape_dt_s")]
+    _OWN,
+    owner="viapath",
+    steps=[("rollout_s", "rollout_dt_s"), ("escape_s", "escape_dt_s")],
+    retired={"compute": _ONE_ARITHMETIC, "backend": _ONE_ARITHMETIC},
 )

@@ -1,9 +1,8 @@
-"""The numpy path's shortcuts for its slowest cycles (docs/CHANGELOG-speed.md, "numpy p99 (wave 6)") hold what
-the functions mean.
+"""The planner's steps hold what they mean, each against what it computes worked out independently (one
+command at a time, dense sampling of legs and segments, a fresh copy of the checks with nothing remembered):
+the escape's scores, the via points and leg contacts, the corridor checks, the roll-out checks.
 
-Each rewritten function is checked against what it computes, worked out independently (one command at a
-time, dense sampling of legs and segments, a fresh copy of the checks with nothing remembered), on seeded
-random situations: the robot near the path (three paths), 0-14 people around it, with and without
+Seeded random situations: the robot near the path (three paths), 0-14 people around it, with and without
 uncertainty, some overlapping the robot, so that both the escape's terms (time to contact, separation) and
 roll-outs that pass, fail and turn on the spot come up. Bit-for-bit sameness of whole runs is the
 equality runs' (episodes.csv before and after).
@@ -16,14 +15,16 @@ from dataclasses import replace
 
 import numpy as np
 
+from tests._core_helpers import rollout
 from viapath import DesignatedPath, Observation, Obstacles, RobotState
+from viapath.compiled import arithmetic as compiled
 from viapath.geometry import wrap_angle
-from viapath.kinematics import UnicycleState, rollout
+from viapath.kinematics import UnicycleState
 from viapath.observation import Command
 from viapath.planning import make_planner
 from viapath.planning.base import Plan
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.escape import escape_scores
+from viapath.planning.viapath.escape import escape_fan
 from viapath.planning.viapath.follow import can_follow
 from viapath.planning.viapath.planner import ViaPathConfig
 
@@ -37,7 +38,7 @@ PATHS = [
 def _situations(count: int, seed: int):
     """(planner, checks) of ``count`` random situations (a new planner per path, reset each time)."""
     rng = np.random.default_rng(seed)
-    planners = [make_planner("viapath", path, nominal_speed_mps=0.2, compute="numpy") for path in PATHS]
+    planners = [make_planner("viapath", path, nominal_speed_mps=0.2) for path in PATHS]
     for case in range(count):
         planner = planners[case % len(PATHS)]
         n = int(rng.integers(0, 15))
@@ -70,7 +71,7 @@ def _same_bits(a, b) -> bool:
 
 
 def _escape_scores_command_by_command(checks, limits, config, previous):
-    """What :func:`escape_scores` computes, one command at a time from its definition (the escape's module
+    """What the escape's scores are (:func:`viapath.compiled.arithmetic.escape`), one command at a time from its definition (the escape's module
     docstring): each command's roll-out, its corridor excess point by point, each person's gap along it, the
     first step any person not overlapped now is touched, the overlapped ones' deepest and last gaps, and the
     weighted sum of the terms. (commands, ends, scores) to compare within round-off."""
@@ -128,7 +129,8 @@ def test_escape_scores_are_those_of_each_command_alone():
     for case, (planner, checks) in enumerate(_situations(300, seed=11)):
         config = planner.config if case % 5 else hasty
         previous = Command(*rng.uniform([0.0, -2.0], [0.5, 2.0])) if case % 3 == 0 else None
-        commands, ends, score = escape_scores(checks, planner.limits, config, previous)
+        fan = escape_fan(planner.limits, config)
+        _, commands, ends, score = compiled.escape(checks, planner.limits, config, fan, previous, score_standing=True)
         expected = _escape_scores_command_by_command(checks, planner.limits, config, previous)
         assert np.array_equal(commands, expected[0]), f"case {case}"
         np.testing.assert_allclose(ends, expected[1], rtol=0, atol=1e-12, err_msg=f"case {case}")
@@ -139,40 +141,36 @@ def test_escape_scores_are_those_of_each_command_alone():
     assert overlapped > 20 and contact > 20  # both terms came up
 
 
-def test_touching_is_hypot_minus_reach_below_zero():
-    """The escape's contact test without hypot where the squared distance is certain: against
-    ``np.hypot(dx, dy) - reach < 0`` on 2 000 batches of offsets on the reach's circle to within a few ulps
-    (where only hypot can tell), near it, far inside and outside, with reaches tiny (squares underflow),
-    huge (squares overflow), zero, negative, infinite and NaN, and offsets NaN, infinite and -0.0."""
-    from viapath.planning.viapath.escape import touching
-
-    rng = np.random.default_rng(9)
-    special = np.array([0.0, -0.0, 1e-300, 1e-170, 1e-150, 1e150, 1e170, 1e300, -0.3, np.inf, -np.inf, np.nan])
-    for case in range(2000):
-        reach = rng.uniform(0.2, 1.2, (6, 5)) * 10.0 ** rng.choice([0, 0, 0, -160, -300, 160], (6, 5))
-        if case % 4 == 0:
-            reach.flat[rng.integers(0, reach.size, 3)] = rng.choice(special, 3)
-        angle = rng.uniform(0, 2 * np.pi, (7, 6, 5))
-        scale = reach * (1.0 + rng.integers(-4, 5, (7, 6, 5)) * 2.0**-52 * rng.choice([1, 1, 1e3, 1e7, 1e9, 1e12]))
-        dx, dy = scale * np.cos(angle), scale * np.sin(angle)
-        if case % 3 == 0:
-            dx.flat[rng.integers(0, dx.size, 4)] = rng.choice(special, 4)
-            dy.flat[rng.integers(0, dy.size, 4)] = rng.choice(special, 4)
-        with np.errstate(all="ignore"):
-            expected = np.hypot(dx, dy) - reach < 0
-            got = touching(dx, dy, reach)
-        assert np.array_equal(got, expected), f"case {case}"
-    # and exactly on the circle: hypot decides
-    reach = np.array([0.5])
-    assert not touching(np.array([0.5]), np.array([0.0]), reach)[0]
-    assert touching(np.array([np.nextafter(0.5, 0)]), np.array([0.0]), reach)[0]
-
-
 # -- the roll-outs of candidates -------------------------------------------------------------------
 
 
+def test_clear_is_the_definition():
+    """:meth:`LegChecks.clear` (compiled) against its definition (:func:`_clear_reference`) on random roll-outs
+    near the people (so that both verdicts come up), with one step exactly on a person's limit in a quarter of
+    them (where a difference in the last bit of a distance would change the verdict)."""
+    rng = np.random.default_rng(5)
+    verdicts = set()
+    for case, (_, checks) in enumerate(_situations(600, seed=12)):
+        for kind in range(4):
+            steps, dt = int(rng.choice([20, 5, 12])), float(rng.choice([0.1, 0.1, 0.05]))
+            positions = checks.position + np.cumsum(rng.normal(0.0, 0.06, (steps, 2)), axis=0)
+            if len(checks.obstacles) and kind == 3:  # one step on the boundary of one person's limit
+                obstacles = checks.obstacles
+                times = dt * np.arange(1, steps + 1)[:, None]
+                centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
+                reach = checks.check_radii + checks.growth * np.minimum(times, checks.growth_until_s)
+                limit = np.minimum(reach, np.hypot(*(checks.position - obstacles.positions).T) - 1e-3)
+                s, j, angle = int(rng.integers(steps)), int(rng.integers(len(obstacles))), rng.uniform(0, 2 * np.pi)
+                positions[s] = centres[s, j] + abs(limit[s, j]) * np.array([np.cos(angle), np.sin(angle)])
+            expected = _clear_reference(checks, positions, dt)
+            assert checks.clear(positions, dt) is expected, f"case {case}"
+            verdicts.add(expected)
+    assert verdicts == {True, False}
+
+
 def _clear_reference(checks, positions, dt):
-    """:meth:`LegChecks.clear` as first written."""
+    """:meth:`LegChecks.clear` by its definition: every step's distance to every obstacle's centre then, at least
+    the obstacle's reach then, or (a close pass) no closer than the robot is now."""
     if len(checks.obstacles) == 0:
         return True
     times = dt * np.arange(1, len(positions) + 1)[:, None]
@@ -182,35 +180,6 @@ def _clear_reference(checks, positions, dt):
     distance = np.hypot(*(positions[:, None, :] - centres).transpose(2, 0, 1))
     now = np.hypot(*(checks.position - obstacles.positions).T)
     return bool(np.all(distance >= np.minimum(reach, now - 1e-3)))
-
-
-def test_clear_is_bit_for_bit_the_first_form():
-    """The obstacles' part of :meth:`LegChecks.clear` is made once per step count and cycle: its arrays
-    against the first form's, bit for bit, and the verdicts of random roll-outs against the first form's:
-    near the people (so that both verdicts come up) and with one step exactly on a person's limit (where
-    a difference in the last bit of a distance would change the verdict)."""
-    rng = np.random.default_rng(5)
-    verdicts = set()
-    for case, (_, checks) in enumerate(_situations(600, seed=12)):
-        for kind in range(4):
-            steps, dt = int(rng.choice([20, 5, 12])), float(rng.choice([0.1, 0.1, 0.05]))
-            positions = checks.position + np.cumsum(rng.normal(0.0, 0.06, (steps, 2)), axis=0)
-            if len(checks.obstacles):
-                obstacles = checks.obstacles
-                times = dt * np.arange(1, steps + 1)[:, None]
-                centres = obstacles.positions[None] + obstacles.velocities[None] * times[..., None]
-                reach = checks.check_radii + checks.growth * np.minimum(times, checks.growth_until_s)
-                limit = np.minimum(reach, np.hypot(*(checks.position - obstacles.positions).T) - 1e-3)
-                cached = checks._clear_limits(steps, dt)
-                for a, b in zip(cached, (centres[..., 0], centres[..., 1], limit)):
-                    np.testing.assert_array_equal(a, b)
-                if kind == 3:  # one step on the boundary of one person's limit
-                    s, j, angle = int(rng.integers(steps)), int(rng.integers(len(obstacles))), rng.uniform(0, 2 * np.pi)
-                    positions[s] = centres[s, j] + abs(limit[s, j]) * np.array([np.cos(angle), np.sin(angle)])
-            expected = _clear_reference(checks, positions, dt)
-            assert checks.clear(positions, dt) is expected, f"case {case}"
-            verdicts.add(expected)
-    assert verdicts == {True, False}
 
 
 def test_can_follow_remembers_only_what_it_would_compute_again():
@@ -308,7 +277,7 @@ def test_via_options_and_leg_contacts_are_what_they_mean():
     people, cones growing or not, capped or not, with and without a braking envelope: every via option
     meets its obstacle's disc tangentially at the option's time, and each leg's first contact (of the legs to
     those via points and of random legs) is where dense sampling finds it."""
-    from viapath.geometry import legs_first_contact, via_options
+    from viapath.compiled.arithmetic import legs_first_contact, via_options
 
     rng = np.random.default_rng(21)
     options = contacts = 0
@@ -468,32 +437,6 @@ def test_first_leg_is_where_the_plan_first_heads():
             assert _same_bits(target, expected[0]) and _same_bits(speed, expected[1])
             kinds.add("slow" if candidates.slow_s[k] > 0 else len(candidates.polyline(k)))
     assert {"slow", 2, 3, 4} <= kinds  # slow/wait, straight, one and two via points
-
-
-def test_clear_in_parts_is_clear_of_the_whole():
-    """The numpy roll-out checks its first half before rolling out the rest (``after_steps``, ``of_steps``): the
-    two verdicts together must be the whole roll-out's, split anywhere, with one step exactly on a person's limit
-    in a quarter of the cases (600 situations)."""
-    rng = np.random.default_rng(18)
-    verdicts = set()
-    for case, (_, checks) in enumerate(_situations(600, seed=15)):
-        steps, dt = int(rng.choice([20, 7, 12])), float(rng.choice([0.1, 0.05]))
-        positions = checks.position + np.cumsum(rng.normal(0.0, 0.06, (steps, 2)), axis=0)
-        if len(checks.obstacles) and case % 4 == 0:
-            centres_x, centres_y, limit = checks._clear_limits(steps, dt)
-            s, j, angle = int(rng.integers(steps)), int(rng.integers(len(checks.obstacles))), rng.uniform(0, 2 * np.pi)
-            positions[s] = (centres_x[s, j], centres_y[s, j]) + abs(limit[s, j]) * np.array(
-                [np.cos(angle), np.sin(angle)]
-            )
-        whole = _clear_reference(checks, positions, dt)
-        split = int(rng.integers(0, steps + 1))
-        fresh = replace(checks)  # nothing remembered: the parts make their rows from the whole roll-out's
-        parts = fresh.clear(positions[:split], dt, of_steps=steps) and fresh.clear(
-            positions[split:], dt, after_steps=split, of_steps=steps
-        )
-        assert parts is whole, f"case {case}"
-        verdicts.add(whole)
-    assert verdicts == {True, False}
 
 
 def test_tree_columns_are_the_pieces_concatenated():

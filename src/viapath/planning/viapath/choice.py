@@ -1,0 +1,231 @@
+"""The planner's choice (paper steps 1-4: step 1, the candidates, Eq. 1, the cheapest the robot can follow) in
+one compiled call, :func:`viapath.compiled.arithmetic.choose`, up to the shield's check of the candidate it
+found; a candidate the shield refuses sends the search on to the next ones here. Taken by every cycle without
+static geometry whose critics are the paper's and which records no candidate polylines (:func:`uses_compiled_choice`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, cast
+
+import numpy as np
+
+from viapath.compiled import arithmetic as compiled
+from viapath.compiled import slots as slot
+from viapath.compiled.arithmetic import CompiledChoice, NodeStore
+from viapath.planning.base import Plan
+from viapath.planning.viapath.candidates import Choice, Way
+from viapath.planning.viapath.checks import LegChecks
+from viapath.planning.viapath.critics import PAPER_CRITICS
+from viapath.planning.viapath.follow import can_follow
+from viapath.planning.viapath.plans import (
+    Chosen,
+    CompiledCandidates,
+    Planning,
+    cost_terms,
+    straight_chosen,
+    straight_plan,
+)
+
+if TYPE_CHECKING:
+    from viapath.planning.viapath.critics import Distance, Heading, Hysteresis, SidePreference, SpeedError, Time
+
+
+def uses_compiled_choice(planner: Planning) -> bool:
+    """Whether the planner's choice runs as :func:`choose_compiled`: the paper's critics (the compiled choice sums
+    exactly those) and no candidate polylines to record."""
+    config, critics = planner.config, planner.critics
+    cached = planner.__dict__.get("_compiled_choice_of")  # (options, critics, the answer): every cycle asks
+    if cached is None or cached[0] is not config or cached[1] is not critics:
+        answer = not config.record_candidates and tuple(map(type, critics)) == PAPER_CRITICS
+        cached = planner.__dict__["_compiled_choice_of"] = (config, critics, answer)
+    return cached[2]
+
+
+def _choice_constants(planner: Planning) -> tuple[Any, ...]:
+    """The compiled choice's settings that do not change within an episode (rebuilt when the options, limits or
+    critics object is replaced); their slots: :mod:`viapath.compiled.slots`."""
+    config, limits, critics, nominal_speed = planner.config, planner.limits, planner.critics, planner.nominal_speed_mps
+    cached = planner.__dict__.get("_choice_cache")
+    if (
+        cached is not None
+        and cached[0] is config
+        and cached[1] is limits
+        and cached[2] is critics
+        and cached[3] is nominal_speed
+    ):
+        return cached[4]
+    distance, time, speed, heading, side, hysteresis = cast(
+        "tuple[Distance, Time, SpeedError, Heading, SidePreference, Hysteresis]", planner.critics
+    )  # the paper's critics (PAPER_CRITICS): the only ones the compiled choice sums
+    settings = np.zeros(slot.F_COUNT, dtype=np.float64)
+    settings[[slot.F_K1, slot.F_K2, slot.F_K3, slot.F_K4, slot.F_SIDE, slot.F_HYSTERESIS]] = (
+        distance.weight,
+        time.weight,
+        speed.weight,
+        heading.weight,
+        side.weight,
+        hysteresis.weight,
+    )
+    settings[slot.F_NOMINAL] = planner.nominal_speed_mps
+    settings[slot.F_ROLLOUT_HEADING] = config.rollout_heading_rad
+    settings[slot.F_ACCEL] = limits.max_accel_mps2
+    settings[slot.F_DT] = config.rollout_dt_s
+    settings[slot.F_TURN_RATE] = limits.max_turn_rate_radps
+    settings[slot.F_TURN_ACCEL] = limits.max_turn_accel_radps2
+    settings[slot.F_SPEED] = limits.max_speed_mps
+    settings[slot.F_GAIN] = config.heading_gain
+    settings[slot.F_TURN_IN_PLACE] = config.turn_in_place_min_rad
+    settings[slot.F_SPACING] = config.corridor_check_spacing_m
+    settings[slot.F_STANDING] = speed.standing_per_s
+    settings[slot.F_CREEP] = config.creep_speed_mps
+    integers = np.zeros(slot.C_COUNT, dtype=np.int64)
+    integers[slot.C_DEPTH] = config.max_depth
+    integers[slot.C_ROOT_LIMIT] = config.max_root_obstacles
+    integers[slot.C_ROLLOUTS] = config.max_rollouts
+    integers[slot.C_STEPS] = max(1, int(round(config.rollout_s / config.rollout_dt_s)))
+    integers[slot.C_DEGREES] = heading.degrees
+    integers[slot.C_PREFERRED] = side.preferred
+    integers[slot.C_SLOW] = bool(config.slow_times_s)
+    slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
+    constants = (settings, integers, slow_times)
+    planner.__dict__["_choice_cache"] = (config, limits, critics, nominal_speed, constants)
+    return constants
+
+
+def choose_compiled(
+    planner: Planning,
+    checks: LegChecks,
+    speeds: np.ndarray,
+    nominal_index: int,
+    previous: Choice | None,
+    only_way: Way | None,
+) -> Chosen | None:
+    """The planner's choice with one compiled call doing everything up to the shield check
+    (:func:`viapath.compiled.planning.choose`): it rolls out candidates cheapest first until one follows; a
+    candidate the shield refuses sends the search on to the next ones here (:func:`_first_admitted`)."""
+    settings, integers, slow_times = _cycle_settings(planner, checks, nominal_index, previous, only_way)
+    slow_checks = planner._slow_checks(checks)
+    chosen = compiled.choose(checks, slow_checks, speeds, slow_times, settings, integers)
+    if chosen.status == slot.STEP_ONE:
+        plan = straight_plan(checks, float(speeds[nominal_index]))
+        if chosen.turn_in_place:
+            plan.extras["turn_in_place"] = True
+        if planner._inside_shield(plan):
+            return straight_chosen(plan)
+        integers[slot.C_TRY_STRAIGHT] = 0  # the shield refused it: the candidates decide
+        chosen = compiled.choose(checks, slow_checks, speeds, slow_times, settings, integers)
+    if chosen.status != slot.CANDIDATES or chosen.first < 0:  # first: the ranks before it do not follow
+        return None
+    return _first_admitted(planner, chosen, checks)
+
+
+def _cycle_settings(
+    planner: Planning, checks: LegChecks, nominal_index: int, previous: Choice | None, only_way: Way | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The compiled choice's settings of this cycle: the episode's (:func:`_choice_constants`) with the cycle's
+    entries (the horizon, the subgoal, last cycle's way and speed, the one way allowed)."""
+    constants, integers_0, slow_times = _choice_constants(planner)
+    settings = constants.copy()  # with this cycle's entries:
+    settings[slot.F_STOP_SHORT] = checks.stop_short_m
+    settings[slot.F_HORIZON] = checks.horizon_s
+    settings[slot.F_TOLERANCE] = checks.corridor_tolerance_m
+    integers = integers_0.copy()  # (one item at a time: a slice from a tuple converts it first, slower)
+    index = checks.subgoal_index
+    integers[slot.C_NOMINAL] = nominal_index
+    if index >= 2:  # the robot's segment matters only when a corner can lie between it and the subgoal
+        integers[slot.C_SEGMENT] = int(checks.path.project(checks.position)[0])
+    integers[slot.C_SUBGOAL] = index
+    integers[slot.C_TRY_STRAIGHT] = 1
+    if previous is not None:
+        way = previous.way
+        integers[slot.C_PREVIOUS] = 1
+        integers[slot.C_PREV_OBSTACLE] = way.obstacle
+        integers[slot.C_PREV_SIDE] = way.side
+        integers[slot.C_PREV_ROOT] = way.root
+        integers[slot.C_PREV_MMPS] = previous.speed_mmps
+    if only_way is not None:
+        integers[slot.C_ONLY] = 1
+        integers[slot.C_ONLY_OBSTACLE] = only_way.obstacle
+        integers[slot.C_ONLY_SIDE] = only_way.side
+        integers[slot.C_ONLY_ROOT] = only_way.root
+    return settings, integers, slow_times
+
+
+def _first_admitted(planner: Planning, chosen: CompiledChoice, checks: LegChecks) -> Chosen | None:
+    """The cheapest candidate from the compiled choice's first that follows on that the robot can follow and the
+    shield admits (past that first one, each is rolled out here: only after the shield refused it)."""
+    leaves, order, follow, total, store = chosen.leaves, chosen.order, chosen.follow, chosen.total, chosen.store
+    for rank in range(chosen.first, min(len(order), planner.config.max_rollouts)):
+        best = order[rank]
+        if not math.isfinite(total[best]):
+            break
+        verdict = follow[rank]
+        if verdict == 0:
+            continue
+        plan = _plan_of_nodes(planner, store, leaves, best, total, checks)
+        if verdict < 0:  # past the first that follows: only after the shield refused that one
+            verdict = can_follow(plan, checks, planner.limits, planner.config)
+        elif verdict == 2:
+            plan.extras["turn_in_place"] = True
+        if verdict and planner._inside_shield(plan):
+            plan.extras["cost_terms"] = cost_terms(_cost_breakdown(planner, chosen.terms), order, rank, total)
+            node = int(leaves[best])
+            way, speed = store.way(node), store.speed(node)
+            return Chosen(
+                Choice(Way(*way), int(round(speed * 1000))),
+                plan,
+                CompiledCandidates(store, leaves, checks.subgoal),
+            )
+    return None
+
+
+def _cost_breakdown(planner: Planning, terms: np.ndarray) -> Callable[[int], dict[str, float]]:
+    """:meth:`.critics.Costs.breakdown` for :func:`viapath.compiled.planning.choose`'s costs (rows: the critics' terms,
+    E): one column as Python floats, the same values as the numpy path's."""
+    critics = planner.critics
+    cached = planner.__dict__.get("_cost_names")
+    if cached is None or cached[0] is not critics:
+        cached = planner.__dict__["_cost_names"] = (critics, tuple(critic.name for critic in critics) + ("total",))
+    names = cached[1]
+    return lambda k: dict(zip(names, terms[:, k].tolist()))
+
+
+def _plan_of_nodes(
+    planner: Planning, store: NodeStore, leaves: np.ndarray, k: int, total: np.ndarray, checks: LegChecks
+) -> Plan:
+    """:meth:`_plan_of` from the compiled tree's node store."""
+    node = int(leaves[k])
+    speed_after, slow_s, slow_speed = store.slowing(node)
+    if slow_s > 0:
+        return Plan(
+            "wait" if slow_speed == 0.0 else "slow",
+            slow_speed,
+            checks.subgoal.copy(),
+            waypoints=np.array([checks.position, checks.subgoal]),
+            subgoal_index=checks.subgoal_index,
+            candidate_count=len(leaves),
+            candidate_costs=total,
+            candidate_polylines=[],
+            chosen=k,
+            extras={"slow_s": slow_s, "speed_after_mps": speed_after},
+        )
+    points = [checks.subgoal]
+    while node >= 0:
+        points.append(store.position(node))
+        node = store.parent(node)
+    line = np.array(points[::-1])
+    return Plan(
+        "avoid" if len(line) > 2 else "straight",
+        speed_after,
+        line[1].copy(),
+        via_points=line[1:-1].copy(),
+        waypoints=line,
+        subgoal_index=checks.subgoal_index,
+        candidate_count=len(leaves),
+        candidate_costs=total,
+        candidate_polylines=[],
+        chosen=k,
+    )

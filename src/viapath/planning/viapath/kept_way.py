@@ -1,0 +1,47 @@
+"""Constraint hysteresis (``keep_previous_way``): under velocity noise last cycle's way round often looks blocked
+for one cycle only because its inflation grew with the estimate's error; the plan then flips and flips back. If
+last cycle's way is gone, it is searched for once more with ``keep_previous_inflation`` of the uncertainty
+inflation (the safety margin stays) and kept if it still costs less than the new choice.
+"""
+
+from __future__ import annotations
+
+from typing import cast
+
+import numpy as np
+
+from viapath.planning.viapath.candidates import Choice
+from viapath.planning.viapath.checks import LegChecks
+from viapath.planning.viapath.plans import Chosen, Planning
+
+
+def keep_previous_way(
+    planner: Planning, chosen: Chosen, checks: LegChecks, speeds: np.ndarray, nominal_index: int
+) -> Chosen:
+    previous = cast(Choice, planner._previous)  # called only when there is one
+    if chosen.candidates is None:
+        return chosen  # a free straight leg at nominal speed (the paper's first choice)
+    if chosen.choice.way == previous.way:
+        return chosen  # the previous way chosen again (the test below would find it among the candidates)
+    # Why the way changed, for analysis (benchmarks/way_changes.py): the relaxed search helps only
+    # where the previous way vanished with the inflation, not where the forecast itself moved.
+    why = chosen.plan.extras
+    if previous.way.same(chosen.candidates.ways).any():
+        why["way_change"] = "cost"  # the previous way is still there: a fair switch on cost
+        return chosen
+    obstacles = checks.obstacles
+    if not (np.any(obstacles.position_sigma_m) or np.any(obstacles.velocity_sigma_mps)):
+        why["way_change"] = "gone"  # no inflation to relax: the search would be the same
+        return chosen
+    relaxed = checks.with_less_inflation(
+        planner.config.keep_previous_inflation, planner.robot_radius_m, planner.settings
+    )
+    kept = planner._choose(relaxed, speeds, nominal_index, previous, only_way=previous.way)
+    if kept is None:
+        why["way_change"] = "gone_relaxed_too"
+        return chosen
+    if kept.plan.candidate_costs[kept.plan.chosen] < chosen.plan.candidate_costs[chosen.plan.chosen]:
+        kept.plan.extras["kept_previous_way"] = True
+        return kept
+    why["way_change"] = "relaxed_costs_more"
+    return chosen

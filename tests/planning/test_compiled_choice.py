@@ -1,0 +1,335 @@
+"""The planner's compiled choice against the recipe's own steps, and its kernels against independent oracles.
+
+A cycle without static geometry makes its choice in one compiled call (``compiled.choose``); with the option
+``record_candidates`` (or critics other than the paper's) the planner takes the recipe's steps one by one instead:
+the compiled candidate tree, Eq. 1's critics as their units score them, the order, the roll-outs. Both must make
+the same plan bit for bit on random observations. The leg-contact kernel is held to the numpy contact of the
+baselines (:func:`viapath.geometry.legs_first_contact`), the corridor kernels to :class:`viapath.path.DesignatedPath`,
+the roll-out check to its definition (tests/planning/test_planner_oracles.py).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from viapath import DesignatedPath, Observation, Obstacles, RobotState
+from viapath.compiled import arithmetic as compiled
+from viapath.planning import make_planner
+from viapath.planning.viapath.choice import uses_compiled_choice
+from viapath.safety.shielded import ShieldedPlanner
+
+PATHS = [
+    DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0),
+    DesignatedPath([[0.0, 0.0], [3.0, 0.0], [3.0, 4.0]], half_width_m=1.2),
+    DesignatedPath([[0.0, 0.0], [2.5, 0.5], [5.0, -0.5], [8.0, 0.0]], half_width_m=1.5),
+]
+
+
+@st.composite
+def cases(draw):
+    path_index = draw(st.integers(0, len(PATHS) - 1))
+    n = draw(st.integers(0, 12))
+    floats = lambda lo, hi: st.floats(lo, hi, allow_nan=False, allow_infinity=False)
+    seed = draw(st.integers(0, 2**31 - 1))
+    rng = np.random.default_rng(seed)
+    # The robot near the path, mostly heading along it; people mostly ahead of it (some behind, some
+    # touching it: escapes), so that every kind of plan comes up.
+    robot = (
+        draw(floats(-0.5, 3.0)),
+        draw(floats(-1.3, 1.3)),
+        draw(floats(-0.8, 0.8)) * draw(st.sampled_from([1, 4])),
+        draw(floats(0.0, 0.5)),
+        draw(floats(-1.0, 1.0)),
+    )
+    distance = rng.uniform(draw(st.sampled_from([0.3, 0.8])), 6.0, n)
+    bearing = rng.normal(0.0, draw(st.sampled_from([0.5, 3.0])), n)
+    positions = np.array(robot[:2]) + np.stack([distance * np.cos(bearing), distance * np.sin(bearing)], 1)
+    speed, direction = rng.uniform(0.0, 1.5, n), rng.uniform(-np.pi, np.pi, n)
+    velocities = np.stack([speed * np.cos(direction), speed * np.sin(direction)], 1)
+    uncertain = draw(st.booleans())
+    sigma_p = rng.uniform(0.0, 0.05, n) if uncertain else None
+    sigma_v = rng.uniform(0.0, 0.1, n) if uncertain else None
+    shield = draw(st.booleans())
+    step = rng.uniform(-0.05, 0.05, (n, 2))  # the second cycle: people moved a little, the robot too
+    return path_index, robot, positions, velocities, rng.uniform(0.2, 0.35, n), sigma_p, sigma_v, shield, step
+
+
+def _observations(case):
+    _, robot, positions, velocities, radii, sigma_p, sigma_v, _, step = case
+    x, y, heading, speed, turn = robot
+    for cycle in range(2):
+        obstacles = Obstacles(
+            positions + cycle * (step + 0.1 * velocities),
+            velocities,
+            radii,
+            position_sigma_m=sigma_p,
+            velocity_sigma_mps=sigma_v,
+        )
+        state = RobotState(
+            np.array([x + 0.02 * cycle * np.cos(heading), y + 0.02 * cycle * np.sin(heading)]), heading, speed, turn
+        )
+        yield Observation(0.1 * cycle, state, obstacles)
+
+
+def test_kernels_match_reference_on_edge_cases():
+    """The contact kernel against numpy where the cone is capped mid-leg, legs start inside a disc, the
+    relative speed is zero and the cone outgrows the relative speed (a < 0)."""
+    from viapath.compiled import planning as kernels
+    from viapath.geometry import legs_first_contact
+
+    rng = np.random.default_rng(3)
+    k, n = 400, 7
+    starts = rng.uniform(-3, 3, (k, 2))
+    starts[:5] = 0.0  # inside obstacle 0 at the start
+    times = rng.uniform(0, 4, k)
+    velocities = rng.uniform(-0.5, 0.5, (k, 2))
+    velocities[5:10] = 0.0
+    durations = rng.uniform(0, 8, k)
+    positions = rng.uniform(-3, 3, (n, 2))
+    positions[0] = 0.0
+    obstacle_velocities = rng.uniform(-1, 1, (n, 2))
+    obstacle_velocities[1] = 0.0  # with the resting legs: zero relative speed
+    radii = rng.uniform(0.3, 0.8, n)
+    growth = np.array([0.0, 0.1, 2.0, 0.05, 0.0, 0.3, 1.0])
+    with np.errstate(divide="ignore"):
+        until = np.where(growth > 0, 0.15 / growth, np.inf)
+    envelope = rng.uniform(0.0, 0.3, k) * (rng.uniform(size=k) < 0.5)  # a braking envelope, some legs
+    for g, u, legs in (
+        (growth, until, None),
+        (np.zeros(n), np.full(n, np.inf), None),
+        (growth, np.full(n, np.inf), None),
+        (growth, until, envelope),
+    ):
+        expected = legs_first_contact(
+            starts, times, velocities, durations, positions, obstacle_velocities, radii, g, u, legs
+        )
+        got = kernels.legs_first_contact(
+            starts,
+            times,
+            velocities,
+            durations,
+            positions,
+            obstacle_velocities,
+            radii,
+            g,
+            u,
+            np.zeros(k) if legs is None else legs,
+        )
+        assert np.array_equal(np.isinf(expected), np.isinf(got))
+        assert np.allclose(expected, got, rtol=0.0, atol=1e-12)
+        assert np.isfinite(expected).any() and np.isinf(expected).any()  # both kinds of legs are there
+
+
+@pytest.mark.parametrize("path", PATHS, ids=["straight", "corner", "zigzag"])
+def test_corridor_kernels_match_reference(path):
+    """Corridor checks of random legs (inside, across a junction, leaving) against the path's own
+    (:meth:`DesignatedPath.legs_inside`), for legs to the subgoal too (:func:`_goal_legs_inside`)."""
+    from viapath.planning.viapath.checks import LegChecks
+
+    rng = np.random.default_rng(13)
+    low, high = path.waypoints.min(axis=0) - 1.5, path.waypoints.max(axis=0) + 1.5
+    starts, ends = rng.uniform(low, high, (600, 2)), rng.uniform(low, high, (600, 2))
+    for tolerance in (1e-9, 0.3):
+        expected = path.legs_inside(starts, ends, 0.05, tolerance)
+        assert np.array_equal(compiled.legs_inside(path, starts, ends, 0.05, tolerance), expected)
+        assert expected.any() and not expected.all()
+    for subgoal_index in range(len(path.waypoints)):
+        checks = LegChecks(
+            path=path,
+            position=np.zeros(2),
+            heading_rad=0.0,
+            speed_mps=0.0,
+            turn_rate_radps=0.0,
+            subgoal=path.waypoints[subgoal_index],
+            subgoal_index=subgoal_index,
+            is_final_subgoal=False,
+            obstacles=None,
+            check_radii=None,
+            growth=None,
+            growth_until_s=None,
+            via_radii=None,
+            horizon_s=10.0,
+            stop_short_m=0.0,
+            continuation=None,
+            corridor_tolerance_m=1e-9,
+            corridor_check_spacing_m=0.05,
+        )
+        expected = _goal_legs_inside(path, starts, subgoal_index, 1e-9)
+        got = checks.goal_legs_inside(starts)
+        assert np.array_equal(got, expected)
+        assert expected.any() and not expected.all()
+
+
+def _goal_legs_inside(path, starts, subgoal_index, tolerance_m):
+    """Legs to the subgoal inside the corridor: the subgoal ends both capsules next to it, so a leg from a point
+    inside one of them is inside that capsule (convex); other legs by :meth:`DesignatedPath.legs_inside`."""
+    inside = np.zeros(len(starts), dtype=bool)
+    for i in (subgoal_index - 1, subgoal_index):
+        if i < len(path.segment_lengths_m):  # (subgoal 0: i = -1, the last segment, as the kernel reads it)
+            rel = starts - path.segment_starts[i]
+            along = np.clip(rel @ path.segment_directions[i], 0.0, path.segment_lengths_m[i])
+            gap = np.hypot(*(rel - along[:, None] * path.segment_directions[i]).T) - path.half_widths_m[i]
+            inside |= gap <= tolerance_m
+    rest = ~inside
+    subgoal = path.waypoints[subgoal_index]
+    inside[rest] = path.legs_inside(starts[rest], np.broadcast_to(subgoal, (int(rest.sum()), 2)), 0.05, tolerance_m)
+    return inside
+
+
+def _plans_equal(a, b):
+    """Two plans the same, bit for bit ."""
+    assert a.status == b.status and a.speed_mps == b.speed_mps
+    for name in ("target", "via_points", "waypoints", "candidate_costs"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    assert (a.subgoal_index, a.candidate_count, a.chosen) == (b.subgoal_index, b.candidate_count, b.chosen)
+    assert a.extras == b.extras
+
+
+@settings(max_examples=600, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    cases(),
+    st.sampled_from(
+        [
+            {},
+            {"theta_unit": "deg", "preferred_side": "right"},
+            {"max_rollouts": 1},
+            {"keep_previous_way": False, "hysteresis": 0.2, "slow_times_s": (1.0,)},
+        ]
+    ),
+)
+def test_compiled_choice_is_the_recipes_choice(case, options):
+    """compiled.choose (roots, step 1, tree, critics, order and roll-outs in one call) against the recipe's
+    steps one by one (``record_candidates``): the same plan bit for bit — status, target, via points, every candidate's cost, each critic's
+    share of the chosen and the runner-up, turn on the spot, the shield's refusals — and the same command,
+    with the paper's options and others (degrees, the other side, a single roll-out, one slow time)."""
+    path = PATHS[case[0]]
+    planners = []
+    for record in (True, False):
+        planner = make_planner("viapath", path, nominal_speed_mps=0.2, record_candidates=record, **options)
+        planners.append(ShieldedPlanner(planner) if case[7] else planner)
+    reference, compiled = planners
+    assert uses_compiled_choice(getattr(compiled, "inner", compiled))
+    for observation in _observations(case):
+        a, b = reference.plan(observation), compiled.plan(observation)
+        _plans_equal(a.plan, b.plan)
+        assert a.command == b.command
+        assert getattr(reference, "inner", reference)._previous == getattr(compiled, "inner", compiled)._previous
+
+
+def test_compiled_choice_scalars_match_reference():
+    """The scalar pieces of kernels.choose against the reference's operations they stand in for: atan2
+    (geometry.angles_of, libm's), wrap_angle (np.mod's sign convention), np.degrees, np.round to mm/s."""
+    from viapath.compiled import planning as kernels
+    from viapath.geometry import angles_of, wrap_angle
+
+    signed_zeros_and_axes = [[0.0, 0.0], [-0.0, 0.0], [0.0, -0.0], [-1.0, 0.0], [-1.0, -0.0], [0.0, 1.0], [1e-300, 1]]
+    vectors = np.concatenate(
+        [np.random.default_rng(4).normal(size=(4000, 2)) * np.logspace(-6, 3, 4000)[:, None], signed_zeros_and_axes]
+    )
+    atan2 = compiled_lambda(lambda values: np.array([math.atan2(y, x) for x, y in values]))
+    np.testing.assert_array_equal(atan2(vectors), angles_of(vectors))
+
+    rng = np.random.default_rng(5)
+    angles = np.concatenate(
+        [
+            rng.uniform(-20, 20, 4000),
+            [
+                0.0,
+                -0.0,
+                np.pi,
+                -np.pi,
+                2 * np.pi,
+                -2 * np.pi,
+                3 * np.pi,
+                np.nextafter(np.pi, 4),
+                np.nextafter(-np.pi, -4),
+                1e-300,
+            ],
+        ]
+    )
+    wrap = compiled_lambda(lambda values: np.array([kernels._wrap(v) for v in values]))
+    np.testing.assert_array_equal(wrap(angles), wrap_angle(angles))
+    degrees = compiled_lambda(lambda values: np.array([v * (180.0 / np.pi) for v in values]))
+    np.testing.assert_array_equal(degrees(np.abs(angles)), np.degrees(np.abs(angles)))
+    speeds = np.concatenate([rng.uniform(0, 2, 4000), np.arange(0, 2000) / 1000 + 0.0005])
+    rint = compiled_lambda(lambda values: np.array([np.rint(v * 1000) for v in values]))
+    np.testing.assert_array_equal(rint(speeds), np.round(speeds * 1000))
+
+
+@settings(max_examples=300, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(cases(), st.integers(0, 3), st.sampled_from([100, 200, 300]))
+def test_compiled_choice_after_refusals_and_a_vanished_way(case, way, speed_mmps):
+    """The compiled choice's rarer branches against the recipe's steps: a shield that refuses the paper's step 1 and every
+    other candidate it is offered (so the search goes on past the kernel's first candidate that follows,
+    in Python), and last cycle's way round set to one round an obstacle that may have vanished (the
+    relaxed search with only that way, only_way)."""
+    from viapath.planning.viapath.candidates import Choice, Way
+
+    path_index, _, positions, _, _, sigma_p, _, _, _ = case
+    planners = [
+        make_planner("viapath", PATHS[path_index], nominal_speed_mps=0.2, record_candidates=record)
+        for record in (True, False)
+    ]
+    offered = [[], []]
+    for planner, seen in zip(planners, offered):
+
+        def inside_shield(plan, seen=seen):
+            seen.append((plan.status, plan.chosen, plan.target.tolist()))
+            return len(seen) % 2 == 0  # refuse every other one: step 1 is always refused
+
+        planner._inside_shield = inside_shield
+        if len(positions) and sigma_p is not None:
+            planner._previous = Choice(Way(0, (1, -1)[way % 2], way // 2), speed_mmps)
+    observation = next(_observations(case))
+    a, b = (planner.plan(observation) for planner in planners)
+    _plans_equal(a.plan, b.plan)
+    assert a.command == b.command and offered[0] == offered[1]
+    assert planners[0]._previous == planners[1]._previous
+
+
+def test_the_warm_up_reaches_the_choice_and_the_escape():
+    """precompile's cycles reach the compiled choice and the escape, and each of their kernels then has one
+    compiled signature (the planner's argument types do not vary)."""
+    from viapath import jit
+    from viapath.compiled import planning as kernels
+    from viapath.planning.viapath.planner import precompile, warm_up_crowds
+
+    planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2)
+    statuses = []
+    for people in warm_up_crowds():
+        planner.reset()
+        statuses.append(
+            planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people)).plan.status
+        )
+    assert statuses[0] in ("avoid", "slow", "wait") and statuses[1] == "escape"
+    assert precompile()
+    if jit.enabled():
+        for kernel in (kernels.escape_headings, kernels.escape_scores, kernels.choose):
+            assert len(kernel.signatures) == 1
+
+
+def compiled_lambda(function):
+    """``function`` compiled as the kernels are (plain Python with compilation off)."""
+    from viapath.jit import compiled as compile_function
+
+    return compile_function(cache=False)(function)  # (a lambda: nothing to cache)
+
+
+def test_pairwise_sum_is_numpys_sum():
+    """The compiled sums (the escape's separation, the detector's convexity test) are np.sum's bit for bit along a
+    row of 0 to 1100 values, small, large, signed zeros and zeros among them."""
+    from viapath.compiled.sums import pairwise_sum
+
+    rng = np.random.default_rng(8)
+    for count in [*range(140), 255, 256, 257, 300, 1031, 1100]:
+        rows = rng.normal(0.0, 1.0, (4, count)) * rng.choice([1e-8, 1.0, 1e8], (4, count))
+        rows[1] = np.where(rng.random(count) < 0.5, -0.0, 0.0)
+        rows[2] = np.where(rng.random(count) < 0.5, rows[2], 0.0)
+        expected = np.sum(rows, axis=1)
+        got = np.array([0.0 + pairwise_sum(np.ascontiguousarray(row), 0, count) for row in rows])
+        assert np.array_equal(got.view(np.int64), expected.view(np.int64))
