@@ -54,3 +54,25 @@ def test_the_cache_follows_every_compiling_module(tmp_path):
 
 def test_the_cache_directory_is_named_by_the_digest():
     assert jit.cache_directory().name == jit.source_digest()
+
+
+def test_a_cache_is_warm_once_it_holds_compiled_code(tmp_path, monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert not jit.cache_is_warm()
+    folder = jit.cache_directory()
+    folder.mkdir(parents=True)
+    assert not jit.cache_is_warm()  # an empty folder holds nothing compiled
+    (folder / "steps.step-1.py311.nbi").write_bytes(b"index")
+    assert jit.cache_is_warm()
+
+
+def test_a_first_run_is_told_it_compiles(tmp_path, monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    note = jit.first_compilation_note()
+    if not jit.enabled():
+        assert note is None
+        return
+    assert note is not None and str(jit.cache_directory()) in note
+    jit.cache_directory().mkdir(parents=True)
+    (jit.cache_directory() / "steps.step-1.py311.nbi").write_bytes(b"index")
+    assert jit.first_compilation_note() is None

@@ -53,6 +53,23 @@ def cache_directory() -> Path:
     return Path(base) / source_digest()
 
 
+def cache_is_warm() -> bool:
+    """Whether compiled steps of this version of the code are in the cache (a first run compiles them)."""
+    folder = cache_directory()
+    return folder.is_dir() and any(folder.rglob("*.nbi"))
+
+
+def first_compilation_note() -> str | None:
+    """What to tell a user whose run compiles the steps for this machine (None when they are cached, or when
+    compilation is off)."""
+    if not enabled() or cache_is_warm():
+        return None
+    return (
+        "viapath: compiling its planner, shield and guard for this machine, once (about a minute); "
+        f"later runs load them from {cache_directory()}"
+    )
+
+
 if _numba is not None:  # before any function is decorated: numba picks a cache folder per function then
     _numba.config.CACHE_DIR = str(cache_directory())
 

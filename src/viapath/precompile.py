@@ -1,17 +1,21 @@
-"""Compile viapath's compiled code now (or load it from its on-disk cache), for a long run that should take it
-from its first cycle: ``viapath bench`` before its workers start, the ROS 2 node before it makes its planner and
-shield. Without the extra ``fast`` it does nothing and the numpy code runs (docs/speed.md).
-
-It lives beside the compiled package (:mod:`viapath.compiled`), not in it: it builds a planner and a shield,
-which import that package.
+"""Compile viapath's compiled steps now (or load them from the on-disk cache, :mod:`viapath.jit`), for a long run
+that should take them from its first cycle: ``viapath bench`` before its workers start, the ROS 2 node before it
+makes its planner and shield (docs/explanation/speed.md).
 """
 
 from __future__ import annotations
 
+import sys
+
 
 def precompile() -> bool:
-    """The shield's compiled test, then the planner's whole-step code (about 40 s of CPU once per machine);
-    True when both are ready."""
+    """The shield's compiled test, then the planner's steps (about a minute of CPU once per machine, said on
+    stderr); True when both are ready."""
+    from viapath.jit import first_compilation_note
+
+    note = first_compilation_note()
+    if note is not None:
+        print(note, file=sys.stderr, flush=True)
     from viapath.planning.viapath.planner import precompile as precompile_planner
     from viapath.safety.shield import precompile as precompile_shield
 

@@ -25,6 +25,15 @@ def fail(message: str, code: int = 2) -> NoReturn:
     raise typer.Exit(code)
 
 
+def note_first_compilation() -> None:
+    """Say on stderr that this run compiles viapath's steps for this machine (once: later runs load them)."""
+    from viapath.jit import first_compilation_note
+
+    note = first_compilation_note()
+    if note is not None:
+        errors.print(note, highlight=False, soft_wrap=True, markup=False)
+
+
 def check_output(file: Path | None, suffixes: Iterable[str], option: str) -> None:
     """Refuse an output file with another suffix, or in a folder that does not exist."""
     if file is None:

@@ -18,6 +18,7 @@ from viapath.cli.common import (
     console,
     errors,
     fail,
+    note_first_compilation,
 )
 from viapath.cli.extras import animation_progress, print_warnings
 from viapath.io.jsonable import dumps as json_dumps
@@ -118,6 +119,7 @@ def run(
         "shield": None if shield is None else shield == "on",
         "shield_options": {"mode": shield_mode},
     }
+    note_first_compilation()
     episode = _simulate(spec, scenario, planner_name, overrides, views_options, episode_options)
     failed = _write_outputs(episode, plot, trace, animate, frame_stride)
     # The metrics are printed whatever became of the outputs: the episode ran (it may have taken hours).
