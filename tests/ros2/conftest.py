@@ -111,7 +111,7 @@ class Launcher:
         }
         from viapath.ros2 import interfaces
 
-        interfaces.build()  # once, before any process needs it (about 45 s on a fresh machine)
+        interfaces.build()  # once, before any process needs it (about two minutes on a fresh machine)
         domain = domain_id()
         out = folder / "hostile.json"
         self.groups["hostile"] = {
@@ -309,24 +309,37 @@ def ros2_launcher(tmp_path_factory):
         launcher.procs.stop_all()
 
 
+LAUNCHED = ("ros2_launcher", "paper_runs", "fault_runs", "play_tracks", "in_process", "nav2_runs")
+
+
+def _launched(item) -> bool:
+    return any(name in getattr(item, "fixturenames", ()) for name in LAUNCHED)
+
+
+def _xdist_worker() -> bool:
+    return bool(os.environ.get("PYTEST_XDIST_WORKER"))
+
+
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(session, config, items):
-    """Tests that read the launched processes go last, so the fast ones run while those processes work."""
-    items.sort(
-        key=lambda item: (
-            "ros2_launcher" in getattr(item, "fixturenames", ())
-            or any(
-                name in getattr(item, "fixturenames", ())
-                for name in ("paper_runs", "fault_runs", "play_tracks", "nav2_runs")
-            )
-        )
-    )
+    """Tests that read the launched processes go last, so the fast ones run while those processes work.
+
+    Under pytest-xdist (``-n``, ``--dist loadgroup``) they are one group, run by one worker, and go
+    first: that worker starts the processes at once and waits on them while the others run the rest."""
+    if _xdist_worker():
+        for item in items:
+            if _launched(item):
+                item.add_marker(pytest.mark.xdist_group("ros2_launcher"))
+        items.sort(key=lambda item: not _launched(item))
+    else:
+        items.sort(key=_launched)
 
 
 @pytest.fixture(scope="session", autouse=True)
 def _start_ros2_processes_early(request):
-    """Start the launcher with the first test when any collected test needs it."""
-    wanted = ("ros2_launcher", "paper_runs", "fault_runs", "play_tracks", "in_process", "nav2_runs")
-    if any(any(n in getattr(item, "fixturenames", ()) for n in wanted) for item in request.session.items):
+    """Start the launcher with the first test when any collected test needs it (in one process; a
+    pytest-xdist worker starts it with the first test of the group, and only the one that runs it)."""
+    if not _xdist_worker() and any(_launched(item) for item in request.session.items):
         from viapath.ros2 import rclpy_available
 
         if rclpy_available()[0]:
