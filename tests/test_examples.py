@@ -102,7 +102,7 @@ def _params():
     params = []
     for page in pages():
         for block in blocks_of(page):
-            marks = [pytest.mark.xdist_group(f"examples:{block.page}")]  # a page's blocks in order, on one worker
+            marks = []  # under pytest-xdist the file's tests run in order on one worker (tests/conftest.py)
             if block.skip is not None:
                 marks.append(pytest.mark.skip(reason=f"{block.name}: {block.skip}"))
             params.append(pytest.param(block, id=block.name, marks=marks))

@@ -257,6 +257,10 @@ class Nav2Run:
             ),
             5.0,
         )
+        try:  # the client ends with the path goal's result (its exit code says how it ended)
+            self.client_code = self.client.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            self.client_code = None
         self.procs.stop(self.client)
         self.procs.stop(self.node)
         _, node_err = self.procs.output(self.node)

@@ -320,19 +320,12 @@ def _xdist_worker() -> bool:
     return bool(os.environ.get("PYTEST_XDIST_WORKER"))
 
 
-@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(session, config, items):
     """Tests that read the launched processes go last, so the fast ones run while those processes work.
 
-    Under pytest-xdist (``-n``, ``--dist loadgroup``) they are one group, run by one worker, and go
-    first: that worker starts the processes at once and waits on them while the others run the rest."""
-    if _xdist_worker():
-        for item in items:
-            if _launched(item):
-                item.add_marker(pytest.mark.xdist_group("ros2_launcher"))
-        items.sort(key=lambda item: not _launched(item))
-    else:
-        items.sort(key=_launched)
+    Under pytest-xdist they go first: their files are one group, run by one worker (tests/conftest.py),
+    which starts the processes at once and waits on them while the other workers run the rest."""
+    items.sort(key=lambda item: _launched(item) != _xdist_worker())
 
 
 @pytest.fixture(scope="session", autouse=True)

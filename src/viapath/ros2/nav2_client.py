@@ -238,7 +238,10 @@ class _FollowSession:
         """The run's end in one line."""
         o = self.outcome
         if o is None:
-            why = f"--until {until_s:g} s came" if self.now() > until_s else "the clock stopped"
+            if self.stop["flag"]:
+                why = "interrupted"
+            else:
+                why = f"--until {until_s:g} s came" if self.now() > until_s else "the clock stopped"
             return f"follow_path: no result ({why}; {self.count} goals sent)"
         detail = f"error_code {o['code']}" + (f": {o['message']}" if o["message"] else "")
         name = GOAL_STATUS.get(o["status"], f"status {o['status']}")
