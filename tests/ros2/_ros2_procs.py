@@ -148,6 +148,8 @@ class Pair:
                 str(self.commands),
                 "--status-log",
                 str(self.status),
+                "--wait-s",
+                "300",  # for the node to come up: slow on a loaded machine
                 *sim_args,
             ),
             self.domain,

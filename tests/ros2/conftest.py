@@ -86,6 +86,11 @@ class Launcher:
         if self.groups:
             return
         procs, folder = self.procs, self.folder
+        from viapath.precompile import precompile
+
+        # The compiled planner and shield into numba's on-disk cache once, here: on a fresh clone each of the
+        # dozen node processes below would compile them at once (minutes on two cores; the sims gave up).
+        precompile()
         self.groups["paper"] = {
             "pairs": {name: Pair(procs, name, name) for name in PAPER},
         }
