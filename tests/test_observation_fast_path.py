@@ -126,3 +126,24 @@ def test_oracle_observes_as_before():
             a, b = getattr(seen, name), getattr(expected, name)
             assert a.dtype == b.dtype
             np.testing.assert_array_equal(a, b, err_msg=name)
+
+
+def test_ids_at_the_ends_of_int64_keep_their_sign_on_every_path_without_a_warning():
+    """Through float (as every path takes ids) int64's maximum becomes 2**63, one past it: it must stay the
+    largest id, not wrap to the most negative one (with numpy's "invalid value in cast" warning)."""
+    import warnings
+
+    from viapath.observation import ObservationError
+
+    ids = np.array([np.iinfo(np.int64).max, np.iinfo(np.int64).min, 7], dtype=np.int64)
+    arrays = (np.zeros((3, 2)), np.zeros((3, 2)), np.full(3, 0.3), np.zeros(3), np.zeros(3))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        built = [Obstacles(*arrays, ids), _general(*arrays, ids), Obstacles.of_fresh_arrays(*arrays, ids)]
+    for obstacles in built:
+        assert obstacles.ids.dtype == np.int64
+        assert obstacles.ids[0] > 2**62 and obstacles.ids[1] == np.iinfo(np.int64).min and obstacles.ids[2] == 7
+        np.testing.assert_array_equal(obstacles.ids, built[0].ids)
+    too_big = np.array([2**64 - 1, 1, 2], dtype=np.uint64)  # beyond int64: refused, naming the field
+    with pytest.raises(ObservationError, match="ids"):
+        Obstacles(*arrays, too_big)

@@ -121,13 +121,22 @@ def test_a_block_for_viapath_run_with_another_planner_runs_it_with_its_defaults(
     [
         ("k9=1", ["--option k9: unknown option 'k9'", "planner 'viapath' has options:", "weights.k1"]),
         ("k1=-1", ["--option weights.k1: Input should be greater than or equal to 0", "found -1"]),
-        ("speeds=[]", ["--option speeds:", "at least 1 item", "found []"]),
+        ("speeds=[]", ["--option speeds:", "expected at least 1 value", "found []"]),
         ("max_depth", ["expected NAME=VALUE"]),
     ],
 )
 def test_bad_command_line_options_are_refused(tmp_path, assignment, needles):
     _, result = _run(tmp_path, "{name: viapath}", "--option", assignment)
     _clean_failure(result, *needles)
+
+
+def test_a_bad_element_of_a_list_option_is_one_line(tmp_path):
+    """The element's own error only: not also pydantic's "too short" for the list it was dropped from."""
+    _, result = _run(tmp_path, "{name: viapath}", "-o", "speeds=[-0.1]")
+    _clean_failure(result, "--option speeds.0: Input should be greater than or equal to 0.01", "found -0.1")
+    assert [line for line in result.stderr.splitlines() if line.strip()] == [
+        "error: --option speeds.0: Input should be greater than or equal to 0.01; found -0.1"
+    ]
 
 
 def test_a_command_line_option_reaches_the_planner(tmp_path):

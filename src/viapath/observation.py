@@ -76,6 +76,13 @@ def _is_number(value: object) -> bool:
     return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
 
 
+def _whole_ids(ids: np.ndarray) -> np.ndarray:
+    """Whole float ids (|id| <= 2**63) as int64. 2**63 itself (an int64 near its maximum, rounded
+    through float) becomes the largest int64 a float holds: a plain cast would wrap it to the minimum,
+    with numpy's "invalid value" warning."""
+    return np.clip(ids, -(2.0**63), np.nextafter(2.0**63, 0.0)).astype(np.int64)
+
+
 @dataclass(frozen=True)
 class Obstacles:
     """Tracked obstacles under a constant-velocity forecast.
@@ -129,7 +136,7 @@ class Obstacles:
                 raise ObservationError(f"obstacles.ids: expected {n} integers, found {self.ids!r}") from None
             if not (np.isfinite(ids).all() and np.all(ids == np.round(ids)) and np.all(np.abs(ids) <= 2.0**63)):
                 raise ObservationError(f"obstacles.ids: expected {n} 64-bit integers, found {ids.tolist()}")
-            ids = ids.astype(int)
+            ids = _whole_ids(ids)
         object.__setattr__(self, "ids", ids)
 
     def _set_static_mask(self) -> None:
@@ -191,7 +198,7 @@ class Obstacles:
             )
         ):
             obstacles = object.__new__(cls)
-            ids = ids.astype(float).astype(int)  # as the constructor: through float (ids past 2**53 round)
+            ids = _whole_ids(ids.astype(float))  # as the constructor: through float (ids past 2**53 round)
             for name, value in (
                 ("positions", positions),
                 ("velocities", velocities),
@@ -229,7 +236,10 @@ class Obstacles:
         if ids is None:
             ids = np.arange(n)
         elif type(ids) is np.ndarray and ids.shape == (n,) and ids.dtype.kind in "iu":
-            ids = ids.astype(float).astype(int)  # as the general path: through float (always whole, finite)
+            as_float = ids.astype(float)  # as the general path: through float (always whole, finite)
+            if ids.dtype.kind == "u" and n and as_float.max() > 2.0**63:
+                return False  # the general path refuses it, naming the ids
+            ids = _whole_ids(as_float)
         else:
             return False
         object.__setattr__(self, "positions", positions.copy())

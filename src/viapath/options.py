@@ -115,6 +115,13 @@ class Option:
         return (self._annotation(), Field(self.default, description=self.describe(), **limits))
 
 
+def _first_causes(items: list[Any]) -> list[Any]:
+    """Pydantic's errors without the consequences: a list whose bad elements were dropped is also
+    reported too short; the elements' own errors say it."""
+    bad_elements = {tuple(item["loc"][:-1]) for item in items if item["loc"] and isinstance(item["loc"][-1], int)}
+    return [item for item in items if not (item["type"] == "too_short" and tuple(item["loc"]) in bad_elements)]
+
+
 class Settings(Mapping):
     """Every option's value, read-only, by key (``settings["k1"]``) or attribute (``settings.k1``)."""
 
@@ -260,7 +267,7 @@ class OptionSet:
         try:
             model = self._model.model_validate(nested)
         except ValidationError as error:
-            raise OptionError([self._explain(item, where) for item in error.errors()]) from None
+            raise OptionError([self._explain(item, where) for item in _first_causes(error.errors())]) from None
         flat: dict[str, Any] = {}
         for option in self:
             value = getattr(getattr(model, option.group), option.name) if option.group else getattr(model, option.name)
@@ -329,5 +336,11 @@ class OptionSet:
             return field, (
                 f"unknown option {item['loc'][-1]!r}; {owner} options: "
                 f"{', '.join(option.path for option in self) or 'none'}"
+            )
+        if item["type"] == "too_short":
+            least = item.get("ctx", {}).get("min_length", 1)
+            return (
+                field,
+                f"expected at least {least} value{'s' if least != 1 else ''}; found {short_repr(item.get('input'))}",
             )
         return field, f"{item['msg']}; found {short_repr(item.get('input'))}"

@@ -1,22 +1,29 @@
 """Start and end the processes of a ROS 2 test: each keeps DDS on this machine, in a domain of its own.
 
 Every process gets ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` and a ``ROS_DOMAIN_ID`` that no
-other test (nor another pytest run started at the same time) uses; :class:`Processes` ends each by
-its pid (SIGTERM, then SIGKILL after a timeout), also when the test fails.
+other test (nor another pytest worker or run started at the same time) uses; :class:`Processes` ends
+each by its pid (SIGTERM, then SIGKILL after a timeout), also when the test fails.
+
+A domain is claimed with an exclusive lock on a file of its own in the temporary folder, held until
+this process exits: pytest-xdist's workers (and other runs with this code) never share one, even
+when two ask at the same instant, before either has started a process in it.
 """
 
 from __future__ import annotations
 
+import fcntl
 import itertools
 import json
 import os
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
 _counter = itertools.count()
+_claimed: dict[int, object] = {}  # domain -> its lock file, open (locked) until this process exits
 
 
 def _domains_in_use() -> set[int]:
@@ -32,15 +39,30 @@ def _domains_in_use() -> set[int]:
     return used
 
 
+def _claim(domain: int) -> bool:
+    """Lock the domain's file for this process (True), unless another process holds it."""
+    if domain in _claimed:
+        return True
+    handle = (Path(tempfile.gettempdir()) / f"viapath-ros2-domain-{domain}.lock").open("a")
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        handle.close()
+        return False
+    _claimed[domain] = handle
+    return True
+
+
 def domain_id() -> int:
-    """A ROS_DOMAIN_ID in 1..100 unique within this run (offset by the pid against parallel runs),
-    skipping those that processes on this machine use now (DDS in one domain would mix the runs)."""
+    """A ROS_DOMAIN_ID in 1..100: claimed by this process (see the module's docstring), not the last
+    ones this process handed out (taken in turn), and used by no process on this machine now (DDS in
+    one domain would mix the runs)."""
     used = _domains_in_use()
-    for _ in range(100):
+    for _ in range(200):
         domain = 1 + (os.getpid() * 17 + next(_counter)) % 100
-        if domain not in used:
+        if domain not in used and _claim(domain):
             return domain
-    return domain
+    raise RuntimeError("no free ROS_DOMAIN_ID in 1..100 on this machine")
 
 
 def ros_env(domain: int) -> dict[str, str]:
@@ -126,6 +148,8 @@ class Pair:
                 str(self.commands),
                 "--status-log",
                 str(self.status),
+                "--wait-s",
+                "300",  # for the node to come up: slow on a loaded machine
                 *sim_args,
             ),
             self.domain,
@@ -235,6 +259,10 @@ class Nav2Run:
             ),
             5.0,
         )
+        try:  # the client ends with the path goal's result (its exit code says how it ended)
+            self.client_code = self.client.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            self.client_code = None
         self.procs.stop(self.client)
         self.procs.stop(self.node)
         _, node_err = self.procs.output(self.node)

@@ -81,6 +81,11 @@ class Launcher:
         if self.groups:
             return
         procs, folder = self.procs, self.folder
+        from viapath.precompile import precompile
+
+        # The compiled planner and shield into numba's on-disk cache once, here: on a fresh clone each of the
+        # dozen node processes below would compile them at once (minutes on two cores; the sims gave up).
+        precompile()
         self.groups["paper"] = {
             "pairs": {name: Pair(procs, name, name) for name in PAPER},
         }
@@ -106,7 +111,7 @@ class Launcher:
         }
         from viapath.ros2 import interfaces
 
-        interfaces.build()  # once, before any process needs it (about 45 s on a fresh machine)
+        interfaces.build()  # once, before any process needs it (about two minutes on a fresh machine)
         domain = domain_id()
         out = folder / "hostile.json"
         self.groups["hostile"] = {
@@ -304,24 +309,30 @@ def ros2_launcher(tmp_path_factory):
         launcher.procs.stop_all()
 
 
+LAUNCHED = ("ros2_launcher", "paper_runs", "fault_runs", "play_tracks", "in_process", "nav2_runs")
+
+
+def _launched(item) -> bool:
+    return any(name in getattr(item, "fixturenames", ()) for name in LAUNCHED)
+
+
+def _xdist_worker() -> bool:
+    return bool(os.environ.get("PYTEST_XDIST_WORKER"))
+
+
 def pytest_collection_modifyitems(session, config, items):
-    """Tests that read the launched processes go last, so the fast ones run while those processes work."""
-    items.sort(
-        key=lambda item: (
-            "ros2_launcher" in getattr(item, "fixturenames", ())
-            or any(
-                name in getattr(item, "fixturenames", ())
-                for name in ("paper_runs", "fault_runs", "play_tracks", "nav2_runs")
-            )
-        )
-    )
+    """Tests that read the launched processes go last, so the fast ones run while those processes work.
+
+    Under pytest-xdist they go first: their files are one group, run by one worker (tests/conftest.py),
+    which starts the processes at once and waits on them while the other workers run the rest."""
+    items.sort(key=lambda item: _launched(item) != _xdist_worker())
 
 
 @pytest.fixture(scope="session", autouse=True)
 def _start_ros2_processes_early(request):
-    """Start the launcher with the first test when any collected test needs it."""
-    wanted = ("ros2_launcher", "paper_runs", "fault_runs", "play_tracks", "in_process", "nav2_runs")
-    if any(any(n in getattr(item, "fixturenames", ()) for n in wanted) for item in request.session.items):
+    """Start the launcher with the first test when any collected test needs it (in one process; a
+    pytest-xdist worker starts it with the first test of the group, and only the one that runs it)."""
+    if not _xdist_worker() and any(_launched(item) for item in request.session.items):
         from viapath.ros2 import rclpy_available
 
         if rclpy_available()[0]:

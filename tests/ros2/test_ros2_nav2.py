@@ -41,11 +41,17 @@ def final(records):
     return min(done, key=lambda r: r["goal"])
 
 
+def client_code(launcher, name):
+    """``viapath ros2 follow``'s exit code: 0 succeeded (or canceled as asked), 1 failed."""
+    return launcher.groups["nav2"]["runs"][name].client_code
+
+
 @pytest.mark.parametrize("name", [*PAPER, "mixed"])
-def test_reaches_the_goal_as_nav2s_controller(nav2_runs, name):
+def test_reaches_the_goal_as_nav2s_controller(nav2_runs, ros2_launcher, name):
     metrics, records, _ = nav2_runs[name]
     assert metrics["reached_goal"] and not metrics["collision"], metrics
     assert final(records)["status"] == SUCCEEDED
+    assert client_code(ros2_launcher, name) == 0
     assert metrics["time_outside_corridor_s"] == 0.0
     last = final(records)["goal"]
     sent = [r["goal"] for r in records if r["kind"] == "sent" and r["label"] == "path" and r["goal"] < last]
@@ -89,9 +95,10 @@ def test_feedback_gives_distance_to_goal_and_speed(nav2_runs):
     assert speeds.max() == pytest.approx(np.nanmax(trace["speed_mps"]), abs=0.01)
 
 
-def test_a_changed_path_is_followed_without_a_stop_and_cancel_brakes(nav2_runs):
+def test_a_changed_path_is_followed_without_a_stop_and_cancel_brakes(nav2_runs, ros2_launcher):
     from conftest import NAV2_PREEMPT_EVENTS
 
+    assert client_code(ros2_launcher, "preempt") == 0  # canceled, as the client asked
     _, records, trace = nav2_runs["preempt"]
     t, v = trace["time_s"], trace["speed_mps"]
     cancel_at = float(NAV2_PREEMPT_EVENTS[-1].split(":")[0])
@@ -109,9 +116,10 @@ def test_a_changed_path_is_followed_without_a_stop_and_cancel_brakes(nav2_runs):
     _assert_rests_within_braking_distance(trace, cancel_at, latency_s=0.5)
 
 
-def test_deactivate_stops_the_robot_and_ends_the_goal(nav2_runs):
+def test_deactivate_stops_the_robot_and_ends_the_goal(nav2_runs, ros2_launcher):
     from conftest import NAV2_DEACTIVATE_AT_S
 
+    assert client_code(ros2_launcher, "deactivate") == 1  # the goal was aborted
     _, records, trace = nav2_runs["deactivate"]
     assert any(r["kind"] == "lifecycle" and r["transition"] == "deactivate" and r["ok"] for r in records)
     assert final(records)["status"] == ABORTED
@@ -119,9 +127,10 @@ def test_deactivate_stops_the_robot_and_ends_the_goal(nav2_runs):
     _assert_rests_within_braking_distance(trace, NAV2_DEACTIVATE_AT_S, latency_s=0.5)
 
 
-def test_a_blocked_corridor_ends_with_no_progress_after_the_patience(nav2_runs):
+def test_a_blocked_corridor_ends_with_no_progress_after_the_patience(nav2_runs, ros2_launcher):
     from conftest import NAV2_PATIENCE_S
 
+    assert client_code(ros2_launcher, "blocked") == 1  # FAILED_TO_MAKE_PROGRESS
     metrics, records, trace = nav2_runs["blocked"]
     assert not metrics["collision"] and not metrics["reached_goal"]
     result = final(records)

@@ -1,6 +1,6 @@
 """Property test of the shield (docs/design.md §7) against an independent brute force (tests/safety/_brute.py).
 
-10 000 random single cycles (seeded numpy, reproducible): robot state, motion limits, control
+2 000 random single cycles (10 000 with VIAPATH_FULL_TESTS=1, tests/_sizes.py) (seeded numpy, reproducible): robot state, motion limits, control
 period, shield options, 0-6 people with random positions, velocities and uncertainties. For each:
 * the output never exceeds the limits and is never NaN;
 * when the shield says its output is admissible, the brute force agrees (soundness);
@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tests._sizes import cases
 from tests.safety._brute import brute_admissible, window_grid
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.safety import Shield, ShieldConfig
@@ -148,9 +149,9 @@ def _batches(case: dict, size: int):
 @pytest.mark.parametrize(
     "mode,towards_only,count,seed",
     [
-        ("passive", True, 10_000, 0),  # the default: meetings count while the robot moves towards the person
-        ("passive", False, 3_000, 2),  # docs/design.md §7 to the letter: any meeting before rest counts
-        ("passive-friendly", True, 1_000, 1),
+        ("passive", True, cases(2_000, 10_000), 0),  # the default: meetings count while moving towards the person
+        ("passive", False, cases(600, 3_000), 2),  # docs/design.md §7 to the letter: any meeting before rest counts
+        ("passive-friendly", True, cases(300, 1_000), 1),
     ],
 )
 def test_shield_against_brute_force(mode, towards_only, count, seed):

@@ -1,6 +1,6 @@
 """Property test of the shield with static geometry (docs/design.md §10) against an independent brute force.
 
-10 000 random single cycles (seeded): robot state, motion limits, control period, margin, 1-8 static
+2 000 random single cycles (10 000 with VIAPATH_FULL_TESTS=1, tests/_sizes.py) (seeded): robot state, motion limits, control period, margin, 1-8 static
 points and segments (a wall, a box edge, a scan return) around the robot, and 0-3 people. The static
 layer goes through the guard's sampling into discs (:func:`viapath.guard.with_static_rows`), as every
 planner's does, and then through the shield. The brute force knows nothing of discs: it steps the drive
@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tests._sizes import cases
 from tests.safety._brute import brute_admissible, window_grid
 from viapath.guard import DEFAULT_CONFIG, with_static_rows
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
@@ -177,7 +178,7 @@ def test_static_discs_cover_segments_within_the_pad():
     assert observation.obstacles.statics().radii_m.max() <= 0.02
 
 
-def test_shield_with_static_geometry_against_brute_force(count: int = 10_000):
+def test_shield_with_static_geometry_against_brute_force(count: int = cases(2_000, 10_000)):
     rng = np.random.default_rng(5)
     case = random_cases(rng, count)
     commands = np.stack([rng.uniform(-0.2, 1.3, count) * case["vmax"], rng.uniform(-1.3, 1.3, count) * case["wmax"]], 1)

@@ -53,7 +53,7 @@ BAD = {
         "speeds: [0.1, 0.2, 0.3, 0.4, 0.5]",
         "speeds: []",
         "planner.speeds",
-        "at least 1 item",
+        "expected at least 1 value",
         "found []",
         1,
     ),

@@ -48,8 +48,9 @@ def test_box_on_the_path_is_passed_without_contact(perception):
 
 @pytest.mark.parametrize("planner", ["dwa", "vo", "stop", "follow"])
 def test_baselines_do_not_drive_into_a_box(planner):
-    """Every planner gets the static layer (and the guard under it): none of them touches the box."""
-    episode = run_episode(scenario_from_dict({**BOX, "duration_s": 25.0}), planner=planner)
+    """Every planner gets the static layer (and the guard under it): none of them touches the box. (The
+    box alone: with the walls too, dwa's contact checks against every wall's discs took 80-110 s here.)"""
+    episode = run_episode(scenario_from_dict(_scene(boxes=BOX["boxes"], duration_s=25.0)), planner=planner)
     assert episode.metrics["static_contact"] == 0
 
 
@@ -64,6 +65,26 @@ def test_closed_door_stops_the_robot_short_of_it_and_it_goes_on_when_the_door_op
     assert "blocked" in trace.plan_status
     assert np.all(trace.robot_speeds_mps[(trace.times_s > 15.0) & (trace.times_s < 19.9)] < 0.02)  # at rest, waiting
     assert m["reached_goal"]  # and went on once it opened
+
+
+def test_time_blocked_is_in_the_metrics_and_the_bench_table(tmp_path):
+    """``blocked_s``: at least the time the robot stood before the closed door (measured from the speeds),
+    at most until it opened; none without the door. The bench's table and --json carry it."""
+    from viapath.bench.report import markdown_table, summarize
+
+    door = {"points": [[4.0, -1.1], [4.0, 1.1]], "until_s": 20.0}
+    episode = run_episode(scenario_from_dict(_scene(walls=[door])))
+    m, trace = episode.metrics, episode.trace
+    stood_s = np.count_nonzero((trace.robot_speeds_mps[:-1] < 0.01) & (trace.times_s[:-1] < 20.0)) * trace.dt_s
+    assert stood_s > 5.0 and stood_s - 1e-9 <= m["blocked_s"] <= 20.0 + trace.dt_s
+    free = run_episode(scenario_from_dict(_scene())).metrics
+    assert free["blocked_s"] == 0.0
+    rows = [{**metrics, "shield": "off", "error": "", "time_ratio": 1.0} for metrics in (m, free)]
+    (summary,) = summarize(rows)
+    assert summary["blocked_rate"] == 0.5 and summary["blocked_s_per_episode"] == pytest.approx(m["blocked_s"] / 2)
+    header, _, row = markdown_table([summary]).splitlines()
+    cells = dict(zip([c.strip() for c in header.split("|")], [c.strip() for c in row.split("|")]))
+    assert cells["blocked"] == "50.0%" and cells["blocked [s/ep]"] == f"{m['blocked_s'] / 2:.1f}"
 
 
 def test_walls_along_the_corridor_cost_no_time():

@@ -210,3 +210,33 @@ def test_bench_rows_read_back(study_run):
     with open(study_run["folder"] / "bench" / "episodes.csv") as file:
         rows = list(csv.DictReader(file))
     assert len(rows) == 2 and len({r["options_hash"] for r in rows}) == 1
+
+
+def test_on_a_terminal_trials_and_the_running_trials_episodes_show_progress(tmp_path, monkeypatch):
+    """As ``viapath bench``: a bar of trials and one of the running trial's episodes (a trial on a large
+    suite takes minutes), also while the chosen trials run on the test suite."""
+    import io
+
+    from rich.console import Console
+
+    import viapath.cli.tune as tune_cli
+
+    screen = io.StringIO()
+    monkeypatch.setattr(tune_cli, "errors", Console(file=screen, force_terminal=True, width=160))
+    suite = write_tiny_suite(tmp_path / "suite")
+    storage = f"sqlite:///{tmp_path / 'tune.db'}"
+    result = _invoke(
+        "tune", suite, "--trials", "2", "--workers", "1", "--storage", storage, "--study", "bars", "--test", suite
+    )
+    colorama = sys.modules.get("colorama.initialise")
+    if colorama is not None and getattr(colorama, "orig_stdout", None) is not None:
+        # numba's coloured messages start colorama under the bar: it kept the bar's proxy of the runner's
+        # stdout, closed now, for its exit handler
+        colorama.orig_stdout, colorama.orig_stderr = sys.__stdout__, sys.__stderr__
+    assert result.exit_code == 0, result.output
+    shown = screen.getvalue()
+    # the last frame of each bar: both trials done, every episode of the last trial done (2 scenarios)
+    assert "trials" in shown and "2/2" in shown and "testing" in shown
+    episode_lines = [line for line in shown.splitlines() if "episodes" in line and "of the running trial" in line]
+    assert episode_lines and any("2/2" in line for line in episode_lines), shown[-2000:]
+    assert any("1/2" in line for line in shown.replace("\r", "\n").splitlines()) or "0/2" in shown

@@ -46,6 +46,8 @@ TABLE_COLUMNS = [
     ("at_fault_avoidable", "at-fault avoidable", "{}"),
     ("at_fault_unavoidable", "at-fault unavoidable", "{}"),
     ("static_contact_rate", "static contact", "{:.1%}"),
+    ("blocked_rate", "blocked", "{:.1%}"),
+    ("blocked_s_per_episode", "blocked [s/ep]", "{:.1f}"),
     ("contact_speed_max_mps", "contact speed max [m/s]", "{:.2f}"),
     ("time_ratio_median", "time ratio (median)", "{:.2f}"),
     ("infeasible_rate", "infeasible", "{:.1%}"),
@@ -139,6 +141,8 @@ def summarize(rows: list[dict[str, Any]], by: str = "planner", order: list[str] 
                 "contact_speed_max_mps": _stat(np.max, _contact_speeds(ok)),
                 "contact_speed_median_mps": _stat(np.median, _contact_speeds(ok)),
                 "static_contact_rate": (sum(bool(r.get("static_contact")) for r in ok) / n) if n else None,
+                "blocked_rate": (sum(bool(r.get("blocked_s")) for r in ok) / n) if n else None,
+                "blocked_s_per_episode": _stat(np.mean, _values(ok, "blocked_s")),
                 "time_ratio_median": _stat(np.median, ratios),
                 "time_ratio_mean": _stat(np.mean, ratios),
                 "feasibility_judged": sum(r.get("feasible") is not None for r in ok),
@@ -297,14 +301,18 @@ def plot_deviation_vs_time(rows: list[dict[str, Any]], file: Path) -> None:
     all_deviation = np.array([r["max_lateral_deviation_m"] for r in done])
     for ax, planner in zip(axes.flat, planners):
         mine = [r for r in done if label(r) == planner]
-        ax.scatter(all_ratio, all_deviation, s=4, color="0.85", zorder=1)
+        ax.scatter(all_ratio, all_deviation, s=4, color="0.85", zorder=1, label="every planner's episodes")
         if mine:
             ratio = np.array([r["time_ratio"] for r in mine])
             deviation = np.array([r["max_lateral_deviation_m"] for r in mine])
-            ax.scatter(ratio, deviation, s=8, alpha=0.6, color="tab:blue", zorder=2)
-            ax.scatter([np.median(ratio)], [np.median(deviation)], s=60, marker="x", color="tab:red", zorder=3)
+            ax.scatter(ratio, deviation, s=8, alpha=0.6, color="tab:blue", zorder=2, label="this planner's episodes")
+            ax.scatter(
+                [np.median(ratio)], [np.median(deviation)], s=60, marker="x", color="tab:red", zorder=3, label="median"
+            )
         ax.set_title(f"{planner} ({len(mine)} reached)", fontsize=9)
         ax.grid(alpha=0.3)
+    if len(done):
+        axes.flat[0].legend(fontsize=7, loc="upper right", markerscale=1.5, framealpha=0.8)
     for ax in axes.flat[len(planners) :]:
         ax.set_visible(False)
     beyond = ""

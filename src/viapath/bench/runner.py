@@ -65,6 +65,7 @@ COLUMNS = [
     "shield_interventions",
     "command_flips",
     "escape_cycles",
+    "blocked_s",
     # viapath.bench.avoidable: the at-fault contacts split by whether any robot could have avoided them
     # (searched on at-fault episodes only), and the robot's speed at every contact's onset.
     "at_fault_avoidable",
@@ -538,7 +539,7 @@ def run_bench(
     scheduler: str | None = None,
     perception: str = "oracle",
     seed: int = 0,
-    progress: bool = True,
+    progress: bool | Callable[[int, int], None] = True,
     shield: str | None = None,
     force: bool = False,
     planner_options: dict[str, dict] | None = None,
@@ -547,7 +548,8 @@ def run_bench(
 ) -> dict[str, Any]:
     """Run every episode not already done in ``out_dir/episodes.csv`` (a row is identified by the
     scenario's content hash, planner, options, perception, seed and viapath version; an episode that
-    crashed is not done). A folder written by another suite or configuration is refused
+    crashed is not done). ``progress``: a bar on stderr (True), nothing (False), or a function told
+    (episodes done, episodes to run) after each episode. A folder written by another suite or configuration is refused
     (:class:`BenchError`) unless ``force``; see :mod:`viapath.bench.identity`.
 
     Returns ``{"rows": this run's rows, "ran": episodes run now, "skipped": already done,
@@ -721,7 +723,7 @@ def _latest(rows: list[dict]) -> dict[tuple, dict]:
     return {row_key(row): row for row in rows}
 
 
-def _run_and_write(parallel, tasks: list[Task], csv_path: Path, progress: bool) -> None:
+def _run_and_write(parallel, tasks: list[Task], csv_path: Path, progress) -> None:
     import joblib
 
     new_file = not csv_path.exists() or csv_path.stat().st_size == 0
@@ -744,7 +746,12 @@ def _run_and_write(parallel, tasks: list[Task], csv_path: Path, progress: bool) 
             handle.flush()
 
 
-def _with_progress(results: Iterable[dict], total: int, enabled: bool) -> Iterator[dict]:
+def _with_progress(results: Iterable[dict], total: int, enabled) -> Iterator[dict]:
+    if callable(enabled):
+        for done, row in enumerate(results, 1):
+            enabled(done, total)
+            yield row
+        return
     if not enabled:
         yield from results
         return

@@ -191,9 +191,10 @@ def evaluate(
     workers: int,
     seed: int,
     executor: str = "loky",
-    progress: bool = False,
+    progress: bool | Callable[[int, int], None] = False,
 ) -> dict[str, Any]:
-    """Run the suite with the viapath planner and these option values; its :func:`suite_metrics`."""
+    """Run the suite with the viapath planner and these option values; its :func:`suite_metrics`
+    (``progress``: as :func:`viapath.bench.runner.run_bench`'s)."""
     with tempfile.TemporaryDirectory(prefix="viapath-tune-") as folder:
         result = run_bench(
             scenarios,
@@ -332,9 +333,11 @@ def run_study(
     executor: str = "loky",
     on_trial: Callable[[Any, Any], None] | None = None,
     start_from: Sequence[tuple[str, dict[str, Any]]] = (),
+    on_episode: Callable[[int, int], None] | None = None,
 ) -> tuple[int, float]:
     """Run trials until the study has ``trials`` complete ones (or ``timeout_s`` passes); returns
-    (trials run now, wall seconds). ``start_from``: (label, option values) tried first (once per study),
+    (trials run now, wall seconds). ``on_trial`` is called after each trial, ``on_episode(done, total)``
+    after each episode of the running trial. ``start_from``: (label, option values) tried first (once per study),
     e.g. presets a user already trusts; values outside the searched ranges are left to the sampler."""
     optuna_module()
     from optuna.storages import fail_stale_trials
@@ -367,7 +370,7 @@ def run_study(
                 values[p.name] = trial.suggest_int(p.name, int(p.low), int(p.high), log=p.log)
             else:
                 values[p.name] = trial.suggest_float(p.name, p.low, p.high, log=p.log)
-        metrics = evaluate(scenarios, values, workers, seed, executor)
+        metrics = evaluate(scenarios, values, workers, seed, executor, progress=on_episode or False)
         trial.set_user_attr("metrics", metrics)
         trial.set_user_attr("constraints", constraints.values(metrics))
         if _has_set_constraint():
@@ -414,14 +417,16 @@ def evaluate_on_test(
     seed: int,
     executor: str = "loky",
     on_done: Callable[[Any, dict], None] | None = None,
+    on_episode: Callable[[int, int], None] | None = None,
 ) -> dict[int, dict]:
-    """Each trial's metrics on the test suite (cached in the study under ``key``)."""
+    """Each trial's metrics on the test suite (cached in the study under ``key``); ``on_done`` after
+    each trial, ``on_episode(done, total)`` after each episode run."""
     cache = dict(study.user_attrs.get(f"test:{key}", {}))
     results: dict[int, dict] = {}
     for trial in trials:
         stored = cache.get(str(trial.number))
         if stored is None:
-            stored = evaluate(scenarios, trial_values(trial), workers, seed, executor)
+            stored = evaluate(scenarios, trial_values(trial), workers, seed, executor, progress=on_episode or False)
             cache[str(trial.number)] = stored
             study.set_user_attr(f"test:{key}", cache)
         results[trial.number] = stored

@@ -133,7 +133,9 @@ def sim(
         10.0, "--max-wait", help="With --lockstep: wait at most this long (wall s) for the node each step."
     ),
     linger: float = typer.Option(
-        0.0, "--linger", help="After the goal, keep simulating this long (s; not in the metrics)."
+        2.0,
+        "--linger",
+        help="After the goal, keep simulating this long (s; not in the metrics), so the node sees the robot there.",
     ),
 ) -> None:
     """Simulated scans, odometry and /clock from a scenario; drives the robot with cmd_vel; prints the metrics."""
@@ -285,15 +287,22 @@ def follow(
         help="Event TIME:KIND[:ARG]: empty, nan, preempt:PATH, cancel, deactivate, activate, speed-limit:PERCENT, clear, stop.",
     ),
     log: Path | None = typer.Option(None, "--log", help="Append every goal, result and feedback as JSON lines here."),
-    until: float = typer.Option(float("inf"), "--until", help="End at this episode time (s)."),
+    until: float = typer.Option(
+        float("inf"), "--until", help="End at this episode time (s) if the path goal has no result by then."
+    ),
     use_sim_time: bool = typer.Option(
         True, "--use-sim-time/--wall-time", help="Episode time from /clock (the simulator's)."
     ),
     wait_s: float = typer.Option(
-        120.0, "--wait-s", help="How long to wait for the node's lifecycle service and action server."
+        120.0,
+        "--wait-s",
+        help="How long (wall s) to wait for the node's lifecycle service and action server, and for a stopped clock.",
     ),
 ) -> None:
-    """Play Nav2's part against a controller (viapath ros2 nav2): lifecycle, FollowPath goals re-sent every second."""
+    """Play Nav2's part against a controller (viapath ros2 nav2): lifecycle, FollowPath goals re-sent every second.
+
+    Ends with the path goal's result, printed: exit 0 when it succeeded (or was canceled by --at T:cancel),
+    1 when it failed, 5 when no result came (--until, or the clock stopped for --wait-s)."""
     import math
 
     from viapath.ros2.nav2_client import parse_event, run_follow
@@ -331,13 +340,36 @@ def follow(
 @app.command()
 def interfaces() -> None:
     """Generate and build nav2_msgs / tf2_msgs (FollowPath, SpeedLimit, ClearEntireCostmap, TFMessage) once; print where."""
+    import time
+
     from viapath.ros2 import interfaces as generated
 
+    started, built_before = time.monotonic(), generated.is_built()
     try:
-        prefix = generated.build(progress=lambda text: errors.print(text, highlight=False))
+        if errors.is_terminal and not built_before:
+            prefix = _build_with_bar(generated)
+        else:
+            prefix = generated.build(progress=lambda text: errors.print(text, highlight=False))
     except generated.InterfaceBuildError as error:
         fail(str(error))
+    if not built_before:
+        errors.print(f"built in {time.monotonic() - started:.0f} s", highlight=False)
     print(prefix)
+
+
+def _build_with_bar(generated):
+    """The build with a bar on the terminal: the step in words, the share done from make's percentages."""
+    from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeElapsedColumn
+
+    with Progress(
+        TextColumn("interfaces"), BarColumn(), TaskProgressColumn(), TimeElapsedColumn(),
+        TextColumn("{task.description}"), console=errors,
+    ) as bar:  # fmt: skip
+        job = bar.add_task("", total=1.0)
+        return generated.build(
+            progress=lambda text: bar.update(job, description=text.split(" into ")[0]),
+            fraction=lambda done: bar.update(job, completed=done),
+        )
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -226,8 +226,29 @@ def _test_on(tuning, study, study_name, test_scenarios, test, info, front, paper
     chosen = _trials_to_test(tuning, study, study_name, front, paper, test_trials, test_top)
     if show:
         errors.print(f"testing {len(chosen)} trials on {len(test_scenarios)} scenarios ...")
-    test_results = tuning.evaluate_on_test(study, chosen, test_scenarios, test_key, workers, seed)
+        test_results = _test_with_progress(tuning, study, chosen, test_scenarios, test_key, workers, seed)
+    else:
+        test_results = tuning.evaluate_on_test(study, chosen, test_scenarios, test_key, workers, seed)
     return test_results, tuning.rank(test_results, constraints, paper.number if paper is not None else None)
+
+
+def _test_with_progress(tuning, study, chosen, scenarios, key, workers, seed) -> dict[int, dict]:
+    """``evaluate_on_test`` with a bar of the trials tested and one of the running trial's episodes."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    columns = (TextColumn("{task.fields[kind]:>8}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn())
+    with Progress(*columns, TextColumn("{task.description}"), console=errors) as bar:
+        tested = bar.add_task("tested", total=len(chosen), kind="trials")
+        episodes = bar.add_task("of the running trial", total=len(scenarios), kind="episodes")
+
+        def on_done(trial, metrics):
+            bar.advance(tested)
+            bar.reset(episodes, total=len(scenarios))
+
+        return tuning.evaluate_on_test(
+            study, chosen, scenarios, key, workers, seed,
+            on_done=on_done, on_episode=lambda done, total: bar.update(episodes, completed=done, total=total),
+        )  # fmt: skip
 
 
 def _suite_errors() -> tuple[type[Exception], ...]:
@@ -395,7 +416,7 @@ def _run_with_progress(
 
     done = len(tuning.complete_trials(study))
     with Progress(
-        TextColumn("trials"),
+        TextColumn("{task.fields[kind]:>8}"),
         BarColumn(),
         MofNCompleteColumn(),
         TimeElapsedColumn(),
@@ -404,12 +425,15 @@ def _run_with_progress(
         TextColumn("{task.description}"),
         console=errors,
     ) as bar:
-        job = bar.add_task(_best_text(tuning, study), total=trials, completed=min(done, trials))
+        job = bar.add_task(_best_text(tuning, study), total=trials, completed=min(done, trials), kind="trials")
+        # The running trial's episodes: a trial on a large suite takes minutes, the trials bar moves once per trial.
+        episodes = bar.add_task("of the running trial", total=len(scenarios), kind="episodes")
 
         def on_trial(study_, trial):
             bar.update(
                 job, completed=min(len(tuning.complete_trials(study_)), trials), description=_best_text(tuning, study_)
             )
+            bar.reset(episodes, total=len(scenarios))
 
         return tuning.run_study(
             study,
@@ -422,6 +446,7 @@ def _run_with_progress(
             timeout,
             on_trial=on_trial,
             start_from=start_from,
+            on_episode=lambda done_, total: bar.update(episodes, completed=done_, total=total),
         )
 
 

@@ -12,7 +12,8 @@ What we chose:
   ``ros2-interfaces/<key>``, where the key hashes the definitions, this module's build recipe, the
   Python version and numpy's major version: a change of any of them builds anew beside the old one.
 * **When**: on first use (:func:`load`), under a file lock so that processes started together build
-  once; about a minute on two cores (``make -j2``). ``viapath ros2 interfaces`` builds and prints where.
+  once; about two minutes on two cores (``make -j2``). ``viapath ros2 interfaces`` builds (with a bar
+  on a terminal, from make's own percentages), prints where and how long it took.
 * **Needs**: ``cmake``, ``make`` and a C/C++ compiler (Debian: ``apt-get install -y cmake
   build-essential``) and the Python headers (``python3-dev`` for Debian's Python).
 * The generator wheels' exported CMake targets name the Python and numpy include folders of the
@@ -31,6 +32,7 @@ import ctypes
 import hashlib
 import importlib
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -168,11 +170,25 @@ def _check_tools() -> None:
         )
 
 
-def _run(args: list[str], cwd: Path, env: dict[str, str], log: Path) -> None:
+_MAKE_PERCENT = re.compile(r"^\[\s*(\d+)%\]")
+
+
+def _run(args: list[str], cwd: Path, env: dict[str, str], log: Path, percent=None) -> None:
+    """Run a build step, its output into ``log``; ``percent(p)`` for each ``[ p%]`` line make prints."""
     with log.open("a") as out:
         out.write("$ " + " ".join(args) + "\n")
         out.flush()
-        code = subprocess.call(args, cwd=cwd, env=env, stdout=out, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+        proc = subprocess.Popen(
+            args, cwd=cwd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+            text=True, errors="replace",
+        )  # fmt: skip
+        assert proc.stdout is not None
+        for line in proc.stdout:
+            out.write(line)
+            match = _MAKE_PERCENT.match(line)
+            if match and percent is not None:
+                percent(int(match.group(1)))
+        code = proc.wait()
     if code != 0:
         tail = "\n".join(log.read_text().splitlines()[-25:])
         raise InterfaceBuildError(f"{' '.join(args[:2])} failed (exit {code}); log {log}:\n{tail}")
@@ -191,14 +207,23 @@ def _locked(path: Path):
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-def build(prefix: Path | None = None, jobs: int = 2, progress=None) -> Path:
+def is_built(prefix: Path | None = None) -> bool:
+    """A complete build is in ``prefix`` (default: the cache)."""
+    return ((install_prefix() if prefix is None else Path(prefix)) / "viapath-complete").is_file()
+
+
+def build(prefix: Path | None = None, jobs: int = 2, progress=None, fraction=None) -> Path:
     """Generate and build the interface packages into ``prefix`` (default: the cache); returns it.
-    Nothing happens when a complete build is already there."""
+    Nothing happens when a complete build is already there. ``progress(text)`` is told each step,
+    ``fraction(f)`` how much of the build is done (0 to 1; make's percentages within each package)."""
     prefix = install_prefix() if prefix is None else Path(prefix)
     marker = prefix / "viapath-complete"
     if marker.is_file():
         return prefix
-    with _locked(prefix.parent / f"{prefix.name}.lock"):
+    lock = prefix.parent / f"{prefix.name}.lock"
+    if progress and lock.exists():
+        progress("waiting for the build lock (another process may be building)")
+    with _locked(lock):
         if marker.is_file():  # another process built it meanwhile
             return prefix
         _check_tools()
@@ -212,9 +237,12 @@ def build(prefix: Path | None = None, jobs: int = 2, progress=None) -> Path:
         env["AMENT_PREFIX_PATH"] = os.pathsep.join([str(prefix), *prefixes])
         env["PATH"] = os.pathsep.join([str(Path(sys.executable).parent), env.get("PATH", "")])
         env.pop("MAKEFLAGS", None)
-        for package, (files, deps) in PACKAGES.items():
+        share = 0.1  # of each package's part: cmake's configure and generate; the rest follows make's percentages
+        for index, (package, (files, deps)) in enumerate(PACKAGES.items()):
             if progress:
                 progress(f"building {package} into {prefix}")
+            done = lambda part, i=index: fraction((i + part) / len(PACKAGES)) if fraction else None
+            done(0.0)
             source = work / "src" / package
             for name in files:
                 (source / name).parent.mkdir(parents=True, exist_ok=True)
@@ -245,7 +273,11 @@ def build(prefix: Path | None = None, jobs: int = 2, progress=None) -> Path:
                 env,
                 log,
             )
-            _run(["make", f"-j{max(1, jobs)}", "install"], out, env, log)
+            done(share)
+            make_done = lambda p, done=done: done(share + (1 - share) * min(p, 100) / 100)
+            _run(["make", f"-j{max(1, jobs)}", "install"], out, env, log, percent=make_done)
+        if fraction:
+            fraction(1.0)
         shutil.rmtree(work, ignore_errors=True)
         marker.write_text(definitions_hash() + "\n")
     return prefix

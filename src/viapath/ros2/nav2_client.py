@@ -14,6 +14,10 @@ What we chose:
   ``T:deactivate``, ``T:activate``, ``T:speed-limit:PERCENT``, ``T:clear`` (the costmap-clearing
   service), ``T:stop`` (no more re-sending).
 * Every goal sent, result, feedback sample and event is one JSON line in ``--log`` (flushed).
+* The run ends with the path's goal, as the behaviour tree's ``FollowPath`` node does: its result
+  (not a preempt's) is printed as one line and gives the exit code: 0 when it succeeded, or was
+  canceled by ``T:cancel``; 1 when it failed (aborted, or canceled by the controller). With no result,
+  the run ends at ``--until`` or when the clock has not moved for ``--wait-s`` (exit 5).
 """
 
 from __future__ import annotations
@@ -27,6 +31,8 @@ from typing import Any
 import numpy as np
 
 EPISODE_START_S = 1.0
+GOAL_STATUS = {4: "SUCCEEDED", 5: "CANCELED", 6: "ABORTED"}  # action_msgs/GoalStatus
+NO_RESULT = 5  # exit code: the run ended without the path goal's result
 
 
 def densify(points, spacing_m: float) -> np.ndarray:
@@ -100,6 +106,7 @@ class _FollowSession:
         self.count = 0
         self.due = True
         self.cancel = False
+        self.outcome: dict | None = None  # the path goal's final result, once it came
 
     # -- helpers ---------------------------------------------------------------------------------
     def write(self, **item) -> None:
@@ -136,11 +143,11 @@ class _FollowSession:
         return to_frame(densify(waypoints, self.spacing_m), self.offset)
 
     # -- lifecycle and servers -------------------------------------------------------------------
-    def transition(self, transition_id: int, label: str) -> bool:
+    def transition(self, transition_id: int, label: str, wait_s: float = 60.0) -> bool:
         request = self.ChangeState.Request()
         request.transition.id = transition_id
         future = self.change.call_async(request)
-        end = time.monotonic() + 60
+        end = time.monotonic() + wait_s  # configuring loads (or compiles) the planner: slow on a loaded machine
         while not future.done() and time.monotonic() < end and not self.stop["flag"]:
             self.spin(0.05)
         ok = future.done() and future.result() is not None and future.result().success
@@ -156,7 +163,10 @@ class _FollowSession:
                 if self.timed_out(wait_s):
                     print(f"error: no lifecycle service {lifecycle_node}/change_state", file=sys.stderr)
                     return 3
-            if not (self.transition(1, "configure") and self.transition(3, "activate")):
+            if not (self.transition(1, "configure", wait_s) and self.transition(3, "activate", wait_s)):
+                print(
+                    f"error: {lifecycle_node}: configure or activate failed or took over {wait_s:g} s", file=sys.stderr
+                )
                 return 4
         while not self.client.wait_for_server(timeout_sec=0.1):
             self.spin(0.05)
@@ -211,6 +221,31 @@ class _FollowSession:
         )
         if label == "path" and message != "preempted by a new path":
             self.resend = False  # as the behaviour tree: the goal is over (succeeded, failed, canceled)
+            if self.outcome is None:
+                self.outcome = dict(
+                    goal=index, t=self.now(), status=int(response.status), code=int(response.result.error_code),
+                    message=message,
+                )  # fmt: skip
+
+    def exit_code(self) -> int:
+        """0: the path goal succeeded (or was canceled as asked); 1: it failed; NO_RESULT: no result came."""
+        if self.outcome is None:
+            return NO_RESULT
+        status = self.outcome["status"]
+        return 0 if status == 4 or (status == 5 and self.cancel) else 1
+
+    def report(self, until_s: float) -> str:
+        """The run's end in one line."""
+        o = self.outcome
+        if o is None:
+            if self.stop["flag"]:
+                why = "interrupted"
+            else:
+                why = f"--until {until_s:g} s came" if self.now() > until_s else "the clock stopped"
+            return f"follow_path: no result ({why}; {self.count} goals sent)"
+        detail = f"error_code {o['code']}" + (f": {o['message']}" if o["message"] else "")
+        name = GOAL_STATUS.get(o["status"], f"status {o['status']}")
+        return f"follow_path: {name} at t = {o['t']:.1f} s (goal {o['goal']}, {detail})"
 
     # -- the run ---------------------------------------------------------------------------------
     def handle_event(self, at: float, kind: str, arg: str, t: float) -> None:
@@ -242,12 +277,18 @@ class _FollowSession:
 
     def follow(self, schedule: list[tuple[float, str, str]], resend_s: float, until_s: float, wait_s: float) -> None:
         """Wait for the simulated clock to start the episode (warm-up ticks lie below it), then play
-        the events as their times come and re-send the path every ``resend_s`` until ``until_s``."""
+        the events as their times come and re-send the path every ``resend_s`` until the path goal's
+        result, ``until_s``, or a clock that has not moved for ``wait_s`` (wall time)."""
         while self.now() < -0.999 and not self.stop["flag"] and time.monotonic() - self.started < wait_s:
             self.spin(0.02)
-        while not self.stop["flag"]:
+        last_t, moved = self.now(), time.monotonic()
+        while not self.stop["flag"] and self.outcome is None:
             t = self.now()
             if t > until_s:
+                break
+            if t != last_t:
+                last_t, moved = t, time.monotonic()
+            elif time.monotonic() - moved > wait_s:
                 break
             while schedule and schedule[0][0] <= t:
                 self.handle_event(*schedule.pop(0), t)
@@ -285,7 +326,8 @@ def run_follow(
             return code
         session.points = session.load_points(source)
         session.follow(schedule, resend_s, until_s, wait_s)
-        return 0
+        print(session.report(until_s), file=sys.stderr if log is sys.stdout else sys.stdout, flush=True)
+        return session.exit_code()
     finally:
         if log is not sys.stdout:
             log.close()

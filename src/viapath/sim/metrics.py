@@ -196,6 +196,7 @@ def compute_metrics(trace) -> dict[str, Any]:
         "at_fault_collision_seen_1s": bool(np.any(faults & present_for(trace, 1.0)) or np.any(static_faults)),
         "static_contact": int(np.count_nonzero(static_onsets)),
         "min_static_clearance_m": _finite_or_none(min_static),
+        "blocked_s": blocked_time_s(trace),
         "overlapping_at_appearance": int(np.count_nonzero(overlap_on_appearance(trace))),
         "min_clearance_m": _finite_or_none(min_clearance),
         "time_to_goal_s": float(trace.times_s[-1]) if trace.reached_goal else None,
@@ -275,6 +276,12 @@ def side_flips(sides) -> int:
     sides = np.asarray(sides)
     sided = sides[sides != 0]
     return int(np.count_nonzero(sided[1:] != sided[:-1]))
+
+
+def blocked_time_s(trace) -> float:
+    """Time (s) the planner reported ``blocked``: waiting short of static geometry across the way (a closed door)."""
+    status = list(getattr(trace, "plan_status", []))
+    return float(sum(1 for s in status if s == "blocked") * trace.dt_s)
 
 
 def smoothness_metrics(trace) -> dict[str, Any]:

@@ -70,8 +70,11 @@ def _scene(plt, trace, dpi: int):
         ax.add_patch(Polygon(outline, closed=True, facecolor="#dfe9f5", edgecolor="none", zorder=0))
     ax.plot(*trace.path.waypoints.T, ls=(0, (4, 3)), color="#2f6eb5", lw=1.2)
     ax.plot(*trace.path.goal, marker="*", color="#2f6eb5", ms=14, mec="k")
-    for wall in trace.walls:
-        ax.plot(*wall.T, color="k", lw=2.5)
+    doors = []  # edges that go during the run: drawn in the frames where they still stand
+    for wall, until_s in zip(trace.walls, _until(trace)):
+        (line,) = ax.plot(*wall.T, color="k", lw=2.5)
+        if np.isfinite(until_s):
+            doors.append((line, until_s))
     _fit_view(ax, trace)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
@@ -87,7 +90,7 @@ def _scene(plt, trace, dpi: int):
     (heading,) = ax.plot([], [], color="k", lw=1.5, zorder=6)
     (via_marker,) = ax.plot([], [], "x", color="#8e44ad", ms=9, mew=2, zorder=6)
     label = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", fontsize=9, family="monospace")
-    moving = [trail, scan, plan_line, *obstacles, robot, heading, via_marker, label]  # in drawing order
+    moving = [*(line for line, _ in doors), trail, scan, plan_line, *obstacles, robot, heading, via_marker, label]
     for artist in moving:
         artist.set_animated(True)
     canvas = fig.canvas
@@ -109,6 +112,8 @@ def _scene(plt, trace, dpi: int):
             patch.center = tuple(trace.obstacle_positions[k, j])
         if trace.scan_points and k < len(trace.scan_points) and len(trace.scan_points[k]):
             scan.set_data(*np.asarray(trace.scan_points[k]).T)
+        for line, until_s in doors:
+            line.set_visible(bool(trace.times_s[k] < until_s))
         label.set_text(
             f"t = {trace.times_s[k]:5.1f} s  v = {trace.robot_speeds_mps[k]:.2f} m/s  {trace.plan_status[k]}"
         )
@@ -118,6 +123,12 @@ def _scene(plt, trace, dpi: int):
         return np.asarray(canvas.buffer_rgba())
 
     return fig, draw
+
+
+def _until(trace) -> np.ndarray:
+    """(W,) the time each static edge goes (inf: it stays)."""
+    until = getattr(trace, "wall_until_s", None)
+    return np.full(len(trace.walls), np.inf) if until is None else np.asarray(until, dtype=float)
 
 
 def _write_gif(images, file: Path, fps: int, total: int, progress) -> None:

@@ -45,7 +45,7 @@ def draw_scene(
     The robot is drawn every ``robot_every_s`` (its track as a line in between): at every 0.1 s step
     the markers pile up into a band and hide the via points."""
     n = len(trace.times_s) if upto is None else upto + 1
-    _draw_path(ax, trace)
+    _draw_path(ax, trace, float(trace.times_s[n - 1]) if n else 0.0)
     _draw_obstacles(ax, trace, n, obstacle_every_s)
     _draw_robot(ax, trace, n, robot_every_s, show_via)
     ax.set_aspect("equal")
@@ -54,8 +54,17 @@ def draw_scene(
     ax.grid(True, lw=0.3, alpha=0.6)
 
 
-def _draw_path(ax, trace) -> None:
-    """The corridor, the designated path with its subgoals and goal, and the walls."""
+def wall_open(trace, time_s: float) -> np.ndarray:
+    """(W,) bool: each static edge is gone at ``time_s`` (a door that opened: ``until_s`` <= ``time_s``)."""
+    until = getattr(trace, "wall_until_s", None)
+    if until is None:
+        return np.zeros(len(trace.walls), dtype=bool)
+    return np.asarray(until, dtype=float) <= time_s
+
+
+def _draw_path(ax, trace, time_s: float) -> None:
+    """The corridor, the designated path with its subgoals and goal, and the walls standing at
+    ``time_s``; a door that had opened by then is a thin dotted line."""
     from matplotlib.patches import Polygon
 
     path = trace.path
@@ -80,8 +89,15 @@ def _draw_path(ax, trace) -> None:
         label="subgoals" if len(path.waypoints) > 2 else None,
     )
     ax.plot(*path.goal, marker="*", color="#2f6eb5", ms=14, mec="k", zorder=5, ls="none", label="goal")
-    for w, wall in enumerate(trace.walls):
-        ax.plot(*wall.T, color="k", lw=2.5, zorder=2, label="wall" if w == 0 else None)
+    gone = wall_open(trace, time_s)
+    standing_labelled = opened_labelled = False
+    for wall, opened in zip(trace.walls, gone):
+        if opened:
+            ax.plot(*wall.T, color="0.45", lw=1.0, ls=":", zorder=2, label=None if opened_labelled else "door (opened)")
+            opened_labelled = True
+        else:
+            ax.plot(*wall.T, color="k", lw=2.5, zorder=2, label=None if standing_labelled else "wall")
+            standing_labelled = True
 
 
 def _draw_obstacles(ax, trace, n: int, obstacle_every_s: float) -> None:

@@ -23,7 +23,7 @@ def keep_previous_way(
         return chosen  # a free straight leg at nominal speed (the paper's first choice)
     if chosen.choice.way == previous.way:
         return chosen  # the previous way chosen again (the test below would find it among the candidates)
-    # Why the way changed, for analysis (benchmarks/way_changes.py): the relaxed search helps only
+    # Why the way changed, for analysis (tests/planning/test_motion_noise.py counts it): the relaxed search helps only
     # where the previous way vanished with the inflation, not where the forecast itself moved.
     why = chosen.plan.extras
     if previous.way.same(chosen.candidates.ways).any():
