@@ -1,9 +1,10 @@
-"""Compile viapath's compiled code now (or load it from its on-disk cache), for a long run that should take it
-from its first cycle: ``viapath bench`` before its workers start, the ROS 2 node before it makes its planner and
-shield. Without the extra ``fast`` it does nothing and the numpy code runs (docs/speed.md).
+"""Compile viapath's compiled steps now (or load them from the on-disk cache), for a long run that should take
+them from its first cycle: ``viapath bench`` before its workers start, the ROS 2 node before it makes its planner
+and shield. The steps live with their features (the planner's in :mod:`viapath.planning.viapath`, the shield's in
+:mod:`viapath.safety`), each decorated with :func:`viapath.jit.compiled`; with compilation off they run as plain
+Python and this costs only the two warm-up runs (docs/speed.md).
 
-It lives beside the compiled package (:mod:`viapath.compiled`), not in it: it builds a planner and a shield,
-which import that package.
+It builds a planner and a shield and runs them, so it lives outside both.
 """
 
 from __future__ import annotations
