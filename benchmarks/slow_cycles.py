@@ -50,7 +50,7 @@ SECTIONS = [  # (module, owner in it or None, function, label): the parts of a c
     ("viapath.planning.viapath.planner", None, "way_back", "the way back"),
     ("viapath.planning.viapath.planner", None, "outrun_held", "the outrun hold"),
     ("viapath.planning.viapath.planner", None, "choose_compiled", "the choice (paper steps 1-4)"),
-    ("viapath.planning.viapath.packing", None, "choose", "  compiled.choose"),
+    ("viapath.planning.viapath.packing", None, "choose", "  packing.choose"),
     ("viapath.planning.viapath.choice", None, "_first_admitted", "  the ranks after the first that follows"),
     ("viapath.planning.viapath.planner", "ViaPathPlanner", "_inside_shield", "the shield's check of candidates"),
     ("viapath.planning.viapath.planner", None, "keep_previous_way", "the kept way"),
