@@ -13,14 +13,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "viapath"
 NUMBA = re.compile(r"\bnumba\b", re.IGNORECASE)
 DECORATOR = "jit.py"
 
-NOT_YET: dict[str, str] = {
-    "compiled/__init__.py": "the policy choosing numpy or compiled arithmetic",
-    "compiled/choice.py": "the option compute",
-    "compiled/planning.py": "the planner's compiled steps, not yet beside their features",
-    "compiled/slots.py": "slot numbers of the compiled planner's settings",
-    "compiled/sums.py": "numpy's pairwise sum, compiled",
-    "compiled/table.py": "the table of twins",
-}
+NOT_YET: dict[str, str] = {}
 
 
 def _naming_numba() -> set[str]:

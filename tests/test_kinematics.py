@@ -40,8 +40,8 @@ def test_rollout_equals_stepping_the_robot(heading, speed, turn, commands):
     planned_speed=finite(0, 0.7),
 )
 def test_tracking_rollout_equals_the_closed_loop(heading, speed, turn, tx, ty, planned_speed):
-    from viapath.compiled.arithmetic import track
     from viapath.kinematics import steer_towards
+    from viapath.planning.viapath.packing import track
 
     limits = MotionLimits()
     start = UnicycleState(0.0, 0.0, heading, speed, turn)
@@ -57,8 +57,8 @@ def test_track_is_bit_for_bit_the_closed_loop():
     """``track`` inlines steer_towards and the arcs for speed: every position must be exactly what the
     controller and :func:`step` give (2 000 seeded cases: headings all round, targets near and far,
     the target at the robot, planned speeds 0 and above the limit, other limits, steps of other sizes)."""
-    from viapath.compiled.arithmetic import track
     from viapath.kinematics import steer_towards
+    from viapath.planning.viapath.packing import track
 
     rng = np.random.default_rng(16)
     for case in range(2000):

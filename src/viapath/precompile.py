@@ -1,6 +1,10 @@
-"""Compile viapath's compiled steps now (or load them from the on-disk cache, :mod:`viapath.jit`), for a long run
-that should take them from its first cycle: ``viapath bench`` before its workers start, the ROS 2 node before it
-makes its planner and shield (docs/explanation/speed.md).
+"""Compile viapath's compiled steps now (or load them from the on-disk cache), for a long run that should take
+them from its first cycle: ``viapath bench`` before its workers start, the ROS 2 node before it makes its planner
+and shield. The steps live with their features (the planner's in :mod:`viapath.planning.viapath`, the shield's in
+:mod:`viapath.safety`), each decorated with :func:`viapath.jit.compiled`; with compilation off they run as plain
+Python and this costs only the two warm-up runs (docs/explanation/speed.md).
+
+It builds a planner and a shield and runs them, so it lives outside both.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ against a plain numpy statement of it kept here as its specification, bit for bi
   statement of the breakpoint rule (:func:`_segments_spec`);
 * the detector's shape tests (:func:`~viapath.perception.detection.segment_shapes`: sagitta and convexity
   t-statistic of each segment) against their numpy statement (``_padded``, ``_chord_coordinates``,
-  ``_convexity_t`` here; the pairwise summation, :mod:`viapath.compiled.sums`, is tested with the planner),
+  ``_convexity_t`` here; the pairwise summation, :mod:`viapath.sums`, is tested with the planner),
   and the t-statistic against a least-squares fit of each segment (np.linalg.lstsq);
 * ``_merge_duplicates`` (its early return when nothing is close, the information it keeps when merging);
 * ``gated_assignment`` against the cheapest pairing, every pairing tried;

@@ -164,7 +164,7 @@ def test_blind_region_of_the_paper_set_up_and_of_narrow_scanners():
 
 
 @pytest.mark.skipif(
-    not __import__("viapath.compiled", fromlist=["x"]).numba_available(),
+    __import__("importlib.util").util.find_spec("numba") is None,
     reason="numba not installed (pip install 'viapath[fast]')",
 )
 def test_free_fit_recovers_exact_circles():

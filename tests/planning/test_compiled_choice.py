@@ -18,8 +18,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from viapath import DesignatedPath, Observation, Obstacles, RobotState
-from viapath.compiled import arithmetic as compiled
 from viapath.planning import make_planner
+from viapath.planning.viapath import packing as compiled
 from viapath.planning.viapath.choice import uses_compiled_choice
 from viapath.safety.shielded import ShieldedPlanner
 
@@ -79,8 +79,8 @@ def _observations(case):
 def test_kernels_match_reference_on_edge_cases():
     """The contact kernel against numpy where the cone is capped mid-leg, legs start inside a disc, the
     relative speed is zero and the cone outgrows the relative speed (a < 0)."""
-    from viapath.compiled import planning as kernels
     from viapath.geometry import legs_first_contact
+    from viapath.planning.viapath import legs as leg_steps
 
     rng = np.random.default_rng(3)
     k, n = 400, 7
@@ -108,7 +108,7 @@ def test_kernels_match_reference_on_edge_cases():
         expected = legs_first_contact(
             starts, times, velocities, durations, positions, obstacle_velocities, radii, g, u, legs
         )
-        got = kernels.legs_first_contact(
+        got = leg_steps.legs_first_contact(
             starts,
             times,
             velocities,
@@ -222,10 +222,10 @@ def test_compiled_choice_is_the_recipes_choice(case, options):
 
 
 def test_compiled_choice_scalars_match_reference():
-    """The scalar pieces of kernels.choose against the reference's operations they stand in for: atan2
+    """The scalar pieces of selection.choose against the reference's operations they stand in for: atan2
     (geometry.angles_of, libm's), wrap_angle (np.mod's sign convention), np.degrees, np.round to mm/s."""
-    from viapath.compiled import planning as kernels
     from viapath.geometry import angles_of, wrap_angle
+    from viapath.planning.viapath import rollout
 
     signed_zeros_and_axes = [[0.0, 0.0], [-0.0, 0.0], [0.0, -0.0], [-1.0, 0.0], [-1.0, -0.0], [0.0, 1.0], [1e-300, 1]]
     vectors = np.concatenate(
@@ -252,7 +252,7 @@ def test_compiled_choice_scalars_match_reference():
             ],
         ]
     )
-    wrap = compiled_lambda(lambda values: np.array([kernels._wrap(v) for v in values]))
+    wrap = compiled_lambda(lambda values: np.array([rollout.wrap(v) for v in values]))
     np.testing.assert_array_equal(wrap(angles), wrap_angle(angles))
     degrees = compiled_lambda(lambda values: np.array([v * (180.0 / np.pi) for v in values]))
     np.testing.assert_array_equal(degrees(np.abs(angles)), np.degrees(np.abs(angles)))
@@ -296,7 +296,7 @@ def test_the_warm_up_reaches_the_choice_and_the_escape():
     """precompile's cycles reach the compiled choice and the escape, and each of their kernels then has one
     compiled signature (the planner's argument types do not vary)."""
     from viapath import jit
-    from viapath.compiled import planning as kernels
+    from viapath.planning.viapath import escape_figures, selection
     from viapath.planning.viapath.planner import precompile, warm_up_crowds
 
     planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2)
@@ -309,7 +309,7 @@ def test_the_warm_up_reaches_the_choice_and_the_escape():
     assert statuses[0] in ("avoid", "slow", "wait") and statuses[1] == "escape"
     assert precompile()
     if jit.enabled():
-        for kernel in (kernels.escape_headings, kernels.escape_scores, kernels.choose):
+        for kernel in (escape_figures.escape_headings, escape_figures.escape_scores, selection.choose):
             assert len(kernel.signatures) == 1
 
 
@@ -323,7 +323,7 @@ def compiled_lambda(function):
 def test_pairwise_sum_is_numpys_sum():
     """The compiled sums (the escape's separation, the detector's convexity test) are np.sum's bit for bit along a
     row of 0 to 1100 values, small, large, signed zeros and zeros among them."""
-    from viapath.compiled.sums import pairwise_sum
+    from viapath.sums import pairwise_sum
 
     rng = np.random.default_rng(8)
     for count in [*range(140), 255, 256, 257, 300, 1031, 1100]:

@@ -1,4 +1,4 @@
-"""The compiled choice's shortcuts (viapath/compiled/planning.py: _wrap, _clear, _legs_free) give what the full computation gives.
+"""The compiled choice's shortcuts (viapath/planning/viapath/rollout.py: wrap, _clear; legs.py: legs_free) give what the full computation gives.
 
 Each test holds a shortcut to the earlier form, compiled here as the reference, on seeded random cases
 and on values placed right at the boundaries the shortcuts decide by: angles at ±pi and multiples of 2 pi
@@ -14,7 +14,7 @@ import pytest
 
 numba = pytest.importorskip("numba")
 
-from viapath.compiled import planning as kernels  # noqa: E402 -- after the importorskip of numba
+from viapath.planning.viapath import legs, rollout  # noqa: E402 -- after the importorskip of numba
 
 
 @numba.njit(cache=False)
@@ -72,7 +72,7 @@ def test_wrap_skips_the_modulo_only_where_it_changes_nothing():
         [special, rng.uniform(-20.0, 20.0, 5000), rng.uniform(-4.0, 4.0, 5000), rng.normal(0.0, 1e3, 500)]
     )
     for angle in angles.tolist():
-        got, expected = kernels._wrap(angle), _wrap_reference(angle)
+        got, expected = rollout.wrap(angle), _wrap_reference(angle)
         assert _bits(got) == _bits(expected) or (math.isnan(got) and math.isnan(expected)), angle
 
 
@@ -127,7 +127,7 @@ def test_clear_by_squared_distance_matches_hypot():
     answers = []
     for arguments in _clear_cases(rng, 600):
         expected = _clear_by_definition(*arguments)
-        assert kernels._clear(*arguments) == expected
+        assert rollout._clear(*arguments) == expected
         answers.append(expected)
     assert any(answers) and not all(answers)  # both answers came up
 
@@ -148,11 +148,11 @@ def test_legs_free_stops_at_the_first_contact_and_agrees():
         if case % 23 == 0 and n:
             radii[0] = math.nan
         horizon = float(rng.uniform(0.5, 5.0))
-        checked = np.array([kernels._clip(horizon - start_times[i], 0.0, durations[i]) for i in range(k)])
-        contact = kernels.legs_first_contact(
+        checked = np.array([legs.clip(horizon - start_times[i], 0.0, durations[i]) for i in range(k)])
+        contact = legs.legs_first_contact(
             starts, start_times, velocities, checked, positions, obstacle_velocities, radii, growth, until, np.zeros(k)
         )
         expected = ~(~np.isinf(contact)).any(axis=1)
         obstacles = (positions, obstacle_velocities, radii, growth, until)
-        got = kernels._legs_free(starts, start_times, velocities, durations, horizon, obstacles)
+        got = legs.legs_free(starts, start_times, velocities, durations, horizon, obstacles)
         assert np.array_equal(got, expected)

@@ -17,12 +17,12 @@ import numpy as np
 
 from tests._core_helpers import rollout
 from viapath import DesignatedPath, Observation, Obstacles, RobotState
-from viapath.compiled import arithmetic as compiled
 from viapath.geometry import wrap_angle
 from viapath.kinematics import UnicycleState
 from viapath.observation import Command
 from viapath.planning import make_planner
 from viapath.planning.base import Plan
+from viapath.planning.viapath import packing as compiled
 from viapath.planning.viapath.checks import LegChecks
 from viapath.planning.viapath.escape import escape_fan
 from viapath.planning.viapath.follow import can_follow
@@ -71,7 +71,7 @@ def _same_bits(a, b) -> bool:
 
 
 def _escape_scores_command_by_command(checks, limits, config, previous):
-    """What the escape's scores are (:func:`viapath.compiled.arithmetic.escape`), one command at a time from its definition (the escape's module
+    """What the escape's scores are (:func:`viapath.planning.viapath.packing.escape`), one command at a time from its definition (the escape's module
     docstring): each command's roll-out, its corridor excess point by point, each person's gap along it, the
     first step any person not overlapped now is touched, the overlapped ones' deepest and last gaps, and the
     weighted sum of the terms. (commands, ends, scores) to compare within round-off."""
@@ -277,7 +277,7 @@ def test_via_options_and_leg_contacts_are_what_they_mean():
     people, cones growing or not, capped or not, with and without a braking envelope: every via option
     meets its obstacle's disc tangentially at the option's time, and each leg's first contact (of the legs to
     those via points and of random legs) is where dense sampling finds it."""
-    from viapath.compiled.arithmetic import legs_first_contact, via_options
+    from viapath.planning.viapath.packing import legs_first_contact, via_options
 
     rng = np.random.default_rng(21)
     options = contacts = 0

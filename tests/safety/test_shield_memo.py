@@ -7,7 +7,7 @@ import contextlib
 
 from hypothesis import HealthCheck, given, settings
 
-from tests.planning.test_backends import PATHS, _observations, cases
+from tests.planning.test_compiled_choice import PATHS, _observations, cases
 from viapath.planning import make_planner
 from viapath.safety.shield import Shield
 from viapath.safety.shielded import ShieldedPlanner

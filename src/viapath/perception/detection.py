@@ -40,12 +40,12 @@ from typing import Any
 
 import numpy as np
 
-from viapath.compiled.sums import pairwise_sum
 from viapath.jit import compiled
 from viapath.perception.circle_fit import fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
 from viapath.perception.scanner import ScannerModel
 from viapath.perception.segmentation import BeamTables, SegmentationParams, segment_beams
+from viapath.sums import pairwise_sum
 
 #: Options the laser chain had to choose between its numpy and its compiled code (``ray_compute`` of the laser
 #: perception, ``fit_compute`` of the detector and the ROS 2 node, and their earlier names): there is one

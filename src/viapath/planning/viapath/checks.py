@@ -28,13 +28,13 @@ from typing import Any
 
 import numpy as np
 
-from viapath.compiled import arithmetic as compiled
 from viapath.geometry import cross2
 from viapath.kinematics import UnicycleState
 from viapath.observation import MotionLimits, Obstacles
 from viapath.options import Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.planning.base import Inflation, Situation
+from viapath.planning.viapath import packing
 
 # Closer to the path line than this the robot is on the path: the way back is the leg to the subgoal.
 ON_PATH_M = 0.01
@@ -75,7 +75,7 @@ class _CompiledInputs:
         return cached
 
     def packed_choice_inputs(self) -> tuple[Any, ...]:
-        """What the compiled choice takes of this cycle (:func:`viapath.compiled.planning.choose`'s order): the robot
+        """What the compiled choice takes of this cycle (:func:`viapath.planning.viapath.selection.choose`'s order): the robot
         (:meth:`packed_robot`), the obstacles (:meth:`packed_obstacles`), the via radii, the ids, the
         continuation, the envelope, and the path's segment arrays and waypoints. Built in one go, every cycle:
         the path's arrays, continuations and envelopes are kept on the path (a path is not changed after it is
@@ -302,11 +302,11 @@ class LegChecks(_CompiledInputs):
             people, static = self._moving_and_static_rows()
             for (rows, *packed), leg_radii, until in ((people, envelope, checked), (static, None, durations)):
                 if len(rows):
-                    contact[:, rows] = compiled.legs_first_contact_packed(
+                    contact[:, rows] = packing.legs_first_contact_packed(
                         starts, start_times, velocities, until, packed, leg_radii
                     )
             return contact
-        return compiled.legs_first_contact(
+        return packing.legs_first_contact(
             starts,
             start_times,
             velocities,
@@ -379,7 +379,7 @@ class LegChecks(_CompiledInputs):
         static geometry in one compiled call; with it, static rows are checked past the horizon without the
         braking envelope (:meth:`contact_times`)."""
         if self.obstacles.static_mask is None:
-            return compiled.goal_legs(
+            return packing.goal_legs(
                 self, starts, start_times, speeds, self.horizon_s if horizon_s is None else horizon_s
             )
         offset = self.subgoal - starts
@@ -410,15 +410,15 @@ class LegChecks(_CompiledInputs):
     # -- the compiled steps the recipe calls -------------------------------------------------------
 
     def via_options(self, *arguments: Any) -> tuple[np.ndarray, ...]:
-        """:func:`viapath.compiled.arithmetic.via_options`."""
-        return compiled.via_options(*arguments)  # type: ignore[no-untyped-call]
+        """:func:`viapath.planning.viapath.packing.via_options`."""
+        return packing.via_options(*arguments)  # type: ignore[no-untyped-call]
 
     def clear(self, positions: np.ndarray, dt: float) -> bool:
         """Whether robot positions, one per ``dt`` from now, keep clear of every obstacle (closer than its check
-        radius only where the robot already is and no closer; :func:`viapath.compiled.arithmetic.clear`)."""
+        radius only where the robot already is and no closer; :func:`viapath.planning.viapath.packing.clear`)."""
         if len(self.obstacles) == 0 or len(positions) == 0:
             return True
-        return compiled.clear(positions, dt, self.position, self.packed_obstacles())
+        return packing.clear(positions, dt, self.position, self.packed_obstacles())
 
     def clear_track(
         self,
@@ -432,7 +432,7 @@ class LegChecks(_CompiledInputs):
     ) -> np.ndarray | None:
         """The positions (steps, 2) of steering for ``target`` at ``speed_mps`` (:func:`viapath.kinematics.track`) if
         they keep clear of every obstacle (:meth:`clear`), else None."""
-        positions = compiled.track(state, target, speed_mps, limits, dt, steps, heading_gain)
+        positions = packing.track(state, target, speed_mps, limits, dt, steps, heading_gain)
         return positions if self.clear(positions, dt) else None
 
     # -- against the corridor (paper step 4) ---------------------------------------------------------
@@ -442,10 +442,10 @@ class LegChecks(_CompiledInputs):
         return self.path.corridor_excess(points) <= self.corridor_tolerance_m
 
     def legs_inside(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-        return compiled.legs_inside(self.path, starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m)
+        return packing.legs_inside(self.path, starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m)
 
     def goal_legs_inside(self, starts: np.ndarray) -> np.ndarray:
-        return compiled.goal_legs_inside(
+        return packing.goal_legs_inside(
             self.path,
             starts,
             self.subgoal,

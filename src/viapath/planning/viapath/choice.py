@@ -1,5 +1,5 @@
 """The planner's choice (paper steps 1-4: step 1, the candidates, Eq. 1, the cheapest the robot can follow) in
-one compiled call, :func:`viapath.compiled.arithmetic.choose`, up to the shield's check of the candidate it
+one compiled call, :func:`viapath.planning.viapath.packing.choose`, up to the shield's check of the candidate it
 found; a candidate the shield refuses sends the search on to the next ones here. Taken by every cycle without
 static geometry whose critics are the paper's and which records no candidate polylines (:func:`uses_compiled_choice`).
 """
@@ -12,14 +12,14 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from viapath.compiled import arithmetic as compiled
-from viapath.compiled import slots as slot
-from viapath.compiled.arithmetic import CompiledChoice, NodeStore
 from viapath.planning.base import Plan
+from viapath.planning.viapath import packing
+from viapath.planning.viapath import slots as slot
 from viapath.planning.viapath.candidates import Choice, Way
 from viapath.planning.viapath.checks import LegChecks
 from viapath.planning.viapath.critics import PAPER_CRITICS
 from viapath.planning.viapath.follow import can_follow
+from viapath.planning.viapath.packing import CompiledChoice, NodeStore
 from viapath.planning.viapath.plans import (
     Chosen,
     CompiledCandidates,
@@ -46,7 +46,7 @@ def uses_compiled_choice(planner: Planning) -> bool:
 
 def _choice_constants(planner: Planning) -> tuple[Any, ...]:
     """The compiled choice's settings that do not change within an episode (rebuilt when the options, limits or
-    critics object is replaced); their slots: :mod:`viapath.compiled.slots`."""
+    critics object is replaced); their slots: :mod:`viapath.planning.viapath.slots`."""
     config, limits, critics, nominal_speed = planner.config, planner.limits, planner.critics, planner.nominal_speed_mps
     cached = planner.__dict__.get("_choice_cache")
     if (
@@ -104,11 +104,11 @@ def choose_compiled(
     only_way: Way | None,
 ) -> Chosen | None:
     """The planner's choice with one compiled call doing everything up to the shield check
-    (:func:`viapath.compiled.planning.choose`): it rolls out candidates cheapest first until one follows; a
+    (:func:`viapath.planning.viapath.selection.choose`): it rolls out candidates cheapest first until one follows; a
     candidate the shield refuses sends the search on to the next ones here (:func:`_first_admitted`)."""
     settings, integers, slow_times = _cycle_settings(planner, checks, nominal_index, previous, only_way)
     slow_checks = planner._slow_checks(checks)
-    chosen = compiled.choose(checks, slow_checks, speeds, slow_times, settings, integers)
+    chosen = packing.choose(checks, slow_checks, speeds, slow_times, settings, integers)
     if chosen.status == slot.STEP_ONE:
         plan = straight_plan(checks, float(speeds[nominal_index]))
         if chosen.turn_in_place:
@@ -116,7 +116,7 @@ def choose_compiled(
         if planner._inside_shield(plan):
             return straight_chosen(plan)
         integers[slot.C_TRY_STRAIGHT] = 0  # the shield refused it: the candidates decide
-        chosen = compiled.choose(checks, slow_checks, speeds, slow_times, settings, integers)
+        chosen = packing.choose(checks, slow_checks, speeds, slow_times, settings, integers)
     if chosen.status != slot.CANDIDATES or chosen.first < 0:  # first: the ranks before it do not follow
         return None
     return _first_admitted(planner, chosen, checks)
@@ -183,7 +183,7 @@ def _first_admitted(planner: Planning, chosen: CompiledChoice, checks: LegChecks
 
 
 def _cost_breakdown(planner: Planning, terms: np.ndarray) -> Callable[[int], dict[str, float]]:
-    """:meth:`.critics.Costs.breakdown` for :func:`viapath.compiled.planning.choose`'s costs (rows: the critics' terms,
+    """:meth:`.critics.Costs.breakdown` for :func:`viapath.planning.viapath.selection.choose`'s costs (rows: the critics' terms,
     E): one column as Python floats, the same values as the numpy path's."""
     critics = planner.critics
     cached = planner.__dict__.get("_cost_names")

@@ -23,7 +23,7 @@ Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 
   further out than it already is): standing is always among the commands, and at rest the robot is
   passively safe (DESIGN §7); fleeing 10 m off the path is not.
 
-The standing check and the fan's scores are compiled (:func:`viapath.compiled.arithmetic.escape`, two calls); the
+The standing check and the fan's scores are compiled (:func:`viapath.planning.viapath.packing.escape`, two calls); the
 choice among them is made here.
 """
 
@@ -34,9 +34,9 @@ from typing import Any
 
 import numpy as np
 
-from viapath.compiled import arithmetic as compiled
 from viapath.observation import Command, Decision, MotionLimits, Plan
 from viapath.options import Settings
+from viapath.planning.viapath import packing
 from viapath.planning.viapath.checks import LegChecks
 
 
@@ -47,7 +47,7 @@ def stop_or_escape(
     ``previous``: last cycle's command if last cycle escaped too (for a calm escape)."""
     position = checks.position
     base: dict[str, Any] = dict(subgoal_index=checks.subgoal_index)
-    standing_free, commands, ends, score = compiled.escape(checks, limits, config, escape_fan(limits, config), previous)
+    standing_free, commands, ends, score = packing.escape(checks, limits, config, escape_fan(limits, config), previous)
     if standing_free:
         return Decision(Command.stop(), Plan("stop", 0.0, position.copy(), **base))
     best = int(score.argmax())

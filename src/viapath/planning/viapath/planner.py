@@ -73,12 +73,12 @@ from typing import Any, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from viapath.compiled import arithmetic as compiled
 from viapath.geometry import wrap_angle
 from viapath.observation import Command, Observation, Obstacles, RobotState
 from viapath.options import Settings
 from viapath.path import DesignatedPath
 from viapath.planning.base import Decision, Plan, Planner, Situation
+from viapath.planning.viapath import packing
 from viapath.planning.viapath.blocked import blocked, near_corridor
 from viapath.planning.viapath.candidates import Candidates, Choice, RootLegs, Way, _candidates_of, grow
 from viapath.planning.viapath.checks import LegChecks
@@ -354,7 +354,7 @@ def grow_step(
     """The candidate tree of the cycle: in one compiled call without static geometry, else
     :func:`.candidates.grow` (the recipe's steps, with the static shapes' extremes and slides)."""
     if checks.obstacles.static_mask is None:
-        return _candidates_of(compiled.grow(checks, slow_checks or checks, roots, config), checks.subgoal)
+        return _candidates_of(packing.grow(checks, slow_checks or checks, roots, config), checks.subgoal)
     return grow(checks, roots, config, slow_checks)
 
 

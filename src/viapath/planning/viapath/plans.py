@@ -12,7 +12,6 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from viapath.compiled.arithmetic import NodeStore
 from viapath.observation import Command, MotionLimits
 from viapath.options import Settings
 from viapath.path import DesignatedPath
@@ -20,6 +19,7 @@ from viapath.planning.base import Plan, Situation
 from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, Way, _candidates_of
 from viapath.planning.viapath.checks import LegChecks
 from viapath.planning.viapath.critics import Critic
+from viapath.planning.viapath.packing import NodeStore
 
 
 class CompiledCandidates:

@@ -1,13 +1,8 @@
-"""The record layouts of the planner's kernels, named once: the slots of the choice kernel's two settings arrays
-(:func:`viapath.compiled.planning.choose` and its halves), the columns of the candidate tree's node store and
-the entries of what the choice hands back. The kernels read these names, and the code outside this package
-reads the records through :mod:`.backend` (:class:`.backend.NodeStore`, :class:`.backend.CompiledChoice`),
-never by number. This module imports no numba, so the planner can import it.
-
-numba compiles these numbers into the kernels as constants, and its cache keys on the kernel's own source file
-only. So :mod:`.planning` holds the digest of this file and of :mod:`.sums` (``DEPENDENCY_DIGEST``) and checks
-it when imported: after a change here, the import says which digest to write there, and writing it changes
-:mod:`.planning`'s source, which makes numba compile again (``tests/planning/test_compiled_table.py``).
+"""The record layouts of the planner's compiled steps, named once: the slots of the choice's two settings arrays
+(:func:`.selection.choose` and its halves), the columns of the candidate tree's node store (:mod:`.tree`) and
+the entries of what the choice hands back. The compiled steps read these names, and the rest of the planner
+reads the records through :mod:`.packing` (:class:`.packing.NodeStore`, :class:`.packing.CompiledChoice`),
+never by number.
 """
 
 # integers: the episode's (filled once per planner: _kernel_constants) ...

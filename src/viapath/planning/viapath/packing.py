@@ -1,4 +1,5 @@
-"""The planner's calls of its compiled steps (:mod:`viapath.compiled.planning`): each packs the cycle's arrays as
+"""The planner's calls of its compiled steps (:mod:`.legs`, :mod:`.via`, :mod:`.tree`, :mod:`.selection`,
+:mod:`.rollout`, :mod:`.escape_figures`): each packs the cycle's arrays as
 the compiled functions take them (C-contiguous float64, one value per obstacle) and reads what they hand back by
 name (:class:`NodeStore`, :class:`CompiledChoice`).
 
@@ -14,17 +15,27 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from viapath.compiled import planning as _planning
-from viapath.compiled import slots as slot
 from viapath.kinematics import UnicycleState
 from viapath.observation import MotionLimits
+from viapath.planning.viapath import escape_figures as escape_steps
+from viapath.planning.viapath import legs as leg_steps
+from viapath.planning.viapath import rollout as rollout_steps
+from viapath.planning.viapath import selection as selection_steps
+from viapath.planning.viapath import slots as slot
+from viapath.planning.viapath import tree as tree_steps
+from viapath.planning.viapath import via as via_steps
 
-# The compiled functions take plain arrays and scalars unannotated (typed when they are compiled).
-kernels: Any = _planning
+# The compiled steps take plain arrays and scalars unannotated (typed when they are compiled).
+_escape_figures: Any = escape_steps
+_legs: Any = leg_steps
+_rollout: Any = rollout_steps
+_selection: Any = selection_steps
+_tree: Any = tree_steps
+_via: Any = via_steps
 
 
 class NodeStore(NamedTuple):
-    """The candidate tree's node store of :func:`viapath.compiled.planning.grow` / ``choose``, read by name
+    """The candidate tree's node store of :func:`.tree.grow` / ``choose``, read by name
     (columns: :mod:`.slots`)."""
 
     floats: np.ndarray  # (M, slots.NODE_FLOATS)
@@ -76,7 +87,7 @@ class NodeStore(NamedTuple):
 
 
 class CompiledChoice(NamedTuple):
-    """What :func:`viapath.compiled.planning.choose` found, by name."""
+    """What :func:`.selection.choose` found, by name."""
 
     status: int  # slots.NO_CANDIDATE, STEP_ONE or CANDIDATES
     turn_in_place: bool  # step 1 turns on the spot first
@@ -92,13 +103,11 @@ class CompiledChoice(NamedTuple):
 def legs_first_contact_packed(
     starts, start_times, velocities, durations, packed_obstacles, leg_radii_m=None
 ) -> np.ndarray:
-    """(K, N) first contact of each leg with each obstacle, inf = free (:func:`viapath.compiled.planning.legs_first_contact`);
+    """(K, N) first contact of each leg with each obstacle, inf = free (:func:`.legs.legs_first_contact`);
     ``packed_obstacles``: positions, velocities, radii, growth, growth_until_s, C-contiguous float64, one row or
     value per obstacle, as a cycle's checks keep them."""
     legs = np.zeros(len(starts)) if leg_radii_m is None else _c(leg_radii_m)
-    return kernels.legs_first_contact(
-        _c(starts), _c(start_times), _c(velocities), _c(durations), *packed_obstacles, legs
-    )
+    return _legs.legs_first_contact(_c(starts), _c(start_times), _c(velocities), _c(durations), *packed_obstacles, legs)
 
 
 def legs_first_contact(
@@ -128,9 +137,9 @@ def legs_first_contact(
 def via_options(
     starts, start_times, speeds, positions, velocities, via_radii, growth, growth_until_s, envelope_m, max_time_s
 ):
-    """The via points of (node, obstacle) pairs, both sides and both roots (:func:`viapath.compiled.planning.via_options`)."""
+    """The via points of (node, obstacle) pairs, both sides and both roots (:func:`.via.via_options`)."""
     n = len(starts)
-    return kernels.via_options(
+    return _via.via_options(
         _c(starts),
         _c(start_times),
         _c(speeds),
@@ -145,7 +154,7 @@ def via_options(
 
 
 def legs_inside(path, starts, ends, spacing_m: float, tolerance_m: float) -> np.ndarray:
-    return kernels.legs_inside(
+    return _legs.legs_inside(
         *_corridor(path),
         _c(np.reshape(starts, (-1, 2))),
         _c(np.reshape(ends, (-1, 2))),
@@ -156,10 +165,10 @@ def legs_inside(path, starts, ends, spacing_m: float, tolerance_m: float) -> np.
 
 def goal_legs_inside(path, starts, subgoal, subgoal_index: int, spacing_m: float, tolerance_m: float) -> np.ndarray:
     """Which legs from ``starts`` to the subgoal stay in the corridor."""
-    inside = kernels.goal_legs_inside(*_corridor(path), _c(starts), int(subgoal_index), float(tolerance_m))
+    inside = _legs.goal_legs_inside(*_corridor(path), _c(starts), int(subgoal_index), float(tolerance_m))
     if not inside.all():
         rest = np.flatnonzero(~inside)
-        inside[rest] = kernels.legs_inside(
+        inside[rest] = _legs.legs_inside(
             *_corridor(path),
             _c(starts[rest]),
             _c(np.broadcast_to(subgoal, (len(rest), 2))),
@@ -172,7 +181,7 @@ def goal_legs_inside(path, starts, subgoal, subgoal_index: int, spacing_m: float
 def goal_legs(checks, starts, start_times, speeds, horizon_s: float):
     """:meth:`.checks.LegChecks.goal_legs` of a cycle without static geometry in one compiled call."""
     obstacles = checks.packed_obstacles()
-    return kernels.goal_legs(
+    return _legs.goal_legs(
         _c(starts),
         _c(start_times),
         _c(speeds),
@@ -226,7 +235,7 @@ def grow(checks, slow_checks, roots, config) -> NodeStore:
         int(config.max_depth),
         int(config.max_root_obstacles),
     )
-    store = kernels.grow(
+    store = _tree.grow(
         _c(checks.position),
         _c(roots.speeds),
         int(roots.nominal_index),
@@ -245,7 +254,7 @@ def grow(checks, slow_checks, roots, config) -> NodeStore:
 def choose(checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.ndarray, integers: np.ndarray):
     """The planner's choice up to its shield check in one compiled call (roots, step 1, the candidate tree,
     Eq. 1's critics, the order and the roll-outs up to the first candidate that follows):
-    :func:`viapath.compiled.planning.choose`, as a :class:`CompiledChoice`. ``slow_times`` (float64),
+    :func:`.selection.choose`, as a :class:`CompiledChoice`. ``slow_times`` (float64),
     ``settings`` and ``integers`` are the kernel's (slots: :mod:`.slots`), filled in by the planner."""
     (
         robot,
@@ -267,7 +276,7 @@ def choose(checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.nda
     _, _, slow_radii, slow_growth, slow_until = (
         (positions, velocities, radii, growth, until) if slow_checks is checks else slow_checks.packed_obstacles()
     )
-    found, floats, integers, costs = kernels.choose(
+    found, floats, integers, costs = _selection.choose(
         robot,
         _c(speeds),
         _c(checks.subgoal),
@@ -296,8 +305,8 @@ def choose(checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.nda
 
 
 def escape(checks, limits: MotionLimits, config, fan, previous=None, score_standing: bool = False):
-    """The escape's figures in two compiled calls: :func:`viapath.compiled.planning.escape_headings` (the standing
-    check, the fan's headings), numpy's sines and cosines of those headings, :func:`viapath.compiled.planning.escape_scores`.
+    """The escape's figures in two compiled calls: :func:`.escape_figures.escape_headings` (the standing
+    check, the fan's headings), numpy's sines and cosines of those headings, :func:`.escape_figures.escape_scores`.
     Returns (standing is free, commands (K, 2), ends (K, 2), scores (K,)), the last three None when standing is
     free (unless ``score_standing``). ``fan``: :func:`.escape.escape_fan`'s (top speed, commands, distinct turn
     commands, each command's turn)."""
@@ -326,10 +335,10 @@ def escape(checks, limits: MotionLimits, config, fan, previous=None, score_stand
     )
     robot = checks.packed_robot()
     obstacles = checks.packed_obstacles()
-    standing_free, headings = kernels.escape_headings(robot, *obstacles, row_turns, settings, steps)
+    standing_free, headings = _escape_figures.escape_headings(robot, *obstacles, row_turns, settings, steps)
     if standing_free and not score_standing:
         return True, None, None, None
-    ends, score = kernels.escape_scores(
+    ends, score = _escape_figures.escape_scores(
         robot,
         commands,
         turn_rows,
@@ -346,10 +355,10 @@ def escape(checks, limits: MotionLimits, config, fan, previous=None, score_stand
 
 
 def clear(positions, dt_s: float, robot_position, packed_obstacles) -> bool:
-    """Whether a roll-out from now keeps clear of every obstacle (:func:`viapath.compiled.planning.clear_positions`).
+    """Whether a roll-out from now keeps clear of every obstacle (:func:`.rollout.clear_positions`).
     ``packed_obstacles``: :meth:`LegChecks.packed_obstacles`."""
     return bool(
-        kernels.clear_positions(
+        _rollout.clear_positions(
             _c(positions), float(dt_s), float(robot_position[0]), float(robot_position[1]), *packed_obstacles
         )
     )
@@ -365,8 +374,8 @@ def track(
     heading_gain: float = 2.5,
 ) -> np.ndarray:
     """(steps, 2) positions of the robot steering for ``target`` with :func:`viapath.kinematics.steer_towards`, each
-    step as :func:`viapath.kinematics.step` moves it (:func:`viapath.compiled.planning.track`)."""
-    return kernels.track(
+    step as :func:`viapath.kinematics.step` moves it (:func:`.rollout.track`)."""
+    return _rollout.track(
         float(state.x),
         float(state.y),
         float(state.heading_rad),

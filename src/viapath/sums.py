@@ -1,4 +1,4 @@
-"""numpy's pairwise summation, for compiled (numba) kernels that must give numpy's sums bit for bit.
+"""numpy's pairwise summation, for compiled steps that must give numpy's sums bit for bit.
 
 Source: numpy's ``pairwise_sum`` (``numpy/_core/src/umath/loops_utils.h.src``), which ``np.sum`` /
 ``np.add.reduce`` use along a contiguous axis: under 8 values one after the other, up to 128 in eight
@@ -7,23 +7,21 @@ another way differs from numpy in the last bit now and then, and the decisions t
 (the escape's separation, the laser detector's convexity test) must not.
 
 Choices:
-* The halving walks an explicit stack instead of recursing: numba's on-disk cache loads a self-recursive
+* The halving walks an explicit stack instead of recursing: the compiler's on-disk cache loads a self-recursive
   function that then crashes (segfault) in the next process.
-* Imported only by the kernel modules (:mod:`viapath.compiled.planning`,
-  :mod:`viapath.compiled.perception`), so only where numba is installed. numba's cache of a kernel
-  does not notice a change to this file: after editing it, delete the callers' cache files
-  (``__pycache__/*.nbi``, ``*.nbc``) or point ``NUMBA_CACHE_DIR`` somewhere new. The tests
-  (``tests/planning/test_backends.py``, ``tests/perception/test_laser_shortcuts.py``) hold the sums to
-  ``np.sum``, for 0 to 1 100 values.
+* Used by the planner's escape (:mod:`viapath.planning.viapath.escape_figures`) and the laser detector's convexity
+  test (:mod:`viapath.perception.detection`). The tests (``tests/planning/test_compiled_choice.py``) hold the sums
+  to ``np.sum``, for 0 to 1 100 values.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from viapath.jit import compiled
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def _pairwise_block(values, start, count):
     """numpy's pairwise summation of at most 128 values: under 8 in order from -0.0, else eight running sums
     combined in pairs, then the rest in order."""
@@ -54,12 +52,12 @@ def _pairwise_block(values, start, count):
     return total
 
 
-@njit(cache=True, nogil=True)
+@compiled
 def pairwise_sum(values, start, count):
     """np.add.reduce of ``values[start:start + count]`` before its initial 0.0: numpy's pairwise summation
     along a contiguous axis (:func:`_pairwise_block`; more than 128 values split in halves at a multiple of
     8, each summed so, then added). numpy recurses; here the recursion is a stack of (start, count, stage),
-    as numba's cache loads a self-recursive function that then crashes."""
+    as the compiler's cache loads a self-recursive function that then crashes."""
     if count <= 128:
         return _pairwise_block(values, start, count)
     frame_start = np.empty(64, np.int64)

@@ -1,0 +1,426 @@
+"""The escape's figures (beyond the paper, which assumes some candidate is free: :mod:`.escape`)
+in two compiled calls: the standing check and the fan's headings (:func:`escape_headings`); then, with numpy's
+sines and cosines of those headings, the roll-outs, their corridor excess, the people near, the contacts and the
+score (:func:`escape_scores`). :mod:`.escape` makes the choice among them.
+
+Choices:
+* numpy takes the sines and cosines between the two calls (as kinematics.rollout does, np.sin and np.cos of arrays:
+  numpy may dispatch its own SIMD routines for them, the compiled code calls libm), and the sums are numpy's pairwise
+  summation (:func:`viapath.sums.pairwise_sum`): the figures they were first specified with, kept bit for bit.
+* hypot costs about 20 ns here; where only the sign of ``hypot - limit`` matters, the squared distance decides
+  outside a band of ±1e-9 around the limit (:func:`_within`, :func:`_furthest`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from viapath.jit import compiled
+from viapath.planning.viapath.legs import excess_at_most, legs_first_contact
+from viapath.sums import pairwise_sum
+
+# Entries of the escape's float settings.
+_E_DT, _E_ESCAPE_S, _E_SPEED_STEP, _E_TURN_STEP, _E_MAX_SPEED, _E_MAX_TURN, _E_TOLERANCE, _E_BOUND = range(8)
+_E_TOP, _E_CONTINUITY, _E_PREVIOUS_SPEED, _E_PREVIOUS_TURN, _E_HORIZON, _E_STANDING_S = range(8, 14)
+ESCAPE_SETTINGS = 14
+
+
+@compiled
+def _minimum(a, b):
+    """np.minimum of two scalars: NaN first, and the second of two equal values (-0.0 against 0.0), as numpy."""
+    return a if (a < b or a != a) else b
+
+
+@compiled
+def _maximum(a, b):
+    """np.maximum of two scalars (as :func:`_minimum`)."""
+    return a if (a > b or a != a) else b
+
+
+@compiled
+def _within(dx, dy, limit):
+    """``math.hypot(dx, dy) < limit``, mostly without hypot (about 20 ns each here, most of the escape's
+    time): outside a band of ±1e-9 (relative) around ``limit`` the squared distance (a few 1e-16 from the
+    square of hypot's result) decides; inside it, and for limits whose square could underflow or overflow
+    (or NaN), hypot decides."""
+    if 1e-140 < limit < 1e140:
+        squared = dx * dx + dy * dy
+        below = limit * (1.0 - 1e-9)
+        if squared < below * below:
+            return True
+        above = limit * (1.0 + 1e-9)
+        if squared > above * above:
+            return False
+    return math.hypot(dx, dy) < limit
+
+
+@compiled
+def escape_contacts(
+    positions, times, obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s, overlapping, steps
+):
+    """For K rolled-out commands (K, S, 2) against N people (centre ``p + v t``, radius ``r + g min(t, cap)``):
+    the first step at which each command touches someone it does not overlap now (``steps`` if never),
+    and, for the people it overlaps now (``overlapping``), the smallest gap over the roll-out and the gap
+    at its end, (K, N_overlapping) each: the arrays :func:`viapath.planning.viapath.escape.escape_scores`
+    scores with.
+
+    Only the first contact counts, so a person not overlapped now is looked at up to the roll-out's first
+    contact found so far, and over the steps in which the gap cannot close: between two steps it closes by
+    at most the robot's longest step plus what the person walks and grows in a step (the triangle
+    inequality), so a gap of g leaves g / that steps free. The skip keeps a margin (1e-6 m, and 1e-9
+    relative) far above the rounding of the gaps, so the steps it passes over are those the full scan finds
+    free: the same first contacts."""
+    k_count = positions.shape[0]
+    s_count = positions.shape[1]
+    n_count = obstacle_positions.shape[0]
+    n_overlapping = 0
+    for j in range(n_count):
+        if overlapping[j]:
+            n_overlapping += 1
+    first = np.full(k_count, steps, np.int64)
+    gap_min = np.full((k_count, n_overlapping), np.inf)
+    gap_last = np.empty((k_count, n_overlapping))
+    tick = 0.0  # the longest time between two steps
+    for s in range(1, s_count):
+        tick = _maximum(tick, times[s] - times[s - 1])
+    for k in range(k_count):
+        hop_squared = 0.0  # the robot's longest step in roll-out k (NaN: no skipping)
+        for s in range(1, s_count):
+            dx = positions[k, s, 0] - positions[k, s - 1, 0]
+            dy = positions[k, s, 1] - positions[k, s - 1, 1]
+            hop_squared = _maximum(hop_squared, dx * dx + dy * dy)
+        hop = math.sqrt(hop_squared)
+        column = 0
+        for j in range(n_count):
+            px = obstacle_positions[j, 0]
+            py = obstacle_positions[j, 1]
+            vx = obstacle_velocities[j, 0]
+            vy = obstacle_velocities[j, 1]
+            if overlapping[j]:
+                for s in range(s_count):
+                    t = times[s]
+                    reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
+                    gap = math.hypot(positions[k, s, 0] - (px + vx * t), positions[k, s, 1] - (py + vy * t)) - reach
+                    if gap < gap_min[k, column]:
+                        gap_min[k, column] = gap
+                    if s == s_count - 1:
+                        gap_last[k, column] = gap
+                column += 1
+                continue
+            # (at least 1e-300: a gap that cannot close leaves every step free; NaN stays NaN)
+            closing = _maximum((hop + (math.hypot(vx, vy) + abs(growth[j])) * tick) * (1.0 + 1e-9), 1e-300)
+            s = 0
+            while s < first[k]:  # (first[k] <= steps, the roll-out's length)
+                t = times[s]
+                reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
+                dx = positions[k, s, 0] - (px + vx * t)
+                dy = positions[k, s, 1] - (py + vy * t)
+                if _within(dx, dy, reach):  # hypot - reach < 0: the sign of a difference is exact
+                    first[k] = s
+                    break
+                free_steps = (math.sqrt(dx * dx + dy * dy) - reach - 1e-6) * (1.0 - 1e-9) / closing
+                if free_steps >= s_count:  # (NaN: not skipped)
+                    break
+                s += 1 + (int(free_steps) if free_steps >= 1.0 else 0)
+    return first, gap_min, gap_last
+
+
+@compiled
+def _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths, limit, known):
+    """Whether each roll-out (K, S, 2) keeps every point within ``limit`` of the corridor (excess <= limit);
+    those ``known`` to are not looked at. (A function of its own: the same loop inside :func:`escape_scores`
+    took several times as long.)"""
+    out = np.ones(positions.shape[0], np.bool_)
+    for k in range(positions.shape[0]):
+        if known[k]:
+            continue
+        for s in range(positions.shape[1]):
+            if not excess_at_most(
+                positions[k, s, 0],
+                positions[k, s, 1],
+                segment_starts,
+                segment_directions,
+                segment_lengths,
+                half_widths,
+                limit,
+            ):
+                out[k] = False
+                break
+    return out
+
+
+@compiled
+def _furthest(positions, x0, y0):
+    """np.max of ``np.hypot`` of the positions' (K, S, 2) offsets from (x0, y0), NaN first: hypot (about 20 ns)
+    only of the squared distances within 1e-9 (relative) of the largest, the others' hypots being certainly
+    smaller; of all of them where a square could have underflowed or overflowed, or is NaN."""
+    k_count = positions.shape[0]
+    s_count = positions.shape[1]
+    squares = np.empty((k_count, s_count))
+    largest = -math.inf
+    for k in range(k_count):
+        for s in range(s_count):
+            dx = positions[k, s, 0] - x0
+            dy = positions[k, s, 1] - y0
+            squared = dx * dx + dy * dy
+            squares[k, s] = squared
+            if squared > largest:
+                largest = squared
+    cut = largest * (1.0 - 1e-9) if 1e-280 < largest < 1e280 else -math.inf
+    furthest = -math.inf
+    for k in range(k_count):
+        for s in range(s_count):
+            squared = squares[k, s]
+            if squared >= cut or squared != squared:
+                distance = math.hypot(positions[k, s, 0] - x0, positions[k, s, 1] - y0)
+                if distance != distance:
+                    return distance
+                if distance > furthest:
+                    furthest = distance
+    return furthest
+
+
+@compiled
+def escape_headings(
+    robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, row_turns, settings, steps
+):
+    """The first half of :func:`viapath.planning.viapath.escape.stop_or_escape`: whether standing still is free
+    over the horizon (its ``contact_times`` of the robot's position at rest, with :func:`legs_first_contact`,
+    as the compiled path checked it before), and the headings (T, steps + 1) of the escape's roll-outs
+    (:func:`viapath.kinematics.rollout`), one row per distinct turn command ``row_turns`` (the fan's commands
+    of one turn rate share them), before the first step and after each: numpy takes their sines and cosines
+    for :func:`escape_scores`."""
+    dt = settings[_E_DT]
+    free = True
+    n_count = obstacle_positions.shape[0]
+    if n_count:
+        starts = np.empty((1, 2))
+        starts[0, 0] = robot[0]
+        starts[0, 1] = robot[1]
+        durations = np.empty(1)
+        durations[0] = _minimum(_maximum(settings[_E_HORIZON] - 0.0, 0.0), settings[_E_STANDING_S])
+        contact = legs_first_contact(
+            starts,
+            np.zeros(1),
+            np.zeros((1, 2)),
+            durations,
+            obstacle_positions,
+            obstacle_velocities,
+            radii,
+            growth,
+            growth_until_s,
+            np.zeros(1),
+        )
+        for j in range(n_count):
+            if not math.isinf(contact[0, j]):
+                free = False
+    max_turn = settings[_E_MAX_TURN]
+    turn0 = robot[4]
+    heading0 = robot[2]
+    headings = np.empty((row_turns.shape[0], steps + 1))
+    for r in range(row_turns.shape[0]):
+        w_cmd = _minimum(_maximum(row_turns[r], -max_turn), max_turn)
+        headings[r, 0] = heading0
+        turned = 0.0
+        for s in range(steps):
+            dw = settings[_E_TURN_STEP] * float(s + 1)
+            turn = turn0 + _minimum(_maximum(w_cmd - turn0, -dw), dw)
+            # np.cumsum: the first term as it is, then each added in order
+            turned = turn * dt if s == 0 else turned + turn * dt
+            headings[r, s + 1] = heading0 + turned
+    return free, headings
+
+
+@compiled
+def _escape_roll_outs(robot, commands, turn_rows, sines, cosines, settings, steps):
+    """The positions (K, steps, 2) of :func:`escape_scores`' roll-outs (:func:`viapath.kinematics.rollout`: the
+    ramps of speed and turn rate, the exact arcs, the positions as running sums)."""
+    k_count = commands.shape[0]
+    dt = settings[_E_DT]
+    max_speed = settings[_E_MAX_SPEED]
+    x0 = robot[0]
+    y0 = robot[1]
+    speed0 = robot[3]
+    turn0 = robot[4]
+    max_turn = settings[_E_MAX_TURN]
+    positions = np.empty((k_count, steps, 2))
+    for k in range(k_count):
+        row = turn_rows[k]
+        v_cmd = _minimum(_maximum(commands[k, 0], 0.0), max_speed)
+        w_cmd = _minimum(_maximum(commands[k, 1], -max_turn), max_turn)
+        x_sum = 0.0
+        y_sum = 0.0
+        for s in range(steps):
+            dv = settings[_E_SPEED_STEP] * float(s + 1)
+            dw = settings[_E_TURN_STEP] * float(s + 1)
+            speed = speed0 + _minimum(_maximum(v_cmd - speed0, -dv), dv)
+            turn = turn0 + _minimum(_maximum(w_cmd - turn0, -dw), dw)
+            sin_before = sines[row, s]
+            sin_after = sines[row, s + 1]
+            cos_before = cosines[row, s]
+            cos_after = cosines[row, s + 1]
+            if abs(turn) < 1e-9:
+                dx = speed * dt * cos_before
+                dy = speed * dt * sin_before
+            else:
+                radius = speed / turn
+                dx = radius * (sin_after - sin_before)
+                dy = -radius * (cos_after - cos_before)
+            x_sum = dx if s == 0 else x_sum + dx
+            y_sum = dy if s == 0 else y_sum + dy
+            px = x0 + x_sum
+            py = y0 + y_sum
+            positions[k, s, 0] = px
+            positions[k, s, 1] = py
+    return positions
+
+
+@compiled
+def _escape_contacts_near(
+    positions, robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, dt, steps, travel
+):
+    """:func:`escape_contacts` of the roll-outs with the people who could come within reach of them (the
+    triangle-inequality bound, ``travel`` the furthest the roll-outs get from the robot): the first contact
+    steps (K,), the smallest and last gaps (K, M) to the M people overlapped now, and their gaps now (M,)."""
+    x0 = robot[0]
+    y0 = robot[1]
+    # The people who could come within reach during the roll-out.
+    horizon = steps * dt
+    n_count = obstacle_positions.shape[0]
+    near = np.zeros(n_count, np.bool_)
+    gap_now_all = np.empty(n_count)
+    for j in range(n_count):
+        gap = math.hypot(x0 - obstacle_positions[j, 0], y0 - obstacle_positions[j, 1]) - radii[j]
+        gap_now_all[j] = gap
+        grown = growth[j] * _minimum(horizon, growth_until_s[j])
+        speed_j = math.hypot(obstacle_velocities[j, 0], obstacle_velocities[j, 1])
+        near[j] = gap - grown - speed_j * horizon - travel <= 0
+    near_positions = obstacle_positions[near]
+    near_velocities = obstacle_velocities[near]
+    gap_now = gap_now_all[near]
+    overlapping = gap_now <= 0
+    times = np.empty(steps)
+    for s in range(steps):
+        times[s] = dt * float(s + 1)
+    first_step, gap_min, gap_last = escape_contacts(
+        positions,
+        times,
+        near_positions,
+        near_velocities,
+        radii[near],
+        growth[near],
+        growth_until_s[near],
+        overlapping,
+        steps,
+    )
+    gap_overlapped = gap_now[overlapping]
+    return first_step, gap_min, gap_last, gap_overlapped
+
+
+@compiled
+def escape_scores(
+    robot,
+    commands,
+    turn_rows,
+    sines,
+    cosines,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+    segment_starts,
+    segment_directions,
+    segment_lengths,
+    half_widths,
+    subgoal,
+    settings,
+    steps,
+    calm,
+):
+    """:func:`viapath.planning.viapath.escape.escape_scores` compiled, operation for operation: the roll-outs of
+    the K commands (:func:`viapath.kinematics.rollout`: the ramps of speed and turn rate, the exact arcs, the
+    positions as running sums), their corridor excess (:func:`_excess`), the people who could come within
+    reach (the triangle-inequality bound), the contacts (:func:`escape_contacts`), the separation from the
+    people overlapped now (summed as np.sum does: :func:`viapath.compiled.sums.pairwise_sum`), the progress towards the subgoal and
+    the score. Returns the ends (K, 2) and the scores (K,).
+
+    ``sines`` and ``cosines`` are numpy's, of :func:`escape_headings`' rows (command k's row is
+    ``turn_rows[k]``). ``calm``: a calm escape with last cycle's command (the continuity term)."""
+    k_count = commands.shape[0]
+    dt = settings[_E_DT]
+    x0 = robot[0]
+    y0 = robot[1]
+    max_turn = settings[_E_MAX_TURN]
+    tolerance = settings[_E_TOLERANCE]
+    bound = settings[_E_BOUND]
+    positions = _escape_roll_outs(robot, commands, turn_rows, sines, cosines, settings, steps)
+    # all(excess <= tolerance); np.max(excess) <= bound is all(excess <= bound), NaN included: with the bound
+    # at least the tolerance (as the caller sets it), true of every roll-out inside
+    inside = _roll_outs_within(
+        positions,
+        segment_starts,
+        segment_directions,
+        segment_lengths,
+        half_widths,
+        tolerance,
+        np.zeros(k_count, np.bool_),
+    )
+    within_bound = _roll_outs_within(
+        positions,
+        segment_starts,
+        segment_directions,
+        segment_lengths,
+        half_widths,
+        bound,
+        inside if bound >= tolerance else np.zeros(k_count, np.bool_),
+    )
+    travel = _furthest(positions, x0, y0)
+
+    first_step, gap_min, gap_last, gap_overlapped = _escape_contacts_near(
+        positions, robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, dt, steps, travel
+    )
+    m_count = gap_overlapped.shape[0]
+    terms = np.empty(m_count)
+
+    toward_x = subgoal[0] - x0
+    toward_y = subgoal[1] - y0
+    norm = math.hypot(toward_x, toward_y)
+    norm = 1e-9 if norm < 1e-9 else norm  # Python's max(norm, 1e-9)
+    toward_x = toward_x / norm
+    toward_y = toward_y / norm
+    ends = np.empty((k_count, 2))
+    score = np.empty(k_count)
+    for k in range(k_count):
+        separation = 0.0
+        if m_count:
+            for column in range(m_count):
+                deeper = gap_min[k, column] - gap_overlapped[column]
+                terms[column] = _minimum(deeper, 0.0) + _minimum(gap_last[k, column], 0.0)
+            separation = 0.0 + pairwise_sum(terms, 0, m_count)
+        time_to_contact = first_step[k] * dt
+        free = time_to_contact >= steps * dt
+        end_x = positions[k, steps - 1, 0]
+        end_y = positions[k, steps - 1, 1]
+        ends[k, 0] = end_x
+        ends[k, 1] = end_y
+        progress = ((end_x - x0) * toward_x + (end_y - y0) * toward_y) / settings[_E_ESCAPE_S]
+        speed = commands[k, 0]
+        value = (
+            1e2 * separation
+            + 20.0 * (1.0 if free else 0.0)
+            + 2.0 * (1.0 if inside[k] else 0.0)
+            + time_to_contact
+            - (0.005 if free else 0.5) * speed
+            + 0.01 * progress
+        )
+        if calm:
+            change = (
+                abs(speed - settings[_E_PREVIOUS_SPEED]) / settings[_E_TOP]
+                + abs(commands[k, 1] - settings[_E_PREVIOUS_TURN]) / max_turn
+            )
+            value = value - settings[_E_CONTINUITY] * _minimum(change, 1.0)
+        score[k] = value if (within_bound[k] or speed == 0.0) else -math.inf
+    return ends, score

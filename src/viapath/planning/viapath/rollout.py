@@ -1,0 +1,212 @@
+"""Whether the robot can follow a candidate (the paper's §3, the choice's last condition): the
+controller stepped within the motion limits as :func:`viapath.kinematics.step` moves the robot (:func:`track`),
+and whether such a roll-out keeps clear of every person and inside the corridor (:func:`clear_positions`,
+:func:`can_follow`). Compiled steps, the one implementation of each.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from viapath.jit import compiled
+from viapath.planning.viapath.legs import clip, excess_at_most
+from viapath.planning.viapath.slots import (
+    F_ACCEL,
+    F_DT,
+    F_GAIN,
+    F_ROLLOUT_HEADING,
+    F_SPEED,
+    F_TOLERANCE,
+    F_TURN_ACCEL,
+    F_TURN_IN_PLACE,
+    F_TURN_RATE,
+)
+
+
+@compiled
+def track(
+    x,
+    y,
+    heading,
+    speed,
+    turn,
+    target_x,
+    target_y,
+    speed_mps,
+    max_speed_mps,
+    max_turn_rate_radps,
+    max_accel_mps2,
+    max_turn_accel_radps2,
+    dt_s,
+    steps,
+    heading_gain,
+):
+    """(steps, 2) positions of the robot steering for the target: the compiled form of
+    :func:`viapath.kinematics.track` (with :func:`~viapath.kinematics.steer_towards` and the exact arcs)."""
+    dv = max_accel_mps2 * dt_s
+    dw = max_turn_accel_radps2 * dt_s
+    positions = np.empty((steps, 2))
+    for k in range(steps):
+        # steer_towards
+        dx = target_x - x
+        dy = target_y - y
+        if dx * dx + dy * dy < 1e-18 or speed_mps <= 0:
+            v_cmd = 0.0
+            w_cmd = 0.0
+        else:
+            error = math.atan2(dy, dx) - heading
+            error = math.atan2(math.sin(error), math.cos(error))
+            w_cmd = clip(heading_gain * error, -max_turn_rate_radps, max_turn_rate_radps)
+            scale = clip((math.pi / 2 - abs(error)) / (math.pi / 4), 0.0, 1.0)
+            v_cmd = min(speed_mps, max_speed_mps) * scale
+        speed += clip(v_cmd - speed, -dv, dv)
+        turn += clip(w_cmd - turn, -dw, dw)
+        # _arc
+        new_heading = heading + turn * dt_s
+        half = 0.5 * turn * dt_s
+        chord = speed * dt_s * (1.0 - half * half / 6.0 if abs(half) < 1e-6 else math.sin(half) / half)
+        x += chord * math.cos(heading + half)
+        y += chord * math.sin(heading + half)
+        heading = math.atan2(math.sin(new_heading), math.cos(new_heading))
+        positions[k, 0] = x
+        positions[k, 1] = y
+    return positions
+
+
+@compiled
+def wrap(angle):
+    """:func:`viapath.geometry.wrap_angle` of a scalar (np.mod's sign convention is Python's %)."""
+    turned = math.pi - angle
+    if 0.0 <= turned < 2.0 * math.pi:  # % leaves it as it is (fmod exact; ±0.0 gives pi either way): skip it
+        return math.pi - turned
+    return math.pi - (turned % (2.0 * math.pi))
+
+
+@compiled
+def _clear(
+    positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
+):
+    """LegChecks.clear of the first ``count`` positions (one per ``dt`` from now)."""
+    for j in range(obstacle_positions.shape[0]):
+        now = math.hypot(robot_x - obstacle_positions[j, 0], robot_y - obstacle_positions[j, 1]) - 1e-3
+        for s in range(count):
+            t = dt * (s + 1)
+            cx = obstacle_positions[j, 0] + obstacle_velocities[j, 0] * t
+            cy = obstacle_positions[j, 1] + obstacle_velocities[j, 1] * t
+            until = growth_until_s[j]
+            capped = until if until != until else (t if t < until else until)  # np.minimum keeps a NaN
+            reach = radii[j] + growth[j] * capped
+            limit = reach if (reach != reach or reach < now) else now  # np.minimum, NaN first
+            if now != now:
+                limit = now
+            dx = positions[s, 0] - cx
+            dy = positions[s, 1] - cy
+            # hypot >= limit by the squared distance outside a ±1e-9 band (as _within), else by hypot itself:
+            # NaN offsets or limits, and limits whose square could underflow or overflow, go to hypot.
+            if 1e-140 < limit < 1e140:
+                squared = dx * dx + dy * dy
+                above = limit * (1.0 + 1e-9)
+                if squared > above * above:
+                    continue
+                below = limit * (1.0 - 1e-9)
+                if squared < below * below:
+                    return False
+            if not math.hypot(dx, dy) >= limit:
+                return False
+    return True
+
+
+@compiled
+def clear_positions(
+    positions, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
+):
+    """LegChecks.clear of a whole roll-out (one position per ``dt`` from now): the choice's own :func:`_clear`,
+    for the planner's stepwise cycles (static geometry in view)."""
+    return _clear(
+        positions,
+        positions.shape[0],
+        dt,
+        robot_x,
+        robot_y,
+        obstacle_positions,
+        obstacle_velocities,
+        radii,
+        growth,
+        growth_until_s,
+    )
+
+
+@compiled
+def can_follow(robot, target_x, target_y, angle, speed, settings, steps, obstacles, corridor):
+    """follow.can_follow: 0 cannot, 1 can, 2 can after turning on the spot first. ``angle``: atan2 of the
+    offset from the robot to the target; ``obstacles`` and ``corridor``: :func:`grow`'s records."""
+    obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
+    segment_starts, segment_directions, segment_lengths, half_widths = corridor
+    ox = target_x - robot[0]
+    oy = target_y - robot[1]
+    heading_error = abs(wrap(angle - robot[2]))
+    speed_change = abs(speed - robot[3])
+    dt = settings[F_DT]
+    if math.hypot(ox, oy) < 1e-6 or (
+        heading_error <= settings[F_ROLLOUT_HEADING] and speed_change <= settings[F_ACCEL] * dt * 2
+    ):
+        return 1
+    positions = track(
+        robot[0],
+        robot[1],
+        robot[2],
+        robot[3],
+        robot[4],
+        target_x,
+        target_y,
+        speed,
+        settings[F_SPEED],
+        settings[F_TURN_RATE],
+        settings[F_ACCEL],
+        settings[F_TURN_ACCEL],
+        dt,
+        steps,
+        settings[F_GAIN],
+    )
+    if not _clear(
+        positions, steps, dt, robot[0], robot[1], obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
+    ):
+        return 0
+    inside = True
+    for s in range(steps):
+        if not excess_at_most(
+            positions[s, 0],
+            positions[s, 1],
+            segment_starts,
+            segment_directions,
+            segment_lengths,
+            half_widths,
+            settings[F_TOLERANCE],
+        ):
+            inside = False
+            break
+    if inside:
+        return 1
+    turn_s = heading_error / settings[F_TURN_RATE] + 1.0
+    count = max(1, int(math.ceil(turn_s / dt)))
+    if heading_error > settings[F_TURN_IN_PLACE]:
+        standing = np.empty((count, 2))
+        for s in range(count):
+            standing[s, 0] = robot[0]
+            standing[s, 1] = robot[1]
+        if _clear(
+            standing,
+            count,
+            dt,
+            robot[0],
+            robot[1],
+            obstacle_positions,
+            obstacle_velocities,
+            radii,
+            growth,
+            growth_until_s,
+        ):
+            return 2
+    return 0

@@ -1,0 +1,336 @@
+"""The choice of the paper's §3 (Eq. 1 and steps 1-4) in one compiled call, :func:`choose`, of two
+halves: the roots, step 1 and the candidate tree (:func:`choose_tree`); then Eq. 1's critics, the order and the
+motion-limit checks (:func:`choose_candidate`). Between them the candidates' angles, by libm's atan2 as the numpy
+recipe took them (geometry.angles_of). :mod:`.choice` takes what it found up to the shield's check.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from viapath.jit import compiled
+from viapath.planning.viapath.legs import goal_legs_of
+from viapath.planning.viapath.rollout import can_follow, wrap
+from viapath.planning.viapath.slots import (
+    C_DEGREES,
+    C_DEPTH,
+    C_NOMINAL,
+    C_ONLY,
+    C_ONLY_OBSTACLE,
+    C_ONLY_ROOT,
+    C_ONLY_SIDE,
+    C_PREFERRED,
+    C_PREV_MMPS,
+    C_PREV_OBSTACLE,
+    C_PREV_ROOT,
+    C_PREV_SIDE,
+    C_PREVIOUS,
+    C_ROLLOUTS,
+    C_ROOT_LIMIT,
+    C_SEGMENT,
+    C_SLOW,
+    C_STEPS,
+    C_SUBGOAL,
+    C_TRY_STRAIGHT,
+    CANDIDATES,
+    F_CREEP,
+    F_HORIZON,
+    F_HYSTERESIS,
+    F_K1,
+    F_K2,
+    F_K3,
+    F_K4,
+    F_NOMINAL,
+    F_SIDE,
+    F_SPACING,
+    F_STANDING,
+    F_STOP_SHORT,
+    F_TOLERANCE,
+    N_FIRST_X,
+    N_FIRST_Y,
+    N_LEAF,
+    N_LENGTH,
+    N_OBSTACLE,
+    N_PARENT,
+    N_ROOT,
+    N_SIDE,
+    N_SLOW_S,
+    N_SLOW_SPEED,
+    N_SPEED,
+    N_TO_GOAL,
+    N_X,
+    N_Y,
+    NO_CANDIDATE,
+    NODE_FLOATS,
+    NODE_INTEGERS,
+    STEP_ONE,
+)
+from viapath.planning.viapath.tree import grow
+
+
+@compiled
+def _leaf_facts(robot, subgoal, nf, ni):
+    """What :func:`choose_tree` hands back of the tree's leaves: ``found`` (status, 0, then the K leaves' nodes)
+    and ``facts`` (6, K), as it says."""
+    k_count = 0
+    for m in range(ni.shape[0]):
+        if ni[m, N_LEAF]:
+            k_count += 1
+    found = np.empty(2 + k_count, np.int64)
+    facts = np.empty((6, k_count))
+    k = 0
+    for m in range(ni.shape[0]):
+        if not ni[m, N_LEAF]:
+            continue
+        found[2 + k] = m
+        # _plan_of's target: the subgoal for slow/wait and straight candidates, else the second point of
+        # the polyline (the node below the root).
+        target_x = subgoal[0]
+        target_y = subgoal[1]
+        if nf[m, N_SLOW_S] <= 0 and ni[m, N_PARENT] >= 0:
+            node = m
+            while ni[node, N_PARENT] >= 0:
+                target_x = nf[node, N_X]
+                target_y = nf[node, N_Y]
+                node = ni[node, N_PARENT]
+        facts[0, k] = nf[m, N_FIRST_Y]
+        facts[1, k] = nf[m, N_FIRST_X]
+        facts[2, k] = target_y - robot[1]
+        facts[3, k] = target_x - robot[0]
+        facts[4, k] = target_x
+        facts[5, k] = target_y
+        k += 1
+    found[0] = CANDIDATES if k_count else NO_CANDIDATE
+    found[1] = 0
+    return found, facts
+
+
+@compiled
+def choose_tree(
+    robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints, settings, integers
+):
+    """The first half of the viapath planner's ``_choose`` in one call: the root legs (:func:`goal_legs`), the
+    paper's step 1 (the free straight leg at the nominal speed, if the robot can follow it: follow.can_follow),
+    else the candidate tree (:func:`grow`). ``robot`` is (x, y, heading, speed, turn rate); ``obstacles``,
+    ``via``, ``slow`` and ``corridor`` are :func:`grow`'s records (:func:`choose` makes them of its
+    arguments); ``settings`` and ``integers`` hold the scalars (their slots: :mod:`viapath.compiled.slots`).
+
+    Returns (found, floats, integers: grow's node store, facts). ``found`` is (NO_CANDIDATE / STEP_ONE /
+    CANDIDATES, step 1 turns on the spot first, then the K leaves: the candidates' nodes); ``facts`` (6, K)
+    is each candidate's first direction (y, x) and its target's offset from the robot (y, x), for atan2,
+    and the target (x, y): the point it steers for first. (Few arrays: each one returned costs about a
+    microsecond.)"""
+    result = np.zeros(2, np.int64)
+    s_count = speeds.shape[0]
+    nominal_index = integers[C_NOMINAL]
+    horizon_s = settings[F_HORIZON]
+    goal = (
+        subgoal,
+        settings[F_STOP_SHORT],
+        continuation,
+        envelope,
+        integers[C_SUBGOAL],
+        settings[F_SPACING],
+        settings[F_TOLERANCE],
+    )
+    starts = np.empty((s_count, 2))
+    for i in range(s_count):
+        starts[i, 0] = robot[0]
+        starts[i, 1] = robot[1]
+    roots = goal_legs_of(starts, np.zeros(s_count), speeds, horizon_s, goal, obstacles, corridor)
+    if roots[2][nominal_index] and integers[C_TRY_STRAIGHT] and not integers[C_ONLY]:
+        straight_angle = math.atan2(subgoal[1] - robot[1], subgoal[0] - robot[0])
+        follows = can_follow(
+            robot,
+            subgoal[0],
+            subgoal[1],
+            straight_angle,
+            speeds[nominal_index],
+            settings,
+            integers[C_STEPS],
+            obstacles,
+            corridor,
+        )
+        if follows:
+            result[0] = STEP_ONE
+            result[1] = follows == 2
+            return result, np.empty((0, NODE_FLOATS)), np.empty((0, NODE_INTEGERS), np.int64), np.empty((6, 0))
+    tree = (waypoints, integers[C_SEGMENT], integers[C_SLOW] != 0, integers[C_DEPTH], integers[C_ROOT_LIMIT])
+    nf, ni = grow(robot[:2].copy(), speeds, nominal_index, roots, via, slow, horizon_s, goal, obstacles, corridor, tree)
+    found, facts = _leaf_facts(robot, subgoal, nf, ni)
+    return found, nf, ni, facts
+
+
+@compiled
+def _before(a, b):
+    """np.argsort's order of two costs: NaN after everything (ties are kept in index order by the caller)."""
+    if b != b:
+        return a == a
+    return a < b
+
+
+@compiled
+def choose_candidate(robot, nf, ni, found, facts, angles, obstacles, corridor, settings, integers):
+    """The second half of ``_choose`` up to its shield check: Eq. 1's critics (:mod:`.critics`, each term as
+    there, summed in :func:`.critics.critics_for`'s order), with ``only_way`` the other ways priced out, the
+    cheapest-first order (np.argsort's, stable) of the first ``max_rollouts`` candidates (and at least two,
+    for the runner-up), and follow.can_follow of each in that order until one passes. ``found`` and ``facts``
+    are :func:`choose_tree`'s, ``angles`` (2, K) atan2 of its facts; ``obstacles`` and ``corridor``
+    :func:`grow`'s records.
+
+    Returns (ranking, costs). ``ranking`` is (the rank that follows or -1, R: the ranks in order (0: with
+    only_way, no candidate goes that way), the order (R), can_follow of each rank tried (R): 0/1/2, -1 not
+    tried); ``costs`` (8, K) the critics' terms, their sum and the sum with only_way applied."""
+    k_count = found.shape[0] - 2
+    leaves = found[2:]
+    costs = np.empty((8, k_count))
+    terms = costs[:6]
+    raw_total = costs[6]
+    total = costs[7]
+    nominal = settings[F_NOMINAL]
+    only = integers[C_ONLY] != 0
+    any_finite = False
+    for k in range(k_count):
+        m = leaves[k]
+        length = nf[m, N_LENGTH] + nf[m, N_TO_GOAL]
+        speed = nf[m, N_SPEED]
+        slow_s = nf[m, N_SLOW_S]
+        slow_v = nf[m, N_SLOW_SPEED]
+        driven_s = (length - slow_v * slow_s) / speed
+        travel_s = slow_s + driven_s
+        terms[0, k] = settings[F_K1] * length
+        terms[1, k] = settings[F_K2] * travel_s
+        error = (slow_s * abs(slow_v - nominal) + driven_s * abs(speed - nominal)) / travel_s
+        terms[2, k] = settings[F_K3] * error + settings[F_STANDING] * (slow_s if slow_v <= 0.0 else 0.0)
+        theta = abs(wrap(angles[0, k] - robot[2]))
+        terms[3, k] = settings[F_K4] * (theta * (180.0 / math.pi) if integers[C_DEGREES] else theta)
+        side = ni[m, N_SIDE]
+        terms[4, k] = settings[F_SIDE] * (1.0 if (side != 0 and side != integers[C_PREFERRED]) else 0.0)
+        if integers[C_PREVIOUS]:
+            same_way = (
+                ni[m, N_OBSTACLE] == integers[C_PREV_OBSTACLE]
+                and ni[m, N_SIDE] == integers[C_PREV_SIDE]
+                and ni[m, N_ROOT] == integers[C_PREV_ROOT]
+            )
+            same_speed = np.rint(speed * 1000) == integers[C_PREV_MMPS]
+            bonus = (1.0 if same_way else 0.0) + 0.5 * (1.0 if (same_way and same_speed) else 0.0)
+            terms[5, k] = -(settings[F_HYSTERESIS] * bonus)
+        else:
+            terms[5, k] = 0.0
+        value = terms[0, k] + terms[1, k]
+        for c in range(2, 6):
+            value = value + terms[c, k]
+        raw_total[k] = value
+        if only and not (
+            ni[m, N_OBSTACLE] == integers[C_ONLY_OBSTACLE]
+            and ni[m, N_SIDE] == integers[C_ONLY_SIDE]
+            and ni[m, N_ROOT] == integers[C_ONLY_ROOT]
+        ):
+            value = math.inf
+        total[k] = value
+        if math.isfinite(value):
+            any_finite = True
+    if only and not any_finite:
+        ranking = np.zeros(2, np.int64)
+        ranking[0] = -1
+        return ranking, costs
+
+    ranks = min(k_count, max(integers[C_ROLLOUTS], 2))
+    ranking = np.empty(2 + 2 * ranks, np.int64)
+    ranking[0] = -1
+    ranking[1] = ranks
+    order = ranking[2 : 2 + ranks]
+    follow = ranking[2 + ranks :]
+    taken = np.zeros(k_count, np.bool_)
+    for r in range(ranks):
+        best = -1
+        for k in range(k_count):
+            if not taken[k] and (best < 0 or _before(total[k], total[best])):
+                best = k
+        taken[best] = True
+        order[r] = best
+    follow[:] = -1
+    for r in range(min(ranks, integers[C_ROLLOUTS])):
+        k = order[r]
+        if not math.isfinite(total[k]):
+            break
+        m = leaves[k]
+        speed = nf[m, N_SLOW_SPEED] if nf[m, N_SLOW_S] > 0 else nf[m, N_SPEED]
+        follow[r] = can_follow(
+            robot,
+            facts[4, k],
+            facts[5, k],
+            angles[1, k],
+            speed,
+            settings,
+            integers[C_STEPS],
+            obstacles,
+            corridor,
+        )
+        if follow[r]:
+            ranking[0] = r
+            break
+    return ranking, costs
+
+
+@compiled
+def choose(
+    robot,
+    speeds,
+    subgoal,
+    obstacle_positions,
+    obstacle_velocities,
+    radii,
+    growth,
+    growth_until_s,
+    via_radii,
+    ids,
+    slow_radii,
+    slow_growth,
+    slow_growth_until_s,
+    slow_times,
+    continuation,
+    envelope,
+    segment_starts,
+    segment_directions,
+    segment_lengths,
+    half_widths,
+    waypoints,
+    settings,
+    integers,
+):
+    """``_choose`` up to its shield check in one call (each array handed back to Python costs about a
+    microsecond): :func:`choose_tree`, then, when it found candidates, their angles and :func:`choose_candidate`.
+    Takes :func:`choose_tree`'s arguments; returns (found, floats, integers: the node store, costs): ``found``
+    is :func:`choose_tree`'s, followed by :func:`choose_candidate`'s ranking when it says CANDIDATES (one array
+    fewer to hand back), ``costs`` (8, K) :func:`choose_candidate`'s, empty unless CANDIDATES."""
+    obstacles = (obstacle_positions, obstacle_velocities, radii, growth, growth_until_s)
+    corridor = (segment_starts, segment_directions, segment_lengths, half_widths)
+    found, nf, ni, facts = choose_tree(
+        robot,
+        speeds,
+        subgoal,
+        obstacles,
+        (via_radii, ids),
+        (slow_radii, slow_growth, slow_growth_until_s, slow_times, settings[F_CREEP]),
+        continuation,
+        envelope,
+        corridor,
+        waypoints,
+        settings,
+        integers,
+    )
+    if found[0] != CANDIDATES:
+        return found, nf, ni, np.empty((8, 0))
+    k_count = facts.shape[1]
+    angles = np.empty((2, k_count))
+    for k in range(k_count):
+        angles[0, k] = math.atan2(facts[0, k], facts[1, k])
+        angles[1, k] = math.atan2(facts[2, k], facts[3, k])
+    ranking, costs = choose_candidate(robot, nf, ni, found, facts, angles, obstacles, corridor, settings, integers)
+    found_and_ranking = np.empty(found.shape[0] + ranking.shape[0], np.int64)
+    found_and_ranking[: found.shape[0]] = found
+    found_and_ranking[found.shape[0] :] = ranking
+    return found_and_ranking, nf, ni, costs
