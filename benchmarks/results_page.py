@@ -320,12 +320,9 @@ def _machine() -> str:
                 break
     except OSError:
         pass
-    try:
-        import numba  # noqa: F401
+    from viapath import jit
 
-        compiled = "with numba (extra `fast`)"
-    except ImportError:
-        compiled = "without numba"
+    compiled = "compiled steps (numba)" if jit.enabled() else "steps as plain Python (NUMBA_DISABLE_JIT)"
     return f"viapath {__version__}, Python {platform.python_version()}, {compiled}; {cpu}, {os.cpu_count()} cores"
 
 

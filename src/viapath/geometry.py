@@ -1,7 +1,7 @@
 """x-y-t geometry of the method: avoiding lines, reachable cones, via points, moving-disc checks.
 
 Source: Yamada, Sa, Ohya, "Moving Obstacle Avoidance for Mobile Robot Moving on Designated Path",
-§3 and Fig. 4, after Tsubouchi et al.'s "iterated forecast and planning"; made precise in DESIGN §2.
+§3 and Fig. 4, after Tsubouchi et al.'s "iterated forecast and planning"; made precise in docs/design.md §2.
 
 * An obstacle with centre ``c + v t`` and combined radius ``R`` is an oblique cylinder in x-y-t.
 * The avoiding line of an obstacle is the cylinder generator through the 2-D tangent point from the
@@ -16,7 +16,7 @@ What the paper leaves open and we chose:
 * side ``+1`` (left) rotates the centre direction counter-clockwise: the robot passes the obstacle
   with the obstacle on its right.
 * The contact test allows a radius that grows linearly with time (``R + g t``), which turns the
-  cylinder into a cone: this is how prediction uncertainty enters (DESIGN §2, pitfalls).
+  cylinder into a cone: this is how prediction uncertainty enters (docs/design.md §2, pitfalls).
 
 Everything here is vectorised numpy with broadcasting over leading axes.
 """

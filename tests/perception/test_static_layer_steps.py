@@ -145,4 +145,4 @@ def test_merging_joins_the_connected_shapes_and_no_others(seed):
         gap = float(rng.choice([0.0, 0.3, 0.6]))
         merged = merge_close_shapes(layer, gap)
         assert np.array_equal(merged.shape_ids, _components_spec(layer, gap))
-        assert merged.segments is layer.segments
+        assert np.array_equal(merged.segments, layer.segments)  # merging changes the ids only

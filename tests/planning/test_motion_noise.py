@@ -93,7 +93,7 @@ def test_keeping_the_previous_way_cuts_side_flips_and_stays_safe(noisy_overtakin
         "56-84 side flips and ~73 s to the goal against 1 flip and 31 s clean; most way changes find the "
         "previous way gone even with a quarter of the inflation, as the forecast itself moved with the "
         "velocity noise (_count_way_changes below), so the constraint hysteresis cannot hold it; "
-        "see docs/safety.md"
+        "see docs/explanation/passive-safety.md"
     ),
 )
 def test_noisy_overtaking_flips_sides_rarely(noisy_overtaking_flips):

@@ -1,4 +1,4 @@
-"""The paper's three experiments (Fig. 8; DESIGN §2 "Expected behaviour"), closed loop, oracle perception.
+"""The paper's three experiments (Fig. 8; docs/design.md §2 "Expected behaviour"), closed loop, oracle perception.
 
 Every threshold comes from the scenario (robot 0.2 m/s, obstacle 0.3 m/s, corridor ±1 m) and the
 paper's description, never from a number printed by our code. Clearances are recomputed here from

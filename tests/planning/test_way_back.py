@@ -1,5 +1,5 @@
 """The way back to the path after an avoidance (option ``return_lookahead_m``, beyond the paper;
-docs/weights.md §6): off the path line the planner first tries the straight leg at the nominal speed
+docs/howto/tune-weights.md §6): off the path line the planner first tries the straight leg at the nominal speed
 to the path point ``return_lookahead_m`` ahead, instead of the shallow line to a far subgoal."""
 
 from __future__ import annotations
@@ -94,7 +94,7 @@ def test_the_way_back_is_on_by_default_and_changes_nothing_on_the_path(overtakin
     from viapath.planning.viapath.options import VIAPATH_OPTIONS
     from viapath.presets import preset_values
 
-    # The default is the measured best (docs/weights.md §7); the paper's planner has none.
+    # The default is the measured best (docs/howto/tune-weights.md §7); the paper's planner has none.
     assert VIAPATH_OPTIONS.defaults()["return_lookahead_m"] == 0.5
     assert preset_values("paper")["return_lookahead_m"] == 0.0
     # Before the pass the robot is on the line: both runs are the same up to there.

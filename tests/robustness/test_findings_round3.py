@@ -46,9 +46,9 @@ def _long_scenario() -> dict:
 
 
 def test_an_episode_past_its_time_limit_is_a_recorded_failure(tmp_path):
-    result = run_bench([_long_scenario()], ["follow"], tmp_path, workers=1, progress=False, episode_time_limit_s=0.5)
+    result = run_bench([_long_scenario()], ["follow"], tmp_path, workers=1, progress=False, episode_time_limit_s=0.05)
     (row,) = result["rows"]
-    assert row["error"].startswith("EpisodeTimeLimit") and "0.5 s" in row["error"]
+    assert row["error"].startswith("EpisodeTimeLimit") and "0.05 s" in row["error"]
     assert row["episode_wall_s"] < 30.0  # stopped at the limit, not run to its 600 s of simulated time
     assert result["errors"] == 1
 
@@ -63,7 +63,7 @@ def test_bench_exits_3_for_an_episode_past_its_time_limit_and_refuses_a_bad_limi
     ran = runner.invoke(
         app,
         ["bench", str(folder), "-p", "follow", "-w", "1", "--out", str(tmp_path / "out"), "--no-plots"]
-        + ["--episode-time-limit", "0.5"],
+        + ["--episode-time-limit", "0.05"],
     )
     assert ran.exit_code == 3, ran.output
     bad = runner.invoke(

@@ -1,6 +1,6 @@
 """Step 2, the candidates: for every speed of the set, the ways to the subgoal in x-y-t.
 
-Source: paper §3 steps 1-3 (after Tsubouchi et al.'s iterated forecast and planning); DESIGN §2.
+Source: paper §3 steps 1-3 (after Tsubouchi et al.'s iterated forecast and planning); docs/design.md §2.
 
 Every candidate is a chain of legs at one constant speed, grown as a tree of (position, time)
 nodes. **The speed loop is the roots**: one root node per speed of the set (plus the current and the
@@ -14,7 +14,7 @@ nominal speed), all at the robot, at t = 0. From each node the straight leg to t
   (earliest first, at most ``max_root_obstacles``), deeper only on the first one hit. Depth is
   bounded by ``max_depth``; a via leg that meets an obstacle or leaves the corridor drops its branch.
 
-Beyond the paper (DESIGN §2 and §5.2 future work):
+Beyond the paper (docs/design.md §2 and §5.2 future work):
 * **Slow / wait**: stand still, creep (``creep_speed_mps``, below the speed set) or drive at a speed of
   the set slower than nominal along the straight leg for each of ``slow_times_s``, then on at the
   nominal speed, or at the slowest faster speed whose leg is free when the nominal one's is not. Once
@@ -24,13 +24,13 @@ Beyond the paper (DESIGN §2 and §5.2 future work):
   to the horizon: waiting is for letting someone pass, not for pushing a collision past the horizon.
   The slow leg itself is checked with ``slow_leg_inflation`` of the uncertainty inflation: at a tenth
   of a metre per second the robot stops within millimetres, the next cycles correct the forecast, and
-  the shield (DESIGN §7) keeps it passively safe; with the full cone a freshly tracked crossing person
+  the shield (docs/design.md §7) keeps it passively safe; with the full cone a freshly tracked crossing person
   made the robot wait where the paper slows down (laser paper-side).
 * **Corners**: when the straight leg to the subgoal would cut a corner of the corridor (the robot
   was pushed back, or a blocked subgoal was given up), the path's own corners between the robot and
   the subgoal become via points: the way back along the designated path.
 
-**Static geometry** (DESIGN §10): a static disc met by a leg stands for its whole shape. The root branches
+**Static geometry** (docs/design.md §10): a static disc met by a leg stands for its whole shape. The root branches
 once per shape a leg meets, and the via points are those of the shape's two extreme discs as seen from the
 node (the tangents to its inflated outline); via points round static geometry keep no braking envelope.
 A node that hugs a static disc (closer than ``HUG_FACTOR`` via radii) also **slides**: a leg of one via

@@ -1,12 +1,12 @@
 """Step 1, the situation: every check a candidate must pass, against the forecast and the corridor.
 
 Source: paper §3 step 3 (legs checked against the obstacles' x-y-t cylinders) and step 4 (the
-path boundary), DESIGN §2 (segment check, capped uncertainty cone, horizon past a near subgoal).
+path boundary), docs/design.md §2 (segment check, capped uncertainty cone, horizon past a near subgoal).
 
 What the paper leaves open and we chose:
 * Legs are checked with the true combined radius + safety margin (the shared
   :class:`~viapath.planning.base.Inflation`); via points are placed ``planning_margin_m`` further
-  out, or chaining never finds a path. With a shield behind the planner (DESIGN §7) via points and
+  out, or chaining never finds a path. With a shield behind the planner (docs/design.md §7) via points and
   legs to the subgoal also keep the robot's braking envelope at their speed (:meth:`LegChecks.envelope_m`).
 * Legs are checked up to ``horizon_s``. Past an intermediate subgoal the robot is assumed to carry
   on along the next segment; past the final goal nothing is checked (the mission ends there). A
@@ -349,7 +349,7 @@ class LegChecks(_CompiledInputs):
 
     def static_extremes(self, start: np.ndarray, obstacle: int) -> tuple[int, int]:
         """The discs of ``obstacle``'s static shape whose via discs reach furthest to the left and to the right as
-        seen from ``start`` (DESIGN §10: the tangents to a shape's inflated outline are the tangents to its
+        seen from ``start`` (docs/design.md §10: the tangents to a shape's inflated outline are the tangents to its
         extreme discs); the obstacle itself twice for a person or when ``start`` is inside the shape's reach."""
         labels = self.static_labels()
         label = labels[obstacle]

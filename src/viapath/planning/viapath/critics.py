@@ -5,7 +5,7 @@ through the via points to the subgoal in m, Time in s, θ = angle between the he
 leg); the lowest E wins. The shape follows Nav2 MPPI's critics: each term is a small object with a
 weight, so new terms slot in without touching the search, and the plan can keep the breakdown.
 
-Beyond the paper (DESIGN §2 pitfalls):
+Beyond the paper (docs/design.md §2 pitfalls):
 * The speed term is time-weighted over a candidate that first slows down or waits, and each second it
   first stands still costs ``standing_cost`` more: Eq. 1 cannot tell standing for T from creeping at half
   the nominal speed for 2T (the same arrival, the same time-weighted speed error), and the paper slows

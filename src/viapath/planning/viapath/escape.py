@@ -1,6 +1,6 @@
 """Step 6, no free candidate: stand if standing is safe, else escape.
 
-Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 and §7.
+Source: beyond the paper (it assumes some candidate is always free); docs/design.md §2 and §7.
 
 * If standing still is free over the horizon, the robot stops (status ``stop``).
 * Otherwise even standing is hit. Of a fan of drive commands (arcs within the limits, and standing),
@@ -21,7 +21,7 @@ Source: beyond the paper (it assumes some candidate is always free); DESIGN §2 
   flipped between 0.6 and 0 m/s and the turn between -2 and +2 rad/s from one cycle to the next.
 * An escape never takes the robot further than ``escape_max_excess_m`` outside the corridor (or
   further out than it already is): standing is always among the commands, and at rest the robot is
-  passively safe (DESIGN §7); fleeing 10 m off the path is not.
+  passively safe (docs/design.md §7); fleeing 10 m off the path is not.
 
 The standing check and the fan's scores are compiled (:func:`viapath.planning.viapath.packing.escape`, two calls); the
 choice among them is made here.

@@ -1,6 +1,6 @@
 """Step 4, the motion limits: the cheapest candidate the robot can actually follow.
 
-Source: beyond the paper (its §5.2 names the robot's dynamics as future work); DESIGN §2.
+Source: beyond the paper (its §5.2 names the robot's dynamics as future work); docs/design.md §2.
 
 The x-y-t legs assume instant turns and speed changes. A candidate whose first leg needs a sharp turn
 (more than ``rollout_heading_rad``) or a large speed change is rolled forward for ``rollout_s`` with

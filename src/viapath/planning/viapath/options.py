@@ -1,7 +1,7 @@
 """The paper planner's options, each defined once (name, default, unit, bounds, help).
 
 Defaults are the paper's where it gives one (speed set 0.1…0.5 m/s and the weights of Eq. 1, §4.2)
-and DESIGN §2's choices elsewhere. The safety margin and the uncertainty inflation are common to
+and docs/design.md §2's choices elsewhere. The safety margin and the uncertainty inflation are common to
 every planner (:data:`viapath.planning.base.COMMON_OPTIONS`).
 """
 
@@ -24,7 +24,7 @@ _OWN = [
     Option(
         "k2",
         0.01,
-        "Eq. 1 weight of the travel time (the paper's 0.001 is preset 'paper'; docs/weights.md)",
+        "Eq. 1 weight of the travel time (the paper's 0.001 is preset 'paper'; docs/howto/tune-weights.md)",
         "1/s",
         minimum=0.0,
         maximum=1000.0,
@@ -43,7 +43,7 @@ _OWN = [
     Option(
         "theta_unit", "rad", "unit of θ in Eq. 1 (degrees make the θ term swamp the others)", choices=("rad", "deg")
     ),
-    # DESIGN §2: how via points and legs are checked.
+    # docs/design.md §2: how via points and legs are checked.
     Option(
         "planning_margin_m",
         0.1,
@@ -77,7 +77,7 @@ _OWN = [
         minimum=0.005,
         maximum=1.0,
     ),
-    # Beyond the paper: the way back to the path after an avoidance (docs/weights.md §6).
+    # Beyond the paper: the way back to the path after an avoidance (docs/howto/tune-weights.md §6).
     Option(
         "return_lookahead_m",
         0.5,
@@ -218,7 +218,7 @@ _OWN = [
         minimum=0.0,
         maximum=100.0,
     ),
-    # Speed (docs/speed.md).
+    # Speed (docs/explanation/speed.md).
     Option(
         "blocked_gap_m",
         0.3,

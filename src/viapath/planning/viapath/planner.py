@@ -1,7 +1,7 @@
 """The paper's planner, as its procedure: situation → candidates → costs → the first candidate the
 robot can follow → command; with no free candidate, stop or escape.
 
-Source: Yamada, Sa, Ohya, §3 (procedure steps 1-5, Eq. 1), after Tsubouchi et al.; DESIGN §2. Each
+Source: Yamada, Sa, Ohya, §3 (procedure steps 1-5, Eq. 1), after Tsubouchi et al.; docs/design.md §2. Each
 step is a module of this package, named after it:
 
 1. situation (:mod:`.checks`): the subgoal, the people with their capped uncertainty cones, the corridor;
@@ -10,7 +10,7 @@ step is a module of this package, named after it:
    path's corners (paper step 1: a free straight leg at the nominal speed is the plan at once);
 3. costs (:mod:`.critics`): Eq. 1 as critics, plus side preference and hysteresis;
 4. follow (:mod:`.follow`): the cheapest candidate whose first leg the robot can follow within its
-   motion limits and, with a shield behind the planner (DESIGN §7), whose command the shield admits
+   motion limits and, with a shield behind the planner (docs/design.md §7), whose command the shield admits
    (via points then also keep the robot's braking envelope from people);
 5. command: steer for the plan's target at the plan's speed (turning on the spot first if needed);
 6. escape (:mod:`.escape`): stop if standing is safe, else the drive command that stays clear longest.
@@ -38,7 +38,7 @@ What the paper leaves open and we chose, beyond what those modules say:
   someone to outrun (under noise the nominal leg looks free in single cycles). Someone faster than the
   top speed can only be raced to the subgoal, and there the cheapest (fastest) leg keeps the most
   margin: unchanged.
-* **Static obstacles** (DESIGN §10; the paper draws its path boundary round static things and plans for
+* **Static obstacles** (docs/design.md §10; the paper draws its path boundary round static things and plans for
   moving ones only). A static obstacle is a vertical prism in x-y-t: the guarded entry hands the planner
   the observation's static layer as discs of velocity 0 sampled along its segments (within a few mm of
   the segments' capsules, :mod:`viapath.static`), so the legs are checked against it exactly as against
@@ -61,7 +61,7 @@ What the paper leaves open and we chose, beyond what those modules say:
   line, the paper's step 1 is tried first towards the path point that far ahead instead of the
   subgoal. The paper heads for the subgoal; when that is metres away the robot drifts back to the path
   on a shallow line after a pass, and that drift was most of the extra deviation of a passing robot
-  (docs/weights.md §6).
+  (docs/howto/tune-weights.md §6).
 """
 
 from __future__ import annotations
@@ -268,7 +268,7 @@ class ViaPathPlanner(Planner, name="viapath"):
     # -- step 4 with a shield behind the planner ------------------------------------------------------
 
     def _inside_shield(self, plan: Plan) -> bool:
-        """With a shield (DESIGN §7) behind the planner, a candidate whose command the shield would refuse
+        """With a shield (docs/design.md §7) behind the planner, a candidate whose command the shield would refuse
         is passed over for the next one: speeds near a person only where the robot can stop in time."""
         if self.shield is None:
             return True

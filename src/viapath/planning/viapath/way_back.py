@@ -1,5 +1,5 @@
 """The way back (``return_lookahead_m``, 0.5 m by default; 0 in the preset ``paper``): off the path line, the
-paper's step 1 is tried first towards the path point that far ahead instead of the subgoal (docs/weights.md §6).
+paper's step 1 is tried first towards the path point that far ahead instead of the subgoal (docs/howto/tune-weights.md §6).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ def way_back(planner: Planning, checks: LegChecks, speed: float) -> Chosen | Non
     nominal speed, checked on along the path to the subgoal. None if there is none; then the paper's
     candidates decide. Eq. 1 never picks such a leg itself: it turns more (k4·θ) than the leg to a
     far subgoal and nothing in E rewards being on the path, so after a pass the robot would drift
-    back on the shallow line to a subgoal metres away (docs/weights.md §6)."""
+    back on the shallow line to a subgoal metres away (docs/howto/tune-weights.md §6)."""
     back = checks.back_to_path(planner.config.return_lookahead_m)
     if back is None:
         return None
