@@ -290,8 +290,10 @@ class Nav2Interface:
         resumed without pause by rclpy's events executor."""
         goal = _Goal(handle, None, handle.request.path, self.node._now_s())
         code, message, _pose = self._path_frame_pose(goal.request_path)
+        if code == self.Result.NONE:
+            code, message = _quickly_invalid(handle.request.path.poses, self.Result.INVALID_PATH)
         if code != self.Result.NONE:
-            self._end(goal, "abort", code, message)
+            self._end(goal, "abort", code, message)  # the running goal, if any, goes on
             return
         previous = self.goal
         if previous is not None:
@@ -395,3 +397,19 @@ def make_nav2_interface_class():
     """The interface's class, for the node class made once rclpy is there (the interface imports rclpy
     and the Nav2 messages only when an instance is made)."""
     return Nav2Interface
+
+
+QUICK_CHECK_POSES = 1000  # a path this short is checked when it arrives, before it preempts the running goal
+
+
+def _quickly_invalid(poses: Any, invalid_path: int) -> tuple[int, str]:
+    """(INVALID_PATH, why) for an empty path, or a short one with a non-finite coordinate; (0, "") otherwise.
+    Checked as the goal arrives (constant time for a long path, whose points the worker thread checks), so that
+    a bad goal is refused with its own code even when the next goal follows at once."""
+    if len(poses) == 0:
+        return invalid_path, "empty path"
+    if len(poses) <= QUICK_CHECK_POSES:
+        coordinates = [value for p in poses for value in (p.pose.position.x, p.pose.position.y)]
+        if not all(math.isfinite(value) for value in coordinates):
+            return invalid_path, "path with NaN or infinite coordinates"
+    return 0, ""
