@@ -245,9 +245,10 @@ def _test_with_progress(tuning, study, chosen, scenarios, key, workers, seed) ->
             bar.advance(tested)
             bar.reset(episodes, total=len(scenarios))
 
+        # drawn at once: the bar is reset as the trial ends, so its last episode might never be shown
         return tuning.evaluate_on_test(
             study, chosen, scenarios, key, workers, seed,
-            on_done=on_done, on_episode=lambda done, total: bar.update(episodes, completed=done, total=total),
+            on_done=on_done, on_episode=lambda done, total: bar.update(episodes, completed=done, total=total, refresh=True),
         )  # fmt: skip
 
 
@@ -446,7 +447,8 @@ def _run_with_progress(
             timeout,
             on_trial=on_trial,
             start_from=start_from,
-            on_episode=lambda done_, total: bar.update(episodes, completed=done_, total=total),
+            # drawn at once: the bar is reset as the trial ends, so its last episode might never be shown
+            on_episode=lambda done_, total: bar.update(episodes, completed=done_, total=total, refresh=True),
         )
 
 
