@@ -41,7 +41,6 @@ def test_rollout_equals_stepping_the_robot(heading, speed, turn, commands):
 )
 def test_tracking_rollout_equals_the_closed_loop(heading, speed, turn, tx, ty, planned_speed):
     from viapath.kinematics import steer_towards
-    from viapath.planning.viapath.packing import track
 
     limits = MotionLimits()
     start = UnicycleState(0.0, 0.0, heading, speed, turn)
@@ -58,7 +57,6 @@ def test_track_is_bit_for_bit_the_closed_loop():
     controller and :func:`step` give (2 000 seeded cases: headings all round, targets near and far,
     the target at the robot, planned speeds 0 and above the limit, other limits, steps of other sizes)."""
     from viapath.kinematics import steer_towards
-    from viapath.planning.viapath.packing import track
 
     rng = np.random.default_rng(16)
     for case in range(2000):
@@ -87,3 +85,15 @@ def test_track_is_bit_for_bit_the_closed_loop():
             expected.append((state.x, state.y))
         assert positions.shape == (steps, 2)
         assert np.array_equal(positions.view(np.int64), np.array(expected).view(np.int64)), f"case {case}"
+
+
+def track(state, target, speed_mps, limits, dt_s, steps, heading_gain=2.5):
+    """The compiled roll-out's positions (:func:`viapath.planning.viapath.rollout.track`) of steering from ``state``."""
+    from viapath.planning.viapath import rollout
+
+    return rollout.track(
+        float(state.x), float(state.y), float(state.heading_rad), float(state.speed_mps), float(state.turn_rate_radps),
+        float(target[0]), float(target[1]), float(speed_mps), float(limits.max_speed_mps),
+        float(limits.max_turn_rate_radps), float(limits.max_accel_mps2), float(limits.max_turn_accel_radps2),
+        float(dt_s), int(steps), float(heading_gain),
+    )  # fmt: skip

@@ -149,10 +149,14 @@ def test_legs_free_stops_at_the_first_contact_and_agrees():
             radii[0] = math.nan
         horizon = float(rng.uniform(0.5, 5.0))
         checked = np.array([legs.clip(horizon - start_times[i], 0.0, durations[i]) for i in range(k)])
-        contact = legs.legs_first_contact(
-            starts, start_times, velocities, checked, positions, obstacle_velocities, radii, growth, until, np.zeros(k)
+        # Some discs static (velocity 0, checked to the leg's end) on every other case.
+        shape_of = np.where(rng.random(n) < 0.5, 0, -1) if case % 2 else np.zeros(0, np.int64)
+        if len(shape_of):
+            obstacle_velocities[shape_of >= 0] = 0.0
+        obstacles = (positions, obstacle_velocities, radii, growth, until)
+        contact = legs.first_contacts(
+            starts, start_times, velocities, checked, durations, obstacles, np.zeros(k), shape_of
         )
         expected = ~(~np.isinf(contact)).any(axis=1)
-        obstacles = (positions, obstacle_velocities, radii, growth, until)
-        got = legs.legs_free(starts, start_times, velocities, durations, horizon, obstacles)
+        got = legs.legs_free(starts, start_times, velocities, durations, horizon, obstacles, shape_of)
         assert np.array_equal(got, expected)

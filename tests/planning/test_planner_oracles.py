@@ -240,24 +240,28 @@ def _check_via_options(arguments, got) -> None:
     assert np.all(np.hypot(sampled[..., 0], sampled[..., 1]) >= radius * (1 - 1e-7) - 1e-9)
 
 
-def _check_first_contacts(leg, people, leg_radii, got) -> None:
+def _check_first_contacts(leg, people, leg_radii, got, checked, static) -> None:
     """What each leg's first contact is, by dense sampling of the leg (2 001 instants): before it the leg is
     never inside the person's (growing, capped) disc, at it the leg is on the disc's edge (or inside at the
-    start: 0), and a leg with no contact (inf) is never inside."""
+    start: 0), and a leg with no contact (inf) is never inside; a person's disc up to the leg's ``checked``
+    time (the horizon) with the leg's radius added, a static disc (``static``) over the whole leg without it."""
     starts, start_times, velocities, durations = leg
     positions, person_velocities, radii, growth, until = people
     until = np.broadcast_to(until, radii.shape)
-    extra = np.zeros(len(starts)) if leg_radii is None else leg_radii
+    added = np.zeros(len(starts)) if leg_radii is None else leg_radii
+    extra = np.where(static[None, :], 0.0, added[:, None])  # (legs, people)
+    limit = np.where(static[None, :], durations[:, None], checked[:, None])
     fraction = np.linspace(0.0, 1.0, 2001)[:, None, None]
     tau = fraction * durations[None, :, None]  # (T, legs, 1)
     absolute = start_times[None, :, None] + tau
     robot = starts[None, :, None, :] + velocities[None, :, None, :] * tau[..., None]
     person = positions[None, None] + person_velocities[None, None] * absolute[..., None]
     gap = np.hypot(*np.moveaxis(robot - person, -1, 0))
-    gap -= radii + extra[:, None] + growth * np.minimum(absolute, until)  # (T, legs, people)
-    last = np.where(np.isfinite(got), got * (1 - 1e-9) - 1e-9, np.inf)  # (legs, people)
+    gap -= radii + extra + growth * np.minimum(absolute, until)  # (T, legs, people)
+    last = np.where(np.isfinite(got), got * (1 - 1e-9) - 1e-9, np.nextafter(limit, np.inf))  # (legs, people)
     before = tau < last[None]
     assert np.all(gap[np.broadcast_to(before, gap.shape)] >= -1e-9)
+    assert np.all(got[np.isfinite(got)] <= limit[np.isfinite(got)] * (1 + 1e-9) + 1e-9)
     at = np.isfinite(got) & (got > 0)
     legs, people_at = np.nonzero(at)
     tau_at, absolute_at = got[at], start_times[legs] + got[at]
@@ -267,20 +271,63 @@ def _check_first_contacts(leg, people, leg_radii, got) -> None:
         - positions[people_at]
         - person_velocities[people_at] * absolute_at[:, None]
     )
-    edge = radii[people_at] + extra[legs] + growth[people_at] * np.minimum(absolute_at, until[people_at])
+    edge = radii[people_at] + extra[legs, people_at] + growth[people_at] * np.minimum(absolute_at, until[people_at])
     np.testing.assert_allclose(np.hypot(*offset.T), edge, rtol=1e-7, atol=1e-7)
     assert np.all(gap[0][got == 0] <= 1e-9)  # contact at the start: inside already
 
 
+def via_options(starts, start_times, speeds, positions, velocities, via_radii, growth, until, envelope, max_time_s):
+    """The via options of each (node, obstacle) pair as the candidate tree makes them (its arithmetic,
+    :func:`viapath.planning.viapath.via.via_pair`, and the tree's legs to them): (pair, option, time, leg velocity,
+    via point), pair by pair, option by option."""
+    from viapath.planning.viapath.via import via_pair
+
+    rows = []
+    t_via, w_via = np.empty(4), np.empty((2, 2))
+    for p in range(len(starts)):
+        if via_pair(
+            *starts[p], start_times[p], speeds[p], *positions[p], *velocities[p], via_radii[p], growth[p], until[p],
+            envelope[p], t_via, w_via,
+        ):  # fmt: skip
+            for o in range(4):
+                t = t_via[o]
+                if t <= max_time_s:
+                    velocity = (w_via[o % 2] + velocities[p] * t) / t
+                    rows.append((p, o, t, velocity, starts[p] + velocity * t))
+    pair, option, t_k = (np.array([row[i] for row in rows], dtype=int if i < 2 else float) for i in range(3))
+    return (
+        pair,
+        option,
+        t_k,
+        np.array([r[3] for r in rows]).reshape(-1, 2),
+        np.array([r[4] for r in rows]).reshape(-1, 2),
+    )
+
+
+def _first_contacts(leg, people, leg_radii, checked, static):
+    """:func:`viapath.planning.viapath.legs.first_contacts` of legs and people given as in the test below."""
+    from viapath.planning.viapath import legs as leg_steps
+    from viapath.planning.viapath.shapes import NO_SHAPES, static_shapes
+
+    starts, start_times, velocities, durations = leg
+    n = len(people[2])
+    packed = tuple(
+        np.ascontiguousarray(np.broadcast_to(values, (n, 2) if i < 2 else (n,)), float)
+        for i, values in enumerate(people)
+    )
+    shapes = static_shapes(static, np.arange(n) % 3) if static.any() else NO_SHAPES
+    added = np.zeros(len(starts)) if leg_radii is None else leg_radii
+    return leg_steps.first_contacts(starts, start_times, velocities, checked, durations, packed, added, shapes.shape_of)
+
+
 def test_via_options_and_leg_contacts_are_what_they_mean():
     """Random nodes (some on or inside an obstacle's disc, some at rest relative to it) against random
-    people, cones growing or not, capped or not, with and without a braking envelope: every via option
-    meets its obstacle's disc tangentially at the option's time, and each leg's first contact (of the legs to
-    those via points and of random legs) is where dense sampling finds it."""
-    from viapath.planning.viapath.packing import legs_first_contact, via_options
-
+    people, cones growing or not, capped or not, with and without a braking envelope, and some static discs: every
+    via option meets its obstacle's disc tangentially at the option's time, and each leg's first contact (of the
+    legs to those via points and of random legs, a person's up to a horizon, a static disc's to the leg's end) is
+    where dense sampling finds it."""
     rng = np.random.default_rng(21)
-    options = contacts = 0
+    options = contacts = static_contacts = 0
     for case in range(600):
         pairs, n = int(rng.integers(1, 30)), int(rng.integers(1, 12))
         starts = rng.uniform(-3, 3, (pairs, 2))
@@ -299,9 +346,10 @@ def test_via_options_and_leg_contacts_are_what_they_mean():
         _check_via_options(arguments, found)
         options += len(found[0])
 
+        static = (rng.uniform(size=n) < 0.4) & (case % 2 == 0)
         people = (
             rng.uniform(-4, 4, (n, 2)),
-            rng.uniform(-1.2, 1.2, (n, 2)),
+            rng.uniform(-1.2, 1.2, (n, 2)) * ~static[:, None],
             rng.uniform(0.4, 0.8, n),
             rng.uniform(0, 0.2, n) * (case % 2),
             rng.choice([np.inf, 1.5, 3.0], n) if case % 4 else np.inf,
@@ -313,10 +361,12 @@ def test_via_options_and_leg_contacts_are_what_they_mean():
         ]
         for leg in legs:
             leg_radii = rng.uniform(0, 0.3, len(leg[0])) if case % 3 == 0 else None
-            contact = legs_first_contact(*leg, *people, leg_radii)
-            _check_first_contacts(leg, people, leg_radii, contact)
+            checked = leg[3] * (rng.uniform(0.2, 1.0, len(leg[0])) if case % 4 == 0 else 1.0)
+            contact = _first_contacts(leg, people, leg_radii, checked, static)
+            _check_first_contacts(leg, people, leg_radii, contact, checked, static)
             contacts += int(np.isfinite(contact).sum())
-    assert options > 2000 and contacts > 2000
+            static_contacts += int(np.isfinite(contact[:, static]).sum())
+    assert options > 2000 and contacts > 2000 and static_contacts > 300
 
 
 # -- the corridor ----------------------------------------------------------------------------------
@@ -416,56 +466,3 @@ def test_wrap_angle_of_one_angle_is_that_of_an_array():
         for kind in (float, np.float64):
             got = np.array([wrap_angle(kind(angle)) for angle in angles])
             assert _same_bits(got, expected), kind
-
-
-def test_first_leg_is_where_the_plan_first_heads():
-    """The planner asks can_follow's verdict before making a candidate's plan (:meth:`Candidates.first_leg`): the
-    target must be the plan's as first made, its polyline's second point (the subgoal at the slow speed for
-    a slow/wait candidate), bit for bit, for every candidate of 400 situations."""
-    from viapath.planning.viapath.candidates import RootLegs, grow
-
-    kinds = set()
-    for planner, checks in _situations(400, seed=14):
-        speeds, nominal_index = planner.speed_set(checks.speed_mps)
-        candidates = grow(checks, RootLegs.of(checks, speeds, nominal_index), planner.config)
-        for k in range(len(candidates) if candidates is not None else 0):
-            target, speed = candidates.first_leg(k)
-            if candidates.slow_s[k] > 0:
-                expected = (checks.subgoal, float(candidates.slow_speed_mps[k]))
-            else:
-                expected = (candidates.polyline(k)[1], float(candidates.speed_mps[k]))
-            assert _same_bits(target, expected[0]) and _same_bits(speed, expected[1])
-            kinds.add("slow" if candidates.slow_s[k] > 0 else len(candidates.polyline(k)))
-    assert {"slow", 2, 3, 4} <= kinds  # slow/wait, straight, one and two via points
-
-
-def test_tree_columns_are_the_pieces_concatenated():
-    """The candidate tree's columns, filled in place and grown when full, are its pieces concatenated (as
-    the tree first kept them), bit for bit; columns read earlier keep their values (a small capacity, so that
-    it grows several times; a cycle rarely reaches the default)."""
-    from viapath.planning.viapath.candidates import _Tree, _ways
-
-    rng = np.random.default_rng(19)
-    tree, pieces, reads = _Tree(capacity=3), [], []
-    for count in (2, 0, 5, 1, 9, 4):
-        piece = dict(
-            position=rng.normal(size=(count, 2)),
-            time_s=rng.uniform(0, 3, count),
-            speed=rng.uniform(0, 1, count),
-            parent=rng.integers(-1, 5, count),
-            length_m=rng.uniform(0, 9, count),
-            first_direction=rng.normal(size=(count, 2)),
-            way=_ways(count, -2, 1, rng.integers(0, 3, count)),
-        )
-        if count % 2:
-            piece.update(slow_s=rng.uniform(0, 2, count), slow_speed=rng.uniform(0, 0.2, count))
-        nodes = tree.extend(**piece)
-        start = sum(len(p["position"]) for p in pieces)
-        assert np.array_equal(nodes, np.arange(start, start + count))
-        pieces.append(piece)
-        reads.append((tree.stacked(), len(pieces)))
-    for stacked, count in reads:
-        for name in _Tree.COLUMNS:
-            expected = np.concatenate([p.get(name, np.zeros(len(p["position"]))) for p in pieces[:count]])
-            assert _same_bits(stacked[name], expected.astype(stacked[name].dtype)), name
-            assert stacked[name].dtype == expected.dtype, name

@@ -10,22 +10,38 @@ import pytest
 
 from viapath import DesignatedPath, Observation, Obstacles, RobotState
 from viapath.planning import make_planner
-from viapath.planning.viapath.candidates import RootLegs, grow
 from viapath.planning.viapath.checks import LegChecks
+from viapath.planning.viapath.critics import Critic
 from viapath.scenarios import load_scenario
 from viapath.sim.loop import run_episode
+
+
+class _Recorder(Critic):
+    """A critic that costs nothing and keeps the candidates it is shown (the planner's own tree of the cycle)."""
+
+    name = "recorder"
+
+    def __init__(self) -> None:
+        self.seen: list = []
+
+    def score(self, candidates, context):
+        self.seen.append(candidates)
+        return np.zeros(len(candidates))
 
 
 def _side_case(x_m: float, person_y_m: float):
     path = DesignatedPath([[0.0, 0.0], [5.0, 0.0]], half_width_m=1.0)
     planner = make_planner("viapath", path, nominal_speed_mps=0.2)
+    recorder = _Recorder()
+    planner.critics = (*planner.critics, recorder)
     people = Obstacles(np.array([[1.0, person_y_m]]), np.array([[0.0, 0.3]]), np.array([0.25]))
     observation = Observation(0.0, RobotState(np.array([x_m, 0.0]), 0.0, 0.1, 0.0, 0.25), people)
     situation = planner.situation(observation)
     checks = LegChecks.of(situation, planner.config, planner.subgoals, planner.subgoal_policy, 0.25)
     speeds, nominal_index = planner.speed_set(0.1)
-    roots = RootLegs.of(checks, speeds, nominal_index)
-    return planner, checks, speeds, nominal_index, grow(checks, roots, planner.config, planner._slow_checks(checks))
+    planner.plan(observation)
+    (candidates,) = recorder.seen
+    return planner, checks, speeds, nominal_index, candidates
 
 
 @pytest.mark.parametrize(("x_m", "person_y_m"), [(0.0, -1.0), (0.2, -0.5), (0.3, -0.1)])

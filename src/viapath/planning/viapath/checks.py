@@ -13,11 +13,11 @@ What the paper leaves open and we chose:
   blocked intermediate subgoal is given up within the bypass distance (paper Fig. 3), so legs towards
   it need to be free only up to there.
 * Static geometry (rows of the obstacles marked static, velocity 0) is checked over a leg's whole length,
-  past the horizon (its forecast is certain), and keeps no braking envelope (:meth:`LegChecks.contact_times`).
+  past the horizon (its forecast is certain), and keeps no braking envelope
+  (:func:`viapath.planning.viapath.legs.first_contacts`).
 * The corridor check covers whole legs, not only via points. A robot already outside the corridor
-  may not go further out, but may come back (``corridor_tolerance_m``). All corridor checks of the
-  planner go through :meth:`LegChecks.inside`, :meth:`LegChecks.legs_inside` and
-  :meth:`LegChecks.goal_legs_inside`.
+  may not go further out, but may come back (``corridor_tolerance_m``): the compiled corridor checks
+  (:func:`viapath.planning.viapath.legs.legs_inside`, :func:`~viapath.planning.viapath.legs.goal_legs_inside_all`).
 """
 
 from __future__ import annotations
@@ -29,12 +29,12 @@ from typing import Any
 import numpy as np
 
 from viapath.geometry import cross2
-from viapath.kinematics import UnicycleState
-from viapath.observation import MotionLimits, Obstacles
+from viapath.observation import Obstacles
 from viapath.options import Settings
 from viapath.path import DesignatedPath, SubgoalPolicy, SubgoalTracker
 from viapath.planning.base import Inflation, Situation
 from viapath.planning.viapath import packing
+from viapath.planning.viapath.shapes import NO_SHAPES, StaticShapes, static_shapes
 
 # Closer to the path line than this the robot is on the path: the way back is the leg to the subgoal.
 ON_PATH_M = 0.01
@@ -285,8 +285,9 @@ class LegChecks(_CompiledInputs):
         horizon_s: float | None = None,
         keep_envelope: bool = False,
     ) -> np.ndarray:
-        """(K, N) first contact of each leg with each obstacle, up to the horizon; inf = free. With
-        ``keep_envelope`` (and a shield behind the planner) each leg also keeps its braking envelope."""
+        """(K, N) first contact of each leg with each obstacle, up to the horizon (static geometry over the whole
+        leg, :func:`viapath.planning.viapath.legs.first_contacts`); inf = free. With ``keep_envelope`` (and a
+        shield behind the planner) each leg also keeps its braking envelope from people."""
         if len(self.obstacles) == 0:
             return np.full((len(starts), 0), np.inf)
         horizon_s = self.horizon_s if horizon_s is None else horizon_s
@@ -294,78 +295,19 @@ class LegChecks(_CompiledInputs):
         envelope = None
         if keep_envelope and self.envelope_accel_mps2 > 0:
             envelope = self.envelope_m(np.hypot(velocities[:, 0], velocities[:, 1]))
-        obstacles = self.obstacles
-        if obstacles.static_mask is not None:
-            # Static geometry stays put: its forecast holds past the horizon (a leg into a wall is not made free
-            # by driving it slowly) and the braking envelope, for where a person may walk, does not apply.
-            contact = np.empty((len(starts), len(obstacles)))
-            people, static = self._moving_and_static_rows()
-            for (rows, *packed), leg_radii, until in ((people, envelope, checked), (static, None, durations)):
-                if len(rows):
-                    contact[:, rows] = packing.legs_first_contact_packed(
-                        starts, start_times, velocities, until, packed, leg_radii
-                    )
-            return contact
-        return packing.legs_first_contact(
-            starts,
-            start_times,
-            velocities,
-            checked,
-            obstacles.positions,
-            obstacles.velocities,
-            self.check_radii,
-            self.growth,
-            self.growth_until_s,
-            envelope,
+        return packing.first_contacts(
+            starts, start_times, velocities, checked, durations, self.packed_obstacles(), envelope, self.static_shapes()
         )
 
-    def _moving_and_static_rows(self) -> tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]:
-        """The obstacles' rows split into people and static geometry, each as (row indices, positions,
-        velocities, check radii, growth, growth_until_s), made once per LegChecks (every leg check of the
-        cycle takes them)."""
-        cached = self.__dict__.get("_moving_and_static")
+    def static_shapes(self) -> StaticShapes:
+        """The static shapes of the obstacles, as the compiled steps take them (made once per checks)."""
+        cached = self.__dict__.get("_static_shapes")
         if cached is None:
-            obstacles, static = self.obstacles, self.obstacles.is_static
-            cached = self.__dict__["_moving_and_static"] = tuple(
-                (
-                    rows,
-                    np.ascontiguousarray(obstacles.positions[rows], dtype=np.float64),
-                    np.ascontiguousarray(obstacles.velocities[rows], dtype=np.float64),
-                    *(
-                        np.ascontiguousarray(np.broadcast_to(values, static.shape)[rows], dtype=np.float64)
-                        for values in (self.check_radii, self.growth, self.growth_until_s)
-                    ),
-                )
-                for rows in (np.flatnonzero(~static), np.flatnonzero(static))
+            obstacles = self.obstacles
+            cached = self.__dict__["_static_shapes"] = (
+                NO_SHAPES if obstacles.static_mask is None else static_shapes(obstacles.static_mask, obstacles.ids)
             )
         return cached
-
-    def static_labels(self) -> np.ndarray:
-        """(N,) for each obstacle the static shape it belongs to (its id; -1: a person)."""
-        cached = self.__dict__.get("_static_labels")
-        if cached is None:
-            cached = self.__dict__["_static_labels"] = np.where(self.obstacles.is_static, self.obstacles.ids, -1)
-        return cached
-
-    def static_extremes(self, start: np.ndarray, obstacle: int) -> tuple[int, int]:
-        """The discs of ``obstacle``'s static shape whose via discs reach furthest to the left and to the right as
-        seen from ``start`` (docs/design.md §10: the tangents to a shape's inflated outline are the tangents to its
-        extreme discs); the obstacle itself twice for a person or when ``start`` is inside the shape's reach."""
-        labels = self.static_labels()
-        label = labels[obstacle]
-        if label < 0:
-            return obstacle, obstacle
-        members = np.flatnonzero(labels == label)
-        offset = self.obstacles.positions[members] - start
-        distance = np.hypot(offset[:, 0], offset[:, 1])
-        radii = self.via_radii[members]
-        if np.any(distance <= radii):
-            return obstacle, obstacle
-        heading = np.arctan2(offset[:, 1], offset[:, 0])
-        reference = heading[members == obstacle][0]
-        relative = (heading - reference + np.pi) % (2 * np.pi) - np.pi
-        half = np.arcsin(radii / distance)
-        return int(members[np.argmax(relative + half)]), int(members[np.argmin(relative - half)])
 
     def legs_free(
         self, starts: np.ndarray, start_times: np.ndarray, velocities: np.ndarray, durations: np.ndarray
@@ -375,43 +317,12 @@ class LegChecks(_CompiledInputs):
     def goal_legs(
         self, starts: np.ndarray, start_times: np.ndarray, speeds: np.ndarray, horizon_s: float | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N)). Without
-        static geometry in one compiled call; with it, static rows are checked past the horizon without the
-        braking envelope (:meth:`contact_times`)."""
-        if self.obstacles.static_mask is None:
-            return packing.goal_legs(
-                self, starts, start_times, speeds, self.horizon_s if horizon_s is None else horizon_s
-            )
-        offset = self.subgoal - starts
-        lengths = np.hypot(offset[:, 0], offset[:, 1])
-        directions = offset / np.maximum(lengths, 1e-12)[:, None]
-        durations = np.maximum(lengths - self.stop_short_m, 0.0) / speeds
-        velocities = directions * speeds[:, None]
-        if self.continuation is not None and len(self.obstacles):
-            # The leg and its continuation past the subgoal, checked in one call (2K legs).
-            direction, length = self.continuation
-            count = len(starts)
-            both = self.contact_times(
-                np.concatenate([starts, np.broadcast_to(self.subgoal, starts.shape)]),
-                np.concatenate([start_times, start_times + durations]),
-                np.concatenate([velocities, direction * speeds[:, None]]),
-                np.concatenate([durations, length / speeds]),
-                horizon_s,
-                keep_envelope=True,
-            )
-            contact = np.minimum(both[:count], both[count:] + durations[:, None])
-        else:
-            contact = self.contact_times(starts, start_times, velocities, durations, horizon_s, keep_envelope=True)
-        free = np.isinf(contact).all(axis=1)
-        if free.any():  # (when every leg meets someone, as in the slowest cycles, the corridor cannot free one)
-            free &= self.goal_legs_inside(starts)
-        return directions, lengths, free, contact
+        """Straight legs from nodes to the subgoal: (directions, lengths, free (K,), contact (K, N)), in one
+        compiled call (:func:`viapath.planning.viapath.legs.goal_legs`; static rows checked past the horizon
+        without the braking envelope)."""
+        return packing.goal_legs(self, starts, start_times, speeds, self.horizon_s if horizon_s is None else horizon_s)
 
     # -- the compiled steps the recipe calls -------------------------------------------------------
-
-    def via_options(self, *arguments: Any) -> tuple[np.ndarray, ...]:
-        """:func:`viapath.planning.viapath.packing.via_options`."""
-        return packing.via_options(*arguments)  # type: ignore[no-untyped-call]
 
     def clear(self, positions: np.ndarray, dt: float) -> bool:
         """Whether robot positions, one per ``dt`` from now, keep clear of every obstacle (closer than its check
@@ -420,39 +331,10 @@ class LegChecks(_CompiledInputs):
             return True
         return packing.clear(positions, dt, self.position, self.packed_obstacles())
 
-    def clear_track(
-        self,
-        state: UnicycleState,
-        target: np.ndarray,
-        speed_mps: float,
-        limits: MotionLimits,
-        dt: float,
-        steps: int,
-        heading_gain: float,
-    ) -> np.ndarray | None:
-        """The positions (steps, 2) of steering for ``target`` at ``speed_mps`` (:func:`viapath.kinematics.track`) if
-        they keep clear of every obstacle (:meth:`clear`), else None."""
-        positions = packing.track(state, target, speed_mps, limits, dt, steps, heading_gain)
-        return positions if self.clear(positions, dt) else None
-
     # -- against the corridor (paper step 4) ---------------------------------------------------------
-
-    def inside(self, points: np.ndarray) -> np.ndarray:
-        """Which points are inside the corridor (or no further out than the robot is now)."""
-        return self.path.corridor_excess(points) <= self.corridor_tolerance_m
 
     def legs_inside(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
         return packing.legs_inside(self.path, starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m)
-
-    def goal_legs_inside(self, starts: np.ndarray) -> np.ndarray:
-        return packing.goal_legs_inside(
-            self.path,
-            starts,
-            self.subgoal,
-            self.subgoal_index,
-            self.corridor_check_spacing_m,
-            self.corridor_tolerance_m,
-        )
 
 
 _FLOAT64 = np.dtype(np.float64)  # (an identity test: numpy's float64 arrays share this descriptor; another fails it)

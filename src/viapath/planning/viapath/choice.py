@@ -1,7 +1,7 @@
 """The planner's choice (paper steps 1-4: step 1, the candidates, Eq. 1, the cheapest the robot can follow) in
 one compiled call, :func:`viapath.planning.viapath.packing.choose`, up to the shield's check of the candidate it
-found; a candidate the shield refuses sends the search on to the next ones here. Taken by every cycle without
-static geometry whose critics are the paper's and which records no candidate polylines (:func:`uses_compiled_choice`).
+found; a candidate the shield refuses sends the search on to the next ones here. Every cycle takes it, with static
+geometry in view or not; critics beyond the paper's (:func:`extra_critics`) are scored between its two halves.
 """
 
 from __future__ import annotations
@@ -15,9 +15,9 @@ import numpy as np
 from viapath.planning.base import Plan
 from viapath.planning.viapath import packing
 from viapath.planning.viapath import slots as slot
-from viapath.planning.viapath.candidates import Choice, Way
+from viapath.planning.viapath.candidates import Choice, Way, candidates_of
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.critics import PAPER_CRITICS
+from viapath.planning.viapath.critics import PAPER_CRITICS, Context, Critic
 from viapath.planning.viapath.follow import can_follow
 from viapath.planning.viapath.packing import CompiledChoice, NodeStore
 from viapath.planning.viapath.plans import (
@@ -33,15 +33,38 @@ if TYPE_CHECKING:
     from viapath.planning.viapath.critics import Distance, Heading, Hysteresis, SidePreference, SpeedError, Time
 
 
-def uses_compiled_choice(planner: Planning) -> bool:
-    """Whether the planner's choice runs as :func:`choose_compiled`: the paper's critics (the compiled choice sums
-    exactly those) and no candidate polylines to record."""
-    config, critics = planner.config, planner.critics
-    cached = planner.__dict__.get("_compiled_choice_of")  # (options, critics, the answer): every cycle asks
-    if cached is None or cached[0] is not config or cached[1] is not critics:
-        answer = not config.record_candidates and tuple(map(type, critics)) == PAPER_CRITICS
-        cached = planner.__dict__["_compiled_choice_of"] = (config, critics, answer)
-    return cached[2]
+def extra_critics(planner: Planning) -> tuple[Critic, ...]:
+    """The planner's critics after the paper's (:data:`.critics.PAPER_CRITICS`, which the compiled choice sums
+    itself): the choice scores these with their own ``score`` between its two halves. The critics must begin
+    with the paper's, in Eq. 1's order (:func:`.critics.critics_for`)."""
+    critics = planner.critics
+    cached = planner.__dict__.get("_extra_critics")  # (critics, the answer): every cycle asks
+    if cached is None or cached[0] is not critics:
+        if tuple(map(type, critics[: len(PAPER_CRITICS)])) != PAPER_CRITICS:
+            raise ValueError(
+                "planner.critics: expected the paper's critics first (critics_for(config)), then any others; found "
+                + ", ".join(type(critic).__name__ for critic in critics)
+            )
+        cached = planner.__dict__["_extra_critics"] = (critics, tuple(critics[len(PAPER_CRITICS) :]))
+    return cached[1]
+
+
+def _extra_terms(
+    planner: Planning, checks: LegChecks, previous: Choice | None
+) -> Callable[[NodeStore, np.ndarray], np.ndarray] | None:
+    """The scoring of :func:`extra_critics` for :func:`.packing.choose` (None: there are none)."""
+    critics = extra_critics(planner)
+    if not critics:
+        return None
+    context = Context(checks.heading_rad, planner.nominal_speed_mps, previous)
+
+    def terms(store: NodeStore, leaves: np.ndarray) -> np.ndarray:
+        candidates = candidates_of(store, checks.subgoal)
+        return np.array([critic.score(candidates, context) for critic in critics], dtype=np.float64).reshape(
+            len(critics), len(leaves)
+        )
+
+    return terms
 
 
 def _choice_constants(planner: Planning) -> tuple[Any, ...]:
@@ -58,8 +81,8 @@ def _choice_constants(planner: Planning) -> tuple[Any, ...]:
     ):
         return cached[4]
     distance, time, speed, heading, side, hysteresis = cast(
-        "tuple[Distance, Time, SpeedError, Heading, SidePreference, Hysteresis]", planner.critics
-    )  # the paper's critics (PAPER_CRITICS): the only ones the compiled choice sums
+        "tuple[Distance, Time, SpeedError, Heading, SidePreference, Hysteresis]", planner.critics[: len(PAPER_CRITICS)]
+    )  # the paper's critics (PAPER_CRITICS, first: extra_critics): the ones the compiled choice sums itself
     settings = np.zeros(slot.F_COUNT, dtype=np.float64)
     settings[[slot.F_K1, slot.F_K2, slot.F_K3, slot.F_K4, slot.F_SIDE, slot.F_HYSTERESIS]] = (
         distance.weight,
@@ -108,7 +131,8 @@ def choose_compiled(
     candidate the shield refuses sends the search on to the next ones here (:func:`_first_admitted`)."""
     settings, integers, slow_times = _cycle_settings(planner, checks, nominal_index, previous, only_way)
     slow_checks = planner._slow_checks(checks)
-    chosen = packing.choose(checks, slow_checks, speeds, slow_times, settings, integers)
+    extra = _extra_terms(planner, checks, previous)
+    chosen = packing.choose(checks, slow_checks, speeds, slow_times, settings, integers, extra)
     if chosen.status == slot.STEP_ONE:
         plan = straight_plan(checks, float(speeds[nominal_index]))
         if chosen.turn_in_place:
@@ -116,7 +140,7 @@ def choose_compiled(
         if planner._inside_shield(plan):
             return straight_chosen(plan)
         integers[slot.C_TRY_STRAIGHT] = 0  # the shield refused it: the candidates decide
-        chosen = packing.choose(checks, slow_checks, speeds, slow_times, settings, integers)
+        chosen = packing.choose(checks, slow_checks, speeds, slow_times, settings, integers, extra)
     if chosen.status != slot.CANDIDATES or chosen.first < 0:  # first: the ranks before it do not follow
         return None
     return _first_admitted(planner, chosen, checks)
@@ -165,7 +189,7 @@ def _first_admitted(planner: Planning, chosen: CompiledChoice, checks: LegChecks
         verdict = follow[rank]
         if verdict == 0:
             continue
-        plan = _plan_of_nodes(planner, store, leaves, best, total, checks)
+        plan = _plan_of_nodes(store, leaves, best, total, checks, _polylines(planner, store, leaves, checks))
         if verdict < 0:  # past the first that follows: only after the shield refused that one
             verdict = can_follow(plan, checks, planner.limits, planner.config)
         elif verdict == 2:
@@ -193,39 +217,50 @@ def _cost_breakdown(planner: Planning, terms: np.ndarray) -> Callable[[int], dic
     return lambda k: dict(zip(names, terms[:, k].tolist()))
 
 
+def _polylines(planner: Planning, store: NodeStore, leaves: np.ndarray, checks: LegChecks) -> list[np.ndarray]:
+    """Every candidate's polyline, with ``record_candidates`` (else none)."""
+    if not planner.config.record_candidates:
+        return []
+    return [_line(store, int(node), checks) for node in leaves]
+
+
+def _line(store: NodeStore, node: int, checks: LegChecks) -> np.ndarray:
+    """The polyline of the candidate ending in ``node``: from the robot through its via points to the subgoal."""
+    points = [checks.subgoal]
+    while node >= 0:
+        points.append(store.position(node))
+        node = store.parent(node)
+    return np.array(points[::-1])
+
+
 def _plan_of_nodes(
-    planner: Planning, store: NodeStore, leaves: np.ndarray, k: int, total: np.ndarray, checks: LegChecks
+    store: NodeStore, leaves: np.ndarray, k: int, total: np.ndarray, checks: LegChecks, polylines: list[np.ndarray]
 ) -> Plan:
-    """:meth:`_plan_of` from the compiled tree's node store."""
+    """The plan of candidate ``k`` of the compiled tree's node store."""
     node = int(leaves[k])
     speed_after, slow_s, slow_speed = store.slowing(node)
+    common: dict[str, Any] = dict(
+        subgoal_index=checks.subgoal_index,
+        candidate_count=len(leaves),
+        candidate_costs=total,
+        candidate_polylines=polylines,
+        chosen=k,
+    )
     if slow_s > 0:
         return Plan(
             "wait" if slow_speed == 0.0 else "slow",
             slow_speed,
             checks.subgoal.copy(),
             waypoints=np.array([checks.position, checks.subgoal]),
-            subgoal_index=checks.subgoal_index,
-            candidate_count=len(leaves),
-            candidate_costs=total,
-            candidate_polylines=[],
-            chosen=k,
             extras={"slow_s": slow_s, "speed_after_mps": speed_after},
+            **common,
         )
-    points = [checks.subgoal]
-    while node >= 0:
-        points.append(store.position(node))
-        node = store.parent(node)
-    line = np.array(points[::-1])
+    line = _line(store, node, checks)
     return Plan(
         "avoid" if len(line) > 2 else "straight",
         speed_after,
         line[1].copy(),
         via_points=line[1:-1].copy(),
         waypoints=line,
-        subgoal_index=checks.subgoal_index,
-        candidate_count=len(leaves),
-        candidate_costs=total,
-        candidate_polylines=[],
-        chosen=k,
+        **common,
     )

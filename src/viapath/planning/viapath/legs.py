@@ -155,6 +155,55 @@ def legs_first_contact(
 
 
 @compiled
+def _cylinder_only_by_kind(growth, growth_until_s, shape_of):
+    """:func:`_cylinder_only` of the people and of the static discs (``shape_of`` >= 0), each on its own; of all
+    obstacles for both without static geometry (an empty ``shape_of``)."""
+    if shape_of.shape[0] == 0:
+        both = _cylinder_only(growth, growth_until_s)
+        return both, both
+    growth_of = np.zeros(2, np.bool_)  # [people, static]
+    finite_of = np.zeros(2, np.bool_)
+    for j in range(growth.shape[0]):
+        kind = 1 if shape_of[j] >= 0 else 0
+        growth_of[kind] = growth_of[kind] or growth[j] != 0.0
+        finite_of[kind] = finite_of[kind] or math.isfinite(growth_until_s[j])
+    return (not growth_of[0]) or (not finite_of[0]), (not growth_of[1]) or (not finite_of[1])
+
+
+@compiled
+def first_contacts(starts, start_times, velocities, checked, durations, obstacles, leg_radii, shape_of):
+    """(K, N) first contact of each leg with each obstacle (:func:`legs_first_contact`): a person's up to the leg's
+    ``checked`` time (the horizon), with the leg's ``leg_radii`` added; a static disc's (``shape_of`` >= 0) over
+    the leg's whole ``durations`` with none added: static geometry stays put, a leg into a wall is not made free
+    by driving it slowly, and the braking envelope is for where people may walk."""
+    obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
+    k_count = starts.shape[0]
+    n_count = obstacle_positions.shape[0]
+    out = np.empty((k_count, n_count))
+    people_cylinders, static_cylinders = _cylinder_only_by_kind(growth, growth_until_s, shape_of)
+    any_static = shape_of.shape[0] > 0
+    for k in range(k_count):
+        for j in range(n_count):
+            static = any_static and shape_of[j] >= 0
+            out[k, j] = _leg_contact(
+                starts,
+                start_times,
+                velocities,
+                durations if static else checked,
+                obstacle_positions,
+                obstacle_velocities,
+                radii,
+                growth,
+                growth_until_s,
+                0.0 if static else leg_radii[k],
+                static_cylinders if static else people_cylinders,
+                k,
+                j,
+            )
+    return out
+
+
+@compiled
 def clip(value, low, high):
     return low if value < low else high if value > high else value
 
@@ -327,12 +376,12 @@ def excess_at_most(px, py, segment_starts, segment_directions, segment_lengths, 
 
 
 @compiled
-def goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corridor):
-    """:func:`goal_legs` on its records."""
+def goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corridor, shape_of):
+    """:func:`goal_legs` on its records; ``shape_of``: :class:`.shapes.StaticShapes`' (static discs checked to
+    the legs' end, without the braking envelope: :func:`first_contacts`)."""
     subgoal, stop_short_m, continuation, envelope, _, _, _ = goal
-    obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
     k_count = starts.shape[0]
-    n_count = obstacle_positions.shape[0]
+    n_count = obstacles[0].shape[0]
     two = continuation.shape[0] == 3 and n_count > 0
     legs = 2 * k_count if two else k_count
     directions = np.empty((k_count, 2))
@@ -381,17 +430,8 @@ def goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corrid
                 leg_radii[m] = half_accel * (stop_s * stop_s)
             else:
                 leg_radii[m] = 0.0
-        both = legs_first_contact(
-            leg_starts,
-            leg_times,
-            leg_velocities,
-            checked,
-            obstacle_positions,
-            obstacle_velocities,
-            radii,
-            growth,
-            growth_until_s,
-            leg_radii,
+        both = first_contacts(
+            leg_starts, leg_times, leg_velocities, checked, leg_durations, obstacles, leg_radii, shape_of
         )
         for k in range(k_count):
             for j in range(n_count):
@@ -444,6 +484,7 @@ def goal_legs(
     subgoal_index,
     spacing_m,
     tolerance_m,
+    shape_of,
 ):
     """The compiled form of :meth:`viapath.planning.viapath.checks.LegChecks.goal_legs`, whole: the straight
     legs from K nodes to the subgoal (with the continuation past an intermediate subgoal as K more legs),
@@ -452,11 +493,12 @@ def goal_legs(
     three kernels and some thirty small array operations; called a few times every cycle.
 
     ``continuation`` is (dx, dy, length) or empty (none); ``envelope`` is (person accel, period, robot
-    accel), accel 0 for none. Returns (directions (K, 2), lengths (K,), free (K,), contact (K, N))."""
+    accel), accel 0 for none; ``shape_of`` :class:`.shapes.StaticShapes`' (empty: no static geometry). Returns
+    (directions (K, 2), lengths (K,), free (K,), contact (K, N))."""
     goal = (subgoal, stop_short_m, continuation, envelope, subgoal_index, spacing_m, tolerance_m)
     obstacles = (obstacle_positions, obstacle_velocities, radii, growth, growth_until_s)
     corridor = (segment_starts, segment_directions, segment_lengths, half_widths)
-    return goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corridor)
+    return goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corridor, shape_of)
 
 
 @compiled
@@ -502,8 +544,9 @@ def goal_legs_inside_all(corridor, starts, goal):
 
 
 @compiled
-def legs_free(starts, start_times, velocities, durations, horizon_s, obstacles):
-    """LegChecks.legs_free: no contact up to the horizon, plain radii (no braking envelope). Leg by leg, up to
+def legs_free(starts, start_times, velocities, durations, horizon_s, obstacles, shape_of):
+    """LegChecks.legs_free: no contact with a person up to the horizon nor with static geometry (``shape_of`` >= 0:
+    :class:`.shapes.StaticShapes`') over the whole leg, plain radii (no braking envelope). Leg by leg, up to
     its first contact: whether any contact is finite (or NaN) is all that is asked. ``obstacles``: the record
     (positions, velocities, radii, growth, growth until)."""
     obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
@@ -511,25 +554,27 @@ def legs_free(starts, start_times, velocities, durations, horizon_s, obstacles):
     checked = np.empty(k_count)
     for k in range(k_count):
         checked[k] = clip(horizon_s - start_times[k], 0.0, durations[k])
-    cylinder_only = _cylinder_only(growth, growth_until_s)
+    people_cylinders, static_cylinders = _cylinder_only_by_kind(growth, growth_until_s, shape_of)
+    any_static = shape_of.shape[0] > 0
     free = np.empty(k_count, np.bool_)
     for k in range(k_count):
         ok = True
         for j in range(obstacle_positions.shape[0]):
+            static = any_static and shape_of[j] >= 0
             # leg radius 0.0, as legs_first_contact with np.zeros(k_count)
             if not math.isinf(
                 _leg_contact(
                     starts,
                     start_times,
                     velocities,
-                    checked,
+                    durations if static else checked,
                     obstacle_positions,
                     obstacle_velocities,
                     radii,
                     growth,
                     growth_until_s,
                     0.0,
-                    cylinder_only,
+                    static_cylinders if static else people_cylinders,
                     k,
                     j,
                 )

@@ -3,19 +3,18 @@
 the compiled functions take them (C-contiguous float64, one value per obstacle) and reads what they hand back by
 name (:class:`NodeStore`, :class:`CompiledChoice`).
 
-A cycle without static geometry runs its whole choice in one call (:func:`choose`), its escape in two
-(:func:`escape`). A cycle with static geometry in view runs the recipe's steps in
-:mod:`viapath.planning.viapath.candidates` (the extremes of static shapes and the slides are not compiled) with
-these calls for its leg checks, via points, corridor checks and roll-outs.
+A cycle runs its whole choice in one call (:func:`choose`), its escape in two (:func:`escape`); the recipe's
+extensions (the way back, the outrun hold, the kept way, the closed way) call the leg checks on their own.
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
 from typing import Any, NamedTuple
 
 import numpy as np
 
-from viapath.kinematics import UnicycleState
 from viapath.observation import MotionLimits
 from viapath.planning.viapath import escape_figures as escape_steps
 from viapath.planning.viapath import legs as leg_steps
@@ -42,7 +41,7 @@ class NodeStore(NamedTuple):
     integers: np.ndarray  # (M, slots.NODE_INTEGERS)
 
     def columns(self) -> dict[str, np.ndarray]:
-        """The columns as :func:`viapath.planning.viapath.candidates.grow` names them (views, no copies)."""
+        """The columns by name, as :class:`.candidates.Candidates` reads them (views, no copies)."""
         floats, integers = self.floats, self.integers
         return {
             "position": floats[:, slot.N_X : slot.N_Y + 1],
@@ -100,56 +99,14 @@ class CompiledChoice(NamedTuple):
     store: NodeStore
 
 
-def legs_first_contact_packed(
-    starts, start_times, velocities, durations, packed_obstacles, leg_radii_m=None
+def first_contacts(
+    starts, start_times, velocities, checked, durations, packed_obstacles, leg_radii_m, shapes
 ) -> np.ndarray:
-    """(K, N) first contact of each leg with each obstacle, inf = free (:func:`.legs.legs_first_contact`);
-    ``packed_obstacles``: positions, velocities, radii, growth, growth_until_s, C-contiguous float64, one row or
-    value per obstacle, as a cycle's checks keep them."""
+    """(K, N) first contact of each leg with each obstacle, inf = free (:func:`.legs.first_contacts`): people up to
+    ``checked``, with ``leg_radii_m`` (None: none), static geometry over the whole ``durations``."""
     legs = np.zeros(len(starts)) if leg_radii_m is None else _c(leg_radii_m)
-    return _legs.legs_first_contact(_c(starts), _c(start_times), _c(velocities), _c(durations), *packed_obstacles, legs)
-
-
-def legs_first_contact(
-    starts,
-    start_times,
-    velocities,
-    durations,
-    positions,
-    velocities_obs,
-    radii,
-    growth,
-    growth_until_s,
-    leg_radii_m=None,
-) -> np.ndarray:
-    """:func:`legs_first_contact_packed` of obstacles given as arrays (a scalar radius or growth for all)."""
-    n = len(positions)
-    obstacles = (
-        _c(positions),
-        _c(velocities_obs),
-        _per_obstacle(radii, n),
-        _per_obstacle(growth, n),
-        _per_obstacle(growth_until_s, n),
-    )
-    return legs_first_contact_packed(starts, start_times, velocities, durations, obstacles, leg_radii_m)
-
-
-def via_options(
-    starts, start_times, speeds, positions, velocities, via_radii, growth, growth_until_s, envelope_m, max_time_s
-):
-    """The via points of (node, obstacle) pairs, both sides and both roots (:func:`.via.via_options`)."""
-    n = len(starts)
-    return _via.via_options(
-        _c(starts),
-        _c(start_times),
-        _c(speeds),
-        _c(positions),
-        _c(velocities),
-        _per_obstacle(via_radii, n),
-        _per_obstacle(growth, n),
-        _per_obstacle(growth_until_s, n),
-        _per_obstacle(envelope_m, n),
-        float(max_time_s),
+    return _legs.first_contacts(
+        _c(starts), _c(start_times), _c(velocities), _c(checked), _c(durations), packed_obstacles, legs, shapes.shape_of
     )
 
 
@@ -163,23 +120,8 @@ def legs_inside(path, starts, ends, spacing_m: float, tolerance_m: float) -> np.
     )
 
 
-def goal_legs_inside(path, starts, subgoal, subgoal_index: int, spacing_m: float, tolerance_m: float) -> np.ndarray:
-    """Which legs from ``starts`` to the subgoal stay in the corridor."""
-    inside = _legs.goal_legs_inside(*_corridor(path), _c(starts), int(subgoal_index), float(tolerance_m))
-    if not inside.all():
-        rest = np.flatnonzero(~inside)
-        inside[rest] = _legs.legs_inside(
-            *_corridor(path),
-            _c(starts[rest]),
-            _c(np.broadcast_to(subgoal, (len(rest), 2))),
-            float(spacing_m),
-            float(tolerance_m),
-        )
-    return inside
-
-
 def goal_legs(checks, starts, start_times, speeds, horizon_s: float):
-    """:meth:`.checks.LegChecks.goal_legs` of a cycle without static geometry in one compiled call."""
+    """:meth:`.checks.LegChecks.goal_legs` in one compiled call."""
     obstacles = checks.packed_obstacles()
     return _legs.goal_legs(
         _c(starts),
@@ -195,67 +137,26 @@ def goal_legs(checks, starts, start_times, speeds, horizon_s: float):
         int(checks.subgoal_index),
         float(checks.corridor_check_spacing_m),
         float(checks.corridor_tolerance_m),
+        checks.static_shapes().shape_of,
     )
 
 
-def grow(checks, slow_checks, roots, config) -> NodeStore:
-    """The whole candidate tree of a cycle without static geometry in one compiled call: its :class:`NodeStore`."""
-    positions, velocities, radii, growth, until = checks.packed_obstacles()
-    _, _, slow_radii, slow_growth, slow_until = slow_checks.packed_obstacles()
-    path = checks.path
-    index = int(checks.subgoal_index)
-    # The robot's segment matters only when a corner can lie between it and the subgoal.
-    segment = int(path.project(checks.position)[0]) if index >= 2 else 0
-    slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
-    root_legs = (
-        _c(roots.directions),
-        _c(roots.lengths),
-        np.ascontiguousarray(roots.free, dtype=np.bool_),
-        _c(roots.contact),
-    )
-    via = (
-        _per_obstacle(checks.via_radii, len(positions)),
-        np.ascontiguousarray(checks.obstacles.ids, dtype=np.int64),
-    )
-    slow = (slow_radii, slow_growth, slow_until, slow_times, float(config.creep_speed_mps))
-    goal = (
-        _c(checks.subgoal),
-        float(checks.stop_short_m),
-        checks.packed_continuation(),
-        checks.packed_envelope(),
-        index,
-        float(checks.corridor_check_spacing_m),
-        float(checks.corridor_tolerance_m),
-    )
-    obstacles = (positions, velocities, radii, growth, until)
-    tree = (
-        _c(path.waypoints),
-        segment,
-        bool(len(slow_times)),
-        int(config.max_depth),
-        int(config.max_root_obstacles),
-    )
-    store = _tree.grow(
-        _c(checks.position),
-        _c(roots.speeds),
-        int(roots.nominal_index),
-        root_legs,
-        via,
-        slow,
-        float(checks.horizon_s),
-        goal,
-        obstacles,
-        _corridor(path),
-        tree,
-    )
-    return NodeStore(*store)
-
-
-def choose(checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.ndarray, integers: np.ndarray):
+def choose(
+    checks,
+    slow_checks,
+    speeds,
+    slow_times: np.ndarray,
+    settings: np.ndarray,
+    integers: np.ndarray,
+    extra_terms: Callable[[NodeStore, np.ndarray], np.ndarray] | None = None,
+):
     """The planner's choice up to its shield check in one compiled call (roots, step 1, the candidate tree,
     Eq. 1's critics, the order and the roll-outs up to the first candidate that follows):
     :func:`.selection.choose`, as a :class:`CompiledChoice`. ``slow_times`` (float64),
-    ``settings`` and ``integers`` are the kernel's (slots: :mod:`.slots`), filled in by the planner."""
+    ``settings`` and ``integers`` are the kernel's (slots: :mod:`.slots`), filled in by the planner. With
+    ``extra_terms`` (the terms (E, K) of critics after the paper's, of the tree's node store and its leaves) the
+    choice takes two compiled calls, :func:`.selection.choose_tree` and :func:`.selection.choose_ranked`, and
+    ``extra_terms`` between them; its terms join the choice's ``terms`` before their sum."""
     (
         robot,
         positions,
@@ -276,32 +177,29 @@ def choose(checks, slow_checks, speeds, slow_times: np.ndarray, settings: np.nda
     _, _, slow_radii, slow_growth, slow_until = (
         (positions, velocities, radii, growth, until) if slow_checks is checks else slow_checks.packed_obstacles()
     )
-    found, floats, integers, costs = _selection.choose(
-        robot,
-        _c(speeds),
-        _c(checks.subgoal),
-        positions,
-        velocities,
-        radii,
-        growth,
-        until,
-        via_radii,
-        ids,
-        slow_radii,
-        slow_growth,
-        slow_until,
-        slow_times,
-        continuation,
-        envelope,
-        starts,
-        directions,
-        lengths,
-        half_widths,
-        waypoints,
-        settings,
-        integers,
+    obstacles = (positions, velocities, radii, growth, until)
+    via = (via_radii, ids, checks.static_shapes())
+    slow = (slow_radii, slow_growth, slow_until, slow_times)
+    corridor = (starts, directions, lengths, half_widths)
+    if extra_terms is None:
+        found, floats, integers, costs = _selection.choose(
+            robot, _c(speeds), _c(checks.subgoal), *obstacles, *via, *slow, continuation, envelope, *corridor,
+            waypoints, settings, integers,
+        )  # fmt: skip
+        return _choice_of(found, floats, integers, costs)
+    found, floats, integers_store, facts = _selection.choose_tree(
+        robot, _c(speeds), _c(checks.subgoal), obstacles, via, (*slow, float(settings[slot.F_CREEP])), continuation,
+        envelope, corridor, waypoints, settings, integers,
+    )  # fmt: skip
+    store = NodeStore(floats, integers_store)
+    extra = _c(extra_terms(store, found[slot.FOUND_LEAVES :]) if found[0] == slot.CANDIDATES else np.empty((0, 0)))
+    found, costs = _selection.choose_ranked(
+        robot, found, floats, integers_store, facts, extra, obstacles, corridor, settings, integers
     )
-    return _choice_of(found, floats, integers, costs)
+    choice = _choice_of(found, floats, integers_store, costs)
+    return choice._replace(
+        terms=np.concatenate([choice.terms[: slot.COST_TERMS], extra, choice.terms[slot.COST_SUM :]])
+    )
 
 
 def escape(checks, limits: MotionLimits, config, fan, previous=None, score_standing: bool = False):
@@ -364,33 +262,33 @@ def clear(positions, dt_s: float, robot_position, packed_obstacles) -> bool:
     )
 
 
-def track(
-    state: UnicycleState,
-    target,
-    speed_mps: float,
-    limits: MotionLimits,
-    dt_s: float,
-    steps: int,
-    heading_gain: float = 2.5,
-) -> np.ndarray:
-    """(steps, 2) positions of the robot steering for ``target`` with :func:`viapath.kinematics.steer_towards`, each
-    step as :func:`viapath.kinematics.step` moves it (:func:`.rollout.track`)."""
-    return _rollout.track(
-        float(state.x),
-        float(state.y),
-        float(state.heading_rad),
-        float(state.speed_mps),
-        float(state.turn_rate_radps),
-        float(target[0]),
-        float(target[1]),
-        float(speed_mps),
-        float(limits.max_speed_mps),
-        float(limits.max_turn_rate_radps),
-        float(limits.max_accel_mps2),
-        float(limits.max_turn_accel_radps2),
-        float(dt_s),
-        int(steps),
-        float(heading_gain),
+def can_follow(checks, target, speed_mps: float, limits: MotionLimits, config) -> int:
+    """:func:`.rollout.can_follow` of steering for ``target`` at ``speed_mps`` from the robot of ``checks``: 0
+    cannot, 1 can, 2 can after turning on the spot first."""
+    settings = np.zeros(slot.F_COUNT, dtype=np.float64)
+    settings[slot.F_ROLLOUT_HEADING] = config.rollout_heading_rad
+    settings[slot.F_ACCEL] = limits.max_accel_mps2
+    settings[slot.F_DT] = config.rollout_dt_s
+    settings[slot.F_TURN_RATE] = limits.max_turn_rate_radps
+    settings[slot.F_TURN_ACCEL] = limits.max_turn_accel_radps2
+    settings[slot.F_SPEED] = limits.max_speed_mps
+    settings[slot.F_GAIN] = config.heading_gain
+    settings[slot.F_TURN_IN_PLACE] = config.turn_in_place_min_rad
+    settings[slot.F_TOLERANCE] = checks.corridor_tolerance_m
+    robot = checks.packed_robot()
+    x, y = float(target[0]), float(target[1])
+    return int(
+        _rollout.can_follow(
+            robot,
+            x,
+            y,
+            math.atan2(y - robot[1], x - robot[0]),  # libm's, as the compiled choice takes it
+            float(speed_mps),
+            settings,
+            max(1, int(round(config.rollout_s / config.rollout_dt_s))),
+            checks.packed_obstacles(),
+            _corridor(checks.path),
+        )
     )
 
 
@@ -436,10 +334,3 @@ def _corridor(path):
         )
         path._kernel_arrays = arrays
     return arrays
-
-
-def _per_obstacle(values, n: int) -> np.ndarray:
-    """One float64 per obstacle (a scalar is repeated)."""
-    if isinstance(values, np.ndarray) and values.shape == (n,):
-        return _c(values)
-    return np.full(n, values, dtype=np.float64) if np.ndim(values) == 0 else _c(np.broadcast_to(values, (n,)))

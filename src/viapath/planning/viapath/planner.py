@@ -5,9 +5,10 @@ Source: Yamada, Sa, Ohya, §3 (procedure steps 1-5, Eq. 1), after Tsubouchi et a
 step is a module of this package, named after it:
 
 1. situation (:mod:`.checks`): the subgoal, the people with their capped uncertainty cones, the corridor;
-2. candidates (:mod:`.candidates`): for every speed of the set (:meth:`ViaPathPlanner.speed_set`), the
-   straight leg, via points chained through further obstacles, slow/wait, the way back through the
-   path's corners (paper step 1: a free straight leg at the nominal speed is the plan at once);
+2. candidates (:mod:`.candidates`, grown by :mod:`.tree`): for every speed of the set
+   (:meth:`ViaPathPlanner.speed_set`), the straight leg, via points chained through further obstacles, slow/wait,
+   the way back through the path's corners (paper step 1: a free straight leg at the nominal speed is the plan
+   at once);
 3. costs (:mod:`.critics`): Eq. 1 as critics, plus side preference and hysteresis;
 4. follow (:mod:`.follow`): the cheapest candidate whose first leg the robot can follow within its
    motion limits and, with a shield behind the planner (docs/design.md §7), whose command the shield admits
@@ -15,8 +16,8 @@ step is a module of this package, named after it:
 5. command: steer for the plan's target at the plan's speed (turning on the spot first if needed);
 6. escape (:mod:`.escape`): stop if standing is safe, else the drive command that stays clear longest.
 
-Steps 1-4 run as one compiled call in a cycle without static geometry (:mod:`.choice`). The extensions
-beyond the paper are named steps beside the recipe, each a module: the way back (:mod:`.way_back`), the
+Steps 1-4 run as one compiled call in every cycle, with static geometry in view or not (:mod:`.choice`). The
+extensions beyond the paper are named steps beside the recipe, each a module: the way back (:mod:`.way_back`), the
 outrun hold (:mod:`.outrun`), the kept way (:mod:`.kept_way`), static geometry near the corridor and the
 closed way (:mod:`.blocked`); the creep is a slow candidate (:mod:`.candidates`).
 
@@ -46,17 +47,16 @@ What the paper leaves open and we chose, beyond what those modules say:
   (v_i = 0: t* = |w|/v). What is ours: (1) via points go round a whole **shape**, not the one disc a leg
   met first: a pair (node, static disc) becomes the two discs of that disc's shape that reach furthest
   left and right as seen from the node (the tangents to the shape's inflated outline,
-  :func:`.candidates._round_static_shapes`), and the root branches once per shape; a node hugging a
-  shape slides along it instead of creeping round its nearest disc (:func:`.candidates._with_slides`);
+  :func:`.shapes.extremes`), and the root branches once per shape (:func:`.shapes.one_per_shape`); a node hugging
+  a shape slides along it instead of creeping round its nearest disc (:func:`.shapes.slide`);
   (2) static legs are checked to their end, past the horizon (a leg into a wall is not made free by
   driving it slowly), and without the shield's braking envelope, which is for where people may walk;
   (3) static discs farther outside the corridor than their reach are left out of the cycle (no
   candidate can meet them); (4) a **closed way** (no free candidate, standing is safe, and the straight
   leg to the subgoal meets static geometry before any person) is not a plain stop: the robot drives on along that leg to
   ``blocked_gap_m`` short of touching it, at a speed from which it stops there, and waits with status
-  ``blocked``; every cycle looks again, so it goes on when the door opens. The candidate tree of a
-  cycle with static geometry runs the recipe's steps (:func:`.candidates.grow`) with the compiled leg checks
-  and via points: the shapes' extremes are not compiled. Its escape treats static discs as any obstacle.
+  ``blocked``; every cycle looks again, so it goes on when the door opens. The candidate tree does all this in
+  the compiled choice, as it grows (:mod:`.shapes`); the escape treats static discs as any obstacle.
 * The way back (``return_lookahead_m``, 0.5 m by default; 0 in the preset ``paper``): off the path
   line, the paper's step 1 is tried first towards the path point that far ahead instead of the
   subgoal. The paper heads for the subgoal; when that is metres away the robot drifts back to the path
@@ -78,18 +78,17 @@ from viapath.observation import Command, Observation, Obstacles, RobotState
 from viapath.options import Settings
 from viapath.path import DesignatedPath
 from viapath.planning.base import Decision, Plan, Planner, Situation
-from viapath.planning.viapath import packing
 from viapath.planning.viapath.blocked import blocked, near_corridor
-from viapath.planning.viapath.candidates import Candidates, Choice, RootLegs, Way, _candidates_of, grow
+from viapath.planning.viapath.candidates import Choice, Way
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.choice import choose_compiled, uses_compiled_choice
-from viapath.planning.viapath.critics import Context, critics_for, score
+from viapath.planning.viapath.choice import choose_compiled
+from viapath.planning.viapath.critics import critics_for
 from viapath.planning.viapath.escape import stop_or_escape
-from viapath.planning.viapath.follow import can_follow, follows
+from viapath.planning.viapath.follow import can_follow
 from viapath.planning.viapath.kept_way import keep_previous_way
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
 from viapath.planning.viapath.outrun import outrun, outrun_held
-from viapath.planning.viapath.plans import Chosen, cost_terms, straight_chosen, straight_plan
+from viapath.planning.viapath.plans import Chosen, straight_chosen, straight_plan
 from viapath.planning.viapath.way_back import way_back
 
 
@@ -214,48 +213,13 @@ class ViaPathPlanner(Planner, name="viapath"):
         previous: Choice | None,
         only_way: Way | None = None,
     ) -> Chosen | None:
-        """Paper steps 1-4 (:meth:`_choose` without the speed of outrunning)."""
+        """Paper steps 1-4 (:meth:`_choose` without the speed of outrunning): the way back, else the compiled
+        choice (:mod:`.choice`)."""
         if only_way is None and self.config.return_lookahead_m > 0:
             back = way_back(self, checks, float(speeds[nominal_index]))
             if back is not None:
                 return back
-        if checks.obstacles.static_mask is None and uses_compiled_choice(self):
-            return choose_compiled(self, checks, speeds, nominal_index, previous, only_way)
-        roots = RootLegs.of(checks, speeds, nominal_index)
-        if roots.nominal_is_free and only_way is None:
-            # Paper step 1: a free straight path at the normal speed is the plan, if the robot can
-            # turn onto it in time.
-            straight = self._straight(checks, float(speeds[nominal_index]))
-            if straight is not None:
-                return straight
-        candidates = grow_step(checks, roots, self.config, self._slow_checks(checks))
-        if candidates is None:
-            return None
-        costs = score(candidates, self.critics, Context(checks.heading_rad, self.nominal_speed_mps, previous))
-        total = costs.total
-        if only_way is not None:
-            total = np.where(only_way.same(candidates.ways), total, np.inf)
-            if not np.isfinite(total).any():
-                return None
-        polylines = [candidates.polyline(k) for k in range(len(candidates))] if self.config.record_candidates else []
-        order = total.argsort(kind="stable")
-        for rank, best in enumerate(order[: self.config.max_rollouts]):
-            if not np.isfinite(total[best]):
-                break
-            # can_follow's verdict before the plan is made: in a cycle without a free candidate (the slowest
-            # cycles) every plan would be made for nothing.
-            followed, turn_in_place = follows(*candidates.first_leg(int(best)), checks, self.limits, self.config)
-            if not followed:
-                continue
-            plan = self._plan_of(candidates, int(best), total, checks, polylines)
-            if turn_in_place:
-                plan.extras["turn_in_place"] = True
-            if self._inside_shield(plan):
-                plan.extras["cost_terms"] = cost_terms(costs.breakdown, order, rank, total)
-                ways = candidates.ways[best]
-                choice = Choice(Way(int(ways[0]), int(ways[1]), int(ways[2])), int(candidates.speed_mmps[best]))
-                return Chosen(choice, plan, candidates)
-        return None
+        return choose_compiled(self, checks, speeds, nominal_index, previous, only_way)
 
     def _straight(self, checks: LegChecks, speed: float) -> Chosen | None:
         """The straight leg to the subgoal at ``speed`` as the plan, if the robot can turn onto it in time
@@ -279,36 +243,6 @@ class ViaPathPlanner(Planner, name="viapath"):
         if not ok[0]:
             plan.extras["outside_shield"] = True
         return bool(ok[0])
-
-    def _plan_of(
-        self, candidates: Candidates, k: int, total: np.ndarray, checks: LegChecks, polylines: list[np.ndarray]
-    ) -> Plan:
-        common: dict[str, Any] = dict(
-            subgoal_index=checks.subgoal_index,
-            candidate_count=len(candidates),
-            candidate_costs=total,
-            candidate_polylines=polylines,
-            chosen=k,
-        )
-        target, speed = candidates.first_leg(k)
-        if candidates.slow_s[k] > 0:
-            return Plan(
-                "wait" if speed == 0.0 else "slow",
-                speed,
-                target.copy(),
-                waypoints=np.array([checks.position, checks.subgoal]),
-                extras={"slow_s": float(candidates.slow_s[k]), "speed_after_mps": float(candidates.speed_mps[k])},
-                **common,
-            )
-        line = candidates.polyline(k)
-        return Plan(
-            "avoid" if len(line) > 2 else "straight",
-            speed,
-            target.copy(),
-            via_points=line[1:-1].copy(),
-            waypoints=line,
-            **common,
-        )
 
     def _slow_checks(self, checks: LegChecks) -> LegChecks:
         fraction = self.config.slow_leg_inflation
@@ -346,16 +280,6 @@ class ViaPathPlanner(Planner, name="viapath"):
 def ViaPathConfig(**values: Any) -> Settings:
     """The viapath planner's options, validated, defaults filled in (``make_planner(..., config=...)``)."""
     return VIAPATH_OPTIONS.validate(values, where="viapath")
-
-
-def grow_step(
-    checks: LegChecks, roots: RootLegs, config: Settings, slow_checks: LegChecks | None = None
-) -> Candidates | None:
-    """The candidate tree of the cycle: in one compiled call without static geometry, else
-    :func:`.candidates.grow` (the recipe's steps, with the static shapes' extremes and slides)."""
-    if checks.obstacles.static_mask is None:
-        return _candidates_of(packing.grow(checks, slow_checks or checks, roots, config), checks.subgoal)
-    return grow(checks, roots, config, slow_checks)
 
 
 def precompile() -> bool:

@@ -16,7 +16,7 @@ from viapath.observation import Command, MotionLimits
 from viapath.options import Settings
 from viapath.path import DesignatedPath
 from viapath.planning.base import Plan, Situation
-from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, Way, _candidates_of
+from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, Way, candidates_of
 from viapath.planning.viapath.checks import LegChecks
 from viapath.planning.viapath.critics import Critic
 from viapath.planning.viapath.packing import NodeStore
@@ -39,7 +39,7 @@ class CompiledCandidates:
         if name.startswith("_"):
             raise AttributeError(name)
         if self._built is None:
-            self._built = _candidates_of(self._store, self._subgoal)
+            self._built = candidates_of(self._store, self._subgoal)
         return getattr(self._built, name)
 
     def __len__(self) -> int:

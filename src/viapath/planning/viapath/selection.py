@@ -139,7 +139,7 @@ def choose_tree(
     for i in range(s_count):
         starts[i, 0] = robot[0]
         starts[i, 1] = robot[1]
-    roots = goal_legs_of(starts, np.zeros(s_count), speeds, horizon_s, goal, obstacles, corridor)
+    roots = goal_legs_of(starts, np.zeros(s_count), speeds, horizon_s, goal, obstacles, corridor, via[2].shape_of)
     if roots[2][nominal_index] and integers[C_TRY_STRAIGHT] and not integers[C_ONLY]:
         straight_angle = math.atan2(subgoal[1] - robot[1], subgoal[0] - robot[0])
         follows = can_follow(
@@ -172,13 +172,13 @@ def _before(a, b):
 
 
 @compiled
-def choose_candidate(robot, nf, ni, found, facts, angles, obstacles, corridor, settings, integers):
+def choose_candidate(robot, nf, ni, found, facts, angles, extra, obstacles, corridor, settings, integers):
     """The second half of ``_choose`` up to its shield check: Eq. 1's critics (:mod:`.critics`, each term as
     there, summed in :func:`.critics.critics_for`'s order), with ``only_way`` the other ways priced out, the
     cheapest-first order (np.argsort's, stable) of the first ``max_rollouts`` candidates (and at least two,
     for the runner-up), and follow.can_follow of each in that order until one passes. ``found`` and ``facts``
-    are :func:`choose_tree`'s, ``angles`` (2, K) atan2 of its facts; ``obstacles`` and ``corridor``
-    :func:`grow`'s records.
+    are :func:`choose_tree`'s, ``angles`` (2, K) atan2 of its facts, ``extra`` (E, K) the terms of critics after
+    the paper's, added after them in their order; ``obstacles`` and ``corridor`` :func:`grow`'s records.
 
     Returns (ranking, costs). ``ranking`` is (the rank that follows or -1, R: the ranks in order (0: with
     only_way, no candidate goes that way), the order (R), can_follow of each rank tried (R): 0/1/2, -1 not
@@ -222,6 +222,8 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacles, corridor, s
         value = terms[0, k] + terms[1, k]
         for c in range(2, 6):
             value = value + terms[c, k]
+        for e in range(extra.shape[0]):
+            value = value + extra[e, k]
         raw_total[k] = value
         if only and not (
             ni[m, N_OBSTACLE] == integers[C_ONLY_OBSTACLE]
@@ -276,6 +278,28 @@ def choose_candidate(robot, nf, ni, found, facts, angles, obstacles, corridor, s
 
 
 @compiled
+def choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, settings, integers):
+    """The second half of :func:`choose`, after :func:`choose_tree`: when it found candidates, their angles and
+    :func:`choose_candidate` (``extra``: its terms of further critics, (E, K)). Returns (found, costs): ``found``
+    followed by :func:`choose_candidate`'s ranking when it says CANDIDATES (one array fewer to hand back),
+    ``costs`` (8, K) :func:`choose_candidate`'s, empty unless CANDIDATES."""
+    if found[0] != CANDIDATES:
+        return found, np.empty((8, 0))
+    k_count = facts.shape[1]
+    angles = np.empty((2, k_count))
+    for k in range(k_count):
+        angles[0, k] = math.atan2(facts[0, k], facts[1, k])
+        angles[1, k] = math.atan2(facts[2, k], facts[3, k])
+    ranking, costs = choose_candidate(
+        robot, nf, ni, found, facts, angles, extra, obstacles, corridor, settings, integers
+    )
+    found_and_ranking = np.empty(found.shape[0] + ranking.shape[0], np.int64)
+    found_and_ranking[: found.shape[0]] = found
+    found_and_ranking[found.shape[0] :] = ranking
+    return found_and_ranking, costs
+
+
+@compiled
 def choose(
     robot,
     speeds,
@@ -287,6 +311,7 @@ def choose(
     growth_until_s,
     via_radii,
     ids,
+    shapes,
     slow_radii,
     slow_growth,
     slow_growth_until_s,
@@ -302,10 +327,9 @@ def choose(
     integers,
 ):
     """``_choose`` up to its shield check in one call (each array handed back to Python costs about a
-    microsecond): :func:`choose_tree`, then, when it found candidates, their angles and :func:`choose_candidate`.
-    Takes :func:`choose_tree`'s arguments; returns (found, floats, integers: the node store, costs): ``found``
-    is :func:`choose_tree`'s, followed by :func:`choose_candidate`'s ranking when it says CANDIDATES (one array
-    fewer to hand back), ``costs`` (8, K) :func:`choose_candidate`'s, empty unless CANDIDATES."""
+    microsecond): :func:`choose_tree`, then :func:`choose_ranked` with the paper's critics only. Takes
+    :func:`choose_tree`'s arguments (``shapes``: :class:`.shapes.StaticShapes`); returns (found, floats,
+    integers: the node store, costs) of :func:`choose_ranked`."""
     obstacles = (obstacle_positions, obstacle_velocities, radii, growth, growth_until_s)
     corridor = (segment_starts, segment_directions, segment_lengths, half_widths)
     found, nf, ni, facts = choose_tree(
@@ -313,7 +337,7 @@ def choose(
         speeds,
         subgoal,
         obstacles,
-        (via_radii, ids),
+        (via_radii, ids, shapes),
         (slow_radii, slow_growth, slow_growth_until_s, slow_times, settings[F_CREEP]),
         continuation,
         envelope,
@@ -322,15 +346,6 @@ def choose(
         settings,
         integers,
     )
-    if found[0] != CANDIDATES:
-        return found, nf, ni, np.empty((8, 0))
-    k_count = facts.shape[1]
-    angles = np.empty((2, k_count))
-    for k in range(k_count):
-        angles[0, k] = math.atan2(facts[0, k], facts[1, k])
-        angles[1, k] = math.atan2(facts[2, k], facts[3, k])
-    ranking, costs = choose_candidate(robot, nf, ni, found, facts, angles, obstacles, corridor, settings, integers)
-    found_and_ranking = np.empty(found.shape[0] + ranking.shape[0], np.int64)
-    found_and_ranking[: found.shape[0]] = found
-    found_and_ranking[found.shape[0] :] = ranking
-    return found_and_ranking, nf, ni, costs
+    extra = np.empty((0, facts.shape[1]))
+    found, costs = choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, settings, integers)
+    return found, nf, ni, costs

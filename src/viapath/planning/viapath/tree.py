@@ -1,7 +1,9 @@
 """The candidate tree of the paper's §3, grown in one compiled call (:func:`grow`): at
 every speed of the set, the straight leg to the subgoal (step 1), the slow and waiting legs, the corners of the path,
 and the via points of each person a leg hits, chained from via point to via point to the search's depth
-(Tsubouchi's iterated forecast and planning). Its node store's columns: :mod:`.slots`.
+(Tsubouchi's iterated forecast and planning); round static shapes as :mod:`.shapes` says (one branch per shape at
+the root, the shape's extremes, slides). What a candidate is: :mod:`.candidates`. Its node store's columns:
+:mod:`.slots`.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from viapath.planning.viapath.legs import (
     legs_free,
     legs_inside_of,
 )
+from viapath.planning.viapath.shapes import hugs, one_per_shape, round_static_shapes, slide
 from viapath.planning.viapath.slots import (
     N_FIRST_X,
     N_FIRST_Y,
@@ -120,8 +123,8 @@ def _root_nodes(position, speeds, root_directions, root_lengths, root_free):
 
 @compiled
 def _slow_legs(position, subgoal, speeds, nominal, slow_times, creep):
-    """The slow/wait legs along the straight leg (_slow_candidates): 0 (waiting), the creep speed (when it is
-    above 0, below the nominal speed and not in the set: creep_speeds) and each speed below the nominal one, for
+    """The slow/wait legs along the straight leg: 0 (waiting), the creep speed (when it is
+    above 0, below the nominal speed and not in the set) and each speed below the nominal one, for
     each slow time, never past the subgoal. Returns the unit direction (dx, dy) to the subgoal, the legs'
     durations and speeds (the first ``count`` of each) and ``count``."""
     s_count = speeds.shape[0]
@@ -164,10 +167,23 @@ def _slow_legs(position, subgoal, speeds, nominal, slow_times, creep):
 
 @compiled
 def _slow_nodes(
-    nf, ni, m, position, speeds, nominal_index, slow_times, creep, horizon_s, slow_obstacles, obstacles, goal, corridor
+    nf,
+    ni,
+    m,
+    position,
+    speeds,
+    nominal_index,
+    slow_times,
+    creep,
+    horizon_s,
+    slow_obstacles,
+    obstacles,
+    goal,
+    corridor,
+    shape_of,
 ):
     """Slow down, creep or wait along the straight leg, then on at the nominal speed or the slowest faster speed
-    whose goal leg is free (_slow_candidates): the slow legs free of the people (at their slow radii:
+    whose goal leg is free: the slow legs free of the people (at their slow radii:
     ``slow_obstacles``) with a free goal leg, added as leaves."""
     s_count = speeds.shape[0]
     nominal = speeds[nominal_index]
@@ -179,7 +195,7 @@ def _slow_nodes(
         starts[k, 1] = position[1]
         velocities[k, 0] = dx * slows[k]
         velocities[k, 1] = dy * slows[k]
-    free = legs_free(starts, np.zeros(c), velocities, durations[:c], horizon_s, slow_obstacles)
+    free = legs_free(starts, np.zeros(c), velocities, durations[:c], horizon_s, slow_obstacles, shape_of)
     after_count = 0
     for i in range(s_count):
         if speeds[i] >= nominal - 1e-9:
@@ -207,7 +223,7 @@ def _slow_nodes(
                 after[q] = speeds[i]
                 slow_v[q] = slows[k]
                 q += 1
-    _, lengths, goal_free, _ = goal_legs_of(ends, times, after, math.inf, goal, obstacles, corridor)
+    _, lengths, goal_free, _ = goal_legs_of(ends, times, after, math.inf, goal, obstacles, corridor, shape_of)
     taken = False
     for q in range(legs):
         if q % after_count == 0:
@@ -238,8 +254,8 @@ def _slow_nodes(
 
 
 @compiled
-def _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles, corridor):
-    """The path's corners between the robot and the subgoal as via points (_corner_nodes): one leg per speed
+def _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles, corridor, shape_of):
+    """The path's corners between the robot and the subgoal as via points: one leg per speed
     and corner, added when free of the people and inside the corridor. ``path``: the waypoints and the
     robot's segment."""
     waypoints, robot_segment = path
@@ -275,7 +291,7 @@ def _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles,
             corner_of[q] = corner
             speed_of[q] = speeds[i]
             q += 1
-    good = legs_free(starts, np.zeros(legs), velocities, durations, horizon_s, obstacles)
+    good = legs_free(starts, np.zeros(legs), velocities, durations, horizon_s, obstacles, shape_of)
     inside = legs_inside_of(corridor, starts, targets, spacing_m, tolerance_m)
     for q in range(legs):
         if good[q] and inside[q]:
@@ -306,7 +322,7 @@ def _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles,
 @compiled
 def _branch_pairs(free_now, contact_now, frontier_start, frontier_end, n_count, depth, max_root_obstacles):
     """The (node, obstacle) pairs to branch on: at the root every obstacle the leg hits, earliest first (at most
-    max_root_obstacles, when there are more pairs than that; _root_pairs), deeper the first hit. Returns the
+    max_root_obstacles, when there are more pairs than that), deeper the first hit. Returns the
     pairs' nodes and obstacles and how many there are."""
     pair_nodes = np.empty((frontier_end - frontier_start) * n_count, np.int64)
     pair_obstacles = np.empty((frontier_end - frontier_start) * n_count, np.int64)
@@ -361,21 +377,44 @@ def _branch_pairs(free_now, contact_now, frontier_start, frontier_end, n_count, 
 
 
 @compiled
-def _via_legs(nf, branch, via_radii, envelope, horizon_s, obstacles):
-    """The via points of each pair (_via_children): both sides, both roots. The pairs' options as via_options
-    gives them, its arithmetic (via_pair) on the nodes and obstacles themselves: no copies of them per pair.
-    Returns, per leg (the first ``count``): its pair, its option, its duration, its start and start time, its
-    velocity and its via point; and ``count``. ``branch``: :func:`_branch_pairs`' pairs."""
+def _pairs(nf, frontier, depth, max_root_obstacles, obstacle_positions, via):
+    """The (node, obstacle) pairs to branch on from the frontier (first ``frontier_start`` .. ``frontier_end`` of
+    the store, their goal legs' ``free`` and ``contact``): :func:`_branch_pairs`, at the root on each static
+    shape's earliest disc only (:func:`.shapes.one_per_shape`), and each static disc replaced by its shape's
+    extremes as seen from the node (:func:`.shapes.round_static_shapes`)."""
+    frontier_start, frontier_end, free_now, contact_now = frontier
+    via_radii, _, shapes = via
+    n_count = obstacle_positions.shape[0]
+    if shapes.shape_of.shape[0] == 0:
+        return _branch_pairs(free_now, contact_now, frontier_start, frontier_end, n_count, depth, max_root_obstacles)
+    if depth == 0:
+        contact_now = one_per_shape(free_now, contact_now, shapes)
+    branch = _branch_pairs(free_now, contact_now, frontier_start, frontier_end, n_count, depth, max_root_obstacles)
+    if not branch[2]:
+        return branch
+    return round_static_shapes(nf, branch, obstacle_positions, via_radii, shapes)
+
+
+@compiled
+def _via_legs(nf, branch, via_radii, envelope, horizon_s, obstacles, shapes):
+    """The via points of each pair (for :func:`_via_children`): both sides, both roots (none round static geometry keeps the
+    braking envelope), then the slides of the pairs whose node hugs a static disc (:func:`_slides`). The pairs'
+    options as via_options gives them, its arithmetic (via_pair) on the nodes and obstacles themselves: no
+    copies of them per pair. Returns, per leg (the first ``count``): its pair, its option, its duration, its
+    start and start time, its velocity and its via point; and ``count``. ``branch``: :func:`_branch_pairs`'
+    pairs."""
     pair_nodes, pair_obstacles, pairs = branch
     obstacle_positions, obstacle_velocities, _, growth, growth_until_s = obstacles
     half_accel = 0.5 * envelope[0]
-    pair = np.empty(4 * pairs, np.int64)
-    option = np.empty(4 * pairs, np.int64)
-    t_k = np.empty(4 * pairs)
-    starts_k = np.empty((4 * pairs, 2))
-    times_k = np.empty(4 * pairs)
-    leg_velocity = np.empty((4 * pairs, 2))
-    via = np.empty((4 * pairs, 2))
+    any_static = shapes.shape_of.shape[0] > 0
+    capacity = (6 if any_static else 4) * pairs
+    pair = np.empty(capacity, np.int64)
+    option = np.empty(capacity, np.int64)
+    t_k = np.empty(capacity)
+    starts_k = np.empty((capacity, 2))
+    times_k = np.empty(capacity)
+    leg_velocity = np.empty((capacity, 2))
+    via = np.empty((capacity, 2))
     t_via = np.empty(4)
     w_via = np.empty((2, 2))
     max_time_s = 3 * horizon_s
@@ -387,7 +426,7 @@ def _via_legs(nf, branch, via_radii, envelope, horizon_s, obstacles):
         sy = nf[node, _Y]
         t0 = nf[node, _T]
         speed = nf[node, _V]
-        if envelope[0] > 0:
+        if envelope[0] > 0 and not (any_static and shapes.shape_of[j] >= 0):
             stop_s = envelope[1] + speed / envelope[2]
             margin = half_accel * (stop_s * stop_s)
         else:
@@ -425,22 +464,58 @@ def _via_legs(nf, branch, via_radii, envelope, horizon_s, obstacles):
                 via[count, 0] = sx + leg_velocity[count, 0] * t
                 via[count, 1] = sy + leg_velocity[count, 1] * t
                 count += 1
+    legs = (pair, option, t_k, starts_k, times_k, leg_velocity, via)
+    if any_static:
+        count = _slides(nf, branch, obstacle_positions, via_radii, shapes, legs, count)
     return pair, option, t_k, starts_k, times_k, leg_velocity, via, count
 
 
 @compiled
+def _slides(nf, branch, obstacle_positions, via_radii, shapes, legs, count):
+    """The slides (:func:`.shapes.slide`, options 0 and 1: left and right) of each pair whose node hugs its
+    static disc, after the first ``count`` of ``legs`` (:func:`_via_legs`' arrays); returns the new count."""
+    pair_nodes, pair_obstacles, pairs = branch
+    pair, option, t_k, starts_k, times_k, leg_velocity, via = legs
+    for p in range(pairs):
+        node = pair_nodes[p]
+        j = pair_obstacles[p]
+        sx = nf[node, _X]
+        sy = nf[node, _Y]
+        cx = obstacle_positions[j, 0]
+        cy = obstacle_positions[j, 1]
+        if shapes.shape_of[j] < 0 or not hugs(sx, sy, cx, cy, via_radii[j], shapes.hug_factor):
+            continue
+        for o in range(2):
+            duration, vx, vy, ex, ey = slide(sx, sy, cx, cy, via_radii[j], nf[node, _V], _SIDES[o])
+            pair[count] = p
+            option[count] = o
+            t_k[count] = duration
+            starts_k[count, 0] = sx
+            starts_k[count, 1] = sy
+            times_k[count] = nf[node, _T]
+            leg_velocity[count, 0] = vx
+            leg_velocity[count, 1] = vy
+            via[count, 0] = ex
+            via[count, 1] = ey
+            count += 1
+    return count
+
+
+@compiled
 def _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, corridor):
-    """The pairs' children (_via_children): the legs to their via points (:func:`_via_legs`) free of the people
+    """The pairs' children: the legs to their via points (:func:`_via_legs`) free of the people
     and inside the corridor, added below their nodes (a root's child starts the way round: obstacle id, side,
     root; deeper ones keep their parent's). ``branch``: :func:`_branch_pairs`' pairs."""
     pair_nodes, pair_obstacles, _ = branch
-    via_radii, ids = via
+    via_radii, ids, shapes = via
     _, _, _, envelope, _, spacing_m, tolerance_m = goal
-    legs = _via_legs(nf, branch, via_radii, envelope, horizon_s, obstacles)
+    legs = _via_legs(nf, branch, via_radii, envelope, horizon_s, obstacles, shapes)
     pair, option, t_k, starts_k, times_k, leg_velocity, via, count = legs
     if not count:
         return nf, ni, m
-    good = legs_free(starts_k[:count], times_k[:count], leg_velocity[:count], t_k[:count], horizon_s, obstacles)
+    good = legs_free(
+        starts_k[:count], times_k[:count], leg_velocity[:count], t_k[:count], horizon_s, obstacles, shapes.shape_of
+    )
     kept = 0
     for q in range(count):
         if good[q]:
@@ -504,13 +579,12 @@ def _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, cor
 
 @compiled
 def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obstacles, corridor, tree):
-    """The compiled form of :func:`viapath.planning.viapath.candidates.grow`: the same nodes in the same order
-    (roots, slow/wait, corners, then the via-point children depth by depth), so the candidates, their
-    order and so every tie are the same. Returns the node store, floats (M, 10) and integers (M, 5), in
+    """Every complete candidate of the cycle (straight, slow/wait, corners, via-point chains), in this order: the
+    roots, slow/wait, corners, then the via-point children depth by depth. Returns the node store, floats (M, 10) and integers (M, 5), in
     the columns named above; a node is a leaf (a complete candidate) when its goal leg is free.
 
     Takes records (tuples): ``roots`` (directions, lengths, free, contact of the root legs: :func:`goal_legs`'),
-    ``via`` (via radii, ids), ``slow`` (slow radii, growth, growth until, slow times, creep speed), ``goal``, ``obstacles``
+    ``via`` (via radii, ids, :class:`.shapes.StaticShapes`), ``slow`` (slow radii, growth, growth until, slow times, creep speed), ``goal``, ``obstacles``
     and ``corridor`` (the kernels' records, named above :func:`goal_legs_of`), ``tree`` (the waypoints, the robot's segment, whether slow/wait
     candidates are grown, the depth, the most obstacles a root branches on)."""
     waypoints, robot_segment, slow_enabled, max_depth, max_root_obstacles = tree
@@ -518,6 +592,7 @@ def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obs
     root_directions, root_lengths, root_free, root_contact = roots
     obstacle_positions, obstacle_velocities, _, _, _ = obstacles
     slow_radii, slow_growth, slow_growth_until_s, slow_times, creep = slow
+    shape_of = via[2].shape_of
     s_count = speeds.shape[0]
     n_count = obstacle_positions.shape[0]
     nf, ni, m = _root_nodes(position, speeds, root_directions, root_lengths, root_free)
@@ -541,6 +616,7 @@ def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obs
             obstacles,
             goal,
             corridor,
+            shape_of,
         )
     frontier_start = 0
     frontier_end = s_count
@@ -550,11 +626,10 @@ def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obs
         batch = m
         if depth == 0 and robot_segment + 1 < subgoal_index and not straight_inside:
             path = (waypoints, robot_segment)
-            nf, ni, m = _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles, corridor)
+            nf, ni, m = _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles, corridor, shape_of)
         if n_count > 0:
-            branch = _branch_pairs(
-                free_now, contact_now, frontier_start, frontier_end, n_count, depth, max_root_obstacles
-            )
+            frontier = (frontier_start, frontier_end, free_now, contact_now)
+            branch = _pairs(nf, frontier, depth, max_root_obstacles, obstacle_positions, via)
             if branch[2]:
                 nf, ni, m = _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, corridor)
         if m == batch:
@@ -564,7 +639,7 @@ def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obs
         frontier_end = m
         starts = np.ascontiguousarray(nf[batch:m, _X : _Y + 1])
         _, lengths, free_now, contact_now = goal_legs_of(
-            starts, nf[batch:m, _T].copy(), nf[batch:m, _V].copy(), horizon_s, goal, obstacles, corridor
+            starts, nf[batch:m, _T].copy(), nf[batch:m, _V].copy(), horizon_s, goal, obstacles, corridor, shape_of
         )
         for r in range(m - batch):
             if free_now[r]:
