@@ -43,7 +43,7 @@ def _leg_contact(
     starts,
     start_times,
     velocities,
-    durations,
+    duration,
     obstacle_positions,
     obstacle_velocities,
     radii,
@@ -54,10 +54,9 @@ def _leg_contact(
     k,
     j,
 ):
-    """The first contact of leg ``k`` with obstacle ``j``: one entry of :func:`legs_first_contact` (inlined:
-    :func:`legs_free` asks it leg by leg and stops at the first contact)."""
+    """The first contact of leg ``k`` (``duration`` long) with obstacle ``j``: one entry of
+    :func:`legs_first_contact` (inlined: :func:`legs_free` asks it leg by leg and stops at the first contact)."""
     t0 = start_times[k]
-    duration = durations[k]
     ovx = obstacle_velocities[j, 0]
     ovy = obstacle_velocities[j, 1]
     px = starts[k, 0] - (obstacle_positions[j, 0] + ovx * t0)
@@ -140,7 +139,7 @@ def legs_first_contact(
                 starts,
                 start_times,
                 velocities,
-                durations,
+                durations[k],
                 obstacle_positions,
                 obstacle_velocities,
                 radii,
@@ -177,19 +176,20 @@ def first_contacts(starts, start_times, velocities, checked, durations, obstacle
     the leg's whole ``durations`` with none added: static geometry stays put, a leg into a wall is not made free
     by driving it slowly, and the braking envelope is for where people may walk."""
     obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
+    if shape_of.shape[0] == 0:  # one kind of obstacle: the loop whose branches do not vary (as in legs_free)
+        return legs_first_contact(starts, start_times, velocities, checked, *obstacles, leg_radii)
     k_count = starts.shape[0]
     n_count = obstacle_positions.shape[0]
     out = np.empty((k_count, n_count))
     people_cylinders, static_cylinders = _cylinder_only_by_kind(growth, growth_until_s, shape_of)
-    any_static = shape_of.shape[0] > 0
     for k in range(k_count):
         for j in range(n_count):
-            static = any_static and shape_of[j] >= 0
+            static = shape_of[j] >= 0
             out[k, j] = _leg_contact(
                 starts,
                 start_times,
                 velocities,
-                durations if static else checked,
+                durations[k] if static else checked[k],
                 obstacle_positions,
                 obstacle_velocities,
                 radii,
@@ -549,13 +549,24 @@ def legs_free(starts, start_times, velocities, durations, horizon_s, obstacles, 
     :class:`.shapes.StaticShapes`') over the whole leg, plain radii (no braking envelope). Leg by leg, up to
     its first contact: whether any contact is finite (or NaN) is all that is asked. ``obstacles``: the record
     (positions, velocities, radii, growth, growth until)."""
-    obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
     k_count = starts.shape[0]
     checked = np.empty(k_count)
     for k in range(k_count):
         checked[k] = clip(horizon_s - start_times[k], 0.0, durations[k])
+    # Without static geometry the loop's branches do not vary from obstacle to obstacle (any_static a constant of
+    # the inlined loop): with 100 people the cycle's choice took 2.3 times as long with one loop for both kinds.
+    if shape_of.shape[0] == 0:
+        return _free_of(starts, start_times, velocities, checked, checked, obstacles, shape_of, False)
+    return _free_of(starts, start_times, velocities, checked, durations, obstacles, shape_of, True)
+
+
+@compiled(inline=True)
+def _free_of(starts, start_times, velocities, checked, durations, obstacles, shape_of, any_static):
+    """:func:`legs_free`'s loop: a person's contact up to ``checked``, a static disc's (with ``any_static``) up to
+    ``durations``."""
+    obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
+    k_count = starts.shape[0]
     people_cylinders, static_cylinders = _cylinder_only_by_kind(growth, growth_until_s, shape_of)
-    any_static = shape_of.shape[0] > 0
     free = np.empty(k_count, np.bool_)
     for k in range(k_count):
         ok = True
@@ -567,7 +578,7 @@ def legs_free(starts, start_times, velocities, durations, horizon_s, obstacles, 
                     starts,
                     start_times,
                     velocities,
-                    durations if static else checked,
+                    durations[k] if static else checked[k],
                     obstacle_positions,
                     obstacle_velocities,
                     radii,
