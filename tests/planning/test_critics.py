@@ -24,7 +24,6 @@ from viapath.planning.viapath.critics import (
     SpeedError,
     Time,
     critics_for,
-    score,
 )
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
 
@@ -104,11 +103,20 @@ def test_hysteresis_rewards_last_cycles_way_and_half_again_its_speed(candidates)
     np.testing.assert_allclose(Hysteresis(0.1).score(candidates, _context(same_way_same_speed)), [0.0, -0.15, 0.0])
 
 
-def test_the_sum_is_eq_1_in_the_listed_order(candidates):
+def test_the_planners_costs_are_the_critics_summed_in_the_listed_order():
+    """The compiled choice sums the paper's critics itself: on a cycle of the paper's side case, every candidate's E
+    in the plan is the critics' own scores (above, by hand) summed in critics_for's order, and the chosen
+    candidate's breakdown is each critic's score."""
+    from tests.planning.test_slow_candidates import _side_case
+
+    planner, checks, _, _, candidates, observation = _side_case(0.2, -0.5)
     config = VIAPATH_OPTIONS.validate({}, where="test")
-    critics = critics_for(config)
-    assert [c.name for c in critics] == ["distance", "time", "speed", "heading", "side", "hysteresis"]
-    costs = score(candidates, critics, _context())
-    by_hand = sum(critic.score(candidates, _context()) for critic in critics)
-    np.testing.assert_allclose(costs.total, by_hand)
-    assert costs.breakdown(1)["total"] == pytest.approx(float(costs.total[1]))
+    assert [c.name for c in critics_for(config)] == ["distance", "time", "speed", "heading", "side", "hysteresis"]
+    context = Context(checks.heading_rad, planner.nominal_speed_mps, None)
+    terms = [critic.score(candidates, context) for critic in planner.critics]
+    plan = planner.plan(observation).plan  # the same cycle again, in the one compiled call
+    np.testing.assert_allclose(plan.candidate_costs, sum(terms), rtol=1e-12, atol=1e-12)
+    chosen = plan.extras["cost_terms"]["chosen"]
+    for critic, values in zip(planner.critics, terms):
+        assert chosen[critic.name] == pytest.approx(float(values[plan.chosen]), rel=1e-12, abs=1e-12)
+    assert len(candidates) > 5

@@ -41,12 +41,14 @@ def _side_case(x_m: float, person_y_m: float):
     speeds, nominal_index = planner.speed_set(0.1)
     planner.plan(observation)
     (candidates,) = recorder.seen
-    return planner, checks, speeds, nominal_index, candidates
+    planner.reset()
+    planner.critics = planner.critics[:-1]  # without the recorder again
+    return planner, checks, speeds, nominal_index, candidates, observation
 
 
 @pytest.mark.parametrize(("x_m", "person_y_m"), [(0.0, -1.0), (0.2, -0.5), (0.3, -0.1)])
 def test_a_slow_leg_goes_on_at_the_slowest_free_speed_from_the_nominal_one_up(x_m, person_y_m):
-    planner, checks, speeds, nominal_index, candidates = _side_case(x_m, person_y_m)
+    planner, checks, speeds, nominal_index, candidates, _ = _side_case(x_m, person_y_m)
     slow = np.flatnonzero(candidates.slow_s > 0)
     assert len(slow) > 0
     after_speeds = speeds[speeds >= speeds[nominal_index] - 1e-9]

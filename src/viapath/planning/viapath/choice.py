@@ -207,8 +207,8 @@ def _first_admitted(planner: Planning, chosen: CompiledChoice, checks: LegChecks
 
 
 def _cost_breakdown(planner: Planning, terms: np.ndarray) -> Callable[[int], dict[str, float]]:
-    """:meth:`.critics.Costs.breakdown` for :func:`viapath.planning.viapath.selection.choose`'s costs (rows: the critics' terms,
-    E): one column as Python floats, the same values as the numpy path's."""
+    """Each critic's term of candidate k and their sum, by name, as Python floats, of the compiled choice's costs
+    (rows: the critics' terms, then E)."""
     critics = planner.critics
     cached = planner.__dict__.get("_cost_names")
     if cached is None or cached[0] is not critics:

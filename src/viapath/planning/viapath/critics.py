@@ -16,7 +16,9 @@ Beyond the paper (docs/design.md §2 pitfalls):
   ``hysteresis``, and half as much again at the same speed, so near-equal options do not alternate.
   It is negative cost, and the only critic that depends on the previous cycle.
 
-The critics are summed in the order listed in :func:`critics_for`, which is Eq. 1's order.
+The critics are summed in the order listed in :func:`critics_for`, which is Eq. 1's order. The compiled choice
+sums the paper's terms itself, each as its critic's ``score`` here says (:mod:`.selection`, held to these by
+tests/planning/test_critics.py); critics after them are scored by their ``score`` between its two halves.
 """
 
 from __future__ import annotations
@@ -131,7 +133,8 @@ class Hysteresis(Critic):
         return -(self.weight * (same_way + 0.5 * (same_way & same_speed)))
 
 
-#: The critics the compiled choice sums, in this order (critics_for's); with others the numpy choice runs.
+#: The critics the compiled choice sums itself, in this order (critics_for's); any after them are scored with their
+#: own ``score`` (:func:`viapath.planning.viapath.choice.extra_critics`).
 PAPER_CRITICS = (Distance, Time, SpeedError, Heading, SidePreference, Hysteresis)
 
 
@@ -145,22 +148,3 @@ def critics_for(config: Settings) -> tuple[Critic, ...]:
         SidePreference(config.side_tolerance, LEFT if config.preferred_side == "left" else RIGHT),
         Hysteresis(config.hysteresis),
     )
-
-
-@dataclass
-class Costs:
-    """Every candidate's E and each critic's share of it."""
-
-    total: np.ndarray
-    terms: dict[str, np.ndarray]
-
-    def breakdown(self, k: int) -> dict[str, float]:
-        return {name: float(values[k]) for name, values in self.terms.items()} | {"total": float(self.total[k])}
-
-
-def score(candidates: Candidates, critics: tuple[Critic, ...], context: Context) -> Costs:
-    terms = {critic.name: critic.score(candidates, context) for critic in critics}
-    total: np.ndarray | None = None
-    for values in terms.values():
-        total = values if total is None else total + values
-    return Costs(total, terms)  # type: ignore[arg-type]  # there is always a critic
