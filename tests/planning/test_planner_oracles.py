@@ -145,7 +145,8 @@ def test_escape_scores_are_those_of_each_command_alone():
 
 
 def test_clear_is_the_definition():
-    """:meth:`LegChecks.clear` (compiled) against its definition (:func:`_clear_reference`) on random roll-outs
+    """The roll-out's clearance (:func:`viapath.planning.viapath.rollout._clear`, compiled) against its definition
+    (:func:`_clear_reference`) on random roll-outs
     near the people (so that both verdicts come up), with one step exactly on a person's limit in a quarter of
     them (where a difference in the last bit of a distance would change the verdict)."""
     rng = np.random.default_rng(5)
@@ -163,13 +164,22 @@ def test_clear_is_the_definition():
                 s, j, angle = int(rng.integers(steps)), int(rng.integers(len(obstacles))), rng.uniform(0, 2 * np.pi)
                 positions[s] = centres[s, j] + abs(limit[s, j]) * np.array([np.cos(angle), np.sin(angle)])
             expected = _clear_reference(checks, positions, dt)
-            assert checks.clear(positions, dt) is expected, f"case {case}"
+            assert _clear(checks, positions, dt) is expected, f"case {case}"
             verdicts.add(expected)
     assert verdicts == {True, False}
 
 
+def _clear(checks, positions, dt):
+    """The compiled roll-out's clearance of ``positions``, one per ``dt`` from now, from the obstacles of ``checks``."""
+    from viapath.planning.viapath import rollout
+
+    positions = np.ascontiguousarray(positions, dtype=float)
+    x, y = (float(v) for v in checks.position)
+    return bool(rollout._clear(positions, len(positions), float(dt), x, y, *checks.packed_obstacles()))
+
+
 def _clear_reference(checks, positions, dt):
-    """:meth:`LegChecks.clear` by its definition: every step's distance to every obstacle's centre then, at least
+    """:func:`_clear` by its definition: every step's distance to every obstacle's centre then, at least
     the obstacle's reach then, or (a close pass) no closer than the robot is now."""
     if len(checks.obstacles) == 0:
         return True

@@ -324,13 +324,6 @@ class LegChecks(_CompiledInputs):
 
     # -- the compiled steps the recipe calls -------------------------------------------------------
 
-    def clear(self, positions: np.ndarray, dt: float) -> bool:
-        """Whether robot positions, one per ``dt`` from now, keep clear of every obstacle (closer than its check
-        radius only where the robot already is and no closer; :func:`viapath.planning.viapath.packing.clear`)."""
-        if len(self.obstacles) == 0 or len(positions) == 0:
-            return True
-        return packing.clear(positions, dt, self.position, self.packed_obstacles())
-
     # -- against the corridor (paper step 4) ---------------------------------------------------------
 
     def legs_inside(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:

@@ -252,16 +252,6 @@ def escape(checks, limits: MotionLimits, config, fan, previous=None, score_stand
     return standing_free, commands, ends, score
 
 
-def clear(positions, dt_s: float, robot_position, packed_obstacles) -> bool:
-    """Whether a roll-out from now keeps clear of every obstacle (:func:`.rollout.clear_positions`).
-    ``packed_obstacles``: :meth:`LegChecks.packed_obstacles`."""
-    return bool(
-        _rollout.clear_positions(
-            _c(positions), float(dt_s), float(robot_position[0]), float(robot_position[1]), *packed_obstacles
-        )
-    )
-
-
 def can_follow(checks, target, speed_mps: float, limits: MotionLimits, config) -> int:
     """:func:`.rollout.can_follow` of steering for ``target`` at ``speed_mps`` from the robot of ``checks``: 0
     cannot, 1 can, 2 can after turning on the spot first."""

@@ -1,6 +1,6 @@
 """Whether the robot can follow a candidate (the paper's §3, the choice's last condition): the
 controller stepped within the motion limits as :func:`viapath.kinematics.step` moves the robot (:func:`track`),
-and whether such a roll-out keeps clear of every person and inside the corridor (:func:`clear_positions`,
+and whether such a roll-out keeps clear of every person and inside the corridor (:func:`_clear`,
 :func:`can_follow`). Compiled steps, the one implementation of each.
 """
 
@@ -88,7 +88,8 @@ def wrap(angle):
 def _clear(
     positions, count, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
 ):
-    """LegChecks.clear of the first ``count`` positions (one per ``dt`` from now)."""
+    """Whether the first ``count`` positions (one per ``dt`` from now) keep clear of every obstacle: each at least its
+    reach then from it, or (a close pass) no closer than the robot is now."""
     for j in range(obstacle_positions.shape[0]):
         now = math.hypot(robot_x - obstacle_positions[j, 0], robot_y - obstacle_positions[j, 1]) - 1e-3
         for s in range(count):
@@ -116,26 +117,6 @@ def _clear(
             if not math.hypot(dx, dy) >= limit:
                 return False
     return True
-
-
-@compiled
-def clear_positions(
-    positions, dt, robot_x, robot_y, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
-):
-    """LegChecks.clear of a whole roll-out (one position per ``dt`` from now): the choice's own :func:`_clear`,
-    for the planner's stepwise cycles (static geometry in view)."""
-    return _clear(
-        positions,
-        positions.shape[0],
-        dt,
-        robot_x,
-        robot_y,
-        obstacle_positions,
-        obstacle_velocities,
-        radii,
-        growth,
-        growth_until_s,
-    )
 
 
 @compiled
