@@ -39,6 +39,9 @@ def test_a_robot_hugging_a_pillar_finds_a_way_round_it(monkeypatch):
     decision = _hugging_cycle(monkeypatch, None)
     assert decision.plan.status in ("avoid", "straight"), decision.plan.status
     assert decision.command.speed_mps > 0.0
+    terms = decision.plan.extras["cost_terms"]["chosen"]  # a static cycle's plan keeps Eq. 1's breakdown too
+    assert set(terms) == {"distance", "time", "speed", "heading", "side", "hysteresis", "total"}
+    assert terms["total"] == pytest.approx(sum(v for k, v in terms.items() if k != "total"))
     without = _hugging_cycle(monkeypatch, 0.0)
     assert without.plan.status == "blocked"  # the cycle this is about: tangents alone find no way round
 
