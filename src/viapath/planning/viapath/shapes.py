@@ -59,12 +59,6 @@ def static_shapes(is_static: np.ndarray, ids: np.ndarray) -> StaticShapes:
 NO_SHAPES = StaticShapes(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(1, np.int64), HUG_FACTOR)
 
 
-@compiled(inline=True)
-def is_static(shapes, j):
-    """Whether obstacle ``j`` is static geometry."""
-    return shapes.shape_of.shape[0] > 0 and shapes.shape_of[j] >= 0
-
-
 @compiled
 def one_per_shape(free_now, contact_now, shapes):
     """The root's contacts (K, N) with only the earliest discs of each static shape kept per blocked leg (the

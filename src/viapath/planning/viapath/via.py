@@ -1,7 +1,7 @@
 """The via points of the paper's §3: where a person's avoiding line, left or right,
-meets the robot's reachable cone in x-y-t, for each (start, person) pair of a cycle; and the legs to them. A compiled
-step, the one implementation; :mod:`.packing` packs the cycle's arrays for it. The formula itself (stable form) is
-:func:`viapath.geometry.via_times`'s, written here as one scalar loop.
+meets the robot's reachable cone in x-y-t, for one (node, person) pair; the candidate tree (:mod:`.tree`) takes
+them pair by pair, with the legs to them. A compiled step, the one implementation. The formula itself (stable
+form) is :func:`viapath.geometry.via_times`'s, written here as one scalar loop.
 """
 
 from __future__ import annotations
