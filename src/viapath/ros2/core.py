@@ -225,6 +225,7 @@ class PlannerCore:
         self._alive_wall_s: float | None = None  # wall time of the last input or move of the node's clock
         self.static_now = StaticLayer.empty()  # the last cycle's static layer from the scans
         self.static_planned = StaticLayer.empty()  # the last cycle's static layer the planner got (map and scans)
+        self.blocked_since_s: float | None = None  # since when the plans say static geometry closes the way
 
     def _make_planner(self, path: DesignatedPath, subgoal_policy: SubgoalPolicy):
         """The configured planner on ``path``, behind the shield when ``use_shield`` says so."""
@@ -1128,6 +1129,7 @@ class PlannerCore:
         if self.events:
             planner["events"] = " | ".join(self.events[-3:])
         out["planner"] = planner
+        out["way"] = self._way_status(result)
         if plan is not None and "shield" in plan.extras:
             shield = plan.extras["shield"]
             out["shield"] = (
@@ -1161,6 +1163,33 @@ class PlannerCore:
             "cycle_time_p99_ms": f"{times[min(len(times) - 1, int(0.99 * len(times)))]:.3f}" if times else "",
         }
         return out
+
+    def _way_status(self, result: CycleResult) -> dict[str, str]:
+        """Whether static geometry closes the way (the plan's status ``blocked``, also under a guard's brake):
+        state ``blocked`` with where the robot waits, else ``ok``. A cycle without a plan changes nothing."""
+        plan = result.decision.plan if result.decision is not None else None
+        if plan is None:
+            last = (self.last_result.status if self.last_result is not None else {}).get("way")
+            if self.blocked_since_s is not None and last is not None and self.path is not None and self.active:
+                return dict(last)  # a watchdog tick while blocked (inputs late): the last plan's word stands
+            self.blocked_since_s = None
+            return {"state": "ok", "message": "no plan this cycle", "blocked": "0"}
+        if "blocked" not in (plan.status, plan.extras.get("guard_planner_status")):
+            self.blocked_since_s = None
+            return {"state": "ok", "message": "the way is open", "blocked": "0"}
+        if self.blocked_since_s is None:
+            self.blocked_since_s = result.stamp_s
+        x, y = (float(v) for v in np.asarray(plan.target, dtype=float)[:2])
+        why = str(plan.extras.get("blocked", "static geometry closes the way"))
+        frame = self.settings.odom_frame or "odom"
+        return {
+            "state": "blocked",
+            "message": f"blocked: {why}; the robot waits at ({x:.2f}, {y:.2f}) m in {frame}",
+            "blocked": "1",
+            "wait_x_m": f"{x:.3f}",
+            "wait_y_m": f"{y:.3f}",
+            "blocked_for_s": f"{result.stamp_s - self.blocked_since_s:.1f}",
+        }
 
 
 def simplify_polyline(points, tolerance_m: float) -> np.ndarray:
