@@ -19,7 +19,9 @@ What we chose:
   layout) they return None and the caller takes the ordinary Python messages: slow, but right.
 * An occupancy grid's cells (10⁸ for a 10 000 x 10 000 map) are copied out of the C message by ``ctypes.memmove``,
   which runs without the GIL, instead of into an ``array.array`` under it: the control loop goes on meanwhile.
-  (The middleware's own deserialisation, before the conversion, still holds it: rclpy takes messages so.)
+  rclpy holds the GIL through the middleware's own deserialisation too (``rcl_take``: 0.1–0.2 s for 100 MB), so
+  :class:`TakenAside` takes such a topic in a thread of its own that calls ``rcl_take`` through ctypes (a
+  foreign call, without the GIL) on a subscription of rclpy's that no executor sees, polled every 0.1 s.
 * The conversion never raises (a ctypes callback that raises would hand rclpy a NULL message): what cannot be read
   becomes a :class:`PathArrays` whose ``error`` says why, refused by the caller with that message.
 * Only the goal's id and its path are read from a FollowPath goal request (the path is the goal's first field in
@@ -30,6 +32,7 @@ from __future__ import annotations
 
 import ctypes
 import math
+import re
 from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any
@@ -181,7 +184,7 @@ def _goal_request_from_c(address: int) -> LeanGoalRequest:
     return LeanGoalRequest(goal_id, LeanGoal(_path_from_c(address + _GoalRequest.path.offset)))
 
 
-def _grid_from_c(address: int) -> SimpleNamespace:
+def grid_from_c(address: int) -> SimpleNamespace:
     """An occupancy grid with the fields the node reads (``header.frame_id``, ``info``, ``data`` as int8 cells);
     ``error`` says why the cells could not be read ('' when they were)."""
     try:
@@ -274,13 +277,13 @@ def lean_path_type() -> Any | None:
 
 def lean_grid_type() -> Any | None:
     """A ``nav_msgs/OccupancyGrid`` class whose taken messages carry their cells as an int8 array (see
-    :func:`_grid_from_c`); None when the layout check fails."""
+    :func:`grid_from_c`); None when the layout check fails."""
     import array
 
     from nav_msgs.msg import OccupancyGrid
     from rclpy.serialization import deserialize_message, serialize_message
 
-    lean = _lean_class(OccupancyGrid, "LeanOccupancyGrid", _grid_from_c)
+    lean = _lean_class(OccupancyGrid, "LeanOccupancyGrid", grid_from_c)
     sample = OccupancyGrid()
     sample.header.frame_id = "odom"
     sample.info.resolution, sample.info.width, sample.info.height = 0.25, 3, 2
@@ -341,3 +344,75 @@ def lean_action_server_class() -> Any:
             return data
 
     return LeanGoalActionServer
+
+
+def _librcl() -> Any:
+    """rcl's shared library as loaded by rclpy (the same file: ``dlopen`` returns the loaded one)."""
+    with open("/proc/self/maps") as maps:
+        for line in maps:
+            path = line.split()[-1]
+            if re.search(r"/librcl(-[0-9a-f]{8})?\.so", path):
+                return ctypes.CDLL(path)
+    raise OSError("librcl is not loaded")
+
+
+def _capsule_pointer(capsule: Any) -> int:
+    get = ctypes.pythonapi.PyCapsule_GetPointer
+    get.restype, get.argtypes = ctypes.c_void_p, [ctypes.py_object, ctypes.c_char_p]
+    name = ctypes.pythonapi.PyCapsule_GetName
+    name.restype, name.argtypes = ctypes.c_char_p, [ctypes.py_object]
+    return int(get(capsule, name(capsule)))
+
+
+RCL_RET_OK = 0
+TAKE_PERIOD_S = 0.1
+
+
+class TakenAside:
+    """A subscription to ``topic`` taken by a thread of its own, ``rcl_take`` called without the GIL; each message
+    ``read(address of the C message)`` (which must copy what it keeps) and handed to ``callback``; what the callback
+    raises goes to ``on_error`` (a text) and the thread goes on."""
+
+    def __init__(self, node: Any, msg_type: Any, topic: str, qos: Any, read, callback, on_error=print) -> None:
+        import threading
+
+        from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+        from rclpy.type_support import check_is_valid_msg_type
+
+        check_is_valid_msg_type(msg_type)
+        rcl = _librcl()
+        self._take = rcl.rcl_take
+        self._take.restype = ctypes.c_int
+        self._take.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
+        self._create = ctypes.CFUNCTYPE(ctypes.c_void_p)(_capsule_pointer(msg_type._CREATE_ROS_MESSAGE))
+        self._destroy = ctypes.CFUNCTYPE(None, ctypes.c_void_p)(_capsule_pointer(msg_type._DESTROY_ROS_MESSAGE))
+        with node.handle:
+            self._subscription = _rclpy.Subscription(node.handle, msg_type, topic, qos.get_c_qos_profile())
+        self._read, self._callback, self._on_error = read, callback, on_error
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name=f"viapath-take-{topic}", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        info = ctypes.create_string_buffer(4096)  # rmw_message_info_t (a few hundred bytes)
+        pointer = self._subscription.pointer
+        while not self._stop.wait(TAKE_PERIOD_S):
+            while not self._stop.is_set():
+                message = self._create()
+                if not message:
+                    break
+                try:
+                    if self._take(pointer, message, ctypes.cast(info, ctypes.c_void_p), None) != RCL_RET_OK:
+                        break  # nothing waiting (or a failure rcl reports on the next take too)
+                    value = self._read(message)
+                finally:
+                    self._destroy(message)  # frees the C message's memory, without the GIL
+                try:
+                    self._callback(value)
+                except Exception as error:  # said, and the thread goes on with the next message
+                    self._on_error(f"{type(error).__name__}: {error}")
+
+    def destroy(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5.0)
+        self._subscription.destroy_when_not_in_use()

@@ -124,6 +124,7 @@ class _NodeBehaviour(_LifecycleNode):
         self._inputs_thread: threading.Thread | None = None
         self._inputs_running = False
         self._input_subs: list = []
+        self._takers: list = []  # subscriptions taken by threads of their own (viapath.ros2.lean.TakenAside)
         try:
             self.declare_parameter("planner_name", "viapath")
             self.declare_parameter("scanner_names", ["front", "rear"])
@@ -285,6 +286,9 @@ class _NodeBehaviour(_LifecycleNode):
             thread.join(timeout=5.0)
 
     def _destroy_inputs_node(self) -> None:
+        for taker in self._takers:
+            taker.destroy()
+        self._takers = []
         if self.inputs_node is not None:
             for sub in self._input_subs:
                 self.inputs_node.destroy_subscription(sub)
@@ -313,14 +317,27 @@ class _NodeBehaviour(_LifecycleNode):
         if s.map_topic:
             from nav_msgs.msg import OccupancyGrid
 
-            from viapath.ros2.lean import lean_grid_type
+            from viapath.ros2.lean import TakenAside, grid_from_c, lean_grid_type
 
-            grid_type = OccupancyGrid
-            try:  # the cells copied without the GIL (viapath.ros2.lean)
-                grid_type = lean_grid_type() or OccupancyGrid
-            except Exception as error:
-                self.get_logger().warning(f"maps taken as Python messages: {type(error).__name__}: {error}")
-            self._input_subs.append(self.inputs.create_subscription(grid_type, s.map_topic, self._on_map, latched))
+            try:  # taken and copied without the GIL by a thread of its own (viapath.ros2.lean)
+                if lean_grid_type() is None:
+                    raise TypeError("unknown message layout")
+                self._takers.append(
+                    TakenAside(
+                        self.inputs,
+                        OccupancyGrid,
+                        s.map_topic,
+                        latched,
+                        grid_from_c,
+                        self._on_map,
+                        on_error=lambda text: self.get_logger().error(f"map: {text}"),
+                    )
+                )
+            except Exception as error:  # the ordinary subscription then: the GIL held while a big map is taken
+                self.get_logger().warning(f"maps taken by rclpy: {type(error).__name__}: {error}")
+                self._input_subs.append(
+                    self.inputs.create_subscription(OccupancyGrid, s.map_topic, self._on_map, latched)
+                )
 
     def _create_timers(self, s) -> None:
         from rclpy.clock import Clock as RosClock
