@@ -12,8 +12,9 @@ inputs are built by a second process (so that building them does not hold up the
 one; the robot drives meanwhile); once they are built the measurement starts, and the sender sends
 the 100 000-pose goal along the same line at 4 s, the free map at 9 s (``odom`` frame, 0.05 m
 cells), the zig-zag goal (±0.1 m, 1 cm apart) at 14 s. cmd_vel arrival times are taken in
-this process on one monotonic clock; the gaps are counted from 2 s (warm-up) to the end. Both
-processes are ended by pid.
+this process on one monotonic clock; the gaps are counted from 2 s (warm-up) to the end, and each is also
+put to the input last sent before it ended (``driving`` before the first), which gives the longest gap per
+input. Both processes are ended by pid.
 """
 
 from __future__ import annotations
@@ -227,6 +228,14 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
         speeds = np.array([s for t, s, _ in commands if t - started >= WARMUP_S])
         gaps = np.diff(times)
         worst = int(np.argmax(gaps)) if len(gaps) else 0
+        sent_at = {
+            line.split()[1]: float(line.split()[3]) for line in sender_err.splitlines() if line.startswith("sent")
+        }
+        by_input: dict[str, float] = {"driving": 0.0, **dict.fromkeys(EVENTS_S, 0.0)}
+        for end, gap in zip(times[1:], gaps, strict=True):
+            earlier = [name for name, at in sent_at.items() if at <= end]
+            name = max(earlier, key=lambda n: sent_at[n]) if earlier else "driving"
+            by_input[name] = max(by_input[name], float(gap))
         return {
             "benchmark": "big_inputs",
             "poses": poses,
@@ -237,6 +246,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
             "rate_hz": float(len(times) / (seconds - WARMUP_S)),
             "longest_gap_s": float(gaps.max()) if len(gaps) else None,
             "longest_gap_at_s": float(times[worst]) if len(gaps) else None,
+            "longest_gap_by_input_s": {name: round(gap, 3) for name, gap in by_input.items()},
             "gaps_over_0_2_s": int((gaps > 0.2).sum()),
             "gaps_over_0_2_s_at": [
                 [round(float(times[i]), 2), round(float(gaps[i]), 3)] for i in np.flatnonzero(gaps > 0.2)
@@ -277,6 +287,10 @@ def main() -> None:
         f"cmd_vel: {result['cmd_vel_messages']} messages in {result['seconds_measured']:.0f} s = {result['rate_hz']:.2f} Hz; "
         f"longest gap {result['longest_gap_s']:.3f} s (at {result['longest_gap_at_s']:.1f} s); "
         f"{result['gaps_over_0_2_s']} gaps over 0.2 s; mean speed {result['mean_speed_mps']:.2f} m/s"
+    )
+    print(
+        "  longest gap after each input: "
+        + ", ".join(f"{name} {gap:.3f} s" for name, gap in result["longest_gap_by_input_s"].items())
     )
     for line in result["sent"]:
         print("  " + line)
