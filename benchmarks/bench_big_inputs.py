@@ -14,7 +14,8 @@ the 100 000-pose goal along the same line at 4 s, the free map at 9 s (``odom`` 
 cells), the zig-zag goal (±0.1 m, 1 cm apart) at 14 s. cmd_vel arrival times are taken in
 this process on one monotonic clock; the gaps are counted from 2 s (warm-up) to the end, and each is also
 put to the input last sent before it ended (``driving`` before the first), which gives the longest gap per
-input. Both processes are ended by pid.
+input; the same for the gaps between the scans this process sent (the node cycles on them: a scan sent
+late, on a busy machine, delays its command as much). Both processes are ended by pid.
 """
 
 from __future__ import annotations
@@ -179,6 +180,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
             stderr=subprocess.PIPE,
             text=True,
         )
+        scans_sent: list[float] = []  # when this process published each cycle's scans (monotonic)
         state = {"x": 0.0, "y": 0.0, "h": 0.0, "k": 0, "t0": time.monotonic()}
 
         def drive_until(end_s: float) -> None:
@@ -206,6 +208,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
                         )
                     )
                 state["k"] += 1
+                scans_sent.append(time.monotonic())
 
         import selectors
 
@@ -221,6 +224,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
         sender_proc.stdin.flush()
         started = time.monotonic() + 0.5
         commands.clear()
+        scans_sent.clear()
         drive_until(started + seconds)
         x = state["x"]
         _, sender_err = sender_proc.communicate(timeout=60)
@@ -231,11 +235,16 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
         sent_at = {
             line.split()[1]: float(line.split()[3]) for line in sender_err.splitlines() if line.startswith("sent")
         }
-        by_input: dict[str, float] = {"driving": 0.0, **dict.fromkeys(EVENTS_S, 0.0)}
-        for end, gap in zip(times[1:], gaps, strict=True):
-            earlier = [name for name, at in sent_at.items() if at <= end]
-            name = max(earlier, key=lambda n: sent_at[n]) if earlier else "driving"
-            by_input[name] = max(by_input[name], float(gap))
+
+        def longest_by_input(moments) -> dict[str, float]:
+            by_input: dict[str, float] = {"driving": 0.0, **dict.fromkeys(EVENTS_S, 0.0)}
+            for end, gap in zip(moments[1:], np.diff(moments), strict=True):
+                earlier = [name for name, at in sent_at.items() if at <= end]
+                name = max(earlier, key=lambda n: sent_at[n]) if earlier else "driving"
+                by_input[name] = round(max(by_input[name], float(gap)), 3)
+            return by_input
+
+        scan_times = np.array([t - started for t in scans_sent if t - started >= WARMUP_S])
         return {
             "benchmark": "big_inputs",
             "poses": poses,
@@ -246,7 +255,9 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
             "rate_hz": float(len(times) / (seconds - WARMUP_S)),
             "longest_gap_s": float(gaps.max()) if len(gaps) else None,
             "longest_gap_at_s": float(times[worst]) if len(gaps) else None,
-            "longest_gap_by_input_s": {name: round(gap, 3) for name, gap in by_input.items()},
+            "longest_gap_by_input_s": longest_by_input(times),
+            # the robot's side: a late scan (this process or the machine busy) delays the node's cycle as much
+            "longest_scan_gap_by_input_s": longest_by_input(scan_times),
             "gaps_over_0_2_s": int((gaps > 0.2).sum()),
             "gaps_over_0_2_s_at": [
                 [round(float(times[i]), 2), round(float(gaps[i]), 3)] for i in np.flatnonzero(gaps > 0.2)
@@ -287,6 +298,10 @@ def main() -> None:
         f"cmd_vel: {result['cmd_vel_messages']} messages in {result['seconds_measured']:.0f} s = {result['rate_hz']:.2f} Hz; "
         f"longest gap {result['longest_gap_s']:.3f} s (at {result['longest_gap_at_s']:.1f} s); "
         f"{result['gaps_over_0_2_s']} gaps over 0.2 s; mean speed {result['mean_speed_mps']:.2f} m/s"
+    )
+    print(
+        "  longest gap between the scans sent: "
+        + ", ".join(f"{name} {gap:.3f} s" for name, gap in result["longest_scan_gap_by_input_s"].items())
     )
     print(
         "  longest gap after each input: "
