@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from viapath.path_simplify import simplify_polyline
 from viapath.ros2.lean import PathArrays, lean_action_server_class, lean_goal_request_type
 from viapath.ros2.tf import TransformBuffer
 
@@ -246,8 +247,6 @@ class Nav2Interface:
         if pose is not None:
             c, s_ = math.cos(pose[2]), math.sin(pose[2])
             points = points @ np.array([[c, s_], [-s_, c]]) + np.array(pose[:2])
-        from viapath.ros2.core import simplify_polyline
-
         points = simplify_polyline(points, self.s.path_simplify_m)
         if len(points) == 1:
             if robot is None:
