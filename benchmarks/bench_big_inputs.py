@@ -122,9 +122,11 @@ def _stop(proc) -> None:
             proc.wait(timeout=10)
 
 
-def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
+def run(poses: int, map_cells: int, zigzag: int, seconds: float, node_log: str | None = None) -> dict:
     domain = 150 + os.getpid() % 50
     os.environ.update(ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(domain))
+    import tempfile
+
     import rclpy
     from geometry_msgs.msg import Twist
     from nav_msgs.msg import Odometry
@@ -134,12 +136,14 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
     from viapath.perception.scanner import paper_scanners
     from viapath.ros2 import convert
 
+    # the node's log to a file: a pipe nobody reads until the end would block the node once full
+    log = open(node_log, "w+b") if node_log else tempfile.TemporaryFile()  # noqa: SIM115  # closed in finally
     node_proc = subprocess.Popen(
         [sys.executable, "-m", "viapath.cli", "ros2", "nav2", "--ros-args", "-p", "autostart:=true"]
         + ["-p", "map_topic:=map", "-p", "scan_timeout_s:=5.0", "-p", "odom_timeout_s:=5.0"],
         env=dict(os.environ),
         stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
+        stderr=log,
     )
     sender_proc = None
     rclpy.init()
@@ -154,7 +158,8 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
         if not _wait_for(
             node, lambda: node.count_publishers("cmd_vel") > 0 and node.count_subscribers("scan_rear") > 0, 120
         ):
-            raise RuntimeError("the node did not come up: " + node_proc.stderr.read().decode()[-2000:])
+            log.seek(0)
+            raise RuntimeError("the node did not come up: " + log.read().decode()[-2000:])
         client, FollowPath = _goal_client(node)
         goal = FollowPath.Goal()
         goal.path = convert.path_message([[-1.0, 0.0], [100.0, 0.0]], "odom", convert.time_msg(0.0))
@@ -273,6 +278,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
         for proc in (sender_proc, node_proc):
             if proc is not None:
                 _stop(proc)
+        log.close()
 
 
 def main() -> None:
@@ -282,11 +288,12 @@ def main() -> None:
     parser.add_argument("--zigzag", type=int, default=30_000)
     parser.add_argument("--seconds", type=float, default=30.0)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--node-log", help="write the node's log (stderr) to this file")
     parser.add_argument("--sender", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.sender:
         raise SystemExit(sender(args.poses, args.map_cells, args.zigzag))
-    result = run(args.poses, args.map_cells, args.zigzag, args.seconds)
+    result = run(args.poses, args.map_cells, args.zigzag, args.seconds, args.node_log)
     if args.json:
         print(json.dumps(result))
         return
