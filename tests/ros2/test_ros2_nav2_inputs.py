@@ -133,3 +133,10 @@ def test_the_way_closed_by_the_mapped_wall_is_a_blocked_warning_and_the_open_way
     assert after[0][0] - opened <= 3.0
     ended = phases["goal_at_robot"]["sent_s"]  # the goal through the wall replaced (then no path: OK again)
     assert [level for t, level, _ in ways if sent <= t < ended][-1] == WARN_LEVEL  # blocked as long as it ran
+
+
+def test_goals_and_maps_are_taken_as_arrays_not_python_messages(driven):
+    """The lean takes are in use on this build (the node says when it falls back to Python messages)."""
+    _, node_err = driven
+    assert "taken as Python messages" not in node_err and "maps taken by rclpy" not in node_err
+    assert "map: 0 static segments" in node_err  # the free map was taken (by the thread of its own)

@@ -332,7 +332,7 @@ def lean_action_server_class() -> Any:
 
         def take_data(self):
             goal = None
-            if self.lean_request is not None and self._is_goal_request_ready:
+            if self.lean_request is not None and getattr(self, "_is_goal_request_ready", False):
                 with self._lock:
                     taken = self._handle.take_goal_request(self.lean_request)
                 if taken[0]:

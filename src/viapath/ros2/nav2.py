@@ -108,6 +108,8 @@ class Nav2Interface:
             cancel_callback=lambda handle: CancelResponse.ACCEPT,
         )
         try:
+            if not all(hasattr(self.server, name) for name in ("_handle", "_lock", "is_ready", "take_data")):
+                raise TypeError("this rclpy's ActionServer takes goals otherwise")
             self.server.lean_request = lean_goal_request_type(FollowPath)
         except Exception as error:  # the ordinary messages then: slow for long paths, but right
             node.get_logger().warning(f"follow_path goals taken as Python messages: {type(error).__name__}: {error}")
