@@ -10,7 +10,8 @@ drives the received cmd_vel and two empty scans every 0.1 s. Phases:
 4. a goal whose three poses all lie at the robot;
 5. goals that are empty, have a NaN among 3 poses, or one among 20 000 poses;
 6. a free map (the wall gone) and a 30 000-pose zig-zag goal along the way;
-7. a goal running when the node is shut down (lifecycle ``shutdown``).
+7. a goal that is canceled while it runs;
+8. a goal running when the node is shut down (lifecycle ``shutdown``).
 
 OUT.json holds per phase the robot's largest x, the goal results (status, error code) and the commands, and
 the node's ``way`` status on /diagnostics (level, message) with the driver's time of each change.
@@ -131,6 +132,8 @@ def main(out_path: str) -> int:
         msg.data = array.array("b", cells.tobytes())
         return msg
 
+    handles: dict[int, object] = {}  # the goal handles, by id of their record
+
     def goal(points) -> dict:
         request = FollowPath.Goal()
         request.path = convert.path_message(np.asarray(points, float).reshape(-1, 2), "odom", convert.time_msg(0.0))
@@ -139,6 +142,7 @@ def main(out_path: str) -> int:
 
         def accepted(future):
             handle = future.result()
+            handles[id(record)] = handle
             record["accepted"] = bool(handle.accepted)
             if handle.accepted:
                 handle.get_result_async().add_done_callback(
@@ -196,6 +200,12 @@ def main(out_path: str) -> int:
     zigzag = np.c_[start_x + np.arange(n) * 0.01, np.where(np.arange(n) % 2, 0.05, -0.05)]
     big = goal(zigzag)
     phases["open_way"] = {"start_x": start_x, "largest_x": run(6.0), "goal": big}
+    canceled = goal([[state["x"], 0.0], [state["x"] + 3.0, 0.0]])
+    run(3.0, lambda: canceled.get("accepted") is not None)
+    if id(canceled) in handles:
+        handles[id(canceled)].cancel_goal_async()  # type: ignore[attr-defined]  # a ClientGoalHandle
+    run(5.0, lambda: "status" in canceled)
+    phases["cancel"] = dict(canceled)
     last = goal([[state["x"], 0.0], [state["x"] + 0.5, 0.0]])
     run(2.0, lambda: last.get("accepted") is not None)
     request = ChangeState.Request()

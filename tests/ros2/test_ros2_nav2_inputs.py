@@ -19,7 +19,7 @@ from _ros2_procs import Processes, domain_id, viapath
 
 WALL_X_M = 1.225  # the map's wall (cell centres); its cells reach 0.025 m nearer
 ROBOT_RADIUS_M = 0.25
-SUCCEEDED, ABORTED = 4, 6
+SUCCEEDED, CANCELED, ABORTED = 4, 5, 6
 INVALID_PATH = 103
 OK_LEVEL, WARN_LEVEL = 0, 1
 
@@ -140,3 +140,8 @@ def test_goals_and_maps_are_taken_as_arrays_not_python_messages(driven):
     _, node_err = driven
     assert "taken as Python messages" not in node_err and "maps taken by rclpy" not in node_err
     assert "map: 0 static segments" in node_err  # the free map was taken (by the thread of its own)
+
+
+def test_a_running_goal_is_canceled_when_asked(driven):
+    phases, _ = driven
+    assert phases["cancel"].get("accepted") and phases["cancel"].get("status") == CANCELED, phases["cancel"]
