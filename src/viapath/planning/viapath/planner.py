@@ -79,7 +79,7 @@ from viapath.options import Settings
 from viapath.path import DesignatedPath
 from viapath.planning.base import Decision, Plan, Planner, Situation
 from viapath.planning.viapath import packing
-from viapath.planning.viapath.blocked import blocked, near_corridor
+from viapath.planning.viapath.blocked import blocked, detour, near_corridor
 from viapath.planning.viapath.candidates import Candidates, Choice, RootLegs, Way, _candidates_of, grow
 from viapath.planning.viapath.checks import LegChecks
 from viapath.planning.viapath.choice import choose_compiled, uses_compiled_choice
@@ -145,6 +145,11 @@ class ViaPathPlanner(Planner, name="viapath"):
             checks.max_accel_mps2 = self.limits.max_accel_mps2
         speeds, nominal_index = self.speed_set(situation.robot.speed_mps)
         chosen = self._choose(checks, speeds, nominal_index, self._previous)
+        if chosen is None and checks.obstacles.static_mask is not None:
+            chosen = detour(self, checks, speeds, nominal_index, grow_step)
+            if chosen is not None:  # a way round static geometry the tree alone did not find (:mod:`.blocked`)
+                self._previous = self._previous_escape = None
+                return Decision(self._command(situation, chosen.plan), chosen.plan)
         if chosen is None:
             self._previous = None
             decision = stop_or_escape(checks, self.limits, self.config, self._previous_escape)
