@@ -102,3 +102,21 @@ def test_a_closed_way_sends_the_robot_round_the_box_towards_the_door():
     line = np.asarray(plan.waypoints)  # the way there keeps clear of the box
     samples = np.concatenate([np.linspace(a, b, 20) for a, b in zip(line[:-1], line[1:], strict=True)])
     assert point_segment_distances(samples, box).min() - RADIUS >= 0.05 - 1e-6
+
+
+def test_a_robot_waiting_at_a_door_floods_the_corridor_once(monkeypatch):
+    """The flood is kept while the static world stays the same: a robot that spends most of the episode
+    before a closed door floods the corridor's free space once, not once a cycle."""
+    from viapath.planning.viapath import flood
+
+    made = []
+    original = flood.FreeSpace.of
+
+    def counted(*arguments):
+        made.append(1)
+        return original(*arguments)
+
+    monkeypatch.setattr(flood.FreeSpace, "of", staticmethod(counted))
+    episode = run_episode(load_scenario("box-beside-door"), perception="oracle")
+    blocked_cycles = int(np.sum(np.asarray(episode.trace.plan_status) == "blocked"))
+    assert blocked_cycles >= 200 and len(made) == 1, (blocked_cycles, len(made))
