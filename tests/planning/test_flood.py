@@ -196,3 +196,21 @@ def test_the_cache_keeps_the_flood_while_the_discs_and_the_window_stay():
     far = cache.free_space(path, np.array([20.0, 0.0]), centres, radii, radii + 0.3)
     assert far.cell_of(np.array([20.0, 0.0])) is not None and far.cell_of(np.array([6.0, 0.0])) is None
     assert cache.free_space(path, np.array([np.nan, 0.0]), centres, radii, radii) is None
+
+
+def test_a_window_over_a_long_path_takes_the_segments_near_it_with_their_arc_length():
+    """A zig-zag of 400 segments: the cells of a window near its middle are those of the whole path (inside
+    the corridor, the same arc length and distance from the path line)."""
+    x = np.arange(401) * 1.0
+    path = DesignatedPath(np.stack([x, np.where(np.arange(401) % 2, 0.5, 0.0)], axis=1), half_width_m=0.8)
+    low, high = (int(200.0 / CELL), int(-1.0 / CELL)), (int(203.0 / CELL), int(1.5 / CELL))
+    corridor = Corridor.of(path, low, high, CELL)
+    xs, ys = np.arange(low[0], high[0] + 1) * CELL, np.arange(low[1], high[1] + 1) * CELL
+    points = np.stack(np.meshgrid(xs, ys), axis=-1)
+    _, arc, lateral = path.project(points)
+    assert np.array_equal(corridor.inside, path.corridor_excess(points) <= 0.0)
+    inside = corridor.inside
+    assert inside.any() and (~inside).any()
+    assert np.allclose(corridor.arc_m[inside], arc[inside]) and np.allclose(
+        corridor.offset_m[inside], np.abs(lateral)[inside]
+    )

@@ -200,7 +200,7 @@ def detour(planner: Planning, checks: LegChecks, speeds: np.ndarray, nominal_ind
         return None
     route = space.route(start, onward[1])
     seen = _in_sight(checks, route) if len(route) else 0
-    if seen == 0:
+    if seen < min(2, len(route)):  # not even the route's first step in sight
         return None
     if seen == len(route) and space.reaches(start, checks.subgoal, space.cell_m) is not None:
         # The subgoal is in sight: what leaves the tree empty is the way on along the next segment.
@@ -239,7 +239,7 @@ def blocked(planner: Planning, situation: Situation, checks: LegChecks, speed_mp
     if len(route) == 0 or arc[1] <= arc[0] + space.cell_m or float(np.hypot(*(goal - position))) <= AT_REST_POINT_M:
         return _standing(checks, goal, "static geometry closes the way; waiting at the farthest point it leaves")
     seen = _in_sight(checks, route)
-    if seen == 0:
+    if seen < min(2, len(route)):  # not even the route's first step in sight
         return None
     target = route[seen - 1]
     steps = np.diff(route[seen - 1 :], axis=0)

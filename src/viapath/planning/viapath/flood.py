@@ -185,9 +185,31 @@ class Corridor:
         xs = np.arange(low[0], high[0] + 1) * cell_m
         ys = np.arange(low[1], high[1] + 1) * cell_m
         points = np.stack(np.meshgrid(xs, ys), axis=-1)  # (ny, nx, 2)
-        _, arc, lateral = path.project(points)
-        inside = path.corridor_excess(points) <= 0.0
-        return cls(float(xs[0]), float(ys[0]), inside, arc, np.abs(lateral))
+        part, offset_m = _near_part(path, np.array([xs[0], ys[0]]), np.array([xs[-1], ys[-1]]))
+        if part is None:
+            empty = np.zeros(points.shape[:2])
+            return cls(float(xs[0]), float(ys[0]), np.zeros(points.shape[:2], dtype=bool), empty, empty)
+        _, arc, lateral = part.project(points)
+        inside = part.corridor_excess(points) <= 0.0
+        return cls(float(xs[0]), float(ys[0]), inside, arc + offset_m, np.abs(lateral))
+
+
+def _near_part(path: DesignatedPath, low: np.ndarray, high: np.ndarray) -> tuple[DesignatedPath | None, float]:
+    """The run of ``path``'s segments from the first to the last whose corridor capsule meets the box
+    [low, high], as a path of its own, and the arc length where it starts (None: no segment meets it). A
+    cell outside every such capsule is outside the corridor; so a window over a long path costs the
+    segments near it only."""
+    starts, ends = path.segment_starts, path.segment_starts + path.segment_vectors
+    grow = path.half_widths_m[:, None]
+    meets = ((np.minimum(starts, ends) - grow <= high) & (np.maximum(starts, ends) + grow >= low)).all(axis=1)
+    near = np.flatnonzero(meets)
+    if len(near) == 0:
+        return None, 0.0
+    first, last = int(near[0]), int(near[-1])
+    if first == 0 and last == len(path.half_widths_m) - 1:
+        return path, 0.0
+    part = DesignatedPath(path.waypoints[first : last + 2], half_widths_m=path.half_widths_m[first : last + 1])
+    return part, float(path.cumulative_length_m[first])
 
 
 @dataclass
