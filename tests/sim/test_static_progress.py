@@ -42,10 +42,12 @@ def test_a_box_before_a_closed_door_is_passed_and_the_robot_waits_at_the_door_th
 @pytest.mark.parametrize("perception", ["oracle", "laser"])
 def test_a_box_beside_the_path_before_a_door_that_stays_closed(perception):
     """A box off to one side (still across the robot's way on the path line), a door that never opens: the
-    robot goes past the box on its free side and waits within 0.5 m of the door to the end."""
+    robot goes round the box on its free (right) side and waits within 0.5 m of the door to the end."""
     episode = run_episode(load_scenario("box-beside-door"), perception=perception)
     trace, m = episode.trace, episode.metrics
     assert m["static_contact"] == 0 and not m["collision"] and m["time_outside_corridor_s"] == 0.0
+    beside = np.abs(trace.robot_poses[:, 0] - 2.5) < 0.3  # the box spans y 0.15 to 0.75 there
+    assert beside.any() and (trace.robot_poses[beside, 1] < 0.15 - RADIUS).all()
     assert not m["reached_goal"]
     assert (_gap_to_door(trace.robot_poses) > 0.0).all()
     gap = _gap_to_door(trace.robot_poses[trace.times_s > 27.0])
@@ -57,7 +59,7 @@ def test_a_box_beside_the_path_before_a_door_that_stays_closed(perception):
 @pytest.mark.parametrize("perception", ["oracle", "laser"])
 def test_a_box_just_past_the_corner_of_an_l_corridor_is_passed(perception):
     """The tutorial's L-shaped corridor with a box 2.5 m past the corner, 0.5 m right of the path: the robot
-    turns the corner and passes the box on its left (the wider side) to the goal."""
+    turns the corner and goes round the box on the left (the wider side) to the goal."""
     episode = run_episode(load_scenario("l-corridor-box"), perception=perception)
     trace, m = episode.trace, episode.metrics
     assert m["static_contact"] == 0 and not m["collision"] and m["time_outside_corridor_s"] == 0.0
