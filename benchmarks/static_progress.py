@@ -125,7 +125,7 @@ def _show(value) -> str:
     if isinstance(value, bool):
         return "yes" if value else "no"
     if isinstance(value, float):
-        return f"{value:.2f}" if value >= 0.01 else f"{value:.4f}"
+        return f"{value:.2f}" if value >= 0.01 or value == 0 else f"{value:.4f}"
     return str(value)
 
 
