@@ -122,3 +122,21 @@ def test_a_robot_waiting_at_a_door_floods_the_corridor_once(monkeypatch):
     episode = run_episode(load_scenario("box-beside-door"), perception="oracle")
     blocked_cycles = int(np.sum(np.asarray(episode.trace.plan_status) == "blocked"))
     assert blocked_cycles >= 200 and len(made) == 1, (blocked_cycles, len(made))
+
+
+@pytest.mark.parametrize("person", [[1.0, -0.3], [1.4, -0.5], [2.0, -0.6], [2.6, -0.5], [3.5, 0.0], [4.2, 0.3]])
+def test_the_drive_to_the_door_keeps_clear_of_a_person_standing_on_the_way(person):
+    """The closed way with someone standing on or near the flood's way round the box: whatever the robot does,
+    the leg it drives (robot to the plan's target) keeps the person's disc and its own apart (brute force
+    over points along the leg), and a plan that cannot is a stop."""
+    scenario = load_scenario("box-before-door")
+    shapes = [edges for edges, _ in scenario.static_shapes()]
+    path = DesignatedPath(scenario.path.waypoints, half_width_m=1.0)
+    planner = make_planner("viapath", path, nominal_speed_mps=0.4)
+    robot = RobotState(np.zeros(2), 0.0, 0.0, 0.0, RADIUS)
+    people = Obstacles(np.array([person], float), np.zeros((1, 2)), np.array([0.3]))
+    decision = planner.plan(Observation(0.0, robot, people, StaticLayer.of_shapes(shapes)))
+    if decision.command.speed_mps == 0.0:
+        return
+    leg = np.linspace(np.zeros(2), np.asarray(decision.plan.target, float), 200)
+    assert np.hypot(*(leg - person).T).min() >= RADIUS + 0.3, decision.plan.status
