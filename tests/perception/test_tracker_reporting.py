@@ -118,3 +118,19 @@ def test_the_settled_velocity_is_steadier_on_a_straight_walk_and_follows_a_turn(
         assert _rms(settled_errors[turn]) < 1.5 * _rms(agile_errors[turn])
         covered = np.mean(settled_errors[turn] <= 2.5 * settled_sigmas[turn])
         assert covered >= np.mean(agile_errors[turn] <= 2.5 * agile_sigmas[turn])
+
+
+def test_a_tentative_track_on_known_static_geometry_waits_for_confirmation():
+    # The detector starts tentative tracks on the corners of boxes: one whose disc overlaps geometry the scans
+    # showed already is left to its confirmation; one clear of it (a person beside the box) is reported at once.
+    from viapath.static import StaticLayer
+
+    box_edge = StaticLayer(np.array([[[1.0, -0.5], [1.0, 0.5]]]))
+    tracker = MultiTargetTracker()
+    tracker.step(0.0, [[1.1, 0.0], [0.6, 1.0]], 0.03, 0.25)  # 0.1 m from the edge; 0.64 m from its end
+    reported = tracker.people(ROBOT, box_edge).positions
+    assert reported.tolist() == [[0.6, 1.0]]
+    assert len(tracker.people(ROBOT)) == 2  # without the static layer both
+    tracker.step(0.1, [[1.1, 0.0], [0.6, 1.0]], 0.03, 0.25)
+    tracker.step(0.2, [[1.1, 0.0], [0.6, 1.0]], 0.03, 0.25)
+    assert len(tracker.people(ROBOT, box_edge)) == 2  # confirmed: a person, whatever stands near them

@@ -168,8 +168,9 @@ class LaserPerception(Perception):
         self.last_detections_world = detections
         tracker = self._tracker
         tracker.step(time_s, detections.centres, detections.position_sigma_m, detections.radii_m)
+        known = self.last_static  # the static geometry the scans showed up to last cycle
         self.last_static = self._static.update(time_s, robot_pose, scans, *tracker.explaining())
-        return tracker.people(robot_pose[:2]).finite()
+        return tracker.people(robot_pose[:2], known).finite()
 
     def static_layer(self, world: WorldSnapshot) -> StaticLayer:
         """What the last scans show of static geometry (:mod:`.static_layer`), not the world's map."""

@@ -70,6 +70,7 @@ import numpy as np
 
 from viapath.observation import Obstacles
 from viapath.perception.assignment import gated_assignment
+from viapath.static import StaticLayer, point_segment_distances
 
 
 @dataclass(frozen=True)
@@ -342,19 +343,27 @@ class MultiTargetTracker:
         agile = _largest_sigma(c[:, 2, 2], c[:, 2, 3], c[:, 3, 3])
         return np.sqrt(agile * agile + gap[:, 0] * gap[:, 0] + gap[:, 1] * gap[:, 1])
 
-    def people(self, robot_position=None) -> Obstacles:
+    def people(self, robot_position=None, known_static: StaticLayer | None = None) -> Obstacles:
         """The people the planner and the shield receive: the confirmed tracks that are not static and, given
-        the robot's position (world frame), the tentative tracks within ``report_tentative_within_m`` of it."""
-        return self.obstacles(rows=self.reported(robot_position))
+        the robot's position (world frame), the tentative tracks within ``report_tentative_within_m`` of it
+        (see :meth:`reported`)."""
+        return self.obstacles(rows=self.reported(robot_position, known_static))
 
-    def reported(self, robot_position=None) -> np.ndarray:
-        """Which tracks :meth:`people` reports (a boolean row mask)."""
+    def reported(self, robot_position=None, known_static: StaticLayer | None = None) -> np.ndarray:
+        """Which tracks :meth:`people` reports (a boolean row mask). A tentative track is left to its
+        confirmation when its disc overlaps a confirmed track's (a fragment of that person) or static geometry
+        already known (``known_static``: the detector starts tentative tracks on the corners of boxes and
+        carts; a person does not stand inside a box)."""
         rows = self.confirmed & ~self.static
         within = self.params.report_tentative_within_m
         if robot_position is None or within <= 0 or self.confirmed.all():
             return rows
         gap = self.state[:, :2] - np.asarray(robot_position, dtype=float)[:2]
         near = ~self.confirmed & (np.hypot(gap[:, 0], gap[:, 1]) <= within)
+        if near.any() and known_static is not None and len(known_static.segments):
+            radii = known_static.radii_m if known_static.radii_m is not None else np.zeros(len(known_static.segments))
+            clearance = point_segment_distances(self.state[near, :2], known_static.segments) - radii[None, :]
+            near[near] = ~(clearance < self.radii_m[near, None]).any(axis=1)
         if near.any() and self.confirmed.any():
             # A tentative track whose disc overlaps a confirmed track's is a fragment of that person (two
             # people do not overlap): the confirmed track stands for it already.
