@@ -11,7 +11,8 @@ What we chose:
 * The detector's radius prior is the usual simulated obstacle (0.25 m); ``fixed_radius_m`` switches
   to a known-radius fit (more accurate when every obstacle has the same, known size).
 * The planner gets what the tracker reports: the confirmed tracks and the tentative ones within the
-  tracker's ``report_tentative_within_m`` of the robot (:mod:`~viapath.perception.tracking`); a
+  tracker's ``report_tentative_within_m`` of the robot and clear of the static geometry the scans showed
+  up to last cycle (:mod:`~viapath.perception.tracking`); a
   confirmed track that is occluded keeps being reported (coasting, with growing sigmas) until
   ``max_unseen_s``.
 * Every return no track explains is static geometry (:mod:`~viapath.perception.static_layer`, option

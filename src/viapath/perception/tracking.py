@@ -34,8 +34,9 @@ What we chose where the source leaves it open:
   towards a robot at 0.3 m/s, 1.3 m shrink to 0.9 m by then). A track born on its first detection is
   reported standing with ``initial_velocity_sigma_mps`` (1 m/s): a cone that covers a walker going any
   way, so planner and shield slow down. Farther away one-off clutter still needs confirmation (a laser's
-  false positives do not stop the robot), and a tentative track whose disc overlaps a confirmed track's
-  is a fragment of that person (two people do not overlap) and is not reported.
+  false positives do not stop the robot); so does a tentative track whose disc overlaps a confirmed
+  track's (a fragment of that person: two people do not overlap) or, given the static geometry known so
+  far, that geometry (the detector starts tentative tracks on the corners of boxes and carts).
 * Settled velocity: the velocity reported is that of a second filter on the same detections with a
   much smaller process noise (``settled_acceleration_sigma_mps2`` = 0.02 m/s²: a walker's steady
   pace), so that a person walking steadily is forecast steadily (with 3 cm detections the agile
