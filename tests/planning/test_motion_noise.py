@@ -90,7 +90,7 @@ def test_keeping_the_previous_way_cuts_side_flips_and_stays_safe(noisy_overtakin
     strict=True,
     reason=(
         "known: under white noise every cycle the noisy built-in overtaking trails the walker, "
-        "56-84 side flips and ~73 s to the goal against 1 flip and 31 s clean; most way changes find the "
+        "46-79 side flips and ~73 s to the goal against 1 flip and 31 s clean; most way changes find the "
         "previous way gone even with a quarter of the inflation, as the forecast itself moved with the "
         "velocity noise (_count_way_changes below), so the constraint hysteresis cannot hold it; "
         "see docs/explanation/passive-safety.md"
