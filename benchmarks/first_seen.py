@@ -1,12 +1,13 @@
 """A person appears 1.3 m ahead of the robot (0.3 m/s) walking straight at it at 1.7 m/s: what the robot commands in
 the cycle they are first seen, per perception mode.
 
-Usage: python benchmarks/first_seen.py [--modes oracle,tracked,laser] [--sigma 0.03] [--json]
+Usage: python benchmarks/first_seen.py [--modes oracle,tracked,laser] [--sigma 0.03] [--confirmed-only] [--json]
 
 The person is a replayed track whose first sample is at 2.0 s (viapath.sim.metrics.first_seen_steps: the first
 step with a position sample, the cycle the simulator hands them to the perception, the step the avoidable search
 starts from). One row per mode: the cycle the planner is first told of them, the command then, the robot's speed
 at the contact (if any) and whether it was at fault. ``tracked`` gives the detections a σ of ``--sigma`` per axis.
+``--confirmed-only``: the trackers report confirmed tracks only (``report_tentative_within_m`` = 0), for comparison.
 """
 
 from __future__ import annotations
@@ -64,6 +65,16 @@ def run_one(mode: str, sigma_m: float, folder: Path) -> dict:
     }
 
 
+def _confirmed_only() -> None:
+    """Every tracker this process makes reports confirmed tracks only (the perception models make their own)."""
+    import functools
+
+    from viapath.perception import laser, oracle
+
+    for module in (laser, oracle):
+        module.TrackerParams = functools.partial(module.TrackerParams, report_tentative_within_m=0.0)  # type: ignore[misc]
+
+
 def _contacts(trace):
     from viapath.bench.avoidable import contact_speeds
 
@@ -75,7 +86,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--modes", default="oracle,tracked,laser")
     parser.add_argument("--sigma", type=float, default=0.03, help="tracked mode's detection σ, m")
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--confirmed-only", action="store_true", help="trackers report confirmed tracks only")
     args = parser.parse_args(argv)
+    if args.confirmed_only:
+        _confirmed_only()
     with tempfile.TemporaryDirectory() as folder:
         rows = [run_one(mode, args.sigma, Path(folder)) for mode in args.modes.split(",")]
     if args.json:
