@@ -1026,7 +1026,8 @@ class PlannerCore:
             self._time_jump("scan stamp before the tracker's time")
             self.hold_until_stamp_s = stamp + self.settings.reset_hold_s
         self.tracker.step(stamp, detections.centres, detections.position_sigma_m, detections.radii_m)
-        obstacles = self.tracker.people().finite()
+        # (the static layer the scans showed up to last cycle: a tentative track on it is not reported early)
+        obstacles = self.tracker.people(pose[:2], self.static_now).finite()
         self.static_now = self.static_layer.update(
             stamp, pose, [r for _, r in scans], *self.tracker.explaining(), scanners=[m for m, _ in scans]
         )
