@@ -146,6 +146,15 @@ def choose_compiled(
     return _first_admitted(planner, chosen, checks)
 
 
+def tree_is_empty(planner: Planning, checks: LegChecks, speeds: np.ndarray, nominal_index: int) -> bool:
+    """Whether the candidate tree of ``checks`` has no candidate at all (no free root either; step 1 is not
+    taken): the compiled choice's tree alone (:func:`.packing.choose` with ``TREE_ONLY``)."""
+    settings, integers, slow_times = _cycle_settings(planner, checks, nominal_index, None, None)
+    integers[slot.C_TRY_STRAIGHT] = 0
+    found = packing.choose(checks, checks, speeds, slow_times, settings, integers, packing.TREE_ONLY)
+    return found.status != slot.CANDIDATES
+
+
 def _cycle_settings(
     planner: Planning, checks: LegChecks, nominal_index: int, previous: Choice | None, only_way: Way | None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

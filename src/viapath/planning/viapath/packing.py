@@ -187,11 +187,22 @@ def choose(
             waypoints, settings, integers,
         )  # fmt: skip
         return _choice_of(found, floats, integers, costs)
+    records = (robot, _c(speeds), _c(checks.subgoal), obstacles, via, slow, continuation, envelope, corridor, waypoints)
+    return _choose_in_halves(records, settings, integers, extra_terms)
+
+
+def _choose_in_halves(records, settings: np.ndarray, integers: np.ndarray, extra_terms) -> CompiledChoice:
+    """:func:`choose` with ``extra_terms``: :func:`.selection.choose_tree`, the terms, :func:`.selection.choose_ranked`
+    (the tree alone with :func:`TREE_ONLY`). ``records``: the robot, speeds, subgoal, obstacles, via, slow (without
+    the creep speed), continuation, envelope, corridor and waypoints."""
+    robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints = records
     found, floats, integers_store, facts = _selection.choose_tree(
-        robot, _c(speeds), _c(checks.subgoal), obstacles, via, (*slow, float(settings[slot.F_CREEP])), continuation,
-        envelope, corridor, waypoints, settings, integers,
+        robot, speeds, subgoal, obstacles, via, (*slow, float(settings[slot.F_CREEP])), continuation, envelope,
+        corridor, waypoints, settings, integers,
     )  # fmt: skip
     store = NodeStore(floats, integers_store)
+    if extra_terms is TREE_ONLY:
+        return CompiledChoice(int(found[0]), False, found[2:], -1, [], [], np.empty(0), np.empty((0, 0)), store)
     extra = _c(extra_terms(store, found[slot.FOUND_LEAVES :]) if found[0] == slot.CANDIDATES else np.empty((0, 0)))
     found, costs = _selection.choose_ranked(
         robot, found, floats, integers_store, facts, extra, obstacles, corridor, settings, integers
@@ -200,6 +211,11 @@ def choose(
     return choice._replace(
         terms=np.concatenate([choice.terms[: slot.COST_TERMS], extra, choice.terms[slot.COST_SUM :]])
     )
+
+
+def TREE_ONLY(store: NodeStore, leaves: np.ndarray) -> np.ndarray:
+    """:func:`choose`'s ``extra_terms`` for the candidate tree only (its status: whether it has candidates)."""
+    raise AssertionError("a marker, never called")
 
 
 def escape(checks, limits: MotionLimits, config, fan, previous=None, score_standing: bool = False):
