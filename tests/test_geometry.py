@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import assume, given
+from hypothesis import assume, example, given
 from hypothesis import strategies as st
 
 from tests._core_helpers import core_settings
@@ -297,6 +297,9 @@ def test_first_contact_time_matches_sampling(rel_position, rel_velocity, radius_
 
 @core_settings
 @given(point, velocity, radius, st.floats(0.0, 0.6), st.floats(0.1, 30.0), st.booleans(), miss)
+# a subnormal growth round touching discs: the root's denominator is a few subnormals (c / it overflows)
+@example(np.zeros(2), np.zeros(2), 1.0, 2.2250738585e-313, 1.0, False, (0.0, 0.0))
+@example(np.array([3.0, 0.0]), np.zeros(2), 1.0, 2.2250738585e-313, 1.0, False, (0.0, 0.0))
 def test_first_contact_time_growing_radius_matches_sampling(
     rel_position, rel_velocity, radius_m, growth, duration, aimed, miss_point
 ):

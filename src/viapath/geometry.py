@@ -147,7 +147,9 @@ def _first_contact(
     # (a > 0, a < 0, a = 0) where one exists, without cancellation.
     denominator = np.sqrt(np.maximum(discriminant, 0.0)) - b
     ok = (discriminant >= 0) & (denominator > 0)
-    tau = c / np.where(ok, denominator, 1.0)
+    # A denominator of a few subnormals overflows to ±inf: past any duration when c > 0, replaced by 0 below when not.
+    with np.errstate(over="ignore"):
+        tau = c / np.where(ok, denominator, 1.0)
     tau = np.where(ok & (tau <= duration), tau, np.inf)
     return np.where(c <= 0, 0.0, tau)
 
