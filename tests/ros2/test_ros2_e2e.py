@@ -111,7 +111,9 @@ def test_every_command_was_finite_and_inside_the_limits(paper_runs, tmp_path_fac
         v, w = trace["cmd_speed_mps"][:-1], trace["cmd_turn_rate_radps"][:-1]
         assert np.all(np.isfinite(v)) and np.all(np.isfinite(w))
         assert np.all((v >= 0) & (v <= 0.6 + 1e-9)) and np.all(np.abs(w) <= 2.0 + 1e-9)
-        assert np.all(np.abs(v - trace["speed_mps"][:-1]) <= 0.08 + 1e-6)
+        # never asks for more speed than the robot gains in a cycle; braking harder is always allowed (a person
+        # reported in the first cycle slows the robot from its starting speed at once)
+        assert np.all(v - trace["speed_mps"][:-1] <= 0.08 + 1e-6)
         assert "0 without the node's command in time" in stderr, stderr
 
 
