@@ -272,6 +272,7 @@ def parse_options(assignments: list[str], planner_name: str) -> dict:
         for text in assignments:
             name, value = parse_assignment(text)
             values[name] = value
+        values = schema.retired.drop(values, where="--option", separator=" ")  # read, warned about, left out
         values = schema.current_names(values, where="--option")  # an option's former name read as its name now
         schema.validate(values, where="--option")
     except OptionError as error:
