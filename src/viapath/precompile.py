@@ -9,18 +9,20 @@ plain Python itself and starts ``python -m viapath.precompile --background`` for
 The steps live with their features (the planner's in :mod:`viapath.planning.viapath`, the shield's in
 :mod:`viapath.safety`, the laser chain's in :mod:`viapath.perception`), each decorated with
 :func:`viapath.jit.compiled`. Compiling them means calling them with the argument types they are called with:
-the shield's and the planner's own warm-up cycles, then a few cycles of the doorway scene seen by the laser
-chain (scans, detection, tracking, the static layer, and the planner, shield and guard with static geometry).
-It builds planners, shields and episodes and runs them, so it lives outside all of them.
+the shield's and the planner's own warm-up cycles, then, when the cache is not ready, the episodes of a few
+built-in scenes (:data:`WARM_UP_EPISODES`: walls and a door seen by the oracle and by the laser chain, a person
+on a subgoal, people met one after another). Every built-in scenario, oracle or laser, then runs without compiling
+anything. It builds planners, shields and episodes and runs them, so it lives outside all of them.
 
 Choices where nothing says: one compiler per cache folder at a time (an exclusive ``flock`` on
 ``compiling.lock`` there, holding its PID; a second background compiler leaves at once, :func:`precompile`
 waits, then loads what the first compiled). numba writes each cache file atomically (a temporary file renamed),
 but a function's index and its data are two files: two processes adding *different* signatures of one function
-at the same moment could pair an index entry with the other's data, hence the lock. A run that compiles without
-it (background compilation off, or a signature no warm-up made) adds the same signatures in the same order as
-any other, which numba's atomic writes keep consistent.
-The background compiler runs at low priority (``nice`` 10) with its output in ``precompile.log`` there, and is
+at the same moment could pair an index entry with the other's data, hence the lock. Runs that compile without it
+(background compilation off, or a signature no warm-up made) are the rare case; two processes compiling the same
+steps in the same order keep the cache consistent (tests/perception/test_numba_cache.py). A cache folder that
+cannot be written (a read-only home) gets no lock and no background compilation: runs compile in their own
+process, as numba does without a cache. The background compiler runs at low priority (``nice`` 10) with its output in ``precompile.log`` there, and is
 switched off by ``VIAPATH_BACKGROUND_COMPILE=0`` (the test suite sets it): a cold run then compiles in its own
 process, as ``viapath bench`` does.
 """
@@ -66,22 +68,26 @@ def _compile_all() -> bool:
 
     shield_ready = precompile_shield()  # first: the planner's warm-up cycles are checked by a shield
     planner_ready = precompile_planner()
-    compiled = shield_ready and planner_ready and _precompile_laser_chain()
-    if compiled and not jit.cache_is_ready():
+    if not (shield_ready and planner_ready):
+        return False
+    if not jit.cache_is_ready():  # compiling: every step; loading (a ready cache): the two above are enough
+        _run_warm_up_episodes()
         _mark_ready(time.process_time())
-    return compiled
+    return True
 
 
-def _precompile_laser_chain() -> bool:
-    """Two seconds of the doorway scene with laser perception: walls, a door and a person, so the scans, the
-    detector, the tracker, the static layer and the planner's, shield's and guard's static checks all run."""
-    from viapath import jit
+#: Built-in scenes whose episodes call every compiled step with the argument types a run does: walls and a door
+#: (the static layer, the planner's and the guard's static checks), seen by the oracle and by the laser chain;
+#: a person standing on a subgoal (the goal legs, the bypass); three people met one after another by laser.
+WARM_UP_EPISODES = (("doorway", "laser"), ("doorway", "oracle"), ("blocked-subgoal", "oracle"), ("hallway", "laser"))
+
+
+def _run_warm_up_episodes() -> None:
     from viapath.scenarios import load_scenario
     from viapath.sim.loop import run_episode
 
-    scene = load_scenario("doorway")
-    run_episode(scene.model_copy(update={"duration_s": 2.0}), perception="laser")
-    return jit.enabled()
+    for scene, perception in WARM_UP_EPISODES:
+        run_episode(load_scenario(scene), perception=perception)
 
 
 def _mark_ready(cpu_s: float) -> None:
@@ -105,9 +111,13 @@ def compiling_lock(wait: bool) -> Iterator[bool]:
         return
     from viapath import jit
 
-    folder = jit.cache_directory()
-    folder.mkdir(parents=True, exist_ok=True)
-    descriptor = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        folder = jit.cache_directory()
+        folder.mkdir(parents=True, exist_ok=True)
+        descriptor = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError:  # a cache that cannot be written: numba compiles without caching, nothing to share
+        yield True
+        return
     try:
         try:
             fcntl.flock(descriptor, fcntl.LOCK_EX | (0 if wait else fcntl.LOCK_NB))
@@ -146,8 +156,17 @@ def compiling_pid() -> int | None:
 
 
 def background_allowed() -> bool:
-    """Whether a cold run may compile in the background (``VIAPATH_BACKGROUND_COMPILE`` is not ``0``)."""
-    return os.environ.get(BACKGROUND_VARIABLE, "1").strip() not in ("0", "false", "no", "off")
+    """Whether a cold run may compile in the background: ``VIAPATH_BACKGROUND_COMPILE`` is not ``0`` and the
+    cache folder can be written (else the next runs would not find what it compiled)."""
+    if os.environ.get(BACKGROUND_VARIABLE, "1").strip() in ("0", "false", "no", "off"):
+        return False
+    from viapath import jit
+
+    try:
+        jit.cache_directory().mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return False
+    return os.access(jit.cache_directory(), os.W_OK)
 
 
 def start_in_background() -> int:
