@@ -201,7 +201,7 @@ def compile_now(announce=print) -> int:
         return 0
     running = compiling_pid()
     if running is not None:
-        announce(f"viapath: waiting for the compilation running in the background (pid {running})")
+        announce(f"viapath: waiting for the compilation under way (pid {running})")
     started = time.perf_counter()
     precompile()
     if not jit.cache_is_ready():  # pragma: no cover - a step could not be compiled: its error was raised
