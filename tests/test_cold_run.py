@@ -194,3 +194,14 @@ def test_a_process_that_compiled_a_step_already_stays_compiled(monkeypatch, tmp_
     from viapath.cli.common import compiled_or_plain
 
     assert compiled_or_plain() is False and jit.enabled()
+
+
+def test_precompile_with_compilation_off_says_there_is_nothing_to_compile(tmp_path):
+    from typer.testing import CliRunner
+
+    from viapath.cli import app
+
+    result = CliRunner().invoke(app, ["precompile"], env={"NUMBA_DISABLE_JIT": "1", "NUMBA_CACHE_DIR": str(tmp_path)})
+    assert result.exit_code == 0, result.output
+    assert "compilation is off" in result.output and "nothing to compile" in result.output
+    assert not any(tmp_path.iterdir())  # no lock, no cache folder
