@@ -12,8 +12,10 @@ inputs are built by a second process (so that building them does not hold up the
 one; the robot drives meanwhile); once they are built the measurement starts, and the sender sends
 the 100 000-pose goal along the same line at 4 s, the free map at 9 s (``odom`` frame, 0.05 m
 cells), the zig-zag goal (±0.1 m, 1 cm apart) at 14 s. cmd_vel arrival times are taken in
-this process on one monotonic clock; the gaps are counted from 2 s (warm-up) to the end. Both
-processes are ended by pid.
+this process on one monotonic clock; the gaps are counted from 2 s (warm-up) to the end, and each is also
+put to the input last sent before it ended (``driving`` before the first), which gives the longest gap per
+input; the same for the gaps between the scans this process sent (the node cycles on them: a scan sent
+late, on a busy machine, delays its command as much). Both processes are ended by pid.
 """
 
 from __future__ import annotations
@@ -120,9 +122,11 @@ def _stop(proc) -> None:
             proc.wait(timeout=10)
 
 
-def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
+def run(poses: int, map_cells: int, zigzag: int, seconds: float, node_log: str | None = None) -> dict:
     domain = 150 + os.getpid() % 50
     os.environ.update(ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(domain))
+    import tempfile
+
     import rclpy
     from geometry_msgs.msg import Twist
     from nav_msgs.msg import Odometry
@@ -132,12 +136,14 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
     from viapath.perception.scanner import paper_scanners
     from viapath.ros2 import convert
 
+    # the node's log to a file: a pipe nobody reads until the end would block the node once full
+    log = open(node_log, "w+b") if node_log else tempfile.TemporaryFile()  # noqa: SIM115  # closed in finally
     node_proc = subprocess.Popen(
         [sys.executable, "-m", "viapath.cli", "ros2", "nav2", "--ros-args", "-p", "autostart:=true"]
         + ["-p", "map_topic:=map", "-p", "scan_timeout_s:=5.0", "-p", "odom_timeout_s:=5.0"],
         env=dict(os.environ),
         stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
+        stderr=log,
     )
     sender_proc = None
     rclpy.init()
@@ -152,7 +158,8 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
         if not _wait_for(
             node, lambda: node.count_publishers("cmd_vel") > 0 and node.count_subscribers("scan_rear") > 0, 120
         ):
-            raise RuntimeError("the node did not come up: " + node_proc.stderr.read().decode()[-2000:])
+            log.seek(0)
+            raise RuntimeError("the node did not come up: " + log.read().decode()[-2000:])
         client, FollowPath = _goal_client(node)
         goal = FollowPath.Goal()
         goal.path = convert.path_message([[-1.0, 0.0], [100.0, 0.0]], "odom", convert.time_msg(0.0))
@@ -178,6 +185,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
             stderr=subprocess.PIPE,
             text=True,
         )
+        scans_sent: list[float] = []  # when this process published each cycle's scans (monotonic)
         state = {"x": 0.0, "y": 0.0, "h": 0.0, "k": 0, "t0": time.monotonic()}
 
         def drive_until(end_s: float) -> None:
@@ -205,6 +213,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
                         )
                     )
                 state["k"] += 1
+                scans_sent.append(time.monotonic())
 
         import selectors
 
@@ -220,6 +229,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
         sender_proc.stdin.flush()
         started = time.monotonic() + 0.5
         commands.clear()
+        scans_sent.clear()
         drive_until(started + seconds)
         x = state["x"]
         _, sender_err = sender_proc.communicate(timeout=60)
@@ -227,6 +237,19 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
         speeds = np.array([s for t, s, _ in commands if t - started >= WARMUP_S])
         gaps = np.diff(times)
         worst = int(np.argmax(gaps)) if len(gaps) else 0
+        sent_at = {
+            line.split()[1]: float(line.split()[3]) for line in sender_err.splitlines() if line.startswith("sent")
+        }
+
+        def longest_by_input(moments) -> dict[str, float]:
+            by_input: dict[str, float] = {"driving": 0.0, **dict.fromkeys(EVENTS_S, 0.0)}
+            for end, gap in zip(moments[1:], np.diff(moments), strict=True):
+                earlier = [name for name, at in sent_at.items() if at <= end]
+                name = max(earlier, key=lambda n: sent_at[n]) if earlier else "driving"
+                by_input[name] = round(max(by_input[name], float(gap)), 3)
+            return by_input
+
+        scan_times = np.array([t - started for t in scans_sent if t - started >= WARMUP_S])
         return {
             "benchmark": "big_inputs",
             "poses": poses,
@@ -237,6 +260,9 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
             "rate_hz": float(len(times) / (seconds - WARMUP_S)),
             "longest_gap_s": float(gaps.max()) if len(gaps) else None,
             "longest_gap_at_s": float(times[worst]) if len(gaps) else None,
+            "longest_gap_by_input_s": longest_by_input(times),
+            # the robot's side: a late scan (this process or the machine busy) delays the node's cycle as much
+            "longest_scan_gap_by_input_s": longest_by_input(scan_times),
             "gaps_over_0_2_s": int((gaps > 0.2).sum()),
             "gaps_over_0_2_s_at": [
                 [round(float(times[i]), 2), round(float(gaps[i]), 3)] for i in np.flatnonzero(gaps > 0.2)
@@ -252,6 +278,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float) -> dict:
         for proc in (sender_proc, node_proc):
             if proc is not None:
                 _stop(proc)
+        log.close()
 
 
 def main() -> None:
@@ -261,11 +288,12 @@ def main() -> None:
     parser.add_argument("--zigzag", type=int, default=30_000)
     parser.add_argument("--seconds", type=float, default=30.0)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument("--node-log", help="write the node's log (stderr) to this file")
     parser.add_argument("--sender", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.sender:
         raise SystemExit(sender(args.poses, args.map_cells, args.zigzag))
-    result = run(args.poses, args.map_cells, args.zigzag, args.seconds)
+    result = run(args.poses, args.map_cells, args.zigzag, args.seconds, args.node_log)
     if args.json:
         print(json.dumps(result))
         return
@@ -277,6 +305,14 @@ def main() -> None:
         f"cmd_vel: {result['cmd_vel_messages']} messages in {result['seconds_measured']:.0f} s = {result['rate_hz']:.2f} Hz; "
         f"longest gap {result['longest_gap_s']:.3f} s (at {result['longest_gap_at_s']:.1f} s); "
         f"{result['gaps_over_0_2_s']} gaps over 0.2 s; mean speed {result['mean_speed_mps']:.2f} m/s"
+    )
+    print(
+        "  longest gap between the scans sent: "
+        + ", ".join(f"{name} {gap:.3f} s" for name, gap in result["longest_scan_gap_by_input_s"].items())
+    )
+    print(
+        "  longest gap after each input: "
+        + ", ".join(f"{name} {gap:.3f} s" for name, gap in result["longest_gap_by_input_s"].items())
     )
     for line in result["sent"]:
         print("  " + line)

@@ -343,6 +343,35 @@ def ros2_page() -> str:
         "|---|---|---|",
         *(f"| `{o.name}` | `{_cell(_value(o.default))}` | {_cell(o.help)} |" for o in topics),
         "",
+        "## Diagnostics",
+        "",
+        "The node publishes one `diagnostic_msgs/DiagnosticArray` per cycle on `status_topic`, and the same array on "
+        "`diagnostics_topic` (`/diagnostics`, where `rqt_robot_monitor` and `diagnostic_aggregator` look) once a "
+        "second and at once when the way's state changes. Each status is named `NODE: PART` and carries its "
+        "values as key/values.",
+        "",
+        "| status | level | message | key/values |",
+        "|---|---|---|---|",
+        "| `planner` | OK driving or at the goal; WARN degraded (a scanner silent) or waiting (no path, inactive); "
+        "ERROR braking or stopped for a fault | the mode and the reasons | mode, reasons, plan status, speed, "
+        "via points, tracks, cycle and plan times, events |",
+        "| `way` | WARN while static geometry (a closed door, a wall across the corridor) closes the way to the "
+        "subgoal and the robot waits short of it (the plan's status `blocked`, also when the guard brakes it); OK "
+        "otherwise | `blocked: static geometry closes the way 1.20 m ahead; the robot waits at (3.10, 0.00) m in "
+        "odom`, or `the way is open` | `blocked` (1 or 0), `wait_x_m`, `wait_y_m` (where the robot waits, "
+        "odometry frame), `blocked_for_s` |",
+        "| `shield` | OK | — | the shield's verdict of the cycle |",
+        "| `scanner NAME` | OK receiving; WARN silent or no scan yet | the state | good and refused scans "
+        "(by reason), the last problem, the invalid fraction, the mount's source |",
+        "| `odometry` | OK fresh; WARN stale or a fault | the state | refused messages (by reason), the last "
+        "problem |",
+        "| `timing` | OK | — | the cycle time, its median and 99th percentile over the last 100 cycles |",
+        "",
+        "The way's state is the one `viapath run --json` counts as `blocked_s` (and the bench table as "
+        "*blocked*); Nav2's FollowPath feedback has no field for it, so as Nav2's controller the node says it "
+        "here too, while the goal runs (its progress check ends a goal that waits longer than "
+        "`progress_patience_s` with FAILED_TO_MAKE_PROGRESS).",
+        "",
         "## Parameters",
         "",
         _option_table(options),

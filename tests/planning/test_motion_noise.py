@@ -90,7 +90,7 @@ def test_keeping_the_previous_way_cuts_side_flips_and_stays_safe(noisy_overtakin
     strict=True,
     reason=(
         "known: under white noise every cycle the noisy built-in overtaking trails the walker, "
-        "56-84 side flips and ~73 s to the goal against 1 flip and 31 s clean; most way changes find the "
+        "46-79 side flips and ~73 s to the goal against 1 flip and 31 s clean; most way changes find the "
         "previous way gone even with a quarter of the inflation, as the forecast itself moved with the "
         "velocity noise (_count_way_changes below), so the constraint hysteresis cannot hold it; "
         "see docs/explanation/passive-safety.md"
@@ -130,7 +130,8 @@ def test_a_previous_way_that_only_lost_on_cost_is_not_searched_again_with_less_i
 
     def recording_choose(self, checks, speeds, nominal_index, previous, only_way=None):
         result = original_choose(self, checks, speeds, nominal_index, previous, only_way)
-        searches.append((only_way is not None, result))
+        # a relaxed search: the obstacle's velocity σ cut below the observed 0.05 m/s
+        searches.append((bool(checks.obstacles.velocity_sigma_mps[0] < 0.05 - 1e-12), result))
         return result
 
     monkeypatch.setattr(ViaPathPlanner, "_choose", recording_choose)
@@ -145,7 +146,7 @@ def test_a_previous_way_that_only_lost_on_cost_is_not_searched_again_with_less_i
     searches.clear()
     second = planner.plan(observation)
     assert planner._previous.way != worst  # it switched ...
-    assert [relaxed for relaxed, _ in searches] == [False]  # ... after one search, no relaxed re-run
+    assert not any(relaxed for relaxed, _ in searches)  # ... with no relaxed re-run
     assert "kept_previous_way" not in second.plan.extras
     assert second.plan.extras["way_change"] == "cost"
 
@@ -215,3 +216,45 @@ def test_relaxed_searches_happen_only_under_noise():
     assert all(clean.get(key, 0) == 0 for key in relaxed), clean
     assert sum(noisy.get(key, 0) for key in relaxed) > 0, noisy
     assert noisy["cycles"] > clean["cycles"] and noisy["plan_side_flips"] > clean["plan_side_flips"]
+
+
+def _trailing_then(walker_y_m: float, switch_inflation: float, sigmas=(0.02, 0.1)):
+    """The robot trailed a walker (0.1 m/s, 1 m ahead, ``walker_y_m`` off the path in a ±1 m corridor) last
+    cycle; this cycle's plan (status, way change)."""
+    import numpy as np
+
+    from viapath import DesignatedPath, Observation, Obstacles, RobotState
+    from viapath.planning import make_planner
+    from viapath.planning.viapath.candidates import STRAIGHT, Choice, Way
+
+    path = DesignatedPath([[0.0, 0.0], [8.0, 0.0]], half_width_m=1.0)
+    options = {"switch_inflation": switch_inflation, "weights": {"k1": 0.1, "k2": 0.01, "k3": 0.08, "k4": 0.3}}
+    planner = make_planner("viapath", path, nominal_speed_mps=0.25, options=options)
+    walker = Obstacles(
+        positions=[[1.0, walker_y_m]],
+        velocities=[[0.1, 0.0]],
+        radii_m=[0.25],
+        position_sigma_m=[sigmas[0]],
+        velocity_sigma_mps=[sigmas[1]],
+    )
+    observation = Observation(0.0, RobotState(np.zeros(2), 0.0, 0.1), walker)
+    planner._previous = Choice(Way(STRAIGHT, 0, 0), 100)  # trailing at 0.1 m/s
+    decision = planner.plan(observation)
+    return decision.plan.status, decision.plan.extras.get("way_change")
+
+
+@pytest.mark.parametrize("walker_y_m", [-0.3, -0.4, -0.5])
+def test_a_pass_that_fits_only_just_does_not_replace_trailing(walker_y_m):
+    # Free with the usual inflation (taken without the switch hysteresis), not with twice it: the robot trails on.
+    assert _trailing_then(walker_y_m, 1.0) == ("avoid", "cost")
+    assert _trailing_then(walker_y_m, 2.0) == ("straight", "held_new_way_too_tight")
+
+
+def test_a_pass_with_room_replaces_trailing_and_exact_estimates_are_not_held():
+    assert _trailing_then(-0.6, 2.0) == ("avoid", "cost")  # the walker 0.6 m aside: room to pass
+    # exact estimates (no σ: no inflation to multiply) switch as without the hysteresis
+    assert (
+        _trailing_then(-0.4, 2.0, sigmas=(0.0, 0.0))
+        == _trailing_then(-0.4, 1.0, sigmas=(0.0, 0.0))
+        == ("avoid", "cost")
+    )

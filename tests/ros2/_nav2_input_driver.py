@@ -8,9 +8,13 @@ drives the received cmd_vel and two empty scans every 0.1 s. Phases:
 2. maps with a NaN origin, a 1e300 origin and an empty frame_id, all free: each refused, the wall kept;
 3. /tf_static with the front scanner 1e6 m out, /tf with the quaternion (0, 0, 1, 1);
 4. a goal whose three poses all lie at the robot;
-5. a goal running when the node is shut down (lifecycle ``shutdown``).
+5. goals that are empty, have a NaN among 3 poses, or one among 20 000 poses;
+6. a free map (the wall gone) and a 30 000-pose zig-zag goal along the way;
+7. a goal that is canceled while it runs;
+8. a goal running when the node is shut down (lifecycle ``shutdown``).
 
-OUT.json holds per phase the robot's largest x, the goal results (status, error code) and the commands.
+OUT.json holds per phase the robot's largest x, the goal results (status, error code) and the commands, and
+the node's ``way`` status on /diagnostics (level, message) with the driver's time of each change.
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ import numpy as np
 
 def main(out_path: str) -> int:
     import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import TransformStamped, Twist
     from lifecycle_msgs.msg import Transition
     from lifecycle_msgs.srv import ChangeState
@@ -56,6 +61,16 @@ def main(out_path: str) -> int:
     node.create_subscription(
         Twist, "cmd_vel", lambda m: commands.append((time.monotonic(), m.linear.x, m.angular.z)), 50
     )
+    ways: list[tuple[float, int, str]] = []  # (driver time, level, message) of the way status as it changes
+
+    def on_diagnostics(msg) -> None:
+        for status in msg.status:
+            if status.name.endswith(": way"):
+                level = int.from_bytes(status.level, "little") if isinstance(status.level, bytes) else int(status.level)
+                if not ways or ways[-1][1:] != (level, status.message):
+                    ways.append((time.monotonic() - started, level, status.message))
+
+    node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, 50)
     client = ActionClient(node, FollowPath, "follow_path")
     change = node.create_client(ChangeState, "controller_server/change_state")
     started = time.monotonic()
@@ -117,18 +132,25 @@ def main(out_path: str) -> int:
         msg.data = array.array("b", cells.tobytes())
         return msg
 
+    handles: dict[int, object] = {}  # the goal handles, by id of their record
+
     def goal(points) -> dict:
         request = FollowPath.Goal()
         request.path = convert.path_message(np.asarray(points, float).reshape(-1, 2), "odom", convert.time_msg(0.0))
-        record: dict = {}
+        record: dict = {"sent_s": time.monotonic() - started}
         sent = client.send_goal_async(request)
 
         def accepted(future):
             handle = future.result()
+            handles[id(record)] = handle
             record["accepted"] = bool(handle.accepted)
             if handle.accepted:
                 handle.get_result_async().add_done_callback(
-                    lambda f: record.update(status=int(f.result().status), code=int(f.result().result.error_code))
+                    lambda f: record.update(
+                        status=int(f.result().status),
+                        code=int(f.result().result.error_code),
+                        message=str(f.result().result.error_msg),
+                    )
                 )
 
         sent.add_done_callback(accepted)
@@ -162,6 +184,28 @@ def main(out_path: str) -> int:
     here = goal([[state["x"], state["y"]]] * 3)
     run(5.0, lambda: "status" in here)
     phases["goal_at_robot"] = dict(here)
+    spoiled = np.c_[np.arange(20_000) * 0.001 + state["x"], np.zeros(20_000)]
+    spoiled[15_000, 1] = float("nan")
+    bad = {
+        "empty": goal(np.zeros((0, 2))),
+        "nan_short": goal([[state["x"], 0.0], [state["x"] + 0.2, float("nan")], [state["x"] + 0.4, 0.0]]),
+        "nan_long": goal(spoiled),
+    }
+    run(8.0, lambda: all("status" in record for record in bad.values()))
+    phases["bad_goals"] = {name: dict(record) for name, record in bad.items()}
+    map_pub.publish(grid(-2.0, -2.0, wall=False))  # the wall gone: the way opens
+    run(1.0)
+    start_x = state["x"]
+    n = 30_000
+    zigzag = np.c_[start_x + np.arange(n) * 0.01, np.where(np.arange(n) % 2, 0.05, -0.05)]
+    big = goal(zigzag)
+    phases["open_way"] = {"start_x": start_x, "largest_x": run(6.0), "goal": big}
+    canceled = goal([[state["x"], 0.0], [state["x"] + 3.0, 0.0]])
+    run(3.0, lambda: canceled.get("accepted") is not None)
+    if id(canceled) in handles:
+        handles[id(canceled)].cancel_goal_async()  # type: ignore[attr-defined]  # a ClientGoalHandle
+    run(5.0, lambda: "status" in canceled)
+    phases["cancel"] = dict(canceled)
     last = goal([[state["x"], 0.0], [state["x"] + 0.5, 0.0]])
     run(2.0, lambda: last.get("accepted") is not None)
     request = ChangeState.Request()
@@ -170,6 +214,7 @@ def main(out_path: str) -> int:
     change.call_async(request)
     run(6.0, lambda: "status" in last)
     phases["shutdown_during_goal"] = dict(last)
+    phases["ways"] = ways
     with open(out_path, "w") as handle:
         json.dump(phases, handle)
     node.destroy_node()

@@ -14,9 +14,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from viapath.path_simplify import simplify_polyline, sleeve_simplify
 from viapath.ros2.background import Background
 from viapath.ros2.convert import MAX_MAP_SEGMENTS, occupancy_layer
-from viapath.ros2.core import PlannerCore, simplify_polyline, sleeve_simplify
+from viapath.ros2.core import PlannerCore
 from viapath.ros2.settings import validate
 from viapath.ros2.tf import TransformBuffer
 from viapath.static import point_segment_distances
@@ -167,7 +168,11 @@ def test_simplified_paths_keep_every_point_within_the_tolerance(steps, scale, to
 def test_a_zig_zag_is_simplified_in_linear_work():
     """Douglas-Peucker's work on a zig-zag grows with the square of its points; the simplification
     switches to the sleeve within its budget: the work counted, not timed (the sleeve visits each point
-    a bounded number of times, which the counting wrapper below checks)."""
+    a bounded number of times, which the counting wrapper below checks on the plain Python form of the
+    compiled pass; the compiled pass gives the same points)."""
+    from viapath.jit import python_function
+    from viapath.path_simplify import _sleeve_keep
+
     n = 30_000
     zig = np.column_stack([np.arange(n) * 0.01, np.where(np.arange(n) % 2, 0.1, -0.1)])
     out = simplify_polyline(zig, 0.05)
@@ -180,12 +185,14 @@ def test_a_zig_zag_is_simplified_in_linear_work():
         visits["count"] += 1
         return original_hypot(*args)
 
+    xs, ys = zig[:, 0].copy(), zig[:, 1].copy()
     math.hypot = counting_hypot
     try:
-        sleeve_simplify(zig, 0.05)
+        kept = python_function(_sleeve_keep)(xs, ys, 0.05)
     finally:
         math.hypot = original_hypot
-    assert visits["count"] <= 3 * n
+    assert 0 < visits["count"] <= 3 * n
+    assert np.array_equal(zig[kept], sleeve_simplify(zig, 0.05))
 
 
 # -- property: hostile maps and paths through the node's core ---------------------------------------

@@ -98,3 +98,33 @@ def test_markers_draw_the_static_layer():
     (line,) = [m for m in markers.markers if m.ns == "static"]
     points = np.array([[p.x, p.y] for p in line.points])
     assert np.allclose(points, static.segments.reshape(-1, 2))
+
+
+def _drive(core, walls, cycles: int = 40):
+    """The robot drives as commanded (a perfect base) along x; each cycle's ``way`` status."""
+    pose, speed, ways = np.array([0.0, 0.0, 0.0]), 0.3, []
+    for k in range(cycles):
+        t = 1.0 + 0.1 * k
+        assert feed(core, t, tuple(pose), speed, scans=wall_scans(pose, walls))
+        result = core.cycle(t)
+        speed = result.command.speed_mps
+        pose = pose + 0.1 * speed * np.array([1.0, 0.0, 0.0])
+        ways.append(result.status["way"])
+    return pose, ways
+
+
+def test_the_way_status_says_blocked_and_where_the_robot_waits_while_a_wall_closes_the_way():
+    """A wall across the way (seen by the scanners): from the first cycles the status is ``blocked`` with a wait
+    point short of the wall, the robot never beyond it; an open corridor: ``ok`` throughout."""
+    core = make_core()
+    pose, ways = _drive(core, WALL)
+    assert all(w["state"] == "blocked" for w in ways[5:]), [w["state"] for w in ways]
+    wait = np.array([float(ways[-1]["wait_x_m"]), float(ways[-1]["wait_y_m"])])
+    assert point_segment_distances(wait[None], WALL)[0, 0] > core.settings.robot_radius_m  # short of the wall
+    assert abs(pose[0] - wait[0]) < 0.1  # and the robot waits there
+    assert ways[-1]["message"].startswith("blocked: static geometry closes the way")
+    assert float(ways[-1]["blocked_for_s"]) >= 3.0
+    open_core = make_core()
+    _, ways = _drive(open_core, np.zeros((0, 2, 2)), cycles=20)
+    assert all(w["state"] == "ok" and w["blocked"] == "0" for w in ways)
+    assert ways[-1]["message"] == "the way is open"

@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from viapath.ros2.core import PlannerCore, simplify_polyline
+from viapath.path_simplify import simplify_polyline
+from viapath.ros2.core import PlannerCore
 from viapath.ros2.settings import validate
 from viapath.ros2.tf import TransformBuffer, apply
 

@@ -84,3 +84,18 @@ def test_the_robot_brakes_in_the_cycle_the_person_is_first_seen(walker_file):
     assert trace.commands[first - 1, 0] == pytest.approx(0.3)  # straight on at the nominal speed before
     assert trace.commands[first, 0] < trace.robot_speeds_mps[first] - 0.1  # slowing in that very cycle
     assert not episode.metrics["at_fault_collision"]
+
+
+@pytest.mark.parametrize("perception", ["tracked", "laser"])
+def test_through_a_tracker_the_robot_brakes_in_the_cycle_the_person_is_first_seen(walker_file, perception):
+    # The tracker reports a track near the robot on its first detection (standing, velocity σ 1 m/s: a person who
+    # may walk any way), without waiting for the confirmation two cycles later.
+    noise = {"position_noise_m": 0.03} if perception == "tracked" else {}
+    episode = run_episode(_scenario(walker_file), perception=perception, record_perceived=True, **noise)
+    trace = episode.trace
+    first = int(first_seen_steps(trace.obstacle_positions)[0])
+    assert len(trace.perceived[first - 1]) == 0 and len(trace.perceived[first]) == 1  # reported in that cycle
+    assert trace.perceived[first].velocity_sigma_mps[0] == pytest.approx(1.0)
+    assert trace.commands[first - 1, 0] == pytest.approx(0.3)
+    assert trace.commands[first, 0] < trace.robot_speeds_mps[first] - 0.1  # slowing in that very cycle
+    assert not episode.metrics["at_fault_collision"]

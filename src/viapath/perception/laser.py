@@ -10,8 +10,11 @@ What we chose:
 * Range noise on by default (``range_noise=True``), drawn from the generator given to ``reset``.
 * The detector's radius prior is the usual simulated obstacle (0.25 m); ``fixed_radius_m`` switches
   to a known-radius fit (more accurate when every obstacle has the same, known size).
-* Tentative tracks are never reported; a confirmed track that is occluded keeps being reported
-  (coasting, with growing sigmas) until ``max_unseen_s``.
+* The planner gets what the tracker reports: the confirmed tracks and the tentative ones within the
+  tracker's ``report_tentative_within_m`` of the robot and clear of the static geometry the scans showed
+  up to last cycle (:mod:`~viapath.perception.tracking`); a
+  confirmed track that is occluded keeps being reported (coasting, with growing sigmas) until
+  ``max_unseen_s``.
 * Every return no track explains is static geometry (:mod:`~viapath.perception.static_layer`, option
   ``static_layer``), handed to the planner as the observation's static layer. A track that has stood
   still for the tracker's ``static_after_s`` explains nothing and is not reported: a box the detector
@@ -166,8 +169,9 @@ class LaserPerception(Perception):
         self.last_detections_world = detections
         tracker = self._tracker
         tracker.step(time_s, detections.centres, detections.position_sigma_m, detections.radii_m)
+        known = self.last_static  # the static geometry the scans showed up to last cycle
         self.last_static = self._static.update(time_s, robot_pose, scans, *tracker.explaining())
-        return tracker.people().finite()
+        return tracker.people(robot_pose[:2], known).finite()
 
     def static_layer(self, world: WorldSnapshot) -> StaticLayer:
         """What the last scans show of static geometry (:mod:`.static_layer`), not the world's map."""

@@ -113,6 +113,9 @@ _TRACKER: dict[str, dict[str, Any]] = {
     "static_after_s": {"gt": 0.0, "allow_inf_nan": True},  # .inf: a track never becomes static
     "static_radius_m": _Positive,
     "static_wake_speed_mps": {"gt": 0.0, "le": 100.0},
+    "settled_acceleration_sigma_mps2": {"gt": 0.0, "le": 100.0},
+    "settled_gate_chi2": {"gt": 0.0, "le": 1.0e6},
+    "report_tentative_within_m": {"ge": 0.0, "le": 100.0},
 }
 _STATIC_LAYER: dict[str, dict[str, Any]] = {
     "explained_margin_m": _NonNegative,

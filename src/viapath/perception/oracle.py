@@ -7,10 +7,12 @@
 * ``tracked``: what a robot's planner really sees. Each cycle every present person is *detected* at their
   true position plus Gaussian noise (σ ``position_noise_m`` per axis; the true radius), and the detections
   go through the project's Kalman tracker (:class:`~viapath.perception.tracking.MultiTargetTracker`, the
-  laser chain's defaults) as the laser's do: the planner gets the confirmed tracks, their velocities
-  estimated by the filter and the filter's σ. So noise is correlated from cycle to cycle, a new person
-  is reported from their third detection on (the tracker's confirmation) and a person is first seen
-  standing still until the filter has learnt their velocity.
+  laser chain's defaults) as the laser's do: the planner gets what the tracker reports
+  (:meth:`~viapath.perception.tracking.MultiTargetTracker.people`): the confirmed tracks and the tentative
+  ones near the robot, with the tracker's settled velocities and σ. So noise is correlated from cycle to
+  cycle; a person appearing near the robot is reported in the cycle they appear, standing with a 1 m/s
+  velocity σ, one farther away from their third detection on (the tracker's confirmation); and a
+  person's velocity is the filter's, learnt over a few cycles.
 
 Choices where the sources are silent, for ``tracked``: the tracker never turns a standing track into
 static geometry (``static_after_s`` = inf): the oracle's static layer is the map, so a person standing
@@ -97,7 +99,7 @@ class TrackedOraclePerception(Perception):
             positions = positions + self.rng.normal(0.0, self.position_noise_m, positions.shape)
         sigma = max(self.position_noise_m, MIN_DETECTION_SIGMA_M)
         self._tracker.step(world.time_s, positions, np.full(len(positions), sigma), world.obstacle_radii_m[present])
-        obstacles = self._tracker.people().finite()
+        obstacles = self._tracker.people(world.robot_pose[:2]).finite()
         self._reported.append(obstacles)
         self._truth.append(world)
         return obstacles

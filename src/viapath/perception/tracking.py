@@ -28,9 +28,28 @@ What we chose where the source leaves it open:
   track that can no longer make it, or that is unseen for ``tentative_max_unseen_s``, is dropped. A
   confirmed track is dropped after ``max_unseen_s`` without a detection; until then it coasts on
   its prediction (an occluded person does not vanish) and its covariance grows.
+* What is reported (:meth:`MultiTargetTracker.people`): the confirmed tracks and, given the robot's
+  position, every tentative track within ``report_tentative_within_m`` (1.5 m) of it, from its first
+  detection: someone who appears that close cannot wait two cycles for confirmation (at 1.7 m/s
+  towards a robot at 0.3 m/s, 1.3 m shrink to 0.9 m by then). A track born on its first detection is
+  reported standing with ``initial_velocity_sigma_mps`` (1 m/s): a cone that covers a walker going any
+  way, so planner and shield slow down. Farther away one-off clutter still needs confirmation (a laser's
+  false positives do not stop the robot); so does a tentative track whose disc overlaps a confirmed
+  track's (a fragment of that person: two people do not overlap) or, given the static geometry known so
+  far, that geometry (the detector starts tentative tracks on the corners of boxes and carts).
+* Settled velocity: the velocity reported is that of a second filter on the same detections with a
+  much smaller process noise (``settled_acceleration_sigma_mps2`` = 0.02 m/s²: a walker's steady
+  pace), so that a person walking steadily is forecast steadily (with 3 cm detections the agile
+  filter's velocity wanders by ≈ 0.07 m/s from cycle to cycle, enough to flip a planner between
+  trailing a walker and passing them). When that filter's innovation leaves its gate
+  (``settled_gate_chi2``, 9.21: 99 % for 2 d.o.f.) the person changed pace or direction, and it
+  restarts from the agile filter's state and covariance. Association, confirmation, the position and
+  standing still use the agile filter.
 * Radius: an exponential average of the detections' radii (``radius_smoothing``).
 * Reported uncertainty: ``position_sigma_m`` and ``velocity_sigma_mps`` are the square roots of the
-  largest eigenvalue of the position / velocity blocks of the covariance (worst direction).
+  largest eigenvalue of the position / velocity blocks of the agile filter's covariance (worst
+  direction); the velocity's has the gap between the two filters' velocities added in quadrature
+  (while the settled velocity lags a change of pace, the gap is what it may be off by).
 * Standing still: a confirmed track whose estimate stays within ``static_radius_m`` of where it
   stopped, slower than ``static_wake_speed_mps``, for ``static_after_s`` is *static* (a box, a cart or
   a pillar the detector took for a person, or a person standing). :meth:`people` leaves it out and no
@@ -52,6 +71,7 @@ import numpy as np
 
 from viapath.observation import Obstacles
 from viapath.perception.assignment import gated_assignment
+from viapath.static import StaticLayer, point_segment_distances
 
 
 @dataclass(frozen=True)
@@ -71,6 +91,9 @@ class TrackerParams:
     static_after_s: float = 3.0
     static_radius_m: float = 0.1
     static_wake_speed_mps: float = 0.3
+    settled_acceleration_sigma_mps2: float = 0.02
+    settled_gate_chi2: float = 9.21
+    report_tentative_within_m: float = 1.5
 
     def __post_init__(self) -> None:
         if not 1 <= self.confirm_hits <= self.confirm_window <= 62:
@@ -84,10 +107,14 @@ class TrackerParams:
             "tentative_max_unseen_s",
             "static_radius_m",
             "static_wake_speed_mps",
+            "settled_acceleration_sigma_mps2",
+            "settled_gate_chi2",
         ):
             value = getattr(self, name)
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be finite and > 0, got {value}")
+        if not (np.isfinite(self.report_tentative_within_m) and self.report_tentative_within_m >= 0):
+            raise ValueError(f"report_tentative_within_m must be finite and >= 0, got {self.report_tentative_within_m}")
         if not self.static_after_s > 0:  # inf allowed: never static
             raise ValueError(f"static_after_s must be > 0 (inf: never), got {self.static_after_s}")
 
@@ -120,6 +147,8 @@ class MultiTargetTracker:
     def reset(self) -> None:
         self.state = np.zeros((0, 4))
         self.covariance = np.zeros((0, 4, 4))
+        self.settled_state = np.zeros((0, 4))  # the settled filter (low process noise): its velocity is reported
+        self.settled_covariance = np.zeros((0, 4, 4))
         self.ids = np.zeros(0, dtype=int)
         self.radii_m = np.zeros(0)
         self.history = np.zeros(0, dtype=np.int64)  # bit k = hit k cycles ago
@@ -150,6 +179,9 @@ class MultiTargetTracker:
         f, qm = _motion_model(dt, self.params.acceleration_sigma_mps2)
         self.state = self.state @ f.T
         self.covariance = f @ self.covariance @ f.T + qm
+        _, qs = _motion_model(dt, self.params.settled_acceleration_sigma_mps2)
+        self.settled_state = self.settled_state @ f.T
+        self.settled_covariance = f @ self.settled_covariance @ f.T + qs
 
     def step(
         self, time_s: float, positions: np.ndarray, sigmas_m: np.ndarray, radii_m: np.ndarray
@@ -179,6 +211,7 @@ class MultiTargetTracker:
             rows = np.array([a for a, _ in pairs])
             cols = np.array([b for _, b in pairs])
             self._update(rows, positions[cols], sigmas_m[cols])
+            self._update_settled(rows, positions[cols], sigmas_m[cols])
             self.radii_m[rows] += p.radius_smoothing * (radii_m[cols] - self.radii_m[rows])
             self.history[rows] |= 1
             self.hits[rows] += 1
@@ -217,27 +250,16 @@ class MultiTargetTracker:
         self.static = self.confirmed & ~moved & (still_s >= p.static_after_s - 1e-9)
 
     def _update(self, rows, z, sigma) -> None:
-        """Kalman update of tracks ``rows`` with position measurements ``z`` of isotropic noise ``sigma``.
+        """Kalman update of tracks ``rows`` with position measurements ``z`` of isotropic noise ``sigma``."""
+        self.state[rows], self.covariance[rows], _ = _kalman_update(self.state[rows], self.covariance[rows], z, sigma)
 
-        ``H = [I 0]``: ``S = P_pp + σ² I`` (2x2, inverted in closed form), ``K = P[:, :2] S⁻¹``,
-        ``P' = P - K P[:2, :]`` (symmetrised).
-        """
-        x = self.state[rows]
-        cov = self.covariance[rows]
-        var = sigma**2
-        s00 = cov[:, 0, 0] + var
-        s01 = cov[:, 0, 1]
-        s11 = cov[:, 1, 1] + var
-        det = s00 * s11 - s01 * s01
-        s_inv = np.empty((len(rows), 2, 2))
-        s_inv[:, 0, 0] = s11 / det
-        s_inv[:, 0, 1] = s_inv[:, 1, 0] = -s01 / det
-        s_inv[:, 1, 1] = s00 / det
-        gain = cov[:, :, :2] @ s_inv  # (R, 4, 2)
-        x = x + (gain @ (z - x[:, :2])[..., None])[..., 0]
-        cov = cov - gain @ cov[:, :2, :]
-        self.state[rows] = x
-        self.covariance[rows] = 0.5 * (cov + cov.transpose(0, 2, 1))
+    def _update_settled(self, rows, z, sigma) -> None:
+        """The settled filter's update; where its innovation leaves its gate (the person changed pace or
+        direction), it restarts from the agile filter's state and covariance (just updated)."""
+        x, cov, d2 = _kalman_update(self.settled_state[rows], self.settled_covariance[rows], z, sigma)
+        off = d2 > self.params.settled_gate_chi2
+        x[off], cov[off] = self.state[rows][off], self.covariance[rows][off]
+        self.settled_state[rows], self.settled_covariance[rows] = x, cov
 
     def _duplicates(self) -> np.ndarray:
         """Tracks that sit on another track, moving alike: the one with fewer hits goes."""
@@ -264,6 +286,8 @@ class MultiTargetTracker:
         for name in (
             "state",
             "covariance",
+            "settled_state",
+            "settled_covariance",
             "ids",
             "radii_m",
             "history",
@@ -288,6 +312,8 @@ class MultiTargetTracker:
         cov[:, 2, 2] = cov[:, 3, 3] = self.params.initial_velocity_sigma_mps**2
         self.state = np.concatenate([self.state, state])
         self.covariance = np.concatenate([self.covariance, cov])
+        self.settled_state = np.concatenate([self.settled_state, state])
+        self.settled_covariance = np.concatenate([self.settled_covariance, cov])
         self.ids = np.concatenate([self.ids, np.arange(self.next_id, self.next_id + n)])
         self.next_id += n
         self.radii_m = np.concatenate([self.radii_m, radii])
@@ -303,14 +329,49 @@ class MultiTargetTracker:
 
     # -- output ------------------------------------------------------------------------------
     def sigmas(self) -> tuple[np.ndarray, np.ndarray]:
+        """The reported position and velocity σ of every track (see :meth:`obstacles`)."""
         if len(self.ids) == 0:
             return np.zeros(0), np.zeros(0)
         c = self.covariance
-        return _largest_sigma(c[:, 0, 0], c[:, 0, 1], c[:, 1, 1]), _largest_sigma(c[:, 2, 2], c[:, 2, 3], c[:, 3, 3])
+        return _largest_sigma(c[:, 0, 0], c[:, 0, 1], c[:, 1, 1]), self._velocity_sigma(np.ones(len(self.ids), bool))
 
-    def people(self) -> Obstacles:
-        """The confirmed tracks that are not static: the people the planner and the shield receive."""
-        return self.obstacles(rows=self.confirmed & ~self.static)
+    def _velocity_sigma(self, rows: np.ndarray) -> np.ndarray:
+        """The reported velocity σ of tracks ``rows``: the agile filter's, with the gap between the two filters'
+        velocities added in quadrature (the settled velocity is reported; while it lags a change of pace the
+        gap is what it may be off by)."""
+        c = self.covariance[rows]
+        gap = self.settled_state[rows, 2:] - self.state[rows, 2:]
+        agile = _largest_sigma(c[:, 2, 2], c[:, 2, 3], c[:, 3, 3])
+        return np.sqrt(agile * agile + gap[:, 0] * gap[:, 0] + gap[:, 1] * gap[:, 1])
+
+    def people(self, robot_position=None, known_static: StaticLayer | None = None) -> Obstacles:
+        """The people the planner and the shield receive: the confirmed tracks that are not static and, given
+        the robot's position (world frame), the tentative tracks within ``report_tentative_within_m`` of it
+        (see :meth:`reported`)."""
+        return self.obstacles(rows=self.reported(robot_position, known_static))
+
+    def reported(self, robot_position=None, known_static: StaticLayer | None = None) -> np.ndarray:
+        """Which tracks :meth:`people` reports (a boolean row mask). A tentative track is left to its
+        confirmation when its disc overlaps a confirmed track's (a fragment of that person) or static geometry
+        already known (``known_static``: the detector starts tentative tracks on the corners of boxes and
+        carts; a person does not stand inside a box)."""
+        rows = self.confirmed & ~self.static
+        within = self.params.report_tentative_within_m
+        if robot_position is None or within <= 0 or self.confirmed.all():
+            return rows
+        gap = self.state[:, :2] - np.asarray(robot_position, dtype=float)[:2]
+        near = ~self.confirmed & (np.hypot(gap[:, 0], gap[:, 1]) <= within)
+        if near.any() and known_static is not None and len(known_static.segments):
+            radii = known_static.radii_m if known_static.radii_m is not None else np.zeros(len(known_static.segments))
+            clearance = point_segment_distances(self.state[near, :2], known_static.segments) - radii[None, :]
+            near[near] = ~(clearance < self.radii_m[near, None]).any(axis=1)
+        if near.any() and self.confirmed.any():
+            # A tentative track whose disc overlaps a confirmed track's is a fragment of that person (two
+            # people do not overlap): the confirmed track stands for it already.
+            offset = self.state[near, None, :2] - self.state[None, self.confirmed, :2]
+            touching = self.radii_m[near, None] + self.radii_m[None, self.confirmed]
+            near[near] = ~(np.hypot(offset[..., 0], offset[..., 1]) < touching).any(axis=1)
+        return rows | near
 
     def explaining(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Positions, radii and confirmation of the tracks whose returns are a person's, not static
@@ -325,6 +386,7 @@ class MultiTargetTracker:
         if rows is None:
             rows = self.confirmed if confirmed_only else np.ones(len(self.ids), dtype=bool)
         state, c = self.state[rows], self.covariance[rows]
+        state[:, 2:] = self.settled_state[rows, 2:]  # the settled filter's velocity
         # The sigmas of the reported rows only (elementwise: the same values as sigmas()[rows]); every
         # array is fresh (boolean indexing copies), so Obstacles may keep them without copying again. The
         # positions and velocities are two column views of one such copy (not C-contiguous: the planner's
@@ -334,7 +396,7 @@ class MultiTargetTracker:
             state[:, 2:],
             self.radii_m[rows],
             _largest_sigma(c[:, 0, 0], c[:, 0, 1], c[:, 1, 1]),
-            _largest_sigma(c[:, 2, 2], c[:, 2, 3], c[:, 3, 3]),
+            self._velocity_sigma(rows),
             self.ids[rows],
         )
 
@@ -343,7 +405,7 @@ class MultiTargetTracker:
             Track(
                 int(self.ids[i]),
                 self.state[i, :2].copy(),
-                self.state[i, 2:].copy(),
+                self.settled_state[i, 2:].copy(),
                 self.covariance[i].copy(),
                 float(self.radii_m[i]),
                 bool(self.confirmed[i]),
@@ -363,6 +425,31 @@ def _per_detection(values, n: int) -> np.ndarray:
     if type(values) is np.ndarray and values.dtype == np.float64 and values.shape == (n,):
         return values  # the common case (detections): np.broadcast_to would only add a read-only view
     return np.broadcast_to(np.asarray(values, dtype=float), (n,))
+
+
+def _kalman_update(x: np.ndarray, cov: np.ndarray, z: np.ndarray, sigma: np.ndarray):
+    """Kalman update of states ``x`` (R, 4) and covariances ``cov`` (R, 4, 4) with position measurements ``z``
+    (R, 2) of isotropic noise ``sigma`` (R,): the new states and covariances, and each innovation's Mahalanobis
+    distance² (R,).
+
+    ``H = [I 0]``: ``S = P_pp + σ² I`` (2x2, inverted in closed form), ``K = P[:, :2] S⁻¹``,
+    ``P' = P - K P[:2, :]`` (symmetrised).
+    """
+    var = sigma**2
+    s00 = cov[:, 0, 0] + var
+    s01 = cov[:, 0, 1]
+    s11 = cov[:, 1, 1] + var
+    det = s00 * s11 - s01 * s01
+    s_inv = np.empty((len(x), 2, 2))
+    s_inv[:, 0, 0] = s11 / det
+    s_inv[:, 0, 1] = s_inv[:, 1, 0] = -s01 / det
+    s_inv[:, 1, 1] = s00 / det
+    gain = cov[:, :, :2] @ s_inv  # (R, 4, 2)
+    innovation = z - x[:, :2]
+    d2 = np.einsum("ri,rij,rj->r", innovation, s_inv, innovation)
+    x = x + (gain @ innovation[..., None])[..., 0]
+    cov = cov - gain @ cov[:, :2, :]
+    return x, 0.5 * (cov + cov.transpose(0, 2, 1)), d2
 
 
 @lru_cache(maxsize=8)

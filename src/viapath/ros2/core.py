@@ -225,6 +225,7 @@ class PlannerCore:
         self._alive_wall_s: float | None = None  # wall time of the last input or move of the node's clock
         self.static_now = StaticLayer.empty()  # the last cycle's static layer from the scans
         self.static_planned = StaticLayer.empty()  # the last cycle's static layer the planner got (map and scans)
+        self.blocked_since_s: float | None = None  # since when the plans say static geometry closes the way
 
     def _make_planner(self, path: DesignatedPath, subgoal_policy: SubgoalPolicy):
         """The configured planner on ``path``, behind the shield when ``use_shield`` says so."""
@@ -1025,7 +1026,8 @@ class PlannerCore:
             self._time_jump("scan stamp before the tracker's time")
             self.hold_until_stamp_s = stamp + self.settings.reset_hold_s
         self.tracker.step(stamp, detections.centres, detections.position_sigma_m, detections.radii_m)
-        obstacles = self.tracker.people().finite()
+        # (the static layer the scans showed up to last cycle: a tentative track on it is not reported early)
+        obstacles = self.tracker.people(pose[:2], self.static_now).finite()
         self.static_now = self.static_layer.update(
             stamp, pose, [r for _, r in scans], *self.tracker.explaining(), scanners=[m for m, _ in scans]
         )
@@ -1128,6 +1130,7 @@ class PlannerCore:
         if self.events:
             planner["events"] = " | ".join(self.events[-3:])
         out["planner"] = planner
+        out["way"] = self._way_status(result)
         if plan is not None and "shield" in plan.extras:
             shield = plan.extras["shield"]
             out["shield"] = (
@@ -1162,93 +1165,32 @@ class PlannerCore:
         }
         return out
 
-
-def simplify_polyline(points, tolerance_m: float) -> np.ndarray:
-    """The fewest of ``points`` (first and last kept) within ``tolerance_m`` of all, in time linear in
-    their number whatever their shape: Douglas-Peucker (which keeps the corners where they are) while
-    its work stays within ``DOUGLAS_PEUCKER_WORK`` point distances per point, else (a zig-zag makes it
-    quadratic) :func:`sleeve_simplify`."""
-    points = np.asarray(points, dtype=float).reshape(-1, 2)
-    if len(points) <= 2 or tolerance_m <= 0:
-        return _without_repeats(points)
-    keep = np.zeros(len(points), dtype=bool)
-    keep[0] = keep[-1] = True
-    stack = [(0, len(points) - 1)]
-    budget = DOUGLAS_PEUCKER_WORK * len(points)
-    while stack:
-        i, j = stack.pop()
-        if j <= i + 1:
-            continue
-        budget -= j - i
-        if budget < 0:
-            return sleeve_simplify(points, tolerance_m)
-        a, b = points[i], points[j]
-        d = b - a
-        length = float(np.hypot(*d))
-        rel = points[i + 1 : j] - a
-        # to the segment, not its line: a point beyond its end (the path turns back) is not near it
-        along = np.clip(rel @ d / (length * length), 0.0, 1.0) if length >= 1e-12 else np.zeros(len(rel))
-        dist = np.hypot(rel[:, 0] - along * d[0], rel[:, 1] - along * d[1])
-        k = int(np.argmax(dist))
-        if dist[k] > tolerance_m:
-            keep[i + 1 + k] = True
-            stack += [(i, i + 1 + k), (i + 1 + k, j)]
-    return _without_repeats(points[keep])
-
-
-DOUGLAS_PEUCKER_WORK = 40  # point distances per point: about log2 of a million-point path's depth, twice
-
-
-def sleeve_simplify(points, tolerance_m: float) -> np.ndarray:
-    """Points of the polyline left out where every left-out point lies within ``tolerance_m`` of the
-    segment that replaces it (first and last kept), in one pass: linear in the number of points.
-
-    A sleeve from the last kept point (Zhao and Saalfeld's sector test): each further point narrows the
-    sector of directions whose ray passes within ``tolerance_m`` of it; a point outside the sector, or
-    nearer to the kept point than one before it (the path turns back), keeps the point before it. A
-    left-out point is then within the tolerance of the ray and not beyond the segment's end, hence of
-    the segment. Points within the tolerance of the kept point leave the sector as it is."""
-    points = _without_repeats(np.asarray(points, dtype=float).reshape(-1, 2))
-    n = len(points)
-    if n <= 2 or tolerance_m <= 0:
-        return points
-    keep = [0]
-    xs, ys = points[:, 0].tolist(), points[:, 1].tolist()
-    anchor, low, high, farthest = 0, -math.inf, math.inf, 0.0
-    k = 1
-    while k < n:
-        dx, dy = xs[k] - xs[anchor], ys[k] - ys[anchor]
-        distance = math.hypot(dx, dy)
-        if distance <= tolerance_m and farthest <= tolerance_m:
-            k += 1
-            continue
-        direction = math.atan2(dy, dx)
-        if low == -math.inf:  # the first point out of the kept point's own disc sets the sector
-            reference = direction
-        inside = True
-        if low != -math.inf:
-            offset = math.atan2(math.sin(direction - reference), math.cos(direction - reference))
-            inside = low <= offset <= high and distance >= farthest - 1e-12
-        if not inside:
-            anchor = k - 1
-            keep.append(anchor)
-            low, high, farthest = -math.inf, math.inf, 0.0
-            continue  # the same point again, from the new kept point
-        offset = math.atan2(math.sin(direction - reference), math.cos(direction - reference))
-        half = math.asin(min(1.0, tolerance_m / distance)) if distance > tolerance_m else math.pi
-        low, high = max(low, offset - half), min(high, offset + half)
-        farthest = max(farthest, distance)
-        k += 1
-    keep.append(n - 1)
-    return points[sorted(set(keep))]
-
-
-def _without_repeats(points: np.ndarray) -> np.ndarray:
-    """Drop repeated points (a path that stands still), keeping the last."""
-    if len(points) < 2:
-        return points
-    step = np.hypot(*np.diff(points, axis=0).T)
-    return np.vstack([points[:-1][step > 1e-6], points[-1:]])
+    def _way_status(self, result: CycleResult) -> dict[str, str]:
+        """Whether static geometry closes the way (the plan's status ``blocked``, also under a guard's brake):
+        state ``blocked`` with where the robot waits, else ``ok``. A cycle without a plan changes nothing."""
+        plan = result.decision.plan if result.decision is not None else None
+        if plan is None:
+            last = (self.last_result.status if self.last_result is not None else {}).get("way")
+            if self.blocked_since_s is not None and last is not None and self.path is not None and self.active:
+                return dict(last)  # a watchdog tick while blocked (inputs late): the last plan's word stands
+            self.blocked_since_s = None
+            return {"state": "ok", "message": "no plan this cycle", "blocked": "0"}
+        if "blocked" not in (plan.status, plan.extras.get("guard_planner_status")):
+            self.blocked_since_s = None
+            return {"state": "ok", "message": "the way is open", "blocked": "0"}
+        if self.blocked_since_s is None:
+            self.blocked_since_s = result.stamp_s
+        x, y = (float(v) for v in np.asarray(plan.target, dtype=float)[:2])
+        why = str(plan.extras.get("blocked", "static geometry closes the way"))
+        frame = self.settings.odom_frame or "odom"
+        return {
+            "state": "blocked",
+            "message": f"blocked: {why}; the robot waits at ({x:.2f}, {y:.2f}) m in {frame}",
+            "blocked": "1",
+            "wait_x_m": f"{x:.3f}",
+            "wait_y_m": f"{y:.3f}",
+            "blocked_for_s": f"{result.stamp_s - self.blocked_since_s:.1f}",
+        }
 
 
 def parse_tracks(text: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -9,6 +9,8 @@ old goal ends aborted with an empty result, as Nav2's ``SimpleActionServer`` doe
 ``progress_patience_s``). TF as REP 105 (``map → odom → base_link``) from ``/tf`` and ``/tf_static``.
 
 What we chose:
+* A goal request is taken as arrays (:mod:`viapath.ros2.lean`): a path of 100 000 poses costs no Python object
+  per pose, which would hold the interpreter (and the control loop) for seconds.
 * A goal's path is moved into the odometry frame with the latest ``path frame → odom`` transform
   and simplified (Douglas-Peucker, ``path_simplify_m``) to the subgoals the planner heads for; a path
   of one pose starts at the robot. Empty, non-finite or degenerate paths end with INVALID_PATH at
@@ -39,6 +41,8 @@ from typing import Any
 
 import numpy as np
 
+from viapath.path_simplify import simplify_polyline
+from viapath.ros2.lean import PathArrays, lean_action_server_class, lean_goal_request_type
 from viapath.ros2.tf import TransformBuffer
 
 
@@ -64,7 +68,7 @@ class Nav2Interface:
         from nav2_msgs.action import FollowPath
         from nav2_msgs.msg import SpeedLimit
         from nav2_msgs.srv import ClearEntireCostmap
-        from rclpy.action import ActionServer, CancelResponse, GoalResponse
+        from rclpy.action import CancelResponse, GoalResponse
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
         from tf2_msgs.msg import TFMessage
 
@@ -94,7 +98,7 @@ class Nav2Interface:
 
             return run
 
-        self.server = ActionServer(
+        self.server = lean_action_server_class()(
             node.inputs,
             FollowPath,
             self.s.follow_path_action,
@@ -103,6 +107,15 @@ class Nav2Interface:
             handle_accepted_callback=locked(self._on_accepted),
             cancel_callback=lambda handle: CancelResponse.ACCEPT,
         )
+        try:
+            if not all(hasattr(self.server, name) for name in ("_handle", "_lock", "is_ready", "take_data")):
+                raise TypeError("this rclpy's ActionServer takes goals otherwise")
+            self.server.lean_request = lean_goal_request_type(FollowPath)
+        except Exception as error:  # the ordinary messages then: slow for long paths, but right
+            node.get_logger().warning(f"follow_path goals taken as Python messages: {type(error).__name__}: {error}")
+        else:
+            if self.server.lean_request is None:
+                node.get_logger().warning("follow_path goals taken as Python messages: unknown message layout")
         self._subs.append(node.create_subscription(SpeedLimit, self.s.speed_limit_topic, self._on_speed_limit, 10))
         self.service = node.create_service(ClearEntireCostmap, self.s.clear_costmap_service, self._on_clear)
         if self.s.use_tf:
@@ -204,7 +217,7 @@ class Nav2Interface:
         """(error code, message, the ``path frame → odom`` transform or None when the frames agree); code
         NONE with message: wait for the transform. Cheap: run in the control loop."""
         R = self.Result
-        frame = msg.header.frame_id or (msg.poses[0].header.frame_id if len(msg.poses) else "")
+        frame = _frame_of(msg)
         target = self.s.odom_frame
         if frame and target and frame.lstrip("/") != target.lstrip("/"):
             if not self.s.use_tf:
@@ -225,7 +238,10 @@ class Nav2Interface:
         "path" (value: a PreparedPath), "same" (the running path), "there" (every pose at the robot),
         "wait" (for odometry) or "abort"."""
         R = self.Result
-        points = np.array([[p.pose.position.x, p.pose.position.y] for p in msg.poses], dtype=float).reshape(-1, 2)
+        path = PathArrays.of(msg)
+        if path.error:
+            return "abort", R.INVALID_PATH, f"path refused: its poses could not be read ({path.error})", None
+        points = path.positions
         if len(points) == 0:
             return "abort", R.INVALID_PATH, "empty path", None
         if not np.isfinite(points).all():
@@ -233,8 +249,6 @@ class Nav2Interface:
         if pose is not None:
             c, s_ = math.cos(pose[2]), math.sin(pose[2])
             points = points @ np.array([[c, s_], [-s_, c]]) + np.array(pose[:2])
-        from viapath.ros2.core import simplify_polyline
-
         points = simplify_polyline(points, self.s.path_simplify_m)
         if len(points) == 1:
             if robot is None:
@@ -291,7 +305,7 @@ class Nav2Interface:
         goal = _Goal(handle, None, handle.request.path, self.node._now_s())
         code, message, _pose = self._path_frame_pose(goal.request_path)
         if code == self.Result.NONE:
-            code, message = _quickly_invalid(handle.request.path.poses, self.Result.INVALID_PATH)
+            code, message = _quickly_invalid(handle.request.path, self.Result.INVALID_PATH)
         if code != self.Result.NONE:
             self._end(goal, "abort", code, message)  # the running goal, if any, goes on
             return
@@ -399,13 +413,30 @@ def make_nav2_interface_class():
     return Nav2Interface
 
 
-QUICK_CHECK_POSES = 1000  # a path this short is checked when it arrives, before it preempts the running goal
+QUICK_CHECK_POSES = 1000  # a path of Python messages this short is checked when it arrives (arrays: any length)
 
 
-def _quickly_invalid(poses: Any, invalid_path: int) -> tuple[int, str]:
-    """(INVALID_PATH, why) for an empty path, or a short one with a non-finite coordinate; (0, "") otherwise.
-    Checked as the goal arrives (constant time for a long path, whose points the worker thread checks), so that
-    a bad goal is refused with its own code even when the next goal follows at once."""
+def _frame_of(path: Any) -> str:
+    """A path's frame: its header's, else its first pose's."""
+    if isinstance(path, PathArrays):
+        return path.frame_id or path.first_pose_frame_id
+    return path.header.frame_id or (path.poses[0].header.frame_id if len(path.poses) else "")
+
+
+def _quickly_invalid(path: Any, invalid_path: int) -> tuple[int, str]:
+    """(INVALID_PATH, why) for a path whose poses could not be read, an empty path, or one with a non-finite
+    coordinate; (0, "") otherwise. Checked as the goal arrives, before it preempts the running goal, so that a bad
+    goal is refused with its own code even when the next goal follows at once (a path of Python messages longer
+    than ``QUICK_CHECK_POSES``: its points are checked by the worker thread)."""
+    if isinstance(path, PathArrays):
+        if path.error:
+            return invalid_path, f"path refused: its poses could not be read ({path.error})"
+        if len(path) == 0:
+            return invalid_path, "empty path"
+        if not np.isfinite(path.positions).all():
+            return invalid_path, "path with NaN or infinite coordinates"
+        return 0, ""
+    poses = path.poses
     if len(poses) == 0:
         return invalid_path, "empty path"
     if len(poses) <= QUICK_CHECK_POSES:

@@ -14,7 +14,9 @@ What we chose:
 * Scans arrive with the sensor-data QoS (best effort, depth 5); odometry reliable depth 10; the
   path is subscribed transient-local (a latched path published before the node started is received).
 * ``cmd_vel`` is published once per scan cycle and by the watchdog (every ``cycle_period_s``) when
-  inputs are stale; markers and the DiagnosticArray once per cycle.
+  inputs are stale; markers and the DiagnosticArray (``status_topic``) once per cycle. The same array goes
+  to ``diagnostics_topic`` (``/diagnostics``, where robot monitors and ``diagnostic_aggregator`` look) once a
+  second, and at once when the way's state changes (``blocked``: static geometry closes it, level WARN).
 * Paths and maps are decoded, checked, simplified and rasterised by a worker thread
   (:mod:`viapath.ros2.background`), never in a callback of the control loop: the cycles go on with
   the last good path and map and take the new one at the first cycle after it is ready, so ``cmd_vel``
@@ -36,6 +38,8 @@ from typing import Any
 from viapath.ros2 import convert
 from viapath.ros2.core import CycleResult, PlannerCore, severity
 from viapath.ros2.settings import NODE_NAME, ParameterError, all_options, describe, validate
+
+DIAGNOSTICS_PERIOD_S = 1.0  # on diagnostics_topic, as ROS's diagnostic_updater publishes
 
 
 def locked(method):
@@ -111,6 +115,7 @@ class _NodeBehaviour(_LifecycleNode):
         self._nav2 = None
         self._wall_timer = None
         self._last_now_s: float | None = None
+        self._diagnostics_sent: tuple[float, str] | None = None  # (wall time, the way's state) last sent there
         from viapath.ros2.background import Background
 
         self.background = Background()
@@ -119,6 +124,7 @@ class _NodeBehaviour(_LifecycleNode):
         self._inputs_thread: threading.Thread | None = None
         self._inputs_running = False
         self._input_subs: list = []
+        self._takers: list = []  # subscriptions taken by threads of their own (viapath.ros2.lean.TakenAside)
         try:
             self.declare_parameter("planner_name", "viapath")
             self.declare_parameter("scanner_names", ["front", "rear"])
@@ -198,6 +204,8 @@ class _NodeBehaviour(_LifecycleNode):
         self._pubs["cmd"] = self.create_lifecycle_publisher(cmd_type, s.cmd_vel_topic, 10)
         self._pubs["markers"] = self.create_lifecycle_publisher(MarkerArray, s.markers_topic, 5)
         self._pubs["status"] = self.create_lifecycle_publisher(DiagnosticArray, s.status_topic, 10)
+        if s.diagnostics_topic:
+            self._pubs["diagnostics"] = self.create_lifecycle_publisher(DiagnosticArray, s.diagnostics_topic, 10)
 
     def _create_input_subscriptions(self, s) -> None:
         from nav_msgs.msg import Odometry
@@ -278,6 +286,9 @@ class _NodeBehaviour(_LifecycleNode):
             thread.join(timeout=5.0)
 
     def _destroy_inputs_node(self) -> None:
+        for taker in self._takers:
+            taker.destroy()
+        self._takers = []
         if self.inputs_node is not None:
             for sub in self._input_subs:
                 self.inputs_node.destroy_subscription(sub)
@@ -289,15 +300,44 @@ class _NodeBehaviour(_LifecycleNode):
         from nav_msgs.msg import Path as PathMsg
         from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
+        from viapath.ros2.lean import lean_path_type
+
         latched = QoSProfile(
             depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
         )
         if s.interface != "nav2" and not s.path_file:
-            self._input_subs.append(self.inputs.create_subscription(PathMsg, s.path_topic, self._on_path, latched))
+            path_type = PathMsg
+            try:  # taken as arrays: no Python object per pose (viapath.ros2.lean)
+                path_type = lean_path_type() or PathMsg
+            except Exception as error:
+                self.get_logger().warning(f"paths taken as Python messages: {type(error).__name__}: {error}")
+            if path_type is PathMsg:
+                self.get_logger().warning("paths taken as Python messages (slow for long paths)")
+            self._input_subs.append(self.inputs.create_subscription(path_type, s.path_topic, self._on_path, latched))
         if s.map_topic:
             from nav_msgs.msg import OccupancyGrid
 
-            self._input_subs.append(self.inputs.create_subscription(OccupancyGrid, s.map_topic, self._on_map, latched))
+            from viapath.ros2.lean import TakenAside, grid_from_c, lean_grid_type
+
+            try:  # taken and copied without the GIL by a thread of its own (viapath.ros2.lean)
+                if lean_grid_type() is None:
+                    raise TypeError("unknown message layout")
+                self._takers.append(
+                    TakenAside(
+                        self.inputs,
+                        OccupancyGrid,
+                        s.map_topic,
+                        latched,
+                        grid_from_c,
+                        self._on_map,
+                        on_error=lambda text: self.get_logger().error(f"map: {text}"),
+                    )
+                )
+            except Exception as error:  # the ordinary subscription then: the GIL held while a big map is taken
+                self.get_logger().warning(f"maps taken by rclpy: {type(error).__name__}: {error}")
+                self._input_subs.append(
+                    self.inputs.create_subscription(OccupancyGrid, s.map_topic, self._on_map, latched)
+                )
 
     def _create_timers(self, s) -> None:
         from rclpy.clock import Clock as RosClock
@@ -391,6 +431,9 @@ class _NodeBehaviour(_LifecycleNode):
 
     @locked
     def _on_map(self, msg) -> None:
+        if getattr(msg, "error", ""):
+            self._map_refused(f"its cells could not be read ({msg.error})")
+            return
         expected = self.core.settings.odom_frame
         if expected and msg.header.frame_id != expected:  # an empty frame_id says nothing of where the map is
             self._map_refused(f"frame_id {msg.header.frame_id!r}, expected {expected!r}")
@@ -404,13 +447,17 @@ class _NodeBehaviour(_LifecycleNode):
 
     @locked
     def _on_path(self, msg) -> None:
+        from viapath.ros2.lean import PathArrays
+
         core = self.core
-        self.background.submit(
-            "path",
-            lambda: core.prepare_path_message(
-                msg.header.frame_id, convert.waypoints_from_path(msg), convert.orientations_from_path(msg)
-            ),
-        )
+
+        def prepare():
+            path = PathArrays.of(msg)  # a Python message (no lean type here) read in the worker
+            if path.error:
+                return "refused", f"its poses could not be read ({path.error})"
+            return core.prepare_path_message(path.frame_id, path.positions, path.orientations)
+
+        self.background.submit("path", prepare)
 
     def take_background(self) -> None:
         """Use the paths and maps the worker has finished (at the start of each cycle and watchdog tick)."""
@@ -511,7 +558,13 @@ class _NodeBehaviour(_LifecycleNode):
             scene = self._scenes.scene(path, self.core.planner, result)
             corridor = self._scenes.builder(path, self.core.planner).path_view
             self._pubs["markers"].publish(marker_array(scene, corridor, self.core.settings.odom_frame or "odom", stamp))
-        self._pubs["status"].publish(self._diagnostics(result, stamp))
+        diagnostics = self._diagnostics(result, stamp)
+        self._pubs["status"].publish(diagnostics)
+        if "diagnostics" in self._pubs:  # a robot monitor's rate, and a change of the way at once
+            way, sent, now = result.status.get("way", {}).get("state", ""), self._diagnostics_sent, time.monotonic()
+            if sent is None or sent[1] != way or now - sent[0] >= DIAGNOSTICS_PERIOD_S:
+                self._pubs["diagnostics"].publish(diagnostics)
+                self._diagnostics_sent = (now, way)
 
     def _inputs_matched(self) -> bool:
         """Whether every input topic has a publisher (the simulator waits for this before its first step)."""
@@ -537,7 +590,7 @@ class _NodeBehaviour(_LifecycleNode):
             else:
                 ok = values.get("state", "ok") == "ok"
                 status.level = DiagnosticStatus.OK if ok else DiagnosticStatus.WARN
-                status.message = values.get("state", "")
+                status.message = values.get("message", values.get("state", ""))
             status.values = [KeyValue(key=str(k), value=str(v)) for k, v in values.items()]
             out.status.append(status)
         return out

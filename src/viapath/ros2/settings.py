@@ -127,6 +127,13 @@ NODE_OPTIONS: tuple[Option, ...] = (
         _opt("cmd_vel_stamped", False, "", help="publish geometry_msgs/TwistStamped instead of Twist"),
         _opt("markers_topic", "viapath/markers", "", help="visualization_msgs/MarkerArray topic"),
         _opt("status_topic", "viapath/status", "", help="diagnostic_msgs/DiagnosticArray topic"),
+        _opt(
+            "diagnostics_topic",
+            "/diagnostics",
+            "",
+            help="the same statuses for robot monitors, once a second and at once when the way's state changes "
+            "('' : none)",
+        ),
         _opt("odom_frame", "odom", "", help="world frame of odometry and path ('' accepts any)"),
         _opt("base_frame", "base_link", "", help="robot frame (markers of the robot)"),
         _opt("half_width_m", 1.0, "m", 0.01, 100.0, "corridor half-width around the designated path"),

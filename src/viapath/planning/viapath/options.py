@@ -107,6 +107,14 @@ _OWN = [
         "keep_previous_inflation", 0.25, "... with this fraction of the uncertainty inflation", minimum=0.0, maximum=1.0
     ),
     Option(
+        "switch_inflation",
+        2.0,
+        "while last cycle's way round is still free, a new way round (other than slowing or waiting) is taken "
+        "only if it is free with this multiple of the uncertainty inflation (σ terms and the cone's cap; 1: off)",
+        minimum=1.0,
+        maximum=10.0,
+    ),
+    Option(
         "outrun_hold_s",
         1.0,
         "outrunning someone from behind: the slowest faster straight speed whose leg stays free this "

@@ -51,10 +51,12 @@ What the paper leaves open and we chose, beyond what those modules say:
   (2) static legs are checked to their end, past the horizon (a leg into a wall is not made free by
   driving it slowly), and without the shield's braking envelope, which is for where people may walk;
   (3) static discs farther outside the corridor than their reach are left out of the cycle (no
-  candidate can meet them); (4) a **closed way** (no free candidate, standing is safe, and the straight
-  leg to the subgoal meets static geometry before any person) is not a plain stop: the robot drives on along that leg to
-  ``blocked_gap_m`` short of touching it, at a speed from which it stops there, and waits with status
-  ``blocked``; every cycle looks again, so it goes on when the door opens. The candidate tree of a
+  candidate can meet them); (4) with no free candidate, the corridor's free space flooded from the robot
+  (:mod:`.flood`) tells a way round from a closed way (:mod:`.blocked`): if the subgoal is reachable but the
+  tree finds nothing even without the people, the tree runs again towards a point of the flood's way there;
+  if it is not reachable (standing being safe), the robot drives to the farthest point along the path the
+  flood reaches, ``blocked_gap_m`` short of touching anything, at a speed from which it stops there, and
+  waits with status ``blocked``; every cycle looks again, so it goes on when the door opens. The candidate tree of a
   cycle with static geometry runs the recipe's steps (:func:`.candidates.grow`) with the compiled leg checks
   and via points: the shapes' extremes are not compiled. Its escape treats static discs as any obstacle.
 * The way back (``return_lookahead_m``, 0.5 m by default; 0 in the preset ``paper``): off the path
@@ -79,7 +81,7 @@ from viapath.options import Settings
 from viapath.path import DesignatedPath
 from viapath.planning.base import Decision, Plan, Planner, Situation
 from viapath.planning.viapath import packing
-from viapath.planning.viapath.blocked import blocked, near_corridor
+from viapath.planning.viapath.blocked import blocked, detour, near_corridor
 from viapath.planning.viapath.candidates import Candidates, Choice, RootLegs, Way, _candidates_of, grow
 from viapath.planning.viapath.checks import LegChecks
 from viapath.planning.viapath.choice import choose_compiled, uses_compiled_choice
@@ -145,6 +147,11 @@ class ViaPathPlanner(Planner, name="viapath"):
             checks.max_accel_mps2 = self.limits.max_accel_mps2
         speeds, nominal_index = self.speed_set(situation.robot.speed_mps)
         chosen = self._choose(checks, speeds, nominal_index, self._previous)
+        if chosen is None and checks.obstacles.static_mask is not None:
+            chosen = detour(self, checks, speeds, nominal_index, grow_step)
+            if chosen is not None:  # a way round static geometry the tree alone did not find (:mod:`.blocked`)
+                self._previous = self._previous_escape = None
+                return Decision(self._command(situation, chosen.plan), chosen.plan)
         if chosen is None:
             self._previous = None
             decision = stop_or_escape(checks, self.limits, self.config, self._previous_escape)

@@ -14,7 +14,7 @@ import numpy as np
 
 from viapath.observation import Command, MotionLimits
 from viapath.options import Settings
-from viapath.path import DesignatedPath
+from viapath.path import DesignatedPath, SubgoalTracker
 from viapath.planning.base import Plan, Situation
 from viapath.planning.viapath.candidates import STRAIGHT, Candidates, Choice, Way, _candidates_of
 from viapath.planning.viapath.checks import LegChecks
@@ -66,6 +66,7 @@ class Planning(Protocol):
     nominal_speed_mps: float
     robot_radius_m: float
     path: DesignatedPath
+    subgoals: SubgoalTracker
     _previous: Choice | None
     _situation: Situation | None
     _straight_speed: float | None
