@@ -11,7 +11,7 @@ The steps live with their features (the planner's in :mod:`viapath.planning.viap
 :func:`viapath.jit.compiled`. Compiling them means calling them with the argument types they are called with:
 the shield's and the planner's own warm-up cycles, then, when the cache is not ready, the episodes of a few
 built-in scenes (:data:`WARM_UP_EPISODES`: walls and a door seen by the oracle and by the laser chain, a person
-on a subgoal, people met one after another). Every built-in scenario, oracle or laser, then runs without compiling
+on a subgoal, people met one after another, a box before a closed door). Every built-in scenario, oracle or laser, then runs without compiling
 anything. It builds planners, shields and episodes and runs them, so it lives outside all of them.
 
 Choices where nothing says: one compiler per cache folder at a time (an exclusive ``flock`` on
@@ -78,8 +78,15 @@ def _compile_all() -> bool:
 
 #: Built-in scenes whose episodes call every compiled step with the argument types a run does: walls and a door
 #: (the static layer, the planner's and the guard's static checks), seen by the oracle and by the laser chain;
-#: a person standing on a subgoal (the goal legs, the bypass); three people met one after another by laser.
-WARM_UP_EPISODES = (("doorway", "laser"), ("doorway", "oracle"), ("blocked-subgoal", "oracle"), ("hallway", "laser"))
+#: a person standing on a subgoal (the goal legs, the bypass); three people met one after another by laser; a box
+#: before a closed door (the flood of the corridor's free space).
+WARM_UP_EPISODES = (
+    ("doorway", "laser"),
+    ("doorway", "oracle"),
+    ("blocked-subgoal", "oracle"),
+    ("hallway", "laser"),
+    ("box-before-door", "oracle"),
+)
 
 
 def _run_warm_up_episodes() -> None:
