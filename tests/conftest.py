@@ -12,11 +12,20 @@ one worker, in order:
 The groups are made here from the test files (the scheduler below), not from ``xdist_group`` marks:
 with pytest 9.2, pytest-xdist 3.8's ``--dist loadgroup`` loses the marks' groups (it writes a node-id
 field pytest no longer reads; pytest-xdist issue 1386) and would send each test anywhere.
+
+A ``viapath run`` with a cold cache of compiled steps would run plain Python and leave a compiler running in the
+background (viapath.precompile): the suite switches that off (``VIAPATH_BACKGROUND_COMPILE=0``, inherited by the
+commands the tests start), so a cold test compiles in its own process; tests/test_cold_run.py switches it on
+for its own commands and ends what they start.
 """
 
 from __future__ import annotations
 
+import os
+
 import pytest
+
+os.environ["VIAPATH_BACKGROUND_COMPILE"] = "0"
 
 LAUNCHER_FILES = (
     "tests/ros2/test_ros2_e2e.py",

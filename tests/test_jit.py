@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -66,7 +70,9 @@ def test_a_cache_is_warm_once_it_holds_compiled_code(tmp_path, monkeypatch):
     assert jit.cache_is_warm()
 
 
-def test_a_first_run_is_told_it_compiles(tmp_path, monkeypatch):
+def test_a_first_run_is_told_it_compiles_until_the_cache_is_ready(tmp_path, monkeypatch):
+    """Some compiled code in the cache is not enough (a run would compile the rest): the note goes only once
+    viapath.precompile marked the cache ready."""
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
     note = jit.first_compilation_note()
     if not jit.enabled():
@@ -75,4 +81,43 @@ def test_a_first_run_is_told_it_compiles(tmp_path, monkeypatch):
     assert note is not None and str(jit.cache_directory()) in note
     jit.cache_directory().mkdir(parents=True)
     (jit.cache_directory() / "steps.step-1.py311.nbi").write_bytes(b"index")
-    assert jit.first_compilation_note() is None
+    assert jit.cache_is_warm() and not jit.cache_is_ready()
+    assert jit.first_compilation_note() is not None
+    jit.ready_file().write_text("compiled\n")
+    assert jit.cache_is_ready() and jit.first_compilation_note() is None
+
+
+def _fresh(script: str, **env: str) -> list[str]:
+    source = str(Path(__file__).resolve().parents[1] / "src")
+    environment = {**os.environ, "PYTHONPATH": source + os.pathsep + os.environ.get("PYTHONPATH", ""), **env}
+    environment.pop("NUMBA_DISABLE_JIT", None)
+    environment.update(env)
+    done = subprocess.run([sys.executable, "-c", script], env=environment, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    return done.stdout.split()
+
+
+def test_numba_is_imported_only_when_a_step_is_compiled():
+    """``import viapath`` and the CLI (``viapath --help``) decorate nothing and load no numba; the first compiled
+    step does, unless the process chose plain Python first."""
+    script = (
+        "import sys\n"
+        "import viapath.cli\n"
+        "from viapath import jit\n"
+        "print('numba' in sys.modules)\n"
+        "if sys.argv[1] == 'plain': print(jit.run_plain())\n"
+        "else: print('-')\n"
+        "from viapath.path import corridor_excess_at\n"
+        "print('numba' in sys.modules, hasattr(corridor_excess_at, 'py_func'), jit.run_plain())\n"
+    )
+    expected_compiled = str(jit.numba_installed())
+    assert _fresh(script.replace("sys.argv[1]", "'compiled'")) == ["False", "-", *[expected_compiled] * 2, "False"]
+    assert _fresh(script.replace("sys.argv[1]", "'plain'")) == ["False", "True", "False", "False", "True"]
+    # NUMBA_DISABLE_JIT: plain Python too, numba never loaded
+    assert _fresh(script.replace("sys.argv[1]", "'compiled'"), NUMBA_DISABLE_JIT="1") == [
+        "False",
+        "-",
+        "False",
+        "False",
+        "True",
+    ]

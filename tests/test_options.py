@@ -175,43 +175,6 @@ def test_a_renamed_option_reads_its_former_name_with_a_warning():
         OptionSet([Option("new", 1.0, "a"), Option("other", 1.0, "b", former_names=("new",))])
 
 
-def test_the_shields_compute_is_retired_and_backend_is_its_former_name():
-    """The shield's steps are compiled, one implementation each: its ``compute`` (formerly ``backend``) is read and
-    ignored with a FutureWarning."""
-    from viapath.safety.options import SHIELD_OPTIONS
-    from viapath.safety.shield import ShieldConfig
-
-    retired = SHIELD_OPTIONS["compute"]
-    assert (retired.default, retired.choices, retired.former_names) == ("auto", None, ("backend",))
-    assert not retired.decides and "backend" not in SHIELD_OPTIONS
-    with (
-        pytest.warns(FutureWarning, match="'backend' is now called 'compute'"),
-        pytest.warns(FutureWarning, match="shield.backend: option 'backend' no longer does anything"),
-    ):
-        assert ShieldConfig.from_options({"backend": "numpy"}) == ShieldConfig()
-    with pytest.warns(FutureWarning, match="shield.compute: option 'compute' no longer does anything"):
-        assert ShieldConfig.from_options({"compute": "numba", "margin_m": 0.1}) == ShieldConfig(margin_m=0.1)
-
-
-def test_the_planners_compute_and_backend_are_read_and_do_nothing(tmp_path):
-    """The planner's steps are compiled, one implementation each: its former options ``compute`` and ``backend``
-    are read (a keyword, a scenario file, --option) with a FutureWarning that they do nothing, and left out."""
-    schema = planner_options("viapath")
-    assert "compute" not in schema and "backend" not in schema
-    path = DesignatedPath([[0.0, 0.0], [3.0, 0.0]], half_width_m=1.0)
-    with pytest.warns(FutureWarning, match="'backend' no longer does anything"):
-        planner = make_planner("viapath", path, backend="numpy")
-    assert "compute" not in dict(getattr(planner, "inner", planner).config)
-    with pytest.warns(FutureWarning, match="planner.compute: option 'compute' no longer does anything"):
-        _, result = _run(tmp_path, "{name: viapath, compute: numpy}")
-    assert result.exit_code == 0, result.output
-    with pytest.warns(FutureWarning, match="option 'backend' no longer does anything"):
-        _, result = _run(tmp_path, "{name: viapath}", "--option", "backend=numpy")
-    assert result.exit_code == 0, result.output
-    with pytest.raises(ValueError, match="retired name 'k1' is an option's name"):
-        OptionSet([Option("k1", 1.0, "a")], retired={"k1": "why"})
-
-
 def test_an_old_preset_file_with_backend_leaves_it_out(tmp_path):
     from viapath.presets import load_preset
 
@@ -223,8 +186,7 @@ def test_an_old_preset_file_with_backend_leaves_it_out(tmp_path):
 
 
 def test_the_options_hash_leaves_out_options_that_decide_nothing():
-    """``compute`` (decides=False), under its name or its former one, does not change a run's identity; an
-    option that decides does."""
+    """The retired names ``compute`` and ``backend`` do not change a run's identity; an option that decides does."""
     from viapath.bench.identity import options_hash
     from viapath.bench.suites import generate_suite
 
@@ -233,20 +195,6 @@ def test_the_options_hash_leaves_out_options_that_decide_nothing():
     assert options_hash(scenario, "viapath", {"compute": "numpy"}) == plain
     assert options_hash(scenario, "viapath", {"backend": "numba"}) == plain
     assert options_hash(scenario, "viapath", {"k1": 0.3}) != plain
-
-
-def test_ros_parameters_name_the_option_a_former_name_became():
-    """A ROS parameter file written before a rename fails on the old name and names the new one, and the new name
-    is accepted; the planner's retired options (compute, backend) are read and ignored, with a FutureWarning."""
-    from viapath.ros2.settings import ParameterError, validate
-
-    with pytest.raises(ParameterError) as raised:
-        validate({"shield.backend": "numpy"})
-    assert "parameter shield.backend: unknown parameter (now called shield.compute)" in str(raised.value)
-    assert validate({"shield.compute": "numpy"}).values["shield.compute"] == "numpy"
-    with pytest.warns(FutureWarning, match="option 'compute' no longer does anything"):
-        settings = validate({"planner.compute": "numpy", "planner.weights.k2": 0.02})
-    assert "planner.compute" not in settings.values and settings.values["planner.weights.k2"] == 0.02
 
 
 def test_settings_survive_copy_and_pickle():

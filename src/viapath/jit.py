@@ -1,4 +1,4 @@
-"""The one decorator of viapath's compiled steps.
+"""The one decorator of viapath's compiled steps, and the on-disk cache they are compiled into.
 
 A step that runs in the control loop and must be fast (the planner's leg checks and search, the shield's
 braking sweep, the guard's checks, the laser chain's ray casting and fits) is written once, in the part of
@@ -8,8 +8,18 @@ Python that numba compiles, and decorated with :func:`compiled`:
   on-disk cache, so later processes load it instead of compiling. numba checks only the defining file for
   changes, not the files of the compiled functions it calls; so the cache lives in a directory named by a
   digest of every module that compiles (:func:`cache_directory`): a change to any of them compiles afresh;
-* with compilation off (``NUMBA_DISABLE_JIT=1``) or without numba, the same function runs as plain Python:
-  a debugger or a print statement sees the real step, only slower.
+* with compilation off (``NUMBA_DISABLE_JIT=1``, :func:`run_plain`) or without numba, the decorator returns
+  the function itself: it runs as plain Python, a debugger or a print statement sees the real step, only
+  slower.
+
+numba is imported only when the first function is decorated with compilation on (about 0.2 s), so a process
+that runs plain Python, or imports no compiled step (``viapath --help``), never loads it. The choice is made
+per process, when the first step is decorated: a compiled step calls other compiled steps, so they are all
+compiled or all plain.
+
+The cache of one version of the code is *ready* once :mod:`viapath.precompile` has compiled every step into
+it (:func:`cache_is_ready`): a ``ready-…`` file it writes last. Until then a first ``viapath run`` runs plain
+Python and compiles in the background (:mod:`viapath.cli.common`).
 
 This is the only module that names numba. Everything else imports :func:`compiled` from here.
 """
@@ -17,24 +27,25 @@ This is the only module that names numba. Everything else imports :func:`compile
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import os
+import sys
 from collections.abc import Callable
+from functools import cache
 from pathlib import Path
 from typing import Any, TypeVar, cast, overload
 
-_numba: Any
-try:  # numba is a dependency; without it (a stripped install) the steps run as plain Python
-    import numba as _numba
-except ImportError:  # pragma: no cover - exercised by installs without numba
-    _numba = None
-
 F = TypeVar("F", bound=Callable[..., Any])
 PACKAGE = Path(__file__).resolve().parent
-_USES = (b"viapath.jit", b"from viapath import jit")
+# How a module that compiles names the decorator (a module that only asks whether compilation is on, or
+# mentions the decorator in a docstring, compiles nothing: a change to it keeps the cache).
+_USES = (b"from viapath.jit import compiled", b"@jit.compiled", b"jit.compiled(")
+
+_state: dict[str, Any] = {"plain": False, "numba": None, "decorated": []}
 
 
 def source_digest(package: Path = PACKAGE) -> str:
-    """A digest of the modules of ``package`` that compile (they import this module), and of this module."""
+    """A digest of the modules of ``package`` that compile (they decorate with :func:`compiled`), and of this module."""
     digest = hashlib.sha256()
     for path in sorted(package.rglob("*.py")):
         text = path.read_bytes()
@@ -53,30 +64,78 @@ def cache_directory() -> Path:
     return Path(base) / source_digest()
 
 
+def ready_file() -> Path:
+    """The file :mod:`viapath.precompile` writes into :func:`cache_directory` once every step is compiled there.
+    Named by the Python and numba versions too: numba keeps the code of each in the same folder."""
+    return cache_directory() / f"ready-{sys.implementation.cache_tag}-numba{_numba_version()}"
+
+
+@cache
+def _numba_version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("numba")
+    except PackageNotFoundError:  # pragma: no cover - a stripped install runs plain Python
+        return "none"
+
+
+def cache_is_ready() -> bool:
+    """Whether every compiled step of this version of the code is in the cache (:mod:`viapath.precompile` ran)."""
+    return ready_file().is_file()
+
+
 def cache_is_warm() -> bool:
-    """Whether compiled steps of this version of the code are in the cache (a first run compiles them)."""
+    """Whether some compiled steps of this version of the code are in the cache (a run loads those and compiles
+    the rest; :func:`cache_is_ready` says whether that is nothing)."""
     folder = cache_directory()
     return folder.is_dir() and any(folder.rglob("*.nbi"))
 
 
 def first_compilation_note() -> str | None:
-    """What to tell a user whose run compiles the steps for this machine (None when they are cached, or when
-    compilation is off)."""
-    if not enabled() or cache_is_warm():
+    """What to tell a user whose run compiles the steps for this machine (None when they are all cached, or
+    when compilation is off)."""
+    if not enabled() or cache_is_ready():
         return None
     return (
-        "viapath: compiling its planner, shield and guard for this machine, once (about a minute); "
+        "viapath: compiling its planner, shield and laser chain for this machine, once (about a minute of CPU); "
         f"later runs load them from {cache_directory()}"
     )
 
 
-if _numba is not None:  # before any function is decorated: numba picks a cache folder per function then
-    _numba.config.CACHE_DIR = str(cache_directory())
+def numba_installed() -> bool:
+    return importlib.util.find_spec("numba") is not None
 
 
 def enabled() -> bool:
-    """Whether decorated functions are compiled (numba installed and ``NUMBA_DISABLE_JIT`` not set)."""
-    return _numba is not None and os.environ.get("NUMBA_DISABLE_JIT", "0").strip() in ("", "0")
+    """Whether decorated functions are compiled: numba installed, ``NUMBA_DISABLE_JIT`` not set and
+    :func:`run_plain` not chosen."""
+    if _state["plain"]:
+        return False
+    return os.environ.get("NUMBA_DISABLE_JIT", "0").strip() in ("", "0") and numba_installed()
+
+
+def run_plain() -> bool:
+    """Run every step of this process as plain Python, when no step has been compiled yet (True then).
+
+    Decided before the first compiled step is decorated (a compiled step cannot call a plain one); False,
+    and nothing changes, when one already is."""
+    if _state["decorated"]:
+        return False
+    _state["plain"] = True
+    return True
+
+
+def _numba() -> Any:
+    """numba, imported on first use, its cache in :func:`cache_directory` (set before any function is decorated:
+    numba picks a cache folder per function then)."""
+    if _state["numba"] is None:
+        import numba
+
+        config: Any = numba.config
+        config.CACHE_DIR = str(cache_directory())
+        _state["numba"] = numba
+    return _state["numba"]
 
 
 @overload
@@ -91,18 +150,20 @@ def compiled(
     ``signature`` compiles eagerly for those types (the module compiles, or loads its cache, at import);
     ``inline`` inlines the function into its compiled callers (for small helpers called per element);
     other keywords go to ``numba.njit`` as they are (``error_model``, ``fastmath``). Used bare
-    (``@compiled``) or with keywords (``@compiled(inline=True)``).
+    (``@compiled``) or with keywords (``@compiled(inline=True)``). With compilation off (:func:`enabled`)
+    it returns ``function`` itself.
     """
 
     def wrap(f: F) -> F:
-        if _numba is None:
+        if not enabled():
             return f
+        numba = _numba()
         settings: dict[str, Any] = {"cache": True, "nogil": True, **options}
         if inline:
             settings["inline"] = "always"
-        if signature is not None:
-            return cast(F, _numba.njit(signature, **settings)(f))
-        return cast(F, _numba.njit(**settings)(f))
+        dispatcher = numba.njit(signature, **settings)(f) if signature is not None else numba.njit(**settings)(f)
+        _state["decorated"].append(dispatcher)
+        return cast(F, dispatcher)
 
     return wrap if function is None else wrap(function)
 
@@ -110,3 +171,15 @@ def compiled(
 def python_function(function: Callable[..., Any]) -> Callable[..., Any]:
     """The plain Python function behind a compiled one (itself when compilation is off)."""
     return getattr(function, "py_func", function)
+
+
+def compilation_statistics() -> dict[str, int]:
+    """How many compiled versions of the steps decorated in this process it loaded from the cache (``hits``) and
+    compiled (``misses``): zeros in a plain process."""
+    hits = misses = 0
+    for function in _state["decorated"]:
+        stats = getattr(function, "stats", None)
+        if stats is not None:
+            hits += sum(stats.cache_hits.values())
+            misses += sum(stats.cache_misses.values())
+    return {"hits": hits, "misses": misses}

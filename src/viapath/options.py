@@ -16,8 +16,10 @@ Choices made here:
   and what was found. A set refuses two options of the same name.
 * ``former_names``: an option that was renamed still reads its old name (a YAML file, ``--option``),
   with a FutureWarning saying the new one; giving both is an error.
-* ``retired`` (of a set): a name that is no longer an option, still read (a YAML file, ``--option``) and
-  ignored, with a FutureWarning saying why it does nothing now.
+* :class:`Retired`: a name that is no longer an option, still read (a YAML file, ``--option``, a ROS 2
+  parameter) and ignored, with one FutureWarning saying what replaced it or why it does nothing now. Every
+  option set keeps its retired names in a :class:`RetiredNames` (an :class:`OptionSet`'s ``retired``, the laser
+  chain's in :mod:`viapath.perception.detection`), the one place they are read, warned about and left out.
 * ``decides``: False for an option that only chooses how the arithmetic runs (numpy or compiled), never
   what is decided; results are the same either way, so a run's identity leaves it out.
 """
@@ -115,6 +117,57 @@ class Option:
         return (self._annotation(), Field(self.default, description=self.describe(), **limits))
 
 
+@dataclass(frozen=True)
+class Retired:
+    """A name that is no longer an option: what it was called, and what replaced it or why it does nothing now."""
+
+    name: str
+    reason: str
+
+    def message(self, field: str) -> str:
+        """The FutureWarning's text, for the option given as ``field`` (its path where it was given)."""
+        return f"{field}: option {self.name!r} no longer does anything ({self.reason}); it is ignored"
+
+
+class RetiredNames(Mapping[str, Retired]):
+    """The retired names of one option set, by name (a name given twice is refused)."""
+
+    def __init__(self, retired: Iterable[Retired] = (), owner: str = ""):
+        self.owner = owner
+        self._retired: dict[str, Retired] = {}
+        for item in retired:
+            if item.name in self._retired:
+                raise ValueError(f"retired name {item.name!r} is given twice{f' in {owner}' if owner else ''}")
+            self._retired[item.name] = item
+
+    def __getitem__(self, name: str) -> Retired:
+        return self._retired[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._retired)
+
+    def __len__(self) -> int:
+        return len(self._retired)
+
+    def __add__(self, other: RetiredNames) -> RetiredNames:
+        return RetiredNames([*self.values(), *other.values()], owner=other.owner or self.owner)
+
+    def drop(
+        self, values: Mapping[str, Any], where: str = "", prefix: str = "", separator: str = ".", stacklevel: int = 2
+    ) -> dict[str, Any]:
+        """``values`` without the retired names (keys ``prefix + name``: ``planner.compute`` of the ROS 2
+        parameters), with one FutureWarning for each one given, naming it as ``where + separator + key``."""
+        kept: dict[str, Any] = {}
+        for key, value in values.items():
+            name = str(key)[len(prefix) :] if str(key).startswith(prefix) else None
+            if name is not None and name in self._retired:
+                field = f"{where}{separator}{key}" if where else str(key)
+                warnings.warn(self._retired[name].message(field), FutureWarning, stacklevel=stacklevel + 1)
+                continue
+            kept[key] = value
+        return kept
+
+
 def _first_causes(items: list[Any]) -> list[Any]:
     """Pydantic's errors without the consequences: a list whose bad elements were dropped is also
     reported too short; the elements' own errors say it."""
@@ -191,11 +244,11 @@ class OptionSet:
         options: Iterable[Option],
         owner: str = "",
         steps: Iterable[tuple[str, str]] = (),
-        retired: Mapping[str, str] | None = None,
+        retired: Iterable[Retired] = (),
     ):
         self.owner = owner  # e.g. the planner's name, for messages
         self.steps = tuple(steps)
-        self.retired = dict(retired or {})  # a name that is no longer an option -> why it does nothing now
+        self.retired = RetiredNames(retired, owner)  # names that are no longer options: read, warned about, ignored
         self._options: dict[str, Option] = {}
         self._former: dict[str, str] = {}  # a former name -> the option's name now
         for option in options:
@@ -228,7 +281,7 @@ class OptionSet:
             [*self, *other],
             owner=other.owner or self.owner,
             steps=(*self.steps, *other.steps),
-            retired={**self.retired, **other.retired},
+            retired=(self.retired + other.retired).values(),
         )
 
     @property
@@ -291,11 +344,7 @@ class OptionSet:
             prefix, _, name = str(key).rpartition(".")
             if name in self.retired:
                 field = f"{where}.{key}" if where else str(key)
-                warnings.warn(
-                    f"{field}: option {name!r} no longer does anything ({self.retired[name]}); it is ignored",
-                    FutureWarning,
-                    stacklevel=2,
-                )
+                warnings.warn(self.retired[name].message(field), FutureWarning, stacklevel=2)
                 continue
             if name in self._former:
                 now = self._former[name]

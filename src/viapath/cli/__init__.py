@@ -4,7 +4,7 @@ Each command lives in a module of this package and imports what is heavy (the si
 Optuna, Foxglove, navground, matplotlib) inside its body, so ``viapath --help`` and ``viapath run``
 need none of the extras.
 
-* :mod:`viapath.cli.run`: ``run``
+* :mod:`viapath.cli.run`: ``run``, ``precompile``
 * :mod:`viapath.cli.catalogue`: ``scenarios``, ``planners``
 * :mod:`viapath.cli.scans`: ``scans``
 * :mod:`viapath.cli.bench`: ``suite``, ``bench``
@@ -28,6 +28,7 @@ app = typer.Typer(
     help="Follow a designated path and avoid moving obstacles by choosing speed as well as direction.",
 )
 app.command("run")(run.run)
+app.command("precompile")(run.precompile)
 app.command("scenarios")(catalogue.scenarios)
 app.command("planners")(catalogue.planners)
 app.command("scans")(scans.scans)

@@ -34,6 +34,40 @@ def note_first_compilation() -> None:
         errors.print(note, highlight=False, soft_wrap=True, markup=False)
 
 
+def compiled_or_plain() -> bool:
+    """Before a command makes its first compiled step: compiled when this version's cache is ready; else, unless
+    ``VIAPATH_BACKGROUND_COMPILE=0``, plain Python in this run while a background process fills the cache for
+    the next runs (compiling first would cost this run about a minute; the plain run takes seconds). True when
+    this run is plain for that reason: :func:`start_compiling` then starts the background process."""
+    from viapath import jit
+
+    if not jit.enabled() or jit.cache_is_ready():
+        return False
+    from viapath.precompile import background_allowed
+
+    return background_allowed() and jit.run_plain()
+
+
+def start_compiling(plain: bool) -> None:
+    """Once the command's input is checked: start the background compilation (``plain``, from
+    :func:`compiled_or_plain`) and say so in one line, or say that this run compiles (a cold cache, no
+    background compilation)."""
+    if not plain:
+        note_first_compilation()
+        return
+    from viapath.precompile import COMPILE_CPU_S, start_in_background
+
+    pid = start_in_background()
+    errors.print(
+        "viapath: this run uses plain Python; compiling viapath's planner, shield and laser chain in the "
+        f"background for the next runs (about {COMPILE_CPU_S} s of CPU, pid {pid}; "
+        "`viapath precompile` waits for it)",
+        highlight=False,
+        soft_wrap=True,
+        markup=False,
+    )
+
+
 def check_output(file: Path | None, suffixes: Iterable[str], option: str) -> None:
     """Refuse an output file with another suffix, or in a folder that does not exist."""
     if file is None:

@@ -15,10 +15,11 @@ from viapath.cli.common import (
     caused_by_interrupt,
     check_noise,
     check_output,
+    compiled_or_plain,
     console,
     errors,
     fail,
-    note_first_compilation,
+    start_compiling,
 )
 from viapath.cli.extras import animation_progress, print_warnings
 from viapath.io.jsonable import dumps as json_dumps
@@ -99,6 +100,7 @@ def run(
     shield_mode: ShieldMode = "passive",
 ) -> None:
     """Run one scenario in the simulator and report its metrics."""
+    plain = compiled_or_plain()  # before anything makes a compiled step
     from viapath.scenarios import ScenarioError, load_scenario
 
     _check_arguments(plot, animate, trace, position_noise, velocity_noise, frame_stride, seed, perception)
@@ -119,7 +121,7 @@ def run(
         "shield": None if shield is None else shield == "on",
         "shield_options": {"mode": shield_mode},
     }
-    note_first_compilation()
+    start_compiling(plain)
     episode = _simulate(spec, scenario, planner_name, overrides, views_options, episode_options)
     failed = _write_outputs(episode, plot, trace, animate, frame_stride)
     # The metrics are printed whatever became of the outputs: the episode ran (it may have taken hours).
@@ -132,6 +134,16 @@ def run(
                 console.print(f"{label}: {file}")
     if failed is not None:
         fail(f"{failed[0]}: {failed[1]}")
+
+
+def precompile() -> None:
+    """Compile viapath's planner, shield and laser chain for this machine now (about a minute of CPU, once per
+    version; waits for a compilation running in the background), so that the next runs load them."""
+    from viapath.precompile import compile_now
+
+    code = compile_now(lambda text: errors.print(text, highlight=False, soft_wrap=True, markup=False))
+    if code:
+        raise typer.Exit(code)
 
 
 def _check_arguments(plot, animate, trace, position_noise, velocity_noise, frame_stride, seed, perception) -> None:
@@ -272,6 +284,7 @@ def parse_options(assignments: list[str], planner_name: str) -> dict:
         for text in assignments:
             name, value = parse_assignment(text)
             values[name] = value
+        values = schema.retired.drop(values, where="--option", separator=" ")  # read, warned about, left out
         values = schema.current_names(values, where="--option")  # an option's former name read as its name now
         schema.validate(values, where="--option")
     except OptionError as error:

@@ -33,7 +33,6 @@ What we chose where the sources leave it open:
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
@@ -41,31 +40,21 @@ from typing import Any
 import numpy as np
 
 from viapath.jit import compiled
+from viapath.options import Retired, RetiredNames
 from viapath.perception.circle_fit import fit_circles, solve_sym3
 from viapath.perception.fusion import FusedScan
 from viapath.perception.scanner import ScannerModel
 from viapath.perception.segmentation import BeamTables, SegmentationParams, segment_beams
 from viapath.sums import pairwise_sum
 
-#: Options the laser chain had to choose between its numpy and its compiled code (``ray_compute`` of the laser
-#: perception, ``fit_compute`` of the detector and the ROS 2 node, and their earlier names): there is one
-#: implementation now; a scenario or parameter file that still gives one is read with a FutureWarning
-#: (:func:`retired_options`).
-RETIRED_OPTIONS = ("ray_compute", "fit_compute", "ray_backend", "fit_backend")
-
-
-def retired_options(values: dict[str, Any], where: str) -> dict[str, Any]:
-    """``values`` without the :data:`RETIRED_OPTIONS`, with a FutureWarning naming each one given (``where``: the
-    place it was given, for the message)."""
-    given = [name for name in RETIRED_OPTIONS if name in values]
-    for name in given:
-        warnings.warn(
-            f"{where}: option {name!r} no longer does anything (the laser chain has one implementation, compiled "
-            "when compilation is on); remove it",
-            FutureWarning,
-            stacklevel=3,
-        )
-    return {key: value for key, value in values.items() if key not in given}
+_ONE_ARITHMETIC = "the laser chain has one implementation, compiled; plain Python when compilation is off"
+#: The options the laser chain had to choose between its numpy and its compiled code (``ray_compute`` of the laser
+#: perception, ``fit_compute`` of the detector and the ROS 2 node, and their earlier names): a scenario or
+#: parameter file that still gives one is read with a FutureWarning (:meth:`~viapath.options.RetiredNames.drop`).
+RETIRED_LASER_OPTIONS = RetiredNames(
+    [Retired(name, _ONE_ARITHMETIC) for name in ("ray_compute", "fit_compute", "ray_backend", "fit_backend")],
+    owner="laser chain",
+)
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ import numpy as np
 
 from viapath.observation import Obstacles
 from viapath.perception.base import Perception, WorldSnapshot
-from viapath.perception.detection import Detections, DetectorParams, detect, retired_options
+from viapath.perception.detection import RETIRED_LASER_OPTIONS, Detections, DetectorParams, detect
 from viapath.perception.fusion import BlindRegion, blind_region
 from viapath.perception.raycast import simulate_scans
 from viapath.perception.scanner import ScannerModel, paper_scanners
@@ -50,7 +50,7 @@ def _dataclass_from(cls, value, what: str):
         return value
     if not isinstance(value, dict):
         raise TypeError(f"{what} must be a mapping or {cls.__name__}, got {type(value).__name__}")
-    value = retired_options(value, what)
+    value = RETIRED_LASER_OPTIONS.drop(value, what, stacklevel=3)
     names = {f.name for f in fields(cls)}
     unknown = sorted(set(value) - names)
     if unknown:
@@ -78,7 +78,7 @@ class LaserPerception(Perception):
         static_layer=None,
         **retired: Any,
     ):
-        unknown = set(retired_options(retired, "LaserPerception"))
+        unknown = set(RETIRED_LASER_OPTIONS.drop(retired, "LaserPerception", stacklevel=3))
         if unknown:
             raise TypeError(f"LaserPerception got unexpected keyword argument(s) {', '.join(sorted(unknown))}")
         if mode not in (None, "laser"):

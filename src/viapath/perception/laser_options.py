@@ -13,8 +13,8 @@ Choices made here:
   (nested as in YAML), so the objects built are the ones built from the same mapping before the schema existed.
 * A model also builds its dataclass once, so a rule that spans fields (``range_min_m < range_max_m``,
   ``confirm_hits <= confirm_window``) is reported at load time with the field path, like a bound.
-* An option that no longer does anything (:data:`~viapath.perception.detection.RETIRED_OPTIONS`: the choice
-  between the numpy and the compiled code) is read with a FutureWarning and dropped.
+* An option that no longer does anything (:data:`~viapath.perception.detection.RETIRED_LASER_OPTIONS`: the
+  choice between the numpy and the compiled code) is read with a FutureWarning and dropped.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ from pydantic import (
     model_validator,
 )
 
-from viapath.perception.detection import DetectorParams, retired_options
+from viapath.perception.detection import RETIRED_LASER_OPTIONS, DetectorParams
 from viapath.perception.laser import LaserPerception
 from viapath.perception.scanner import INVALID_ENCODINGS, ScannerModel
 from viapath.perception.segmentation import SegmentationParams
@@ -145,8 +145,10 @@ class _Options(BaseModel):
     @model_validator(mode="before")
     @classmethod
     def _retired(cls, value: Any) -> Any:
-        if isinstance(value, dict) and getattr(cls, "built_from", None) in (DetectorParams, LaserPerception):
-            return retired_options(value, f"perception.options ({cls.__name__})")
+        built_from = getattr(cls, "built_from", None)
+        if isinstance(value, dict) and built_from in (DetectorParams, LaserPerception):
+            where = "perception.options" + (".detector" if built_from is DetectorParams else "")
+            return RETIRED_LASER_OPTIONS.drop(value, where, stacklevel=4)
         return value
 
     def given(self) -> dict[str, Any]:

@@ -24,7 +24,6 @@ What we chose:
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from viapath.limits import LIMITS_OPTIONS, ROBOT_OPTIONS, SUBGOAL_OPTIONS
-from viapath.perception.detection import retired_options
+from viapath.perception.detection import RETIRED_LASER_OPTIONS
 from viapath.perception.scanner import URG04LX_MOUNT_OFFSET_M
 from viapath.perception.tracking import TrackerParams
 from viapath.ros2.options import Option, planner_options
@@ -438,21 +437,16 @@ class NodeSettings:
             raise AttributeError(name) from None
 
 
-def _without_retired_planner_options(values: dict[str, Any], planner_name: str) -> dict[str, Any]:
-    """``values`` without the planner's retired options (``planner.<name>``: read and ignored, with a FutureWarning
-    saying why, as in a scenario file)."""
+def _without_retired_options(values: dict[str, Any], planner_name: str) -> dict[str, Any]:
+    """``values`` without the retired names of the laser chain (``fit_compute``), the planner (``planner.compute``)
+    and the shield (``shield.compute``): read and ignored, with a FutureWarning saying why, as in a scenario file."""
     from viapath.planning import planner_class
+    from viapath.safety import SHIELD_OPTIONS
 
-    retired = planner_class(planner_name).options.retired
-    given = [key for key in values if key.startswith(PLANNER_PREFIX) and key[len(PLANNER_PREFIX) :] in retired]
-    for key in given:
-        warnings.warn(
-            f"ROS 2 parameter {key}: option {key[len(PLANNER_PREFIX) :]!r} no longer does anything "
-            f"({retired[key[len(PLANNER_PREFIX) :]]}); it is ignored",
-            FutureWarning,
-            stacklevel=3,
-        )
-    return {key: value for key, value in values.items() if key not in given}
+    where: dict[str, Any] = {"where": "ROS 2 parameter", "separator": " ", "stacklevel": 3}
+    values = RETIRED_LASER_OPTIONS.drop(values, **where)
+    values = planner_class(planner_name).options.retired.drop(values, prefix=PLANNER_PREFIX, **where)
+    return SHIELD_OPTIONS.retired.drop(values, prefix=SHIELD_PREFIX, **where)
 
 
 def validate(values: dict[str, Any]) -> NodeSettings:
@@ -463,8 +457,7 @@ def validate(values: dict[str, Any]) -> NodeSettings:
     if len(set(scanner_names)) != len(scanner_names):
         raise ParameterError(f"parameter scanner_names: names repeat: {scanner_names}")
     options = {o.name: o for o in all_options(planner_name, scanner_names)}
-    values = retired_options(values, "ROS 2 parameters")
-    values = _without_retired_planner_options(values, planner_name)
+    values = _without_retired_options(values, planner_name)
     renamed = {f: o.name for o in options.values() for f in o.former_names}
     errors = [
         f"parameter {name}: unknown parameter" + (f" (now called {renamed[name]})" if name in renamed else "")

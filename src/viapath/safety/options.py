@@ -6,15 +6,14 @@ parameters and the listings are generated from it.
 
 from __future__ import annotations
 
-import warnings
 from typing import Any
 
-from viapath.options import Option, OptionError, OptionSet
+from viapath.options import Option, OptionError, OptionSet, Retired
 
 SHIELD_MODES = ("passive", "passive-friendly")
-# The option that once chose the shield's arithmetic (numpy or compiled; formerly ``backend``): old files and
-# parameters still name it, so it is read and ignored with a warning.
-RETIRED = "compute"
+# The option that once chose the shield's arithmetic (numpy or compiled), and its former name: old files and
+# parameters still name them, so they are read and ignored with a warning.
+_ONE_ARITHMETIC = "the shield has one implementation, compiled; plain Python when compilation is off"
 
 SHIELD_OPTIONS = OptionSet(
     [
@@ -79,16 +78,9 @@ SHIELD_OPTIONS = OptionSet(
             minimum=0.001,
             maximum=1.0,
         ),
-        Option(
-            RETIRED,
-            "auto",
-            "no longer does anything: the shield has one implementation, compiled (any value is read, with a "
-            "warning, and ignored)",
-            former_names=("backend",),
-            decides=False,
-        ),
     ],
     owner="shield",
+    retired=[Retired("compute", _ONE_ARITHMETIC), Retired("backend", _ONE_ARITHMETIC)],
 )
 
 
@@ -97,21 +89,9 @@ def option_defaults() -> dict[str, Any]:
 
 
 def check_options(values: dict[str, Any], where: str = "shield") -> dict[str, Any]:
-    """Defaults overlaid with ``values``; one clear ValueError naming the option for bad input. The retired
-    option ``compute`` (``backend``) is read, with a FutureWarning when set to other than its default, and left
-    out."""
+    """Defaults overlaid with ``values``; one clear ValueError naming the option for bad input. A retired name
+    (``compute``, ``backend``) is read, with a FutureWarning, and left out."""
     try:
-        checked = dict(SHIELD_OPTIONS.validate(values, where=where))
+        return dict(SHIELD_OPTIONS.validate(values, where=where))
     except OptionError as error:
         raise ValueError(str(error)) from None
-    for name in (RETIRED, *SHIELD_OPTIONS[RETIRED].former_names):
-        # Its default is what a ROS 2 node declares for every parameter: only a value set by hand is news.
-        if name in values and values[name] != SHIELD_OPTIONS[RETIRED].default:
-            warnings.warn(
-                f"{where}.{name}: option {name!r} no longer does anything (the shield has one implementation, "
-                "compiled); remove it",
-                FutureWarning,
-                stacklevel=2,
-            )
-    del checked[RETIRED]
-    return checked

@@ -95,7 +95,21 @@ def scenario_from_dict(data: dict[str, Any], origin: str = "<dict>") -> Scenario
         planner_settings(scenario)
     except (KeyError, OptionError) as error:
         raise ScenarioError(_capped(_planner_error(error, origin).splitlines())) from None
-    return scenario
+    return _without_retired_planner_options(scenario)
+
+
+def _without_retired_planner_options(scenario: Scenario) -> Scenario:
+    """The scenario without the planner block's retired names: they were read, with their warning, by the check
+    above; the planner made from the scenario later need not read (and warn about) them again."""
+    from viapath.planning import planner_class
+    from viapath.scenarios.models import PlannerSpec
+
+    spec = scenario.planner
+    retired = planner_class(spec.name).options.retired
+    if not any(name in retired for name in spec.given()):
+        return scenario
+    kept = {name: value for name, value in spec.given().items() if name not in retired}
+    return scenario.model_copy(update={"planner": PlannerSpec.model_validate({"name": spec.name, **kept})})
 
 
 def _planner_block_errors(data: Any, origin: str) -> list[str]:

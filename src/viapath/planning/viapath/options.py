@@ -7,7 +7,7 @@ every planner (:data:`viapath.planning.base.COMMON_OPTIONS`).
 
 from __future__ import annotations
 
-from viapath.options import Option, OptionSet
+from viapath.options import Option, OptionSet, Retired
 from viapath.planning.base import COMMON_OPTIONS
 
 _OWN = [
@@ -250,5 +250,5 @@ VIAPATH_OPTIONS = COMMON_OPTIONS + OptionSet(
     _OWN,
     owner="viapath",
     steps=[("rollout_s", "rollout_dt_s"), ("escape_s", "escape_dt_s")],
-    retired={"compute": _ONE_ARITHMETIC, "backend": _ONE_ARITHMETIC},
+    retired=[Retired("compute", _ONE_ARITHMETIC), Retired("backend", _ONE_ARITHMETIC)],
 )
