@@ -7,13 +7,15 @@ person blind to it still walks into it; where a move inside the corridor keeps b
 
 What we chose:
 * **When.** After the recipe's decision, if its plan is ``stop``, ``wait``, ``blocked`` (waiting at a
-  closed way) or ``escape`` with the robot at rest (below 0.05 m/s, the at-fault rule's threshold; an escape
-  already under way is the escape's, unless it is a step aside going on): staying, the plan's own command
+  closed way) or ``escape``, and the robot is at rest (below 0.05 m/s, the at-fault rule's threshold) or
+  stepping aside already: staying, the plan's own command
   held (for an escape: braking to rest and standing), is scored against the people's forecast over
   ``step_aside_s``, the capped uncertainty cones of the leg checks. If it keeps less than ``step_aside_clearance_m`` beyond the cones, the robot looks for a
   move. Static geometry alone never starts one. A wait is scored with the uncertainty inflation its
   standing was checked with (``slow_leg_inflation``). A ``slow`` plan is left alone: the robot is under way
-  on a leg checked free, and the person crosses ahead of it (the paper's "side" behaviour).
+  on a leg checked free, and the person crosses ahead of it (the paper's "side" behaviour). A robot still
+  under way brakes first: a move started at speed near people that then change course (replayed crowds)
+  came into contact while moving.
 * **The moves.** Targets in 16 directions round the robot at ``step_aside_distances_m``, inside the
   corridor, and last cycle's target. The robot steers for a target as the planner's command does (turning
   first, slowing for large heading errors), no faster than the top of the speed set, and slows so as to
@@ -261,8 +263,8 @@ def step_aside(planner: Any, checks: LegChecks, decision: Decision, previous: np
     stands). ``previous``: last cycle's step-aside target, if it stepped aside."""
     if decision.plan.status not in STEPPING_STATUSES or len(checks.obstacles) == 0:
         return None
-    if decision.plan.status == "escape" and previous is None and checks.speed_mps > AT_REST_MPS:
-        return None  # a moving escape is the escape's: a step aside starts from rest
+    if previous is None and checks.speed_mps > AT_REST_MPS:
+        return None  # a step aside starts from rest: a robot under way brakes first (or escapes)
     if checks.obstacles.static_mask is not None and bool(np.all(checks.obstacles.static_mask)):
         return None  # only static geometry: nobody to step aside for
     drive = _drive(planner)
