@@ -72,7 +72,7 @@ def test_in_a_wide_corridor_the_waiting_robot_steps_out_of_the_persons_way(wide)
     assert metrics["reached_goal"] and not metrics["collision"]
     assert metrics["time_outside_corridor_s"] == 0.0
     assert np.abs(trace.robot_poses[:, 1]).max() <= 1.5
-    # It keeps more room from the person than without the step (these two runs: 0.25 m against 0.08 m,
+    # It keeps more room from the person than without the step (these two runs: 0.29 m against 0.08 m,
     # surface to surface), at least step_aside_clearance_m (0.2 m).
     person_gap = clearance_per_step(trace).min()
     assert person_gap >= 0.2

@@ -20,8 +20,10 @@ What we chose:
   corridor, and last cycle's target. The robot steers for a target as the planner's command does (turning
   first, slowing for large heading errors), no faster than the top of the speed set, and slows so as to
   stop on it (speed at most ``sqrt(2 a d)`` for the distance d left, a the drive's braking limit); it then
-  stands there. Each move is rolled out for ``step_aside_s`` with the drive's limits; its roll-out must stay
-  inside the corridor and come no nearer static geometry than touching (the static discs, velocity 0).
+  stands there. Each move is rolled out with the drive's limits, and the robot then stands on its target,
+  up to the planner's horizon (``horizon_s``): a place the person passes by, not one they reach a little
+  later. The roll-out must stay inside the corridor and come no nearer static geometry than touching (the
+  static discs, velocity 0).
 * **The score.** A move's clearance is the smallest gap, over the roll-out, between the robot's centre and
   every forecast cone (the gap between two samples is bounded below by the smaller sample minus half what
   the two can close within the step, so a positive clearance is clear over the whole roll-out). The move
@@ -325,8 +327,17 @@ def _scored_moves(
         return None
     cap = escape_top_speed(planner.limits, config)
     dt = config.escape_dt_s
+    # The move, then standing on its target, up to the planner's horizon: a place the person passes by, not a
+    # place they reach a little later (a group filling the corridor).
+    long = max(drive[5], int(round(max(checks.horizon_s, config.step_aside_s) / dt)))
     positions = roll_outs(
-        checks.packed_robot(), targets, np.full(len(targets), cap), np.zeros(len(targets), np.bool_), *drive
+        checks.packed_robot(),
+        targets,
+        np.full(len(targets), cap),
+        np.zeros(len(targets), np.bool_),
+        *drive[:5],
+        long,
+        *drive[6:],
     )
     inside = checks.inside(positions.reshape(-1, 2)).reshape(positions.shape[:2]).all(axis=1)
     inside &= clearances(positions, dt, *statics) >= static_floor
