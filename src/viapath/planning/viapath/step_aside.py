@@ -330,14 +330,9 @@ def _scored_moves(
     # The move, then standing on its target, up to the planner's horizon: a place the person passes by, not a
     # place they reach a little later (a group filling the corridor).
     long = max(drive[5], int(round(max(checks.horizon_s, config.step_aside_s) / dt)))
+    drive_long = (*drive[:5], long, *drive[6:])
     positions = roll_outs(
-        checks.packed_robot(),
-        targets,
-        np.full(len(targets), cap),
-        np.zeros(len(targets), np.bool_),
-        *drive[:5],
-        long,
-        *drive[6:],
+        checks.packed_robot(), targets, np.full(len(targets), cap), np.zeros(len(targets), np.bool_), *drive_long
     )
     inside = checks.inside(positions.reshape(-1, 2)).reshape(positions.shape[:2]).all(axis=1)
     inside &= clearances(positions, dt, *statics) >= static_floor
