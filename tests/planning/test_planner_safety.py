@@ -147,6 +147,13 @@ def check_plan_against_status(situation):
         # inside the stopping distance (viapath.guard); what is left is turning on the spot.
         assert command.speed_mps == 0.0 and plan.extras["guard"]
         return
+    if status == "step-aside":
+        # A move from rest out of someone's way (planning/viapath/step_aside.py) to a target inside the corridor,
+        # clear of the forecast over its roll-out (that claim checked by brute force in test_step_aside.py).
+        assert observation.robot.speed_mps <= 0.05
+        assert path.corridor_excess(plan.target) <= 0.0
+        assert plan.extras["step_aside"]["clearance_m"] >= 0.0
+        return
     assert status in SAFE_STATUSES | {"stop", "escape", "goal"}
     if status == "goal":
         assert np.hypot(*(path.goal - position)) <= planner.subgoal_policy.goal_tolerance_m

@@ -326,6 +326,10 @@ class LegChecks(_CompiledInputs):
 
     # -- against the corridor (paper step 4) ---------------------------------------------------------
 
+    def inside(self, points: np.ndarray) -> np.ndarray:
+        """Which points are inside the corridor (or no further out than the robot is now)."""
+        return self.path.corridor_excess(points) <= self.corridor_tolerance_m
+
     def legs_inside(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
         return packing.legs_inside(self.path, starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m)
 

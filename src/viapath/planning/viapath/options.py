@@ -226,6 +226,32 @@ _OWN = [
         minimum=0.0,
         maximum=100.0,
     ),
+    # Stepping aside (step_aside.py): a standing or waiting robot leaves the way of someone walking at it.
+    Option(
+        "step_aside_s",
+        3.0,
+        "a stop, wait, blocked wait or escape from rest that keeps less than step_aside_clearance_m from "
+        "someone's forecast over this time gives way to a move inside the corridor that keeps clear (0: off)",
+        "s",
+        minimum=0.0,
+        maximum=30.0,
+    ),
+    Option(
+        "step_aside_clearance_m",
+        0.2,
+        "clearance beyond the checked disc that a standing robot keeps from the forecast by stepping aside",
+        "m",
+        minimum=0.0,
+        maximum=5.0,
+    ),
+    Option(
+        "step_aside_distances_m",
+        (0.3, 0.6, 0.9),
+        "how far the moves of a step aside go, each in 16 directions",
+        "m",
+        minimum=0.05,
+        maximum=10.0,
+    ),
     # Speed (docs/explanation/speed.md).
     Option(
         "blocked_gap_m",

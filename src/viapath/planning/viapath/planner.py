@@ -92,6 +92,7 @@ from viapath.planning.viapath.kept_way import keep_previous_way
 from viapath.planning.viapath.options import VIAPATH_OPTIONS
 from viapath.planning.viapath.outrun import outrun, outrun_held
 from viapath.planning.viapath.plans import Chosen, straight_chosen, straight_plan
+from viapath.planning.viapath.step_aside import step_aside
 from viapath.planning.viapath.way_back import way_back
 
 
@@ -112,6 +113,8 @@ class ViaPathPlanner(Planner, name="viapath"):
         self._last_command: tuple[Any, ...] | None = None  # (situation, plan, command) of the last command made
         self._straight_speed: float | None = None  # last cycle's speed if its plan was the straight leg
         self._outrun_seen_s = -math.inf  # when someone from behind last blocked the nominal leg (outrun)
+        self._checks: LegChecks | None = None  # this cycle's (for the step aside)
+        self._step_aside_target: np.ndarray | None = None  # last cycle's, if it stepped aside
 
     def reset(self) -> None:
         super().reset()
@@ -120,11 +123,21 @@ class ViaPathPlanner(Planner, name="viapath"):
         self._last_command = None
         self._straight_speed = None
         self._outrun_seen_s = -math.inf
+        self._step_aside_target = None
 
     # -- the recipe ----------------------------------------------------------------------------------
 
     def decide(self, situation: Situation) -> Decision:
         decision = self._decide(situation)
+        if self.config.step_aside_s > 0 and self._checks is not None:
+            # A wait plan's standing was checked with less uncertainty inflation: so is staying on it.
+            checks = self._slow_checks(self._checks) if decision.plan.status == "wait" else self._checks
+            aside = step_aside(self, checks, decision, self._step_aside_target)
+            self._step_aside_target = None if aside is None else aside.plan.target
+            if aside is not None:
+                if decision.plan.status == "escape":
+                    self._previous_escape = aside.command  # the command sent, for a calm escape next cycle
+                decision = aside
         plan = decision.plan
         self._straight_speed = plan.speed_mps if plan.status == "straight" else None
         return decision
@@ -140,6 +153,7 @@ class ViaPathPlanner(Planner, name="viapath"):
             self.subgoal_policy,
             self.robot_radius_m,
         )
+        self._checks = checks
         if self.shield is not None and self.shield.config.enabled:
             # Set on the checks just built (dataclasses.replace would copy every field again, every cycle).
             checks.envelope_accel_mps2 = self.shield.config.person_accel_mps2
