@@ -22,6 +22,7 @@ import numpy as np
 from viapath.jit import compiled
 
 DOUGLAS_PEUCKER_WORK = 40  # point distances per point: about log2 of a million-point path's depth, twice
+REPEAT_M = 1e-6  # a point closer than this to the next is a repeat of it (the later is kept)
 
 
 @compiled(signature="Tuple((boolean[::1], boolean))(float64[::1], float64[::1], float64, int64)")
@@ -131,8 +132,8 @@ def sleeve_simplify(points, tolerance_m: float) -> np.ndarray:
 
 
 def _without_repeats(points: np.ndarray) -> np.ndarray:
-    """Drop repeated points (a path that stands still), keeping the last."""
+    """Drop repeated points (a path that stands still: closer than ``REPEAT_M``), keeping the last."""
     if len(points) < 2:
         return points
     step = np.hypot(*np.diff(points, axis=0).T)
-    return np.vstack([points[:-1][step > 1e-6], points[-1:]])
+    return np.vstack([points[:-1][step > REPEAT_M], points[-1:]])

@@ -16,13 +16,13 @@ anything. It builds planners, shields and episodes and runs them, so it lives ou
 
 Choices where nothing says: one compiler per cache folder at a time (an exclusive ``flock`` on
 ``compiling.lock`` there, holding its PID; a second background compiler leaves at once, :func:`precompile`
-waits, then loads what the first compiled). numba writes each cache file atomically (a temporary file renamed),
+waits, then loads what the first compiled). The compiler writes each cache file atomically (a temporary file renamed),
 but a function's index and its data are two files: two processes adding *different* signatures of one function
 at the same moment could pair an index entry with the other's data, hence the lock. Runs that compile without it
 (background compilation off, or a signature no warm-up made) are the rare case; two processes compiling the same
 steps in the same order keep the cache consistent (tests/perception/test_numba_cache.py). A cache folder that
 cannot be written (a read-only home) gets no lock and no background compilation: runs compile in their own
-process, as numba does without a cache. The background compiler runs at low priority (``nice`` 10) with its output in ``precompile.log`` there, and is
+process, as the compiler does without a cache. The background compiler runs at low priority (``nice`` 10) with its output in ``precompile.log`` there, and is
 switched off by ``VIAPATH_BACKGROUND_COMPILE=0`` (the test suite sets it): a cold run then compiles in its own
 process, as ``viapath bench`` does.
 """
@@ -122,7 +122,7 @@ def compiling_lock(wait: bool) -> Iterator[bool]:
         folder = jit.cache_directory()
         folder.mkdir(parents=True, exist_ok=True)
         descriptor = os.open(folder / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
-    except OSError:  # a cache that cannot be written: numba compiles without caching, nothing to share
+    except OSError:  # a cache that cannot be written: the compiler works without caching, nothing to share
         yield True
         return
     try:
@@ -204,7 +204,9 @@ def compile_now(announce=print) -> int:
     from viapath import jit
 
     if not jit.enabled():
-        announce("viapath: compilation is off (NUMBA_DISABLE_JIT set, or numba not installed): nothing to compile")
+        announce(
+            "viapath: compilation is off (NUMBA_DISABLE_JIT set, or the compiler, a dependency, not installed): nothing to compile"
+        )
         return 0
     running = compiling_pid()
     if running is not None:
