@@ -17,6 +17,10 @@ A ``viapath run`` with a cold cache of compiled steps would run plain Python and
 background (viapath.precompile): the suite switches that off (``VIAPATH_BACKGROUND_COMPILE=0``, inherited by the
 commands the tests start), so a cold test compiles in its own process; tests/test_cold_run.py switches it on
 for its own commands and ends what they start.
+
+Property tests draw the same cases on every run (hypothesis ``derandomize``), so a run's verdict is the code's,
+not the draw's; ``VIAPATH_FULL_TESTS=1`` draws new ones each run (tests/_sizes.py), for searching, with the
+counts at their full sizes.
 """
 
 from __future__ import annotations
@@ -24,8 +28,14 @@ from __future__ import annotations
 import os
 
 import pytest
+from hypothesis import settings
+
+from tests._sizes import FULL
 
 os.environ["VIAPATH_BACKGROUND_COMPILE"] = "0"
+
+settings.register_profile("viapath-tests", derandomize=not FULL)
+settings.load_profile("viapath-tests")
 
 LAUNCHER_FILES = (
     "tests/ros2/test_ros2_e2e.py",
