@@ -7,7 +7,8 @@ one worker, in order:
   one launcher starts them all at once; on two workers it would start them twice;
 * ``tests/test_examples.py``: a page's examples run in order in one folder (later blocks use what
   earlier ones wrote); ``tests/tune/test_tune.py``: its tests read the folders of one study and
-  of a bench the tests before them wrote.
+  of a bench the tests before them wrote; ``tests/planning/test_compiled_choice.py``: a test counts the
+  cycles with recorded candidates that the property test before it saw.
 
 The groups are made here from the test files (the scheduler below), not from ``xdist_group`` marks:
 with pytest 9.2, pytest-xdist 3.8's ``--dist loadgroup`` loses the marks' groups (it writes a node-id
@@ -43,7 +44,7 @@ LAUNCHER_FILES = (
     "tests/ros2/test_ros2_nav2.py",
     "tests/ros2/test_ros2_play.py",
 )
-IN_ORDER_FILES = ("tests/test_examples.py", "tests/tune/test_tune.py")
+IN_ORDER_FILES = ("tests/test_examples.py", "tests/tune/test_tune.py", "tests/planning/test_compiled_choice.py")
 
 
 def group_of(nodeid: str) -> str | None:

@@ -25,6 +25,56 @@ from viapath.planning.viapath.slots import (
 )
 
 
+@compiled(inline=True)
+def steer(
+    x: float,
+    y: float,
+    heading: float,
+    target_x: float,
+    target_y: float,
+    speed_mps: float,
+    max_speed_mps: float,
+    max_turn_rate_radps: float,
+    heading_gain: float,
+) -> tuple[float, float]:
+    """The command (speed, turn rate) steering for the target at ``speed_mps``: the compiled form of
+    :func:`viapath.kinematics.steer_towards` (the planner's command law)."""
+    dx = target_x - x
+    dy = target_y - y
+    if dx * dx + dy * dy < 1e-18 or speed_mps <= 0:
+        return 0.0, 0.0
+    error = math.atan2(dy, dx) - heading
+    error = math.atan2(math.sin(error), math.cos(error))
+    w_cmd = clip(heading_gain * error, -max_turn_rate_radps, max_turn_rate_radps)
+    scale = clip((math.pi / 2 - abs(error)) / (math.pi / 4), 0.0, 1.0)
+    return min(speed_mps, max_speed_mps) * scale, w_cmd
+
+
+@compiled(inline=True)
+def drive_step(
+    x: float,
+    y: float,
+    heading: float,
+    speed: float,
+    turn: float,
+    v_cmd: float,
+    w_cmd: float,
+    dv: float,
+    dw: float,
+    dt_s: float,
+) -> tuple[float, float, float, float, float]:
+    """One step of the drive: speed and turn rate ramped towards the command by at most ``dv`` and ``dw``, then
+    the exact arc (the compiled form of :func:`viapath.kinematics.step`). Returns (x, y, heading, speed, turn)."""
+    speed += clip(v_cmd - speed, -dv, dv)
+    turn += clip(w_cmd - turn, -dw, dw)
+    new_heading = heading + turn * dt_s
+    half = 0.5 * turn * dt_s
+    chord = speed * dt_s * (1.0 - half * half / 6.0 if abs(half) < 1e-6 else math.sin(half) / half)
+    x += chord * math.cos(heading + half)
+    y += chord * math.sin(heading + half)
+    return x, y, math.atan2(math.sin(new_heading), math.cos(new_heading)), speed, turn
+
+
 @compiled
 def track(
     x,
@@ -44,32 +94,15 @@ def track(
     heading_gain,
 ):
     """(steps, 2) positions of the robot steering for the target: the compiled form of
-    :func:`viapath.kinematics.track` (with :func:`~viapath.kinematics.steer_towards` and the exact arcs)."""
+    :func:`viapath.kinematics.track` (:func:`steer`, then :func:`drive_step`)."""
     dv = max_accel_mps2 * dt_s
     dw = max_turn_accel_radps2 * dt_s
     positions = np.empty((steps, 2))
     for k in range(steps):
-        # steer_towards
-        dx = target_x - x
-        dy = target_y - y
-        if dx * dx + dy * dy < 1e-18 or speed_mps <= 0:
-            v_cmd = 0.0
-            w_cmd = 0.0
-        else:
-            error = math.atan2(dy, dx) - heading
-            error = math.atan2(math.sin(error), math.cos(error))
-            w_cmd = clip(heading_gain * error, -max_turn_rate_radps, max_turn_rate_radps)
-            scale = clip((math.pi / 2 - abs(error)) / (math.pi / 4), 0.0, 1.0)
-            v_cmd = min(speed_mps, max_speed_mps) * scale
-        speed += clip(v_cmd - speed, -dv, dv)
-        turn += clip(w_cmd - turn, -dw, dw)
-        # _arc
-        new_heading = heading + turn * dt_s
-        half = 0.5 * turn * dt_s
-        chord = speed * dt_s * (1.0 - half * half / 6.0 if abs(half) < 1e-6 else math.sin(half) / half)
-        x += chord * math.cos(heading + half)
-        y += chord * math.sin(heading + half)
-        heading = math.atan2(math.sin(new_heading), math.cos(new_heading))
+        v_cmd, w_cmd = steer(
+            x, y, heading, target_x, target_y, speed_mps, max_speed_mps, max_turn_rate_radps, heading_gain
+        )
+        x, y, heading, speed, turn = drive_step(x, y, heading, speed, turn, v_cmd, w_cmd, dv, dw, dt_s)
         positions[k, 0] = x
         positions[k, 1] = y
     return positions

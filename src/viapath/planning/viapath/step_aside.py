@@ -49,6 +49,7 @@ from viapath.jit import compiled
 from viapath.observation import Command, Decision, Plan
 from viapath.planning.viapath.checks import LegChecks
 from viapath.planning.viapath.escape import escape_top_speed
+from viapath.planning.viapath.rollout import drive_step, steer
 
 # Plans after which the robot looks for a way out of someone's path.
 STEPPING_STATUSES = frozenset({"stop", "wait", "blocked", "escape"})
@@ -117,14 +118,7 @@ def roll_outs(
                     gain,
                     stop_tolerance,
                 )
-            speed += _clip(v_cmd - speed, -dv, dv)
-            turn += _clip(w_cmd - turn, -dw, dw)
-            half = 0.5 * turn * dt
-            chord = speed * dt * (1.0 - half * half / 6.0 if abs(half) < 1e-6 else math.sin(half) / half)
-            x += chord * math.cos(heading + half)
-            y += chord * math.sin(heading + half)
-            heading = heading + turn * dt
-            heading = math.atan2(math.sin(heading), math.cos(heading))
+            x, y, heading, speed, turn = drive_step(x, y, heading, speed, turn, v_cmd, w_cmd, dv, dw, dt)
             out[k, s + 1, 0] = x
             out[k, s + 1, 1] = y
     return out
@@ -145,18 +139,11 @@ def _towards(
     stop_tolerance: float,
 ) -> tuple[float, float]:
     """The command (speed, turn rate) steering for (tx, ty): :func:`viapath.kinematics.steer_towards` at
-    :func:`stopping_speed`."""
+    :func:`stopping_speed` (:func:`.rollout.steer`)."""
     dx = tx - x
     dy = ty - y
-    distance = math.sqrt(dx * dx + dy * dy)
-    speed_mps = stopping_speed(distance, cap, max_accel, stop_tolerance)
-    if distance * distance < 1e-18 or speed_mps <= 0:
-        return 0.0, 0.0
-    error = math.atan2(dy, dx) - heading
-    error = math.atan2(math.sin(error), math.cos(error))
-    w_cmd = _clip(gain * error, -max_turn, max_turn)
-    scale = _clip((math.pi / 2 - abs(error)) / (math.pi / 4), 0.0, 1.0)
-    return min(speed_mps, max_speed) * scale, w_cmd
+    speed_mps = stopping_speed(math.sqrt(dx * dx + dy * dy), cap, max_accel, stop_tolerance)
+    return steer(x, y, heading, tx, ty, speed_mps, max_speed, max_turn, gain)
 
 
 @compiled
