@@ -164,11 +164,6 @@ NOT_YET: dict[tuple[str, str], str] = {
         ("escape_figures.py", "escape_contacts"),
         ("escape_figures.py", "escape_scores"),
         ("legs.py", "goal_legs_of"),
-        ("tree.py", "_slow_nodes"),
-        ("tree.py", "_corner_nodes"),
-        ("tree.py", "_via_legs"),
-        ("tree.py", "_via_children"),
-        ("tree.py", "grow"),
         ("rollout.py", "can_follow"),
         ("selection.py", "choose_candidate"),
     )

@@ -166,28 +166,28 @@ def _slow_legs(position, subgoal, speeds, nominal, slow_times, creep):
 
 
 @compiled
-def _slow_nodes(
-    nf,
-    ni,
-    m,
-    position,
-    speeds,
-    nominal_index,
-    slow_times,
-    creep,
-    horizon_s,
-    slow_obstacles,
-    obstacles,
-    goal,
-    corridor,
-    shape_of,
-):
+def _slow_nodes(nf, ni, m, position, speeds, nominal_index, slow, horizon_s, obstacles, goal, corridor, shape_of):
     """Slow down, creep or wait along the straight leg, then on at the nominal speed or the slowest faster speed
-    whose goal leg is free: the slow legs free of the people (at their slow radii:
-    ``slow_obstacles``) with a free goal leg, added as leaves."""
-    s_count = speeds.shape[0]
+    whose goal leg is free: the slow legs (:func:`_slow_legs`) free of the people at their slow radii, each with
+    its first free goal leg, added as leaves. ``slow``: :func:`grow`'s record."""
+    slow_radii, slow_growth, slow_growth_until_s, slow_times, creep = slow
+    obstacle_positions, obstacle_velocities, _, _, _ = obstacles
+    slow_obstacles = (obstacle_positions, obstacle_velocities, slow_radii, slow_growth, slow_growth_until_s)
     nominal = speeds[nominal_index]
     dx, dy, durations, slows, c = _slow_legs(position, goal[0], speeds, nominal, slow_times, creep)
+    free = _slow_legs_free(position, dx, dy, durations, slows, c, horizon_s, slow_obstacles, shape_of)
+    goes_on = _goes_on(position, speeds, nominal, dx, dy, durations, slows, free)
+    ends, times, after, _, _ = goes_on
+    if not times.shape[0]:
+        return nf, ni, m
+    _, lengths, goal_free, _ = goal_legs_of(ends, times, after, math.inf, goal, obstacles, corridor, shape_of)
+    return _slow_leaves(nf, ni, m, dx, dy, goes_on, lengths, goal_free)
+
+
+@compiled
+def _slow_legs_free(position, dx, dy, durations, slows, c, horizon_s, slow_obstacles, shape_of):
+    """Which of the first ``c`` slow legs (from the robot, now, along (dx, dy)) are free of the people at their slow
+    radii (``slow_obstacles``)."""
     starts = np.empty((c, 2))
     velocities = np.empty((c, 2))
     for k in range(c):
@@ -195,24 +195,30 @@ def _slow_nodes(
         starts[k, 1] = position[1]
         velocities[k, 0] = dx * slows[k]
         velocities[k, 1] = dy * slows[k]
-    free = legs_free(starts, np.zeros(c), velocities, durations[:c], horizon_s, slow_obstacles, shape_of)
+    return legs_free(starts, np.zeros(c), velocities, durations[:c], horizon_s, slow_obstacles, shape_of)
+
+
+@compiled
+def _goes_on(position, speeds, nominal, dx, dy, durations, slows, free):
+    """Where the robot goes on after each free slow leg: at its end and its duration, once at each speed from the
+    nominal one up. Returns the goal legs' starts, start times and speeds, the slow speed before each, and how
+    many speeds go on from each slow leg."""
+    s_count = speeds.shape[0]
     after_count = 0
     for i in range(s_count):
         if speeds[i] >= nominal - 1e-9:
             after_count += 1
     kept = 0
-    for k in range(c):
+    for k in range(free.shape[0]):
         if free[k]:
             kept += 1
-    if not kept:
-        return nf, ni, m
     legs = kept * after_count
     ends = np.empty((legs, 2))
     times = np.empty(legs)
     after = np.empty(legs)
     slow_v = np.empty(legs)
     q = 0
-    for k in range(c):
+    for k in range(free.shape[0]):
         if not free[k]:
             continue
         for i in range(s_count):
@@ -223,9 +229,16 @@ def _slow_nodes(
                 after[q] = speeds[i]
                 slow_v[q] = slows[k]
                 q += 1
-    _, lengths, goal_free, _ = goal_legs_of(ends, times, after, math.inf, goal, obstacles, corridor, shape_of)
+    return ends, times, after, slow_v, after_count
+
+
+@compiled
+def _slow_leaves(nf, ni, m, dx, dy, goes_on, lengths, goal_free):
+    """Each slow leg with its first free goal leg (:func:`_goes_on`'s, the slowest speed from the nominal one up),
+    added as a leaf."""
+    ends, times, after, slow_v, after_count = goes_on
     taken = False
-    for q in range(legs):
+    for q in range(times.shape[0]):
         if q % after_count == 0:
             taken = False  # a new slow leg: its first free continuation only
         if goal_free[q] and not taken:
@@ -254,12 +267,9 @@ def _slow_nodes(
 
 
 @compiled
-def _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles, corridor, shape_of):
-    """The path's corners between the robot and the subgoal as via points: one leg per speed
-    and corner, added when free of the people and inside the corridor. ``path``: the waypoints and the
-    robot's segment."""
-    waypoints, robot_segment = path
-    _, _, _, _, subgoal_index, spacing_m, tolerance_m = goal
+def _corner_legs(position, speeds, waypoints, robot_segment, subgoal_index):
+    """The legs from the robot to each corner of the path before the subgoal, at each speed: their targets, starts,
+    velocities, unit directions, lengths, durations, corners (waypoint index) and speeds."""
     s_count = speeds.shape[0]
     corners = subgoal_index - robot_segment - 1
     legs = corners * s_count
@@ -291,13 +301,32 @@ def _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles,
             corner_of[q] = corner
             speed_of[q] = speeds[i]
             q += 1
-    good = legs_free(starts, np.zeros(legs), velocities, durations, horizon_s, obstacles, shape_of)
+    return targets, starts, velocities, directions, lengths, durations, corner_of, speed_of
+
+
+@compiled(inline=True)  # inlined: called per corner leg kept
+def _root_of(speeds, speed):
+    """The root node of ``speed`` (np.searchsorted(speeds, speed): the roots are the speeds, in order)."""
+    root = _ZERO
+    while root < speeds.shape[0] and speeds[root] < speed:
+        root += 1
+    return root
+
+
+@compiled
+def _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles, corridor, shape_of):
+    """The path's corners between the robot and the subgoal as via points: one leg per speed and corner
+    (:func:`_corner_legs`), added below the root of its speed when free of the people and inside the corridor.
+    ``path``: the waypoints and the robot's segment."""
+    waypoints, robot_segment = path
+    _, _, _, _, subgoal_index, spacing_m, tolerance_m = goal
+    legs = _corner_legs(position, speeds, waypoints, robot_segment, subgoal_index)
+    targets, starts, velocities, directions, lengths, durations, corner_of, speed_of = legs
+    count = lengths.shape[0]
+    good = legs_free(starts, np.zeros(count), velocities, durations, horizon_s, obstacles, shape_of)
     inside = legs_inside_of(corridor, starts, targets, spacing_m, tolerance_m)
-    for q in range(legs):
+    for q in range(count):
         if good[q] and inside[q]:
-            root = _ZERO  # np.searchsorted(speeds, speed): the root node of that speed
-            while root < s_count and speeds[root] < speed_of[q]:
-                root += 1
             nf, ni, m = _add(
                 nf,
                 ni,
@@ -306,7 +335,7 @@ def _corner_nodes(nf, ni, m, position, speeds, path, horizon_s, goal, obstacles,
                 targets[q, 1],
                 durations[q],
                 speed_of[q],
-                root,
+                _root_of(speeds, speed_of[q]),
                 lengths[q],
                 directions[q, 0],
                 directions[q, 1],
@@ -397,15 +426,11 @@ def _pairs(nf, frontier, depth, max_root_obstacles, obstacle_positions, via):
 
 @compiled
 def _via_legs(nf, branch, via_radii, envelope, horizon_s, obstacles, shapes):
-    """The via points of each pair (for :func:`_via_children`): both sides, both roots (none round static geometry keeps the
-    braking envelope), then the slides of the pairs whose node hugs a static disc (:func:`_slides`). The pairs'
-    options as via_options gives them, its arithmetic (via_pair) on the nodes and obstacles themselves: no
-    copies of them per pair. Returns, per leg (the first ``count``): its pair, its option, its duration, its
-    start and start time, its velocity and its via point; and ``count``. ``branch``: :func:`_branch_pairs`'
-    pairs."""
+    """The via points of each pair (for :func:`_via_children`): both sides, both roots (:func:`_via_points_round`;
+    none round static geometry keeps the braking envelope), then the slides of the pairs whose node hugs a static
+    disc (:func:`_slides`). Returns, per leg (the first ``count``): its pair, its option, its duration, its start
+    and start time, its velocity and its via point; and ``count``. ``branch``: :func:`_branch_pairs`' pairs."""
     pair_nodes, pair_obstacles, pairs = branch
-    obstacle_positions, obstacle_velocities, _, growth, growth_until_s = obstacles
-    half_accel = 0.5 * envelope[0]
     any_static = shapes.shape_of.shape[0] > 0
     capacity = (6 if any_static else 4) * pairs
     pair = np.empty(capacity, np.int64)
@@ -415,59 +440,79 @@ def _via_legs(nf, branch, via_radii, envelope, horizon_s, obstacles, shapes):
     times_k = np.empty(capacity)
     leg_velocity = np.empty((capacity, 2))
     via = np.empty((capacity, 2))
-    t_via = np.empty(4)
-    w_via = np.empty((2, 2))
+    legs = (pair, option, t_k, starts_k, times_k, leg_velocity, via)
+    scratch = (np.empty(4), np.empty((2, 2)))
     max_time_s = 3 * horizon_s
     count = 0
     for p in range(pairs):
-        node = pair_nodes[p]
-        j = pair_obstacles[p]
-        sx = nf[node, _X]
-        sy = nf[node, _Y]
-        t0 = nf[node, _T]
-        speed = nf[node, _V]
-        if envelope[0] > 0 and not (any_static and shapes.shape_of[j] >= 0):
-            stop_s = envelope[1] + speed / envelope[2]
-            margin = half_accel * (stop_s * stop_s)
-        else:
-            margin = 0.0
-        ovx = obstacle_velocities[j, 0]
-        ovy = obstacle_velocities[j, 1]
-        if not via_pair(
-            sx,
-            sy,
-            t0,
-            speed,
-            obstacle_positions[j, 0],
-            obstacle_positions[j, 1],
-            ovx,
-            ovy,
-            via_radii[j],
-            growth[j],
-            growth_until_s[j],
-            margin,
-            t_via,
-            w_via,
-        ):
-            continue
-        for o in range(4):
-            t = t_via[o]
-            if t <= max_time_s:
-                pair[count] = p
-                option[count] = o
-                t_k[count] = t
-                starts_k[count, 0] = sx
-                starts_k[count, 1] = sy
-                times_k[count] = t0
-                leg_velocity[count, 0] = (w_via[o % 2, 0] + ovx * t) / t
-                leg_velocity[count, 1] = (w_via[o % 2, 1] + ovy * t) / t
-                via[count, 0] = sx + leg_velocity[count, 0] * t
-                via[count, 1] = sy + leg_velocity[count, 1] * t
-                count += 1
-    legs = (pair, option, t_k, starts_k, times_k, leg_velocity, via)
+        static = any_static and shapes.shape_of[pair_obstacles[p]] >= 0
+        margin = _braking_margin(nf[pair_nodes[p], _V], envelope, static)
+        count = _via_points_round(nf, p, branch, via_radii, margin, max_time_s, obstacles, scratch, legs, count)
     if any_static:
-        count = _slides(nf, branch, obstacle_positions, via_radii, shapes, legs, count)
+        count = _slides(nf, branch, obstacles[0], via_radii, shapes, legs, count)
     return pair, option, t_k, starts_k, times_k, leg_velocity, via, count
+
+
+@compiled(inline=True)  # inlined: called per pair
+def _braking_margin(speed, envelope, static):
+    """The braking envelope's margin at ``speed`` (``envelope``: deceleration, reaction time, braking rate; none
+    when the deceleration is 0 or round static geometry)."""
+    if envelope[0] > 0 and not static:
+        half_accel = 0.5 * envelope[0]
+        stop_s = envelope[1] + speed / envelope[2]
+        return half_accel * (stop_s * stop_s)
+    return 0.0
+
+
+@compiled(inline=True)  # inlined: called per pair, with the legs' arrays
+def _via_points_round(nf, p, branch, via_radii, margin, max_time_s, obstacles, scratch, legs, count):
+    """The via points round pair ``p``'s obstacle (:func:`.via.via_pair`, the options as via_options gives them, on
+    the node and the obstacle themselves: no copies of them), reached within ``max_time_s``: written as legs from
+    the node after the first ``count`` of ``legs``. Returns the new count."""
+    pair_nodes, pair_obstacles, _ = branch
+    obstacle_positions, obstacle_velocities, _, growth, growth_until_s = obstacles
+    pair, option, t_k, starts_k, times_k, leg_velocity, via = legs
+    t_via, w_via = scratch
+    node = pair_nodes[p]
+    j = pair_obstacles[p]
+    sx = nf[node, _X]
+    sy = nf[node, _Y]
+    t0 = nf[node, _T]
+    speed = nf[node, _V]
+    ovx = obstacle_velocities[j, 0]
+    ovy = obstacle_velocities[j, 1]
+    if not via_pair(
+        sx,
+        sy,
+        t0,
+        speed,
+        obstacle_positions[j, 0],
+        obstacle_positions[j, 1],
+        ovx,
+        ovy,
+        via_radii[j],
+        growth[j],
+        growth_until_s[j],
+        margin,
+        t_via,
+        w_via,
+    ):
+        return count
+    for o in range(4):
+        t = t_via[o]
+        if t <= max_time_s:
+            pair[count] = p
+            option[count] = o
+            t_k[count] = t
+            starts_k[count, 0] = sx
+            starts_k[count, 1] = sy
+            times_k[count] = t0
+            leg_velocity[count, 0] = (w_via[o % 2, 0] + ovx * t) / t
+            leg_velocity[count, 1] = (w_via[o % 2, 1] + ovy * t) / t
+            via[count, 0] = sx + leg_velocity[count, 0] * t
+            via[count, 1] = sy + leg_velocity[count, 1] * t
+            count += 1
+    return count
 
 
 @compiled
@@ -502,6 +547,44 @@ def _slides(nf, branch, obstacle_positions, via_radii, shapes, legs, count):
 
 
 @compiled
+def _keep_inside(good, starts_k, via, count, corridor, spacing_m, tolerance_m):
+    """Keep the free via legs (``good``, of the first ``count`` legs) that stay inside the corridor: ``good`` turned
+    False for the others (the corridor checked on the free legs only), and returned."""
+    kept = 0
+    for q in range(count):
+        if good[q]:
+            kept += 1
+    if not kept:
+        return good
+    good_starts = np.empty((kept, 2))
+    good_vias = np.empty((kept, 2))
+    g = 0
+    for q in range(count):
+        if good[q]:
+            good_starts[g, 0] = starts_k[q, 0]
+            good_starts[g, 1] = starts_k[q, 1]
+            good_vias[g, 0] = via[q, 0]
+            good_vias[g, 1] = via[q, 1]
+            g += 1
+    inside = legs_inside_of(corridor, good_starts, good_vias, spacing_m, tolerance_m)
+    g = 0
+    for q in range(count):
+        if good[q]:
+            good[q] = inside[g]
+            g += 1
+    return good
+
+
+@compiled(inline=True)  # inlined: called per child
+def _way_of(nf, ni, parent, depth, vx, vy, speed, obstacle_id, option):
+    """The way round a child carries (first direction, obstacle id, side, root): a root's child starts it with its
+    leg's direction and its option, deeper ones keep their parent's."""
+    if depth == 0:
+        return vx / speed, vy / speed, obstacle_id, _SIDES[option], _ROOTS[option]
+    return nf[parent, _FX], nf[parent, _FY], ni[parent, _WAY0], ni[parent, _WAY1], ni[parent, _WAY2]
+
+
+@compiled
 def _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, corridor):
     """The pairs' children: the legs to their via points (:func:`_via_legs`) free of the people
     and inside the corridor, added below their nodes (a root's child starts the way round: obstacle id, side,
@@ -516,46 +599,17 @@ def _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, cor
     good = legs_free(
         starts_k[:count], times_k[:count], leg_velocity[:count], t_k[:count], horizon_s, obstacles, shapes.shape_of
     )
-    kept = 0
+    kept = _keep_inside(good, starts_k, via, count, corridor, spacing_m, tolerance_m)
     for q in range(count):
-        if good[q]:
-            kept += 1
-    if not kept:
-        return nf, ni, m
-    good_starts = np.empty((kept, 2))
-    good_vias = np.empty((kept, 2))
-    g = 0
-    for q in range(count):
-        if good[q]:
-            good_starts[g, 0] = starts_k[q, 0]
-            good_starts[g, 1] = starts_k[q, 1]
-            good_vias[g, 0] = via[q, 0]
-            good_vias[g, 1] = via[q, 1]
-            g += 1
-    inside = legs_inside_of(corridor, good_starts, good_vias, spacing_m, tolerance_m)
-    g = 0
-    for q in range(count):
-        if not good[q]:
-            continue
-        ok = inside[g]
-        g += 1
-        if not ok:
+        if not kept[q]:
             continue
         p = pair[q]
         parent = pair_nodes[p]
         speed = nf[parent, _V]
-        if depth == 0:
-            fx = leg_velocity[q, 0] / speed
-            fy = leg_velocity[q, 1] / speed
-            way0 = ids[pair_obstacles[p]]
-            way1 = _SIDES[option[q]]
-            way2 = _ROOTS[option[q]]
-        else:
-            fx = nf[parent, _FX]
-            fy = nf[parent, _FY]
-            way0 = ni[parent, _WAY0]
-            way1 = ni[parent, _WAY1]
-            way2 = ni[parent, _WAY2]
+        way = _way_of(
+            nf, ni, parent, depth, leg_velocity[q, 0], leg_velocity[q, 1], speed, ids[pair_obstacles[p]], option[q]
+        )
+        fx, fy, way0, way1, way2 = way
         nf, ni, m = _add(
             nf,
             ni,
@@ -578,6 +632,30 @@ def _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, cor
 
 
 @compiled
+def _straight_inside(position, goal, corridor):
+    """Whether the straight leg from the robot to the subgoal stays inside the corridor."""
+    here = np.empty((1, 2))
+    here[0, 0] = position[0]
+    here[0, 1] = position[1]
+    return goal_legs_inside_all(corridor, here, goal)[0]
+
+
+@compiled
+def _frontier_leaves(nf, ni, batch, m, horizon_s, goal, obstacles, corridor, shape_of):
+    """The goal legs of the new frontier (the nodes ``batch`` .. ``m``): the free ones complete candidates, made
+    leaves. Returns the legs' free and first contacts, which the next depth branches on."""
+    starts = np.ascontiguousarray(nf[batch:m, _X : _Y + 1])
+    _, lengths, free_now, contact_now = goal_legs_of(
+        starts, nf[batch:m, _T].copy(), nf[batch:m, _V].copy(), horizon_s, goal, obstacles, corridor, shape_of
+    )
+    for r in range(m - batch):
+        if free_now[r]:
+            ni[batch + r, _LEAF] = 1
+            nf[batch + r, _GOAL] = lengths[r]
+    return free_now, contact_now
+
+
+@compiled
 def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obstacles, corridor, tree):
     """Every complete candidate of the cycle (straight, slow/wait, corners, via-point chains), in this order: the
     roots, slow/wait, corners, then the via-point children depth by depth. Returns the node store, floats (M, 10) and integers (M, 5), in
@@ -590,36 +668,17 @@ def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obs
     waypoints, robot_segment, slow_enabled, max_depth, max_root_obstacles = tree
     subgoal_index = goal[4]
     root_directions, root_lengths, root_free, root_contact = roots
-    obstacle_positions, obstacle_velocities, _, _, _ = obstacles
-    slow_radii, slow_growth, slow_growth_until_s, slow_times, creep = slow
+    obstacle_positions = obstacles[0]
     shape_of = via[2].shape_of
-    s_count = speeds.shape[0]
     n_count = obstacle_positions.shape[0]
     nf, ni, m = _root_nodes(position, speeds, root_directions, root_lengths, root_free)
-    here = np.empty((1, 2))
-    here[0, 0] = position[0]
-    here[0, 1] = position[1]
-    straight_inside = goal_legs_inside_all(corridor, here, goal)[0]
+    straight_inside = _straight_inside(position, goal, corridor)
     if slow_enabled and n_count > 0 and straight_inside:
-        slow_obstacles = (obstacle_positions, obstacle_velocities, slow_radii, slow_growth, slow_growth_until_s)
         nf, ni, m = _slow_nodes(
-            nf,
-            ni,
-            m,
-            position,
-            speeds,
-            nominal_index,
-            slow_times,
-            creep,
-            horizon_s,
-            slow_obstacles,
-            obstacles,
-            goal,
-            corridor,
-            shape_of,
+            nf, ni, m, position, speeds, nominal_index, slow, horizon_s, obstacles, goal, corridor, shape_of
         )
     frontier_start = 0
-    frontier_end = s_count
+    frontier_end = speeds.shape[0]
     free_now = root_free.copy()
     contact_now = root_contact
     for depth in range(max_depth):
@@ -634,15 +693,7 @@ def grow(position, speeds, nominal_index, roots, via, slow, horizon_s, goal, obs
                 nf, ni, m = _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, corridor)
         if m == batch:
             break
-        # The goal legs of the new frontier: the free ones complete candidates.
         frontier_start = batch
         frontier_end = m
-        starts = np.ascontiguousarray(nf[batch:m, _X : _Y + 1])
-        _, lengths, free_now, contact_now = goal_legs_of(
-            starts, nf[batch:m, _T].copy(), nf[batch:m, _V].copy(), horizon_s, goal, obstacles, corridor, shape_of
-        )
-        for r in range(m - batch):
-            if free_now[r]:
-                ni[batch + r, _LEAF] = 1
-                nf[batch + r, _GOAL] = lengths[r]
+        free_now, contact_now = _frontier_leaves(nf, ni, batch, m, horizon_s, goal, obstacles, corridor, shape_of)
     return nf[:m].copy(), ni[:m].copy()
