@@ -160,16 +160,11 @@ def test_the_once_written_counter_counts_a_planted_long_function_and_class(tmp_p
 NOT_YET: dict[tuple[str, str], str] = {
     (f"viapath/planning/viapath/{file}", name): "one loop nest, to be split into inlined steps"
     for file, name in (
-        ("legs.py", "legs_inside"),
-        ("escape_figures.py", "escape_contacts"),
-        ("escape_figures.py", "escape_scores"),
-        ("legs.py", "goal_legs_of"),
         ("tree.py", "_slow_nodes"),
         ("tree.py", "_corner_nodes"),
         ("tree.py", "_via_legs"),
         ("tree.py", "_via_children"),
         ("tree.py", "grow"),
-        ("rollout.py", "can_follow"),
         ("selection.py", "choose_candidate"),
     )
 }
