@@ -66,71 +66,68 @@ def _longest_tick(times, s_count):
 
 
 @compiled(inline=True)
-def _longest_hop(positions, k):
-    """The robot's longest step in roll-out ``k`` (NaN first: then no skipping)."""
-    hop_squared = 0.0
-    for s in range(1, positions.shape[1]):
-        dx = positions[k, s, 0] - positions[k, s - 1, 0]
-        dy = positions[k, s, 1] - positions[k, s - 1, 1]
-        hop_squared = _maximum(hop_squared, dx * dx + dy * dy)
-    return math.sqrt(hop_squared)
-
-
-@compiled(inline=True)
-def _overlapped_gaps(positions, times, k, people, overlapping, gap_min, gap_last):
-    """For roll-out ``k`` and each person it overlaps now (``overlapping``, one column each, in order): the smallest
+def _overlapped_gaps(positions, times, people, overlapping, gap_min, gap_last):
+    """For each roll-out and each person it overlaps now (``overlapping``, one column each, in order): the smallest
     gap over the roll-out into ``gap_min`` and the gap at its end into ``gap_last``."""
     obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s = people
     s_count = positions.shape[1]
-    column = 0
-    for j in range(obstacle_positions.shape[0]):
-        if not overlapping[j]:
-            continue
-        px = obstacle_positions[j, 0]
-        py = obstacle_positions[j, 1]
-        vx = obstacle_velocities[j, 0]
-        vy = obstacle_velocities[j, 1]
-        for s in range(s_count):
-            t = times[s]
-            reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
-            gap = math.hypot(positions[k, s, 0] - (px + vx * t), positions[k, s, 1] - (py + vy * t)) - reach
-            if gap < gap_min[k, column]:
-                gap_min[k, column] = gap
-            if s == s_count - 1:
-                gap_last[k, column] = gap
-        column += 1
+    for k in range(positions.shape[0]):
+        column = 0
+        for j in range(obstacle_positions.shape[0]):
+            if not overlapping[j]:
+                continue
+            px = obstacle_positions[j, 0]
+            py = obstacle_positions[j, 1]
+            vx = obstacle_velocities[j, 0]
+            vy = obstacle_velocities[j, 1]
+            for s in range(s_count):
+                t = times[s]
+                reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
+                gap = math.hypot(positions[k, s, 0] - (px + vx * t), positions[k, s, 1] - (py + vy * t)) - reach
+                if gap < gap_min[k, column]:
+                    gap_min[k, column] = gap
+                if s == s_count - 1:
+                    gap_last[k, column] = gap
+            column += 1
 
 
 @compiled(inline=True)
-def _first_contact_step(positions, times, k, people, overlapping, hop, tick, steps):
-    """The first step at which roll-out ``k`` touches someone it does not overlap now (``steps`` if never): each
-    person looked at up to the first contact found so far, skipping the steps in which the gap cannot close."""
+def _first_contact_steps(positions, times, people, overlapping, tick, first):
+    """Into ``first`` (K,), holding the roll-out's length: the first step at which each roll-out touches someone it
+    does not overlap now (kept if never). Each person is looked at up to the first contact found so far, skipping
+    the steps in which the gap cannot close: by at most the robot's longest step in the roll-out (``hop``) plus
+    what the person walks and grows in the longest time between two steps (``tick``)."""
     obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s = people
     s_count = positions.shape[1]
-    first = steps
-    for j in range(obstacle_positions.shape[0]):
-        if overlapping[j]:
-            continue
-        px = obstacle_positions[j, 0]
-        py = obstacle_positions[j, 1]
-        vx = obstacle_velocities[j, 0]
-        vy = obstacle_velocities[j, 1]
-        # (at least 1e-300: a gap that cannot close leaves every step free; NaN stays NaN)
-        closing = _maximum((hop + (math.hypot(vx, vy) + abs(growth[j])) * tick) * (1.0 + 1e-9), 1e-300)
-        s = 0
-        while s < first:  # (first <= steps, the roll-out's length)
-            t = times[s]
-            reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
-            dx = positions[k, s, 0] - (px + vx * t)
-            dy = positions[k, s, 1] - (py + vy * t)
-            if _within(dx, dy, reach):  # hypot - reach < 0: the sign of a difference is exact
-                first = s
-                break
-            free_steps = (math.sqrt(dx * dx + dy * dy) - reach - 1e-6) * (1.0 - 1e-9) / closing
-            if free_steps >= s_count:  # (NaN: not skipped)
-                break
-            s += 1 + (int(free_steps) if free_steps >= 1.0 else 0)
-    return first
+    for k in range(positions.shape[0]):
+        hop_squared = 0.0  # the robot's longest step in roll-out k (NaN: no skipping)
+        for s in range(1, s_count):
+            dx = positions[k, s, 0] - positions[k, s - 1, 0]
+            dy = positions[k, s, 1] - positions[k, s - 1, 1]
+            hop_squared = _maximum(hop_squared, dx * dx + dy * dy)
+        hop = math.sqrt(hop_squared)
+        for j in range(obstacle_positions.shape[0]):
+            if overlapping[j]:
+                continue
+            px = obstacle_positions[j, 0]
+            py = obstacle_positions[j, 1]
+            vx = obstacle_velocities[j, 0]
+            vy = obstacle_velocities[j, 1]
+            # (at least 1e-300: a gap that cannot close leaves every step free; NaN stays NaN)
+            closing = _maximum((hop + (math.hypot(vx, vy) + abs(growth[j])) * tick) * (1.0 + 1e-9), 1e-300)
+            s = 0
+            while s < first[k]:  # (first[k] <= steps, the roll-out's length)
+                t = times[s]
+                reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
+                dx = positions[k, s, 0] - (px + vx * t)
+                dy = positions[k, s, 1] - (py + vy * t)
+                if _within(dx, dy, reach):  # hypot - reach < 0: the sign of a difference is exact
+                    first[k] = s
+                    break
+                free_steps = (math.sqrt(dx * dx + dy * dy) - reach - 1e-6) * (1.0 - 1e-9) / closing
+                if free_steps >= s_count:  # (NaN: not skipped)
+                    break
+                s += 1 + (int(free_steps) if free_steps >= 1.0 else 0)
 
 
 @compiled
@@ -159,10 +156,8 @@ def escape_contacts(
     gap_last = np.empty((k_count, n_overlapping))
     tick = _longest_tick(times, positions.shape[1])
     people = (obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s)
-    for k in range(k_count):
-        hop = _longest_hop(positions, k)
-        _overlapped_gaps(positions, times, k, people, overlapping, gap_min, gap_last)
-        first[k] = _first_contact_step(positions, times, k, people, overlapping, hop, tick, steps)
+    _overlapped_gaps(positions, times, people, overlapping, gap_min, gap_last)
+    _first_contact_steps(positions, times, people, overlapping, tick, first)
     return first, gap_min, gap_last
 
 
