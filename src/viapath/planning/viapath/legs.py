@@ -232,9 +232,9 @@ def _along(rx, ry, dx, dy, length):
 
 
 # The capsule's projection in two inlined steps: the arrays read in one without branches, the arithmetic on
-# scalars in the other. One inlined step taking the arrays, with the clip's branches, made the escape's corridor
-# check four times as slow and the leg checks' three times (measured: the arrays' reference counts are then
-# kept in the loop).
+# scalars in the other. One inlined step that takes the arrays and has the clip's branches keeps the arrays'
+# reference counting inside the caller's loop: the escape's scores took 4.7 times as long, the corridor check of
+# legs 2.7 times (measured on a cycle's arguments).
 @compiled(inline=True)
 def _capsule_offset(px, py, segment_starts, segment_directions, segment_lengths, i):
     """The offset (x, y) of the point from its nearest point on segment ``i``."""
