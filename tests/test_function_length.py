@@ -160,11 +160,6 @@ def test_the_once_written_counter_counts_a_planted_long_function_and_class(tmp_p
 NOT_YET: dict[tuple[str, str], str] = {
     (f"viapath/planning/viapath/{file}", name): "one loop nest, to be split into inlined steps"
     for file, name in (
-        ("legs.py", "legs_inside"),
-        ("escape_figures.py", "escape_contacts"),
-        ("escape_figures.py", "escape_scores"),
-        ("legs.py", "goal_legs_of"),
-        ("rollout.py", "can_follow"),
         ("selection.py", "choose_candidate"),
     )
 }

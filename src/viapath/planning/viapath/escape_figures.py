@@ -56,6 +56,80 @@ def _within(dx, dy, limit):
     return math.hypot(dx, dy) < limit
 
 
+@compiled(inline=True)
+def _longest_tick(times, s_count):
+    """The longest time between two of the first ``s_count`` steps (NaN first, as np.max)."""
+    tick = 0.0
+    for s in range(1, s_count):
+        tick = _maximum(tick, times[s] - times[s - 1])
+    return tick
+
+
+@compiled(inline=True)
+def _overlapped_gaps(positions, times, people, overlapping, gap_min, gap_last):
+    """For each roll-out and each person it overlaps now (``overlapping``, one column each, in order): the smallest
+    gap over the roll-out into ``gap_min`` and the gap at its end into ``gap_last``."""
+    obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s = people
+    s_count = positions.shape[1]
+    for k in range(positions.shape[0]):
+        column = 0
+        for j in range(obstacle_positions.shape[0]):
+            if not overlapping[j]:
+                continue
+            px = obstacle_positions[j, 0]
+            py = obstacle_positions[j, 1]
+            vx = obstacle_velocities[j, 0]
+            vy = obstacle_velocities[j, 1]
+            for s in range(s_count):
+                t = times[s]
+                reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
+                gap = math.hypot(positions[k, s, 0] - (px + vx * t), positions[k, s, 1] - (py + vy * t)) - reach
+                if gap < gap_min[k, column]:
+                    gap_min[k, column] = gap
+                if s == s_count - 1:
+                    gap_last[k, column] = gap
+            column += 1
+
+
+@compiled(inline=True)
+def _first_contact_steps(positions, times, people, overlapping, tick, first):
+    """Into ``first`` (K,), holding the roll-out's length: the first step at which each roll-out touches someone it
+    does not overlap now (kept if never). Each person is looked at up to the first contact found so far, skipping
+    the steps in which the gap cannot close: by at most the robot's longest step in the roll-out (``hop``) plus
+    what the person walks and grows in the longest time between two steps (``tick``)."""
+    obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s = people
+    s_count = positions.shape[1]
+    for k in range(positions.shape[0]):
+        hop_squared = 0.0  # the robot's longest step in roll-out k (NaN: no skipping)
+        for s in range(1, s_count):
+            dx = positions[k, s, 0] - positions[k, s - 1, 0]
+            dy = positions[k, s, 1] - positions[k, s - 1, 1]
+            hop_squared = _maximum(hop_squared, dx * dx + dy * dy)
+        hop = math.sqrt(hop_squared)
+        for j in range(obstacle_positions.shape[0]):
+            if overlapping[j]:
+                continue
+            px = obstacle_positions[j, 0]
+            py = obstacle_positions[j, 1]
+            vx = obstacle_velocities[j, 0]
+            vy = obstacle_velocities[j, 1]
+            # (at least 1e-300: a gap that cannot close leaves every step free; NaN stays NaN)
+            closing = _maximum((hop + (math.hypot(vx, vy) + abs(growth[j])) * tick) * (1.0 + 1e-9), 1e-300)
+            s = 0
+            while s < first[k]:  # (first[k] <= steps, the roll-out's length)
+                t = times[s]
+                reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
+                dx = positions[k, s, 0] - (px + vx * t)
+                dy = positions[k, s, 1] - (py + vy * t)
+                if _within(dx, dy, reach):  # hypot - reach < 0: the sign of a difference is exact
+                    first[k] = s
+                    break
+                free_steps = (math.sqrt(dx * dx + dy * dy) - reach - 1e-6) * (1.0 - 1e-9) / closing
+                if free_steps >= s_count:  # (NaN: not skipped)
+                    break
+                s += 1 + (int(free_steps) if free_steps >= 1.0 else 0)
+
+
 @compiled
 def escape_contacts(
     positions, times, obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s, overlapping, steps
@@ -73,57 +147,17 @@ def escape_contacts(
     relative) far above the rounding of the gaps, so the steps it passes over are those the full scan finds
     free: the same first contacts."""
     k_count = positions.shape[0]
-    s_count = positions.shape[1]
-    n_count = obstacle_positions.shape[0]
     n_overlapping = 0
-    for j in range(n_count):
+    for j in range(obstacle_positions.shape[0]):
         if overlapping[j]:
             n_overlapping += 1
     first = np.full(k_count, steps, np.int64)
     gap_min = np.full((k_count, n_overlapping), np.inf)
     gap_last = np.empty((k_count, n_overlapping))
-    tick = 0.0  # the longest time between two steps
-    for s in range(1, s_count):
-        tick = _maximum(tick, times[s] - times[s - 1])
-    for k in range(k_count):
-        hop_squared = 0.0  # the robot's longest step in roll-out k (NaN: no skipping)
-        for s in range(1, s_count):
-            dx = positions[k, s, 0] - positions[k, s - 1, 0]
-            dy = positions[k, s, 1] - positions[k, s - 1, 1]
-            hop_squared = _maximum(hop_squared, dx * dx + dy * dy)
-        hop = math.sqrt(hop_squared)
-        column = 0
-        for j in range(n_count):
-            px = obstacle_positions[j, 0]
-            py = obstacle_positions[j, 1]
-            vx = obstacle_velocities[j, 0]
-            vy = obstacle_velocities[j, 1]
-            if overlapping[j]:
-                for s in range(s_count):
-                    t = times[s]
-                    reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
-                    gap = math.hypot(positions[k, s, 0] - (px + vx * t), positions[k, s, 1] - (py + vy * t)) - reach
-                    if gap < gap_min[k, column]:
-                        gap_min[k, column] = gap
-                    if s == s_count - 1:
-                        gap_last[k, column] = gap
-                column += 1
-                continue
-            # (at least 1e-300: a gap that cannot close leaves every step free; NaN stays NaN)
-            closing = _maximum((hop + (math.hypot(vx, vy) + abs(growth[j])) * tick) * (1.0 + 1e-9), 1e-300)
-            s = 0
-            while s < first[k]:  # (first[k] <= steps, the roll-out's length)
-                t = times[s]
-                reach = check_radii[j] + growth[j] * (t if t < growth_until_s[j] else growth_until_s[j])
-                dx = positions[k, s, 0] - (px + vx * t)
-                dy = positions[k, s, 1] - (py + vy * t)
-                if _within(dx, dy, reach):  # hypot - reach < 0: the sign of a difference is exact
-                    first[k] = s
-                    break
-                free_steps = (math.sqrt(dx * dx + dy * dy) - reach - 1e-6) * (1.0 - 1e-9) / closing
-                if free_steps >= s_count:  # (NaN: not skipped)
-                    break
-                s += 1 + (int(free_steps) if free_steps >= 1.0 else 0)
+    tick = _longest_tick(times, positions.shape[1])
+    people = (obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s)
+    _overlapped_gaps(positions, times, people, overlapping, gap_min, gap_last)
+    _first_contact_steps(positions, times, people, overlapping, tick, first)
     return first, gap_min, gap_last
 
 
@@ -183,6 +217,23 @@ def _furthest(positions, x0, y0):
 
 
 @compiled
+def _standing_free(robot, obstacles, settings):
+    """Whether standing still at the robot's position is free over the horizon (capped at the standing time): no
+    contact of that leg at rest with anyone (:func:`legs_first_contact`)."""
+    starts = np.empty((1, 2))
+    starts[0, 0] = robot[0]
+    starts[0, 1] = robot[1]
+    durations = np.empty(1)
+    durations[0] = _minimum(_maximum(settings[_E_HORIZON] - 0.0, 0.0), settings[_E_STANDING_S])
+    contact = legs_first_contact(starts, np.zeros(1), np.zeros((1, 2)), durations, *obstacles, np.zeros(1))
+    free = True
+    for j in range(contact.shape[1]):
+        if not math.isinf(contact[0, j]):
+            free = False
+    return free
+
+
+@compiled
 def escape_headings(
     robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, row_turns, settings, steps
 ):
@@ -193,29 +244,8 @@ def escape_headings(
     of one turn rate share them), before the first step and after each: numpy takes their sines and cosines
     for :func:`escape_scores`."""
     dt = settings[_E_DT]
-    free = True
-    n_count = obstacle_positions.shape[0]
-    if n_count:
-        starts = np.empty((1, 2))
-        starts[0, 0] = robot[0]
-        starts[0, 1] = robot[1]
-        durations = np.empty(1)
-        durations[0] = _minimum(_maximum(settings[_E_HORIZON] - 0.0, 0.0), settings[_E_STANDING_S])
-        contact = legs_first_contact(
-            starts,
-            np.zeros(1),
-            np.zeros((1, 2)),
-            durations,
-            obstacle_positions,
-            obstacle_velocities,
-            radii,
-            growth,
-            growth_until_s,
-            np.zeros(1),
-        )
-        for j in range(n_count):
-            if not math.isinf(contact[0, j]):
-                free = False
+    obstacles = (obstacle_positions, obstacle_velocities, radii, growth, growth_until_s)
+    free = _standing_free(robot, obstacles, settings) if obstacle_positions.shape[0] else True
     max_turn = settings[_E_MAX_TURN]
     turn0 = robot[4]
     heading0 = robot[2]
@@ -319,6 +349,79 @@ def _escape_contacts_near(
     return first_step, gap_min, gap_last, gap_overlapped
 
 
+@compiled(inline=True)
+def _roll_outs_inside(positions, corridor, tolerance, bound):
+    """Whether each roll-out keeps inside the corridor (every point's excess <= ``tolerance``) and within the bound
+    (np.max(excess) <= bound is all(excess <= bound), NaN included: with the bound at least the tolerance, as the
+    caller sets it, true of every roll-out inside, not looked at again)."""
+    segment_starts, segment_directions, segment_lengths, half_widths = corridor
+    k_count = positions.shape[0]
+    inside = _roll_outs_within(
+        positions,
+        segment_starts,
+        segment_directions,
+        segment_lengths,
+        half_widths,
+        tolerance,
+        np.zeros(k_count, np.bool_),
+    )
+    known = inside if bound >= tolerance else np.zeros(k_count, np.bool_)
+    within_bound = _roll_outs_within(
+        positions, segment_starts, segment_directions, segment_lengths, half_widths, bound, known
+    )
+    return inside, within_bound
+
+
+@compiled(inline=True)
+def _toward(subgoal, x0, y0):
+    """The unit direction from (x0, y0) to the subgoal (of length at least 1e-9 before scaling)."""
+    toward_x = subgoal[0] - x0
+    toward_y = subgoal[1] - y0
+    norm = math.hypot(toward_x, toward_y)
+    norm = 1e-9 if norm < 1e-9 else norm  # Python's max(norm, 1e-9)
+    return toward_x / norm, toward_y / norm
+
+
+@compiled(inline=True)
+def _separations(gap_min, gap_last, gap_overlapped):
+    """Each roll-out's separation (K,) from the M people overlapped now: per person, how much deeper it goes than now
+    and how deep it ends (each counted when negative), summed as np.sum does (:func:`viapath.sums.pairwise_sum`)."""
+    k_count = gap_min.shape[0]
+    m_count = gap_overlapped.shape[0]
+    separations = np.zeros(k_count)
+    if m_count:
+        terms = np.empty(m_count)
+        for k in range(k_count):
+            for column in range(m_count):
+                deeper = gap_min[k, column] - gap_overlapped[column]
+                terms[column] = _minimum(deeper, 0.0) + _minimum(gap_last[k, column], 0.0)
+            separations[k] = 0.0 + pairwise_sum(terms, 0, m_count)
+    return separations
+
+
+@compiled(inline=True)
+def _score(separation, free, inside, time_to_contact, speed, progress):
+    """One escape command's score before the continuity term: separation, free of contact over the roll-out, inside
+    the corridor, time to contact, speed (less of it when not free), progress towards the subgoal."""
+    return (
+        1e2 * separation
+        + 20.0 * (1.0 if free else 0.0)
+        + 2.0 * (1.0 if inside else 0.0)
+        + time_to_contact
+        - (0.005 if free else 0.5) * speed
+        + 0.01 * progress
+    )
+
+
+@compiled(inline=True)
+def _change(speed, turn, settings):
+    """How far a command is from last cycle's, speed and turn rate each relative to its top (the continuity term)."""
+    return (
+        abs(speed - settings[_E_PREVIOUS_SPEED]) / settings[_E_TOP]
+        + abs(turn - settings[_E_PREVIOUS_TURN]) / settings[_E_MAX_TURN]
+    )
+
+
 @compiled
 def escape_scores(
     robot,
@@ -342,85 +445,32 @@ def escape_scores(
 ):
     """:func:`viapath.planning.viapath.escape.escape_scores` compiled, operation for operation: the roll-outs of
     the K commands (:func:`viapath.kinematics.rollout`: the ramps of speed and turn rate, the exact arcs, the
-    positions as running sums), their corridor excess (:func:`_excess`), the people who could come within
-    reach (the triangle-inequality bound), the contacts (:func:`escape_contacts`), the separation from the
-    people overlapped now (summed as np.sum does: :func:`viapath.compiled.sums.pairwise_sum`), the progress towards the subgoal and
-    the score. Returns the ends (K, 2) and the scores (K,).
+    positions as running sums), whether they keep inside the corridor, the people who could come within reach
+    (the triangle-inequality bound), the contacts (:func:`escape_contacts`), the separation from the people
+    overlapped now, the progress towards the subgoal and the score. Returns the ends (K, 2) and the scores (K,).
 
     ``sines`` and ``cosines`` are numpy's, of :func:`escape_headings`' rows (command k's row is
     ``turn_rows[k]``). ``calm``: a calm escape with last cycle's command (the continuity term)."""
     k_count = commands.shape[0]
     dt = settings[_E_DT]
-    x0 = robot[0]
-    y0 = robot[1]
-    max_turn = settings[_E_MAX_TURN]
-    tolerance = settings[_E_TOLERANCE]
-    bound = settings[_E_BOUND]
     positions = _escape_roll_outs(robot, commands, turn_rows, sines, cosines, settings, steps)
-    # all(excess <= tolerance); np.max(excess) <= bound is all(excess <= bound), NaN included: with the bound
-    # at least the tolerance (as the caller sets it), true of every roll-out inside
-    inside = _roll_outs_within(
-        positions,
-        segment_starts,
-        segment_directions,
-        segment_lengths,
-        half_widths,
-        tolerance,
-        np.zeros(k_count, np.bool_),
-    )
-    within_bound = _roll_outs_within(
-        positions,
-        segment_starts,
-        segment_directions,
-        segment_lengths,
-        half_widths,
-        bound,
-        inside if bound >= tolerance else np.zeros(k_count, np.bool_),
-    )
-    travel = _furthest(positions, x0, y0)
-
+    corridor = (segment_starts, segment_directions, segment_lengths, half_widths)
+    inside, within_bound = _roll_outs_inside(positions, corridor, settings[_E_TOLERANCE], settings[_E_BOUND])
+    travel = _furthest(positions, robot[0], robot[1])
     first_step, gap_min, gap_last, gap_overlapped = _escape_contacts_near(
         positions, robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, dt, steps, travel
     )
-    m_count = gap_overlapped.shape[0]
-    terms = np.empty(m_count)
-
-    toward_x = subgoal[0] - x0
-    toward_y = subgoal[1] - y0
-    norm = math.hypot(toward_x, toward_y)
-    norm = 1e-9 if norm < 1e-9 else norm  # Python's max(norm, 1e-9)
-    toward_x = toward_x / norm
-    toward_y = toward_y / norm
-    ends = np.empty((k_count, 2))
+    toward_x, toward_y = _toward(subgoal, robot[0], robot[1])
+    separations = _separations(gap_min, gap_last, gap_overlapped)
+    ends = positions[:, steps - 1, :].copy()
     score = np.empty(k_count)
     for k in range(k_count):
-        separation = 0.0
-        if m_count:
-            for column in range(m_count):
-                deeper = gap_min[k, column] - gap_overlapped[column]
-                terms[column] = _minimum(deeper, 0.0) + _minimum(gap_last[k, column], 0.0)
-            separation = 0.0 + pairwise_sum(terms, 0, m_count)
+        speed = commands[k, 0]
         time_to_contact = first_step[k] * dt
         free = time_to_contact >= steps * dt
-        end_x = positions[k, steps - 1, 0]
-        end_y = positions[k, steps - 1, 1]
-        ends[k, 0] = end_x
-        ends[k, 1] = end_y
-        progress = ((end_x - x0) * toward_x + (end_y - y0) * toward_y) / settings[_E_ESCAPE_S]
-        speed = commands[k, 0]
-        value = (
-            1e2 * separation
-            + 20.0 * (1.0 if free else 0.0)
-            + 2.0 * (1.0 if inside[k] else 0.0)
-            + time_to_contact
-            - (0.005 if free else 0.5) * speed
-            + 0.01 * progress
-        )
+        progress = ((ends[k, 0] - robot[0]) * toward_x + (ends[k, 1] - robot[1]) * toward_y) / settings[_E_ESCAPE_S]
+        value = _score(separations[k], free, inside[k], time_to_contact, speed, progress)
         if calm:
-            change = (
-                abs(speed - settings[_E_PREVIOUS_SPEED]) / settings[_E_TOP]
-                + abs(commands[k, 1] - settings[_E_PREVIOUS_TURN]) / max_turn
-            )
-            value = value - settings[_E_CONTINUITY] * _minimum(change, 1.0)
+            value = value - settings[_E_CONTINUITY] * _minimum(_change(speed, commands[k, 1], settings), 1.0)
         score[k] = value if (within_bound[k] or speed == 0.0) else -math.inf
     return ends, score

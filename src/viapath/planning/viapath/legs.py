@@ -219,52 +219,107 @@ def _excess(px, py, segment_starts, segment_directions, segment_lengths, half_wi
     return best
 
 
-@compiled
-def _capsule_excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths, i):
-    dx = segment_directions[i, 0]
-    dy = segment_directions[i, 1]
-    rx = px - segment_starts[i, 0]
-    ry = py - segment_starts[i, 1]
+@compiled(inline=True)
+def _along(rx, ry, dx, dy, length):
+    """How far along a segment (unit direction (dx, dy), ``length`` long) its nearest point to a point at (rx, ry)
+    from its start lies: the projection, clipped to the segment."""
     along = rx * dx + ry * dy
     if along < 0.0:
         along = 0.0
-    if along > segment_lengths[i]:
-        along = segment_lengths[i]
-    ox = px - (segment_starts[i, 0] + along * dx)
-    oy = py - (segment_starts[i, 1] + along * dy)
+    if along > length:
+        along = length
+    return along
+
+
+# The capsule's projection in two inlined steps: the arrays read in one without branches, the arithmetic on
+# scalars in the other. One inlined step that takes the arrays and has the clip's branches keeps the arrays'
+# reference counting inside the caller's loop: the escape's scores took 4.7 times as long, the corridor check of
+# legs 2.7 times (measured on a cycle's arguments).
+@compiled(inline=True)
+def _capsule_offset(px, py, segment_starts, segment_directions, segment_lengths, i):
+    """The offset (x, y) of the point from its nearest point on segment ``i``."""
+    return _segment_offset(
+        px,
+        py,
+        segment_starts[i, 0],
+        segment_starts[i, 1],
+        segment_directions[i, 0],
+        segment_directions[i, 1],
+        segment_lengths[i],
+    )
+
+
+@compiled(inline=True)
+def _segment_offset(px, py, start_x, start_y, dx, dy, length):
+    """The offset (x, y) of the point from its nearest point on the segment from (start_x, start_y) along the unit
+    direction (dx, dy), ``length`` long."""
+    along = _along(px - start_x, py - start_y, dx, dy, length)
+    return px - (start_x + along * dx), py - (start_y + along * dy)
+
+
+@compiled
+def _capsule_excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths, i):
+    """How far the point lies outside capsule ``i`` (negative inside)."""
+    ox, oy = _capsule_offset(px, py, segment_starts, segment_directions, segment_lengths, i)
     return math.hypot(ox, oy) - half_widths[i]
+
+
+@compiled(inline=True)  # inlined: called per leg of the corridor check
+def _ends_inside(starts, ends, k, corridor, tolerance_m):
+    """Whether leg ``k``'s start lies in some capsule of the corridor (within ``tolerance_m``), its end in some,
+    and both in one (then the leg is inside: a capsule is convex)."""
+    segment_starts, segment_directions, segment_lengths, half_widths = corridor
+    start_any = False
+    end_any = False
+    both = False
+    for i in range(segment_starts.shape[0]):
+        a = (
+            _capsule_excess(
+                starts[k, 0], starts[k, 1], segment_starts, segment_directions, segment_lengths, half_widths, i
+            )
+            <= tolerance_m
+        )
+        b = (
+            _capsule_excess(ends[k, 0], ends[k, 1], segment_starts, segment_directions, segment_lengths, half_widths, i)
+            <= tolerance_m
+        )
+        start_any = start_any or a
+        end_any = end_any or b
+        both = both or (a and b)
+    return start_any, end_any, both
+
+
+@compiled(inline=True)  # inlined: called per leg the ends leave open
+def _samples_inside(starts, ends, k, num, corridor, tolerance_m):
+    """Whether leg ``k``'s ``num`` evenly spaced points (both ends among them) are all within ``tolerance_m`` of
+    the corridor."""
+    segment_starts, segment_directions, segment_lengths, half_widths = corridor
+    step = 1.0 / (num - 1)
+    ax = starts[k, 0]
+    ay = starts[k, 1]
+    bx = ends[k, 0] - ax
+    by = ends[k, 1] - ay
+    for f_index in range(num):
+        fraction = 1.0 if f_index == num - 1 else f_index * step
+        px = ax + fraction * bx
+        py = ay + fraction * by
+        if _excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths) > tolerance_m:
+            return False
+    return True
 
 
 @compiled
 def legs_inside(segment_starts, segment_directions, segment_lengths, half_widths, starts, ends, spacing_m, tolerance_m):
     """The compiled form of :meth:`viapath.path.DesignatedPath.legs_inside`: both ends in one capsule, else
     sampled every ``spacing_m`` (the sample count set by the longest unresolved leg, as there)."""
+    corridor = (segment_starts, segment_directions, segment_lengths, half_widths)
     count = starts.shape[0]
-    segments = segment_starts.shape[0]
     inside = np.zeros(count, np.bool_)
     unresolved = np.zeros(count, np.bool_)
     longest = 0.0
     any_unresolved = False
     for k in range(count):
-        start_any = False
-        end_any = False
-        both = False
-        for i in range(segments):
-            a = (
-                _capsule_excess(
-                    starts[k, 0], starts[k, 1], segment_starts, segment_directions, segment_lengths, half_widths, i
-                )
-                <= tolerance_m
-            )
-            b = (
-                _capsule_excess(
-                    ends[k, 0], ends[k, 1], segment_starts, segment_directions, segment_lengths, half_widths, i
-                )
-                <= tolerance_m
-            )
-            start_any = start_any or a
-            end_any = end_any or b
-            both = both or (a and b)
+        start_any, end_any, both = _ends_inside(starts, ends, k, corridor, tolerance_m)
         inside[k] = both
         if not both and start_any and end_any:
             unresolved[k] = True
@@ -275,31 +330,9 @@ def legs_inside(segment_starts, segment_directions, segment_lengths, half_widths
     if not any_unresolved:
         return inside
     num = max(2, int(math.ceil(longest / spacing_m)) + 1)
-    step = 1.0 / (num - 1)
     for k in range(count):
-        if not unresolved[k]:
-            continue
-        ax = starts[k, 0]
-        ay = starts[k, 1]
-        bx = ends[k, 0] - ax
-        by = ends[k, 1] - ay
-        ok = True
-        for f_index in range(num):
-            fraction = 1.0 if f_index == num - 1 else f_index * step
-            if (
-                _excess(
-                    ax + fraction * bx,
-                    ay + fraction * by,
-                    segment_starts,
-                    segment_directions,
-                    segment_lengths,
-                    half_widths,
-                )
-                > tolerance_m
-            ):
-                ok = False
-                break
-        inside[k] = ok
+        if unresolved[k]:
+            inside[k] = _samples_inside(starts, ends, k, num, corridor, tolerance_m)
     return inside
 
 
@@ -322,11 +355,7 @@ def goal_legs_inside(
             dy = segment_directions[j, 1]
             rx = starts[k, 0] - segment_starts[j, 0]
             ry = starts[k, 1] - segment_starts[j, 1]
-            along = rx * dx + ry * dy
-            if along < 0.0:
-                along = 0.0
-            if along > segment_lengths[j]:
-                along = segment_lengths[j]
+            along = _along(rx, ry, dx, dy, segment_lengths[j])
             if math.hypot(rx - along * dx, ry - along * dy) - half_widths[j] <= tolerance_m:
                 inside[k] = True
     return inside
@@ -341,20 +370,8 @@ def excess_at_most(px, py, segment_starts, segment_directions, segment_lengths, 
     if not limit >= 0.0:
         return _excess(px, py, segment_starts, segment_directions, segment_lengths, half_widths) <= limit
     for i in range(segment_starts.shape[0]):
-        # _capsule_excess's projection written out again: an inlined helper returning the offset (x, y) made the
-        # escape a third slower (0.21 -> 0.30 ms a cycle, measured), so the copy stays.
         half = half_widths[i]
-        dx = segment_directions[i, 0]
-        dy = segment_directions[i, 1]
-        rx = px - segment_starts[i, 0]
-        ry = py - segment_starts[i, 1]
-        along = rx * dx + ry * dy
-        if along < 0.0:
-            along = 0.0
-        if along > segment_lengths[i]:
-            along = segment_lengths[i]
-        ox = px - (segment_starts[i, 0] + along * dx)
-        oy = py - (segment_starts[i, 1] + along * dy)
+        ox, oy = _capsule_offset(px, py, segment_starts, segment_directions, segment_lengths, i)
         reach = half + limit
         if half >= 0.0 and 1e-140 < reach < 1e140:
             squared = ox * ox + oy * oy
@@ -369,20 +386,13 @@ def excess_at_most(px, py, segment_starts, segment_directions, segment_lengths, 
     return False
 
 
-# The compiled steps' records (tuples, so that their pieces take a few names instead of a dozen arguments each):
-# obstacles (positions, velocities, radii, growth, growth until), as legs_first_contact takes them;
-# corridor (segment starts, directions, lengths, half widths); goal (subgoal, how far short of it legs end,
-# continuation, braking envelope, subgoal index, corridor check spacing, corridor tolerance).
-
-
-@compiled
-def goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corridor, shape_of):
-    """:func:`goal_legs` on its records; ``shape_of``: :class:`.shapes.StaticShapes`' (static discs checked to
-    the legs' end, without the braking envelope: :func:`first_contacts`)."""
-    subgoal, stop_short_m, continuation, envelope, _, _, _ = goal
+@compiled(inline=True)
+def _legs_to_subgoal(starts, start_times, speeds, subgoal, stop_short_m, continuation, two):
+    """The straight legs of :func:`goal_legs_of`: from each of the K starts, its direction to the subgoal (K, 2), its
+    distance (K,) and its leg's duration at its speed, ending ``stop_short_m`` short (K,); and the legs whose
+    contacts are checked, (starts, start times, velocities, durations): the K legs, then, with ``two``, the K
+    continuations past the subgoal, each starting when its leg ends."""
     k_count = starts.shape[0]
-    n_count = obstacles[0].shape[0]
-    two = continuation.shape[0] == 3 and n_count > 0
     legs = 2 * k_count if two else k_count
     directions = np.empty((k_count, 2))
     lengths = np.empty(k_count)
@@ -418,38 +428,57 @@ def goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corrid
             leg_velocities[m, 0] = continuation[0] * speeds[k]
             leg_velocities[m, 1] = continuation[1] * speeds[k]
             leg_durations[m] = continuation[2] / speeds[k]
-    contact = np.empty((k_count, n_count))
-    if n_count > 0:
-        checked = np.empty(legs)
-        leg_radii = np.empty(legs)
-        half_accel = 0.5 * envelope[0]
-        for m in range(legs):
-            checked[m] = clip(horizon_s - leg_times[m], 0.0, leg_durations[m])
-            if envelope[0] > 0:
-                stop_s = envelope[1] + math.hypot(leg_velocities[m, 0], leg_velocities[m, 1]) / envelope[2]
-                leg_radii[m] = half_accel * (stop_s * stop_s)
-            else:
-                leg_radii[m] = 0.0
-        both = first_contacts(
-            leg_starts, leg_times, leg_velocities, checked, leg_durations, obstacles, leg_radii, shape_of
-        )
-        for k in range(k_count):
-            for j in range(n_count):
-                value = both[k, j]
-                if two:
-                    later = both[k_count + k, j] + durations[k]
-                    if value != value or later != later:
-                        value = math.nan
-                    elif later < value:
-                        value = later
-                contact[k, j] = value
-    # Free: no contact, then inside. The corridor check only when some leg has no contact (a blocked batch,
-    # the usual case in the tree, needs none); then of all the legs, as the sample spacing is the longest's.
+    return directions, lengths, durations, (leg_starts, leg_times, leg_velocities, leg_durations)
+
+
+@compiled(inline=True)
+def _envelope_contacts(legs, horizon_s, envelope, obstacles, shape_of):
+    """:func:`first_contacts` of the legs (the record of :func:`_legs_to_subgoal`), a person's up to the horizon
+    and with the braking envelope's radius: how far a person accelerating at ``envelope[0]`` gets in the robot's
+    stopping time (the period ``envelope[1]``, then braking from the leg's speed at ``envelope[2]``; none with
+    accel 0)."""
+    leg_starts, leg_times, leg_velocities, leg_durations = legs
+    count = leg_times.shape[0]
+    checked = np.empty(count)
+    leg_radii = np.empty(count)
+    half_accel = 0.5 * envelope[0]
+    for m in range(count):
+        checked[m] = clip(horizon_s - leg_times[m], 0.0, leg_durations[m])
+        if envelope[0] > 0:
+            stop_s = envelope[1] + math.hypot(leg_velocities[m, 0], leg_velocities[m, 1]) / envelope[2]
+            leg_radii[m] = half_accel * (stop_s * stop_s)
+        else:
+            leg_radii[m] = 0.0
+    return first_contacts(leg_starts, leg_times, leg_velocities, checked, leg_durations, obstacles, leg_radii, shape_of)
+
+
+@compiled(inline=True)
+def _sooner_of_two(both, durations, two, contact):
+    """Fills ``contact`` (K, N) with each start's first contacts: its leg's (``both``'s first K rows), or, with
+    ``two``, the sooner of that and its continuation's (the next K rows, from the leg's end), NaN if either is."""
+    k_count = contact.shape[0]
+    for k in range(k_count):
+        for j in range(contact.shape[1]):
+            value = both[k, j]
+            if two:
+                later = both[k_count + k, j] + durations[k]
+                if value != value or later != later:
+                    value = math.nan
+                elif later < value:
+                    value = later
+            contact[k, j] = value
+
+
+@compiled(inline=True)
+def _free_and_inside(contact, corridor, starts, goal):
+    """Which legs are free: no contact, then inside. The corridor check only when some leg has no contact (a blocked
+    batch, the usual case in the tree, needs none); then of all the legs, as the sample spacing is the longest's."""
+    k_count = contact.shape[0]
     free = np.empty(k_count, np.bool_)
     any_clear = False
     for k in range(k_count):
         ok = True
-        for j in range(n_count):
+        for j in range(contact.shape[1]):
             if not math.isinf(contact[k, j]):
                 ok = False
                 break
@@ -459,7 +488,30 @@ def goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corrid
         inside = goal_legs_inside_all(corridor, starts, goal)
         for k in range(k_count):
             free[k] = free[k] and inside[k]
-    return directions, lengths, free, contact
+    return free
+
+
+# The compiled steps' records (tuples, so that their pieces take a few names instead of a dozen arguments each):
+# obstacles (positions, velocities, radii, growth, growth until), as legs_first_contact takes them;
+# corridor (segment starts, directions, lengths, half widths); goal (subgoal, how far short of it legs end,
+# continuation, braking envelope, subgoal index, corridor check spacing, corridor tolerance).
+
+
+@compiled
+def goal_legs_of(starts, start_times, speeds, horizon_s, goal, obstacles, corridor, shape_of):
+    """:func:`goal_legs` on its records; ``shape_of``: :class:`.shapes.StaticShapes`' (static discs checked to
+    the legs' end, without the braking envelope: :func:`first_contacts`)."""
+    subgoal, stop_short_m, continuation, envelope, _, _, _ = goal
+    n_count = obstacles[0].shape[0]
+    two = continuation.shape[0] == 3 and n_count > 0
+    directions, lengths, durations, legs = _legs_to_subgoal(
+        starts, start_times, speeds, subgoal, stop_short_m, continuation, two
+    )
+    contact = np.empty((starts.shape[0], n_count))
+    if n_count > 0:
+        both = _envelope_contacts(legs, horizon_s, envelope, obstacles, shape_of)
+        _sooner_of_two(both, durations, two, contact)
+    return directions, lengths, _free_and_inside(contact, corridor, starts, goal), contact
 
 
 @compiled

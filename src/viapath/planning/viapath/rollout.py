@@ -152,22 +152,23 @@ def _clear(
     return True
 
 
-@compiled
-def can_follow(robot, target_x, target_y, angle, speed, settings, steps, obstacles, corridor):
-    """follow.can_follow: 0 cannot, 1 can, 2 can after turning on the spot first. ``angle``: atan2 of the
-    offset from the robot to the target; ``obstacles`` and ``corridor``: :func:`grow`'s records."""
-    obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
-    segment_starts, segment_directions, segment_lengths, half_widths = corridor
+@compiled(inline=True)
+def _close_enough(robot, target_x, target_y, heading_error, speed, settings):
+    """Whether the robot follows without a roll-out: the target is where it stands, or it heads for it within
+    the roll-out's heading and is within two steps' acceleration of the speed."""
     ox = target_x - robot[0]
     oy = target_y - robot[1]
-    heading_error = abs(wrap(angle - robot[2]))
     speed_change = abs(speed - robot[3])
     dt = settings[F_DT]
-    if math.hypot(ox, oy) < 1e-6 or (
+    return math.hypot(ox, oy) < 1e-6 or (
         heading_error <= settings[F_ROLLOUT_HEADING] and speed_change <= settings[F_ACCEL] * dt * 2
-    ):
-        return 1
-    positions = track(
+    )
+
+
+@compiled(inline=True)
+def _roll_out(robot, target_x, target_y, speed, settings, steps):
+    """The (steps, 2) positions of the robot steering for the target at ``speed`` (:func:`track`)."""
+    return track(
         robot[0],
         robot[1],
         robot[2],
@@ -180,16 +181,17 @@ def can_follow(robot, target_x, target_y, angle, speed, settings, steps, obstacl
         settings[F_TURN_RATE],
         settings[F_ACCEL],
         settings[F_TURN_ACCEL],
-        dt,
+        settings[F_DT],
         steps,
         settings[F_GAIN],
     )
-    if not _clear(
-        positions, steps, dt, robot[0], robot[1], obstacle_positions, obstacle_velocities, radii, growth, growth_until_s
-    ):
-        return 0
-    inside = True
-    for s in range(steps):
+
+
+@compiled(inline=True)
+def _inside(positions, count, corridor, tolerance):
+    """Whether the first ``count`` positions keep within ``tolerance`` of the corridor."""
+    segment_starts, segment_directions, segment_lengths, half_widths = corridor
+    for s in range(count):
         if not excess_at_most(
             positions[s, 0],
             positions[s, 1],
@@ -197,30 +199,42 @@ def can_follow(robot, target_x, target_y, angle, speed, settings, steps, obstacl
             segment_directions,
             segment_lengths,
             half_widths,
-            settings[F_TOLERANCE],
+            tolerance,
         ):
-            inside = False
-            break
-    if inside:
-        return 1
+            return False
+    return True
+
+
+@compiled(inline=True)
+def _clear_turning_on_the_spot(robot, heading_error, settings, obstacles):
+    """Whether standing at the robot's position keeps clear (:func:`_clear`) while it turns by ``heading_error`` at
+    its top turn rate, and a second more."""
+    dt = settings[F_DT]
     turn_s = heading_error / settings[F_TURN_RATE] + 1.0
     count = max(1, int(math.ceil(turn_s / dt)))
-    if heading_error > settings[F_TURN_IN_PLACE]:
-        standing = np.empty((count, 2))
-        for s in range(count):
-            standing[s, 0] = robot[0]
-            standing[s, 1] = robot[1]
-        if _clear(
-            standing,
-            count,
-            dt,
-            robot[0],
-            robot[1],
-            obstacle_positions,
-            obstacle_velocities,
-            radii,
-            growth,
-            growth_until_s,
-        ):
-            return 2
+    standing = np.empty((count, 2))
+    for s in range(count):
+        standing[s, 0] = robot[0]
+        standing[s, 1] = robot[1]
+    return _clear(standing, count, dt, robot[0], robot[1], *obstacles)
+
+
+@compiled
+def can_follow(robot, target_x, target_y, angle, speed, settings, steps, obstacles, corridor):
+    """follow.can_follow: 0 cannot, 1 can, 2 can after turning on the spot first. ``angle``: atan2 of the
+    offset from the robot to the target; ``obstacles`` and ``corridor``: :func:`grow`'s records. The roll-out
+    steering for the target must keep clear of everyone (:func:`_clear`); then it can if the roll-out keeps inside
+    the corridor, or, turning a lot, if standing while it turns on the spot keeps clear."""
+    heading_error = abs(wrap(angle - robot[2]))
+    if _close_enough(robot, target_x, target_y, heading_error, speed, settings):
+        return 1
+    positions = _roll_out(robot, target_x, target_y, speed, settings, steps)
+    if not _clear(positions, steps, settings[F_DT], robot[0], robot[1], *obstacles):
+        return 0
+    if _inside(positions, steps, corridor, settings[F_TOLERANCE]):
+        return 1
+    if heading_error > settings[F_TURN_IN_PLACE] and _clear_turning_on_the_spot(
+        robot, heading_error, settings, obstacles
+    ):
+        return 2
     return 0
