@@ -170,7 +170,6 @@ NOT_YET: dict[tuple[str, str], str] = {
         ("tree.py", "_via_children"),
         ("tree.py", "grow"),
         ("rollout.py", "can_follow"),
-        ("selection.py", "choose_candidate"),
     )
 }
 
