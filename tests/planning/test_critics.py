@@ -10,11 +10,13 @@ Candidates of the hand-worked cases (robot heading 0 rad, nominal 0.2 m/s):
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
 
 from viapath.geometry import LEFT, RIGHT, angles_of, wrap_angle
+from viapath.jit import compiled
 from viapath.planning.viapath.candidates import CORNER, SLOW, STRAIGHT, Candidates, Choice, Way
 from viapath.planning.viapath.critics import (
     PAPER_CRITICS,
@@ -204,9 +206,7 @@ def test_each_compiled_term_is_its_specification_on_random_candidates(seed):
         Hysteresis(rng.uniform(0.0, 0.2)),
     )
     for critic in critics:
-        np.testing.assert_allclose(
-            critic.score(c, context), spec_of(critic, c, context), rtol=1e-15, atol=0.0, err_msg=critic.name
-        )
+        np.testing.assert_array_equal(critic.score(c, context), spec_of(critic, c, context), err_msg=critic.name)
     if previous is not None:
         assert critics[-1].score(c, context)[k] == pytest.approx(-1.5 * critics[-1].weight)
 
@@ -233,3 +233,44 @@ def test_the_planners_costs_are_the_terms_specification_summed_in_the_listed_ord
     for critic, values in zip(planner.critics, terms):
         assert chosen[critic.name] == pytest.approx(float(values[plan.chosen]), rel=1e-12, abs=1e-12)
     assert chosen["total"] == pytest.approx(float(total[plan.chosen]), rel=1e-12, abs=1e-12)
+
+
+# The term that docs/howto/add-cost-term.md adds, as it writes it.
+@compiled
+def waiting_term(weight: float, slow_s: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """k5·T_slow: each second the candidate first slows down or waits."""
+    for k in range(out.shape[0]):
+        out[k] = weight * slow_s[k]
+    return out
+
+
+@dataclass(frozen=True)
+class Waiting(Critic):
+    """:func:`waiting_term` as a critic."""
+
+    weight: float
+    name = "waiting"
+
+    def score(self, candidates: Candidates, context: Context) -> np.ndarray:
+        return waiting_term(self.weight, candidates.slow_s, np.empty(len(candidates)))
+
+
+def test_a_term_added_after_the_papers_adds_its_share_to_every_candidates_E():
+    """The how-to's term, appended to the critics: every candidate's E is the paper's terms, then its term (by
+    hand: 0.5 per second of slowing down or waiting), and the chosen candidate's breakdown has it by name."""
+    from tests.planning.test_slow_candidates import _side_case
+
+    planner, checks, _, _, candidates, observation = _side_case(0.2, -0.5)
+    context = Context(checks.heading_rad, planner.nominal_speed_mps, None)
+    terms = [spec_of(critic, candidates, context) for critic in planner.critics]
+    paper = planner.plan(observation).plan.candidate_costs
+    planner.reset()
+    planner.critics = (*planner.critics, Waiting(0.5))
+    plan = planner.plan(observation).plan
+    waiting = 0.5 * candidates.slow_s
+    assert np.count_nonzero(waiting) >= 2
+    np.testing.assert_array_equal(plan.candidate_costs, paper + waiting)
+    chosen = plan.extras["cost_terms"]["chosen"]
+    assert list(chosen) == [*(critic.name for critic in planner.critics), "total"]
+    assert chosen["waiting"] == waiting[plan.chosen]
+    assert chosen["total"] == pytest.approx(sum(float(values[plan.chosen]) for values in [*terms, waiting]), rel=1e-12)

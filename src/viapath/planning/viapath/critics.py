@@ -22,7 +22,9 @@ into ``out`` (K,) and returned. The compiled choice (:func:`.selection.choose_ca
 itself, in Eq. 1's order; a :class:`Critic` holds a term's name and weight (the plan's cost breakdown,
 :func:`critics_for`) and its ``score`` calls the same function on a cycle's :class:`.candidates.Candidates`.
 Critics after the paper's six are scored by their ``score`` between the choice's two compiled halves
-(:func:`viapath.planning.viapath.choice.extra_critics`) and added after them, in their order.
+(:func:`viapath.planning.viapath.choice.extra_critics`) and added after them, in their order. The terms share
+this one module: each is a few lines, so Eq. 1 reads on one screen, and a new term goes after them
+(docs/howto/add-cost-term.md).
 """
 
 from __future__ import annotations

@@ -215,17 +215,10 @@ def _paper_terms(features, ways, first_angles, heading_rad, settings, integers, 
     speed_term(settings[F_K3], settings[F_STANDING], nominal, speed, slow_s, slow_v, driven_s, travel_s, terms[2])
     heading_term(settings[F_K4], integers[C_DEGREES] != 0, heading_rad, first_angles, terms[3])
     side_term(settings[F_SIDE], integers[C_PREFERRED], ways, terms[4])
-    hysteresis_term(
-        settings[F_HYSTERESIS],
-        integers[C_PREVIOUS] != 0,
-        integers[C_PREV_OBSTACLE],
-        integers[C_PREV_SIDE],
-        integers[C_PREV_ROOT],
-        integers[C_PREV_MMPS],
-        ways,
-        speed,
-        terms[5],
-    )
+    previous = integers[C_PREVIOUS] != 0
+    hysteresis = settings[F_HYSTERESIS]
+    way = (integers[C_PREV_OBSTACLE], integers[C_PREV_SIDE], integers[C_PREV_ROOT])
+    hysteresis_term(hysteresis, previous, way[0], way[1], way[2], integers[C_PREV_MMPS], ways, speed, terms[5])
 
 
 @compiled
