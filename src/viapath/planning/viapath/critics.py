@@ -18,8 +18,8 @@ Beyond the paper (docs/design.md §2 pitfalls):
 
 Each term is one compiled function (``*_term``): arrays with one entry per candidate in (the K leaves of the
 candidate tree, as :class:`.candidates.Candidates` holds them), the weighted term of each candidate written
-into ``out`` (K,) and returned. The compiled choice (:func:`.selection.choose_candidate`) calls the paper's six
-itself, in Eq. 1's order; a :class:`Critic` holds a term's name and weight (the plan's cost breakdown,
+into ``out`` (K,) and returned. The compiled choice (:func:`.selection.choose_candidate`, which says why they are
+inlined) calls the paper's six itself, in Eq. 1's order; a :class:`Critic` holds a term's name and weight (the plan's cost breakdown,
 :func:`critics_for`) and its ``score`` calls the same function on a cycle's :class:`.candidates.Candidates`.
 Critics after the paper's six are scored by their ``score`` between the choice's two compiled halves
 (:func:`viapath.planning.viapath.choice.extra_critics`) and added after them, in their order. The terms share
@@ -41,7 +41,7 @@ from viapath.planning.viapath.candidates import Candidates, Choice, Way
 from viapath.planning.viapath.rollout import wrap
 
 
-@compiled
+@compiled(inline=True)
 def distance_term(weight: float, length_m: np.ndarray, out: np.ndarray) -> np.ndarray:
     """k1·Dist: the length of each candidate through its via points to the subgoal."""
     for k in range(out.shape[0]):
@@ -49,7 +49,7 @@ def distance_term(weight: float, length_m: np.ndarray, out: np.ndarray) -> np.nd
     return out
 
 
-@compiled
+@compiled(inline=True)
 def time_term(weight: float, travel_s: np.ndarray, out: np.ndarray) -> np.ndarray:
     """k2·Time: how long each candidate takes to the subgoal, waiting included."""
     for k in range(out.shape[0]):
@@ -57,7 +57,7 @@ def time_term(weight: float, travel_s: np.ndarray, out: np.ndarray) -> np.ndarra
     return out
 
 
-@compiled
+@compiled(inline=True)
 def speed_term(
     weight: float,
     standing_per_s: float,
@@ -78,7 +78,7 @@ def speed_term(
     return out
 
 
-@compiled
+@compiled(inline=True)
 def heading_term(
     weight: float, degrees: bool, heading_rad: float, first_angle_rad: np.ndarray, out: np.ndarray
 ) -> np.ndarray:
@@ -89,7 +89,7 @@ def heading_term(
     return out
 
 
-@compiled
+@compiled(inline=True)
 def side_term(weight: float, preferred: int, ways: np.ndarray, out: np.ndarray) -> np.ndarray:
     """Passing on the other side than ``preferred`` costs ``weight`` (``ways``: (K, 3) obstacle, side, root)."""
     for k in range(out.shape[0]):
@@ -98,7 +98,7 @@ def side_term(weight: float, preferred: int, ways: np.ndarray, out: np.ndarray) 
     return out
 
 
-@compiled
+@compiled(inline=True)
 def hysteresis_term(
     weight: float,
     has_previous: bool,
