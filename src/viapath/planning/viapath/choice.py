@@ -34,9 +34,10 @@ if TYPE_CHECKING:
 
 
 def extra_critics(planner: Planning) -> tuple[Critic, ...]:
-    """The planner's critics after the paper's (:data:`.critics.PAPER_CRITICS`, which the compiled choice sums
-    itself): the choice scores these with their own ``score`` between its two halves. The critics must begin
-    with the paper's, in Eq. 1's order (:func:`.critics.critics_for`)."""
+    """The planner's critics after the paper's (:data:`.critics.PAPER_CRITICS`, whose term functions the compiled
+    choice calls itself, with their weights: :func:`_choice_constants`): the choice scores these with their own
+    ``score`` between its two halves. The critics must begin with the paper's, in Eq. 1's order
+    (:func:`.critics.critics_for`)."""
     critics = planner.critics
     cached = planner.__dict__.get("_extra_critics")  # (critics, the answer): every cycle asks
     if cached is None or cached[0] is not critics:
