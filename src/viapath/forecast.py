@@ -59,7 +59,6 @@ def protocol_windows(
     observed_rows: int = OBSERVED_ROWS,
     predicted_rows: int = PREDICTED_ROWS,
     min_people: int = 2,
-    frames_per_row: int = 10,
 ) -> Iterator[Window]:
     """Yield the protocol's :class:`Window` s of a 4-column table ``frame id x y`` (rows sorted or not).
 

@@ -60,9 +60,6 @@ class Segments:
     def __len__(self) -> int:
         return len(self.starts)
 
-    def cluster_points(self, k: int) -> np.ndarray:
-        return self.points[self.starts[k] : self.starts[k] + self.counts[k]]
-
     @classmethod
     def empty(cls) -> Segments:
         i, b = np.zeros(0, dtype=int), np.zeros(0, dtype=bool)

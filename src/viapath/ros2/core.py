@@ -92,7 +92,6 @@ class ScannerHealth:
     model: ScannerModel | None
     expected_frame: str
     last_good_s: float | None = None  # node clock time of the last good scan
-    last_stamp_s: float | None = None
     pending: tuple[float, np.ndarray] | None = None  # (stamp, ranges) not yet used by a cycle
     good: int = 0
     refused: dict[str, int] = field(default_factory=dict)
@@ -719,7 +718,6 @@ class PlannerCore:
         """Keep an accepted scan for the next cycle; returns whether that cycle is due now."""
         if self.last_cycle_stamp_s is not None and stamp_s < self.last_cycle_stamp_s - 1e-9:
             self._time_jump(f"scan stamp went back {self.last_cycle_stamp_s - stamp_s:.3f} s")
-        h.last_stamp_s = stamp_s
         h.last_good_s = now_s
         h.good += 1
         waited_a_period = h.pending is not None  # this scanner delivered twice: the others are late, go on

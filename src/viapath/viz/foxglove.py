@@ -958,8 +958,6 @@ def record_episode(
 
 # -- benchmark failures ----------------------------------------------------------------------------
 
-FAILURE_REASONS = ("collision", "at_fault_collision", "outside_corridor", "missed_goal")
-
 
 def failure_reasons(row: dict) -> list[str]:
     """Why a benchmark row is a failure (empty: it is not). Rows with an error are not episodes."""
