@@ -5,12 +5,29 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from viapath.perception.circle_fit import fit_circle, fit_circles
+from viapath.perception.circle_fit import fit_circles
 from viapath.perception.detection import DetectorParams, detect
 from viapath.perception.fusion import blind_region, covered
 from viapath.perception.raycast import simulate_scan
 from viapath.perception.scanner import paper_scanners
-from viapath.perception.segmentation import SegmentationParams, segment_beams, segment_scan
+from viapath.perception.segmentation import SegmentationParams, Segments, segment_beams
+
+
+def fit_circle(points: np.ndarray, sensor_origin=(0.0, 0.0), **options):
+    """One cluster through :func:`fit_circles`: returns ``(centre (2,), radius_m, rms_m)``."""
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    fits = fit_circles(
+        points, np.array([0]), np.array([len(points)]), np.asarray(sensor_origin, float)[None, :], **options
+    )
+    return fits.centres[0], float(fits.radii_m[0]), float(fits.rms_m[0])
+
+
+def segment_scan(
+    ranges_m: np.ndarray, angles_rad: np.ndarray, params: SegmentationParams = SegmentationParams()
+) -> Segments:
+    """One sanitised scan (NaN = invalid) in its own frame through :func:`segment_beams`."""
+    ranges_m = np.asarray(ranges_m, dtype=float)
+    return segment_beams(ranges_m, angles_rad, 0.0, 0.0, np.zeros(len(ranges_m), dtype=int), params)
 
 
 def arc(centre, radius, sensor, n, noise, rng, half_angle=np.pi / 2):

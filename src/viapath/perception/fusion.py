@@ -79,10 +79,6 @@ class BlindRegion:
         return robot_to_world(self.polygon_robot(far_m), robot_pose)
 
 
-def _in_sector(angles, start, end):
-    return np.mod(angles - start, 2 * np.pi) <= np.mod(end - start, 2 * np.pi) + 1e-12
-
-
 @lru_cache(maxsize=32)
 def blind_region(
     scanners: tuple[ScannerModel, ...],

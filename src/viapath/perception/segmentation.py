@@ -94,14 +94,6 @@ class BeamTables:
         return cls(np.cos(angles_rad), np.sin(angles_rad), sin_gap, sin_rest)
 
 
-def segment_scan(
-    ranges_m: np.ndarray, angles_rad: np.ndarray, params: SegmentationParams = SegmentationParams()
-) -> Segments:
-    """Cluster one sanitised scan (NaN = invalid) in its own frame."""
-    ranges_m = np.asarray(ranges_m, dtype=float)
-    return segment_beams(ranges_m, angles_rad, 0.0, 0.0, np.zeros(len(ranges_m), dtype=int), params)
-
-
 def segment_beams(
     ranges_m,
     angles_rad,
