@@ -59,7 +59,6 @@ def protocol_windows(
     observed_rows: int = OBSERVED_ROWS,
     predicted_rows: int = PREDICTED_ROWS,
     min_people: int = 2,
-    frames_per_row: int = 10,
 ) -> Iterator[Window]:
     """Yield the protocol's :class:`Window` s of a 4-column table ``frame id x y`` (rows sorted or not).
 
@@ -161,29 +160,38 @@ class SocialForecastParams:
     step_s: float = 0.2
 
 
-def _repulsion(positions: np.ndarray, velocities: np.ndarray, params: SocialForecastParams) -> np.ndarray:
-    """Sum over b of Helbing's elliptic repulsion on each a (N, 2), with field-of-view weights."""
-    n = len(positions)
-    if n < 2 or params.strength_m2ps2 == 0.0:
+def elliptic_repulsion(
+    positions: np.ndarray,
+    velocities: np.ndarray,
+    shrink_m: np.ndarray | float,
+    potential: tuple[float, float, float],
+    view: tuple[float, float],
+) -> np.ndarray:
+    """Helbing's elliptic repulsion summed over b on each a (N, 2): ``shrink_m`` (scalar or (N, N)) off each
+    centre distance, ``potential`` V0, σ, Δt of Eq. 4, forces outside the ``view`` (half-angle, weight) weighed
+    less (Eq. 8). For the social-force forecast and the simulated crowd."""
+    strength_m2ps2, range_m, step_time_s = potential
+    if len(positions) < 2 or strength_m2ps2 == 0.0:
         return np.zeros_like(positions)
-    r = positions[:, None, :] - positions[None, :, :]
+    field_of_view_rad, outside_view_weight = view
+    r = positions[:, None, :] - positions[None, :, :]  # r_ab = r_a - r_b, (N, N, 2)
+    # Surface distance, expressed as a centre distance for the point-pedestrian formula.
     centre = np.hypot(r[..., 0], r[..., 1])
-    shrink = 2.0 * params.radius_m
-    r = r * np.where(centre > 1e-9, np.maximum(centre - shrink, 1e-3) / np.maximum(centre, 1e-9), 1.0)[..., None]
-    s = velocities[None, :, :] * params.step_time_s
+    r = r * np.where(centre > 1e-9, np.maximum(centre - shrink_m, 1e-3) / np.maximum(centre, 1e-9), 1.0)[..., None]
+    s = velocities[None, :, :] * step_time_s  # v_b dt e_b, (1, N, 2)
     r_norm = np.maximum(np.hypot(r[..., 0], r[..., 1]), 1e-9)
     rs = r - s
     rs_norm = np.maximum(np.hypot(rs[..., 0], rs[..., 1]), 1e-9)
     b = np.maximum(0.5 * np.sqrt(np.maximum((r_norm + rs_norm) ** 2 - np.sum(s * s, axis=-1), 1e-12)), 1e-6)
     grad_b = ((r_norm + rs_norm) / (4.0 * b))[..., None] * (r / r_norm[..., None] + rs / rs_norm[..., None])
-    force = (params.strength_m2ps2 / params.range_m * np.exp(-b / params.range_m))[..., None] * grad_b
-    idx = np.arange(n)
-    force[idx, idx] = 0.0
+    force = (strength_m2ps2 / range_m * np.exp(-b / range_m))[..., None] * grad_b  # along +grad b (away from b)
+    idx = np.arange(len(positions))
+    force[idx, idx] = 0.0  # no self-interaction
     speed = np.hypot(velocities[:, 0], velocities[:, 1])
     heading = np.where(speed[:, None] > 1e-9, velocities / np.maximum(speed, 1e-9)[:, None], 0.0)
     f_norm = np.hypot(force[..., 0], force[..., 1])
-    in_view = np.sum(heading[:, None, :] * (-force), axis=-1) >= f_norm * np.cos(params.field_of_view_rad)
-    weight = np.where(in_view | (speed[:, None] <= 1e-9), 1.0, params.outside_view_weight)
+    in_view = np.sum(heading[:, None, :] * (-force), axis=-1) >= f_norm * np.cos(field_of_view_rad)
+    weight = np.where(in_view | (speed[:, None] <= 1e-9), 1.0, outside_view_weight)
     return np.sum(weight[..., None] * force, axis=1)
 
 
@@ -203,7 +211,13 @@ def social_force_forecast(
     out = np.empty((len(position), steps, 2))
     for k in range(steps):
         for _ in range(substeps):
-            accel = (desired - velocity) / params.relaxation_time_s + _repulsion(position, velocity, params)
+            accel = (desired - velocity) / params.relaxation_time_s + elliptic_repulsion(
+                position,
+                velocity,
+                2.0 * params.radius_m,
+                (params.strength_m2ps2, params.range_m, params.step_time_s),
+                (params.field_of_view_rad, params.outside_view_weight),
+            )
             velocity = velocity + h * accel
             speed = np.hypot(velocity[:, 0], velocity[:, 1])
             velocity *= np.where(speed > cap, cap / np.maximum(speed, 1e-12), 1.0)[:, None]

@@ -52,7 +52,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from viapath.guard_checks import Braking, braking_points, first_touched, obstacles_sound
+from viapath.guard_checks import Braking, first_touched, obstacles_sound
 from viapath.observation import (
     Command,
     Decision,
@@ -489,37 +489,7 @@ def stopping_distance_m(speed_mps: float, limits: MotionLimits, config: GuardCon
     return v * config.control_period_s + v * v / (2.0 * max(limits.max_accel_mps2, 1e-9)) + config.brake_margin_m
 
 
-BRAKING_SAMPLES_PER_PERIOD = 5  # braking_path's samples of the held command
-
-
-def braking_path(
-    robot: RobotState,
-    command: Command,
-    limits: MotionLimits,
-    period_s: float,
-    samples_per_period: int = BRAKING_SAMPLES_PER_PERIOD,
-) -> np.ndarray:
-    """Positions (S, 2) of the robot holding ``command`` for ``period_s`` and then commanded to stop
-    until at rest, stepped as :func:`viapath.kinematics.step` (the drive's acceleration limits), from
-    the first sample on (the current position excluded): :func:`viapath.guard_checks.braking_points`."""
-    braking = Braking(
-        float(limits.max_speed_mps),
-        float(limits.max_turn_rate_radps),
-        float(limits.max_accel_mps2),
-        float(limits.max_turn_accel_radps2),
-        float(period_s),
-        int(samples_per_period),
-    )
-    return braking_points(
-        float(robot.position[0]),
-        float(robot.position[1]),
-        float(robot.heading_rad),
-        float(robot.speed_mps),
-        float(robot.turn_rate_radps),
-        float(command.speed_mps),
-        float(command.turn_rate_radps),
-        braking,
-    )
+BRAKING_SAMPLES_PER_PERIOD = 5  # the braking roll-out's samples of the held command
 
 
 def check_command(

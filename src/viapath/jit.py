@@ -171,15 +171,3 @@ def compiled(
 def python_function(function: Callable[..., Any]) -> Callable[..., Any]:
     """The plain Python function behind a compiled one (itself when compilation is off)."""
     return getattr(function, "py_func", function)
-
-
-def compilation_statistics() -> dict[str, int]:
-    """How many compiled versions of the steps decorated in this process it loaded from the cache (``hits``) and
-    compiled (``misses``): zeros in a plain process."""
-    hits = misses = 0
-    for function in _state["decorated"]:
-        stats = getattr(function, "stats", None)
-        if stats is not None:
-            hits += sum(stats.cache_hits.values())
-            misses += sum(stats.cache_misses.values())
-    return {"hits": hits, "misses": misses}

@@ -122,7 +122,7 @@ def test_every_static_shape_reaches_the_static_layer_at_its_true_distance(tmp_pa
     static layer (segments, padded) equals shapely's distance to IR-SIM's own geometry."""
     import irsim
 
-    from viapath.integrations.irsim import objects_observation
+    from viapath.integrations.irsim import people_of, static_of
     from viapath.static import point_segment_distances
 
     world = _head_on_world({})
@@ -141,7 +141,7 @@ def test_every_static_shape_reaches_the_static_layer_at_its_true_distance(tmp_pa
     shutil.copy(Path(maps.__path__[0]) / "cave.png", tmp_path / "cave.png")  # the grid map IR-SIM ships
     env = irsim.make(str(write_world(tmp_path, world)), display=False, disable_all_plot=True)
     robot = env.robot
-    people, layer = objects_observation(list(env.obstacle_list))
+    people, layer = people_of(list(env.obstacle_list)), static_of(list(env.obstacle_list))
     assert len(people) == 0
     shapes = {obj.shape for obj in env.obstacle_list}
     assert {"rectangle", "polygon", "linestring", "circle", "map"} <= shapes
@@ -152,7 +152,7 @@ def test_every_static_shape_reaches_the_static_layer_at_its_true_distance(tmp_pa
     assert ours == pytest.approx(theirs, abs=0.02)
     # Each shape on its own, at its own distance (none dropped, none merged into another).
     for k, obj in enumerate(env.obstacle_list):
-        _, one = objects_observation([obj])
+        one = static_of([obj])
         assert len(one) > 0, obj.shape
         d = float((point_segment_distances(centre[None], one.segments)[0] - one.padding_m).min())
         assert d == pytest.approx(float(robot.geometry.centroid.distance(obj.geometry)), abs=0.02), (k, obj.shape)

@@ -5,12 +5,29 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from viapath.perception.circle_fit import fit_circle, fit_circles
+from viapath.perception.circle_fit import fit_circles
 from viapath.perception.detection import DetectorParams, detect
-from viapath.perception.fusion import blind_region, covered, fuse_scans
+from viapath.perception.fusion import blind_region, covered
 from viapath.perception.raycast import simulate_scan
 from viapath.perception.scanner import paper_scanners
-from viapath.perception.segmentation import SegmentationParams, segment_beams, segment_scan
+from viapath.perception.segmentation import SegmentationParams, Segments, segment_beams
+
+
+def fit_circle(points: np.ndarray, sensor_origin=(0.0, 0.0), **options):
+    """One cluster through :func:`fit_circles`: returns ``(centre (2,), radius_m, rms_m)``."""
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    fits = fit_circles(
+        points, np.array([0]), np.array([len(points)]), np.asarray(sensor_origin, float)[None, :], **options
+    )
+    return fits.centres[0], float(fits.radii_m[0]), float(fits.rms_m[0])
+
+
+def segment_scan(
+    ranges_m: np.ndarray, angles_rad: np.ndarray, params: SegmentationParams = SegmentationParams()
+) -> Segments:
+    """One sanitised scan (NaN = invalid) in its own frame through :func:`segment_beams`."""
+    ranges_m = np.asarray(ranges_m, dtype=float)
+    return segment_beams(ranges_m, angles_rad, 0.0, 0.0, np.zeros(len(ranges_m), dtype=int), params)
 
 
 def arc(centre, radius, sensor, n, noise, rng, half_angle=np.pi / 2):
@@ -138,7 +155,7 @@ def test_fusion_covers_360_degrees_and_keeps_the_source():
     centres = np.stack([2.5 * np.cos(angles), 2.5 * np.sin(angles)], -1)
     scanners = paper_scanners()
     scans = [simulate_scan(s, (0, 0, 0), centres, np.full(36, 0.1)) for s in scanners]
-    fused = fuse_scans(scanners, scans)
+    fused = detect(scanners, scans).fused
     bearings = np.degrees(np.arctan2(fused.points_robot[:, 1], fused.points_robot[:, 0]))
     hist, _ = np.histogram(bearings, bins=36, range=(-180, 180))
     assert (hist > 0).all()
@@ -159,8 +176,6 @@ def test_blind_region_of_the_paper_set_up_and_of_narrow_scanners():
     assert np.isinf(narrow.blind_depth_m).any()
     assert not covered(paper_scanners(beam_count=513), np.array([[0.0, 3.0]]))[0]
     assert covered(paper_scanners(), np.array([[0.0, 3.0]]))[0]
-    polygons = narrow.sector_polygons_world((1.0, 2.0, 0.3), far_m=2.0)
-    assert len(polygons) == 2 and all(p.shape[1] == 2 for p in polygons)
 
 
 @pytest.mark.skipif(

@@ -215,28 +215,6 @@ def test_tracking_errors_nearest_truth_and_false_tracks():
     assert np.isnan(tracking_errors([Obstacles.empty()], [world])["track_position_rmse_m"])
 
 
-def test_draw_laser_overlay_draws_points_unseen_region_and_tracks():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from viapath.perception.plotting import draw_laser
-
-    perception = LaserPerception()
-    perception.reset(np.random.default_rng(0))
-    for k in range(5):
-        perception.observe(snapshot(k * 0.1, (0, 0, 0), [[2.0, 0.5], [-1.5, -0.5]], [[0.0, 0.0], [0.0, 0.0]]))
-    fig, ax = plt.subplots()
-    draw_laser(ax, perception)
-    confirmed = sum(t.confirmed for t in perception.tracks)
-    assert confirmed == 2
-    # one unseen polygon, one radius circle per track and one 2σ circle per confirmed track
-    assert len(ax.patches) == 1 + len(perception.tracks) + confirmed
-    assert len(ax.collections[0].get_offsets()) == len(perception.last_points_world) > 0
-    plt.close(fig)
-
-
 def test_scans_command_error_keeps_brackets_of_the_install_hint(monkeypatch):
     """Rich markup must not eat "[ros]" in "pip install 'viapath[ros]'" (the error is one plain line)."""
     import typer

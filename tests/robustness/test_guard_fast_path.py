@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from viapath import guard
+from viapath.guard_checks import Braking, braking_points
 from viapath.observation import Observation, Obstacles, RobotState
 
 _ODD = [np.nan, np.inf, -np.inf, -0.1, 0.0, 0.3, 0.6, 0.9, 1.2, 11.0, 2e6, -2e6]
@@ -129,6 +130,36 @@ def test_a_planner_inside_a_guarded_one_is_not_inspected_again(monkeypatch):
     assert any(d.plan.extras.get("guard") for d in once)  # the repair was there to compare
 
 
+def braking_path(
+    robot: RobotState,
+    command,
+    limits,
+    period_s: float,
+    samples_per_period: int = guard.BRAKING_SAMPLES_PER_PERIOD,
+) -> np.ndarray:
+    """The guard's braking roll-out (:func:`viapath.guard_checks.braking_points`) of the robot holding
+    ``command`` for ``period_s`` and then commanded to stop until at rest: positions (S, 2), the current
+    position excluded."""
+    braking = Braking(
+        float(limits.max_speed_mps),
+        float(limits.max_turn_rate_radps),
+        float(limits.max_accel_mps2),
+        float(limits.max_turn_accel_radps2),
+        float(period_s),
+        int(samples_per_period),
+    )
+    return braking_points(
+        float(robot.position[0]),
+        float(robot.position[1]),
+        float(robot.heading_rad),
+        float(robot.speed_mps),
+        float(robot.turn_rate_radps),
+        float(command.speed_mps),
+        float(command.turn_rate_radps),
+        braking,
+    )
+
+
 def test_braking_path_steps_as_the_drive_model():
     """The guard's braking roll-out on plain floats gives kinematics.step's positions exactly: the held
     command (within the limits or not, not finite) for one period, then the stop until at rest."""
@@ -164,9 +195,7 @@ def test_braking_path_steps_as_the_drive_model():
         if trial % 50 == 0:
             v = np.nan
         command = Command(v, w)
-        np.testing.assert_array_equal(
-            guard.braking_path(robot, command, limits, 0.1), reference(robot, command, limits, 0.1)
-        )
+        np.testing.assert_array_equal(braking_path(robot, command, limits, 0.1), reference(robot, command, limits, 0.1))
 
 
 @settings(max_examples=400, deadline=None, derandomize=True)

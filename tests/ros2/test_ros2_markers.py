@@ -19,13 +19,30 @@ def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.nd
     return np.hypot(*(points - (a + t[:, None] * d)).T)
 
 
+def tracks_from_markers(markers) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(ids, positions (N, 2), velocities (N, 2)) back from a MarkerArray of :func:`marker_array`."""
+    ids, positions, velocities = [], [], []
+    arrows = {m.id: m for m in markers.markers if m.ns == "velocities"}
+    for m in markers.markers:
+        if m.ns == "tracks":
+            ids.append(m.id)
+            positions.append((m.pose.position.x, m.pose.position.y))
+            a = arrows.get(m.id)
+            velocities.append((a.points[1].x - a.points[0].x, a.points[1].y - a.points[0].y) if a else (np.nan, np.nan))
+    return (
+        np.array(ids, dtype=int),
+        np.array(positions, dtype=float).reshape(-1, 2),
+        np.array(velocities, dtype=float).reshape(-1, 2),
+    )
+
+
 def test_markers_of_a_cycle():
     from viapath.observation import Command, Decision, Obstacles, Plan
     from viapath.path import DesignatedPath
     from viapath.planning import make_planner
     from viapath.ros2.convert import time_msg
     from viapath.ros2.core import CycleResult
-    from viapath.ros2.markers import MarkerScenes, marker_array, tracks_from_markers
+    from viapath.ros2.markers import MarkerScenes, marker_array
 
     path = DesignatedPath([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]], half_widths_m=[1.0, 0.5])
     planner = make_planner("viapath", path, nominal_speed_mps=0.2)
@@ -99,7 +116,7 @@ def test_a_braking_cycle_without_a_decision_still_shows_the_tracks():
     from viapath.planning import make_planner
     from viapath.ros2.convert import time_msg
     from viapath.ros2.core import CycleResult
-    from viapath.ros2.markers import MarkerScenes, marker_array, tracks_from_markers
+    from viapath.ros2.markers import MarkerScenes, marker_array
 
     path = DesignatedPath([[0.0, 0.0], [4.0, 0.0]], half_widths_m=1.0)
     planner = make_planner("viapath", path, nominal_speed_mps=0.2)

@@ -10,10 +10,31 @@ import pytest
 
 pytest.importorskip("foxglove.layouts", reason="needs the viz extra (foxglove-sdk)")
 
-from viapath.viz.foxglove import METRICS_SCHEMA, expected_topics
+from viapath.viz import foxglove as fg
+from viapath.viz.foxglove import METRICS_SCHEMA
 from viapath.viz.foxglove_layout import LAYOUT_FILE, layout_json
 
 REPO = Path(__file__).resolve().parents[2]
+
+
+def expected_topics(scanner_names: list[str] | tuple[str, ...] = ()) -> dict[str, str]:
+    """Topic → schema name of a run (laser topics only when there are scanners)."""
+    topics = {
+        fg.TF: "foxglove.FrameTransforms",
+        fg.FOOTPRINT: "foxglove.SceneUpdate",
+        fg.TRACKS: "foxglove.SceneUpdate",
+        fg.PATH: "foxglove.SceneUpdate",
+        fg.STATIC: "foxglove.SceneUpdate",
+        fg.CANDIDATES: "foxglove.SceneUpdate",
+        fg.CHOSEN: "foxglove.SceneUpdate",
+        fg.COSTS: "viapath.PlanCosts",
+        fg.XYT: "foxglove.SceneUpdate",
+        fg.METRICS: "viapath.Metrics",
+    }
+    if scanner_names:
+        topics.update({fg.BLIND: "foxglove.SceneUpdate", fg.DETECTIONS: "foxglove.SceneUpdate"})
+        topics.update({fg.scan_topic(name): "foxglove.LaserScan" for name in scanner_names})
+    return topics
 
 
 def _walk(node):

@@ -13,6 +13,21 @@ from google.protobuf import descriptor_pb2, descriptor_pool, message_factory  # 
 from viapath.viz import protobuf_wire as wire  # noqa: E402
 
 
+# foxglove.TriangleListPrimitive: pose 1, points 2, color 3, colors 4, indices 5
+def triangle_list_primitive(vertices_xyz: np.ndarray, triangles: np.ndarray, color: bytes, pose: bytes) -> bytes:
+    return (
+        wire.message_field(1, pose)
+        + wire.points_field(2, vertices_xyz)
+        + wire.message_field(3, color)
+        + wire.fixed32_packed_field(5, np.asarray(triangles).ravel())
+    )
+
+
+# foxglove.SceneUpdate: deletions 1, entities 2
+def scene_update(deletions: list[bytes], entities: list[bytes]) -> bytes:
+    return b"".join(wire.message_field(1, d) for d in deletions) + b"".join(wire.message_field(2, e) for e in entities)
+
+
 def _scene_update_class():
     files = descriptor_pb2.FileDescriptorSet.FromString(messages.SceneUpdate.get_schema().data)
     pool = descriptor_pool.DescriptorPool()
@@ -57,7 +72,7 @@ def test_scene_update_matches_the_sdk_encoding():
             )
         ],
     ).encode()
-    ours = wire.scene_update(
+    ours = scene_update(
         [m.SceneEntityDeletion(type=m.SceneEntityDeletionType.All).encode()],
         [
             wire.scene_entity(
@@ -65,7 +80,7 @@ def test_scene_update_matches_the_sdk_encoding():
                 "xyt",
                 "person-4",
                 lines=[wire.line_primitive(line_xyz, colour.encode(), pose.encode(), 0.02, wire.LINE_LOOP)],
-                triangles=[wire.triangle_list_primitive(vertices, triangles, colour.encode(), pose.encode())],
+                triangles=[triangle_list_primitive(vertices, triangles, colour.encode(), pose.encode())],
                 other=m.SceneEntity(texts=[text]).encode(),
             )
         ],

@@ -46,7 +46,7 @@ import statistics
 import tempfile
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -294,17 +294,6 @@ def open_study(url: str, name: str, seed: int, sampler: str, constraints: Constr
             "name (or the same settings to continue it)"
         )
     return study
-
-
-@dataclass
-class TuneResult:
-    study: Any
-    front: list[Any]  # Pareto-front trials (feasible only)
-    paper: Any | None  # the reference trial
-    ran: int
-    wall_s: float
-    test: dict[int, dict[str, Any]] = field(default_factory=dict)  # trial number → test metrics
-    ranking: list[int] = field(default_factory=list)  # trial numbers, best first on the test suite
 
 
 def complete_trials(study) -> list[Any]:

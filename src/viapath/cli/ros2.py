@@ -49,17 +49,26 @@ def node(
     use_sim_time: bool = typer.Option(False, "--use-sim-time", help="Run on /clock (as with the simulator node)."),
 ) -> None:
     """The planner node: scans + odometry + designated path in, cmd_vel out (see docs/ros2.md)."""
-    from viapath.ros2.settings import ParameterError, read_params_file, validate
+    _run_node(_ros_args(ctx.args), params_file, use_sim_time)
 
-    ros_args = _ros_args(ctx.args)
+
+def _run_node(ros_args: list[str], params_file: Path | None, use_sim_time: bool, nav2_name: str | None = None) -> None:
+    """Check the parameters file (as the node named ``nav2_name`` with ``interface: nav2`` when given), then run
+    the node with it and ``ros_args``."""
+    from viapath.ros2.settings import NODE_NAME, ParameterError, read_params_file, validate
+
     if params_file is not None:
         try:
-            values = read_params_file(params_file)
+            values = read_params_file(params_file, node_name=nav2_name or NODE_NAME)
             values.pop("use_sim_time", None)
+            if nav2_name is not None:
+                values.setdefault("interface", "nav2")
             validate(values)
         except ParameterError as error:
             fail(f"{params_file}: {error}")
         ros_args = ["--params-file", str(params_file), *ros_args]
+    if nav2_name is not None:
+        ros_args = ["-r", f"__node:={nav2_name}", "-p", "interface:=nav2", "-p", "autostart:=false", *ros_args]
     if use_sim_time:
         ros_args = [*ros_args, "-p", "use_sim_time:=true"]
     _need_rclpy()
@@ -80,25 +89,7 @@ def nav2(
     ),
 ) -> None:
     """The planner as Nav2's controller server: serves follow_path, honours speed_limit, reads TF (see docs/nav2.md)."""
-    from viapath.ros2.settings import ParameterError, read_params_file, validate
-
-    ros_args = _ros_args(ctx.args)
-    if params_file is not None:
-        try:
-            values = read_params_file(params_file, node_name=name)
-            values.pop("use_sim_time", None)
-            values.setdefault("interface", "nav2")
-            validate(values)
-        except ParameterError as error:
-            fail(f"{params_file}: {error}")
-        ros_args = ["--params-file", str(params_file), *ros_args]
-    ros_args = ["-r", f"__node:={name}", "-p", "interface:=nav2", "-p", "autostart:=false", *ros_args]
-    if use_sim_time:
-        ros_args = [*ros_args, "-p", "use_sim_time:=true"]
-    _need_rclpy()
-    from viapath.ros2.node import run_node
-
-    raise typer.Exit(run_node(ros_args))
+    _run_node(_ros_args(ctx.args), params_file, use_sim_time, nav2_name=name)
 
 
 @app.command(context_settings=_CONTEXT)

@@ -149,11 +149,6 @@ def static_of(external_objects: list[Any]) -> StaticLayer:
     return static_layer(polygons, polylines, circles, maps)
 
 
-def objects_observation(external_objects: list[Any]) -> tuple[Obstacles, StaticLayer]:
-    """People (moving objects) and the static layer (static ones) of IR-SIM's objects."""
-    return people_of(external_objects), static_of(external_objects)
-
-
 def _lidar(ego: Any) -> Any:
     for sensor in getattr(ego, "sensors", []) or []:
         if getattr(sensor, "sensor_type", "") == "lidar2d":

@@ -229,12 +229,3 @@ def _gauss_newton(points, s, m, mx, my, cx, cy, r, weight, target, iterations):
             cy -= d1
             r = abs(r - d2)
     return cx, cy, r, rms, i00, i01, i11
-
-
-def fit_circle(points: np.ndarray, sensor_origin=(0.0, 0.0), **options):
-    """Convenience for one cluster: returns ``(centre (2,), radius_m, rms_m)``."""
-    points = np.asarray(points, dtype=float).reshape(-1, 2)
-    fits = fit_circles(
-        points, np.array([0]), np.array([len(points)]), np.asarray(sensor_origin, float)[None, :], **options
-    )
-    return fits.centres[0], float(fits.radii_m[0]), float(fits.rms_m[0])

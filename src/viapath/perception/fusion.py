@@ -24,7 +24,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from viapath.perception.scanner import ScannerModel, sanitize_ranges
+from viapath.perception.scanner import ScannerModel
 
 
 @dataclass
@@ -44,31 +44,6 @@ def robot_to_world(points: np.ndarray, robot_pose) -> np.ndarray:
     c, s = np.cos(heading), np.sin(heading)
     points = np.asarray(points, dtype=float).reshape(-1, 2)
     return np.stack([x + c * points[:, 0] - s * points[:, 1], y + s * points[:, 0] + c * points[:, 1]], axis=-1)
-
-
-def scanner_points_robot(scanner: ScannerModel, ranges_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Valid points of one scan in the robot frame and their beam indices (input may hold 0/NaN/inf)."""
-    ranges = sanitize_ranges(ranges_m, scanner.range_min_m, scanner.range_max_m)
-    if len(ranges) != scanner.beam_count:
-        raise ValueError(f"scanner {scanner.name!r} has {scanner.beam_count} beams, scan has {len(ranges)}")
-    beams = np.flatnonzero(np.isfinite(ranges))
-    angles = scanner.beam_angles_rad()[beams] + scanner.mount_yaw_rad
-    r = ranges[beams]
-    points = np.stack([scanner.mount_x_m + r * np.cos(angles), scanner.mount_y_m + r * np.sin(angles)], axis=-1)
-    return points, beams
-
-
-def fuse_scans(scanners, scans) -> FusedScan:
-    """One robot-frame point set from the scans of ``scanners`` (same order)."""
-    parts, which, beams = [], [], []
-    for index, (scanner, ranges) in enumerate(zip(scanners, scans, strict=True)):
-        points, beam = scanner_points_robot(scanner, ranges)
-        parts.append(points)
-        beams.append(beam)
-        which.append(np.full(len(beam), index))
-    if not parts:
-        return FusedScan(np.zeros((0, 2)), np.zeros(0, dtype=int), np.zeros(0, dtype=int))
-    return FusedScan(np.concatenate(parts), np.concatenate(which), np.concatenate(beams))
 
 
 def covered(scanners, points_robot: np.ndarray) -> np.ndarray:
@@ -102,25 +77,6 @@ class BlindRegion:
 
     def polygon_world(self, robot_pose, far_m: float | None = None) -> np.ndarray:
         return robot_to_world(self.polygon_robot(far_m), robot_pose)
-
-    def sector_polygons_world(self, robot_pose, far_m: float | None = None) -> list[np.ndarray]:
-        """One polygon per blind sector beyond the robot body (for drawing): body arc + blind depth."""
-        polygon = self.polygon_robot(far_m)
-        out = []
-        for start, end in self.sectors_rad:
-            inside = _in_sector(self.angles_rad, start, end)
-            if not inside.any():
-                continue
-            order = np.argsort(np.mod(self.angles_rad[inside] - start, 2 * np.pi))
-            outer = polygon[inside][order]
-            inner_angles = (start + np.mod(self.angles_rad[inside] - start, 2 * np.pi)[order])[::-1]
-            inner = self.robot_radius_m * np.stack([np.cos(inner_angles), np.sin(inner_angles)], axis=-1)
-            out.append(robot_to_world(np.concatenate([outer, inner]), robot_pose))
-        return out
-
-
-def _in_sector(angles, start, end):
-    return np.mod(angles - start, 2 * np.pi) <= np.mod(end - start, 2 * np.pi) + 1e-12
 
 
 @lru_cache(maxsize=32)

@@ -120,7 +120,6 @@ class LaserPerception(Perception):
         self.last_static = StaticLayer.empty()
         self.last_scans: list[np.ndarray] = []
         self.last_points_world = np.zeros((0, 2))
-        self.last_points_scanner = np.zeros(0, dtype=int)
         self.last_detections_world = Detections.empty()
         self.last_robot_pose = np.zeros(3)
         self._reported: list[Obstacles] = []
@@ -164,7 +163,6 @@ class LaserPerception(Perception):
         self.last_scans = scans
         detections = detect(self.scanners, scans, self.detector_params)
         self.last_points_world = detections.fused.to_world(robot_pose)  # type: ignore[union-attr]  # scans given
-        self.last_points_scanner = detections.fused.scanner_index  # type: ignore[union-attr]
         detections = detections.transformed(robot_pose)
         self.last_detections_world = detections
         tracker = self._tracker

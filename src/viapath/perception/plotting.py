@@ -19,61 +19,6 @@ def _pyplot():
     return plt
 
 
-def draw_laser(
-    ax,
-    perception,
-    *,
-    scan_color="tab:red",
-    track_color="tab:blue",
-    blind_far_m: float = 1.0,
-    velocity_horizon_s: float = 1.0,
-) -> None:
-    """Overlay on a world-frame axis: the last fused scan, the unseen region and the live tracks.
-
-    ``perception`` is a :class:`~viapath.perception.laser.LaserPerception` after ``observe``.
-    Confirmed tracks: solid circle (radius), dashed 2σ position circle, arrow = velocity × ``velocity_horizon_s``;
-    tentative tracks: dotted.
-    """
-    from matplotlib.patches import Circle, Polygon
-
-    points = perception.last_points_world
-    if len(points):
-        ax.scatter(points[:, 0], points[:, 1], s=2, color=scan_color, alpha=0.6, label="scan points", zorder=3)
-    polygon = perception.blind_polygon_world(blind_far_m)
-    ax.add_patch(Polygon(polygon, closed=True, facecolor="0.5", alpha=0.25, edgecolor="none", label="unseen", zorder=1))
-    for track in perception.tracks:
-        style = "-" if track.confirmed else ":"
-        ax.add_patch(Circle(track.position, track.radius_m, fill=False, linestyle=style, color=track_color, zorder=4))
-        sigma = float(np.sqrt(max(np.linalg.eigvalsh(track.covariance[:2, :2])[-1], 0.0)))
-        if track.confirmed:
-            ax.add_patch(
-                Circle(
-                    track.position,
-                    track.radius_m + 2 * sigma,
-                    fill=False,
-                    linestyle="--",
-                    linewidth=0.6,
-                    color=track_color,
-                    zorder=4,
-                )
-            )
-            ax.annotate(
-                "",
-                track.position + track.velocity * velocity_horizon_s,
-                track.position,
-                arrowprops=dict(arrowstyle="->", color=track_color),
-                zorder=5,
-            )
-            ax.text(
-                track.position[0],
-                track.position[1] + track.radius_m + 0.05,
-                f"#{track.track_id}",
-                fontsize=7,
-                color=track_color,
-                ha="center",
-            )
-
-
 def plot_recording(
     result, path, title: str = "", min_travel_m: float = 1.0, point_scans: int = 40, dpi: int = 110
 ) -> Path:

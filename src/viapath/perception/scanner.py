@@ -19,7 +19,7 @@ What the sources leave open and we chose:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -86,9 +86,6 @@ class ScannerModel:
         else:
             raise ValueError(f"facing must be 'forward' or 'backward', got {facing!r}")
         return cls(name=name, **{**pose, **overrides})
-
-    def with_(self, **changes) -> ScannerModel:
-        return replace(self, **changes)
 
     @property
     def field_of_view_rad(self) -> float:

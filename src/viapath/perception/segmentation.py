@@ -60,9 +60,6 @@ class Segments:
     def __len__(self) -> int:
         return len(self.starts)
 
-    def cluster_points(self, k: int) -> np.ndarray:
-        return self.points[self.starts[k] : self.starts[k] + self.counts[k]]
-
     @classmethod
     def empty(cls) -> Segments:
         i, b = np.zeros(0, dtype=int), np.zeros(0, dtype=bool)
@@ -95,14 +92,6 @@ class BeamTables:
             sin_gap[d - 1, :-d] = np.sin(angle)
             sin_rest[d - 1, :-d] = np.sin(params.grazing_angle_rad - angle)
         return cls(np.cos(angles_rad), np.sin(angles_rad), sin_gap, sin_rest)
-
-
-def segment_scan(
-    ranges_m: np.ndarray, angles_rad: np.ndarray, params: SegmentationParams = SegmentationParams()
-) -> Segments:
-    """Cluster one sanitised scan (NaN = invalid) in its own frame."""
-    ranges_m = np.asarray(ranges_m, dtype=float)
-    return segment_beams(ranges_m, angles_rad, 0.0, 0.0, np.zeros(len(ranges_m), dtype=int), params)
 
 
 def segment_beams(

@@ -136,18 +136,6 @@ def path_message(waypoints, frame_id: str, stamp):
     return msg
 
 
-def waypoints_from_path(msg) -> np.ndarray:
-    return np.array([[p.pose.position.x, p.pose.position.y] for p in msg.poses], dtype=float).reshape(-1, 2)
-
-
-def orientations_from_path(msg) -> np.ndarray:
-    """(N, 4) quaternions (x, y, z, w) of a ``nav_msgs/Path``'s poses."""
-    return np.array(
-        [[p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z, p.pose.orientation.w] for p in msg.poses],
-        dtype=float,
-    ).reshape(-1, 4)
-
-
 def laser_scan(
     frame_id: str,
     stamp,

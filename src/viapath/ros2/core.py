@@ -92,7 +92,6 @@ class ScannerHealth:
     model: ScannerModel | None
     expected_frame: str
     last_good_s: float | None = None  # node clock time of the last good scan
-    last_stamp_s: float | None = None
     pending: tuple[float, np.ndarray] | None = None  # (stamp, ranges) not yet used by a cycle
     good: int = 0
     refused: dict[str, int] = field(default_factory=dict)
@@ -606,49 +605,37 @@ class PlannerCore:
     ) -> bool:
         """Store one scan of scanner ``index``; returns whether a cycle is due now. A scan that cannot be
         read at all is refused (reason ``error``, with the exception's text) like any other bad scan."""
-        try:
-            return self._on_scan(
-                index, now_s, stamp_s, frame_id, angle_min_rad, angle_increment_rad, ranges, range_min_m, range_max_m
-            )
-        except Exception as error:
-            self.health[index].refuse("error", f"{type(error).__name__}: {error}")
-            return False
-
-    def _on_scan(
-        self,
-        index: int,
-        now_s: float,
-        stamp_s: float,
-        frame_id: str,
-        angle_min_rad: float,
-        angle_increment_rad: float,
-        ranges,
-        range_min_m: float,
-        range_max_m: float,
-    ) -> bool:
         h = self.health[index]
-        ranges = np.asarray(ranges, dtype=float).reshape(-1)
-        stamp_s, angle_min_rad, angle_increment_rad = float(stamp_s), float(angle_min_rad), float(angle_increment_rad)
-        range_min_m, range_max_m = float(range_min_m), float(range_max_m)
-        if h.expected_frame and frame_id != h.expected_frame:
-            h.refuse("frame", f"frame_id {frame_id!r}, expected {h.expected_frame!r}")
-            return False
-        if not (math.isfinite(stamp_s) and math.isfinite(angle_min_rad) and math.isfinite(angle_increment_rad)):
-            h.refuse("header", "a NaN or infinite stamp or angle")
-            return False
-        if angle_increment_rad < 0:  # clockwise scanner: store it counter-clockwise
-            ranges = ranges[::-1]
-            angle_min_rad, angle_increment_rad = (
-                angle_min_rad + (len(ranges) - 1) * angle_increment_rad,
-                -angle_increment_rad,
+        try:
+            ranges = np.asarray(ranges, dtype=float).reshape(-1)
+            stamp_s, angle_min_rad, angle_increment_rad = (
+                float(stamp_s),
+                float(angle_min_rad),
+                float(angle_increment_rad),
             )
-        if h.model is None and not self._make_scanner_model(
-            index, len(ranges), angle_min_rad, angle_increment_rad, range_min_m, range_max_m
-        ):
+            range_min_m, range_max_m = float(range_min_m), float(range_max_m)
+            if h.expected_frame and frame_id != h.expected_frame:
+                h.refuse("frame", f"frame_id {frame_id!r}, expected {h.expected_frame!r}")
+                return False
+            if not (math.isfinite(stamp_s) and math.isfinite(angle_min_rad) and math.isfinite(angle_increment_rad)):
+                h.refuse("header", "a NaN or infinite stamp or angle")
+                return False
+            if angle_increment_rad < 0:  # clockwise scanner: store it counter-clockwise
+                ranges = ranges[::-1]
+                angle_min_rad, angle_increment_rad = (
+                    angle_min_rad + (len(ranges) - 1) * angle_increment_rad,
+                    -angle_increment_rad,
+                )
+            if h.model is None and not self._make_scanner_model(
+                index, len(ranges), angle_min_rad, angle_increment_rad, range_min_m, range_max_m
+            ):
+                return False
+            if not self._scan_fits_model(h, ranges, angle_min_rad, angle_increment_rad):
+                return False
+            return self._store_scan(h, now_s, stamp_s, ranges)
+        except Exception as error:
+            h.refuse("error", f"{type(error).__name__}: {error}")
             return False
-        if not self._scan_fits_model(h, ranges, angle_min_rad, angle_increment_rad):
-            return False
-        return self._store_scan(h, now_s, stamp_s, ranges)
 
     def _make_scanner_model(
         self,
@@ -719,7 +706,6 @@ class PlannerCore:
         """Keep an accepted scan for the next cycle; returns whether that cycle is due now."""
         if self.last_cycle_stamp_s is not None and stamp_s < self.last_cycle_stamp_s - 1e-9:
             self._time_jump(f"scan stamp went back {self.last_cycle_stamp_s - stamp_s:.3f} s")
-        h.last_stamp_s = stamp_s
         h.last_good_s = now_s
         h.good += 1
         waited_a_period = h.pending is not None  # this scanner delivered twice: the others are late, go on

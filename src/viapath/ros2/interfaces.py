@@ -321,17 +321,3 @@ def load(progress=None) -> Path | None:
 def _from_cache() -> bool:
     module = sys.modules.get("nav2_msgs")
     return module is not None and str(cache_root()) in str(getattr(module, "__file__", ""))
-
-
-def type_hashes(prefix: Path | None = None) -> dict[str, str]:
-    """Type name -> ``RIHS01_…`` of every generated type (from the generator's JSON descriptions)."""
-    import json
-
-    prefix = install_prefix() if prefix is None else Path(prefix)
-    out: dict[str, str] = {}
-    for package in PACKAGES:
-        for file in sorted((prefix / "share" / package).glob("*/*.json")):
-            for item in json.loads(file.read_text())["type_hashes"]:
-                if item["type_name"].startswith(package + "/"):
-                    out[item["type_name"]] = item["hash_string"]
-    return out

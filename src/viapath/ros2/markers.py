@@ -150,20 +150,3 @@ def marker_array(scene: CycleScene, path: PathView | None, frame_id: str, stamp)
             Point, np.concatenate(segments)
         )
     return out
-
-
-def tracks_from_markers(markers) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(ids, positions (N, 2), velocities (N, 2)) back from a MarkerArray of :func:`marker_array`."""
-    ids, positions, velocities = [], [], []
-    arrows = {m.id: m for m in markers.markers if m.ns == "velocities"}
-    for m in markers.markers:
-        if m.ns == "tracks":
-            ids.append(m.id)
-            positions.append((m.pose.position.x, m.pose.position.y))
-            a = arrows.get(m.id)
-            velocities.append((a.points[1].x - a.points[0].x, a.points[1].y - a.points[0].y) if a else (np.nan, np.nan))
-    return (
-        np.array(ids, dtype=int),
-        np.array(positions, dtype=float).reshape(-1, 2),
-        np.array(velocities, dtype=float).reshape(-1, 2),
-    )

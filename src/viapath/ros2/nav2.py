@@ -79,13 +79,11 @@ class Nav2Interface:
         self.Result = FollowPath.Result
         # A dynamic transform older than failure_tolerance_s is stale: a goal waits for a fresh one as long.
         self.buffer = TransformBuffer(max_age_s=self.s.failure_tolerance_s)
-        self.transforms_refused = 0
         self.goal: _Goal | None = None
         self.mounts_done = not self.s.use_tf
-        self.clear_calls = 0
         self.finished: list[tuple[str, int, str]] = []
         self._subs = []
-        self._GoalResponse, self._CancelResponse = GoalResponse, CancelResponse
+        self._GoalResponse = GoalResponse
         self._outcomes: dict[bytes, tuple[str, object]] = {}
         # Goals are taken by the node's input thread (a goal of 100 000 poses takes seconds to become
         # Python objects): its callbacks run under the node's lock, the control loop goes on meanwhile.
@@ -172,7 +170,6 @@ class Nav2Interface:
             self.resolve_mounts()
 
     def _refuse_transform(self, t, why: str) -> None:
-        self.transforms_refused += 1
         self.core.events.append(f"transform {t.header.frame_id} -> {t.child_frame_id} refused: {why}")
         self.node.get_logger().error(self.core.events[-1])
 
@@ -206,7 +203,6 @@ class Nav2Interface:
         self.core.set_speed_limit(float(msg.speed_limit), bool(msg.percentage))
 
     def _on_clear(self, request, response):
-        self.clear_calls += 1
         return response
 
     # -- goals -------------------------------------------------------------------------------

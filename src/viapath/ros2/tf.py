@@ -145,6 +145,3 @@ class TransformBuffer:
                 target_in_common = up_t[1][index_t[frame]]
                 return compose(inverse(target_in_common), source_in_common)
         return None
-
-    def can_transform(self, target: str, source: str, stamp_s: float | None = None) -> bool:
-        return self.lookup(target, source, stamp_s) is not None

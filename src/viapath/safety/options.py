@@ -84,10 +84,6 @@ SHIELD_OPTIONS = OptionSet(
 )
 
 
-def option_defaults() -> dict[str, Any]:
-    return SHIELD_OPTIONS.defaults()
-
-
 def check_options(values: dict[str, Any], where: str = "shield") -> dict[str, Any]:
     """Defaults overlaid with ``values``; one clear ValueError naming the option for bad input. A retired name
     (``compute``, ``backend``) is read, with a FutureWarning, and left out."""

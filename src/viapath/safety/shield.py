@@ -78,13 +78,13 @@ from viapath import jit
 from viapath.observation import Command, MotionLimits, Observation, Obstacles, RobotState
 from viapath.path import DesignatedPath
 from viapath.safety.options import check_options
-from viapath.safety.sweep import Drive, Robot
-from viapath.safety.verdicts import Corridor, Forecast, People, Statics, evaluate_fields
+from viapath.safety.sweep import Drive
+from viapath.safety.verdicts import Corridor, Fields, Forecast, Statics, evaluate_fields
 from viapath.safety.window import Found, search_fields
 
 _EMPTY_POINTS, _EMPTY = np.zeros((0, 2)), np.zeros(0)
-_NO_STATICS = Statics(_EMPTY_POINTS, _EMPTY)
-_NO_CORRIDOR = Corridor(_EMPTY_POINTS, _EMPTY_POINTS, _EMPTY, _EMPTY)
+_NO_STATICS = tuple(Statics(_EMPTY_POINTS, _EMPTY))
+_NO_CORRIDOR = tuple(Corridor(_EMPTY_POINTS, _EMPTY_POINTS, _EMPTY, _EMPTY))
 
 
 @dataclass(frozen=True)
@@ -153,7 +153,7 @@ class Shield:
         # The records of the last obstacles tested (the obstacles object, its people and its static discs).
         self._obstacle_records: tuple[Any, ...] = (None, None, None)
         # The corridor's record and the path it was made of.
-        self._corridor_record: tuple[DesignatedPath | None, Corridor] = (None, _NO_CORRIDOR)
+        self._corridor_record: tuple[DesignatedPath | None, Fields] = (None, _NO_CORRIDOR)
         # Within one cycle of a shielded planner (:meth:`remembering`), the verdicts on single commands: the
         # planner tests its chosen command against this observation and the filter then tests the same one.
         self._verdicts: dict[Any, Any] | None = None
@@ -197,7 +197,7 @@ class Shield:
         commands = _c(np.reshape(commands, (-1, 2)))
         # The fields of a Verdicts record, in its order.
         achieved, admissible, friendly, meet, person, contact, static_meet, corridor_exit = evaluate_fields(
-            *_robot(observation.robot), *drive, *forecast, commands, *people, *statics, *self._corridor()
+            _robot(observation.robot), drive, forecast, commands, people, statics, self._corridor()
         )
         return {
             "achieved": achieved,
@@ -210,7 +210,7 @@ class Shield:
             "corridor_exit_time_s": corridor_exit,
         }
 
-    def _drive_and_forecast(self) -> tuple[Drive, Forecast]:
+    def _drive_and_forecast(self) -> tuple[Fields, Fields]:
         """The compiled test's constants, made again only when the limits, period or options are replaced."""
         limits, dt_s, config = self.limits, self.dt_s, self.config
         records = self._records
@@ -231,10 +231,10 @@ class Shield:
             config.mode == "passive-friendly",
             bool(config.towards_only),
         )
-        self._records = (limits, dt_s, config, drive, forecast)
-        return drive, forecast
+        self._records = (limits, dt_s, config, tuple(drive), tuple(forecast))
+        return self._records[3], self._records[4]
 
-    def _people_and_statics(self, obstacles: Obstacles) -> tuple[People, Statics]:
+    def _people_and_statics(self, obstacles: Obstacles) -> tuple[Fields, Fields]:
         """:func:`_people_and_statics`, made once per obstacles object within one cycle (:meth:`remembering`:
         a cycle tests its observation more than once, the planner's command, the filter's, the window)."""
         if self._verdicts is None:
@@ -244,18 +244,20 @@ class Shield:
             known = self._obstacle_records = (obstacles, *_people_and_statics(obstacles))
         return known[1], known[2]
 
-    def _corridor(self) -> Corridor:
+    def _corridor(self) -> Fields:
         """The corridor the sweeps must keep to (an inactive record when there is none to keep to)."""
         path = self.corridor
         if path is None or not self.config.keep_in_corridor:
             return _NO_CORRIDOR
         known, record = self._corridor_record
         if known is not path:
-            record = Corridor(
-                _c(path.segment_starts),
-                _c(path.segment_directions),
-                _c(path.segment_lengths_m),
-                _c(path.half_widths_m),
+            record = tuple(
+                Corridor(
+                    _c(path.segment_starts),
+                    _c(path.segment_directions),
+                    _c(path.segment_lengths_m),
+                    _c(path.half_widths_m),
+                )
             )
             self._corridor_record = (path, record)
         return record
@@ -374,23 +376,23 @@ class Shield:
         drive, forecast = self._drive_and_forecast()
         people, statics = self._people_and_statics(observation.obstacles)
         reached, pick, passive_pick, tested, passing = search_fields(
-            *_robot(observation.robot),
-            *drive,
-            *forecast,
-            float(command.speed_mps),
-            float(command.turn_rate_radps),
+            _robot(observation.robot),
+            drive,
+            forecast,
+            (float(command.speed_mps), float(command.turn_rate_radps)),
             int(self.config.samples),
-            *people,
-            *statics,
-            *self._corridor(),
+            people,
+            statics,
+            self._corridor(),
         )
         # Plain ints (in plain Python the counts and rows are numpy integers).
         return Found(reached, int(pick), int(passive_pick), int(tested), int(passing))
 
 
-def _robot(robot: RobotState) -> Robot:
+def _robot(robot: RobotState) -> Fields:
+    """The fields of the compiled test's :class:`viapath.safety.sweep.Robot`, in its order."""
     position = robot.position
-    return Robot(
+    return (
         float(position[0]),
         float(position[1]),
         float(robot.heading_rad),
@@ -400,21 +402,21 @@ def _robot(robot: RobotState) -> Robot:
     )
 
 
-def _people_and_statics(obstacles: Obstacles) -> tuple[People, Statics]:
+def _people_and_statics(obstacles: Obstacles) -> tuple[Fields, Fields]:
     """The people (every row but static geometry; the compiled test leaves out those with a field not finite)
     and the static discs, as the compiled test's records."""
     people = obstacles.people()
-    record = People(
+    record = (
         _c(people.positions),
         _c(people.velocities),
         _c(people.radii_m),
         _c(people.position_sigma_m),
         _c(people.velocity_sigma_mps),
-    )
+    )  # People's fields
     if obstacles.static_mask is None:
         return record, _NO_STATICS
     statics = obstacles.statics()
-    return record, Statics(_c(statics.positions), _c(statics.radii_m))
+    return record, (_c(statics.positions), _c(statics.radii_m))  # Statics' fields
 
 
 def _c(array: ArrayLike) -> np.ndarray:

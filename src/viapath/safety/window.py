@@ -20,7 +20,7 @@ import numpy as np
 
 from viapath.jit import compiled
 from viapath.safety.sweep import Drive, Robot, achieved_first_period
-from viapath.safety.verdicts import Corridor, Forecast, People, Statics, evaluate
+from viapath.safety.verdicts import Corridor, Fields, Forecast, People, Statics, evaluate
 
 CHUNK = 24  # candidates tested at once when the planner's command fails
 
@@ -132,49 +132,25 @@ def search(
 
 @compiled
 def search_fields(
-    x_m: float,
-    y_m: float,
-    heading_rad: float,
-    speed_mps: float,
-    turn_rate_radps: float,
-    radius_m: float,
-    max_speed_mps: float,
-    max_accel_mps2: float,
-    max_turn_rate_radps: float,
-    max_turn_accel_radps2: float,
-    dt_s: float,
-    substeps: int,
-    margin_m: float,
-    sigma_multiplier: float,
-    person_accel_mps2: float,
-    friendly: bool,
-    towards_only: bool,
-    command_speed_mps: float,
-    command_turn_rate_radps: float,
+    robot: Fields,
+    drive: Fields,
+    forecast: Fields,
+    command: tuple[float, float],
     samples: int,
-    positions: np.ndarray,
-    velocities: np.ndarray,
-    radii_m: np.ndarray,
-    position_sigma_m: np.ndarray,
-    velocity_sigma_mps: np.ndarray,
-    static_positions: np.ndarray,
-    static_radii_m: np.ndarray,
-    starts: np.ndarray,
-    directions: np.ndarray,
-    lengths_m: np.ndarray,
-    half_widths_m: np.ndarray,
+    people: Fields,
+    statics: Fields,
+    corridor: Fields,
 ) -> tuple[np.ndarray, int, int, int, int]:
-    """:func:`search` called from Python: the records field by field (``*robot, *drive, *forecast, v, ω,
-    samples, *people, *statics, *corridor``), the answer as a plain tuple in :class:`Found`'s order (a record
-    passed into or out of compiled code costs microseconds at the boundary, a plain field almost nothing)."""
+    """:func:`search` called from Python: each record as its :data:`viapath.safety.verdicts.Fields`, the answer
+    as a plain tuple in :class:`Found`'s order."""
     found = search(
-        Robot(x_m, y_m, heading_rad, speed_mps, turn_rate_radps, radius_m),
-        Drive(max_speed_mps, max_accel_mps2, max_turn_rate_radps, max_turn_accel_radps2, dt_s, substeps),
-        Forecast(margin_m, sigma_multiplier, person_accel_mps2, friendly, towards_only),
-        (command_speed_mps, command_turn_rate_radps),
+        Robot(*robot),
+        Drive(*drive),
+        Forecast(*forecast),
+        command,
         samples,
-        People(positions, velocities, radii_m, position_sigma_m, velocity_sigma_mps),
-        Statics(static_positions, static_radii_m),
-        Corridor(starts, directions, lengths_m, half_widths_m),
+        People(*people),
+        Statics(*statics),
+        Corridor(*corridor),
     )
     return found.reached, found.pick, found.passive_pick, found.tested, found.passing

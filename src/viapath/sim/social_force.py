@@ -33,6 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from viapath.forecast import elliptic_repulsion
+
 
 @dataclass(frozen=True)
 class SocialForceParams:
@@ -68,36 +70,6 @@ def _wall_forces(positions: np.ndarray, walls: np.ndarray, params: SocialForcePa
     distance = np.maximum(np.hypot(away[..., 0], away[..., 1]), 1e-6)
     magnitude = params.wall_strength_m2ps2 / params.wall_range_m * np.exp(-distance / params.wall_range_m)
     return np.sum(magnitude[..., None] * away / distance[..., None], axis=1)
-
-
-def _agent_forces(positions, velocities, radii, params: SocialForceParams) -> np.ndarray:
-    n = len(positions)
-    if n < 2:
-        return np.zeros_like(positions)
-    r = positions[:, None, :] - positions[None, :, :]  # r_ab = r_a - r_b, (N, N, 2)
-    # Surface distance, expressed as a centre distance for the point-pedestrian formula.
-    centre = np.hypot(r[..., 0], r[..., 1])
-    shrink = radii[:, None] + radii[None, :]
-    scale = np.where(centre > 1e-9, np.maximum(centre - shrink, 1e-3) / np.maximum(centre, 1e-9), 1.0)
-    r = r * scale[..., None]
-    s = velocities[None, :, :] * params.step_time_s  # v_b dt e_b, (1, N, 2)
-    r_norm = np.maximum(np.hypot(r[..., 0], r[..., 1]), 1e-9)
-    rs = r - s
-    rs_norm = np.maximum(np.hypot(rs[..., 0], rs[..., 1]), 1e-9)
-    s_norm_sq = np.sum(s * s, axis=-1)
-    b = 0.5 * np.sqrt(np.maximum((r_norm + rs_norm) ** 2 - s_norm_sq, 1e-12))
-    b = np.maximum(b, 1e-6)
-    grad_b = ((r_norm + rs_norm) / (4.0 * b))[..., None] * (r / r_norm[..., None] + rs / rs_norm[..., None])
-    magnitude = params.agent_strength_m2ps2 / params.agent_range_m * np.exp(-b / params.agent_range_m)
-    force = magnitude[..., None] * grad_b  # repulsive: along +grad b (away from b)
-    np.einsum("iij->ij", force)[:] = 0.0  # no self-interaction
-    # Field of view: forces from behind count less (Eq. 8).
-    speed = np.hypot(velocities[:, 0], velocities[:, 1])
-    heading = np.where(speed[:, None] > 1e-9, velocities / np.maximum(speed, 1e-9)[:, None], 0.0)
-    f_norm = np.hypot(force[..., 0], force[..., 1])
-    in_view = np.sum(heading[:, None, :] * (-force), axis=-1) >= f_norm * np.cos(params.field_of_view_rad)
-    weight = np.where(in_view | (speed[:, None] <= 1e-9), 1.0, params.outside_view_weight)
-    return np.sum(weight[..., None] * force, axis=1)
 
 
 def simulate_crowd(
@@ -151,7 +123,16 @@ def simulate_crowd(
             direction = to_goal / np.maximum(distance, 1e-9)[:, None]
             target_velocity = np.where(active[:, None], desired[:, None] * direction, 0.0)
             accel = (target_velocity - velocities) / params.relaxation_time_s
-            accel += _agent_forces(positions, velocities, radii, params) * active[:, None]
+            accel += (
+                elliptic_repulsion(
+                    positions,
+                    velocities,
+                    radii[:, None] + radii[None, :],
+                    (params.agent_strength_m2ps2, params.agent_range_m, params.step_time_s),
+                    (params.field_of_view_rad, params.outside_view_weight),
+                )
+                * active[:, None]
+            )
             accel += _wall_forces(positions, walls, params) * active[:, None]
             velocities = velocities + h * accel
             speed = np.hypot(velocities[:, 0], velocities[:, 1])

@@ -6,7 +6,6 @@ and the contact count all read the same :meth:`StaticWorld.at`.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,7 +58,3 @@ class StaticWorld:
     @property
     def changes(self) -> bool:
         return bool(np.any(np.isfinite(self.until_s)))
-
-    def last_change_s(self) -> float:
-        finite = self.until_s[np.isfinite(self.until_s)]
-        return float(finite.max()) if len(finite) else math.inf

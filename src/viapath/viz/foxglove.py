@@ -131,26 +131,6 @@ def scanner_frame(name: str) -> str:
     return f"laser_{name}"
 
 
-def expected_topics(scanner_names: list[str] | tuple[str, ...] = ()) -> dict[str, str]:
-    """Topic → schema name of a run (laser topics only when there are scanners)."""
-    topics = {
-        TF: "foxglove.FrameTransforms",
-        FOOTPRINT: "foxglove.SceneUpdate",
-        TRACKS: "foxglove.SceneUpdate",
-        PATH: "foxglove.SceneUpdate",
-        STATIC: "foxglove.SceneUpdate",
-        CANDIDATES: "foxglove.SceneUpdate",
-        CHOSEN: "foxglove.SceneUpdate",
-        COSTS: "viapath.PlanCosts",
-        XYT: "foxglove.SceneUpdate",
-        METRICS: "viapath.Metrics",
-    }
-    if scanner_names:
-        topics.update({BLIND: "foxglove.SceneUpdate", DETECTIONS: "foxglove.SceneUpdate"})
-        topics.update({scan_topic(name): "foxglove.LaserScan" for name in scanner_names})
-    return topics
-
-
 def _foxglove():
     try:
         import foxglove
@@ -957,8 +937,6 @@ def record_episode(
 
 
 # -- benchmark failures ----------------------------------------------------------------------------
-
-FAILURE_REASONS = ("collision", "at_fault_collision", "outside_corridor", "missed_goal")
 
 
 def failure_reasons(row: dict) -> list[str]:

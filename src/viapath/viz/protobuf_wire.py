@@ -154,16 +154,6 @@ def line_primitive(
     )
 
 
-# foxglove.TriangleListPrimitive: pose 1, points 2, color 3, colors 4, indices 5
-def triangle_list_primitive(vertices_xyz: np.ndarray, triangles: np.ndarray, color: bytes, pose: bytes) -> bytes:
-    return (
-        message_field(1, pose)
-        + points_field(2, vertices_xyz)
-        + message_field(3, color)
-        + fixed32_packed_field(5, np.asarray(triangles).ravel())
-    )
-
-
 # foxglove.SceneEntity: timestamp 1, frame_id 2, id 3, lifetime 4, frame_locked 5, metadata 6, arrows 7,
 # cubes 8, spheres 9, cylinders 10, lines 11, triangles 12, texts 13, models 14
 ENTITY_LINES, ENTITY_TRIANGLES = 11, 12  # with ENTITY_ARROWS ... below
@@ -186,11 +176,6 @@ def scene_entity(
         + b"".join(message_field(ENTITY_TRIANGLES, tri) for tri in triangles)
         + other
     )
-
-
-# foxglove.SceneUpdate: deletions 1, entities 2
-def scene_update(deletions: list[bytes], entities: list[bytes]) -> bytes:
-    return b"".join(message_field(1, d) for d in deletions) + b"".join(message_field(2, e) for e in entities)
 
 
 # -- small messages as one struct.pack each (every tag and length is a single byte here) -----------

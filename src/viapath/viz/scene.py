@@ -130,9 +130,6 @@ class XYTScene:
     # the builder gives it from the tracks' arrays so that the rings need no loop over persons.
     person_fields: np.ndarray | None = None
 
-    def height_m(self, t_s) -> np.ndarray:
-        return np.asarray(t_s, dtype=float) * self.settings.time_scale_m_per_s
-
     def rings(self, index: int, segments: int = 24) -> np.ndarray:
         """Circles of person ``index``'s cylinder at its ring times: (R, segments, 3) in x, y, t."""
         person = self.persons[index]
