@@ -13,8 +13,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from viapath.planning.base import Plan
-from viapath.planning.viapath import packing
-from viapath.planning.viapath import slots as slot
+from viapath.planning.viapath import packing, records
 from viapath.planning.viapath.candidates import Choice, Way, candidates_of
 from viapath.planning.viapath.checks import LegChecks
 from viapath.planning.viapath.critics import PAPER_CRITICS, Context, Critic
@@ -68,9 +67,9 @@ def _extra_terms(
     return terms
 
 
-def _choice_constants(planner: Planning) -> tuple[Any, ...]:
-    """The compiled choice's settings that do not change within an episode (rebuilt when the options, limits or
-    critics object is replaced); their slots: :mod:`viapath.planning.viapath.slots`."""
+def _choice_constants(planner: Planning) -> tuple[bytes, np.ndarray]:
+    """The compiled choice's settings that do not change within an episode (:func:`.records.choice_episode`) and
+    the slow/wait times; rebuilt when the options, limits or critics object is replaced."""
     config, limits, critics, nominal_speed = planner.config, planner.limits, planner.critics, planner.nominal_speed_mps
     cached = planner.__dict__.get("_choice_cache")
     if (
@@ -84,37 +83,35 @@ def _choice_constants(planner: Planning) -> tuple[Any, ...]:
     distance, time, speed, heading, side, hysteresis = cast(
         "tuple[Distance, Time, SpeedError, Heading, SidePreference, Hysteresis]", planner.critics[: len(PAPER_CRITICS)]
     )  # the paper's critics (PAPER_CRITICS, first: extra_critics): the ones the compiled choice sums itself
-    settings = np.zeros(slot.F_COUNT, dtype=np.float64)
-    settings[[slot.F_K1, slot.F_K2, slot.F_K3, slot.F_K4, slot.F_SIDE, slot.F_HYSTERESIS]] = (
-        distance.weight,
-        time.weight,
-        speed.weight,
-        heading.weight,
-        side.weight,
-        hysteresis.weight,
+    episode = records.choice_episode(
+        k1_per_m=distance.weight,
+        k2_per_s=time.weight,
+        k3_per_mps=speed.weight,
+        k4_per_angle=heading.weight,
+        side_weight=side.weight,
+        hysteresis_weight=hysteresis.weight,
+        nominal_speed_mps=planner.nominal_speed_mps,
+        rollout_heading_rad=config.rollout_heading_rad,
+        max_accel_mps2=limits.max_accel_mps2,
+        rollout_dt_s=config.rollout_dt_s,
+        max_turn_rate_radps=limits.max_turn_rate_radps,
+        max_turn_accel_radps2=limits.max_turn_accel_radps2,
+        max_speed_mps=limits.max_speed_mps,
+        heading_gain=config.heading_gain,
+        turn_in_place_min_rad=config.turn_in_place_min_rad,
+        corridor_check_spacing_m=config.corridor_check_spacing_m,
+        standing_per_s=speed.standing_per_s,
+        creep_speed_mps=config.creep_speed_mps,
+        max_depth=config.max_depth,
+        max_root_obstacles=config.max_root_obstacles,
+        max_rollouts=config.max_rollouts,
+        rollout_steps=max(1, int(round(config.rollout_s / config.rollout_dt_s))),
+        heading_in_degrees=heading.degrees,
+        preferred_side=side.preferred,
+        grows_slow=bool(config.slow_times_s),
     )
-    settings[slot.F_NOMINAL] = planner.nominal_speed_mps
-    settings[slot.F_ROLLOUT_HEADING] = config.rollout_heading_rad
-    settings[slot.F_ACCEL] = limits.max_accel_mps2
-    settings[slot.F_DT] = config.rollout_dt_s
-    settings[slot.F_TURN_RATE] = limits.max_turn_rate_radps
-    settings[slot.F_TURN_ACCEL] = limits.max_turn_accel_radps2
-    settings[slot.F_SPEED] = limits.max_speed_mps
-    settings[slot.F_GAIN] = config.heading_gain
-    settings[slot.F_TURN_IN_PLACE] = config.turn_in_place_min_rad
-    settings[slot.F_SPACING] = config.corridor_check_spacing_m
-    settings[slot.F_STANDING] = speed.standing_per_s
-    settings[slot.F_CREEP] = config.creep_speed_mps
-    integers = np.zeros(slot.C_COUNT, dtype=np.int64)
-    integers[slot.C_DEPTH] = config.max_depth
-    integers[slot.C_ROOT_LIMIT] = config.max_root_obstacles
-    integers[slot.C_ROLLOUTS] = config.max_rollouts
-    integers[slot.C_STEPS] = max(1, int(round(config.rollout_s / config.rollout_dt_s)))
-    integers[slot.C_DEGREES] = heading.degrees
-    integers[slot.C_PREFERRED] = side.preferred
-    integers[slot.C_SLOW] = bool(config.slow_times_s)
     slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
-    constants = (settings, integers, slow_times)
+    constants = (episode, slow_times)
     planner.__dict__["_choice_cache"] = (config, limits, critics, nominal_speed, constants)
     return constants
 
@@ -130,19 +127,20 @@ def choose_compiled(
     """The planner's choice with one compiled call doing everything up to the shield check
     (:func:`viapath.planning.viapath.selection.choose`): it rolls out candidates cheapest first until one follows; a
     candidate the shield refuses sends the search on to the next ones here (:func:`_first_admitted`)."""
-    settings, integers, slow_times = _cycle_settings(planner, checks, nominal_index, previous, only_way)
+    settings, slow_times = _cycle_settings(planner, checks, nominal_index, previous, only_way, True)
     slow_checks = planner._slow_checks(checks)
     extra = _extra_terms(planner, checks, previous)
-    chosen = packing.choose(checks, slow_checks, speeds, slow_times, settings, integers, extra)
-    if chosen.status == slot.STEP_ONE:
+    chosen = packing.choose(checks, slow_checks, speeds, slow_times, settings, extra)
+    if chosen.status == records.STEP_ONE:
         plan = straight_plan(checks, float(speeds[nominal_index]))
         if chosen.turn_in_place:
             plan.extras["turn_in_place"] = True
         if planner._inside_shield(plan):
             return straight_chosen(plan)
-        integers[slot.C_TRY_STRAIGHT] = 0  # the shield refused it: the candidates decide
-        chosen = packing.choose(checks, slow_checks, speeds, slow_times, settings, integers, extra)
-    if chosen.status != slot.CANDIDATES or chosen.first < 0:  # first: the ranks before it do not follow
+        # the shield refused it: the candidates decide
+        settings, slow_times = _cycle_settings(planner, checks, nominal_index, previous, only_way, False)
+        chosen = packing.choose(checks, slow_checks, speeds, slow_times, settings, extra)
+    if chosen.status != records.CANDIDATES or chosen.first < 0:  # first: the ranks before it do not follow
         return None
     return _first_admitted(planner, chosen, checks)
 
@@ -150,42 +148,51 @@ def choose_compiled(
 def tree_is_empty(planner: Planning, checks: LegChecks, speeds: np.ndarray, nominal_index: int) -> bool:
     """Whether the candidate tree of ``checks`` has no candidate at all (no free root either; step 1 is not
     taken): the compiled choice's tree alone (:func:`.packing.choose` with ``TREE_ONLY``)."""
-    settings, integers, slow_times = _cycle_settings(planner, checks, nominal_index, None, None)
-    integers[slot.C_TRY_STRAIGHT] = 0
-    found = packing.choose(checks, checks, speeds, slow_times, settings, integers, packing.TREE_ONLY)
-    return found.status != slot.CANDIDATES
+    settings, slow_times = _cycle_settings(planner, checks, nominal_index, None, None, False)
+    found = packing.choose(checks, checks, speeds, slow_times, settings, packing.TREE_ONLY)
+    return found.status != records.CANDIDATES
+
+
+_NO_WAY = Way(0, 0, 0)  # (the record's way fields when there is no way: zeros)
 
 
 def _cycle_settings(
-    planner: Planning, checks: LegChecks, nominal_index: int, previous: Choice | None, only_way: Way | None
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The compiled choice's settings of this cycle: the episode's (:func:`_choice_constants`) with the cycle's
-    entries (the horizon, the subgoal, last cycle's way and speed, the one way allowed)."""
-    constants, integers_0, slow_times = _choice_constants(planner)
-    settings = constants.copy()  # with this cycle's entries:
-    settings[slot.F_STOP_SHORT] = checks.stop_short_m
-    settings[slot.F_HORIZON] = checks.horizon_s
-    settings[slot.F_TOLERANCE] = checks.corridor_tolerance_m
-    integers = integers_0.copy()  # (one item at a time: a slice from a tuple converts it first, slower)
+    planner: Planning,
+    checks: LegChecks,
+    nominal_index: int,
+    previous: Choice | None,
+    only_way: Way | None,
+    try_step_one: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The compiled choice's settings of this cycle (a row of :data:`.records.CHOICE`): the episode's
+    (:func:`_choice_constants`) with the cycle's (the horizon, the subgoal, last cycle's way and speed, the one way
+    allowed, whether to try step 1); and the slow/wait times."""
+    episode, slow_times = _choice_constants(planner)
     index = checks.subgoal_index
-    integers[slot.C_NOMINAL] = nominal_index
-    if index >= 2:  # the robot's segment matters only when a corner can lie between it and the subgoal
-        integers[slot.C_SEGMENT] = int(checks.path.project(checks.position)[0])
-    integers[slot.C_SUBGOAL] = index
-    integers[slot.C_TRY_STRAIGHT] = 1
-    if previous is not None:
-        way = previous.way
-        integers[slot.C_PREVIOUS] = 1
-        integers[slot.C_PREV_OBSTACLE] = way.obstacle
-        integers[slot.C_PREV_SIDE] = way.side
-        integers[slot.C_PREV_ROOT] = way.root
-        integers[slot.C_PREV_MMPS] = previous.speed_mmps
-    if only_way is not None:
-        integers[slot.C_ONLY] = 1
-        integers[slot.C_ONLY_OBSTACLE] = only_way.obstacle
-        integers[slot.C_ONLY_SIDE] = only_way.side
-        integers[slot.C_ONLY_ROOT] = only_way.root
-    return settings, integers, slow_times
+    # the robot's segment matters only when a corner can lie between it and the subgoal
+    segment = int(checks.path.project(checks.position)[0]) if index >= 2 else 0
+    way, only = (previous.way if previous is not None else _NO_WAY), (only_way if only_way is not None else _NO_WAY)
+    # choice_settings' arguments by position (by keyword the call took 2 µs more, every cycle); their names:
+    settings = records.choice_settings(
+        episode,
+        checks.stop_short_m,
+        checks.horizon_s,
+        checks.corridor_tolerance_m,
+        nominal_index,
+        segment,  # robot_segment
+        index,  # subgoal_index
+        try_step_one,
+        previous is not None,  # has_previous
+        way.obstacle,  # previous_obstacle
+        way.side,  # previous_side
+        way.root,  # previous_root
+        previous.speed_mmps if previous is not None else 0,  # previous_speed_mmps
+        only_way is not None,  # only_one_way
+        only.obstacle,  # only_obstacle
+        only.side,  # only_side
+        only.root,  # only_root
+    )
+    return settings, slow_times
 
 
 def _first_admitted(planner: Planning, chosen: CompiledChoice, checks: LegChecks) -> Chosen | None:

@@ -1,7 +1,8 @@
 """The planner's calls of its compiled steps (:mod:`.legs`, :mod:`.via`, :mod:`.tree`, :mod:`.selection`,
 :mod:`.rollout`, :mod:`.escape_figures`): each packs the cycle's arrays as
 the compiled functions take them (C-contiguous float64, one value per obstacle) and reads what they hand back by
-name (:class:`NodeStore`, :class:`CompiledChoice`).
+name (:class:`NodeStore`, :class:`CompiledChoice`). The settings go over as records, rows of :mod:`.records`'
+dtypes, through small compiled doors (:func:`_choose` ...) that hand the steps the row's record.
 
 A cycle runs its whole choice in one call (:func:`choose`), its escape in two (:func:`escape`); the recipe's
 extensions (the way back, the outrun hold, the kept way, the closed way) call the leg checks on their own.
@@ -15,80 +16,126 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from viapath.jit import compiled
 from viapath.observation import MotionLimits
 from viapath.planning.viapath import escape_figures as escape_steps
 from viapath.planning.viapath import legs as leg_steps
+from viapath.planning.viapath import records
 from viapath.planning.viapath import rollout as rollout_steps
 from viapath.planning.viapath import selection as selection_steps
-from viapath.planning.viapath import slots as slot
 from viapath.planning.viapath import tree as tree_steps
 from viapath.planning.viapath import via as via_steps
 
 # The compiled steps take plain arrays and scalars unannotated (typed when they are compiled).
-_escape_figures: Any = escape_steps
 _legs: Any = leg_steps
-_rollout: Any = rollout_steps
-_selection: Any = selection_steps
 _tree: Any = tree_steps
 _via: Any = via_steps
 
 
+# The doors of the steps that take a record: each takes the record's row (a plain argument, typed as fast as an array)
+# where the step takes the record, and hands the step ``row[0]`` (:mod:`.records`).
+@compiled
+def _choose(*arguments):
+    """:func:`.selection.choose`, its settings row last."""
+    return selection_steps.choose(*arguments[:-1], arguments[-1][0])
+
+
+@compiled
+def _choose_tree(
+    robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints, settings_row
+):
+    """:func:`.selection.choose_tree`, the settings' creep speed added to ``slow``."""
+    settings = settings_row[0]
+    slow_radii, slow_growth, slow_until, slow_times = slow
+    slow = (slow_radii, slow_growth, slow_until, slow_times, settings.creep_speed_mps)
+    return selection_steps.choose_tree(
+        robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints, settings
+    )
+
+
+@compiled
+def _choose_ranked(*arguments):
+    """:func:`.selection.choose_ranked`, its settings row last."""
+    return selection_steps.choose_ranked(*arguments[:-1], arguments[-1][0])
+
+
+@compiled
+def _can_follow(robot, target_x, target_y, angle, speed, settings_row, obstacles, corridor):
+    """:func:`.rollout.can_follow` with the settings' roll-out steps."""
+    settings = settings_row[0]
+    return rollout_steps.can_follow(
+        robot, target_x, target_y, angle, speed, settings, settings.rollout_steps, obstacles, corridor
+    )
+
+
+@compiled
+def _escape_headings(*arguments):
+    """:func:`.escape_figures.escape_headings`, its settings row second to last."""
+    return escape_steps.escape_headings(*arguments[:-2], arguments[-2][0], arguments[-1])
+
+
+@compiled
+def _escape_scores(*arguments):
+    """:func:`.escape_figures.escape_scores`, its settings row third to last."""
+    return escape_steps.escape_scores(*arguments[:-3], arguments[-3][0], *arguments[-2:])
+
+
 class NodeStore(NamedTuple):
     """The candidate tree's node store of :func:`.tree.grow` / ``choose``, read by name
-    (columns: :mod:`.slots`)."""
+    (columns: :mod:`.records`)."""
 
-    floats: np.ndarray  # (M, slots.NODE_FLOATS)
-    integers: np.ndarray  # (M, slots.NODE_INTEGERS)
+    floats: np.ndarray  # (M, records.NODE_FLOATS)
+    integers: np.ndarray  # (M, records.NODE_INTEGERS)
 
     def columns(self) -> dict[str, np.ndarray]:
         """The columns by name, as :class:`.candidates.Candidates` reads them (views, no copies)."""
         floats, integers = self.floats, self.integers
         return {
-            "position": floats[:, slot.N_X : slot.N_Y + 1],
-            "time_s": floats[:, slot.N_TIME],
-            "speed": floats[:, slot.N_SPEED],
-            "parent": integers[:, slot.N_PARENT],
-            "length_m": floats[:, slot.N_LENGTH],
-            "first_direction": floats[:, slot.N_FIRST_X : slot.N_FIRST_Y + 1],
-            "way": integers[:, slot.N_OBSTACLE : slot.N_ROOT + 1],
-            "slow_s": floats[:, slot.N_SLOW_S],
-            "slow_speed": floats[:, slot.N_SLOW_SPEED],
+            "position": floats[:, records.N_X : records.N_Y + 1],
+            "time_s": floats[:, records.N_TIME],
+            "speed": floats[:, records.N_SPEED],
+            "parent": integers[:, records.N_PARENT],
+            "length_m": floats[:, records.N_LENGTH],
+            "first_direction": floats[:, records.N_FIRST_X : records.N_FIRST_Y + 1],
+            "way": integers[:, records.N_OBSTACLE : records.N_ROOT + 1],
+            "slow_s": floats[:, records.N_SLOW_S],
+            "slow_speed": floats[:, records.N_SLOW_SPEED],
         }
 
     def leaves(self) -> np.ndarray:
         """The nodes that end a complete candidate, in node order."""
-        return np.flatnonzero(self.integers[:, slot.N_LEAF])
+        return np.flatnonzero(self.integers[:, records.N_LEAF])
 
     def to_goal_m(self, nodes) -> np.ndarray:
         """The length left from these nodes to the subgoal."""
-        return self.floats[nodes, slot.N_TO_GOAL]
+        return self.floats[nodes, records.N_TO_GOAL]
 
     def ways(self, nodes) -> np.ndarray:
         """(len(nodes), 3) ways round: obstacle, side, root."""
-        return self.integers[nodes, slot.N_OBSTACLE : slot.N_ROOT + 1]
+        return self.integers[nodes, records.N_OBSTACLE : records.N_ROOT + 1]
 
     def way(self, node: int) -> list[int]:
-        return self.integers[node, slot.N_OBSTACLE : slot.N_ROOT + 1].tolist()
+        return self.integers[node, records.N_OBSTACLE : records.N_ROOT + 1].tolist()
 
     def position(self, node: int) -> np.ndarray:
-        return self.floats[node, slot.N_X : slot.N_Y + 1]
+        return self.floats[node, records.N_X : records.N_Y + 1]
 
     def parent(self, node: int) -> int:
-        return int(self.integers[node, slot.N_PARENT])
+        return int(self.integers[node, records.N_PARENT])
 
     def speed(self, node: int) -> float:
-        return float(self.floats[node, slot.N_SPEED])
+        return float(self.floats[node, records.N_SPEED])
 
     def slowing(self, node: int) -> tuple[float, float, float]:
         """The speed after the node's leg, its slow/wait time and the speed during it (0 s: no slowing)."""
         row = self.floats[node]
-        return float(row[slot.N_SPEED]), float(row[slot.N_SLOW_S]), float(row[slot.N_SLOW_SPEED])
+        return float(row[records.N_SPEED]), float(row[records.N_SLOW_S]), float(row[records.N_SLOW_SPEED])
 
 
 class CompiledChoice(NamedTuple):
     """What :func:`.selection.choose` found, by name."""
 
-    status: int  # slots.NO_CANDIDATE, STEP_ONE or CANDIDATES
+    status: int  # records.NO_CANDIDATE, STEP_ONE or CANDIDATES
     turn_in_place: bool  # step 1 turns on the spot first
     leaves: np.ndarray  # (K,) the candidates' last nodes
     first: int  # the first rank whose candidate follows, -1: none tried follows
@@ -147,13 +194,12 @@ def choose(
     speeds,
     slow_times: np.ndarray,
     settings: np.ndarray,
-    integers: np.ndarray,
     extra_terms: Callable[[NodeStore, np.ndarray], np.ndarray] | None = None,
 ):
     """The planner's choice up to its shield check in one compiled call (roots, step 1, the candidate tree,
     Eq. 1's critics, the order and the roll-outs up to the first candidate that follows):
     :func:`.selection.choose`, as a :class:`CompiledChoice`. ``slow_times`` (float64),
-    ``settings`` and ``integers`` are the kernel's (slots: :mod:`.slots`), filled in by the planner. With
+    ``settings`` the choice's (a row of :data:`.records.CHOICE`), filled in by the planner. With
     ``extra_terms`` (the terms (E, K) of critics after the paper's, of the tree's node store and its leaves) the
     choice takes two compiled calls, :func:`.selection.choose_tree` and :func:`.selection.choose_ranked`, and
     ``extra_terms`` between them; its terms join the choice's ``terms`` before their sum."""
@@ -182,34 +228,33 @@ def choose(
     slow = (slow_radii, slow_growth, slow_until, slow_times)
     corridor = (starts, directions, lengths, half_widths)
     if extra_terms is None:
-        found, floats, integers, costs = _selection.choose(
+        found, floats, integers, costs = _choose(
             robot, _c(speeds), _c(checks.subgoal), *obstacles, *via, *slow, continuation, envelope, *corridor,
-            waypoints, settings, integers,
+            waypoints, settings,
         )  # fmt: skip
         return _choice_of(found, floats, integers, costs)
-    records = (robot, _c(speeds), _c(checks.subgoal), obstacles, via, slow, continuation, envelope, corridor, waypoints)
-    return _choose_in_halves(records, settings, integers, extra_terms)
+    inputs = (robot, _c(speeds), _c(checks.subgoal), obstacles, via, slow, continuation, envelope, corridor, waypoints)
+    return _choose_in_halves(inputs, settings, extra_terms)
 
 
-def _choose_in_halves(records, settings: np.ndarray, integers: np.ndarray, extra_terms) -> CompiledChoice:
+def _choose_in_halves(inputs, settings: np.ndarray, extra_terms) -> CompiledChoice:
     """:func:`choose` with ``extra_terms``: :func:`.selection.choose_tree`, the terms, :func:`.selection.choose_ranked`
-    (the tree alone with :func:`TREE_ONLY`). ``records``: the robot, speeds, subgoal, obstacles, via, slow (without
+    (the tree alone with :func:`TREE_ONLY`). ``inputs``: the robot, speeds, subgoal, obstacles, via, slow (without
     the creep speed), continuation, envelope, corridor and waypoints."""
-    robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints = records
-    found, floats, integers_store, facts = _selection.choose_tree(
-        robot, speeds, subgoal, obstacles, via, (*slow, float(settings[slot.F_CREEP])), continuation, envelope,
-        corridor, waypoints, settings, integers,
-    )  # fmt: skip
+    robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints = inputs
+    found, floats, integers_store, facts = _choose_tree(
+        robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints, settings
+    )
     store = NodeStore(floats, integers_store)
     if extra_terms is TREE_ONLY:
         return CompiledChoice(int(found[0]), False, found[2:], -1, [], [], np.empty(0), np.empty((0, 0)), store)
-    extra = _c(extra_terms(store, found[slot.FOUND_LEAVES :]) if found[0] == slot.CANDIDATES else np.empty((0, 0)))
-    found, costs = _selection.choose_ranked(
-        robot, found, floats, integers_store, facts, extra, obstacles, corridor, settings, integers
+    extra = _c(
+        extra_terms(store, found[records.FOUND_LEAVES :]) if found[0] == records.CANDIDATES else np.empty((0, 0))
     )
+    found, costs = _choose_ranked(robot, found, floats, integers_store, facts, extra, obstacles, corridor, settings)
     choice = _choice_of(found, floats, integers_store, costs)
     return choice._replace(
-        terms=np.concatenate([choice.terms[: slot.COST_TERMS], extra, choice.terms[slot.COST_SUM :]])
+        terms=np.concatenate([choice.terms[: records.COST_TERMS], extra, choice.terms[records.COST_SUM :]])
     )
 
 
@@ -228,31 +273,29 @@ def escape(checks, limits: MotionLimits, config, fan, previous=None, score_stand
     dt = config.escape_dt_s
     steps = max(1, int(round(config.escape_s / dt)))
     calm = bool(config.calm_escape and previous is not None)
-    settings = np.array(
-        [
-            dt,
-            config.escape_s,
-            limits.max_accel_mps2 * dt,
-            limits.max_turn_accel_radps2 * dt,
-            limits.max_speed_mps,
-            limits.max_turn_rate_radps,
-            checks.corridor_tolerance_m,
-            max(config.escape_max_excess_m, checks.corridor_tolerance_m),
-            max(top, 1e-9),
-            config.escape_continuity_s if calm else 0.0,
-            previous.speed_mps if calm else 0.0,
-            previous.turn_rate_radps if calm else 0.0,
-            checks.horizon_s,
-            config.horizon_s,
-        ],
-        dtype=np.float64,
+    settings = records.record(
+        records.ESCAPE,
+        dt_s=dt,
+        escape_s=config.escape_s,
+        speed_step_mps=limits.max_accel_mps2 * dt,
+        turn_step_radps=limits.max_turn_accel_radps2 * dt,
+        max_speed_mps=limits.max_speed_mps,
+        max_turn_rate_radps=limits.max_turn_rate_radps,
+        corridor_tolerance_m=checks.corridor_tolerance_m,
+        max_excess_m=max(config.escape_max_excess_m, checks.corridor_tolerance_m),
+        top_speed_mps=max(top, 1e-9),
+        continuity_s=config.escape_continuity_s if calm else 0.0,
+        previous_speed_mps=previous.speed_mps if calm else 0.0,
+        previous_turn_radps=previous.turn_rate_radps if calm else 0.0,
+        horizon_s=checks.horizon_s,
+        standing_check_s=config.horizon_s,
     )
     robot = checks.packed_robot()
     obstacles = checks.packed_obstacles()
-    standing_free, headings = _escape_figures.escape_headings(robot, *obstacles, row_turns, settings, steps)
+    standing_free, headings = _escape_headings(robot, *obstacles, row_turns, settings, steps)
     if standing_free and not score_standing:
         return True, None, None, None
-    ends, score = _escape_figures.escape_scores(
+    ends, score = _escape_scores(
         robot,
         commands,
         turn_rows,
@@ -271,55 +314,50 @@ def escape(checks, limits: MotionLimits, config, fan, previous=None, score_stand
 def can_follow(checks, target, speed_mps: float, limits: MotionLimits, config) -> int:
     """:func:`.rollout.can_follow` of steering for ``target`` at ``speed_mps`` from the robot of ``checks``: 0
     cannot, 1 can, 2 can after turning on the spot first."""
-    settings = np.zeros(slot.F_COUNT, dtype=np.float64)
-    settings[slot.F_ROLLOUT_HEADING] = config.rollout_heading_rad
-    settings[slot.F_ACCEL] = limits.max_accel_mps2
-    settings[slot.F_DT] = config.rollout_dt_s
-    settings[slot.F_TURN_RATE] = limits.max_turn_rate_radps
-    settings[slot.F_TURN_ACCEL] = limits.max_turn_accel_radps2
-    settings[slot.F_SPEED] = limits.max_speed_mps
-    settings[slot.F_GAIN] = config.heading_gain
-    settings[slot.F_TURN_IN_PLACE] = config.turn_in_place_min_rad
-    settings[slot.F_TOLERANCE] = checks.corridor_tolerance_m
+    settings = records.record(
+        records.CHOICE,
+        zero_others=True,  # (the roll-out's fields only)
+        rollout_heading_rad=config.rollout_heading_rad,
+        max_accel_mps2=limits.max_accel_mps2,
+        rollout_dt_s=config.rollout_dt_s,
+        max_turn_rate_radps=limits.max_turn_rate_radps,
+        max_turn_accel_radps2=limits.max_turn_accel_radps2,
+        max_speed_mps=limits.max_speed_mps,
+        heading_gain=config.heading_gain,
+        turn_in_place_min_rad=config.turn_in_place_min_rad,
+        corridor_tolerance_m=checks.corridor_tolerance_m,
+        rollout_steps=max(1, int(round(config.rollout_s / config.rollout_dt_s))),
+    )
     robot = checks.packed_robot()
     x, y = float(target[0]), float(target[1])
+    angle = math.atan2(y - robot[1], x - robot[0])  # libm's, as the compiled choice takes it
     return int(
-        _rollout.can_follow(
-            robot,
-            x,
-            y,
-            math.atan2(y - robot[1], x - robot[0]),  # libm's, as the compiled choice takes it
-            float(speed_mps),
-            settings,
-            max(1, int(round(config.rollout_s / config.rollout_dt_s))),
-            checks.packed_obstacles(),
-            _corridor(checks.path),
-        )
+        _can_follow(robot, x, y, angle, float(speed_mps), settings, checks.packed_obstacles(), _corridor(checks.path))
     )
 
 
 def _choice_of(found, floats, integers, costs) -> CompiledChoice:
     """:class:`CompiledChoice` from choose's arrays: ``found`` (status, turn on the spot, the K leaves, then
-    the ranking when there are candidates) and ``costs`` (slots.COST_ROWS, K)."""
+    the ranking when there are candidates) and ``costs`` (records.COST_ROWS, K)."""
     store = NodeStore(floats, integers)
-    status, turn = int(found[slot.FOUND_STATUS]), bool(found[slot.FOUND_TURN_IN_PLACE])
-    if status != slot.CANDIDATES:
+    status, turn = int(found[records.FOUND_STATUS]), bool(found[records.FOUND_TURN_IN_PLACE])
+    if status != records.CANDIDATES:
         return CompiledChoice(
-            status, turn, found[slot.FOUND_LEAVES :], -1, [], [], costs[slot.COST_TOTAL], costs, store
+            status, turn, found[records.FOUND_LEAVES :], -1, [], [], costs[records.COST_TOTAL], costs, store
         )
-    leaves_end = slot.FOUND_LEAVES + costs.shape[1]
-    leaves, ranking = found[slot.FOUND_LEAVES : leaves_end], found[leaves_end:]
-    ranks = int(ranking[slot.RANKING_COUNT])
-    order_end = slot.RANKING_ORDER + ranks
+    leaves_end = records.FOUND_LEAVES + costs.shape[1]
+    leaves, ranking = found[records.FOUND_LEAVES : leaves_end], found[leaves_end:]
+    ranks = int(ranking[records.RANKING_COUNT])
+    order_end = records.RANKING_ORDER + ranks
     return CompiledChoice(
         status,
         turn,
         leaves,
-        int(ranking[slot.RANKING_FIRST]),
-        ranking[slot.RANKING_ORDER : order_end].tolist(),
+        int(ranking[records.RANKING_FIRST]),
+        ranking[records.RANKING_ORDER : order_end].tolist(),
         ranking[order_end:].tolist(),
-        costs[slot.COST_TOTAL],
-        costs[: slot.COST_SUM + 1],
+        costs[records.COST_TOTAL],
+        costs[: records.COST_SUM + 1],
         store,
     )
 

@@ -1,0 +1,206 @@
+"""The records of the planner's compiled steps, each field named once: the choice's settings (:data:`CHOICE`, read
+as ``settings.k2_per_s`` by :func:`.selection.choose` and :func:`.rollout.can_follow`), the escape's
+(:data:`ESCAPE`, :mod:`.escape_figures`), the columns of the candidate tree's node store (:mod:`.tree`) and the
+entries of what the choice hands back. The rest of the planner builds the records here (:func:`choice_episode`,
+:func:`choice_settings`, :func:`record`) and reads what comes back through :mod:`.packing`
+(:class:`.packing.NodeStore`, :class:`.packing.CompiledChoice`), never by number.
+
+Choices (measured with numba 0.68 on the development machine: a compiled call that reads four fields):
+
+* A record is a numpy structured array of one row, its fields float64 or int64 (8 bytes each, no padding; flags are
+  0/1 integers). The compiled steps take the row's record (``row[0]``, a reference into the row) and read a field at
+  its fixed offset, as cheaply as an array item. numba types the row on each call about as fast as a plain array
+  (one record: 0.5-0.7 µs a call, against 0.45-0.5 µs for the two flat arrays of slot numbers it replaces); a
+  ``typing.NamedTuple`` reads as well inside but costs 6-7 µs a call to type (numba types a tuple argument in
+  Python), and so does a numpy record scalar.
+* :mod:`.packing` hands the rows to the compiled steps through small compiled doors that take ``row[0]``: inside,
+  every step sees the record.
+* The choice's row is the episode's fields (packed once) and the cycle's, packed with :mod:`struct` into a copy of
+  the episode's bytes: 1.4-1.7 µs a cycle, what the flat arrays' copies and item sets took (numpy sets one field of
+  a structured array in about 4 µs).
+* The node store stays two 2-D arrays, floats and integers, with named columns (``N_X`` ...): the tree hands
+  columns on as contiguous slices (node positions as (K, 2) rows) and the Python side reads them as views. A
+  structured node store read faster in a compiled micro-benchmark (about half the time for a loop over 400 nodes'
+  fields) but made each (K, 2) position array a copy, and rewrites every signature of the tree.
+"""
+
+from __future__ import annotations
+
+import struct
+
+import numpy as np
+
+_F, _I = "d", "q"  # struct's codes of float64 and int64 fields
+
+# The choice's settings (CHOICE): first the episode's, constant while the options, motion limits and critics stay
+# (:func:`choice_episode`) ...
+CHOICE_EPISODE_FIELDS: tuple[tuple[str, str], ...] = (
+    ("k1_per_m", _F),  # Eq. 1's weights: of the path length (per m), ...
+    ("k2_per_s", _F),  # ... of the travel time (per s), ...
+    ("k3_per_mps", _F),  # ... of the speed's error from the nominal speed (per m/s) ...
+    ("k4_per_angle", _F),  # ... and of the first leg's turn (per degree or radian: heading_in_degrees)
+    ("side_weight", _F),  # the cost of passing on the side not preferred
+    ("hysteresis_weight", _F),  # the bonus of last cycle's way round (and speed)
+    ("nominal_speed_mps", _F),
+    ("rollout_heading_rad", _F),  # turns up to this (and small speed changes) are followed without a roll-out
+    ("max_accel_mps2", _F),
+    ("rollout_dt_s", _F),
+    ("max_turn_rate_radps", _F),
+    ("max_turn_accel_radps2", _F),
+    ("max_speed_mps", _F),
+    ("heading_gain", _F),  # the controller's turn rate per radian of heading error (1/s)
+    ("turn_in_place_min_rad", _F),  # a roll-out that leaves the corridor may turn on the spot beyond this error
+    ("corridor_check_spacing_m", _F),
+    ("standing_per_s", _F),  # the cost of standing still per second
+    ("creep_speed_mps", _F),  # the creep speed of slow/wait candidates (0: none)
+    ("max_depth", _I),  # the candidate tree's depth
+    ("max_root_obstacles", _I),  # the most obstacles a root leg branches on
+    ("max_rollouts", _I),  # the most candidates rolled out, cheapest first
+    ("rollout_steps", _I),  # a roll-out's steps of rollout_dt_s
+    ("heading_in_degrees", _I),  # k4 prices the turn in degrees (1) or radians (0)
+    ("preferred_side", _I),  # +1 left, -1 right, 0 none
+    ("grows_slow", _I),  # whether slow/wait candidates are grown (slow times given)
+)
+# ... then the cycle's (:func:`choice_settings`).
+CHOICE_CYCLE_FIELDS: tuple[tuple[str, str], ...] = (
+    ("stop_short_m", _F),  # how far short of a blocked subgoal legs end
+    ("horizon_s", _F),
+    ("corridor_tolerance_m", _F),  # how far outside the corridor a leg may go
+    ("nominal_index", _I),  # the nominal speed's index in the speed set
+    ("robot_segment", _I),  # the path segment the robot is on (0 when the subgoal index is below 2)
+    ("subgoal_index", _I),
+    ("try_step_one", _I),  # take the paper's step 1 (the straight leg) when it is free
+    ("has_previous", _I),  # last cycle chose a candidate: its way round (obstacle, side, root) and speed (mm/s)
+    ("previous_obstacle", _I),
+    ("previous_side", _I),
+    ("previous_root", _I),
+    ("previous_speed_mmps", _I),
+    ("only_one_way", _I),  # only one way round is allowed: obstacle, side, root
+    ("only_obstacle", _I),
+    ("only_side", _I),
+    ("only_root", _I),
+)
+
+# The escape's settings (ESCAPE, :func:`.packing.escape`).
+ESCAPE_FIELDS: tuple[tuple[str, str], ...] = (
+    ("dt_s", _F),  # the roll-outs' step
+    ("escape_s", _F),  # the roll-outs' length
+    ("speed_step_mps", _F),  # the most the speed changes in one step
+    ("turn_step_radps", _F),  # the most the turn rate changes in one step
+    ("max_speed_mps", _F),
+    ("max_turn_rate_radps", _F),
+    ("corridor_tolerance_m", _F),
+    ("max_excess_m", _F),  # a roll-out further outside the corridor than this is not taken (moving)
+    ("top_speed_mps", _F),  # the fan's top speed (at least 1e-9)
+    ("continuity_s", _F),  # a calm escape's weight of the change from last cycle's command (0: not calm)
+    ("previous_speed_mps", _F),  # last cycle's command (calm escape)
+    ("previous_turn_radps", _F),
+    ("horizon_s", _F),  # the cycle's horizon ...
+    ("standing_check_s", _F),  # ... and the options' one: standing is checked for the shorter
+)
+
+
+def _dtype(fields: tuple[tuple[str, str], ...]) -> np.dtype:
+    """The structured dtype of ``fields``, its scalars numpy records (attribute access in plain Python, as compiled)."""
+    base = np.dtype([(name, np.float64 if code == _F else np.int64) for name, code in fields], align=True)
+    return np.dtype((np.record, base))
+
+
+CHOICE = _dtype(CHOICE_EPISODE_FIELDS + CHOICE_CYCLE_FIELDS)
+ESCAPE = _dtype(ESCAPE_FIELDS)
+_EPISODE = struct.Struct("=" + "".join(code for _, code in CHOICE_EPISODE_FIELDS))
+_CYCLE = struct.Struct("=" + "".join(code for _, code in CHOICE_CYCLE_FIELDS))
+_ESCAPE = struct.Struct("=" + "".join(code for _, code in ESCAPE_FIELDS))
+assert _EPISODE.size + _CYCLE.size == CHOICE.itemsize and _ESCAPE.size == ESCAPE.itemsize  # no padding
+
+
+def _packed(layout: struct.Struct, fields: tuple[tuple[str, str], ...], what: str, values: dict[str, float | int]) -> bytes:
+    names = [name for name, _ in fields]
+    if set(values) != set(names):
+        missing, unknown = sorted(set(names) - set(values)), sorted(set(values) - set(names))
+        raise TypeError(f"{what}: missing fields {missing}, unknown fields {unknown}")
+    return layout.pack(*(values[name] for name in names))
+
+
+def choice_episode(**fields: float | int) -> bytes:
+    """The episode's part of the choice's settings (every field of :data:`CHOICE_EPISODE_FIELDS`, by name), with
+    the cycle's zero: what :func:`choice_settings` starts from."""
+    return _packed(_EPISODE, CHOICE_EPISODE_FIELDS, "choice_episode", fields) + bytes(_CYCLE.size)
+
+
+def choice_settings(
+    episode: bytes,
+    stop_short_m: float,
+    horizon_s: float,
+    corridor_tolerance_m: float,
+    nominal_index: int,
+    robot_segment: int,
+    subgoal_index: int,
+    try_step_one: int,
+    has_previous: int,
+    previous_obstacle: int,
+    previous_side: int,
+    previous_root: int,
+    previous_speed_mmps: int,
+    only_one_way: int,
+    only_obstacle: int,
+    only_side: int,
+    only_root: int,
+) -> np.ndarray:
+    """The choice's settings of a cycle, a row of :data:`CHOICE`: the episode's (:func:`choice_episode`) with the
+    cycle's fields (:data:`CHOICE_CYCLE_FIELDS`, in that order). Called every cycle: its fields are packed in place."""
+    buffer = bytearray(episode)
+    _CYCLE.pack_into(
+        buffer,
+        _EPISODE.size,
+        stop_short_m,
+        horizon_s,
+        corridor_tolerance_m,
+        nominal_index,
+        robot_segment,
+        subgoal_index,
+        try_step_one,
+        has_previous,
+        previous_obstacle,
+        previous_side,
+        previous_root,
+        previous_speed_mmps,
+        only_one_way,
+        only_obstacle,
+        only_side,
+        only_root,
+    )
+    return np.frombuffer(buffer, CHOICE)
+
+
+_LAYOUTS = {
+    CHOICE: ("the choice's settings", CHOICE_EPISODE_FIELDS + CHOICE_CYCLE_FIELDS, _EPISODE.format + _CYCLE.format[1:]),
+    ESCAPE: ("the escape's settings", ESCAPE_FIELDS, _ESCAPE.format),
+}
+
+
+def record(dtype: np.dtype, zero_others: bool = False, **fields: float | int) -> np.ndarray:
+    """A row of ``dtype`` (:data:`CHOICE` or :data:`ESCAPE`) with ``fields`` by name: every field, unless
+    ``zero_others`` (then the fields not given are 0)."""
+    what, names, layout = _LAYOUTS[dtype]
+    if zero_others:
+        fields = {name: 0 for name, _ in names} | fields
+    return np.frombuffer(bytearray(_packed(struct.Struct(layout), names, what, fields)), dtype)
+
+
+# The node store of the candidate tree (grow, choose_tree): floats (M, NODE_FLOATS): position, time, speed,
+# path length, first direction (unit x, y), slow/wait time and speed, length left to the subgoal; ...
+N_X, N_Y, N_TIME, N_SPEED, N_LENGTH, N_FIRST_X, N_FIRST_Y, N_SLOW_S, N_SLOW_SPEED, N_TO_GOAL = range(10)
+NODE_FLOATS = 10
+# ... integers (M, NODE_INTEGERS): parent node (-1 for a root), way round (obstacle, side, root), leaf flag.
+N_PARENT, N_OBSTACLE, N_SIDE, N_ROOT, N_LEAF = range(5)
+NODE_INTEGERS = 5
+
+# What choose_tree found (``found``): its status, whether step 1 turns on the spot, then the K leaves' nodes.
+FOUND_STATUS, FOUND_TURN_IN_PLACE, FOUND_LEAVES = 0, 1, 2
+NO_CANDIDATE, STEP_ONE, CANDIDATES = 0, 1, 2  # the status
+# What choose_candidate ranks (``ranking``, after ``found`` in choose's first array): the first rank that
+# follows (-1: none tried follows), R the ranks, then the order (R candidates) and each rank's can_follow (R).
+RANKING_FIRST, RANKING_COUNT, RANKING_ORDER = 0, 1, 2
+# Its costs (COST_ROWS, K): the six critics' terms (critics_for's order), their sum E, E with only_way applied.
+COST_TERMS, COST_SUM, COST_TOTAL, COST_ROWS = 6, 6, 7, 8

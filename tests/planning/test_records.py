@@ -1,0 +1,71 @@
+"""The records the planner's compiled steps read by field name (:mod:`viapath.planning.viapath.records`): each value
+the planner packs lands in the field of its name, and no compiled step reads its settings by number."""
+
+from __future__ import annotations
+
+import inspect
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from viapath.planning.viapath import records
+
+
+def _distinct(fields, start):
+    """A distinct value for each field, of its kind (float fields get a fraction)."""
+    return {name: (start + k + 0.25 if code == "d" else start + k) for k, (name, code) in enumerate(fields)}
+
+
+def test_choice_settings_put_each_value_in_its_field():
+    episode_values = _distinct(records.CHOICE_EPISODE_FIELDS, 1)
+    cycle_values = _distinct(records.CHOICE_CYCLE_FIELDS, 100)
+    parameters = list(inspect.signature(records.choice_settings).parameters)[1:]
+    assert parameters == [name for name, _ in records.CHOICE_CYCLE_FIELDS]
+    row = records.choice_settings(records.choice_episode(**episode_values), *cycle_values.values())
+    assert row.shape == (1,) and row.dtype == records.CHOICE
+    for name, value in (episode_values | cycle_values).items():
+        assert getattr(row[0], name) == value, name  # attribute access, as the compiled steps read it
+        assert type(row[name][0].item()) is type(value), name
+
+
+def test_the_episode_is_packed_once_and_each_cycle_gets_its_own_row():
+    episode = records.choice_episode(**_distinct(records.CHOICE_EPISODE_FIELDS, 1))
+    cycle = list(_distinct(records.CHOICE_CYCLE_FIELDS, 100).values())
+    first = records.choice_settings(episode, *cycle)
+    second = records.choice_settings(episode, *cycle[:6], 0, *cycle[7:])
+    assert first[0].try_step_one == 106 and second[0].try_step_one == 0
+    assert first.flags.writeable and not np.shares_memory(first, second)
+
+
+def test_a_record_refuses_missing_and_unknown_fields():
+    values = _distinct(records.CHOICE_EPISODE_FIELDS, 1)
+    del values["k2_per_s"]
+    with pytest.raises(TypeError, match=r"missing fields \['k2_per_s'\], unknown fields \['k2'\]"):
+        records.choice_episode(**values, k2=1.0)
+    with pytest.raises(TypeError, match=r"the escape's settings: missing fields \['standing_check_s'\]"):
+        records.record(records.ESCAPE, **{name: 1.0 for name, _ in records.ESCAPE_FIELDS[:-1]}, max_excess=1.0)
+
+
+def test_records_by_name_and_with_the_others_zero():
+    values = _distinct(records.ESCAPE_FIELDS, 3)
+    row = records.record(records.ESCAPE, **values)
+    assert [getattr(row[0], name) for name in values] == list(values.values())
+    rollout = records.record(records.CHOICE, zero_others=True, rollout_dt_s=0.1, rollout_steps=20)
+    assert rollout[0].rollout_dt_s == 0.1 and rollout[0].rollout_steps == 20
+    assert all(rollout[name][0] == 0 for name in records.CHOICE.names if name not in ("rollout_dt_s", "rollout_steps"))
+
+
+def test_no_compiled_step_reads_its_settings_by_number():
+    """The planner's compiled modules read the records by field name: no ``settings[...]``, no slot constants."""
+    folder = Path(records.__file__).parent
+    offending = []
+    for path in sorted(folder.glob("*.py")):
+        text = path.read_text()
+        if "from viapath.jit import compiled" not in text:
+            continue
+        for number, line in enumerate(text.splitlines(), 1):
+            if re.search(r"\bsettings\[|\b[FC]_[A-Z]+\b|\b_E_[A-Z]+\b|\bslots\b", line):
+                offending.append(f"{path.name}:{number}: {line.strip()}")
+    assert offending == []
