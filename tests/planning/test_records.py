@@ -39,22 +39,26 @@ def test_the_episode_is_packed_once_and_each_cycle_gets_its_own_row():
     assert first.flags.writeable and not np.shares_memory(first, second)
 
 
+def test_the_escape_and_the_roll_out_put_each_value_in_its_field():
+    values = _distinct(records.ESCAPE_FIELDS, 3)
+    assert list(inspect.signature(records.escape_settings).parameters) == list(values)
+    row = records.escape_settings(*values.values())
+    assert row.dtype == records.ESCAPE and [getattr(row[0], name) for name in values] == list(values.values())
+    episode = records.choice_episode(zero_others=True, rollout_dt_s=0.1, rollout_steps=20)
+    rollout = records.rollout_settings(episode, 0.05)
+    given = {"rollout_dt_s": 0.1, "rollout_steps": 20, "corridor_tolerance_m": 0.05}
+    assert {name: rollout[name][0] for name in records.CHOICE.names} == {
+        name: given.get(name, 0) for name in records.CHOICE.names
+    }
+
+
 def test_a_record_refuses_missing_and_unknown_fields():
     values = _distinct(records.CHOICE_EPISODE_FIELDS, 1)
     del values["k2_per_s"]
-    with pytest.raises(TypeError, match=r"missing fields \['k2_per_s'\], unknown fields \['k2'\]"):
+    with pytest.raises(TypeError, match=r"settings: missing fields \['k2_per_s'\], unknown fields \['k2'\]"):
         records.choice_episode(**values, k2=1.0)
-    with pytest.raises(TypeError, match=r"the escape's settings: missing fields \['standing_check_s'\]"):
-        records.record(records.ESCAPE, **{name: 1.0 for name, _ in records.ESCAPE_FIELDS[:-1]}, max_excess=1.0)
-
-
-def test_records_by_name_and_with_the_others_zero():
-    values = _distinct(records.ESCAPE_FIELDS, 3)
-    row = records.record(records.ESCAPE, **values)
-    assert [getattr(row[0], name) for name in values] == list(values.values())
-    rollout = records.record(records.CHOICE, zero_others=True, rollout_dt_s=0.1, rollout_steps=20)
-    assert rollout[0].rollout_dt_s == 0.1 and rollout[0].rollout_steps == 20
-    assert all(rollout[name][0] == 0 for name in records.CHOICE.names if name not in ("rollout_dt_s", "rollout_steps"))
+    with pytest.raises(TypeError, match=r"missing fields \[\], unknown fields \['horizon_s'\]"):
+        records.choice_episode(zero_others=True, horizon_s=4.0)  # a cycle's field
 
 
 def test_no_compiled_step_reads_its_settings_by_number():

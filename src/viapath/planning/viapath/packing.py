@@ -273,22 +273,21 @@ def escape(checks, limits: MotionLimits, config, fan, previous=None, score_stand
     dt = config.escape_dt_s
     steps = max(1, int(round(config.escape_s / dt)))
     calm = bool(config.calm_escape and previous is not None)
-    settings = records.record(
-        records.ESCAPE,
-        dt_s=dt,
-        escape_s=config.escape_s,
-        speed_step_mps=limits.max_accel_mps2 * dt,
-        turn_step_radps=limits.max_turn_accel_radps2 * dt,
-        max_speed_mps=limits.max_speed_mps,
-        max_turn_rate_radps=limits.max_turn_rate_radps,
-        corridor_tolerance_m=checks.corridor_tolerance_m,
-        max_excess_m=max(config.escape_max_excess_m, checks.corridor_tolerance_m),
-        top_speed_mps=max(top, 1e-9),
-        continuity_s=config.escape_continuity_s if calm else 0.0,
-        previous_speed_mps=previous.speed_mps if calm else 0.0,
-        previous_turn_radps=previous.turn_rate_radps if calm else 0.0,
-        horizon_s=checks.horizon_s,
-        standing_check_s=config.horizon_s,
+    settings = records.escape_settings(  # (by position, in the record's order: ESCAPE_FIELDS)
+        dt,  # dt_s
+        config.escape_s,  # escape_s
+        limits.max_accel_mps2 * dt,  # speed_step_mps
+        limits.max_turn_accel_radps2 * dt,  # turn_step_radps
+        limits.max_speed_mps,
+        limits.max_turn_rate_radps,
+        checks.corridor_tolerance_m,
+        max(config.escape_max_excess_m, checks.corridor_tolerance_m),  # max_excess_m
+        max(top, 1e-9),  # top_speed_mps
+        config.escape_continuity_s if calm else 0.0,  # continuity_s
+        previous.speed_mps if calm else 0.0,  # previous_speed_mps
+        previous.turn_rate_radps if calm else 0.0,  # previous_turn_radps
+        checks.horizon_s,
+        config.horizon_s,  # standing_check_s
     )
     robot = checks.packed_robot()
     obstacles = checks.packed_obstacles()
@@ -314,26 +313,39 @@ def escape(checks, limits: MotionLimits, config, fan, previous=None, score_stand
 def can_follow(checks, target, speed_mps: float, limits: MotionLimits, config) -> int:
     """:func:`.rollout.can_follow` of steering for ``target`` at ``speed_mps`` from the robot of ``checks``: 0
     cannot, 1 can, 2 can after turning on the spot first."""
-    settings = records.record(
-        records.CHOICE,
-        zero_others=True,  # (the roll-out's fields only)
-        rollout_heading_rad=config.rollout_heading_rad,
-        max_accel_mps2=limits.max_accel_mps2,
-        rollout_dt_s=config.rollout_dt_s,
-        max_turn_rate_radps=limits.max_turn_rate_radps,
-        max_turn_accel_radps2=limits.max_turn_accel_radps2,
-        max_speed_mps=limits.max_speed_mps,
-        heading_gain=config.heading_gain,
-        turn_in_place_min_rad=config.turn_in_place_min_rad,
-        corridor_tolerance_m=checks.corridor_tolerance_m,
-        rollout_steps=max(1, int(round(config.rollout_s / config.rollout_dt_s))),
-    )
+    settings = records.rollout_settings(_rollout_episode(limits, config), checks.corridor_tolerance_m)
     robot = checks.packed_robot()
     x, y = float(target[0]), float(target[1])
     angle = math.atan2(y - robot[1], x - robot[0])  # libm's, as the compiled choice takes it
     return int(
         _can_follow(robot, x, y, angle, float(speed_mps), settings, checks.packed_obstacles(), _corridor(checks.path))
     )
+
+
+_rollout_cache: list[Any] = [None, None, b""]  # the last (limits, config) and their roll-out fields, packed
+
+
+def _rollout_episode(limits: MotionLimits, config) -> bytes:
+    """The roll-out's fields of the choice's settings (:func:`.records.choice_episode`, the others 0), packed once
+    per (limits, config) object: :func:`can_follow` is called several times a cycle."""
+    if _rollout_cache[0] is not limits or _rollout_cache[1] is not config:
+        _rollout_cache[:] = (
+            limits,
+            config,
+            records.choice_episode(
+                zero_others=True,
+                rollout_heading_rad=config.rollout_heading_rad,
+                max_accel_mps2=limits.max_accel_mps2,
+                rollout_dt_s=config.rollout_dt_s,
+                max_turn_rate_radps=limits.max_turn_rate_radps,
+                max_turn_accel_radps2=limits.max_turn_accel_radps2,
+                max_speed_mps=limits.max_speed_mps,
+                heading_gain=config.heading_gain,
+                turn_in_place_min_rad=config.turn_in_place_min_rad,
+                rollout_steps=max(1, int(round(config.rollout_s / config.rollout_dt_s))),
+            ),
+        )
+    return _rollout_cache[2]
 
 
 def _choice_of(found, floats, integers, costs) -> CompiledChoice:

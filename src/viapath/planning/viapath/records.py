@@ -2,8 +2,8 @@
 as ``settings.k2_per_s`` by :func:`.selection.choose` and :func:`.rollout.can_follow`), the escape's
 (:data:`ESCAPE`, :mod:`.escape_figures`), the columns of the candidate tree's node store (:mod:`.tree`) and the
 entries of what the choice hands back. The rest of the planner builds the records here (:func:`choice_episode`,
-:func:`choice_settings`, :func:`record`) and reads what comes back through :mod:`.packing`
-(:class:`.packing.NodeStore`, :class:`.packing.CompiledChoice`), never by number.
+:func:`choice_settings`, :func:`rollout_settings`, :func:`escape_settings`) and reads what comes back through
+:mod:`.packing` (:class:`.packing.NodeStore`, :class:`.packing.CompiledChoice`), never by number.
 
 Choices (measured with numba 0.68 on the development machine: a compiled call that reads four fields):
 
@@ -17,7 +17,8 @@ Choices (measured with numba 0.68 on the development machine: a compiled call th
   every step sees the record.
 * The choice's row is the episode's fields (packed once) and the cycle's, packed with :mod:`struct` into a copy of
   the episode's bytes: 1.4-1.7 µs a cycle, what the flat arrays' copies and item sets took (numpy sets one field of
-  a structured array in about 4 µs).
+  a structured array in about 4 µs). The builders called every cycle take their fields by position, in the
+  record's order (a call by keyword took about 2 µs more).
 * The node store stays two 2-D arrays, floats and integers, with named columns (``N_X`` ...): the tree hands
   columns on as contiguous slices (node positions as (K, 2) rows) and the Python side reads them as views. A
   structured node store read faster in a compiled micro-benchmark (about half the time for a loop over 400 nodes'
@@ -112,9 +113,13 @@ _EPISODE = struct.Struct("=" + "".join(code for _, code in CHOICE_EPISODE_FIELDS
 _CYCLE = struct.Struct("=" + "".join(code for _, code in CHOICE_CYCLE_FIELDS))
 _ESCAPE = struct.Struct("=" + "".join(code for _, code in ESCAPE_FIELDS))
 assert _EPISODE.size + _CYCLE.size == CHOICE.itemsize and _ESCAPE.size == ESCAPE.itemsize  # no padding
+_FLOAT = struct.Struct("=d")
+_TOLERANCE_AT = _EPISODE.size + 8 * [name for name, _ in CHOICE_CYCLE_FIELDS].index("corridor_tolerance_m")
 
 
-def _packed(layout: struct.Struct, fields: tuple[tuple[str, str], ...], what: str, values: dict[str, float | int]) -> bytes:
+def _packed(
+    layout: struct.Struct, fields: tuple[tuple[str, str], ...], what: str, values: dict[str, float | int]
+) -> bytes:
     names = [name for name, _ in fields]
     if set(values) != set(names):
         missing, unknown = sorted(set(names) - set(values)), sorted(set(values) - set(names))
@@ -122,10 +127,13 @@ def _packed(layout: struct.Struct, fields: tuple[tuple[str, str], ...], what: st
     return layout.pack(*(values[name] for name in names))
 
 
-def choice_episode(**fields: float | int) -> bytes:
-    """The episode's part of the choice's settings (every field of :data:`CHOICE_EPISODE_FIELDS`, by name), with
-    the cycle's zero: what :func:`choice_settings` starts from."""
-    return _packed(_EPISODE, CHOICE_EPISODE_FIELDS, "choice_episode", fields) + bytes(_CYCLE.size)
+def choice_episode(zero_others: bool = False, **fields: float | int) -> bytes:
+    """The episode's part of the choice's settings (every field of :data:`CHOICE_EPISODE_FIELDS`, by name, unless
+    ``zero_others``: then the fields not given are 0), with the cycle's zero: what :func:`choice_settings` and
+    :func:`rollout_settings` start from."""
+    if zero_others:
+        fields = {name: 0 for name, _ in CHOICE_EPISODE_FIELDS} | fields
+    return _packed(_EPISODE, CHOICE_EPISODE_FIELDS, "the choice's settings", fields) + bytes(_CYCLE.size)
 
 
 def choice_settings(
@@ -173,19 +181,52 @@ def choice_settings(
     return np.frombuffer(buffer, CHOICE)
 
 
-_LAYOUTS = {
-    CHOICE: ("the choice's settings", CHOICE_EPISODE_FIELDS + CHOICE_CYCLE_FIELDS, _EPISODE.format + _CYCLE.format[1:]),
-    ESCAPE: ("the escape's settings", ESCAPE_FIELDS, _ESCAPE.format),
-}
+def rollout_settings(episode: bytes, corridor_tolerance_m: float) -> np.ndarray:
+    """The choice's settings for a roll-out on its own (:func:`.rollout.can_follow`), a row of :data:`CHOICE`: the
+    episode's (:func:`choice_episode`) with the corridor tolerance, the cycle's other fields 0."""
+    buffer = bytearray(episode)
+    _FLOAT.pack_into(buffer, _TOLERANCE_AT, corridor_tolerance_m)
+    return np.frombuffer(buffer, CHOICE)
 
 
-def record(dtype: np.dtype, zero_others: bool = False, **fields: float | int) -> np.ndarray:
-    """A row of ``dtype`` (:data:`CHOICE` or :data:`ESCAPE`) with ``fields`` by name: every field, unless
-    ``zero_others`` (then the fields not given are 0)."""
-    what, names, layout = _LAYOUTS[dtype]
-    if zero_others:
-        fields = {name: 0 for name, _ in names} | fields
-    return np.frombuffer(bytearray(_packed(struct.Struct(layout), names, what, fields)), dtype)
+def escape_settings(
+    dt_s: float,
+    escape_s: float,
+    speed_step_mps: float,
+    turn_step_radps: float,
+    max_speed_mps: float,
+    max_turn_rate_radps: float,
+    corridor_tolerance_m: float,
+    max_excess_m: float,
+    top_speed_mps: float,
+    continuity_s: float,
+    previous_speed_mps: float,
+    previous_turn_radps: float,
+    horizon_s: float,
+    standing_check_s: float,
+) -> np.ndarray:
+    """The escape's settings, a row of :data:`ESCAPE` (its fields, :data:`ESCAPE_FIELDS`, in that order)."""
+    return np.frombuffer(
+        bytearray(
+            _ESCAPE.pack(
+                dt_s,
+                escape_s,
+                speed_step_mps,
+                turn_step_radps,
+                max_speed_mps,
+                max_turn_rate_radps,
+                corridor_tolerance_m,
+                max_excess_m,
+                top_speed_mps,
+                continuity_s,
+                previous_speed_mps,
+                previous_turn_radps,
+                horizon_s,
+                standing_check_s,
+            )
+        ),
+        ESCAPE,
+    )
 
 
 # The node store of the candidate tree (grow, choose_tree): floats (M, NODE_FLOATS): position, time, speed,
