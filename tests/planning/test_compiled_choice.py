@@ -254,9 +254,9 @@ def test_compiled_choice_scalars_match_reference():
 
 def test_the_warm_up_reaches_the_choice_and_the_escape():
     """precompile's cycles reach the compiled choice and the escape, and each of their kernels then has one
-    compiled signature (the planner's argument types do not vary)."""
+    compiled signature (the planner's argument types do not vary): the doors Python calls them through (packing's;
+    the kernels behind them, loaded from the cache inside the doors, may show none)."""
     from viapath import jit
-    from viapath.planning.viapath import escape_figures, selection
     from viapath.planning.viapath.planner import precompile, warm_up_crowds
 
     planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2)
@@ -269,7 +269,7 @@ def test_the_warm_up_reaches_the_choice_and_the_escape():
     assert statuses[0] in ("avoid", "slow", "wait") and statuses[1] == "escape"
     assert precompile()
     if jit.enabled():
-        for kernel in (escape_figures.escape_headings, escape_figures.escape_scores, selection.choose):
+        for kernel in (compiled._escape_headings, compiled._escape_scores, compiled._choose):
             assert len(kernel.signatures) == 1
 
 
