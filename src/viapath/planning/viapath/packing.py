@@ -33,11 +33,20 @@ _via: Any = via_steps
 
 
 # The doors of the steps that take a record: each takes the record's row (a plain argument, typed as fast as an array)
-# where the step takes the record, and hands the step ``row[0]`` (:mod:`.records`).
+# where the step takes the record, and hands the step ``row[0]`` (:mod:`.records`). Their arguments are spelled out:
+# with ``*arguments`` numba types them as one tuple, in Python, about 1.7 us a call more.
 @compiled
-def _choose(*arguments):
-    """:func:`.selection.choose`, its settings row last."""
-    return selection_steps.choose(*arguments[:-1], arguments[-1][0])
+def _choose(
+    robot, speeds, subgoal, positions, velocities, radii, growth, until, via_radii, ids, shapes, slow_radii,
+    slow_growth, slow_until, slow_times, continuation, envelope, starts, directions, lengths, half_widths, waypoints,
+    settings_row,
+):  # fmt: skip
+    """:func:`.selection.choose`."""
+    return selection_steps.choose(
+        robot, speeds, subgoal, positions, velocities, radii, growth, until, via_radii, ids, shapes, slow_radii,
+        slow_growth, slow_until, slow_times, continuation, envelope, starts, directions, lengths, half_widths,
+        waypoints, settings_row[0],
+    )  # fmt: skip
 
 
 @compiled
@@ -54,9 +63,9 @@ def _choose_tree(
 
 
 @compiled
-def _choose_ranked(*arguments):
-    """:func:`.selection.choose_ranked`, its settings row last."""
-    return selection_steps.choose_ranked(*arguments[:-1], arguments[-1][0])
+def _choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, settings_row):
+    """:func:`.selection.choose_ranked`."""
+    return selection_steps.choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, settings_row[0])
 
 
 @compiled
@@ -69,15 +78,23 @@ def _can_follow(robot, target_x, target_y, angle, speed, settings_row, obstacles
 
 
 @compiled
-def _escape_headings(*arguments):
-    """:func:`.escape_figures.escape_headings`, its settings row second to last."""
-    return escape_steps.escape_headings(*arguments[:-2], arguments[-2][0], arguments[-1])
+def _escape_headings(robot, positions, velocities, radii, growth, until, row_turns, settings_row, steps):
+    """:func:`.escape_figures.escape_headings`."""
+    return escape_steps.escape_headings(
+        robot, positions, velocities, radii, growth, until, row_turns, settings_row[0], steps
+    )
 
 
 @compiled
-def _escape_scores(*arguments):
-    """:func:`.escape_figures.escape_scores`, its settings row third to last."""
-    return escape_steps.escape_scores(*arguments[:-3], arguments[-3][0], *arguments[-2:])
+def _escape_scores(
+    robot, commands, turn_rows, sines, cosines, positions, velocities, radii, growth, until, starts, directions,
+    lengths, half_widths, subgoal, settings_row, steps, calm,
+):  # fmt: skip
+    """:func:`.escape_figures.escape_scores`."""
+    return escape_steps.escape_scores(
+        robot, commands, turn_rows, sines, cosines, positions, velocities, radii, growth, until, starts, directions,
+        lengths, half_widths, subgoal, settings_row[0], steps, calm,
+    )  # fmt: skip
 
 
 class NodeStore(NamedTuple):
@@ -290,18 +307,28 @@ def escape(checks, limits: MotionLimits, config, fan, previous=None, score_stand
         config.horizon_s,  # standing_check_s
     )
     robot = checks.packed_robot()
-    obstacles = checks.packed_obstacles()
-    standing_free, headings = _escape_headings(robot, *obstacles, row_turns, settings, steps)
+    positions, velocities, radii, growth, until = checks.packed_obstacles()
+    standing_free, headings = _escape_headings(
+        robot, positions, velocities, radii, growth, until, row_turns, settings, steps
+    )
     if standing_free and not score_standing:
         return True, None, None, None
+    starts, directions, lengths, half_widths = _corridor(checks.path)
     ends, score = _escape_scores(
         robot,
         commands,
         turn_rows,
         np.sin(headings),
         np.cos(headings),
-        *obstacles,
-        *_corridor(checks.path),
+        positions,
+        velocities,
+        radii,
+        growth,
+        until,
+        starts,
+        directions,
+        lengths,
+        half_widths,
         _c(checks.subgoal),
         settings,
         steps,
