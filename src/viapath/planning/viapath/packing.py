@@ -25,6 +25,7 @@ from viapath.planning.viapath import rollout as rollout_steps
 from viapath.planning.viapath import selection as selection_steps
 from viapath.planning.viapath import tree as tree_steps
 from viapath.planning.viapath import via as via_steps
+from viapath.planning.viapath.shapes import StaticShapes
 
 # The compiled steps take plain arrays and scalars unannotated (typed when they are compiled).
 _legs: Any = leg_steps
@@ -37,11 +38,13 @@ _via: Any = via_steps
 # with ``*arguments`` numba types them as one tuple, in Python, about 1.7 us a call more.
 @compiled
 def _choose(
-    robot, speeds, subgoal, positions, velocities, radii, growth, until, via_radii, ids, shapes, slow_radii,
-    slow_growth, slow_until, slow_times, continuation, envelope, starts, directions, lengths, half_widths, waypoints,
-    settings_row,
+    robot, speeds, subgoal, positions, velocities, radii, growth, until, via_radii, ids, shape_of, shape_members,
+    shape_offsets, hug_factor, slow_radii, slow_growth, slow_until, slow_times, continuation, envelope, starts,
+    directions, lengths, half_widths, waypoints, settings_row,
 ):  # fmt: skip
-    """:func:`.selection.choose`."""
+    """:func:`.selection.choose`; the static shapes come as their fields (a record argument from Python costs a call
+    about 0.5 µs: numba types a tuple argument in Python)."""
+    shapes = StaticShapes(shape_of, shape_members, shape_offsets, hug_factor)
     return selection_steps.choose(
         robot, speeds, subgoal, positions, velocities, radii, growth, until, via_radii, ids, shapes, slow_radii,
         slow_growth, slow_until, slow_times, continuation, envelope, starts, directions, lengths, half_widths,
@@ -246,8 +249,8 @@ def choose(
     corridor = (starts, directions, lengths, half_widths)
     if extra_terms is None:
         found, floats, integers, costs = _choose(
-            robot, _c(speeds), _c(checks.subgoal), *obstacles, *via, *slow, continuation, envelope, *corridor,
-            waypoints, settings,
+            robot, _c(speeds), _c(checks.subgoal), *obstacles, via_radii, ids, *via[2], *slow, continuation, envelope,
+            *corridor, waypoints, settings,
         )  # fmt: skip
         return _choice_of(found, floats, integers, costs)
     inputs = (robot, _c(speeds), _c(checks.subgoal), obstacles, via, slow, continuation, envelope, corridor, waypoints)
