@@ -244,13 +244,14 @@ def choose(
         (positions, velocities, radii, growth, until) if slow_checks is checks else slow_checks.packed_obstacles()
     )
     obstacles = (positions, velocities, radii, growth, until)
-    via = (via_radii, ids, checks.static_shapes())
+    shapes = checks.static_shapes()
+    via = (via_radii, ids, shapes)
     slow = (slow_radii, slow_growth, slow_until, slow_times)
     corridor = (starts, directions, lengths, half_widths)
     if extra_terms is None:
         found, floats, integers, costs = _choose(
-            robot, _c(speeds), _c(checks.subgoal), *obstacles, via_radii, ids, *via[2], *slow, continuation, envelope,
-            *corridor, waypoints, settings,
+            robot, _c(speeds), _c(checks.subgoal), *obstacles, via_radii, ids, shapes.shape_of, shapes.members,
+            shapes.offsets, shapes.hug_factor, *slow, continuation, envelope, *corridor, waypoints, settings,
         )  # fmt: skip
         return _choice_of(found, floats, integers, costs)
     inputs = (robot, _c(speeds), _c(checks.subgoal), obstacles, via, slow, continuation, envelope, corridor, waypoints)
