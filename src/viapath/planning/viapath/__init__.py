@@ -7,7 +7,7 @@ boundary. The recipe is :mod:`viapath.planning.viapath.planner`; each of its ste
 The compiled steps live beside them, one module per step: :mod:`.legs` (leg contacts and the corridor),
 :mod:`.via` (via points), :mod:`.tree` (the candidate tree), :mod:`.selection` (Eq. 1 and the choice),
 :mod:`.rollout` (the roll-outs the follow step checks), :mod:`.escape_figures` (the escape's standing check and
-scores); :mod:`.packing` packs a cycle's arrays for them and :mod:`.slots` names their records' fields.
+scores); :mod:`.packing` packs a cycle's arrays for them and :mod:`.records` names their records' fields.
 """
 
 from viapath.planning.viapath.options import VIAPATH_OPTIONS

@@ -21,11 +21,6 @@ from viapath.jit import compiled
 from viapath.planning.viapath.legs import excess_at_most, legs_first_contact
 from viapath.sums import pairwise_sum
 
-# Entries of the escape's float settings.
-_E_DT, _E_ESCAPE_S, _E_SPEED_STEP, _E_TURN_STEP, _E_MAX_SPEED, _E_MAX_TURN, _E_TOLERANCE, _E_BOUND = range(8)
-_E_TOP, _E_CONTINUITY, _E_PREVIOUS_SPEED, _E_PREVIOUS_TURN, _E_HORIZON, _E_STANDING_S = range(8, 14)
-ESCAPE_SETTINGS = 14
-
 
 @compiled
 def _minimum(a, b):
@@ -224,7 +219,7 @@ def _standing_free(robot, obstacles, settings):
     starts[0, 0] = robot[0]
     starts[0, 1] = robot[1]
     durations = np.empty(1)
-    durations[0] = _minimum(_maximum(settings[_E_HORIZON] - 0.0, 0.0), settings[_E_STANDING_S])
+    durations[0] = _minimum(_maximum(settings.horizon_s - 0.0, 0.0), settings.standing_check_s)
     contact = legs_first_contact(starts, np.zeros(1), np.zeros((1, 2)), durations, *obstacles, np.zeros(1))
     free = True
     for j in range(contact.shape[1]):
@@ -243,10 +238,10 @@ def escape_headings(
     (:func:`viapath.kinematics.rollout`), one row per distinct turn command ``row_turns`` (the fan's commands
     of one turn rate share them), before the first step and after each: numpy takes their sines and cosines
     for :func:`escape_scores`."""
-    dt = settings[_E_DT]
+    dt = settings.dt_s
     obstacles = (obstacle_positions, obstacle_velocities, radii, growth, growth_until_s)
     free = _standing_free(robot, obstacles, settings) if obstacle_positions.shape[0] else True
-    max_turn = settings[_E_MAX_TURN]
+    max_turn = settings.max_turn_rate_radps
     turn0 = robot[4]
     heading0 = robot[2]
     headings = np.empty((row_turns.shape[0], steps + 1))
@@ -255,7 +250,7 @@ def escape_headings(
         headings[r, 0] = heading0
         turned = 0.0
         for s in range(steps):
-            dw = settings[_E_TURN_STEP] * float(s + 1)
+            dw = settings.turn_step_radps * float(s + 1)
             turn = turn0 + _minimum(_maximum(w_cmd - turn0, -dw), dw)
             # np.cumsum: the first term as it is, then each added in order
             turned = turn * dt if s == 0 else turned + turn * dt
@@ -268,13 +263,13 @@ def _escape_roll_outs(robot, commands, turn_rows, sines, cosines, settings, step
     """The positions (K, steps, 2) of :func:`escape_scores`' roll-outs (:func:`viapath.kinematics.rollout`: the
     ramps of speed and turn rate, the exact arcs, the positions as running sums)."""
     k_count = commands.shape[0]
-    dt = settings[_E_DT]
-    max_speed = settings[_E_MAX_SPEED]
+    dt = settings.dt_s
+    max_speed = settings.max_speed_mps
     x0 = robot[0]
     y0 = robot[1]
     speed0 = robot[3]
     turn0 = robot[4]
-    max_turn = settings[_E_MAX_TURN]
+    max_turn = settings.max_turn_rate_radps
     positions = np.empty((k_count, steps, 2))
     for k in range(k_count):
         row = turn_rows[k]
@@ -283,8 +278,8 @@ def _escape_roll_outs(robot, commands, turn_rows, sines, cosines, settings, step
         x_sum = 0.0
         y_sum = 0.0
         for s in range(steps):
-            dv = settings[_E_SPEED_STEP] * float(s + 1)
-            dw = settings[_E_TURN_STEP] * float(s + 1)
+            dv = settings.speed_step_mps * float(s + 1)
+            dw = settings.turn_step_radps * float(s + 1)
             speed = speed0 + _minimum(_maximum(v_cmd - speed0, -dv), dv)
             turn = turn0 + _minimum(_maximum(w_cmd - turn0, -dw), dw)
             sin_before = sines[row, s]
@@ -417,8 +412,8 @@ def _score(separation, free, inside, time_to_contact, speed, progress):
 def _change(speed, turn, settings):
     """How far a command is from last cycle's, speed and turn rate each relative to its top (the continuity term)."""
     return (
-        abs(speed - settings[_E_PREVIOUS_SPEED]) / settings[_E_TOP]
-        + abs(turn - settings[_E_PREVIOUS_TURN]) / settings[_E_MAX_TURN]
+        abs(speed - settings.previous_speed_mps) / settings.top_speed_mps
+        + abs(turn - settings.previous_turn_radps) / settings.max_turn_rate_radps
     )
 
 
@@ -452,10 +447,10 @@ def escape_scores(
     ``sines`` and ``cosines`` are numpy's, of :func:`escape_headings`' rows (command k's row is
     ``turn_rows[k]``). ``calm``: a calm escape with last cycle's command (the continuity term)."""
     k_count = commands.shape[0]
-    dt = settings[_E_DT]
+    dt = settings.dt_s
     positions = _escape_roll_outs(robot, commands, turn_rows, sines, cosines, settings, steps)
     corridor = (segment_starts, segment_directions, segment_lengths, half_widths)
-    inside, within_bound = _roll_outs_inside(positions, corridor, settings[_E_TOLERANCE], settings[_E_BOUND])
+    inside, within_bound = _roll_outs_inside(positions, corridor, settings.corridor_tolerance_m, settings.max_excess_m)
     travel = _furthest(positions, robot[0], robot[1])
     first_step, gap_min, gap_last, gap_overlapped = _escape_contacts_near(
         positions, robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, dt, steps, travel
@@ -468,9 +463,9 @@ def escape_scores(
         speed = commands[k, 0]
         time_to_contact = first_step[k] * dt
         free = time_to_contact >= steps * dt
-        progress = ((ends[k, 0] - robot[0]) * toward_x + (ends[k, 1] - robot[1]) * toward_y) / settings[_E_ESCAPE_S]
+        progress = ((ends[k, 0] - robot[0]) * toward_x + (ends[k, 1] - robot[1]) * toward_y) / settings.escape_s
         value = _score(separations[k], free, inside[k], time_to_contact, speed, progress)
         if calm:
-            value = value - settings[_E_CONTINUITY] * _minimum(_change(speed, commands[k, 1], settings), 1.0)
+            value = value - settings.continuity_s * _minimum(_change(speed, commands[k, 1], settings), 1.0)
         score[k] = value if (within_bound[k] or speed == 0.0) else -math.inf
     return ends, score

@@ -12,17 +12,6 @@ import numpy as np
 
 from viapath.jit import compiled
 from viapath.planning.viapath.legs import clip, excess_at_most
-from viapath.planning.viapath.slots import (
-    F_ACCEL,
-    F_DT,
-    F_GAIN,
-    F_ROLLOUT_HEADING,
-    F_SPEED,
-    F_TOLERANCE,
-    F_TURN_ACCEL,
-    F_TURN_IN_PLACE,
-    F_TURN_RATE,
-)
 
 
 @compiled(inline=True)
@@ -159,9 +148,9 @@ def _close_enough(robot, target_x, target_y, heading_error, speed, settings):
     ox = target_x - robot[0]
     oy = target_y - robot[1]
     speed_change = abs(speed - robot[3])
-    dt = settings[F_DT]
+    dt = settings.rollout_dt_s
     return math.hypot(ox, oy) < 1e-6 or (
-        heading_error <= settings[F_ROLLOUT_HEADING] and speed_change <= settings[F_ACCEL] * dt * 2
+        heading_error <= settings.rollout_heading_rad and speed_change <= settings.max_accel_mps2 * dt * 2
     )
 
 
@@ -177,13 +166,13 @@ def _roll_out(robot, target_x, target_y, speed, settings, steps):
         target_x,
         target_y,
         speed,
-        settings[F_SPEED],
-        settings[F_TURN_RATE],
-        settings[F_ACCEL],
-        settings[F_TURN_ACCEL],
-        settings[F_DT],
+        settings.max_speed_mps,
+        settings.max_turn_rate_radps,
+        settings.max_accel_mps2,
+        settings.max_turn_accel_radps2,
+        settings.rollout_dt_s,
         steps,
-        settings[F_GAIN],
+        settings.heading_gain,
     )
 
 
@@ -209,8 +198,8 @@ def _inside(positions, count, corridor, tolerance):
 def _clear_turning_on_the_spot(robot, heading_error, settings, obstacles):
     """Whether standing at the robot's position keeps clear (:func:`_clear`) while it turns by ``heading_error`` at
     its top turn rate, and a second more."""
-    dt = settings[F_DT]
-    turn_s = heading_error / settings[F_TURN_RATE] + 1.0
+    dt = settings.rollout_dt_s
+    turn_s = heading_error / settings.max_turn_rate_radps + 1.0
     count = max(1, int(math.ceil(turn_s / dt)))
     standing = np.empty((count, 2))
     for s in range(count):
@@ -229,11 +218,11 @@ def can_follow(robot, target_x, target_y, angle, speed, settings, steps, obstacl
     if _close_enough(robot, target_x, target_y, heading_error, speed, settings):
         return 1
     positions = _roll_out(robot, target_x, target_y, speed, settings, steps)
-    if not _clear(positions, steps, settings[F_DT], robot[0], robot[1], *obstacles):
+    if not _clear(positions, steps, settings.rollout_dt_s, robot[0], robot[1], *obstacles):
         return 0
-    if _inside(positions, steps, corridor, settings[F_TOLERANCE]):
+    if _inside(positions, steps, corridor, settings.corridor_tolerance_m):
         return 1
-    if heading_error > settings[F_TURN_IN_PLACE] and _clear_turning_on_the_spot(
+    if heading_error > settings.turn_in_place_min_rad and _clear_turning_on_the_spot(
         robot, heading_error, settings, obstacles
     ):
         return 2

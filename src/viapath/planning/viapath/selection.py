@@ -20,46 +20,12 @@ from viapath.planning.viapath.critics import (
     time_term,
 )
 from viapath.planning.viapath.legs import goal_legs_of
-from viapath.planning.viapath.rollout import can_follow
-from viapath.planning.viapath.slots import (
-    C_DEGREES,
-    C_DEPTH,
-    C_NOMINAL,
-    C_ONLY,
-    C_ONLY_OBSTACLE,
-    C_ONLY_ROOT,
-    C_ONLY_SIDE,
-    C_PREFERRED,
-    C_PREV_MMPS,
-    C_PREV_OBSTACLE,
-    C_PREV_ROOT,
-    C_PREV_SIDE,
-    C_PREVIOUS,
-    C_ROLLOUTS,
-    C_ROOT_LIMIT,
-    C_SEGMENT,
-    C_SLOW,
-    C_STEPS,
-    C_SUBGOAL,
-    C_TRY_STRAIGHT,
+from viapath.planning.viapath.records import (
     CANDIDATES,
     COST_ROWS,
     COST_SUM,
     COST_TERMS,
     COST_TOTAL,
-    F_CREEP,
-    F_HORIZON,
-    F_HYSTERESIS,
-    F_K1,
-    F_K2,
-    F_K3,
-    F_K4,
-    F_NOMINAL,
-    F_SIDE,
-    F_SPACING,
-    F_STANDING,
-    F_STOP_SHORT,
-    F_TOLERANCE,
     N_FIRST_X,
     N_FIRST_Y,
     N_LEAF,
@@ -79,6 +45,7 @@ from viapath.planning.viapath.slots import (
     NODE_INTEGERS,
     STEP_ONE,
 )
+from viapath.planning.viapath.rollout import can_follow
 from viapath.planning.viapath.tree import grow
 
 
@@ -120,14 +87,12 @@ def _leaf_facts(robot, subgoal, nf, ni):
 
 
 @compiled
-def choose_tree(
-    robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints, settings, integers
-):
+def choose_tree(robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints, settings):
     """The first half of the viapath planner's ``_choose`` in one call: the root legs (:func:`goal_legs`), the
     paper's step 1 (the free straight leg at the nominal speed, if the robot can follow it: follow.can_follow),
     else the candidate tree (:func:`grow`). ``robot`` is (x, y, heading, speed, turn rate); ``obstacles``,
     ``via``, ``slow`` and ``corridor`` are :func:`grow`'s records (:func:`choose` makes them of its
-    arguments); ``settings`` and ``integers`` hold the scalars (their slots: :mod:`viapath.compiled.slots`).
+    arguments); ``settings`` holds the scalars (a record: :data:`.records.CHOICE`).
 
     Returns (found, floats, integers: grow's node store, facts). ``found`` is (NO_CANDIDATE / STEP_ONE /
     CANDIDATES, step 1 turns on the spot first, then the K leaves: the candidates' nodes); ``facts`` (6, K)
@@ -136,23 +101,23 @@ def choose_tree(
     microsecond.)"""
     result = np.zeros(2, np.int64)
     s_count = speeds.shape[0]
-    nominal_index = integers[C_NOMINAL]
-    horizon_s = settings[F_HORIZON]
+    nominal_index = settings.nominal_index
+    horizon_s = settings.horizon_s
     goal = (
         subgoal,
-        settings[F_STOP_SHORT],
+        settings.stop_short_m,
         continuation,
         envelope,
-        integers[C_SUBGOAL],
-        settings[F_SPACING],
-        settings[F_TOLERANCE],
+        settings.subgoal_index,
+        settings.corridor_check_spacing_m,
+        settings.corridor_tolerance_m,
     )
     starts = np.empty((s_count, 2))
     for i in range(s_count):
         starts[i, 0] = robot[0]
         starts[i, 1] = robot[1]
     roots = goal_legs_of(starts, np.zeros(s_count), speeds, horizon_s, goal, obstacles, corridor, via[2].shape_of)
-    if roots[2][nominal_index] and integers[C_TRY_STRAIGHT] and not integers[C_ONLY]:
+    if roots[2][nominal_index] and settings.try_step_one and not settings.only_one_way:
         straight_angle = math.atan2(subgoal[1] - robot[1], subgoal[0] - robot[0])
         follows = can_follow(
             robot,
@@ -161,7 +126,7 @@ def choose_tree(
             straight_angle,
             speeds[nominal_index],
             settings,
-            integers[C_STEPS],
+            settings.rollout_steps,
             obstacles,
             corridor,
         )
@@ -169,7 +134,13 @@ def choose_tree(
             result[0] = STEP_ONE
             result[1] = follows == 2
             return result, np.empty((0, NODE_FLOATS)), np.empty((0, NODE_INTEGERS), np.int64), np.empty((6, 0))
-    tree = (waypoints, integers[C_SEGMENT], integers[C_SLOW] != 0, integers[C_DEPTH], integers[C_ROOT_LIMIT])
+    tree = (
+        waypoints,
+        settings.robot_segment,
+        settings.grows_slow != 0,
+        settings.max_depth,
+        settings.max_root_obstacles,
+    )
     nf, ni = grow(robot[:2].copy(), speeds, nominal_index, roots, via, slow, horizon_s, goal, obstacles, corridor, tree)
     found, facts = _leaf_facts(robot, subgoal, nf, ni)
     return found, nf, ni, facts
@@ -203,31 +174,33 @@ def _leaf_features(nf, ni, leaves):
 
 
 @compiled(inline=True)
-def _paper_terms(features, ways, first_angles, heading_rad, settings, integers, terms):
+def _paper_terms(features, ways, first_angles, heading_rad, settings, terms):
     """Eq. 1's terms, in its order (:func:`.critics.critics_for`'s), into ``terms`` (6, K), of
     :func:`_leaf_features`' ``features`` and ``ways`` and the first legs' angles: each term's function of
     :mod:`.critics`, with its weight and settings."""
     length, speed, slow_s = features[0], features[1], features[2]
     slow_v, driven_s, travel_s = features[3], features[4], features[5]
-    distance_term(settings[F_K1], length, terms[0])
-    time_term(settings[F_K2], travel_s, terms[1])
-    nominal = settings[F_NOMINAL]
-    speed_term(settings[F_K3], settings[F_STANDING], nominal, speed, slow_s, slow_v, driven_s, travel_s, terms[2])
-    heading_term(settings[F_K4], integers[C_DEGREES] != 0, heading_rad, first_angles, terms[3])
-    side_term(settings[F_SIDE], integers[C_PREFERRED], ways, terms[4])
-    previous = integers[C_PREVIOUS] != 0
-    hysteresis = settings[F_HYSTERESIS]
-    way = (integers[C_PREV_OBSTACLE], integers[C_PREV_SIDE], integers[C_PREV_ROOT])
-    hysteresis_term(hysteresis, previous, way[0], way[1], way[2], integers[C_PREV_MMPS], ways, speed, terms[5])
+    distance_term(settings.k1_per_m, length, terms[0])
+    time_term(settings.k2_per_s, travel_s, terms[1])
+    nominal = settings.nominal_speed_mps
+    speed_term(
+        settings.k3_per_mps, settings.standing_per_s, nominal, speed, slow_s, slow_v, driven_s, travel_s, terms[2]
+    )
+    heading_term(settings.k4_per_angle, settings.heading_in_degrees != 0, heading_rad, first_angles, terms[3])
+    side_term(settings.side_weight, settings.preferred_side, ways, terms[4])
+    previous = settings.has_previous != 0
+    hysteresis = settings.hysteresis_weight
+    way = (settings.previous_obstacle, settings.previous_side, settings.previous_root)
+    hysteresis_term(hysteresis, previous, way[0], way[1], way[2], settings.previous_speed_mmps, ways, speed, terms[5])
 
 
 @compiled(inline=True)
-def _sums(costs, extra, ways, integers):
+def _sums(costs, extra, ways, settings):
     """E of each candidate into ``costs`` (its rows COST_SUM and COST_TOTAL), after its terms (the paper's six, then
     ``extra``'s rows, in that order), and with ``only_way`` (``integers``) every other way priced out (inf) in
     COST_TOTAL. Returns whether any E there is finite."""
-    only = integers[C_ONLY] != 0
-    only_way = (integers[C_ONLY_OBSTACLE], integers[C_ONLY_SIDE], integers[C_ONLY_ROOT])
+    only = settings.only_one_way != 0
+    only_way = (settings.only_obstacle, settings.only_side, settings.only_root)
     any_finite = False
     for k in range(costs.shape[1]):
         value = costs[0, k] + costs[1, k]
@@ -266,21 +239,21 @@ def _cheapest_first(total, order):
 
 
 @compiled(inline=True)
-def _first_that_follows(robot, nf, leaves, facts, angles, total, ranking, obstacles, corridor, settings, integers):
+def _first_that_follows(robot, nf, leaves, facts, angles, total, ranking, obstacles, corridor, settings):
     """follow.can_follow of each rank of ``ranking`` in order (up to ``max_rollouts``, none past an inf E) into its
     follow entries, until one passes: its rank into ``ranking[0]``."""
     ranks = ranking[1]
     order = ranking[2 : 2 + ranks]
     follow = ranking[2 + ranks :]
     follow[:] = -1
-    for r in range(min(ranks, integers[C_ROLLOUTS])):
+    for r in range(min(ranks, settings.max_rollouts)):
         k = order[r]
         if not math.isfinite(total[k]):
             break
         m = leaves[k]
         speed = nf[m, N_SLOW_SPEED] if nf[m, N_SLOW_S] > 0 else nf[m, N_SPEED]
         follow[r] = can_follow(
-            robot, facts[4, k], facts[5, k], angles[1, k], speed, settings, integers[C_STEPS], obstacles, corridor
+            robot, facts[4, k], facts[5, k], angles[1, k], speed, settings, settings.rollout_steps, obstacles, corridor
         )
         if follow[r]:
             ranking[0] = r
@@ -288,7 +261,7 @@ def _first_that_follows(robot, nf, leaves, facts, angles, total, ranking, obstac
 
 
 @compiled
-def choose_candidate(robot, nf, ni, found, facts, angles, extra, obstacles, corridor, settings, integers):
+def choose_candidate(robot, nf, ni, found, facts, angles, extra, obstacles, corridor, settings):
     """The second half of ``_choose`` up to its shield check: Eq. 1's terms (:mod:`.critics`, summed in
     :func:`.critics.critics_for`'s order), with ``only_way`` the other ways priced out, the
     cheapest-first order (np.argsort's, stable) of the first ``max_rollouts`` candidates (and at least two,
@@ -305,25 +278,23 @@ def choose_candidate(robot, nf, ni, found, facts, angles, extra, obstacles, corr
     k_count = leaves.shape[0]
     features, ways = _leaf_features(nf, ni, leaves)
     costs = np.empty((COST_ROWS, k_count))
-    _paper_terms(features, ways, angles[0], robot[2], settings, integers, costs[:COST_TERMS])
-    any_finite = _sums(costs, extra, ways, integers)
-    if integers[C_ONLY] != 0 and not any_finite:
+    _paper_terms(features, ways, angles[0], robot[2], settings, costs[:COST_TERMS])
+    any_finite = _sums(costs, extra, ways, settings)
+    if settings.only_one_way != 0 and not any_finite:
         ranking = np.zeros(2, np.int64)
         ranking[0] = -1
         return ranking, costs
-    ranks = min(k_count, max(integers[C_ROLLOUTS], 2))
+    ranks = min(k_count, max(settings.max_rollouts, 2))
     ranking = np.empty(2 + 2 * ranks, np.int64)
     ranking[0] = -1
     ranking[1] = ranks
     _cheapest_first(costs[COST_TOTAL], ranking[2 : 2 + ranks])
-    _first_that_follows(
-        robot, nf, leaves, facts, angles, costs[COST_TOTAL], ranking, obstacles, corridor, settings, integers
-    )
+    _first_that_follows(robot, nf, leaves, facts, angles, costs[COST_TOTAL], ranking, obstacles, corridor, settings)
     return ranking, costs
 
 
 @compiled
-def choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, settings, integers):
+def choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, settings):
     """The second half of :func:`choose`, after :func:`choose_tree`: when it found candidates, their angles and
     :func:`choose_candidate` (``extra``: its terms of further critics, (E, K)). Returns (found, costs): ``found``
     followed by :func:`choose_candidate`'s ranking when it says CANDIDATES (one array fewer to hand back),
@@ -335,9 +306,7 @@ def choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, setti
     for k in range(k_count):
         angles[0, k] = math.atan2(facts[0, k], facts[1, k])
         angles[1, k] = math.atan2(facts[2, k], facts[3, k])
-    ranking, costs = choose_candidate(
-        robot, nf, ni, found, facts, angles, extra, obstacles, corridor, settings, integers
-    )
+    ranking, costs = choose_candidate(robot, nf, ni, found, facts, angles, extra, obstacles, corridor, settings)
     found_and_ranking = np.empty(found.shape[0] + ranking.shape[0], np.int64)
     found_and_ranking[: found.shape[0]] = found
     found_and_ranking[found.shape[0] :] = ranking
@@ -369,7 +338,6 @@ def choose(
     half_widths,
     waypoints,
     settings,
-    integers,
 ):
     """``_choose`` up to its shield check in one call (each array handed back to Python costs about a
     microsecond): :func:`choose_tree`, then :func:`choose_ranked` with the paper's critics only. Takes
@@ -383,14 +351,13 @@ def choose(
         subgoal,
         obstacles,
         (via_radii, ids, shapes),
-        (slow_radii, slow_growth, slow_growth_until_s, slow_times, settings[F_CREEP]),
+        (slow_radii, slow_growth, slow_growth_until_s, slow_times, settings.creep_speed_mps),
         continuation,
         envelope,
         corridor,
         waypoints,
         settings,
-        integers,
     )
     extra = np.empty((0, facts.shape[1]))
-    found, costs = choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, settings, integers)
+    found, costs = choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, settings)
     return found, nf, ni, costs

@@ -27,7 +27,7 @@ from typing import NamedTuple
 import numpy as np
 
 from viapath.jit import compiled
-from viapath.planning.viapath.slots import N_X, N_Y
+from viapath.planning.viapath.records import N_X, N_Y
 
 # A node closer to a static disc than this many times its via radius hugs it (:func:`slide`).
 HUG_FACTOR = 1.25

@@ -3,7 +3,7 @@ every speed of the set, the straight leg to the subgoal (step 1), the slow and w
 and the via points of each person a leg hits, chained from via point to via point to the search's depth
 (Tsubouchi's iterated forecast and planning); round static shapes as :mod:`.shapes` says (one branch per shape at
 the root, the shape's extremes, slides). What a candidate is: :mod:`.candidates`. Its node store's columns:
-:mod:`.slots`.
+:mod:`.records`.
 """
 
 from __future__ import annotations
@@ -19,8 +19,7 @@ from viapath.planning.viapath.legs import (
     legs_free,
     legs_inside_of,
 )
-from viapath.planning.viapath.shapes import hugs, one_per_shape, round_static_shapes, slide
-from viapath.planning.viapath.slots import (
+from viapath.planning.viapath.records import (
     N_FIRST_X,
     N_FIRST_Y,
     N_LEAF,
@@ -39,6 +38,7 @@ from viapath.planning.viapath.slots import (
     NODE_FLOATS,
     NODE_INTEGERS,
 )
+from viapath.planning.viapath.shapes import hugs, one_per_shape, round_static_shapes, slide
 from viapath.planning.viapath.via import via_pair
 
 # Columns of the node store: floats, then integers.
