@@ -35,7 +35,7 @@ _via: Any = via_steps
 
 # The doors of the steps that take a record: each takes the record's row (a plain argument, typed as fast as an array)
 # where the step takes the record, and hands the step ``row[0]`` (:mod:`.records`). Their arguments are spelled out:
-# with ``*arguments`` numba types them as one tuple, in Python, about 1.7 us a call more.
+# with ``*arguments`` the compiler types them as one tuple, in Python, about 1.7 us a call more.
 @compiled
 def _choose(
     robot, speeds, subgoal, positions, velocities, radii, growth, until, via_radii, ids, shape_of, shape_members,
@@ -43,7 +43,7 @@ def _choose(
     directions, lengths, half_widths, waypoints, settings_row,
 ):  # fmt: skip
     """:func:`.selection.choose`; the static shapes come as their fields (a record argument from Python costs a call
-    about 0.5 µs: numba types a tuple argument in Python)."""
+    about 0.5 µs: the compiler types a tuple argument in Python)."""
     shapes = StaticShapes(shape_of, shape_members, shape_offsets, hug_factor)
     return selection_steps.choose(
         robot, speeds, subgoal, positions, velocities, radii, growth, until, via_radii, ids, shapes, slow_radii,

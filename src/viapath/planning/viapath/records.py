@@ -5,13 +5,13 @@ entries of what the choice hands back. The rest of the planner builds the record
 :func:`choice_settings`, :func:`rollout_settings`, :func:`escape_settings`) and reads what comes back through
 :mod:`.packing` (:class:`.packing.NodeStore`, :class:`.packing.CompiledChoice`), never by number.
 
-Choices (measured with numba 0.68 on the development machine: a compiled call that reads four fields):
+Choices (measured on the development machine: a compiled call that reads four fields):
 
 * A record is a numpy structured array of one row, its fields float64 or int64 (8 bytes each, no padding; flags are
   0/1 integers). The compiled steps take the row's record (``row[0]``, a reference into the row) and read a field at
-  its fixed offset, as cheaply as an array item. numba types the row on each call about as fast as a plain array
+  its fixed offset, as cheaply as an array item. the compiler types the row on each call about as fast as a plain array
   (one record: 0.5-0.7 µs a call, against 0.45-0.5 µs for the two flat arrays of slot numbers it replaces); a
-  ``typing.NamedTuple`` reads as well inside but costs 6-7 µs a call to type (numba types a tuple argument in
+  ``typing.NamedTuple`` reads as well inside but costs 6-7 µs a call to type (the compiler types a tuple argument in
   Python), and so does a numpy record scalar.
 * :mod:`.packing` hands the rows to the compiled steps through small compiled doors that take ``row[0]``: inside,
   every step sees the record.
