@@ -256,10 +256,10 @@ _OWN = [
     # stops before it.
     Option(
         "stream_band_s",
-        5.0,
+        0.0,
         "the band people swept over this time and are forecast to sweep over it: a straight, avoiding or slow "
         "plan from outside the band that enters it with less than stream_band_entry_clearance_m from someone's "
-        "forecast gives way to a stop short of it (0: off)",
+        "forecast gives way to a stop short of it (0: off; 5 s is the measured value)",
         "s",
         minimum=0.0,
         maximum=30.0,
