@@ -2,11 +2,12 @@
 coming (viapath.bench.contact_kinds), and what the planner was doing in the second before.
 
 Usage: python benchmarks/classify_contacts.py OUT [OUT ...] [--workers 2] [--top-speed V [--cell M] [--clearance M]]
-       [--detail] [--json]
+       [--options JSON] [--detail] [--json]
 
 Each OUT is a ``viapath bench`` results folder (episodes.csv and the suite's YAML files in OUT/suite). Every
 episode with a contact is run again (same scenario, seed and perception; the planner's defaults, so run it with
-the tree that wrote OUT) and each contact with a person is classified. ``--detail`` prints one line per contact.
+the tree that wrote OUT) and each contact with a person is classified. ``--options '{"name": value}'``: the planner options the runs were made with (a ``--weights`` preset's).
+``--detail`` prints one line per contact.
 The table counts contacts (a group walking into the robot counts once per person) and, per family, the episodes
 with a contact among the feasible ones (the bench's ``feasible`` column, when present). ``--top-speed V``: also
 whether each episode with a contact is feasible for the reachable set (viapath.bench.feasibility) grown at V m/s
@@ -56,7 +57,13 @@ def _feasible_at(scenario, top_speed_mps: float, cell_m: float, clearance_m: flo
 
 
 def _episode_kinds(
-    yaml_path: str, seed: int, perception: str, top_speed_mps: float | None, cell_m: float, clearance_m: float
+    yaml_path: str,
+    seed: int,
+    perception: str,
+    top_speed_mps: float | None,
+    cell_m: float,
+    clearance_m: float,
+    options: dict | None = None,
 ) -> dict:
     from viapath.bench.contact_kinds import contact_kinds
     from viapath.scenarios.loader import load_scenario
@@ -64,7 +71,7 @@ def _episode_kinds(
 
     scenario = load_scenario(yaml_path)
     feasible_at = "" if top_speed_mps is None else str(_feasible_at(scenario, top_speed_mps, cell_m, clearance_m))
-    trace = run_episode(scenario, seed=seed, perception=perception).trace
+    trace = run_episode(scenario, seed=seed, perception=perception, planner_overrides=options).trace
     out = []
     for contact in contact_kinds(trace):
         step = int(round(contact.time_s / trace.dt_s))
@@ -80,6 +87,7 @@ def classify(
     top_speed_mps: float | None = None,
     cell_m: float = 0.1,
     clearance_m: float = 0.0,
+    options: dict | None = None,
 ) -> list[dict]:
     jobs = []
     for folder in folders:
@@ -94,6 +102,7 @@ def classify(
             top_speed_mps,
             cell_m,
             clearance_m,
+            options,
         )
         for folder, row in jobs
     )
@@ -131,10 +140,13 @@ def main() -> None:
     parser.add_argument(
         "--clearance", type=float, default=0.0, help="with --top-speed: added to every person's radius (m)"
     )
+    parser.add_argument(
+        "--options", type=json.loads, default=None, help="planner options the runs were made with, as JSON (--weights)"
+    )
     parser.add_argument("--detail", action="store_true")
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args()
-    records = classify(args.folders, args.workers, args.top_speed, args.cell, args.clearance)
+    records = classify(args.folders, args.workers, args.top_speed, args.cell, args.clearance, args.options)
     rows = table(records)
     if args.json:
         print(json.dumps({"contacts": records, "table": rows}, indent=1))

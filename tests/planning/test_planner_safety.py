@@ -154,6 +154,14 @@ def check_plan_against_status(situation):
         assert path.corridor_excess(plan.target) <= 0.0
         assert plan.extras["step_aside"]["clearance_m"] >= 0.0
         return
+    if status == "hold-short":
+        # A stop short of a stream's band instead of a plan entering it without room (planning/viapath/stream_band.py;
+        # behaviour in test_stream_band.py): braking where the robot is, in place of a moving plan.
+        assert command.speed_mps == 0.0 and command.turn_rate_radps == 0.0
+        assert np.allclose(plan.target, position) and plan.speed_mps == 0.0
+        assert plan.extras["hold_short"]["instead_of"] in ("straight", "avoid", "slow")
+        assert plan.extras["hold_short"]["clearance_m"] < config.stream_band_entry_clearance_m
+        return
     assert status in SAFE_STATUSES | {"stop", "escape", "goal"}
     if status == "goal":
         assert np.hypot(*(path.goal - position)) <= planner.subgoal_policy.goal_tolerance_m

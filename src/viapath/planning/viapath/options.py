@@ -252,6 +252,34 @@ _OWN = [
         minimum=0.05,
         maximum=10.0,
     ),
+    # Holding short of a stream (stream_band.py): a robot that would enter the band people sweep without room
+    # stops before it.
+    Option(
+        "stream_band_s",
+        0.0,
+        "the band people swept over this time and are forecast to sweep over it: a straight, avoiding or slow "
+        "plan from outside the band that enters it with less than stream_band_entry_clearance_m from someone's "
+        "forecast gives way to a stop short of it (0: off; 5 s is the measured value)",
+        "s",
+        minimum=0.0,
+        maximum=30.0,
+    ),
+    Option(
+        "stream_band_margin_m",
+        0.3,
+        "added to each person's checked radius for the band they sweep",
+        "m",
+        minimum=0.0,
+        maximum=5.0,
+    ),
+    Option(
+        "stream_band_entry_clearance_m",
+        0.3,
+        "clearance from everyone's forecast a plan keeps from the band's edge on (over 3 s) to enter the band",
+        "m",
+        minimum=0.0,
+        maximum=5.0,
+    ),
     # Speed (docs/explanation/speed.md).
     Option(
         "blocked_gap_m",

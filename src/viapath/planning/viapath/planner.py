@@ -19,7 +19,8 @@ step is a module of this package, named after it:
 Steps 1-4 run as one compiled call in every cycle, with static geometry in view or not (:mod:`.choice`). The
 extensions beyond the paper are named steps beside the recipe, each a module: the way back (:mod:`.way_back`), the
 outrun hold (:mod:`.outrun`), the kept way (:mod:`.kept_way`), static geometry near the corridor and the
-closed way (:mod:`.blocked`); the creep is a slow candidate (:mod:`.candidates`).
+closed way (:mod:`.blocked`), after the decision stepping aside (:mod:`.step_aside`) and holding short of a stream
+(:mod:`.stream_band`); the creep is a slow candidate (:mod:`.candidates`).
 
 What the paper leaves open and we chose, beyond what those modules say:
 * The speed set is the configured speeds, the current speed and the nominal speed (mm/s resolution,
@@ -93,6 +94,7 @@ from viapath.planning.viapath.options import VIAPATH_OPTIONS
 from viapath.planning.viapath.outrun import outrun, outrun_held
 from viapath.planning.viapath.plans import Chosen, straight_chosen, straight_plan
 from viapath.planning.viapath.step_aside import step_aside
+from viapath.planning.viapath.stream_band import StreamBand, hold_short
 from viapath.planning.viapath.way_back import way_back
 
 
@@ -115,6 +117,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         self._outrun_seen_s = -math.inf  # when someone from behind last blocked the nominal leg (outrun)
         self._checks: LegChecks | None = None  # this cycle's (for the step aside)
         self._step_aside_target: np.ndarray | None = None  # last cycle's, if it stepped aside
+        self._stream_band = StreamBand()  # people's recent tracks, for holding short of a stream
 
     def reset(self) -> None:
         super().reset()
@@ -124,6 +127,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         self._straight_speed = None
         self._outrun_seen_s = -math.inf
         self._step_aside_target = None
+        self._stream_band.reset()
 
     # -- the recipe ----------------------------------------------------------------------------------
 
@@ -138,6 +142,10 @@ class ViaPathPlanner(Planner, name="viapath"):
                 if decision.plan.status == "escape":
                     self._previous_escape = aside.command  # the command sent, for a calm escape next cycle
                 decision = aside
+        if self.config.stream_band_s > 0 and self._checks is not None:
+            band = self._stream_band
+            band.observe(situation.observation.time_s, self._checks, self.config.stream_band_s)
+            decision = hold_short(self, self._checks, decision, band) or decision
         plan = decision.plan
         self._straight_speed = plan.speed_mps if plan.status == "straight" else None
         return decision
