@@ -271,6 +271,7 @@ class _FollowSession:
             msg.percentage = True
             msg.speed_limit = float(arg)
             self.speed_pub.publish(msg)
+            self.write(kind="speed-limit", percent=float(arg), t=self.now())
         elif kind == "clear":
             future = self.clear.call_async(self.ClearEntireCostmap.Request())
             future.add_done_callback(lambda f: self.write(kind="cleared", ok=f.result() is not None, t=self.now()))
