@@ -107,10 +107,11 @@ def test_a_changed_path_is_followed_without_a_stop_and_cancel_brakes(nav2_runs, 
     after_preempt = (t > 2.0) & (t <= cancel_at)
     assert trace["y_m"][after_preempt].max() > 0.15  # on its way to the new path's bend (y = 1 from x = 4)
     assert np.nanmax(trace["y_m"][(t > 2.0) & (t < 2.3)]) < 0.05  # the old path ran along y = 0
-    # From 1 s after the client published the limit (time to take it and brake to it; on a loaded machine the
-    # client's publication lags its schedule).
+    # From 0.5 s after the client published the limit (time to take it and brake to it) to the end, the cancel's
+    # braking included: on a loaded machine the client's publication lags its schedule (seen: 1.6 s, a stalled
+    # client whose next event, the cancel, came on time).
     (limit_at,) = [r["t"] for r in records if r["kind"] == "speed-limit"]
-    limited = (t > limit_at + 1.0) & (t <= cancel_at)
+    limited = t > limit_at + 0.5
     assert limited.sum() >= 5 and v[limited].max() <= 0.6 * 0.25 + 1e-6  # speed_limit 25 % of max_speed_mps 0.6
     assert final(records)["status"] == CANCELED
     assert any(r["kind"] == "cleared" and r["ok"] for r in records)
