@@ -25,35 +25,13 @@ import csv
 import json
 from pathlib import Path
 
-import numpy as np
 from joblib import Parallel, delayed
 
 
 def _feasible_at(scenario, top_speed_mps: float, cell_m: float, clearance_m: float = 0.0) -> bool:
-    from viapath.bench.feasibility import forward_reachable
-    from viapath.scenarios.build import scenario_path, scenario_subgoal_policy
-    from viapath.sim.obstacles import scenario_obstacle_states
-    from viapath.sim.static_world import StaticWorld
+    from viapath.bench.feasibility import scenario_reach
 
-    dt = scenario.dt_s
-    times = np.arange(int(round(scenario.duration_s / dt)) + 1) * dt
-    positions, _, radii = scenario_obstacle_states(scenario, times)
-    static, path = StaticWorld.of_scenario(scenario), scenario_path(scenario)
-    reach = forward_reachable(
-        positions,
-        radii + clearance_m,
-        scenario.robot.radius,
-        path,
-        scenario.robot.start,
-        top_speed_mps,
-        dt,
-        goal=path.goal,
-        goal_tolerance_m=scenario_subgoal_policy(scenario).goal_tolerance_m,
-        walls=static.segments,
-        wall_until_s=static.until_s,
-        cell_m=cell_m,
-    )
-    return bool(reach.feasible)
+    return bool(scenario_reach(scenario, cell_m, top_speed_mps=top_speed_mps, clearance_m=clearance_m).feasible)
 
 
 def _episode_kinds(

@@ -333,9 +333,16 @@ def reacts_to_robot(scenario) -> bool:
     return any(getattr(getattr(item, "replay", None), "react", False) for item in scenario.obstacles)
 
 
-def scenario_reach(scenario, cell_m: float = DEFAULT_CELL_M, keep: bool = False) -> Reach:
+def scenario_reach(
+    scenario,
+    cell_m: float = DEFAULT_CELL_M,
+    keep: bool = False,
+    top_speed_mps: float | None = None,
+    clearance_m: float = 0.0,
+) -> Reach:
     """The sweep over a scenario's whole duration, from the robot's start to the goal, with the drive's
-    top speed. Raises ValueError for people who react to the robot."""
+    top speed (or ``top_speed_mps``) and the people's radii grown by ``clearance_m``. Raises ValueError for people
+    who react to the robot."""
     from viapath.scenarios.build import scenario_limits, scenario_path, scenario_subgoal_policy
     from viapath.sim.obstacles import scenario_obstacle_states
     from viapath.sim.static_world import StaticWorld
@@ -349,11 +356,11 @@ def scenario_reach(scenario, cell_m: float = DEFAULT_CELL_M, keep: bool = False)
     path = scenario_path(scenario)
     return forward_reachable(
         positions,
-        radii,
+        radii + clearance_m,
         scenario.robot.radius,
         path,
         scenario.robot.start,
-        scenario_limits(scenario).max_speed_mps,
+        scenario_limits(scenario).max_speed_mps if top_speed_mps is None else top_speed_mps,
         dt,
         goal=path.goal,
         goal_tolerance_m=scenario_subgoal_policy(scenario).goal_tolerance_m,

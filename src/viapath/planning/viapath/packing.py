@@ -363,18 +363,7 @@ def _rollout_episode(limits: MotionLimits, config) -> bytes:
         _rollout_cache[:] = (
             limits,
             config,
-            records.choice_episode(
-                zero_others=True,
-                rollout_heading_rad=config.rollout_heading_rad,
-                max_accel_mps2=limits.max_accel_mps2,
-                rollout_dt_s=config.rollout_dt_s,
-                max_turn_rate_radps=limits.max_turn_rate_radps,
-                max_turn_accel_radps2=limits.max_turn_accel_radps2,
-                max_speed_mps=limits.max_speed_mps,
-                heading_gain=config.heading_gain,
-                turn_in_place_min_rad=config.turn_in_place_min_rad,
-                rollout_steps=max(1, int(round(config.rollout_s / config.rollout_dt_s))),
-            ),
+            records.choice_episode(zero_others=True, **records.rollout_fields(limits, config)),
         )
     return _rollout_cache[2]
 

@@ -28,6 +28,7 @@ Choices (measured on the development machine: a compiled call that reads four fi
 from __future__ import annotations
 
 import struct
+from typing import Any
 
 import numpy as np
 
@@ -134,6 +135,22 @@ def choice_episode(zero_others: bool = False, **fields: float | int) -> bytes:
     if zero_others:
         fields = {name: 0 for name, _ in CHOICE_EPISODE_FIELDS} | fields
     return _packed(_EPISODE, CHOICE_EPISODE_FIELDS, "the choice's settings", fields) + bytes(_CYCLE.size)
+
+
+def rollout_fields(limits: Any, config: Any) -> dict[str, Any]:
+    """The roll-out's fields of the choice's settings, of the motion limits and the planner's options (the follow
+    check, :func:`.rollout.can_follow`, reads only these)."""
+    return {
+        "rollout_heading_rad": config.rollout_heading_rad,
+        "max_accel_mps2": limits.max_accel_mps2,
+        "rollout_dt_s": config.rollout_dt_s,
+        "max_turn_rate_radps": limits.max_turn_rate_radps,
+        "max_turn_accel_radps2": limits.max_turn_accel_radps2,
+        "max_speed_mps": limits.max_speed_mps,
+        "heading_gain": config.heading_gain,
+        "turn_in_place_min_rad": config.turn_in_place_min_rad,
+        "rollout_steps": max(1, int(round(config.rollout_s / config.rollout_dt_s))),
+    }
 
 
 def choice_settings(
