@@ -258,36 +258,26 @@ class FreeSpace:
     def seed(self, point: np.ndarray, within_m: float = SEED_M) -> tuple[int, int] | None:
         """The free cell the flood starts from for a robot at ``point``: its own cell if free, else the free
         cell nearest to it within ``within_m``; None when there is none."""
-        x = (float(point[0]) - self.corridor.x0) / self.cell_m
-        y = (float(point[1]) - self.corridor.y0) / self.cell_m
-        if not (math.isfinite(x) and math.isfinite(y)):
-            return None
-        ny, nx = self.shape
-        own_i, own_j = int(round(x)), int(round(y))
-        if 0 <= own_i < nx and 0 <= own_j < ny and self.free[own_j, own_i]:
-            return own_j, own_i  # (its centre is within half a cell's diagonal of the point)
-        reach = int(math.ceil(within_m / self.cell_m))
-        i0, i1 = max(0, int(math.floor(x)) - reach), min(nx - 1, int(math.ceil(x)) + reach)
-        j0, j1 = max(0, int(math.floor(y)) - reach), min(ny - 1, int(math.ceil(y)) + reach)
-        if i0 > i1 or j0 > j1:
-            return None
-        jj, ii = np.mgrid[j0 : j1 + 1, i0 : i1 + 1]
-        gap = np.hypot(ii - x, jj - y) * self.cell_m
-        ok = self.free[j0 : j1 + 1, i0 : i1 + 1] & (gap <= within_m + 1e-9)
-        if not ok.any():
-            return None
-        k = int(np.argmin(np.where(ok, gap, np.inf)))
-        return int(jj.flat[k]), int(ii.flat[k])
+        return self._nearest(point, within_m, component=None)
 
     def reaches(self, start: tuple[int, int], point: np.ndarray, within_m: float) -> tuple[int, int] | None:
         """The cell of ``start``'s component nearest to ``point`` within ``within_m`` (None: no such cell):
         whether the robot can get there through the static world."""
-        component = self.labels[start]
+        return self._nearest(point, within_m, component=int(self.labels[start]))
+
+    def _nearest(self, point: np.ndarray, within_m: float, component: int | None) -> tuple[int, int] | None:
+        """The cell of ``component`` whose centre is nearest to ``point`` within ``within_m``; None: none. With no
+        component: the nearest free cell, the point's own cell first when free (its centre is within half a
+        cell's diagonal of the point)."""
         x = (float(point[0]) - self.corridor.x0) / self.cell_m
         y = (float(point[1]) - self.corridor.y0) / self.cell_m
         if not (math.isfinite(x) and math.isfinite(y)):
             return None
         ny, nx = self.shape
+        if component is None:
+            own_i, own_j = int(round(x)), int(round(y))
+            if 0 <= own_i < nx and 0 <= own_j < ny and self.free[own_j, own_i]:
+                return own_j, own_i
         reach = int(math.ceil(within_m / self.cell_m))
         i0, i1 = max(0, int(math.floor(x)) - reach), min(nx - 1, int(math.ceil(x)) + reach)
         j0, j1 = max(0, int(math.floor(y)) - reach), min(ny - 1, int(math.ceil(y)) + reach)
@@ -295,7 +285,11 @@ class FreeSpace:
             return None
         jj, ii = np.mgrid[j0 : j1 + 1, i0 : i1 + 1]
         gap = np.hypot(ii - x, jj - y) * self.cell_m
-        ok = (self.labels[j0 : j1 + 1, i0 : i1 + 1] == component) & (gap <= within_m + 1e-9)
+        if component is None:
+            allowed = self.free[j0 : j1 + 1, i0 : i1 + 1]
+        else:
+            allowed = self.labels[j0 : j1 + 1, i0 : i1 + 1] == component
+        ok = allowed & (gap <= within_m + 1e-9)
         if not ok.any():
             return None
         k = int(np.argmin(np.where(ok, gap, np.inf)))
