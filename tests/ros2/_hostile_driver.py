@@ -8,8 +8,9 @@ node's status of each step (lock-step). Phases:
 
 1. the first scan has range_min 6 m > range_max 1 m (a layout no scanner has); then good scans;
 2. the odometry's quaternion is (0, 0, 0, 0) for three steps;
-3. an empty nav_msgs/Path;
-4. a path again, then /clock and every input stop for 2 s of wall time.
+3. no odometry for 20 steps (2 s), the scans going on;
+4. an empty nav_msgs/Path;
+5. a path again, then /clock and every input stop for 2 s of wall time.
 
 OUT.json holds, per phase, the planner statuses and the commands received (with wall times).
 """
@@ -22,6 +23,8 @@ import sys
 import time
 
 import numpy as np
+
+ODOMETRY_STALE_STEPS = 20  # steps of 0.1 s of simulated time without odometry
 
 
 def main(out_path: str) -> int:
@@ -87,8 +90,9 @@ def main(out_path: str) -> int:
             convert.path_message(np.asarray(points, float).reshape(-1, 2), "odom", convert.time_msg(state["t"]))
         )
 
-    def step(quaternion=None, range_min=0.02, range_max=5.6):
-        """One simulated step: clock, odometry, scan; wait for the node's cycle; drive the last command."""
+    def step(quaternion=None, range_min=0.02, range_max=5.6, odometry=True):
+        """One simulated step: clock, odometry (unless not ``odometry``), scan; wait for the node's cycle; drive the
+        last command."""
         stamp = convert.time_msg(state["t"])
         clock = Clock()
         clock.clock = stamp
@@ -97,7 +101,8 @@ def main(out_path: str) -> int:
         if quaternion is not None:
             q = odom.pose.pose.orientation
             q.x, q.y, q.z, q.w = quaternion
-        odom_pub.publish(odom)
+        if odometry:
+            odom_pub.publish(odom)
         scan_pub.publish(
             convert.laser_scan("right_laser", stamp, angle_min, increment, np.full(beams, np.inf), range_min, range_max)
         )
@@ -129,6 +134,7 @@ def main(out_path: str) -> int:
     phase("driving", lambda: [step() for _ in range(12)])
     phase("zero_quaternion", lambda: [step(quaternion=(0.0, 0.0, 0.0, 0.0)) for _ in range(3)])
     phase("after_quaternion", lambda: [step() for _ in range(12)])
+    phase("odometry_stale", lambda: [step(odometry=False) for _ in range(ODOMETRY_STALE_STEPS)])
 
     def empty_path():
         path([])

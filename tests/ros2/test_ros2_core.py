@@ -141,6 +141,34 @@ def test_no_scan_brakes_to_a_stop_within_the_limits():
     assert speeds.index(0.0) == math.ceil(start / (0.8 * 0.1) - 1e-9) - 1
 
 
+def test_one_command_per_period_the_watchdog_only_when_no_cycle_ran():
+    """Scans every 0.1 s, odometry stops at 1.9 s (stale from 2.4 s), scans stop after 3.9 s; the watchdog ticks
+    every 0.1 s between the scans. While scans arrive the cycles brake for the stale odometry and the watchdog
+    adds nothing; once they stop, the watchdog brakes within 2.5 periods of the last cycle, then every tick."""
+    core = make_core(nominal_speed_mps=0.5)
+    sent: list[tuple[float, str, float]] = []  # (node time, source, speed)
+    for k in range(40):
+        t = 1.0 + 0.1 * k
+        if k < 30 and feed(core, t, speed=core.last_command.speed_mps, odom=k < 10):
+            result = core.cycle(t)
+            sent.append((t, "cycle", result.command.speed_mps))
+            if k >= 15:
+                assert any("no odometry" in r for r in result.reasons)
+        tick = t + 0.03
+        result = core.watchdog(tick)
+        if result is not None:
+            sent.append((tick, "watchdog", result.command.speed_mps))
+    times = np.array([t for t, _, _ in sent])
+    sources = [s for _, s, _ in sent]
+    assert sources.count("cycle") == 30 and all(s == "cycle" for s in sources[:30])
+    last_cycle = times[29]
+    assert 0.1 < times[30] - last_cycle <= 2.5 * 0.1 + 1e-9  # the watchdog takes over
+    assert np.allclose(np.diff(times[30:]), 0.1)  # every tick after
+    for start in np.arange(1.0, 5.0, 0.01):  # at most one command per period in every second
+        assert np.count_nonzero((times >= start) & (times < start + 1.0 - 1e-9)) <= 10
+    assert sent[-1][2] == 0.0
+
+
 def test_no_odometry_brakes_from_the_last_command_to_zero():
     core = make_core()
     for k in range(3):

@@ -129,6 +129,22 @@ def test_a_zero_quaternion_is_an_odometry_fault_and_the_robot_brakes(hostile_run
     assert phases["after_quaternion"]["commands"][-1][1] >= 0.15  # driving again after reset_hold_s
 
 
+def test_with_odometry_stale_one_command_per_cycle_the_watchdog_adds_none(hostile_run):
+    """Scans go on for 2 s of simulated time (lock-step) without odometry: each cycle brakes for it, and the
+    watchdog, which brakes for the same reason, sends nothing beside them: 10 commands a second, not 20."""
+    from _hostile_driver import ODOMETRY_STALE_STEPS
+
+    phases, _, _ = hostile_run
+    phase = phases["odometry_stale"]
+    statuses = _planner(phase)
+    assert sum("no odometry" in s["reasons"] for s in statuses) >= ODOMETRY_STALE_STEPS // 2
+    assert sum(s["source"] == "cycle" for s in statuses) >= ODOMETRY_STALE_STEPS - 1
+    seconds = ODOMETRY_STALE_STEPS * 0.1
+    assert len(phase["commands"]) <= 10.5 * seconds, [s["source"] for s in statuses]
+    assert not any(s["source"] == "watchdog" for s in statuses)
+    assert phase["commands"][-1][1] == 0.0  # braked to rest meanwhile
+
+
 def test_an_empty_path_stops_the_robot(hostile_run):
     phases, _, _ = hostile_run
     statuses = _planner(phases["empty_path"])

@@ -34,8 +34,11 @@ What we chose where the sources are silent:
   frame is refused and the previous path stays.
 * **All scanners silent**, or no odometry for ``odom_timeout_s``, or no path: the robot brakes to a
   stop within its limits (the command ramps down by ``max_accel_mps2`` per cycle from the measured
-  speed) and the status says why. The watchdog runs every ``cycle_period_s`` of the node's clock,
-  and a second one on the wall clock: with ``use_sim_time`` the node's clock stops with /clock, so
+  speed) and the status says why. While scans arrive the cycles brake for these reasons themselves; the
+  watchdog, every ``cycle_period_s`` of the node's clock, sends the braking command only when no cycle
+  ran in the last 1.5 periods: one command per period, never a second one beside a cycle's (two brakes
+  in one period would also take twice a cycle's braking off the speed). A second watchdog runs on the
+  wall clock: with ``use_sim_time`` the node's clock stops with /clock, so
   when nothing at all (no input, no /clock) arrived for ``wall_timeout_s`` of wall time, it brakes
   from the last command.
 * **Some scanners silent**: the cycle goes on with the others; their field of view is the one the
@@ -83,6 +86,10 @@ from viapath.ros2.settings import MAX_MOUNT_OFFSET_M, NodeSettings
 from viapath.static import StaticLayer
 
 FORWARD_CONE_RAD = math.radians(30.0)
+# The watchdog is quiet this many cycle periods after a scan cycle: more than one, so that scans a little
+# late (a busy machine) do not let it add a command beside the cycles'; a cycle missed is made up for
+# within 2.5 periods.
+WATCHDOG_QUIET_PERIODS = 1.5
 NO_PATH = "no designated path"
 PATH_CLEARED = "designated path cleared by an empty path"
 
@@ -207,6 +214,7 @@ class PlannerCore:
         self.hold_until_stamp_s: float | None = None
         self.last_command = Command.stop()
         self.last_command_s: float | None = None
+        self.last_cycle_s: float | None = None  # the node's time of the last scan cycle (its command sent)
         self.last_result: CycleResult | None = None
         self.cycle_times_ms: list[float] = []
         self.events: list[str] = []  # things reported once (time jumps, refused path)
@@ -866,10 +874,14 @@ class PlannerCore:
         return Command(float(v), float(w))
 
     def watchdog(self, now_s: float) -> CycleResult | None:
-        """Called every cycle period: brakes when inputs are stale; None when the scan cycles run."""
+        """Called every cycle period: brakes when inputs are stale; None when the scan cycles run (a cycle
+        in the last ``WATCHDOG_QUIET_PERIODS`` periods: it braked for the same reasons itself)."""
         self._now_s = now_s
         reasons = self._stop_reasons(now_s)
         if not reasons:
+            return None
+        since = None if self.last_cycle_s is None else now_s - self.last_cycle_s
+        if since is not None and 0.0 <= since < WATCHDOG_QUIET_PERIODS * self.settings.cycle_period_s:
             return None
         command = self.brake_command()
         self._record_command(command, now_s)
@@ -882,6 +894,7 @@ class PlannerCore:
     def fault_result(self, now_s: float, why: str) -> CycleResult:
         """A cycle that could not run (``why``): one cycle's braking, with the reason in the status."""
         self._now_s = now_s
+        self.last_cycle_s = now_s
         self.events.append(why)
         command = self.brake_command()
         self._record_command(command, now_s)
@@ -954,7 +967,7 @@ class PlannerCore:
     def cycle(self, now_s: float) -> CycleResult:
         """Perceive and plan on the pending scans; the command is always finite and within the limits."""
         started = time.perf_counter()
-        self._now_s = now_s
+        self._now_s = self.last_cycle_s = now_s
         live = self.live_scanners(now_s)
         used = [i for i in live if self.health[i].pending is not None]
         stamp = max(self.health[i].pending[0] for i in used) if used else now_s  # type: ignore[index]  # used: pending
