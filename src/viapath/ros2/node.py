@@ -13,14 +13,19 @@ What we chose:
   and activates itself; ``viapath ros2 node`` exits with code 2 when configuring fails.
 * Scans arrive with the sensor-data QoS (best effort, depth 5); odometry reliable depth 10; the
   path is subscribed transient-local (a latched path published before the node started is received).
-* ``cmd_vel`` is published once per scan cycle and by the watchdog (every ``cycle_period_s``) when
-  inputs are stale; markers and the DiagnosticArray (``status_topic``) once per cycle. The same array goes
+* ``cmd_vel`` is published once per scan cycle and, when inputs are stale and no scan cycle ran for 1.5
+  periods, by the watchdog (every ``cycle_period_s``): one command per period; markers and the DiagnosticArray (``status_topic``) once per cycle. The same array goes
   to ``diagnostics_topic`` (``/diagnostics``, where robot monitors and ``diagnostic_aggregator`` look) once a
   second, and at once when the way's state changes (``blocked``: static geometry closes it, level WARN).
 * Paths and maps are decoded, checked, simplified and rasterised by a worker thread
   (:mod:`viapath.ros2.background`), never in a callback of the control loop: the cycles go on with
   the last good path and map and take the new one at the first cycle after it is ready, so ``cmd_vel``
   keeps its rate whatever the size of what arrives.
+* The map is subscribed by a node in a ROS context of its own, so a DDS participant of its own (its own
+  receive buffers and threads): a 10 000 x 10 000 map is 100 MB, thousands of fragments, and through the
+  control loop's participant they crowded out scans sent meanwhile (best effort: lost, the cycle missed,
+  0.2 s without ``cmd_vel``; 2 scan pairs of 10 maps on one run, none with the participant of its own). Its
+  topic is resolved by the node (namespace and remappings) first.
 * Signals: SIGINT / SIGTERM end the spin loop; a zero command is published before the node is
   destroyed (rclpy's own handlers would shut the context down before we could publish).
 """
@@ -125,6 +130,7 @@ class _NodeBehaviour(_LifecycleNode):
         self._inputs_running = False
         self._input_subs: list = []
         self._takers: list = []  # subscriptions taken by threads of their own (viapath.ros2.lean.TakenAside)
+        self._map_node: Any = None  # the map's node, in a context (a DDS participant) of its own (see below)
         try:
             self.declare_parameter("planner_name", "viapath")
             self.declare_parameter("scanner_names", ["front", "rear"])
@@ -289,6 +295,10 @@ class _NodeBehaviour(_LifecycleNode):
         for taker in self._takers:
             taker.destroy()
         self._takers = []
+        if self._map_node is not None:
+            map_node, self._map_node = self._map_node, None
+            map_node.destroy_node()
+            map_node.context.try_shutdown()
         if self.inputs_node is not None:
             for sub in self._input_subs:
                 self.inputs_node.destroy_subscription(sub)
@@ -324,9 +334,9 @@ class _NodeBehaviour(_LifecycleNode):
                     raise TypeError("unknown message layout")
                 self._takers.append(
                     TakenAside(
-                        self.inputs,
+                        self._map_participant(),
                         OccupancyGrid,
-                        s.map_topic,
+                        self.inputs.resolve_topic_name(s.map_topic),  # the node's namespace and remappings
                         latched,
                         grid_from_c,
                         self._on_map,
@@ -338,6 +348,29 @@ class _NodeBehaviour(_LifecycleNode):
                 self._input_subs.append(
                     self.inputs.create_subscription(OccupancyGrid, s.map_topic, self._on_map, latched)
                 )
+
+    def _map_participant(self):
+        """A node for the map in a context of its own, so a DDS participant of its own: its own receive
+        buffers and threads. A map of 100 MB arrives as thousands of fragments; into the control loop's
+        participant they crowd out the scans (best effort, so lost: a cycle missed) while they arrive."""
+        import rclpy
+        from rclpy.node import Node
+
+        context = rclpy.Context()
+        context.init(args=[], initialize_logging=False, domain_id=self.context.get_domain_id())
+        try:
+            self._map_node = Node(
+                f"{self.get_name()}_map",
+                namespace=self.get_namespace(),
+                context=context,
+                start_parameter_services=False,
+                enable_rosout=False,
+                use_global_arguments=False,
+            )
+        except Exception:
+            context.try_shutdown()
+            raise
+        return self._map_node
 
     def _create_timers(self, s) -> None:
         from rclpy.clock import Clock as RosClock
