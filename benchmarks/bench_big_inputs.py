@@ -3,11 +3,13 @@ a 100 000-pose FollowPath goal, a 10 000 x 10 000 map and a 30 000-pose zig-zag 
 
 Usage: python benchmarks/bench_big_inputs.py [--poses 100000] [--map-cells 10000] [--zigzag 30000]
                                             [--seconds 30] [--json]
+       python benchmarks/bench_big_inputs.py --table RUN.json [RUN.json ...]
 
 Needs the ``ros2`` extra. Starts ``viapath ros2 nav2`` (autostart, ``map_topic: map``) as a separate
 process (its own ROS domain, DDS kept on this machine), and drives it from this process at the scan
 rate in real time: odometry of an honest base that drives the received ``cmd_vel`` and two empty
-URG-04LX scans every 0.1 s. A first goal (a straight path 100 m long) sets the robot going. The big
+URG-04LX scans every 0.1 s. A first goal (a straight path 100 m long, sent again until the node, once
+active, accepts it) sets the robot going. The big
 inputs are built by a second process (so that building them does not hold up the scans of this
 one; the robot drives meanwhile); once they are built the measurement starts, and the sender sends
 the 100 000-pose goal along the same line at 4 s, the free map at 9 s (``odom`` frame, 0.05 m
@@ -15,7 +17,12 @@ cells), the zig-zag goal (±0.1 m, 1 cm apart) at 14 s. cmd_vel arrival times ar
 this process on one monotonic clock; the gaps are counted from 2 s (warm-up) to the end, and each is also
 put to the input last sent before it ended (``driving`` before the first), which gives the longest gap per
 input; the same for the gaps between the scans this process sent (the node cycles on them: a scan sent
-late, on a busy machine, delays its command as much). Both processes are ended by pid.
+late, on a busy machine, delays its command as much). The rate is the number of commands over the
+measured time, with the fewest and most in any 1 s window of it, and who sent them (``cycle``,
+``watchdog``: the planner status the node sends with each command). Both processes are ended by pid.
+
+``--table`` prints the Markdown table of docs/explanation/robustness.md from the ``--json`` output of
+runs saved to files, one row per run.
 """
 
 from __future__ import annotations
@@ -28,6 +35,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -128,6 +136,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float, node_log: str |
     import tempfile
 
     import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import Twist
     from nav_msgs.msg import Odometry
     from rclpy.qos import qos_profile_sensor_data
@@ -155,6 +164,15 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float, node_log: str |
         node.create_subscription(
             Twist, "cmd_vel", lambda m: commands.append((time.monotonic(), m.linear.x, m.angular.z)), 50
         )
+        sources: list[tuple[float, str]] = []  # who sent each command: the planner status beside it
+
+        def on_status(msg) -> None:
+            for status in msg.status:
+                if status.name.endswith(": planner"):
+                    values = {kv.key: kv.value for kv in status.values}
+                    sources.append((time.monotonic(), values.get("source", "")))
+
+        node.create_subscription(DiagnosticArray, "viapath/status", on_status, 50)
         if not _wait_for(
             node, lambda: node.count_publishers("cmd_vel") > 0 and node.count_subscribers("scan_rear") > 0, 120
         ):
@@ -163,8 +181,15 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float, node_log: str |
         client, FollowPath = _goal_client(node)
         goal = FollowPath.Goal()
         goal.path = convert.path_message([[-1.0, 0.0], [100.0, 0.0]], "odom", convert.time_msg(0.0))
-        future = client.send_goal_async(goal)
-        _wait_for(node, future.done, 30)
+        accepted_by, first_goal_sends = time.monotonic() + 30.0, 0
+        while True:  # the action server is there once configured; goals are refused until the node is active
+            first_goal_sends += 1
+            future = client.send_goal_async(goal)
+            if _wait_for(node, future.done, 30) and future.result().accepted:
+                break
+            if time.monotonic() > accepted_by:
+                raise RuntimeError("the node did not accept the first goal")
+            _wait_for(node, lambda: False, 0.2)
         scanners = paper_scanners()
         empty = [np.full(s.beam_count, np.inf) for s in scanners]
         sender_proc = subprocess.Popen(
@@ -230,6 +255,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float, node_log: str |
         started = time.monotonic() + 0.5
         commands.clear()
         scans_sent.clear()
+        sources.clear()
         drive_until(started + seconds)
         x = state["x"]
         _, sender_err = sender_proc.communicate(timeout=60)
@@ -250,6 +276,13 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float, node_log: str |
             return by_input
 
         scan_times = np.array([t - started for t in scans_sent if t - started >= WARMUP_S])
+        # commands in each 1 s window (one starting at each command) that ends by the end of the measurement
+        ends = np.searchsorted(times, times + 1.0 - 1e-9)
+        per_second = (ends - np.arange(len(times)))[times + 1.0 <= seconds]
+        by_source: dict[str, int] = {}
+        for t, source in sources:
+            if t - started >= WARMUP_S:
+                by_source[source] = by_source.get(source, 0) + 1
         return {
             "benchmark": "big_inputs",
             "poses": poses,
@@ -258,6 +291,8 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float, node_log: str |
             "seconds_measured": seconds - WARMUP_S,
             "cmd_vel_messages": int(len(times)),
             "rate_hz": float(len(times) / (seconds - WARMUP_S)),
+            "cmd_vel_in_1_s": [int(per_second.min()), int(per_second.max())] if len(per_second) else None,
+            "cmd_vel_by_source": by_source,  # from the planner status sent with each command
             "longest_gap_s": float(gaps.max()) if len(gaps) else None,
             "longest_gap_at_s": float(times[worst]) if len(gaps) else None,
             "longest_gap_by_input_s": longest_by_input(times),
@@ -268,6 +303,7 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float, node_log: str |
                 [round(float(times[i]), 2), round(float(gaps[i]), 3)] for i in np.flatnonzero(gaps > 0.2)
             ],
             "mean_speed_mps": float(speeds.mean()) if len(speeds) else None,
+            "first_goal_sends": first_goal_sends,
             "distance_driven_m": float(x),
             "sent": [line for line in sender_err.splitlines() if line.startswith("sent")],
             "load_avg_1min": os.getloadavg()[0],
@@ -281,6 +317,26 @@ def run(poses: int, map_cells: int, zigzag: int, seconds: float, node_log: str |
         log.close()
 
 
+def table(results: list[dict]) -> str:
+    """The Markdown table of the robustness page, one row per run's ``--json`` result."""
+    lines = [
+        "| run | load average | longest `cmd_vel` gap: driving | after the 100 000-pose goal | after the map "
+        "| after the zig-zag goal | rate | commands in any 1 s | from scan cycles | longest gap between scans sent |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for k, r in enumerate(results, 1):
+        gaps = r["longest_gap_by_input_s"]
+        fewest, most = r["cmd_vel_in_1_s"]
+        cycles = r["cmd_vel_by_source"].get("cycle", 0)
+        lines.append(
+            f"| {k} | {r['load_avg_1min']:.1f} | "
+            + " | ".join(f"{gaps[name]:.3f} s" for name in ("driving", "path", "map", "zigzag"))
+            + f" | {r['rate_hz']:.2f} Hz | {fewest}–{most} | {cycles} of {sum(r['cmd_vel_by_source'].values())} | "
+            + f"{max(r['longest_scan_gap_by_input_s'].values()):.3f} s |"
+        )
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--poses", type=int, default=100_000)
@@ -289,8 +345,12 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=30.0)
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--node-log", help="write the node's log (stderr) to this file")
+    parser.add_argument("--table", nargs="+", metavar="RUN.json", help="print the docs' table of saved --json runs")
     parser.add_argument("--sender", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.table:
+        print(table([json.loads(Path(path).read_text()) for path in args.table]))
+        return
     if args.sender:
         raise SystemExit(sender(args.poses, args.map_cells, args.zigzag))
     result = run(args.poses, args.map_cells, args.zigzag, args.seconds, args.node_log)
@@ -305,6 +365,12 @@ def main() -> None:
         f"cmd_vel: {result['cmd_vel_messages']} messages in {result['seconds_measured']:.0f} s = {result['rate_hz']:.2f} Hz; "
         f"longest gap {result['longest_gap_s']:.3f} s (at {result['longest_gap_at_s']:.1f} s); "
         f"{result['gaps_over_0_2_s']} gaps over 0.2 s; mean speed {result['mean_speed_mps']:.2f} m/s"
+    )
+    print(
+        "  commands in any 1 s: {}-{}; sent by: {}".format(
+            *(result["cmd_vel_in_1_s"] or ("-", "-")),
+            ", ".join(f"{name} {n}" for name, n in sorted(result["cmd_vel_by_source"].items())),
+        )
     )
     print(
         "  longest gap between the scans sent: "
