@@ -88,3 +88,14 @@ def test_layer_radii_widen_the_discs():
     _, radii, _ = layer.discs(0.25, 0.1)
     plain = StaticLayer(np.array([[[0.0, 0.0], [1.0, 0.0]]])).discs(0.25, 0.1)[1]
     assert np.allclose(radii, plain + 0.05)
+
+
+def test_finite_drops_non_finite_segments_once_and_is_kept():
+    """The finite part of a layer is made once: asking again (each cycle, for a map) gives the same layer."""
+    segments = np.array([[[0.0, 0.0], [1.0, 0.0]], [[np.nan, 0.0], [1.0, 1.0]], [[2.0, 2.0], [3.0, np.inf]]])
+    layer = StaticLayer(segments, np.array([0, 1, 2]))
+    finite = layer.finite()
+    assert np.array_equal(finite.segments, segments[:1]) and finite.shape_ids.tolist() == [0]
+    assert layer.finite() is finite and finite.finite() is finite
+    clean = StaticLayer(segments[:1], np.array([7]))
+    assert clean.finite() is clean and clean.finite() is clean
