@@ -13,6 +13,8 @@ drives the received cmd_vel and two empty scans every 0.1 s. Phases:
 7. a goal that is canceled while it runs;
 8. a goal running when the node is shut down (lifecycle ``shutdown``).
 
+Before them, the DDS participants that subscribe to the map, a scan and odometry.
+
 OUT.json holds per phase the robot's largest x, the goal results (status, error code) and the commands, and
 the node's ``way`` status on /diagnostics (level, message) with the driver's time of each change.
 """
@@ -157,6 +159,14 @@ def main(out_path: str) -> int:
         return record
 
     run(2.0)  # the node configures its scanners
+
+    def participants(topic: str) -> list[str]:
+        """The DDS participants (the first 12 bytes of the endpoint's id) subscribing to ``topic``."""
+        return sorted({bytes(info.endpoint_gid[:12]).hex() for info in node.get_subscriptions_info_by_topic(topic)})
+
+    topics = ("/map", "/scan_front", "/odom")
+    run(30.0, lambda: all(node.count_subscribers(topic) > 0 for topic in topics))  # discovered
+    phases["participants"] = {topic: participants(topic) for topic in topics}
     map_pub.publish(grid(-2.0, -2.0))
     run(1.0)
     first = goal([[0.0, 0.0], [3.0, 0.0]])

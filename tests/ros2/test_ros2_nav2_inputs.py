@@ -135,6 +135,16 @@ def test_the_way_closed_by_the_mapped_wall_is_a_blocked_warning_and_the_open_way
     assert [level for t, level, _ in ways if sent <= t < ended][-1] == WARN_LEVEL  # blocked as long as it ran
 
 
+def test_the_map_is_taken_by_a_participant_other_than_the_scans(driven):
+    """A 10 000 x 10 000 map is 100 MB of fragments: through the participant that takes the scans they crowded out
+    best-effort scans (lost: a cycle missed). The node subscribes to the map from a DDS participant of its own."""
+    phases, _ = driven
+    found = phases["participants"]
+    assert len(found["/map"]) == 1 and len(found["/scan_front"]) == 1, found
+    assert found["/scan_front"] == found["/odom"]  # the control loop's inputs share one participant
+    assert found["/map"] != found["/scan_front"]
+
+
 def test_goals_and_maps_are_taken_as_arrays_not_python_messages(driven):
     """The lean takes are in use on this build (the node says when it falls back to Python messages)."""
     _, node_err = driven
