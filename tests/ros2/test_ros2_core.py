@@ -169,6 +169,29 @@ def test_one_command_per_period_the_watchdog_only_when_no_cycle_ran():
     assert sent[-1][2] == 0.0
 
 
+def test_a_cleared_path_brakes_at_max_accel_with_the_watchdog_ticking_between_cycles():
+    """Driving at 0.5 m/s, the path cleared; scans and (honest) odometry go on, the watchdog ticks between the
+    cycles. Each 0.1 s takes 0.8 m/s² x 0.1 s = 0.08 m/s off, not more: one braking command per period (a
+    watchdog command beside each cycle's braked twice as hard)."""
+    core = make_core(nominal_speed_mps=0.5)
+    far = np.array([[50.0, 30.0]])
+    speed = 0.0
+    for k in range(20):
+        t = 1.0 + 0.1 * k
+        feed(core, t, speed=speed, scans=scans_at((0.0, 0.0, 0.0), far))
+        speed = core.cycle(t).command.speed_mps
+    assert speed == pytest.approx(0.5)
+    core.clear_path()
+    speeds = [speed]
+    for k in range(20, 30):
+        t = 1.0 + 0.1 * k
+        feed(core, t, speed=core.last_command.speed_mps, scans=scans_at((0.0, 0.0, 0.0), far))
+        core.cycle(t)
+        core.watchdog(t + 0.05)
+        speeds.append(core.last_command.speed_mps)
+    assert np.allclose(-np.diff(speeds)[:6], 0.08) and speeds[-1] == 0.0, speeds
+
+
 def test_no_odometry_brakes_from_the_last_command_to_zero():
     core = make_core()
     for k in range(3):
