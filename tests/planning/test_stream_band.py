@@ -108,6 +108,32 @@ def test_holding_short_of_a_stream_keeps_clear_of_it_and_still_arrives(stream_ru
     assert hold.metrics["time_to_goal_s"] <= off.metrics["time_to_goal_s"] + 2.0
 
 
+def test_a_stream_with_no_end_in_sight_is_not_waited_for(tmp_path):
+    """Thirty people in single file 1.6 m apart crossing at x = 2.5 m at 0.8 m/s, all walking from the start: the
+    stream lasts the whole run and the forecast never shows it ending within WAIT_LOOK_S. The robot does not begin
+    to wait for it (these runs: 15 cycles of holding short, against 523 when a hold did not ask whether the stream
+    ends, which holds the robot at the band's edge for the rest of the run) and keeps, as without holding short,
+    clear of everyone (0.14 m against 0.141 m)."""
+    people = "\n".join(
+        f"  - {{start: [2.5, {2.0 + 1.6 * k:.2f}], velocity: [0.0, -0.8], radius: 0.25}}" for k in range(30)
+    )
+    file = tmp_path / "endless.yaml"
+    file.write_text(_STREAM.format(people=people))
+    scenario = load_scenario(file)
+    runs = {
+        name: run_episode(
+            scenario, perception="oracle", seed=0, position_noise_m=0.0, velocity_noise_mps=0.0, planner_overrides=o
+        )
+        for name, o in (("off", {"stream_band_s": 0.0}), ("hold", HOLD))
+    }
+    status = np.array(runs["hold"].trace.plan_status)
+    assert 0 < (status == "hold-short").sum() <= 20  # 2 s at most
+    assert not runs["hold"].metrics["collision"]
+    assert runs["hold"].metrics["time_outside_corridor_s"] == 0.0
+    gap_off = clearance_per_step(runs["off"].trace).min()
+    assert clearance_per_step(runs["hold"].trace).min() >= gap_off - 0.01
+
+
 def test_the_forecast_seen_from_later_is_the_same_cone_at_the_same_times():
     """forecast_from(t0) at t' must be the leg checks' cone at t0 + t': centre p + v (t0 + t'), radius
     r + g min(t0 + t', cap), sampled here directly from the checks' own fields."""
