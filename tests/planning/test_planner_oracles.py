@@ -109,7 +109,8 @@ def _escape_scores_command_by_command(checks, limits, config, previous):
         free = first_touch == steps
         progress = float(np.dot(positions[-1] - position, toward)) / config.escape_s
         score = 100 * separation + 20 * free + 2 * (max(excess) <= checks.corridor_tolerance_m) + time_to_contact
-        score += -(0.005 if free else 0.5) * speed + 0.01 * progress
+        score += -(0.005 if free else 0.5) * speed
+        score += (config.escape_progress_s if free else 0.01) * progress
         if config.calm_escape and previous is not None:
             change = abs(speed - previous.speed_mps) / max(top, 1e-9)
             change += abs(turn - previous.turn_rate_radps) / limits.max_turn_rate_radps

@@ -9,6 +9,15 @@ Source: beyond the paper (it assumes some candidate is always free); docs/design
   the roll-out; never further out of the corridor than now (worth up to 2 s of time to contact: when
   stopping is not safe, not being hit comes first); the longest time to contact; then progress towards
   the subgoal, and slower rather than sideways (status ``escape``).
+* Among the commands that stay clear over the whole roll-out (they tie on time to contact), progress towards
+  the subgoal is worth ``escape_progress_s`` seconds of time to contact per m/s. By default (0.01) it is a
+  tie-break and the calm escape's continuity keeps last cycle's command: in ETH/UCY crowds those escapes drove
+  on at about 0.2 m/s and got nowhere along the path, and most of the time lost in the windows where the robot
+  missed its goal was lost there (benchmarks/reach_failures.py). With a weight above the continuity (5) the
+  robot escapes onwards and reaches its goal more often, but it also drives on towards people coming at it
+  whom it must then flee (a group abreast filling the corridor then meets it moving, not at rest), so it is
+  not the default. A command that is not clear keeps progress as a tie-break: there the time to contact
+  decides.
 * Only people who could come within reach during the roll-out are scored (triangle inequality: the
   robot travels at most so far, each person |v|·T, each cone grows at most so much).
 * When contact cannot be avoided, fleeing fast mostly runs into someone else: a contact at speed

@@ -395,16 +395,17 @@ def _separations(gap_min, gap_last, gap_overlapped):
 
 
 @compiled(inline=True)
-def _score(separation, free, inside, time_to_contact, speed, progress):
+def _score(separation, free, inside, time_to_contact, speed, progress, progress_s):
     """One escape command's score before the continuity term: separation, free of contact over the roll-out, inside
-    the corridor, time to contact, speed (less of it when not free), progress towards the subgoal."""
+    the corridor, time to contact, speed (less of it when not free), progress towards the subgoal (``progress_s``
+    per m/s when free, a tie-break otherwise)."""
     return (
         1e2 * separation
         + 20.0 * (1.0 if free else 0.0)
         + 2.0 * (1.0 if inside else 0.0)
         + time_to_contact
         - (0.005 if free else 0.5) * speed
-        + 0.01 * progress
+        + (progress_s if free else 0.01) * progress
     )
 
 
@@ -464,7 +465,7 @@ def escape_scores(
         time_to_contact = first_step[k] * dt
         free = time_to_contact >= steps * dt
         progress = ((ends[k, 0] - robot[0]) * toward_x + (ends[k, 1] - robot[1]) * toward_y) / settings.escape_s
-        value = _score(separations[k], free, inside[k], time_to_contact, speed, progress)
+        value = _score(separations[k], free, inside[k], time_to_contact, speed, progress, settings.progress_s)
         if calm:
             value = value - settings.continuity_s * _minimum(_change(speed, commands[k, 1], settings), 1.0)
         score[k] = value if (within_bound[k] or speed == 0.0) else -math.inf

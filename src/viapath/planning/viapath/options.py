@@ -219,6 +219,16 @@ _OWN = [
         maximum=60.0,
     ),
     Option(
+        "escape_progress_s",
+        0.01,
+        "time to contact an escape command that stays clear over its whole roll-out gains per m/s of progress "
+        "towards the subgoal (0.01: progress only breaks ties, and the calm escape's continuity keeps last cycle's "
+        "command; 5 s²/m: the robot escapes onwards)",
+        "s²/m",
+        minimum=0.0,
+        maximum=60.0,
+    ),
+    Option(
         "escape_max_excess_m",
         0.5,
         "an escape may take the robot at most this far outside the corridor (standing is always allowed)",

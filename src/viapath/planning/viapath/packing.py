@@ -284,17 +284,12 @@ def TREE_ONLY(store: NodeStore, leaves: np.ndarray) -> np.ndarray:
     raise AssertionError("a marker, never called")
 
 
-def escape(checks, limits: MotionLimits, config, fan, previous=None, score_standing: bool = False):
-    """The escape's figures in two compiled calls: :func:`.escape_figures.escape_headings` (the standing
-    check, the fan's headings), numpy's sines and cosines of those headings, :func:`.escape_figures.escape_scores`.
-    Returns (standing is free, commands (K, 2), ends (K, 2), scores (K,)), the last three None when standing is
-    free (unless ``score_standing``). ``fan``: :func:`.escape.escape_fan`'s (top speed, commands, distinct turn
-    commands, each command's turn)."""
-    top, commands, row_turns, turn_rows = fan
+def _escape_settings(checks, limits: MotionLimits, config, top: float, previous) -> np.ndarray:
+    """The escape's settings row (:data:`.records.ESCAPE`); ``previous``: last cycle's command for a calm escape,
+    else None."""
     dt = config.escape_dt_s
-    steps = max(1, int(round(config.escape_s / dt)))
-    calm = bool(config.calm_escape and previous is not None)
-    settings = records.escape_settings(  # (by position, in the record's order: ESCAPE_FIELDS)
+    calm = previous is not None
+    return records.escape_settings(  # (by position, in the record's order: ESCAPE_FIELDS)
         dt,  # dt_s
         config.escape_s,  # escape_s
         limits.max_accel_mps2 * dt,  # speed_step_mps
@@ -305,11 +300,24 @@ def escape(checks, limits: MotionLimits, config, fan, previous=None, score_stand
         max(config.escape_max_excess_m, checks.corridor_tolerance_m),  # max_excess_m
         max(top, 1e-9),  # top_speed_mps
         config.escape_continuity_s if calm else 0.0,  # continuity_s
+        config.escape_progress_s,  # progress_s
         previous.speed_mps if calm else 0.0,  # previous_speed_mps
         previous.turn_rate_radps if calm else 0.0,  # previous_turn_radps
         checks.horizon_s,
         config.horizon_s,  # standing_check_s
     )
+
+
+def escape(checks, limits: MotionLimits, config, fan, previous=None, score_standing: bool = False):
+    """The escape's figures in two compiled calls: :func:`.escape_figures.escape_headings` (the standing
+    check, the fan's headings), numpy's sines and cosines of those headings, :func:`.escape_figures.escape_scores`.
+    Returns (standing is free, commands (K, 2), ends (K, 2), scores (K,)), the last three None when standing is
+    free (unless ``score_standing``). ``fan``: :func:`.escape.escape_fan`'s (top speed, commands, distinct turn
+    commands, each command's turn)."""
+    top, commands, row_turns, turn_rows = fan
+    steps = max(1, int(round(config.escape_s / config.escape_dt_s)))
+    calm = bool(config.calm_escape and previous is not None)
+    settings = _escape_settings(checks, limits, config, top, previous if calm else None)
     robot = checks.packed_robot()
     positions, velocities, radii, growth, until = checks.packed_obstacles()
     standing_free, headings = _escape_headings(

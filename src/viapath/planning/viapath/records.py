@@ -95,6 +95,7 @@ ESCAPE_FIELDS: tuple[tuple[str, str], ...] = (
     ("max_excess_m", _F),  # a roll-out further outside the corridor than this is not taken (moving)
     ("top_speed_mps", _F),  # the fan's top speed (at least 1e-9)
     ("continuity_s", _F),  # a calm escape's weight of the change from last cycle's command (0: not calm)
+    ("progress_s", _F),  # the weight of a free roll-out's progress towards the subgoal (per m/s)
     ("previous_speed_mps", _F),  # last cycle's command (calm escape)
     ("previous_turn_radps", _F),
     ("horizon_s", _F),  # the cycle's horizon ...
@@ -217,6 +218,7 @@ def escape_settings(
     max_excess_m: float,
     top_speed_mps: float,
     continuity_s: float,
+    progress_s: float,
     previous_speed_mps: float,
     previous_turn_radps: float,
     horizon_s: float,
@@ -236,6 +238,7 @@ def escape_settings(
                 max_excess_m,
                 top_speed_mps,
                 continuity_s,
+                progress_s,
                 previous_speed_mps,
                 previous_turn_radps,
                 horizon_s,
