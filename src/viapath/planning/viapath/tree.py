@@ -13,38 +13,32 @@ import math
 import numpy as np
 
 from viapath.jit import compiled
+from viapath.planning.viapath import records
 from viapath.planning.viapath.legs import (
     goal_legs_inside_all,
     goal_legs_of,
     legs_free,
     legs_inside_of,
 )
-from viapath.planning.viapath.records import (
-    N_FIRST_X,
-    N_FIRST_Y,
-    N_LEAF,
-    N_LENGTH,
-    N_OBSTACLE,
-    N_PARENT,
-    N_ROOT,
-    N_SIDE,
-    N_SLOW_S,
-    N_SLOW_SPEED,
-    N_SPEED,
-    N_TIME,
-    N_TO_GOAL,
-    N_X,
-    N_Y,
-    NODE_FLOATS,
-    NODE_INTEGERS,
-)
 from viapath.planning.viapath.shapes import hugs, one_per_shape, round_static_shapes, slide
 from viapath.planning.viapath.via import via_pair
 
-# Columns of the node store: floats, then integers.
-_X, _Y, _T, _V, _LENGTH, _FX, _FY = N_X, N_Y, N_TIME, N_SPEED, N_LENGTH, N_FIRST_X, N_FIRST_Y
-_SLOW_S, _SLOW_V, _GOAL = N_SLOW_S, N_SLOW_SPEED, N_TO_GOAL
-_PARENT, _WAY0, _WAY1, _WAY2, _LEAF = N_PARENT, N_OBSTACLE, N_SIDE, N_ROOT, N_LEAF
+# Columns of the node store (:mod:`.records`): floats, then integers.
+_X, _Y, _T, _V, _LENGTH = records.N_X, records.N_Y, records.N_TIME, records.N_SPEED, records.N_LENGTH
+_FX, _FY, _SLOW_S, _SLOW_V, _GOAL = (
+    records.N_FIRST_X,
+    records.N_FIRST_Y,
+    records.N_SLOW_S,
+    records.N_SLOW_SPEED,
+    records.N_TO_GOAL,
+)
+_PARENT, _WAY0, _WAY1, _WAY2, _LEAF = (
+    records.N_PARENT,
+    records.N_OBSTACLE,
+    records.N_SIDE,
+    records.N_ROOT,
+    records.N_LEAF,
+)
 _STRAIGHT, _SLOW, _CORNER = -1, -2, -3  # candidates.STRAIGHT, SLOW, CORNER
 _SIDES = (1, -1, 1, -1)  # geometry.VIA_SIDES
 _ROOTS = (0, 0, 1, 1)  # geometry.VIA_ROOTS
@@ -93,8 +87,8 @@ def _root_nodes(position, speeds, root_directions, root_lengths, root_free):
     """The tree's first nodes (a store with room to grow): the roots, one per speed, at the robot, now; a root
     whose goal leg is free is a leaf."""
     s_count = speeds.shape[0]
-    nf = np.empty((4 * s_count + 32, NODE_FLOATS))
-    ni = np.empty((4 * s_count + 32, NODE_INTEGERS), np.int64)
+    nf = np.empty((4 * s_count + 32, records.NODE_FLOATS))
+    ni = np.empty((4 * s_count + 32, records.NODE_INTEGERS), np.int64)
     m = _ZERO
     for i in range(s_count):
         nf, ni, m = _add(
