@@ -49,7 +49,7 @@ from viapath.planning.viapath.rollout import can_follow
 from viapath.planning.viapath.tree import grow
 
 
-@compiled
+@compiled(inline=True)
 def _leaf_facts(robot, subgoal, nf, ni):
     """What :func:`choose_tree` hands back of the tree's leaves: ``found`` (status, 0, then the K leaves' nodes)
     and ``facts`` (6, K), as it says."""
@@ -293,7 +293,7 @@ def choose_candidate(robot, nf, ni, found, facts, angles, extra, obstacles, corr
     return ranking, costs
 
 
-@compiled
+@compiled(inline=True)
 def choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, settings):
     """The second half of :func:`choose`, after :func:`choose_tree`: when it found candidates, their angles and
     :func:`choose_candidate` (``extra``: its terms of further critics, (E, K)). Returns (found, costs): ``found``
@@ -313,7 +313,7 @@ def choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, setti
     return found_and_ranking, costs
 
 
-@compiled
+@compiled(inline=True)
 def choose(
     robot,
     speeds,
