@@ -98,7 +98,7 @@ def _leg_contact(
     return math.inf
 
 
-@compiled
+@compiled(inline=True)
 def _cylinder_only(growth, growth_until_s):
     """Whether no obstacle's radius stops growing within the legs' time (no growth, or none capped): then
     one cylinder per obstacle."""
@@ -153,7 +153,7 @@ def legs_first_contact(
     return out
 
 
-@compiled
+@compiled(inline=True)
 def _cylinder_only_by_kind(growth, growth_until_s, shape_of):
     """:func:`_cylinder_only` of the people and of the static discs (``shape_of`` >= 0), each on its own; of all
     obstacles for both without static geometry (an empty ``shape_of``)."""
@@ -647,7 +647,7 @@ def _free_of(starts, start_times, velocities, checked, durations, obstacles, sha
     return free
 
 
-@compiled
+@compiled(inline=True)
 def legs_inside_of(corridor, starts, ends, spacing_m, tolerance_m):
     """:func:`legs_inside` with the corridor's record unpacked."""
     segment_starts, segment_directions, segment_lengths, half_widths = corridor

@@ -86,7 +86,7 @@ def _leaf_facts(robot, subgoal, nf, ni):
     return found, facts
 
 
-@compiled
+@compiled(inline=True)
 def choose_tree(robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints, settings):
     """The first half of the viapath planner's ``_choose`` in one call: the root legs (:func:`goal_legs`), the
     paper's step 1 (the free straight leg at the nominal speed, if the robot can follow it: follow.can_follow),
@@ -260,7 +260,7 @@ def _first_that_follows(robot, nf, leaves, facts, angles, total, ranking, obstac
             break
 
 
-@compiled
+@compiled(inline=True)
 def choose_candidate(robot, nf, ni, found, facts, angles, extra, obstacles, corridor, settings):
     """The second half of ``_choose`` up to its shield check: Eq. 1's terms (:mod:`.critics`, summed in
     :func:`.critics.critics_for`'s order), with ``only_way`` the other ways priced out, the

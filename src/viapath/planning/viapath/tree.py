@@ -82,7 +82,7 @@ def _add(nf, ni, m, x, y, t, v, parent, length, fx, fy, way0, way1, way2, slow_s
     return nf, ni, m + 1
 
 
-@compiled
+@compiled(inline=True)
 def _root_nodes(position, speeds, root_directions, root_lengths, root_free):
     """The tree's first nodes (a store with room to grow): the roots, one per speed, at the robot, now; a root
     whose goal leg is free is a leaf."""
@@ -159,7 +159,7 @@ def _slow_legs(position, subgoal, speeds, nominal, slow_times, creep):
     return dx, dy, durations, slows, c
 
 
-@compiled
+@compiled(inline=True)
 def _slow_nodes(nf, ni, m, position, speeds, nominal_index, slow, horizon_s, obstacles, goal, corridor, shape_of):
     """Slow down, creep or wait along the straight leg, then on at the nominal speed or the slowest faster speed
     whose goal leg is free: the slow legs (:func:`_slow_legs`) free of the people at their slow radii, each with
@@ -178,7 +178,7 @@ def _slow_nodes(nf, ni, m, position, speeds, nominal_index, slow, horizon_s, obs
     return _slow_leaves(nf, ni, m, dx, dy, goes_on, lengths, goal_free)
 
 
-@compiled
+@compiled(inline=True)
 def _slow_legs_free(position, dx, dy, durations, slows, c, horizon_s, slow_obstacles, shape_of):
     """Which of the first ``c`` slow legs (from the robot, now, along (dx, dy)) are free of the people at their slow
     radii (``slow_obstacles``)."""
@@ -192,7 +192,7 @@ def _slow_legs_free(position, dx, dy, durations, slows, c, horizon_s, slow_obsta
     return legs_free(starts, np.zeros(c), velocities, durations[:c], horizon_s, slow_obstacles, shape_of)
 
 
-@compiled
+@compiled(inline=True)
 def _goes_on(position, speeds, nominal, dx, dy, durations, slows, free):
     """Where the robot goes on after each free slow leg: at its end and its duration, once at each speed from the
     nominal one up. Returns the goal legs' starts, start times and speeds, the slow speed before each, and how
@@ -226,7 +226,7 @@ def _goes_on(position, speeds, nominal, dx, dy, durations, slows, free):
     return ends, times, after, slow_v, after_count
 
 
-@compiled
+@compiled(inline=True)
 def _slow_leaves(nf, ni, m, dx, dy, goes_on, lengths, goal_free):
     """Each slow leg with its first free goal leg (:func:`_goes_on`'s, the slowest speed from the nominal one up),
     added as a leaf."""
@@ -399,7 +399,7 @@ def _branch_pairs(free_now, contact_now, frontier_start, frontier_end, n_count, 
     return pair_nodes, pair_obstacles, pairs
 
 
-@compiled
+@compiled(inline=True)
 def _pairs(nf, frontier, depth, max_root_obstacles, obstacle_positions, via):
     """The (node, obstacle) pairs to branch on from the frontier (first ``frontier_start`` .. ``frontier_end`` of
     the store, their goal legs' ``free`` and ``contact``): :func:`_branch_pairs`, at the root on each static
@@ -539,7 +539,7 @@ def _slides(nf, branch, obstacle_positions, via_radii, shapes, legs, count):
     return count
 
 
-@compiled
+@compiled(inline=True)
 def _keep_inside(good, starts_k, via, count, corridor, spacing_m, tolerance_m):
     """Keep the free via legs (``good``, of the first ``count`` legs) that stay inside the corridor: ``good`` turned
     False for the others (the corridor checked on the free legs only), and returned."""
@@ -577,7 +577,7 @@ def _way_of(nf, ni, parent, depth, vx, vy, speed, obstacle_id, option):
     return nf[parent, _FX], nf[parent, _FY], ni[parent, _WAY0], ni[parent, _WAY1], ni[parent, _WAY2]
 
 
-@compiled
+@compiled(inline=True)
 def _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, corridor):
     """The pairs' children: the legs to their via points (:func:`_via_legs`) free of the people
     and inside the corridor, added below their nodes (a root's child starts the way round: obstacle id, side,
@@ -624,7 +624,7 @@ def _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, cor
     return nf, ni, m
 
 
-@compiled
+@compiled(inline=True)
 def _straight_inside(position, goal, corridor):
     """Whether the straight leg from the robot to the subgoal stays inside the corridor."""
     here = np.empty((1, 2))
@@ -633,7 +633,7 @@ def _straight_inside(position, goal, corridor):
     return goal_legs_inside_all(corridor, here, goal)[0]
 
 
-@compiled
+@compiled(inline=True)
 def _frontier_leaves(nf, ni, batch, m, horizon_s, goal, obstacles, corridor, shape_of):
     """The goal legs of the new frontier (the nodes ``batch`` .. ``m``): the free ones complete candidates, made
     leaves. Returns the legs' free and first contacts, which the next depth branches on."""
