@@ -265,8 +265,10 @@ class LegChecks(_CompiledInputs):
         start, direction = path.segment_starts[segment], path.segment_directions[segment]
         length = float(path.segment_lengths_m[segment])
         relative = self.position - start
+        if abs(float(cross2(direction, relative))) <= ON_PATH_M:  # on the path line (most cycles: asked first)
+            return None
         ahead_m = max(float(relative @ direction), 0.0) + lookahead_m
-        if abs(float(cross2(direction, relative))) <= ON_PATH_M or ahead_m >= length:
+        if ahead_m >= length:
             return None
         # The continuation to the subgoal is checked with the full radii, so a person standing on a
         # blocked subgoal blocks the way back too and the planner plans as the paper does.
@@ -334,12 +336,19 @@ class LegChecks(_CompiledInputs):
         return packing.legs_inside(self.path, starts, ends, self.corridor_check_spacing_m, self.corridor_tolerance_m)
 
 
-_FLOAT64 = np.dtype(np.float64)  # (an identity test: numpy's float64 arrays share this descriptor; another fails it)
+_FLOAT64 = np.dtype(np.float64)  # (an identity test first: numpy's float64 arrays share this descriptor ...
 
 
 def _contiguous(values: Any, shape: tuple[int, ...]) -> np.ndarray:
     """``values`` as a C-contiguous float64 array of ``shape`` (a scalar or a row is repeated)."""
-    if type(values) is np.ndarray and values.dtype is _FLOAT64 and values.shape == shape and values.flags.c_contiguous:
+    dtype = getattr(values, "dtype", None)
+    # ... the arrays compiled code hands back (the inflation's rows) carry an equal descriptor of their own
+    if (
+        type(values) is np.ndarray
+        and (dtype is _FLOAT64 or dtype == _FLOAT64)
+        and values.shape == shape
+        and values.flags.c_contiguous
+    ):
         return values  # what the conversions below return for it, without them (every cycle, every array)
     array = np.asarray(values, dtype=np.float64)
     if array.shape != shape:

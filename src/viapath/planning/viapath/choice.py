@@ -245,31 +245,28 @@ def _line(store: NodeStore, node: int, checks: LegChecks) -> np.ndarray:
 def _plan_of_nodes(
     store: NodeStore, leaves: np.ndarray, k: int, total: np.ndarray, checks: LegChecks, polylines: list[np.ndarray]
 ) -> Plan:
-    """The plan of candidate ``k`` of the compiled tree's node store."""
+    """The plan of candidate ``k`` of the compiled tree's node store (one Plan call: a dict of the common fields
+    unpacked into two took 0.3 us more a cycle)."""
     node = int(leaves[k])
     speed_after, slow_s, slow_speed = store.slowing(node)
-    common: dict[str, Any] = dict(
+    if slow_s > 0:
+        status, speed, target = "wait" if slow_speed == 0.0 else "slow", slow_speed, checks.subgoal.copy()
+        via_points, line = np.zeros((0, 2)), np.array([checks.position, checks.subgoal])
+        extras: dict[str, Any] = {"slow_s": slow_s, "speed_after_mps": speed_after}
+    else:
+        line = _line(store, node, checks)
+        status, speed, target = "avoid" if len(line) > 2 else "straight", speed_after, line[1].copy()
+        via_points, extras = line[1:-1].copy(), {}
+    return Plan(
+        status,
+        speed,
+        target,
+        via_points=via_points,
+        waypoints=line,
         subgoal_index=checks.subgoal_index,
         candidate_count=len(leaves),
         candidate_costs=total,
         candidate_polylines=polylines,
         chosen=k,
-    )
-    if slow_s > 0:
-        return Plan(
-            "wait" if slow_speed == 0.0 else "slow",
-            slow_speed,
-            checks.subgoal.copy(),
-            waypoints=np.array([checks.position, checks.subgoal]),
-            extras={"slow_s": slow_s, "speed_after_mps": speed_after},
-            **common,
-        )
-    line = _line(store, node, checks)
-    return Plan(
-        "avoid" if len(line) > 2 else "straight",
-        speed_after,
-        line[1].copy(),
-        via_points=line[1:-1].copy(),
-        waypoints=line,
-        **common,
+        extras=extras,
     )

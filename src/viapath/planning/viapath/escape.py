@@ -83,8 +83,15 @@ def _fan(speeds: tuple[float, ...], top: float, max_turn_rate_radps: float) -> n
 def escape_fan(limits: MotionLimits, config: Settings) -> tuple[Any, ...]:
     """The top speed, the fan's commands (K, 2), its distinct turn commands (T,) and each command's index
     among them (K,), for the compiled escape, which takes the headings, sines and cosines once per turn command:
-    the commands of one turn rate share them."""
-    return _fan_turns(tuple(config.speeds), escape_top_speed(limits, config), limits.max_turn_rate_radps)
+    the commands of one turn rate share them. Kept for the last (limits, options) objects: asked every escape."""
+    last = _last_fan[0]  # (one read: planners in other threads may replace it)
+    if last is None or last[0] is not limits or last[1] is not config:
+        fan = _fan_turns(tuple(config.speeds), escape_top_speed(limits, config), limits.max_turn_rate_radps)
+        last = _last_fan[0] = (limits, config, fan)
+    return last[2]
+
+
+_last_fan: list[Any] = [None]  # escape_fan's last (limits, options, fan)
 
 
 @functools.lru_cache(maxsize=64)

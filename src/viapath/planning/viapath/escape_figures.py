@@ -64,6 +64,8 @@ def _longest_tick(times, s_count):
 def _overlapped_gaps(positions, times, people, overlapping, gap_min, gap_last):
     """For each roll-out and each person it overlaps now (``overlapping``, one column each, in order): the smallest
     gap over the roll-out into ``gap_min`` and the gap at its end into ``gap_last``."""
+    if gap_min.shape[1] == 0:  # no one overlapped now (mostly): no pass over every roll-out and person
+        return
     obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s = people
     s_count = positions.shape[1]
     for k in range(positions.shape[0]):
@@ -125,7 +127,7 @@ def _first_contact_steps(positions, times, people, overlapping, tick, first):
                 s += 1 + (int(free_steps) if free_steps >= 1.0 else 0)
 
 
-@compiled
+@compiled(inline=True)
 def escape_contacts(
     positions, times, obstacle_positions, obstacle_velocities, check_radii, growth, growth_until_s, overlapping, steps
 ):
@@ -180,7 +182,7 @@ def _roll_outs_within(positions, segment_starts, segment_directions, segment_len
     return out
 
 
-@compiled
+@compiled(inline=True)
 def _furthest(positions, x0, y0):
     """np.max of ``np.hypot`` of the positions' (K, S, 2) offsets from (x0, y0), NaN first: hypot (about 20 ns)
     only of the squared distances within 1e-9 (relative) of the largest, the others' hypots being certainly
@@ -258,7 +260,7 @@ def escape_headings(
     return free, headings
 
 
-@compiled
+@compiled(inline=True)
 def _escape_roll_outs(robot, commands, turn_rows, sines, cosines, settings, steps):
     """The positions (K, steps, 2) of :func:`escape_scores`' roll-outs (:func:`viapath.kinematics.rollout`: the
     ramps of speed and turn rate, the exact arcs, the positions as running sums)."""
@@ -302,7 +304,7 @@ def _escape_roll_outs(robot, commands, turn_rows, sines, cosines, settings, step
     return positions
 
 
-@compiled
+@compiled(inline=True)
 def _escape_contacts_near(
     positions, robot, obstacle_positions, obstacle_velocities, radii, growth, growth_until_s, dt, steps, travel
 ):

@@ -98,7 +98,7 @@ def _leg_contact(
     return math.inf
 
 
-@compiled
+@compiled(inline=True)
 def _cylinder_only(growth, growth_until_s):
     """Whether no obstacle's radius stops growing within the legs' time (no growth, or none capped): then
     one cylinder per obstacle."""
@@ -153,7 +153,7 @@ def legs_first_contact(
     return out
 
 
-@compiled
+@compiled(inline=True)
 def _cylinder_only_by_kind(growth, growth_until_s, shape_of):
     """:func:`_cylinder_only` of the people and of the static discs (``shape_of`` >= 0), each on its own; of all
     obstacles for both without static geometry (an empty ``shape_of``)."""
@@ -175,32 +175,45 @@ def first_contacts(starts, start_times, velocities, checked, durations, obstacle
     ``checked`` time (the horizon), with the leg's ``leg_radii`` added; a static disc's (``shape_of`` >= 0) over
     the leg's whole ``durations`` with none added: static geometry stays put, a leg into a wall is not made free
     by driving it slowly, and the braking envelope is for where people may walk."""
-    obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
+    obstacle_positions, _, _, growth, growth_until_s = obstacles
     if shape_of.shape[0] == 0:  # one kind of obstacle: the loop whose branches do not vary (as in legs_free)
         return legs_first_contact(starts, start_times, velocities, checked, *obstacles, leg_radii)
     k_count = starts.shape[0]
     n_count = obstacle_positions.shape[0]
     out = np.empty((k_count, n_count))
-    people_cylinders, static_cylinders = _cylinder_only_by_kind(growth, growth_until_s, shape_of)
+    cylinders = _cylinder_only_by_kind(growth, growth_until_s, shape_of)
     for k in range(k_count):
         for j in range(n_count):
             static = shape_of[j] >= 0
-            out[k, j] = _leg_contact(
-                starts,
-                start_times,
-                velocities,
-                durations[k] if static else checked[k],
-                obstacle_positions,
-                obstacle_velocities,
-                radii,
-                growth,
-                growth_until_s,
-                0.0 if static else leg_radii[k],
-                static_cylinders if static else people_cylinders,
-                k,
-                j,
+            out[k, j] = _contact_by_kind(
+                starts, start_times, velocities, checked, durations, obstacles, leg_radii[k], cylinders, static, k, j
             )
     return out
+
+
+@compiled(inline=True)  # inlined: called per leg and obstacle
+def _contact_by_kind(
+    starts, start_times, velocities, checked, durations, obstacles, leg_radius, cylinders, static, k, j
+):
+    """:func:`_leg_contact` of leg ``k`` and obstacle ``j`` by its kind: a static disc's (``static``) over the leg's
+    whole ``durations[k]``, no leg radius added; a person's up to ``checked[k]``, with ``leg_radius``.
+    ``cylinders``: :func:`_cylinder_only_by_kind`'s (people, static)."""
+    obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
+    return _leg_contact(
+        starts,
+        start_times,
+        velocities,
+        durations[k] if static else checked[k],
+        obstacle_positions,
+        obstacle_velocities,
+        radii,
+        growth,
+        growth_until_s,
+        0.0 if static else leg_radius,
+        cylinders[1] if static else cylinders[0],
+        k,
+        j,
+    )
 
 
 @compiled
@@ -616,39 +629,25 @@ def legs_free(starts, start_times, velocities, durations, horizon_s, obstacles, 
 def _free_of(starts, start_times, velocities, checked, durations, obstacles, shape_of, any_static):
     """:func:`legs_free`'s loop: a person's contact up to ``checked``, a static disc's (with ``any_static``) up to
     ``durations``."""
-    obstacle_positions, obstacle_velocities, radii, growth, growth_until_s = obstacles
     k_count = starts.shape[0]
-    people_cylinders, static_cylinders = _cylinder_only_by_kind(growth, growth_until_s, shape_of)
+    cylinders = _cylinder_only_by_kind(obstacles[3], obstacles[4], shape_of)
     free = np.empty(k_count, np.bool_)
     for k in range(k_count):
         ok = True
-        for j in range(obstacle_positions.shape[0]):
+        for j in range(obstacles[0].shape[0]):
             static = any_static and shape_of[j] >= 0
             # leg radius 0.0, as legs_first_contact with np.zeros(k_count)
-            if not math.isinf(
-                _leg_contact(
-                    starts,
-                    start_times,
-                    velocities,
-                    durations[k] if static else checked[k],
-                    obstacle_positions,
-                    obstacle_velocities,
-                    radii,
-                    growth,
-                    growth_until_s,
-                    0.0,
-                    static_cylinders if static else people_cylinders,
-                    k,
-                    j,
-                )
-            ):
+            contact = _contact_by_kind(
+                starts, start_times, velocities, checked, durations, obstacles, 0.0, cylinders, static, k, j
+            )
+            if not math.isinf(contact):
                 ok = False
                 break
         free[k] = ok
     return free
 
 
-@compiled
+@compiled(inline=True)
 def legs_inside_of(corridor, starts, ends, spacing_m, tolerance_m):
     """:func:`legs_inside` with the corridor's record unpacked."""
     segment_starts, segment_directions, segment_lengths, half_widths = corridor

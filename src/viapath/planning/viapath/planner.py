@@ -189,7 +189,8 @@ class ViaPathPlanner(Planner, name="viapath"):
 
     def speed_set(self, current_speed_mps: float) -> tuple[np.ndarray, int]:
         """The configured speeds, the current speed and the nominal speed (mm/s resolution, within
-        the limit), sorted; and where the nominal speed is in it."""
+        the limit), sorted; and where the nominal speed is in it. The same set is the same array (read only
+        by the planner's steps: do not change it)."""
         top = self.limits.max_speed_mps
         current = round(min(current_speed_mps, top), 3) if current_speed_mps > 0.02 else None
         # The same few sets come back cycle after cycle (one per current speed in mm/s): kept while the
@@ -198,7 +199,7 @@ class ViaPathPlanner(Planner, name="viapath"):
         cached = self.__dict__.get("_speed_sets")
         if cached is None or cached[0] is not config or cached[1] is not limits or cached[2] is not nominal_speed:
             cached = self.__dict__["_speed_sets"] = (config, limits, nominal_speed, {})
-        known: dict[float | None, tuple[list[float], int]] = cached[3]
+        known: dict[float | None, tuple[np.ndarray, int]] = cached[3]
         found = known.get(current)
         if found is None:
             nominal = self.nominal_in_speed_set_mps()
@@ -206,10 +207,10 @@ class ViaPathPlanner(Planner, name="viapath"):
             if current is not None:
                 speeds.add(current)
             ordered = sorted(speeds)
-            found = known[current] = (ordered, ordered.index(nominal))
-            if len(known) > 4096:  # a long run through many current speeds: start again
+            if len(known) >= 4096:  # a long run through many current speeds: start again
                 known.clear()
-        return np.array(found[0]), found[1]
+            found = known[current] = (np.array(ordered), ordered.index(nominal))
+        return found
 
     def nominal_in_speed_set_mps(self) -> float:
         return round(min(self.nominal_speed_mps, self.limits.max_speed_mps), 3)
@@ -276,8 +277,9 @@ class ViaPathPlanner(Planner, name="viapath"):
 
     def _slow_checks(self, checks: LegChecks) -> LegChecks:
         fraction = self.config.slow_leg_inflation
-        # (np.logical_or.reduce: what .any() answers, NaN counting as not zero, without .any()'s Python wrapper)
-        any_nonzero = np.logical_or.reduce
+        # (np.count_nonzero: what .any() answers, NaN counting as not zero, in a fifth of the time of .any() or of
+        # np.logical_or.reduce on a cycle's few sigmas)
+        any_nonzero = np.count_nonzero
         if fraction >= 1.0 or not (
             any_nonzero(checks.obstacles.position_sigma_m) or any_nonzero(checks.obstacles.velocity_sigma_mps)
         ):

@@ -49,7 +49,7 @@ from viapath.planning.viapath.rollout import can_follow
 from viapath.planning.viapath.tree import grow
 
 
-@compiled
+@compiled(inline=True)
 def _leaf_facts(robot, subgoal, nf, ni):
     """What :func:`choose_tree` hands back of the tree's leaves: ``found`` (status, 0, then the K leaves' nodes)
     and ``facts`` (6, K), as it says."""
@@ -86,7 +86,7 @@ def _leaf_facts(robot, subgoal, nf, ni):
     return found, facts
 
 
-@compiled
+@compiled(inline=True)
 def choose_tree(robot, speeds, subgoal, obstacles, via, slow, continuation, envelope, corridor, waypoints, settings):
     """The first half of the viapath planner's ``_choose`` in one call: the root legs (:func:`goal_legs`), the
     paper's step 1 (the free straight leg at the nominal speed, if the robot can follow it: follow.can_follow),
@@ -260,7 +260,7 @@ def _first_that_follows(robot, nf, leaves, facts, angles, total, ranking, obstac
             break
 
 
-@compiled
+@compiled(inline=True)
 def choose_candidate(robot, nf, ni, found, facts, angles, extra, obstacles, corridor, settings):
     """The second half of ``_choose`` up to its shield check: Eq. 1's terms (:mod:`.critics`, summed in
     :func:`.critics.critics_for`'s order), with ``only_way`` the other ways priced out, the
@@ -293,7 +293,7 @@ def choose_candidate(robot, nf, ni, found, facts, angles, extra, obstacles, corr
     return ranking, costs
 
 
-@compiled
+@compiled(inline=True)
 def choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, settings):
     """The second half of :func:`choose`, after :func:`choose_tree`: when it found candidates, their angles and
     :func:`choose_candidate` (``extra``: its terms of further critics, (E, K)). Returns (found, costs): ``found``
@@ -313,7 +313,7 @@ def choose_ranked(robot, found, nf, ni, facts, extra, obstacles, corridor, setti
     return found_and_ranking, costs
 
 
-@compiled
+@compiled(inline=True)
 def choose(
     robot,
     speeds,

@@ -13,38 +13,32 @@ import math
 import numpy as np
 
 from viapath.jit import compiled
+from viapath.planning.viapath import records
 from viapath.planning.viapath.legs import (
     goal_legs_inside_all,
     goal_legs_of,
     legs_free,
     legs_inside_of,
 )
-from viapath.planning.viapath.records import (
-    N_FIRST_X,
-    N_FIRST_Y,
-    N_LEAF,
-    N_LENGTH,
-    N_OBSTACLE,
-    N_PARENT,
-    N_ROOT,
-    N_SIDE,
-    N_SLOW_S,
-    N_SLOW_SPEED,
-    N_SPEED,
-    N_TIME,
-    N_TO_GOAL,
-    N_X,
-    N_Y,
-    NODE_FLOATS,
-    NODE_INTEGERS,
-)
 from viapath.planning.viapath.shapes import hugs, one_per_shape, round_static_shapes, slide
 from viapath.planning.viapath.via import via_pair
 
-# Columns of the node store: floats, then integers.
-_X, _Y, _T, _V, _LENGTH, _FX, _FY = N_X, N_Y, N_TIME, N_SPEED, N_LENGTH, N_FIRST_X, N_FIRST_Y
-_SLOW_S, _SLOW_V, _GOAL = N_SLOW_S, N_SLOW_SPEED, N_TO_GOAL
-_PARENT, _WAY0, _WAY1, _WAY2, _LEAF = N_PARENT, N_OBSTACLE, N_SIDE, N_ROOT, N_LEAF
+# Columns of the node store (:mod:`.records`): floats, then integers.
+_X, _Y, _T, _V, _LENGTH = records.N_X, records.N_Y, records.N_TIME, records.N_SPEED, records.N_LENGTH
+_FX, _FY, _SLOW_S, _SLOW_V, _GOAL = (
+    records.N_FIRST_X,
+    records.N_FIRST_Y,
+    records.N_SLOW_S,
+    records.N_SLOW_SPEED,
+    records.N_TO_GOAL,
+)
+_PARENT, _WAY0, _WAY1, _WAY2, _LEAF = (
+    records.N_PARENT,
+    records.N_OBSTACLE,
+    records.N_SIDE,
+    records.N_ROOT,
+    records.N_LEAF,
+)
 _STRAIGHT, _SLOW, _CORNER = -1, -2, -3  # candidates.STRAIGHT, SLOW, CORNER
 _SIDES = (1, -1, 1, -1)  # geometry.VIA_SIDES
 _ROOTS = (0, 0, 1, 1)  # geometry.VIA_ROOTS
@@ -88,13 +82,13 @@ def _add(nf, ni, m, x, y, t, v, parent, length, fx, fy, way0, way1, way2, slow_s
     return nf, ni, m + 1
 
 
-@compiled
+@compiled(inline=True)
 def _root_nodes(position, speeds, root_directions, root_lengths, root_free):
     """The tree's first nodes (a store with room to grow): the roots, one per speed, at the robot, now; a root
     whose goal leg is free is a leaf."""
     s_count = speeds.shape[0]
-    nf = np.empty((4 * s_count + 32, NODE_FLOATS))
-    ni = np.empty((4 * s_count + 32, NODE_INTEGERS), np.int64)
+    nf = np.empty((4 * s_count + 32, records.NODE_FLOATS))
+    ni = np.empty((4 * s_count + 32, records.NODE_INTEGERS), np.int64)
     m = _ZERO
     for i in range(s_count):
         nf, ni, m = _add(
@@ -165,7 +159,7 @@ def _slow_legs(position, subgoal, speeds, nominal, slow_times, creep):
     return dx, dy, durations, slows, c
 
 
-@compiled
+@compiled(inline=True)
 def _slow_nodes(nf, ni, m, position, speeds, nominal_index, slow, horizon_s, obstacles, goal, corridor, shape_of):
     """Slow down, creep or wait along the straight leg, then on at the nominal speed or the slowest faster speed
     whose goal leg is free: the slow legs (:func:`_slow_legs`) free of the people at their slow radii, each with
@@ -184,7 +178,7 @@ def _slow_nodes(nf, ni, m, position, speeds, nominal_index, slow, horizon_s, obs
     return _slow_leaves(nf, ni, m, dx, dy, goes_on, lengths, goal_free)
 
 
-@compiled
+@compiled(inline=True)
 def _slow_legs_free(position, dx, dy, durations, slows, c, horizon_s, slow_obstacles, shape_of):
     """Which of the first ``c`` slow legs (from the robot, now, along (dx, dy)) are free of the people at their slow
     radii (``slow_obstacles``)."""
@@ -198,7 +192,7 @@ def _slow_legs_free(position, dx, dy, durations, slows, c, horizon_s, slow_obsta
     return legs_free(starts, np.zeros(c), velocities, durations[:c], horizon_s, slow_obstacles, shape_of)
 
 
-@compiled
+@compiled(inline=True)
 def _goes_on(position, speeds, nominal, dx, dy, durations, slows, free):
     """Where the robot goes on after each free slow leg: at its end and its duration, once at each speed from the
     nominal one up. Returns the goal legs' starts, start times and speeds, the slow speed before each, and how
@@ -232,7 +226,7 @@ def _goes_on(position, speeds, nominal, dx, dy, durations, slows, free):
     return ends, times, after, slow_v, after_count
 
 
-@compiled
+@compiled(inline=True)
 def _slow_leaves(nf, ni, m, dx, dy, goes_on, lengths, goal_free):
     """Each slow leg with its first free goal leg (:func:`_goes_on`'s, the slowest speed from the nominal one up),
     added as a leaf."""
@@ -405,7 +399,7 @@ def _branch_pairs(free_now, contact_now, frontier_start, frontier_end, n_count, 
     return pair_nodes, pair_obstacles, pairs
 
 
-@compiled
+@compiled(inline=True)
 def _pairs(nf, frontier, depth, max_root_obstacles, obstacle_positions, via):
     """The (node, obstacle) pairs to branch on from the frontier (first ``frontier_start`` .. ``frontier_end`` of
     the store, their goal legs' ``free`` and ``contact``): :func:`_branch_pairs`, at the root on each static
@@ -545,7 +539,7 @@ def _slides(nf, branch, obstacle_positions, via_radii, shapes, legs, count):
     return count
 
 
-@compiled
+@compiled(inline=True)
 def _keep_inside(good, starts_k, via, count, corridor, spacing_m, tolerance_m):
     """Keep the free via legs (``good``, of the first ``count`` legs) that stay inside the corridor: ``good`` turned
     False for the others (the corridor checked on the free legs only), and returned."""
@@ -583,7 +577,7 @@ def _way_of(nf, ni, parent, depth, vx, vy, speed, obstacle_id, option):
     return nf[parent, _FX], nf[parent, _FY], ni[parent, _WAY0], ni[parent, _WAY1], ni[parent, _WAY2]
 
 
-@compiled
+@compiled(inline=True)
 def _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, corridor):
     """The pairs' children: the legs to their via points (:func:`_via_legs`) free of the people
     and inside the corridor, added below their nodes (a root's child starts the way round: obstacle id, side,
@@ -630,7 +624,7 @@ def _via_children(nf, ni, m, depth, branch, via, horizon_s, goal, obstacles, cor
     return nf, ni, m
 
 
-@compiled
+@compiled(inline=True)
 def _straight_inside(position, goal, corridor):
     """Whether the straight leg from the robot to the subgoal stays inside the corridor."""
     here = np.empty((1, 2))
@@ -639,7 +633,7 @@ def _straight_inside(position, goal, corridor):
     return goal_legs_inside_all(corridor, here, goal)[0]
 
 
-@compiled
+@compiled(inline=True)
 def _frontier_leaves(nf, ni, batch, m, horizon_s, goal, obstacles, corridor, shape_of):
     """The goal legs of the new frontier (the nodes ``batch`` .. ``m``): the free ones complete candidates, made
     leaves. Returns the legs' free and first contacts, which the next depth branches on."""
