@@ -99,7 +99,7 @@ class Nav2Interface:
         self.server = lean_action_server_class()(
             node.inputs,
             FollowPath,
-            self.s.follow_path_action,
+            node.resolve_input_name(self.s.follow_path_action),  # the inputs' node takes no global arguments
             locked(self._execute),
             goal_callback=locked(self._on_goal),
             handle_accepted_callback=locked(self._on_accepted),

@@ -26,6 +26,11 @@ What we chose:
   control loop's participant they crowded out scans sent meanwhile (best effort: lost, the cycle missed,
   0.2 s without ``cmd_vel``; 2 scan pairs of 10 maps on one run, none with the participant of its own). Its
   topic is resolved by the node (namespace and remappings) first.
+* Every node of the process has a name of its own, the node's resolved name with a suffix, in its namespace
+  (``<name>_inputs``, ``<name>_map``), and takes no global arguments: a ``-r __node:=controller_server`` (how
+  Nav2 starts its controller) applies to the node alone, never two nodes of one name in the graph (rclpy's
+  "already registered" warning on /rosout, parameter and lifecycle tools confused). The topic and action
+  names of the other nodes are resolved by the node, so the user's remappings reach them all the same.
 * Signals: SIGINT / SIGTERM end the spin loop; a zero command is published before the node is
   destroyed (rclpy's own handlers would shut the context down before we could publish).
 """
@@ -241,7 +246,12 @@ class _NodeBehaviour(_LifecycleNode):
     def inputs(self):
         """The node that takes the inputs whose size has no bound (paths, maps, FollowPath goals): rclpy turns
         a message into Python objects in the thread that takes it (seconds for 100 000 poses), so they are
-        taken by a second node spun in a thread of its own, never by the control loop's executor."""
+        taken by a second node spun in a thread of its own, never by the control loop's executor.
+
+        It is named after the node (``<name>_inputs`` in its namespace) and takes no global arguments: with
+        them, a ``-r __node:=NAME`` (how Nav2 starts its controller) would give it the node's name, two nodes
+        of one name in the graph. So its topic and action names are resolved by the node first
+        (:meth:`resolve_input_name`): the user's remappings and namespace apply as they do to the node."""
         if self.inputs_node is None:
             from rclpy.node import Node
             from rclpy.parameter import Parameter
@@ -251,11 +261,17 @@ class _NodeBehaviour(_LifecycleNode):
                 namespace=self.get_namespace(),
                 context=self.context,
                 start_parameter_services=False,
+                use_global_arguments=False,
                 parameter_overrides=[
                     Parameter("use_sim_time", Parameter.Type.BOOL, bool(self.get_parameter("use_sim_time").value))
                 ],
             )
         return self.inputs_node
+
+    def resolve_input_name(self, name: str) -> str:
+        """``name`` (a topic or action) as the node resolves it: namespace, ``~`` and remappings applied, for
+        the nodes that take no global arguments (the inputs' and the map's)."""
+        return self.resolve_topic_name(name)
 
     def _start_inputs_thread(self) -> None:
         if self.inputs_node is None or self._inputs_thread is not None:
@@ -323,7 +339,11 @@ class _NodeBehaviour(_LifecycleNode):
                 self.get_logger().warning(f"paths taken as Python messages: {type(error).__name__}: {error}")
             if path_type is PathMsg:
                 self.get_logger().warning("paths taken as Python messages (slow for long paths)")
-            self._input_subs.append(self.inputs.create_subscription(path_type, s.path_topic, self._on_path, latched))
+            self._input_subs.append(
+                self.inputs.create_subscription(
+                    path_type, self.resolve_input_name(s.path_topic), self._on_path, latched
+                )
+            )
         if s.map_topic:
             from nav_msgs.msg import OccupancyGrid
 
@@ -336,7 +356,7 @@ class _NodeBehaviour(_LifecycleNode):
                     TakenAside(
                         self._map_participant(),
                         OccupancyGrid,
-                        self.inputs.resolve_topic_name(s.map_topic),  # the node's namespace and remappings
+                        self.resolve_input_name(s.map_topic),
                         latched,
                         grid_from_c,
                         self._on_map,
@@ -346,7 +366,9 @@ class _NodeBehaviour(_LifecycleNode):
             except Exception as error:  # the ordinary subscription then: the GIL held while a big map is taken
                 self.get_logger().warning(f"maps taken by rclpy: {type(error).__name__}: {error}")
                 self._input_subs.append(
-                    self.inputs.create_subscription(OccupancyGrid, s.map_topic, self._on_map, latched)
+                    self.inputs.create_subscription(
+                        OccupancyGrid, self.resolve_input_name(s.map_topic), self._on_map, latched
+                    )
                 )
 
     def _map_participant(self):
