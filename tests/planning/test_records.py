@@ -18,25 +18,30 @@ def _distinct(fields, start):
     return {name: (start + k + 0.25 if code == "d" else start + k) for k, (name, code) in enumerate(fields)}
 
 
-def test_choice_settings_put_each_value_in_its_field():
+def test_choice_row_puts_each_value_in_its_field():
     episode_values = _distinct(records.CHOICE_EPISODE_FIELDS, 1)
     cycle_values = _distinct(records.CHOICE_CYCLE_FIELDS, 100)
-    parameters = list(inspect.signature(records.choice_settings).parameters)[1:]
+    parameters = list(inspect.signature(records.ChoiceRow.write).parameters)[1:]
     assert parameters == [name for name, _ in records.CHOICE_CYCLE_FIELDS]
-    row = records.choice_settings(records.choice_episode(**episode_values), *cycle_values.values())
+    row = records.ChoiceRow(records.choice_episode(**episode_values)).write(*cycle_values.values())
     assert row.shape == (1,) and row.dtype == records.CHOICE
     for name, value in (episode_values | cycle_values).items():
         assert getattr(row[0], name) == value, name  # attribute access, as the compiled steps read it
         assert type(row[name][0].item()) is type(value), name
 
 
-def test_the_episode_is_packed_once_and_each_cycle_gets_its_own_row():
-    episode = records.choice_episode(**_distinct(records.CHOICE_EPISODE_FIELDS, 1))
-    cycle = list(_distinct(records.CHOICE_CYCLE_FIELDS, 100).values())
-    first = records.choice_settings(episode, *cycle)
-    second = records.choice_settings(episode, *cycle[:6], 0, *cycle[7:])
-    assert first[0].try_step_one == 106 and second[0].try_step_one == 0
-    assert first.flags.writeable and not np.shares_memory(first, second)
+def test_the_episode_is_packed_once_and_each_cycle_writes_its_fields_in_place():
+    episode_values = _distinct(records.CHOICE_EPISODE_FIELDS, 1)
+    episode = records.choice_episode(**episode_values)
+    cycle = list(_distinct(records.CHOICE_CYCLE_FIELDS, 200).values())
+    kept, other = records.ChoiceRow(episode), records.ChoiceRow(episode)
+    first = kept.write(*cycle)
+    assert first[0].try_step_one == 206 and first[0].only_root == 215
+    second = kept.write(*cycle[:6], 0, *cycle[7:14], 7, *cycle[15:])
+    assert second is first and second.flags.writeable
+    assert second[0].try_step_one == 0 and second[0].only_side == 7 and second[0].only_root == 215
+    assert all(getattr(second[0], name) == value for name, value in episode_values.items())
+    assert not np.shares_memory(kept.row, other.row) and other.row[0].try_step_one == 0
 
 
 def test_the_escape_and_the_roll_out_put_each_value_in_its_field():

@@ -341,11 +341,10 @@ _FLOAT64 = np.dtype(np.float64)  # (an identity test first: numpy's float64 arra
 
 def _contiguous(values: Any, shape: tuple[int, ...]) -> np.ndarray:
     """``values`` as a C-contiguous float64 array of ``shape`` (a scalar or a row is repeated)."""
-    dtype = getattr(values, "dtype", None)
-    # ... the arrays compiled code hands back (the inflation's rows) carry an equal descriptor of their own
+    # ... the arrays compiled code hands back (the inflation's rows) may carry an equal descriptor of their own
     if (
         type(values) is np.ndarray
-        and (dtype is _FLOAT64 or dtype == _FLOAT64)
+        and ((dtype := values.dtype) is _FLOAT64 or dtype == _FLOAT64)
         and values.shape == shape
         and values.flags.c_contiguous
     ):

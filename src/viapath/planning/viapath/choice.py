@@ -32,31 +32,56 @@ if TYPE_CHECKING:
     from viapath.planning.viapath.critics import Distance, Heading, Hysteresis, SidePreference, SpeedError, Time
 
 
-def extra_critics(planner: Planning) -> tuple[Critic, ...]:
-    """The planner's critics after the paper's (:data:`.critics.PAPER_CRITICS`, whose term functions the compiled
-    choice calls itself, with their weights: :func:`_choice_constants`): the choice scores these with their own
-    ``score`` between its two halves. The critics must begin with the paper's, in Eq. 1's order
-    (:func:`.critics.critics_for`)."""
-    critics = planner.critics
-    cached = planner.__dict__.get("_extra_critics")  # (critics, the answer): every cycle asks
-    if cached is None or cached[0] is not critics:
-        if tuple(map(type, critics[: len(PAPER_CRITICS)])) != PAPER_CRITICS:
-            raise ValueError(
-                "planner.critics: expected the paper's critics first (critics_for(config)), then any others; found "
-                + ", ".join(type(critic).__name__ for critic in critics)
-            )
-        cached = planner.__dict__["_extra_critics"] = (critics, tuple(critics[len(PAPER_CRITICS) :]))
-    return cached[1]
+def extra_critics(critics: tuple[Critic, ...]) -> tuple[Critic, ...]:
+    """The critics after the paper's (:data:`.critics.PAPER_CRITICS`, whose term functions the compiled choice calls
+    itself, with their weights: :class:`ChoiceSetup`): the choice scores these with their own ``score`` between its
+    two halves. The critics must begin with the paper's, in Eq. 1's order (:func:`.critics.critics_for`)."""
+    if tuple(map(type, critics[: len(PAPER_CRITICS)])) != PAPER_CRITICS:
+        raise ValueError(
+            "planner.critics: expected the paper's critics first (critics_for(config)), then any others; found "
+            + ", ".join(type(critic).__name__ for critic in critics)
+        )
+    return tuple(critics[len(PAPER_CRITICS) :])
+
+
+class ChoiceSetup:
+    """What the compiled choice takes of the planner's configuration (its options, motion limits, critics and nominal
+    speed), made once per configuration (:func:`choice_setup`): the settings row, the episode's fields packed
+    (:class:`.records.ChoiceRow`), the slow/wait times, the critics after the paper's (:func:`extra_critics`), the
+    names of the cost terms and the options read after the choice."""
+
+    def __init__(self, planner: Planning):
+        config, limits, critics = planner.config, planner.limits, planner.critics
+        self.made_for = (config, limits, critics, planner.nominal_speed_mps)
+        self.extra = extra_critics(critics)
+        self.row = records.ChoiceRow(_choice_episode(planner))
+        self.slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
+        self.cost_names = tuple(critic.name for critic in critics) + ("total",)
+        self.max_rollouts: int = config.max_rollouts
+        self.record_candidates: bool = config.record_candidates
+
+
+def choice_setup(planner: Planning) -> ChoiceSetup:
+    """The planner's :class:`ChoiceSetup`, made again when its options, limits, critics or nominal speed is replaced."""
+    setup: ChoiceSetup | None = planner.__dict__.get("_choice_setup")
+    if setup is not None:
+        config, limits, critics, nominal_speed = setup.made_for
+        if (
+            config is planner.config
+            and limits is planner.limits
+            and critics is planner.critics
+            and nominal_speed is planner.nominal_speed_mps
+        ):
+            return setup
+    setup = planner.__dict__["_choice_setup"] = ChoiceSetup(planner)
+    return setup
 
 
 def _extra_terms(
-    planner: Planning, checks: LegChecks, previous: Choice | None
-) -> Callable[[NodeStore, np.ndarray], np.ndarray] | None:
-    """The scoring of :func:`extra_critics` for :func:`.packing.choose` (None: there are none)."""
-    critics = extra_critics(planner)
-    if not critics:
-        return None
-    context = Context(checks.heading_rad, planner.nominal_speed_mps, previous)
+    critics: tuple[Critic, ...], checks: LegChecks, nominal_speed_mps: float, previous: Choice | None
+) -> Callable[[NodeStore, np.ndarray], np.ndarray]:
+    """The scoring of the critics after the paper's (:func:`extra_critics`) for :func:`.packing.choose`."""
+    context = Context(checks.heading_rad, nominal_speed_mps, previous)
 
     def terms(store: NodeStore, leaves: np.ndarray) -> np.ndarray:
         candidates = candidates_of(store, checks.subgoal)
@@ -67,23 +92,13 @@ def _extra_terms(
     return terms
 
 
-def _choice_constants(planner: Planning) -> tuple[bytes, np.ndarray]:
-    """The compiled choice's settings that do not change within an episode (:func:`.records.choice_episode`) and
-    the slow/wait times; rebuilt when the options, limits or critics object is replaced."""
-    config, limits, critics, nominal_speed = planner.config, planner.limits, planner.critics, planner.nominal_speed_mps
-    cached = planner.__dict__.get("_choice_cache")
-    if (
-        cached is not None
-        and cached[0] is config
-        and cached[1] is limits
-        and cached[2] is critics
-        and cached[3] is nominal_speed
-    ):
-        return cached[4]
+def _choice_episode(planner: Planning) -> bytes:
+    """The compiled choice's settings that do not change within an episode (:func:`.records.choice_episode`)."""
+    config = planner.config
     distance, time, speed, heading, side, hysteresis = cast(
         "tuple[Distance, Time, SpeedError, Heading, SidePreference, Hysteresis]", planner.critics[: len(PAPER_CRITICS)]
     )  # the paper's critics (PAPER_CRITICS, first: extra_critics): the ones the compiled choice sums itself
-    episode = records.choice_episode(
+    return records.choice_episode(
         k1_per_m=distance.weight,
         k2_per_s=time.weight,
         k3_per_mps=speed.weight,
@@ -100,12 +115,8 @@ def _choice_constants(planner: Planning) -> tuple[bytes, np.ndarray]:
         heading_in_degrees=heading.degrees,
         preferred_side=side.preferred,
         grows_slow=bool(config.slow_times_s),
-        **records.rollout_fields(limits, config),
+        **records.rollout_fields(planner.limits, config),
     )
-    slow_times = np.asarray(config.slow_times_s, dtype=np.float64).reshape(-1)
-    constants = (episode, slow_times)
-    planner.__dict__["_choice_cache"] = (config, limits, critics, nominal_speed, constants)
-    return constants
 
 
 def choose_compiled(
@@ -119,10 +130,11 @@ def choose_compiled(
     """The planner's choice with one compiled call doing everything up to the shield check
     (:func:`viapath.planning.viapath.selection.choose`): it rolls out candidates cheapest first until one follows; a
     candidate the shield refuses sends the search on to the next ones here (:func:`_first_admitted`)."""
-    settings, slow_times = _cycle_settings(planner, checks, nominal_index, previous, only_way, True)
+    setup = choice_setup(planner)
+    settings = _cycle_settings(setup, checks, nominal_index, previous, only_way, True)
     slow_checks = planner._slow_checks(checks)
-    extra = _extra_terms(planner, checks, previous)
-    chosen = packing.choose(checks, slow_checks, speeds, slow_times, settings, extra)
+    extra = _extra_terms(setup.extra, checks, planner.nominal_speed_mps, previous) if setup.extra else None
+    chosen = packing.choose(checks, slow_checks, speeds, setup.slow_times, settings, extra)
     if chosen.status == records.STEP_ONE:
         plan = straight_plan(checks, float(speeds[nominal_index]))
         if chosen.turn_in_place:
@@ -130,18 +142,19 @@ def choose_compiled(
         if planner._inside_shield(plan):
             return straight_chosen(plan)
         # the shield refused it: the candidates decide
-        settings, slow_times = _cycle_settings(planner, checks, nominal_index, previous, only_way, False)
-        chosen = packing.choose(checks, slow_checks, speeds, slow_times, settings, extra)
+        settings = _cycle_settings(setup, checks, nominal_index, previous, only_way, False)
+        chosen = packing.choose(checks, slow_checks, speeds, setup.slow_times, settings, extra)
     if chosen.status != records.CANDIDATES or chosen.first < 0:  # first: the ranks before it do not follow
         return None
-    return _first_admitted(planner, chosen, checks)
+    return _first_admitted(planner, setup, chosen, checks)
 
 
 def tree_is_empty(planner: Planning, checks: LegChecks, speeds: np.ndarray, nominal_index: int) -> bool:
     """Whether the candidate tree of ``checks`` has no candidate at all (no free root either; step 1 is not
     taken): the compiled choice's tree alone (:func:`.packing.choose` with ``TREE_ONLY``)."""
-    settings, slow_times = _cycle_settings(planner, checks, nominal_index, None, None, False)
-    found = packing.choose(checks, checks, speeds, slow_times, settings, packing.TREE_ONLY)
+    setup = choice_setup(planner)
+    settings = _cycle_settings(setup, checks, nominal_index, None, None, False)
+    found = packing.choose(checks, checks, speeds, setup.slow_times, settings, packing.TREE_ONLY)
     return found.status != records.CANDIDATES
 
 
@@ -149,24 +162,21 @@ _NO_WAY = Way(0, 0, 0)  # (the record's way fields when there is no way: zeros)
 
 
 def _cycle_settings(
-    planner: Planning,
+    setup: ChoiceSetup,
     checks: LegChecks,
     nominal_index: int,
     previous: Choice | None,
     only_way: Way | None,
     try_step_one: bool,
-) -> tuple[np.ndarray, np.ndarray]:
-    """The compiled choice's settings of this cycle (a row of :data:`.records.CHOICE`): the episode's
-    (:func:`_choice_constants`) with the cycle's (the horizon, the subgoal, last cycle's way and speed, the one way
-    allowed, whether to try step 1); and the slow/wait times."""
-    episode, slow_times = _choice_constants(planner)
+) -> np.ndarray:
+    """The compiled choice's settings of this cycle (the row of :class:`.records.ChoiceRow`): the episode's with the
+    cycle's (the horizon, the subgoal, last cycle's way and speed, the one way allowed, whether to try step 1)."""
     index = checks.subgoal_index
     # the robot's segment matters only when a corner can lie between it and the subgoal
     segment = int(checks.path.project(checks.position)[0]) if index >= 2 else 0
     way, only = (previous.way if previous is not None else _NO_WAY), (only_way if only_way is not None else _NO_WAY)
-    # choice_settings' arguments by position (by keyword the call took 2 µs more, every cycle); their names:
-    settings = records.choice_settings(
-        episode,
+    # ChoiceRow.write's arguments by position (by keyword the call took 2 µs more, every cycle); their names:
+    return setup.row.write(
         checks.stop_short_m,
         checks.horizon_s,
         checks.corridor_tolerance_m,
@@ -184,27 +194,27 @@ def _cycle_settings(
         only.side,  # only_side
         only.root,  # only_root
     )
-    return settings, slow_times
 
 
-def _first_admitted(planner: Planning, chosen: CompiledChoice, checks: LegChecks) -> Chosen | None:
+def _first_admitted(planner: Planning, setup: ChoiceSetup, chosen: CompiledChoice, checks: LegChecks) -> Chosen | None:
     """The cheapest candidate from the compiled choice's first that follows on that the robot can follow and the
     shield admits (past that first one, each is rolled out here: only after the shield refused it)."""
     leaves, order, follow, total, store = chosen.leaves, chosen.order, chosen.follow, chosen.total, chosen.store
-    for rank in range(chosen.first, min(len(order), planner.config.max_rollouts)):
+    for rank in range(chosen.first, min(len(order), setup.max_rollouts)):
         best = order[rank]
         if not math.isfinite(total[best]):
             break
         verdict = follow[rank]
         if verdict == 0:
             continue
-        plan = _plan_of_nodes(store, leaves, best, total, checks, _polylines(planner, store, leaves, checks))
+        polylines = [_line(store, int(node), checks) for node in leaves] if setup.record_candidates else []
+        plan = _plan_of_nodes(store, leaves, best, total, checks, polylines)
         if verdict < 0:  # past the first that follows: only after the shield refused that one
             verdict = can_follow(plan, checks, planner.limits, planner.config)
         elif verdict == 2:
             plan.extras["turn_in_place"] = True
         if verdict and planner._inside_shield(plan):
-            plan.extras["cost_terms"] = cost_terms(_cost_breakdown(planner, chosen.terms), order, rank, total)
+            plan.extras["cost_terms"] = cost_terms(_cost_breakdown(setup.cost_names, chosen.terms), order, rank, total)
             node = int(leaves[best])
             way, speed = store.way(node), store.speed(node)
             return Chosen(
@@ -215,22 +225,10 @@ def _first_admitted(planner: Planning, chosen: CompiledChoice, checks: LegChecks
     return None
 
 
-def _cost_breakdown(planner: Planning, terms: np.ndarray) -> Callable[[int], dict[str, float]]:
-    """Each critic's term of candidate k and their sum, by name, as Python floats, of the compiled choice's costs
-    (rows: the critics' terms, then E)."""
-    critics = planner.critics
-    cached = planner.__dict__.get("_cost_names")
-    if cached is None or cached[0] is not critics:
-        cached = planner.__dict__["_cost_names"] = (critics, tuple(critic.name for critic in critics) + ("total",))
-    names = cached[1]
+def _cost_breakdown(names: tuple[str, ...], terms: np.ndarray) -> Callable[[int], dict[str, float]]:
+    """Each critic's term of candidate k and their sum, by ``names``, as Python floats, of the compiled choice's
+    costs (rows: the critics' terms, then E)."""
     return lambda k: dict(zip(names, terms[:, k].tolist()))
-
-
-def _polylines(planner: Planning, store: NodeStore, leaves: np.ndarray, checks: LegChecks) -> list[np.ndarray]:
-    """Every candidate's polyline, with ``record_candidates`` (else none)."""
-    if not planner.config.record_candidates:
-        return []
-    return [_line(store, int(node), checks) for node in leaves]
 
 
 def _line(store: NodeStore, node: int, checks: LegChecks) -> np.ndarray:

@@ -276,6 +276,12 @@ class ViaPathPlanner(Planner, name="viapath"):
         return bool(ok[0])
 
     def _slow_checks(self, checks: LegChecks) -> LegChecks:
+        """``checks`` with ``slow_leg_inflation`` of the uncertainty inflation (slow/wait legs and standing), made
+        once per checks: the choice, a second choice keeping last cycle's way and the step aside after a wait all
+        ask."""
+        kept = checks.__dict__.get("_slow_checks")  # False: the checks themselves (no reference from them to them)
+        if kept is not None:
+            return checks if kept is False else kept
         fraction = self.config.slow_leg_inflation
         # (np.count_nonzero: what .any() answers, NaN counting as not zero, in a fifth of the time of .any() or of
         # np.logical_or.reduce on a cycle's few sigmas)
@@ -283,8 +289,12 @@ class ViaPathPlanner(Planner, name="viapath"):
         if fraction >= 1.0 or not (
             any_nonzero(checks.obstacles.position_sigma_m) or any_nonzero(checks.obstacles.velocity_sigma_mps)
         ):
+            checks.__dict__["_slow_checks"] = False
             return checks
-        return checks.with_less_inflation(fraction, self.robot_radius_m, self.settings, cap_too=True)
+        slow = checks.__dict__["_slow_checks"] = checks.with_less_inflation(
+            fraction, self.robot_radius_m, self.settings, cap_too=True
+        )
+        return slow
 
     # -- step 5: the command -------------------------------------------------------------------------
 

@@ -2,7 +2,7 @@
 as ``settings.k2_per_s`` by :func:`.selection.choose` and :func:`.rollout.can_follow`), the escape's
 (:data:`ESCAPE`, :mod:`.escape_figures`), the columns of the candidate tree's node store (:mod:`.tree`) and the
 entries of what the choice hands back. The rest of the planner builds the records here (:func:`choice_episode`,
-:func:`choice_settings`, :func:`rollout_settings`, :func:`escape_settings`) and reads what comes back through
+:class:`ChoiceRow`, :func:`rollout_settings`, :func:`escape_settings`) and reads what comes back through
 :mod:`.packing` (:class:`.packing.NodeStore`, :class:`.packing.CompiledChoice`), never by number.
 
 Choices (measured on the development machine: a compiled call that reads four fields):
@@ -15,10 +15,11 @@ Choices (measured on the development machine: a compiled call that reads four fi
   Python), and so does a numpy record scalar.
 * :mod:`.packing` hands the rows to the compiled steps through small compiled doors that take ``row[0]``: inside,
   every step sees the record.
-* The choice's row is the episode's fields (packed once) and the cycle's, packed with :mod:`struct` into a copy of
-  the episode's bytes: 1.4-1.7 µs a cycle, what the flat arrays' copies and item sets took (numpy sets one field of
-  a structured array in about 4 µs). The builders called every cycle take their fields by position, in the
-  record's order (a call by keyword took about 2 µs more).
+* The choice's row is kept per configuration (:class:`ChoiceRow`): the episode's fields packed once, the cycle's
+  packed with :mod:`struct` into its bytes in place, 0.4 µs a cycle (a copy of the episode's bytes as a new row took
+  1.2 µs, the flat arrays' copies and item sets about 1 µs; numpy sets one field of a structured array in about
+  4 µs). The writers called every cycle take their fields by position, in the record's order (a call by keyword
+  took about 2 µs more).
 * The node store stays two 2-D arrays, floats and integers, with named columns (``N_X`` ...): the tree hands
   columns on as contiguous slices (node positions as (K, 2) rows) and the Python side reads them as views. A
   structured node store read faster in a compiled micro-benchmark (about half the time for a loop over 400 nodes'
@@ -63,7 +64,7 @@ CHOICE_EPISODE_FIELDS: tuple[tuple[str, str], ...] = (
     ("preferred_side", _I),  # +1 left, -1 right, 0 none
     ("grows_slow", _I),  # whether slow/wait candidates are grown (slow times given)
 )
-# ... then the cycle's (:func:`choice_settings`).
+# ... then the cycle's (:meth:`ChoiceRow.write`).
 CHOICE_CYCLE_FIELDS: tuple[tuple[str, str], ...] = (
     ("stop_short_m", _F),  # how far short of a blocked subgoal legs end
     ("horizon_s", _F),
@@ -131,7 +132,7 @@ def _packed(
 
 def choice_episode(zero_others: bool = False, **fields: float | int) -> bytes:
     """The episode's part of the choice's settings (every field of :data:`CHOICE_EPISODE_FIELDS`, by name, unless
-    ``zero_others``: then the fields not given are 0), with the cycle's zero: what :func:`choice_settings` and
+    ``zero_others``: then the fields not given are 0), with the cycle's zero: what :class:`ChoiceRow` and
     :func:`rollout_settings` start from."""
     if zero_others:
         fields = {name: 0 for name, _ in CHOICE_EPISODE_FIELDS} | fields
@@ -154,49 +155,59 @@ def rollout_fields(limits: Any, config: Any) -> dict[str, Any]:
     }
 
 
-def choice_settings(
-    episode: bytes,
-    stop_short_m: float,
-    horizon_s: float,
-    corridor_tolerance_m: float,
-    nominal_index: int,
-    robot_segment: int,
-    subgoal_index: int,
-    try_step_one: int,
-    has_previous: int,
-    previous_obstacle: int,
-    previous_side: int,
-    previous_root: int,
-    previous_speed_mmps: int,
-    only_one_way: int,
-    only_obstacle: int,
-    only_side: int,
-    only_root: int,
-) -> np.ndarray:
-    """The choice's settings of a cycle, a row of :data:`CHOICE`: the episode's (:func:`choice_episode`) with the
-    cycle's fields (:data:`CHOICE_CYCLE_FIELDS`, in that order). Called every cycle: its fields are packed in place."""
-    buffer = bytearray(episode)
-    _CYCLE.pack_into(
-        buffer,
-        _EPISODE.size,
-        stop_short_m,
-        horizon_s,
-        corridor_tolerance_m,
-        nominal_index,
-        robot_segment,
-        subgoal_index,
-        try_step_one,
-        has_previous,
-        previous_obstacle,
-        previous_side,
-        previous_root,
-        previous_speed_mmps,
-        only_one_way,
-        only_obstacle,
-        only_side,
-        only_root,
-    )
-    return np.frombuffer(buffer, CHOICE)
+class ChoiceRow:
+    """The choice's settings for one configuration, a row of :data:`CHOICE` (:attr:`row`): the episode's fields
+    packed once (:func:`choice_episode`), the cycle's (:data:`CHOICE_CYCLE_FIELDS`) written in place by
+    :meth:`write` every cycle (0.4 µs; a fresh row each cycle took 1.2 µs). The row holds the fields last written:
+    each compiled call takes it right after its :meth:`write`."""
+
+    __slots__ = ("_buffer", "row")
+
+    def __init__(self, episode: bytes):
+        self._buffer = bytearray(episode)
+        self.row = np.frombuffer(self._buffer, CHOICE)
+
+    def write(
+        self,
+        stop_short_m: float,
+        horizon_s: float,
+        corridor_tolerance_m: float,
+        nominal_index: int,
+        robot_segment: int,
+        subgoal_index: int,
+        try_step_one: int,
+        has_previous: int,
+        previous_obstacle: int,
+        previous_side: int,
+        previous_root: int,
+        previous_speed_mmps: int,
+        only_one_way: int,
+        only_obstacle: int,
+        only_side: int,
+        only_root: int,
+    ) -> np.ndarray:
+        """:attr:`row` with this cycle's fields (in the record's order: called every cycle, by position)."""
+        _CYCLE.pack_into(
+            self._buffer,
+            _EPISODE.size,
+            stop_short_m,
+            horizon_s,
+            corridor_tolerance_m,
+            nominal_index,
+            robot_segment,
+            subgoal_index,
+            try_step_one,
+            has_previous,
+            previous_obstacle,
+            previous_side,
+            previous_root,
+            previous_speed_mmps,
+            only_one_way,
+            only_obstacle,
+            only_side,
+            only_root,
+        )
+        return self.row
 
 
 def rollout_settings(episode: bytes, corridor_tolerance_m: float) -> np.ndarray:
