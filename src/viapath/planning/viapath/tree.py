@@ -483,27 +483,36 @@ def _braking_margin(speed, envelope, static):
     return 0.0
 
 
+@compiled(inline=True)  # inlined: called per leg, with the legs' arrays
+def _put_leg(legs, q, p, o, duration, sx, sy, start_s, vx, vy, ex, ey):
+    """Leg ``q`` of ``legs`` (:func:`_via_legs`' arrays): pair ``p``'s option ``o``, ``duration`` long, from (sx, sy)
+    at ``start_s`` at velocity (vx, vy) to its via point (ex, ey)."""
+    pair, option, t_k, starts_k, times_k, leg_velocity, via = legs
+    pair[q] = p
+    option[q] = o
+    t_k[q] = duration
+    starts_k[q, 0] = sx
+    starts_k[q, 1] = sy
+    times_k[q] = start_s
+    leg_velocity[q, 0] = vx
+    leg_velocity[q, 1] = vy
+    via[q, 0] = ex
+    via[q, 1] = ey
+
+
 @compiled(inline=True)  # inlined: called per pair, with the legs' arrays
 def _legs_to_via_points(nf, node, p, ovx, ovy, t_via, w_via, max_time_s, legs, count):
     """The legs from pair ``p``'s node to its via points (via_pair's durations ``t_via`` and offsets ``w_via``, the
     obstacle's velocity (ovx, ovy)) reached within ``max_time_s``, written after the first ``count`` of ``legs``
     (:func:`_via_legs`' arrays). Returns the new count."""
-    pair, option, t_k, starts_k, times_k, leg_velocity, via = legs
     sx = nf[node, _X]
     sy = nf[node, _Y]
     for o in range(4):
         t = t_via[o]
         if t <= max_time_s:
-            pair[count] = p
-            option[count] = o
-            t_k[count] = t
-            starts_k[count, 0] = sx
-            starts_k[count, 1] = sy
-            times_k[count] = nf[node, _T]
-            leg_velocity[count, 0] = (w_via[o % 2, 0] + ovx * t) / t
-            leg_velocity[count, 1] = (w_via[o % 2, 1] + ovy * t) / t
-            via[count, 0] = sx + leg_velocity[count, 0] * t
-            via[count, 1] = sy + leg_velocity[count, 1] * t
+            vx = (w_via[o % 2, 0] + ovx * t) / t
+            vy = (w_via[o % 2, 1] + ovy * t) / t
+            _put_leg(legs, count, p, o, t, sx, sy, nf[node, _T], vx, vy, sx + vx * t, sy + vy * t)
             count += 1
     return count
 
@@ -513,7 +522,6 @@ def _slides(nf, branch, obstacle_positions, via_radii, shapes, legs, count):
     """The slides (:func:`.shapes.slide`, options 0 and 1: left and right) of each pair whose node hugs its
     static disc, after the first ``count`` of ``legs`` (:func:`_via_legs`' arrays); returns the new count."""
     pair_nodes, pair_obstacles, pairs = branch
-    pair, option, t_k, starts_k, times_k, leg_velocity, via = legs
     for p in range(pairs):
         node = pair_nodes[p]
         j = pair_obstacles[p]
@@ -525,16 +533,7 @@ def _slides(nf, branch, obstacle_positions, via_radii, shapes, legs, count):
             continue
         for o in range(2):
             duration, vx, vy, ex, ey = slide(sx, sy, cx, cy, via_radii[j], nf[node, _V], _SIDES[o])
-            pair[count] = p
-            option[count] = o
-            t_k[count] = duration
-            starts_k[count, 0] = sx
-            starts_k[count, 1] = sy
-            times_k[count] = nf[node, _T]
-            leg_velocity[count, 0] = vx
-            leg_velocity[count, 1] = vy
-            via[count, 0] = ex
-            via[count, 1] = ey
+            _put_leg(legs, count, p, o, duration, sx, sy, nf[node, _T], vx, vy, ex, ey)
             count += 1
     return count
 
