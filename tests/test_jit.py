@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -53,6 +54,18 @@ def test_the_cache_follows_every_compiling_module(tmp_path):
     (package / "plain.py").write_text("x = 2\n")
     assert jit.source_digest(package) == before
     (package / "steps.py").write_text("from viapath.jit import compiled\n# changed\n")
+    assert jit.source_digest(package) != before
+
+
+def test_the_cache_follows_the_kinematics_compiled_from_its_source(tmp_path):
+    """viapath.kinematics compiles nothing itself, but the guard's braking roll-out and the planner's roll-out
+    compile its arc: a change to it must name a new cache folder."""
+    package = tmp_path / "viapath"
+    shutil.copytree(jit.PACKAGE, package, ignore=shutil.ignore_patterns("__pycache__"))
+    before = jit.source_digest(package)
+    kinematics = package / "kinematics.py"
+    kinematics.write_text(kinematics.read_text().replace("half * half / 6.0", "half * half / 7.0"))
+    assert kinematics.read_text() != (jit.PACKAGE / "kinematics.py").read_text()
     assert jit.source_digest(package) != before
 
 

@@ -48,6 +48,9 @@ def step(state: UnicycleState, command: Command, limits: MotionLimits, dt_s: flo
     return UnicycleState(x, y, heading, speed, turn)
 
 
+# _arc and _clip are compiled from this source by viapath.guard_checks and the planner's roll-out
+# (jit.compiled(kinematics._arc)); naming the decorator here puts this file in the compiled cache's digest
+# (viapath.jit.source_digest), so that a change to them is compiled afresh in their callers.
 def _arc(x: float, y: float, heading: float, speed: float, turn: float, dt_s: float) -> tuple[float, float, float]:
     """Where constant (v, ω) for ``dt_s`` takes the robot: along the exact arc (a line for ω = 0)."""
     # The chord of the arc: length v·dt·sin(h)/h with h = ω·dt/2, along the mean heading. Exact, and
