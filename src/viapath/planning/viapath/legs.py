@@ -217,7 +217,7 @@ def _contact_by_kind(
 
 
 @compiled
-def clip(value, low, high):
+def clip(value: float, low: float, high: float) -> float:
     return low if value < low else high if value > high else value
 
 

@@ -49,6 +49,7 @@ from viapath.jit import compiled
 from viapath.observation import Command, Decision, Plan
 from viapath.planning.viapath.checks import LegChecks
 from viapath.planning.viapath.escape import escape_top_speed
+from viapath.planning.viapath.legs import clip
 from viapath.planning.viapath.rollout import drive_step, steer
 
 # Plans after which the robot looks for a way out of someone's path.
@@ -62,11 +63,6 @@ _PER_METRE = 0.05  # score per metre to the target (shorter moves among equally 
 _PROGRESS = 0.02  # score per metre of progress towards the subgoal
 _SAME_TARGET = 0.03  # score bonus for last cycle's target
 _SAME_TARGET_M = 0.05  # last cycle's target counts as the same within this
-
-
-@compiled
-def _clip(value: float, low: float, high: float) -> float:
-    return low if value < low else (high if value > high else value)
 
 
 @compiled
@@ -102,8 +98,8 @@ def roll_outs(
         out[k, 0, 1] = y
         for s in range(steps):
             if held[k]:
-                v_cmd = _clip(targets[k, 0], 0.0, max_speed)
-                w_cmd = _clip(targets[k, 1], -max_turn, max_turn)
+                v_cmd = clip(targets[k, 0], 0.0, max_speed)
+                w_cmd = clip(targets[k, 1], -max_turn, max_turn)
             else:
                 v_cmd, w_cmd = _towards(
                     x,
