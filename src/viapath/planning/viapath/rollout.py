@@ -10,8 +10,12 @@ import math
 
 import numpy as np
 
+from viapath import kinematics
 from viapath.jit import compiled
 from viapath.planning.viapath.legs import clip, excess_at_most
+
+# The drive's exact arc, compiled from the simulator's own (inlined: called per step of every roll-out).
+_arc = compiled(inline=True)(kinematics._arc)
 
 
 @compiled(inline=True)
@@ -53,15 +57,11 @@ def drive_step(
     dt_s: float,
 ) -> tuple[float, float, float, float, float]:
     """One step of the drive: speed and turn rate ramped towards the command by at most ``dv`` and ``dw``, then
-    the exact arc (the compiled form of :func:`viapath.kinematics.step`). Returns (x, y, heading, speed, turn)."""
+    the exact arc, as :func:`viapath.kinematics.step` moves the robot. Returns (x, y, heading, speed, turn)."""
     speed += clip(v_cmd - speed, -dv, dv)
     turn += clip(w_cmd - turn, -dw, dw)
-    new_heading = heading + turn * dt_s
-    half = 0.5 * turn * dt_s
-    chord = speed * dt_s * (1.0 - half * half / 6.0 if abs(half) < 1e-6 else math.sin(half) / half)
-    x += chord * math.cos(heading + half)
-    y += chord * math.sin(heading + half)
-    return x, y, math.atan2(math.sin(new_heading), math.cos(new_heading)), speed, turn
+    x, y, heading = _arc(x, y, heading, speed, turn, dt_s)
+    return x, y, heading, speed, turn
 
 
 @compiled
