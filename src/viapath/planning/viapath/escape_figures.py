@@ -18,7 +18,8 @@ import math
 import numpy as np
 
 from viapath.jit import compiled
-from viapath.planning.viapath.legs import excess_at_most, legs_first_contact
+from viapath.planning.viapath.legs import legs_first_contact
+from viapath.planning.viapath.rollout import keeps_inside
 from viapath.sums import pairwise_sum
 
 
@@ -159,26 +160,14 @@ def escape_contacts(
 
 
 @compiled
-def _roll_outs_within(positions, segment_starts, segment_directions, segment_lengths, half_widths, limit, known):
-    """Whether each roll-out (K, S, 2) keeps every point within ``limit`` of the corridor (excess <= limit);
-    those ``known`` to are not looked at. (A function of its own: the same loop inside :func:`escape_scores`
-    took several times as long.)"""
+def _roll_outs_within(positions, corridor, limit, known):
+    """Whether each roll-out (K, S, 2) keeps every point within ``limit`` of the corridor (excess <= limit,
+    :func:`.rollout.keeps_inside`); those ``known`` to are not looked at. (A function of its own: the same loop
+    inside :func:`escape_scores` took several times as long.)"""
     out = np.ones(positions.shape[0], np.bool_)
     for k in range(positions.shape[0]):
-        if known[k]:
-            continue
-        for s in range(positions.shape[1]):
-            if not excess_at_most(
-                positions[k, s, 0],
-                positions[k, s, 1],
-                segment_starts,
-                segment_directions,
-                segment_lengths,
-                half_widths,
-                limit,
-            ):
-                out[k] = False
-                break
+        if not known[k]:
+            out[k] = keeps_inside(positions[k], positions.shape[1], corridor, limit)
     return out
 
 
@@ -351,21 +340,10 @@ def _roll_outs_inside(positions, corridor, tolerance, bound):
     """Whether each roll-out keeps inside the corridor (every point's excess <= ``tolerance``) and within the bound
     (np.max(excess) <= bound is all(excess <= bound), NaN included: with the bound at least the tolerance, as the
     caller sets it, true of every roll-out inside, not looked at again)."""
-    segment_starts, segment_directions, segment_lengths, half_widths = corridor
     k_count = positions.shape[0]
-    inside = _roll_outs_within(
-        positions,
-        segment_starts,
-        segment_directions,
-        segment_lengths,
-        half_widths,
-        tolerance,
-        np.zeros(k_count, np.bool_),
-    )
+    inside = _roll_outs_within(positions, corridor, tolerance, np.zeros(k_count, np.bool_))
     known = inside if bound >= tolerance else np.zeros(k_count, np.bool_)
-    within_bound = _roll_outs_within(
-        positions, segment_starts, segment_directions, segment_lengths, half_widths, bound, known
-    )
+    within_bound = _roll_outs_within(positions, corridor, bound, known)
     return inside, within_bound
 
 

@@ -177,7 +177,7 @@ def _roll_out(robot, target_x, target_y, speed, settings, steps):
 
 
 @compiled(inline=True)
-def _inside(positions, count, corridor, tolerance):
+def keeps_inside(positions, count, corridor, tolerance):
     """Whether the first ``count`` positions keep within ``tolerance`` of the corridor."""
     segment_starts, segment_directions, segment_lengths, half_widths = corridor
     for s in range(count):
@@ -220,7 +220,7 @@ def can_follow(robot, target_x, target_y, angle, speed, settings, steps, obstacl
     positions = _roll_out(robot, target_x, target_y, speed, settings, steps)
     if not _clear(positions, steps, settings.rollout_dt_s, robot[0], robot[1], *obstacles):
         return 0
-    if _inside(positions, steps, corridor, settings.corridor_tolerance_m):
+    if keeps_inside(positions, steps, corridor, settings.corridor_tolerance_m):
         return 1
     if heading_error > settings.turn_in_place_min_rad and _clear_turning_on_the_spot(
         robot, heading_error, settings, obstacles
