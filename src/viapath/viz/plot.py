@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from viapath.viz.scene import path_view
+
 
 def _matplotlib():
     import matplotlib
@@ -20,21 +22,10 @@ def _matplotlib():
     return plt
 
 
-def corridor_polygons(path, resolution: int = 24):
-    """Outline of each segment's capsule, for drawing."""
-    outlines = []
-    for a, d, length, hw in zip(
-        path.segment_starts, path.segment_directions, path.segment_lengths_m, path.half_widths_m
-    ):
-        normal = np.array([-d[1], d[0]])
-        angle0 = np.arctan2(normal[1], normal[0])
-        arc_end = [
-            a + d * length + hw * np.array([np.cos(t), np.sin(t)])
-            for t in np.linspace(angle0 - np.pi, angle0, resolution)
-        ]
-        arc_start = [a + hw * np.array([np.cos(t), np.sin(t)]) for t in np.linspace(angle0, angle0 + np.pi, resolution)]
-        outlines.append(np.array(arc_end + arc_start))
-    return outlines
+def corridor_polygons(path, resolution: int = 24) -> list[np.ndarray]:
+    """Outline of each segment's capsule, for drawing: the outlines the scene views draw
+    (:func:`viapath.viz.scene.path_view`, closed)."""
+    return path_view(path, resolution).corridor_outlines
 
 
 def draw_scene(
