@@ -269,8 +269,30 @@ def test_the_warm_up_reaches_the_choice_and_the_escape():
     assert statuses[0] in ("avoid", "slow", "wait") and statuses[1] == "escape"
     assert precompile()
     if jit.enabled():
-        for kernel in (compiled._escape_headings, compiled._escape_scores, compiled._choose):
-            assert len(kernel.signatures) == 1
+        kernels = (compiled._escape_headings, compiled._escape_scores, compiled._choose)
+        for kernel in (*kernels, compiled._choose_tree, compiled._choose_ranked):
+            assert len(kernel.signatures) == 1, kernel
+
+
+def test_a_static_cycle_asks_the_tree_alone_with_the_warm_ups_types():
+    """The way round static geometry asks whether static geometry alone closes the candidate tree
+    (:func:`tree_is_empty`) with the static discs' shapes; precompile asked it without any: the same compiled
+    signature, so a robot whose map first leaves it no candidate does not stop to compile."""
+    from viapath import jit
+    from viapath.planning.viapath.choice import tree_is_empty
+    from viapath.planning.viapath.planner import precompile
+    from viapath.static import StaticLayer
+
+    assert precompile()
+    path = DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0)
+    planner = make_planner("viapath", path, nominal_speed_mps=0.2)
+    wall = StaticLayer.of_shapes([np.array([[2.0, -1.5], [2.0, 1.5]])])  # across the corridor: the tree is empty
+    robot = RobotState(np.zeros(2), 0.0, 0.0, 0.0, 0.25)
+    planner.plan(Observation(0.0, robot, Obstacles.empty(), wall))
+    before = list(compiled._choose_tree.signatures) if jit.enabled() else []
+    assert tree_is_empty(planner, planner._checks, *planner.speed_set(0.0))
+    if jit.enabled():
+        assert list(compiled._choose_tree.signatures) == before and len(before) == 1
 
 
 def compiled_lambda(function):

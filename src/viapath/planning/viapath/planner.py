@@ -83,10 +83,10 @@ from viapath.options import Settings
 from viapath.path import DesignatedPath
 from viapath.planning.base import Decision, Plan, Planner, Situation
 from viapath.planning.viapath.blocked import blocked, detour, near_corridor
-from viapath.planning.viapath.candidates import Choice, Way
+from viapath.planning.viapath.candidates import Candidates, Choice, Way
 from viapath.planning.viapath.checks import LegChecks
-from viapath.planning.viapath.choice import choose_compiled
-from viapath.planning.viapath.critics import critics_for
+from viapath.planning.viapath.choice import choose_compiled, tree_is_empty
+from viapath.planning.viapath.critics import Context, Critic, critics_for
 from viapath.planning.viapath.escape import stop_or_escape
 from viapath.planning.viapath.follow import can_follow
 from viapath.planning.viapath.kept_way import keep_previous_way
@@ -328,12 +328,31 @@ def precompile() -> bool:
     """Compile every compiled step of the planner now (or load them from the on-disk cache: about 30 s of CPU once per
     machine, the compiled choice most of it). Two planning cycles run all of them with the planner's own argument
     types: one whose straight leg is blocked (the compiled choice with its goal legs and tree), one closed in from
-    four sides, where no candidate is free and standing is hit too (the compiled escape). True when done."""
+    four sides, where no candidate is free and standing is hit too (the compiled escape). Then the two calls no
+    cycle of theirs makes: the candidate tree alone (the way round static geometry asks whether static geometry
+    closes the tree, :func:`.choice.tree_is_empty`) and the choice in two halves that a critic beyond the paper's
+    takes (:class:`_Unscored`). True when done."""
     planner = ViaPathPlanner(DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2)
+    robot = RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25)
     for people in warm_up_crowds():
         planner.reset()
-        planner.plan(Observation(0.0, RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25), people))
+        planner.plan(Observation(0.0, robot, people))
+    checks = planner._checks
+    assert checks is not None  # set by every cycle
+    tree_is_empty(planner, checks, *planner.speed_set(robot.speed_mps))
+    planner.critics = (*planner.critics, _Unscored())
+    planner.reset()
+    planner.plan(Observation(0.0, robot, warm_up_crowds()[0]))
     return True
+
+
+class _Unscored(Critic):
+    """A critic beyond the paper's that adds nothing: :func:`precompile`'s way into the choice in two halves."""
+
+    name = "unscored"
+
+    def score(self, candidates: Candidates, context: Context) -> np.ndarray:
+        return np.zeros(len(candidates))
 
 
 def warm_up_crowds() -> list[Obstacles]:
