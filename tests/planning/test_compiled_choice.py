@@ -257,6 +257,7 @@ def test_the_warm_up_reaches_the_choice_and_the_escape():
     compiled signature (the planner's argument types do not vary): the doors Python calls them through (packing's;
     the kernels behind them, loaded from the cache inside the doors, may show none)."""
     from viapath import jit
+    from viapath.planning.viapath import step_aside
     from viapath.planning.viapath.planner import precompile, warm_up_crowds
 
     planner = make_planner("viapath", DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2)
@@ -270,7 +271,8 @@ def test_the_warm_up_reaches_the_choice_and_the_escape():
     assert precompile()
     if jit.enabled():
         kernels = (compiled._escape_headings, compiled._escape_scores, compiled._choose)
-        for kernel in (*kernels, compiled._choose_tree, compiled._choose_ranked):
+        aside = (step_aside.stopping_speed, step_aside._towards, step_aside.roll_outs, step_aside.clearances)
+        for kernel in (*kernels, compiled._choose_tree, compiled._choose_ranked, *aside):
             assert len(kernel.signatures) == 1, kernel
 
 

@@ -328,21 +328,23 @@ def precompile() -> bool:
     """Compile every compiled step of the planner now (or load them from the on-disk cache: about 30 s of CPU once per
     machine, the compiled choice most of it). Two planning cycles run all of them with the planner's own argument
     types: one whose straight leg is blocked (the compiled choice with its goal legs and tree), one closed in from
-    four sides, where no candidate is free and standing is hit too (the compiled escape). Then the two calls no
-    cycle of theirs makes: the candidate tree alone (the way round static geometry asks whether static geometry
-    closes the tree, :func:`.choice.tree_is_empty`) and the choice in two halves that a critic beyond the paper's
-    takes (:class:`_Unscored`). True when done."""
+    four sides, where no candidate is free and standing is hit too (the compiled escape), the second again from rest
+    (the step aside's roll-outs). Then the two calls no cycle of theirs makes: the candidate tree alone (the way
+    round static geometry asks whether static geometry closes the tree, :func:`.choice.tree_is_empty`) and the
+    choice in two halves that a critic beyond the paper's takes (:class:`_Unscored`). True when done."""
     planner = ViaPathPlanner(DesignatedPath([[0.0, 0.0], [6.0, 0.0]], half_width_m=1.0), nominal_speed_mps=0.2)
     robot = RobotState(np.zeros(2), 0.0, 0.2, 0.0, 0.25)
-    for people in warm_up_crowds():
+    standing = RobotState(np.zeros(2), 0.0, 0.0, 0.0, 0.25)
+    crowds = warm_up_crowds()
+    for state, people in ((robot, crowds[0]), (robot, crowds[1]), (standing, crowds[1])):
         planner.reset()
-        planner.plan(Observation(0.0, robot, people))
+        planner.plan(Observation(0.0, state, people))
     checks = planner._checks
     assert checks is not None  # set by every cycle
     tree_is_empty(planner, checks, *planner.speed_set(robot.speed_mps))
     planner.critics = (*planner.critics, _Unscored())
     planner.reset()
-    planner.plan(Observation(0.0, robot, warm_up_crowds()[0]))
+    planner.plan(Observation(0.0, robot, crowds[0]))
     return True
 
 
