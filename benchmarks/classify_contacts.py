@@ -7,7 +7,9 @@ Usage: python benchmarks/classify_contacts.py OUT [OUT ...] [--workers 2] [--top
 Each OUT is a ``viapath bench`` results folder (episodes.csv and the suite's YAML files in OUT/suite). Every
 episode with a contact is run again (same scenario, seed and perception; the planner's defaults, so run it with
 the tree that wrote OUT) and each contact with a person is classified. ``--options '{"name": value}'``: the planner options the runs were made with (a ``--weights`` preset's).
-``--detail`` prints one line per contact.
+``--detail`` prints one line per contact. For each contact with the robot at rest it also gives how long the
+robot had stood (below 0.05 m/s, the at-fault rule's threshold) and the room the corridor left beside it (half
+width less the distance to the path: 0 when it stands on the corridor's edge), summed up after the table.
 The table counts contacts (a group walking into the robot counts once per person) and, per family, the episodes
 with a contact among the feasible ones (the bench's ``feasible`` column, when present). ``--top-speed V``: also
 whether each episode with a contact is feasible for the reachable set (viapath.bench.feasibility) grown at V m/s
@@ -25,7 +27,11 @@ import csv
 import json
 from pathlib import Path
 
+import numpy as np
 from joblib import Parallel, delayed
+
+AT_REST_MPS = 0.05  # the at-fault rule's threshold
+EDGE_M = 0.1  # a robot with less room than this to the corridor's edge stands on it
 
 
 def _feasible_at(scenario, top_speed_mps: float, cell_m: float, clearance_m: float = 0.0) -> bool:
@@ -55,7 +61,18 @@ def _episode_kinds(
         step = int(round(contact.time_s / trace.dt_s))
         last_second = trace.plan_status[max(step - int(round(1.0 / trace.dt_s)), 0) : step + 1]
         doing = collections.Counter(last_second).most_common(1)[0][0]
-        out.append({**contact.__dict__, "planner_doing": doing, "feasible_at_top_speed": feasible_at})
+        moving = np.nonzero(trace.robot_speeds_mps[: step + 1] > AT_REST_MPS)[0]
+        rest_s = (step - (moving[-1] if len(moving) else -1)) * trace.dt_s
+        room_m = -float(trace.path.corridor_excess(trace.robot_poses[step, :2]))
+        out.append(
+            {
+                **contact.__dict__,
+                "planner_doing": doing,
+                "feasible_at_top_speed": feasible_at,
+                "rest_s": rest_s,
+                "corridor_room_m": room_m,
+            }
+        )
     return {"contacts": out}
 
 
@@ -99,6 +116,19 @@ def classify(
     return records
 
 
+def resting_line(records: list[dict]) -> str:
+    """The contacts at rest: how many on the corridor's edge, and how long the robot had stood (median)."""
+    resting = [r for r in records if r["at_rest"]]
+    if not resting:
+        return "no contact at rest"
+    edge = sum(r["corridor_room_m"] < EDGE_M for r in resting)
+    stood = float(np.median([r["rest_s"] for r in resting]))
+    return (
+        f"{len(resting)} at rest: {edge} on the corridor's edge (room < {EDGE_M} m), "
+        f"{len(resting) - edge} with room beside; the robot had stood a median {stood:.1f} s"
+    )
+
+
 def table(records: list[dict]) -> list[dict]:
     counts: collections.Counter = collections.Counter()
     for record in records:
@@ -136,12 +166,14 @@ def main() -> None:
                 f" {r['kind']} (turn {r['turn_2s_deg']:.0f}°, forecast gap 1 s/2 s before "
                 f"{r['forecast_gap_1s_m']:.2f}/{r['forecast_gap_2s_m']:.2f} m) doing {r['planner_doing']}"
                 f" feasible={r['feasible']} at top speed={r['feasible_at_top_speed']}"
+                f" stood {r['rest_s']:.1f} s, corridor room {r['corridor_room_m']:.2f} m"
             )
     print("| family | robot | kind | contacts |\n|---|---|---|---|")
     for row in rows:
         print(f"| {row['family']} | {row['robot']} | {row['kind']} | {row['contacts']} |")
     doing = collections.Counter(r["planner_doing"] for r in records)
     print(f"\n{len(records)} contacts; planner in the second before: {dict(doing.most_common())}")
+    print(resting_line(records))
     episodes = {(r["run"], r["scenario"]): r for r in records}
     feasible = [r for r in episodes.values() if r["feasible"] == "True"]
     line = f"{len(episodes)} episodes with a contact, {len(feasible)} of them feasible"
