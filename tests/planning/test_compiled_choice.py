@@ -271,7 +271,7 @@ def test_the_warm_up_reaches_the_choice_and_the_escape():
     assert precompile()
     if jit.enabled():
         kernels = (compiled._escape_headings, compiled._escape_scores, compiled._choose)
-        aside = (step_aside.stopping_speed, step_aside._towards, step_aside.roll_outs, step_aside.clearances)
+        aside = (step_aside.roll_outs, step_aside.clearances)  # the step aside's doors (from rest)
         for kernel in (*kernels, compiled._choose_tree, compiled._choose_ranked, *aside):
             assert len(kernel.signatures) == 1, kernel
 
