@@ -4,16 +4,11 @@ wide and a person walks up the path from behind into it (no move lets them pass)
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import pytest
 
+from tests._scripts import load_benchmark
 from viapath.scenarios import load_scenario
 from viapath.sim.loop import run_episode
-
-ROOT = Path(__file__).resolve().parents[2]
 
 _NARROW = """
 name: narrow
@@ -32,11 +27,7 @@ duration_s: 60
 
 @pytest.fixture(scope="module")
 def classify():
-    spec = importlib.util.spec_from_file_location("classify_contacts", ROOT / "benchmarks" / "classify_contacts.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["classify_contacts"] = module
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark("classify_contacts")
 
 
 def test_a_contact_at_rest_reports_how_long_the_robot_stood_and_the_room_beside_it(classify, tmp_path):

@@ -4,25 +4,16 @@ a route must be the brute-force one."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
+from tests._scripts import load_benchmark
 from viapath.bench.suites import generate_suite
-
-ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
 def turns():
-    spec = importlib.util.spec_from_file_location("crowd_turns", ROOT / "benchmarks" / "crowd_turns.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["crowd_turns"] = module
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark("crowd_turns")
 
 
 def test_the_terms_add_up_to_the_persons_own_velocity_change(turns):

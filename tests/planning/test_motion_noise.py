@@ -3,19 +3,13 @@ oracle perception noise (position σ 0.03 m, velocity σ 0.05 m/s), 4 seeds each
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import pytest
 
-_BENCH = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_noise.py"
+from tests._scripts import load_benchmark
 
 
 def _bench_module():
-    spec = importlib.util.spec_from_file_location("bench_noise", _BENCH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_benchmark("bench_noise")
 
 
 @pytest.fixture(scope="module")
